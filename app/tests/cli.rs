@@ -1,0 +1,70 @@
+//! The `clothlab` binary: a good run and every kind of bad input.
+
+use std::process::{Command, Output};
+
+fn clothlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_clothlab")).args(args).env("RUST_BACKTRACE", "1").output().expect("run clothlab")
+}
+
+/// Bad input: non-zero exit, the expected words on stderr, no panic or backtrace.
+fn refused(args: &[&str], expect: &str) {
+    let out = clothlab(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{args:?} should fail; stderr: {err}");
+    assert!(err.contains(expect), "{args:?}: stderr should mention `{expect}`, got: {err}");
+    assert!(!err.contains("panicked") && !err.contains("stack backtrace"), "{args:?} panicked: {err}");
+    assert!(out.stdout.is_empty(), "{args:?} printed to stdout: {}", String::from_utf8_lossy(&out.stdout));
+}
+
+#[test]
+fn sim_runs_and_reports() {
+    let dir = std::env::temp_dir().join(format!("clothlab-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("state.obj");
+    let json = dir.join("state.json");
+    for (backend, out) in [("cpu", &obj), ("cpu-par", &json)] {
+        let o = clothlab(&["sim", "--backend", backend, "--n", "16", "--steps", "64", "--out", out.to_str().unwrap()]);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{backend}: {}", String::from_utf8_lossy(&o.stderr));
+        for key in ["time/substep", "max strain", "lowest point", "NaN            none", "substeps       64"] {
+            assert!(text.contains(key), "{backend}: no `{key}` in:\n{text}");
+        }
+    }
+    let obj = std::fs::read_to_string(&obj).unwrap();
+    assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 256);
+    assert_eq!(obj.lines().filter(|l| l.starts_with("f ")).count(), 2 * 15 * 15);
+    let state: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(state["n"], 16);
+    assert_eq!(state["pos"].as_array().unwrap().len(), 256);
+    // The pinned corner is where the default scene puts it.
+    assert_eq!(state["pos"][0], serde_json::json!([-1.0, 2.2, -0.9, 0.0]));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_input_is_refused_with_one_clear_message() {
+    refused(&["sim", "--n", "1"], "grid side must be in 2 ..= 4096");
+    refused(&["sim", "--n", "100000"], "grid side must be in 2 ..= 4096");
+    refused(&["sim", "--n=-3"], "invalid value '-3' for '--n <N>'");
+    refused(&["sim", "--n", "-3"], "unexpected argument '-3'");
+    refused(&["sim", "--backend", "cuda"], "invalid value 'cuda'");
+    refused(&["sim", "--steps", "0"], "--steps");
+    refused(&["sim", "--set", "damping=-0.5"], "`damping` = -0.5");
+    refused(&["sim", "--set", "cloth_mass=0"], "`cloth_mass`");
+    refused(&["sim", "--set", "frame_dt=nan"], "must be a finite number");
+    refused(&["sim", "--set", "gravity=[0,1e39,0]"], "gravity");
+    refused(&["sim", "--set", "structural_stiffness=0.9"], "stability limit");
+    refused(&["sim", "--set", "no_such_thing=1"], "unknown parameter `no_such_thing`");
+    refused(&["sim", "--set", "damping"], "NAME=VALUE");
+    refused(&["sim", "--n", "4", "--out", "/tmp/state.txt"], "unknown format");
+    refused(&["sim", "--n", "4", "--steps", "16", "--out", "/nonexistent-dir/x.obj"], "cannot create");
+    refused(&["frobnicate"], "unrecognized subcommand");
+}
+
+#[test]
+fn our_own_errors_are_one_line() {
+    let out = clothlab(&["sim", "--n", "1"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "stderr: {err}");
+    assert!(err.starts_with("error: "), "stderr: {err}");
+}

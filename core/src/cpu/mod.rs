@@ -1,0 +1,76 @@
+//! The CPU reference: one plain-Rust function per GPU kernel, in the loop shape the
+//! kernel has, and the serial and rayon solvers built from them.
+//!
+//! Every kernel writes each output element from one closure call that reads only its
+//! inputs (a gather), so running the loop serially or on rayon's threads computes the
+//! same bits. The `*_scatter` functions are the twins of the naive GPU kernels, which
+//! walk springs or triangles and accumulate into particles.
+
+mod collide;
+mod forces;
+mod integrate;
+mod normals;
+mod solver;
+mod springs;
+mod strain_limit;
+
+pub use collide::collide;
+pub use forces::forces;
+pub use integrate::integrate;
+pub use normals::{tri_normals, vertex_normals};
+pub use solver::CpuSolver;
+pub use springs::{springs, springs_scatter};
+pub use strain_limit::strain_limit;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::grid::V4;
+
+/// How a kernel's loop runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Exec {
+    /// One thread, index order (the thesis's CPU variant).
+    Serial,
+    /// rayon's thread pool (the thesis's OpenMP variant).
+    Parallel,
+}
+
+/// Particles per rayon task: large enough that scheduling costs little next to the work.
+const MIN_CHUNK: usize = 1024;
+
+/// Runs `f(i, &mut out[i])` for every element.
+pub(crate) fn for_each<T: Send>(exec: Exec, out: &mut [T], f: impl Fn(usize, &mut T) + Sync + Send) {
+    match exec {
+        Exec::Serial => out.iter_mut().enumerate().for_each(|(i, o)| f(i, o)),
+        Exec::Parallel => out.par_iter_mut().with_min_len(MIN_CHUNK).enumerate().for_each(|(i, o)| f(i, o)),
+    }
+}
+
+/// Runs `f(i, &mut a[i], &mut b[i])` for every element.
+pub(crate) fn for_each2<A: Send, B: Send>(
+    exec: Exec,
+    a: &mut [A],
+    b: &mut [B],
+    f: impl Fn(usize, &mut A, &mut B) + Sync + Send,
+) {
+    match exec {
+        Exec::Serial => a.iter_mut().zip(b.iter_mut()).enumerate().for_each(|(i, (a, b))| f(i, a, b)),
+        Exec::Parallel => a
+            .par_iter_mut()
+            .zip(b.par_iter_mut())
+            .with_min_len(MIN_CHUNK)
+            .enumerate()
+            .for_each(|(i, (a, b))| f(i, a, b)),
+    }
+}
+
+#[inline(always)]
+pub(crate) fn v3(a: V4) -> Vec3 {
+    Vec3::new(a[0], a[1], a[2])
+}
+
+#[inline(always)]
+pub(crate) fn v4(v: Vec3, w: f32) -> V4 {
+    [v.x, v.y, v.z, w]
+}

@@ -1,0 +1,180 @@
+//! The serial and rayon solvers: the step of DESIGN.md, one kernel after another.
+
+use std::time::Instant;
+
+use super::{Exec, collide, forces, integrate, springs, strain_limit, tri_normals, vertex_normals};
+use crate::grid::{ClothState, ClothTopology, Grab, StepParams, V4, build};
+use crate::params::SimParams;
+use crate::scene::Scene;
+use crate::solver::{Solver, SolverError};
+use crate::timing::{FRAME, KernelId, KernelTimings, SUBSTEP, TimingRecorder};
+
+/// The CPU solver; [`Exec::Serial`] is the thesis's CPU variant, [`Exec::Parallel`] its
+/// OpenMP one. Both run the same gather kernels, so they agree bit for bit.
+pub struct CpuSolver {
+    exec: Exec,
+    scene: Scene,
+    params: SimParams,
+    grab: Option<Grab>,
+    state: ClothState,
+    topo: ClothTopology,
+    /// Strain-limit ping-pong target.
+    scratch: Vec<V4>,
+    /// Face normals, one per triangle.
+    face: Vec<V4>,
+    timer: TimingRecorder,
+    /// Record per-kernel timings (costs two `Instant::now` per kernel).
+    pub time_kernels: bool,
+}
+
+impl CpuSolver {
+    /// Builds the cloth of `scene` and computes its initial normals.
+    pub fn new(exec: Exec, scene: Scene, params: SimParams) -> Result<Self, SolverError> {
+        let (state, topo) = build(&scene, &params)?;
+        let np = state.pos.len();
+        let mut s = Self {
+            exec,
+            scene,
+            params,
+            grab: None,
+            scratch: vec![[0.0; 4]; np],
+            face: vec![[0.0; 4]; topo.triangles.len()],
+            state,
+            topo,
+            timer: TimingRecorder::default(),
+            time_kernels: true,
+        };
+        s.update_normals();
+        Ok(s)
+    }
+
+    /// The connectivity and spring constants.
+    pub fn topology(&self) -> &ClothTopology {
+        &self.topo
+    }
+
+    /// The current state, borrowed (no copy).
+    pub fn state_ref(&self) -> &ClothState {
+        &self.state
+    }
+
+    /// The per-step constants in use.
+    pub fn step_params(&self) -> StepParams {
+        StepParams::new(&self.params, &self.scene, self.grab)
+    }
+
+    fn update_normals(&mut self) {
+        let p = self.step_params();
+        tri_normals(self.exec, &self.topo.triangles, &self.state.pos, &mut self.face);
+        vertex_normals(self.exec, &p, &self.topo.face_slots, &self.face, &mut self.state.normal, &mut self.state.force);
+    }
+
+    /// Runs `f`, recording its duration under `id` when timing is on.
+    fn timed(timer: &mut TimingRecorder, on: bool, id: KernelId, f: impl FnOnce()) {
+        if on {
+            let t = Instant::now();
+            f();
+            timer.record(id.name(), t.elapsed().as_nanos() as f64);
+        } else {
+            f();
+        }
+    }
+
+    /// One substep.
+    pub fn substep(&mut self) {
+        let p = self.step_params();
+        let e = self.exec;
+        let on = self.time_kernels;
+        let t0 = Instant::now();
+        let Self { state, topo, scratch, face, timer, scene, params, .. } = self;
+        let ClothState { pos, prev, force, normal, .. } = state;
+        Self::timed(timer, on, KernelId::Forces, || forces(e, &p, pos, prev, force));
+        Self::timed(timer, on, KernelId::Springs, || springs(e, p.dt, &topo.slots, pos, prev, force));
+        Self::timed(timer, on, KernelId::Integrate, || integrate(e, &p, force, pos, prev));
+        Self::timed(timer, on, KernelId::Collide, || collide(e, &p, &scene.spheres, &scene.boxes, pos, prev));
+        Self::timed(timer, on, KernelId::StrainLimit, || {
+            for _ in 0..params.strain_iterations {
+                strain_limit(e, &p, &topo.slots, &topo.tethers, pos, scratch);
+                std::mem::swap(pos, scratch);
+            }
+        });
+        Self::timed(timer, on, KernelId::TriNormals, || tri_normals(e, &topo.triangles, pos, face));
+        Self::timed(timer, on, KernelId::VertexNormals, || {
+            vertex_normals(e, &p, &topo.face_slots, face, normal, force)
+        });
+        if on {
+            timer.record(SUBSTEP, t0.elapsed().as_nanos() as f64);
+        }
+    }
+}
+
+impl Solver for CpuSolver {
+    fn name(&self) -> &str {
+        match self.exec {
+            Exec::Serial => "cpu",
+            Exec::Parallel => "cpu-par",
+        }
+    }
+
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    fn params(&self) -> &SimParams {
+        &self.params
+    }
+
+    fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
+        params.validate()?;
+        self.params = params;
+        self.topo.set_spring_constants(&self.params);
+        Ok(())
+    }
+
+    fn set_grab(&mut self, grab: Option<Grab>) {
+        self.grab =
+            grab.filter(|g| (g.particle as usize) < self.state.pos.len() && g.target.iter().all(|v| v.is_finite()));
+    }
+
+    fn step_frame(&mut self) -> Result<(), SolverError> {
+        let t0 = Instant::now();
+        for _ in 0..self.params.substeps {
+            self.substep();
+        }
+        if self.time_kernels {
+            self.timer.record(FRAME, t0.elapsed().as_nanos() as f64);
+        }
+        Ok(())
+    }
+
+    fn state(&mut self) -> Result<ClothState, SolverError> {
+        Ok(self.state.clone())
+    }
+
+    fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
+        let want = self.state.n;
+        let np = want as usize * want as usize;
+        if state.n != want
+            || state.pos.len() != np
+            || state.prev.len() != np
+            || state.force.len() != np
+            || state.normal.len() != np
+        {
+            return Err(SolverError::GridMismatch { want, got: state.n });
+        }
+        let finite = |v: &Vec<V4>| v.iter().flatten().all(|x| x.is_finite());
+        if !(finite(&state.pos) && finite(&state.prev) && finite(&state.force) && finite(&state.normal)) {
+            return Err(SolverError::Backend("state holds non-finite values".into()));
+        }
+        self.state = state.clone();
+        Ok(())
+    }
+
+    fn timings(&self) -> KernelTimings {
+        self.timer.table()
+    }
+
+    fn reset_timings(&mut self) {
+        self.timer.clear();
+    }
+}

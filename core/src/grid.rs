@@ -1,0 +1,413 @@
+//! The grid builder: particles, triangles, springs and the per-step constants.
+//!
+//! Particle `(i, j)` (column `i`, row `j`, both `0 … n-1`) has index `j·n + i`. Row 0 is
+//! the top edge, the one pinned. Every per-particle buffer is a `Vec<[f32; 4]>` (structure
+//! of arrays, 16-byte elements, the layout the GPU buffers have).
+
+use bytemuck::{Pod, Zeroable};
+use serde::{Deserialize, Serialize};
+
+use crate::params::{ParamError, SimParams};
+use crate::scene::{Pinning, Scene};
+
+/// A 16-byte particle attribute: xyz plus one spare or flag component.
+pub type V4 = [f32; 4];
+
+/// Spring slots per particle in the gather table.
+pub const SLOTS: usize = 12;
+/// Slots `0 .. STRAIN_SLOTS` (structural and shear) are held by the strain limit.
+pub const STRAIN_SLOTS: usize = 8;
+/// Face slots per particle: a regular grid vertex touches at most six triangles.
+pub const FACE_SLOTS: usize = 6;
+
+/// The three spring families.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[repr(u32)]
+pub enum SpringKind {
+    /// i±1 or j±1.
+    Structural = 0,
+    /// The diagonals of a quad.
+    Shear = 1,
+    /// i±2 or j±2.
+    Bend = 2,
+}
+
+/// Grid offsets `(di, dj)` of the 12 slots, in the fixed order every gather uses:
+/// structural left, right, up, down; shear up-left, up-right, down-left, down-right;
+/// bend left, right, up, down.
+pub const SLOT_OFFSETS: [(i32, i32); SLOTS] =
+    [(-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (1, -1), (-1, 1), (1, 1), (-2, 0), (2, 0), (0, -2), (0, 2)];
+
+/// The family of slot `s`.
+pub fn slot_kind(s: usize) -> SpringKind {
+    match s {
+        0..=3 => SpringKind::Structural,
+        4..=7 => SpringKind::Shear,
+        _ => SpringKind::Bend,
+    }
+}
+
+/// Tether slots per particle (long-range attachments to pins).
+pub const TETHER_SLOTS: usize = 2;
+
+/// A long-range attachment (Kim, Chentanez & Müller 2012): the particle may be at most
+/// `(1 + τ) · rest` from the pinned particle `pin` (`#[repr(C)]`, mirrored in the shaders).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
+pub struct Tether {
+    /// Index of the pinned particle, or -1 for an empty slot.
+    pub pin: i32,
+    /// Distance to the pin in the flat rest sheet (the geodesic distance), m.
+    pub rest: f32,
+}
+
+impl Tether {
+    /// An empty slot.
+    pub const EMPTY: Self = Self { pin: -1, rest: 0.0 };
+}
+
+/// One slot of the per-particle gather table (`#[repr(C)]`, mirrored in the shaders).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
+pub struct SpringSlot {
+    /// Index of the particle at the other end, or -1 for an empty slot.
+    pub neighbor: i32,
+    /// Rest length, m.
+    pub rest: f32,
+    /// Stiffness, N/m.
+    pub ks: f32,
+    /// Damping, N·s/m.
+    pub kd: f32,
+}
+
+impl SpringSlot {
+    /// An empty slot.
+    pub const EMPTY: Self = Self { neighbor: -1, rest: 0.0, ks: 0.0, kd: 0.0 };
+}
+
+/// One spring of the flat list the scatter (naive) kernels walk (`#[repr(C)]`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
+pub struct Spring {
+    /// First particle.
+    pub a: u32,
+    /// Second particle.
+    pub b: u32,
+    /// Rest length, m.
+    pub rest: f32,
+    /// Stiffness, N/m.
+    pub ks: f32,
+    /// Damping, N·s/m.
+    pub kd: f32,
+    /// [`SpringKind`] as u32.
+    pub kind: u32,
+}
+
+/// The mutable state of the cloth: what a solver advances and a renderer draws.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ClothState {
+    /// Particles per side.
+    pub n: u32,
+    /// Positions, m; w = mobility (1 free, 0 pinned).
+    pub pos: Vec<V4>,
+    /// Positions one substep ago (Verlet's x*), m; w unused.
+    pub prev: Vec<V4>,
+    /// Force accumulator, N. Between substeps it holds the wind force computed by the
+    /// last `vertex_normals`; `forces` adds gravity and drag to it, `springs` the springs.
+    pub force: Vec<V4>,
+    /// Unit vertex normals; w unused.
+    pub normal: Vec<V4>,
+}
+
+/// What does not change while simulating: connectivity and spring constants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClothTopology {
+    /// Particles per side.
+    pub n: u32,
+    /// Texture coordinates per particle, in [0, 1]².
+    pub uv: Vec<[f32; 2]>,
+    /// Triangles, counter-clockwise seen from +y when the cloth lies flat.
+    pub triangles: Vec<[u32; 3]>,
+    /// The gather table: `SLOTS` slots per particle, particle-major.
+    pub slots: Vec<SpringSlot>,
+    /// Every spring once, for scatter kernels.
+    pub springs: Vec<Spring>,
+    /// Per particle, the up-to-six adjacent triangles (or -1), in a fixed order.
+    pub face_slots: Vec<[i32; FACE_SLOTS]>,
+    /// Per particle, the tethers to the nearest pins.
+    pub tethers: Vec<[Tether; TETHER_SLOTS]>,
+}
+
+impl ClothTopology {
+    /// Number of particles.
+    pub fn num_particles(&self) -> usize {
+        self.uv.len()
+    }
+
+    /// Rebuilds the spring constants for new parameters (rest lengths stay).
+    pub fn set_spring_constants(&mut self, params: &SimParams) {
+        let n = self.n;
+        let consts = spring_constants(params, n);
+        for (k, slot) in self.slots.iter_mut().enumerate() {
+            if slot.neighbor >= 0 {
+                let (ks, kd) = consts[slot_kind(k % SLOTS) as usize];
+                slot.ks = ks;
+                slot.kd = kd;
+            }
+        }
+        for s in &mut self.springs {
+            let (ks, kd) = consts[s.kind as usize];
+            s.ks = ks;
+            s.kd = kd;
+        }
+    }
+}
+
+/// (ks, kd) per [`SpringKind`].
+fn spring_constants(params: &SimParams, n: u32) -> [(f32, f32); 3] {
+    [
+        (
+            params.stiffness_n_per_m(params.structural_stiffness, n),
+            params.damping_ns_per_m(params.structural_damping, n),
+        ),
+        (params.stiffness_n_per_m(params.shear_stiffness, n), params.damping_ns_per_m(params.shear_damping, n)),
+        (params.stiffness_n_per_m(params.bend_stiffness, n), params.damping_ns_per_m(params.bend_damping, n)),
+    ]
+}
+
+/// Index of triangle `t` (0 or 1) of quad `(qi, qj)`; quads are `(n-1) × (n-1)`.
+fn tri_index(n: u32, qi: u32, qj: u32, t: u32) -> i32 {
+    (2 * (qj * (n - 1) + qi) + t) as i32
+}
+
+/// Builds the initial state and the topology for a validated scene and parameters.
+pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopology), ParamError> {
+    scene.validate()?;
+    params.validate()?;
+    let n = scene.cloth.n;
+    let nu = n as usize;
+    let np = nu * nu;
+    let spacing = scene.cloth.size / (n - 1) as f32;
+    let [cx, cy, cz] = scene.cloth.top_center;
+
+    let mut pos = Vec::with_capacity(np);
+    let mut uv = Vec::with_capacity(np);
+    for j in 0..n {
+        for i in 0..n {
+            let pinned = match scene.cloth.pinning {
+                Pinning::TopCorners => j == 0 && (i == 0 || i == n - 1),
+                Pinning::TopEdge => j == 0,
+                Pinning::None => false,
+            };
+            let x = cx - 0.5 * scene.cloth.size + i as f32 * spacing;
+            let z = cz + j as f32 * spacing;
+            pos.push([x, cy, z, if pinned { 0.0 } else { 1.0 }]);
+            uv.push([i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32]);
+        }
+    }
+
+    // Triangles: quad (qi, qj) with corners p00 = (qi, qj), p10, p01, p11, split along the
+    // p00–p11 diagonal. t0 = (p00, p01, p11), t1 = (p00, p11, p10): counter-clockwise seen
+    // from +y for the initial sheet (x right, z towards the viewer), so normals start at +y.
+    let mut triangles = Vec::with_capacity(2 * (nu - 1) * (nu - 1));
+    for qj in 0..n - 1 {
+        for qi in 0..n - 1 {
+            let p00 = qj * n + qi;
+            let p10 = p00 + 1;
+            let p01 = p00 + n;
+            let p11 = p01 + 1;
+            triangles.push([p00, p01, p11]);
+            triangles.push([p00, p11, p10]);
+        }
+    }
+
+    // Face slots, fixed order: quad (i-1, j-1) t0, t1; quad (i, j-1) t0 (it holds p01 = (i, j)
+    // ... see below); quad (i-1, j) t1; quad (i, j) t0, t1.
+    // Vertex (i, j) is p11 of quad (i-1, j-1): in t0 and t1; p01 of quad (i, j-1): in t0;
+    // p10 of quad (i-1, j): in t1; p00 of quad (i, j): in t0 and t1.
+    let mut face_slots = Vec::with_capacity(np);
+    for j in 0..n {
+        for i in 0..n {
+            let mut f = [-1i32; FACE_SLOTS];
+            let has_l = i > 0;
+            let has_r = i < n - 1;
+            let has_u = j > 0;
+            let has_d = j < n - 1;
+            if has_l && has_u {
+                f[0] = tri_index(n, i - 1, j - 1, 0);
+                f[1] = tri_index(n, i - 1, j - 1, 1);
+            }
+            if has_r && has_u {
+                f[2] = tri_index(n, i, j - 1, 0);
+            }
+            if has_l && has_d {
+                f[3] = tri_index(n, i - 1, j, 1);
+            }
+            if has_r && has_d {
+                f[4] = tri_index(n, i, j, 0);
+                f[5] = tri_index(n, i, j, 1);
+            }
+            face_slots.push(f);
+        }
+    }
+
+    let consts = spring_constants(params, n);
+    let mut slots = Vec::with_capacity(np * SLOTS);
+    let mut springs = Vec::new();
+    for j in 0..n as i32 {
+        for i in 0..n as i32 {
+            let me = (j * n as i32 + i) as u32;
+            for (s, &(di, dj)) in SLOT_OFFSETS.iter().enumerate() {
+                let (ni, nj) = (i + di, j + dj);
+                if ni < 0 || nj < 0 || ni >= n as i32 || nj >= n as i32 {
+                    slots.push(SpringSlot::EMPTY);
+                    continue;
+                }
+                let other = (nj * n as i32 + ni) as u32;
+                let kind = slot_kind(s);
+                let (ks, kd) = consts[kind as usize];
+                let rest = spacing * ((di * di + dj * dj) as f32).sqrt();
+                slots.push(SpringSlot { neighbor: other as i32, rest, ks, kd });
+                if me < other {
+                    springs.push(Spring { a: me, b: other, rest, ks, kd, kind: kind as u32 });
+                }
+            }
+        }
+    }
+
+    // Tethers: to both corners for TopCorners, to the pin straight above for TopEdge.
+    let mut tethers = Vec::with_capacity(np);
+    for j in 0..n {
+        for i in 0..n {
+            let me = (j * n + i) as usize;
+            let mut t = [Tether::EMPTY; TETHER_SLOTS];
+            let pins: &[u32] = match scene.cloth.pinning {
+                Pinning::TopCorners => &[0, n - 1],
+                Pinning::TopEdge => &[i],
+                Pinning::None => &[],
+            };
+            if pos[me][3] != 0.0 {
+                for (slot, &pin) in t.iter_mut().zip(pins) {
+                    let (a, b) = (pos[me], pos[pin as usize]);
+                    let rest = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+                    *slot = Tether { pin: pin as i32, rest };
+                }
+            }
+            tethers.push(t);
+        }
+    }
+
+    let zero = vec![[0.0f32; 4]; np];
+    let state = ClothState { n, prev: pos.clone(), pos, force: zero.clone(), normal: zero };
+    let topo = ClothTopology { n, uv, triangles, slots, springs, face_slots, tethers };
+    Ok((state, topo))
+}
+
+/// The particle being dragged with the mouse and where it is dragged to.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Grab {
+    /// Particle index.
+    pub particle: u32,
+    /// Target position, m. The particle is moved there every substep and held.
+    pub target: [f32; 3],
+}
+
+/// Per-step constants every kernel reads, derived from [`SimParams`] and [`Scene`]
+/// (`#[repr(C)]`: the GPU backends upload exactly these bytes).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct StepParams {
+    /// Gravity, m/s²; w unused.
+    pub gravity: [f32; 4],
+    /// Wind velocity, m/s; w = wind coefficient, kg/(m²·s).
+    pub wind: [f32; 4],
+    /// Grab target, m; w unused.
+    pub grab_target: [f32; 4],
+    /// Substep, s.
+    pub dt: f32,
+    /// Verlet damping per substep.
+    pub damping: f32,
+    /// Air drag per unit mass, 1/s.
+    pub air_drag: f32,
+    /// Mass of one particle, kg.
+    pub particle_mass: f32,
+    /// Floor height, m.
+    pub floor_y: f32,
+    /// Collision margin, m.
+    pub margin: f32,
+    /// Contact friction in [0, 1].
+    pub friction: f32,
+    /// Strain limit τ.
+    pub strain_limit: f32,
+    /// Particles per side.
+    pub n: u32,
+    /// Number of spheres in use.
+    pub num_spheres: u32,
+    /// Number of boxes in use.
+    pub num_boxes: u32,
+    /// Grabbed particle, or -1.
+    pub grab_index: i32,
+}
+
+impl StepParams {
+    /// The constants for `scene` and `params` with an optional grab.
+    pub fn new(params: &SimParams, scene: &Scene, grab: Option<Grab>) -> Self {
+        let [gx, gy, gz] = params.gravity;
+        let [wx, wy, wz] = params.wind;
+        let (grab_index, grab_target) = match grab {
+            Some(g) if (g.particle as usize) < scene.num_particles() => {
+                (g.particle as i32, [g.target[0], g.target[1], g.target[2], 0.0])
+            }
+            _ => (-1, [0.0; 4]),
+        };
+        Self {
+            gravity: [gx, gy, gz, 0.0],
+            wind: [wx, wy, wz, params.wind_coefficient],
+            grab_target,
+            dt: params.dt(),
+            damping: params.damping,
+            air_drag: params.air_drag,
+            particle_mass: params.particle_mass(scene.cloth.n),
+            floor_y: scene.floor_y,
+            margin: params.collision_margin,
+            friction: params.friction,
+            strain_limit: params.strain_limit,
+            n: scene.cloth.n,
+            num_spheres: scene.spheres.len() as u32,
+            num_boxes: scene.boxes.len() as u32,
+            grab_index,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_match_the_grid() {
+        let n = 7u32;
+        let (state, topo) = build(&Scene::with_n(n), &SimParams::default()).unwrap();
+        let nu = n as usize;
+        assert_eq!(state.pos.len(), nu * nu);
+        assert_eq!(topo.triangles.len(), 2 * (nu - 1) * (nu - 1));
+        // structural 2n(n-1), shear 2(n-1)², bend 2n(n-2)
+        let expect = 2 * nu * (nu - 1) + 2 * (nu - 1) * (nu - 1) + 2 * nu * (nu - 2);
+        assert_eq!(topo.springs.len(), expect);
+        let filled = topo.slots.iter().filter(|s| s.neighbor >= 0).count();
+        assert_eq!(filled, 2 * expect, "every spring appears in both ends' slots");
+        // Each triangle appears in exactly three face slots.
+        let mut seen = vec![0; topo.triangles.len()];
+        for f in topo.face_slots.iter().flatten().filter(|&&f| f >= 0) {
+            seen[*f as usize] += 1;
+        }
+        assert!(seen.iter().all(|&c| c == 3));
+        for (p, f) in topo.face_slots.iter().enumerate() {
+            for &t in f.iter().filter(|&&t| t >= 0) {
+                assert!(topo.triangles[t as usize].contains(&(p as u32)));
+            }
+        }
+        let pinned = state.pos.iter().filter(|p| p[3] == 0.0).count();
+        assert_eq!(pinned, 2);
+    }
+}

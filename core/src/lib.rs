@@ -1,0 +1,24 @@
+//! clothlab-core: the cloth model, its parameters and scene, and the CPU reference.
+//!
+//! Nothing here touches a GPU. The GPU backends implement the same [`Solver`] trait and
+//! check every kernel against the functions in [`cpu`].
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod camera;
+pub mod cpu;
+pub mod grid;
+pub mod params;
+pub mod scene;
+pub mod solver;
+pub mod stats;
+pub mod timing;
+
+pub use camera::OrbitCamera;
+pub use cpu::{CpuSolver, Exec};
+pub use grid::{ClothState, ClothTopology, Grab, Spring, SpringKind, SpringSlot, StepParams, build};
+pub use params::{ParamError, SimParams};
+pub use scene::{Aabb, ClothSpec, Pinning, Scene, Sphere};
+pub use solver::{RenderError, RenderMode, Renderer, Solver, SolverError, View};
+pub use timing::{KernelId, KernelTimings, TimingRecorder, TimingRow};

@@ -1,0 +1,235 @@
+//! Simulation parameters: what a user may change, with units, defaults and one validation.
+//!
+//! # Why spring stiffness is given relative to the substep
+//!
+//! The cloth is integrated explicitly (Verlet). An explicit mass-spring system is stable
+//! only while `ω·dt < 2` for its fastest mode, and for a particle held by springs of
+//! stiffness `k_1 … k_m` that mode has `ω² ≲ 4·Σk / m` (a 1-D chain's highest mode is
+//! `4k/m`; a 2-D grid with structural, shear and bend springs adds their projections).
+//! A cloth of fixed size and mass has `m = M / n²` per particle, so a stiffness given in
+//! N/m that is stable at n = 100 explodes at n = 1024 unless the substep shrinks tenfold.
+//!
+//! clothlab wants one fixed substep count for every grid size the app's slider offers
+//! (10 … 1024), so each spring family's stiffness is a dimensionless fraction `κ` of the
+//! stability limit: `k = κ · m / dt²` (N/m), and the damping likewise `c = ζ · m / dt`
+//! (N·s/m). With `Σκ < 1` and `Σζ < 0.5` ([`SimParams::validate`] refuses anything else)
+//! the integrator is stable at every `n` and `dt`. The price is that springs get softer
+//! relative to gravity as `n` grows (the sag strain of a hanging column grows like
+//! `n²·g·dt²/κ`), which is what Provot's strain limit is for: it holds every structural
+//! and shear spring to at most `(1 + τ)` of its rest length whatever the springs do.
+//! The defaults below were chosen by running 10 000 substeps at n = 64 … 1024
+//! (`clothlab sim`), see `docs/parameters.md`.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// A parameter that [`SimParams::validate`] or [`crate::Scene::validate`] refused.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("invalid parameter `{field}` = {value}: {reason}")]
+pub struct ParamError {
+    /// The field's name as written in the struct (and on the CLI).
+    pub field: &'static str,
+    /// The refused value, formatted.
+    pub value: String,
+    /// What would be accepted.
+    pub reason: String,
+}
+
+impl ParamError {
+    pub(crate) fn new(field: &'static str, value: impl std::fmt::Display, reason: impl Into<String>) -> Self {
+        Self { field, value: value.to_string(), reason: reason.into() }
+    }
+}
+
+/// Every simulation parameter. Plain data: change fields, then call [`SimParams::validate`]
+/// before handing it to a solver (solvers validate again and refuse bad values).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SimParams {
+    /// Simulated time per rendered frame, seconds. Default 1/60.
+    pub frame_dt: f32,
+    /// Substeps per frame; one substep advances `frame_dt / substeps` seconds. Default 16.
+    pub substeps: u32,
+    /// Gravity, m/s². Default (0, -9.81, 0).
+    pub gravity: [f32; 3],
+    /// Total mass of the cloth, kg, shared equally by its n² particles. Default 0.5.
+    pub cloth_mass: f32,
+    /// Linear air drag per unit mass, 1/s: each particle feels `-air_drag · m · v`. Default 0.1.
+    pub air_drag: f32,
+    /// Verlet velocity damping per substep, dimensionless in [0, 1):
+    /// `x' = x + (1 - damping)(x - x*) + a dt²`. Default 0.0005.
+    pub damping: f32,
+    /// Structural spring stiffness (i±1, j±1) as a fraction of the explicit stability
+    /// limit, dimensionless: `k = κ m / dt²`. Default 0.45.
+    pub structural_stiffness: f32,
+    /// Shear spring stiffness (diagonals), fraction of the stability limit. Default 0.15.
+    pub shear_stiffness: f32,
+    /// Bend spring stiffness (i±2, j±2), fraction of the stability limit. Default 0.05.
+    pub bend_stiffness: f32,
+    /// Structural spring damping, dimensionless: `c = ζ m / dt` (N·s/m). Default 0.04.
+    pub structural_damping: f32,
+    /// Shear spring damping, dimensionless (see `structural_damping`). Default 0.02.
+    pub shear_damping: f32,
+    /// Bend spring damping, dimensionless (see `structural_damping`). Default 0.01.
+    pub bend_damping: f32,
+    /// Provot strain limit τ: structural and shear springs are pulled back to at most
+    /// `(1 + τ) · rest`, dimensionless. Default 0.10 (10 %).
+    pub strain_limit: f32,
+    /// Strain-limit passes (Jacobi) per substep, 0 switches it off. Default 2.
+    pub strain_iterations: u32,
+    /// Tangential friction on the floor and on colliders, in [0, 1]: the fraction of the
+    /// tangential motion removed at a contact. Default 0.4.
+    pub friction: f32,
+    /// Distance kept between the cloth and every collider (its thickness), m. Default 0.01.
+    pub collision_margin: f32,
+    /// Wind velocity, m/s. Default (0, 0, 0): no wind.
+    pub wind: [f32; 3],
+    /// Wind pressure coefficient, kg/(m²·s): a triangle of area A and unit normal n̂ feels
+    /// `wind_coefficient · A · (n̂·w) n̂`, shared by its three corners. Default 0.5.
+    pub wind_coefficient: f32,
+}
+
+impl Default for SimParams {
+    fn default() -> Self {
+        Self {
+            frame_dt: 1.0 / 60.0,
+            substeps: 16,
+            gravity: [0.0, -9.81, 0.0],
+            cloth_mass: 0.5,
+            air_drag: 0.1,
+            damping: 0.0005,
+            structural_stiffness: 0.45,
+            shear_stiffness: 0.15,
+            bend_stiffness: 0.05,
+            structural_damping: 0.04,
+            shear_damping: 0.02,
+            bend_damping: 0.01,
+            strain_limit: 0.10,
+            strain_iterations: 2,
+            friction: 0.4,
+            collision_margin: 0.01,
+            wind: [0.0; 3],
+            wind_coefficient: 0.5,
+        }
+    }
+}
+
+/// Upper bound on substeps per frame (a frame of more would never be interactive).
+pub const MAX_SUBSTEPS: u32 = 1024;
+/// Upper bound on strain-limit passes per substep.
+pub const MAX_STRAIN_ITERATIONS: u32 = 64;
+
+impl SimParams {
+    /// Duration of one substep, seconds.
+    pub fn dt(&self) -> f32 {
+        self.frame_dt / self.substeps as f32
+    }
+
+    /// Mass of one particle for an `n × n` cloth, kg.
+    pub fn particle_mass(&self, n: u32) -> f32 {
+        self.cloth_mass / (n as f32 * n as f32)
+    }
+
+    /// Spring stiffness in N/m for a family with fraction `kappa` on an `n × n` cloth.
+    pub fn stiffness_n_per_m(&self, kappa: f32, n: u32) -> f32 {
+        kappa * self.particle_mass(n) / (self.dt() * self.dt())
+    }
+
+    /// Spring damping in N·s/m for a family with fraction `zeta` on an `n × n` cloth.
+    pub fn damping_ns_per_m(&self, zeta: f32, n: u32) -> f32 {
+        zeta * self.particle_mass(n) / self.dt()
+    }
+
+    /// Checks every field; the first bad one is reported. Nothing that passes can make a
+    /// solver produce NaN from a valid scene.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        finite_in("frame_dt", self.frame_dt, 1e-5, 1.0)?;
+        if self.substeps == 0 || self.substeps > MAX_SUBSTEPS {
+            return Err(ParamError::new("substeps", self.substeps, format!("must be in 1 ..= {MAX_SUBSTEPS}")));
+        }
+        for (i, g) in self.gravity.iter().enumerate() {
+            finite_in(["gravity.x", "gravity.y", "gravity.z"][i], *g, -1000.0, 1000.0)?;
+        }
+        finite_in("cloth_mass", self.cloth_mass, 1e-6, 1e6)?;
+        if self.cloth_mass <= 0.0 {
+            return Err(ParamError::new("cloth_mass", self.cloth_mass, "must be > 0"));
+        }
+        // Explicit drag is stable while air_drag · dt < 1; keep a wide margin.
+        finite_in("air_drag", self.air_drag, 0.0, 0.5 / self.dt())?;
+        finite_in("damping", self.damping, 0.0, 0.5)?;
+        finite_in("structural_stiffness", self.structural_stiffness, 0.0, 1.0)?;
+        finite_in("shear_stiffness", self.shear_stiffness, 0.0, 1.0)?;
+        finite_in("bend_stiffness", self.bend_stiffness, 0.0, 1.0)?;
+        let kappa = self.structural_stiffness + self.shear_stiffness + self.bend_stiffness;
+        if kappa >= 0.95 {
+            return Err(ParamError::new(
+                "structural_stiffness + shear_stiffness + bend_stiffness",
+                kappa,
+                "must be < 0.95 (fractions of the explicit stability limit, see docs/parameters.md)",
+            ));
+        }
+        finite_in("structural_damping", self.structural_damping, 0.0, 0.5)?;
+        finite_in("shear_damping", self.shear_damping, 0.0, 0.5)?;
+        finite_in("bend_damping", self.bend_damping, 0.0, 0.5)?;
+        let zeta = self.structural_damping + self.shear_damping + self.bend_damping;
+        if zeta >= 0.5 {
+            return Err(ParamError::new(
+                "structural_damping + shear_damping + bend_damping",
+                zeta,
+                "must be < 0.5 (explicit damping is unstable beyond)",
+            ));
+        }
+        finite_in("strain_limit", self.strain_limit, 0.0, 10.0)?;
+        if self.strain_iterations > MAX_STRAIN_ITERATIONS {
+            return Err(ParamError::new(
+                "strain_iterations",
+                self.strain_iterations,
+                format!("must be in 0 ..= {MAX_STRAIN_ITERATIONS}"),
+            ));
+        }
+        finite_in("friction", self.friction, 0.0, 1.0)?;
+        finite_in("collision_margin", self.collision_margin, 0.0, 1.0)?;
+        for (i, w) in self.wind.iter().enumerate() {
+            finite_in(["wind.x", "wind.y", "wind.z"][i], *w, -1000.0, 1000.0)?;
+        }
+        finite_in("wind_coefficient", self.wind_coefficient, 0.0, 1000.0)?;
+        Ok(())
+    }
+}
+
+/// Refuses NaN, infinities and values outside `[lo, hi]`.
+pub(crate) fn finite_in(field: &'static str, v: f32, lo: f32, hi: f32) -> Result<(), ParamError> {
+    if !v.is_finite() {
+        return Err(ParamError::new(field, v, "must be a finite number"));
+    }
+    if v < lo || v > hi {
+        return Err(ParamError::new(field, v, format!("must be in {lo} ..= {hi}")));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_validate() {
+        assert_eq!(SimParams::default().validate(), Ok(()));
+    }
+
+    #[test]
+    fn refuses_nan_negative_and_unstable() {
+        let bad = [
+            SimParams { frame_dt: f32::NAN, ..Default::default() },
+            SimParams { cloth_mass: -1.0, ..Default::default() },
+            SimParams { substeps: 0, ..Default::default() },
+            SimParams { damping: -0.1, ..Default::default() },
+            SimParams { wind: [f32::INFINITY, 0.0, 0.0], ..Default::default() },
+            SimParams { structural_stiffness: 0.9, shear_stiffness: 0.1, ..Default::default() },
+            SimParams { strain_iterations: 1000, ..Default::default() },
+        ];
+        for p in bad {
+            assert!(p.validate().is_err(), "{p:?} should be refused");
+        }
+    }
+}

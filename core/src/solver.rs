@@ -1,0 +1,105 @@
+//! The `Solver` and `Renderer` traits every backend implements.
+
+use thiserror::Error;
+
+use crate::camera::OrbitCamera;
+use crate::grid::{ClothState, Grab};
+use crate::params::{ParamError, SimParams};
+use crate::scene::Scene;
+use crate::timing::KernelTimings;
+
+/// Why a solver could not do what it was asked.
+#[derive(Debug, Error)]
+pub enum SolverError {
+    /// A parameter or scene value was refused.
+    #[error(transparent)]
+    Param(#[from] ParamError),
+    /// A state of another grid size was offered.
+    #[error("state is for a {got}×{got} grid, the solver simulates {want}×{want}")]
+    GridMismatch {
+        /// The solver's n.
+        want: u32,
+        /// The state's n.
+        got: u32,
+    },
+    /// The backend failed (device lost, out of memory, …).
+    #[error("{0}")]
+    Backend(String),
+}
+
+/// A cloth simulation on some backend.
+pub trait Solver {
+    /// Short name of the backend and variant, e.g. `cpu`, `cpu-par`.
+    fn name(&self) -> &str;
+    /// The scene being simulated.
+    fn scene(&self) -> &Scene;
+    /// The parameters in use.
+    fn params(&self) -> &SimParams;
+    /// Replaces the parameters (validated first; on error nothing changes).
+    fn set_params(&mut self, params: SimParams) -> Result<(), SolverError>;
+    /// Starts, moves or (with `None`) ends a mouse drag.
+    fn set_grab(&mut self, grab: Option<Grab>);
+    /// Advances one frame: `params().substeps` substeps.
+    fn step_frame(&mut self) -> Result<(), SolverError>;
+    /// A copy of the current state (read back from the GPU where it lives there).
+    fn state(&mut self) -> Result<ClothState, SolverError>;
+    /// Replaces the current state, e.g. when switching backends mid-run.
+    fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError>;
+    /// Per-kernel timings since the last reset.
+    fn timings(&self) -> KernelTimings;
+    /// Forgets the recorded timings.
+    fn reset_timings(&mut self);
+}
+
+/// How the cloth is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub enum RenderMode {
+    /// One point per particle.
+    Points,
+    /// The triangle edges.
+    Lines,
+    /// Lit, textured triangles.
+    #[default]
+    Triangles,
+}
+
+/// What a frame shows, apart from the cloth itself.
+#[derive(Debug, Clone, PartialEq)]
+pub struct View {
+    /// The camera.
+    pub camera: OrbitCamera,
+    /// Point light position, m.
+    pub light: [f32; 3],
+    /// Cloth render mode.
+    pub mode: RenderMode,
+}
+
+/// Why a renderer could not draw.
+#[derive(Debug, Error)]
+pub enum RenderError {
+    /// A target size of zero or beyond the device's limits.
+    #[error("invalid target size {width}×{height}: {reason}")]
+    InvalidSize {
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+        /// What is allowed.
+        reason: String,
+    },
+    /// The backend failed.
+    #[error("{0}")]
+    Backend(String),
+}
+
+/// Draws the scene and the cloth (implemented by the GPU backends).
+pub trait Renderer {
+    /// Changes the size of the render target.
+    fn resize(&mut self, width: u32, height: u32) -> Result<(), RenderError>;
+    /// Draws one frame of the scene.
+    fn render(&mut self, view: &View) -> Result<(), RenderError>;
+    /// The particle drawn at pixel `(x, y)` of the last frame, if any.
+    fn pick(&mut self, x: u32, y: u32) -> Result<Option<u32>, RenderError>;
+    /// The last frame as tightly packed sRGB RGBA8 rows, with its width and height.
+    fn read_image(&mut self) -> Result<(Vec<u8>, u32, u32), RenderError>;
+}
