@@ -144,6 +144,35 @@ impl ClothTopology {
         self.uv.len()
     }
 
+    /// The 12 slots every particle at least two away from the border has, if all such
+    /// particles' slots agree in rest length and constants (true for every grid that
+    /// [`build`] makes). Solvers then read them once instead of per particle.
+    pub fn uniform_interior_slots(&self) -> Option<[SpringSlot; SLOTS]> {
+        let n = self.n as usize;
+        if n <= 4 {
+            return None;
+        }
+        let first = 2 * n + 2;
+        let mut uni = [SpringSlot::EMPTY; SLOTS];
+        uni.copy_from_slice(&self.slots[first * SLOTS..(first + 1) * SLOTS]);
+        for u in &mut uni {
+            u.neighbor = 0;
+        }
+        for j in 2..n - 2 {
+            for i in 2..n - 2 {
+                let p = j * n + i;
+                for (s, u) in uni.iter().enumerate() {
+                    let t = &self.slots[p * SLOTS + s];
+                    let off = SLOT_OFFSETS[s].0 as isize + SLOT_OFFSETS[s].1 as isize * n as isize;
+                    if t.neighbor as isize != p as isize + off || t.rest != u.rest || t.ks != u.ks || t.kd != u.kd {
+                        return None;
+                    }
+                }
+            }
+        }
+        Some(uni)
+    }
+
     /// Rebuilds the spring constants for new parameters (rest lengths stay).
     pub fn set_spring_constants(&mut self, params: &SimParams) {
         let n = self.n;

@@ -358,3 +358,53 @@ fn ten_thousand_substeps_stay_finite_and_bounded() {
     // that jitters the particles next to the pins gives about 1 m/s.
     assert!(vmax < 0.3, "cloth still moving at {vmax} m/s after {} s", frames as f32 * params.frame_dt);
 }
+
+#[test]
+fn row_fast_path_matches_the_twin_bit_for_bit() {
+    // The solvers' row-wise springs (uniform interior fast path) must compute exactly what
+    // the per-particle twin computes: same operations in the same order.
+    for n in [5u32, 6, 33, 64] {
+        let scene = Scene::with_n(n);
+        let params = SimParams::default();
+        let mut s = CpuSolver::new(Exec::Serial, scene, params.clone()).unwrap();
+        for _ in 0..20 {
+            s.step_frame().unwrap();
+        }
+        let st = s.state().unwrap();
+        let topo = s.topology();
+        let uni = topo.uniform_interior_slots();
+        assert!(uni.is_some(), "a built grid has uniform interior slots");
+        let mut lanes = cpu::Lanes::default();
+        lanes.fill(Exec::Serial, n as usize, &st.pos, Some(&st.prev));
+        let mut twin = st.force.clone();
+        cpu::springs(Exec::Serial, params.dt(), &topo.slots, &st.pos, &st.prev, &mut twin);
+        for exec in [Exec::Serial, Exec::Parallel] {
+            let mut rows = st.force.clone();
+            cpu::springs_rows(exec, n as usize, params.dt(), &topo.slots, uni.as_ref(), &lanes, &st.pos, &st.prev, &mut rows);
+            let bits = |v: &Vec<V4>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&twin), bits(&rows), "springs, n = {n}, {exec:?}");
+        }
+        // Strain limit, with a grabbed particle inside the interior (mobility 0 there).
+        let grab = clothlab_core::Grab { particle: (n * n / 2 + n / 2), target: [0.0, 1.0, 0.0] };
+        let p = StepParams::new(&params, s.scene(), Some(grab));
+        // Stretch the sheet 1.2× away from its first pin so that springs and tethers act.
+        let mut st = st.clone();
+        let top = st.pos[0];
+        for q in st.pos.iter_mut().filter(|q| q[3] != 0.0) {
+            for k in 0..3 {
+                q[k] = top[k] + (q[k] - top[k]) * 1.2;
+            }
+        }
+        let mut lanes_p = cpu::Lanes::default();
+        lanes_p.fill(Exec::Parallel, n as usize, &st.pos, None);
+        let mut twin = st.pos.clone();
+        cpu::strain_limit(Exec::Serial, &p, &topo.slots, &topo.tethers, &st.pos, &mut twin);
+        assert_ne!(twin, st.pos, "the pass should change something");
+        for exec in [Exec::Serial, Exec::Parallel] {
+            let mut rows = st.pos.clone();
+            cpu::strain_limit_rows(exec, &p, &topo.slots, uni.as_ref(), &topo.tethers, &lanes_p, &st.pos, &mut rows);
+            let bits = |v: &Vec<V4>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&twin), bits(&rows), "strain_limit, n = {n}, {exec:?}");
+        }
+    }
+}

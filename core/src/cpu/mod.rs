@@ -9,6 +9,7 @@
 mod collide;
 mod forces;
 mod integrate;
+mod lanes;
 mod normals;
 mod solver;
 mod springs;
@@ -17,10 +18,11 @@ mod strain_limit;
 pub use collide::collide;
 pub use forces::forces;
 pub use integrate::integrate;
+pub use lanes::Lanes;
 pub use normals::{tri_normals, vertex_normals};
 pub use solver::CpuSolver;
-pub use springs::{springs, springs_scatter};
-pub use strain_limit::strain_limit;
+pub use springs::{springs, springs_rows, springs_scatter};
+pub use strain_limit::{strain_limit, strain_limit_rows};
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -62,6 +64,33 @@ pub(crate) fn for_each2<A: Send, B: Send>(
             .with_min_len(MIN_CHUNK)
             .enumerate()
             .for_each(|(i, (a, b))| f(i, a, b)),
+    }
+}
+
+/// Runs `f(j, row_j)` for every row of `n` elements of `out`.
+pub(crate) fn for_each_row<T: Send>(exec: Exec, n: usize, out: &mut [T], f: impl Fn(usize, &mut [T]) + Sync + Send) {
+    match exec {
+        Exec::Serial => out.chunks_mut(n).enumerate().for_each(|(j, r)| f(j, r)),
+        Exec::Parallel => out.par_chunks_mut(n).with_min_len(MIN_CHUNK.div_ceil(n)).enumerate().for_each(|(j, r)| f(j, r)),
+    }
+}
+
+/// Particles per SIMD group in the interior fast paths.
+pub(crate) const LANES: usize = 8;
+
+/// x, y and z of `buf[start .. start + LANES]`, one lane per particle.
+#[inline(always)]
+pub(crate) fn load3(buf: &[V4], start: usize) -> [wide::f32x8; 3] {
+    let g: &[V4; LANES] = buf[start..start + LANES].try_into().expect("LANES elements");
+    std::array::from_fn(|c| wide::f32x8::from(std::array::from_fn::<f32, LANES, _>(|k| g[k][c])))
+}
+
+/// Writes lanes back as `[x, y, z, 0]` to `buf[0 .. LANES]`.
+#[inline(always)]
+pub(crate) fn store3(buf: &mut [V4], v: &[wide::f32x8; 3]) {
+    let [x, y, z] = [v[0].to_array(), v[1].to_array(), v[2].to_array()];
+    for (k, o) in buf[..LANES].iter_mut().enumerate() {
+        *o = [x[k], y[k], z[k], 0.0];
     }
 }
 

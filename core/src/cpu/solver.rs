@@ -2,8 +2,8 @@
 
 use std::time::Instant;
 
-use super::{Exec, collide, forces, integrate, springs, strain_limit, tri_normals, vertex_normals};
-use crate::grid::{ClothState, ClothTopology, Grab, StepParams, V4, build};
+use super::{Exec, Lanes, collide, forces, integrate, springs_rows, strain_limit_rows, tri_normals, vertex_normals};
+use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
 use crate::params::SimParams;
 use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};
@@ -22,6 +22,10 @@ pub struct CpuSolver {
     scratch: Vec<V4>,
     /// Face normals, one per triangle.
     face: Vec<V4>,
+    /// Structure-of-arrays copy of the state for the SIMD paths.
+    lanes: Lanes,
+    /// The interior's uniform spring slots, if the table has them (the fast path).
+    uniform: Option<[SpringSlot; SLOTS]>,
     timer: TimingRecorder,
     /// Record per-kernel timings (costs two `Instant::now` per kernel).
     pub time_kernels: bool,
@@ -39,6 +43,8 @@ impl CpuSolver {
             grab: None,
             scratch: vec![[0.0; 4]; np],
             face: vec![[0.0; 4]; topo.triangles.len()],
+            uniform: topo.uniform_interior_slots(),
+            lanes: Lanes::default(),
             state,
             topo,
             timer: TimingRecorder::default(),
@@ -86,15 +92,24 @@ impl CpuSolver {
         let e = self.exec;
         let on = self.time_kernels;
         let t0 = Instant::now();
-        let Self { state, topo, scratch, face, timer, scene, params, .. } = self;
+        let Self { state, topo, scratch, face, timer, scene, params, uniform, lanes, .. } = self;
+        let n = topo.n as usize;
         let ClothState { pos, prev, force, normal, .. } = state;
         Self::timed(timer, on, KernelId::Forces, || forces(e, &p, pos, prev, force));
-        Self::timed(timer, on, KernelId::Springs, || springs(e, p.dt, &topo.slots, pos, prev, force));
+        Self::timed(timer, on, KernelId::Springs, || {
+            if uniform.is_some() {
+                lanes.fill(e, n, pos, Some(prev));
+            }
+            springs_rows(e, n, p.dt, &topo.slots, uniform.as_ref(), lanes, pos, prev, force)
+        });
         Self::timed(timer, on, KernelId::Integrate, || integrate(e, &p, force, pos, prev));
         Self::timed(timer, on, KernelId::Collide, || collide(e, &p, &scene.spheres, &scene.boxes, pos, prev));
         Self::timed(timer, on, KernelId::StrainLimit, || {
             for _ in 0..params.strain_iterations {
-                strain_limit(e, &p, &topo.slots, &topo.tethers, pos, scratch);
+                if uniform.is_some() {
+                    lanes.fill(e, n, pos, None);
+                }
+                strain_limit_rows(e, &p, &topo.slots, uniform.as_ref(), &topo.tethers, lanes, pos, scratch);
                 std::mem::swap(pos, scratch);
             }
         });
@@ -128,6 +143,7 @@ impl Solver for CpuSolver {
         params.validate()?;
         self.params = params;
         self.topo.set_spring_constants(&self.params);
+        self.uniform = self.topo.uniform_interior_slots();
         Ok(())
     }
 

@@ -2,9 +2,10 @@
 //! `F_a = -[ks (|L| - r) + kd (L'·L)/|L|] L/|L|`, `L = x_a - x_b`, `L' = v_a - v_b`.
 
 use glam::Vec3;
+use wide::f32x8;
 
-use super::{Exec, for_each, v3, v4};
-use crate::grid::{SLOTS, Spring, SpringSlot, V4};
+use super::{Exec, LANES, Lanes, for_each, load3, store3, v3, v4};
+use crate::grid::{SLOT_OFFSETS, SLOTS, Spring, SpringSlot, V4};
 
 /// Force on end `a` of a spring with `l = x_a - x_b` and `dv = (v_a - v_b)·dt`.
 #[inline(always)]
@@ -13,27 +14,67 @@ fn spring_force(l: Vec3, dv: Vec3, s: &SpringSlot, inv_dt: f32) -> Vec3 {
     if len <= f32::MIN_POSITIVE {
         return Vec3::ZERO;
     }
-    let dir = l / len;
-    -(s.ks * (len - s.rest) + s.kd * inv_dt * dv.dot(dir)) * dir
+    // One division per spring, not three: the kernels are bound by divisions and roots.
+    let dir = l * (1.0 / len);
+    -(s.ks * (len - s.rest) + (s.kd * inv_dt) * dv.dot(dir)) * dir
 }
 
 /// Gather (optimized kernels, CPU solvers): each particle adds its 12 slots in slot order.
 pub fn springs(exec: Exec, dt: f32, slots: &[SpringSlot], pos: &[V4], prev: &[V4], force: &mut [V4]) {
     let inv_dt = 1.0 / dt;
-    for_each(exec, force, |i, f| {
-        let xa = v3(pos[i]);
-        let va = xa - v3(prev[i]);
-        let mut acc = v3(*f);
-        for s in &slots[i * SLOTS..(i + 1) * SLOTS] {
-            if s.neighbor < 0 {
-                continue;
-            }
-            let b = s.neighbor as usize;
-            let xb = v3(pos[b]);
-            let vb = xb - v3(prev[b]);
-            acc += spring_force(xa - xb, va - vb, s, inv_dt);
+    for_each(exec, force, |i, f| *f = gather_at(i, inv_dt, slots, pos, prev, *f));
+}
+
+/// The gather of particle `i`: `f` plus its springs' forces in slot order.
+#[inline(always)]
+fn gather_at(i: usize, inv_dt: f32, slots: &[SpringSlot], pos: &[V4], prev: &[V4], f: V4) -> V4 {
+    let xa = v3(pos[i]);
+    let va = xa - v3(prev[i]);
+    let mut acc = v3(f);
+    for s in &slots[i * SLOTS..(i + 1) * SLOTS] {
+        if s.neighbor < 0 {
+            continue;
         }
-        *f = v4(acc, 0.0);
+        let b = s.neighbor as usize;
+        let xb = v3(pos[b]);
+        let vb = xb - v3(prev[b]);
+        acc += spring_force(xa - xb, va - vb, s, inv_dt);
+    }
+    v4(acc, 0.0)
+}
+
+/// [`springs`], row by row, with the interior of each row on [`springs_interior`] when
+/// the grid's slots are uniform (`uni`); `lanes` must hold `pos` and `pos - prev`.
+/// Bit-identical to [`springs`].
+#[allow(clippy::too_many_arguments)]
+pub fn springs_rows(
+    exec: Exec,
+    n: usize,
+    dt: f32,
+    slots: &[SpringSlot],
+    uni: Option<&[SpringSlot; SLOTS]>,
+    lanes: &Lanes,
+    pos: &[V4],
+    prev: &[V4],
+    force: &mut [V4],
+) {
+    let inv_dt = 1.0 / dt;
+    let offs: [isize; SLOTS] = SLOT_OFFSETS.map(|(di, dj)| di as isize + dj as isize * n as isize);
+    super::for_each_row(exec, n, force, |j, row| {
+        let base = j * n;
+        match uni {
+            Some(uni) if j >= 2 && j + 2 < n && n > 4 => {
+                for i in [0, 1, n - 2, n - 1] {
+                    row[i] = gather_at(base + i, inv_dt, slots, pos, prev, row[i]);
+                }
+                springs_interior(base + 2, n - 4, &offs, uni, inv_dt, lanes, pos, prev, &mut row[2..n - 2]);
+            }
+            _ => {
+                for (i, f) in row.iter_mut().enumerate() {
+                    *f = gather_at(base + i, inv_dt, slots, pos, prev, *f);
+                }
+            }
+        }
     });
 }
 
@@ -49,5 +90,63 @@ pub fn springs_scatter(dt: f32, springs: &[Spring], pos: &[V4], prev: &[V4], for
         let fa = spring_force(xa - xb, va - vb, &slot, inv_dt);
         force[a] = v4(v3(force[a]) + fa, 0.0);
         force[b] = v4(v3(force[b]) - fa, 0.0);
+    }
+}
+
+/// Fast path for `len` interior particles starting at `base` (all 12 slots present, all
+/// springs of a slot with the same constants `uni[s]`): the same arithmetic in the same
+/// order as [`springs`], without the table and the branches, eight particles at a time
+/// in SIMD lanes (`wide::f32x8`; lane-wise IEEE operations, so the bits are the twin's).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn springs_interior(
+    base: usize,
+    len: usize,
+    offs: &[isize; SLOTS],
+    uni: &[SpringSlot; SLOTS],
+    inv_dt: f32,
+    lanes: &Lanes,
+    pos: &[V4],
+    prev: &[V4],
+    force: &mut [V4],
+) {
+    let groups = len / LANES;
+    let zero = f32x8::ZERO;
+    let tiny = f32x8::splat(f32::MIN_POSITIVE);
+    for g in 0..groups {
+        let a0 = base + g * LANES;
+        let xa = lanes.pos3(a0);
+        let va = lanes.vel3(a0);
+        let fo = &mut force[g * LANES..(g + 1) * LANES];
+        let mut acc = load3(fo, 0);
+        for (s, slot) in uni.iter().enumerate() {
+            let b0 = (a0 as isize + offs[s]) as usize;
+            let xb = lanes.pos3(b0);
+            let vb = lanes.vel3(b0);
+            let l = [xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2]];
+            let dv = [va[0] - vb[0], va[1] - vb[1], va[2] - vb[2]];
+            let len = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+            let inv = f32x8::ONE / len;
+            let dir = [l[0] * inv, l[1] * inv, l[2] * inv];
+            let dot = dv[0] * dir[0] + dv[1] * dir[1] + dv[2] * dir[2];
+            let m = -(f32x8::splat(slot.ks) * (len - f32x8::splat(slot.rest)) + f32x8::splat(slot.kd * inv_dt) * dot);
+            let live = len.simd_gt(tiny);
+            for c in 0..3 {
+                acc[c] += live.bitselect(m * dir[c], zero);
+            }
+        }
+        store3(fo, &acc);
+    }
+    // The remainder, one particle at a time with the same arithmetic.
+    for i in groups * LANES..len {
+        let a = base + i;
+        let xa = v3(pos[a]);
+        let va = xa - v3(prev[a]);
+        let mut acc = v3(force[i]);
+        for (s, slot) in uni.iter().enumerate() {
+            let b = (a as isize + offs[s]) as usize;
+            let xb = v3(pos[b]);
+            acc += spring_force(xa - xb, va - (xb - v3(prev[b])), slot, inv_dt);
+        }
+        force[i] = v4(acc, 0.0);
     }
 }

@@ -17,8 +17,10 @@
 //! bound as n grows (measured: max structural strain 1.5 at n = 128 and 9.4 at n = 256
 //! with 2 passes per substep); with them the pins hold every particle directly.
 
-use super::{Exec, for_each, v3, v4};
-use crate::grid::{SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
+use wide::f32x8;
+
+use super::{Exec, LANES, Lanes, for_each, v3, v4};
+use crate::grid::{SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
 
 /// A spring over `(1 + τ)·rest` is pulled towards `(1 + STRAIN_AIM·τ)·rest`, a little
 /// inside the limit: corrections proportional to the excess over the limit itself make
@@ -38,45 +40,166 @@ pub fn strain_limit(
     pos: &[V4],
     out: &mut [V4],
 ) {
+    for_each(exec, out, |i, o| *o = limit_at(i, p, slots, tethers, pos));
+}
+
+/// The pass for particle `i`.
+#[inline(always)]
+fn limit_at(i: usize, p: &StepParams, slots: &[SpringSlot], tethers: &[[Tether; TETHER_SLOTS]], pos: &[V4]) -> V4 {
     let stretch = 1.0 + p.strain_limit;
     let aim = 1.0 + STRAIN_AIM * p.strain_limit;
     let mobility = |k: usize| if k as i32 == p.grab_index { 0.0 } else { pos[k][3] };
-    for_each(exec, out, |i, o| {
-        let xi = v3(pos[i]);
-        let wi = mobility(i);
-        if wi == 0.0 {
-            *o = pos[i];
-            return;
+    let xi = v3(pos[i]);
+    let wi = mobility(i);
+    if wi == 0.0 {
+        return pos[i];
+    }
+    let mut corr = glam::Vec3::ZERO;
+    let mut count = 0.0f32;
+    for s in &slots[i * SLOTS..i * SLOTS + STRAIN_SLOTS] {
+        if s.neighbor < 0 {
+            continue;
         }
-        let mut corr = glam::Vec3::ZERO;
-        let mut count = 0.0f32;
-        for s in &slots[i * SLOTS..i * SLOTS + STRAIN_SLOTS] {
-            if s.neighbor < 0 {
-                continue;
+        let b = s.neighbor as usize;
+        let d = v3(pos[b]) - xi;
+        let len = d.length();
+        if len > stretch * s.rest {
+            let wb = mobility(b);
+            let share = wi / (wi + wb);
+            corr += d * (share * (len - aim * s.rest) / len);
+            count += 1.0;
+        }
+    }
+    let mut x = if count > 0.0 { xi + corr / count } else { xi };
+    for t in &tethers[i] {
+        if t.pin < 0 {
+            continue;
+        }
+        let pin = v3(pos[t.pin as usize]);
+        let d = x - pin;
+        let len = d.length();
+        let max = stretch * t.rest;
+        if len > max {
+            x = pin + d * (max / len);
+        }
+    }
+    v4(x, pos[i][3])
+}
+
+/// [`strain_limit`] row by row, the interior of each row eight particles at a time when
+/// the grid's slots are uniform (`uni`); `lanes` must hold `pos`. Bit-identical to
+/// [`strain_limit`].
+#[allow(clippy::too_many_arguments)]
+pub fn strain_limit_rows(
+    exec: Exec,
+    p: &StepParams,
+    slots: &[SpringSlot],
+    uni: Option<&[SpringSlot; SLOTS]>,
+    tethers: &[[Tether; TETHER_SLOTS]],
+    lanes: &Lanes,
+    pos: &[V4],
+    out: &mut [V4],
+) {
+    let n = p.n as usize;
+    super::for_each_row(exec, n, out, |j, row| {
+        let base = j * n;
+        match uni {
+            Some(uni) if j >= 2 && j + 2 < n && n > 4 => {
+                for i in [0, 1, n - 2, n - 1] {
+                    row[i] = limit_at(base + i, p, slots, tethers, pos);
+                }
+                let len = n - 4;
+                let groups = len / LANES;
+                for g in 0..groups {
+                    let a0 = base + 2 + g * LANES;
+                    let o = &mut row[2 + g * LANES..2 + (g + 1) * LANES];
+                    limit_lanes(a0, p, uni, tethers, lanes, pos, o);
+                }
+                for i in 2 + groups * LANES..n - 2 {
+                    row[i] = limit_at(base + i, p, slots, tethers, pos);
+                }
             }
-            let b = s.neighbor as usize;
-            let d = v3(pos[b]) - xi;
-            let len = d.length();
-            if len > stretch * s.rest {
-                let wb = mobility(b);
-                let share = wi / (wi + wb);
-                corr += d * (share * (len - aim * s.rest) / len);
-                count += 1.0;
+            _ => {
+                for (i, o) in row.iter_mut().enumerate() {
+                    *o = limit_at(base + i, p, slots, tethers, pos);
+                }
             }
         }
-        let mut x = if count > 0.0 { xi + corr / count } else { xi };
-        for t in &tethers[i] {
-            if t.pin < 0 {
-                continue;
-            }
-            let pin = v3(pos[t.pin as usize]);
-            let d = x - pin;
-            let len = d.length();
-            let max = stretch * t.rest;
-            if len > max {
-                x = pin + d * (max / len);
-            }
-        }
-        *o = v4(x, pos[i][3]);
     });
+}
+
+/// Mobility of particles `start .. start + LANES`, with the grabbed particle's lane at 0.
+#[inline(always)]
+fn mobility_lanes(lanes: &Lanes, start: usize, grab: i32) -> f32x8 {
+    let k = grab as isize - start as isize;
+    if (0..LANES as isize).contains(&k) {
+        let mut w = lanes.w(start).to_array();
+        w[k as usize] = 0.0;
+        f32x8::from(w)
+    } else {
+        lanes.w(start)
+    }
+}
+
+/// [`limit_at`] for the eight interior particles from `a0`, written to `out[0 .. LANES]`.
+fn limit_lanes(
+    a0: usize,
+    p: &StepParams,
+    uni: &[SpringSlot; SLOTS],
+    tethers: &[[Tether; TETHER_SLOTS]],
+    lanes: &Lanes,
+    pos: &[V4],
+    out: &mut [V4],
+) {
+    let n = p.n as isize;
+    let stretch = 1.0 + p.strain_limit;
+    let aim = 1.0 + STRAIN_AIM * p.strain_limit;
+    let zero = f32x8::ZERO;
+    let xi = lanes.pos3(a0);
+    let wi = mobility_lanes(lanes, a0, p.grab_index);
+    let mut corr = [zero; 3];
+    let mut count = zero;
+    for (s, slot) in uni[..STRAIN_SLOTS].iter().enumerate() {
+        let (di, dj) = SLOT_OFFSETS[s];
+        let b0 = (a0 as isize + di as isize + dj as isize * n) as usize;
+        let xb = lanes.pos3(b0);
+        let d = [xb[0] - xi[0], xb[1] - xi[1], xb[2] - xi[2]];
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let live = len.simd_gt(f32x8::splat(stretch * slot.rest));
+        let wb = mobility_lanes(lanes, b0, p.grab_index);
+        let share = wi / (wi + wb);
+        let f = share * (len - f32x8::splat(aim * slot.rest)) / len;
+        for c in 0..3 {
+            corr[c] += live.bitselect(d[c] * f, zero);
+        }
+        count += live.bitselect(f32x8::ONE, zero);
+    }
+    let has = count.simd_gt(zero);
+    let mut x: [f32x8; 3] = std::array::from_fn(|c| has.bitselect(xi[c] + corr[c] / count, xi[c]));
+    let tg: &[[Tether; TETHER_SLOTS]; LANES] = tethers[a0..a0 + LANES].try_into().expect("LANES elements");
+    for t in 0..TETHER_SLOTS {
+        if tg.iter().all(|tk| tk[t].pin < 0) {
+            continue;
+        }
+        // Empty slots read particle 0 and are masked out.
+        let pins: [&V4; LANES] = std::array::from_fn(|k| &pos[tg[k][t].pin.max(0) as usize]);
+        let pin: [f32x8; 3] = std::array::from_fn(|c| f32x8::from(std::array::from_fn::<f32, LANES, _>(|k| pins[k][c])));
+        let rest = f32x8::from(std::array::from_fn::<f32, LANES, _>(|k| tg[k][t].rest));
+        let live = f32x8::from(std::array::from_fn::<f32, LANES, _>(|k| (tg[k][t].pin >= 0) as u8 as f32));
+        let d = [x[0] - pin[0], x[1] - pin[1], x[2] - pin[2]];
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let max = f32x8::splat(stretch) * rest;
+        let apply = len.simd_gt(max) & live.simd_gt(zero);
+        let q = max / len;
+        for c in 0..3 {
+            x[c] = apply.bitselect(pin[c] + d[c] * q, x[c]);
+        }
+    }
+    // Pinned and grabbed particles keep their position.
+    let fixed = wi.simd_eq(zero);
+    let [x0, x1, x2] = std::array::from_fn(|c| fixed.bitselect(xi[c], x[c]).to_array());
+    let src: &[V4; LANES] = pos[a0..a0 + LANES].try_into().expect("LANES elements");
+    for (k, o) in out[..LANES].iter_mut().enumerate() {
+        *o = [x0[k], x1[k], x2[k], src[k][3]];
+    }
 }
