@@ -380,7 +380,17 @@ fn row_fast_path_matches_the_twin_bit_for_bit() {
         cpu::springs(Exec::Serial, params.dt(), &topo.slots, &st.pos, &st.prev, &mut twin);
         for exec in [Exec::Serial, Exec::Parallel] {
             let mut rows = st.force.clone();
-            cpu::springs_rows(exec, n as usize, params.dt(), &topo.slots, uni.as_ref(), &lanes, &st.pos, &st.prev, &mut rows);
+            cpu::springs_rows(
+                exec,
+                n as usize,
+                params.dt(),
+                &topo.slots,
+                uni.as_ref(),
+                &lanes,
+                &st.pos,
+                &st.prev,
+                &mut rows,
+            );
             let bits = |v: &Vec<V4>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&twin), bits(&rows), "springs, n = {n}, {exec:?}");
         }
@@ -405,6 +415,26 @@ fn row_fast_path_matches_the_twin_bit_for_bit() {
             cpu::strain_limit_rows(exec, &p, &topo.slots, uni.as_ref(), &topo.tethers, &lanes_p, &st.pos, &mut rows);
             let bits = |v: &Vec<V4>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&twin), bits(&rows), "strain_limit, n = {n}, {exec:?}");
+        }
+        // Normals and wind (wind on, so the wind path is compared too).
+        let windy = SimParams { wind: [1.5, -0.5, 2.0], ..params.clone() };
+        let p = StepParams::new(&windy, s.scene(), None);
+        let mut face = vec![[0.0; 4]; topo.triangles.len()];
+        let (mut nrm, mut wind) = (st.normal.clone(), st.force.clone());
+        cpu::tri_normals(Exec::Serial, &topo.triangles, &st.pos, &mut face);
+        cpu::vertex_normals(Exec::Serial, &p, &topo.face_slots, &face, &mut nrm, &mut wind);
+        assert!(wind.iter().any(|f| f[0] != 0.0), "wind should act on the stretched sheet");
+        for exec in [Exec::Serial, Exec::Parallel] {
+            let mut faces = cpu::FaceLanes::default();
+            cpu::tri_normals_lanes(exec, n as usize, &lanes_p, &mut faces);
+            for (t, f) in face.iter().enumerate() {
+                assert_eq!(f.map(f32::to_bits), faces.get(t).map(f32::to_bits), "face {t}, n = {n}");
+            }
+            let (mut nrm2, mut wind2) = (vec![[0.0; 4]; st.pos.len()], vec![[0.0; 4]; st.pos.len()]);
+            cpu::vertex_normals_rows(exec, &p, &topo.face_slots, &faces, &mut nrm2, &mut wind2);
+            let bits = |v: &Vec<V4>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&nrm), bits(&nrm2), "normals, n = {n}, {exec:?}");
+            assert_eq!(bits(&wind), bits(&wind2), "wind, n = {n}, {exec:?}");
         }
     }
 }

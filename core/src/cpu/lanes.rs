@@ -82,7 +82,8 @@ impl Lanes {
     }
 }
 
-type RowMut<'a> = (((&'a mut [f32], &'a mut [f32]), (&'a mut [f32], &'a mut [f32])), ((&'a mut [f32], &'a mut [f32]), &'a mut [f32]));
+type RowMut<'a> =
+    (((&'a mut [f32], &'a mut [f32]), (&'a mut [f32], &'a mut [f32])), ((&'a mut [f32], &'a mut [f32]), &'a mut [f32]));
 
 #[inline(always)]
 fn lane(v: &[f32], start: usize) -> f32x8 {

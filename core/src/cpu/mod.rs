@@ -19,7 +19,7 @@ pub use collide::collide;
 pub use forces::forces;
 pub use integrate::integrate;
 pub use lanes::Lanes;
-pub use normals::{tri_normals, vertex_normals};
+pub use normals::{FaceLanes, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows};
 pub use solver::CpuSolver;
 pub use springs::{springs, springs_rows, springs_scatter};
 pub use strain_limit::{strain_limit, strain_limit_rows};
@@ -71,7 +71,9 @@ pub(crate) fn for_each2<A: Send, B: Send>(
 pub(crate) fn for_each_row<T: Send>(exec: Exec, n: usize, out: &mut [T], f: impl Fn(usize, &mut [T]) + Sync + Send) {
     match exec {
         Exec::Serial => out.chunks_mut(n).enumerate().for_each(|(j, r)| f(j, r)),
-        Exec::Parallel => out.par_chunks_mut(n).with_min_len(MIN_CHUNK.div_ceil(n)).enumerate().for_each(|(j, r)| f(j, r)),
+        Exec::Parallel => {
+            out.par_chunks_mut(n).with_min_len(MIN_CHUNK.div_ceil(n)).enumerate().for_each(|(j, r)| f(j, r))
+        }
     }
 }
 

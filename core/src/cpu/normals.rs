@@ -2,7 +2,11 @@
 //! `vertex_normals` — per particle: the sum of the adjacent face normals, normalised, and
 //! the wind force, which stays in the force buffer for the next substep's `forces`.
 
-use super::{Exec, for_each, for_each2, v3, v4};
+use glam::Vec3;
+use rayon::prelude::*;
+use wide::f32x8;
+
+use super::{Exec, LANES, Lanes, for_each, for_each2, v3, v4};
 use crate::grid::{FACE_SLOTS, StepParams, V4};
 
 /// Face normals `N` with `|N| = 2 · area(t)`; w holds `|N|`.
@@ -27,21 +31,186 @@ pub fn vertex_normals(
 ) {
     let w = v3(p.wind);
     let c = p.wind[3] / 6.0;
-    for_each2(exec, normal, force, |i, nrm, f| {
-        let mut sum = glam::Vec3::ZERO;
-        let mut wind = glam::Vec3::ZERO;
-        for &t in &face_slots[i] {
-            if t < 0 {
-                continue;
-            }
-            let f4 = face[t as usize];
-            let nf = v3(f4);
-            sum += nf;
-            if f4[3] > 0.0 {
-                wind += nf * (c * nf.dot(w) / f4[3]);
+    for_each2(exec, normal, force, |i, nrm, f| (*nrm, *f) = vnormal_at(&face_slots[i], |t| face[t], w, c));
+}
+
+/// Normal and wind force of a particle whose faces are `slots`, read through `fetch`.
+#[inline(always)]
+fn vnormal_at(slots: &[i32; FACE_SLOTS], fetch: impl Fn(usize) -> V4, w: Vec3, c: f32) -> (V4, V4) {
+    let mut sum = Vec3::ZERO;
+    let mut wind = Vec3::ZERO;
+    for &t in slots {
+        if t < 0 {
+            continue;
+        }
+        let f4 = fetch(t as usize);
+        let nf = v3(f4);
+        sum += nf;
+        // No wind (c = 0 or w = 0) adds exact zeros: skip the division.
+        if c != 0.0 && w != Vec3::ZERO && f4[3] > 0.0 {
+            wind += nf * (c * nf.dot(w) / f4[3]);
+        }
+    }
+    (v4(sum.normalize_or_zero(), 0.0), v4(wind, 0.0))
+}
+
+/// Face normals in structure-of-arrays form for the fast paths: `f[t][c][q]` is
+/// component `c` (x, y, z, |N|) of triangle `t` (0 or 1) of quad `q = qj·(n-1) + qi`,
+/// i.e. of triangle `2q + t` of [`tri_normals`].
+#[derive(Debug, Clone, Default)]
+pub struct FaceLanes {
+    f: [[Vec<f32>; 4]; 2],
+}
+
+impl FaceLanes {
+    /// Triangle `t` (numbered as in the topology) as `[x, y, z, |N|]`.
+    #[inline(always)]
+    pub fn get(&self, t: usize) -> V4 {
+        let (q, k) = (t / 2, t % 2);
+        [self.f[k][0][q], self.f[k][1][q], self.f[k][2][q], self.f[k][3][q]]
+    }
+
+    #[inline(always)]
+    fn lanes(&self, k: usize, q: usize) -> [f32x8; 4] {
+        std::array::from_fn(|c| {
+            let a: [f32; LANES] = self.f[k][c][q..q + LANES].try_into().expect("LANES elements");
+            f32x8::from(a)
+        })
+    }
+}
+
+/// `(b - a) × (c - a)` and its length, lane-wise, in glam's operation order.
+#[inline(always)]
+fn cross_len(a: &[f32x8; 3], b: &[f32x8; 3], c: &[f32x8; 3]) -> [f32x8; 4] {
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let x = u[1] * v[2] - v[1] * u[2];
+    let y = u[2] * v[0] - v[2] * u[0];
+    let z = u[0] * v[1] - v[0] * u[1];
+    [x, y, z, (x * x + y * y + z * z).sqrt()]
+}
+
+/// [`tri_normals`] for a regular grid into [`FaceLanes`], eight quads at a time;
+/// `lanes` must hold the positions. Bit-identical to [`tri_normals`].
+pub fn tri_normals_lanes(exec: Exec, n: usize, lanes: &Lanes, out: &mut FaceLanes) {
+    let m = n - 1;
+    for v in out.f.iter_mut().flatten() {
+        v.resize(m * m, 0.0);
+    }
+    let [[a0, a1, a2, a3], [b0, b1, b2, b3]] = &mut out.f;
+    let row = |qj: usize, ((a0, a1), (a2, a3)): Quad4, ((b0, b1), (b2, b3)): Quad4| {
+        let base = qj * n;
+        let groups = m / LANES;
+        let mut put = |qi: usize, t0: [f32; 4], t1: [f32; 4]| {
+            (a0[qi], a1[qi], a2[qi], a3[qi]) = (t0[0], t0[1], t0[2], t0[3]);
+            (b0[qi], b1[qi], b2[qi], b3[qi]) = (t1[0], t1[1], t1[2], t1[3]);
+        };
+        for g in 0..groups {
+            let p00 = lanes.pos3(base + g * LANES);
+            let p10 = lanes.pos3(base + g * LANES + 1);
+            let p01 = lanes.pos3(base + n + g * LANES);
+            let p11 = lanes.pos3(base + n + g * LANES + 1);
+            let t0 = cross_len(&p00, &p01, &p11).map(|v| v.to_array());
+            let t1 = cross_len(&p00, &p11, &p10).map(|v| v.to_array());
+            for k in 0..LANES {
+                put(g * LANES + k, std::array::from_fn(|c| t0[c][k]), std::array::from_fn(|c| t1[c][k]));
             }
         }
-        *nrm = v4(sum.normalize_or_zero(), 0.0);
-        *f = v4(wind, 0.0);
-    });
+        let at = |i: usize| Vec3::new(lanes.pos[0][i], lanes.pos[1][i], lanes.pos[2][i]);
+        for qi in groups * LANES..m {
+            let (p00, p10, p01, p11) = (at(base + qi), at(base + qi + 1), at(base + n + qi), at(base + n + qi + 1));
+            let t0 = (p01 - p00).cross(p11 - p00);
+            let t1 = (p11 - p00).cross(p10 - p00);
+            put(qi, v4(t0, t0.length()), v4(t1, t1.length()));
+        }
+    };
+    match exec {
+        Exec::Serial => a0
+            .chunks_mut(m)
+            .zip(a1.chunks_mut(m))
+            .zip(a2.chunks_mut(m).zip(a3.chunks_mut(m)))
+            .zip(b0.chunks_mut(m).zip(b1.chunks_mut(m)).zip(b2.chunks_mut(m).zip(b3.chunks_mut(m))))
+            .enumerate()
+            .for_each(|(j, (a, b))| row(j, a, b)),
+        Exec::Parallel => a0
+            .par_chunks_mut(m)
+            .zip(a1.par_chunks_mut(m))
+            .zip(a2.par_chunks_mut(m).zip(a3.par_chunks_mut(m)))
+            .zip(b0.par_chunks_mut(m).zip(b1.par_chunks_mut(m)).zip(b2.par_chunks_mut(m).zip(b3.par_chunks_mut(m))))
+            .enumerate()
+            .for_each(|(j, (a, b))| row(j, a, b)),
+    }
+}
+
+type Quad4<'a> = ((&'a mut [f32], &'a mut [f32]), (&'a mut [f32], &'a mut [f32]));
+
+/// [`vertex_normals`] row by row from [`FaceLanes`], the interior of each row eight
+/// particles at a time. Bit-identical to [`vertex_normals`].
+pub fn vertex_normals_rows(
+    exec: Exec,
+    p: &StepParams,
+    face_slots: &[[i32; FACE_SLOTS]],
+    faces: &FaceLanes,
+    normal: &mut [V4],
+    force: &mut [V4],
+) {
+    let n = p.n as usize;
+    let m = n - 1;
+    let w = v3(p.wind);
+    let c = p.wind[3] / 6.0;
+    let windy = c != 0.0 && w != Vec3::ZERO;
+    let scalar = |i: usize| vnormal_at(&face_slots[i], |t| faces.get(t), w, c);
+    let (wl, cl, zero) = ([f32x8::splat(w.x), f32x8::splat(w.y), f32x8::splat(w.z)], f32x8::splat(c), f32x8::ZERO);
+    let row = |j: usize, nrow: &mut [V4], frow: &mut [V4]| {
+        let base = j * n;
+        let interior = j >= 1 && j + 1 < n && n > 2;
+        let groups = if interior { (n - 2) / LANES } else { 0 };
+        for g in 0..groups {
+            let i0 = 1 + g * LANES;
+            // Quads (i-1, j-1), (i, j-1), (i-1, j), (i, j) for i = i0 .. i0 + LANES.
+            let (qa, qb, qc, qd) = ((j - 1) * m + i0 - 1, (j - 1) * m + i0, j * m + i0 - 1, j * m + i0);
+            let faces6 = [
+                faces.lanes(0, qa),
+                faces.lanes(1, qa),
+                faces.lanes(0, qb),
+                faces.lanes(1, qc),
+                faces.lanes(0, qd),
+                faces.lanes(1, qd),
+            ];
+            let mut sum = [zero; 3];
+            let mut wind = [zero; 3];
+            for f4 in &faces6 {
+                for k in 0..3 {
+                    sum[k] += f4[k];
+                }
+                if !windy {
+                    continue;
+                }
+                let dot = f4[0] * wl[0] + f4[1] * wl[1] + f4[2] * wl[2];
+                let q = cl * dot / f4[3];
+                let live = f4[3].simd_gt(zero);
+                for k in 0..3 {
+                    wind[k] += live.bitselect(f4[k] * q, zero);
+                }
+            }
+            let rcp = f32x8::ONE / (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
+            let ok = rcp.simd_lt(f32x8::splat(f32::INFINITY)) & rcp.simd_gt(zero);
+            let nv: [[f32; LANES]; 3] = std::array::from_fn(|k| ok.bitselect(sum[k] * rcp, zero).to_array());
+            let wv: [[f32; LANES]; 3] = std::array::from_fn(|k| wind[k].to_array());
+            for k in 0..LANES {
+                nrow[i0 + k] = [nv[0][k], nv[1][k], nv[2][k], 0.0];
+                frow[i0 + k] = [wv[0][k], wv[1][k], wv[2][k], 0.0];
+            }
+        }
+        let done = if interior { 1..1 + groups * LANES } else { 0..0 };
+        for i in (0..n).filter(|i| !done.contains(i)) {
+            (nrow[i], frow[i]) = scalar(base + i);
+        }
+    };
+    match exec {
+        Exec::Serial => normal.chunks_mut(n).zip(force.chunks_mut(n)).enumerate().for_each(|(j, (a, b))| row(j, a, b)),
+        Exec::Parallel => {
+            normal.par_chunks_mut(n).zip(force.par_chunks_mut(n)).enumerate().for_each(|(j, (a, b))| row(j, a, b))
+        }
+    }
 }

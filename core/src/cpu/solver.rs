@@ -2,7 +2,10 @@
 
 use std::time::Instant;
 
-use super::{Exec, Lanes, collide, forces, integrate, springs_rows, strain_limit_rows, tri_normals, vertex_normals};
+use super::{
+    Exec, FaceLanes, Lanes, collide, forces, integrate, springs_rows, strain_limit_rows, tri_normals,
+    tri_normals_lanes, vertex_normals, vertex_normals_rows,
+};
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
 use crate::params::SimParams;
 use crate::scene::Scene;
@@ -24,6 +27,8 @@ pub struct CpuSolver {
     face: Vec<V4>,
     /// Structure-of-arrays copy of the state for the SIMD paths.
     lanes: Lanes,
+    /// Face normals for the SIMD paths.
+    face_lanes: FaceLanes,
     /// The interior's uniform spring slots, if the table has them (the fast path).
     uniform: Option<[SpringSlot; SLOTS]>,
     timer: TimingRecorder,
@@ -45,6 +50,7 @@ impl CpuSolver {
             face: vec![[0.0; 4]; topo.triangles.len()],
             uniform: topo.uniform_interior_slots(),
             lanes: Lanes::default(),
+            face_lanes: FaceLanes::default(),
             state,
             topo,
             timer: TimingRecorder::default(),
@@ -92,7 +98,7 @@ impl CpuSolver {
         let e = self.exec;
         let on = self.time_kernels;
         let t0 = Instant::now();
-        let Self { state, topo, scratch, face, timer, scene, params, uniform, lanes, .. } = self;
+        let Self { state, topo, scratch, face, timer, scene, params, uniform, lanes, face_lanes, .. } = self;
         let n = topo.n as usize;
         let ClothState { pos, prev, force, normal, .. } = state;
         Self::timed(timer, on, KernelId::Forces, || forces(e, &p, pos, prev, force));
@@ -113,10 +119,20 @@ impl CpuSolver {
                 std::mem::swap(pos, scratch);
             }
         });
-        Self::timed(timer, on, KernelId::TriNormals, || tri_normals(e, &topo.triangles, pos, face));
-        Self::timed(timer, on, KernelId::VertexNormals, || {
-            vertex_normals(e, &p, &topo.face_slots, face, normal, force)
-        });
+        if uniform.is_some() {
+            Self::timed(timer, on, KernelId::TriNormals, || {
+                lanes.fill(e, n, pos, None);
+                tri_normals_lanes(e, n, lanes, face_lanes)
+            });
+            Self::timed(timer, on, KernelId::VertexNormals, || {
+                vertex_normals_rows(e, &p, &topo.face_slots, face_lanes, normal, force)
+            });
+        } else {
+            Self::timed(timer, on, KernelId::TriNormals, || tri_normals(e, &topo.triangles, pos, face));
+            Self::timed(timer, on, KernelId::VertexNormals, || {
+                vertex_normals(e, &p, &topo.face_slots, face, normal, force)
+            });
+        }
         if on {
             timer.record(SUBSTEP, t0.elapsed().as_nanos() as f64);
         }

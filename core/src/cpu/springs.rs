@@ -137,16 +137,16 @@ pub(crate) fn springs_interior(
         store3(fo, &acc);
     }
     // The remainder, one particle at a time with the same arithmetic.
-    for i in groups * LANES..len {
+    for (i, f) in force.iter_mut().enumerate().take(len).skip(groups * LANES) {
         let a = base + i;
         let xa = v3(pos[a]);
         let va = xa - v3(prev[a]);
-        let mut acc = v3(force[i]);
+        let mut acc = v3(*f);
         for (s, slot) in uni.iter().enumerate() {
             let b = (a as isize + offs[s]) as usize;
             let xb = v3(pos[b]);
             acc += spring_force(xa - xb, va - (xb - v3(prev[b])), slot, inv_dt);
         }
-        force[i] = v4(acc, 0.0);
+        *f = v4(acc, 0.0);
     }
 }

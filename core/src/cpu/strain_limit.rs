@@ -65,8 +65,8 @@ fn limit_at(i: usize, p: &StepParams, slots: &[SpringSlot], tethers: &[[Tether; 
         let len = d.length();
         if len > stretch * s.rest {
             let wb = mobility(b);
-            let share = wi / (wi + wb);
-            corr += d * (share * (len - aim * s.rest) / len);
+            // share · excess / len with share = wi / (wi + wb), in one division.
+            corr += d * (wi * (len - aim * s.rest) / ((wi + wb) * len));
             count += 1.0;
         }
     }
@@ -115,8 +115,8 @@ pub fn strain_limit_rows(
                     let o = &mut row[2 + g * LANES..2 + (g + 1) * LANES];
                     limit_lanes(a0, p, uni, tethers, lanes, pos, o);
                 }
-                for i in 2 + groups * LANES..n - 2 {
-                    row[i] = limit_at(base + i, p, slots, tethers, pos);
+                for (i, o) in row.iter_mut().enumerate().take(n - 2).skip(2 + groups * LANES) {
+                    *o = limit_at(base + i, p, slots, tethers, pos);
                 }
             }
             _ => {
@@ -167,8 +167,7 @@ fn limit_lanes(
         let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         let live = len.simd_gt(f32x8::splat(stretch * slot.rest));
         let wb = mobility_lanes(lanes, b0, p.grab_index);
-        let share = wi / (wi + wb);
-        let f = share * (len - f32x8::splat(aim * slot.rest)) / len;
+        let f = wi * (len - f32x8::splat(aim * slot.rest)) / ((wi + wb) * len);
         for c in 0..3 {
             corr[c] += live.bitselect(d[c] * f, zero);
         }
@@ -183,7 +182,8 @@ fn limit_lanes(
         }
         // Empty slots read particle 0 and are masked out.
         let pins: [&V4; LANES] = std::array::from_fn(|k| &pos[tg[k][t].pin.max(0) as usize]);
-        let pin: [f32x8; 3] = std::array::from_fn(|c| f32x8::from(std::array::from_fn::<f32, LANES, _>(|k| pins[k][c])));
+        let pin: [f32x8; 3] =
+            std::array::from_fn(|c| f32x8::from(std::array::from_fn::<f32, LANES, _>(|k| pins[k][c])));
         let rest = f32x8::from(std::array::from_fn::<f32, LANES, _>(|k| tg[k][t].rest));
         let live = f32x8::from(std::array::from_fn::<f32, LANES, _>(|k| (tg[k][t].pin >= 0) as u8 as f32));
         let d = [x[0] - pin[0], x[1] - pin[1], x[2] - pin[2]];
