@@ -43,7 +43,20 @@ fn main() {
         let mut f = st.force.clone();
         let a = median_us(|| cpu::springs(exec, p.dt, &topo.slots, &st.pos, &st.prev, &mut f), reps);
         let b = median_us(
-            || cpu::springs_rows(exec, n as usize, p.dt, &topo.slots, uni.as_ref(), &lanes, &st.pos, &st.prev, &mut f),
+            || {
+                cpu::springs_rows(
+                    exec,
+                    n as usize,
+                    p.dt,
+                    &topo.slots,
+                    uni.as_ref(),
+                    None,
+                    &lanes,
+                    &st.pos,
+                    &st.prev,
+                    &mut f,
+                )
+            },
             reps,
         );
         println!("{exec:?} springs       twin {:7.1} ns/particle   rows {:7.1}", a * 1e3 / np, b * 1e3 / np);

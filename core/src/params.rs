@@ -75,7 +75,9 @@ pub struct SimParams {
     /// Provot strain limit τ: structural and shear springs are pulled back to at most
     /// `(1 + τ) · rest`, dimensionless. Default 0.10 (10 %).
     pub strain_limit: f32,
-    /// Strain-limit passes (Jacobi) per substep, 0 switches it off. Default 2.
+    /// Strain-limit passes (Jacobi) per substep, 0 switches it off. Default 1: with the
+    /// tethers holding the cloth to its pins, a second pass lowered the worst strain at
+    /// n = 256 only from 0.215 to 0.176 for a third of the substep's time.
     pub strain_iterations: u32,
     /// Tangential friction on the floor and on colliders, in [0, 1]: the fraction of the
     /// tangential motion removed at a contact. Default 0.4.
@@ -105,7 +107,7 @@ impl Default for SimParams {
             shear_damping: 0.02,
             bend_damping: 0.01,
             strain_limit: 0.10,
-            strain_iterations: 2,
+            strain_iterations: 1,
             friction: 0.4,
             collision_margin: 0.01,
             wind: [0.0; 3],

@@ -50,6 +50,10 @@ impl KernelId {
     }
 }
 
+/// Label of the CPU solvers' fused `forces` + `springs` sweep.
+pub const FORCES_SPRINGS: &str = "forces+springs";
+/// Label of the CPU solvers' fused `integrate` + `collide` sweep.
+pub const INTEGRATE_COLLIDE: &str = "integrate+collide";
 /// Label of the whole-substep row.
 pub const SUBSTEP: &str = "substep";
 /// Label of the whole-frame row (all substeps of a frame).

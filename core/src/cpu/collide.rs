@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::integrate::contact_prev;
+use super::integrate::{contact_prev, integrate_at};
 use super::{Exec, for_each2, v3, v4};
 use crate::grid::{StepParams, V4};
 use crate::scene::{Aabb, Sphere};
@@ -12,55 +12,79 @@ use crate::scene::{Aabb, Sphere};
 pub fn collide(exec: Exec, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], pos: &mut [V4], prev: &mut [V4]) {
     let spheres = &spheres[..p.num_spheres as usize];
     let boxes = &boxes[..p.num_boxes as usize];
+    for_each2(exec, pos, prev, |i, x4, xp4| collide_at(i, p, spheres, boxes, x4, xp4));
+}
+
+/// `integrate` then `collide` for each particle in one sweep (both touch only their own
+/// particle, so this is exactly the two kernels run one after the other).
+#[allow(clippy::too_many_arguments)]
+pub fn integrate_collide(
+    exec: Exec,
+    p: &StepParams,
+    spheres: &[Sphere],
+    boxes: &[Aabb],
+    force: &[V4],
+    pos: &mut [V4],
+    prev: &mut [V4],
+) {
+    let spheres = &spheres[..p.num_spheres as usize];
+    let boxes = &boxes[..p.num_boxes as usize];
     for_each2(exec, pos, prev, |i, x4, xp4| {
-        if x4[3] == 0.0 || i as i32 == p.grab_index {
-            return;
-        }
-        let mut x = v3(*x4);
-        let mut xp = v3(*xp4);
-        for s in spheres {
-            let c = Vec3::from(s.center);
-            let r = s.radius + p.margin;
-            let d = x - c;
-            let dist2 = d.length_squared();
-            if dist2 < r * r {
-                let dist = dist2.sqrt();
-                // A particle exactly at the centre is pushed up.
-                let nrm = if dist > 1e-12 { d / dist } else { Vec3::Y };
-                x = c + nrm * r;
-                xp = contact_prev(x, xp, nrm, p.friction);
-            }
-        }
-        for b in boxes {
-            let lo = v3(b.min) - Vec3::splat(p.margin);
-            let hi = v3(b.max) + Vec3::splat(p.margin);
-            if x.cmpgt(lo).all() && x.cmplt(hi).all() {
-                // Leave through the nearest face.
-                let below = x - lo;
-                let above = hi - x;
-                let mut best = below.x;
-                let mut nrm = -Vec3::X;
-                let mut face = lo.x;
-                let cands = [
-                    (above.x, Vec3::X, hi.x),
-                    (below.y, -Vec3::Y, lo.y),
-                    (above.y, Vec3::Y, hi.y),
-                    (below.z, -Vec3::Z, lo.z),
-                    (above.z, Vec3::Z, hi.z),
-                ];
-                for (dpen, nn, f) in cands {
-                    if dpen < best {
-                        best = dpen;
-                        nrm = nn;
-                        face = f;
-                    }
-                }
-                let axis = nrm.abs();
-                x = x * (Vec3::ONE - axis) + axis * face;
-                xp = contact_prev(x, xp, nrm, p.friction);
-            }
-        }
-        *x4 = v4(x, x4[3]);
-        *xp4 = v4(xp, 0.0);
+        integrate_at(i, p, force[i], x4, xp4);
+        collide_at(i, p, spheres, boxes, x4, xp4);
     });
+}
+
+/// Particle `i` against `spheres` and `boxes` (already cut to their counts), in place.
+#[inline(always)]
+fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], x4: &mut V4, xp4: &mut V4) {
+    if x4[3] == 0.0 || i as i32 == p.grab_index {
+        return;
+    }
+    let mut x = v3(*x4);
+    let mut xp = v3(*xp4);
+    for s in spheres {
+        let c = Vec3::from(s.center);
+        let r = s.radius + p.margin;
+        let d = x - c;
+        let dist2 = d.length_squared();
+        if dist2 < r * r {
+            let dist = dist2.sqrt();
+            // A particle exactly at the centre is pushed up.
+            let nrm = if dist > 1e-12 { d / dist } else { Vec3::Y };
+            x = c + nrm * r;
+            xp = contact_prev(x, xp, nrm, p.friction);
+        }
+    }
+    for b in boxes {
+        let lo = v3(b.min) - Vec3::splat(p.margin);
+        let hi = v3(b.max) + Vec3::splat(p.margin);
+        if x.cmpgt(lo).all() && x.cmplt(hi).all() {
+            // Leave through the nearest face.
+            let below = x - lo;
+            let above = hi - x;
+            let mut best = below.x;
+            let mut nrm = -Vec3::X;
+            let mut face = lo.x;
+            let cands = [
+                (above.x, Vec3::X, hi.x),
+                (below.y, -Vec3::Y, lo.y),
+                (above.y, Vec3::Y, hi.y),
+                (below.z, -Vec3::Z, lo.z),
+                (above.z, Vec3::Z, hi.z),
+            ];
+            for (dpen, nn, f) in cands {
+                if dpen < best {
+                    best = dpen;
+                    nrm = nn;
+                    face = f;
+                }
+            }
+            let axis = nrm.abs();
+            x = x * (Vec3::ONE - axis) + axis * face;
+            xp = contact_prev(x, xp, nrm, p.friction);
+        }
+    }
+    *x4 = v4(x, x4[3]);
+    *xp4 = v4(xp, 0.0);
 }

@@ -15,7 +15,7 @@ mod solver;
 mod springs;
 mod strain_limit;
 
-pub use collide::collide;
+pub use collide::{collide, integrate_collide};
 pub use forces::forces;
 pub use integrate::integrate;
 pub use lanes::Lanes;

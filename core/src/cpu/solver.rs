@@ -3,14 +3,14 @@
 use std::time::Instant;
 
 use super::{
-    Exec, FaceLanes, Lanes, collide, forces, integrate, springs_rows, strain_limit_rows, tri_normals,
-    tri_normals_lanes, vertex_normals, vertex_normals_rows,
+    Exec, FaceLanes, Lanes, integrate_collide, springs_rows, strain_limit_rows, tri_normals, tri_normals_lanes,
+    vertex_normals, vertex_normals_rows,
 };
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
 use crate::params::SimParams;
 use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};
-use crate::timing::{FRAME, KernelId, KernelTimings, SUBSTEP, TimingRecorder};
+use crate::timing::{FORCES_SPRINGS, FRAME, INTEGRATE_COLLIDE, KernelId, KernelTimings, SUBSTEP, TimingRecorder};
 
 /// The CPU solver; [`Exec::Serial`] is the thesis's CPU variant, [`Exec::Parallel`] its
 /// OpenMP one. Both run the same gather kernels, so they agree bit for bit.
@@ -81,18 +81,22 @@ impl CpuSolver {
         vertex_normals(self.exec, &p, &self.topo.face_slots, &self.face, &mut self.state.normal, &mut self.state.force);
     }
 
-    /// Runs `f`, recording its duration under `id` when timing is on.
-    fn timed(timer: &mut TimingRecorder, on: bool, id: KernelId, f: impl FnOnce()) {
+    /// Runs `f`, recording its duration under `label` when timing is on.
+    fn timed(timer: &mut TimingRecorder, on: bool, label: &str, f: impl FnOnce()) {
         if on {
             let t = Instant::now();
             f();
-            timer.record(id.name(), t.elapsed().as_nanos() as f64);
+            timer.record(label, t.elapsed().as_nanos() as f64);
         } else {
             f();
         }
     }
 
-    /// One substep.
+    /// One substep: the kernels of DESIGN.md's step, in order. Kernels that touch only
+    /// their own particle run fused with their neighbour in the step (`forces` into
+    /// `springs`, `integrate` with `collide`), and on a regular grid the gathers run on
+    /// SIMD lanes; every path computes the twins' bits (tests/physics.rs checks it), so
+    /// GPU kernels compared with the twins are compared with this solver.
     pub fn substep(&mut self) {
         let p = self.step_params();
         let e = self.exec;
@@ -100,36 +104,37 @@ impl CpuSolver {
         let t0 = Instant::now();
         let Self { state, topo, scratch, face, timer, scene, params, uniform, lanes, face_lanes, .. } = self;
         let n = topo.n as usize;
+        let fast = uniform.is_some();
         let ClothState { pos, prev, force, normal, .. } = state;
-        Self::timed(timer, on, KernelId::Forces, || forces(e, &p, pos, prev, force));
-        Self::timed(timer, on, KernelId::Springs, || {
-            if uniform.is_some() {
+        Self::timed(timer, on, FORCES_SPRINGS, || {
+            if fast {
                 lanes.fill(e, n, pos, Some(prev));
             }
-            springs_rows(e, n, p.dt, &topo.slots, uniform.as_ref(), lanes, pos, prev, force)
+            springs_rows(e, n, p.dt, &topo.slots, uniform.as_ref(), Some(&p), lanes, pos, prev, force)
         });
-        Self::timed(timer, on, KernelId::Integrate, || integrate(e, &p, force, pos, prev));
-        Self::timed(timer, on, KernelId::Collide, || collide(e, &p, &scene.spheres, &scene.boxes, pos, prev));
-        Self::timed(timer, on, KernelId::StrainLimit, || {
+        Self::timed(timer, on, INTEGRATE_COLLIDE, || {
+            integrate_collide(e, &p, &scene.spheres, &scene.boxes, force, pos, prev)
+        });
+        Self::timed(timer, on, KernelId::StrainLimit.name(), || {
             for _ in 0..params.strain_iterations {
-                if uniform.is_some() {
+                if fast {
                     lanes.fill(e, n, pos, None);
                 }
                 strain_limit_rows(e, &p, &topo.slots, uniform.as_ref(), &topo.tethers, lanes, pos, scratch);
                 std::mem::swap(pos, scratch);
             }
         });
-        if uniform.is_some() {
-            Self::timed(timer, on, KernelId::TriNormals, || {
+        if fast {
+            Self::timed(timer, on, KernelId::TriNormals.name(), || {
                 lanes.fill(e, n, pos, None);
                 tri_normals_lanes(e, n, lanes, face_lanes)
             });
-            Self::timed(timer, on, KernelId::VertexNormals, || {
+            Self::timed(timer, on, KernelId::VertexNormals.name(), || {
                 vertex_normals_rows(e, &p, &topo.face_slots, face_lanes, normal, force)
             });
         } else {
-            Self::timed(timer, on, KernelId::TriNormals, || tri_normals(e, &topo.triangles, pos, face));
-            Self::timed(timer, on, KernelId::VertexNormals, || {
+            Self::timed(timer, on, KernelId::TriNormals.name(), || tri_normals(e, &topo.triangles, pos, face));
+            Self::timed(timer, on, KernelId::VertexNormals.name(), || {
                 vertex_normals(e, &p, &topo.face_slots, face, normal, force)
             });
         }

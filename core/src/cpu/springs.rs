@@ -4,8 +4,9 @@
 use glam::Vec3;
 use wide::f32x8;
 
+use super::forces::{forces_at, forces_consts};
 use super::{Exec, LANES, Lanes, for_each, load3, store3, v3, v4};
-use crate::grid::{SLOT_OFFSETS, SLOTS, Spring, SpringSlot, V4};
+use crate::grid::{SLOT_OFFSETS, SLOTS, Spring, SpringSlot, StepParams, V4};
 
 /// Force on end `a` of a spring with `l = x_a - x_b` and `dv = (v_a - v_b)·dt`.
 #[inline(always)]
@@ -53,25 +54,36 @@ pub fn springs_rows(
     dt: f32,
     slots: &[SpringSlot],
     uni: Option<&[SpringSlot; SLOTS]>,
+    forces: Option<&StepParams>,
     lanes: &Lanes,
     pos: &[V4],
     prev: &[V4],
     force: &mut [V4],
 ) {
     let inv_dt = 1.0 / dt;
+    // With `forces`, each particle first gets `forces` (gravity and drag), then its springs:
+    // the two kernels fused into one sweep, bit-identical to running them in turn.
+    let ext = forces.map(forces_consts);
+    let gather = |i: usize, f: V4| {
+        let f = match ext {
+            Some((g, drag)) => forces_at(f, pos[i], prev[i], g, drag),
+            None => f,
+        };
+        gather_at(i, inv_dt, slots, pos, prev, f)
+    };
     let offs: [isize; SLOTS] = SLOT_OFFSETS.map(|(di, dj)| di as isize + dj as isize * n as isize);
     super::for_each_row(exec, n, force, |j, row| {
         let base = j * n;
         match uni {
             Some(uni) if j >= 2 && j + 2 < n && n > 4 => {
                 for i in [0, 1, n - 2, n - 1] {
-                    row[i] = gather_at(base + i, inv_dt, slots, pos, prev, row[i]);
+                    row[i] = gather(base + i, row[i]);
                 }
-                springs_interior(base + 2, n - 4, &offs, uni, inv_dt, lanes, pos, prev, &mut row[2..n - 2]);
+                springs_interior(base + 2, n - 4, &offs, uni, inv_dt, ext, lanes, pos, prev, &mut row[2..n - 2]);
             }
             _ => {
                 for (i, f) in row.iter_mut().enumerate() {
-                    *f = gather_at(base + i, inv_dt, slots, pos, prev, *f);
+                    *f = gather(base + i, *f);
                 }
             }
         }
@@ -104,6 +116,7 @@ pub(crate) fn springs_interior(
     offs: &[isize; SLOTS],
     uni: &[SpringSlot; SLOTS],
     inv_dt: f32,
+    ext: Option<(Vec3, f32)>,
     lanes: &Lanes,
     pos: &[V4],
     prev: &[V4],
@@ -118,6 +131,12 @@ pub(crate) fn springs_interior(
         let va = lanes.vel3(a0);
         let fo = &mut force[g * LANES..(g + 1) * LANES];
         let mut acc = load3(fo, 0);
+        if let Some((g, drag)) = ext {
+            let (g, drag) = ([f32x8::splat(g.x), f32x8::splat(g.y), f32x8::splat(g.z)], f32x8::splat(drag));
+            for c in 0..3 {
+                acc[c] = (acc[c] + g[c]) - va[c] * drag;
+            }
+        }
         for (s, slot) in uni.iter().enumerate() {
             let b0 = (a0 as isize + offs[s]) as usize;
             let xb = lanes.pos3(b0);
@@ -141,7 +160,11 @@ pub(crate) fn springs_interior(
         let a = base + i;
         let xa = v3(pos[a]);
         let va = xa - v3(prev[a]);
-        let mut acc = v3(*f);
+        let f0 = match ext {
+            Some((g, drag)) => forces_at(*f, pos[a], prev[a], g, drag),
+            None => *f,
+        };
+        let mut acc = v3(f0);
         for (s, slot) in uni.iter().enumerate() {
             let b = (a as isize + offs[s]) as usize;
             let xb = v3(pos[b]);
