@@ -1,0 +1,149 @@
+//! Validates every WGSL kernel with naga (a shader error fails `cargo build`), checks that
+//! the shared structs have the size and field offsets of clothlab-core's `#[repr(C)]`
+//! types, and emits each kernel as WGSL (for wgpu) and SPIR-V 1.3 (for Vulkan) into
+//! OUT_DIR, with `kernels.rs` listing them.
+
+use std::fmt::Write as _;
+use std::fs;
+use std::mem::{offset_of, size_of};
+use std::path::{Path, PathBuf};
+
+use clothlab_core::grid::{Spring, SpringSlot, StepParams, Tether};
+use clothlab_core::scene::{Aabb, Sphere};
+
+/// (struct name, size, [(field, offset)]) as core lays them out.
+fn expected_layouts() -> Vec<(&'static str, usize, Vec<(&'static str, usize)>)> {
+    macro_rules! layout {
+        ($t:ty, $name:literal, [$($f:ident),*]) => {
+            ($name, size_of::<$t>(), vec![$((stringify!($f), offset_of!($t, $f))),*])
+        };
+    }
+    vec![
+        layout!(
+            StepParams,
+            "StepParams",
+            [
+                gravity,
+                wind,
+                grab_target,
+                dt,
+                damping,
+                air_drag,
+                particle_mass,
+                floor_y,
+                margin,
+                friction,
+                strain_limit,
+                n,
+                num_spheres,
+                num_boxes,
+                grab_index
+            ]
+        ),
+        layout!(SpringSlot, "SpringSlot", [neighbor, rest, ks, kd]),
+        layout!(Spring, "Spring", [a, b, rest, ks, kd, kind]),
+        layout!(Tether, "Tether", [pin, rest]),
+        layout!(Sphere, "Sphere", [center, radius]),
+        layout!(Aabb, "Aabb", [min, max]),
+    ]
+}
+
+fn fail(msg: String) -> ! {
+    // cargo shows a build script's panic message; one clear failure.
+    panic!("\n{msg}\n");
+}
+
+fn parse_and_validate(name: &str, source: &str) -> (naga::Module, naga::valid::ModuleInfo) {
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| fail(format!("{name}: WGSL parse error\n{}", e.emit_to_string_with_path(source, name))));
+    let mut validator =
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());
+    let info = validator
+        .validate(&module)
+        .unwrap_or_else(|e| fail(format!("{name}: invalid shader\n{}", e.emit_to_string_with_path(source, name))));
+    (module, info)
+}
+
+fn check_layouts(types_src: &str) {
+    let (module, _) = parse_and_validate("shared/types.wgsl", types_src);
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).unwrap_or_else(|e| fail(format!("layout: {e}")));
+    for (name, size, fields) in expected_layouts() {
+        let Some((handle, ty)) = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)) else {
+            fail(format!("shared/types.wgsl has no struct {name}, which core defines"));
+        };
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            fail(format!("{name} is not a struct in WGSL"));
+        };
+        let wgsl_size = layouter[handle].size.max(*span);
+        if wgsl_size as usize != size {
+            fail(format!("struct {name}: WGSL size {wgsl_size} bytes, core's #[repr(C)] size {size}"));
+        }
+        if members.len() != fields.len() {
+            fail(format!("struct {name}: WGSL has {} fields, core {}", members.len(), fields.len()));
+        }
+        for (m, (field, offset)) in members.iter().zip(&fields) {
+            if m.name.as_deref() != Some(*field) || m.offset as usize != *offset {
+                fail(format!(
+                    "struct {name}: WGSL field {:?} at offset {}, core has `{field}` at {offset}",
+                    m.name, m.offset
+                ));
+            }
+        }
+    }
+}
+
+fn main() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
+    let out = PathBuf::from(std::env::var("OUT_DIR").expect("OUT_DIR"));
+    println!("cargo:rerun-if-changed={}", dir.display());
+    let shared = |name: &str| {
+        let p = dir.join("shared").join(format!("{name}.wgsl"));
+        println!("cargo:rerun-if-changed={}", p.display());
+        fs::read_to_string(&p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())))
+    };
+    let types = shared("types");
+    check_layouts(&types);
+
+    let mut kernels: Vec<PathBuf> = fs::read_dir(&dir)
+        .unwrap_or_else(|e| fail(format!("{}: {e}", dir.display())))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "wgsl"))
+        .collect();
+    kernels.sort();
+    let mut list = String::from("/// Every kernel, by name.\npub const KERNELS: &[Kernel] = &[\n");
+    for path in kernels {
+        println!("cargo:rerun-if-changed={}", path.display());
+        let name = path.file_stem().and_then(|s| s.to_str()).expect("utf-8 file name").to_owned();
+        let body = fs::read_to_string(&path).unwrap_or_else(|e| fail(format!("{}: {e}", path.display())));
+        // `//! include: a, b` on the first line pulls in shared/a.wgsl, shared/b.wgsl.
+        let mut source = types.clone();
+        if let Some(list) = body.lines().next().and_then(|l| l.strip_prefix("//! include:")) {
+            for inc in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+                source.push_str(&format!("\n// ---- shared/{inc}.wgsl\n"));
+                source.push_str(&shared(inc));
+            }
+        }
+        source.push_str(&format!("\n// ---- {name}.wgsl\n"));
+        source.push_str(&body);
+        let (module, info) = parse_and_validate(&format!("{name}.wgsl"), &source);
+        let options = naga::back::spv::Options {
+            lang_version: (1, 3),
+            flags: naga::back::spv::WriterFlags::empty(),
+            ..Default::default()
+        };
+        let words = naga::back::spv::write_vec(&module, &info, &options, None)
+            .unwrap_or_else(|e| fail(format!("{name}: SPIR-V output failed: {e}")));
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        fs::write(out.join(format!("{name}.wgsl")), &source).expect("write WGSL");
+        fs::write(out.join(format!("{name}.spv")), bytes).expect("write SPIR-V");
+        writeln!(
+            list,
+            "    Kernel {{ name: {name:?}, wgsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.wgsl\")), \
+             spirv: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")) }},"
+        )
+        .expect("write to string");
+    }
+    list.push_str("];\n");
+    fs::write(out.join("kernels.rs"), list).expect("write kernels.rs");
+}

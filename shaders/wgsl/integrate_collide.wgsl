@@ -1,0 +1,11 @@
+//! include: state, colliders
+// integrate + collide fused (optimized variant): both touch only their own particle.
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = flat_id(id, groups);
+    if i >= num_particles() {
+        return;
+    }
+    integrate_at(i);
+    collide_at(i);
+}

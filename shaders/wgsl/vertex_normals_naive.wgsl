@@ -1,0 +1,12 @@
+//! include: wind
+// vertex_normals — per particle (naive variant): normalise the sum tri_normals_scatter
+// accumulated with atomics, and the wind force into the force buffer.
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = flat_id(id, groups);
+    if i >= p.n * p.n {
+        return;
+    }
+    normal[i] = vec4<f32>(normalize_or_zero(normal[i].xyz), 0.0);
+    force[i] = vec4<f32>(wind_at(i), 0.0);
+}
