@@ -11,8 +11,10 @@ use std::path::{Path, PathBuf};
 use clothlab_core::grid::{Spring, SpringSlot, StepParams, Tether};
 use clothlab_core::scene::{Aabb, Sphere};
 
-/// (struct name, size, [(field, offset)]) as core lays them out.
-fn expected_layouts() -> Vec<(&'static str, usize, Vec<(&'static str, usize)>)> {
+/// A struct as core lays it out: name, size, and (field, offset) pairs.
+type Layout = (&'static str, usize, Vec<(&'static str, usize)>);
+
+fn expected_layouts() -> Vec<Layout> {
     macro_rules! layout {
         ($t:ty, $name:literal, [$($f:ident),*]) => {
             ($name, size_of::<$t>(), vec![$((stringify!($f), offset_of!($t, $f))),*])
