@@ -11,6 +11,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_wgpu::{Variant, WgpuSolver};
 
 #[derive(Parser)]
 #[command(name = "clothlab", version, about = "Interactive, GPU-accelerated cloth simulation testbed")]
@@ -32,6 +33,10 @@ pub enum Backend {
     Cpu,
     /// CPU, rayon threads (the thesis's OpenMP variant).
     CpuPar,
+    /// wgpu, the direct port: a dispatch per kernel, atomics (the thesis's CUDA port).
+    WgpuNaive,
+    /// wgpu, optimized: fused kernels, gathers, one submission per frame.
+    Wgpu,
 }
 
 #[derive(clap::Args)]
@@ -107,6 +112,8 @@ pub fn make_solver(backend: Backend, scene: Scene, params: SimParams) -> Result<
     Ok(match backend {
         Backend::Cpu => Box::new(CpuSolver::new(Exec::Serial, scene, params)?),
         Backend::CpuPar => Box::new(CpuSolver::new(Exec::Parallel, scene, params)?),
+        Backend::WgpuNaive => Box::new(WgpuSolver::new(Variant::Naive, scene, params)?),
+        Backend::Wgpu => Box::new(WgpuSolver::new(Variant::Optimized, scene, params)?),
     })
 }
 

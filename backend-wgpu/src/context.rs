@@ -1,0 +1,139 @@
+//! Adapter and device: found once, shared by solvers (and later renderers).
+
+use std::sync::{Arc, Mutex};
+
+use thiserror::Error;
+
+/// Why the GPU could not be used.
+#[derive(Debug, Error)]
+pub enum GpuError {
+    /// No adapter at all.
+    #[error(
+        "no GPU adapter found (wgpu, Vulkan); on Linux, `apt-get install mesa-vulkan-drivers` gives a software one (lavapipe)"
+    )]
+    NoAdapter,
+    /// The adapter refused the device we asked for.
+    #[error("cannot open a device on {adapter}: {reason}")]
+    Device {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's reason.
+        reason: String,
+    },
+    /// A wgpu validation or out-of-memory error during the named operation.
+    #[error("wgpu error during {what}: {reason}")]
+    Wgpu {
+        /// What was being done.
+        what: &'static str,
+        /// wgpu's message.
+        reason: String,
+    },
+    /// Mapping a buffer for reading failed.
+    #[error("reading back from the GPU failed: {0}")]
+    Readback(String),
+}
+
+/// An adapter, its device and queue, and what they can do.
+pub struct GpuContext {
+    /// The adapter.
+    pub adapter: wgpu::Adapter,
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// Adapter name, driver and backend, for reports.
+    pub info: wgpu::AdapterInfo,
+    /// Timestamp queries are available.
+    pub timestamps: bool,
+    /// `atomic<f32>` with `atomicAdd` in storage buffers is available.
+    pub float_atomics: bool,
+    /// Errors wgpu reported outside an error scope, oldest first.
+    uncaptured: Arc<Mutex<Vec<String>>>,
+}
+
+impl GpuContext {
+    /// Opens the first adapter wgpu finds (high performance preferred), with every limit
+    /// the adapter has and timestamp queries if it supports them.
+    pub fn new() -> Result<Self, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        }))
+        .map_err(|_| GpuError::NoAdapter)?;
+        let info = adapter.get_info();
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let mut required_features = wgpu::Features::empty();
+        if timestamps {
+            required_features |= wgpu::Features::TIMESTAMP_QUERY;
+        }
+        let float_atomics = adapter.features().contains(wgpu::Features::SHADER_FLOAT32_ATOMIC);
+        if float_atomics {
+            required_features |= wgpu::Features::SHADER_FLOAT32_ATOMIC;
+        }
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("clothlab"),
+            required_features,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device { adapter: info.name.clone(), reason: e.to_string() })?;
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            log::error!("wgpu: {e}");
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        log::info!("wgpu adapter: {} ({:?}, {})", info.name, info.backend, info.driver_info);
+        Ok(Self { adapter, device, queue, info, timestamps, float_atomics, uncaptured })
+    }
+
+    /// One line naming the adapter: `llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Mesa 22.3.6)`.
+    pub fn describe(&self) -> String {
+        format!("{} ({:?}, {} {})", self.info.name, self.info.backend, self.info.driver, self.info.driver_info)
+    }
+
+    /// Fails with the first error wgpu reported since the last call, if any.
+    pub fn check(&self, what: &'static str) -> Result<(), GpuError> {
+        let mut v = self.uncaptured.lock().map_err(|_| GpuError::Wgpu { what, reason: "poisoned lock".into() })?;
+        if v.is_empty() {
+            return Ok(());
+        }
+        let reason = v.remove(0);
+        v.clear();
+        Err(GpuError::Wgpu { what, reason })
+    }
+
+    /// Blocks until the queue is idle.
+    pub fn wait_idle(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Wgpu { what: "waiting for the GPU", reason: e.to_string() })
+    }
+
+    /// Copies `size` bytes of `src` from `offset` into a mapped staging buffer and returns them.
+    pub fn read_buffer(&self, src: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<u8>, GpuError> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+        enc.copy_buffer_to_buffer(src, offset, &staging, 0, size);
+        self.queue.submit([enc.finish()]);
+        let slice = staging.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait_idle()?;
+        rx.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))?;
+        let data = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
+        staging.unmap();
+        Ok(data)
+    }
+}

@@ -1,0 +1,626 @@
+//! The wgpu solver: buffers, pipelines, and the recipe of dispatches per substep.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use clothlab_core::grid::{ClothState, ClothTopology, Grab, StepParams, V4, build};
+use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
+use clothlab_core::solver::{Solver, SolverError};
+use clothlab_core::timing::{
+    FORCES_SPRINGS, FRAME, INTEGRATE_COLLIDE, KernelId, KernelTimings, SUBSTEP, TimingRecorder,
+};
+use clothlab_core::{SimParams, cpu};
+use wgpu::util::DeviceExt;
+
+use crate::context::{GpuContext, GpuError};
+
+/// Which formulation of the step runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Variant {
+    /// One dispatch per kernel, scatter with atomics, a submission per substep.
+    Naive,
+    /// Fused kernels, gathers, one submission per frame.
+    Optimized,
+}
+
+/// What a dispatch runs over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Count {
+    Particles,
+    Springs,
+    Triangles,
+}
+
+/// One dispatch of a recipe.
+#[derive(Debug, Clone, Copy)]
+struct Dispatch {
+    /// Kernel file name in clothlab-shaders.
+    kernel: &'static str,
+    /// Timing label.
+    label: &'static str,
+    count: Count,
+    /// Zero the normal accumulators first (naive normals).
+    clear_normal: bool,
+    /// Writes positions to the other buffer of the pair (strain limit's ping-pong).
+    flips: bool,
+}
+
+const fn d(kernel: &'static str, label: &'static str, count: Count) -> Dispatch {
+    Dispatch { kernel, label, count, clear_normal: false, flips: false }
+}
+
+/// The dispatch that runs `kernel` alone (for [`WgpuSolver::run_kernel`]).
+fn dispatch_for(kernel: &'static str) -> Dispatch {
+    let count = if kernel.starts_with("springs_scatter") {
+        Count::Springs
+    } else if kernel.starts_with("tri_normals") {
+        Count::Triangles
+    } else {
+        Count::Particles
+    };
+    Dispatch {
+        kernel,
+        label: kernel,
+        count,
+        clear_normal: kernel.starts_with("tri_normals_scatter"),
+        flips: kernel == "strain_limit",
+    }
+}
+
+/// The dispatches of one substep for `variant` with `strain_passes` strain passes; the
+/// naive scatters use float atomics where the adapter has them.
+fn recipe(variant: Variant, strain_passes: u32, float_atomics: bool) -> Vec<Dispatch> {
+    let strain = Dispatch { flips: true, ..d("strain_limit", "strain_limit", Count::Particles) };
+    let mut r = Vec::new();
+    match variant {
+        Variant::Naive => {
+            r.push(d("forces", KernelId::Forces.name(), Count::Particles));
+            let (springs, normals) = if float_atomics {
+                ("springs_scatter_f32", "tri_normals_scatter_f32")
+            } else {
+                ("springs_scatter", "tri_normals_scatter")
+            };
+            r.push(d(springs, KernelId::Springs.name(), Count::Springs));
+            r.push(d("integrate", KernelId::Integrate.name(), Count::Particles));
+            r.push(d("collide", KernelId::Collide.name(), Count::Particles));
+            r.extend((0..strain_passes).map(|_| strain));
+            r.push(Dispatch { clear_normal: true, ..d(normals, "tri_normals", Count::Triangles) });
+            r.push(d("vertex_normals_naive", KernelId::VertexNormals.name(), Count::Particles));
+        }
+        Variant::Optimized => {
+            r.push(d("forces_springs", FORCES_SPRINGS, Count::Particles));
+            r.push(d("integrate_collide", INTEGRATE_COLLIDE, Count::Particles));
+            r.extend((0..strain_passes).map(|_| strain));
+            r.push(d("tri_normals", KernelId::TriNormals.name(), Count::Triangles));
+            r.push(d("vertex_normals", KernelId::VertexNormals.name(), Count::Particles));
+        }
+    }
+    r
+}
+
+/// Workgroups of 64 for `count` invocations, as a 2-D grid (x ≤ 65535).
+fn groups(count: u32) -> (u32, u32) {
+    let g = count.div_ceil(64).max(1);
+    let x = g.min(65535);
+    (x, g.div_ceil(x))
+}
+
+const V4_SIZE: u64 = 16;
+/// Most timestamp queries per submission.
+const MAX_QUERIES: u32 = 4096;
+
+struct Buffers {
+    params: wgpu::Buffer,
+    /// The position pair; `cur` says which holds the positions.
+    pos: [wgpu::Buffer; 2],
+    prev: wgpu::Buffer,
+    force: wgpu::Buffer,
+    normal: wgpu::Buffer,
+    faces: wgpu::Buffer,
+    spheres: wgpu::Buffer,
+    boxes: wgpu::Buffer,
+    slots: wgpu::Buffer,
+    springs: wgpu::Buffer,
+    tethers: wgpu::Buffer,
+    triangles: wgpu::Buffer,
+    face_slots: wgpu::Buffer,
+}
+
+fn entry(binding: u32, buf: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource: buf.as_entire_binding() }
+}
+
+struct Timestamps {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    period_ns: f64,
+}
+
+/// The cloth solver on wgpu.
+pub struct WgpuSolver {
+    ctx: GpuContext,
+    variant: Variant,
+    scene: Scene,
+    params: SimParams,
+    grab: Option<Grab>,
+    topo: ClothTopology,
+    buffers: Buffers,
+    bind_groups: [wgpu::BindGroup; 2],
+    pipelines: HashMap<&'static str, wgpu::ComputePipeline>,
+    recipe: Vec<Dispatch>,
+    /// Which of `buffers.pos` holds the current positions.
+    cur: usize,
+    timestamps: Option<Timestamps>,
+    timer: TimingRecorder,
+    /// Record per-kernel GPU timings (reads timestamps back after every submission).
+    pub time_kernels: bool,
+}
+
+fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+impl WgpuSolver {
+    /// Builds the cloth of `scene` on the first adapter found.
+    pub fn new(variant: Variant, scene: Scene, params: SimParams) -> Result<Self, SolverError> {
+        let ctx = GpuContext::new().map_err(backend)?;
+        Self::with_context(ctx, variant, scene, params)
+    }
+
+    /// Builds the cloth of `scene` on `ctx`.
+    pub fn with_context(
+        ctx: GpuContext,
+        variant: Variant,
+        scene: Scene,
+        params: SimParams,
+    ) -> Result<Self, SolverError> {
+        if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
+            return Err(SolverError::Backend(format!("at most {MAX_COLLIDERS} spheres and boxes")));
+        }
+        let (mut state, topo) = build(&scene, &params)?;
+        // Initial normals and wind, as the CPU solvers start.
+        let sp = StepParams::new(&params, &scene, None);
+        let mut face = vec![[0.0f32; 4]; topo.triangles.len()];
+        cpu::tri_normals(cpu::Exec::Serial, &topo.triangles, &state.pos, &mut face);
+        cpu::vertex_normals(cpu::Exec::Serial, &sp, &topo.face_slots, &face, &mut state.normal, &mut state.force);
+
+        let dev = &ctx.device;
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            dev.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+        };
+        use wgpu::BufferUsages as U;
+        let state_usage = U::STORAGE | U::VERTEX | U::COPY_SRC | U::COPY_DST;
+        let data_usage = U::STORAGE | U::COPY_DST;
+        let mut spheres = [Sphere { center: [0.0; 3], radius: 0.0 }; MAX_COLLIDERS];
+        spheres[..scene.spheres.len()].copy_from_slice(&scene.spheres);
+        let mut boxes = [Aabb::new([0.0; 3], [0.0; 3]); MAX_COLLIDERS];
+        boxes[..scene.boxes.len()].copy_from_slice(&scene.boxes);
+        let tri_flat: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
+        let face_flat: Vec<i32> = topo.face_slots.iter().flatten().copied().collect();
+        let buffers = Buffers {
+            params: init("params", bytemuck::bytes_of(&sp), U::UNIFORM | U::COPY_DST),
+            pos: [
+                init("pos0", bytemuck::cast_slice(&state.pos), state_usage),
+                init("pos1", bytemuck::cast_slice(&state.pos), state_usage),
+            ],
+            prev: init("prev", bytemuck::cast_slice(&state.prev), state_usage),
+            force: init("force", bytemuck::cast_slice(&state.force), state_usage),
+            normal: init("normal", bytemuck::cast_slice(&state.normal), state_usage),
+            faces: init("faces", bytemuck::cast_slice(&face), U::STORAGE | U::COPY_SRC | U::COPY_DST),
+            spheres: init("spheres", bytemuck::cast_slice(&spheres), data_usage),
+            boxes: init("boxes", bytemuck::cast_slice(&boxes), data_usage),
+            slots: init("slots", bytemuck::cast_slice(&topo.slots), data_usage),
+            springs: init("springs", bytemuck::cast_slice(&topo.springs), data_usage),
+            tethers: init("tethers", bytemuck::cast_slice(&topo.tethers), data_usage),
+            triangles: init("triangles", bytemuck::cast_slice(&tri_flat), data_usage | U::INDEX),
+            face_slots: init("face_slots", bytemuck::cast_slice(&face_flat), data_usage),
+        };
+
+        let layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cloth"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                storage(1, false),
+                storage(2, false),
+                storage(3, false),
+                storage(4, false),
+                storage(5, false),
+                storage(6, true),
+                storage(7, true),
+                storage(8, true),
+                storage(9, true),
+                storage(10, true),
+                storage(11, false),
+                storage(12, true),
+                storage(13, true),
+            ],
+        });
+        let bind = |k: usize| {
+            let b = &buffers;
+            let e = entry;
+            dev.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(if k == 0 { "cloth (pos0)" } else { "cloth (pos1)" }),
+                layout: &layout,
+                entries: &[
+                    e(0, &b.params),
+                    e(1, &b.pos[k]),
+                    e(2, &b.prev),
+                    e(3, &b.force),
+                    e(4, &b.normal),
+                    e(5, &b.pos[1 - k]),
+                    e(6, &b.slots),
+                    e(7, &b.springs),
+                    e(8, &b.tethers),
+                    e(9, &b.triangles),
+                    e(10, &b.face_slots),
+                    e(11, &b.faces),
+                    e(12, &b.spheres),
+                    e(13, &b.boxes),
+                ],
+            })
+        };
+        let bind_groups = [bind(0), bind(1)];
+        let pipeline_layout = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("cloth"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let mut pipelines = HashMap::new();
+        let mut kernels = vec!["springs", "springs_scatter", "tri_normals_scatter"];
+        for v in [Variant::Naive, Variant::Optimized] {
+            kernels.extend(recipe(v, 1, ctx.float_atomics).iter().map(|d| d.kernel));
+        }
+        for name in kernels {
+            if pipelines.contains_key(name) {
+                continue;
+            }
+            let k = clothlab_shaders::kernel(name)
+                .ok_or_else(|| SolverError::Backend(format!("kernel {name} missing from clothlab-shaders")))?;
+            let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(name),
+                source: wgpu::ShaderSource::Wgsl(k.wgsl.into()),
+            });
+            let pipeline = dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(name),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            pipelines.insert(name, pipeline);
+        }
+        let timestamps = ctx.timestamps.then(|| Timestamps {
+            set: dev.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("kernel timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: MAX_QUERIES,
+            }),
+            resolve: dev.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamp resolve"),
+                size: MAX_QUERIES as u64 * 8,
+                usage: U::QUERY_RESOLVE | U::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            period_ns: ctx.queue.get_timestamp_period() as f64,
+        });
+        ctx.check("creating the solver").map_err(backend)?;
+        let recipe = recipe(variant, params.strain_iterations, ctx.float_atomics);
+        Ok(Self {
+            ctx,
+            variant,
+            scene,
+            params,
+            grab: None,
+            topo,
+            buffers,
+            bind_groups,
+            pipelines,
+            recipe,
+            cur: 0,
+            timestamps,
+            timer: TimingRecorder::default(),
+            time_kernels: true,
+        })
+    }
+
+    /// The adapter in use, in one line.
+    pub fn adapter(&self) -> String {
+        self.ctx.describe()
+    }
+
+    /// Whether the naive scatters use float atomics (else compare-exchange loops).
+    pub fn float_atomics(&self) -> bool {
+        self.ctx.float_atomics
+    }
+
+    /// The GPU context.
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    /// The buffer holding the current positions (`VERTEX | STORAGE`), and the normals'.
+    pub fn vertex_buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
+        (&self.buffers.pos[self.cur], &self.buffers.normal)
+    }
+
+    fn count(&self, c: Count) -> u32 {
+        match c {
+            Count::Particles => self.topo.num_particles() as u32,
+            Count::Springs => self.topo.springs.len() as u32,
+            Count::Triangles => self.topo.triangles.len() as u32,
+        }
+    }
+
+    /// Records `dispatches` into `enc`, writing timestamps from query `*q` on while there
+    /// is room. Returns the labels of the timed dispatches in order.
+    fn record(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        dispatches: &[Dispatch],
+        q: &mut u32,
+        labels: &mut Vec<&'static str>,
+    ) {
+        for dsp in dispatches {
+            if dsp.clear_normal {
+                enc.clear_buffer(&self.buffers.normal, 0, None);
+            }
+            let timed = self.time_kernels && self.timestamps.is_some() && *q + 2 <= MAX_QUERIES;
+            let timestamp_writes = match (&self.timestamps, timed) {
+                (Some(ts), true) => Some(wgpu::ComputePassTimestampWrites {
+                    query_set: &ts.set,
+                    beginning_of_pass_write_index: Some(*q),
+                    end_of_pass_write_index: Some(*q + 1),
+                }),
+                _ => None,
+            };
+            let mut pass =
+                enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(dsp.label), timestamp_writes });
+            pass.set_pipeline(&self.pipelines[dsp.kernel]);
+            pass.set_bind_group(0, &self.bind_groups[self.cur], &[]);
+            let (x, y) = groups(self.count(dsp.count));
+            pass.dispatch_workgroups(x, y, 1);
+            drop(pass);
+            if timed {
+                *q += 2;
+                labels.push(dsp.label);
+            }
+            if dsp.flips {
+                self.cur ^= 1;
+            }
+        }
+    }
+
+    /// Submits `enc` (resolving `q` timestamps first) and, when timing, records the
+    /// per-dispatch GPU times; returns the submission's GPU span in ns, if timed.
+    fn submit(
+        &mut self,
+        mut enc: wgpu::CommandEncoder,
+        q: u32,
+        labels: &[&'static str],
+    ) -> Result<Option<f64>, SolverError> {
+        let ts = self.timestamps.as_ref().filter(|_| q > 0);
+        if let Some(ts) = ts {
+            enc.resolve_query_set(&ts.set, 0..q, &ts.resolve, 0);
+        }
+        self.ctx.queue.submit([enc.finish()]);
+        let Some(ts) = ts else {
+            return Ok(None);
+        };
+        let raw = self.ctx.read_buffer(&ts.resolve, 0, q as u64 * 8).map_err(backend)?;
+        let ticks: &[u64] = bytemuck::cast_slice(&raw);
+        let period = ts.period_ns;
+        let per_substep = self.recipe.len();
+        let mut substep_ns = 0.0;
+        for (k, label) in labels.iter().enumerate() {
+            let ns = ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * period;
+            self.timer.record(label, ns);
+            substep_ns += ns;
+            if (k + 1) % per_substep == 0 {
+                self.timer.record(SUBSTEP, substep_ns);
+                substep_ns = 0.0;
+            }
+        }
+        Ok(Some(ticks[q as usize - 1].saturating_sub(ticks[0]) as f64 * period))
+    }
+
+    /// Runs `kernel` once on `state` (and `faces`, one per triangle, for the kernels that
+    /// read them) and returns the state and faces afterwards. The kernel's pure outputs
+    /// are filled with NaN first, so an element it fails to write shows. For tests and
+    /// `clothlab validate`; the strain kernel's output is returned as `pos`.
+    pub fn run_kernel(
+        &mut self,
+        kernel: &str,
+        state: &ClothState,
+        faces: &[V4],
+        grab: Option<Grab>,
+    ) -> Result<(ClothState, Vec<V4>), SolverError> {
+        let name = *self
+            .pipelines
+            .keys()
+            .find(|k| **k == kernel)
+            .ok_or_else(|| SolverError::Backend(format!("no kernel named {kernel} on this adapter")))?;
+        let dispatch = dispatch_for(name);
+        self.set_state(state)?;
+        if faces.len() != self.topo.triangles.len() {
+            return Err(SolverError::Backend(format!(
+                "{} faces given, the grid has {}",
+                faces.len(),
+                self.topo.triangles.len()
+            )));
+        }
+        let q = &self.ctx.queue;
+        q.write_buffer(&self.buffers.faces, 0, bytemuck::cast_slice(faces));
+        let sp = StepParams::new(&self.params, &self.scene, grab);
+        q.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&sp));
+        let nan_particles = vec![[f32::NAN; 4]; state.pos.len()];
+        let nan = bytemuck::cast_slice::<V4, u8>(&nan_particles);
+        match kernel {
+            "strain_limit" => q.write_buffer(&self.buffers.pos[1 - self.cur], 0, nan),
+            "tri_normals" | "tri_normals_scatter" | "tri_normals_scatter_f32" => {
+                q.write_buffer(&self.buffers.faces, 0, bytemuck::cast_slice(&vec![[f32::NAN; 4]; faces.len()]))
+            }
+            "vertex_normals" => {
+                q.write_buffer(&self.buffers.normal, 0, nan);
+                q.write_buffer(&self.buffers.force, 0, nan);
+            }
+            "vertex_normals_naive" => q.write_buffer(&self.buffers.force, 0, nan),
+            _ => {}
+        }
+        let mut enc = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(kernel) });
+        let was = self.time_kernels;
+        self.time_kernels = false;
+        self.record(&mut enc, &[dispatch], &mut 0, &mut Vec::new());
+        self.time_kernels = was;
+        self.ctx.queue.submit([enc.finish()]);
+        self.ctx.check("running a kernel").map_err(backend)?;
+        let out_state = self.state()?;
+        let raw = self.ctx.read_buffer(&self.buffers.faces, 0, self.buffers.faces.size()).map_err(backend)?;
+        let out_faces = bytemuck::cast_slice::<u8, V4>(&raw).to_vec();
+        if dispatch.flips {
+            self.cur ^= 1; // leave the solver's own positions where they were
+        }
+        Ok((out_state, out_faces))
+    }
+}
+
+fn backend(e: GpuError) -> SolverError {
+    SolverError::Backend(e.to_string())
+}
+
+impl Solver for WgpuSolver {
+    fn name(&self) -> &str {
+        match self.variant {
+            Variant::Naive => "wgpu-naive",
+            Variant::Optimized => "wgpu",
+        }
+    }
+
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    fn params(&self) -> &SimParams {
+        &self.params
+    }
+
+    fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
+        params.validate()?;
+        self.topo.set_spring_constants(&params);
+        // The spring constants depend on dt and the stiffness fractions: rewrite both tables
+        // in place (the bind groups keep pointing at the same buffers).
+        let q = &self.ctx.queue;
+        q.write_buffer(&self.buffers.slots, 0, bytemuck::cast_slice(&self.topo.slots));
+        q.write_buffer(&self.buffers.springs, 0, bytemuck::cast_slice(&self.topo.springs));
+        self.recipe = recipe(self.variant, params.strain_iterations, self.ctx.float_atomics);
+        self.params = params;
+        Ok(())
+    }
+
+    fn set_grab(&mut self, grab: Option<Grab>) {
+        self.grab = grab
+            .filter(|g| (g.particle as usize) < self.topo.num_particles() && g.target.iter().all(|v| v.is_finite()));
+    }
+
+    fn step_frame(&mut self) -> Result<(), SolverError> {
+        let t0 = Instant::now();
+        let sp = StepParams::new(&self.params, &self.scene, self.grab);
+        self.ctx.queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&sp));
+        let recipe = self.recipe.clone();
+        let mut gpu_ns = 0.0;
+        let mut timed = false;
+        let new_encoder = |ctx: &GpuContext| {
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") })
+        };
+        match self.variant {
+            Variant::Optimized => {
+                let mut enc = new_encoder(&self.ctx);
+                let (mut q, mut labels) = (0, Vec::new());
+                for _ in 0..self.params.substeps {
+                    self.record(&mut enc, &recipe, &mut q, &mut labels);
+                }
+                if let Some(ns) = self.submit(enc, q, &labels)? {
+                    gpu_ns += ns;
+                    timed = true;
+                }
+            }
+            Variant::Naive => {
+                for _ in 0..self.params.substeps {
+                    let mut enc = new_encoder(&self.ctx);
+                    let (mut q, mut labels) = (0, Vec::new());
+                    self.record(&mut enc, &recipe, &mut q, &mut labels);
+                    if let Some(ns) = self.submit(enc, q, &labels)? {
+                        gpu_ns += ns;
+                        timed = true;
+                    }
+                }
+            }
+        }
+        if self.time_kernels {
+            if !timed {
+                self.ctx.wait_idle().map_err(backend)?;
+            }
+            let frame = if timed { gpu_ns } else { t0.elapsed().as_nanos() as f64 };
+            self.timer.record(FRAME, frame);
+        }
+        self.ctx.check("simulating a frame").map_err(backend)
+    }
+
+    fn state(&mut self) -> Result<ClothState, SolverError> {
+        let np = self.topo.num_particles();
+        let size = np as u64 * V4_SIZE;
+        let read = |buf: &wgpu::Buffer| -> Result<Vec<V4>, SolverError> {
+            let raw = self.ctx.read_buffer(buf, 0, size).map_err(backend)?;
+            Ok(bytemuck::cast_slice::<u8, V4>(&raw).to_vec())
+        };
+        let b = &self.buffers;
+        Ok(ClothState {
+            n: self.topo.n,
+            pos: read(&b.pos[self.cur])?,
+            prev: read(&b.prev)?,
+            force: read(&b.force)?,
+            normal: read(&b.normal)?,
+        })
+    }
+
+    fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
+        let want = self.topo.n;
+        let np = self.topo.num_particles();
+        if state.n != want || [&state.pos, &state.prev, &state.force, &state.normal].iter().any(|v| v.len() != np) {
+            return Err(SolverError::GridMismatch { want, got: state.n });
+        }
+        let q = &self.ctx.queue;
+        let b = &self.buffers;
+        q.write_buffer(&b.pos[self.cur], 0, bytemuck::cast_slice(&state.pos));
+        q.write_buffer(&b.prev, 0, bytemuck::cast_slice(&state.prev));
+        q.write_buffer(&b.force, 0, bytemuck::cast_slice(&state.force));
+        q.write_buffer(&b.normal, 0, bytemuck::cast_slice(&state.normal));
+        Ok(())
+    }
+
+    fn timings(&self) -> KernelTimings {
+        self.timer.table()
+    }
+
+    fn reset_timings(&mut self) {
+        self.timer.clear();
+    }
+}

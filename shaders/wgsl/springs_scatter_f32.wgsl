@@ -1,0 +1,29 @@
+// springs — per spring: add the force to both ends with float atomics (naive variant, on
+// adapters with Features::SHADER_FLOAT32_ATOMIC; springs_scatter.wgsl is the fallback).
+@group(0) @binding(0) var<uniform> p: StepParams;
+@group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> prev: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read_write> force_bits: array<atomic<f32>>;
+@group(0) @binding(7) var<storage, read> springs: array<Spring>;
+
+fn atomic_add_f32(idx: u32, v: f32) {
+    atomicAdd(&force_bits[idx], v);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let k = flat_id(id, groups);
+    if k >= arrayLength(&springs) {
+        return;
+    }
+    let s = springs[k];
+    let xa = pos[s.a].xyz;
+    let xb = pos[s.b].xyz;
+    let va = xa - prev[s.a].xyz;
+    let vb = xb - prev[s.b].xyz;
+    let fa = spring_force(xa - xb, va - vb, SpringSlot(i32(s.b), s.rest, s.ks, s.kd), 1.0 / p.dt);
+    for (var c = 0u; c < 3u; c++) {
+        atomic_add_f32(4u * s.a + c, fa[c]);
+        atomic_add_f32(4u * s.b + c, -fa[c]);
+    }
+}

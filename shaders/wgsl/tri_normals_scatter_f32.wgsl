@@ -1,0 +1,31 @@
+// tri_normals — per triangle (naive variant): the face normal, also added to its three
+// corners' normal accumulators with float atomics (on adapters with
+// Features::SHADER_FLOAT32_ATOMIC; tri_normals_scatter.wgsl is the fallback).
+@group(0) @binding(0) var<uniform> p: StepParams;
+@group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> normal_bits: array<atomic<f32>>;
+@group(0) @binding(9) var<storage, read> triangles: array<u32>;
+@group(0) @binding(11) var<storage, read_write> faces: array<vec4<f32>>;
+
+fn atomic_add_f32(idx: u32, v: f32) {
+    atomicAdd(&normal_bits[idx], v);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let t = flat_id(id, groups);
+    if t >= arrayLength(&faces) {
+        return;
+    }
+    let ia = triangles[3u * t];
+    let ib = triangles[3u * t + 1u];
+    let ic = triangles[3u * t + 2u];
+    let xa = pos[ia].xyz;
+    let nrm = cross(pos[ib].xyz - xa, pos[ic].xyz - xa);
+    faces[t] = vec4<f32>(nrm, length(nrm));
+    for (var c = 0u; c < 3u; c++) {
+        atomic_add_f32(4u * ia + c, nrm[c]);
+        atomic_add_f32(4u * ib + c, nrm[c]);
+        atomic_add_f32(4u * ic + c, nrm[c]);
+    }
+}
