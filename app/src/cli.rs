@@ -10,6 +10,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
+use clothlab_core::validate::{KernelRunner, validate_kernels, validate_rollout};
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
 use clothlab_wgpu::{Variant, WgpuSolver};
 
@@ -24,6 +25,21 @@ struct Cli {
 enum Command {
     /// Simulate headless and print a summary.
     Sim(SimArgs),
+    /// Check every GPU kernel and a rollout on each GPU backend against the CPU reference.
+    Validate(ValidateArgs),
+}
+
+#[derive(clap::Args)]
+struct ValidateArgs {
+    /// GPU backends to check (comma-separated).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::WgpuNaive, Backend::Wgpu])]
+    backends: Vec<Backend>,
+    /// Particles per side for the kernel checks and the rollout (2 ..= 1024).
+    #[arg(long, default_value_t = 64)]
+    n: u32,
+    /// Substeps of the rollout (rounded up to whole frames).
+    #[arg(long, default_value_t = 200)]
+    steps: u32,
 }
 
 /// Solver backends.
@@ -74,6 +90,7 @@ pub fn run() -> Result<ExitCode> {
     };
     match cli.command {
         Command::Sim(args) => sim(args),
+        Command::Validate(args) => validate(args),
     }
 }
 
@@ -182,6 +199,134 @@ fn sim(args: SimArgs) -> Result<ExitCode> {
         println!("state written  {}", path.display());
     }
     Ok(if summary.nan_count == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+}
+
+/// The kernels a GPU backend's recipe uses (what `validate` checks for it).
+fn backend_kernels(backend: Backend, float_atomics: bool) -> &'static [&'static str] {
+    match (backend, float_atomics) {
+        (Backend::WgpuNaive, true) => &[
+            "forces",
+            "springs_scatter_f32",
+            "integrate",
+            "collide",
+            "strain_limit",
+            "tri_normals_scatter_f32",
+            "vertex_normals_naive",
+        ],
+        (Backend::WgpuNaive, false) => &[
+            "forces",
+            "springs_scatter",
+            "integrate",
+            "collide",
+            "strain_limit",
+            "tri_normals_scatter",
+            "vertex_normals_naive",
+        ],
+        (Backend::Wgpu, _) => &["forces_springs", "integrate_collide", "strain_limit", "tri_normals", "vertex_normals"],
+        (Backend::Cpu | Backend::CpuPar, _) => &[],
+    }
+}
+
+/// The buffer a kernel exists to write (shown when every buffer matches exactly).
+fn primary_output(kernel: &str) -> &'static str {
+    match kernel {
+        k if k.starts_with("forces") || k.starts_with("springs") => "force",
+        k if k.starts_with("tri_normals_scatter") || k.starts_with("vertex_normals") => "normal",
+        "tri_normals" => "faces",
+        _ => "pos",
+    }
+}
+
+/// Only the named kernels of a runner.
+struct Only<'a> {
+    inner: &'a mut WgpuSolver,
+    names: &'static [&'static str],
+}
+
+impl KernelRunner for Only<'_> {
+    fn kernel_names(&self) -> Vec<&'static str> {
+        self.names.to_vec()
+    }
+    fn run_kernel(
+        &mut self,
+        kernel: &str,
+        state: &clothlab_core::ClothState,
+        faces: &[[f32; 4]],
+        p: &clothlab_core::StepParams,
+    ) -> Result<(clothlab_core::ClothState, Vec<[f32; 4]>), clothlab_core::SolverError> {
+        self.inner.run_kernel(kernel, state, faces, p)
+    }
+}
+
+fn validate(args: ValidateArgs) -> Result<ExitCode> {
+    if !(2..=1024).contains(&args.n) {
+        bail!("invalid --n {}: must be in 2 ..= 1024", args.n);
+    }
+    if args.steps == 0 || args.steps > 100_000 {
+        bail!("invalid --steps {}: must be in 1 ..= 100000", args.steps);
+    }
+    let params = SimParams::default();
+    let frames = args.steps.div_ceil(params.substeps);
+    let mut variants = Vec::new();
+    for &backend in &args.backends {
+        variants.push(match backend {
+            Backend::WgpuNaive => (backend, Variant::Naive),
+            Backend::Wgpu => (backend, Variant::Optimized),
+            Backend::Cpu | Backend::CpuPar => {
+                bail!("validate checks GPU backends; {backend:?} is the reference itself")
+            }
+        });
+    }
+    let mut failed = 0;
+    println!(
+        "{:<11} {:<26} {:<7} {:>10} {:>10} {:>10} {:>8}  result",
+        "backend", "check", "buffer", "max abs", "rms", "error", "bound"
+    );
+    for (backend, variant) in variants {
+        let mut solver = WgpuSolver::new(variant, Scene::with_n(args.n), params.clone())?;
+        let names = backend_kernels(backend, solver.float_atomics());
+        let kernel_checks = validate_kernels(&mut Only { inner: &mut solver, names }, args.n, 0x5eed)?;
+        // One row per kernel: its worst buffer relative to the bound.
+        let mut rows = Vec::new();
+        for name in names {
+            let worst = kernel_checks
+                .iter()
+                .filter(|c| c.what == *name)
+                .max_by(|a, b| {
+                    let key =
+                        |c: &clothlab_core::validate::Check| (c.error / c.bound, c.buffer == primary_output(name));
+                    let (ka, kb) = (key(a), key(b));
+                    ka.0.total_cmp(&kb.0).then(ka.1.cmp(&kb.1))
+                })
+                .cloned();
+            rows.extend(worst);
+        }
+        let mut rollout_solver = WgpuSolver::new(variant, Scene::with_n(args.n), params.clone())?;
+        rows.push(validate_rollout(&mut rollout_solver, frames)?);
+        let name = rollout_solver.name().to_owned();
+        for c in rows {
+            let ok = c.passed();
+            failed += usize::from(!ok);
+            println!(
+                "{:<11} {:<26} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
+                name,
+                c.what,
+                c.buffer,
+                c.max_abs,
+                c.rms,
+                c.error,
+                c.bound,
+                if ok { "ok" } else { "FAILED" }
+            );
+        }
+        println!("{:<11} adapter: {}", name, solver.adapter());
+    }
+    println!("kernel errors are relative to the largest value in the buffer; rollout errors are in metres");
+    if failed > 0 {
+        eprintln!("error: {failed} check(s) over their bound: do not trust this backend's numbers on this adapter");
+        return Ok(ExitCode::FAILURE);
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 enum OutFormat {

@@ -68,3 +68,20 @@ fn our_own_errors_are_one_line() {
     assert_eq!(err.trim_end().lines().count(), 1, "stderr: {err}");
     assert!(err.starts_with("error: "), "stderr: {err}");
 }
+
+#[test]
+fn validate_checks_the_gpu_backends_or_says_why_not() {
+    refused(&["validate", "--n", "1"], "invalid --n 1");
+    refused(&["validate", "--backends", "cpu"], "reference itself");
+    let out = clothlab(&["validate", "--n", "20", "--steps", "32"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    if err.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") {
+        eprintln!("skipped: {err}");
+        return;
+    }
+    assert!(out.status.success(), "validate failed: {text}\n{err}");
+    // Seven naive kernels, five optimized, a rollout each: all ok.
+    assert_eq!(text.lines().filter(|l| l.ends_with(" ok")).count(), 7 + 5 + 2, "{text}");
+    assert!(!text.contains("FAILED"));
+}

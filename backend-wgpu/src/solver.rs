@@ -9,6 +9,7 @@ use clothlab_core::solver::{Solver, SolverError};
 use clothlab_core::timing::{
     FORCES_SPRINGS, FRAME, INTEGRATE_COLLIDE, KernelId, KernelTimings, SUBSTEP, TimingRecorder,
 };
+use clothlab_core::validate::KernelRunner;
 use clothlab_core::{SimParams, cpu};
 use wgpu::util::DeviceExt;
 
@@ -443,16 +444,20 @@ impl WgpuSolver {
     }
 
     /// Runs `kernel` once on `state` (and `faces`, one per triangle, for the kernels that
-    /// read them) and returns the state and faces afterwards. The kernel's pure outputs
-    /// are filled with NaN first, so an element it fails to write shows. For tests and
-    /// `clothlab validate`; the strain kernel's output is returned as `pos`.
-    pub fn run_kernel(
+    /// read them) with constants `sp` and returns the state and faces afterwards. The
+    /// kernel's pure outputs are filled with NaN first, so an element it fails to write
+    /// shows. For tests and `clothlab validate`; the strain kernel's output is returned as
+    /// `pos`. The next frame uploads the solver's own constants again.
+    fn run_one(
         &mut self,
         kernel: &str,
         state: &ClothState,
         faces: &[V4],
-        grab: Option<Grab>,
+        sp: &StepParams,
     ) -> Result<(ClothState, Vec<V4>), SolverError> {
+        if sp.n != self.topo.n || sp.num_spheres as usize > MAX_COLLIDERS || sp.num_boxes as usize > MAX_COLLIDERS {
+            return Err(SolverError::Backend("step constants for another grid or too many colliders".into()));
+        }
         let name = *self
             .pipelines
             .keys()
@@ -469,8 +474,7 @@ impl WgpuSolver {
         }
         let q = &self.ctx.queue;
         q.write_buffer(&self.buffers.faces, 0, bytemuck::cast_slice(faces));
-        let sp = StepParams::new(&self.params, &self.scene, grab);
-        q.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&sp));
+        q.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(sp));
         let nan_particles = vec![[f32::NAN; 4]; state.pos.len()];
         let nan = bytemuck::cast_slice::<V4, u8>(&nan_particles);
         match kernel {
@@ -499,6 +503,24 @@ impl WgpuSolver {
             self.cur ^= 1; // leave the solver's own positions where they were
         }
         Ok((out_state, out_faces))
+    }
+}
+
+impl KernelRunner for WgpuSolver {
+    fn kernel_names(&self) -> Vec<&'static str> {
+        let mut v: Vec<&'static str> = self.pipelines.keys().copied().collect();
+        v.sort();
+        v
+    }
+
+    fn run_kernel(
+        &mut self,
+        kernel: &str,
+        state: &ClothState,
+        faces: &[V4],
+        p: &StepParams,
+    ) -> Result<(ClothState, Vec<V4>), SolverError> {
+        self.run_one(kernel, state, faces, p)
     }
 }
 

@@ -14,6 +14,7 @@ pub mod scene;
 pub mod solver;
 pub mod stats;
 pub mod timing;
+pub mod validate;
 
 pub use camera::OrbitCamera;
 pub use cpu::{CpuSolver, Exec};
