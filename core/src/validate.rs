@@ -218,7 +218,7 @@ pub fn validate_rollout(solver: &mut dyn Solver, frames: u32) -> Result<Check, S
         reference.step_frame()?;
         solver.step_frame()?;
         let c = compare("", "pos", &solver.state()?.pos, &reference.state_ref().pos, false, 0.0);
-        if !(c.max_abs <= worst.max_abs) {
+        if c.max_abs > worst.max_abs {
             worst = c;
         }
     }
