@@ -95,6 +95,30 @@ fn check_layouts(types_src: &str) {
     }
 }
 
+/// How kernels declare the step constants in the uniform buffer.
+const UNIFORM_PARAMS: &str = "@group(0) @binding(0) var<uniform> p: StepParams;";
+
+/// Validates `source`, writes it and its SPIR-V to `out`, and lists it in `list`.
+fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
+    let (module, info) = parse_and_validate(&format!("{name}.wgsl"), source);
+    let options = naga::back::spv::Options {
+        lang_version: (1, 3),
+        flags: naga::back::spv::WriterFlags::empty(),
+        ..Default::default()
+    };
+    let words = naga::back::spv::write_vec(&module, &info, &options, None)
+        .unwrap_or_else(|e| fail(format!("{name}: SPIR-V output failed: {e}")));
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    fs::write(out.join(format!("{name}.wgsl")), source).expect("write WGSL");
+    fs::write(out.join(format!("{name}.spv")), bytes).expect("write SPIR-V");
+    writeln!(
+        list,
+        "    Kernel {{ name: {name:?}, wgsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.wgsl\")), \
+         spirv: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")) }},"
+    )
+    .expect("write to string");
+}
+
 fn main() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("OUT_DIR"));
@@ -128,23 +152,13 @@ fn main() {
         }
         source.push_str(&format!("\n// ---- {name}.wgsl\n"));
         source.push_str(&body);
-        let (module, info) = parse_and_validate(&format!("{name}.wgsl"), &source);
-        let options = naga::back::spv::Options {
-            lang_version: (1, 3),
-            flags: naga::back::spv::WriterFlags::empty(),
-            ..Default::default()
-        };
-        let words = naga::back::spv::write_vec(&module, &info, &options, None)
-            .unwrap_or_else(|e| fail(format!("{name}: SPIR-V output failed: {e}")));
-        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-        fs::write(out.join(format!("{name}.wgsl")), &source).expect("write WGSL");
-        fs::write(out.join(format!("{name}.spv")), bytes).expect("write SPIR-V");
-        writeln!(
-            list,
-            "    Kernel {{ name: {name:?}, wgsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.wgsl\")), \
-             spirv: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")) }},"
-        )
-        .expect("write to string");
+        emit(&out, &mut list, &name, &source);
+        // A kernel that reads the step constants from the uniform buffer also gets a
+        // `<name>_imm` twin reading them from immediates (push constants).
+        if source.contains(UNIFORM_PARAMS) {
+            let imm = source.replace(UNIFORM_PARAMS, "var<immediate> p: StepParams;");
+            emit(&out, &mut list, &format!("{name}_imm"), &imm);
+        }
     }
     list.push_str("];\n");
     fs::write(out.join("kernels.rs"), list).expect("write kernels.rs");

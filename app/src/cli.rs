@@ -201,35 +201,9 @@ fn sim(args: SimArgs) -> Result<ExitCode> {
     Ok(if summary.nan_count == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }
 
-/// The kernels a GPU backend's recipe uses (what `validate` checks for it).
-fn backend_kernels(backend: Backend, float_atomics: bool) -> &'static [&'static str] {
-    match (backend, float_atomics) {
-        (Backend::WgpuNaive, true) => &[
-            "forces",
-            "springs_scatter_f32",
-            "integrate",
-            "collide",
-            "strain_limit",
-            "tri_normals_scatter_f32",
-            "vertex_normals_naive",
-        ],
-        (Backend::WgpuNaive, false) => &[
-            "forces",
-            "springs_scatter",
-            "integrate",
-            "collide",
-            "strain_limit",
-            "tri_normals_scatter",
-            "vertex_normals_naive",
-        ],
-        (Backend::Wgpu, _) => &["forces_springs", "integrate_collide", "strain_limit", "tri_normals", "vertex_normals"],
-        (Backend::Cpu | Backend::CpuPar, _) => &[],
-    }
-}
-
 /// The buffer a kernel exists to write (shown when every buffer matches exactly).
 fn primary_output(kernel: &str) -> &'static str {
-    match kernel {
+    match kernel.trim_end_matches("_imm") {
         k if k.starts_with("forces") || k.starts_with("springs") => "force",
         k if k.starts_with("tri_normals_scatter") || k.starts_with("vertex_normals") => "normal",
         "tri_normals" => "faces",
@@ -240,12 +214,12 @@ fn primary_output(kernel: &str) -> &'static str {
 /// Only the named kernels of a runner.
 struct Only<'a> {
     inner: &'a mut WgpuSolver,
-    names: &'static [&'static str],
+    names: Vec<&'static str>,
 }
 
 impl KernelRunner for Only<'_> {
     fn kernel_names(&self) -> Vec<&'static str> {
-        self.names.to_vec()
+        self.names.clone()
     }
     fn run_kernel(
         &mut self,
@@ -282,13 +256,13 @@ fn validate(args: ValidateArgs) -> Result<ExitCode> {
         "{:<11} {:<26} {:<7} {:>10} {:>10} {:>10} {:>8}  result",
         "backend", "check", "buffer", "max abs", "rms", "error", "bound"
     );
-    for (backend, variant) in variants {
+    for (_, variant) in variants {
         let mut solver = WgpuSolver::new(variant, Scene::with_n(args.n), params.clone())?;
-        let names = backend_kernels(backend, solver.float_atomics());
-        let kernel_checks = validate_kernels(&mut Only { inner: &mut solver, names }, args.n, 0x5eed)?;
+        let names = solver.recipe_kernels();
+        let kernel_checks = validate_kernels(&mut Only { inner: &mut solver, names: names.clone() }, args.n, 0x5eed)?;
         // One row per kernel: its worst buffer relative to the bound.
         let mut rows = Vec::new();
-        for name in names {
+        for name in &names {
             let worst = kernel_checks
                 .iter()
                 .filter(|c| c.what == *name)

@@ -47,6 +47,8 @@ pub struct GpuContext {
     pub timestamps: bool,
     /// `atomic<f32>` with `atomicAdd` in storage buffers is available.
     pub float_atomics: bool,
+    /// Immediates (push constants) big enough for the step constants are available.
+    pub immediates: bool,
     /// Errors wgpu reported outside an error scope, oldest first.
     uncaptured: Arc<Mutex<Vec<String>>>,
 }
@@ -66,6 +68,11 @@ impl GpuContext {
         let mut required_features = wgpu::Features::empty();
         if timestamps {
             required_features |= wgpu::Features::TIMESTAMP_QUERY;
+        }
+        let immediates = adapter.features().contains(wgpu::Features::IMMEDIATES)
+            && adapter.limits().max_immediate_size as usize >= std::mem::size_of::<clothlab_core::StepParams>();
+        if immediates {
+            required_features |= wgpu::Features::IMMEDIATES;
         }
         let float_atomics = adapter.features().contains(wgpu::Features::SHADER_FLOAT32_ATOMIC);
         if float_atomics {
@@ -87,7 +94,7 @@ impl GpuContext {
             }
         }));
         log::info!("wgpu adapter: {} ({:?}, {})", info.name, info.backend, info.driver_info);
-        Ok(Self { adapter, device, queue, info, timestamps, float_atomics, uncaptured })
+        Ok(Self { adapter, device, queue, info, timestamps, float_atomics, immediates, uncaptured })
     }
 
     /// One line naming the adapter: `llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Mesa 22.3.6)`.

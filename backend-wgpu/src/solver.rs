@@ -52,9 +52,10 @@ const fn d(kernel: &'static str, label: &'static str, count: Count) -> Dispatch 
 
 /// The dispatch that runs `kernel` alone (for [`WgpuSolver::run_kernel`]).
 fn dispatch_for(kernel: &'static str) -> Dispatch {
-    let count = if kernel.starts_with("springs_scatter") {
+    let base = kernel.trim_end_matches("_imm");
+    let count = if base.starts_with("springs_scatter") {
         Count::Springs
-    } else if kernel.starts_with("tri_normals") {
+    } else if base.starts_with("tri_normals") {
         Count::Triangles
     } else {
         Count::Particles
@@ -63,14 +64,28 @@ fn dispatch_for(kernel: &'static str) -> Dispatch {
         kernel,
         label: kernel,
         count,
-        clear_normal: kernel.starts_with("tri_normals_scatter"),
-        flips: kernel == "strain_limit",
+        clear_normal: base.starts_with("tri_normals_scatter"),
+        flips: base == "strain_limit",
     }
 }
 
+/// The `<kernel>_imm` twin that reads the step constants from immediates.
+fn with_immediates(kernel: &'static str) -> &'static str {
+    clothlab_shaders::kernel(&format!("{kernel}_imm")).map_or(kernel, |k| k.name)
+}
+
+/// What the adapter offers that the recipes use.
+#[derive(Debug, Clone, Copy)]
+struct Caps {
+    float_atomics: bool,
+    immediates: bool,
+}
+
 /// The dispatches of one substep for `variant` with `strain_passes` strain passes; the
-/// naive scatters use float atomics where the adapter has them.
-fn recipe(variant: Variant, strain_passes: u32, float_atomics: bool) -> Vec<Dispatch> {
+/// naive scatters use float atomics where the adapter has them, the optimized kernels
+/// read the step constants from immediates where it has those.
+fn recipe(variant: Variant, strain_passes: u32, caps: Caps) -> Vec<Dispatch> {
+    let float_atomics = caps.float_atomics;
     let strain = Dispatch { flips: true, ..d("strain_limit", "strain_limit", Count::Particles) };
     let mut r = Vec::new();
     match variant {
@@ -94,6 +109,11 @@ fn recipe(variant: Variant, strain_passes: u32, float_atomics: bool) -> Vec<Disp
             r.extend((0..strain_passes).map(|_| strain));
             r.push(d("tri_normals", KernelId::TriNormals.name(), Count::Triangles));
             r.push(d("vertex_normals", KernelId::VertexNormals.name(), Count::Particles));
+            if caps.immediates {
+                for dsp in &mut r {
+                    dsp.kernel = with_immediates(dsp.kernel);
+                }
+            }
         }
     }
     r
@@ -151,6 +171,9 @@ pub struct WgpuSolver {
     recipe: Vec<Dispatch>,
     /// Which of `buffers.pos` holds the current positions.
     cur: usize,
+    /// The step constants of the frame being recorded (for kernels reading immediates).
+    sp: StepParams,
+    caps: Caps,
     timestamps: Option<Timestamps>,
     timer: TimingRecorder,
     /// Record per-kernel GPU timings (reads timestamps back after every submission).
@@ -279,15 +302,22 @@ impl WgpuSolver {
             })
         };
         let bind_groups = [bind(0), bind(1)];
-        let pipeline_layout = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("cloth"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let caps = Caps { float_atomics: ctx.float_atomics, immediates: ctx.immediates };
+        let pipeline_layout = |immediate_size: u32| {
+            dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("cloth"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size,
+            })
+        };
+        let plain_layout = pipeline_layout(0);
+        let imm_layout = caps.immediates.then(|| pipeline_layout(std::mem::size_of::<StepParams>() as u32));
         let mut pipelines = HashMap::new();
         let mut kernels = vec!["springs", "springs_scatter", "tri_normals_scatter"];
+        // Every kernel either recipe can use on this adapter, so that all can be validated.
         for v in [Variant::Naive, Variant::Optimized] {
-            kernels.extend(recipe(v, 1, ctx.float_atomics).iter().map(|d| d.kernel));
+            kernels.extend(recipe(v, 1, caps).iter().map(|d| d.kernel));
+            kernels.extend(recipe(v, 1, Caps { immediates: false, ..caps }).iter().map(|d| d.kernel));
         }
         for name in kernels {
             if pipelines.contains_key(name) {
@@ -301,7 +331,10 @@ impl WgpuSolver {
             });
             let pipeline = dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(name),
-                layout: Some(&pipeline_layout),
+                layout: Some(match (&imm_layout, name.ends_with("_imm")) {
+                    (Some(l), true) => l,
+                    _ => &plain_layout,
+                }),
                 module: &module,
                 entry_point: Some("main"),
                 compilation_options: Default::default(),
@@ -324,7 +357,7 @@ impl WgpuSolver {
             period_ns: ctx.queue.get_timestamp_period() as f64,
         });
         ctx.check("creating the solver").map_err(backend)?;
-        let recipe = recipe(variant, params.strain_iterations, ctx.float_atomics);
+        let recipe = recipe(variant, params.strain_iterations, caps);
         Ok(Self {
             ctx,
             variant,
@@ -337,6 +370,8 @@ impl WgpuSolver {
             pipelines,
             recipe,
             cur: 0,
+            sp,
+            caps,
             timestamps,
             timer: TimingRecorder::default(),
             time_kernels: true,
@@ -346,6 +381,22 @@ impl WgpuSolver {
     /// The adapter in use, in one line.
     pub fn adapter(&self) -> String {
         self.ctx.describe()
+    }
+
+    /// The kernels one substep dispatches, in order (strain passes once).
+    pub fn recipe_kernels(&self) -> Vec<&'static str> {
+        let mut v: Vec<&'static str> = Vec::new();
+        for d in &self.recipe {
+            if !v.contains(&d.kernel) {
+                v.push(d.kernel);
+            }
+        }
+        v
+    }
+
+    /// Whether the optimized kernels read the step constants from immediates.
+    pub fn immediates(&self) -> bool {
+        self.caps.immediates
     }
 
     /// Whether the naive scatters use float atomics (else compare-exchange loops).
@@ -396,6 +447,9 @@ impl WgpuSolver {
             let mut pass =
                 enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(dsp.label), timestamp_writes });
             pass.set_pipeline(&self.pipelines[dsp.kernel]);
+            if dsp.kernel.ends_with("_imm") {
+                pass.set_immediates(0, bytemuck::bytes_of(&self.sp));
+            }
             pass.set_bind_group(0, &self.bind_groups[self.cur], &[]);
             let (x, y) = groups(self.count(dsp.count));
             pass.dispatch_workgroups(x, y, 1);
@@ -475,9 +529,10 @@ impl WgpuSolver {
         let q = &self.ctx.queue;
         q.write_buffer(&self.buffers.faces, 0, bytemuck::cast_slice(faces));
         q.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(sp));
+        self.sp = *sp;
         let nan_particles = vec![[f32::NAN; 4]; state.pos.len()];
         let nan = bytemuck::cast_slice::<V4, u8>(&nan_particles);
-        match kernel {
+        match kernel.trim_end_matches("_imm") {
             "strain_limit" => q.write_buffer(&self.buffers.pos[1 - self.cur], 0, nan),
             "tri_normals" | "tri_normals_scatter" | "tri_normals_scatter_f32" => {
                 q.write_buffer(&self.buffers.faces, 0, bytemuck::cast_slice(&vec![[f32::NAN; 4]; faces.len()]))
@@ -552,7 +607,7 @@ impl Solver for WgpuSolver {
         let q = &self.ctx.queue;
         q.write_buffer(&self.buffers.slots, 0, bytemuck::cast_slice(&self.topo.slots));
         q.write_buffer(&self.buffers.springs, 0, bytemuck::cast_slice(&self.topo.springs));
-        self.recipe = recipe(self.variant, params.strain_iterations, self.ctx.float_atomics);
+        self.recipe = recipe(self.variant, params.strain_iterations, self.caps);
         self.params = params;
         Ok(())
     }
@@ -564,8 +619,8 @@ impl Solver for WgpuSolver {
 
     fn step_frame(&mut self) -> Result<(), SolverError> {
         let t0 = Instant::now();
-        let sp = StepParams::new(&self.params, &self.scene, self.grab);
-        self.ctx.queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&sp));
+        self.sp = StepParams::new(&self.params, &self.scene, self.grab);
+        self.ctx.queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&self.sp));
         let recipe = self.recipe.clone();
         let mut gpu_ns = 0.0;
         let mut timed = false;

@@ -5,7 +5,9 @@
 //! for the structs that mirror clothlab-core's `#[repr(C)]` types and for functions
 //! several kernels use. A kernel's first line `//! include: a, b` names the shared files
 //! it needs; `shared/types.wgsl` is always first. The build fails on a WGSL error and
-//! on a shared struct whose size or field offsets differ from core's.
+//! on a shared struct whose size or field offsets differ from core's. Every kernel that
+//! reads the step constants `p` from the uniform buffer (binding 0) also exists as
+//! `<name>_imm`, reading them from immediates (push constants) instead.
 #![forbid(unsafe_code)]
 
 /// One compiled kernel.
@@ -52,5 +54,7 @@ mod tests {
             assert_eq!(&k.spirv[..4], &[0x03, 0x02, 0x23, 0x07], "{name}");
             assert_eq!(k.spirv.len() % 4, 0);
         }
+        let imm = kernel("forces_springs_imm").expect("immediates twin");
+        assert!(imm.wgsl.contains("var<immediate> p: StepParams;") && !imm.wgsl.contains("var<uniform> p"));
     }
 }

@@ -28,6 +28,9 @@ fn kernels_match_on(n: u32) {
     }
     for k in ["forces_springs", "integrate_collide", "strain_limit", "tri_normals", "vertex_normals"] {
         assert!(names.contains(&k), "optimized kernel {k} missing");
+        // And the twins reading the constants from immediates, where the adapter has them.
+        let imm = format!("{k}_imm");
+        assert_eq!(names.iter().any(|n| *n == imm), g.immediates(), "{imm}");
     }
     if g.float_atomics() {
         assert!(names.contains(&"springs_scatter_f32") && names.contains(&"tri_normals_scatter_f32"));
