@@ -85,3 +85,20 @@ fn validate_checks_the_gpu_backends_or_says_why_not() {
     assert_eq!(text.lines().filter(|l| l.ends_with(" ok")).count(), 7 + 5 + 2, "{text}");
     assert!(!text.contains("FAILED"));
 }
+
+#[test]
+fn a_grid_too_big_for_the_adapter_is_refused_with_the_size_it_takes() {
+    // lavapipe binds at most 128 MiB per storage buffer; n = 2048 needs 768 MiB of springs.
+    let out = clothlab(&["sim", "--backend", "wgpu", "--n", "2048", "--steps", "16"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    if err.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") {
+        eprintln!("skipped: {err}");
+        return;
+    }
+    if out.status.success() {
+        // An adapter that binds 768 MiB (a big real GPU) runs it: nothing to refuse.
+        return;
+    }
+    assert!(err.contains("spring table") && err.contains("use n ≤"), "{err}");
+    assert!(!err.contains("Validation Error") && !err.contains("panicked"), "{err}");
+}

@@ -210,6 +210,22 @@ impl WgpuSolver {
         if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
             return Err(SolverError::Backend(format!("at most {MAX_COLLIDERS} spheres and boxes")));
         }
+        // The largest buffer is the spring table (12 slots × 16 bytes per particle); refuse
+        // a grid whose buffers the adapter cannot bind, with the size it can take.
+        let limits = ctx.device.limits();
+        let max_binding = (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
+        let per_particle = (clothlab_core::grid::SLOTS * std::mem::size_of::<clothlab_core::SpringSlot>()) as u64;
+        let np = scene.num_particles() as u64;
+        if np * per_particle > max_binding {
+            let max_n = ((max_binding / per_particle) as f64).sqrt().floor() as u64;
+            return Err(SolverError::Backend(format!(
+                "n = {} needs a {} MiB spring table, more than the {} MiB this adapter ({}) binds per storage buffer: use n ≤ {max_n} on it",
+                scene.cloth.n,
+                np * per_particle >> 20,
+                max_binding >> 20,
+                ctx.info.name
+            )));
+        }
         let (mut state, topo) = build(&scene, &params)?;
         // Initial normals and wind, as the CPU solvers start.
         let sp = StepParams::new(&params, &scene, None);
