@@ -88,7 +88,8 @@ impl GpuContext {
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
         let sink = uncaptured.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-            log::error!("wgpu: {e}");
+            // Surfaced by `check` as the caller's error; logged here for RUST_LOG=debug.
+            log::debug!("wgpu: {e}");
             if let Ok(mut v) = sink.lock() {
                 v.push(e.to_string());
             }

@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
-use clothlab_core::grid::{ClothState, ClothTopology, Grab, StepParams, V4, build};
+use clothlab_core::grid::{ClothState, ClothTopology, Grab, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, V4, build};
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::solver::{Solver, SolverError};
 use clothlab_core::timing::{
@@ -140,11 +140,34 @@ struct Buffers {
     faces: wgpu::Buffer,
     spheres: wgpu::Buffer,
     boxes: wgpu::Buffer,
+    /// Slots 0..8 of every particle (structural, shear).
     slots: wgpu::Buffer,
+    /// Slots 8..12 of every particle (bend).
+    bend_slots: wgpu::Buffer,
+    /// The flat spring list, first half.
     springs: wgpu::Buffer,
+    /// The flat spring list, second half.
+    springs_b: wgpu::Buffer,
     tethers: wgpu::Buffer,
     triangles: wgpu::Buffer,
     face_slots: wgpu::Buffer,
+}
+
+/// The spring table as the shaders read it: slots `0..STRAIN_SLOTS` of every particle,
+/// then the remaining (bend) slots of every particle.
+fn split_slots(topo: &ClothTopology) -> (Vec<SpringSlot>, Vec<SpringSlot>) {
+    let mut strain = Vec::with_capacity(topo.num_particles() * STRAIN_SLOTS);
+    let mut bend = Vec::with_capacity(topo.num_particles() * (SLOTS - STRAIN_SLOTS));
+    for p in topo.slots.chunks_exact(SLOTS) {
+        strain.extend_from_slice(&p[..STRAIN_SLOTS]);
+        bend.extend_from_slice(&p[STRAIN_SLOTS..]);
+    }
+    (strain, bend)
+}
+
+/// The flat spring list split in two (the second half at least one spring long).
+fn halves(springs: &[clothlab_core::Spring]) -> (&[clothlab_core::Spring], &[clothlab_core::Spring]) {
+    springs.split_at(springs.len() / 2)
 }
 
 fn entry(binding: u32, buf: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
@@ -210,18 +233,18 @@ impl WgpuSolver {
         if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
             return Err(SolverError::Backend(format!("at most {MAX_COLLIDERS} spheres and boxes")));
         }
-        // The largest buffer is the spring table (12 slots × 16 bytes per particle); refuse
-        // a grid whose buffers the adapter cannot bind, with the size it can take.
+        // Refuse a grid whose buffers the adapter cannot bind, naming the size it can take.
         let limits = ctx.device.limits();
-        let max_binding = (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
-        let per_particle = (clothlab_core::grid::SLOTS * std::mem::size_of::<clothlab_core::SpringSlot>()) as u64;
+        let max_binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        // The largest buffer is the structural and shear half of the spring table.
+        let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
         let np = scene.num_particles() as u64;
         if np * per_particle > max_binding {
             let max_n = ((max_binding / per_particle) as f64).sqrt().floor() as u64;
             return Err(SolverError::Backend(format!(
                 "n = {} needs a {} MiB spring table, more than the {} MiB this adapter ({}) binds per storage buffer: use n ≤ {max_n} on it",
                 scene.cloth.n,
-                np * per_particle >> 20,
+                (np * per_particle) >> 20,
                 max_binding >> 20,
                 ctx.info.name
             )));
@@ -258,8 +281,10 @@ impl WgpuSolver {
             faces: init("faces", bytemuck::cast_slice(&face), U::STORAGE | U::COPY_SRC | U::COPY_DST),
             spheres: init("spheres", bytemuck::cast_slice(&spheres), data_usage),
             boxes: init("boxes", bytemuck::cast_slice(&boxes), data_usage),
-            slots: init("slots", bytemuck::cast_slice(&topo.slots), data_usage),
-            springs: init("springs", bytemuck::cast_slice(&topo.springs), data_usage),
+            slots: init("slots", bytemuck::cast_slice(&split_slots(&topo).0), data_usage),
+            bend_slots: init("bend slots", bytemuck::cast_slice(&split_slots(&topo).1), data_usage),
+            springs: init("springs", bytemuck::cast_slice(halves(&topo.springs).0), data_usage),
+            springs_b: init("springs (2nd half)", bytemuck::cast_slice(halves(&topo.springs).1), data_usage),
             tethers: init("tethers", bytemuck::cast_slice(&topo.tethers), data_usage),
             triangles: init("triangles", bytemuck::cast_slice(&tri_flat), data_usage | U::INDEX),
             face_slots: init("face_slots", bytemuck::cast_slice(&face_flat), data_usage),
@@ -291,6 +316,8 @@ impl WgpuSolver {
                 storage(11, false),
                 storage(12, true),
                 storage(13, true),
+                storage(14, true),
+                storage(15, true),
             ],
         });
         let bind = |k: usize| {
@@ -314,6 +341,8 @@ impl WgpuSolver {
                     e(11, &b.faces),
                     e(12, &b.spheres),
                     e(13, &b.boxes),
+                    e(14, &b.bend_slots),
+                    e(15, &b.springs_b),
                 ],
             })
         };
@@ -621,8 +650,12 @@ impl Solver for WgpuSolver {
         // The spring constants depend on dt and the stiffness fractions: rewrite both tables
         // in place (the bind groups keep pointing at the same buffers).
         let q = &self.ctx.queue;
-        q.write_buffer(&self.buffers.slots, 0, bytemuck::cast_slice(&self.topo.slots));
-        q.write_buffer(&self.buffers.springs, 0, bytemuck::cast_slice(&self.topo.springs));
+        let (strain, bend) = split_slots(&self.topo);
+        q.write_buffer(&self.buffers.slots, 0, bytemuck::cast_slice(&strain));
+        q.write_buffer(&self.buffers.bend_slots, 0, bytemuck::cast_slice(&bend));
+        let (a, b) = halves(&self.topo.springs);
+        q.write_buffer(&self.buffers.springs, 0, bytemuck::cast_slice(a));
+        q.write_buffer(&self.buffers.springs_b, 0, bytemuck::cast_slice(b));
         self.recipe = recipe(self.variant, params.strain_iterations, self.caps);
         self.params = params;
         Ok(())

@@ -4,7 +4,10 @@
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> prev: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> force_bits: array<atomic<u32>>;
+// The spring list in two halves, each within the 128 MiB a storage binding may span on
+// many adapters up to n = 1024.
 @group(0) @binding(7) var<storage, read> springs: array<Spring>;
+@group(0) @binding(15) var<storage, read> springs_b: array<Spring>;
 
 fn atomic_add_f32(idx: u32, v: f32) {
     var old = atomicLoad(&force_bits[idx]);
@@ -21,10 +24,16 @@ fn atomic_add_f32(idx: u32, v: f32) {
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let k = flat_id(id, groups);
-    if k >= arrayLength(&springs) {
+    let half = arrayLength(&springs);
+    if k >= half + arrayLength(&springs_b) {
         return;
     }
-    let s = springs[k];
+    var s: Spring;
+    if k < half {
+        s = springs[k];
+    } else {
+        s = springs_b[k - half];
+    }
     let xa = pos[s.a].xyz;
     let xb = pos[s.b].xyz;
     let va = xa - prev[s.a].xyz;

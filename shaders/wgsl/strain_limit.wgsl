@@ -3,6 +3,7 @@
 @group(0) @binding(0) var<uniform> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
+// Slots 0..8 of each particle (the structural and shear springs; see shared/gather.wgsl).
 @group(0) @binding(6) var<storage, read> slots: array<SpringSlot>;
 @group(0) @binding(8) var<storage, read> tethers: array<Tether>;
 
@@ -30,7 +31,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     var corr = vec3<f32>(0.0);
     var count = 0.0;
     for (var s = 0u; s < STRAIN_SLOTS; s++) {
-        let slot = slots[i * SLOTS + s];
+        let slot = slots[i * STRAIN_SLOTS + s];
         if slot.neighbor < 0 {
             continue;
         }
