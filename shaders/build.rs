@@ -8,7 +8,7 @@ use std::fs;
 use std::mem::{offset_of, size_of};
 use std::path::{Path, PathBuf};
 
-use clothlab_core::grid::{Spring, SpringSlot, StepParams, Tether};
+use clothlab_core::grid::{InteriorSlots, Spring, SpringSlot, StepParams, Tether};
 use clothlab_core::scene::{Aabb, Sphere};
 
 /// A struct as core lays it out: name, size, and (field, offset) pairs.
@@ -45,6 +45,7 @@ fn expected_layouts() -> Vec<Layout> {
         layout!(SpringSlot, "SpringSlot", [neighbor, rest, ks, kd]),
         layout!(Spring, "Spring", [a, b, rest, ks, kd, kind]),
         layout!(Tether, "Tether", [pin, rest]),
+        layout!(InteriorSlots, "InteriorSlots", [slots, enabled, _pad0, _pad1, _pad2]),
         layout!(Sphere, "Sphere", [center, radius]),
         layout!(Aabb, "Aabb", [min, max]),
     ]

@@ -3,7 +3,9 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
-use clothlab_core::grid::{ClothState, ClothTopology, Grab, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, V4, build};
+use clothlab_core::grid::{
+    ClothState, ClothTopology, Grab, InteriorSlots, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, V4, build,
+};
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::solver::{Solver, SolverError};
 use clothlab_core::timing::{
@@ -144,6 +146,8 @@ struct Buffers {
     slots: wgpu::Buffer,
     /// Slots 8..12 of every particle (bend).
     bend_slots: wgpu::Buffer,
+    /// The interior's shared spring constants (uniform).
+    interior: wgpu::Buffer,
     /// The flat spring list, first half.
     springs: wgpu::Buffer,
     /// The flat spring list, second half.
@@ -281,6 +285,7 @@ impl WgpuSolver {
             faces: init("faces", bytemuck::cast_slice(&face), U::STORAGE | U::COPY_SRC | U::COPY_DST),
             spheres: init("spheres", bytemuck::cast_slice(&spheres), data_usage),
             boxes: init("boxes", bytemuck::cast_slice(&boxes), data_usage),
+            interior: init("interior slots", bytemuck::bytes_of(&InteriorSlots::new(&topo)), U::UNIFORM | U::COPY_DST),
             slots: init("slots", bytemuck::cast_slice(&split_slots(&topo).0), data_usage),
             bend_slots: init("bend slots", bytemuck::cast_slice(&split_slots(&topo).1), data_usage),
             springs: init("springs", bytemuck::cast_slice(halves(&topo.springs).0), data_usage),
@@ -318,6 +323,16 @@ impl WgpuSolver {
                 storage(13, true),
                 storage(14, true),
                 storage(15, true),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 16,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
             ],
         });
         let bind = |k: usize| {
@@ -343,6 +358,7 @@ impl WgpuSolver {
                     e(13, &b.boxes),
                     e(14, &b.bend_slots),
                     e(15, &b.springs_b),
+                    e(16, &b.interior),
                 ],
             })
         };
@@ -650,6 +666,7 @@ impl Solver for WgpuSolver {
         // The spring constants depend on dt and the stiffness fractions: rewrite both tables
         // in place (the bind groups keep pointing at the same buffers).
         let q = &self.ctx.queue;
+        q.write_buffer(&self.buffers.interior, 0, bytemuck::bytes_of(&InteriorSlots::new(&self.topo)));
         let (strain, bend) = split_slots(&self.topo);
         q.write_buffer(&self.buffers.slots, 0, bytemuck::cast_slice(&strain));
         q.write_buffer(&self.buffers.bend_slots, 0, bytemuck::cast_slice(&bend));

@@ -66,6 +66,37 @@ impl Tether {
     pub const EMPTY: Self = Self { pin: -1, rest: 0.0 };
 }
 
+/// The spring constants every interior particle shares (see
+/// [`ClothTopology::uniform_interior_slots`]), for GPU kernels to read from a uniform block
+/// (the thesis's constant memory) instead of the per-particle table. `#[repr(C)]`,
+/// mirrored in the shaders; `neighbor` is unused (the offsets are [`SLOT_OFFSETS`]).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct InteriorSlots {
+    /// Rest length and constants of slot `s` for every particle at least two away from
+    /// the border.
+    pub slots: [SpringSlot; SLOTS],
+    /// 1 when `slots` is valid, 0 when kernels must read the table everywhere.
+    pub enabled: u32,
+    /// Padding to 16 bytes (three scalars: a WGSL uniform array needs a 16-byte stride,
+    /// and a `vec3` pad would be aligned to 16).
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
+}
+
+impl InteriorSlots {
+    /// From the topology's uniform interior slots, if it has them.
+    pub fn new(topo: &ClothTopology) -> Self {
+        match topo.uniform_interior_slots() {
+            Some(slots) => Self { slots, enabled: 1, _pad0: 0, _pad1: 0, _pad2: 0 },
+            None => Self { slots: [SpringSlot::EMPTY; SLOTS], enabled: 0, _pad0: 0, _pad1: 0, _pad2: 0 },
+        }
+    }
+}
+
 /// One slot of the per-particle gather table (`#[repr(C)]`, mirrored in the shaders).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]

@@ -6,6 +6,7 @@
 // Slots 0..8 of each particle (the structural and shear springs; see shared/gather.wgsl).
 @group(0) @binding(6) var<storage, read> slots: array<SpringSlot>;
 @group(0) @binding(8) var<storage, read> tethers: array<Tether>;
+@group(0) @binding(16) var<uniform> interior: InteriorSlots;
 
 fn mobility(k: u32) -> f32 {
     if i32(k) == p.grab_index {
@@ -30,8 +31,16 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     var corr = vec3<f32>(0.0);
     var count = 0.0;
+    let inner = interior.enabled != 0u && is_interior(i, p.n);
     for (var s = 0u; s < STRAIN_SLOTS; s++) {
-        let slot = slots[i * STRAIN_SLOTS + s];
+        // Interior: neighbour by offset and rest length from the uniform block.
+        var slot: SpringSlot;
+        if inner {
+            slot = interior.slots[s];
+            slot.neighbor = i32(i) + SLOT_DI[s] + SLOT_DJ[s] * i32(p.n);
+        } else {
+            slot = slots[i * STRAIN_SLOTS + s];
+        }
         if slot.neighbor < 0 {
             continue;
         }

@@ -5,6 +5,9 @@
 @group(0) @binding(6) var<storage, read> slots: array<SpringSlot>;
 @group(0) @binding(14) var<storage, read> bend_slots: array<SpringSlot>;
 
+// The interior's shared spring constants (the thesis's constant memory).
+@group(0) @binding(16) var<uniform> interior: InteriorSlots;
+
 fn slot_at(i: u32, s: u32) -> SpringSlot {
     if s < STRAIN_SLOTS {
         return slots[i * STRAIN_SLOTS + s];
@@ -18,6 +21,17 @@ fn springs_at(i: u32, f: vec4<f32>) -> vec4<f32> {
     let xa = pos[i].xyz;
     let va = xa - prev[i].xyz;
     var acc = f.xyz;
+    if interior.enabled != 0u && is_interior(i, p.n) {
+        // Neighbours by offset, constants from the uniform block: no table reads.
+        for (var s = 0u; s < SLOTS; s++) {
+            let slot = interior.slots[s];
+            let b = u32(i32(i) + SLOT_DI[s] + SLOT_DJ[s] * i32(p.n));
+            let xb = pos[b].xyz;
+            let vb = xb - prev[b].xyz;
+            acc += spring_force(xa - xb, va - vb, slot, inv_dt);
+        }
+        return vec4<f32>(acc, 0.0);
+    }
     for (var s = 0u; s < SLOTS; s++) {
         let slot = slot_at(i, s);
         if slot.neighbor < 0 {

@@ -40,6 +40,14 @@ struct Tether {
     rest: f32,
 }
 
+struct InteriorSlots {
+    slots: array<SpringSlot, 12>,
+    enabled: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
 struct Sphere {
     center: vec3<f32>,
     radius: f32,
@@ -55,6 +63,18 @@ const SLOTS: u32 = 12u;
 const STRAIN_SLOTS: u32 = 8u;
 const FACE_SLOTS: u32 = 6u;
 const TETHER_SLOTS: u32 = 2u;
+// core::grid::SLOT_OFFSETS: (di, dj) of the 12 slots.
+const SLOT_DI = array<i32, 12>(-1, 1, 0, 0, -1, 1, -1, 1, -2, 2, 0, 0);
+const SLOT_DJ = array<i32, 12>(0, 0, -1, 1, -1, -1, 1, 1, 0, 0, -2, 2);
+
+// Whether particle i of an n × n grid is at least two away from the border (all 12 of
+// its slots are filled and equal to the interior's).
+fn is_interior(i: u32, n: u32) -> bool {
+    let col = i % n;
+    let row = i / n;
+    return col >= 2u && col + 2u < n && row >= 2u && row + 2u < n;
+}
+
 // core::cpu::strain_limit::STRAIN_AIM
 const STRAIN_AIM: f32 = 0.95;
 
