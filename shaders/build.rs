@@ -144,21 +144,34 @@ fn main() {
         let name = path.file_stem().and_then(|s| s.to_str()).expect("utf-8 file name").to_owned();
         let body = fs::read_to_string(&path).unwrap_or_else(|e| fail(format!("{}: {e}", path.display())));
         // `//! include: a, b` on the first line pulls in shared/a.wgsl, shared/b.wgsl.
-        let mut source = types.clone();
-        if let Some(list) = body.lines().next().and_then(|l| l.strip_prefix("//! include:")) {
-            for inc in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let includes: Vec<String> = body
+            .lines()
+            .next()
+            .and_then(|l| l.strip_prefix("//! include:"))
+            .map(|list| list.split(',').map(str::trim).filter(|s| !s.is_empty()).map(String::from).collect())
+            .unwrap_or_default();
+        // A kernel using compare-exchange float addition also gets a `<name>_f32` twin
+        // using float atomics.
+        let mut variants = vec![(name.clone(), includes.clone())];
+        if includes.iter().any(|i| i == "atomic_cas") {
+            let f32_includes = includes.iter().map(|i| if i == "atomic_cas" { "atomic_f32".into() } else { i.clone() });
+            variants.push((format!("{name}_f32"), f32_includes.collect()));
+        }
+        for (vname, incs) in variants {
+            let mut source = types.clone();
+            for inc in &incs {
                 source.push_str(&format!("\n// ---- shared/{inc}.wgsl\n"));
                 source.push_str(&shared(inc));
             }
-        }
-        source.push_str(&format!("\n// ---- {name}.wgsl\n"));
-        source.push_str(&body);
-        emit(&out, &mut list, &name, &source);
-        // A kernel that reads the step constants from the uniform buffer also gets a
-        // `<name>_imm` twin reading them from immediates (push constants).
-        if source.contains(UNIFORM_PARAMS) {
-            let imm = source.replace(UNIFORM_PARAMS, "var<immediate> p: StepParams;");
-            emit(&out, &mut list, &format!("{name}_imm"), &imm);
+            source.push_str(&format!("\n// ---- {name}.wgsl\n"));
+            source.push_str(&body);
+            emit(&out, &mut list, &vname, &source);
+            // A kernel that reads the step constants from the uniform buffer also gets a
+            // `<name>_imm` twin reading them from immediates (push constants).
+            if source.contains(UNIFORM_PARAMS) {
+                let imm = source.replace(UNIFORM_PARAMS, "var<immediate> p: StepParams;");
+                emit(&out, &mut list, &format!("{vname}_imm"), &imm);
+            }
         }
     }
     list.push_str("];\n");

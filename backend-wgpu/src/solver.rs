@@ -207,17 +207,21 @@ pub struct WgpuSolver {
     pub time_kernels: bool,
 }
 
-fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
         count: None,
     }
+}
+
+fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    buffer_entry(binding, wgpu::BufferBindingType::Storage { read_only })
+}
+
+fn uniform(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    buffer_entry(binding, wgpu::BufferBindingType::Uniform)
 }
 
 impl WgpuSolver {
@@ -298,16 +302,7 @@ impl WgpuSolver {
         let layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cloth"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                uniform(0),
                 storage(1, false),
                 storage(2, false),
                 storage(3, false),
@@ -323,16 +318,7 @@ impl WgpuSolver {
                 storage(13, true),
                 storage(14, true),
                 storage(15, true),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 16,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                uniform(16),
             ],
         });
         let bind = |k: usize| {
@@ -745,11 +731,7 @@ impl Solver for WgpuSolver {
     }
 
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
-        let want = self.topo.n;
-        let np = self.topo.num_particles();
-        if state.n != want || [&state.pos, &state.prev, &state.force, &state.normal].iter().any(|v| v.len() != np) {
-            return Err(SolverError::GridMismatch { want, got: state.n });
-        }
+        state.check(self.topo.n)?;
         let q = &self.ctx.queue;
         let b = &self.buffers;
         q.write_buffer(&b.pos[self.cur], 0, bytemuck::cast_slice(&state.pos));

@@ -150,6 +150,22 @@ pub struct ClothState {
     pub normal: Vec<V4>,
 }
 
+impl ClothState {
+    /// Checks that this is a finite state of an `n × n` grid (what `Solver::set_state`
+    /// accepts).
+    pub fn check(&self, n: u32) -> Result<(), crate::solver::SolverError> {
+        let np = n as usize * n as usize;
+        let bufs = [&self.pos, &self.prev, &self.force, &self.normal];
+        if self.n != n || bufs.iter().any(|v| v.len() != np) {
+            return Err(crate::solver::SolverError::GridMismatch { want: n, got: self.n });
+        }
+        if !bufs.iter().all(|v| v.iter().flatten().all(|x| x.is_finite())) {
+            return Err(crate::solver::SolverError::Backend("state holds non-finite values".into()));
+        }
+        Ok(())
+    }
+}
+
 /// What does not change while simulating: connectivity and spring constants.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClothTopology {

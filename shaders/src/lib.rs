@@ -7,7 +7,9 @@
 //! it needs; `shared/types.wgsl` is always first. The build fails on a WGSL error and
 //! on a shared struct whose size or field offsets differ from core's. Every kernel that
 //! reads the step constants `p` from the uniform buffer (binding 0) also exists as
-//! `<name>_imm`, reading them from immediates (push constants) instead.
+//! `<name>_imm`, reading them from immediates (push constants) instead; every kernel that
+//! includes `atomic_cas` (float addition by compare-exchange) also exists as
+//! `<name>_f32`, using float atomics.
 #![forbid(unsafe_code)]
 
 /// One compiled kernel.

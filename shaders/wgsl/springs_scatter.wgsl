@@ -1,25 +1,13 @@
-// springs — per spring: add the force to both ends with atomics (naive variant). WGSL has
-// no float atomics, so each component is a compare-exchange loop on its bit pattern.
+//! include: atomic_cas
+// springs — per spring: add the force to both ends with atomics (naive variant).
 @group(0) @binding(0) var<uniform> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> prev: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read_write> force_bits: array<atomic<u32>>;
+@group(0) @binding(3) var<storage, read_write> accum: array<AtomicF32>;
 // The spring list in two halves, each within the 128 MiB a storage binding may span on
 // many adapters up to n = 1024.
 @group(0) @binding(7) var<storage, read> springs: array<Spring>;
 @group(0) @binding(15) var<storage, read> springs_b: array<Spring>;
-
-fn atomic_add_f32(idx: u32, v: f32) {
-    var old = atomicLoad(&force_bits[idx]);
-    loop {
-        let new_bits = bitcast<u32>(bitcast<f32>(old) + v);
-        let r = atomicCompareExchangeWeak(&force_bits[idx], old, new_bits);
-        if r.exchanged {
-            break;
-        }
-        old = r.old_value;
-    }
-}
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

@@ -1,22 +1,11 @@
+//! include: atomic_cas
 // tri_normals — per triangle (naive variant): the face normal, also added to its three
-// corners' normal accumulators with compare-exchange atomics.
+// corners' normal accumulators with atomics.
 @group(0) @binding(0) var<uniform> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read_write> normal_bits: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> accum: array<AtomicF32>;
 @group(0) @binding(9) var<storage, read> triangles: array<u32>;
 @group(0) @binding(11) var<storage, read_write> faces: array<vec4<f32>>;
-
-fn atomic_add_f32(idx: u32, v: f32) {
-    var old = atomicLoad(&normal_bits[idx]);
-    loop {
-        let new_bits = bitcast<u32>(bitcast<f32>(old) + v);
-        let r = atomicCompareExchangeWeak(&normal_bits[idx], old, new_bits);
-        if r.exchanged {
-            break;
-        }
-        old = r.old_value;
-    }
-}
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

@@ -189,20 +189,7 @@ impl Solver for CpuSolver {
     }
 
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
-        let want = self.state.n;
-        let np = want as usize * want as usize;
-        if state.n != want
-            || state.pos.len() != np
-            || state.prev.len() != np
-            || state.force.len() != np
-            || state.normal.len() != np
-        {
-            return Err(SolverError::GridMismatch { want, got: state.n });
-        }
-        let finite = |v: &Vec<V4>| v.iter().flatten().all(|x| x.is_finite());
-        if !(finite(&state.pos) && finite(&state.prev) && finite(&state.force) && finite(&state.normal)) {
-            return Err(SolverError::Backend("state holds non-finite values".into()));
-        }
+        state.check(self.state.n)?;
         self.state = state.clone();
         Ok(())
     }
