@@ -12,7 +12,7 @@ use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 use clothlab_core::validate::{KernelRunner, validate_kernels, validate_rollout};
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
-use clothlab_wgpu::{Variant, WgpuSolver};
+use clothlab_wgpu::{ClothSource, Variant, WgpuRenderer, WgpuSolver};
 
 #[derive(Parser)]
 #[command(name = "clothlab", version, about = "Interactive, GPU-accelerated cloth simulation testbed")]
@@ -27,6 +27,44 @@ enum Command {
     Sim(SimArgs),
     /// Check every GPU kernel and a rollout on each GPU backend against the CPU reference.
     Validate(ValidateArgs),
+    /// Simulate headless, then render the scene to a PNG (no window, no display).
+    Render(RenderArgs),
+}
+
+/// Cloth render modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Mode {
+    /// One point per particle.
+    Points,
+    /// Triangle edges.
+    Lines,
+    /// Lit, textured, shadowed triangles.
+    Triangles,
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// Solver backend.
+    #[arg(long, value_enum, default_value_t = Backend::Wgpu)]
+    backend: Backend,
+    /// Particles per side of the cloth.
+    #[arg(long, default_value_t = 100)]
+    n: u32,
+    /// Frames to simulate before the picture (of `substeps` substeps each).
+    #[arg(long, default_value_t = 120)]
+    frames: u32,
+    /// How the cloth is drawn.
+    #[arg(long, value_enum, default_value_t = Mode::Triangles)]
+    mode: Mode,
+    /// Image width, pixels.
+    #[arg(long, default_value_t = 960)]
+    width: u32,
+    /// Image height, pixels.
+    #[arg(long, default_value_t = 640)]
+    height: u32,
+    /// Output PNG file.
+    #[arg(long)]
+    out: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -91,6 +129,7 @@ pub fn run() -> Result<ExitCode> {
     match cli.command {
         Command::Sim(args) => sim(args),
         Command::Validate(args) => validate(args),
+        Command::Render(args) => render(args),
     }
 }
 
@@ -300,6 +339,69 @@ fn validate(args: ValidateArgs) -> Result<ExitCode> {
         eprintln!("error: {failed} check(s) over their bound: do not trust this backend's numbers on this adapter");
         return Ok(ExitCode::FAILURE);
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The default view of the scene: the orbit camera's start and a light above and in front.
+pub fn default_view(mode: Mode) -> clothlab_core::View {
+    clothlab_core::View {
+        camera: clothlab_core::OrbitCamera::default(),
+        light: [2.0, 5.5, 3.0],
+        mode: match mode {
+            Mode::Points => clothlab_core::RenderMode::Points,
+            Mode::Lines => clothlab_core::RenderMode::Lines,
+            Mode::Triangles => clothlab_core::RenderMode::Triangles,
+        },
+    }
+}
+
+fn render(args: RenderArgs) -> Result<ExitCode> {
+    let scene = Scene::with_n(args.n);
+    scene.validate()?;
+    if args.frames > 100_000 {
+        bail!("invalid --frames {}: must be in 0 ..= 100000", args.frames);
+    }
+    if !matches!(args.out.extension().and_then(|e| e.to_str()), Some("png" | "PNG")) {
+        bail!("--out {}: the image is written as PNG, use a .png file name", args.out.display());
+    }
+    let params = SimParams::default();
+    let view = default_view(args.mode);
+    let (pixels, adapter) = match args.backend {
+        Backend::Cpu | Backend::CpuPar => {
+            let exec = if args.backend == Backend::Cpu { Exec::Serial } else { Exec::Parallel };
+            let mut solver = CpuSolver::new(exec, scene.clone(), params)?;
+            for _ in 0..args.frames {
+                solver.step_frame()?;
+            }
+            let ctx = clothlab_wgpu::GpuContext::new()?;
+            let mut r = WgpuRenderer::new(&ctx, &scene, solver.topology(), args.width, args.height)?;
+            r.render(&ctx, &view, ClothSource::Cpu(solver.state_ref()))?;
+            (r.read_image(&ctx)?, ctx.describe())
+        }
+        Backend::WgpuNaive | Backend::Wgpu => {
+            let variant = if args.backend == Backend::Wgpu { Variant::Optimized } else { Variant::Naive };
+            let mut solver = WgpuSolver::new(variant, scene.clone(), params.clone())?;
+            for _ in 0..args.frames {
+                solver.step_frame()?;
+            }
+            let (_, topo) = clothlab_core::build(&scene, &params)?;
+            let ctx = solver.context();
+            let mut r = WgpuRenderer::new(ctx, &scene, &topo, args.width, args.height)?;
+            let (pos, normal) = solver.vertex_buffers();
+            r.render(ctx, &view, ClothSource::Gpu { pos, normal })?;
+            (r.read_image(ctx)?, solver.adapter())
+        }
+    };
+    image::save_buffer(&args.out, &pixels, args.width, args.height, image::ExtendedColorType::Rgba8)
+        .with_context(|| format!("cannot write {}", args.out.display()))?;
+    println!(
+        "wrote {} ({}x{}, {} frames, {:?}, adapter {adapter})",
+        args.out.display(),
+        args.width,
+        args.height,
+        args.frames,
+        args.mode
+    );
     Ok(ExitCode::SUCCESS)
 }
 

@@ -13,7 +13,9 @@
 #![forbid(unsafe_code)]
 
 mod context;
+mod render;
 mod solver;
 
 pub use context::{GpuContext, GpuError};
+pub use render::{ClothSource, WgpuRenderer};
 pub use solver::{Variant, WgpuSolver};
