@@ -102,3 +102,41 @@ fn a_grid_too_big_for_the_adapter_is_refused_with_the_size_it_takes() {
     assert!(err.contains("spring table") && err.contains("use n ≤"), "{err}");
     assert!(!err.contains("Validation Error") && !err.contains("panicked"), "{err}");
 }
+
+#[test]
+fn render_writes_a_png_or_refuses_bad_sizes() {
+    refused(
+        &["render", "--backend", "cpu", "--n", "8", "--frames", "1", "--width", "0", "--out", "/tmp/x.png"],
+        "invalid target size 0",
+    );
+    refused(&["render", "--n", "8", "--out", "/tmp/x.jpg"], "use a .png file name");
+    refused(&["render", "--n", "1", "--out", "/tmp/x.png"], "grid side must be in 2 ..= 4096");
+    let out_path = std::env::temp_dir().join(format!("clothlab-render-{}.png", std::process::id()));
+    let out = clothlab(&[
+        "render",
+        "--backend",
+        "cpu-par",
+        "--n",
+        "16",
+        "--frames",
+        "10",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
+        out_path.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    if err.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") {
+        eprintln!("skipped: {err}");
+        return;
+    }
+    assert!(out.status.success(), "{err}");
+    let bytes = std::fs::read(&out_path).unwrap();
+    // A PNG of 64 × 48: signature and IHDR width/height.
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 64);
+    assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 48);
+    std::fs::remove_file(&out_path).ok();
+}

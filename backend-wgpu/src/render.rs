@@ -54,6 +54,10 @@ struct Targets {
     resolve: wgpu::Texture,
     resolve_view: wgpu::TextureView,
     depth: wgpu::TextureView,
+    /// Particle ids (R32Uint) and their depth, one sample per pixel.
+    pick: wgpu::Texture,
+    pick_view: wgpu::TextureView,
+    pick_depth: wgpu::TextureView,
 }
 
 /// Offscreen renderer of one scene and its cloth.
@@ -71,6 +75,8 @@ pub struct WgpuRenderer {
     points_cloth: wgpu::RenderPipeline,
     shadow_static: wgpu::RenderPipeline,
     shadow_cloth: wgpu::RenderPipeline,
+    pick_static: wgpu::RenderPipeline,
+    pick_cloth: wgpu::RenderPipeline,
     static_vb: wgpu::Buffer,
     static_ib: wgpu::Buffer,
     static_count: u32,
@@ -109,11 +115,21 @@ fn make_targets(ctx: &GpuContext, width: u32, height: u32) -> Targets {
     let msaa = tex("color (msaa)", COLOR_FORMAT, SAMPLES, wgpu::TextureUsages::RENDER_ATTACHMENT);
     let resolve = tex("color", COLOR_FORMAT, 1, wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC);
     let depth = tex("depth", DEPTH_FORMAT, SAMPLES, wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let pick = tex(
+        "pick ids",
+        wgpu::TextureFormat::R32Uint,
+        1,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
+    let pick_depth = tex("pick depth", DEPTH_FORMAT, 1, wgpu::TextureUsages::RENDER_ATTACHMENT);
     Targets {
         msaa: msaa.create_view(&Default::default()),
         resolve_view: resolve.create_view(&Default::default()),
         resolve,
         depth: depth.create_view(&Default::default()),
+        pick_view: pick.create_view(&Default::default()),
+        pick,
+        pick_depth: pick_depth.create_view(&Default::default()),
     }
 }
 
@@ -448,6 +464,36 @@ impl WgpuRenderer {
             true,
         );
 
+        let pick_pipeline = |label: &str, vs: &str, buffers: &[Option<wgpu::VertexBufferLayout>]| {
+            dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&shadow_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers,
+                },
+                primitive: wgpu::PrimitiveState { topology: T::TriangleList, cull_mode: None, ..Default::default() },
+                depth_stencil: Some(depth_state(Default::default())),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_pick"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: wgpu::TextureFormat::R32Uint,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let pick_static = pick_pipeline("pick static", "vs_pick_static", &shadow_static_layouts);
+        let pick_cloth = pick_pipeline("pick cloth", "vs_pick_cloth", &cloth_layouts[..1]);
+
         let (sv, si) = static_mesh(scene);
         let init = |label, contents: &[u8], usage| {
             dev.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
@@ -484,6 +530,8 @@ impl WgpuRenderer {
             points_cloth,
             shadow_static,
             shadow_cloth,
+            pick_static,
+            pick_cloth,
             static_vb: init("static vertices", bytemuck::cast_slice(&sv), U::VERTEX),
             static_ib: init("static indices", bytemuck::cast_slice(&si), U::INDEX),
             static_count: si.len() as u32,
@@ -514,9 +562,13 @@ impl WgpuRenderer {
         Ok(())
     }
 
-    /// Draws one frame of the scene with the cloth from `cloth`.
-    pub fn render(&mut self, ctx: &GpuContext, view: &View, cloth: ClothSource<'_>) -> Result<(), RenderError> {
-        let (pos, normal) = match cloth {
+    /// The cloth's position and normal buffers for `cloth` (uploading a CPU state).
+    fn cloth_buffers<'a>(
+        &'a self,
+        ctx: &GpuContext,
+        cloth: ClothSource<'a>,
+    ) -> Result<(&'a wgpu::Buffer, &'a wgpu::Buffer), RenderError> {
+        Ok(match cloth {
             ClothSource::Gpu { pos, normal } => (pos, normal),
             ClothSource::Cpu(state) => {
                 if state.pos.len() != self.num_particles as usize {
@@ -526,7 +578,11 @@ impl WgpuRenderer {
                 ctx.queue.write_buffer(&self.cpu_normal, 0, bytemuck::cast_slice(&state.normal));
                 (&self.cpu_pos, &self.cpu_normal)
             }
-        };
+        })
+    }
+
+    /// Uploads the camera and light of `view`.
+    fn write_frame(&self, ctx: &GpuContext, view: &View) {
         let aspect = self.width as f32 / self.height as f32;
         let light = Vec3::from(view.light);
         let light_target = Vec3::new(0.0, 0.6, 0.0);
@@ -545,6 +601,12 @@ impl WgpuRenderer {
             misc: [1.0 / SHADOW_SIZE as f32, 0.0004, 3.0, 0.0],
         };
         ctx.queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&f));
+    }
+
+    /// Draws one frame of the scene with the cloth from `cloth`.
+    pub fn render(&mut self, ctx: &GpuContext, view: &View, cloth: ClothSource<'_>) -> Result<(), RenderError> {
+        let (pos, normal) = self.cloth_buffers(ctx, cloth)?;
+        self.write_frame(ctx, view);
         let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render") });
         {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -620,6 +682,81 @@ impl WgpuRenderer {
         ctx.check("rendering").map_err(|e| RenderError::Backend(e.to_string()))
     }
 
+    /// The particle drawn at pixel `(x, y)` (origin top left) for this view and cloth, or
+    /// `None` where no cloth is (floor, colliders and sky hide it or are there instead).
+    /// The id is that of the provoking (first) vertex of the cloth triangle under the
+    /// pixel: the particle itself or one of its direct neighbours.
+    pub fn pick(
+        &mut self,
+        ctx: &GpuContext,
+        view: &View,
+        cloth: ClothSource<'_>,
+        x: u32,
+        y: u32,
+    ) -> Result<Option<u32>, RenderError> {
+        if x >= self.width || y >= self.height {
+            return Ok(None);
+        }
+        let (pos, _) = self.cloth_buffers(ctx, cloth)?;
+        self.write_frame(ctx, view);
+        let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("pick") });
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("pick"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.targets.pick_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.targets.pick_depth,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.frame_group, &[]);
+            pass.set_pipeline(&self.pick_static);
+            pass.set_vertex_buffer(0, self.static_vb.slice(..));
+            pass.set_index_buffer(self.static_ib.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..self.static_count, 0, 0..1);
+            pass.set_pipeline(&self.pick_cloth);
+            pass.set_vertex_buffer(0, pos.slice(..));
+            pass.set_index_buffer(self.tri_ib.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..self.tri_count, 0, 0..1);
+        }
+        let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pick pixel"),
+            size: 256,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.targets.pick,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x, y, z: 0 },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buf,
+                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(256), rows_per_image: None },
+            },
+            wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+        );
+        ctx.queue.submit([enc.finish()]);
+        let raw = ctx.read_buffer(&buf, 0, 4).map_err(|e| RenderError::Backend(e.to_string()))?;
+        let id = u32::from_le_bytes([raw[0], raw[1], raw[2], raw[3]]);
+        ctx.check("picking").map_err(|e| RenderError::Backend(e.to_string()))?;
+        Ok(id.checked_sub(1))
+    }
+
     /// The last frame as tightly packed sRGB RGBA8 rows.
     pub fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>, RenderError> {
         let row = self.width as u64 * 4;
@@ -651,5 +788,33 @@ impl WgpuRenderer {
         ctx.queue.submit([enc.finish()]);
         let raw = ctx.read_buffer(&buf, 0, buf.size()).map_err(|e| RenderError::Backend(e.to_string()))?;
         Ok(raw.chunks(padded as usize).flat_map(|r| r[..row as usize].iter().copied()).collect())
+    }
+}
+
+impl clothlab_core::Renderer for WgpuRenderer {
+    type Context = GpuContext;
+    type Cloth<'a> = ClothSource<'a>;
+
+    fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) -> Result<(), RenderError> {
+        WgpuRenderer::resize(self, ctx, width, height)
+    }
+
+    fn render(&mut self, ctx: &GpuContext, view: &View, cloth: ClothSource<'_>) -> Result<(), RenderError> {
+        WgpuRenderer::render(self, ctx, view, cloth)
+    }
+
+    fn pick(
+        &mut self,
+        ctx: &GpuContext,
+        view: &View,
+        cloth: ClothSource<'_>,
+        x: u32,
+        y: u32,
+    ) -> Result<Option<u32>, RenderError> {
+        WgpuRenderer::pick(self, ctx, view, cloth, x, y)
+    }
+
+    fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>, RenderError> {
+        WgpuRenderer::read_image(self, ctx)
     }
 }

@@ -92,14 +92,26 @@ pub enum RenderError {
     Backend(String),
 }
 
-/// Draws the scene and the cloth (implemented by the GPU backends).
+/// Draws the scene and the cloth (implemented by the GPU backends). The device and the
+/// cloth's buffers are the API's own types, hence the associated types.
 pub trait Renderer {
-    /// Changes the size of the render target.
-    fn resize(&mut self, width: u32, height: u32) -> Result<(), RenderError>;
+    /// What the renderer draws with (a wgpu device and queue, a Vulkan device, …).
+    type Context;
+    /// Where the cloth's positions and normals come from for one frame.
+    type Cloth<'a>;
+    /// Changes the size of the render target; a refused size changes nothing.
+    fn resize(&mut self, ctx: &Self::Context, width: u32, height: u32) -> Result<(), RenderError>;
     /// Draws one frame of the scene.
-    fn render(&mut self, view: &View) -> Result<(), RenderError>;
-    /// The particle drawn at pixel `(x, y)` of the last frame, if any.
-    fn pick(&mut self, x: u32, y: u32) -> Result<Option<u32>, RenderError>;
-    /// The last frame as tightly packed sRGB RGBA8 rows, with its width and height.
-    fn read_image(&mut self) -> Result<(Vec<u8>, u32, u32), RenderError>;
+    fn render(&mut self, ctx: &Self::Context, view: &View, cloth: Self::Cloth<'_>) -> Result<(), RenderError>;
+    /// The particle drawn at pixel `(x, y)` (origin top left), if any.
+    fn pick(
+        &mut self,
+        ctx: &Self::Context,
+        view: &View,
+        cloth: Self::Cloth<'_>,
+        x: u32,
+        y: u32,
+    ) -> Result<Option<u32>, RenderError>;
+    /// The last frame as tightly packed sRGB RGBA8 rows.
+    fn read_image(&self, ctx: &Self::Context) -> Result<Vec<u8>, RenderError>;
 }

@@ -129,3 +129,31 @@ fn fs_lit(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f3
 fn fs_flat(in: VsOut) -> @location(0) vec4<f32> {
     return vec4<f32>(0.12, 0.16, 0.3, 1.0);
 }
+
+// Picking: particle id + 1 of the provoking vertex of the cloth triangle under each pixel,
+// 0 where the floor, a sphere, a box or nothing is.
+struct PickOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) @interpolate(flat) id: u32,
+}
+
+@vertex
+fn vs_pick_cloth(@location(0) pos: vec4<f32>, @builtin(vertex_index) vid: u32) -> PickOut {
+    var o: PickOut;
+    o.clip = frame.view_proj * vec4<f32>(pos.xyz, 1.0);
+    o.id = vid + 1u;
+    return o;
+}
+
+@vertex
+fn vs_pick_static(@location(0) pos: vec3<f32>) -> PickOut {
+    var o: PickOut;
+    o.clip = frame.view_proj * vec4<f32>(pos, 1.0);
+    o.id = 0u;
+    return o;
+}
+
+@fragment
+fn fs_pick(in: PickOut) -> @location(0) u32 {
+    return in.id;
+}
