@@ -140,3 +140,24 @@ fn render_writes_a_png_or_refuses_bad_sizes() {
     assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 48);
     std::fs::remove_file(&out_path).ok();
 }
+
+#[test]
+fn no_adapter_is_one_clear_line() {
+    // An ICD list that names no driver: the Vulkan loader finds no adapter.
+    for args in [
+        &["sim", "--backend", "wgpu", "--n", "8", "--steps", "16"][..],
+        &["validate"],
+        &["render", "--n", "8", "--out", "/tmp/none.png"],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_clothlab"))
+            .args(args)
+            .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded without an adapter");
+        assert!(err.contains("no GPU adapter found") && err.contains("mesa-vulkan-drivers"), "{args:?}: {err}");
+        assert!(out.stdout.is_empty(), "{args:?} printed: {}", String::from_utf8_lossy(&out.stdout));
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
