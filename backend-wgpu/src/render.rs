@@ -581,6 +581,26 @@ impl WgpuRenderer {
         })
     }
 
+    /// Floor, colliders and cloth triangles with one pipeline for the static mesh and one
+    /// for the cloth (positions only): the shadow and picking passes.
+    fn draw_geometry(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        static_pipeline: &wgpu::RenderPipeline,
+        cloth_pipeline: &wgpu::RenderPipeline,
+        pos: &wgpu::Buffer,
+    ) {
+        pass.set_bind_group(0, &self.frame_group, &[]);
+        pass.set_pipeline(static_pipeline);
+        pass.set_vertex_buffer(0, self.static_vb.slice(..));
+        pass.set_index_buffer(self.static_ib.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.static_count, 0, 0..1);
+        pass.set_pipeline(cloth_pipeline);
+        pass.set_vertex_buffer(0, pos.slice(..));
+        pass.set_index_buffer(self.tri_ib.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.tri_count, 0, 0..1);
+    }
+
     /// Uploads the camera and light of `view`.
     fn write_frame(&self, ctx: &GpuContext, view: &View) {
         let aspect = self.width as f32 / self.height as f32;
@@ -621,15 +641,7 @@ impl WgpuRenderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_bind_group(0, &self.frame_group, &[]);
-            pass.set_pipeline(&self.shadow_static);
-            pass.set_vertex_buffer(0, self.static_vb.slice(..));
-            pass.set_index_buffer(self.static_ib.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.static_count, 0, 0..1);
-            pass.set_pipeline(&self.shadow_cloth);
-            pass.set_vertex_buffer(0, pos.slice(..));
-            pass.set_index_buffer(self.tri_ib.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.tri_count, 0, 0..1);
+            self.draw_geometry(&mut pass, &self.shadow_static, &self.shadow_cloth, pos);
         }
         {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -721,15 +733,7 @@ impl WgpuRenderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_bind_group(0, &self.frame_group, &[]);
-            pass.set_pipeline(&self.pick_static);
-            pass.set_vertex_buffer(0, self.static_vb.slice(..));
-            pass.set_index_buffer(self.static_ib.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.static_count, 0, 0..1);
-            pass.set_pipeline(&self.pick_cloth);
-            pass.set_vertex_buffer(0, pos.slice(..));
-            pass.set_index_buffer(self.tri_ib.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.tri_count, 0, 0..1);
+            self.draw_geometry(&mut pass, &self.pick_static, &self.pick_cloth, pos);
         }
         let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("pick pixel"),
