@@ -16,6 +16,7 @@ mod context;
 mod render;
 mod solver;
 
+pub use clothlab_shaders::recipe::Variant;
 pub use context::{GpuContext, GpuError};
 pub use render::{ClothSource, WgpuRenderer};
-pub use solver::{Variant, WgpuSolver};
+pub use solver::WgpuSolver;
