@@ -12,6 +12,7 @@ use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 use clothlab_core::validate::{KernelRunner, validate_kernels, validate_rollout};
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_vulkan::VulkanSolver;
 use clothlab_wgpu::{ClothSource, Variant, WgpuRenderer, WgpuSolver};
 
 #[derive(Parser)]
@@ -70,7 +71,7 @@ struct RenderArgs {
 #[derive(clap::Args)]
 struct ValidateArgs {
     /// GPU backends to check (comma-separated).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::WgpuNaive, Backend::Wgpu])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan])]
     backends: Vec<Backend>,
     /// Particles per side for the kernel checks and the rollout (2 ..= 1024).
     #[arg(long, default_value_t = 64)]
@@ -91,6 +92,16 @@ pub enum Backend {
     WgpuNaive,
     /// wgpu, optimized: fused kernels, gathers, one submission per frame.
     Wgpu,
+    /// Raw Vulkan, the naive recipe (same kernels as wgpu-naive).
+    VulkanNaive,
+    /// Raw Vulkan, the optimized recipe with push constants.
+    Vulkan,
+}
+
+/// Whether the Vulkan backends run with the Khronos validation layer: in debug builds,
+/// or when CLOTHLAB_VALIDATION=1.
+fn vulkan_validation() -> bool {
+    cfg!(debug_assertions) || std::env::var("CLOTHLAB_VALIDATION").as_deref() == Ok("1")
 }
 
 #[derive(clap::Args)]
@@ -170,6 +181,8 @@ pub fn make_solver(backend: Backend, scene: Scene, params: SimParams) -> Result<
         Backend::CpuPar => Box::new(CpuSolver::new(Exec::Parallel, scene, params)?),
         Backend::WgpuNaive => Box::new(WgpuSolver::new(Variant::Naive, scene, params)?),
         Backend::Wgpu => Box::new(WgpuSolver::new(Variant::Optimized, scene, params)?),
+        Backend::VulkanNaive => Box::new(VulkanSolver::new(Variant::Naive, scene, params, vulkan_validation())?),
+        Backend::Vulkan => Box::new(VulkanSolver::new(Variant::Optimized, scene, params, vulkan_validation())?),
     })
 }
 
@@ -250,9 +263,48 @@ fn primary_output(kernel: &str) -> &'static str {
     }
 }
 
+/// A GPU backend's kernels, runnable one by one.
+trait GpuRunner: KernelRunner {
+    /// The kernels its recipe dispatches.
+    fn recipe_kernels(&self) -> Vec<&'static str>;
+    /// The adapter, in one line.
+    fn adapter(&self) -> String;
+}
+
+impl GpuRunner for WgpuSolver {
+    fn recipe_kernels(&self) -> Vec<&'static str> {
+        WgpuSolver::recipe_kernels(self)
+    }
+    fn adapter(&self) -> String {
+        WgpuSolver::adapter(self)
+    }
+}
+
+impl GpuRunner for VulkanSolver {
+    fn recipe_kernels(&self) -> Vec<&'static str> {
+        VulkanSolver::recipe_kernels(self)
+    }
+    fn adapter(&self) -> String {
+        VulkanSolver::adapter(self)
+    }
+}
+
+fn gpu_runner(backend: Backend, n: u32, params: &SimParams) -> Result<Box<dyn GpuRunner>> {
+    let scene = Scene::with_n(n);
+    Ok(match backend {
+        Backend::WgpuNaive => Box::new(WgpuSolver::new(Variant::Naive, scene, params.clone())?),
+        Backend::Wgpu => Box::new(WgpuSolver::new(Variant::Optimized, scene, params.clone())?),
+        Backend::VulkanNaive => {
+            Box::new(VulkanSolver::new(Variant::Naive, scene, params.clone(), vulkan_validation())?)
+        }
+        Backend::Vulkan => Box::new(VulkanSolver::new(Variant::Optimized, scene, params.clone(), vulkan_validation())?),
+        Backend::Cpu | Backend::CpuPar => bail!("{backend:?} is not a GPU backend"),
+    })
+}
+
 /// Only the named kernels of a runner.
 struct Only<'a> {
-    inner: &'a mut WgpuSolver,
+    inner: &'a mut dyn GpuRunner,
     names: Vec<&'static str>,
 }
 
@@ -280,30 +332,26 @@ fn validate(args: ValidateArgs) -> Result<ExitCode> {
     }
     let params = SimParams::default();
     let frames = args.steps.div_ceil(params.substeps);
-    let mut variants = Vec::new();
     for &backend in &args.backends {
-        variants.push(match backend {
-            Backend::WgpuNaive => (backend, Variant::Naive),
-            Backend::Wgpu => (backend, Variant::Optimized),
-            Backend::Cpu | Backend::CpuPar => {
-                bail!("validate checks GPU backends; {backend:?} is the reference itself")
-            }
-        });
+        if matches!(backend, Backend::Cpu | Backend::CpuPar) {
+            bail!("validate checks GPU backends; {backend:?} is the reference itself");
+        }
     }
     let mut failed = 0;
     let mut header = false;
-    for (_, variant) in variants {
+    for &backend in &args.backends {
         // The first solver also tells whether there is an adapter at all: print the header
         // only once there is.
-        let mut solver = WgpuSolver::new(variant, Scene::with_n(args.n), params.clone())?;
+        let mut solver = gpu_runner(backend, args.n, &params)?;
         if !std::mem::replace(&mut header, true) {
             println!(
-                "{:<11} {:<26} {:<7} {:>10} {:>10} {:>10} {:>8}  result",
+                "{:<13} {:<26} {:<7} {:>10} {:>10} {:>10} {:>8}  result",
                 "backend", "check", "buffer", "max abs", "rms", "error", "bound"
             );
         }
         let names = solver.recipe_kernels();
-        let kernel_checks = validate_kernels(&mut Only { inner: &mut solver, names: names.clone() }, args.n, 0x5eed)?;
+        let kernel_checks =
+            validate_kernels(&mut Only { inner: solver.as_mut(), names: names.clone() }, args.n, 0x5eed)?;
         // One row per kernel: its worst buffer relative to the bound.
         let mut rows = Vec::new();
         for name in &names {
@@ -319,14 +367,14 @@ fn validate(args: ValidateArgs) -> Result<ExitCode> {
                 .cloned();
             rows.extend(worst);
         }
-        let mut rollout_solver = WgpuSolver::new(variant, Scene::with_n(args.n), params.clone())?;
-        rows.push(validate_rollout(&mut rollout_solver, frames)?);
+        let mut rollout_solver = make_solver(backend, Scene::with_n(args.n), params.clone())?;
+        rows.push(validate_rollout(rollout_solver.as_mut(), frames)?);
         let name = rollout_solver.name().to_owned();
         for c in rows {
             let ok = c.passed();
             failed += usize::from(!ok);
             println!(
-                "{:<11} {:<26} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
+                "{:<13} {:<26} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
                 name,
                 c.what,
                 c.buffer,
@@ -337,7 +385,7 @@ fn validate(args: ValidateArgs) -> Result<ExitCode> {
                 if ok { "ok" } else { "FAILED" }
             );
         }
-        println!("{:<11} adapter: {}", name, solver.adapter());
+        println!("{:<13} adapter: {}", name, solver.adapter());
     }
     println!("kernel errors are relative to the largest value in the buffer; rollout errors are in metres");
     if failed > 0 {
@@ -382,6 +430,11 @@ fn render(args: RenderArgs) -> Result<ExitCode> {
             let mut r = WgpuRenderer::new(&ctx, &scene, solver.topology(), args.width, args.height)?;
             r.render(&ctx, &view, ClothSource::Cpu(solver.state_ref()))?;
             (r.read_image(&ctx)?, ctx.describe())
+        }
+        Backend::VulkanNaive | Backend::Vulkan => {
+            bail!(
+                "the Vulkan renderer is not built yet (issue 6): render with --backend wgpu, wgpu-naive, cpu or cpu-par"
+            )
         }
         Backend::WgpuNaive | Backend::Wgpu => {
             let variant = if args.backend == Backend::Wgpu { Variant::Optimized } else { Variant::Naive };

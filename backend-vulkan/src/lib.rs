@@ -1,4 +1,38 @@
-//! clothlab-vulkan: the naive and optimized solvers and the renderer on raw Vulkan (ash).
+//! clothlab-vulkan: the cloth solver on raw Vulkan through ash and gpu-allocator, running
+//! the same SPIR-V kernels (from clothlab-shaders) and the same recipes as the wgpu backend,
+//! so that the two differ only in the API and how it is driven.
 //!
-//! Empty until the Vulkan-solver issue. This will be the only crate with `unsafe`, kept in
-//! one small `raw` module behind safe RAII types.
+//! All `unsafe` is in the [`raw`] module, each block with a `// SAFETY:` line; the solver
+//! above it is safe code over RAII types.
+#![deny(unsafe_code)]
+
+pub mod raw;
+mod solver;
+
+use thiserror::Error;
+
+pub use solver::VulkanSolver;
+
+/// Why Vulkan could not be used.
+#[derive(Debug, Error)]
+pub enum VkError {
+    /// No loader (libvulkan) on this system.
+    #[error("no Vulkan loader found ({0}); on Linux, `apt-get install libvulkan1 mesa-vulkan-drivers`")]
+    NoVulkan(String),
+    /// A loader but no device with a compute queue.
+    #[error(
+        "no GPU adapter found (Vulkan); on Linux, `apt-get install mesa-vulkan-drivers` gives a software one (lavapipe)"
+    )]
+    NoAdapter,
+    /// A Vulkan call failed.
+    #[error("Vulkan error while {what}: {reason}")]
+    Vulkan {
+        /// What was being done.
+        what: &'static str,
+        /// The result code or allocator message.
+        reason: String,
+    },
+    /// The validation layer reported problems.
+    #[error("Vulkan validation: {0}")]
+    Validation(String),
+}

@@ -1,0 +1,647 @@
+//! The only unsafe code of clothlab: thin RAII wrappers over the Vulkan objects the
+//! solver uses. Every object holds an `Arc<Device>`, so it is destroyed before the device;
+//! the device waits for idle, drops the allocator, then destroys itself, the debug
+//! messenger and the instance, in reverse creation order.
+#![allow(unsafe_code)]
+
+use std::ffi::{CStr, c_void};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme, Allocator, AllocatorCreateDesc};
+
+use crate::VkError;
+
+const VALIDATION: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// Messages of the validation layer (warnings and errors), in order.
+pub type Messages = Arc<Mutex<Vec<String>>>;
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    // SAFETY: the layer passes valid callback data for the duration of the call, and
+    // `user` is the `Mutex<Vec<String>>` inside the `Messages` Arc that `Device` keeps
+    // alive until after the messenger is destroyed.
+    unsafe {
+        if data.is_null() || user.is_null() {
+            return vk::FALSE;
+        }
+        let msg = (*data).message_as_c_str().map(|m| m.to_string_lossy().into_owned()).unwrap_or_default();
+        let sink = &*(user as *const Mutex<Vec<String>>);
+        if severity
+            .intersects(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING)
+            && let Ok(mut v) = sink.lock()
+        {
+            v.push(msg);
+        }
+    }
+    vk::FALSE
+}
+
+/// Instance, physical device, logical device, queue and allocator.
+pub struct Device {
+    _entry: ash::Entry,
+    instance: ash::Instance,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    /// Validation-layer messages (empty when the layer is off).
+    pub messages: Messages,
+    /// Whether the validation layer is on.
+    pub validation: bool,
+    /// The physical device.
+    pub physical: vk::PhysicalDevice,
+    /// The logical device.
+    pub device: ash::Device,
+    /// A queue with compute.
+    pub queue: vk::Queue,
+    /// Its family.
+    pub queue_family: u32,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    /// Adapter name.
+    pub name: String,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f32,
+    /// Whether the queue writes timestamps.
+    pub timestamps: bool,
+    /// Largest push-constant block, bytes.
+    pub max_push_constants: u32,
+    /// Largest storage-buffer binding, bytes.
+    pub max_storage_range: u64,
+}
+
+impl Device {
+    /// Loads Vulkan, opens the first device with a compute queue, with the Khronos
+    /// validation layer when `validation` is set and the layer is installed.
+    pub fn new(validation: bool) -> Result<Arc<Self>, VkError> {
+        // SAFETY: loading the system's Vulkan loader; its functions are used through ash's
+        // tables only while `_entry` lives (it is a field of the returned Device).
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::NoVulkan(e.to_string()))?;
+        // SAFETY: plain enumeration call with a valid entry.
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }.map_err(vk_err("listing layers"))?;
+        let has_layer = layers.iter().any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION));
+        let validation = validation && has_layer;
+        if !has_layer {
+            log::info!("Vulkan validation layer not installed (package vulkan-validationlayers)");
+        }
+        let app = vk::ApplicationInfo::default().application_name(c"clothlab").api_version(vk::API_VERSION_1_2);
+        let layer_names = [VALIDATION.as_ptr()];
+        let ext_names = [ash::ext::debug_utils::NAME.as_ptr()];
+        let mut info = vk::InstanceCreateInfo::default().application_info(&app);
+        if validation {
+            info = info.enabled_layer_names(&layer_names).enabled_extension_names(&ext_names);
+        }
+        // SAFETY: `info` and everything it points to live until the call returns.
+        let instance = unsafe { entry.create_instance(&info, None) }.map_err(vk_err("creating the instance"))?;
+        let messages: Messages = Arc::new(Mutex::new(Vec::new()));
+        let debug = if validation {
+            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(debug_callback))
+                .user_data(Arc::as_ptr(&messages) as *mut c_void);
+            // SAFETY: the user data points into `messages`, which the Device owns and drops
+            // only after destroying this messenger.
+            let m = unsafe { loader.create_debug_utils_messenger(&info, None) }
+                .map_err(vk_err("creating the messenger"))?;
+            Some((loader, m))
+        } else {
+            None
+        };
+        let fail = |e: VkError, debug: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
+            // SAFETY: nothing else was created from the instance yet.
+            unsafe {
+                if let Some((l, m)) = debug {
+                    l.destroy_debug_utils_messenger(*m, None);
+                }
+                instance.destroy_instance(None);
+            }
+            e
+        };
+        // SAFETY: valid instance.
+        let physicals = unsafe { instance.enumerate_physical_devices() }.map_err(vk_err("listing devices"));
+        let physicals = match physicals {
+            Ok(p) => p,
+            Err(e) => return Err(fail(e, &debug)),
+        };
+        let mut choice = None;
+        for &pd in &physicals {
+            // SAFETY: `pd` comes from this instance.
+            let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+            if let Some(f) = families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE)) {
+                // SAFETY: as above.
+                let props = unsafe { instance.get_physical_device_properties(pd) };
+                let discrete = props.device_type == vk::PhysicalDeviceType::DISCRETE_GPU;
+                if choice.is_none() || discrete {
+                    choice = Some((pd, f as u32, props, families[f].timestamp_valid_bits > 0));
+                }
+            }
+        }
+        let Some((physical, queue_family, props, timestamps)) = choice else {
+            return Err(fail(VkError::NoAdapter, &debug));
+        };
+        let priorities = [1.0f32];
+        let queue_info =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let dinfo = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
+        // SAFETY: `physical` belongs to `instance`; the create info outlives the call.
+        let device = match unsafe { instance.create_device(physical, &dinfo, None) } {
+            Ok(d) => d,
+            Err(e) => return Err(fail(vk_err("creating the device")(e), &debug)),
+        };
+        // SAFETY: the family was requested with one queue.
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        });
+        let allocator = match allocator {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: the device has no objects yet.
+                unsafe { device.destroy_device(None) };
+                return Err(fail(VkError::Vulkan { what: "creating the allocator", reason: e.to_string() }, &debug));
+            }
+        };
+        let name = props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+        Ok(Arc::new(Self {
+            _entry: entry,
+            instance,
+            debug,
+            messages,
+            validation,
+            physical,
+            device,
+            queue,
+            queue_family,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            name,
+            timestamp_period: props.limits.timestamp_period,
+            timestamps: timestamps && props.limits.timestamp_compute_and_graphics == vk::TRUE,
+            max_push_constants: props.limits.max_push_constants_size,
+            max_storage_range: props.limits.max_storage_buffer_range as u64,
+        }))
+    }
+
+    /// Takes the validation messages gathered so far.
+    pub fn take_messages(&self) -> Vec<String> {
+        self.messages.lock().map(|mut v| std::mem::take(&mut *v)).unwrap_or_default()
+    }
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        // SAFETY: every object created from this device holds an Arc to it, so none is
+        // alive any more; wait for the GPU, then free in reverse creation order.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_device(None);
+            if let Some((l, m)) = &self.debug {
+                l.destroy_debug_utils_messenger(*m, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> VkError {
+    move |e| VkError::Vulkan { what, reason: format!("{e:?}") }
+}
+
+/// A buffer and its memory.
+pub struct Buffer {
+    dev: Arc<Device>,
+    /// The Vulkan buffer.
+    pub buffer: vk::Buffer,
+    allocation: Option<Allocation>,
+    /// Size, bytes.
+    pub size: u64,
+}
+
+impl Buffer {
+    /// A buffer of `size` bytes (at least 4) in `location`.
+    pub fn new(
+        dev: &Arc<Device>,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Self, VkError> {
+        let size = size.max(4);
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid device and create info.
+        let buffer = unsafe { dev.device.create_buffer(&info, None) }.map_err(vk_err("creating a buffer"))?;
+        // SAFETY: `buffer` was just created on this device.
+        let requirements = unsafe { dev.device.get_buffer_memory_requirements(buffer) };
+        let allocation = dev
+            .allocator
+            .lock()
+            .map_err(|_| VkError::Vulkan { what: "allocating", reason: "poisoned allocator".into() })?
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: the buffer is unused and unbound.
+                unsafe { dev.device.destroy_buffer(buffer, None) };
+                return Err(VkError::Vulkan { what: "allocating buffer memory", reason: e.to_string() });
+            }
+        };
+        // SAFETY: the allocation satisfies the buffer's requirements and outlives it (it is
+        // freed in Drop after the buffer is destroyed).
+        unsafe { dev.device.bind_buffer_memory(buffer, allocation.memory(), allocation.offset()) }
+            .map_err(vk_err("binding buffer memory"))?;
+        Ok(Self { dev: dev.clone(), buffer, allocation: Some(allocation), size })
+    }
+
+    /// The mapped bytes of a host-visible buffer.
+    pub fn mapped(&mut self) -> Option<&mut [u8]> {
+        let size = self.size as usize;
+        self.allocation.as_mut().and_then(|a| a.mapped_slice_mut()).map(|s| &mut s[..size])
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: the owner waits for the GPU before dropping resources it used (the
+        // solver waits after every submission).
+        unsafe { self.dev.device.destroy_buffer(self.buffer, None) };
+        if let (Some(a), Ok(mut alloc)) = (self.allocation.take(), self.dev.allocator.lock()) {
+            let _ = alloc.free(a);
+        }
+    }
+}
+
+/// A compute pipeline with its descriptor-set layout and pipeline layout.
+pub struct Kernel {
+    dev: Arc<Device>,
+    set_layout: vk::DescriptorSetLayout,
+    /// The pipeline layout (for binding sets and pushing constants).
+    pub layout: vk::PipelineLayout,
+    /// The pipeline.
+    pub pipeline: vk::Pipeline,
+}
+
+impl Kernel {
+    /// A pipeline for the SPIR-V `spirv` (entry `main`) with descriptor set 0 holding
+    /// `bindings` and `push_size` bytes of push constants.
+    pub fn new(
+        dev: &Arc<Device>,
+        spirv: &[u8],
+        bindings: &[(u32, vk::DescriptorType)],
+        push_size: u32,
+    ) -> Result<Self, VkError> {
+        if !spirv.len().is_multiple_of(4) {
+            return Err(VkError::Vulkan { what: "loading SPIR-V", reason: "length not a multiple of 4".into() });
+        }
+        let words: Vec<u32> = spirv.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        let d = &dev.device;
+        let b: Vec<vk::DescriptorSetLayoutBinding> = bindings
+            .iter()
+            .map(|&(binding, ty)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(binding)
+                    .descriptor_type(ty)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        // SAFETY: valid device, create infos live across each call; each object is
+        // destroyed in Drop (or below, on failure) before the device.
+        unsafe {
+            let set_layout = d
+                .create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&b), None)
+                .map_err(vk_err("creating a set layout"))?;
+            let ranges =
+                [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).offset(0).size(push_size)];
+            let set_layouts = [set_layout];
+            let mut pl_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+            if push_size > 0 {
+                pl_info = pl_info.push_constant_ranges(&ranges);
+            }
+            let layout = match d.create_pipeline_layout(&pl_info, None) {
+                Ok(l) => l,
+                Err(e) => {
+                    d.destroy_descriptor_set_layout(set_layout, None);
+                    return Err(vk_err("creating a pipeline layout")(e));
+                }
+            };
+            let module = match d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None) {
+                Ok(m) => m,
+                Err(e) => {
+                    d.destroy_pipeline_layout(layout, None);
+                    d.destroy_descriptor_set_layout(set_layout, None);
+                    return Err(vk_err("creating a shader module")(e));
+                }
+            };
+            let stage = vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::COMPUTE)
+                .module(module)
+                .name(c"main");
+            let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+            let pipeline = d.create_compute_pipelines(vk::PipelineCache::null(), &info, None);
+            d.destroy_shader_module(module, None);
+            let pipeline = match pipeline {
+                Ok(p) => p[0],
+                Err((_, e)) => {
+                    d.destroy_pipeline_layout(layout, None);
+                    d.destroy_descriptor_set_layout(set_layout, None);
+                    return Err(vk_err("creating a compute pipeline")(e));
+                }
+            };
+            Ok(Self { dev: dev.clone(), set_layout, layout, pipeline })
+        }
+    }
+}
+
+impl Drop for Kernel {
+    fn drop(&mut self) {
+        // SAFETY: destroyed in reverse creation order after the owner waited for the GPU.
+        unsafe {
+            self.dev.device.destroy_pipeline(self.pipeline, None);
+            self.dev.device.destroy_pipeline_layout(self.layout, None);
+            self.dev.device.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+/// A descriptor pool with one set per (kernel, buffer assignment).
+pub struct Sets {
+    dev: Arc<Device>,
+    pool: vk::DescriptorPool,
+}
+
+impl Sets {
+    /// A pool for `max_sets` sets of at most 32 descriptors each.
+    pub fn new(dev: &Arc<Device>, max_sets: u32) -> Result<Self, VkError> {
+        let sizes = [
+            vk::DescriptorPoolSize::default().ty(vk::DescriptorType::STORAGE_BUFFER).descriptor_count(32 * max_sets),
+            vk::DescriptorPoolSize::default().ty(vk::DescriptorType::UNIFORM_BUFFER).descriptor_count(4 * max_sets),
+        ];
+        let info = vk::DescriptorPoolCreateInfo::default().max_sets(max_sets).pool_sizes(&sizes);
+        // SAFETY: valid device and create info; destroyed in Drop.
+        let pool =
+            unsafe { dev.device.create_descriptor_pool(&info, None) }.map_err(vk_err("creating a descriptor pool"))?;
+        Ok(Self { dev: dev.clone(), pool })
+    }
+
+    /// A set for `kernel` with `buffers[k]` (binding, type, buffer) bound whole.
+    pub fn allocate(
+        &self,
+        kernel: &Kernel,
+        buffers: &[(u32, vk::DescriptorType, &Buffer)],
+    ) -> Result<vk::DescriptorSet, VkError> {
+        let layouts = [kernel.set_layout];
+        let info = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.pool).set_layouts(&layouts);
+        // SAFETY: pool and layout belong to this device; the set lives as long as the pool.
+        let set = unsafe { self.dev.device.allocate_descriptor_sets(&info) }
+            .map_err(vk_err("allocating a descriptor set"))?[0];
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+            .iter()
+            .map(|(_, _, b)| [vk::DescriptorBufferInfo::default().buffer(b.buffer).offset(0).range(b.size)])
+            .collect();
+        let writes: Vec<vk::WriteDescriptorSet> = buffers
+            .iter()
+            .zip(&infos)
+            .map(|((binding, ty, _), info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(*binding)
+                    .descriptor_type(*ty)
+                    .buffer_info(info)
+            })
+            .collect();
+        // SAFETY: the writes reference live buffers and the set just allocated.
+        unsafe { self.dev.device.update_descriptor_sets(&writes, &[]) };
+        Ok(set)
+    }
+}
+
+impl Drop for Sets {
+    fn drop(&mut self) {
+        // SAFETY: the sets are no longer in use (the owner waited for the GPU).
+        unsafe { self.dev.device.destroy_descriptor_pool(self.pool, None) };
+    }
+}
+
+/// One command buffer, its pool, a fence and a timestamp query pool.
+pub struct Commands {
+    dev: Arc<Device>,
+    pool: vk::CommandPool,
+    /// The command buffer.
+    pub cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+    queries: vk::QueryPool,
+    /// Capacity of the query pool.
+    pub max_queries: u32,
+}
+
+/// One recorded dispatch.
+pub struct Dispatch<'a> {
+    /// The pipeline.
+    pub kernel: &'a Kernel,
+    /// Its descriptor set.
+    pub set: vk::DescriptorSet,
+    /// Push constants (may be empty).
+    pub push: &'a [u8],
+    /// Workgroups in x and y.
+    pub groups: (u32, u32),
+}
+
+impl Commands {
+    /// A command buffer on the device's queue family, with room for `max_queries` timestamps.
+    pub fn new(dev: &Arc<Device>, max_queries: u32) -> Result<Self, VkError> {
+        let d = &dev.device;
+        // SAFETY: valid device and create infos; every object is destroyed in Drop.
+        unsafe {
+            let pool = d
+                .create_command_pool(
+                    &vk::CommandPoolCreateInfo::default()
+                        .queue_family_index(dev.queue_family)
+                        .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                    None,
+                )
+                .map_err(vk_err("creating a command pool"))?;
+            let cmd = d
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default()
+                        .command_pool(pool)
+                        .level(vk::CommandBufferLevel::PRIMARY)
+                        .command_buffer_count(1),
+                )
+                .map_err(vk_err("allocating a command buffer"))?[0];
+            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).map_err(vk_err("creating a fence"))?;
+            let queries = d
+                .create_query_pool(
+                    &vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(max_queries),
+                    None,
+                )
+                .map_err(vk_err("creating a query pool"))?;
+            Ok(Self { dev: dev.clone(), pool, cmd, fence, queries, max_queries })
+        }
+    }
+
+    /// Starts recording (the previous submission must have completed).
+    pub fn begin(&self, query_count: u32) -> Result<(), VkError> {
+        let d = &self.dev.device;
+        // SAFETY: the command buffer is not pending (every submit waits on the fence).
+        unsafe {
+            d.begin_command_buffer(
+                self.cmd,
+                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )
+            .map_err(vk_err("beginning a command buffer"))?;
+            if query_count > 0 {
+                d.cmd_reset_query_pool(self.cmd, self.queries, 0, query_count.min(self.max_queries));
+            }
+        }
+        Ok(())
+    }
+
+    /// Records a dispatch, with timestamps before and after it into queries `q`, `q + 1`
+    /// when given.
+    pub fn dispatch(&self, dsp: &Dispatch<'_>, timestamps: Option<u32>) {
+        let d = &self.dev.device;
+        // SAFETY: recording state; pipeline, layout and set are live and compatible.
+        unsafe {
+            if let Some(q) = timestamps {
+                d.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::COMPUTE_SHADER, self.queries, q);
+            }
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, dsp.kernel.pipeline);
+            d.cmd_bind_descriptor_sets(self.cmd, vk::PipelineBindPoint::COMPUTE, dsp.kernel.layout, 0, &[dsp.set], &[]);
+            if !dsp.push.is_empty() {
+                d.cmd_push_constants(self.cmd, dsp.kernel.layout, vk::ShaderStageFlags::COMPUTE, 0, dsp.push);
+            }
+            d.cmd_dispatch(self.cmd, dsp.groups.0, dsp.groups.1, 1);
+            if let Some(q) = timestamps {
+                d.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::COMPUTE_SHADER, self.queries, q + 1);
+            }
+        }
+    }
+
+    /// A barrier making compute and transfer writes visible to later compute and transfer.
+    pub fn barrier(&self) {
+        let mb = [vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(
+                vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_READ,
+            )];
+        let stages = vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER;
+        // SAFETY: recording state.
+        unsafe {
+            self.dev.device.cmd_pipeline_barrier(self.cmd, stages, stages, vk::DependencyFlags::empty(), &mb, &[], &[])
+        };
+    }
+
+    /// Records a copy of `size` bytes from `src` to `dst`.
+    pub fn copy(&self, src: &Buffer, dst: &Buffer, size: u64) {
+        let region = [vk::BufferCopy::default().size(size)];
+        // SAFETY: recording state; both buffers are live and at least `size` long.
+        unsafe { self.dev.device.cmd_copy_buffer(self.cmd, src.buffer, dst.buffer, &region) };
+    }
+
+    /// Records a fill of `dst` with zeros.
+    pub fn zero(&self, dst: &Buffer) {
+        // SAFETY: recording state; the buffer is live and has TRANSFER_DST usage.
+        unsafe { self.dev.device.cmd_fill_buffer(self.cmd, dst.buffer, 0, vk::WHOLE_SIZE, 0) };
+    }
+
+    /// Ends, submits and waits; returns `query_count` timestamps in ticks.
+    pub fn submit_and_wait(&self, query_count: u32) -> Result<Vec<u64>, VkError> {
+        let d = &self.dev.device;
+        // SAFETY: the buffer is in recording state; the fence is unsignalled; after the
+        // wait nothing recorded is pending, so the buffer and fence can be reset.
+        unsafe {
+            d.end_command_buffer(self.cmd).map_err(vk_err("ending a command buffer"))?;
+            let cmds = [self.cmd];
+            let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+            d.queue_submit(self.dev.queue, &submit, self.fence).map_err(vk_err("submitting"))?;
+            d.wait_for_fences(&[self.fence], true, u64::MAX).map_err(vk_err("waiting for the GPU"))?;
+            d.reset_fences(&[self.fence]).map_err(vk_err("resetting a fence"))?;
+            let mut ticks = vec![0u64; query_count.min(self.max_queries) as usize];
+            if !ticks.is_empty() {
+                d.get_query_pool_results(
+                    self.queries,
+                    0,
+                    &mut ticks,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
+                .map_err(vk_err("reading timestamps"))?;
+            }
+            Ok(ticks)
+        }
+    }
+}
+
+impl Drop for Commands {
+    fn drop(&mut self) {
+        // SAFETY: every submission was waited for; destroy in reverse creation order.
+        unsafe {
+            self.dev.device.destroy_query_pool(self.queries, None);
+            self.dev.device.destroy_fence(self.fence, None);
+            self.dev.device.free_command_buffers(self.pool, &[self.cmd]);
+            self.dev.device.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_validation_layer_reports_into_the_message_list() {
+        let dev = match Device::new(true) {
+            Ok(d) => d,
+            Err(e) if std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") => {
+                eprintln!("skipped: {e}");
+                return;
+            }
+            Err(e) => panic!("{e}"),
+        };
+        if !dev.validation {
+            assert_ne!(
+                std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref(),
+                Ok("1"),
+                "CI installs vulkan-validationlayers"
+            );
+            eprintln!("skipped: validation layer not installed");
+            return;
+        }
+        assert!(dev.take_messages().is_empty(), "a clean device reports nothing");
+        // A zero-sized buffer breaks a valid-usage rule (VkBufferCreateInfo::size > 0) that
+        // drivers tolerate: the layer must report it.
+        let info = vk::BufferCreateInfo::default().size(0).usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+        // SAFETY: deliberately invalid usage of a harmless call, to see the layer report it;
+        // the buffer, if any, is destroyed at once and never bound or used.
+        unsafe {
+            if let Ok(b) = dev.device.create_buffer(&info, None) {
+                dev.device.destroy_buffer(b, None);
+            }
+        }
+        let m = dev.take_messages();
+        assert!(!m.is_empty(), "the validation layer said nothing about a zero-sized buffer");
+        println!("validation layer: {}", m[0]);
+    }
+}

@@ -1,0 +1,554 @@
+//! The Vulkan solver: device-local buffers, one descriptor set per kernel and position
+//! parity, and the recipes of clothlab-shaders recorded into one command buffer per frame
+//! (optimized) or per substep (naive), with a compute→compute barrier between dispatches.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::time::Instant;
+
+use ash::vk;
+use clothlab_core::grid::{
+    ClothState, ClothTopology, Grab, InteriorSlots, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, V4, build,
+};
+use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
+use clothlab_core::solver::{Solver, SolverError};
+use clothlab_core::timing::{FRAME, KernelTimings, SUBSTEP, TimingRecorder};
+use clothlab_core::validate::KernelRunner;
+use clothlab_core::{SimParams, cpu};
+use clothlab_shaders::recipe::{Caps, Count, Dispatch, Variant, dispatch_for, groups, recipe};
+use gpu_allocator::MemoryLocation;
+
+use crate::VkError;
+use crate::raw::{self, Buffer, Commands, Device, Kernel, Sets};
+
+const STORAGE: vk::DescriptorType = vk::DescriptorType::STORAGE_BUFFER;
+const UNIFORM: vk::DescriptorType = vk::DescriptorType::UNIFORM_BUFFER;
+/// Timestamp queries per submission.
+const MAX_QUERIES: u32 = 4096;
+
+/// The buffers of the step, bound at the same numbers as in the WGSL (see shaders/wgsl).
+struct Buffers {
+    params: Buffer,
+    pos: [Buffer; 2],
+    prev: Buffer,
+    force: Buffer,
+    normal: Buffer,
+    slots: Buffer,
+    springs: Buffer,
+    tethers: Buffer,
+    triangles: Buffer,
+    face_slots: Buffer,
+    faces: Buffer,
+    spheres: Buffer,
+    boxes: Buffer,
+    bend_slots: Buffer,
+    springs_b: Buffer,
+    interior: Buffer,
+}
+
+impl Buffers {
+    /// (binding, type, buffer) for the descriptor set whose current positions are `pos[k]`.
+    fn bindings(&self, k: usize) -> Vec<(u32, vk::DescriptorType, &Buffer)> {
+        vec![
+            (0, UNIFORM, &self.params),
+            (1, STORAGE, &self.pos[k]),
+            (2, STORAGE, &self.prev),
+            (3, STORAGE, &self.force),
+            (4, STORAGE, &self.normal),
+            (5, STORAGE, &self.pos[1 - k]),
+            (6, STORAGE, &self.slots),
+            (7, STORAGE, &self.springs),
+            (8, STORAGE, &self.tethers),
+            (9, STORAGE, &self.triangles),
+            (10, STORAGE, &self.face_slots),
+            (11, STORAGE, &self.faces),
+            (12, STORAGE, &self.spheres),
+            (13, STORAGE, &self.boxes),
+            (14, STORAGE, &self.bend_slots),
+            (15, STORAGE, &self.springs_b),
+            (16, UNIFORM, &self.interior),
+        ]
+    }
+}
+
+/// The cloth solver on raw Vulkan.
+pub struct VulkanSolver {
+    variant: Variant,
+    scene: Scene,
+    params: SimParams,
+    grab: Option<Grab>,
+    topo: ClothTopology,
+    sp: StepParams,
+    recipe: Vec<Dispatch>,
+    cur: usize,
+    timer: TimingRecorder,
+    /// Record per-dispatch GPU timestamps.
+    pub time_kernels: bool,
+    // Vulkan objects; each holds the device alive, and is dropped before it.
+    kernels: HashMap<&'static str, (Kernel, [vk::DescriptorSet; 2])>,
+    _sets: Sets,
+    cmds: Commands,
+    staging: Buffer,
+    buffers: Buffers,
+    dev: Arc<Device>,
+}
+
+fn backend(e: VkError) -> SolverError {
+    SolverError::Backend(e.to_string())
+}
+
+/// The spring table split as the shaders read it (see clothlab-wgpu).
+fn split_slots(topo: &ClothTopology) -> (Vec<SpringSlot>, Vec<SpringSlot>) {
+    let mut strain = Vec::with_capacity(topo.num_particles() * STRAIN_SLOTS);
+    let mut bend = Vec::with_capacity(topo.num_particles() * (SLOTS - STRAIN_SLOTS));
+    for p in topo.slots.chunks_exact(SLOTS) {
+        strain.extend_from_slice(&p[..STRAIN_SLOTS]);
+        bend.extend_from_slice(&p[STRAIN_SLOTS..]);
+    }
+    (strain, bend)
+}
+
+impl VulkanSolver {
+    /// Builds the cloth of `scene` on the first Vulkan device with a compute queue; with
+    /// `validation`, the Khronos validation layer checks every call (when installed).
+    pub fn new(variant: Variant, scene: Scene, params: SimParams, validation: bool) -> Result<Self, SolverError> {
+        if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
+            return Err(SolverError::Backend(format!("at most {MAX_COLLIDERS} spheres and boxes")));
+        }
+        let dev = Device::new(validation).map_err(backend)?;
+        let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
+        let np = scene.num_particles() as u64;
+        if np * per_particle > dev.max_storage_range {
+            let max_n = ((dev.max_storage_range / per_particle) as f64).sqrt().floor() as u64;
+            return Err(SolverError::Backend(format!(
+                "n = {} needs a {} MiB spring table, more than the {} MiB this device ({}) binds per storage buffer: use n ≤ {max_n} on it",
+                scene.cloth.n,
+                (np * per_particle) >> 20,
+                dev.max_storage_range >> 20,
+                dev.name
+            )));
+        }
+        let (mut state, topo) = build(&scene, &params)?;
+        let sp = StepParams::new(&params, &scene, None);
+        let mut face = vec![[0.0f32; 4]; topo.triangles.len()];
+        cpu::tri_normals(cpu::Exec::Serial, &topo.triangles, &state.pos, &mut face);
+        cpu::vertex_normals(cpu::Exec::Serial, &sp, &topo.face_slots, &face, &mut state.normal, &mut state.force);
+
+        let mut spheres = [Sphere { center: [0.0; 3], radius: 0.0 }; MAX_COLLIDERS];
+        spheres[..scene.spheres.len()].copy_from_slice(&scene.spheres);
+        let mut boxes = [Aabb::new([0.0; 3], [0.0; 3]); MAX_COLLIDERS];
+        boxes[..scene.boxes.len()].copy_from_slice(&scene.boxes);
+        let tri_flat: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
+        let face_flat: Vec<i32> = topo.face_slots.iter().flatten().copied().collect();
+        let (strain, bend) = split_slots(&topo);
+        let (springs_a, springs_b) = topo.springs.split_at(topo.springs.len() / 2);
+        let interior = InteriorSlots::new(&topo);
+
+        // Everything device-local; filled through one staging buffer.
+        let contents: Vec<(&str, &[u8], bool)> = vec![
+            ("params", bytemuck::bytes_of(&sp), true),
+            ("pos0", bytemuck::cast_slice(&state.pos), false),
+            ("pos1", bytemuck::cast_slice(&state.pos), false),
+            ("prev", bytemuck::cast_slice(&state.prev), false),
+            ("force", bytemuck::cast_slice(&state.force), false),
+            ("normal", bytemuck::cast_slice(&state.normal), false),
+            ("slots", bytemuck::cast_slice(&strain), false),
+            ("springs", bytemuck::cast_slice(springs_a), false),
+            ("tethers", bytemuck::cast_slice(&topo.tethers), false),
+            ("triangles", bytemuck::cast_slice(&tri_flat), false),
+            ("face_slots", bytemuck::cast_slice(&face_flat), false),
+            ("faces", bytemuck::cast_slice(&face), false),
+            ("spheres", bytemuck::cast_slice(&spheres), false),
+            ("boxes", bytemuck::cast_slice(&boxes), false),
+            ("bend_slots", bytemuck::cast_slice(&bend), false),
+            ("springs_b", bytemuck::cast_slice(springs_b), false),
+            ("interior", bytemuck::bytes_of(&interior), true),
+        ];
+        let largest = contents.iter().map(|c| c.1.len() as u64).max().unwrap_or(4);
+        let mut staging = Buffer::new(
+            &dev,
+            "staging",
+            largest,
+            vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::CpuToGpu,
+        )
+        .map_err(backend)?;
+        let cmds = Commands::new(&dev, MAX_QUERIES).map_err(backend)?;
+        let mut made = Vec::new();
+        for (name, bytes, uniform) in &contents {
+            let usage =
+                if *uniform { vk::BufferUsageFlags::UNIFORM_BUFFER } else { vk::BufferUsageFlags::STORAGE_BUFFER }
+                    | vk::BufferUsageFlags::TRANSFER_DST
+                    | vk::BufferUsageFlags::TRANSFER_SRC;
+            let b = Buffer::new(&dev, name, bytes.len() as u64, usage, MemoryLocation::GpuOnly).map_err(backend)?;
+            upload(&cmds, &mut staging, &b, bytes).map_err(backend)?;
+            made.push(b);
+        }
+        let mut it = made.into_iter();
+        let mut next = || it.next().expect("one buffer per entry");
+        let buffers = Buffers {
+            params: next(),
+            pos: [next(), next()],
+            prev: next(),
+            force: next(),
+            normal: next(),
+            slots: next(),
+            springs: next(),
+            tethers: next(),
+            triangles: next(),
+            face_slots: next(),
+            faces: next(),
+            spheres: next(),
+            boxes: next(),
+            bend_slots: next(),
+            springs_b: next(),
+            interior: next(),
+        };
+        // Push constants hold the step constants where the device has room (128 bytes is
+        // the Vulkan minimum, so always in practice); float atomics need an extension this
+        // backend does not enable yet, so the naive scatters use compare-exchange.
+        let caps = Caps {
+            float_atomics: false,
+            immediates: dev.max_push_constants as usize >= std::mem::size_of::<StepParams>(),
+        };
+        let mut names = vec!["springs", "springs_scatter", "tri_normals_scatter"];
+        for v in [Variant::Naive, Variant::Optimized] {
+            names.extend(recipe(v, 1, caps).iter().map(|d| d.kernel));
+            names.extend(recipe(v, 1, Caps { immediates: false, ..caps }).iter().map(|d| d.kernel));
+        }
+        names.sort();
+        names.dedup();
+        let sets = Sets::new(&dev, 2 * names.len() as u32).map_err(backend)?;
+        let mut kernels = HashMap::new();
+        for name in names {
+            let k = clothlab_shaders::kernel(name)
+                .ok_or_else(|| SolverError::Backend(format!("kernel {name} missing from clothlab-shaders")))?;
+            let layout: Vec<(u32, vk::DescriptorType)> = buffers.bindings(0).iter().map(|(b, t, _)| (*b, *t)).collect();
+            let push = if name.ends_with("_imm") { std::mem::size_of::<StepParams>() as u32 } else { 0 };
+            let kernel = Kernel::new(&dev, k.spirv, &layout, push).map_err(backend)?;
+            let s0 = sets.allocate(&kernel, &buffers.bindings(0)).map_err(backend)?;
+            let s1 = sets.allocate(&kernel, &buffers.bindings(1)).map_err(backend)?;
+            kernels.insert(name, (kernel, [s0, s1]));
+        }
+        let messages = dev.take_messages();
+        if !messages.is_empty() {
+            return Err(backend(VkError::Validation(messages.join(" | "))));
+        }
+        Ok(Self {
+            variant,
+            scene,
+            params: params.clone(),
+            grab: None,
+            recipe: recipe(variant, params.strain_iterations, caps),
+            topo,
+            sp,
+            cur: 0,
+            timer: TimingRecorder::default(),
+            time_kernels: true,
+            kernels,
+            _sets: sets,
+            cmds,
+            staging,
+            buffers,
+            dev,
+        })
+    }
+
+    /// The device's name.
+    pub fn adapter(&self) -> String {
+        self.dev.name.clone()
+    }
+
+    /// Validation-layer messages gathered since the last call (none when it is off).
+    pub fn take_validation_messages(&self) -> Vec<String> {
+        self.dev.take_messages()
+    }
+
+    /// The kernels one substep dispatches, in order.
+    pub fn recipe_kernels(&self) -> Vec<&'static str> {
+        let mut v: Vec<&'static str> = Vec::new();
+        for d in &self.recipe {
+            if !v.contains(&d.kernel) {
+                v.push(d.kernel);
+            }
+        }
+        v
+    }
+
+    fn count(&self, c: Count) -> u32 {
+        match c {
+            Count::Particles => self.topo.num_particles() as u32,
+            Count::Springs => self.topo.springs.len() as u32,
+            Count::Triangles => self.topo.triangles.len() as u32,
+        }
+    }
+
+    /// Records `dispatches` (after a barrier each), timestamps from query `*q` while timing.
+    fn record(&mut self, dispatches: &[Dispatch], q: &mut u32, labels: &mut Vec<&'static str>) {
+        for dsp in dispatches {
+            if dsp.clear_normal {
+                self.cmds.zero(&self.buffers.normal);
+                self.cmds.barrier();
+            }
+            let (kernel, sets) = &self.kernels[dsp.kernel];
+            let push: &[u8] = if dsp.kernel.ends_with("_imm") { bytemuck::bytes_of(&self.sp) } else { &[] };
+            let timed = self.time_kernels && self.dev.timestamps && *q + 2 <= MAX_QUERIES;
+            let d = raw::Dispatch { kernel, set: sets[self.cur], push, groups: groups(self.count(dsp.count)) };
+            self.cmds.dispatch(&d, timed.then_some(*q));
+            // The next dispatch reads what this one wrote.
+            self.cmds.barrier();
+            if timed {
+                *q += 2;
+                labels.push(dsp.label);
+            }
+            if dsp.flips {
+                self.cur ^= 1;
+            }
+        }
+    }
+
+    /// Submits, waits, records the timestamps; returns the GPU span in ns when timed.
+    fn submit(&mut self, q: u32, labels: &[&'static str]) -> Result<Option<f64>, SolverError> {
+        let ticks = self.cmds.submit_and_wait(q).map_err(backend)?;
+        self.check()?;
+        if q == 0 {
+            return Ok(None);
+        }
+        let period = self.dev.timestamp_period as f64;
+        let per_substep = self.recipe.len();
+        let mut substep_ns = 0.0;
+        for (k, label) in labels.iter().enumerate() {
+            let ns = ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * period;
+            self.timer.record(label, ns);
+            substep_ns += ns;
+            if (k + 1) % per_substep == 0 {
+                self.timer.record(SUBSTEP, substep_ns);
+                substep_ns = 0.0;
+            }
+        }
+        Ok(Some(ticks[q as usize - 1].saturating_sub(ticks[0]) as f64 * period))
+    }
+
+    /// Fails if the validation layer reported anything.
+    fn check(&self) -> Result<(), SolverError> {
+        let m = self.dev.take_messages();
+        if m.is_empty() { Ok(()) } else { Err(backend(VkError::Validation(m.join(" | ")))) }
+    }
+
+    fn write(&mut self, which: Target, bytes: &[u8]) -> Result<(), SolverError> {
+        upload(&self.cmds, &mut self.staging, which.of(&self.buffers), bytes).map_err(backend)
+    }
+
+    fn read(&mut self, which: Target) -> Result<Vec<V4>, SolverError> {
+        let buf = which.of(&self.buffers);
+        let bytes = download(&self.cmds, &mut self.staging, buf, buf.size).map_err(backend)?;
+        Ok(bytes.chunks_exact(16).map(bytemuck::pod_read_unaligned::<V4>).collect())
+    }
+
+    fn run_one(
+        &mut self,
+        kernel: &str,
+        state: &ClothState,
+        faces: &[V4],
+        sp: &StepParams,
+    ) -> Result<(ClothState, Vec<V4>), SolverError> {
+        if sp.n != self.topo.n {
+            return Err(SolverError::Backend("step constants for another grid".into()));
+        }
+        let name = *self
+            .kernels
+            .keys()
+            .find(|k| **k == kernel)
+            .ok_or_else(|| SolverError::Backend(format!("no kernel named {kernel} on this device")))?;
+        if faces.len() != self.topo.triangles.len() {
+            return Err(SolverError::Backend("faces of another grid".into()));
+        }
+        self.set_state(state)?;
+        self.write(Target::Faces, bytemuck::cast_slice(faces))?;
+        self.write(Target::Params, bytemuck::bytes_of(sp))?;
+        self.sp = *sp;
+        let nan = vec![[f32::NAN; 4]; state.pos.len()];
+        match kernel.trim_end_matches("_imm") {
+            "strain_limit" => self.write(Target::Pos(1 - self.cur), bytemuck::cast_slice(&nan))?,
+            "tri_normals" | "tri_normals_scatter" => {
+                self.write(Target::Faces, bytemuck::cast_slice(&vec![[f32::NAN; 4]; faces.len()]))?
+            }
+            "vertex_normals" => {
+                self.write(Target::Normal, bytemuck::cast_slice(&nan))?;
+                self.write(Target::Force, bytemuck::cast_slice(&nan))?;
+            }
+            "vertex_normals_naive" => self.write(Target::Force, bytemuck::cast_slice(&nan))?,
+            _ => {}
+        }
+        let dispatch = dispatch_for(name);
+        let was = self.time_kernels;
+        self.time_kernels = false;
+        self.cmds.begin(0).map_err(backend)?;
+        self.record(&[dispatch], &mut 0, &mut Vec::new());
+        let r = self.submit(0, &[]);
+        self.time_kernels = was;
+        r?;
+        let out = self.state()?;
+        let out_faces = self.read(Target::Faces)?;
+        if dispatch.flips {
+            self.cur ^= 1;
+        }
+        Ok((out, out_faces))
+    }
+}
+
+/// A buffer the host writes or reads.
+#[derive(Clone, Copy)]
+enum Target {
+    Params,
+    Pos(usize),
+    Prev,
+    Force,
+    Normal,
+    Faces,
+}
+
+impl Target {
+    fn of(self, b: &Buffers) -> &Buffer {
+        match self {
+            Target::Params => &b.params,
+            Target::Pos(k) => &b.pos[k],
+            Target::Prev => &b.prev,
+            Target::Force => &b.force,
+            Target::Normal => &b.normal,
+            Target::Faces => &b.faces,
+        }
+    }
+}
+
+/// Copies `bytes` into `dst` through the staging buffer.
+fn upload(cmds: &Commands, staging: &mut Buffer, dst: &Buffer, bytes: &[u8]) -> Result<(), VkError> {
+    let map = staging
+        .mapped()
+        .ok_or(VkError::Vulkan { what: "mapping the staging buffer", reason: "not host visible".into() })?;
+    map[..bytes.len()].copy_from_slice(bytes);
+    cmds.begin(0)?;
+    cmds.copy(staging, dst, bytes.len() as u64);
+    cmds.submit_and_wait(0).map(|_| ())
+}
+
+/// Reads `size` bytes of `src` through the staging buffer.
+fn download(cmds: &Commands, staging: &mut Buffer, src: &Buffer, size: u64) -> Result<Vec<u8>, VkError> {
+    cmds.begin(0)?;
+    cmds.copy(src, staging, size);
+    cmds.submit_and_wait(0)?;
+    let map = staging
+        .mapped()
+        .ok_or(VkError::Vulkan { what: "mapping the staging buffer", reason: "not host visible".into() })?;
+    Ok(map[..size as usize].to_vec())
+}
+
+impl KernelRunner for VulkanSolver {
+    fn kernel_names(&self) -> Vec<&'static str> {
+        let mut v: Vec<&'static str> = self.kernels.keys().copied().collect();
+        v.sort();
+        v
+    }
+
+    fn run_kernel(
+        &mut self,
+        kernel: &str,
+        state: &ClothState,
+        faces: &[V4],
+        p: &StepParams,
+    ) -> Result<(ClothState, Vec<V4>), SolverError> {
+        self.run_one(kernel, state, faces, p)
+    }
+}
+
+impl Solver for VulkanSolver {
+    fn name(&self) -> &str {
+        match self.variant {
+            Variant::Naive => "vulkan-naive",
+            Variant::Optimized => "vulkan",
+        }
+    }
+
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    fn params(&self) -> &SimParams {
+        &self.params
+    }
+
+    fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
+        params.validate()?;
+        if params.strain_iterations != self.params.strain_iterations || params != self.params {
+            return Err(SolverError::Backend("changing parameters on the Vulkan solver is not supported yet".into()));
+        }
+        Ok(())
+    }
+
+    fn set_grab(&mut self, grab: Option<Grab>) {
+        self.grab = grab
+            .filter(|g| (g.particle as usize) < self.topo.num_particles() && g.target.iter().all(|v| v.is_finite()));
+    }
+
+    fn step_frame(&mut self) -> Result<(), SolverError> {
+        let t0 = Instant::now();
+        self.sp = StepParams::new(&self.params, &self.scene, self.grab);
+        let sp = self.sp;
+        self.write(Target::Params, bytemuck::bytes_of(&sp))?;
+        let recipe = self.recipe.clone();
+        let mut gpu_ns = 0.0;
+        let mut timed = false;
+        let submissions = match self.variant {
+            Variant::Optimized => 1,
+            Variant::Naive => self.params.substeps,
+        };
+        let per_submission = self.params.substeps / submissions;
+        for _ in 0..submissions {
+            let max_q = if self.time_kernels {
+                (2 * per_submission as usize * recipe.len()).min(MAX_QUERIES as usize) as u32
+            } else {
+                0
+            };
+            self.cmds.begin(max_q).map_err(backend)?;
+            let (mut q, mut labels) = (0, Vec::new());
+            for _ in 0..per_submission {
+                self.record(&recipe, &mut q, &mut labels);
+            }
+            if let Some(ns) = self.submit(q, &labels)? {
+                gpu_ns += ns;
+                timed = true;
+            }
+        }
+        if self.time_kernels {
+            self.timer.record(FRAME, if timed { gpu_ns } else { t0.elapsed().as_nanos() as f64 });
+        }
+        Ok(())
+    }
+
+    fn state(&mut self) -> Result<ClothState, SolverError> {
+        Ok(ClothState {
+            n: self.topo.n,
+            pos: self.read(Target::Pos(self.cur))?,
+            prev: self.read(Target::Prev)?,
+            force: self.read(Target::Force)?,
+            normal: self.read(Target::Normal)?,
+        })
+    }
+
+    fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
+        state.check(self.topo.n)?;
+        self.write(Target::Pos(self.cur), bytemuck::cast_slice(&state.pos))?;
+        self.write(Target::Prev, bytemuck::cast_slice(&state.prev))?;
+        self.write(Target::Force, bytemuck::cast_slice(&state.force))?;
+        self.write(Target::Normal, bytemuck::cast_slice(&state.normal))?;
+        Ok(())
+    }
+
+    fn timings(&self) -> KernelTimings {
+        self.timer.table()
+    }
+
+    fn reset_timings(&mut self) {
+        self.timer.clear();
+    }
+}
