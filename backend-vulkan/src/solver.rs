@@ -8,14 +8,17 @@ use std::time::Instant;
 
 use ash::vk;
 use clothlab_core::grid::{
-    ClothState, ClothTopology, Grab, InteriorSlots, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, V4, build,
+    ClothState, ClothTopology, Grab, InteriorSlots, STRAIN_SLOTS, SpringSlot, StepParams, V4, build,
 };
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::solver::{Solver, SolverError};
-use clothlab_core::timing::{FRAME, KernelTimings, SUBSTEP, TimingRecorder};
+use clothlab_core::timing::{FRAME, KernelTimings, TimingRecorder};
 use clothlab_core::validate::KernelRunner;
 use clothlab_core::{SimParams, cpu};
-use clothlab_shaders::recipe::{Caps, Count, Dispatch, Variant, dispatch_for, groups, recipe};
+use clothlab_shaders::recipe::{
+    Caps, Dispatch, Output, Variant, dispatch_for, groups, kernels_of, pure_outputs, recipe, record_times, split_slots,
+    spring_halves,
+};
 use gpu_allocator::MemoryLocation;
 
 use crate::VkError;
@@ -97,17 +100,6 @@ fn backend(e: VkError) -> SolverError {
     SolverError::Backend(e.to_string())
 }
 
-/// The spring table split as the shaders read it (see clothlab-wgpu).
-fn split_slots(topo: &ClothTopology) -> (Vec<SpringSlot>, Vec<SpringSlot>) {
-    let mut strain = Vec::with_capacity(topo.num_particles() * STRAIN_SLOTS);
-    let mut bend = Vec::with_capacity(topo.num_particles() * (SLOTS - STRAIN_SLOTS));
-    for p in topo.slots.chunks_exact(SLOTS) {
-        strain.extend_from_slice(&p[..STRAIN_SLOTS]);
-        bend.extend_from_slice(&p[STRAIN_SLOTS..]);
-    }
-    (strain, bend)
-}
-
 impl VulkanSolver {
     /// Builds the cloth of `scene` on the first Vulkan device with a compute queue; with
     /// `validation`, the Khronos validation layer checks every call (when installed).
@@ -141,7 +133,7 @@ impl VulkanSolver {
         let tri_flat: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
         let face_flat: Vec<i32> = topo.face_slots.iter().flatten().copied().collect();
         let (strain, bend) = split_slots(&topo);
-        let (springs_a, springs_b) = topo.springs.split_at(topo.springs.len() / 2);
+        let (springs_a, springs_b) = spring_halves(&topo.springs);
         let interior = InteriorSlots::new(&topo);
 
         // Everything device-local; filled through one staging buffer.
@@ -266,21 +258,7 @@ impl VulkanSolver {
 
     /// The kernels one substep dispatches, in order.
     pub fn recipe_kernels(&self) -> Vec<&'static str> {
-        let mut v: Vec<&'static str> = Vec::new();
-        for d in &self.recipe {
-            if !v.contains(&d.kernel) {
-                v.push(d.kernel);
-            }
-        }
-        v
-    }
-
-    fn count(&self, c: Count) -> u32 {
-        match c {
-            Count::Particles => self.topo.num_particles() as u32,
-            Count::Springs => self.topo.springs.len() as u32,
-            Count::Triangles => self.topo.triangles.len() as u32,
-        }
+        kernels_of(&self.recipe)
     }
 
     /// Records `dispatches` (after a barrier each), timestamps from query `*q` while timing.
@@ -293,7 +271,7 @@ impl VulkanSolver {
             let (kernel, sets) = &self.kernels[dsp.kernel];
             let push: &[u8] = if dsp.kernel.ends_with("_imm") { bytemuck::bytes_of(&self.sp) } else { &[] };
             let timed = self.time_kernels && self.dev.timestamps && *q + 2 <= MAX_QUERIES;
-            let d = raw::Dispatch { kernel, set: sets[self.cur], push, groups: groups(self.count(dsp.count)) };
+            let d = raw::Dispatch { kernel, set: sets[self.cur], push, groups: groups(dsp.count.of(&self.topo)) };
             self.cmds.dispatch(&d, timed.then_some(*q));
             // The next dispatch reads what this one wrote.
             self.cmds.barrier();
@@ -314,19 +292,7 @@ impl VulkanSolver {
         if q == 0 {
             return Ok(None);
         }
-        let period = self.dev.timestamp_period as f64;
-        let per_substep = self.recipe.len();
-        let mut substep_ns = 0.0;
-        for (k, label) in labels.iter().enumerate() {
-            let ns = ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * period;
-            self.timer.record(label, ns);
-            substep_ns += ns;
-            if (k + 1) % per_substep == 0 {
-                self.timer.record(SUBSTEP, substep_ns);
-                substep_ns = 0.0;
-            }
-        }
-        Ok(Some(ticks[q as usize - 1].saturating_sub(ticks[0]) as f64 * period))
+        Ok(Some(record_times(&mut self.timer, labels, &ticks, self.dev.timestamp_period as f64, self.recipe.len())))
     }
 
     /// Fails if the validation layer reported anything.
@@ -368,17 +334,13 @@ impl VulkanSolver {
         self.write(Target::Params, bytemuck::bytes_of(sp))?;
         self.sp = *sp;
         let nan = vec![[f32::NAN; 4]; state.pos.len()];
-        match kernel.trim_end_matches("_imm") {
-            "strain_limit" => self.write(Target::Pos(1 - self.cur), bytemuck::cast_slice(&nan))?,
-            "tri_normals" | "tri_normals_scatter" => {
-                self.write(Target::Faces, bytemuck::cast_slice(&vec![[f32::NAN; 4]; faces.len()]))?
+        for out in pure_outputs(kernel) {
+            match out {
+                Output::PosOut => self.write(Target::Pos(1 - self.cur), bytemuck::cast_slice(&nan))?,
+                Output::Faces => self.write(Target::Faces, bytemuck::cast_slice(&vec![[f32::NAN; 4]; faces.len()]))?,
+                Output::Normal => self.write(Target::Normal, bytemuck::cast_slice(&nan))?,
+                Output::Force => self.write(Target::Force, bytemuck::cast_slice(&nan))?,
             }
-            "vertex_normals" => {
-                self.write(Target::Normal, bytemuck::cast_slice(&nan))?;
-                self.write(Target::Force, bytemuck::cast_slice(&nan))?;
-            }
-            "vertex_normals_naive" => self.write(Target::Force, bytemuck::cast_slice(&nan))?,
-            _ => {}
         }
         let dispatch = dispatch_for(name);
         let was = self.time_kernels;

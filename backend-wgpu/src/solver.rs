@@ -4,14 +4,17 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use clothlab_core::grid::{
-    ClothState, ClothTopology, Grab, InteriorSlots, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, V4, build,
+    ClothState, ClothTopology, Grab, InteriorSlots, STRAIN_SLOTS, SpringSlot, StepParams, V4, build,
 };
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::solver::{Solver, SolverError};
-use clothlab_core::timing::{FRAME, KernelTimings, SUBSTEP, TimingRecorder};
+use clothlab_core::timing::{FRAME, KernelTimings, TimingRecorder};
 use clothlab_core::validate::KernelRunner;
 use clothlab_core::{SimParams, cpu};
-use clothlab_shaders::recipe::{Caps, Count, Dispatch, Variant, dispatch_for, groups, recipe};
+use clothlab_shaders::recipe::{
+    Caps, Dispatch, Output, Variant, dispatch_for, groups, kernels_of, pure_outputs, recipe, record_times, split_slots,
+    spring_halves,
+};
 use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
@@ -43,23 +46,6 @@ struct Buffers {
     tethers: wgpu::Buffer,
     triangles: wgpu::Buffer,
     face_slots: wgpu::Buffer,
-}
-
-/// The spring table as the shaders read it: slots `0..STRAIN_SLOTS` of every particle,
-/// then the remaining (bend) slots of every particle.
-fn split_slots(topo: &ClothTopology) -> (Vec<SpringSlot>, Vec<SpringSlot>) {
-    let mut strain = Vec::with_capacity(topo.num_particles() * STRAIN_SLOTS);
-    let mut bend = Vec::with_capacity(topo.num_particles() * (SLOTS - STRAIN_SLOTS));
-    for p in topo.slots.chunks_exact(SLOTS) {
-        strain.extend_from_slice(&p[..STRAIN_SLOTS]);
-        bend.extend_from_slice(&p[STRAIN_SLOTS..]);
-    }
-    (strain, bend)
-}
-
-/// The flat spring list split in two (the second half at least one spring long).
-fn halves(springs: &[clothlab_core::Spring]) -> (&[clothlab_core::Spring], &[clothlab_core::Spring]) {
-    springs.split_at(springs.len() / 2)
 }
 
 fn entry(binding: u32, buf: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
@@ -180,8 +166,8 @@ impl WgpuSolver {
             interior: init("interior slots", bytemuck::bytes_of(&InteriorSlots::new(&topo)), U::UNIFORM | U::COPY_DST),
             slots: init("slots", bytemuck::cast_slice(&split_slots(&topo).0), data_usage),
             bend_slots: init("bend slots", bytemuck::cast_slice(&split_slots(&topo).1), data_usage),
-            springs: init("springs", bytemuck::cast_slice(halves(&topo.springs).0), data_usage),
-            springs_b: init("springs (2nd half)", bytemuck::cast_slice(halves(&topo.springs).1), data_usage),
+            springs: init("springs", bytemuck::cast_slice(spring_halves(&topo.springs).0), data_usage),
+            springs_b: init("springs (2nd half)", bytemuck::cast_slice(spring_halves(&topo.springs).1), data_usage),
             tethers: init("tethers", bytemuck::cast_slice(&topo.tethers), data_usage),
             triangles: init("triangles", bytemuck::cast_slice(&tri_flat), data_usage | U::INDEX),
             face_slots: init("face_slots", bytemuck::cast_slice(&face_flat), data_usage),
@@ -320,13 +306,7 @@ impl WgpuSolver {
 
     /// The kernels one substep dispatches, in order (strain passes once).
     pub fn recipe_kernels(&self) -> Vec<&'static str> {
-        let mut v: Vec<&'static str> = Vec::new();
-        for d in &self.recipe {
-            if !v.contains(&d.kernel) {
-                v.push(d.kernel);
-            }
-        }
-        v
+        kernels_of(&self.recipe)
     }
 
     /// Whether the optimized kernels read the step constants from immediates.
@@ -347,14 +327,6 @@ impl WgpuSolver {
     /// The buffer holding the current positions (`VERTEX | STORAGE`), and the normals'.
     pub fn vertex_buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
         (&self.buffers.pos[self.cur], &self.buffers.normal)
-    }
-
-    fn count(&self, c: Count) -> u32 {
-        match c {
-            Count::Particles => self.topo.num_particles() as u32,
-            Count::Springs => self.topo.springs.len() as u32,
-            Count::Triangles => self.topo.triangles.len() as u32,
-        }
     }
 
     /// Records `dispatches` into `enc`, writing timestamps from query `*q` on while there
@@ -386,7 +358,7 @@ impl WgpuSolver {
                 pass.set_immediates(0, bytemuck::bytes_of(&self.sp));
             }
             pass.set_bind_group(0, &self.bind_groups[self.cur], &[]);
-            let (x, y) = groups(self.count(dsp.count));
+            let (x, y) = groups(dsp.count.of(&self.topo));
             pass.dispatch_workgroups(x, y, 1);
             drop(pass);
             if timed {
@@ -417,19 +389,7 @@ impl WgpuSolver {
         };
         let raw = self.ctx.read_buffer(&ts.resolve, 0, q as u64 * 8).map_err(backend)?;
         let ticks: &[u64] = bytemuck::cast_slice(&raw);
-        let period = ts.period_ns;
-        let per_substep = self.recipe.len();
-        let mut substep_ns = 0.0;
-        for (k, label) in labels.iter().enumerate() {
-            let ns = ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * period;
-            self.timer.record(label, ns);
-            substep_ns += ns;
-            if (k + 1) % per_substep == 0 {
-                self.timer.record(SUBSTEP, substep_ns);
-                substep_ns = 0.0;
-            }
-        }
-        Ok(Some(ticks[q as usize - 1].saturating_sub(ticks[0]) as f64 * period))
+        Ok(Some(record_times(&mut self.timer, labels, ticks, ts.period_ns, self.recipe.len())))
     }
 
     /// Runs `kernel` once on `state` (and `faces`, one per triangle, for the kernels that
@@ -467,17 +427,15 @@ impl WgpuSolver {
         self.sp = *sp;
         let nan_particles = vec![[f32::NAN; 4]; state.pos.len()];
         let nan = bytemuck::cast_slice::<V4, u8>(&nan_particles);
-        match kernel.trim_end_matches("_imm") {
-            "strain_limit" => q.write_buffer(&self.buffers.pos[1 - self.cur], 0, nan),
-            "tri_normals" | "tri_normals_scatter" | "tri_normals_scatter_f32" => {
-                q.write_buffer(&self.buffers.faces, 0, bytemuck::cast_slice(&vec![[f32::NAN; 4]; faces.len()]))
+        for out in pure_outputs(kernel) {
+            match out {
+                Output::PosOut => q.write_buffer(&self.buffers.pos[1 - self.cur], 0, nan),
+                Output::Faces => {
+                    q.write_buffer(&self.buffers.faces, 0, bytemuck::cast_slice(&vec![[f32::NAN; 4]; faces.len()]))
+                }
+                Output::Normal => q.write_buffer(&self.buffers.normal, 0, nan),
+                Output::Force => q.write_buffer(&self.buffers.force, 0, nan),
             }
-            "vertex_normals" => {
-                q.write_buffer(&self.buffers.normal, 0, nan);
-                q.write_buffer(&self.buffers.force, 0, nan);
-            }
-            "vertex_normals_naive" => q.write_buffer(&self.buffers.force, 0, nan),
-            _ => {}
         }
         let mut enc = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(kernel) });
         let was = self.time_kernels;
@@ -544,7 +502,7 @@ impl Solver for WgpuSolver {
         let (strain, bend) = split_slots(&self.topo);
         q.write_buffer(&self.buffers.slots, 0, bytemuck::cast_slice(&strain));
         q.write_buffer(&self.buffers.bend_slots, 0, bytemuck::cast_slice(&bend));
-        let (a, b) = halves(&self.topo.springs);
+        let (a, b) = spring_halves(&self.topo.springs);
         q.write_buffer(&self.buffers.springs, 0, bytemuck::cast_slice(a));
         q.write_buffer(&self.buffers.springs_b, 0, bytemuck::cast_slice(b));
         self.recipe = recipe(self.variant, params.strain_iterations, self.caps);

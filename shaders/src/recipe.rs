@@ -120,3 +120,96 @@ pub fn groups(count: u32) -> (u32, u32) {
     let x = g.min(65535);
     (x, g.div_ceil(x))
 }
+
+impl Count {
+    /// How many invocations this is on `topo`.
+    pub fn of(self, topo: &clothlab_core::ClothTopology) -> u32 {
+        match self {
+            Count::Particles => topo.num_particles() as u32,
+            Count::Springs => topo.springs.len() as u32,
+            Count::Triangles => topo.triangles.len() as u32,
+        }
+    }
+}
+
+/// The distinct kernels of a recipe, in order.
+pub fn kernels_of(recipe: &[Dispatch]) -> Vec<&'static str> {
+    let mut v: Vec<&'static str> = Vec::new();
+    for d in recipe {
+        if !v.contains(&d.kernel) {
+            v.push(d.kernel);
+        }
+    }
+    v
+}
+
+/// A buffer a kernel only writes (so it is poisoned with NaN before a kernel test).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Output {
+    /// The other buffer of the position pair.
+    PosOut,
+    /// Face normals.
+    Faces,
+    /// Vertex normals.
+    Normal,
+    /// The force buffer.
+    Force,
+}
+
+/// The pure outputs of `kernel`.
+pub fn pure_outputs(kernel: &str) -> &'static [Output] {
+    match kernel.trim_end_matches("_imm") {
+        "strain_limit" => &[Output::PosOut],
+        "tri_normals" | "tri_normals_scatter" | "tri_normals_scatter_f32" => &[Output::Faces],
+        "vertex_normals" => &[Output::Normal, Output::Force],
+        "vertex_normals_naive" => &[Output::Force],
+        _ => &[],
+    }
+}
+
+/// Records the per-dispatch GPU times of one submission: `ticks` holds a begin and an end
+/// timestamp per entry of `labels`; every `per_substep` dispatches also make a substep
+/// row. Returns the submission's span in ns (first begin to last end).
+pub fn record_times(
+    timer: &mut clothlab_core::TimingRecorder,
+    labels: &[&'static str],
+    ticks: &[u64],
+    period_ns: f64,
+    per_substep: usize,
+) -> f64 {
+    let mut substep_ns = 0.0;
+    for (k, label) in labels.iter().enumerate() {
+        let ns = ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * period_ns;
+        timer.record(label, ns);
+        substep_ns += ns;
+        if (k + 1) % per_substep.max(1) == 0 {
+            timer.record(clothlab_core::timing::SUBSTEP, substep_ns);
+            substep_ns = 0.0;
+        }
+    }
+    match (ticks.first(), ticks.get(2 * labels.len().max(1) - 1)) {
+        (Some(a), Some(b)) => b.saturating_sub(*a) as f64 * period_ns,
+        _ => 0.0,
+    }
+}
+
+/// The spring table as the shaders read it: slots `0..STRAIN_SLOTS` of every particle,
+/// then the remaining (bend) slots of every particle, so that each part stays within
+/// the 128 MiB a storage binding may span on many adapters up to n = 1024.
+pub fn split_slots(
+    topo: &clothlab_core::ClothTopology,
+) -> (Vec<clothlab_core::SpringSlot>, Vec<clothlab_core::SpringSlot>) {
+    use clothlab_core::grid::{SLOTS, STRAIN_SLOTS};
+    let mut strain = Vec::with_capacity(topo.num_particles() * STRAIN_SLOTS);
+    let mut bend = Vec::with_capacity(topo.num_particles() * (SLOTS - STRAIN_SLOTS));
+    for p in topo.slots.chunks_exact(SLOTS) {
+        strain.extend_from_slice(&p[..STRAIN_SLOTS]);
+        bend.extend_from_slice(&p[STRAIN_SLOTS..]);
+    }
+    (strain, bend)
+}
+
+/// The flat spring list in two halves (bindings 7 and 15), for the same reason.
+pub fn spring_halves(springs: &[clothlab_core::Spring]) -> (&[clothlab_core::Spring], &[clothlab_core::Spring]) {
+    springs.split_at(springs.len() / 2)
+}
