@@ -70,6 +70,8 @@ pub struct Device {
     pub timestamps: bool,
     /// Largest push-constant block, bytes.
     pub max_push_constants: u32,
+    /// `atomicAdd` on `f32` in storage buffers (VK_EXT_shader_atomic_float), enabled.
+    pub float_atomics: bool,
     /// Largest storage-buffer binding, bytes.
     pub max_storage_range: u64,
 }
@@ -151,10 +153,31 @@ impl Device {
         let Some((physical, queue_family, props, timestamps)) = choice else {
             return Err(fail(VkError::NoAdapter, &debug));
         };
+        // Float atomic add on storage buffers, where the device has it: the naive recipe's
+        // scatters then use the same kernels as on wgpu.
+        // SAFETY: `physical` belongs to `instance`.
+        let extensions = unsafe { instance.enumerate_device_extension_properties(physical) }.unwrap_or_default();
+        let has_ext = extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::shader_atomic_float::NAME));
+        let mut atomic_query = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+        if has_ext {
+            let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut atomic_query);
+            // SAFETY: the query chain lives across the call; Vulkan 1.1+ core entry point.
+            unsafe { instance.get_physical_device_features2(physical, &mut features2) };
+        }
+        let float_atomics = has_ext && atomic_query.shader_buffer_float32_atomic_add == vk::TRUE;
+        let mut atomic_enable = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
+            .shader_buffer_float32_atomics(true)
+            .shader_buffer_float32_atomic_add(true);
+        let device_exts = [ash::ext::shader_atomic_float::NAME.as_ptr()];
         let priorities = [1.0f32];
         let queue_info =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let dinfo = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
+        let mut dinfo = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
+        if float_atomics {
+            dinfo = dinfo.enabled_extension_names(&device_exts).push_next(&mut atomic_enable);
+        }
         // SAFETY: `physical` belongs to `instance`; the create info outlives the call.
         let device = match unsafe { instance.create_device(physical, &dinfo, None) } {
             Ok(d) => d,
@@ -194,6 +217,7 @@ impl Device {
             timestamp_period: props.limits.timestamp_period,
             timestamps: timestamps && props.limits.timestamp_compute_and_graphics == vk::TRUE,
             max_push_constants: props.limits.max_push_constants_size,
+            float_atomics,
             max_storage_range: props.limits.max_storage_buffer_range as u64,
         }))
     }

@@ -197,10 +197,11 @@ impl VulkanSolver {
             interior: next(),
         };
         // Push constants hold the step constants where the device has room (128 bytes is
-        // the Vulkan minimum, so always in practice); float atomics need an extension this
-        // backend does not enable yet, so the naive scatters use compare-exchange.
+        // the Vulkan minimum, so always in practice); the naive scatters use float atomics
+        // where VK_EXT_shader_atomic_float is there, compare-exchange otherwise: the same
+        // choice as on wgpu, so the naive pair compares only the APIs.
         let caps = Caps {
-            float_atomics: false,
+            float_atomics: dev.float_atomics,
             immediates: dev.max_push_constants as usize >= std::mem::size_of::<StepParams>(),
         };
         let mut names = vec!["springs", "springs_scatter", "tri_normals_scatter"];
@@ -249,6 +250,11 @@ impl VulkanSolver {
     /// The device's name.
     pub fn adapter(&self) -> String {
         self.dev.name.clone()
+    }
+
+    /// Whether the naive scatters use float atomics (VK_EXT_shader_atomic_float).
+    pub fn float_atomics(&self) -> bool {
+        self.dev.float_atomics
     }
 
     /// Validation-layer messages gathered since the last call (none when it is off).

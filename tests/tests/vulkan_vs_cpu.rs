@@ -32,6 +32,9 @@ fn every_vulkan_kernel_matches_its_cpu_twin() {
         let Some(mut v) = vulkan(Variant::Optimized, n) else { return };
         let names = v.kernel_names();
         assert!(names.contains(&"forces_springs") && names.contains(&"springs_scatter"), "{names:?}");
+        if v.float_atomics() {
+            assert!(names.contains(&"springs_scatter_f32") && names.contains(&"tri_normals_scatter_f32"), "{names:?}");
+        }
         let checks = validate_kernels(&mut v, n, 0x5eed + n as u64).unwrap();
         assert_eq!(checks.len(), 5 * names.len());
         assert_checks(&format!("vk n={n}"), &checks);
