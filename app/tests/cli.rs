@@ -146,7 +146,9 @@ fn no_adapter_is_one_clear_line() {
     // An ICD list that names no driver: the Vulkan loader finds no adapter.
     for args in [
         &["sim", "--backend", "wgpu", "--n", "8", "--steps", "16"][..],
+        &["sim", "--backend", "vulkan", "--n", "8", "--steps", "16"],
         &["validate"],
+        &["validate", "--backends", "vulkan"],
         &["render", "--n", "8", "--out", "/tmp/none.png"],
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_clothlab"))

@@ -98,7 +98,11 @@ impl Device {
             info = info.enabled_layer_names(&layer_names).enabled_extension_names(&ext_names);
         }
         // SAFETY: `info` and everything it points to live until the call returns.
-        let instance = unsafe { entry.create_instance(&info, None) }.map_err(vk_err("creating the instance"))?;
+        let instance = unsafe { entry.create_instance(&info, None) }.map_err(|e| match e {
+            // The loader found no driver at all.
+            vk::Result::ERROR_INCOMPATIBLE_DRIVER => VkError::NoAdapter,
+            e => vk_err("creating the instance")(e),
+        })?;
         let messages: Messages = Arc::new(Mutex::new(Vec::new()));
         let debug = if validation {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
