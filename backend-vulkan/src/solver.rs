@@ -83,6 +83,7 @@ pub struct VulkanSolver {
     topo: ClothTopology,
     sp: StepParams,
     recipe: Vec<Dispatch>,
+    caps: Caps,
     cur: usize,
     timer: TimingRecorder,
     /// Record per-dispatch GPU timestamps.
@@ -233,6 +234,7 @@ impl VulkanSolver {
             params: params.clone(),
             grab: None,
             recipe: recipe(variant, params.strain_iterations, caps),
+            caps,
             topo,
             sp,
             cur: 0,
@@ -447,9 +449,23 @@ impl Solver for VulkanSolver {
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         params.validate()?;
-        if params.strain_iterations != self.params.strain_iterations || params != self.params {
-            return Err(SolverError::Backend("changing parameters on the Vulkan solver is not supported yet".into()));
+        self.topo.set_spring_constants(&params);
+        // Spring constants depend on dt and the stiffness fractions: rewrite the tables in
+        // place (the descriptor sets keep pointing at the same buffers).
+        let (strain, bend) = split_slots(&self.topo);
+        let (a, b) = spring_halves(&self.topo.springs);
+        let interior = InteriorSlots::new(&self.topo);
+        for (buf, bytes) in [
+            (&self.buffers.slots, bytemuck::cast_slice::<SpringSlot, u8>(&strain)),
+            (&self.buffers.bend_slots, bytemuck::cast_slice(&bend)),
+            (&self.buffers.springs, bytemuck::cast_slice(a)),
+            (&self.buffers.springs_b, bytemuck::cast_slice(b)),
+            (&self.buffers.interior, bytemuck::bytes_of(&interior)),
+        ] {
+            upload(&self.cmds, &mut self.staging, buf, bytes).map_err(backend)?;
         }
+        self.recipe = recipe(self.variant, params.strain_iterations, self.caps);
+        self.params = params;
         Ok(())
     }
 

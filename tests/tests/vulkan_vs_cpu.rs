@@ -51,3 +51,17 @@ fn vulkan_rollouts_stay_close_to_the_cpu() {
         no_validation_messages(&v);
     }
 }
+
+#[test]
+fn changed_parameters_reach_the_vulkan_kernels() {
+    // Stiffer bend springs, two strain passes and wind: a rollout with them must still
+    // match the CPU solver given the same parameters (bound as in validate_rollout).
+    let params = SimParams { bend_stiffness: 0.1, strain_iterations: 2, wind: [2.0, 0.0, 1.0], ..SimParams::default() };
+    for variant in [Variant::Naive, Variant::Optimized] {
+        let Some(mut v) = vulkan(variant, 48) else { return };
+        v.set_params(params.clone()).unwrap();
+        let c = validate_rollout(&mut v, 8).unwrap();
+        assert_checks(&format!("{} set_params", v.name()), &[c]);
+        no_validation_messages(&v);
+    }
+}

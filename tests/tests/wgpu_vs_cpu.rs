@@ -68,3 +68,15 @@ fn rollouts_of_200_substeps_stay_close_to_the_cpu() {
     ab.error = ab.max_abs;
     assert_checks("rollout", &[a, b, ab]);
 }
+
+#[test]
+fn changed_parameters_reach_the_wgpu_kernels() {
+    // As for Vulkan: after set_params, a rollout still matches the CPU with the new values.
+    let params = SimParams { bend_stiffness: 0.1, strain_iterations: 2, wind: [2.0, 0.0, 1.0], ..SimParams::default() };
+    for variant in [Variant::Naive, Variant::Optimized] {
+        let Some(mut g) = gpu(variant, 48) else { return };
+        g.set_params(params.clone()).unwrap();
+        let c = validate_rollout(&mut g, 8).unwrap();
+        assert_checks(&format!("{} set_params", g.name()), &[c]);
+    }
+}
