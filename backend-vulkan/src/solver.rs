@@ -477,8 +477,14 @@ impl Solver for VulkanSolver {
     fn step_frame(&mut self) -> Result<(), SolverError> {
         let t0 = Instant::now();
         self.sp = StepParams::new(&self.params, &self.scene, self.grab);
-        let sp = self.sp;
-        self.write(Target::Params, bytemuck::bytes_of(&sp))?;
+        // The frame's constants go through the staging buffer in the frame's own command
+        // buffer (a copy and a barrier before the first dispatch), not in a submission of
+        // their own.
+        let bytes = bytemuck::bytes_of(&self.sp);
+        let map =
+            self.staging.mapped().ok_or_else(|| SolverError::Backend("staging buffer not host visible".into()))?;
+        map[..bytes.len()].copy_from_slice(bytes);
+        let mut params_pending = true;
         let recipe = self.recipe.clone();
         let mut gpu_ns = 0.0;
         let mut timed = false;
@@ -494,6 +500,10 @@ impl Solver for VulkanSolver {
                 0
             };
             self.cmds.begin(max_q).map_err(backend)?;
+            if std::mem::take(&mut params_pending) {
+                self.cmds.copy(&self.staging, &self.buffers.params, std::mem::size_of::<StepParams>() as u64);
+                self.cmds.barrier();
+            }
             let (mut q, mut labels) = (0, Vec::new());
             for _ in 0..per_submission {
                 self.record(&recipe, &mut q, &mut labels);

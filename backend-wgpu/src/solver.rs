@@ -151,6 +151,7 @@ impl WgpuSolver {
         boxes[..scene.boxes.len()].copy_from_slice(&scene.boxes);
         let tri_flat: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
         let face_flat: Vec<i32> = topo.face_slots.iter().flatten().copied().collect();
+        let (strain_slots, bend_slots) = split_slots(&topo);
         let buffers = Buffers {
             params: init("params", bytemuck::bytes_of(&sp), U::UNIFORM | U::COPY_DST),
             pos: [
@@ -164,8 +165,8 @@ impl WgpuSolver {
             spheres: init("spheres", bytemuck::cast_slice(&spheres), data_usage),
             boxes: init("boxes", bytemuck::cast_slice(&boxes), data_usage),
             interior: init("interior slots", bytemuck::bytes_of(&InteriorSlots::new(&topo)), U::UNIFORM | U::COPY_DST),
-            slots: init("slots", bytemuck::cast_slice(&split_slots(&topo).0), data_usage),
-            bend_slots: init("bend slots", bytemuck::cast_slice(&split_slots(&topo).1), data_usage),
+            slots: init("slots", bytemuck::cast_slice(&strain_slots), data_usage),
+            bend_slots: init("bend slots", bytemuck::cast_slice(&bend_slots), data_usage),
             springs: init("springs", bytemuck::cast_slice(spring_halves(&topo.springs).0), data_usage),
             springs_b: init("springs (2nd half)", bytemuck::cast_slice(spring_halves(&topo.springs).1), data_usage),
             tethers: init("tethers", bytemuck::cast_slice(&topo.tethers), data_usage),
@@ -371,22 +372,17 @@ impl WgpuSolver {
         }
     }
 
-    /// Submits `enc` (resolving `q` timestamps first) and, when timing, records the
-    /// per-dispatch GPU times; returns the submission's GPU span in ns, if timed.
-    fn submit(
-        &mut self,
-        mut enc: wgpu::CommandEncoder,
-        q: u32,
-        labels: &[&'static str],
-    ) -> Result<Option<f64>, SolverError> {
-        let ts = self.timestamps.as_ref().filter(|_| q > 0);
-        if let Some(ts) = ts {
-            enc.resolve_query_set(&ts.set, 0..q, &ts.resolve, 0);
-        }
-        self.ctx.queue.submit([enc.finish()]);
-        let Some(ts) = ts else {
+    /// Resolves the `q` timestamps of the frame just submitted, reads them back once, and
+    /// records the per-dispatch times; returns the frame's GPU span (first dispatch begin to
+    /// last end, so for the naive variant the gaps between its submissions count too).
+    fn read_times(&mut self, q: u32, labels: &[&'static str]) -> Result<Option<f64>, SolverError> {
+        let Some(ts) = self.timestamps.as_ref().filter(|_| q > 0) else {
             return Ok(None);
         };
+        let mut enc =
+            self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("timestamps") });
+        enc.resolve_query_set(&ts.set, 0..q, &ts.resolve, 0);
+        self.ctx.queue.submit([enc.finish()]);
         let raw = self.ctx.read_buffer(&ts.resolve, 0, q as u64 * 8).map_err(backend)?;
         let ticks: &[u64] = bytemuck::cast_slice(&raw);
         Ok(Some(record_times(&mut self.timer, labels, ticks, ts.period_ns, self.recipe.len())))
@@ -520,35 +516,24 @@ impl Solver for WgpuSolver {
         self.sp = StepParams::new(&self.params, &self.scene, self.grab);
         self.ctx.queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&self.sp));
         let recipe = self.recipe.clone();
-        let mut gpu_ns = 0.0;
-        let mut timed = false;
-        let new_encoder = |ctx: &GpuContext| {
-            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") })
+        // Query indices run on across the frame's submissions; the timestamps are read
+        // back once, after the last one.
+        let (mut q, mut labels) = (0, Vec::new());
+        let submissions = match self.variant {
+            Variant::Optimized => 1,
+            Variant::Naive => self.params.substeps,
         };
-        match self.variant {
-            Variant::Optimized => {
-                let mut enc = new_encoder(&self.ctx);
-                let (mut q, mut labels) = (0, Vec::new());
-                for _ in 0..self.params.substeps {
-                    self.record(&mut enc, &recipe, &mut q, &mut labels);
-                }
-                if let Some(ns) = self.submit(enc, q, &labels)? {
-                    gpu_ns += ns;
-                    timed = true;
-                }
+        for _ in 0..submissions {
+            let mut enc =
+                self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+            for _ in 0..self.params.substeps / submissions {
+                self.record(&mut enc, &recipe, &mut q, &mut labels);
             }
-            Variant::Naive => {
-                for _ in 0..self.params.substeps {
-                    let mut enc = new_encoder(&self.ctx);
-                    let (mut q, mut labels) = (0, Vec::new());
-                    self.record(&mut enc, &recipe, &mut q, &mut labels);
-                    if let Some(ns) = self.submit(enc, q, &labels)? {
-                        gpu_ns += ns;
-                        timed = true;
-                    }
-                }
-            }
+            self.ctx.queue.submit([enc.finish()]);
         }
+        let gpu_ns = self.read_times(q, &labels)?;
+        let timed = gpu_ns.is_some();
+        let gpu_ns = gpu_ns.unwrap_or(0.0);
         if self.time_kernels {
             if !timed {
                 self.ctx.wait_idle().map_err(backend)?;
