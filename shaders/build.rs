@@ -151,11 +151,14 @@ fn main() {
             .map(|list| list.split(',').map(str::trim).filter(|s| !s.is_empty()).map(String::from).collect())
             .unwrap_or_default();
         // A kernel using compare-exchange float addition also gets a `<name>_f32` twin
-        // using float atomics.
+        // using float atomics; one reading the spring table from storage buffers also gets
+        // a `<name>_tex` twin reading it from a sampled image.
         let mut variants = vec![(name.clone(), includes.clone())];
-        if includes.iter().any(|i| i == "atomic_cas") {
-            let f32_includes = includes.iter().map(|i| if i == "atomic_cas" { "atomic_f32".into() } else { i.clone() });
-            variants.push((format!("{name}_f32"), f32_includes.collect()));
+        for (from, to, suffix) in [("atomic_cas", "atomic_f32", "_f32"), ("table", "table_tex", "_tex")] {
+            if includes.iter().any(|i| i == from) {
+                let twin = includes.iter().map(|i| if i == from { to.to_owned() } else { i.clone() });
+                variants.push((format!("{name}{suffix}"), twin.collect()));
+            }
         }
         for (vname, incs) in variants {
             let mut source = types.clone();
@@ -167,8 +170,9 @@ fn main() {
             source.push_str(&body);
             emit(&out, &mut list, &vname, &source);
             // A kernel that reads the step constants from the uniform buffer also gets a
-            // `<name>_imm` twin reading them from immediates (push constants).
-            if source.contains(UNIFORM_PARAMS) {
+            // `<name>_imm` twin reading them from immediates (push constants), unless it
+            // uses immediates for something else already.
+            if source.contains(UNIFORM_PARAMS) && !source.contains("var<immediate>") {
                 let imm = source.replace(UNIFORM_PARAMS, "var<immediate> p: StepParams;");
                 emit(&out, &mut list, &format!("{vname}_imm"), &imm);
             }

@@ -12,7 +12,7 @@ use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 use clothlab_core::validate::{KernelRunner, validate_kernels, validate_rollout};
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
-use clothlab_vulkan::VulkanSolver;
+use clothlab_vulkan::{SpringTable, StatsMode, VulkanOptions, VulkanSolver};
 use clothlab_wgpu::{ClothSource, Variant, WgpuRenderer, WgpuSolver};
 
 #[derive(Parser)]
@@ -122,6 +122,67 @@ struct SimArgs {
     /// Write the final state: `.obj` (mesh with normals and uvs) or `.json` (full state).
     #[arg(long)]
     out: Option<PathBuf>,
+    #[command(flatten)]
+    vulkan: VulkanArgs,
+}
+
+/// Options of the Vulkan backends.
+#[derive(clap::Args, Clone, Copy, Debug, Default)]
+pub struct VulkanArgs {
+    /// Vulkan only: per-substep statistics (max strain, kinetic energy) on the GPU, by
+    /// subgroup reductions or by atomics.
+    #[arg(long, value_enum, default_value_t = StatsArg::Off)]
+    pub stats: StatsArg,
+    /// Vulkan only: where the gathers read the spring table.
+    #[arg(long, value_enum, default_value_t = TableArg::Interior)]
+    pub table: TableArg,
+}
+
+/// `--stats` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, ValueEnum)]
+pub enum StatsArg {
+    /// Not computed.
+    #[default]
+    Off,
+    /// Atomics from every invocation.
+    Atomics,
+    /// Subgroup reductions, no atomics.
+    Subgroups,
+}
+
+/// `--table` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, ValueEnum)]
+pub enum TableArg {
+    /// Uniform constants in the interior, storage buffers at the border.
+    #[default]
+    Interior,
+    /// Read-only storage buffers everywhere.
+    Storage,
+    /// A sampled image (texture memory) everywhere.
+    Image,
+}
+
+impl VulkanArgs {
+    /// The Vulkan solver's options.
+    pub fn options(self) -> VulkanOptions {
+        VulkanOptions {
+            validation: vulkan_validation(),
+            stats: match self.stats {
+                StatsArg::Off => StatsMode::Off,
+                StatsArg::Atomics => StatsMode::Atomics,
+                StatsArg::Subgroups => StatsMode::Subgroups,
+            },
+            table: match self.table {
+                TableArg::Interior => SpringTable::Interior,
+                TableArg::Storage => SpringTable::Storage,
+                TableArg::Image => SpringTable::Image,
+            },
+        }
+    }
+
+    fn is_default(self) -> bool {
+        self.stats == StatsArg::Off && self.table == TableArg::Interior
+    }
 }
 
 /// Most substeps one `sim` run may ask for.
@@ -176,13 +237,27 @@ pub fn apply_overrides(params: &SimParams, sets: &[String]) -> Result<SimParams>
 }
 
 pub fn make_solver(backend: Backend, scene: Scene, params: SimParams) -> Result<Box<dyn Solver>> {
+    make_solver_with(backend, scene, params, VulkanArgs::default())
+}
+
+/// [`make_solver`] with the Vulkan backends' options (refused for the others).
+pub fn make_solver_with(
+    backend: Backend,
+    scene: Scene,
+    params: SimParams,
+    vulkan: VulkanArgs,
+) -> Result<Box<dyn Solver>> {
+    let is_vulkan = matches!(backend, Backend::VulkanNaive | Backend::Vulkan);
+    if !is_vulkan && !vulkan.is_default() {
+        bail!("--stats and --table apply to the Vulkan backends (vulkan-naive, vulkan) only");
+    }
     Ok(match backend {
         Backend::Cpu => Box::new(CpuSolver::new(Exec::Serial, scene, params)?),
         Backend::CpuPar => Box::new(CpuSolver::new(Exec::Parallel, scene, params)?),
         Backend::WgpuNaive => Box::new(WgpuSolver::new(Variant::Naive, scene, params)?),
         Backend::Wgpu => Box::new(WgpuSolver::new(Variant::Optimized, scene, params)?),
-        Backend::VulkanNaive => Box::new(VulkanSolver::new(Variant::Naive, scene, params, vulkan_validation())?),
-        Backend::Vulkan => Box::new(VulkanSolver::new(Variant::Optimized, scene, params, vulkan_validation())?),
+        Backend::VulkanNaive => Box::new(VulkanSolver::with_options(Variant::Naive, scene, params, vulkan.options())?),
+        Backend::Vulkan => Box::new(VulkanSolver::with_options(Variant::Optimized, scene, params, vulkan.options())?),
     })
 }
 
@@ -204,7 +279,7 @@ fn sim(args: SimArgs) -> Result<ExitCode> {
     };
     let frames = args.steps.div_ceil(params.substeps as u64);
     let substeps = frames * params.substeps as u64;
-    let mut solver = make_solver(args.backend, scene.clone(), params)?;
+    let mut solver = make_solver_with(args.backend, scene.clone(), params, args.vulkan)?;
     let t0 = Instant::now();
     for _ in 0..frames {
         solver.step_frame()?;
@@ -228,6 +303,15 @@ fn sim(args: SimArgs) -> Result<ExitCode> {
         "NaN            {}",
         if summary.nan_count == 0 { "none".to_string() } else { format!("{} components", summary.nan_count) }
     );
+
+    if let Some(last) = solver.substep_stats().last() {
+        println!(
+            "GPU statistics max strain {:.4}, kinetic energy {:.4e} J (last substep, reduced by {})",
+            last.max_strain,
+            last.kinetic_energy,
+            if args.vulkan.stats == StatsArg::Atomics { "atomics" } else { "subgroups" }
+        );
+    }
 
     println!("kernel              median us    min us    max us  samples");
     for r in solver.timings().rows {

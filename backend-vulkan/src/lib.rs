@@ -11,7 +11,8 @@ mod solver;
 
 use thiserror::Error;
 
-pub use solver::VulkanSolver;
+pub use clothlab_shaders::recipe::StatsMode;
+pub use solver::{SpringTable, VulkanOptions, VulkanSolver};
 
 /// Why Vulkan could not be used.
 #[derive(Debug, Error)]

@@ -74,6 +74,15 @@ pub struct Device {
     pub float_atomics: bool,
     /// Largest storage-buffer binding, bytes.
     pub max_storage_range: u64,
+    /// Invocations per subgroup (0 when unknown).
+    pub subgroup_size: u32,
+    /// Subgroup arithmetic (subgroupAdd, subgroupMax) in compute shaders.
+    pub subgroup_arithmetic: bool,
+    /// synchronization2 (Vulkan 1.3) enabled: timestamps by `vkCmdWriteTimestamp2`,
+    /// barriers by `vkCmdPipelineBarrier2`.
+    pub sync2: bool,
+    /// Largest 2-D image side, texels.
+    pub max_image_2d: u32,
 }
 
 impl Device {
@@ -90,7 +99,7 @@ impl Device {
         if !has_layer {
             log::info!("Vulkan validation layer not installed (package vulkan-validationlayers)");
         }
-        let app = vk::ApplicationInfo::default().application_name(c"clothlab").api_version(vk::API_VERSION_1_2);
+        let app = vk::ApplicationInfo::default().application_name(c"clothlab").api_version(vk::API_VERSION_1_3);
         let layer_names = [VALIDATION.as_ptr()];
         let ext_names = [ash::ext::debug_utils::NAME.as_ptr()];
         let mut info = vk::InstanceCreateInfo::default().application_info(&app);
@@ -171,6 +180,26 @@ impl Device {
             unsafe { instance.get_physical_device_features2(physical, &mut features2) };
         }
         let float_atomics = has_ext && atomic_query.shader_buffer_float32_atomic_add == vk::TRUE;
+        // Subgroup size and operations (Vulkan 1.1 core).
+        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        {
+            let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+            // SAFETY: the query chain lives across the call.
+            unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
+        }
+        let subgroup_arithmetic = subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+            && subgroup
+                .supported_operations
+                .contains(vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC);
+        // synchronization2, where the device is Vulkan 1.3.
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+        if props.api_version >= vk::API_VERSION_1_3 {
+            let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+            // SAFETY: the query chain lives across the call.
+            unsafe { instance.get_physical_device_features2(physical, &mut features2) };
+        }
+        let sync2 = f13.synchronization2 == vk::TRUE;
+        let mut enable13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
         let mut atomic_enable = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
             .shader_buffer_float32_atomics(true)
             .shader_buffer_float32_atomic_add(true);
@@ -181,6 +210,9 @@ impl Device {
         let mut dinfo = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
         if float_atomics {
             dinfo = dinfo.enabled_extension_names(&device_exts).push_next(&mut atomic_enable);
+        }
+        if sync2 {
+            dinfo = dinfo.push_next(&mut enable13);
         }
         // SAFETY: `physical` belongs to `instance`; the create info outlives the call.
         let device = match unsafe { instance.create_device(physical, &dinfo, None) } {
@@ -223,7 +255,17 @@ impl Device {
             max_push_constants: props.limits.max_push_constants_size,
             float_atomics,
             max_storage_range: props.limits.max_storage_buffer_range as u64,
+            subgroup_size: subgroup.subgroup_size,
+            subgroup_arithmetic,
+            sync2,
+            max_image_2d: props.limits.max_image_dimension2_d,
         }))
+    }
+
+    /// Allocations gpu-allocator holds now (0 once every buffer and image is dropped:
+    /// the leak check).
+    pub fn live_allocations(&self) -> usize {
+        self.allocator.lock().map(|a| a.generate_report().allocations.len()).unwrap_or(usize::MAX)
     }
 
     /// Takes the validation messages gathered so far.
@@ -238,6 +280,9 @@ impl Drop for Device {
         // alive any more; wait for the GPU, then free in reverse creation order.
         unsafe {
             let _ = self.device.device_wait_idle();
+            if let Ok(a) = self.allocator.lock() {
+                a.report_memory_leaks(log::Level::Error);
+            }
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
             if let Some((l, m)) = &self.debug {
@@ -315,6 +360,105 @@ impl Drop for Buffer {
         // SAFETY: the owner waits for the GPU before dropping resources it used (the
         // solver waits after every submission).
         unsafe { self.dev.device.destroy_buffer(self.buffer, None) };
+        if let (Some(a), Ok(mut alloc)) = (self.allocation.take(), self.dev.allocator.lock()) {
+            let _ = alloc.free(a);
+        }
+    }
+}
+
+/// A sampled 2-D image of rgba32uint texels (the spring table read as texture memory)
+/// and its view.
+pub struct Image {
+    dev: Arc<Device>,
+    image: vk::Image,
+    view: vk::ImageView,
+    allocation: Option<Allocation>,
+    /// Width, texels.
+    pub width: u32,
+    /// Height, texels.
+    pub height: u32,
+}
+
+impl Image {
+    /// The format of every texel: four 32-bit words.
+    pub const FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
+
+    /// A device-local `width × height` image, sampled by compute shaders and filled by
+    /// transfer ([`Commands::copy_to_image`]).
+    pub fn new(dev: &Arc<Device>, name: &str, width: u32, height: u32) -> Result<Self, VkError> {
+        if width == 0 || height == 0 || width > dev.max_image_2d || height > dev.max_image_2d {
+            return Err(VkError::Vulkan {
+                what: "creating an image",
+                reason: format!("{width} × {height} texels; this device allows 1 … {} a side", dev.max_image_2d),
+            });
+        }
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(Self::FORMAT)
+            .extent(vk::Extent3D { width, height, depth: 1 })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let d = &dev.device;
+        // SAFETY: valid device and create info.
+        let image = unsafe { d.create_image(&info, None) }.map_err(vk_err("creating an image"))?;
+        // SAFETY: `image` was just created on this device.
+        let requirements = unsafe { d.get_image_memory_requirements(image) };
+        let allocation = dev
+            .allocator
+            .lock()
+            .map_err(|_| VkError::Vulkan { what: "allocating", reason: "poisoned allocator".into() })
+            .and_then(|mut a| {
+                a.allocate(&AllocationCreateDesc {
+                    name,
+                    requirements,
+                    location: MemoryLocation::GpuOnly,
+                    linear: false,
+                    allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+                })
+                .map_err(|e| VkError::Vulkan { what: "allocating image memory", reason: e.to_string() })
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: the image is unused and unbound.
+                unsafe { d.destroy_image(image, None) };
+                return Err(e);
+            }
+        };
+        let mut me = Self { dev: dev.clone(), image, view: vk::ImageView::null(), allocation: None, width, height };
+        // SAFETY: the allocation satisfies the image's requirements and is freed in Drop
+        // after the image is destroyed.
+        unsafe { d.bind_image_memory(image, allocation.memory(), allocation.offset()) }
+            .map_err(vk_err("binding image memory"))?;
+        me.allocation = Some(allocation);
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(image)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(Self::FORMAT)
+            .subresource_range(color_range());
+        // SAFETY: the image is live and bound; the view is destroyed first in Drop.
+        me.view = unsafe { d.create_image_view(&view_info, None) }.map_err(vk_err("creating an image view"))?;
+        Ok(me)
+    }
+}
+
+fn color_range() -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1)
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        // SAFETY: the owner waited for the GPU; view, image, memory in reverse order (a
+        // null view is ignored by vkDestroyImageView).
+        unsafe {
+            self.dev.device.destroy_image_view(self.view, None);
+            self.dev.device.destroy_image(self.image, None);
+        }
         if let (Some(a), Ok(mut alloc)) = (self.allocation.take(), self.dev.allocator.lock()) {
             let _ = alloc.free(a);
         }
@@ -426,6 +570,7 @@ impl Sets {
         let sizes = [
             vk::DescriptorPoolSize::default().ty(vk::DescriptorType::STORAGE_BUFFER).descriptor_count(32 * max_sets),
             vk::DescriptorPoolSize::default().ty(vk::DescriptorType::UNIFORM_BUFFER).descriptor_count(4 * max_sets),
+            vk::DescriptorPoolSize::default().ty(vk::DescriptorType::SAMPLED_IMAGE).descriptor_count(max_sets),
         ];
         let info = vk::DescriptorPoolCreateInfo::default().max_sets(max_sets).pool_sizes(&sizes);
         // SAFETY: valid device and create info; destroyed in Drop.
@@ -434,11 +579,13 @@ impl Sets {
         Ok(Self { dev: dev.clone(), pool })
     }
 
-    /// A set for `kernel` with `buffers[k]` (binding, type, buffer) bound whole.
+    /// A set for `kernel` with `buffers[k]` (binding, type, buffer) bound whole, and
+    /// `image` (binding, image) as a sampled image.
     pub fn allocate(
         &self,
         kernel: &Kernel,
         buffers: &[(u32, vk::DescriptorType, &Buffer)],
+        image: Option<(u32, &Image)>,
     ) -> Result<vk::DescriptorSet, VkError> {
         let layouts = [kernel.set_layout];
         let info = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.pool).set_layouts(&layouts);
@@ -460,6 +607,21 @@ impl Sets {
                     .buffer_info(info)
             })
             .collect();
+        let image_info = image.map(|(_, img)| {
+            [vk::DescriptorImageInfo::default()
+                .image_view(img.view)
+                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
+        });
+        let mut writes = writes;
+        if let (Some((binding, _)), Some(info)) = (image, &image_info) {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(binding)
+                    .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                    .image_info(info),
+            );
+        }
         // SAFETY: the writes reference live buffers and the set just allocated.
         unsafe { self.dev.device.update_descriptor_sets(&writes, &[]) };
         Ok(set)
@@ -473,12 +635,14 @@ impl Drop for Sets {
     }
 }
 
-/// One command buffer, its pool, a fence and a timestamp query pool.
+/// A ring of command buffers from one pool, a fence and a timestamp query pool. One
+/// buffer is active (being recorded) at a time; a frame may record and submit several
+/// (the naive recipe: one per substep) and wait once, on the last.
 pub struct Commands {
     dev: Arc<Device>,
     pool: vk::CommandPool,
-    /// The command buffer.
-    pub cmd: vk::CommandBuffer,
+    cmds: Vec<vk::CommandBuffer>,
+    active: usize,
     fence: vk::Fence,
     queries: vk::QueryPool,
     /// Capacity of the query pool.
@@ -498,7 +662,8 @@ pub struct Dispatch<'a> {
 }
 
 impl Commands {
-    /// A command buffer on the device's queue family, with room for `max_queries` timestamps.
+    /// One command buffer on the device's queue family, with room for `max_queries`
+    /// timestamps.
     pub fn new(dev: &Arc<Device>, max_queries: u32) -> Result<Self, VkError> {
         let d = &dev.device;
         // SAFETY: valid device and create infos; every object is destroyed in Drop.
@@ -511,103 +676,248 @@ impl Commands {
                     None,
                 )
                 .map_err(vk_err("creating a command pool"))?;
-            let cmd = d
-                .allocate_command_buffers(
-                    &vk::CommandBufferAllocateInfo::default()
-                        .command_pool(pool)
-                        .level(vk::CommandBufferLevel::PRIMARY)
-                        .command_buffer_count(1),
-                )
-                .map_err(vk_err("allocating a command buffer"))?[0];
-            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).map_err(vk_err("creating a fence"))?;
-            let queries = d
+            let mut me = Self {
+                dev: dev.clone(),
+                pool,
+                cmds: Vec::new(),
+                active: 0,
+                fence: vk::Fence::null(),
+                queries: vk::QueryPool::null(),
+                max_queries,
+            };
+            me.fence = d.create_fence(&vk::FenceCreateInfo::default(), None).map_err(vk_err("creating a fence"))?;
+            me.queries = d
                 .create_query_pool(
                     &vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(max_queries),
                     None,
                 )
                 .map_err(vk_err("creating a query pool"))?;
-            Ok(Self { dev: dev.clone(), pool, cmd, fence, queries, max_queries })
+            me.reserve(1)?;
+            Ok(me)
         }
     }
 
-    /// Starts recording (the previous submission must have completed).
-    pub fn begin(&self, query_count: u32) -> Result<(), VkError> {
+    /// Makes sure the ring has at least `count` command buffers.
+    pub fn reserve(&mut self, count: usize) -> Result<(), VkError> {
+        if count <= self.cmds.len() {
+            return Ok(());
+        }
+        let info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count((count - self.cmds.len()) as u32);
+        // SAFETY: the pool belongs to this device; the buffers are freed in Drop.
+        let more =
+            unsafe { self.dev.device.allocate_command_buffers(&info) }.map_err(vk_err("allocating command buffers"))?;
+        self.cmds.extend(more);
+        Ok(())
+    }
+
+    fn cmd(&self) -> vk::CommandBuffer {
+        self.cmds[self.active]
+    }
+
+    /// Starts recording buffer 0, resetting the first `query_count` queries (the previous
+    /// submission must have completed).
+    pub fn begin(&mut self, query_count: u32) -> Result<(), VkError> {
+        self.begin_at(0, query_count)
+    }
+
+    /// Starts recording buffer `index` of the ring (reserved before), resetting the
+    /// first `query_count` queries when not 0.
+    pub fn begin_at(&mut self, index: usize, query_count: u32) -> Result<(), VkError> {
+        self.reserve(index + 1)?;
+        self.active = index;
         let d = &self.dev.device;
-        // SAFETY: the command buffer is not pending (every submit waits on the fence).
+        // SAFETY: the command buffer is not pending (every frame waits on the fence,
+        // which covers all earlier submissions, before recording again).
         unsafe {
             d.begin_command_buffer(
-                self.cmd,
+                self.cmd(),
                 &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
             )
             .map_err(vk_err("beginning a command buffer"))?;
             if query_count > 0 {
-                d.cmd_reset_query_pool(self.cmd, self.queries, 0, query_count.min(self.max_queries));
+                d.cmd_reset_query_pool(self.cmd(), self.queries, 0, query_count.min(self.max_queries));
             }
         }
         Ok(())
+    }
+
+    fn timestamp(&self, q: u32) {
+        let d = &self.dev.device;
+        // SAFETY: recording state; `q` is below the pool's capacity (the caller checks)
+        // and was reset in this frame. With synchronization2 the 1.3 entry point is used.
+        unsafe {
+            if self.dev.sync2 {
+                d.cmd_write_timestamp2(self.cmd(), vk::PipelineStageFlags2::COMPUTE_SHADER, self.queries, q);
+            } else {
+                d.cmd_write_timestamp(self.cmd(), vk::PipelineStageFlags::COMPUTE_SHADER, self.queries, q);
+            }
+        }
     }
 
     /// Records a dispatch, with timestamps before and after it into queries `q`, `q + 1`
     /// when given.
     pub fn dispatch(&self, dsp: &Dispatch<'_>, timestamps: Option<u32>) {
         let d = &self.dev.device;
+        if let Some(q) = timestamps {
+            self.timestamp(q);
+        }
         // SAFETY: recording state; pipeline, layout and set are live and compatible.
         unsafe {
-            if let Some(q) = timestamps {
-                d.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::COMPUTE_SHADER, self.queries, q);
-            }
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, dsp.kernel.pipeline);
-            d.cmd_bind_descriptor_sets(self.cmd, vk::PipelineBindPoint::COMPUTE, dsp.kernel.layout, 0, &[dsp.set], &[]);
+            d.cmd_bind_pipeline(self.cmd(), vk::PipelineBindPoint::COMPUTE, dsp.kernel.pipeline);
+            d.cmd_bind_descriptor_sets(
+                self.cmd(),
+                vk::PipelineBindPoint::COMPUTE,
+                dsp.kernel.layout,
+                0,
+                &[dsp.set],
+                &[],
+            );
             if !dsp.push.is_empty() {
-                d.cmd_push_constants(self.cmd, dsp.kernel.layout, vk::ShaderStageFlags::COMPUTE, 0, dsp.push);
+                d.cmd_push_constants(self.cmd(), dsp.kernel.layout, vk::ShaderStageFlags::COMPUTE, 0, dsp.push);
             }
-            d.cmd_dispatch(self.cmd, dsp.groups.0, dsp.groups.1, 1);
-            if let Some(q) = timestamps {
-                d.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::COMPUTE_SHADER, self.queries, q + 1);
-            }
+            d.cmd_dispatch(self.cmd(), dsp.groups.0, dsp.groups.1, 1);
+        }
+        if let Some(q) = timestamps {
+            self.timestamp(q + 1);
         }
     }
 
-    /// A barrier making compute and transfer writes visible to later compute and transfer.
+    /// A barrier making compute and transfer writes visible to later compute and transfer
+    /// (a global memory barrier: the recipes' dependencies are whole buffers).
     pub fn barrier(&self) {
+        let d = &self.dev.device;
+        if self.dev.sync2 {
+            let stages = vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::ALL_TRANSFER;
+            let mb = [vk::MemoryBarrier2::default()
+                .src_stage_mask(stages)
+                .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(stages)
+                .dst_access_mask(
+                    vk::AccessFlags2::SHADER_STORAGE_READ
+                        | vk::AccessFlags2::SHADER_STORAGE_WRITE
+                        | vk::AccessFlags2::TRANSFER_READ
+                        | vk::AccessFlags2::TRANSFER_WRITE
+                        | vk::AccessFlags2::UNIFORM_READ,
+                )];
+            // SAFETY: recording state; synchronization2 is enabled on this device.
+            unsafe { d.cmd_pipeline_barrier2(self.cmd(), &vk::DependencyInfo::default().memory_barriers(&mb)) };
+            return;
+        }
         let mb = [vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
             .dst_access_mask(
                 vk::AccessFlags::SHADER_READ
                     | vk::AccessFlags::SHADER_WRITE
                     | vk::AccessFlags::TRANSFER_READ
+                    | vk::AccessFlags::TRANSFER_WRITE
                     | vk::AccessFlags::UNIFORM_READ,
             )];
         let stages = vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER;
         // SAFETY: recording state.
-        unsafe {
-            self.dev.device.cmd_pipeline_barrier(self.cmd, stages, stages, vk::DependencyFlags::empty(), &mb, &[], &[])
-        };
+        unsafe { d.cmd_pipeline_barrier(self.cmd(), stages, stages, vk::DependencyFlags::empty(), &mb, &[], &[]) };
+    }
+
+    /// Records a copy of `size` bytes from `src` at `src_offset` to `dst` at `dst_offset`.
+    pub fn copy_range(&self, src: &Buffer, src_offset: u64, dst: &Buffer, dst_offset: u64, size: u64) {
+        let region = [vk::BufferCopy::default().src_offset(src_offset).dst_offset(dst_offset).size(size)];
+        // SAFETY: recording state; both buffers are live and the ranges lie within them
+        // (the callers size them).
+        unsafe { self.dev.device.cmd_copy_buffer(self.cmd(), src.buffer, dst.buffer, &region) };
     }
 
     /// Records a copy of `size` bytes from `src` to `dst`.
     pub fn copy(&self, src: &Buffer, dst: &Buffer, size: u64) {
-        let region = [vk::BufferCopy::default().size(size)];
-        // SAFETY: recording state; both buffers are live and at least `size` long.
-        unsafe { self.dev.device.cmd_copy_buffer(self.cmd, src.buffer, dst.buffer, &region) };
+        self.copy_range(src, 0, dst, 0, size);
+    }
+
+    /// Records the upload of a whole image from `src` (tightly packed texels): layout to
+    /// transfer destination, copy, layout to shader-read-only for compute.
+    pub fn copy_to_image(&self, src: &Buffer, dst: &Image) {
+        let d = &self.dev.device;
+        let to_dst = [vk::ImageMemoryBarrier::default()
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(dst.image)
+            .subresource_range(color_range())];
+        let to_read = [vk::ImageMemoryBarrier::default()
+            .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(vk::AccessFlags::SHADER_READ)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(dst.image)
+            .subresource_range(color_range())];
+        let region = [vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+            )
+            .image_extent(vk::Extent3D { width: dst.width, height: dst.height, depth: 1 })];
+        // SAFETY: recording state; `src` holds width × height texels (the caller sizes it);
+        // the image is live and only used by this command buffer until the barrier.
+        unsafe {
+            d.cmd_pipeline_barrier(
+                self.cmd(),
+                vk::PipelineStageFlags::TOP_OF_PIPE,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &to_dst,
+            );
+            d.cmd_copy_buffer_to_image(
+                self.cmd(),
+                src.buffer,
+                dst.image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &region,
+            );
+            d.cmd_pipeline_barrier(
+                self.cmd(),
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &to_read,
+            );
+        }
     }
 
     /// Records a fill of `dst` with zeros.
     pub fn zero(&self, dst: &Buffer) {
         // SAFETY: recording state; the buffer is live and has TRANSFER_DST usage.
-        unsafe { self.dev.device.cmd_fill_buffer(self.cmd, dst.buffer, 0, vk::WHOLE_SIZE, 0) };
+        unsafe { self.dev.device.cmd_fill_buffer(self.cmd(), dst.buffer, 0, vk::WHOLE_SIZE, 0) };
     }
 
-    /// Ends, submits and waits; returns `query_count` timestamps in ticks.
-    pub fn submit_and_wait(&self, query_count: u32) -> Result<Vec<u64>, VkError> {
+    /// Ends the active buffer and submits it; with `fence`, the fence is signalled once it
+    /// and every earlier submission on the queue are done (wait with [`Commands::wait`]).
+    pub fn submit(&self, fence: bool) -> Result<(), VkError> {
         let d = &self.dev.device;
-        // SAFETY: the buffer is in recording state; the fence is unsignalled; after the
-        // wait nothing recorded is pending, so the buffer and fence can be reset.
+        // SAFETY: the buffer is in recording state; the fence is unsignalled (every
+        // fenced submit is waited for and the fence reset before the next).
         unsafe {
-            d.end_command_buffer(self.cmd).map_err(vk_err("ending a command buffer"))?;
-            let cmds = [self.cmd];
+            d.end_command_buffer(self.cmd()).map_err(vk_err("ending a command buffer"))?;
+            let cmds = [self.cmd()];
             let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-            d.queue_submit(self.dev.queue, &submit, self.fence).map_err(vk_err("submitting"))?;
+            let f = if fence { self.fence } else { vk::Fence::null() };
+            d.queue_submit(self.dev.queue, &submit, f).map_err(vk_err("submitting"))
+        }
+    }
+
+    /// Waits for the fenced submission (and so for all before it); returns `query_count`
+    /// timestamps in ticks.
+    pub fn wait(&self, query_count: u32) -> Result<Vec<u64>, VkError> {
+        let d = &self.dev.device;
+        // SAFETY: a fenced submission is pending; after the wait nothing recorded is
+        // pending, so the fence can be reset and the queries read.
+        unsafe {
             d.wait_for_fences(&[self.fence], true, u64::MAX).map_err(vk_err("waiting for the GPU"))?;
             d.reset_fences(&[self.fence]).map_err(vk_err("resetting a fence"))?;
             let mut ticks = vec![0u64; query_count.min(self.max_queries) as usize];
@@ -623,15 +933,24 @@ impl Commands {
             Ok(ticks)
         }
     }
+
+    /// Ends, submits and waits; returns `query_count` timestamps in ticks.
+    pub fn submit_and_wait(&self, query_count: u32) -> Result<Vec<u64>, VkError> {
+        self.submit(true)?;
+        self.wait(query_count)
+    }
 }
 
 impl Drop for Commands {
     fn drop(&mut self) {
-        // SAFETY: every submission was waited for; destroy in reverse creation order.
+        // SAFETY: every submission was waited for; destroy in reverse creation order (null
+        // handles, after a failed creation, are ignored).
         unsafe {
             self.dev.device.destroy_query_pool(self.queries, None);
             self.dev.device.destroy_fence(self.fence, None);
-            self.dev.device.free_command_buffers(self.pool, &[self.cmd]);
+            if !self.cmds.is_empty() {
+                self.dev.device.free_command_buffers(self.pool, &self.cmds);
+            }
             self.dev.device.destroy_command_pool(self.pool, None);
         }
     }

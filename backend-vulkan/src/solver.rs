@@ -1,33 +1,66 @@
 //! The Vulkan solver: device-local buffers, one descriptor set per kernel and position
 //! parity, and the recipes of clothlab-shaders recorded into one command buffer per frame
-//! (optimized) or per substep (naive), with a compute→compute barrier between dispatches.
+//! (optimized) or one per substep, submitted without waiting in between (naive), with a
+//! compute→compute barrier between dependent dispatches. Options: per-substep statistics
+//! by subgroup reductions or by atomics, and the spring table read from storage buffers,
+//! from a sampled image, or (default) from a uniform block in the interior.
 
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
 
 use ash::vk;
+use clothlab_core::cpu::SubstepStats;
 use clothlab_core::grid::{
     ClothState, ClothTopology, Grab, InteriorSlots, STRAIN_SLOTS, SpringSlot, StepParams, V4, build,
 };
+use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::solver::{Solver, SolverError};
-use clothlab_core::timing::{FRAME, KernelTimings, TimingRecorder};
+use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, TimingRecorder};
 use clothlab_core::validate::KernelRunner;
 use clothlab_core::{SimParams, cpu};
 use clothlab_shaders::recipe::{
-    Caps, Dispatch, Output, Variant, dispatch_for, groups, kernels_of, pure_outputs, recipe, record_times, split_slots,
-    spring_halves,
+    Caps, Dispatch, Output, StatsMode, TABLE_WIDTH, Variant, base_name, dispatch_for, groups, kernels_of, pure_outputs,
+    recipe, record_times, split_slots, spring_halves, stats_dispatches, table_texels,
 };
 use gpu_allocator::MemoryLocation;
 
 use crate::VkError;
-use crate::raw::{self, Buffer, Commands, Device, Kernel, Sets};
+use crate::raw::{self, Buffer, Commands, Device, Image, Kernel, Sets};
 
 const STORAGE: vk::DescriptorType = vk::DescriptorType::STORAGE_BUFFER;
 const UNIFORM: vk::DescriptorType = vk::DescriptorType::UNIFORM_BUFFER;
-/// Timestamp queries per submission.
+/// Timestamp queries per frame.
 const MAX_QUERIES: u32 = 4096;
+/// Where the frame's statistics land in the staging buffer (after the step constants).
+const STATS_OFFSET: u64 = 256;
+/// Binding of the spring-table image (shared/table_tex.wgsl).
+const TABLE_BINDING: u32 = 20;
+
+/// Where the gathers read the spring table from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SpringTable {
+    /// Interior particles take their 12 springs' constants from a uniform block and their
+    /// neighbours by offset; only border particles read the table (storage buffers).
+    #[default]
+    Interior,
+    /// Every particle reads its slots from read-only storage buffers.
+    Storage,
+    /// Every particle reads its slots from a sampled image (the thesis's texture memory).
+    Image,
+}
+
+/// How the Vulkan solver is set up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct VulkanOptions {
+    /// Run under the Khronos validation layer (when installed); any message fails the call.
+    pub validation: bool,
+    /// Per-substep statistics (max strain, kinetic energy) computed on the GPU.
+    pub stats: StatsMode,
+    /// Where the spring table is read from.
+    pub table: SpringTable,
+}
 
 /// The buffers of the step, bound at the same numbers as in the WGSL (see shaders/wgsl).
 struct Buffers {
@@ -47,6 +80,10 @@ struct Buffers {
     bend_slots: Buffer,
     springs_b: Buffer,
     interior: Buffer,
+    stats_max: Buffer,
+    stats_energy: Buffer,
+    partials: Buffer,
+    table: Option<Image>,
 }
 
 impl Buffers {
@@ -70,6 +107,9 @@ impl Buffers {
             (14, STORAGE, &self.bend_slots),
             (15, STORAGE, &self.springs_b),
             (16, UNIFORM, &self.interior),
+            (17, STORAGE, &self.stats_max),
+            (18, STORAGE, &self.stats_energy),
+            (19, STORAGE, &self.partials),
         ]
     }
 }
@@ -84,6 +124,8 @@ pub struct VulkanSolver {
     sp: StepParams,
     recipe: Vec<Dispatch>,
     caps: Caps,
+    options: VulkanOptions,
+    stats: Vec<SubstepStats>,
     cur: usize,
     timer: TimingRecorder,
     /// Record per-dispatch GPU timestamps.
@@ -105,10 +147,26 @@ impl VulkanSolver {
     /// Builds the cloth of `scene` on the first Vulkan device with a compute queue; with
     /// `validation`, the Khronos validation layer checks every call (when installed).
     pub fn new(variant: Variant, scene: Scene, params: SimParams, validation: bool) -> Result<Self, SolverError> {
+        Self::with_options(variant, scene, params, VulkanOptions { validation, ..Default::default() })
+    }
+
+    /// Builds the cloth of `scene` with `options` (statistics, spring-table source).
+    pub fn with_options(
+        variant: Variant,
+        scene: Scene,
+        params: SimParams,
+        options: VulkanOptions,
+    ) -> Result<Self, SolverError> {
         if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
             return Err(SolverError::Backend(format!("at most {MAX_COLLIDERS} spheres and boxes")));
         }
-        let dev = Device::new(validation).map_err(backend)?;
+        let dev = Device::new(options.validation).map_err(backend)?;
+        if options.stats == StatsMode::Subgroups && !dev.subgroup_arithmetic {
+            return Err(SolverError::Backend(format!(
+                "{} has no subgroup arithmetic in compute shaders: use statistics by atomics",
+                dev.name
+            )));
+        }
         let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
         let np = scene.num_particles() as u64;
         if np * per_particle > dev.max_storage_range {
@@ -135,7 +193,15 @@ impl VulkanSolver {
         let face_flat: Vec<i32> = topo.face_slots.iter().flatten().copied().collect();
         let (strain, bend) = split_slots(&topo);
         let (springs_a, springs_b) = spring_halves(&topo.springs);
-        let interior = InteriorSlots::new(&topo);
+        let mut interior = InteriorSlots::new(&topo);
+        if options.table != SpringTable::Interior {
+            interior.enabled = 0;
+        }
+        let (texels, table_height) =
+            if options.table == SpringTable::Image { table_texels(&topo) } else { (Vec::new(), 0) };
+        let groups_xy = groups(topo.num_particles() as u32);
+        let stats_zero = vec![0u8; 4 * MAX_SUBSTEPS as usize];
+        let partials_zero = vec![0u8; 8 * (groups_xy.0 * groups_xy.1) as usize];
 
         // Everything device-local; filled through one staging buffer.
         let contents: Vec<(&str, &[u8], bool)> = vec![
@@ -156,8 +222,16 @@ impl VulkanSolver {
             ("bend_slots", bytemuck::cast_slice(&bend), false),
             ("springs_b", bytemuck::cast_slice(springs_b), false),
             ("interior", bytemuck::bytes_of(&interior), true),
+            ("stats_max", &stats_zero, false),
+            ("stats_energy", &stats_zero, false),
+            ("partials", &partials_zero, false),
         ];
-        let largest = contents.iter().map(|c| c.1.len() as u64).max().unwrap_or(4);
+        let largest = contents
+            .iter()
+            .map(|c| c.1.len() as u64)
+            .chain([(texels.len() * 16) as u64, STATS_OFFSET + 8 * MAX_SUBSTEPS as u64])
+            .max()
+            .unwrap_or(4);
         let mut staging = Buffer::new(
             &dev,
             "staging",
@@ -166,7 +240,7 @@ impl VulkanSolver {
             MemoryLocation::CpuToGpu,
         )
         .map_err(backend)?;
-        let cmds = Commands::new(&dev, MAX_QUERIES).map_err(backend)?;
+        let mut cmds = Commands::new(&dev, MAX_QUERIES).map_err(backend)?;
         let mut made = Vec::new();
         for (name, bytes, uniform) in &contents {
             let usage =
@@ -174,7 +248,7 @@ impl VulkanSolver {
                     | vk::BufferUsageFlags::TRANSFER_DST
                     | vk::BufferUsageFlags::TRANSFER_SRC;
             let b = Buffer::new(&dev, name, bytes.len() as u64, usage, MemoryLocation::GpuOnly).map_err(backend)?;
-            upload(&cmds, &mut staging, &b, bytes).map_err(backend)?;
+            upload(&mut cmds, &mut staging, &b, bytes).map_err(backend)?;
             made.push(b);
         }
         let mut it = made.into_iter();
@@ -196,7 +270,21 @@ impl VulkanSolver {
             bend_slots: next(),
             springs_b: next(),
             interior: next(),
+            stats_max: next(),
+            stats_energy: next(),
+            partials: next(),
+            table: None,
         };
+        let mut buffers = buffers;
+        if options.table == SpringTable::Image {
+            let image = Image::new(&dev, "spring table", TABLE_WIDTH, table_height).map_err(backend)?;
+            let map = staging.mapped().ok_or_else(|| SolverError::Backend("staging not host visible".into()))?;
+            map[..texels.len() * 16].copy_from_slice(bytemuck::cast_slice(&texels));
+            cmds.begin(0).map_err(backend)?;
+            cmds.copy_to_image(&staging, &image);
+            cmds.submit_and_wait(0).map_err(backend)?;
+            buffers.table = Some(image);
+        }
         // Push constants hold the step constants where the device has room (128 bytes is
         // the Vulkan minimum, so always in practice); the naive scatters use float atomics
         // where VK_EXT_shader_atomic_float is there, compare-exchange otherwise: the same
@@ -204,12 +292,17 @@ impl VulkanSolver {
         let caps = Caps {
             float_atomics: dev.float_atomics,
             immediates: dev.max_push_constants as usize >= std::mem::size_of::<StepParams>(),
+            table_image: options.table == SpringTable::Image,
         };
         let mut names = vec!["springs", "springs_scatter", "tri_normals_scatter"];
+        if caps.table_image {
+            names.extend(["springs_tex", "strain_limit_tex"]);
+        }
         for v in [Variant::Naive, Variant::Optimized] {
             names.extend(recipe(v, 1, caps).iter().map(|d| d.kernel));
             names.extend(recipe(v, 1, Caps { immediates: false, ..caps }).iter().map(|d| d.kernel));
         }
+        names.extend(stats_dispatches(options.stats, caps).iter().map(|d| d.kernel));
         names.sort();
         names.dedup();
         let sets = Sets::new(&dev, 2 * names.len() as u32).map_err(backend)?;
@@ -217,11 +310,22 @@ impl VulkanSolver {
         for name in names {
             let k = clothlab_shaders::kernel(name)
                 .ok_or_else(|| SolverError::Backend(format!("kernel {name} missing from clothlab-shaders")))?;
-            let layout: Vec<(u32, vk::DescriptorType)> = buffers.bindings(0).iter().map(|(b, t, _)| (*b, *t)).collect();
-            let push = if name.ends_with("_imm") { std::mem::size_of::<StepParams>() as u32 } else { 0 };
+            let mut layout: Vec<(u32, vk::DescriptorType)> =
+                buffers.bindings(0).iter().map(|(b, t, _)| (*b, *t)).collect();
+            let image = buffers.table.as_ref().filter(|_| name.contains("_tex")).map(|i| (TABLE_BINDING, i));
+            if image.is_some() {
+                layout.push((TABLE_BINDING, vk::DescriptorType::SAMPLED_IMAGE));
+            }
+            let push = if name.ends_with("_imm") {
+                std::mem::size_of::<StepParams>() as u32
+            } else if name.starts_with("stats") {
+                4
+            } else {
+                0
+            };
             let kernel = Kernel::new(&dev, k.spirv, &layout, push).map_err(backend)?;
-            let s0 = sets.allocate(&kernel, &buffers.bindings(0)).map_err(backend)?;
-            let s1 = sets.allocate(&kernel, &buffers.bindings(1)).map_err(backend)?;
+            let s0 = sets.allocate(&kernel, &buffers.bindings(0), image).map_err(backend)?;
+            let s1 = sets.allocate(&kernel, &buffers.bindings(1), image).map_err(backend)?;
             kernels.insert(name, (kernel, [s0, s1]));
         }
         let messages = dev.take_messages();
@@ -235,6 +339,8 @@ impl VulkanSolver {
             grab: None,
             recipe: recipe(variant, params.strain_iterations, caps),
             caps,
+            options,
+            stats: Vec::new(),
             topo,
             sp,
             cur: 0,
@@ -264,20 +370,55 @@ impl VulkanSolver {
         self.dev.take_messages()
     }
 
-    /// The kernels one substep dispatches, in order.
+    /// The kernels one substep dispatches, in order (statistics included).
     pub fn recipe_kernels(&self) -> Vec<&'static str> {
-        kernels_of(&self.recipe)
+        kernels_of(&self.substep_recipe())
     }
 
-    /// Records `dispatches` (after a barrier each), timestamps from query `*q` while timing.
-    fn record(&mut self, dispatches: &[Dispatch], q: &mut u32, labels: &mut Vec<&'static str>) {
+    /// The options it was built with.
+    pub fn options(&self) -> VulkanOptions {
+        self.options
+    }
+
+    /// Invocations per subgroup on this device (0 when unknown).
+    pub fn subgroup_size(&self) -> u32 {
+        self.dev.subgroup_size
+    }
+
+    /// Whether timestamps and barriers use synchronization2 (Vulkan 1.3).
+    pub fn sync2(&self) -> bool {
+        self.dev.sync2
+    }
+
+    /// The device, for checks that outlive the solver (the leak check).
+    pub fn device(&self) -> Arc<Device> {
+        self.dev.clone()
+    }
+
+    /// The dispatches of one substep: the step, then the statistics.
+    fn substep_recipe(&self) -> Vec<Dispatch> {
+        let mut r = self.recipe.clone();
+        r.extend(stats_dispatches(self.options.stats, self.caps));
+        r
+    }
+
+    /// Records `dispatches` of substep `substep` (after a barrier each), timestamps from
+    /// query `*q` while timing.
+    fn record(&mut self, dispatches: &[Dispatch], substep: u32, q: &mut u32, labels: &mut Vec<&'static str>) {
+        let substep_bytes = substep.to_le_bytes();
         for dsp in dispatches {
             if dsp.clear_normal {
                 self.cmds.zero(&self.buffers.normal);
                 self.cmds.barrier();
             }
             let (kernel, sets) = &self.kernels[dsp.kernel];
-            let push: &[u8] = if dsp.kernel.ends_with("_imm") { bytemuck::bytes_of(&self.sp) } else { &[] };
+            let push: &[u8] = if dsp.kernel.ends_with("_imm") {
+                bytemuck::bytes_of(&self.sp)
+            } else if dsp.substep_push {
+                &substep_bytes
+            } else {
+                &[]
+            };
             let timed = self.time_kernels && self.dev.timestamps && *q + 2 <= MAX_QUERIES;
             let d = raw::Dispatch { kernel, set: sets[self.cur], push, groups: groups(dsp.count.of(&self.topo)) };
             self.cmds.dispatch(&d, timed.then_some(*q));
@@ -310,12 +451,12 @@ impl VulkanSolver {
     }
 
     fn write(&mut self, which: Target, bytes: &[u8]) -> Result<(), SolverError> {
-        upload(&self.cmds, &mut self.staging, which.of(&self.buffers), bytes).map_err(backend)
+        upload(&mut self.cmds, &mut self.staging, which.of(&self.buffers), bytes).map_err(backend)
     }
 
     fn read(&mut self, which: Target) -> Result<Vec<V4>, SolverError> {
         let buf = which.of(&self.buffers);
-        let bytes = download(&self.cmds, &mut self.staging, buf, buf.size).map_err(backend)?;
+        let bytes = download(&mut self.cmds, &mut self.staging, buf, buf.size).map_err(backend)?;
         Ok(bytes.chunks_exact(16).map(bytemuck::pod_read_unaligned::<V4>).collect())
     }
 
@@ -354,7 +495,7 @@ impl VulkanSolver {
         let was = self.time_kernels;
         self.time_kernels = false;
         self.cmds.begin(0).map_err(backend)?;
-        self.record(&[dispatch], &mut 0, &mut Vec::new());
+        self.record(&[dispatch], 0, &mut 0, &mut Vec::new());
         let r = self.submit(0, &[]);
         self.time_kernels = was;
         r?;
@@ -392,7 +533,7 @@ impl Target {
 }
 
 /// Copies `bytes` into `dst` through the staging buffer.
-fn upload(cmds: &Commands, staging: &mut Buffer, dst: &Buffer, bytes: &[u8]) -> Result<(), VkError> {
+fn upload(cmds: &mut Commands, staging: &mut Buffer, dst: &Buffer, bytes: &[u8]) -> Result<(), VkError> {
     let map = staging
         .mapped()
         .ok_or(VkError::Vulkan { what: "mapping the staging buffer", reason: "not host visible".into() })?;
@@ -403,7 +544,7 @@ fn upload(cmds: &Commands, staging: &mut Buffer, dst: &Buffer, bytes: &[u8]) -> 
 }
 
 /// Reads `size` bytes of `src` through the staging buffer.
-fn download(cmds: &Commands, staging: &mut Buffer, src: &Buffer, size: u64) -> Result<Vec<u8>, VkError> {
+fn download(cmds: &mut Commands, staging: &mut Buffer, src: &Buffer, size: u64) -> Result<Vec<u8>, VkError> {
     cmds.begin(0)?;
     cmds.copy(src, staging, size);
     cmds.submit_and_wait(0)?;
@@ -415,7 +556,9 @@ fn download(cmds: &Commands, staging: &mut Buffer, src: &Buffer, size: u64) -> R
 
 impl KernelRunner for VulkanSolver {
     fn kernel_names(&self) -> Vec<&'static str> {
-        let mut v: Vec<&'static str> = self.kernels.keys().copied().collect();
+        // The statistics kernels write no state; they are checked by their own test.
+        let mut v: Vec<&'static str> =
+            self.kernels.keys().copied().filter(|k| !base_name(k).starts_with("stats")).collect();
         v.sort();
         v
     }
@@ -454,7 +597,18 @@ impl Solver for VulkanSolver {
         // place (the descriptor sets keep pointing at the same buffers).
         let (strain, bend) = split_slots(&self.topo);
         let (a, b) = spring_halves(&self.topo.springs);
-        let interior = InteriorSlots::new(&self.topo);
+        let mut interior = InteriorSlots::new(&self.topo);
+        if self.options.table != SpringTable::Interior {
+            interior.enabled = 0;
+        }
+        if let Some(image) = &self.buffers.table {
+            let (texels, _) = table_texels(&self.topo);
+            let map = self.staging.mapped().ok_or_else(|| SolverError::Backend("staging not host visible".into()))?;
+            map[..texels.len() * 16].copy_from_slice(bytemuck::cast_slice(&texels));
+            self.cmds.begin(0).map_err(backend)?;
+            self.cmds.copy_to_image(&self.staging, image);
+            self.cmds.submit_and_wait(0).map_err(backend)?;
+        }
         for (buf, bytes) in [
             (&self.buffers.slots, bytemuck::cast_slice::<SpringSlot, u8>(&strain)),
             (&self.buffers.bend_slots, bytemuck::cast_slice(&bend)),
@@ -462,7 +616,7 @@ impl Solver for VulkanSolver {
             (&self.buffers.springs_b, bytemuck::cast_slice(b)),
             (&self.buffers.interior, bytemuck::bytes_of(&interior)),
         ] {
-            upload(&self.cmds, &mut self.staging, buf, bytes).map_err(backend)?;
+            upload(&mut self.cmds, &mut self.staging, buf, bytes).map_err(backend)?;
         }
         self.recipe = recipe(self.variant, params.strain_iterations, self.caps);
         self.params = params;
@@ -484,37 +638,65 @@ impl Solver for VulkanSolver {
         let map =
             self.staging.mapped().ok_or_else(|| SolverError::Backend("staging buffer not host visible".into()))?;
         map[..bytes.len()].copy_from_slice(bytes);
-        let mut params_pending = true;
-        let recipe = self.recipe.clone();
-        let mut gpu_ns = 0.0;
-        let mut timed = false;
+        let recipe = self.substep_recipe();
+        let stats = self.options.stats != StatsMode::Off;
+        let substeps = self.params.substeps;
+        // Optimized: one command buffer for the frame. Naive: one per substep, submitted
+        // without waiting; the last is fenced, and its fence covers all of them.
         let submissions = match self.variant {
             Variant::Optimized => 1,
-            Variant::Naive => self.params.substeps,
+            Variant::Naive => substeps,
         };
-        let per_submission = self.params.substeps / submissions;
-        for _ in 0..submissions {
-            let max_q = if self.time_kernels {
-                (2 * per_submission as usize * recipe.len()).min(MAX_QUERIES as usize) as u32
-            } else {
-                0
-            };
-            self.cmds.begin(max_q).map_err(backend)?;
-            if std::mem::take(&mut params_pending) {
+        let per_submission = substeps / submissions;
+        let max_q =
+            if self.time_kernels { (2 * substeps as usize * recipe.len()).min(MAX_QUERIES as usize) as u32 } else { 0 };
+        let (mut q, mut labels) = (0, Vec::new());
+        let (mut record_ns, mut submit_ns) = (0.0, 0.0);
+        self.cmds.reserve(submissions as usize).map_err(backend)?;
+        for k in 0..submissions {
+            let t_record = Instant::now();
+            self.cmds.begin_at(k as usize, if k == 0 { max_q } else { 0 }).map_err(backend)?;
+            if k == 0 {
                 self.cmds.copy(&self.staging, &self.buffers.params, std::mem::size_of::<StepParams>() as u64);
+                if stats {
+                    self.cmds.zero(&self.buffers.stats_max);
+                    self.cmds.zero(&self.buffers.stats_energy);
+                }
                 self.cmds.barrier();
             }
-            let (mut q, mut labels) = (0, Vec::new());
-            for _ in 0..per_submission {
-                self.record(&recipe, &mut q, &mut labels);
+            for s in 0..per_submission {
+                self.record(&recipe, k * per_submission + s, &mut q, &mut labels);
             }
-            if let Some(ns) = self.submit(q, &labels)? {
-                gpu_ns += ns;
-                timed = true;
+            let last = k + 1 == submissions;
+            if last && stats {
+                // The statistics land in the staging buffer, read after the wait.
+                let size = 4 * substeps as u64;
+                self.cmds.copy_range(&self.buffers.stats_max, 0, &self.staging, STATS_OFFSET, size);
+                self.cmds.copy_range(&self.buffers.stats_energy, 0, &self.staging, STATS_OFFSET + size, size);
             }
+            record_ns += t_record.elapsed().as_nanos() as f64;
+            let t_submit = Instant::now();
+            self.cmds.submit(last).map_err(backend)?;
+            submit_ns += t_submit.elapsed().as_nanos() as f64;
+        }
+        let ticks = self.cmds.wait(q).map_err(backend)?;
+        self.check()?;
+        if stats {
+            let map =
+                self.staging.mapped().ok_or_else(|| SolverError::Backend("staging buffer not host visible".into()))?;
+            let words: &[u8] = &map[STATS_OFFSET as usize..(STATS_OFFSET + 8 * substeps as u64) as usize];
+            let word =
+                |k: usize| f32::from_le_bytes([words[4 * k], words[4 * k + 1], words[4 * k + 2], words[4 * k + 3]]);
+            let n = substeps as usize;
+            self.stats = (0..n).map(|k| SubstepStats { max_strain: word(k), kinetic_energy: word(n + k) }).collect();
         }
         if self.time_kernels {
-            self.timer.record(FRAME, if timed { gpu_ns } else { t0.elapsed().as_nanos() as f64 });
+            self.timer.record(CPU_RECORD, record_ns);
+            self.timer.record(CPU_SUBMIT, submit_ns);
+            let gpu_ns = (q > 0).then(|| {
+                record_times(&mut self.timer, &labels, &ticks, self.dev.timestamp_period as f64, recipe.len())
+            });
+            self.timer.record(FRAME, gpu_ns.unwrap_or_else(|| t0.elapsed().as_nanos() as f64));
         }
         Ok(())
     }
@@ -544,5 +726,9 @@ impl Solver for VulkanSolver {
 
     fn reset_timings(&mut self) {
         self.timer.clear();
+    }
+
+    fn substep_stats(&self) -> Vec<SubstepStats> {
+        self.stats.clone()
     }
 }

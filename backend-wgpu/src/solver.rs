@@ -8,7 +8,7 @@ use clothlab_core::grid::{
 };
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::solver::{Solver, SolverError};
-use clothlab_core::timing::{FRAME, KernelTimings, TimingRecorder};
+use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, TimingRecorder};
 use clothlab_core::validate::KernelRunner;
 use clothlab_core::{SimParams, cpu};
 use clothlab_shaders::recipe::{
@@ -224,7 +224,7 @@ impl WgpuSolver {
             })
         };
         let bind_groups = [bind(0), bind(1)];
-        let caps = Caps { float_atomics: ctx.float_atomics, immediates: ctx.immediates };
+        let caps = Caps { float_atomics: ctx.float_atomics, immediates: ctx.immediates, table_image: false };
         let pipeline_layout = |immediate_size: u32| {
             dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("cloth"),
@@ -523,13 +523,24 @@ impl Solver for WgpuSolver {
             Variant::Optimized => 1,
             Variant::Naive => self.params.substeps,
         };
+        // CPU-side cost: encoding (passes, finish) and queue.submit, per frame.
+        let (mut record_ns, mut submit_ns) = (0.0, 0.0);
         for _ in 0..submissions {
+            let t_record = Instant::now();
             let mut enc =
                 self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
             for _ in 0..self.params.substeps / submissions {
                 self.record(&mut enc, &recipe, &mut q, &mut labels);
             }
-            self.ctx.queue.submit([enc.finish()]);
+            let cmd = enc.finish();
+            record_ns += t_record.elapsed().as_nanos() as f64;
+            let t_submit = Instant::now();
+            self.ctx.queue.submit([cmd]);
+            submit_ns += t_submit.elapsed().as_nanos() as f64;
+        }
+        if self.time_kernels {
+            self.timer.record(CPU_RECORD, record_ns);
+            self.timer.record(CPU_SUBMIT, submit_ns);
         }
         let gpu_ns = self.read_times(q, &labels)?;
         let timed = gpu_ns.is_some();

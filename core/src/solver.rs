@@ -49,6 +49,11 @@ pub trait Solver {
     fn timings(&self) -> KernelTimings;
     /// Forgets the recorded timings.
     fn reset_timings(&mut self);
+    /// Statistics of every substep of the last frame, where the solver computes them on
+    /// the way (the Vulkan solver with statistics on); empty otherwise.
+    fn substep_stats(&self) -> Vec<crate::cpu::SubstepStats> {
+        Vec::new()
+    }
 }
 
 /// How the cloth is drawn.

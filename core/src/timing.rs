@@ -58,6 +58,12 @@ pub const INTEGRATE_COLLIDE: &str = "integrate+collide";
 pub const SUBSTEP: &str = "substep";
 /// Label of the whole-frame row (all substeps of a frame).
 pub const FRAME: &str = "frame";
+/// Label of a GPU solver's CPU time per frame spent recording its commands (wgpu: encoding
+/// the passes and finishing; Vulkan: vkCmd* calls into the command buffers).
+pub const CPU_RECORD: &str = "cpu record";
+/// Label of a GPU solver's CPU time per frame spent submitting (wgpu: `Queue::submit`;
+/// Vulkan: `vkQueueSubmit`).
+pub const CPU_SUBMIT: &str = "cpu submit";
 
 /// Statistics of one label's samples.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

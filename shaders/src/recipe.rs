@@ -22,6 +22,8 @@ pub enum Count {
     Springs,
     /// One per triangle.
     Triangles,
+    /// One workgroup (a final reduction).
+    Workgroup,
 }
 
 /// One dispatch of a recipe.
@@ -37,15 +39,23 @@ pub struct Dispatch {
     pub clear_normal: bool,
     /// Writes positions to the other buffer of the pair (strain limit's ping-pong).
     pub flips: bool,
+    /// Takes the substep's index in immediates (the statistics kernels).
+    pub substep_push: bool,
 }
 
 const fn d(kernel: &'static str, label: &'static str, count: Count) -> Dispatch {
-    Dispatch { kernel, label, count, clear_normal: false, flips: false }
+    Dispatch { kernel, label, count, clear_normal: false, flips: false, substep_push: false }
+}
+
+/// The name of `kernel` without its `_imm` (immediates) and `_tex` (table in an image)
+/// suffixes: the kernel whose CPU twin it shares.
+pub fn base_name(kernel: &str) -> &str {
+    kernel.trim_end_matches("_imm").trim_end_matches("_tex")
 }
 
 /// The dispatch that runs `kernel` alone (kernel tests, `clothlab validate`).
 pub fn dispatch_for(kernel: &'static str) -> Dispatch {
-    let base = kernel.trim_end_matches("_imm");
+    let base = base_name(kernel);
     let count = if base.starts_with("springs_scatter") {
         Count::Springs
     } else if base.starts_with("tri_normals") {
@@ -59,12 +69,13 @@ pub fn dispatch_for(kernel: &'static str) -> Dispatch {
         count,
         clear_normal: base.starts_with("tri_normals_scatter"),
         flips: base == "strain_limit",
+        substep_push: false,
     }
 }
 
-/// The `<kernel>_imm` twin that reads the step constants from immediates.
-fn with_immediates(kernel: &'static str) -> &'static str {
-    crate::kernel(&format!("{kernel}_imm")).map_or(kernel, |k| k.name)
+/// The `<kernel><suffix>` twin where there is one, else `kernel`.
+fn twin(kernel: &'static str, suffix: &str) -> &'static str {
+    crate::kernel(&format!("{kernel}{suffix}")).map_or(kernel, |k| k.name)
 }
 
 /// What the adapter offers that the recipes use.
@@ -74,6 +85,9 @@ pub struct Caps {
     pub float_atomics: bool,
     /// Immediates (push constants) large enough for the step constants.
     pub immediates: bool,
+    /// Read the spring table from a sampled image (`<kernel>_tex` twins) instead of
+    /// storage buffers (Vulkan only: the thesis's texture memory).
+    pub table_image: bool,
 }
 
 /// The dispatches of one substep for `variant` with `strain_passes` strain passes; the
@@ -104,15 +118,60 @@ pub fn recipe(variant: Variant, strain_passes: u32, caps: Caps) -> Vec<Dispatch>
             r.extend((0..strain_passes).map(|_| strain));
             r.push(d("tri_normals", KernelId::TriNormals.name(), Count::Triangles));
             r.push(d("vertex_normals", KernelId::VertexNormals.name(), Count::Particles));
-            if caps.immediates {
-                for dsp in &mut r {
-                    dsp.kernel = with_immediates(dsp.kernel);
+            for dsp in &mut r {
+                if caps.table_image {
+                    dsp.kernel = twin(dsp.kernel, "_tex");
+                }
+                if caps.immediates {
+                    dsp.kernel = twin(dsp.kernel, "_imm");
                 }
             }
         }
     }
     r
 }
+
+/// How a substep's statistics (max strain, kinetic energy) are reduced on the GPU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StatsMode {
+    /// Not computed.
+    #[default]
+    Off,
+    /// Every invocation adds into the substep's entry with atomics (`stats_atomic`).
+    Atomics,
+    /// Subgroup and workgroup reductions, one partial per workgroup, then one workgroup
+    /// folds the partials (`stats` + `stats_reduce`): no atomics.
+    Subgroups,
+}
+
+/// The dispatches that compute a substep's statistics at its end.
+pub fn stats_dispatches(mode: StatsMode, caps: Caps) -> Vec<Dispatch> {
+    let push = |kernel, count| Dispatch { substep_push: true, ..d(kernel, kernel, count) };
+    match mode {
+        StatsMode::Off => Vec::new(),
+        StatsMode::Atomics => {
+            let k = if caps.float_atomics { "stats_atomic_f32" } else { "stats_atomic" };
+            vec![Dispatch { label: "stats_atomic", ..push(k, Count::Particles) }]
+        }
+        StatsMode::Subgroups => vec![push("stats", Count::Particles), push("stats_reduce", Count::Workgroup)],
+    }
+}
+
+/// The spring table as one image of rgba32uint texels (`shared/table_tex.wgsl`): slot s of
+/// particle i at texel 12 i + s, [`TABLE_WIDTH`] texels a row. Returns the texels (4 words
+/// each, row-major, the last row padded with empty slots) and the image's height.
+pub fn table_texels(topo: &clothlab_core::ClothTopology) -> (Vec<[u32; 4]>, u32) {
+    let count = topo.slots.len();
+    let height = count.div_ceil(TABLE_WIDTH as usize).max(1);
+    let mut texels = vec![[u32::MAX, 0, 0, 0]; height * TABLE_WIDTH as usize];
+    for (t, s) in texels.iter_mut().zip(&topo.slots) {
+        *t = [s.neighbor as u32, s.rest.to_bits(), s.ks.to_bits(), s.kd.to_bits()];
+    }
+    (texels, height as u32)
+}
+
+/// Texels per row of the spring-table image (`TABLE_WIDTH` in shared/table_tex.wgsl).
+pub const TABLE_WIDTH: u32 = 4096;
 
 /// Workgroups of 64 for `count` invocations, as a 2-D grid (x ≤ 65535).
 pub fn groups(count: u32) -> (u32, u32) {
@@ -128,6 +187,7 @@ impl Count {
             Count::Particles => topo.num_particles() as u32,
             Count::Springs => topo.springs.len() as u32,
             Count::Triangles => topo.triangles.len() as u32,
+            Count::Workgroup => 64,
         }
     }
 }
@@ -158,7 +218,7 @@ pub enum Output {
 
 /// The pure outputs of `kernel`.
 pub fn pure_outputs(kernel: &str) -> &'static [Output] {
-    match kernel.trim_end_matches("_imm") {
+    match base_name(kernel) {
         "strain_limit" => &[Output::PosOut],
         "tri_normals" | "tri_normals_scatter" | "tri_normals_scatter_f32" => &[Output::Faces],
         "vertex_normals" => &[Output::Normal, Output::Force],

@@ -1,4 +1,4 @@
-//! include: state, gather
+//! include: state, table, gather
 // forces + springs fused (optimized variant): one read and one write of the force.
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

@@ -1,4 +1,4 @@
-//! include: state, gather
+//! include: state, table, gather
 // springs — per particle: gather the 12 slots of the spring table (optimized variant).
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

@@ -1,10 +1,9 @@
+//! include: table
 // strain_limit — per particle, one Jacobi pass of Provot's strain limit plus the tethers
 // (core::cpu::strain_limit::limit_at). Reads pos, writes pos_out.
 @group(0) @binding(0) var<uniform> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
-// Slots 0..8 of each particle (the structural and shear springs; see shared/gather.wgsl).
-@group(0) @binding(6) var<storage, read> slots: array<SpringSlot>;
 @group(0) @binding(8) var<storage, read> tethers: array<Tether>;
 @group(0) @binding(16) var<uniform> interior: InteriorSlots;
 
@@ -39,7 +38,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             slot = interior.slots[s];
             slot.neighbor = i32(i) + SLOT_DI[s] + SLOT_DJ[s] * i32(p.n);
         } else {
-            slot = slots[i * STRAIN_SLOTS + s];
+            slot = slot_at(i, s);
         }
         if slot.neighbor < 0 {
             continue;

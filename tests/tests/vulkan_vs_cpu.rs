@@ -1,14 +1,20 @@
 //! The Vulkan backend against the CPU twins, with the Khronos validation layer on: any
 //! message it reports fails the test that caused it.
 
+use clothlab_core::cpu::substep_stats;
+use clothlab_core::grid::StepParams;
 use clothlab_core::validate::{KernelRunner, validate_kernels, validate_rollout};
 use clothlab_core::{Scene, SimParams, Solver};
 use clothlab_shaders::recipe::Variant;
 use clothlab_tests::{assert_checks, gpu_required};
-use clothlab_vulkan::VulkanSolver;
+use clothlab_vulkan::{SpringTable, StatsMode, VulkanOptions, VulkanSolver};
 
 fn vulkan(variant: Variant, n: u32) -> Option<VulkanSolver> {
-    match VulkanSolver::new(variant, Scene::with_n(n), SimParams::default(), true) {
+    vulkan_with(variant, n, VulkanOptions { validation: true, ..Default::default() })
+}
+
+fn vulkan_with(variant: Variant, n: u32, options: VulkanOptions) -> Option<VulkanSolver> {
+    match VulkanSolver::with_options(variant, Scene::with_n(n), SimParams::default(), options) {
         Ok(s) => Some(s),
         Err(e)
             if !gpu_required()
@@ -64,4 +70,98 @@ fn changed_parameters_reach_the_vulkan_kernels() {
         assert_checks(&format!("{} set_params", v.name()), &[c]);
         no_validation_messages(&v);
     }
+}
+
+#[test]
+fn the_spring_table_from_storage_or_an_image_gives_the_twins_results() {
+    // With the interior's uniform constants off, every particle reads its slots from the
+    // table: from read-only storage buffers, or from a sampled image (texture memory).
+    // Same arithmetic as the twins, so the kernel bounds of validate_kernels apply; and a
+    // rollout stays within the rollout bound.
+    for table in [SpringTable::Storage, SpringTable::Image] {
+        let options = VulkanOptions { validation: true, table, ..Default::default() };
+        let Some(mut v) = vulkan_with(Variant::Optimized, 65, options) else { return };
+        let names = v.kernel_names();
+        if table == SpringTable::Image {
+            assert!(names.iter().any(|k| k.starts_with("forces_springs_tex")), "{names:?}");
+            assert!(names.iter().any(|k| k.starts_with("strain_limit_tex")), "{names:?}");
+            assert!(v.recipe_kernels().iter().all(|k| !k.contains("springs") || k.contains("_tex")));
+        }
+        let checks = validate_kernels(&mut v, 65, 0x7ab1e).unwrap();
+        assert_checks(&format!("{table:?}"), &checks);
+        no_validation_messages(&v);
+        // A fresh solver: the kernel checks left the disturbed state in this one.
+        let Some(mut v) = vulkan_with(Variant::Optimized, 65, options) else { return };
+        let c = validate_rollout(&mut v, 6).unwrap();
+        assert_checks(&format!("{table:?} rollout"), &[c]);
+        no_validation_messages(&v);
+    }
+}
+
+#[test]
+fn gpu_statistics_match_the_cpu_twin_by_subgroups_and_by_atomics() {
+    // n = 65: 4225 particles, the last workgroup partly empty. The max strain is a max of
+    // the same f32 values the twin computes (length and a division: within 4 ulps of
+    // ~1.1, so 1e-6 absolute). The energy is a sum of 4225 positive terms in another
+    // order than the twin's f64 sum: by atomics in any order, relative error below
+    // N·2^-24 = 2.5e-4; by subgroups a tree of depth ~log2(N) plus 67 partials in
+    // sequence, so below 1e-4 too (measured on lavapipe: ~1e-7 both).
+    let n = 65;
+    for (variant, stats, energy_bound) in [
+        (Variant::Optimized, StatsMode::Subgroups, 1e-4),
+        (Variant::Optimized, StatsMode::Atomics, 2.5e-4),
+        (Variant::Naive, StatsMode::Atomics, 2.5e-4),
+    ] {
+        let options = VulkanOptions { validation: true, stats, ..Default::default() };
+        let v = match VulkanSolver::with_options(variant, Scene::with_n(n), SimParams::default(), options) {
+            Ok(v) => Some(v),
+            Err(e) if e.to_string().contains("subgroup") => {
+                // A device without subgroup arithmetic refuses the mode with a message.
+                eprintln!("skipped {stats:?}: {e}");
+                None
+            }
+            Err(_) => vulkan_with(variant, n, options),
+        };
+        let Some(mut v) = v else { continue };
+        for _ in 0..3 {
+            v.step_frame().unwrap();
+        }
+        let stats_gpu = v.substep_stats();
+        let substeps = v.params().substeps as usize;
+        assert_eq!(stats_gpu.len(), substeps, "one entry per substep");
+        // Every substep wrote its own entry (zeroed at the frame's start): the cloth is
+        // falling, so each has energy.
+        assert!(stats_gpu.iter().all(|s| s.kinetic_energy > 0.0 && s.max_strain.is_finite()), "{stats_gpu:?}");
+        let state = v.state().unwrap();
+        let (_, topo) = clothlab_core::build(v.scene(), v.params()).unwrap();
+        let sp = StepParams::new(v.params(), v.scene(), None);
+        let want = substep_stats(&sp, &topo.slots, &state.pos, &state.prev);
+        let got = stats_gpu[substeps - 1];
+        let strain_err = (got.max_strain - want.max_strain).abs();
+        let energy_err = ((got.kinetic_energy - want.kinetic_energy) / want.kinetic_energy).abs();
+        println!(
+            "{} {stats:?}: strain {} vs {} ({strain_err:.1e}), energy {} vs {} ({energy_err:.1e} rel)",
+            v.name(),
+            got.max_strain,
+            want.max_strain,
+            got.kinetic_energy,
+            want.kinetic_energy
+        );
+        assert!(want.kinetic_energy > 0.0 && want.max_strain > 0.0, "{want:?}");
+        assert!(strain_err <= 1e-6, "max strain {got:?} vs {want:?}");
+        assert!(energy_err <= energy_bound, "kinetic energy {got:?} vs {want:?}");
+        no_validation_messages(&v);
+    }
+}
+
+#[test]
+fn dropping_the_solver_frees_every_allocation() {
+    let options = VulkanOptions { validation: true, table: SpringTable::Image, stats: StatsMode::Atomics };
+    let Some(mut v) = vulkan_with(Variant::Naive, 33, options) else { return };
+    v.step_frame().unwrap();
+    let dev = v.device();
+    // 21 buffers (state, tables, constants, statistics, staging) and the table image.
+    assert!(dev.live_allocations() >= 22, "{} allocations", dev.live_allocations());
+    drop(v);
+    assert_eq!(dev.live_allocations(), 0, "gpu-allocator still holds allocations after the solver is gone");
 }

@@ -13,6 +13,7 @@ mod lanes;
 mod normals;
 mod solver;
 mod springs;
+mod stats;
 mod strain_limit;
 
 pub use collide::{collide, integrate_collide};
@@ -22,6 +23,7 @@ pub use lanes::Lanes;
 pub use normals::{FaceLanes, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows};
 pub use solver::CpuSolver;
 pub use springs::{springs, springs_rows, springs_scatter};
+pub use stats::{SubstepStats, particle_stats, substep_stats};
 pub use strain_limit::{strain_limit, strain_limit_rows};
 
 use glam::Vec3;

@@ -1,19 +1,7 @@
-// The per-particle spring table (needs state.wgsl), in two buffers so that each stays
-// within the 128 MiB a storage binding may span on many adapters up to n = 1024:
-// slots 0..8 (structural and shear) and slots 8..12 (bend).
-
-@group(0) @binding(6) var<storage, read> slots: array<SpringSlot>;
-@group(0) @binding(14) var<storage, read> bend_slots: array<SpringSlot>;
+// The spring gather (needs state.wgsl and table.wgsl or table_tex.wgsl).
 
 // The interior's shared spring constants (the thesis's constant memory).
 @group(0) @binding(16) var<uniform> interior: InteriorSlots;
-
-fn slot_at(i: u32, s: u32) -> SpringSlot {
-    if s < STRAIN_SLOTS {
-        return slots[i * STRAIN_SLOTS + s];
-    }
-    return bend_slots[i * (SLOTS - STRAIN_SLOTS) + s - STRAIN_SLOTS];
-}
 
 // core::cpu::springs::gather_at: f plus the springs of particle i, in slot order.
 fn springs_at(i: u32, f: vec4<f32>) -> vec4<f32> {

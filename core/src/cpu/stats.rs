@@ -1,0 +1,45 @@
+//! Twin of the `stats` kernels: per-substep statistics of the state, the numbers a GPU
+//! solver can report every substep without reading the state back.
+
+use serde::{Deserialize, Serialize};
+
+use super::v3;
+use crate::grid::{SLOTS, SpringSlot, StepParams, V4};
+
+/// Statistics of the state at the end of one substep.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct SubstepStats {
+    /// Largest structural strain `|L| / rest - 1`, 0 when nothing is stretched.
+    pub max_strain: f32,
+    /// Kinetic energy `Σ ½ m |x - x*|² / dt²`, J.
+    pub kinetic_energy: f32,
+}
+
+/// Particle `i`'s share: the largest strain of the structural springs that start at it
+/// (slots 1 and 3, to its +i and +j neighbours, so that every structural spring is counted
+/// once) and its kinetic energy. `slots` is the full table, [`SLOTS`] per particle.
+#[inline]
+pub fn particle_stats(i: usize, p: &StepParams, slots: &[SpringSlot], pos: &[V4], prev: &[V4]) -> [f32; 2] {
+    let x = v3(pos[i]);
+    let mut strain = 0.0f32;
+    for s in [1, 3] {
+        let slot = slots[i * SLOTS + s];
+        if slot.neighbor >= 0 {
+            strain = strain.max((v3(pos[slot.neighbor as usize]) - x).length() / slot.rest - 1.0);
+        }
+    }
+    let v = (x - v3(prev[i])) / p.dt;
+    [strain, 0.5 * p.particle_mass * v.dot(v)]
+}
+
+/// The statistics of the whole state: the maximum of the strains, and the energies summed
+/// in f64 (the reference the GPU reductions are checked against).
+pub fn substep_stats(p: &StepParams, slots: &[SpringSlot], pos: &[V4], prev: &[V4]) -> SubstepStats {
+    let (mut max_strain, mut energy) = (0.0f32, 0.0f64);
+    for i in 0..pos.len() {
+        let [s, e] = particle_stats(i, p, slots, pos, prev);
+        max_strain = max_strain.max(s);
+        energy += e as f64;
+    }
+    SubstepStats { max_strain, kinetic_energy: energy as f32 }
+}

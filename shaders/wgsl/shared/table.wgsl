@@ -1,0 +1,15 @@
+// The per-particle spring table in storage buffers, in two bindings so that each stays
+// within the 128 MiB a storage binding may span on many adapters up to n = 1024:
+// slots 0..8 (structural and shear) and slots 8..12 (bend). The build also emits every
+// kernel that includes this file as `<kernel>_tex`, reading the table from a sampled
+// image instead (shared/table_tex.wgsl).
+
+@group(0) @binding(6) var<storage, read> slots: array<SpringSlot>;
+@group(0) @binding(14) var<storage, read> bend_slots: array<SpringSlot>;
+
+fn slot_at(i: u32, s: u32) -> SpringSlot {
+    if s < STRAIN_SLOTS {
+        return slots[i * STRAIN_SLOTS + s];
+    }
+    return bend_slots[i * (SLOTS - STRAIN_SLOTS) + s - STRAIN_SLOTS];
+}

@@ -1,0 +1,14 @@
+// The per-particle spring table in a sampled image (the thesis's texture memory): one
+// rgba32uint texel per slot (neighbour, rest, ks, kd as bits), slot s of particle i at
+// texel t = 12 i + s, row t / TABLE_WIDTH, column t % TABLE_WIDTH
+// (clothlab_shaders::recipe::table_texels lays it out).
+
+@group(0) @binding(20) var table: texture_2d<u32>;
+
+const TABLE_WIDTH: u32 = 4096u;
+
+fn slot_at(i: u32, s: u32) -> SpringSlot {
+    let t = i * SLOTS + s;
+    let v = textureLoad(table, vec2<i32>(i32(t % TABLE_WIDTH), i32(t / TABLE_WIDTH)), 0);
+    return SpringSlot(bitcast<i32>(v.x), bitcast<f32>(v.y), bitcast<f32>(v.z), bitcast<f32>(v.w));
+}
