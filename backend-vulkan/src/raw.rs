@@ -101,10 +101,25 @@ impl Device {
         }
         let app = vk::ApplicationInfo::default().application_name(c"clothlab").api_version(vk::API_VERSION_1_3);
         let layer_names = [VALIDATION.as_ptr()];
-        let ext_names = [ash::ext::debug_utils::NAME.as_ptr()];
+        // The layer's synchronization validation checks that the barriers the solver
+        // leaves out are really not needed (hazards are reported as errors).
+        // SAFETY: plain enumeration call with a valid entry and layer name.
+        let layer_exts = unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION)) }.unwrap_or_default();
+        let has_features = layer_exts
+            .iter()
+            .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::validation_features::NAME));
+        let mut ext_names = vec![ash::ext::debug_utils::NAME.as_ptr()];
+        if has_features {
+            ext_names.push(ash::ext::validation_features::NAME.as_ptr());
+        }
+        let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
         let mut info = vk::InstanceCreateInfo::default().application_info(&app);
         if validation {
             info = info.enabled_layer_names(&layer_names).enabled_extension_names(&ext_names);
+            if has_features {
+                info = info.push_next(&mut features);
+            }
         }
         // SAFETY: `info` and everything it points to live until the call returns.
         let instance = unsafe { entry.create_instance(&info, None) }.map_err(|e| match e {

@@ -21,8 +21,8 @@ use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, Timing
 use clothlab_core::validate::KernelRunner;
 use clothlab_core::{SimParams, cpu};
 use clothlab_shaders::recipe::{
-    Caps, Dispatch, Output, StatsMode, TABLE_WIDTH, Variant, base_name, dispatch_for, groups, kernels_of, pure_outputs,
-    recipe, record_times, split_slots, spring_halves, stats_dispatches, table_texels,
+    Caps, Dispatch, Hazards, Output, StatsMode, TABLE_WIDTH, Variant, base_name, dispatch_for, groups, kernels_of,
+    pure_outputs, recipe, record_times, res, split_slots, spring_halves, stats_dispatches, table_texels,
 };
 use gpu_allocator::MemoryLocation;
 
@@ -126,6 +126,8 @@ pub struct VulkanSolver {
     caps: Caps,
     options: VulkanOptions,
     stats: Vec<SubstepStats>,
+    hazards: Hazards,
+    barriers: usize,
     cur: usize,
     timer: TimingRecorder,
     /// Record per-dispatch GPU timestamps.
@@ -341,6 +343,8 @@ impl VulkanSolver {
             caps,
             options,
             stats: Vec::new(),
+            hazards: Hazards::default(),
+            barriers: 0,
             topo,
             sp,
             cur: 0,
@@ -390,6 +394,18 @@ impl VulkanSolver {
         self.dev.sync2
     }
 
+    /// Pipeline barriers recorded in the last frame.
+    pub fn barriers_last_frame(&self) -> usize {
+        self.barriers
+    }
+
+    /// Records a barrier and notes it.
+    fn barrier(&mut self) {
+        self.cmds.barrier();
+        self.hazards.clear();
+        self.barriers += 1;
+    }
+
     /// The device, for checks that outlive the solver (the leak check).
     pub fn device(&self) -> Arc<Device> {
         self.dev.clone()
@@ -407,9 +423,18 @@ impl VulkanSolver {
     fn record(&mut self, dispatches: &[Dispatch], substep: u32, q: &mut u32, labels: &mut Vec<&'static str>) {
         let substep_bytes = substep.to_le_bytes();
         for dsp in dispatches {
+            // Only the barriers the data needs (see recipe::Hazards).
+            let (before_clear, before) = self.hazards.dispatch(dsp, self.cur);
+            if before_clear {
+                self.cmds.barrier();
+                self.barriers += 1;
+            }
             if dsp.clear_normal {
                 self.cmds.zero(&self.buffers.normal);
+            }
+            if before {
                 self.cmds.barrier();
+                self.barriers += 1;
             }
             let (kernel, sets) = &self.kernels[dsp.kernel];
             let push: &[u8] = if dsp.kernel.ends_with("_imm") {
@@ -422,8 +447,6 @@ impl VulkanSolver {
             let timed = self.time_kernels && self.dev.timestamps && *q + 2 <= MAX_QUERIES;
             let d = raw::Dispatch { kernel, set: sets[self.cur], push, groups: groups(dsp.count.of(&self.topo)) };
             self.cmds.dispatch(&d, timed.then_some(*q));
-            // The next dispatch reads what this one wrote.
-            self.cmds.barrier();
             if timed {
                 *q += 2;
                 labels.push(dsp.label);
@@ -451,6 +474,7 @@ impl VulkanSolver {
     }
 
     fn write(&mut self, which: Target, bytes: &[u8]) -> Result<(), SolverError> {
+        self.hazards.dirty();
         upload(&mut self.cmds, &mut self.staging, which.of(&self.buffers), bytes).map_err(backend)
     }
 
@@ -546,6 +570,8 @@ fn upload(cmds: &mut Commands, staging: &mut Buffer, dst: &Buffer, bytes: &[u8])
 /// Reads `size` bytes of `src` through the staging buffer.
 fn download(cmds: &mut Commands, staging: &mut Buffer, src: &Buffer, size: u64) -> Result<Vec<u8>, VkError> {
     cmds.begin(0)?;
+    // The last dispatches' writes become visible to the copy.
+    cmds.barrier();
     cmds.copy(src, staging, size);
     cmds.submit_and_wait(0)?;
     let map = staging
@@ -653,16 +679,23 @@ impl Solver for VulkanSolver {
         let (mut q, mut labels) = (0, Vec::new());
         let (mut record_ns, mut submit_ns) = (0.0, 0.0);
         self.cmds.reserve(submissions as usize).map_err(backend)?;
+        self.barriers = 0;
         for k in 0..submissions {
             let t_record = Instant::now();
             self.cmds.begin_at(k as usize, if k == 0 { max_q } else { 0 }).map_err(backend)?;
             if k == 0 {
                 self.cmds.copy(&self.staging, &self.buffers.params, std::mem::size_of::<StepParams>() as u64);
+                let mut written = res::PARAMS;
                 if stats {
                     self.cmds.zero(&self.buffers.stats_max);
                     self.cmds.zero(&self.buffers.stats_energy);
+                    written |= res::STATS;
                 }
-                self.cmds.barrier();
+                // The first dispatch reads the constants: the tracker places the barrier.
+                if self.hazards.conflicts(0, written) {
+                    self.barrier();
+                }
+                self.hazards.add(0, written);
             }
             for s in 0..per_submission {
                 self.record(&recipe, k * per_submission + s, &mut q, &mut labels);
@@ -670,6 +703,10 @@ impl Solver for VulkanSolver {
             let last = k + 1 == submissions;
             if last && stats {
                 // The statistics land in the staging buffer, read after the wait.
+                if self.hazards.conflicts(res::STATS, 0) {
+                    self.barrier();
+                }
+                self.hazards.add(res::STATS, 0);
                 let size = 4 * substeps as u64;
                 self.cmds.copy_range(&self.buffers.stats_max, 0, &self.staging, STATS_OFFSET, size);
                 self.cmds.copy_range(&self.buffers.stats_energy, 0, &self.staging, STATS_OFFSET + size, size);

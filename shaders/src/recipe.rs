@@ -273,3 +273,175 @@ pub fn split_slots(
 pub fn spring_halves(springs: &[clothlab_core::Spring]) -> (&[clothlab_core::Spring], &[clothlab_core::Spring]) {
     springs.split_at(springs.len() / 2)
 }
+
+/// The buffers a frame's dispatches read and write (the tables, written only between
+/// frames, are left out), as bits; the position pair by physical buffer.
+pub mod res {
+    /// Position buffer 0 of the pair.
+    pub const POS0: u32 = 1 << 0;
+    /// Position buffer 1 of the pair.
+    pub const POS1: u32 = 1 << 1;
+    /// Previous positions.
+    pub const PREV: u32 = 1 << 2;
+    /// Forces.
+    pub const FORCE: u32 = 1 << 3;
+    /// Vertex normals.
+    pub const NORMAL: u32 = 1 << 4;
+    /// Face normals.
+    pub const FACES: u32 = 1 << 5;
+    /// Step constants.
+    pub const PARAMS: u32 = 1 << 6;
+    /// The per-substep statistics.
+    pub const STATS: u32 = 1 << 7;
+    /// The statistics' per-workgroup partials.
+    pub const PARTIALS: u32 = 1 << 8;
+    /// Everything.
+    pub const ALL: u32 = (1 << 9) - 1;
+}
+
+/// What `kernel` reads and writes when the current positions are `pos[cur]` (atomic
+/// read-modify-writes count as both). Errs on the side of reading more.
+pub fn access(kernel: &str, cur: usize) -> (u32, u32) {
+    use res::*;
+    let (pos, pos_out) = if cur == 0 { (POS0, POS1) } else { (POS1, POS0) };
+    let state = PARAMS | pos | PREV;
+    match base_name(kernel).trim_end_matches("_f32") {
+        "forces" | "springs" | "forces_springs" => (state | FORCE, FORCE),
+        "springs_scatter" => (state | FORCE, FORCE),
+        "integrate" | "integrate_collide" => (state | FORCE, pos | PREV),
+        "collide" => (state, pos | PREV),
+        "strain_limit" => (PARAMS | pos, pos_out),
+        "tri_normals" => (PARAMS | pos, FACES),
+        "tri_normals_scatter" => (PARAMS | pos | NORMAL, NORMAL),
+        "vertex_normals" | "vertex_normals_naive" => (state | FACES | NORMAL | FORCE, NORMAL | FORCE),
+        "stats" => (state, PARTIALS),
+        "stats_atomic" => (state | STATS, STATS),
+        "stats_reduce" => (PARAMS | PARTIALS | STATS, STATS),
+        // Unknown: depends on everything.
+        _ => (ALL, ALL),
+    }
+}
+
+/// Tracks what was read and written since the last barrier, so that a recorder places a
+/// barrier only before an access that depends on an earlier one: a read or write of
+/// something written (read-after-write, write-after-write) or a write of something read
+/// (write-after-read). A global memory barrier clears both sets.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Hazards {
+    read: u32,
+    written: u32,
+}
+
+impl Hazards {
+    /// Whether an access reading `reads` and writing `writes` must wait for a barrier.
+    pub fn conflicts(&self, reads: u32, writes: u32) -> bool {
+        (reads | writes) & self.written != 0 || writes & self.read != 0
+    }
+
+    /// Notes an access (after any barrier it needed).
+    pub fn add(&mut self, reads: u32, writes: u32) {
+        self.read |= reads;
+        self.written |= writes;
+    }
+
+    /// Notes a barrier.
+    pub fn clear(&mut self) {
+        *self = Self::default();
+    }
+
+    /// Notes an access the tracker cannot see (an upload): everything is suspect.
+    pub fn dirty(&mut self) {
+        self.written = res::ALL;
+    }
+
+    /// Notes dispatch `d` at parity `cur`; returns whether a barrier must come before
+    /// its normal clear (naive normals) and whether one must come before the dispatch.
+    pub fn dispatch(&mut self, d: &Dispatch, cur: usize) -> (bool, bool) {
+        let mut before_clear = false;
+        if d.clear_normal {
+            before_clear = self.conflicts(0, res::NORMAL);
+            if before_clear {
+                self.clear();
+            }
+            self.add(0, res::NORMAL);
+        }
+        let (r, w) = access(d.kernel, cur);
+        let before = self.conflicts(r, w);
+        if before {
+            self.clear();
+        }
+        self.add(r, w);
+        (before_clear, before)
+    }
+
+    /// The number of barriers `dispatches` need from parity `cur`.
+    pub fn plan(&mut self, dispatches: &[Dispatch], mut cur: usize) -> usize {
+        let mut count = 0;
+        for d in dispatches {
+            let (a, b) = self.dispatch(d, cur);
+            count += a as usize + b as usize;
+            if d.flips {
+                cur ^= 1;
+            }
+        }
+        count
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CAPS: Caps = Caps { float_atomics: false, immediates: true, table_image: false };
+
+    fn barriers_per_substep(r: &[Dispatch]) -> usize {
+        // Two substeps, counted in the second (the first also pays for the frame start).
+        let two: Vec<Dispatch> = r.iter().chain(r).copied().collect();
+        let mut h = Hazards::default();
+        let first = h.plan(r, 0);
+        assert!(first >= 1);
+        // Parity after one substep: flipped once per strain pass.
+        let cur = r.iter().filter(|d| d.flips).count() % 2;
+        h.plan(&two[r.len()..], cur)
+    }
+
+    #[test]
+    fn every_dependent_dispatch_gets_a_barrier_and_no_other() {
+        // Optimized: each of its five kernels reads what the one before wrote.
+        let opt = recipe(Variant::Optimized, 1, CAPS);
+        assert_eq!(barriers_per_substep(&opt), opt.len());
+        // Statistics read only the positions: they need no barrier after the normals,
+        // and the reduction's barrier also covers the next substep's force write, so
+        // they cost no barrier at all.
+        let mut with_stats = opt.clone();
+        with_stats.extend(stats_dispatches(StatsMode::Subgroups, CAPS));
+        assert_eq!(barriers_per_substep(&with_stats), opt.len());
+        let mut with_atomics = opt.clone();
+        with_atomics.extend(stats_dispatches(StatsMode::Atomics, CAPS));
+        // stats_atomic writes the substep's own entry: the next substep's forces depend
+        // on the normals' force write, so one barrier covers both.
+        assert_eq!(barriers_per_substep(&with_atomics), opt.len());
+        // Naive: every dispatch waits for the one before; the normal clear needs none (the
+        // normals were last read several barriers ago), the scatter after it does.
+        let naive = recipe(Variant::Naive, 1, CAPS);
+        assert_eq!(barriers_per_substep(&naive), naive.len());
+        // Two strain passes: the second reads the first's output.
+        let two_passes = recipe(Variant::Optimized, 2, CAPS);
+        assert_eq!(barriers_per_substep(&two_passes), two_passes.len());
+    }
+
+    #[test]
+    fn a_read_after_a_write_always_waits() {
+        let mut h = Hazards::default();
+        assert!(!h.conflicts(res::POS0, res::FORCE));
+        h.add(res::POS0, res::FORCE);
+        assert!(h.conflicts(res::FORCE, 0), "read after write");
+        assert!(h.conflicts(0, res::FORCE), "write after write");
+        assert!(h.conflicts(0, res::POS0), "write after read");
+        assert!(!h.conflicts(res::POS0 | res::PREV, res::FACES), "reads of unwritten buffers");
+        h.clear();
+        assert!(!h.conflicts(res::FORCE, res::FORCE));
+        h.dirty();
+        assert!(h.conflicts(res::PREV, 0));
+    }
+}
