@@ -102,11 +102,14 @@ const UNIFORM_PARAMS: &str = "@group(0) @binding(0) var<uniform> p: StepParams;"
 /// Validates `source`, writes it and its SPIR-V to `out`, and lists it in `list`.
 fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
     let (module, info) = parse_and_validate(&format!("{name}.wgsl"), source);
-    let options = naga::back::spv::Options {
-        lang_version: (1, 3),
-        flags: naga::back::spv::WriterFlags::empty(),
-        ..Default::default()
+    // The render shader gets what wgpu does to WGSL for Vulkan: y flipped into Vulkan's
+    // clip space, and a point size of 1 written (Vulkan leaves it undefined otherwise).
+    let flags = if name == "render" {
+        naga::back::spv::WriterFlags::ADJUST_COORDINATE_SPACE | naga::back::spv::WriterFlags::FORCE_POINT_SIZE
+    } else {
+        naga::back::spv::WriterFlags::empty()
     };
+    let options = naga::back::spv::Options { lang_version: (1, 3), flags, ..Default::default() };
     let words = naga::back::spv::write_vec(&module, &info, &options, None)
         .unwrap_or_else(|e| fail(format!("{name}: SPIR-V output failed: {e}")));
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();

@@ -12,7 +12,7 @@ use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 use clothlab_core::validate::{KernelRunner, validate_kernels, validate_rollout};
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
-use clothlab_vulkan::{SpringTable, StatsMode, VulkanOptions, VulkanSolver};
+use clothlab_vulkan::{SpringTable, StatsMode, VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
 use clothlab_wgpu::{ClothSource, Variant, WgpuRenderer, WgpuSolver};
 
 #[derive(Parser)]
@@ -66,6 +66,20 @@ struct RenderArgs {
     /// Output PNG file.
     #[arg(long)]
     out: PathBuf,
+    /// Graphics API of the renderer: wgpu, or raw Vulkan. Default: Vulkan for the Vulkan
+    /// solvers (drawn from their buffers), wgpu for the others (CPU solvers upload a frame
+    /// to either).
+    #[arg(long, value_enum)]
+    api: Option<Api>,
+}
+
+/// Graphics APIs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Api {
+    /// wgpu (Vulkan, Metal, DX12 or GL underneath).
+    Wgpu,
+    /// Raw Vulkan through ash.
+    Vulkan,
 }
 
 #[derive(clap::Args)]
@@ -503,7 +517,28 @@ fn render(args: RenderArgs) -> Result<ExitCode> {
     }
     let params = SimParams::default();
     let view = default_view(args.mode);
+    let is_vulkan = matches!(args.backend, Backend::VulkanNaive | Backend::Vulkan);
+    let api = args.api.unwrap_or(if is_vulkan { Api::Vulkan } else { Api::Wgpu });
+    if api == Api::Wgpu && is_vulkan || api == Api::Vulkan && matches!(args.backend, Backend::WgpuNaive | Backend::Wgpu)
+    {
+        bail!(
+            "--backend {} draws through its own API: a GPU solver's buffers are drawn without a copy, so pick --api {} (or a CPU backend)",
+            args.backend.to_possible_value().map(|v| v.get_name().to_owned()).unwrap_or_default(),
+            if is_vulkan { "vulkan" } else { "wgpu" }
+        );
+    }
     let (pixels, adapter) = match args.backend {
+        Backend::Cpu | Backend::CpuPar if api == Api::Vulkan => {
+            let exec = if args.backend == Backend::Cpu { Exec::Serial } else { Exec::Parallel };
+            let mut solver = CpuSolver::new(exec, scene.clone(), params)?;
+            for _ in 0..args.frames {
+                solver.step_frame()?;
+            }
+            let dev = clothlab_vulkan::raw::Device::new(vulkan_validation())?;
+            let mut r = VulkanRenderer::new(&dev, &scene, solver.topology(), args.width, args.height)?;
+            r.render(&view, VkCloth::Cpu(solver.state_ref()))?;
+            (r.read_image()?, format!("{} (Vulkan)", dev.name))
+        }
         Backend::Cpu | Backend::CpuPar => {
             let exec = if args.backend == Backend::Cpu { Exec::Serial } else { Exec::Parallel };
             let mut solver = CpuSolver::new(exec, scene.clone(), params)?;
@@ -516,9 +551,17 @@ fn render(args: RenderArgs) -> Result<ExitCode> {
             (r.read_image(&ctx)?, ctx.describe())
         }
         Backend::VulkanNaive | Backend::Vulkan => {
-            bail!(
-                "the Vulkan renderer is not built yet (issue 6): render with --backend wgpu, wgpu-naive, cpu or cpu-par"
-            )
+            let variant = if args.backend == Backend::Vulkan { Variant::Optimized } else { Variant::Naive };
+            let options = VulkanOptions { validation: vulkan_validation(), ..Default::default() };
+            let mut solver = VulkanSolver::with_options(variant, scene.clone(), params.clone(), options)?;
+            for _ in 0..args.frames {
+                solver.step_frame()?;
+            }
+            let (_, topo) = clothlab_core::build(&scene, &params)?;
+            let mut r = VulkanRenderer::new(&solver.device(), &scene, &topo, args.width, args.height)?;
+            let (pos, normal) = solver.vertex_buffers();
+            r.render(&view, VkCloth::Gpu { pos, normal })?;
+            (r.read_image()?, format!("{} (Vulkan)", solver.adapter()))
         }
         Backend::WgpuNaive | Backend::Wgpu => {
             let variant = if args.backend == Backend::Wgpu { Variant::Optimized } else { Variant::Naive };

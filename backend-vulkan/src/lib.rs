@@ -7,11 +7,13 @@
 #![deny(unsafe_code)]
 
 pub mod raw;
+mod render;
 mod solver;
 
 use thiserror::Error;
 
 pub use clothlab_shaders::recipe::StatsMode;
+pub use render::{VkCloth, VulkanRenderer};
 pub use solver::{SpringTable, VulkanOptions, VulkanSolver};
 
 /// Why Vulkan could not be used.

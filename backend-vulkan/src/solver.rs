@@ -245,8 +245,11 @@ impl VulkanSolver {
         let mut cmds = Commands::new(&dev, MAX_QUERIES).map_err(backend)?;
         let mut made = Vec::new();
         for (name, bytes, uniform) in &contents {
+            // Positions and normals are the renderer's vertex buffers too (no copy).
+            let drawn = matches!(*name, "pos0" | "pos1" | "normal");
             let usage =
                 if *uniform { vk::BufferUsageFlags::UNIFORM_BUFFER } else { vk::BufferUsageFlags::STORAGE_BUFFER }
+                    | if drawn { vk::BufferUsageFlags::VERTEX_BUFFER } else { vk::BufferUsageFlags::empty() }
                     | vk::BufferUsageFlags::TRANSFER_DST
                     | vk::BufferUsageFlags::TRANSFER_SRC;
             let b = Buffer::new(&dev, name, bytes.len() as u64, usage, MemoryLocation::GpuOnly).map_err(backend)?;
@@ -392,6 +395,11 @@ impl VulkanSolver {
     /// Whether timestamps and barriers use synchronization2 (Vulkan 1.3).
     pub fn sync2(&self) -> bool {
         self.dev.sync2
+    }
+
+    /// The current positions and the normals: the renderer's vertex buffers.
+    pub fn vertex_buffers(&self) -> (&Buffer, &Buffer) {
+        (&self.buffers.pos[self.cur], &self.buffers.normal)
     }
 
     /// Pipeline barriers recorded in the last frame.
@@ -557,7 +565,7 @@ impl Target {
 }
 
 /// Copies `bytes` into `dst` through the staging buffer.
-fn upload(cmds: &mut Commands, staging: &mut Buffer, dst: &Buffer, bytes: &[u8]) -> Result<(), VkError> {
+pub(crate) fn upload(cmds: &mut Commands, staging: &mut Buffer, dst: &Buffer, bytes: &[u8]) -> Result<(), VkError> {
     let map = staging
         .mapped()
         .ok_or(VkError::Vulkan { what: "mapping the staging buffer", reason: "not host visible".into() })?;

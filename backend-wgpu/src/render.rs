@@ -2,18 +2,14 @@
 //! PCF shadows, textured cloth, checkered floor, spheres, boxes) with 4× MSAA into an sRGB
 //! target, the cloth as triangles, lines or points, drawn from the solver's own buffers.
 
-use std::collections::BTreeSet;
-
 use clothlab_core::grid::{ClothState, ClothTopology};
+use clothlab_core::render::{Frame, SAMPLES, SHADOW_SIZE, SKY, StaticVertex, cloth_lines, fabric_texture, static_mesh};
 use clothlab_core::scene::Scene;
 use clothlab_core::solver::{RenderError, RenderMode, View};
-use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
 use crate::context::GpuContext;
 
-const SAMPLES: u32 = 4;
-const SHADOW_SIZE: u32 = 2048;
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -28,25 +24,6 @@ pub enum ClothSource<'a> {
     },
     /// A CPU solver's state: uploaded once per frame.
     Cpu(&'a ClothState),
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Frame {
-    view_proj: [[f32; 4]; 4],
-    light_view_proj: [[f32; 4]; 4],
-    light_pos: [f32; 4],
-    eye: [f32; 4],
-    misc: [f32; 4],
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct StaticVertex {
-    pos: [f32; 3],
-    normal: [f32; 3],
-    uv: [f32; 2],
-    material: u32,
 }
 
 struct Targets {
@@ -131,97 +108,6 @@ fn make_targets(ctx: &GpuContext, width: u32, height: u32) -> Targets {
         pick,
         pick_depth: pick_depth.create_view(&Default::default()),
     }
-}
-
-/// Floor, spheres and boxes as one triangle list.
-fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
-    let mut v = Vec::new();
-    let mut idx = Vec::new();
-    let mut quad = |v: &mut Vec<StaticVertex>, corners: [[f32; 3]; 4], normal: [f32; 3], material: u32| {
-        let base = v.len() as u32;
-        for (k, c) in corners.iter().enumerate() {
-            let uv = [(k == 1 || k == 2) as u32 as f32, (k >= 2) as u32 as f32];
-            v.push(StaticVertex { pos: *c, normal, uv, material });
-        }
-        idx.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
-    };
-    let y = scene.floor_y;
-    let s = 6.0;
-    quad(&mut v, [[-s, y, -s], [-s, y, s], [s, y, s], [s, y, -s]], [0.0, 1.0, 0.0], 0);
-    for b in &scene.boxes {
-        let (lo, hi) = (b.min, b.max);
-        let faces: [([[f32; 3]; 4], [f32; 3]); 6] = [
-            (
-                [[lo[0], hi[1], lo[2]], [lo[0], hi[1], hi[2]], [hi[0], hi[1], hi[2]], [hi[0], hi[1], lo[2]]],
-                [0.0, 1.0, 0.0],
-            ),
-            (
-                [[lo[0], lo[1], lo[2]], [hi[0], lo[1], lo[2]], [hi[0], lo[1], hi[2]], [lo[0], lo[1], hi[2]]],
-                [0.0, -1.0, 0.0],
-            ),
-            (
-                [[lo[0], lo[1], hi[2]], [hi[0], lo[1], hi[2]], [hi[0], hi[1], hi[2]], [lo[0], hi[1], hi[2]]],
-                [0.0, 0.0, 1.0],
-            ),
-            (
-                [[lo[0], lo[1], lo[2]], [lo[0], hi[1], lo[2]], [hi[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]],
-                [0.0, 0.0, -1.0],
-            ),
-            (
-                [[hi[0], lo[1], lo[2]], [hi[0], hi[1], lo[2]], [hi[0], hi[1], hi[2]], [hi[0], lo[1], hi[2]]],
-                [1.0, 0.0, 0.0],
-            ),
-            (
-                [[lo[0], lo[1], lo[2]], [lo[0], lo[1], hi[2]], [lo[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]]],
-                [-1.0, 0.0, 0.0],
-            ),
-        ];
-        for (c, nrm) in faces {
-            quad(&mut v, c, nrm, 2);
-        }
-    }
-    let (rings, segs) = (24u32, 48u32);
-    for sp in &scene.spheres {
-        let base = v.len() as u32;
-        for r in 0..=rings {
-            let th = std::f32::consts::PI * r as f32 / rings as f32;
-            for sgi in 0..=segs {
-                let ph = std::f32::consts::TAU * sgi as f32 / segs as f32;
-                let nrm = [th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()];
-                let pos = [
-                    sp.center[0] + sp.radius * nrm[0],
-                    sp.center[1] + sp.radius * nrm[1],
-                    sp.center[2] + sp.radius * nrm[2],
-                ];
-                v.push(StaticVertex { pos, normal: nrm, uv: [0.0, 0.0], material: 1 });
-            }
-        }
-        for r in 0..rings {
-            for sgi in 0..segs {
-                let a = base + r * (segs + 1) + sgi;
-                let b = a + segs + 1;
-                idx.extend_from_slice(&[a, a + 1, b, a + 1, b + 1, b]);
-            }
-        }
-    }
-    (v, idx)
-}
-
-/// A woven-looking fabric texture: two thread directions with a slight irregularity.
-fn fabric_texture() -> Vec<u8> {
-    let size = 64usize;
-    let mut px = Vec::with_capacity(size * size * 4);
-    for y in 0..size {
-        for x in 0..size {
-            let warp = ((x / 4 + y / 8) % 2 == 0) as u8 as f32;
-            let thread = 0.5 + 0.5 * (((x % 4) as f32 - 1.5).abs() / 1.5);
-            let noise = ((x * 7 + y * 13) % 11) as f32 / 11.0 * 0.06;
-            let k = 0.78 + 0.12 * warp * thread - noise;
-            let (r, g, b) = (0.32 * k, 0.5 * k, 0.78 * k);
-            px.extend_from_slice(&[(r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8, 255]);
-        }
-    }
-    px
 }
 
 impl WgpuRenderer {
@@ -500,13 +386,7 @@ impl WgpuRenderer {
         };
         use wgpu::BufferUsages as U;
         let tri: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
-        let mut edges = BTreeSet::new();
-        for t in &topo.triangles {
-            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                edges.insert((a.min(b), a.max(b)));
-            }
-        }
-        let lines: Vec<u32> = edges.iter().flat_map(|&(a, b)| [a, b]).collect();
+        let lines = cloth_lines(topo);
         let np = topo.num_particles() as u64;
         let vertex_buffer = |label| {
             dev.create_buffer(&wgpu::BufferDescriptor {
@@ -603,23 +483,7 @@ impl WgpuRenderer {
 
     /// Uploads the camera and light of `view`.
     fn write_frame(&self, ctx: &GpuContext, view: &View) {
-        let aspect = self.width as f32 / self.height as f32;
-        let light = Vec3::from(view.light);
-        let light_target = Vec3::new(0.0, 0.6, 0.0);
-        let light_view_proj = Mat4::perspective_rh(70f32.to_radians(), 1.0, 0.5, 30.0)
-            * Mat4::look_at_rh(
-                light,
-                light_target,
-                if (light - light_target).cross(Vec3::Y).length() < 1e-3 { Vec3::Z } else { Vec3::Y },
-            );
-        let eye = view.camera.eye();
-        let f = Frame {
-            view_proj: view.camera.view_proj(aspect).to_cols_array_2d(),
-            light_view_proj: light_view_proj.to_cols_array_2d(),
-            light_pos: [light.x, light.y, light.z, 1.0],
-            eye: [eye.x, eye.y, eye.z, 1.0],
-            misc: [1.0 / SHADOW_SIZE as f32, 0.0004, 3.0, 0.0],
-        };
+        let f = Frame::new(view, self.width, self.height);
         ctx.queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&f));
     }
 
@@ -651,7 +515,12 @@ impl WgpuRenderer {
                     depth_slice: None,
                     resolve_target: Some(&self.targets.resolve_view),
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color { r: 0.62, g: 0.72, b: 0.85, a: 1.0 }),
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: SKY[0] as f64,
+                            g: SKY[1] as f64,
+                            b: SKY[2] as f64,
+                            a: SKY[3] as f64,
+                        }),
                         store: wgpu::StoreOp::Discard,
                     },
                 })],

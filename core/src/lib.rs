@@ -10,6 +10,7 @@ pub mod camera;
 pub mod cpu;
 pub mod grid;
 pub mod params;
+pub mod render;
 pub mod scene;
 pub mod solver;
 pub mod stats;

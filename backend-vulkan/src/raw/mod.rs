@@ -4,6 +4,10 @@
 //! messenger and the instance, in reverse creation order.
 #![allow(unsafe_code)]
 
+mod graphics;
+
+pub use graphics::{Binding, GraphicsPipeline, PipelineDesc, PipelineLayout, Sampler, Transition, VertexBinding};
+
 use std::ffi::{CStr, c_void};
 use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex};
@@ -83,6 +87,8 @@ pub struct Device {
     pub sync2: bool,
     /// Largest 2-D image side, texels.
     pub max_image_2d: u32,
+    /// The queue draws too, with dynamic rendering (Vulkan 1.3): the renderer can run.
+    pub dynamic_rendering: bool,
 }
 
 impl Device {
@@ -169,7 +175,14 @@ impl Device {
         for &pd in &physicals {
             // SAFETY: `pd` comes from this instance.
             let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-            if let Some(f) = families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE)) {
+            // A family with graphics and compute (the renderer draws from the solver's
+            // buffers on the same queue), else one with compute.
+            let both = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
+            let family = families
+                .iter()
+                .position(|f| f.queue_flags.contains(both))
+                .or_else(|| families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE)));
+            if let Some(f) = family {
                 // SAFETY: as above.
                 let props = unsafe { instance.get_physical_device_properties(pd) };
                 let discrete = props.device_type == vk::PhysicalDeviceType::DISCRETE_GPU;
@@ -181,6 +194,10 @@ impl Device {
         let Some((physical, queue_family, props, timestamps)) = choice else {
             return Err(fail(VkError::NoAdapter, &debug));
         };
+        // SAFETY: `physical` belongs to `instance`.
+        let graphics = unsafe { instance.get_physical_device_queue_family_properties(physical) }[queue_family as usize]
+            .queue_flags
+            .contains(vk::QueueFlags::GRAPHICS);
         // Float atomic add on storage buffers, where the device has it: the naive recipe's
         // scatters then use the same kernels as on wgpu.
         // SAFETY: `physical` belongs to `instance`.
@@ -214,7 +231,9 @@ impl Device {
             unsafe { instance.get_physical_device_features2(physical, &mut features2) };
         }
         let sync2 = f13.synchronization2 == vk::TRUE;
-        let mut enable13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
+        let dynamic_rendering = f13.dynamic_rendering == vk::TRUE && graphics;
+        let mut enable13 =
+            vk::PhysicalDeviceVulkan13Features::default().synchronization2(sync2).dynamic_rendering(dynamic_rendering);
         let mut atomic_enable = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
             .shader_buffer_float32_atomics(true)
             .shader_buffer_float32_atomic_add(true);
@@ -226,7 +245,7 @@ impl Device {
         if float_atomics {
             dinfo = dinfo.enabled_extension_names(&device_exts).push_next(&mut atomic_enable);
         }
-        if sync2 {
+        if sync2 || dynamic_rendering {
             dinfo = dinfo.push_next(&mut enable13);
         }
         // SAFETY: `physical` belongs to `instance`; the create info outlives the call.
@@ -274,6 +293,7 @@ impl Device {
             subgroup_arithmetic,
             sync2,
             max_image_2d: props.limits.max_image_dimension2_d,
+            dynamic_rendering,
         }))
     }
 
@@ -368,6 +388,12 @@ impl Buffer {
         let size = self.size as usize;
         self.allocation.as_mut().and_then(|a| a.mapped_slice_mut()).map(|s| &mut s[..size])
     }
+
+    /// The mapped bytes of a host-visible buffer, read only.
+    pub fn bytes(&self) -> Option<&[u8]> {
+        let size = self.size as usize;
+        self.allocation.as_ref().and_then(|a| a.mapped_slice()).map(|s| &s[..size])
+    }
 }
 
 impl Drop for Buffer {
@@ -381,8 +407,8 @@ impl Drop for Buffer {
     }
 }
 
-/// A sampled 2-D image of rgba32uint texels (the spring table read as texture memory)
-/// and its view.
+/// A device-local 2-D image and its view: the spring table read as texture memory, and
+/// the renderer's targets, shadow map and fabric texture.
 pub struct Image {
     dev: Arc<Device>,
     image: vk::Image,
@@ -392,15 +418,47 @@ pub struct Image {
     pub width: u32,
     /// Height, texels.
     pub height: u32,
+    /// Texel format.
+    pub format: vk::Format,
+    /// Colour or depth.
+    pub aspect: vk::ImageAspectFlags,
+}
+
+/// What an [`Image`] is.
+#[derive(Debug, Clone, Copy)]
+pub struct ImageDesc {
+    /// Width, texels.
+    pub width: u32,
+    /// Height, texels.
+    pub height: u32,
+    /// Texel format.
+    pub format: vk::Format,
+    /// How it is used.
+    pub usage: vk::ImageUsageFlags,
+    /// Samples per texel.
+    pub samples: vk::SampleCountFlags,
 }
 
 impl Image {
-    /// The format of every texel: four 32-bit words.
+    /// The format of the spring-table image: four 32-bit words a texel.
     pub const FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 
-    /// A device-local `width × height` image, sampled by compute shaders and filled by
+    /// A `width × height` spring-table image, sampled by compute shaders and filled by
     /// transfer ([`Commands::copy_to_image`]).
     pub fn new(dev: &Arc<Device>, name: &str, width: u32, height: u32) -> Result<Self, VkError> {
+        let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+        Self::with_desc(
+            dev,
+            name,
+            ImageDesc { width, height, format: Self::FORMAT, usage, samples: vk::SampleCountFlags::TYPE_1 },
+        )
+    }
+
+    /// An image as `desc` says.
+    pub fn with_desc(dev: &Arc<Device>, name: &str, desc: ImageDesc) -> Result<Self, VkError> {
+        let ImageDesc { width, height, format, usage, samples } = desc;
+        let aspect =
+            if format == vk::Format::D32_SFLOAT { vk::ImageAspectFlags::DEPTH } else { vk::ImageAspectFlags::COLOR };
         if width == 0 || height == 0 || width > dev.max_image_2d || height > dev.max_image_2d {
             return Err(VkError::Vulkan {
                 what: "creating an image",
@@ -409,13 +467,13 @@ impl Image {
         }
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
-            .format(Self::FORMAT)
+            .format(format)
             .extent(vk::Extent3D { width, height, depth: 1 })
             .mip_levels(1)
             .array_layers(1)
-            .samples(vk::SampleCountFlags::TYPE_1)
+            .samples(samples)
             .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)
+            .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
         let d = &dev.device;
@@ -445,7 +503,16 @@ impl Image {
                 return Err(e);
             }
         };
-        let mut me = Self { dev: dev.clone(), image, view: vk::ImageView::null(), allocation: None, width, height };
+        let mut me = Self {
+            dev: dev.clone(),
+            image,
+            view: vk::ImageView::null(),
+            allocation: None,
+            width,
+            height,
+            format,
+            aspect,
+        };
         // SAFETY: the allocation satisfies the image's requirements and is freed in Drop
         // after the image is destroyed.
         unsafe { d.bind_image_memory(image, allocation.memory(), allocation.offset()) }
@@ -454,16 +521,16 @@ impl Image {
         let view_info = vk::ImageViewCreateInfo::default()
             .image(image)
             .view_type(vk::ImageViewType::TYPE_2D)
-            .format(Self::FORMAT)
-            .subresource_range(color_range());
+            .format(format)
+            .subresource_range(range(aspect));
         // SAFETY: the image is live and bound; the view is destroyed first in Drop.
         me.view = unsafe { d.create_image_view(&view_info, None) }.map_err(vk_err("creating an image view"))?;
         Ok(me)
     }
 }
 
-fn color_range() -> vk::ImageSubresourceRange {
-    vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1)
+fn range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange::default().aspect_mask(aspect).level_count(1).layer_count(1)
 }
 
 impl Drop for Image {
@@ -585,7 +652,8 @@ impl Sets {
         let sizes = [
             vk::DescriptorPoolSize::default().ty(vk::DescriptorType::STORAGE_BUFFER).descriptor_count(32 * max_sets),
             vk::DescriptorPoolSize::default().ty(vk::DescriptorType::UNIFORM_BUFFER).descriptor_count(4 * max_sets),
-            vk::DescriptorPoolSize::default().ty(vk::DescriptorType::SAMPLED_IMAGE).descriptor_count(max_sets),
+            vk::DescriptorPoolSize::default().ty(vk::DescriptorType::SAMPLED_IMAGE).descriptor_count(2 * max_sets),
+            vk::DescriptorPoolSize::default().ty(vk::DescriptorType::SAMPLER).descriptor_count(2 * max_sets),
         ];
         let info = vk::DescriptorPoolCreateInfo::default().max_sets(max_sets).pool_sizes(&sizes);
         // SAFETY: valid device and create info; destroyed in Drop.
@@ -701,12 +769,16 @@ impl Commands {
                 max_queries,
             };
             me.fence = d.create_fence(&vk::FenceCreateInfo::default(), None).map_err(vk_err("creating a fence"))?;
-            me.queries = d
-                .create_query_pool(
-                    &vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(max_queries),
-                    None,
-                )
-                .map_err(vk_err("creating a query pool"))?;
+            if max_queries > 0 {
+                me.queries = d
+                    .create_query_pool(
+                        &vk::QueryPoolCreateInfo::default()
+                            .query_type(vk::QueryType::TIMESTAMP)
+                            .query_count(max_queries),
+                        None,
+                    )
+                    .map_err(vk_err("creating a query pool"))?;
+            }
             me.reserve(1)?;
             Ok(me)
         }
@@ -728,7 +800,7 @@ impl Commands {
         Ok(())
     }
 
-    fn cmd(&self) -> vk::CommandBuffer {
+    pub(crate) fn cmd(&self) -> vk::CommandBuffer {
         self.cmds[self.active]
     }
 
@@ -859,7 +931,7 @@ impl Commands {
             .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .image(dst.image)
-            .subresource_range(color_range())];
+            .subresource_range(range(dst.aspect))];
         let to_read = [vk::ImageMemoryBarrier::default()
             .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
             .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
@@ -868,7 +940,7 @@ impl Commands {
             .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .image(dst.image)
-            .subresource_range(color_range())];
+            .subresource_range(range(dst.aspect))];
         let region = [vk::BufferImageCopy::default()
             .image_subresource(
                 vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
@@ -879,7 +951,7 @@ impl Commands {
         unsafe {
             d.cmd_pipeline_barrier(
                 self.cmd(),
-                vk::PipelineStageFlags::TOP_OF_PIPE,
+                vk::PipelineStageFlags::ALL_COMMANDS,
                 vk::PipelineStageFlags::TRANSFER,
                 vk::DependencyFlags::empty(),
                 &[],
@@ -896,7 +968,7 @@ impl Commands {
             d.cmd_pipeline_barrier(
                 self.cmd(),
                 vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::FRAGMENT_SHADER,
                 vk::DependencyFlags::empty(),
                 &[],
                 &[],

@@ -1,0 +1,637 @@
+//! The scene renderer on raw Vulkan: the same passes, shaders (render.wgsl as SPIR-V) and
+//! look as the wgpu renderer — a shadow pass from the light, a lit main pass with 4× MSAA
+//! into an sRGB target, the cloth as triangles, lines or points, and a picking pass —
+//! drawing the cloth straight from the Vulkan solver's position and normal buffers.
+
+use std::sync::Arc;
+
+use ash::vk;
+use clothlab_core::grid::{ClothState, ClothTopology};
+use clothlab_core::render::{Frame, SAMPLES, SHADOW_SIZE, SKY, StaticVertex, cloth_lines, fabric_texture, static_mesh};
+use clothlab_core::scene::Scene;
+use clothlab_core::solver::{RenderError, RenderMode, View};
+use gpu_allocator::MemoryLocation;
+
+use crate::VkError;
+use crate::raw::{
+    Binding, Buffer, Commands, Device, GraphicsPipeline, Image, ImageDesc, PipelineDesc, PipelineLayout, Sampler, Sets,
+    Transition, VertexBinding,
+};
+use crate::solver::upload;
+
+const COLOR_FORMAT: vk::Format = vk::Format::R8G8B8A8_SRGB;
+const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+const PICK_FORMAT: vk::Format = vk::Format::R32_UINT;
+
+/// Where the cloth's positions and normals come from.
+pub enum VkCloth<'a> {
+    /// The Vulkan solver's own buffers (`[f32; 4]` per particle each): drawn with no copy.
+    Gpu {
+        /// Positions.
+        pos: &'a Buffer,
+        /// Normals.
+        normal: &'a Buffer,
+    },
+    /// A CPU solver's state: uploaded once per frame.
+    Cpu(&'a ClothState),
+}
+
+struct Targets {
+    msaa: Image,
+    resolve: Image,
+    depth: Image,
+    pick: Image,
+    pick_depth: Image,
+    /// Host-readable copy of the resolved image.
+    readback: Buffer,
+}
+
+fn rerr(e: VkError) -> RenderError {
+    RenderError::Backend(e.to_string())
+}
+
+fn check_size(dev: &Device, width: u32, height: u32) -> Result<(), RenderError> {
+    let max = dev.max_image_2d;
+    if width == 0 || height == 0 || width > max || height > max {
+        return Err(RenderError::InvalidSize { width, height, reason: format!("each side must be in 1 ..= {max}") });
+    }
+    Ok(())
+}
+
+fn make_targets(dev: &Arc<Device>, width: u32, height: u32) -> Result<Targets, VkError> {
+    use vk::ImageUsageFlags as U;
+    let img =
+        |name, format, usage, samples| Image::with_desc(dev, name, ImageDesc { width, height, format, usage, samples });
+    let one = vk::SampleCountFlags::TYPE_1;
+    let msaa = vk::SampleCountFlags::from_raw(SAMPLES);
+    Ok(Targets {
+        msaa: img("color (msaa)", COLOR_FORMAT, U::COLOR_ATTACHMENT | U::TRANSIENT_ATTACHMENT, msaa)?,
+        resolve: img("color", COLOR_FORMAT, U::COLOR_ATTACHMENT | U::TRANSFER_SRC, one)?,
+        depth: img("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT | U::TRANSIENT_ATTACHMENT, msaa)?,
+        pick: img("pick ids", PICK_FORMAT, U::COLOR_ATTACHMENT | U::TRANSFER_SRC, one)?,
+        pick_depth: img("pick depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT, one)?,
+        readback: Buffer::new(
+            dev,
+            "image readback",
+            width as u64 * height as u64 * 4,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?,
+    })
+}
+
+struct Pipelines {
+    lit_static: GraphicsPipeline,
+    lit_cloth: GraphicsPipeline,
+    lines_cloth: GraphicsPipeline,
+    points_cloth: GraphicsPipeline,
+    shadow_static: GraphicsPipeline,
+    shadow_cloth: GraphicsPipeline,
+    pick_static: GraphicsPipeline,
+    pick_cloth: GraphicsPipeline,
+}
+
+fn make_pipelines(dev: &Arc<Device>, main: &PipelineLayout, shadow: &PipelineLayout) -> Result<Pipelines, VkError> {
+    use vk::Format as F;
+    let spirv = clothlab_shaders::kernel("render")
+        .ok_or(VkError::Vulkan { what: "loading the render shader", reason: "missing from clothlab-shaders".into() })?
+        .spirv;
+    let stat = VertexBinding {
+        stride: std::mem::size_of::<StaticVertex>() as u32,
+        attributes: vec![
+            (0, F::R32G32B32_SFLOAT, 0),
+            (1, F::R32G32B32_SFLOAT, 12),
+            (2, F::R32G32_SFLOAT, 24),
+            (3, F::R32_UINT, 32),
+        ],
+    };
+    let stat_pos = VertexBinding { stride: stat.stride, attributes: vec![(0, F::R32G32B32_SFLOAT, 0)] };
+    let v4 = |loc| VertexBinding { stride: 16, attributes: vec![(loc, F::R32G32B32A32_SFLOAT, 0)] };
+    let uv = VertexBinding { stride: 8, attributes: vec![(2, F::R32G32_SFLOAT, 0)] };
+    let cloth = vec![v4(0), v4(1), uv];
+    let four = vk::SampleCountFlags::from_raw(SAMPLES);
+    let one = vk::SampleCountFlags::TYPE_1;
+    use vk::PrimitiveTopology as T;
+    let lit = |vs, fs, bindings, topology| PipelineDesc {
+        vs,
+        fs: Some(fs),
+        bindings,
+        topology,
+        samples: four,
+        color: Some(COLOR_FORMAT),
+        depth: DEPTH_FORMAT,
+        depth_bias: None,
+    };
+    let depth_only = |vs, bindings| PipelineDesc {
+        vs,
+        fs: None,
+        bindings,
+        topology: T::TRIANGLE_LIST,
+        samples: one,
+        color: None,
+        depth: DEPTH_FORMAT,
+        depth_bias: Some((2.0, 2.0)),
+    };
+    let pick = |vs, bindings| PipelineDesc {
+        vs,
+        fs: Some(c"fs_pick"),
+        bindings,
+        topology: T::TRIANGLE_LIST,
+        samples: one,
+        color: Some(PICK_FORMAT),
+        depth: DEPTH_FORMAT,
+        depth_bias: None,
+    };
+    let p = |layout, desc: PipelineDesc<'_>| GraphicsPipeline::new(dev, layout, spirv, &desc);
+    Ok(Pipelines {
+        lit_static: p(main, lit(c"vs_static", c"fs_lit", vec![stat], T::TRIANGLE_LIST))?,
+        lit_cloth: p(main, lit(c"vs_cloth", c"fs_lit", cloth.clone(), T::TRIANGLE_LIST))?,
+        lines_cloth: p(main, lit(c"vs_cloth", c"fs_flat", cloth.clone(), T::LINE_LIST))?,
+        points_cloth: p(main, lit(c"vs_cloth", c"fs_flat", cloth.clone(), T::POINT_LIST))?,
+        shadow_static: p(shadow, depth_only(c"vs_shadow_static", vec![stat_pos.clone()]))?,
+        shadow_cloth: p(shadow, depth_only(c"vs_shadow_cloth", vec![v4(0)]))?,
+        pick_static: p(shadow, pick(c"vs_pick_static", vec![stat_pos]))?,
+        pick_cloth: p(shadow, pick(c"vs_pick_cloth", vec![v4(0)]))?,
+    })
+}
+
+/// Offscreen renderer of one scene and its cloth on raw Vulkan.
+pub struct VulkanRenderer {
+    width: u32,
+    height: u32,
+    targets: Targets,
+    pipelines: Pipelines,
+    frame: Buffer,
+    frame_set: vk::DescriptorSet,
+    texture_set: vk::DescriptorSet,
+    static_vb: Buffer,
+    static_ib: Buffer,
+    static_count: u32,
+    uv: Buffer,
+    tri_ib: Buffer,
+    tri_count: u32,
+    line_ib: Buffer,
+    line_count: u32,
+    num_particles: u32,
+    cpu_pos: Buffer,
+    cpu_normal: Buffer,
+    pick_buf: Buffer,
+    // Dropped after everything that refers to them.
+    _sets: Sets,
+    _main_layout: PipelineLayout,
+    _shadow_layout: PipelineLayout,
+    shadow: Image,
+    _fabric: Image,
+    _shadow_sampler: Sampler,
+    _fabric_sampler: Sampler,
+    cmds: Commands,
+    dev: Arc<Device>,
+}
+
+impl VulkanRenderer {
+    /// A renderer of `scene` with its cloth `topo` on `dev`, drawing `width × height`.
+    pub fn new(
+        dev: &Arc<Device>,
+        scene: &Scene,
+        topo: &ClothTopology,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, RenderError> {
+        if !dev.dynamic_rendering {
+            return Err(RenderError::Backend(format!(
+                "{} cannot draw with dynamic rendering (Vulkan 1.3 with a graphics queue): use the wgpu renderer",
+                dev.name
+            )));
+        }
+        check_size(dev, width, height)?;
+        Self::build(dev, scene, topo, width, height).map_err(rerr)
+    }
+
+    fn build(dev: &Arc<Device>, scene: &Scene, topo: &ClothTopology, width: u32, height: u32) -> Result<Self, VkError> {
+        use vk::BufferUsageFlags as B;
+        use vk::DescriptorType as D;
+        use vk::ShaderStageFlags as S;
+        let targets = make_targets(dev, width, height)?;
+        let frame_bindings = [(0, D::UNIFORM_BUFFER, S::VERTEX | S::FRAGMENT)];
+        let texture_bindings = [
+            (0, D::SAMPLED_IMAGE, S::FRAGMENT),
+            (1, D::SAMPLER, S::FRAGMENT),
+            (2, D::SAMPLED_IMAGE, S::FRAGMENT),
+            (3, D::SAMPLER, S::FRAGMENT),
+        ];
+        let main_layout = PipelineLayout::new(dev, &[&frame_bindings, &texture_bindings])?;
+        let shadow_layout = PipelineLayout::new(dev, &[&frame_bindings])?;
+        let pipelines = make_pipelines(dev, &main_layout, &shadow_layout)?;
+
+        let shadow = Image::with_desc(
+            dev,
+            "shadow map",
+            ImageDesc {
+                width: SHADOW_SIZE,
+                height: SHADOW_SIZE,
+                format: DEPTH_FORMAT,
+                usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+                samples: vk::SampleCountFlags::TYPE_1,
+            },
+        )?;
+        let fabric = Image::with_desc(
+            dev,
+            "fabric",
+            ImageDesc {
+                width: 64,
+                height: 64,
+                format: vk::Format::R8G8B8A8_SRGB,
+                usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+                samples: vk::SampleCountFlags::TYPE_1,
+            },
+        )?;
+        let shadow_sampler = Sampler::new(dev, true)?;
+        let fabric_sampler = Sampler::new(dev, false)?;
+        let frame = Buffer::new(
+            dev,
+            "frame",
+            std::mem::size_of::<Frame>() as u64,
+            B::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let sets = Sets::new(dev, 4)?;
+        let frame_set = sets.allocate_with(main_layout.sets[0], &[Binding::Buffer(0, D::UNIFORM_BUFFER, &frame)])?;
+        let texture_set = sets.allocate_with(
+            main_layout.sets[1],
+            &[
+                Binding::Image(0, &shadow),
+                Binding::Sampler(1, &shadow_sampler),
+                Binding::Image(2, &fabric),
+                Binding::Sampler(3, &fabric_sampler),
+            ],
+        )?;
+
+        // Static data, device-local through one staging buffer.
+        let (sv, si) = static_mesh(scene);
+        let tri: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
+        let lines = cloth_lines(topo);
+        let texels = fabric_texture();
+        let contents: [(&str, &[u8], B); 5] = [
+            ("static vertices", bytemuck::cast_slice(&sv), B::VERTEX_BUFFER),
+            ("static indices", bytemuck::cast_slice(&si), B::INDEX_BUFFER),
+            ("cloth uv", bytemuck::cast_slice(&topo.uv), B::VERTEX_BUFFER),
+            ("cloth triangles", bytemuck::cast_slice(&tri), B::INDEX_BUFFER),
+            ("cloth lines", bytemuck::cast_slice(&lines), B::INDEX_BUFFER),
+        ];
+        let largest = contents.iter().map(|c| c.1.len()).max().unwrap_or(0).max(texels.len()) as u64;
+        let mut staging = Buffer::new(dev, "render staging", largest, B::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
+        let mut cmds = Commands::new(dev, 0)?;
+        let mut made = Vec::new();
+        for (name, bytes, usage) in contents {
+            let b = Buffer::new(dev, name, bytes.len() as u64, usage | B::TRANSFER_DST, MemoryLocation::GpuOnly)?;
+            upload(&mut cmds, &mut staging, &b, bytes)?;
+            made.push(b);
+        }
+        let map = staging
+            .mapped()
+            .ok_or(VkError::Vulkan { what: "mapping the staging buffer", reason: "not host visible".into() })?;
+        map[..texels.len()].copy_from_slice(&texels);
+        cmds.begin(0)?;
+        cmds.copy_to_image(&staging, &fabric);
+        // The shadow map starts readable, so that every frame transitions it the same way.
+        cmds.transition(
+            &shadow,
+            Transition {
+                old: vk::ImageLayout::UNDEFINED,
+                new: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                src_stage: vk::PipelineStageFlags::TOP_OF_PIPE,
+                src_access: vk::AccessFlags::empty(),
+                dst_stage: vk::PipelineStageFlags::FRAGMENT_SHADER,
+                dst_access: vk::AccessFlags::SHADER_READ,
+            },
+        );
+        cmds.submit_and_wait(0)?;
+        drop(staging);
+        let mut it = made.into_iter();
+        let mut next = || it.next().expect("one buffer per entry");
+        let np = topo.num_particles() as u64;
+        let host_vertices = |name| Buffer::new(dev, name, np * 16, B::VERTEX_BUFFER, MemoryLocation::CpuToGpu);
+        let r = Self {
+            width,
+            height,
+            targets,
+            pipelines,
+            frame,
+            frame_set,
+            texture_set,
+            static_vb: next(),
+            static_ib: next(),
+            static_count: si.len() as u32,
+            uv: next(),
+            tri_ib: next(),
+            tri_count: tri.len() as u32,
+            line_ib: next(),
+            line_count: lines.len() as u32,
+            num_particles: np as u32,
+            cpu_pos: host_vertices("cpu positions")?,
+            cpu_normal: host_vertices("cpu normals")?,
+            pick_buf: Buffer::new(dev, "pick pixel", 4, B::TRANSFER_DST, MemoryLocation::GpuToCpu)?,
+            _sets: sets,
+            _main_layout: main_layout,
+            _shadow_layout: shadow_layout,
+            shadow,
+            _fabric: fabric,
+            _shadow_sampler: shadow_sampler,
+            _fabric_sampler: fabric_sampler,
+            cmds,
+            dev: dev.clone(),
+        };
+        r.check()?;
+        Ok(r)
+    }
+
+    fn check(&self) -> Result<(), VkError> {
+        let m = self.dev.take_messages();
+        if m.is_empty() { Ok(()) } else { Err(VkError::Validation(m.join(" | "))) }
+    }
+
+    /// Target size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Changes the target size; a zero or too large side is refused and nothing changes.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), RenderError> {
+        check_size(&self.dev, width, height)?;
+        self.targets = make_targets(&self.dev, width, height).map_err(rerr)?;
+        self.width = width;
+        self.height = height;
+        Ok(())
+    }
+
+    /// Checks `cloth` against the grid and writes a CPU state to the host-visible vertex
+    /// buffers.
+    fn prepare(&mut self, cloth: &VkCloth<'_>) -> Result<(), RenderError> {
+        let need = self.num_particles as u64 * 16;
+        match cloth {
+            VkCloth::Gpu { pos, normal } => {
+                if pos.size < need || normal.size < need {
+                    return Err(RenderError::Backend("cloth buffers of another grid size".into()));
+                }
+            }
+            VkCloth::Cpu(state) => {
+                if state.pos.len() != self.num_particles as usize || state.normal.len() != state.pos.len() {
+                    return Err(RenderError::Backend("state of another grid size".into()));
+                }
+                for (buf, data) in [(&mut self.cpu_pos, &state.pos), (&mut self.cpu_normal, &state.normal)] {
+                    let bytes: &[u8] = bytemuck::cast_slice(data);
+                    buf.mapped().ok_or_else(|| RenderError::Backend("vertex buffer not host visible".into()))?
+                        [..bytes.len()]
+                        .copy_from_slice(bytes);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn write_frame(&mut self, view: &View) -> Result<(), RenderError> {
+        let f = Frame::new(view, self.width, self.height);
+        self.frame
+            .mapped()
+            .ok_or_else(|| RenderError::Backend("frame buffer not host visible".into()))?
+            .copy_from_slice(bytemuck::bytes_of(&f));
+        Ok(())
+    }
+
+    /// Begins the command buffer: the solver's compute writes (and host writes) become
+    /// visible to vertex input and uniform reads.
+    fn begin(cmds: &mut Commands) -> Result<(), VkError> {
+        cmds.begin(0)?;
+        cmds.memory_barrier(
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::HOST,
+            vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::HOST_WRITE,
+            vk::PipelineStageFlags::VERTEX_INPUT
+                | vk::PipelineStageFlags::VERTEX_SHADER
+                | vk::PipelineStageFlags::FRAGMENT_SHADER,
+            vk::AccessFlags::VERTEX_ATTRIBUTE_READ | vk::AccessFlags::INDEX_READ | vk::AccessFlags::UNIFORM_READ,
+        );
+        Ok(())
+    }
+
+    /// Floor, colliders and cloth triangles: the shadow and picking passes.
+    fn draw_geometry(&self, stat: &GraphicsPipeline, cloth: &GraphicsPipeline, pos: &Buffer) {
+        let c = &self.cmds;
+        c.bind_graphics(stat, &[self.frame_set]);
+        c.bind_vertices(&[&self.static_vb], Some(&self.static_ib));
+        c.draw(self.static_count, true);
+        c.bind_graphics(cloth, &[self.frame_set]);
+        c.bind_vertices(&[pos], Some(&self.tri_ib));
+        c.draw(self.tri_count, true);
+    }
+
+    /// Draws one frame of the scene with the cloth from `cloth`.
+    pub fn render(&mut self, view: &View, cloth: VkCloth<'_>) -> Result<(), RenderError> {
+        self.write_frame(view)?;
+        self.prepare(&cloth)?;
+        Self::begin(&mut self.cmds).map_err(rerr)?;
+        let (pos, normal) = match cloth {
+            VkCloth::Gpu { pos, normal } => (pos, normal),
+            VkCloth::Cpu(_) => (&self.cpu_pos, &self.cpu_normal),
+        };
+        let c = &self.cmds;
+        let t = &self.targets;
+        use vk::AccessFlags as A;
+        use vk::ImageLayout as L;
+        use vk::PipelineStageFlags as P;
+        let tests = P::EARLY_FRAGMENT_TESTS | P::LATE_FRAGMENT_TESTS;
+        let depth_rw = A::DEPTH_STENCIL_ATTACHMENT_READ | A::DEPTH_STENCIL_ATTACHMENT_WRITE;
+        // Shadow pass: depth from the light.
+        c.transition(
+            &self.shadow,
+            Transition {
+                old: L::UNDEFINED,
+                new: L::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+                src_stage: P::FRAGMENT_SHADER,
+                src_access: A::empty(),
+                dst_stage: tests,
+                dst_access: depth_rw,
+            },
+        );
+        c.begin_rendering(None, &self.shadow);
+        self.draw_geometry(&self.pipelines.shadow_static, &self.pipelines.shadow_cloth, pos);
+        c.end_rendering();
+        c.transition(
+            &self.shadow,
+            Transition {
+                old: L::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+                new: L::SHADER_READ_ONLY_OPTIMAL,
+                src_stage: tests,
+                src_access: A::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                dst_stage: P::FRAGMENT_SHADER,
+                dst_access: A::SHADER_READ,
+            },
+        );
+        // Main pass: 4× MSAA colour resolved into the sRGB target.
+        let to_color = |img: &Image, src_stage| {
+            Transition {
+                old: L::UNDEFINED,
+                new: L::COLOR_ATTACHMENT_OPTIMAL,
+                src_stage,
+                src_access: A::empty(),
+                dst_stage: P::COLOR_ATTACHMENT_OUTPUT,
+                dst_access: A::COLOR_ATTACHMENT_READ | A::COLOR_ATTACHMENT_WRITE,
+            }
+            .apply(c, img)
+        };
+        to_color(&t.msaa, P::COLOR_ATTACHMENT_OUTPUT);
+        to_color(&t.resolve, P::TRANSFER);
+        c.transition(
+            &t.depth,
+            Transition {
+                old: L::UNDEFINED,
+                new: L::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+                src_stage: tests,
+                src_access: A::empty(),
+                dst_stage: tests,
+                dst_access: depth_rw,
+            },
+        );
+        c.begin_rendering(Some((&t.msaa, Some(&t.resolve), vk::ClearColorValue { float32: SKY })), &t.depth);
+        let p = &self.pipelines;
+        c.bind_graphics(&p.lit_static, &[self.frame_set, self.texture_set]);
+        c.bind_vertices(&[&self.static_vb], Some(&self.static_ib));
+        c.draw(self.static_count, true);
+        match view.mode {
+            RenderMode::Triangles => {
+                c.bind_graphics(&p.lit_cloth, &[self.frame_set, self.texture_set]);
+                c.bind_vertices(&[pos, normal, &self.uv], Some(&self.tri_ib));
+                c.draw(self.tri_count, true);
+            }
+            RenderMode::Lines => {
+                c.bind_graphics(&p.lines_cloth, &[self.frame_set, self.texture_set]);
+                c.bind_vertices(&[pos, normal, &self.uv], Some(&self.line_ib));
+                c.draw(self.line_count, true);
+            }
+            RenderMode::Points => {
+                c.bind_graphics(&p.points_cloth, &[self.frame_set, self.texture_set]);
+                c.bind_vertices(&[pos, normal, &self.uv], None);
+                c.draw(self.num_particles, false);
+            }
+        }
+        c.end_rendering();
+        // The resolved image, ready to be read back.
+        c.transition(
+            &t.resolve,
+            Transition {
+                old: L::COLOR_ATTACHMENT_OPTIMAL,
+                new: L::TRANSFER_SRC_OPTIMAL,
+                src_stage: P::COLOR_ATTACHMENT_OUTPUT,
+                src_access: A::COLOR_ATTACHMENT_WRITE,
+                dst_stage: P::TRANSFER,
+                dst_access: A::TRANSFER_READ,
+            },
+        );
+        c.copy_image_to_buffer(&t.resolve, 0, 0, self.width, self.height, &t.readback);
+        c.submit_and_wait(0).map_err(rerr)?;
+        self.check().map_err(rerr)
+    }
+
+    /// The particle drawn at pixel `(x, y)` (origin top left) for this view and cloth, or
+    /// `None` where no cloth is: the provoking vertex of the cloth triangle under the pixel
+    /// (the particle or a direct neighbour), as on wgpu.
+    pub fn pick(&mut self, view: &View, cloth: VkCloth<'_>, x: u32, y: u32) -> Result<Option<u32>, RenderError> {
+        if x >= self.width || y >= self.height {
+            return Ok(None);
+        }
+        self.write_frame(view)?;
+        self.prepare(&cloth)?;
+        Self::begin(&mut self.cmds).map_err(rerr)?;
+        let pos = match cloth {
+            VkCloth::Gpu { pos, .. } => pos,
+            VkCloth::Cpu(_) => &self.cpu_pos,
+        };
+        let c = &self.cmds;
+        let t = &self.targets;
+        use vk::AccessFlags as A;
+        use vk::ImageLayout as L;
+        use vk::PipelineStageFlags as P;
+        let tests = P::EARLY_FRAGMENT_TESTS | P::LATE_FRAGMENT_TESTS;
+        c.transition(
+            &t.pick,
+            Transition {
+                old: L::UNDEFINED,
+                new: L::COLOR_ATTACHMENT_OPTIMAL,
+                src_stage: P::TRANSFER,
+                src_access: A::empty(),
+                dst_stage: P::COLOR_ATTACHMENT_OUTPUT,
+                dst_access: A::COLOR_ATTACHMENT_WRITE,
+            },
+        );
+        c.transition(
+            &t.pick_depth,
+            Transition {
+                old: L::UNDEFINED,
+                new: L::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+                src_stage: tests,
+                src_access: A::empty(),
+                dst_stage: tests,
+                dst_access: A::DEPTH_STENCIL_ATTACHMENT_READ | A::DEPTH_STENCIL_ATTACHMENT_WRITE,
+            },
+        );
+        c.begin_rendering(Some((&t.pick, None, vk::ClearColorValue { uint32: [0; 4] })), &t.pick_depth);
+        self.draw_geometry(&self.pipelines.pick_static, &self.pipelines.pick_cloth, pos);
+        c.end_rendering();
+        c.transition(
+            &t.pick,
+            Transition {
+                old: L::COLOR_ATTACHMENT_OPTIMAL,
+                new: L::TRANSFER_SRC_OPTIMAL,
+                src_stage: P::COLOR_ATTACHMENT_OUTPUT,
+                src_access: A::COLOR_ATTACHMENT_WRITE,
+                dst_stage: P::TRANSFER,
+                dst_access: A::TRANSFER_READ,
+            },
+        );
+        c.copy_image_to_buffer(&t.pick, x, y, 1, 1, &self.pick_buf);
+        c.submit_and_wait(0).map_err(rerr)?;
+        self.check().map_err(rerr)?;
+        let raw = self.pick_buf.bytes().ok_or_else(|| RenderError::Backend("pick buffer not host visible".into()))?;
+        let id = u32::from_le_bytes([raw[0], raw[1], raw[2], raw[3]]);
+        Ok(id.checked_sub(1))
+    }
+
+    /// The last frame as tightly packed sRGB RGBA8 rows (copied at the end of `render`).
+    pub fn read_image(&self) -> Result<Vec<u8>, RenderError> {
+        let len = self.width as usize * self.height as usize * 4;
+        let map =
+            self.targets.readback.bytes().ok_or_else(|| RenderError::Backend("readback not host visible".into()))?;
+        Ok(map[..len].to_vec())
+    }
+
+    /// The device it draws on.
+    pub fn device(&self) -> &Arc<Device> {
+        &self.dev
+    }
+}
+
+impl Transition {
+    fn apply(self, c: &Commands, image: &Image) {
+        c.transition(image, self);
+    }
+}
+
+impl clothlab_core::Renderer for VulkanRenderer {
+    type Context = ();
+    type Cloth<'a> = VkCloth<'a>;
+
+    fn resize(&mut self, _: &(), width: u32, height: u32) -> Result<(), RenderError> {
+        VulkanRenderer::resize(self, width, height)
+    }
+
+    fn render(&mut self, _: &(), view: &View, cloth: VkCloth<'_>) -> Result<(), RenderError> {
+        VulkanRenderer::render(self, view, cloth)
+    }
+
+    fn pick(&mut self, _: &(), view: &View, cloth: VkCloth<'_>, x: u32, y: u32) -> Result<Option<u32>, RenderError> {
+        VulkanRenderer::pick(self, view, cloth, x, y)
+    }
+
+    fn read_image(&self, _: &()) -> Result<Vec<u8>, RenderError> {
+        VulkanRenderer::read_image(self)
+    }
+}

@@ -1,0 +1,173 @@
+//! What both renderers draw, as plain data: the static scene mesh, the fabric texture, the
+//! cloth's line list and the per-frame constants (camera, light) of `shaders/wgsl/render.wgsl`.
+
+use std::collections::BTreeSet;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use crate::grid::ClothTopology;
+use crate::scene::Scene;
+use crate::solver::View;
+
+/// Shadow-map side, texels.
+pub const SHADOW_SIZE: u32 = 2048;
+/// MSAA samples of the main pass.
+pub const SAMPLES: u32 = 4;
+/// Sky colour (linear RGBA), the main pass's clear value.
+pub const SKY: [f32; 4] = [0.62, 0.72, 0.85, 1.0];
+
+/// The constants of one frame (`Frame` in render.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct Frame {
+    /// Camera view-projection.
+    pub view_proj: [[f32; 4]; 4],
+    /// Light view-projection (the shadow map's).
+    pub light_view_proj: [[f32; 4]; 4],
+    /// Light position, w = 1.
+    pub light_pos: [f32; 4],
+    /// Eye position, w = 1.
+    pub eye: [f32; 4],
+    /// x shadow-map texel size, y depth bias, z cloth material, w unused.
+    pub misc: [f32; 4],
+}
+
+impl Frame {
+    /// The constants for `view` on a `width × height` target.
+    pub fn new(view: &View, width: u32, height: u32) -> Self {
+        let aspect = width as f32 / height as f32;
+        let light = Vec3::from(view.light);
+        let light_target = Vec3::new(0.0, 0.6, 0.0);
+        let light_view_proj = Mat4::perspective_rh(70f32.to_radians(), 1.0, 0.5, 30.0)
+            * Mat4::look_at_rh(
+                light,
+                light_target,
+                if (light - light_target).cross(Vec3::Y).length() < 1e-3 { Vec3::Z } else { Vec3::Y },
+            );
+        let eye = view.camera.eye();
+        Frame {
+            view_proj: view.camera.view_proj(aspect).to_cols_array_2d(),
+            light_view_proj: light_view_proj.to_cols_array_2d(),
+            light_pos: [light.x, light.y, light.z, 1.0],
+            eye: [eye.x, eye.y, eye.z, 1.0],
+            misc: [1.0 / SHADOW_SIZE as f32, 0.0004, 3.0, 0.0],
+        }
+    }
+}
+
+/// A vertex of the static mesh: position, normal, uv, material (0 floor, 1 sphere, 2 box).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct StaticVertex {
+    /// Position, m.
+    pub pos: [f32; 3],
+    /// Unit normal.
+    pub normal: [f32; 3],
+    /// Texture coordinates.
+    pub uv: [f32; 2],
+    /// Material id.
+    pub material: u32,
+}
+
+/// The cloth's edges as a line list (each edge of its triangles once).
+pub fn cloth_lines(topo: &ClothTopology) -> Vec<u32> {
+    let mut edges = BTreeSet::new();
+    for t in &topo.triangles {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            edges.insert((a.min(b), a.max(b)));
+        }
+    }
+    edges.iter().flat_map(|&(a, b)| [a, b]).collect()
+}
+
+/// Floor, spheres and boxes as one triangle list.
+pub fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
+    let mut v = Vec::new();
+    let mut idx = Vec::new();
+    let mut quad = |v: &mut Vec<StaticVertex>, corners: [[f32; 3]; 4], normal: [f32; 3], material: u32| {
+        let base = v.len() as u32;
+        for (k, c) in corners.iter().enumerate() {
+            let uv = [(k == 1 || k == 2) as u32 as f32, (k >= 2) as u32 as f32];
+            v.push(StaticVertex { pos: *c, normal, uv, material });
+        }
+        idx.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    };
+    let y = scene.floor_y;
+    let s = 6.0;
+    quad(&mut v, [[-s, y, -s], [-s, y, s], [s, y, s], [s, y, -s]], [0.0, 1.0, 0.0], 0);
+    for b in &scene.boxes {
+        let (lo, hi) = (b.min, b.max);
+        let faces: [([[f32; 3]; 4], [f32; 3]); 6] = [
+            (
+                [[lo[0], hi[1], lo[2]], [lo[0], hi[1], hi[2]], [hi[0], hi[1], hi[2]], [hi[0], hi[1], lo[2]]],
+                [0.0, 1.0, 0.0],
+            ),
+            (
+                [[lo[0], lo[1], lo[2]], [hi[0], lo[1], lo[2]], [hi[0], lo[1], hi[2]], [lo[0], lo[1], hi[2]]],
+                [0.0, -1.0, 0.0],
+            ),
+            (
+                [[lo[0], lo[1], hi[2]], [hi[0], lo[1], hi[2]], [hi[0], hi[1], hi[2]], [lo[0], hi[1], hi[2]]],
+                [0.0, 0.0, 1.0],
+            ),
+            (
+                [[lo[0], lo[1], lo[2]], [lo[0], hi[1], lo[2]], [hi[0], hi[1], lo[2]], [hi[0], lo[1], lo[2]]],
+                [0.0, 0.0, -1.0],
+            ),
+            (
+                [[hi[0], lo[1], lo[2]], [hi[0], hi[1], lo[2]], [hi[0], hi[1], hi[2]], [hi[0], lo[1], hi[2]]],
+                [1.0, 0.0, 0.0],
+            ),
+            (
+                [[lo[0], lo[1], lo[2]], [lo[0], lo[1], hi[2]], [lo[0], hi[1], hi[2]], [lo[0], hi[1], lo[2]]],
+                [-1.0, 0.0, 0.0],
+            ),
+        ];
+        for (c, nrm) in faces {
+            quad(&mut v, c, nrm, 2);
+        }
+    }
+    let (rings, segs) = (24u32, 48u32);
+    for sp in &scene.spheres {
+        let base = v.len() as u32;
+        for r in 0..=rings {
+            let th = std::f32::consts::PI * r as f32 / rings as f32;
+            for sgi in 0..=segs {
+                let ph = std::f32::consts::TAU * sgi as f32 / segs as f32;
+                let nrm = [th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()];
+                let pos = [
+                    sp.center[0] + sp.radius * nrm[0],
+                    sp.center[1] + sp.radius * nrm[1],
+                    sp.center[2] + sp.radius * nrm[2],
+                ];
+                v.push(StaticVertex { pos, normal: nrm, uv: [0.0, 0.0], material: 1 });
+            }
+        }
+        for r in 0..rings {
+            for sgi in 0..segs {
+                let a = base + r * (segs + 1) + sgi;
+                let b = a + segs + 1;
+                idx.extend_from_slice(&[a, a + 1, b, a + 1, b + 1, b]);
+            }
+        }
+    }
+    (v, idx)
+}
+
+/// A woven-looking fabric texture (64 × 64 sRGB RGBA8): two thread directions with a slight irregularity.
+pub fn fabric_texture() -> Vec<u8> {
+    let size = 64usize;
+    let mut px = Vec::with_capacity(size * size * 4);
+    for y in 0..size {
+        for x in 0..size {
+            let warp = ((x / 4 + y / 8) % 2 == 0) as u8 as f32;
+            let thread = 0.5 + 0.5 * (((x % 4) as f32 - 1.5).abs() / 1.5);
+            let noise = ((x * 7 + y * 13) % 11) as f32 / 11.0 * 0.06;
+            let k = 0.78 + 0.12 * warp * thread - noise;
+            let (r, g, b) = (0.32 * k, 0.5 * k, 0.78 * k);
+            px.extend_from_slice(&[(r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8, 255]);
+        }
+    }
+    px
+}
