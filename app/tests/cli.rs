@@ -150,6 +150,8 @@ fn no_adapter_is_one_clear_line() {
         &["validate"],
         &["validate", "--backends", "vulkan"],
         &["render", "--n", "8", "--out", "/tmp/none.png"],
+        &["render", "--backend", "vulkan", "--n", "8", "--out", "/tmp/none.png"],
+        &["render", "--backend", "cpu", "--api", "vulkan", "--n", "8", "--out", "/tmp/none.png"],
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_clothlab"))
             .args(args)
@@ -161,5 +163,58 @@ fn no_adapter_is_one_clear_line() {
         assert!(err.contains("no GPU adapter found") && err.contains("mesa-vulkan-drivers"), "{args:?}: {err}");
         assert!(out.stdout.is_empty(), "{args:?} printed: {}", String::from_utf8_lossy(&out.stdout));
         assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
+fn render_draws_through_vulkan_and_refuses_mixed_apis() {
+    refused(&["render", "--backend", "vulkan", "--api", "wgpu", "--out", "/tmp/x.png"], "draws through its own API");
+    refused(&["render", "--backend", "wgpu", "--api", "vulkan", "--out", "/tmp/x.png"], "draws through its own API");
+    for extra in [&["--backend", "vulkan"][..], &["--backend", "vulkan-naive"], &["--backend", "cpu", "--api", "vulkan"]] {
+        let out_path = std::env::temp_dir().join(format!("clothlab-vk-{}-{}.png", std::process::id(), extra.len()));
+        let mut args = vec!["render", "--n", "12", "--frames", "5", "--width", "64", "--height", "48"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", out_path.to_str().unwrap()]);
+        let out = clothlab(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        if err.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") {
+            eprintln!("skipped: {err}");
+            return;
+        }
+        assert!(out.status.success(), "{args:?}: {err}");
+        assert!(String::from_utf8_lossy(&out.stdout).contains("(Vulkan)"), "{args:?} did not draw through Vulkan");
+        let bytes = std::fs::read(&out_path).unwrap();
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+        assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 64);
+        assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 48);
+        std::fs::remove_file(&out_path).ok();
+    }
+    refused(
+        &["render", "--backend", "vulkan", "--n", "8", "--frames", "1", "--width", "0", "--out", "/tmp/x.png"],
+        "invalid target size 0",
+    );
+}
+
+#[test]
+fn vulkan_options_reach_the_solver_or_are_refused_elsewhere() {
+    refused(&["sim", "--backend", "cpu", "--stats", "atomics"], "Vulkan backends");
+    refused(&["sim", "--backend", "wgpu", "--table", "image"], "Vulkan backends");
+    refused(&["sim", "--backend", "vulkan", "--stats", "sometimes"], "invalid value");
+    for extra in [&["--stats", "subgroups"][..], &["--stats", "atomics", "--table", "image"]] {
+        let mut args = vec!["sim", "--backend", "vulkan", "--n", "20", "--steps", "32"];
+        args.extend_from_slice(extra);
+        let out = clothlab(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        if err.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") {
+            eprintln!("skipped: {err}");
+            return;
+        }
+        assert!(out.status.success(), "{args:?}: {err}");
+        let text = String::from_utf8_lossy(&out.stdout);
+        let line = text.lines().find(|l| l.starts_with("GPU statistics")).unwrap_or_else(|| panic!("{text}"));
+        // The cloth is falling after two frames: a positive kinetic energy.
+        let energy: f64 = line.split("kinetic energy ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+        assert!(energy > 0.0 && energy.is_finite(), "{line}");
+        assert!(text.contains("cpu record") && text.contains("cpu submit"), "{text}");
     }
 }
