@@ -22,6 +22,8 @@ use crate::solver::upload;
 const COLOR_FORMAT: vk::Format = vk::Format::R8G8B8A8_SRGB;
 const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 const PICK_FORMAT: vk::Format = vk::Format::R32_UINT;
+/// Frames that may be in flight at once (each has its own constants and CPU vertices).
+pub const FRAMES_IN_FLIGHT: usize = 2;
 
 /// Where the cloth's positions and normals come from.
 pub enum VkCloth<'a> {
@@ -78,6 +80,13 @@ fn make_targets(dev: &Arc<Device>, width: u32, height: u32) -> Result<Targets, V
             MemoryLocation::GpuToCpu,
         )?,
     })
+}
+
+struct Slot {
+    frame: Buffer,
+    frame_set: vk::DescriptorSet,
+    cpu_pos: Buffer,
+    cpu_normal: Buffer,
 }
 
 struct Pipelines {
@@ -161,8 +170,8 @@ pub struct VulkanRenderer {
     height: u32,
     targets: Targets,
     pipelines: Pipelines,
-    frame: Buffer,
-    frame_set: vk::DescriptorSet,
+    /// Per frame slot: the constants, their set, and the CPU solvers' vertices.
+    slots: Vec<Slot>,
     texture_set: vk::DescriptorSet,
     static_vb: Buffer,
     static_ib: Buffer,
@@ -173,8 +182,6 @@ pub struct VulkanRenderer {
     line_ib: Buffer,
     line_count: u32,
     num_particles: u32,
-    cpu_pos: Buffer,
-    cpu_normal: Buffer,
     pick_buf: Buffer,
     // Dropped after everything that refers to them.
     _sets: Sets,
@@ -247,15 +254,22 @@ impl VulkanRenderer {
         )?;
         let shadow_sampler = Sampler::new(dev, true)?;
         let fabric_sampler = Sampler::new(dev, false)?;
-        let frame = Buffer::new(
-            dev,
-            "frame",
-            std::mem::size_of::<Frame>() as u64,
-            B::UNIFORM_BUFFER,
-            MemoryLocation::CpuToGpu,
-        )?;
-        let sets = Sets::new(dev, 4)?;
-        let frame_set = sets.allocate_with(main_layout.sets[0], &[Binding::Buffer(0, D::UNIFORM_BUFFER, &frame)])?;
+        let sets = Sets::new(dev, 1 + FRAMES_IN_FLIGHT as u32)?;
+        let np = topo.num_particles() as u64;
+        let host_vertices = |name| Buffer::new(dev, name, np * 16, B::VERTEX_BUFFER, MemoryLocation::CpuToGpu);
+        let mut slots = Vec::new();
+        for _ in 0..FRAMES_IN_FLIGHT {
+            let size = std::mem::size_of::<Frame>() as u64;
+            let frame = Buffer::new(dev, "frame", size, B::UNIFORM_BUFFER, MemoryLocation::CpuToGpu)?;
+            let frame_set =
+                sets.allocate_with(main_layout.sets[0], &[Binding::Buffer(0, D::UNIFORM_BUFFER, &frame)])?;
+            slots.push(Slot {
+                frame,
+                frame_set,
+                cpu_pos: host_vertices("cpu positions")?,
+                cpu_normal: host_vertices("cpu normals")?,
+            });
+        }
         let texture_set = sets.allocate_with(
             main_layout.sets[1],
             &[
@@ -309,15 +323,12 @@ impl VulkanRenderer {
         drop(staging);
         let mut it = made.into_iter();
         let mut next = || it.next().expect("one buffer per entry");
-        let np = topo.num_particles() as u64;
-        let host_vertices = |name| Buffer::new(dev, name, np * 16, B::VERTEX_BUFFER, MemoryLocation::CpuToGpu);
         let r = Self {
             width,
             height,
             targets,
             pipelines,
-            frame,
-            frame_set,
+            slots,
             texture_set,
             static_vb: next(),
             static_ib: next(),
@@ -328,8 +339,6 @@ impl VulkanRenderer {
             line_ib: next(),
             line_count: lines.len() as u32,
             num_particles: np as u32,
-            cpu_pos: host_vertices("cpu positions")?,
-            cpu_normal: host_vertices("cpu normals")?,
             pick_buf: Buffer::new(dev, "pick pixel", 4, B::TRANSFER_DST, MemoryLocation::GpuToCpu)?,
             _sets: sets,
             _main_layout: main_layout,
@@ -364,10 +373,17 @@ impl VulkanRenderer {
         Ok(())
     }
 
-    /// Checks `cloth` against the grid and writes a CPU state to the host-visible vertex
-    /// buffers.
-    fn prepare(&mut self, cloth: &VkCloth<'_>) -> Result<(), RenderError> {
+    /// Writes the constants of `view` into frame slot `slot`, checks `cloth` against the
+    /// grid, and writes a CPU state to the slot's host-visible vertex buffers. The slot's
+    /// previous frame must have completed.
+    pub fn prepare(&mut self, slot: usize, view: &View, cloth: &VkCloth<'_>) -> Result<(), RenderError> {
         let need = self.num_particles as u64 * 16;
+        let f = Frame::new(view, self.width, self.height);
+        let s = &mut self.slots[slot % FRAMES_IN_FLIGHT];
+        s.frame
+            .mapped()
+            .ok_or_else(|| RenderError::Backend("frame buffer not host visible".into()))?
+            .copy_from_slice(bytemuck::bytes_of(&f));
         match cloth {
             VkCloth::Gpu { pos, normal } => {
                 if pos.size < need || normal.size < need {
@@ -378,10 +394,10 @@ impl VulkanRenderer {
                 if state.pos.len() != self.num_particles as usize || state.normal.len() != state.pos.len() {
                     return Err(RenderError::Backend("state of another grid size".into()));
                 }
-                for (buf, data) in [(&mut self.cpu_pos, &state.pos), (&mut self.cpu_normal, &state.normal)] {
+                for (buf, data) in [(&mut s.cpu_pos, &state.pos), (&mut s.cpu_normal, &state.normal)] {
                     let bytes: &[u8] = bytemuck::cast_slice(data);
-                    buf.mapped().ok_or_else(|| RenderError::Backend("vertex buffer not host visible".into()))?
-                        [..bytes.len()]
+                    buf.mapped()
+                        .ok_or_else(|| RenderError::Backend("vertex buffer not host visible".into()))?[..bytes.len()]
                         .copy_from_slice(bytes);
                 }
             }
@@ -389,19 +405,20 @@ impl VulkanRenderer {
         Ok(())
     }
 
-    fn write_frame(&mut self, view: &View) -> Result<(), RenderError> {
-        let f = Frame::new(view, self.width, self.height);
-        self.frame
-            .mapped()
-            .ok_or_else(|| RenderError::Backend("frame buffer not host visible".into()))?
-            .copy_from_slice(bytemuck::bytes_of(&f));
-        Ok(())
+    /// The position and normal buffers `cloth` is drawn from in slot `slot`.
+    fn cloth_buffers<'a>(&'a self, slot: usize, cloth: &VkCloth<'a>) -> (&'a Buffer, &'a Buffer) {
+        match cloth {
+            VkCloth::Gpu { pos, normal } => (pos, normal),
+            VkCloth::Cpu(_) => {
+                let s = &self.slots[slot % FRAMES_IN_FLIGHT];
+                (&s.cpu_pos, &s.cpu_normal)
+            }
+        }
     }
 
-    /// Begins the command buffer: the solver's compute writes (and host writes) become
-    /// visible to vertex input and uniform reads.
-    fn begin(cmds: &mut Commands) -> Result<(), VkError> {
-        cmds.begin(0)?;
+    /// Records the barrier that makes the solver's compute writes (and host writes)
+    /// visible to vertex input and uniform reads; first in every drawing command buffer.
+    pub fn record_inputs_barrier(cmds: &Commands) {
         cmds.memory_barrier(
             vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::HOST,
             vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::HOST_WRITE,
@@ -410,30 +427,47 @@ impl VulkanRenderer {
                 | vk::PipelineStageFlags::FRAGMENT_SHADER,
             vk::AccessFlags::VERTEX_ATTRIBUTE_READ | vk::AccessFlags::INDEX_READ | vk::AccessFlags::UNIFORM_READ,
         );
+    }
+
+    fn begin(cmds: &mut Commands) -> Result<(), VkError> {
+        cmds.begin(0)?;
+        Self::record_inputs_barrier(cmds);
         Ok(())
     }
 
     /// Floor, colliders and cloth triangles: the shadow and picking passes.
-    fn draw_geometry(&self, stat: &GraphicsPipeline, cloth: &GraphicsPipeline, pos: &Buffer) {
-        let c = &self.cmds;
-        c.bind_graphics(stat, &[self.frame_set]);
+    fn draw_geometry(&self, c: &Commands, slot: usize, stat: &GraphicsPipeline, cloth: &GraphicsPipeline, pos: &Buffer) {
+        let frame_set = self.slots[slot % FRAMES_IN_FLIGHT].frame_set;
+        c.bind_graphics(stat, &[frame_set]);
         c.bind_vertices(&[&self.static_vb], Some(&self.static_ib));
         c.draw(self.static_count, true);
-        c.bind_graphics(cloth, &[self.frame_set]);
+        c.bind_graphics(cloth, &[frame_set]);
         c.bind_vertices(&[pos], Some(&self.tri_ib));
         c.draw(self.tri_count, true);
     }
 
-    /// Draws one frame of the scene with the cloth from `cloth`.
+    /// Draws one frame of the scene with the cloth from `cloth` and keeps a copy for
+    /// [`VulkanRenderer::read_image`].
     pub fn render(&mut self, view: &View, cloth: VkCloth<'_>) -> Result<(), RenderError> {
-        self.write_frame(view)?;
-        self.prepare(&cloth)?;
+        self.prepare(0, view, &cloth)?;
         Self::begin(&mut self.cmds).map_err(rerr)?;
-        let (pos, normal) = match cloth {
-            VkCloth::Gpu { pos, normal } => (pos, normal),
-            VkCloth::Cpu(_) => (&self.cpu_pos, &self.cpu_normal),
-        };
-        let c = &self.cmds;
+        self.record(&self.cmds, 0, view, &cloth);
+        let t = &self.targets;
+        self.cmds.copy_image_to_buffer(&t.resolve, 0, 0, self.width, self.height, &t.readback);
+        self.cmds.submit_and_wait(0).map_err(rerr)?;
+        self.check().map_err(rerr)
+    }
+
+    /// The resolved scene image (TRANSFER_SRC_OPTIMAL after [`VulkanRenderer::record`]).
+    pub fn image(&self) -> &Image {
+        &self.targets.resolve
+    }
+
+    /// Records one frame of the scene into `c` from frame slot `slot` (written by
+    /// [`VulkanRenderer::prepare`]); leaves the resolved image in TRANSFER_SRC_OPTIMAL.
+    pub fn record(&self, c: &Commands, slot: usize, view: &View, cloth: &VkCloth<'_>) {
+        let (pos, normal) = self.cloth_buffers(slot, cloth);
+        let frame_set = self.slots[slot % FRAMES_IN_FLIGHT].frame_set;
         let t = &self.targets;
         use vk::AccessFlags as A;
         use vk::ImageLayout as L;
@@ -453,7 +487,7 @@ impl VulkanRenderer {
             },
         );
         c.begin_rendering(None, &self.shadow);
-        self.draw_geometry(&self.pipelines.shadow_static, &self.pipelines.shadow_cloth, pos);
+        self.draw_geometry(c, slot, &self.pipelines.shadow_static, &self.pipelines.shadow_cloth, pos);
         c.end_rendering();
         c.transition(
             &self.shadow,
@@ -493,22 +527,22 @@ impl VulkanRenderer {
         );
         c.begin_rendering(Some((&t.msaa, Some(&t.resolve), vk::ClearColorValue { float32: SKY })), &t.depth);
         let p = &self.pipelines;
-        c.bind_graphics(&p.lit_static, &[self.frame_set, self.texture_set]);
+        c.bind_graphics(&p.lit_static, &[frame_set, self.texture_set]);
         c.bind_vertices(&[&self.static_vb], Some(&self.static_ib));
         c.draw(self.static_count, true);
         match view.mode {
             RenderMode::Triangles => {
-                c.bind_graphics(&p.lit_cloth, &[self.frame_set, self.texture_set]);
+                c.bind_graphics(&p.lit_cloth, &[frame_set, self.texture_set]);
                 c.bind_vertices(&[pos, normal, &self.uv], Some(&self.tri_ib));
                 c.draw(self.tri_count, true);
             }
             RenderMode::Lines => {
-                c.bind_graphics(&p.lines_cloth, &[self.frame_set, self.texture_set]);
+                c.bind_graphics(&p.lines_cloth, &[frame_set, self.texture_set]);
                 c.bind_vertices(&[pos, normal, &self.uv], Some(&self.line_ib));
                 c.draw(self.line_count, true);
             }
             RenderMode::Points => {
-                c.bind_graphics(&p.points_cloth, &[self.frame_set, self.texture_set]);
+                c.bind_graphics(&p.points_cloth, &[frame_set, self.texture_set]);
                 c.bind_vertices(&[pos, normal, &self.uv], None);
                 c.draw(self.num_particles, false);
             }
@@ -526,9 +560,6 @@ impl VulkanRenderer {
                 dst_access: A::TRANSFER_READ,
             },
         );
-        c.copy_image_to_buffer(&t.resolve, 0, 0, self.width, self.height, &t.readback);
-        c.submit_and_wait(0).map_err(rerr)?;
-        self.check().map_err(rerr)
     }
 
     /// The particle drawn at pixel `(x, y)` (origin top left) for this view and cloth, or
@@ -538,13 +569,9 @@ impl VulkanRenderer {
         if x >= self.width || y >= self.height {
             return Ok(None);
         }
-        self.write_frame(view)?;
-        self.prepare(&cloth)?;
+        self.prepare(0, view, &cloth)?;
         Self::begin(&mut self.cmds).map_err(rerr)?;
-        let pos = match cloth {
-            VkCloth::Gpu { pos, .. } => pos,
-            VkCloth::Cpu(_) => &self.cpu_pos,
-        };
+        let (pos, _) = self.cloth_buffers(0, &cloth);
         let c = &self.cmds;
         let t = &self.targets;
         use vk::AccessFlags as A;
@@ -574,7 +601,7 @@ impl VulkanRenderer {
             },
         );
         c.begin_rendering(Some((&t.pick, None, vk::ClearColorValue { uint32: [0; 4] })), &t.pick_depth);
-        self.draw_geometry(&self.pipelines.pick_static, &self.pipelines.pick_cloth, pos);
+        self.draw_geometry(c, 0, &self.pipelines.pick_static, &self.pipelines.pick_cloth, pos);
         c.end_rendering();
         c.transition(
             &t.pick,

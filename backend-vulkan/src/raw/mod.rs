@@ -5,7 +5,9 @@
 #![allow(unsafe_code)]
 
 mod graphics;
+mod surface;
 
+pub use surface::{Acquired, Semaphore, Swapchain};
 pub use graphics::{Binding, GraphicsPipeline, PipelineDesc, PipelineLayout, Sampler, Transition, VertexBinding};
 
 use std::ffi::{CStr, c_void};
@@ -89,12 +91,39 @@ pub struct Device {
     pub max_image_2d: u32,
     /// The queue draws too, with dynamic rendering (Vulkan 1.3): the renderer can run.
     pub dynamic_rendering: bool,
+    /// The window's surface (null without a window).
+    pub surface: vk::SurfaceKHR,
+    /// Surface queries (with a window).
+    pub surface_loader: Option<ash::khr::surface::Instance>,
+    /// Swapchain functions (with a window).
+    pub swapchain_loader: Option<ash::khr::swapchain::Device>,
 }
 
 impl Device {
     /// Loads Vulkan, opens the first device with a compute queue, with the Khronos
     /// validation layer when `validation` is set and the layer is installed.
     pub fn new(validation: bool) -> Result<Arc<Self>, VkError> {
+        Ok(Self::open(validation, None)?.0)
+    }
+
+    /// Like [`Device::new`], for drawing into `window` too: the instance gets the surface
+    /// extensions, the queue must present to the window's surface, and the device gets
+    /// VK_KHR_swapchain. The surface is owned by the device.
+    pub fn for_window(
+        validation: bool,
+        window: &(impl raw_window_handle::HasDisplayHandle + raw_window_handle::HasWindowHandle),
+    ) -> Result<Arc<Self>, VkError> {
+        let handles = window
+            .display_handle()
+            .and_then(|d| window.window_handle().map(|w| (d.as_raw(), w.as_raw())))
+            .map_err(|e| VkError::Vulkan { what: "reading the window handles", reason: e.to_string() })?;
+        Ok(Self::open(validation, Some(handles))?.0)
+    }
+
+    fn open(
+        validation: bool,
+        window: Option<(raw_window_handle::RawDisplayHandle, raw_window_handle::RawWindowHandle)>,
+    ) -> Result<(Arc<Self>, ()), VkError> {
         // SAFETY: loading the system's Vulkan loader; its functions are used through ash's
         // tables only while `_entry` lives (it is a field of the returned Device).
         let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::NoVulkan(e.to_string()))?;
@@ -114,15 +143,23 @@ impl Device {
         let has_features = layer_exts
             .iter()
             .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::validation_features::NAME));
-        let mut ext_names = vec![ash::ext::debug_utils::NAME.as_ptr()];
-        if has_features {
-            ext_names.push(ash::ext::validation_features::NAME.as_ptr());
+        let mut ext_names = Vec::new();
+        if let Some((display, _)) = window {
+            let surface_exts = ash_window::enumerate_required_extensions(display)
+                .map_err(vk_err("listing the surface extensions"))?;
+            ext_names.extend_from_slice(surface_exts);
+        }
+        if validation {
+            ext_names.push(ash::ext::debug_utils::NAME.as_ptr());
+            if has_features {
+                ext_names.push(ash::ext::validation_features::NAME.as_ptr());
+            }
         }
         let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
-        let mut info = vk::InstanceCreateInfo::default().application_info(&app);
+        let mut info = vk::InstanceCreateInfo::default().application_info(&app).enabled_extension_names(&ext_names);
         if validation {
-            info = info.enabled_layer_names(&layer_names).enabled_extension_names(&ext_names);
+            info = info.enabled_layer_names(&layer_names);
             if has_features {
                 info = info.push_next(&mut features);
             }
@@ -155,9 +192,24 @@ impl Device {
         } else {
             None
         };
-        let fail = |e: VkError, debug: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
-            // SAFETY: nothing else was created from the instance yet.
+        // Surface functions exist only with the surface extensions (a window).
+        let surface_loader = window.map(|_| ash::khr::surface::Instance::new(&entry, &instance));
+        let surface = match window {
+            // SAFETY: the handles come from a live window that the caller keeps open
+            // while the device lives (the app drops the device before the window).
+            Some((display, win)) => unsafe { ash_window::create_surface(&entry, &instance, display, win, None) }
+                .map_err(vk_err("creating the window surface")),
+            None => Ok(vk::SurfaceKHR::null()),
+        };
+        let fail = |e: VkError,
+                    debug: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+                    surface: vk::SurfaceKHR| {
+            // SAFETY: nothing else was created from the instance yet (a null surface is
+            // ignored).
             unsafe {
+                if let Some(sl) = &surface_loader {
+                    sl.destroy_surface(surface, None);
+                }
                 if let Some((l, m)) = debug {
                     l.destroy_debug_utils_messenger(*m, None);
                 }
@@ -165,11 +217,15 @@ impl Device {
             }
             e
         };
+        let surface = match surface {
+            Ok(s) => s,
+            Err(e) => return Err(fail(e, &debug, vk::SurfaceKHR::null())),
+        };
         // SAFETY: valid instance.
         let physicals = unsafe { instance.enumerate_physical_devices() }.map_err(vk_err("listing devices"));
         let physicals = match physicals {
             Ok(p) => p,
-            Err(e) => return Err(fail(e, &debug)),
+            Err(e) => return Err(fail(e, &debug, surface)),
         };
         let mut choice = None;
         for &pd in &physicals {
@@ -178,10 +234,25 @@ impl Device {
             // A family with graphics and compute (the renderer draws from the solver's
             // buffers on the same queue), else one with compute.
             let both = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
+            // With a window, the family must also present to its surface.
+            let presents = |k: usize| {
+                match &surface_loader {
+                    None => true,
+                    // SAFETY: `pd`, `k` and `surface` belong to this instance.
+                    Some(sl) => unsafe { sl.get_physical_device_surface_support(pd, k as u32, surface) }
+                        .unwrap_or(false),
+                }
+            };
             let family = families
                 .iter()
-                .position(|f| f.queue_flags.contains(both))
-                .or_else(|| families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE)));
+                .enumerate()
+                .position(|(k, f)| f.queue_flags.contains(both) && presents(k))
+                .or_else(|| {
+                    if surface != vk::SurfaceKHR::null() {
+                        return None;
+                    }
+                    families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+                });
             if let Some(f) = family {
                 // SAFETY: as above.
                 let props = unsafe { instance.get_physical_device_properties(pd) };
@@ -192,7 +263,7 @@ impl Device {
             }
         }
         let Some((physical, queue_family, props, timestamps)) = choice else {
-            return Err(fail(VkError::NoAdapter, &debug));
+            return Err(fail(VkError::NoAdapter, &debug, surface));
         };
         // SAFETY: `physical` belongs to `instance`.
         let graphics = unsafe { instance.get_physical_device_queue_family_properties(physical) }[queue_family as usize]
@@ -237,13 +308,20 @@ impl Device {
         let mut atomic_enable = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
             .shader_buffer_float32_atomics(true)
             .shader_buffer_float32_atomic_add(true);
-        let device_exts = [ash::ext::shader_atomic_float::NAME.as_ptr()];
+        let mut device_exts = Vec::new();
+        if float_atomics {
+            device_exts.push(ash::ext::shader_atomic_float::NAME.as_ptr());
+        }
+        if surface != vk::SurfaceKHR::null() {
+            device_exts.push(ash::khr::swapchain::NAME.as_ptr());
+        }
         let priorities = [1.0f32];
         let queue_info =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let mut dinfo = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
+        let mut dinfo =
+            vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_extension_names(&device_exts);
         if float_atomics {
-            dinfo = dinfo.enabled_extension_names(&device_exts).push_next(&mut atomic_enable);
+            dinfo = dinfo.push_next(&mut atomic_enable);
         }
         if sync2 || dynamic_rendering {
             dinfo = dinfo.push_next(&mut enable13);
@@ -251,7 +329,7 @@ impl Device {
         // SAFETY: `physical` belongs to `instance`; the create info outlives the call.
         let device = match unsafe { instance.create_device(physical, &dinfo, None) } {
             Ok(d) => d,
-            Err(e) => return Err(fail(vk_err("creating the device")(e), &debug)),
+            Err(e) => return Err(fail(vk_err("creating the device")(e), &debug, surface)),
         };
         // SAFETY: the family was requested with one queue.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
@@ -268,11 +346,14 @@ impl Device {
             Err(e) => {
                 // SAFETY: the device has no objects yet.
                 unsafe { device.destroy_device(None) };
-                return Err(fail(VkError::Vulkan { what: "creating the allocator", reason: e.to_string() }, &debug));
+                let e = VkError::Vulkan { what: "creating the allocator", reason: e.to_string() };
+                return Err(fail(e, &debug, surface));
             }
         };
         let name = props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
-        Ok(Arc::new(Self {
+        let swapchain_loader =
+            (surface != vk::SurfaceKHR::null()).then(|| ash::khr::swapchain::Device::new(&instance, &device));
+        let dev = Arc::new(Self {
             _entry: entry,
             instance,
             debug,
@@ -294,7 +375,11 @@ impl Device {
             sync2,
             max_image_2d: props.limits.max_image_dimension2_d,
             dynamic_rendering,
-        }))
+            surface,
+            surface_loader,
+            swapchain_loader,
+        });
+        Ok((dev, ()))
     }
 
     /// Allocations gpu-allocator holds now (0 once every buffer and image is dropped:
@@ -320,6 +405,9 @@ impl Drop for Device {
             }
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
+            if let Some(sl) = &self.surface_loader {
+                sl.destroy_surface(self.surface, None);
+            }
             if let Some((l, m)) = &self.debug {
                 l.destroy_debug_utils_messenger(*m, None);
             }

@@ -1,0 +1,285 @@
+//! The window half of the raw layer: semaphores, the swapchain on the device's surface,
+//! and the commands that put a rendered image on screen.
+
+use super::*;
+
+/// A binary semaphore.
+pub struct Semaphore {
+    dev: Arc<Device>,
+    /// The Vulkan semaphore.
+    pub semaphore: vk::Semaphore,
+}
+
+impl Semaphore {
+    /// A new, unsignalled semaphore.
+    pub fn new(dev: &Arc<Device>) -> Result<Self, VkError> {
+        // SAFETY: valid device and create info; destroyed in Drop.
+        let semaphore = unsafe { dev.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
+            .map_err(vk_err("creating a semaphore"))?;
+        Ok(Self { dev: dev.clone(), semaphore })
+    }
+}
+
+impl Drop for Semaphore {
+    fn drop(&mut self) {
+        // SAFETY: the owner waited for the queue to be idle.
+        unsafe { self.dev.device.destroy_semaphore(self.semaphore, None) };
+    }
+}
+
+/// What acquiring a swapchain image gave.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Acquired {
+    /// Image `index`; `suboptimal` asks for a new swapchain after presenting.
+    Image {
+        /// Index into the swapchain's images.
+        index: u32,
+        /// The surface changed; the image still presents.
+        suboptimal: bool,
+    },
+    /// The swapchain no longer matches the surface: make a new one.
+    OutOfDate,
+}
+
+/// A swapchain with a view per image.
+pub struct Swapchain {
+    dev: Arc<Device>,
+    swapchain: vk::SwapchainKHR,
+    /// The images (owned by the swapchain).
+    pub images: Vec<vk::Image>,
+    views: Vec<vk::ImageView>,
+    /// Image format (an sRGB one where the surface offers it).
+    pub format: vk::Format,
+    /// Image size.
+    pub extent: vk::Extent2D,
+}
+
+impl Swapchain {
+    /// A swapchain of about `width × height` (clamped to what the surface allows) on the
+    /// device's surface, replacing `old` when given. `None` when the surface has zero
+    /// extent (a minimised window): nothing can be presented until it changes.
+    pub fn new(dev: &Arc<Device>, width: u32, height: u32, old: Option<&Swapchain>) -> Result<Option<Self>, VkError> {
+        let (Some(loader), Some(sl)) = (&dev.swapchain_loader, &dev.surface_loader) else {
+            return Err(VkError::Vulkan { what: "creating a swapchain", reason: "the device has no window".into() });
+        };
+        // SAFETY: physical device and surface belong to this device's instance.
+        let (caps, formats, modes) = unsafe {
+            (
+                sl.get_physical_device_surface_capabilities(dev.physical, dev.surface)
+                    .map_err(vk_err("reading the surface capabilities"))?,
+                sl.get_physical_device_surface_formats(dev.physical, dev.surface)
+                    .map_err(vk_err("reading the surface formats"))?,
+                sl.get_physical_device_surface_present_modes(dev.physical, dev.surface)
+                    .map_err(vk_err("reading the present modes"))?,
+            )
+        };
+        let extent = if caps.current_extent.width != u32::MAX {
+            caps.current_extent
+        } else {
+            vk::Extent2D {
+                width: width.clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+                height: height.clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+            }
+        };
+        if extent.width == 0 || extent.height == 0 {
+            return Ok(None);
+        }
+        let srgb = [vk::Format::B8G8R8A8_SRGB, vk::Format::R8G8B8A8_SRGB];
+        let format = formats
+            .iter()
+            .find(|f| srgb.contains(&f.format) && f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR)
+            .or(formats.first())
+            .copied()
+            .ok_or(VkError::Vulkan { what: "choosing a surface format", reason: "the surface offers none".into() })?;
+        // FIFO always exists; MAILBOX (no tearing, no blocking) where offered.
+        let mode =
+            if modes.contains(&vk::PresentModeKHR::MAILBOX) { vk::PresentModeKHR::MAILBOX } else { vk::PresentModeKHR::FIFO };
+        let mut count = caps.min_image_count + 1;
+        if caps.max_image_count > 0 {
+            count = count.min(caps.max_image_count);
+        }
+        let info = vk::SwapchainCreateInfoKHR::default()
+            .surface(dev.surface)
+            .min_image_count(count)
+            .image_format(format.format)
+            .image_color_space(format.color_space)
+            .image_extent(extent)
+            .image_array_layers(1)
+            .image_usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_DST)
+            .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .pre_transform(caps.current_transform)
+            .composite_alpha(vk::CompositeAlphaFlagsKHR::OPAQUE)
+            .present_mode(mode)
+            .clipped(true)
+            .old_swapchain(old.map_or(vk::SwapchainKHR::null(), |o| o.swapchain));
+        // SAFETY: valid device with the swapchain extension; `old` (if any) is retired by
+        // this call and destroyed by its owner after the device is idle.
+        let swapchain = unsafe { loader.create_swapchain(&info, None) }.map_err(vk_err("creating a swapchain"))?;
+        let mut me =
+            Self { dev: dev.clone(), swapchain, images: Vec::new(), views: Vec::new(), format: format.format, extent };
+        // SAFETY: the swapchain was just created.
+        me.images = unsafe { loader.get_swapchain_images(swapchain) }.map_err(vk_err("listing swapchain images"))?;
+        for &image in &me.images {
+            let view_info = vk::ImageViewCreateInfo::default()
+                .image(image)
+                .view_type(vk::ImageViewType::TYPE_2D)
+                .format(me.format)
+                .subresource_range(range(vk::ImageAspectFlags::COLOR));
+            // SAFETY: the image belongs to the swapchain; the view is destroyed in Drop.
+            let view = unsafe { dev.device.create_image_view(&view_info, None) }
+                .map_err(vk_err("creating a swapchain view"))?;
+            me.views.push(view);
+        }
+        Ok(Some(me))
+    }
+
+    /// The view of image `index`.
+    pub fn view(&self, index: u32) -> vk::ImageView {
+        self.views[index as usize]
+    }
+
+    /// Acquires the next image, signalling `signal` when it may be drawn into.
+    pub fn acquire(&self, signal: &Semaphore) -> Result<Acquired, VkError> {
+        let loader = self.dev.swapchain_loader.as_ref().expect("a swapchain implies the loader");
+        // SAFETY: the semaphore is unsignalled with no pending signal (its frame slot was
+        // waited for); no fence.
+        match unsafe { loader.acquire_next_image(self.swapchain, u64::MAX, signal.semaphore, vk::Fence::null()) } {
+            Ok((index, suboptimal)) => Ok(Acquired::Image { index, suboptimal }),
+            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Acquired::OutOfDate),
+            Err(e) => Err(vk_err("acquiring a swapchain image")(e)),
+        }
+    }
+
+    /// Presents image `index` once `wait` is signalled; `false` when the swapchain is
+    /// out of date or suboptimal and should be made anew.
+    pub fn present(&self, index: u32, wait: &Semaphore) -> Result<bool, VkError> {
+        let loader = self.dev.swapchain_loader.as_ref().expect("a swapchain implies the loader");
+        let swapchains = [self.swapchain];
+        let indices = [index];
+        let waits = [wait.semaphore];
+        let info =
+            vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&swapchains).image_indices(&indices);
+        // SAFETY: the image was acquired and the submission rendering it signals `wait`.
+        match unsafe { loader.queue_present(self.dev.queue, &info) } {
+            Ok(false) => Ok(true),
+            Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(false),
+            Err(e) => Err(vk_err("presenting")(e)),
+        }
+    }
+}
+
+impl Drop for Swapchain {
+    fn drop(&mut self) {
+        // SAFETY: the owner waits for the device to be idle before dropping a swapchain.
+        unsafe {
+            for v in &self.views {
+                self.dev.device.destroy_image_view(*v, None);
+            }
+            if let Some(loader) = &self.dev.swapchain_loader {
+                loader.destroy_swapchain(self.swapchain, None);
+            }
+        }
+    }
+}
+
+impl Commands {
+    /// Ends the active buffer and submits it, waiting for `wait` (at the given stages),
+    /// signalling `signal`, and the fence (see [`Commands::wait`]).
+    pub fn submit_with(
+        &self,
+        wait: &[(&Semaphore, vk::PipelineStageFlags)],
+        signal: &[&Semaphore],
+    ) -> Result<(), VkError> {
+        let d = &self.dev.device;
+        let wait_sems: Vec<vk::Semaphore> = wait.iter().map(|(s, _)| s.semaphore).collect();
+        let stages: Vec<vk::PipelineStageFlags> = wait.iter().map(|(_, st)| *st).collect();
+        let signal_sems: Vec<vk::Semaphore> = signal.iter().map(|s| s.semaphore).collect();
+        // SAFETY: the buffer is recording; the fence is unsignalled; the semaphores are
+        // live and each wait has a pending signal (an acquire).
+        unsafe {
+            d.end_command_buffer(self.cmd()).map_err(vk_err("ending a command buffer"))?;
+            let cmds = [self.cmd()];
+            let submit = [vk::SubmitInfo::default()
+                .command_buffers(&cmds)
+                .wait_semaphores(&wait_sems)
+                .wait_dst_stage_mask(&stages)
+                .signal_semaphores(&signal_sems)];
+            d.queue_submit(self.dev.queue, &submit, self.fence).map_err(vk_err("submitting"))
+        }
+    }
+
+    /// A layout transition of swapchain image `image` (colour).
+    pub fn transition_swapchain(&self, image: vk::Image, t: Transition) {
+        let b = [vk::ImageMemoryBarrier::default()
+            .old_layout(t.old)
+            .new_layout(t.new)
+            .src_access_mask(t.src_access)
+            .dst_access_mask(t.dst_access)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image)
+            .subresource_range(range(vk::ImageAspectFlags::COLOR))];
+        // SAFETY: recording state; the image belongs to a live swapchain.
+        unsafe {
+            self.dev.device.cmd_pipeline_barrier(
+                self.cmd(),
+                t.src_stage,
+                t.dst_stage,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &b,
+            )
+        };
+    }
+
+    /// Copies all of `src` (TRANSFER_SRC_OPTIMAL) onto swapchain image `dst`
+    /// (TRANSFER_DST_OPTIMAL) of the same size, converting the format.
+    pub fn blit_to_swapchain(&self, src: &Image, dst: vk::Image, extent: vk::Extent2D) {
+        let corner = |w: u32, h: u32| [vk::Offset3D::default(), vk::Offset3D { x: w as i32, y: h as i32, z: 1 }];
+        let layers = vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1);
+        let region = [vk::ImageBlit::default()
+            .src_subresource(layers)
+            .src_offsets(corner(src.width, src.height))
+            .dst_subresource(layers)
+            .dst_offsets(corner(extent.width, extent.height))];
+        // SAFETY: recording state; both images are live and in the named layouts.
+        unsafe {
+            self.dev.device.cmd_blit_image(
+                self.cmd(),
+                src.image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &region,
+                vk::Filter::NEAREST,
+            )
+        };
+    }
+
+    /// Begins dynamic rendering onto `view` (COLOR_ATTACHMENT_OPTIMAL) keeping what is
+    /// there: the egui pass over the scene.
+    pub fn begin_overlay(&self, view: vk::ImageView, extent: vk::Extent2D) {
+        let color = [vk::RenderingAttachmentInfo::default()
+            .image_view(view)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::LOAD)
+            .store_op(vk::AttachmentStoreOp::STORE)];
+        let info = vk::RenderingInfo::default()
+            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
+            .layer_count(1)
+            .color_attachments(&color);
+        // SAFETY: recording state, outside rendering; dynamic rendering is enabled.
+        unsafe { self.dev.device.cmd_begin_rendering(self.cmd(), &info) };
+    }
+
+    /// The command pool (egui-ash-renderer uploads its textures through it).
+    pub fn pool(&self) -> vk::CommandPool {
+        self.pool
+    }
+
+    /// The buffer being recorded.
+    pub fn buffer(&self) -> vk::CommandBuffer {
+        self.cmd()
+    }
+}
