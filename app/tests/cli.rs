@@ -170,7 +170,9 @@ fn no_adapter_is_one_clear_line() {
 fn render_draws_through_vulkan_and_refuses_mixed_apis() {
     refused(&["render", "--backend", "vulkan", "--api", "wgpu", "--out", "/tmp/x.png"], "draws through its own API");
     refused(&["render", "--backend", "wgpu", "--api", "vulkan", "--out", "/tmp/x.png"], "draws through its own API");
-    for extra in [&["--backend", "vulkan"][..], &["--backend", "vulkan-naive"], &["--backend", "cpu", "--api", "vulkan"]] {
+    for extra in
+        [&["--backend", "vulkan"][..], &["--backend", "vulkan-naive"], &["--backend", "cpu", "--api", "vulkan"]]
+    {
         let out_path = std::env::temp_dir().join(format!("clothlab-vk-{}-{}.png", std::process::id(), extra.len()));
         let mut args = vec!["render", "--n", "12", "--frames", "5", "--width", "64", "--height", "48"];
         args.extend_from_slice(extra);
@@ -213,7 +215,8 @@ fn vulkan_options_reach_the_solver_or_are_refused_elsewhere() {
         let text = String::from_utf8_lossy(&out.stdout);
         let line = text.lines().find(|l| l.starts_with("GPU statistics")).unwrap_or_else(|| panic!("{text}"));
         // The cloth is falling after two frames: a positive kinetic energy.
-        let energy: f64 = line.split("kinetic energy ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+        let energy: f64 =
+            line.split("kinetic energy ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
         assert!(energy > 0.0 && energy.is_finite(), "{line}");
         assert!(text.contains("cpu record") && text.contains("cpu submit"), "{text}");
     }

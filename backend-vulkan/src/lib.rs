@@ -6,6 +6,7 @@
 //! above it is safe code over RAII types.
 #![deny(unsafe_code)]
 
+mod present;
 pub mod raw;
 mod render;
 mod solver;
@@ -13,7 +14,8 @@ mod solver;
 use thiserror::Error;
 
 pub use clothlab_shaders::recipe::StatsMode;
-pub use render::{VkCloth, VulkanRenderer};
+pub use present::{Overlay, Presented, Presenter, Screenshot};
+pub use render::{FRAMES_IN_FLIGHT, VkCloth, VulkanRenderer};
 pub use solver::{SpringTable, VulkanOptions, VulkanSolver};
 
 /// Why Vulkan could not be used.

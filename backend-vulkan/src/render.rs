@@ -396,8 +396,8 @@ impl VulkanRenderer {
                 }
                 for (buf, data) in [(&mut s.cpu_pos, &state.pos), (&mut s.cpu_normal, &state.normal)] {
                     let bytes: &[u8] = bytemuck::cast_slice(data);
-                    buf.mapped()
-                        .ok_or_else(|| RenderError::Backend("vertex buffer not host visible".into()))?[..bytes.len()]
+                    buf.mapped().ok_or_else(|| RenderError::Backend("vertex buffer not host visible".into()))?
+                        [..bytes.len()]
                         .copy_from_slice(bytes);
                 }
             }
@@ -436,7 +436,14 @@ impl VulkanRenderer {
     }
 
     /// Floor, colliders and cloth triangles: the shadow and picking passes.
-    fn draw_geometry(&self, c: &Commands, slot: usize, stat: &GraphicsPipeline, cloth: &GraphicsPipeline, pos: &Buffer) {
+    fn draw_geometry(
+        &self,
+        c: &Commands,
+        slot: usize,
+        stat: &GraphicsPipeline,
+        cloth: &GraphicsPipeline,
+        pos: &Buffer,
+    ) {
         let frame_set = self.slots[slot % FRAMES_IN_FLIGHT].frame_set;
         c.bind_graphics(stat, &[frame_set]);
         c.bind_vertices(&[&self.static_vb], Some(&self.static_ib));

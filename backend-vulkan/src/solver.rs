@@ -163,6 +163,21 @@ impl VulkanSolver {
             return Err(SolverError::Backend(format!("at most {MAX_COLLIDERS} spheres and boxes")));
         }
         let dev = Device::new(options.validation).map_err(backend)?;
+        Self::on_device(dev, variant, scene, params, options)
+    }
+
+    /// Builds the cloth on `dev` (a window's device: the presenter draws its buffers).
+    /// `options.validation` is the device's business and ignored here.
+    pub fn on_device(
+        dev: Arc<Device>,
+        variant: Variant,
+        scene: Scene,
+        params: SimParams,
+        options: VulkanOptions,
+    ) -> Result<Self, SolverError> {
+        if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
+            return Err(SolverError::Backend(format!("at most {MAX_COLLIDERS} spheres and boxes")));
+        }
         if options.stats == StatsMode::Subgroups && !dev.subgroup_arithmetic {
             return Err(SolverError::Backend(format!(
                 "{} has no subgroup arithmetic in compute shaders: use statistics by atomics",

@@ -7,8 +7,8 @@
 mod graphics;
 mod surface;
 
-pub use surface::{Acquired, Semaphore, Swapchain};
 pub use graphics::{Binding, GraphicsPipeline, PipelineDesc, PipelineLayout, Sampler, Transition, VertexBinding};
+pub use surface::{Acquired, Semaphore, Swapchain};
 
 use std::ffi::{CStr, c_void};
 use std::mem::ManuallyDrop;
@@ -145,8 +145,8 @@ impl Device {
             .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::validation_features::NAME));
         let mut ext_names = Vec::new();
         if let Some((display, _)) = window {
-            let surface_exts = ash_window::enumerate_required_extensions(display)
-                .map_err(vk_err("listing the surface extensions"))?;
+            let surface_exts =
+                ash_window::enumerate_required_extensions(display).map_err(vk_err("listing the surface extensions"))?;
             ext_names.extend_from_slice(surface_exts);
         }
         if validation {
@@ -239,20 +239,20 @@ impl Device {
                 match &surface_loader {
                     None => true,
                     // SAFETY: `pd`, `k` and `surface` belong to this instance.
-                    Some(sl) => unsafe { sl.get_physical_device_surface_support(pd, k as u32, surface) }
-                        .unwrap_or(false),
+                    Some(sl) => {
+                        unsafe { sl.get_physical_device_surface_support(pd, k as u32, surface) }.unwrap_or(false)
+                    }
                 }
             };
-            let family = families
-                .iter()
-                .enumerate()
-                .position(|(k, f)| f.queue_flags.contains(both) && presents(k))
-                .or_else(|| {
-                    if surface != vk::SurfaceKHR::null() {
-                        return None;
-                    }
-                    families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
-                });
+            let family =
+                families.iter().enumerate().position(|(k, f)| f.queue_flags.contains(both) && presents(k)).or_else(
+                    || {
+                        if surface != vk::SurfaceKHR::null() {
+                            return None;
+                        }
+                        families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+                    },
+                );
             if let Some(f) = family {
                 // SAFETY: as above.
                 let props = unsafe { instance.get_physical_device_properties(pd) };
@@ -386,6 +386,18 @@ impl Device {
     /// the leak check).
     pub fn live_allocations(&self) -> usize {
         self.allocator.lock().map(|a| a.generate_report().allocations.len()).unwrap_or(usize::MAX)
+    }
+
+    /// The instance (for libraries that create their own objects, like egui-ash-renderer).
+    pub fn instance(&self) -> &ash::Instance {
+        &self.instance
+    }
+
+    /// Waits until the device has nothing left to do.
+    pub fn wait_idle(&self) -> Result<(), VkError> {
+        // SAFETY: host access to the queue is not shared with another thread (every user
+        // of the device is on the caller's thread).
+        unsafe { self.device.device_wait_idle() }.map_err(vk_err("waiting for the device"))
     }
 
     /// Takes the validation messages gathered so far.

@@ -52,6 +52,8 @@ pub struct Swapchain {
     pub format: vk::Format,
     /// Image size.
     pub extent: vk::Extent2D,
+    /// The images can be copied out (screenshots).
+    pub capturable: bool,
 }
 
 impl Swapchain {
@@ -92,8 +94,17 @@ impl Swapchain {
             .copied()
             .ok_or(VkError::Vulkan { what: "choosing a surface format", reason: "the surface offers none".into() })?;
         // FIFO always exists; MAILBOX (no tearing, no blocking) where offered.
-        let mode =
-            if modes.contains(&vk::PresentModeKHR::MAILBOX) { vk::PresentModeKHR::MAILBOX } else { vk::PresentModeKHR::FIFO };
+        let mode = if modes.contains(&vk::PresentModeKHR::MAILBOX) {
+            vk::PresentModeKHR::MAILBOX
+        } else {
+            vk::PresentModeKHR::FIFO
+        };
+        // TRANSFER_SRC where offered: screenshots of what the window shows.
+        let mut usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_DST;
+        let capturable = caps.supported_usage_flags.contains(vk::ImageUsageFlags::TRANSFER_SRC);
+        if capturable {
+            usage |= vk::ImageUsageFlags::TRANSFER_SRC;
+        }
         let mut count = caps.min_image_count + 1;
         if caps.max_image_count > 0 {
             count = count.min(caps.max_image_count);
@@ -105,7 +116,7 @@ impl Swapchain {
             .image_color_space(format.color_space)
             .image_extent(extent)
             .image_array_layers(1)
-            .image_usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_DST)
+            .image_usage(usage)
             .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
             .pre_transform(caps.current_transform)
             .composite_alpha(vk::CompositeAlphaFlagsKHR::OPAQUE)
@@ -115,8 +126,15 @@ impl Swapchain {
         // SAFETY: valid device with the swapchain extension; `old` (if any) is retired by
         // this call and destroyed by its owner after the device is idle.
         let swapchain = unsafe { loader.create_swapchain(&info, None) }.map_err(vk_err("creating a swapchain"))?;
-        let mut me =
-            Self { dev: dev.clone(), swapchain, images: Vec::new(), views: Vec::new(), format: format.format, extent };
+        let mut me = Self {
+            dev: dev.clone(),
+            swapchain,
+            images: Vec::new(),
+            views: Vec::new(),
+            format: format.format,
+            extent,
+            capturable,
+        };
         // SAFETY: the swapchain was just created.
         me.images = unsafe { loader.get_swapchain_images(swapchain) }.map_err(vk_err("listing swapchain images"))?;
         for &image in &me.images {
@@ -271,6 +289,26 @@ impl Commands {
             .color_attachments(&color);
         // SAFETY: recording state, outside rendering; dynamic rendering is enabled.
         unsafe { self.dev.device.cmd_begin_rendering(self.cmd(), &info) };
+    }
+
+    /// Copies swapchain image `image` (TRANSFER_SRC_OPTIMAL) into `dst`, tightly packed.
+    pub fn copy_swapchain_to_buffer(&self, image: vk::Image, extent: vk::Extent2D, dst: &Buffer) {
+        let region = [vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+            )
+            .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 })];
+        // SAFETY: recording state; `dst` holds width × height × 4 bytes (the presenter
+        // sizes it) and the image belongs to a live swapchain created with TRANSFER_SRC.
+        unsafe {
+            self.dev.device.cmd_copy_image_to_buffer(
+                self.cmd(),
+                image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.buffer,
+                &region,
+            )
+        };
     }
 
     /// The command pool (egui-ash-renderer uploads its textures through it).
