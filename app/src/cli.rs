@@ -18,12 +18,15 @@ use clothlab_wgpu::{ClothSource, Variant, WgpuRenderer, WgpuSolver};
 #[derive(Parser)]
 #[command(name = "clothlab", version, about = "Interactive, GPU-accelerated cloth simulation testbed")]
 struct Cli {
+    /// What to do; without one, the interactive app opens (`run`).
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
 }
 
 #[derive(Subcommand)]
 enum Command {
+    /// Open the interactive app (the default): the cloth live, on any backend and API.
+    Run(RunArgs),
     /// Simulate headless and print a summary.
     Sim(SimArgs),
     /// Check every GPU kernel and a rollout on each GPU backend against the CPU reference.
@@ -95,6 +98,55 @@ struct ValidateArgs {
     steps: u32,
 }
 
+#[derive(clap::Args, Debug)]
+struct RunArgs {
+    /// Graphics API of the window.
+    #[arg(long, value_enum, default_value_t = Api::Wgpu)]
+    api: Api,
+    /// Solver (default: the optimized GPU solver of the API).
+    #[arg(long, value_enum)]
+    backend: Option<Backend>,
+    /// Particles per side of the cloth (10 ..= 1024 in the app).
+    #[arg(long, default_value_t = 64)]
+    n: u32,
+    /// Quit after this many frames (for tests and screenshots).
+    #[arg(long)]
+    frames: Option<u64>,
+    /// Save a PNG of the window (panels included) after `--frames` frames.
+    #[arg(long)]
+    screenshot: Option<PathBuf>,
+    /// Window width, pixels.
+    #[arg(long, default_value_t = 1280)]
+    width: u32,
+    /// Window height, pixels.
+    #[arg(long, default_value_t = 800)]
+    height: u32,
+}
+
+impl Default for RunArgs {
+    fn default() -> Self {
+        Self { api: Api::Wgpu, backend: None, n: 64, frames: None, screenshot: None, width: 1280, height: 800 }
+    }
+}
+
+fn run_app(args: RunArgs) -> Result<ExitCode> {
+    if !(10..=1024).contains(&args.n) {
+        bail!("invalid --n {}: the app takes 10 ..= 1024 particles per side", args.n);
+    }
+    let backend = args.backend.unwrap_or(match args.api {
+        Api::Wgpu => Backend::Wgpu,
+        Api::Vulkan => Backend::Vulkan,
+    });
+    crate::gui::run(crate::gui::RunOptions {
+        api: args.api,
+        backend,
+        n: args.n,
+        frames: args.frames,
+        screenshot: args.screenshot,
+        size: (args.width, args.height),
+    })
+}
+
 /// Solver backends.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Backend {
@@ -112,9 +164,23 @@ pub enum Backend {
     Vulkan,
 }
 
+impl Backend {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Cpu => "cpu",
+            Backend::CpuPar => "cpu-par",
+            Backend::WgpuNaive => "wgpu-naive",
+            Backend::Wgpu => "wgpu",
+            Backend::VulkanNaive => "vulkan-naive",
+            Backend::Vulkan => "vulkan",
+        }
+    }
+}
+
 /// Whether the Vulkan backends run with the Khronos validation layer: in debug builds,
 /// or when CLOTHLAB_VALIDATION=1.
-fn vulkan_validation() -> bool {
+pub fn vulkan_validation() -> bool {
     cfg!(debug_assertions) || std::env::var("CLOTHLAB_VALIDATION").as_deref() == Ok("1")
 }
 
@@ -212,7 +278,8 @@ pub fn run() -> Result<ExitCode> {
             return Ok(code);
         }
     };
-    match cli.command {
+    match cli.command.unwrap_or(Command::Run(RunArgs::default())) {
+        Command::Run(args) => run_app(args),
         Command::Sim(args) => sim(args),
         Command::Validate(args) => validate(args),
         Command::Render(args) => render(args),

@@ -1,8 +1,9 @@
-//! `clothlab`: the command line (and, from the app issue on, the interactive app).
+//! `clothlab`: the interactive app (`clothlab` or `clothlab run`) and the command line.
 
 #![forbid(unsafe_code)]
 
 mod cli;
+mod gui;
 
 use std::process::ExitCode;
 

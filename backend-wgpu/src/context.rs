@@ -33,7 +33,8 @@ pub enum GpuError {
     Readback(String),
 }
 
-/// An adapter, its device and queue, and what they can do.
+/// An adapter, its device and queue, and what they can do. Clones share the device.
+#[derive(Clone)]
 pub struct GpuContext {
     /// The adapter.
     pub adapter: wgpu::Adapter,
@@ -58,8 +59,33 @@ impl GpuContext {
     /// the adapter has and timestamp queries if it supports them.
     pub fn new() -> Result<Self, GpuError> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Self::open(&instance, None)
+    }
+
+    /// Like [`GpuContext::new`], with an adapter that can present to `window`, and the
+    /// window's surface (not configured yet).
+    pub fn for_window<W>(window: std::sync::Arc<W>) -> Result<(Self, wgpu::Surface<'static>), GpuError>
+    where
+        W: raw_window_handle::HasWindowHandle
+            + raw_window_handle::HasDisplayHandle
+            + std::fmt::Debug
+            + Send
+            + Sync
+            + 'static,
+    {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(window.clone())));
+        let surface = instance
+            .create_surface(window)
+            .map_err(|e| GpuError::Wgpu { what: "creating the window surface", reason: e.to_string() })?;
+        let ctx = Self::open(&instance, Some(&surface))?;
+        Ok((ctx, surface))
+    }
+
+    fn open(instance: &wgpu::Instance, surface: Option<&wgpu::Surface<'_>>) -> Result<Self, GpuError> {
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
+            compatible_surface: surface,
             ..Default::default()
         }))
         .map_err(|_| GpuError::NoAdapter)?;

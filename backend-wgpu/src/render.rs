@@ -30,6 +30,8 @@ struct Targets {
     msaa: wgpu::TextureView,
     resolve: wgpu::Texture,
     resolve_view: wgpu::TextureView,
+    /// The same image viewed as plain RGBA8 (its sRGB bytes, undecoded).
+    resolve_bytes_view: wgpu::TextureView,
     depth: wgpu::TextureView,
     /// Particle ids (R32Uint) and their depth, one sample per pixel.
     pick: wgpu::Texture,
@@ -86,11 +88,19 @@ fn make_targets(ctx: &GpuContext, width: u32, height: u32) -> Targets {
             dimension: wgpu::TextureDimension::D2,
             format,
             usage,
-            view_formats: &[],
+            // The resolved image is also viewed as plain RGBA8: egui samples its textures
+            // as gamma-encoded bytes.
+            view_formats: if format == COLOR_FORMAT && samples == 1 { &[wgpu::TextureFormat::Rgba8Unorm] } else { &[] },
         })
     };
     let msaa = tex("color (msaa)", COLOR_FORMAT, SAMPLES, wgpu::TextureUsages::RENDER_ATTACHMENT);
-    let resolve = tex("color", COLOR_FORMAT, 1, wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC);
+    // Sampled too: the app shows it as an egui image.
+    let resolve = tex(
+        "color",
+        COLOR_FORMAT,
+        1,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING,
+    );
     let depth = tex("depth", DEPTH_FORMAT, SAMPLES, wgpu::TextureUsages::RENDER_ATTACHMENT);
     let pick = tex(
         "pick ids",
@@ -102,6 +112,10 @@ fn make_targets(ctx: &GpuContext, width: u32, height: u32) -> Targets {
     Targets {
         msaa: msaa.create_view(&Default::default()),
         resolve_view: resolve.create_view(&Default::default()),
+        resolve_bytes_view: resolve.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(wgpu::TextureFormat::Rgba8Unorm),
+            ..Default::default()
+        }),
         resolve,
         depth: depth.create_view(&Default::default()),
         pick_view: pick.create_view(&Default::default()),
@@ -426,6 +440,12 @@ impl WgpuRenderer {
         };
         ctx.check("creating the renderer").map_err(|e| RenderError::Backend(e.to_string()))?;
         Ok(r)
+    }
+
+    /// The resolved colour target viewed as plain RGBA8 (the sRGB bytes as they are):
+    /// what egui, which works on gamma-encoded colours, samples.
+    pub fn color_view(&self) -> &wgpu::TextureView {
+        &self.targets.resolve_bytes_view
     }
 
     /// Target size.

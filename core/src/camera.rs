@@ -13,6 +13,8 @@ pub struct OrbitCamera {
     pub yaw: f32,
     /// Elevation above the xz plane, radians, in (-π/2, π/2).
     pub pitch: f32,
+    /// Rotation of the picture about the line of sight, radians (the app's "rotate Z").
+    pub roll: f32,
     /// Vertical field of view, radians.
     pub fov_y: f32,
     /// Near plane, m.
@@ -36,6 +38,7 @@ impl Default for OrbitCamera {
             distance: 4.8,
             yaw: 0.6,
             pitch: 0.35,
+            roll: 0.0,
             fov_y: 45f32.to_radians(),
             near: 0.05,
             far: 100.0,
@@ -53,7 +56,9 @@ impl OrbitCamera {
 
     /// World → view.
     pub fn view(&self) -> Mat4 {
-        Mat4::look_at_rh(self.eye(), self.target, Vec3::Y)
+        let eye = self.eye();
+        let up = glam::Quat::from_axis_angle((self.target - eye).normalize(), self.roll) * Vec3::Y;
+        Mat4::look_at_rh(eye, self.target, up)
     }
 
     /// View → clip for a target of `aspect` = width / height.
@@ -70,6 +75,13 @@ impl OrbitCamera {
     pub fn rotate(&mut self, dyaw: f32, dpitch: f32) {
         self.yaw = (self.yaw + dyaw).rem_euclid(std::f32::consts::TAU);
         self.pitch = (self.pitch + dpitch).clamp(-Self::PITCH_LIMIT, Self::PITCH_LIMIT);
+    }
+
+    /// Rolls the picture by `droll` radians about the line of sight.
+    pub fn roll_by(&mut self, droll: f32) {
+        if droll.is_finite() {
+            self.roll = (self.roll + droll).rem_euclid(std::f32::consts::TAU);
+        }
     }
 
     /// Multiplies the distance by `factor` (< 1 zooms in), within the allowed range.

@@ -1,0 +1,431 @@
+//! The interactive app: the thesis's Qt program rebuilt in egui + winit, on wgpu or raw
+//! Vulkan, with any solver.
+
+mod gfx;
+pub mod input;
+mod sim;
+mod ui;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use clothlab_core::{OrbitCamera, RenderMode, SimParams, View};
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::WindowEvent;
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::window::{Window, WindowId};
+
+use crate::cli::{Api, Backend};
+use gfx::{EguiFrame, Gfx, Shot};
+use input::{Action, Panel, Tool};
+use sim::Sim;
+
+/// How `clothlab run` starts.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Graphics API.
+    pub api: Api,
+    /// Solver.
+    pub backend: Backend,
+    /// Particles per side.
+    pub n: u32,
+    /// Quit after this many frames (tests, screenshots).
+    pub frames: Option<u64>,
+    /// Save a picture of the window when quitting after `frames`.
+    pub screenshot: Option<PathBuf>,
+    /// Window size, pixels.
+    pub size: (u32, u32),
+}
+
+/// Everything the panels show and change.
+pub struct UiState {
+    /// Mouse tool.
+    pub tool: Tool,
+    /// Cloth drawing.
+    pub mode: RenderMode,
+    /// Simulation paused.
+    pub paused: bool,
+    /// Camera.
+    pub camera: OrbitCamera,
+    /// Light position, m.
+    pub light: [f32; 3],
+    /// Which panels show.
+    pub panels: Vec<Panel>,
+    /// Wind on.
+    pub wind_on: bool,
+    /// Wind speed, m/s.
+    pub wind_speed: f32,
+    /// Wind direction, degrees about +y (0 = +x).
+    pub wind_azimuth: f32,
+    /// Gusts: the speed varies by up to this fraction.
+    pub gusts: f32,
+    /// Grid size the slider holds (applied on release).
+    pub grid_n: u32,
+    /// Parameters being edited (applied when valid).
+    pub params: SimParams,
+    /// The About window is open.
+    pub about: bool,
+    /// The last message for the status bar (errors, saved files).
+    pub message: String,
+    /// Frames per second, smoothed.
+    pub fps: f32,
+}
+
+/// A request from the UI that needs the app (solver, renderer, window).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Command {
+    /// A menu or shortcut action.
+    Action(Action),
+    /// Another solver, keeping the cloth.
+    Backend(Backend),
+    /// Another grid size.
+    Grid(u32),
+    /// New parameters.
+    Params(SimParams),
+}
+
+struct Running {
+    window: Arc<Window>,
+    gfx: Gfx,
+    sim: Sim,
+    ui: UiState,
+    egui_ctx: egui::Context,
+    egui_state: egui_winit::State,
+    last: Instant,
+    drawn: u64,
+    /// Grabbed particle and where it was when grabbed.
+    dragging: Option<(u32, glam::Vec3)>,
+    /// File → Exit was chosen.
+    quit: bool,
+}
+
+struct App {
+    opts: RunOptions,
+    running: Option<Running>,
+    error: Option<anyhow::Error>,
+}
+
+/// Runs the app until the window closes (or `frames` frames are drawn).
+pub fn run(opts: RunOptions) -> Result<ExitCode> {
+    if opts.screenshot.is_some() && opts.frames.is_none() {
+        bail!("--screenshot needs --frames N (the picture is taken after N frames)");
+    }
+    if opts.frames == Some(0) {
+        bail!("--frames must be at least 1");
+    }
+    let (w, h) = opts.size;
+    if !(64..=8192).contains(&w) || !(64..=8192).contains(&h) {
+        bail!("invalid window size {w}×{h}: each side must be in 64 ..= 8192");
+    }
+    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+        bail!(
+            "no display to open a window on (DISPLAY and WAYLAND_DISPLAY are unset): for headless use, \
+             `clothlab render` draws to a PNG and `clothlab sim` simulates"
+        );
+    }
+    let event_loop = EventLoop::new().map_err(|e| {
+        anyhow!("cannot open a window ({e}): for headless use, `clothlab render` draws to a PNG and `clothlab sim` simulates")
+    })?;
+    let mut app = App { opts, running: None, error: None };
+    event_loop.run_app(&mut app).context("the window's event loop failed")?;
+    match app.error {
+        Some(e) => Err(e),
+        None => Ok(ExitCode::SUCCESS),
+    }
+}
+
+impl App {
+    fn start(&mut self, event_loop: &ActiveEventLoop) -> Result<Running> {
+        let (w, h) = self.opts.size;
+        let attrs = Window::default_attributes()
+            .with_title("clothlab")
+            .with_inner_size(PhysicalSize::new(w, h))
+            .with_min_inner_size(PhysicalSize::new(64, 64));
+        let window = Arc::new(event_loop.create_window(attrs).context("cannot open a window")?);
+        let params = SimParams::default();
+        let scene = clothlab_core::Scene::with_n(self.opts.n);
+        scene.validate()?;
+        let gfx = Gfx::new(self.opts.api, &window, &scene, &params)?;
+        let sim = Sim::new(self.opts.backend, self.opts.n, params.clone(), &gfx.shared())?;
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            event_loop,
+            Some(window.scale_factor() as f32),
+            None,
+            None,
+        );
+        log::info!("window on {}", gfx.adapter());
+        let ui = UiState {
+            tool: Tool::RotateFree,
+            mode: RenderMode::Triangles,
+            paused: false,
+            camera: OrbitCamera::default(),
+            light: [2.0, 5.5, 3.0],
+            panels: Panel::ALL.to_vec(),
+            wind_on: false,
+            wind_speed: 3.0,
+            wind_azimuth: 200.0,
+            gusts: 0.3,
+            grid_n: self.opts.n,
+            params,
+            about: false,
+            message: String::new(),
+            fps: 0.0,
+        };
+        Ok(Running {
+            window,
+            gfx,
+            sim,
+            ui,
+            egui_ctx,
+            egui_state,
+            last: Instant::now(),
+            drawn: 0,
+            dragging: None,
+            quit: false,
+        })
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        self.error = Some(e);
+        event_loop.exit();
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.running.is_some() {
+            return;
+        }
+        match self.start(event_loop) {
+            Ok(r) => {
+                r.window.request_redraw();
+                self.running = Some(r);
+            }
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let Some(r) = self.running.as_mut() else { return };
+        let _ = r.egui_state.on_window_event(&r.window, &event);
+        let result = match event {
+            WindowEvent::CloseRequested => {
+                event_loop.exit();
+                Ok(())
+            }
+            WindowEvent::Resized(size) => r.gfx.resize(size.width, size.height),
+            WindowEvent::RedrawRequested => {
+                let limit = self.opts.frames;
+                let shot_path = self.opts.screenshot.clone();
+                match r.frame(limit, shot_path.as_deref()) {
+                    Ok(true) => {
+                        event_loop.exit();
+                        Ok(())
+                    }
+                    Ok(false) => {
+                        r.window.request_redraw();
+                        Ok(())
+                    }
+                    Err(e) => Err(e),
+                }
+            }
+            _ => Ok(()),
+        };
+        if let Err(e) = result {
+            self.fail(event_loop, e);
+        }
+    }
+
+    fn exiting(&mut self, _: &ActiveEventLoop) {
+        // Solver and renderers go before the window they draw into.
+        self.running = None;
+    }
+}
+
+impl Running {
+    fn view(&self) -> View {
+        View { camera: self.ui.camera.clone(), light: self.ui.light, mode: self.ui.mode }
+    }
+
+    /// One frame: simulate, lay out the panels, act on what they asked, draw. Returns
+    /// whether to quit.
+    fn frame(&mut self, limit: Option<u64>, shot_path: Option<&std::path::Path>) -> Result<bool> {
+        let now = Instant::now();
+        let dt = (now - self.last).as_secs_f32().max(1e-4);
+        self.last = now;
+        self.ui.fps = if self.ui.fps == 0.0 { 1.0 / dt } else { 0.9 * self.ui.fps + 0.1 / dt };
+        if !self.ui.paused {
+            self.apply_wind();
+            self.sim.step()?;
+        }
+        let raw = self.egui_state.take_egui_input(&self.window);
+        let scene_tex = self.gfx.scene_texture();
+        let mut commands = Vec::new();
+        let mut drag = None;
+        let (sw, sh) = self.gfx.scene_size();
+        let out = self.egui_ctx.run_ui(raw, |root| {
+            let info = ui::Info {
+                backend: self.sim.backend,
+                api: self.gfx.api(),
+                adapter: self.gfx.adapter(),
+                substep_ns: self.sim.substep_ns(),
+                history: &self.sim.history,
+                frames: self.sim.frames,
+                scene_tex,
+                scene_size: (sw, sh),
+            };
+            let view = ui::draw(root, &mut self.ui, &info, &mut commands);
+            drag = view;
+        });
+        self.egui_state.handle_platform_output(&self.window, out.platform_output);
+        for c in commands {
+            self.command(c)?;
+        }
+        if let Some(d) = drag {
+            self.drag(d)?;
+        }
+        let primitives = self.egui_ctx.tessellate(out.shapes, out.pixels_per_point);
+        let last = limit.is_some_and(|l| self.drawn + 1 >= l);
+        let capture = last && shot_path.is_some();
+        let view = self.view();
+        let frame = EguiFrame {
+            primitives: &primitives,
+            textures: &out.textures_delta,
+            pixels_per_point: out.pixels_per_point,
+        };
+        let shot = self.gfx.draw(&mut self.sim.solver, &view, frame, capture)?;
+        self.drawn += 1;
+        if let (true, Some(path)) = (capture, shot_path) {
+            let shot = shot.context("the last frame was not drawn (window minimised?): no screenshot")?;
+            save_png(path, &shot)?;
+        }
+        Ok(last || self.quit)
+    }
+
+    /// Wind from the panel, with gusts: a slow sine of the frame count.
+    fn apply_wind(&mut self) {
+        let u = &self.ui;
+        let speed = if u.wind_on {
+            u.wind_speed
+                * (1.0 + u.gusts * (self.sim.frames as f32 * 0.07).sin() * (self.sim.frames as f32 * 0.013).cos())
+        } else {
+            0.0
+        };
+        let a = u.wind_azimuth.to_radians();
+        let wind = [speed * a.cos(), 0.0, speed * a.sin()];
+        let solver = self.sim.solver.get();
+        if solver.params().wind != wind {
+            let p = SimParams { wind, ..solver.params().clone() };
+            if let Err(e) = solver.set_params(p) {
+                self.ui.message = format!("wind refused: {e}");
+            }
+        }
+    }
+
+    fn command(&mut self, c: Command) -> Result<()> {
+        match c {
+            Command::Action(a) => self.action(a)?,
+            Command::Backend(b) => match self.sim.switch(b, &self.gfx.shared()) {
+                Ok(()) => self.ui.message = format!("switched to {}", b.name()),
+                Err(e) => self.ui.message = format!("cannot switch to {}: {e:#}", b.name()),
+            },
+            Command::Grid(n) => {
+                self.sim.regrid(n, &self.gfx.shared())?;
+                let scene = self.sim.solver.get_ref().scene().clone();
+                self.gfx.rebuild(&scene, &self.ui.params)?;
+                self.dragging = None;
+                self.ui.message = format!("new cloth: {n}×{n}");
+            }
+            Command::Params(p) => match self.sim.solver.get().set_params(p.clone()) {
+                Ok(()) => {}
+                Err(e) => self.ui.message = format!("parameters refused: {e}"),
+            },
+        }
+        Ok(())
+    }
+
+    fn action(&mut self, a: Action) -> Result<()> {
+        match a {
+            Action::Reset => {
+                let n = self.sim.solver.get_ref().scene().cloth.n;
+                self.sim.regrid(n, &self.gfx.shared())?;
+                self.dragging = None;
+                self.ui.message = "reset".into();
+            }
+            Action::SaveImage => {
+                let view = self.view();
+                let shot = self.gfx.scene_image(&mut self.sim.solver, &view)?;
+                let secs = std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map(|d| d.as_secs())
+                    .unwrap_or_default();
+                let path = PathBuf::from(format!("clothlab-{secs}.png"));
+                match save_png(&path, &shot) {
+                    Ok(()) => self.ui.message = format!("saved {}", path.display()),
+                    Err(e) => self.ui.message = format!("cannot save: {e:#}"),
+                }
+            }
+            Action::Exit => self.window_close(),
+            Action::Tool(t) => self.ui.tool = t,
+            Action::ZoomIn => input::zoom(&mut self.ui.camera, 1.0),
+            Action::ZoomOut => input::zoom(&mut self.ui.camera, -1.0),
+            Action::Mode(m) => self.ui.mode = m,
+            Action::TogglePlay => self.ui.paused = !self.ui.paused,
+            Action::TogglePanel(p) => {
+                if let Some(k) = self.ui.panels.iter().position(|q| *q == p) {
+                    self.ui.panels.remove(k);
+                } else {
+                    self.ui.panels.push(p);
+                }
+            }
+            Action::About => self.ui.about = true,
+        }
+        Ok(())
+    }
+
+    fn window_close(&mut self) {
+        self.quit = true;
+    }
+
+    /// Grabs, drags or lets go of the cloth with the cursor tool.
+    fn drag(&mut self, d: ui::Drag) -> Result<()> {
+        let view = self.view();
+        let (w, h) = self.gfx.scene_size();
+        match d {
+            ui::Drag::Start { x, y } => {
+                if let Some(id) = self.gfx.pick(&mut self.sim.solver, &view, x as u32, y as u32)? {
+                    let state = self.sim.solver.get().state()?;
+                    let p = state.pos[id as usize];
+                    let at = glam::Vec3::new(p[0], p[1], p[2]);
+                    self.dragging = Some((id, at));
+                    self.sim.grab = Some(clothlab_core::Grab { particle: id, target: [p[0], p[1], p[2]] });
+                    self.ui.message = format!("grabbed particle {id}");
+                }
+            }
+            ui::Drag::Move { x, y } => {
+                if let Some((id, at)) = self.dragging {
+                    let floor = self.sim.solver.get_ref().scene().floor_y;
+                    let target = input::drag_target(&view.camera, at, x, y, w, h, floor);
+                    self.sim.grab = Some(clothlab_core::Grab { particle: id, target });
+                }
+            }
+            ui::Drag::End => {
+                self.dragging = None;
+                self.sim.grab = None;
+            }
+        }
+        Ok(())
+    }
+}
+
+fn save_png(path: &std::path::Path, shot: &Shot) -> Result<()> {
+    image::save_buffer(path, &shot.rgba, shot.width, shot.height, image::ExtendedColorType::Rgba8)
+        .with_context(|| format!("cannot write {}", path.display()))
+}

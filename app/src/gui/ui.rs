@@ -1,0 +1,400 @@
+//! The panels: menu bar, tool bar, animation bar, wind, light, parameters, kernel timings,
+//! status bar, the 3-D view's mouse handling and its context menu.
+
+use std::collections::VecDeque;
+
+use clothlab_core::RenderMode;
+use clothlab_core::params::{MAX_STRAIN_ITERATIONS, MAX_SUBSTEPS};
+use clothlab_core::timing::SUBSTEP;
+use egui::{Color32, RichText};
+use egui_plot::{Legend, Line, Plot, PlotPoints};
+
+use super::input::{self, Action, Panel, SHORTCUT_KEYS, Tool};
+use super::{Command, UiState};
+use crate::cli::{Api, Backend};
+
+/// What the panels show that the UI does not own.
+pub struct Info<'a> {
+    /// Running solver.
+    pub backend: Backend,
+    /// Drawing API.
+    pub api: Api,
+    /// Adapter in one line.
+    pub adapter: String,
+    /// Last substep time, ns.
+    pub substep_ns: Option<f64>,
+    /// Per-frame kernel timings.
+    pub history: &'a VecDeque<Vec<(String, f64)>>,
+    /// Frames since reset.
+    pub frames: u64,
+    /// The scene image to paint behind the panels (wgpu), if egui paints it.
+    pub scene_tex: Option<egui::TextureId>,
+    /// Scene size in pixels.
+    pub scene_size: (u32, u32),
+}
+
+/// A drag of the cloth with the cursor tool, in scene pixels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Drag {
+    /// Pressed at `(x, y)`: grab what is there.
+    Start {
+        /// Pixel x.
+        x: f32,
+        /// Pixel y.
+        y: f32,
+    },
+    /// Moved to `(x, y)`.
+    Move {
+        /// Pixel x.
+        x: f32,
+        /// Pixel y.
+        y: f32,
+    },
+    /// Released.
+    End,
+}
+
+const BACKENDS: [Backend; 6] =
+    [Backend::Cpu, Backend::CpuPar, Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan];
+
+fn shown(ui: &UiState, p: Panel) -> bool {
+    ui.panels.contains(&p)
+}
+
+/// Lays out one frame of the UI; returns a cloth drag, if any.
+pub fn draw(root: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec<Command>) -> Option<Drag> {
+    let ctx = root.ctx().clone();
+    // Shortcuts, unless a text field has the keyboard.
+    if !ctx.egui_wants_keyboard_input() {
+        ctx.input(|i| {
+            for k in SHORTCUT_KEYS {
+                if i.key_pressed(k)
+                    && let Some(a) = input::shortcut(k, i.modifiers.command)
+                {
+                    out.push(Command::Action(a));
+                }
+            }
+        });
+    }
+    // The scene behind everything (wgpu; Vulkan puts it under egui itself).
+    if let Some(tex) = info.scene_tex {
+        let rect = ctx.content_rect();
+        ctx.layer_painter(egui::LayerId::background()).image(
+            tex,
+            rect,
+            egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+            Color32::WHITE,
+        );
+    }
+    egui::Panel::top("menu").show(root, |ui| menu_bar(ui, s, out));
+    if shown(s, Panel::Toolbar) {
+        egui::Panel::top("tools").show(root, |ui| tool_bar(ui, s, out));
+    }
+    if shown(s, Panel::Status) {
+        egui::Panel::bottom("status").show(root, |ui| status_bar(ui, s, info, out));
+    }
+    if shown(s, Panel::Animation) {
+        egui::Panel::bottom("animation").show(root, |ui| animation_bar(ui, s, info, out));
+    }
+    let side = [Panel::Wind, Panel::Light, Panel::Parameters, Panel::Timings].iter().any(|p| shown(s, *p));
+    if side {
+        egui::Panel::right("side").resizable(true).default_size(300.0).show(root, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                ui.label(RichText::new("Backend").strong());
+                backend_picker(ui, info, out);
+                if shown(s, Panel::Wind) {
+                    ui.separator();
+                    wind_panel(ui, s);
+                }
+                if shown(s, Panel::Light) {
+                    ui.separator();
+                    light_panel(ui, s);
+                }
+                if shown(s, Panel::Parameters) {
+                    ui.separator();
+                    params_panel(ui, s, out);
+                }
+                if shown(s, Panel::Timings) {
+                    ui.separator();
+                    timing_chart(ui, info);
+                }
+            });
+        });
+    }
+    if s.about {
+        egui::Window::new("About clothlab").collapsible(false).open(&mut s.about).show(&ctx, |ui| {
+            ui.label("clothlab — a mass-spring cloth on CPU, wgpu and raw Vulkan.");
+            ui.label(
+                "After the master's thesis \"Interactive Cloth Simulation Accelerated by GPU\" (Melichar, Brno, 2016).",
+            );
+            ui.label(format!("version {}", env!("CARGO_PKG_VERSION")));
+        });
+    }
+    // The 3-D view: what is left, transparent, takes the mouse.
+    egui::CentralPanel::no_frame().show(root, |ui| view_area(ui, s, info, out)).inner
+}
+
+fn menu_bar(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
+    egui::MenuBar::new().ui(ui, |ui| {
+        ui.menu_button("File", |ui| {
+            item(ui, "Reset", "Ctrl+R", Action::Reset, out);
+            item(ui, "Save image", "Ctrl+S", Action::SaveImage, out);
+            item(ui, "Exit", "Ctrl+Q", Action::Exit, out);
+        });
+        ui.menu_button("View", |ui| view_items(ui, out));
+        ui.menu_button("Animation", |ui| animation_items(ui, s, out));
+        ui.menu_button("Window", |ui| {
+            for p in Panel::ALL {
+                let mut on = shown(s, p);
+                if ui.checkbox(&mut on, p.name()).clicked() {
+                    out.push(Command::Action(Action::TogglePanel(p)));
+                }
+            }
+        });
+        ui.menu_button("Help", |ui| item(ui, "About", "", Action::About, out));
+    });
+}
+
+fn item(ui: &mut egui::Ui, label: &str, key: &str, a: Action, out: &mut Vec<Command>) {
+    if ui.add(egui::Button::new(label).shortcut_text(key)).clicked() {
+        out.push(Command::Action(a));
+        ui.close();
+    }
+}
+
+/// The View menu (also in the context menu).
+fn view_items(ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    item(ui, "Cursor", "C", Action::Tool(Tool::Cursor), out);
+    item(ui, "Rotate X", "X", Action::Tool(Tool::RotateX), out);
+    item(ui, "Rotate Y", "Y", Action::Tool(Tool::RotateY), out);
+    item(ui, "Rotate Z", "Z", Action::Tool(Tool::RotateZ), out);
+    item(ui, "Rotate free", "F", Action::Tool(Tool::RotateFree), out);
+    ui.separator();
+    item(ui, "Zoom in", "I", Action::ZoomIn, out);
+    item(ui, "Zoom out", "O", Action::ZoomOut, out);
+    ui.separator();
+    item(ui, "Points", "P", Action::Mode(RenderMode::Points), out);
+    item(ui, "Lines", "L", Action::Mode(RenderMode::Lines), out);
+    item(ui, "Triangles", "T", Action::Mode(RenderMode::Triangles), out);
+}
+
+/// The Animation menu (also in the context menu).
+fn animation_items(ui: &mut egui::Ui, s: &UiState, out: &mut Vec<Command>) {
+    item(ui, if s.paused { "Play" } else { "Pause" }, "Space", Action::TogglePlay, out);
+}
+
+fn tool_bar(ui: &mut egui::Ui, s: &UiState, out: &mut Vec<Command>) {
+    ui.horizontal(|ui| {
+        for (t, label, tip) in [
+            (Tool::Cursor, "✋ Cursor", "Grab and drag the cloth (C)"),
+            (Tool::RotateX, "⟲ X", "Rotate about x (X)"),
+            (Tool::RotateY, "⟲ Y", "Rotate about y (Y)"),
+            (Tool::RotateZ, "⟲ Z", "Roll (Z)"),
+            (Tool::RotateFree, "⟲ free", "Rotate freely (F)"),
+        ] {
+            if ui.selectable_label(s.tool == t, label).on_hover_text(tip).clicked() {
+                out.push(Command::Action(Action::Tool(t)));
+            }
+        }
+        ui.separator();
+        if ui.button("🔍+").on_hover_text("Zoom in (I)").clicked() {
+            out.push(Command::Action(Action::ZoomIn));
+        }
+        if ui.button("🔍−").on_hover_text("Zoom out (O)").clicked() {
+            out.push(Command::Action(Action::ZoomOut));
+        }
+        ui.separator();
+        for (m, label) in
+            [(RenderMode::Points, "Points"), (RenderMode::Lines, "Lines"), (RenderMode::Triangles, "Triangles")]
+        {
+            if ui.selectable_label(s.mode == m, label).clicked() {
+                out.push(Command::Action(Action::Mode(m)));
+            }
+        }
+    });
+}
+
+fn animation_bar(ui: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec<Command>) {
+    ui.horizontal(|ui| {
+        if ui.button(if s.paused { "▶ Play" } else { "⏸ Pause" }).clicked() {
+            out.push(Command::Action(Action::TogglePlay));
+        }
+        if ui.button("⟲ Reset").clicked() {
+            out.push(Command::Action(Action::Reset));
+        }
+        ui.separator();
+        let mut substeps = s.params.substeps;
+        let r = ui.add(egui::Slider::new(&mut substeps, 1..=64).text("substeps per frame"));
+        if r.changed() && substeps <= MAX_SUBSTEPS {
+            s.params.substeps = substeps;
+            if s.params.validate().is_ok() {
+                out.push(Command::Params(s.params.clone()));
+            }
+        }
+        ui.label(format!("frame {}", info.frames));
+    });
+}
+
+fn status_bar(ui: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec<Command>) {
+    ui.horizontal(|ui| {
+        ui.label(format!("{:.0} fps", s.fps));
+        ui.separator();
+        match info.substep_ns {
+            Some(ns) => ui.label(format!("{:.2} ms per substep", ns / 1e6)),
+            None => ui.label("— ms per substep"),
+        };
+        ui.separator();
+        let r = ui.add(egui::Slider::new(&mut s.grid_n, 10..=1024).logarithmic(true).text("grid"));
+        if r.drag_stopped() || (r.changed() && !r.dragged()) {
+            out.push(Command::Grid(s.grid_n));
+        }
+        ui.separator();
+        ui.label(format!("{} · {:?} · {}", info.backend.name(), info.api, info.adapter));
+        ui.separator();
+        ui.label(&s.message);
+    });
+}
+
+fn backend_picker(ui: &mut egui::Ui, info: &Info<'_>, out: &mut Vec<Command>) {
+    egui::ComboBox::from_id_salt("backend").selected_text(info.backend.name()).show_ui(ui, |ui| {
+        for b in BACKENDS {
+            if ui.selectable_label(b == info.backend, b.name()).clicked() && b != info.backend {
+                out.push(Command::Backend(b));
+            }
+        }
+    });
+}
+
+fn wind_panel(ui: &mut egui::Ui, s: &mut UiState) {
+    ui.label(RichText::new("Wind").strong());
+    ui.checkbox(&mut s.wind_on, "on");
+    ui.add(egui::Slider::new(&mut s.wind_speed, 0.0..=15.0).text("speed m/s"));
+    ui.add(egui::Slider::new(&mut s.wind_azimuth, 0.0..=360.0).text("direction °"));
+    ui.add(egui::Slider::new(&mut s.gusts, 0.0..=1.0).text("gusts"));
+}
+
+fn light_panel(ui: &mut egui::Ui, s: &mut UiState) {
+    ui.label(RichText::new("Light").strong());
+    for (k, name) in ["x", "y", "z"].iter().enumerate() {
+        let range = if k == 1 { 0.5..=10.0 } else { -8.0..=8.0 };
+        ui.add(egui::Slider::new(&mut s.light[k], range).text(format!("{name} m")));
+    }
+}
+
+fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
+    ui.label(RichText::new("Parameters").strong());
+    let p = &mut s.params;
+    let mut changed = false;
+    let mut f = |ui: &mut egui::Ui, v: &mut f32, r: std::ops::RangeInclusive<f32>, label: &str, log: bool| {
+        changed |= ui.add(egui::Slider::new(v, r).text(label).logarithmic(log)).changed();
+    };
+    f(ui, &mut p.frame_dt, 1.0 / 240.0..=1.0 / 15.0, "frame dt s", false);
+    f(ui, &mut p.gravity[1], -30.0..=0.0, "gravity y m/s²", false);
+    f(ui, &mut p.cloth_mass, 0.01..=10.0, "cloth mass kg", true);
+    f(ui, &mut p.air_drag, 0.0..=5.0, "air drag 1/s", false);
+    f(ui, &mut p.damping, 0.0..=0.1, "damping", false);
+    f(ui, &mut p.structural_stiffness, 0.001..=1.0, "structural κ", true);
+    f(ui, &mut p.shear_stiffness, 0.001..=1.0, "shear κ", true);
+    f(ui, &mut p.bend_stiffness, 0.0001..=1.0, "bend κ", true);
+    f(ui, &mut p.structural_damping, 0.0..=1.0, "structural damping", false);
+    f(ui, &mut p.shear_damping, 0.0..=1.0, "shear damping", false);
+    f(ui, &mut p.bend_damping, 0.0..=1.0, "bend damping", false);
+    f(ui, &mut p.strain_limit, 0.01..=1.0, "strain limit τ", false);
+    f(ui, &mut p.friction, 0.0..=1.0, "friction", false);
+    f(ui, &mut p.collision_margin, 0.0..=0.05, "collision margin m", false);
+    f(ui, &mut p.wind_coefficient, 0.0..=5.0, "wind coefficient", false);
+    changed |= ui
+        .add(egui::Slider::new(&mut p.strain_iterations, 0..=MAX_STRAIN_ITERATIONS.min(16)).text("strain passes"))
+        .changed();
+    if changed {
+        match p.validate() {
+            Ok(()) => out.push(Command::Params(p.clone())),
+            Err(e) => s.message = format!("{e}"),
+        }
+    }
+    if ui.button("Defaults").clicked() {
+        *p = clothlab_core::SimParams { wind: p.wind, ..Default::default() };
+        out.push(Command::Params(p.clone()));
+    }
+}
+
+fn timing_chart(ui: &mut egui::Ui, info: &Info<'_>) {
+    ui.label(RichText::new("Kernel timings (ms, median per frame)").strong());
+    let mut labels: Vec<&str> = Vec::new();
+    for row in info.history {
+        for (l, _) in row {
+            if !labels.contains(&l.as_str()) {
+                labels.push(l);
+            }
+        }
+    }
+    Plot::new("timings").height(180.0).legend(Legend::default()).allow_scroll(false).show(ui, |plot| {
+        for label in labels {
+            let pts: PlotPoints = info
+                .history
+                .iter()
+                .enumerate()
+                .filter_map(|(k, row)| row.iter().find(|(l, _)| l == label).map(|(_, v)| [k as f64, v / 1e6]))
+                .collect();
+            let line = Line::new(label.to_string(), pts);
+            plot.line(if label == SUBSTEP { line.width(2.5) } else { line });
+        }
+    });
+}
+
+fn view_area(ui: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec<Command>) -> Option<Drag> {
+    let rect = ui.max_rect();
+    let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+    response.context_menu(|ui| {
+        view_items(ui, out);
+        ui.separator();
+        animation_items(ui, s, out);
+    });
+    if response.hovered() {
+        let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+        if scroll != 0.0 {
+            input::zoom(&mut s.camera, scroll / 50.0);
+        }
+    }
+    // Pixels of the scene image, which covers the whole window.
+    let ppp = ui.ctx().pixels_per_point();
+    let to_px = |p: egui::Pos2| {
+        let (w, h) = info.scene_size;
+        ((p.x * ppp).clamp(0.0, w as f32 - 1.0), (p.y * ppp).clamp(0.0, h as f32 - 1.0))
+    };
+    let primary =
+        response.dragged_by(egui::PointerButton::Primary) || response.drag_started_by(egui::PointerButton::Primary);
+    if s.tool == Tool::Cursor {
+        if response.drag_started_by(egui::PointerButton::Primary)
+            && let Some(p) = response.interact_pointer_pos()
+        {
+            let (x, y) = to_px(p);
+            return Some(Drag::Start { x, y });
+        }
+        if response.drag_stopped() {
+            return Some(Drag::End);
+        }
+        if primary && let Some(p) = response.interact_pointer_pos() {
+            let (x, y) = to_px(p);
+            return Some(Drag::Move { x, y });
+        }
+    } else if primary {
+        let d = response.drag_delta() * ppp;
+        input::rotate(&mut s.camera, s.tool, d.x, d.y);
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_backend_is_offered() {
+        for b in
+            [Backend::Cpu, Backend::CpuPar, Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan]
+        {
+            assert!(BACKENDS.contains(&b), "{b:?}");
+        }
+    }
+}
