@@ -121,11 +121,24 @@ struct RunArgs {
     /// Window height, pixels.
     #[arg(long, default_value_t = 800)]
     height: u32,
+    /// Test hook: from frame 5 on, grab the cloth under its middle with the cursor tool
+    /// and drag it upwards, printing what was grabbed and where it went.
+    #[arg(long, hide = true)]
+    drag_test: bool,
 }
 
 impl Default for RunArgs {
     fn default() -> Self {
-        Self { api: Api::Wgpu, backend: None, n: 64, frames: None, screenshot: None, width: 1280, height: 800 }
+        Self {
+            api: Api::Wgpu,
+            backend: None,
+            n: 64,
+            frames: None,
+            screenshot: None,
+            width: 1280,
+            height: 800,
+            drag_test: false,
+        }
     }
 }
 
@@ -144,6 +157,7 @@ fn run_app(args: RunArgs) -> Result<ExitCode> {
         frames: args.frames,
         screenshot: args.screenshot,
         size: (args.width, args.height),
+        drag_test: args.drag_test,
     })
 }
 

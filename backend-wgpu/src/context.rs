@@ -75,9 +75,14 @@ impl GpuContext {
     {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(window.clone())));
-        let surface = instance
-            .create_surface(window)
-            .map_err(|e| GpuError::Wgpu { what: "creating the window surface", reason: e.to_string() })?;
+        let surface = match instance.create_surface(window) {
+            Ok(s) => s,
+            // No backend could make a surface: most likely there is no adapter at all.
+            Err(e) => {
+                Self::open(&instance, None)?;
+                return Err(GpuError::Wgpu { what: "creating the window surface", reason: e.to_string() });
+            }
+        };
         let ctx = Self::open(&instance, Some(&surface))?;
         Ok((ctx, surface))
     }

@@ -39,6 +39,8 @@ pub struct RunOptions {
     pub screenshot: Option<PathBuf>,
     /// Window size, pixels.
     pub size: (u32, u32),
+    /// Drag the cloth by script (a test of picking and dragging).
+    pub drag_test: bool,
 }
 
 /// Everything the panels show and change.
@@ -101,6 +103,8 @@ struct Running {
     dragging: Option<(u32, glam::Vec3)>,
     /// File → Exit was chosen.
     quit: bool,
+    /// Where the scripted drag pressed.
+    script_at: Option<[f32; 2]>,
 }
 
 struct App {
@@ -189,6 +193,7 @@ impl App {
             drawn: 0,
             dragging: None,
             quit: false,
+            script_at: None,
         })
     }
 
@@ -224,6 +229,12 @@ impl ApplicationHandler for App {
             WindowEvent::RedrawRequested => {
                 let limit = self.opts.frames;
                 let shot_path = self.opts.screenshot.clone();
+                if self.opts.drag_test
+                    && let Err(e) = r.scripted_drag(limit)
+                {
+                    self.fail(event_loop, e);
+                    return;
+                }
                 match r.frame(limit, shot_path.as_deref()) {
                     Ok(true) => {
                         event_loop.exit();
@@ -392,6 +403,34 @@ impl Running {
 
     fn window_close(&mut self) {
         self.quit = true;
+    }
+
+    /// The `--drag-test` script: at frame 5 press on the particle a third of the way down
+    /// the middle of the cloth, then move up 4 px a frame; report at the last frame.
+    fn scripted_drag(&mut self, limit: Option<u64>) -> Result<()> {
+        let (w, h) = self.gfx.scene_size();
+        if self.drawn == 5 {
+            self.ui.tool = Tool::Cursor;
+            let n = self.sim.solver.get_ref().scene().cloth.n as usize;
+            let p = self.sim.solver.get().state()?.pos[(n / 3) * n + n / 2];
+            let [x, y] =
+                self.ui.camera.project(glam::Vec3::new(p[0], p[1], p[2]), w, h).context("cloth behind the camera")?;
+            self.drag(ui::Drag::Start { x, y })?;
+            let (id, at) = self.dragging.context("drag test: nothing grabbed under the cloth's middle")?;
+            println!("drag: grabbed particle {id} at y={:.4} (pixel {x:.0}, {y:.0})", at.y);
+            self.script_at = Some([x, y]);
+        } else if let Some([x, y]) = self.script_at {
+            let k = self.drawn.saturating_sub(5) as f32;
+            self.drag(ui::Drag::Move { x, y: (y - 4.0 * k).max(0.0) })?;
+            if limit.is_some_and(|l| self.drawn + 1 >= l)
+                && let Some((id, _)) = self.dragging
+            {
+                let now = self.sim.solver.get().state()?.pos[id as usize];
+                let target = self.sim.grab.map(|g| g.target[1]).unwrap_or(f32::NAN);
+                println!("drag: particle {id} now at y={:.4} (target y={target:.4})", now[1]);
+            }
+        }
+        Ok(())
     }
 
     /// Grabs, drags or lets go of the cloth with the cursor tool.

@@ -22,6 +22,9 @@ pub enum Shared<'a> {
     Wgpu(&'a GpuContext),
     /// The window draws through raw Vulkan on this device.
     Vulkan(&'a std::sync::Arc<Device>),
+    /// No window: every GPU solver opens its own device.
+    #[cfg_attr(not(test), allow(dead_code))]
+    None,
 }
 
 /// A solver of any backend, kept by type so that a GPU solver on the window's device can
@@ -105,14 +108,14 @@ pub fn make_solver(backend: Backend, scene: Scene, params: SimParams, shared: &S
         (Backend::WgpuNaive | Backend::Wgpu, Shared::Wgpu(ctx)) => {
             AnySolver::Wgpu(Box::new(WgpuSolver::with_context((*ctx).clone(), v, scene, params)?), true)
         }
-        (Backend::WgpuNaive | Backend::Wgpu, Shared::Vulkan(_)) => {
+        (Backend::WgpuNaive | Backend::Wgpu, Shared::Vulkan(_) | Shared::None) => {
             AnySolver::Wgpu(Box::new(WgpuSolver::new(v, scene, params)?), false)
         }
         (Backend::VulkanNaive | Backend::Vulkan, Shared::Vulkan(dev)) => AnySolver::Vulkan(
             Box::new(VulkanSolver::on_device((*dev).clone(), v, scene, params, VulkanOptions::default())?),
             true,
         ),
-        (Backend::VulkanNaive | Backend::Vulkan, Shared::Wgpu(_)) => {
+        (Backend::VulkanNaive | Backend::Vulkan, Shared::Wgpu(_) | Shared::None) => {
             let options = VulkanOptions { validation: crate::cli::vulkan_validation(), ..Default::default() };
             AnySolver::Vulkan(Box::new(VulkanSolver::with_options(v, scene, params, options)?), false)
         }
@@ -176,5 +179,37 @@ impl Sim {
         let params = self.solver.get_ref().params().clone();
         *self = Self::new(self.backend, n, params, shared)?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn switching_the_solver_keeps_the_cloth_where_it_is() {
+        let mut sim = Sim::new(Backend::Cpu, 24, SimParams::default(), &Shared::None).unwrap();
+        for _ in 0..6 {
+            sim.step().unwrap();
+        }
+        let before = sim.solver.get().state().unwrap();
+        let mut targets = vec![Backend::CpuPar];
+        // GPU solvers where an adapter must be (lavapipe in CI).
+        if std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() == Ok("1") {
+            targets.extend([Backend::Wgpu, Backend::Vulkan, Backend::Cpu]);
+        }
+        for b in targets {
+            sim.switch(b, &Shared::None).unwrap();
+            assert_eq!(sim.backend, b);
+            let after = sim.solver.get().state().unwrap();
+            // The state is copied, not re-simulated: bit for bit.
+            assert_eq!(before.pos, after.pos, "{b:?}");
+            assert_eq!(before.prev, after.prev, "{b:?}");
+        }
+        // And it simulates on from there: one more frame moves the cloth a little.
+        sim.step().unwrap();
+        let next = sim.solver.get().state().unwrap();
+        let moved = next.pos.iter().zip(&before.pos).map(|(a, b)| (a[1] - b[1]).abs()).fold(0.0f32, f32::max);
+        assert!(moved > 0.0 && moved < 0.1, "one frame moves the cloth by {moved} m");
     }
 }
