@@ -125,6 +125,9 @@ struct RunArgs {
     /// and drag it upwards, printing what was grabbed and where it went.
     #[arg(long, hide = true)]
     drag_test: bool,
+    /// Test hook: halfway through `--frames`, switch to the other graphics API.
+    #[arg(long, hide = true)]
+    switch_api: bool,
 }
 
 impl Default for RunArgs {
@@ -138,6 +141,7 @@ impl Default for RunArgs {
             width: 1280,
             height: 800,
             drag_test: false,
+            switch_api: false,
         }
     }
 }
@@ -158,6 +162,7 @@ fn run_app(args: RunArgs) -> Result<ExitCode> {
         screenshot: args.screenshot,
         size: (args.width, args.height),
         drag_test: args.drag_test,
+        switch_api: args.switch_api,
     })
 }
 

@@ -337,3 +337,44 @@ fn dragging_with_the_cursor_tool_lifts_the_grabbed_particle() {
         assert!(after > before + 0.2, "{api}: grabbed at {before} m, now {after} m");
     }
 }
+
+#[test]
+fn switching_the_api_while_running_keeps_drawing_the_cloth_and_the_panels() {
+    if !display() {
+        return;
+    }
+    for api in ["wgpu", "vulkan"] {
+        let path = std::env::temp_dir().join(format!("clothlab-switch-{}-{api}.png", std::process::id()));
+        let out = clothlab(&[
+            "run",
+            "--api",
+            api,
+            "--n",
+            "32",
+            "--frames",
+            "30",
+            "--width",
+            "640",
+            "--height",
+            "400",
+            "--switch-api",
+            "--screenshot",
+            path.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{api}: {}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8_lossy(&out.stdout);
+        let other = if api == "wgpu" { "Vulkan" } else { "Wgpu" };
+        assert!(text.contains(&format!("switched to {other}")), "{api}: {text}");
+        let img = image::open(&path).unwrap().to_rgba8();
+        let px: Vec<[u8; 4]> = img.pixels().map(|p| p.0).collect();
+        let cloth = px
+            .iter()
+            .filter(|p| p[2] as i32 > p[0] as i32 + 50 && p[2] as i32 > p[1] as i32 + 20 && p[2] < 220)
+            .count();
+        assert!(cloth > 2000, "{api} → {other}: only {cloth} cloth pixels");
+        // egui's text made it to the new renderer: light pixels in the menu bar row.
+        let text_px = px[(8 * 640)..(16 * 640)].iter().filter(|p| p[0] > 150 && p[1] > 150 && p[2] > 150).count();
+        assert!(text_px > 30, "{api} → {other}: no menu text ({text_px} light pixels)");
+        std::fs::remove_file(&path).ok();
+    }
+}

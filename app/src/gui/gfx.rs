@@ -57,9 +57,16 @@ pub enum Gfx {
     Wgpu(Box<WgpuGfx>),
     /// Through raw Vulkan.
     Vulkan(Box<VulkanGfx>),
+    /// Nothing, for the moment of an API switch.
+    None,
 }
 
 impl Gfx {
+    /// No graphics (while switching APIs).
+    pub fn new_placeholder() -> Self {
+        Gfx::None
+    }
+
     /// Graphics for `window` on `api`, drawing `scene` (its cloth topology built from
     /// `params`) at the window's size.
     pub fn new(api: Api, window: &Arc<Window>, scene: &Scene, params: &clothlab_core::SimParams) -> Result<Self> {
@@ -112,6 +119,7 @@ impl Gfx {
         match self {
             Gfx::Wgpu(g) => Shared::Wgpu(&g.ctx),
             Gfx::Vulkan(g) => Shared::Vulkan(&g.dev),
+            Gfx::None => Shared::None,
         }
     }
 
@@ -119,7 +127,7 @@ impl Gfx {
     pub fn api(&self) -> Api {
         match self {
             Gfx::Wgpu(_) => Api::Wgpu,
-            Gfx::Vulkan(_) => Api::Vulkan,
+            Gfx::Vulkan(_) | Gfx::None => Api::Vulkan,
         }
     }
 
@@ -128,6 +136,7 @@ impl Gfx {
         match self {
             Gfx::Wgpu(g) => g.ctx.describe(),
             Gfx::Vulkan(g) => format!("{} (raw Vulkan)", g.dev.name),
+            Gfx::None => String::new(),
         }
     }
 
@@ -136,7 +145,7 @@ impl Gfx {
     pub fn scene_texture(&self) -> Option<egui::TextureId> {
         match self {
             Gfx::Wgpu(g) => Some(g.scene_tex),
-            Gfx::Vulkan(_) => None,
+            Gfx::Vulkan(_) | Gfx::None => None,
         }
     }
 
@@ -159,6 +168,7 @@ impl Gfx {
                 g.dev.wait_idle()?;
                 g.renderer = VulkanRenderer::new(&g.dev, scene, &topo, w, h)?;
             }
+            Gfx::None => {}
         }
         Ok(())
     }
@@ -182,6 +192,7 @@ impl Gfx {
                 );
             }
             Gfx::Vulkan(g) => g.presenter.resize(width, height),
+            Gfx::None => {}
         }
         Ok(())
     }
@@ -191,6 +202,7 @@ impl Gfx {
         match self {
             Gfx::Wgpu(g) => g.renderer.size(),
             Gfx::Vulkan(g) => g.renderer.size(),
+            Gfx::None => (1, 1),
         }
     }
 
@@ -207,6 +219,7 @@ impl Gfx {
                 let cloth = vulkan_cloth(solver, &mut copy)?;
                 g.renderer.pick(view, cloth, x, y)?
             }
+            Gfx::None => None,
         })
     }
 
@@ -226,6 +239,7 @@ impl Gfx {
                 g.renderer.render(view, cloth)?;
                 g.renderer.read_image()?
             }
+            Gfx::None => bail!("no graphics"),
         };
         Ok(Shot { width, height, rgba })
     }
@@ -265,6 +279,7 @@ impl Gfx {
                 }
                 Ok(g.presenter.take_screenshot()?.map(|s| Shot { width: s.width, height: s.height, rgba: s.rgba }))
             }
+            Gfx::None => Ok(None),
         }
     }
 }

@@ -41,6 +41,8 @@ pub struct RunOptions {
     pub size: (u32, u32),
     /// Drag the cloth by script (a test of picking and dragging).
     pub drag_test: bool,
+    /// Switch to the other API halfway through `frames` (a test).
+    pub switch_api: bool,
 }
 
 /// Everything the panels show and change.
@@ -88,6 +90,8 @@ pub enum Command {
     Grid(u32),
     /// New parameters.
     Params(SimParams),
+    /// Draw through the other API (the solver follows where it is a GPU solver).
+    Api(Api),
 }
 
 struct Running {
@@ -235,6 +239,14 @@ impl ApplicationHandler for App {
                     self.fail(event_loop, e);
                     return;
                 }
+                if self.opts.switch_api && limit.is_some_and(|l| r.drawn == l / 2) {
+                    let other = if r.gfx.api() == Api::Wgpu { Api::Vulkan } else { Api::Wgpu };
+                    if let Err(e) = r.command(Command::Api(other)) {
+                        self.fail(event_loop, e);
+                        return;
+                    }
+                    println!("switched to {other:?}, solver {}", r.sim.backend.name());
+                }
                 match r.frame(limit, shot_path.as_deref()) {
                     Ok(true) => {
                         event_loop.exit();
@@ -354,11 +366,49 @@ impl Running {
                 self.dragging = None;
                 self.ui.message = format!("new cloth: {n}×{n}");
             }
+            Command::Api(api) => self.switch_api(api)?,
             Command::Params(p) => match self.sim.solver.get().set_params(p.clone()) {
                 Ok(()) => {}
                 Err(e) => self.ui.message = format!("parameters refused: {e}"),
             },
         }
+        Ok(())
+    }
+
+    /// Draws through `api` from now on. The window's surface belongs to one API at a time,
+    /// so the cloth is parked on the CPU solver, the old graphics (and any device holding
+    /// the surface) dropped, the new ones made, and the solver moved onto them; egui starts
+    /// afresh so that its textures reach the new renderer.
+    fn switch_api(&mut self, api: Api) -> Result<()> {
+        if api == self.gfx.api() {
+            return Ok(());
+        }
+        let backend = self.sim.backend;
+        self.sim.switch(Backend::Cpu, &sim::Shared::None)?;
+        let scene = self.sim.solver.get_ref().scene().clone();
+        let params = self.sim.solver.get_ref().params().clone();
+        // The old surface must be gone before the new one is made.
+        let placeholder = Gfx::new_placeholder();
+        drop(std::mem::replace(&mut self.gfx, placeholder));
+        self.gfx = Gfx::new(api, &self.window, &scene, &params)?;
+        let target = match (backend, api) {
+            (Backend::WgpuNaive, Api::Vulkan) => Backend::VulkanNaive,
+            (Backend::Wgpu, Api::Vulkan) => Backend::Vulkan,
+            (Backend::VulkanNaive, Api::Wgpu) => Backend::WgpuNaive,
+            (Backend::Vulkan, Api::Wgpu) => Backend::Wgpu,
+            (b, _) => b,
+        };
+        self.sim.switch(target, &self.gfx.shared())?;
+        self.egui_ctx = egui::Context::default();
+        self.egui_state = egui_winit::State::new(
+            self.egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &self.window,
+            Some(self.window.scale_factor() as f32),
+            None,
+            None,
+        );
+        self.ui.message = format!("drawing through {api:?}, solver {}", target.name());
         Ok(())
     }
 

@@ -102,6 +102,14 @@ pub fn draw(root: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
             egui::ScrollArea::vertical().show(ui, |ui| {
                 ui.label(RichText::new("Backend").strong());
                 backend_picker(ui, info, out);
+                ui.horizontal(|ui| {
+                    ui.label("API");
+                    for api in [Api::Wgpu, Api::Vulkan] {
+                        if ui.selectable_label(info.api == api, format!("{api:?}")).clicked() && info.api != api {
+                            out.push(Command::Api(api));
+                        }
+                    }
+                });
                 if shown(s, Panel::Wind) {
                     ui.separator();
                     wind_panel(ui, s);
