@@ -232,6 +232,26 @@ fn display() -> bool {
     ok
 }
 
+/// Runs the app for `frames` frames on `api` at 640×400 with `extra` arguments and returns
+/// its stdout and the screenshot's pixels.
+fn run_app(api: &str, frames: &str, extra: &[&str]) -> (String, Vec<[u8; 4]>) {
+    let path = std::env::temp_dir().join(format!("clothlab-app-{}-{api}-{}.png", std::process::id(), extra.len()));
+    let mut args = vec!["run", "--api", api, "--n", "32", "--frames", frames, "--width", "640", "--height", "400"];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["--screenshot", path.to_str().unwrap()]);
+    let out = clothlab(&args);
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    let img = image::open(&path).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (640, 400), "{args:?}");
+    std::fs::remove_file(&path).ok();
+    (String::from_utf8_lossy(&out.stdout).into_owned(), img.pixels().map(|p| p.0).collect())
+}
+
+/// Clearly blue pixels (the cloth, not sky, floor or spheres).
+fn cloth_pixels(px: &[[u8; 4]]) -> usize {
+    px.iter().filter(|p| p[2] as i32 > p[0] as i32 + 50 && p[2] as i32 > p[1] as i32 + 20 && p[2] < 220).count()
+}
+
 #[test]
 fn the_app_refuses_bad_input_and_a_missing_display_in_one_line() {
     refused(&["run", "--screenshot", "/tmp/x.png"], "--screenshot needs --frames");
@@ -268,39 +288,14 @@ fn the_app_opens_on_each_api_draws_the_cloth_and_the_panels_and_exits() {
         return;
     }
     for api in ["wgpu", "vulkan"] {
-        let path = std::env::temp_dir().join(format!("clothlab-app-{}-{api}.png", std::process::id()));
-        let out = clothlab(&[
-            "run",
-            "--api",
-            api,
-            "--n",
-            "32",
-            "--frames",
-            "30",
-            "--width",
-            "640",
-            "--height",
-            "400",
-            "--screenshot",
-            path.to_str().unwrap(),
-        ]);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(out.status.success(), "{api}: {err}");
-        let img = image::open(&path).unwrap().to_rgba8();
-        assert_eq!(img.dimensions(), (640, 400), "{api}");
-        let px: Vec<[u8; 4]> = img.pixels().map(|p| p.0).collect();
-        // The cloth: clearly blue pixels (not sky, floor or spheres). At n = 32 after
-        // half a second it covers a few per cent of a 640×400 window.
-        let cloth = px
-            .iter()
-            .filter(|p| p[2] as i32 > p[0] as i32 + 50 && p[2] as i32 > p[1] as i32 + 20 && p[2] < 220)
-            .count();
+        let (_, px) = run_app(api, "30", &[]);
+        // At n = 32 after half a second the cloth covers a few per cent of the window.
+        let cloth = cloth_pixels(&px);
         assert!(cloth > 2000, "{api}: only {cloth} cloth pixels");
         // The panels: egui's dark grey (r = g = b < 40) fills most of the menu bar row.
         let menu_row = &px[(8 * 640)..(9 * 640)];
         let dark = menu_row.iter().filter(|p| p[0] < 40 && p[0].abs_diff(p[1]) < 4 && p[1].abs_diff(p[2]) < 4).count();
         assert!(dark > 400, "{api}: the menu bar is not there ({dark} dark pixels in row 8)");
-        std::fs::remove_file(&path).ok();
     }
 }
 
@@ -344,37 +339,13 @@ fn switching_the_api_while_running_keeps_drawing_the_cloth_and_the_panels() {
         return;
     }
     for api in ["wgpu", "vulkan"] {
-        let path = std::env::temp_dir().join(format!("clothlab-switch-{}-{api}.png", std::process::id()));
-        let out = clothlab(&[
-            "run",
-            "--api",
-            api,
-            "--n",
-            "32",
-            "--frames",
-            "30",
-            "--width",
-            "640",
-            "--height",
-            "400",
-            "--switch-api",
-            "--screenshot",
-            path.to_str().unwrap(),
-        ]);
-        assert!(out.status.success(), "{api}: {}", String::from_utf8_lossy(&out.stderr));
-        let text = String::from_utf8_lossy(&out.stdout);
+        let (text, px) = run_app(api, "30", &["--switch-api"]);
         let other = if api == "wgpu" { "Vulkan" } else { "Wgpu" };
         assert!(text.contains(&format!("switched to {other}")), "{api}: {text}");
-        let img = image::open(&path).unwrap().to_rgba8();
-        let px: Vec<[u8; 4]> = img.pixels().map(|p| p.0).collect();
-        let cloth = px
-            .iter()
-            .filter(|p| p[2] as i32 > p[0] as i32 + 50 && p[2] as i32 > p[1] as i32 + 20 && p[2] < 220)
-            .count();
+        let cloth = cloth_pixels(&px);
         assert!(cloth > 2000, "{api} → {other}: only {cloth} cloth pixels");
         // egui's text made it to the new renderer: light pixels in the menu bar row.
         let text_px = px[(8 * 640)..(16 * 640)].iter().filter(|p| p[0] > 150 && p[1] > 150 && p[2] > 150).count();
         assert!(text_px > 30, "{api} → {other}: no menu text ({text_px} light pixels)");
-        std::fs::remove_file(&path).ok();
     }
 }

@@ -159,9 +159,6 @@ impl VulkanSolver {
         params: SimParams,
         options: VulkanOptions,
     ) -> Result<Self, SolverError> {
-        if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
-            return Err(SolverError::Backend(format!("at most {MAX_COLLIDERS} spheres and boxes")));
-        }
         let dev = Device::new(options.validation).map_err(backend)?;
         Self::on_device(dev, variant, scene, params, options)
     }

@@ -4,7 +4,6 @@
 // workgroup, which stats_reduce folds into the substep's entry.
 @group(0) @binding(19) var<storage, read_write> partials: array<vec2<f32>>;
 
-var<workgroup> by_subgroup: array<vec2<f32>, 64>;
 
 @compute @workgroup_size(64)
 fn main(
@@ -22,21 +21,8 @@ fn main(
     if i < p.n * p.n {
         v = particle_stats(i);
     }
-    let m = subgroupMax(v.x);
-    let e = subgroupAdd(v.y);
-    if lane == 0u {
-        by_subgroup[sg] = vec2<f32>(m, e);
-    }
-    workgroupBarrier();
-    if sg == 0u {
-        var acc = vec2<f32>(0.0);
-        for (var k = lane; k < num_sg; k += sg_size) {
-            acc = vec2<f32>(max(acc.x, by_subgroup[k].x), acc.y + by_subgroup[k].y);
-        }
-        let wm = subgroupMax(acc.x);
-        let we = subgroupAdd(acc.y);
-        if lane == 0u {
-            partials[wg.x + wg.y * groups.x] = vec2<f32>(wm, we);
-        }
+    let total = fold_workgroup(v, sg, num_sg, lane, sg_size);
+    if sg == 0u && lane == 0u {
+        partials[wg.x + wg.y * groups.x] = total;
     }
 }

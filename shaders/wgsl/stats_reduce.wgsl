@@ -6,7 +6,6 @@
 @group(0) @binding(18) var<storage, read_write> stats_energy: array<f32>;
 @group(0) @binding(19) var<storage, read_write> partials: array<vec2<f32>>;
 
-var<workgroup> by_subgroup: array<vec2<f32>, 64>;
 
 @compute @workgroup_size(64)
 fn main(
@@ -21,22 +20,9 @@ fn main(
     for (var k = li; k < count; k += WORKGROUP) {
         acc = vec2<f32>(max(acc.x, partials[k].x), acc.y + partials[k].y);
     }
-    let m = subgroupMax(acc.x);
-    let e = subgroupAdd(acc.y);
-    if lane == 0u {
-        by_subgroup[sg] = vec2<f32>(m, e);
-    }
-    workgroupBarrier();
-    if sg == 0u {
-        var total = vec2<f32>(0.0);
-        for (var k = lane; k < num_sg; k += sg_size) {
-            total = vec2<f32>(max(total.x, by_subgroup[k].x), total.y + by_subgroup[k].y);
-        }
-        let wm = subgroupMax(total.x);
-        let we = subgroupAdd(total.y);
-        if lane == 0u {
-            stats_max[stats_push.substep] = wm;
-            stats_energy[stats_push.substep] = we;
-        }
+    let total = fold_workgroup(acc, sg, num_sg, lane, sg_size);
+    if sg == 0u && lane == 0u {
+        stats_max[stats_push.substep] = total.x;
+        stats_energy[stats_push.substep] = total.y;
     }
 }

@@ -32,3 +32,14 @@ pub fn assert_checks(label: &str, checks: &[Check]) {
         );
     }
 }
+
+/// Mean absolute difference per channel (0–255) of two RGBA8 images and the fraction of
+/// pixels whose largest channel difference exceeds 48: the golden-image measure.
+pub fn image_diff(a: &[u8], b: &[u8]) -> (f64, f64) {
+    assert_eq!(a.len(), b.len());
+    let sum: u64 = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y) as u64).sum();
+    let px = a.len() / 4;
+    let bad =
+        a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.abs_diff(*y) > 48)).count();
+    (sum as f64 / a.len() as f64, bad as f64 / px as f64)
+}

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clothlab_core::cpu::Exec;
 use clothlab_core::{CpuSolver, OrbitCamera, RenderError, RenderMode, Scene, SimParams, Solver, View};
-use clothlab_tests::gpu_required;
+use clothlab_tests::{gpu_required, image_diff};
 use clothlab_wgpu::{ClothSource, Variant, WgpuRenderer, WgpuSolver};
 
 const W: u32 = 320;
@@ -41,17 +41,6 @@ fn draw(s: &WgpuSolver, r: &mut WgpuRenderer, mode: RenderMode) -> Vec<u8> {
     let (pos, normal) = s.vertex_buffers();
     r.render(s.context(), &view(mode), ClothSource::Gpu { pos, normal }).unwrap();
     r.read_image(s.context()).unwrap()
-}
-
-/// Mean absolute difference per channel (0–255) and the fraction of pixels whose largest
-/// channel difference exceeds 48.
-fn image_diff(a: &[u8], b: &[u8]) -> (f64, f64) {
-    assert_eq!(a.len(), b.len());
-    let sum: u64 = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y) as u64).sum();
-    let px = a.len() / 4;
-    let bad =
-        a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.abs_diff(*y) > 48)).count();
-    (sum as f64 / a.len() as f64, bad as f64 / px as f64)
 }
 
 fn out_dir() -> PathBuf {

@@ -5,7 +5,7 @@
 use clothlab_core::grid::ClothState;
 use clothlab_core::{OrbitCamera, RenderMode, Scene, SimParams, Solver, View};
 use clothlab_shaders::recipe::Variant;
-use clothlab_tests::gpu_required;
+use clothlab_tests::{gpu_required, image_diff};
 use clothlab_vulkan::{VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
 use clothlab_wgpu::{ClothSource, GpuContext, WgpuRenderer};
 
@@ -48,17 +48,6 @@ fn wgpu_picture(state: &ClothState, scene: &Scene, mode: RenderMode) -> Vec<u8> 
     let mut r = WgpuRenderer::new(&ctx, scene, &topo, W, H).unwrap();
     r.render(&ctx, &view(mode), ClothSource::Cpu(state)).unwrap();
     r.read_image(&ctx).unwrap()
-}
-
-/// Mean absolute difference per channel (0–255) and the fraction of pixels whose largest
-/// channel difference exceeds 48 (the golden-image measure of tests/render.rs).
-fn image_diff(a: &[u8], b: &[u8]) -> (f64, f64) {
-    assert_eq!(a.len(), b.len());
-    let sum: u64 = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y) as u64).sum();
-    let px = a.len() / 4;
-    let bad =
-        a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.abs_diff(*y) > 48)).count();
-    (sum as f64 / a.len() as f64, bad as f64 / px as f64)
 }
 
 fn no_validation_messages(s: &VulkanSolver) {

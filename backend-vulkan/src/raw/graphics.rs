@@ -336,6 +336,11 @@ pub struct Transition {
 impl Commands {
     /// Records a layout transition of `image`.
     pub fn transition(&self, image: &Image, t: Transition) {
+        self.transition_handle(image.image, image.aspect, t);
+    }
+
+    /// Records a layout transition of the image `image` (ours or a swapchain's).
+    pub(crate) fn transition_handle(&self, image: vk::Image, aspect: vk::ImageAspectFlags, t: Transition) {
         let b = [vk::ImageMemoryBarrier::default()
             .old_layout(t.old)
             .new_layout(t.new)
@@ -343,9 +348,9 @@ impl Commands {
             .dst_access_mask(t.dst_access)
             .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(image.image)
-            .subresource_range(range(image.aspect))];
-        // SAFETY: recording state; the image is live.
+            .image(image)
+            .subresource_range(range(aspect))];
+        // SAFETY: recording state; the image is live (ours, or a live swapchain's).
         unsafe {
             self.dev.device.cmd_pipeline_barrier(
                 self.cmd(),

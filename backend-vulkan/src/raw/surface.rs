@@ -228,27 +228,7 @@ impl Commands {
 
     /// A layout transition of swapchain image `image` (colour).
     pub fn transition_swapchain(&self, image: vk::Image, t: Transition) {
-        let b = [vk::ImageMemoryBarrier::default()
-            .old_layout(t.old)
-            .new_layout(t.new)
-            .src_access_mask(t.src_access)
-            .dst_access_mask(t.dst_access)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(image)
-            .subresource_range(range(vk::ImageAspectFlags::COLOR))];
-        // SAFETY: recording state; the image belongs to a live swapchain.
-        unsafe {
-            self.dev.device.cmd_pipeline_barrier(
-                self.cmd(),
-                t.src_stage,
-                t.dst_stage,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &b,
-            )
-        };
+        self.transition_handle(image, vk::ImageAspectFlags::COLOR, t);
     }
 
     /// Copies all of `src` (TRANSFER_SRC_OPTIMAL) onto swapchain image `dst`

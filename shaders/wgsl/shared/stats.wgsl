@@ -11,3 +11,26 @@ struct StatsPush {
     substep: u32,
 }
 var<immediate> stats_push: StatsPush;
+
+var<workgroup> by_subgroup: array<vec2<f32>, 64>;
+
+// (max, sum) of `v` over the workgroup without atomics: a subgroup reduction, then the
+// subgroups' results through workgroup memory, folded by subgroup 0. Every invocation
+// must call it; the result is valid in invocation 0 of subgroup 0 (`is_first`).
+fn fold_workgroup(v: vec2<f32>, sg: u32, num_sg: u32, lane: u32, sg_size: u32) -> vec2<f32> {
+    let m = subgroupMax(v.x);
+    let e = subgroupAdd(v.y);
+    if lane == 0u {
+        by_subgroup[sg] = vec2<f32>(m, e);
+    }
+    workgroupBarrier();
+    var total = vec2<f32>(0.0);
+    if sg == 0u {
+        var acc = vec2<f32>(0.0);
+        for (var k = lane; k < num_sg; k += sg_size) {
+            acc = vec2<f32>(max(acc.x, by_subgroup[k].x), acc.y + by_subgroup[k].y);
+        }
+        total = vec2<f32>(subgroupMax(acc.x), subgroupAdd(acc.y));
+    }
+    return total;
+}
