@@ -711,11 +711,12 @@ impl Solver for VulkanSolver {
                     self.cmds.zero(&self.buffers.stats_energy);
                     written |= res::STATS;
                 }
-                // The first dispatch reads the constants: the tracker places the barrier.
-                if self.hazards.conflicts(0, written) {
-                    self.barrier();
-                }
+                // One barrier after all earlier work (the renderer may still have been
+                // reading the positions as vertices) and the copies above.
                 self.hazards.add(0, written);
+                self.cmds.barrier_after_all();
+                self.hazards.clear();
+                self.barriers += 1;
             }
             for s in 0..per_submission {
                 self.record(&recipe, k * per_submission + s, &mut q, &mut labels);

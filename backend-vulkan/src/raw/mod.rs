@@ -1007,6 +1007,34 @@ impl Commands {
         unsafe { d.cmd_pipeline_barrier(self.cmd(), stages, stages, vk::DependencyFlags::empty(), &mb, &[], &[]) };
     }
 
+    /// A barrier after everything submitted before (any stage, e.g. the renderer's vertex
+    /// reads of the positions) and this buffer's transfers, before compute and transfer:
+    /// the first barrier of a solver frame.
+    pub fn barrier_after_all(&self) {
+        let mb = [vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(
+                vk::AccessFlags::SHADER_READ
+                    | vk::AccessFlags::SHADER_WRITE
+                    | vk::AccessFlags::TRANSFER_READ
+                    | vk::AccessFlags::TRANSFER_WRITE
+                    | vk::AccessFlags::UNIFORM_READ,
+            )];
+        let dst = vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER;
+        // SAFETY: recording state.
+        unsafe {
+            self.dev.device.cmd_pipeline_barrier(
+                self.cmd(),
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                dst,
+                vk::DependencyFlags::empty(),
+                &mb,
+                &[],
+                &[],
+            )
+        };
+    }
+
     /// Records a copy of `size` bytes from `src` at `src_offset` to `dst` at `dst_offset`.
     pub fn copy_range(&self, src: &Buffer, src_offset: u64, dst: &Buffer, dst_offset: u64, size: u64) {
         let region = [vk::BufferCopy::default().src_offset(src_offset).dst_offset(dst_offset).size(size)];
