@@ -7,6 +7,15 @@ fn clothlab(args: &[&str]) -> Output {
 }
 
 /// Bad input: non-zero exit, the expected words on stderr, no panic or backtrace.
+/// Whether `stderr` says there is no adapter and CI does not require one (the test skips).
+fn no_gpu(stderr: &str) -> bool {
+    let skip = stderr.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1");
+    if skip {
+        eprintln!("skipped: {stderr}");
+    }
+    skip
+}
+
 fn refused(args: &[&str], expect: &str) {
     let out = clothlab(args);
     let err = String::from_utf8_lossy(&out.stderr);
@@ -76,8 +85,7 @@ fn validate_checks_the_gpu_backends_or_says_why_not() {
     let out = clothlab(&["validate", "--n", "20", "--steps", "32"]);
     let text = String::from_utf8_lossy(&out.stdout);
     let err = String::from_utf8_lossy(&out.stderr);
-    if err.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") {
-        eprintln!("skipped: {err}");
+    if no_gpu(&err) {
         return;
     }
     assert!(out.status.success(), "validate failed: {text}\n{err}");
@@ -91,8 +99,7 @@ fn a_grid_too_big_for_the_adapter_is_refused_with_the_size_it_takes() {
     // lavapipe binds at most 128 MiB per storage buffer; n = 2048 needs 768 MiB of springs.
     let out = clothlab(&["sim", "--backend", "wgpu", "--n", "2048", "--steps", "16"]);
     let err = String::from_utf8_lossy(&out.stderr);
-    if err.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") {
-        eprintln!("skipped: {err}");
+    if no_gpu(&err) {
         return;
     }
     if out.status.success() {
@@ -128,8 +135,7 @@ fn render_writes_a_png_or_refuses_bad_sizes() {
         out_path.to_str().unwrap(),
     ]);
     let err = String::from_utf8_lossy(&out.stderr);
-    if err.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") {
-        eprintln!("skipped: {err}");
+    if no_gpu(&err) {
         return;
     }
     assert!(out.status.success(), "{err}");
@@ -179,8 +185,7 @@ fn render_draws_through_vulkan_and_refuses_mixed_apis() {
         args.extend_from_slice(&["--out", out_path.to_str().unwrap()]);
         let out = clothlab(&args);
         let err = String::from_utf8_lossy(&out.stderr);
-        if err.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") {
-            eprintln!("skipped: {err}");
+        if no_gpu(&err) {
             return;
         }
         assert!(out.status.success(), "{args:?}: {err}");
@@ -207,8 +212,7 @@ fn vulkan_options_reach_the_solver_or_are_refused_elsewhere() {
         args.extend_from_slice(extra);
         let out = clothlab(&args);
         let err = String::from_utf8_lossy(&out.stderr);
-        if err.contains("no GPU adapter") && std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") {
-            eprintln!("skipped: {err}");
+        if no_gpu(&err) {
             return;
         }
         assert!(out.status.success(), "{args:?}: {err}");

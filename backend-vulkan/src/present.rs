@@ -308,17 +308,7 @@ impl Presenter {
         }
         let mut last = (L::COLOR_ATTACHMENT_OPTIMAL, P::COLOR_ATTACHMENT_OUTPUT, A::COLOR_ATTACHMENT_WRITE);
         if let Some((buf, extent)) = &capture {
-            c.transition_swapchain(
-                image,
-                Transition {
-                    old: L::COLOR_ATTACHMENT_OPTIMAL,
-                    new: L::TRANSFER_SRC_OPTIMAL,
-                    src_stage: P::COLOR_ATTACHMENT_OUTPUT,
-                    src_access: A::COLOR_ATTACHMENT_WRITE,
-                    dst_stage: P::TRANSFER,
-                    dst_access: A::TRANSFER_READ,
-                },
-            );
+            c.transition_swapchain(image, Transition::color_to_transfer_src());
             c.copy_swapchain_to_buffer(image, *extent, buf);
             last = (L::TRANSFER_SRC_OPTIMAL, P::TRANSFER, A::empty());
         }

@@ -521,17 +521,7 @@ impl VulkanRenderer {
         };
         to_color(&t.msaa, P::COLOR_ATTACHMENT_OUTPUT);
         to_color(&t.resolve, P::TRANSFER);
-        c.transition(
-            &t.depth,
-            Transition {
-                old: L::UNDEFINED,
-                new: L::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
-                src_stage: tests,
-                src_access: A::empty(),
-                dst_stage: tests,
-                dst_access: depth_rw,
-            },
-        );
+        c.transition(&t.depth, Transition::fresh_depth());
         c.begin_rendering(Some((&t.msaa, Some(&t.resolve), vk::ClearColorValue { float32: SKY })), &t.depth);
         let p = &self.pipelines;
         c.bind_graphics(&p.lit_static, &[frame_set, self.texture_set]);
@@ -556,17 +546,7 @@ impl VulkanRenderer {
         }
         c.end_rendering();
         // The resolved image, ready to be read back.
-        c.transition(
-            &t.resolve,
-            Transition {
-                old: L::COLOR_ATTACHMENT_OPTIMAL,
-                new: L::TRANSFER_SRC_OPTIMAL,
-                src_stage: P::COLOR_ATTACHMENT_OUTPUT,
-                src_access: A::COLOR_ATTACHMENT_WRITE,
-                dst_stage: P::TRANSFER,
-                dst_access: A::TRANSFER_READ,
-            },
-        );
+        c.transition(&t.resolve, Transition::color_to_transfer_src());
     }
 
     /// The particle drawn at pixel `(x, y)` (origin top left) for this view and cloth, or
@@ -584,7 +564,6 @@ impl VulkanRenderer {
         use vk::AccessFlags as A;
         use vk::ImageLayout as L;
         use vk::PipelineStageFlags as P;
-        let tests = P::EARLY_FRAGMENT_TESTS | P::LATE_FRAGMENT_TESTS;
         c.transition(
             &t.pick,
             Transition {
@@ -596,31 +575,11 @@ impl VulkanRenderer {
                 dst_access: A::COLOR_ATTACHMENT_WRITE,
             },
         );
-        c.transition(
-            &t.pick_depth,
-            Transition {
-                old: L::UNDEFINED,
-                new: L::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
-                src_stage: tests,
-                src_access: A::empty(),
-                dst_stage: tests,
-                dst_access: A::DEPTH_STENCIL_ATTACHMENT_READ | A::DEPTH_STENCIL_ATTACHMENT_WRITE,
-            },
-        );
+        c.transition(&t.pick_depth, Transition::fresh_depth());
         c.begin_rendering(Some((&t.pick, None, vk::ClearColorValue { uint32: [0; 4] })), &t.pick_depth);
         self.draw_geometry(c, 0, &self.pipelines.pick_static, &self.pipelines.pick_cloth, pos);
         c.end_rendering();
-        c.transition(
-            &t.pick,
-            Transition {
-                old: L::COLOR_ATTACHMENT_OPTIMAL,
-                new: L::TRANSFER_SRC_OPTIMAL,
-                src_stage: P::COLOR_ATTACHMENT_OUTPUT,
-                src_access: A::COLOR_ATTACHMENT_WRITE,
-                dst_stage: P::TRANSFER,
-                dst_access: A::TRANSFER_READ,
-            },
-        );
+        c.transition(&t.pick, Transition::color_to_transfer_src());
         c.copy_image_to_buffer(&t.pick, x, y, 1, 1, &self.pick_buf);
         c.submit_and_wait(0).map_err(rerr)?;
         self.check().map_err(rerr)?;

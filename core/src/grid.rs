@@ -239,8 +239,9 @@ impl ClothTopology {
     }
 }
 
-/// (ks, kd) per [`SpringKind`].
-fn spring_constants(params: &SimParams, n: u32) -> [(f32, f32); 3] {
+/// (ks, kd) per [`SpringKind`] for an `n × n` cloth: what the spring tables hold, so a
+/// parameter change that leaves these equal (wind, gravity, …) needs no table upload.
+pub fn spring_constants(params: &SimParams, n: u32) -> [(f32, f32); 3] {
     [
         (
             params.stiffness_n_per_m(params.structural_stiffness, n),

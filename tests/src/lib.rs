@@ -7,10 +7,33 @@
 #![forbid(unsafe_code)]
 
 use clothlab_core::validate::Check;
+use clothlab_core::{OrbitCamera, RenderMode, View};
+
+/// The view the picture tests draw: the default camera, the light up and to the side.
+pub fn test_view(mode: RenderMode) -> View {
+    View { camera: OrbitCamera::default(), light: [2.0, 5.5, 3.0], mode }
+}
 
 /// Whether GPU tests must fail rather than skip without an adapter.
 pub fn gpu_required() -> bool {
     std::env::var("CLOTHLAB_REQUIRE_GPU").is_ok_and(|v| v == "1")
+}
+
+/// `Some(value)`, or `None` with the reason printed when there is no GPU adapter (or no
+/// Vulkan loader) and `CLOTHLAB_REQUIRE_GPU` is not set; any other error panics.
+pub fn or_skip<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> Option<T> {
+    match r {
+        Ok(v) => Some(v),
+        Err(e) => {
+            let msg = e.to_string();
+            if !gpu_required() && (msg.contains("no GPU adapter") || msg.contains("no Vulkan loader")) {
+                eprintln!("skipped: {msg}");
+                None
+            } else {
+                panic!("{what}: {msg}")
+            }
+        }
+    }
 }
 
 /// Prints every check and fails on the first one over its bound.

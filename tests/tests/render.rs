@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 
 use clothlab_core::cpu::Exec;
-use clothlab_core::{CpuSolver, OrbitCamera, RenderError, RenderMode, Scene, SimParams, Solver, View};
-use clothlab_tests::{gpu_required, image_diff};
+use clothlab_core::{CpuSolver, RenderError, RenderMode, Scene, SimParams, Solver, View};
+use clothlab_tests::{image_diff, or_skip, test_view};
 use clothlab_wgpu::{ClothSource, Variant, WgpuRenderer, WgpuSolver};
 
 const W: u32 = 320;
@@ -13,19 +13,12 @@ const N: u32 = 32;
 const FRAMES: u32 = 60;
 
 fn view(mode: RenderMode) -> View {
-    View { camera: OrbitCamera::default(), light: [2.0, 5.5, 3.0], mode }
+    test_view(mode)
 }
 
 /// The optimized wgpu solver after `FRAMES` frames, or `None` without an adapter.
 fn simulated() -> Option<WgpuSolver> {
-    let mut s = match WgpuSolver::new(Variant::Optimized, Scene::with_n(N), SimParams::default()) {
-        Ok(s) => s,
-        Err(e) if !gpu_required() && e.to_string().contains("no GPU adapter") => {
-            eprintln!("skipped: {e}");
-            return None;
-        }
-        Err(e) => panic!("wgpu solver: {e}"),
-    };
+    let mut s = or_skip(WgpuSolver::new(Variant::Optimized, Scene::with_n(N), SimParams::default()), "wgpu solver")?;
     for _ in 0..FRAMES {
         s.step_frame().unwrap();
     }

@@ -3,9 +3,9 @@
 //! may draw a validation-layer message (synchronization validation on).
 
 use clothlab_core::grid::ClothState;
-use clothlab_core::{OrbitCamera, RenderMode, Scene, SimParams, Solver, View};
+use clothlab_core::{RenderMode, Scene, SimParams, Solver, View};
 use clothlab_shaders::recipe::Variant;
-use clothlab_tests::{gpu_required, image_diff};
+use clothlab_tests::{image_diff, or_skip, test_view};
 use clothlab_vulkan::{VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
 use clothlab_wgpu::{ClothSource, GpuContext, WgpuRenderer};
 
@@ -15,21 +15,17 @@ const N: u32 = 32;
 const FRAMES: u32 = 60;
 
 fn view(mode: RenderMode) -> View {
-    View { camera: OrbitCamera::default(), light: [2.0, 5.5, 3.0], mode }
+    test_view(mode)
 }
 
 /// The optimized Vulkan solver after `FRAMES` frames (validation on), or `None` without
 /// an adapter.
 fn simulated() -> Option<VulkanSolver> {
     let options = VulkanOptions { validation: true, ..Default::default() };
-    let mut s = match VulkanSolver::with_options(Variant::Optimized, Scene::with_n(N), SimParams::default(), options) {
-        Ok(s) => s,
-        Err(e) if !gpu_required() && e.to_string().contains("no GPU adapter") => {
-            eprintln!("skipped: {e}");
-            return None;
-        }
-        Err(e) => panic!("vulkan solver: {e}"),
-    };
+    let mut s = or_skip(
+        VulkanSolver::with_options(Variant::Optimized, Scene::with_n(N), SimParams::default(), options),
+        "vulkan solver",
+    )?;
     for _ in 0..FRAMES {
         s.step_frame().unwrap();
     }

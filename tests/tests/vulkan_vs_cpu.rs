@@ -6,7 +6,7 @@ use clothlab_core::grid::StepParams;
 use clothlab_core::validate::{KernelRunner, validate_kernels, validate_rollout};
 use clothlab_core::{Scene, SimParams, Solver};
 use clothlab_shaders::recipe::Variant;
-use clothlab_tests::{assert_checks, gpu_required};
+use clothlab_tests::{assert_checks, or_skip};
 use clothlab_vulkan::{SpringTable, StatsMode, VulkanOptions, VulkanSolver};
 
 fn vulkan(variant: Variant, n: u32) -> Option<VulkanSolver> {
@@ -14,17 +14,7 @@ fn vulkan(variant: Variant, n: u32) -> Option<VulkanSolver> {
 }
 
 fn vulkan_with(variant: Variant, n: u32, options: VulkanOptions) -> Option<VulkanSolver> {
-    match VulkanSolver::with_options(variant, Scene::with_n(n), SimParams::default(), options) {
-        Ok(s) => Some(s),
-        Err(e)
-            if !gpu_required()
-                && (e.to_string().contains("no GPU adapter") || e.to_string().contains("no Vulkan loader")) =>
-        {
-            eprintln!("skipped: {e}");
-            None
-        }
-        Err(e) => panic!("vulkan solver: {e}"),
-    }
+    or_skip(VulkanSolver::with_options(variant, Scene::with_n(n), SimParams::default(), options), "vulkan solver")
 }
 
 fn no_validation_messages(s: &VulkanSolver) {
@@ -63,12 +53,20 @@ fn changed_parameters_reach_the_vulkan_kernels() {
     // Stiffer bend springs, two strain passes and wind: a rollout with them must still
     // match the CPU solver given the same parameters (bound as in validate_rollout).
     let params = SimParams { bend_stiffness: 0.1, strain_iterations: 2, wind: [2.0, 0.0, 1.0], ..SimParams::default() };
-    for variant in [Variant::Naive, Variant::Optimized] {
-        let Some(mut v) = vulkan(variant, 48) else { return };
-        v.set_params(params.clone()).unwrap();
-        let c = validate_rollout(&mut v, 8).unwrap();
-        assert_checks(&format!("{} set_params", v.name()), &[c]);
-        no_validation_messages(&v);
+    // Wind and gravity alone leave the spring tables as they are (no upload): they must
+    // still reach the kernels through the frame's constants. (A gustier scene, wind
+    // (-1.5, 0.5, 2) with gravity -6, makes the naive scatter's rounding grow to 3.1e-4 m
+    // in 128 substeps, over ROLLOUT_BOUND_PER_SUBSTEP, with or without a table upload:
+    // measured on lavapipe; the optimized variants stay bit-exact.)
+    let light = SimParams { wind: [2.0, 0.0, 1.0], gravity: [0.0, -9.0, 0.0], ..SimParams::default() };
+    for (what, p) in [("tables", &params), ("constants only", &light)] {
+        for variant in [Variant::Naive, Variant::Optimized] {
+            let Some(mut v) = vulkan(variant, 48) else { return };
+            v.set_params(p.clone()).unwrap();
+            let c = validate_rollout(&mut v, 8).unwrap();
+            assert_checks(&format!("{} set_params {what}", v.name()), &[c]);
+            no_validation_messages(&v);
+        }
     }
 }
 
@@ -120,7 +118,7 @@ fn gpu_statistics_match_the_cpu_twin_by_subgroups_and_by_atomics() {
                 eprintln!("skipped {stats:?}: {e}");
                 None
             }
-            Err(_) => vulkan_with(variant, n, options),
+            Err(e) => or_skip(Err(e), "vulkan solver"),
         };
         let Some(mut v) = v else { continue };
         for _ in 0..3 {

@@ -333,6 +333,34 @@ pub struct Transition {
     pub dst_access: vk::AccessFlags,
 }
 
+impl Transition {
+    /// A depth attachment to be cleared and tested (its old contents discarded).
+    pub fn fresh_depth() -> Self {
+        let tests = vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS;
+        Transition {
+            old: vk::ImageLayout::UNDEFINED,
+            new: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+            src_stage: tests,
+            src_access: vk::AccessFlags::empty(),
+            dst_stage: tests,
+            dst_access: vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ
+                | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+        }
+    }
+
+    /// A colour attachment just written, to be copied out.
+    pub fn color_to_transfer_src() -> Self {
+        Transition {
+            old: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            new: vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            src_stage: vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+            src_access: vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            dst_stage: vk::PipelineStageFlags::TRANSFER,
+            dst_access: vk::AccessFlags::TRANSFER_READ,
+        }
+    }
+}
+
 impl Commands {
     /// Records a layout transition of `image`.
     pub fn transition(&self, image: &Image, t: Transition) {

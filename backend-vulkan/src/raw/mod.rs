@@ -975,11 +975,21 @@ impl Commands {
     /// A barrier making compute and transfer writes visible to later compute and transfer
     /// (a global memory barrier: the recipes' dependencies are whole buffers).
     pub fn barrier(&self) {
+        self.compute_barrier(false);
+    }
+
+    /// The same after everything submitted before, at any stage (e.g. the renderer's
+    /// vertex reads of the positions): the first barrier of a solver frame.
+    pub fn barrier_after_all(&self) {
+        self.compute_barrier(true);
+    }
+
+    fn compute_barrier(&self, after_all: bool) {
         let d = &self.dev.device;
         if self.dev.sync2 {
             let stages = vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::ALL_TRANSFER;
             let mb = [vk::MemoryBarrier2::default()
-                .src_stage_mask(stages)
+                .src_stage_mask(if after_all { vk::PipelineStageFlags2::ALL_COMMANDS } else { stages })
                 .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::TRANSFER_WRITE)
                 .dst_stage_mask(stages)
                 .dst_access_mask(
@@ -1003,36 +1013,9 @@ impl Commands {
                     | vk::AccessFlags::UNIFORM_READ,
             )];
         let stages = vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER;
+        let src = if after_all { vk::PipelineStageFlags::ALL_COMMANDS } else { stages };
         // SAFETY: recording state.
-        unsafe { d.cmd_pipeline_barrier(self.cmd(), stages, stages, vk::DependencyFlags::empty(), &mb, &[], &[]) };
-    }
-
-    /// A barrier after everything submitted before (any stage, e.g. the renderer's vertex
-    /// reads of the positions) and this buffer's transfers, before compute and transfer:
-    /// the first barrier of a solver frame.
-    pub fn barrier_after_all(&self) {
-        let mb = [vk::MemoryBarrier::default()
-            .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
-            .dst_access_mask(
-                vk::AccessFlags::SHADER_READ
-                    | vk::AccessFlags::SHADER_WRITE
-                    | vk::AccessFlags::TRANSFER_READ
-                    | vk::AccessFlags::TRANSFER_WRITE
-                    | vk::AccessFlags::UNIFORM_READ,
-            )];
-        let dst = vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER;
-        // SAFETY: recording state.
-        unsafe {
-            self.dev.device.cmd_pipeline_barrier(
-                self.cmd(),
-                vk::PipelineStageFlags::ALL_COMMANDS,
-                dst,
-                vk::DependencyFlags::empty(),
-                &mb,
-                &[],
-                &[],
-            )
-        };
+        unsafe { d.cmd_pipeline_barrier(self.cmd(), src, stages, vk::DependencyFlags::empty(), &mb, &[], &[]) };
     }
 
     /// Records a copy of `size` bytes from `src` at `src_offset` to `dst` at `dst_offset`.
