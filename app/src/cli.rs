@@ -33,6 +33,9 @@ enum Command {
     Validate(ValidateArgs),
     /// Simulate headless, then render the scene to a PNG (no window, no display).
     Render(RenderArgs),
+    /// Measure every backend: per-kernel times, time per frame and fps against grid size,
+    /// and the API overhead of wgpu vs Vulkan; writes CSV, JSON, a report and plots.
+    Bench(crate::bench::BenchArgs),
 }
 
 /// Cloth render modes.
@@ -302,6 +305,7 @@ pub fn run() -> Result<ExitCode> {
         Command::Sim(args) => sim(args),
         Command::Validate(args) => validate(args),
         Command::Render(args) => render(args),
+        Command::Bench(args) => crate::bench::bench(args),
     }
 }
 

@@ -6,6 +6,7 @@
 //! above it is safe code over RAII types.
 #![deny(unsafe_code)]
 
+pub mod overhead;
 mod present;
 pub mod raw;
 mod render;

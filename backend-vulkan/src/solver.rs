@@ -588,7 +588,7 @@ pub(crate) fn upload(cmds: &mut Commands, staging: &mut Buffer, dst: &Buffer, by
 }
 
 /// Reads `size` bytes of `src` through the staging buffer.
-fn download(cmds: &mut Commands, staging: &mut Buffer, src: &Buffer, size: u64) -> Result<Vec<u8>, VkError> {
+pub(crate) fn download(cmds: &mut Commands, staging: &mut Buffer, src: &Buffer, size: u64) -> Result<Vec<u8>, VkError> {
     cmds.begin(0)?;
     // The last dispatches' writes become visible to the copy.
     cmds.barrier();
@@ -791,6 +791,10 @@ impl Solver for VulkanSolver {
 
     fn reset_timings(&mut self) {
         self.timer.clear();
+    }
+
+    fn set_kernel_timing(&mut self, on: bool) {
+        self.time_kernels = on;
     }
 
     fn substep_stats(&self) -> Vec<SubstepStats> {

@@ -13,6 +13,7 @@
 #![forbid(unsafe_code)]
 
 mod context;
+pub mod overhead;
 mod render;
 mod solver;
 

@@ -597,4 +597,8 @@ impl Solver for WgpuSolver {
     fn reset_timings(&mut self) {
         self.timer.clear();
     }
+
+    fn set_kernel_timing(&mut self, on: bool) {
+        self.time_kernels = on;
+    }
 }

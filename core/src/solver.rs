@@ -49,6 +49,10 @@ pub trait Solver {
     fn timings(&self) -> KernelTimings;
     /// Forgets the recorded timings.
     fn reset_timings(&mut self);
+    /// Turns per-kernel timing on (the default) or off. GPU solvers write timestamps
+    /// around every dispatch and read them back each frame while it is on; `clothlab bench`
+    /// turns it off to time whole frames without that cost. CPU solvers ignore it.
+    fn set_kernel_timing(&mut self, _on: bool) {}
     /// Statistics of every substep of the last frame, where the solver computes them on
     /// the way (the Vulkan solver with statistics on); empty otherwise.
     fn substep_stats(&self) -> Vec<crate::cpu::SubstepStats> {

@@ -139,22 +139,106 @@ impl TimingRecorder {
         let rows = self
             .series
             .iter()
-            .filter(|(_, q)| !q.is_empty())
-            .map(|(label, q)| {
-                let mut v: Vec<f64> = q.iter().copied().collect();
-                v.sort_by(f64::total_cmp);
-                let mid = v.len() / 2;
-                let median = if v.len() % 2 == 1 { v[mid] } else { 0.5 * (v[mid - 1] + v[mid]) };
-                TimingRow {
-                    label: label.clone(),
-                    samples: v.len(),
-                    median_ns: median,
-                    min_ns: v[0],
-                    max_ns: v[v.len() - 1],
-                }
-            })
+            .filter_map(|(label, q)| TimingRow::from_samples(label, q.iter().copied().collect()))
             .collect();
         KernelTimings { rows }
+    }
+}
+
+impl TimingRow {
+    /// Median, min and max of `samples` (ns); `None` when there are none.
+    pub fn from_samples(label: &str, mut samples: Vec<f64>) -> Option<Self> {
+        if samples.is_empty() {
+            return None;
+        }
+        samples.sort_by(f64::total_cmp);
+        let mid = samples.len() / 2;
+        let median = if samples.len() % 2 == 1 { samples[mid] } else { 0.5 * (samples[mid - 1] + samples[mid]) };
+        Some(TimingRow {
+            label: label.to_owned(),
+            samples: samples.len(),
+            median_ns: median,
+            min_ns: samples[0],
+            max_ns: samples[samples.len() - 1],
+        })
+    }
+}
+
+/// What the API-overhead micro-benchmarks of `clothlab bench` measure, the same on every
+/// API: see [`OverheadRow`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OverheadPlan {
+    /// Measured repetitions of each benchmark (after `warmup` unmeasured ones).
+    pub samples: usize,
+    /// Unmeasured repetitions first (pipelines, caches, clocks).
+    pub warmup: usize,
+    /// Chain lengths k: k dependent dispatches of one workgroup, a barrier between each two.
+    pub chain: Vec<u32>,
+    /// Buffer sizes for the upload and readback latencies, bytes.
+    pub bytes: Vec<u64>,
+}
+
+impl Default for OverheadPlan {
+    fn default() -> Self {
+        Self { samples: 100, warmup: 10, chain: vec![1, 2, 4, 8, 16, 32, 64], bytes: vec![4 << 10, 1 << 20, 16 << 20] }
+    }
+}
+
+/// Benchmark names of [`OverheadRow::bench`].
+pub mod overhead {
+    /// An empty command buffer submitted, then waited for (CPU clock).
+    pub const EMPTY_SUBMIT: &str = "empty submit";
+    /// k dependent one-workgroup dispatches (param = k).
+    pub const CHAIN: &str = "chain";
+    /// Host → device copy of `param` bytes, until the GPU has it (CPU clock).
+    pub const UPLOAD: &str = "upload";
+    /// Device → host copy of `param` bytes, until the host has it (CPU clock).
+    pub const READBACK: &str = "readback";
+    /// Clock label: CPU time recording the commands.
+    pub const CPU_RECORD: &str = "cpu record";
+    /// Clock label: CPU time from submit until the GPU is done (wall).
+    pub const CPU_SUBMIT_WAIT: &str = "cpu submit+wait";
+    /// Clock label: whole round trip on the CPU clock (upload, readback, empty submit).
+    pub const CPU_TOTAL: &str = "cpu total";
+    /// Clock label: GPU time from timestamps (first dispatch begin to last end).
+    pub const GPU: &str = "gpu";
+}
+
+/// One API-overhead measurement: benchmark, its parameter, the clock, and the statistics
+/// of the samples (`stats.label` is the clock label).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OverheadRow {
+    /// One of the names in [`overhead`].
+    pub bench: String,
+    /// k for the chain, bytes for upload/readback, 0 otherwise.
+    pub param: u64,
+    /// Median, min, max and sample count, ns.
+    pub stats: TimingRow,
+}
+
+/// Collects overhead samples per (bench, param, clock) and turns them into rows.
+#[derive(Debug, Default)]
+pub struct OverheadRecorder {
+    series: Vec<(String, u64, String, Vec<f64>)>,
+}
+
+impl OverheadRecorder {
+    /// Adds one sample, ns.
+    pub fn record(&mut self, bench: &str, param: u64, clock: &str, ns: f64) {
+        match self.series.iter_mut().find(|(b, p, c, _)| b == bench && *p == param && c == clock) {
+            Some(s) => s.3.push(ns),
+            None => self.series.push((bench.to_owned(), param, clock.to_owned(), vec![ns])),
+        }
+    }
+
+    /// The rows, in the order first recorded.
+    pub fn rows(self) -> Vec<OverheadRow> {
+        self.series
+            .into_iter()
+            .filter_map(|(bench, param, clock, v)| {
+                TimingRow::from_samples(&clock, v).map(|stats| OverheadRow { bench, param, stats })
+            })
+            .collect()
     }
 }
 

@@ -931,7 +931,12 @@ impl Commands {
         Ok(())
     }
 
-    fn timestamp(&self, q: u32) {
+    /// Records a timestamp into query `q` (below `max_queries`, reset by `begin`) once
+    /// earlier compute work is done.
+    pub fn timestamp(&self, q: u32) {
+        if q >= self.max_queries {
+            return;
+        }
         let d = &self.dev.device;
         // SAFETY: recording state; `q` is below the pool's capacity (the caller checks)
         // and was reset in this frame. With synchronization2 the 1.3 entry point is used.

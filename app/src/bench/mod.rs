@@ -1,0 +1,466 @@
+//! `clothlab bench`: the thesis's chapter 7 for every backend — per-kernel times, time per
+//! frame and frames per second against grid size — plus the API-overhead micro-benchmarks
+//! (wgpu vs raw Vulkan), written as CSV, JSON, a Markdown report and plots.
+//!
+//! Every backend × size cell runs the same workload: the default scene and parameters,
+//! `warmup` frames, then `frames` frames with per-kernel timing on (the kernel table),
+//! then `frames` frames with it off, each followed by an offscreen render of the scene (the
+//! frame table). The final positions of 25 particles are compared with the first backend
+//! that ran at that size, so a backend cannot be fast by doing less.
+
+mod output;
+mod plot;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clothlab_core::timing::{OverheadPlan, OverheadRow};
+use clothlab_core::{ClothState, CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_vulkan::raw::Device;
+use clothlab_vulkan::{VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
+use clothlab_wgpu::{ClothSource, GpuContext, Variant, WgpuRenderer, WgpuSolver};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
+
+use crate::cli::{Backend, Mode, default_view, vulkan_validation};
+
+
+/// Arguments of `clothlab bench`.
+#[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    /// Backends to measure (comma-separated). GPU backends without an adapter are skipped
+    /// with a note.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::CpuPar, Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan])]
+    backends: Vec<Backend>,
+    /// Grid sizes, particles per side (comma-separated, 2 ..= 4096). Sizes a backend would
+    /// take longer than `--cell-budget` for are skipped for that backend.
+    #[arg(long, value_delimiter = ',', default_values_t = [100, 200, 300, 400, 500, 1024, 2048])]
+    sizes: Vec<u32>,
+    /// Substeps measured per kernel at each size (the thesis: 1000 iterations); rounded up
+    /// to whole frames. The frame table gets as many frames again.
+    #[arg(long, default_value_t = 1000)]
+    iters: u32,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "bench-out")]
+    out: PathBuf,
+    /// Most seconds one backend × size cell may take, predicted from the backend's
+    /// previous size; larger cells are skipped and listed in the report.
+    #[arg(long, default_value_t = 300.0)]
+    cell_budget: f64,
+    /// Offscreen render target of the frame measurement, pixels (WIDTHxHEIGHT).
+    #[arg(long, default_value = "1280x720", value_parser = parse_resolution)]
+    resolution: (u32, u32),
+    /// Skip the API-overhead micro-benchmarks.
+    #[arg(long)]
+    no_overhead: bool,
+    /// Label of the machine in the report (default: CPU model and core count).
+    #[arg(long)]
+    machine: Option<String>,
+}
+
+fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once('x').ok_or_else(|| format!("`{s}`: expected WIDTHxHEIGHT, e.g. 1280x720"))?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("`{s}`: width is not a whole number"))?;
+    let h: u32 = h.trim().parse().map_err(|_| format!("`{s}`: height is not a whole number"))?;
+    if !(16..=8192).contains(&w) || !(16..=8192).contains(&h) {
+        return Err(format!("`{s}`: width and height must be in 16 ..= 8192"));
+    }
+    Ok((w, h))
+}
+
+/// Unmeasured frames at the start of every cell (pipelines, caches, clocks, the cloth's
+/// first fall).
+pub const WARMUP_FRAMES: u32 = 3;
+/// Particles per side of the lattice whose final positions are compared.
+const CHECK_LATTICE: u32 = 5;
+/// Bound on a sampled particle's distance from the reference backend's after the run,
+/// per simulated substep, m. Float summation order makes backends drift apart slowly (core::
+/// validate bounds a 200-substep rollout by 1e-6 m per substep); contacts and strain
+/// limiting let that drift grow over thousands of substeps, so the check allows 10× that
+/// rate, still far below what a skipped substep or kernel moves a falling cloth (about a
+/// millimetre per substep at the speeds of the default scene).
+pub const CHECK_BOUND_PER_SUBSTEP: f64 = 1e-5;
+
+/// One backend × size measurement.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Cell {
+    /// Backend name.
+    pub backend: String,
+    /// Particles per side.
+    pub n: u32,
+    /// Where it ran: the adapter, or the CPU.
+    pub adapter: String,
+    /// Per-kernel table (per substep; `frame`, `cpu record`, `cpu submit` per frame).
+    pub kernels: Vec<clothlab_core::TimingRow>,
+    /// Whole frames with per-kernel timing off: `sim` (substeps, until the GPU is done),
+    /// `render` (offscreen, until done) and `frame` (both).
+    pub frames: Vec<clothlab_core::TimingRow>,
+    /// The renderer of the frame measurement (empty when none could run).
+    pub renderer: String,
+    /// Positions of the check lattice after the run.
+    pub probe: Vec<[f32; 3]>,
+    /// Seconds the cell took.
+    pub seconds: f64,
+}
+
+/// The solver of a cell, with what its renderer needs to draw it.
+enum Sim {
+    Cpu(CpuSolver),
+    Wgpu(WgpuSolver),
+    Vulkan(VulkanSolver),
+}
+
+impl Sim {
+    fn solver(&mut self) -> &mut dyn Solver {
+        match self {
+            Sim::Cpu(s) => s,
+            Sim::Wgpu(s) => s,
+            Sim::Vulkan(s) => s,
+        }
+    }
+}
+
+enum Painter {
+    Wgpu(GpuContext, Box<WgpuRenderer>),
+    Vulkan(Box<VulkanRenderer>),
+    None,
+}
+
+/// The devices found once and shared by every cell.
+struct Devices {
+    wgpu: Option<GpuContext>,
+    vulkan: Option<Arc<Device>>,
+    wgpu_error: Option<String>,
+    vulkan_error: Option<String>,
+}
+
+impl Devices {
+    fn open(need_wgpu: bool, need_vulkan: bool) -> Self {
+        let (wgpu, wgpu_error) = if need_wgpu {
+            match GpuContext::new() {
+                Ok(c) => (Some(c), None),
+                Err(e) => (None, Some(e.to_string())),
+            }
+        } else {
+            (None, None)
+        };
+        let (vulkan, vulkan_error) = if need_vulkan {
+            match Device::new(vulkan_validation()) {
+                Ok(d) => (Some(d), None),
+                Err(e) => (None, Some(e.to_string())),
+            }
+        } else {
+            (None, None)
+        };
+        Self { wgpu, vulkan, wgpu_error, vulkan_error }
+    }
+}
+
+fn is_vulkan(b: Backend) -> bool {
+    matches!(b, Backend::VulkanNaive | Backend::Vulkan)
+}
+
+fn is_wgpu(b: Backend) -> bool {
+    matches!(b, Backend::WgpuNaive | Backend::Wgpu)
+}
+
+/// The CPU in one line: model and logical cores.
+pub fn cpu_label() -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split_once(':')).map(|(_, m)| m.trim().to_owned()))
+        .unwrap_or_else(|| std::env::consts::ARCH.to_owned());
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    format!("{model}, {cores} threads")
+}
+
+pub fn bench(args: BenchArgs) -> Result<ExitCode> {
+    let mut sizes = args.sizes.clone();
+    if sizes.is_empty() {
+        bail!("--sizes is empty: give at least one grid size");
+    }
+    if let Some(&n) = sizes.iter().find(|&&n| !(2..=4096).contains(&n)) {
+        bail!("invalid size {n} in --sizes: grid sizes must be in 2 ..= 4096");
+    }
+    sizes.sort_unstable();
+    sizes.dedup();
+    if args.iters == 0 || args.iters > 1_000_000 {
+        bail!("invalid --iters {}: must be in 1 ..= 1000000", args.iters);
+    }
+    if !(args.cell_budget > 0.0 && args.cell_budget.is_finite()) {
+        bail!("invalid --cell-budget {}: must be a positive number of seconds", args.cell_budget);
+    }
+    let mut backends = Vec::new();
+    for b in &args.backends {
+        if !backends.contains(b) {
+            backends.push(*b);
+        }
+    }
+    if backends.is_empty() {
+        bail!("--backends is empty: name at least one backend");
+    }
+    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+
+    let params = SimParams::default();
+    let frames = args.iters.div_ceil(params.substeps);
+    let plan = OverheadPlan {
+        samples: args.iters.clamp(5, 1000) as usize,
+        warmup: (args.iters / 10).clamp(2, 50) as usize,
+        ..Default::default()
+    };
+    // Every backend draws its frames; CPU backends draw through wgpu (or Vulkan without it).
+    let need_wgpu = backends.iter().any(|&b| is_wgpu(b) || !is_vulkan(b)) || !args.no_overhead;
+    let need_vulkan = backends.iter().any(|&b| is_vulkan(b)) || !args.no_overhead;
+    let devices = Devices::open(need_wgpu, need_vulkan);
+    let mut notes = Vec::new();
+    for (api, err, present) in [
+        ("wgpu", &devices.wgpu_error, backends.iter().any(|&b| is_wgpu(b))),
+        ("Vulkan", &devices.vulkan_error, backends.iter().any(|&b| is_vulkan(b))),
+    ] {
+        if let Some(e) = err {
+            let what = if present { "its backends and overhead benchmarks are skipped" } else { "skipped" };
+            eprintln!("note: no {api} adapter ({e}); {what}");
+            notes.push(format!("no {api} adapter: {e}"));
+        }
+    }
+    backends.retain(|&b| !(is_wgpu(b) && devices.wgpu.is_none() || is_vulkan(b) && devices.vulkan.is_none()));
+    if backends.is_empty() {
+        bail!("none of the requested backends can run here (no GPU adapter); try --backends cpu,cpu-par");
+    }
+
+    let overhead_apis = usize::from(!args.no_overhead && devices.wgpu.is_some())
+        + usize::from(!args.no_overhead && devices.vulkan.is_some());
+    let bar = ProgressBar::new((sizes.len() * backends.len() + overhead_apis) as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:32} {pos}/{len} [{elapsed_precise}] {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let say = |bar: &ProgressBar, line: String| bar.suspend(|| eprintln!("{line}"));
+
+    let started = Instant::now();
+    let mut cells: Vec<Cell> = Vec::new();
+    let mut skipped: Vec<String> = Vec::new();
+    for &n in &sizes {
+        for &backend in &backends {
+            bar.set_message(format!("{} n={n}", backend.name()));
+            // Predict the cell's time from this backend's previous size (time ∝ particles).
+            let predicted = cells
+                .iter()
+                .rev()
+                .find(|c| c.backend == backend.name())
+                .map(|c| c.seconds * (n as f64 / c.n as f64).powi(2));
+            if let Some(p) = predicted.filter(|&p| p > args.cell_budget) {
+                let line = format!(
+                    "{} at n={n}: skipped, predicted {p:.0} s > --cell-budget {:.0} s",
+                    backend.name(),
+                    args.cell_budget
+                );
+                say(&bar, line.clone());
+                skipped.push(line);
+                bar.inc(1);
+                continue;
+            }
+            let cell = run_cell(backend, n, &params, frames, args.resolution, &devices)
+                .with_context(|| format!("{} at n={n}", backend.name()))?;
+            let sub = cell.kernels.iter().find(|r| r.label == clothlab_core::timing::SUBSTEP);
+            let frame = cell.frames.iter().find(|r| r.label == "frame");
+            say(
+                &bar,
+                format!(
+                    "{:<13} n={n:<5} substep {:>10.3} ms   frame {:>10.2} ms ({:.1} fps)   [{:.1} s]",
+                    cell.backend,
+                    sub.map(|r| r.median_ns / 1e6).unwrap_or(f64::NAN),
+                    frame.map(|r| r.median_ns / 1e6).unwrap_or(f64::NAN),
+                    frame.map(|r| 1e9 / r.median_ns).unwrap_or(f64::NAN),
+                    cell.seconds
+                ),
+            );
+            cells.push(cell);
+            bar.inc(1);
+        }
+    }
+
+    let mut overhead: Vec<(String, String, Vec<OverheadRow>)> = Vec::new();
+    if !args.no_overhead {
+        if let Some(ctx) = &devices.wgpu {
+            bar.set_message("API overhead: wgpu");
+            let rows = clothlab_wgpu::overhead::measure(ctx, &plan).context("wgpu overhead benchmarks")?;
+            overhead.push(("wgpu".into(), ctx.describe(), rows));
+            bar.inc(1);
+        }
+        if let Some(dev) = &devices.vulkan {
+            bar.set_message("API overhead: Vulkan");
+            let rows = clothlab_vulkan::overhead::measure(dev, &plan).context("Vulkan overhead benchmarks")?;
+            overhead.push(("vulkan".into(), format!("{} (Vulkan)", dev.name), rows));
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+
+    let results = output::Results::new(output::Inputs {
+        machine: args.machine.clone().unwrap_or_else(cpu_label),
+        wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
+        vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name.clone()),
+        params: params.clone(),
+        frames,
+        warmup_frames: WARMUP_FRAMES,
+        resolution: args.resolution,
+        plan,
+        cells,
+        overhead,
+        skipped,
+        notes,
+        seconds: started.elapsed().as_secs_f64(),
+        command: std::env::args().collect::<Vec<_>>().join(" "),
+    });
+    let files = output::write_all(&results, &args.out)?;
+    for f in &files {
+        println!("wrote {}", f.display());
+    }
+    let failed: Vec<&output::Check> = results.checks.iter().filter(|c| !c.ok).collect();
+    for c in &failed {
+        eprintln!(
+            "error: {} at n={} ended {:.2e} m from {} (bound {:.1e} m): not the same workload",
+            c.backend, c.n, c.max_dev_m, c.reference, c.bound_m
+        );
+    }
+    Ok(if failed.is_empty() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+}
+
+fn run_cell(
+    backend: Backend,
+    n: u32,
+    params: &SimParams,
+    frames: u32,
+    (width, height): (u32, u32),
+    devices: &Devices,
+) -> Result<Cell> {
+    let t_cell = Instant::now();
+    let scene = Scene::with_n(n);
+    let p = params.clone();
+    let options = VulkanOptions { validation: vulkan_validation(), ..Default::default() };
+    let variant = if matches!(backend, Backend::Wgpu | Backend::Vulkan) { Variant::Optimized } else { Variant::Naive };
+    let mut sim = match backend {
+        Backend::Cpu => Sim::Cpu(CpuSolver::new(Exec::Serial, scene.clone(), p)?),
+        Backend::CpuPar => Sim::Cpu(CpuSolver::new(Exec::Parallel, scene.clone(), p)?),
+        Backend::WgpuNaive | Backend::Wgpu => {
+            let ctx = devices.wgpu.clone().context("no wgpu adapter")?;
+            Sim::Wgpu(WgpuSolver::with_context(ctx, variant, scene.clone(), p)?)
+        }
+        Backend::VulkanNaive | Backend::Vulkan => {
+            let dev = devices.vulkan.clone().context("no Vulkan adapter")?;
+            Sim::Vulkan(VulkanSolver::on_device(dev, variant, scene.clone(), p, options)?)
+        }
+    };
+    let (_, topo) = clothlab_core::build(&scene, params)?;
+    let mut painter = match &sim {
+        Sim::Wgpu(s) => Painter::Wgpu(s.context().clone(), Box::new(WgpuRenderer::new(s.context(), &scene, &topo, width, height)?)),
+        Sim::Vulkan(s) => Painter::Vulkan(Box::new(VulkanRenderer::new(&s.device(), &scene, &topo, width, height)?)),
+        Sim::Cpu(_) => match (&devices.wgpu, &devices.vulkan) {
+            (Some(ctx), _) => Painter::Wgpu(ctx.clone(), Box::new(WgpuRenderer::new(ctx, &scene, &topo, width, height)?)),
+            (None, Some(dev)) => Painter::Vulkan(Box::new(VulkanRenderer::new(dev, &scene, &topo, width, height)?)),
+            (None, None) => Painter::None,
+        },
+    };
+    let renderer = match &painter {
+        Painter::Wgpu(ctx, _) => format!("wgpu on {}", ctx.describe()),
+        Painter::Vulkan(r) => format!("Vulkan on {}", r.device().name),
+        Painter::None => String::new(),
+    };
+    let adapter = match &sim {
+        Sim::Cpu(_) => cpu_label(),
+        Sim::Wgpu(s) => s.adapter(),
+        Sim::Vulkan(s) => format!("{} (Vulkan)", s.adapter()),
+    };
+    let view = default_view(Mode::Triangles);
+
+    for _ in 0..WARMUP_FRAMES {
+        sim.solver().step_frame()?;
+        draw(&mut sim, &mut painter, &view)?;
+    }
+    // Per-kernel table.
+    sim.solver().set_kernel_timing(true);
+    sim.solver().reset_timings();
+    for _ in 0..frames {
+        sim.solver().step_frame()?;
+    }
+    let kernels = sim.solver().timings().rows;
+    // Frame table: per-kernel timestamps off, each frame simulated, waited for, drawn.
+    sim.solver().set_kernel_timing(false);
+    let mut rec = clothlab_core::TimingRecorder::new(frames as usize);
+    for _ in 0..frames {
+        let t = Instant::now();
+        sim.solver().step_frame()?;
+        finish(&sim)?;
+        let t_sim = t.elapsed().as_nanos() as f64;
+        let t = Instant::now();
+        let drew = draw(&mut sim, &mut painter, &view)?;
+        let t_render = t.elapsed().as_nanos() as f64;
+        rec.record("sim", t_sim);
+        if drew {
+            rec.record("render", t_render);
+        }
+        rec.record("frame", t_sim + if drew { t_render } else { 0.0 });
+    }
+    let state = sim.solver().state()?;
+    Ok(Cell {
+        backend: backend.name().to_owned(),
+        n,
+        adapter,
+        kernels,
+        frames: rec.table().rows,
+        renderer,
+        probe: probe(&state),
+        seconds: t_cell.elapsed().as_secs_f64(),
+    })
+}
+
+/// Waits until the solver's last frame is done on the GPU.
+fn finish(sim: &Sim) -> Result<()> {
+    match sim {
+        Sim::Cpu(_) => Ok(()),
+        Sim::Wgpu(s) => Ok(s.context().wait_idle()?),
+        Sim::Vulkan(s) => Ok(s.device().wait_idle()?),
+    }
+}
+
+/// Draws the cloth offscreen and waits for the picture; false when there is no renderer.
+fn draw(sim: &mut Sim, painter: &mut Painter, view: &clothlab_core::View) -> Result<bool> {
+    match (painter, sim) {
+        (Painter::None, _) => return Ok(false),
+        (Painter::Wgpu(ctx, r), Sim::Cpu(s)) => {
+            r.render(ctx, view, ClothSource::Cpu(s.state_ref()))?;
+            ctx.wait_idle()?;
+        }
+        (Painter::Wgpu(ctx, r), Sim::Wgpu(s)) => {
+            let (pos, normal) = s.vertex_buffers();
+            r.render(ctx, view, ClothSource::Gpu { pos, normal })?;
+            ctx.wait_idle()?;
+        }
+        (Painter::Vulkan(r), Sim::Cpu(s)) => r.render(view, VkCloth::Cpu(s.state_ref()))?,
+        (Painter::Vulkan(r), Sim::Vulkan(s)) => {
+            let (pos, normal) = s.vertex_buffers();
+            r.render(view, VkCloth::Gpu { pos, normal })?;
+        }
+        _ => bail!("a GPU solver's buffers are drawn by its own API"),
+    }
+    Ok(true)
+}
+
+/// Positions of a `CHECK_LATTICE`² lattice of particles, corners included.
+fn probe(state: &ClothState) -> Vec<[f32; 3]> {
+    let n = state.n as usize;
+    let m = CHECK_LATTICE as usize;
+    let at = |k: usize| if n == 1 { 0 } else { k * (n - 1) / (m - 1) };
+    let mut v = Vec::with_capacity(m * m);
+    for j in 0..m {
+        for i in 0..m {
+            let p = state.pos[at(j) * n + at(i)];
+            v.push([p[0], p[1], p[2]]);
+        }
+    }
+    v
+}
