@@ -8,7 +8,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use ash::vk;
-use clothlab_core::timing::overhead::{CHAIN, CPU_RECORD, CPU_SUBMIT_WAIT, CPU_TOTAL, EMPTY_SUBMIT, GPU, READBACK, UPLOAD};
+use clothlab_core::timing::overhead::{
+    CHAIN, CPU_RECORD, CPU_SUBMIT_WAIT, CPU_TOTAL, EMPTY_SUBMIT, GPU, READBACK, UPLOAD,
+};
 use clothlab_core::timing::{OverheadPlan, OverheadRecorder, OverheadRow};
 use gpu_allocator::MemoryLocation;
 

@@ -8,7 +8,9 @@
 
 use std::time::Instant;
 
-use clothlab_core::timing::overhead::{CHAIN, CPU_RECORD, CPU_SUBMIT_WAIT, CPU_TOTAL, EMPTY_SUBMIT, GPU, READBACK, UPLOAD};
+use clothlab_core::timing::overhead::{
+    CHAIN, CPU_RECORD, CPU_SUBMIT_WAIT, CPU_TOTAL, EMPTY_SUBMIT, GPU, READBACK, UPLOAD,
+};
 use clothlab_core::timing::{OverheadPlan, OverheadRecorder, OverheadRow};
 
 use crate::{GpuContext, GpuError};
@@ -166,9 +168,7 @@ pub fn measure(ctx: &GpuContext, plan: &OverheadPlan) -> Result<Vec<OverheadRow>
                 let _ = tx.send(r);
             });
             ctx.wait_idle()?;
-            rx.recv()
-                .map_err(|e| GpuError::Readback(e.to_string()))?
-                .map_err(|e| GpuError::Readback(e.to_string()))?;
+            rx.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))?;
             out.copy_from_slice(&slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?);
             staging.unmap();
             let readback = ns(t);

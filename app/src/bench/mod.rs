@@ -27,7 +27,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::cli::{Backend, Mode, default_view, vulkan_validation};
 
-
 /// Arguments of `clothlab bench`.
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
@@ -108,23 +107,23 @@ pub struct Cell {
 
 /// The solver of a cell, with what its renderer needs to draw it.
 enum Sim {
-    Cpu(CpuSolver),
-    Wgpu(WgpuSolver),
-    Vulkan(VulkanSolver),
+    Cpu(Box<CpuSolver>),
+    Wgpu(Box<WgpuSolver>),
+    Vulkan(Box<VulkanSolver>),
 }
 
 impl Sim {
     fn solver(&mut self) -> &mut dyn Solver {
         match self {
-            Sim::Cpu(s) => s,
-            Sim::Wgpu(s) => s,
-            Sim::Vulkan(s) => s,
+            Sim::Cpu(s) => s.as_mut(),
+            Sim::Wgpu(s) => s.as_mut(),
+            Sim::Vulkan(s) => s.as_mut(),
         }
     }
 }
 
 enum Painter {
-    Wgpu(GpuContext, Box<WgpuRenderer>),
+    Wgpu(Box<(GpuContext, WgpuRenderer)>),
     Vulkan(Box<VulkanRenderer>),
     None,
 }
@@ -171,7 +170,12 @@ fn is_wgpu(b: Backend) -> bool {
 pub fn cpu_label() -> String {
     let model = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split_once(':')).map(|(_, m)| m.trim().to_owned()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, m)| m.trim().to_owned())
+        })
         .unwrap_or_else(|| std::env::consts::ARCH.to_owned());
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     format!("{model}, {cores} threads")
@@ -344,29 +348,34 @@ fn run_cell(
     let options = VulkanOptions { validation: vulkan_validation(), ..Default::default() };
     let variant = if matches!(backend, Backend::Wgpu | Backend::Vulkan) { Variant::Optimized } else { Variant::Naive };
     let mut sim = match backend {
-        Backend::Cpu => Sim::Cpu(CpuSolver::new(Exec::Serial, scene.clone(), p)?),
-        Backend::CpuPar => Sim::Cpu(CpuSolver::new(Exec::Parallel, scene.clone(), p)?),
+        Backend::Cpu => Sim::Cpu(Box::new(CpuSolver::new(Exec::Serial, scene.clone(), p)?)),
+        Backend::CpuPar => Sim::Cpu(Box::new(CpuSolver::new(Exec::Parallel, scene.clone(), p)?)),
         Backend::WgpuNaive | Backend::Wgpu => {
             let ctx = devices.wgpu.clone().context("no wgpu adapter")?;
-            Sim::Wgpu(WgpuSolver::with_context(ctx, variant, scene.clone(), p)?)
+            Sim::Wgpu(Box::new(WgpuSolver::with_context(ctx, variant, scene.clone(), p)?))
         }
         Backend::VulkanNaive | Backend::Vulkan => {
             let dev = devices.vulkan.clone().context("no Vulkan adapter")?;
-            Sim::Vulkan(VulkanSolver::on_device(dev, variant, scene.clone(), p, options)?)
+            Sim::Vulkan(Box::new(VulkanSolver::on_device(dev, variant, scene.clone(), p, options)?))
         }
     };
     let (_, topo) = clothlab_core::build(&scene, params)?;
     let mut painter = match &sim {
-        Sim::Wgpu(s) => Painter::Wgpu(s.context().clone(), Box::new(WgpuRenderer::new(s.context(), &scene, &topo, width, height)?)),
+        Sim::Wgpu(s) => {
+            let r = WgpuRenderer::new(s.context(), &scene, &topo, width, height)?;
+            Painter::Wgpu(Box::new((s.context().clone(), r)))
+        }
         Sim::Vulkan(s) => Painter::Vulkan(Box::new(VulkanRenderer::new(&s.device(), &scene, &topo, width, height)?)),
         Sim::Cpu(_) => match (&devices.wgpu, &devices.vulkan) {
-            (Some(ctx), _) => Painter::Wgpu(ctx.clone(), Box::new(WgpuRenderer::new(ctx, &scene, &topo, width, height)?)),
+            (Some(ctx), _) => {
+                Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, &topo, width, height)?)))
+            }
             (None, Some(dev)) => Painter::Vulkan(Box::new(VulkanRenderer::new(dev, &scene, &topo, width, height)?)),
             (None, None) => Painter::None,
         },
     };
     let renderer = match &painter {
-        Painter::Wgpu(ctx, _) => format!("wgpu on {}", ctx.describe()),
+        Painter::Wgpu(p) => format!("wgpu on {}", p.0.describe()),
         Painter::Vulkan(r) => format!("Vulkan on {}", r.device().name),
         Painter::None => String::new(),
     };
@@ -431,11 +440,13 @@ fn finish(sim: &Sim) -> Result<()> {
 fn draw(sim: &mut Sim, painter: &mut Painter, view: &clothlab_core::View) -> Result<bool> {
     match (painter, sim) {
         (Painter::None, _) => return Ok(false),
-        (Painter::Wgpu(ctx, r), Sim::Cpu(s)) => {
+        (Painter::Wgpu(p), Sim::Cpu(s)) => {
+            let (ctx, r) = &mut **p;
             r.render(ctx, view, ClothSource::Cpu(s.state_ref()))?;
             ctx.wait_idle()?;
         }
-        (Painter::Wgpu(ctx, r), Sim::Wgpu(s)) => {
+        (Painter::Wgpu(p), Sim::Wgpu(s)) => {
+            let (ctx, r) = &mut **p;
             let (pos, normal) = s.vertex_buffers();
             r.render(ctx, view, ClothSource::Gpu { pos, normal })?;
             ctx.wait_idle()?;

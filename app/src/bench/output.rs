@@ -359,7 +359,10 @@ pub fn report(r: &Results) -> String {
     if let Some(n) = r.kernel_size() {
         let _ = writeln!(s, "## Per-kernel time at {n}×{n} (thesis Figures 7.1–7.4)\n");
         let _ = writeln!(s, "![per-kernel time](kernels.png)\n");
-        let _ = writeln!(s, "Milliseconds per substep (`frame`, `cpu record`, `cpu submit`: per frame; `render`: one offscreen frame).\n");
+        let _ = writeln!(
+            s,
+            "Milliseconds per substep (`frame`, `cpu record`, `cpu submit`: per frame; `render`: one offscreen frame).\n"
+        );
         let mut labels: Vec<String> = Vec::new();
         for row in r.rows.iter().filter(|x| x.section == "kernel" && x.size == n) {
             if !labels.contains(&row.label) {
@@ -383,7 +386,11 @@ pub fn report(r: &Results) -> String {
 
     let _ = writeln!(s, "## Time per frame and frames per second against grid size (Figures 7.5–7.8)\n");
     let _ = writeln!(s, "![frame time](frame_time.png) ![frames per second](fps.png)\n");
-    let _ = writeln!(s, "Milliseconds per frame ({} substeps + offscreen render), frames per second in brackets.\n", st.substeps);
+    let _ = writeln!(
+        s,
+        "Milliseconds per frame ({} substeps + offscreen render), frames per second in brackets.\n",
+        st.substeps
+    );
     let _ = writeln!(s, "| n | particles | {} |", backends.join(" | "));
     let _ = writeln!(s, "|---:|---:|{}", "---:|".repeat(backends.len()));
     for &n in &sizes {
@@ -447,7 +454,9 @@ pub fn report(r: &Results) -> String {
             let cells: Vec<String> = apis
                 .iter()
                 .map(|a| {
-                    r.get("overhead", a, *size, label, Some(clock)).map(|x| us(x.median_ns)).unwrap_or_else(|| "–".into())
+                    r.get("overhead", a, *size, label, Some(clock))
+                        .map(|x| us(x.median_ns))
+                        .unwrap_or_else(|| "–".into())
                 })
                 .collect();
             let _ = writeln!(s, "| {label} | {size_s} | {clock} | {} |", cells.join(" | "));
@@ -477,7 +486,10 @@ pub fn report(r: &Results) -> String {
         st.warmup_frames + 2 * st.frames,
         CHECK_BOUND_PER_SUBSTEP
     );
-    let _ = writeln!(s, "| backend | n | reference | max distance (m) | bound (m) | result |\n|---|---:|---|---:|---:|---|");
+    let _ = writeln!(
+        s,
+        "| backend | n | reference | max distance (m) | bound (m) | result |\n|---|---:|---|---:|---:|---|"
+    );
     for c in &r.checks {
         let _ = writeln!(
             s,
@@ -518,14 +530,20 @@ pub fn targets(r: &Results) -> Vec<String> {
     let sub = |b: &str, n: u64| r.get("kernel", b, n, SUBSTEP, None).map(|x| x.median_ns);
     let sizes = r.sizes();
     // rayon vs serial at 500² (or the largest measured size).
-    if let Some(&n) = sizes.iter().rev().find(|&&n| n <= 500) {
-        if let (Some(a), Some(b)) = (sub("cpu", n), sub("cpu-par", n)) {
-            let x = a / b;
-            v.push(format!(
-                "CPU rayon ≥ 1.8× CPU serial at 500×500: {x:.2}× at {n}×{n} — {}",
-                if n != 500 { "not measured at 500" } else if x >= 1.8 { "met" } else { "not met" }
-            ));
-        }
+    if let Some(&n) = sizes.iter().rev().find(|&&n| n <= 500)
+        && let (Some(a), Some(b)) = (sub("cpu", n), sub("cpu-par", n))
+    {
+        let x = a / b;
+        v.push(format!(
+            "CPU rayon ≥ 1.8× CPU serial at 500×500: {x:.2}× at {n}×{n} — {}",
+            if n != 500 {
+                "not measured at 500"
+            } else if x >= 1.8 {
+                "met"
+            } else {
+                "not met"
+            }
+        ));
     }
     for (api, naive, opt) in [("wgpu", "wgpu-naive", "wgpu"), ("Vulkan", "vulkan-naive", "vulkan")] {
         let pairs: Vec<String> = sizes
@@ -584,4 +602,109 @@ pub fn write_all(results: &Results, dir: &Path) -> Result<Vec<PathBuf>> {
         put(&format!("{name}.png"), &png)?;
     }
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clothlab_core::TimingRow;
+
+    fn timing(label: &str, ns: f64) -> TimingRow {
+        TimingRow { label: label.into(), samples: 16, median_ns: ns, min_ns: ns * 0.9, max_ns: ns * 1.2 }
+    }
+
+    fn cell(backend: &str, n: u32, substep_ns: f64, shift_m: f32) -> Cell {
+        Cell {
+            backend: backend.into(),
+            n,
+            adapter: "test".into(),
+            kernels: vec![
+                timing(SUBSTEP, substep_ns),
+                timing(CPU_RECORD, substep_ns / 10.0),
+                timing(CPU_SUBMIT, substep_ns / 100.0),
+            ],
+            frames: vec![timing("frame", 16.0 * substep_ns)],
+            renderer: String::new(),
+            probe: (0..25).map(|i| [i as f32 * 0.1 + shift_m, 1.0, 0.0]).collect(),
+            seconds: 1.0,
+        }
+    }
+
+    fn results(cells: Vec<Cell>, overhead: Vec<(String, String, Vec<OverheadRow>)>) -> Results {
+        Results::new(Inputs {
+            machine: "test machine".into(),
+            wgpu_adapter: None,
+            vulkan_adapter: None,
+            params: SimParams::default(),
+            frames: 10,
+            warmup_frames: 3,
+            resolution: (64, 64),
+            plan: OverheadPlan::default(),
+            cells,
+            overhead,
+            skipped: vec![],
+            notes: vec![],
+            seconds: 1.0,
+            command: "test".into(),
+        })
+    }
+
+    #[test]
+    fn a_backend_that_ends_elsewhere_fails_the_same_workload_check() {
+        // (3 + 2·10) frames × 16 substeps × 1e-5 m = 3.68 mm allowed.
+        let r = results(
+            vec![cell("cpu", 64, 1e5, 0.0), cell("wgpu", 64, 1e4, 0.001), cell("vulkan", 64, 1e4, 0.01)],
+            vec![],
+        );
+        let by = |b: &str| r.checks.iter().find(|c| c.backend == b).unwrap();
+        assert!((by("wgpu").bound_m - 3.68e-3).abs() < 1e-9);
+        assert!(by("wgpu").ok && (by("wgpu").max_dev_m - 1e-3).abs() < 1e-6, "{:?}", by("wgpu"));
+        assert!(!by("vulkan").ok, "1 cm off must fail: {:?}", by("vulkan"));
+        assert!(report(&r).contains("**FAILED**"));
+        // A NaN position is never within the bound.
+        let mut bad = cell("cpu-par", 64, 1e5, 0.0);
+        bad.probe[3][1] = f32::NAN;
+        let r = results(vec![cell("cpu", 64, 1e5, 0.0), bad], vec![]);
+        assert!(!r.checks[0].ok);
+    }
+
+    #[test]
+    fn targets_compare_the_right_rows() {
+        let r = results(
+            vec![
+                cell("cpu", 500, 2e7, 0.0),
+                cell("cpu-par", 500, 1e7, 0.0),
+                cell("wgpu-naive", 500, 9e6, 0.0),
+                cell("wgpu", 500, 8e6, 0.0),
+                cell("vulkan-naive", 500, 5e6, 0.0),
+                cell("vulkan", 500, 6e6, 0.0),
+            ],
+            vec![],
+        );
+        let t = targets(&r).join("\n");
+        assert!(t.contains("2.00× at 500×500 — met"), "{t}");
+        assert!(t.contains("on wgpu: n=500: 8.00 vs 9.00 ms — met"), "{t}");
+        assert!(t.contains("on Vulkan: n=500: 6.00 vs 5.00 ms (NOT faster) — not met"), "{t}");
+        // Vulkan (6e5 + 6e4) / 16 = 41.25 µs vs wgpu (8e5 + 8e4) / 16 = 55 µs per substep.
+        assert!(t.contains("n=500: 41.2 vs 55.0 µs — met"), "{t}");
+    }
+
+    #[test]
+    fn chain_slope_is_the_cost_per_added_dispatch() {
+        let rows = [1u64, 8, 64]
+            .iter()
+            .map(|&k| OverheadRow {
+                bench: overhead::CHAIN.into(),
+                param: k,
+                stats: timing(overhead::GPU, 5_000.0 + 2_000.0 * k as f64),
+            })
+            .collect();
+        let r = results(vec![], vec![("vulkan".into(), "test".into(), rows)]);
+        let slope = chain_slope(&r, "vulkan", overhead::GPU).unwrap();
+        assert!((slope - 2_000.0).abs() < 1e-9, "{slope}");
+        assert!(chain_slope(&r, "wgpu", overhead::GPU).is_none());
+        let csv = csv(&r);
+        assert_eq!(csv.lines().count(), 4, "{csv}");
+        assert!(csv.lines().nth(1).unwrap().starts_with("overhead,vulkan,1,chain,gpu,16,7000.0,"), "{csv}");
+    }
 }

@@ -323,7 +323,8 @@ impl Figure for Overhead<'_> {
         DB::ErrorType: 'static,
     {
         root.fill(&WHITE).map_err(err)?;
-        let root = root.titled(&format!("API overhead, wgpu vs Vulkan — {}", self.r.machine), (FONT, 20)).map_err(err)?;
+        let root =
+            root.titled(&format!("API overhead, wgpu vs Vulkan — {}", self.r.machine), (FONT, 20)).map_err(err)?;
         let halves = root.split_evenly((1, 2));
         let rows = |api: &str, label: &str, clock: &str| -> Vec<(f64, f64)> {
             self.r
@@ -334,7 +335,9 @@ impl Figure for Overhead<'_> {
                 .collect()
         };
         let apis = ["wgpu", "vulkan"];
-        let panels: [(&str, &str, Vec<(&str, &str)>); 2] = [
+        // (caption, x axis, [(benchmark, clock)]) per panel.
+        type Panel<'s> = (&'s str, &'s str, Vec<(&'s str, &'s str)>);
+        let panels: [Panel; 2] = [
             (
                 "chain of k dependent dispatches (µs)",
                 "k dispatches",

@@ -1,0 +1,192 @@
+//! `clothlab bench`: a small run writes every file, well-formed, with sane numbers; bad
+//! input is refused; cells over the time budget are skipped and said so.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn clothlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_clothlab")).args(args).env("RUST_BACKTRACE", "1").output().expect("run clothlab")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("clothlab-bench-{name}-{}", std::process::id()));
+    std::fs::remove_dir_all(&d).ok();
+    d
+}
+
+/// Splits one CSV line, honouring double quotes (the writer quotes fields with commas).
+fn split_csv(line: &str) -> Vec<String> {
+    let (mut out, mut cur, mut quoted) = (Vec::new(), String::new(), false);
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => out.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    out.push(cur);
+    out
+}
+
+fn gpu_required() -> bool {
+    std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() == Ok("1")
+}
+
+/// Decodes a PNG and checks it is a real picture: the expected size and more than a
+/// handful of colours (axes, text, lines).
+fn check_png(path: &Path) {
+    let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8();
+    assert!(img.width() >= 600 && img.height() >= 400, "{}: {}×{}", path.display(), img.width(), img.height());
+    let mut colours: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+    colours.sort_unstable();
+    colours.dedup();
+    // White background, black text, grey grid, a colour per series, anti-aliased edges.
+    assert!(colours.len() > 20, "{}: only {} colours — nothing drawn?", path.display(), colours.len());
+    let white = img.pixels().filter(|p| p.0 == [255, 255, 255]).count() as f64 / (img.width() * img.height()) as f64;
+    assert!((0.3..0.995).contains(&white), "{}: {:.1}% white", path.display(), white * 100.0);
+}
+
+#[test]
+fn a_small_run_writes_every_file_with_positive_finite_numbers() {
+    let out = tmp("small");
+    let o = clothlab(&["bench", "--sizes", "16,32", "--iters", "5", "--out", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "bench failed: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let gpu = !err.contains("no wgpu adapter");
+    assert!(gpu || !gpu_required(), "CI has lavapipe, but: {err}");
+    let backends: &[&str] =
+        if gpu { &["cpu", "cpu-par", "wgpu-naive", "wgpu", "vulkan-naive", "vulkan"] } else { &["cpu", "cpu-par"] };
+
+    // CSV: the header, 11 fields a row, numbers positive and finite, min ≤ median ≤ max.
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = split_csv(lines.next().unwrap());
+    assert_eq!(header.join(","), "section,backend,size,label,clock,samples,median_ns,min_ns,max_ns,adapter,machine");
+    let rows: Vec<Vec<String>> = lines.map(split_csv).collect();
+    for r in &rows {
+        assert_eq!(r.len(), 11, "{r:?}");
+        let samples: usize = r[5].parse().unwrap();
+        let [med, min, max] = [6, 7, 8].map(|i| r[i].parse::<f64>().unwrap());
+        assert!(samples >= 1, "{r:?}");
+        for v in [med, min, max] {
+            assert!(v.is_finite() && v > 0.0, "{r:?}");
+        }
+        assert!(min <= med && med <= max, "{r:?}");
+        assert!(!r[10].is_empty() && !r[9].is_empty(), "machine and adapter in every row: {r:?}");
+    }
+    let find = |section: &str, backend: &str, size: &str, label: &str| {
+        rows.iter().find(|r| r[0] == section && r[1] == backend && r[2] == size && r[3] == label)
+    };
+    for b in backends {
+        for n in ["16", "32"] {
+            // --iters 5 rounds up to one frame of 16 substeps: 16 samples per kernel.
+            let sub = find("kernel", b, n, "substep").unwrap_or_else(|| panic!("no substep row for {b} n={n}"));
+            assert_eq!(sub[5], "16", "{sub:?}");
+            let frame = find("frame", b, n, "frame").unwrap_or_else(|| panic!("no frame row for {b} n={n}"));
+            assert_eq!(frame[5], "1", "{frame:?}");
+        }
+    }
+    if gpu {
+        for api in ["wgpu", "vulkan"] {
+            for k in ["1", "64"] {
+                assert!(rows.iter().any(|r| r[0] == "overhead"
+                    && r[1] == api
+                    && r[3] == "chain"
+                    && r[2] == k
+                    && r[4] == "gpu"));
+            }
+            assert!(find("overhead", api, "0", "empty submit").is_some());
+            assert!(find("overhead", api, "16777216", "readback").is_some());
+        }
+    }
+
+    // JSON: the same rows, the machine, and every same-workload check passed.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json["rows"].as_array().unwrap().len(), rows.len());
+    assert!(!json["machine"].as_str().unwrap().is_empty());
+    assert_eq!(json["settings"]["frames"], 1);
+    let checks = json["checks"].as_array().unwrap();
+    assert_eq!(checks.len(), 2 * (backends.len() - 1), "every backend but the reference, at each size");
+    for c in checks {
+        assert_eq!(c["ok"], true, "{c}");
+        assert!(c["max_dev_m"].as_f64().unwrap() <= c["bound_m"].as_f64().unwrap());
+    }
+
+    // Report and plots.
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for key in ["## Per-kernel time at 32×32", "## Time per frame", "## Targets", "## Same workload", "kernels.png"] {
+        assert!(report.contains(key), "report.md lacks `{key}`");
+    }
+    for b in backends {
+        assert!(report.contains(&format!("| {b} ")), "report.md lacks {b}");
+    }
+    let mut plots = vec!["kernels", "frame_time", "fps"];
+    if gpu {
+        plots.push("overhead");
+        assert!(report.contains("## API overhead"));
+    }
+    for p in plots {
+        check_png(&out.join(format!("{p}.png")));
+        let svg = std::fs::read_to_string(out.join(format!("{p}.svg"))).unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "{p}.svg is not an SVG document");
+        let series = if p == "overhead" { "vulkan chain gpu" } else { "cpu-par" };
+        assert!(svg.contains(series), "{p}.svg has no series `{series}`");
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn a_cell_over_the_budget_is_skipped_and_reported() {
+    let out = tmp("budget");
+    // The 8×8 cell takes well over a microsecond, so 512×512 (4096× the particles) is
+    // predicted over a 1 ms budget and skipped.
+    let o = clothlab(&[
+        "bench",
+        "--backends",
+        "cpu",
+        "--sizes",
+        "8,512",
+        "--iters",
+        "1",
+        "--cell-budget",
+        "0.001",
+        "--no-overhead",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("cpu at n=512: skipped"), "{err}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("## Skipped") && report.contains("cpu at n=512: skipped"), "{report}");
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert!(csv.contains(",cpu,8,substep,") && !csv.contains(",cpu,512,"), "{csv}");
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn bad_bench_input_is_refused_in_one_line() {
+    for (args, expect) in [
+        (&["bench", "--sizes", "1"][..], "grid sizes must be in 2 ..= 4096"),
+        (&["bench", "--sizes", "16,5000"], "grid sizes must be in 2 ..= 4096"),
+        (&["bench", "--iters", "0"], "invalid --iters 0"),
+        (&["bench", "--resolution", "10x10"], "width and height must be in 16 ..= 8192"),
+        (&["bench", "--resolution", "wide"], "expected WIDTHxHEIGHT"),
+        (&["bench", "--cell-budget", "0"], "invalid --cell-budget"),
+        (&["bench", "--backends", "cuda"], "invalid value 'cuda'"),
+        (&["bench", "--sizes", "8", "--out", "/proc/clothlab-bench"], "cannot create /proc/clothlab-bench"),
+    ] {
+        let o = clothlab(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} should fail");
+        assert!(err.contains(expect), "{args:?}: expected `{expect}` in: {err}");
+        assert!(!err.contains("panicked") && !err.contains("backtrace"), "{args:?}: {err}");
+    }
+}
