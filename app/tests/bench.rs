@@ -139,6 +139,14 @@ fn a_small_run_writes_every_file_with_positive_finite_numbers() {
         let series = if p == "overhead" { "vulkan chain gpu" } else { "cpu-par" };
         assert!(svg.contains(series), "{p}.svg has no series `{series}`");
     }
+
+    // --replot rebuilds the report and plots from results.json alone.
+    std::fs::remove_file(out.join("report.md")).unwrap();
+    std::fs::remove_file(out.join("kernels.png")).unwrap();
+    let o = clothlab(&["bench", "--replot", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(out.join("report.md")).unwrap(), report, "the same report from the JSON");
+    check_png(&out.join("kernels.png"));
     std::fs::remove_dir_all(&out).ok();
 }
 
@@ -182,6 +190,7 @@ fn bad_bench_input_is_refused_in_one_line() {
         (&["bench", "--cell-budget", "0"], "invalid --cell-budget"),
         (&["bench", "--backends", "cuda"], "invalid value 'cuda'"),
         (&["bench", "--sizes", "8", "--out", "/proc/clothlab-bench"], "cannot create /proc/clothlab-bench"),
+        (&["bench", "--replot", "--out", "/nonexistent-dir"], "cannot read /nonexistent-dir/results.json"),
     ] {
         let o = clothlab(args);
         let err = String::from_utf8_lossy(&o.stderr);

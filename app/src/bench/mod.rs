@@ -58,6 +58,10 @@ pub struct BenchArgs {
     /// Label of the machine in the report (default: CPU model and core count).
     #[arg(long)]
     machine: Option<String>,
+    /// Measure nothing: read `--out`/results.json (e.g. copied from another machine) and
+    /// write report.md and the plots again.
+    #[arg(long)]
+    replot: bool,
 }
 
 fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
@@ -182,6 +186,16 @@ pub fn cpu_label() -> String {
 }
 
 pub fn bench(args: BenchArgs) -> Result<ExitCode> {
+    if args.replot {
+        let path = args.out.join("results.json");
+        let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        let results: output::Results = serde_json::from_str(&text)
+            .with_context(|| format!("{} is not a clothlab bench result", path.display()))?;
+        for f in output::write_report(&results, &args.out)? {
+            println!("wrote {}", f.display());
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
     let mut sizes = args.sizes.clone();
     if sizes.is_empty() {
         bail!("--sizes is empty: give at least one grid size");

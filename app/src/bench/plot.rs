@@ -142,6 +142,7 @@ impl Figure for Kernels<'_> {
             chart
                 .configure_mesh()
                 .disable_y_mesh()
+                .x_label_formatter(&|v| sig3(*v))
                 .y_labels(k as usize)
                 .y_label_formatter(&|v| match v {
                     SegmentValue::CenterOf(i) | SegmentValue::Exact(i) => {
