@@ -11,7 +11,7 @@ use ash::vk;
 use clothlab_core::timing::overhead::{
     CHAIN, CPU_RECORD, CPU_SUBMIT_WAIT, CPU_TOTAL, EMPTY_SUBMIT, GPU, READBACK, UPLOAD,
 };
-use clothlab_core::timing::{OverheadPlan, OverheadRecorder, OverheadRow};
+use clothlab_core::timing::{OverheadPlan, OverheadRecorder, OverheadRow, elapsed_ns as ns};
 use gpu_allocator::MemoryLocation;
 
 use crate::VkError;
@@ -20,10 +20,6 @@ use crate::solver::{download, upload};
 
 /// Elements of the chain's buffer: one workgroup of the `chain` kernel.
 const CHAIN_ELEMENTS: u64 = 64;
-
-fn ns(t: Instant) -> f64 {
-    t.elapsed().as_nanos() as f64
-}
 
 fn fail(what: &'static str, reason: String) -> VkError {
     VkError::Vulkan { what, reason }

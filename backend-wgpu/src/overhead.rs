@@ -11,16 +11,12 @@ use std::time::Instant;
 use clothlab_core::timing::overhead::{
     CHAIN, CPU_RECORD, CPU_SUBMIT_WAIT, CPU_TOTAL, EMPTY_SUBMIT, GPU, READBACK, UPLOAD,
 };
-use clothlab_core::timing::{OverheadPlan, OverheadRecorder, OverheadRow};
+use clothlab_core::timing::{OverheadPlan, OverheadRecorder, OverheadRow, elapsed_ns as ns};
 
 use crate::{GpuContext, GpuError};
 
 /// Elements of the chain's buffer: one workgroup of the `chain` kernel.
 const CHAIN_ELEMENTS: u64 = 64;
-
-fn ns(t: Instant) -> f64 {
-    t.elapsed().as_nanos() as f64
-}
 
 fn fail(what: &'static str, reason: String) -> GpuError {
     GpuError::Wgpu { what, reason }

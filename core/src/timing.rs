@@ -164,6 +164,11 @@ impl TimingRow {
     }
 }
 
+/// Nanoseconds since `t`, as the timing tables take them.
+pub fn elapsed_ns(t: std::time::Instant) -> f64 {
+    t.elapsed().as_nanos() as f64
+}
+
 /// What the API-overhead micro-benchmarks of `clothlab bench` measure, the same on every
 /// API: see [`OverheadRow`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

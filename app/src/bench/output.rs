@@ -585,17 +585,19 @@ pub fn targets(r: &Results) -> Vec<String> {
     v
 }
 
+/// Writes `bytes` to `dir/name` and notes the path in `files`.
+fn put(dir: &Path, files: &mut Vec<PathBuf>, name: &str, bytes: &[u8]) -> Result<()> {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).with_context(|| format!("cannot write {}", p.display()))?;
+    files.push(p);
+    Ok(())
+}
+
 /// Writes every file into `dir` and returns their paths.
 pub fn write_all(results: &Results, dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
-    let mut put = |name: &str, bytes: &[u8]| -> Result<()> {
-        let p = dir.join(name);
-        std::fs::write(&p, bytes).with_context(|| format!("cannot write {}", p.display()))?;
-        files.push(p);
-        Ok(())
-    };
-    put("results.csv", csv(results).as_bytes())?;
-    put("results.json", serde_json::to_string_pretty(results)?.as_bytes())?;
+    put(dir, &mut files, "results.csv", csv(results).as_bytes())?;
+    put(dir, &mut files, "results.json", serde_json::to_string_pretty(results)?.as_bytes())?;
     files.extend(write_report(results, dir)?);
     Ok(files)
 }
@@ -603,16 +605,10 @@ pub fn write_all(results: &Results, dir: &Path) -> Result<Vec<PathBuf>> {
 /// Writes report.md and the plots into `dir` and returns their paths.
 pub fn write_report(results: &Results, dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
-    let mut put = |name: &str, bytes: &[u8]| -> Result<()> {
-        let p = dir.join(name);
-        std::fs::write(&p, bytes).with_context(|| format!("cannot write {}", p.display()))?;
-        files.push(p);
-        Ok(())
-    };
-    put("report.md", report(results).as_bytes())?;
+    put(dir, &mut files, "report.md", report(results).as_bytes())?;
     for (name, svg, png) in super::plot::all(results)? {
-        put(&format!("{name}.svg"), svg.as_bytes())?;
-        put(&format!("{name}.png"), &png)?;
+        put(dir, &mut files, &format!("{name}.svg"), svg.as_bytes())?;
+        put(dir, &mut files, &format!("{name}.png"), &png)?;
     }
     Ok(files)
 }
