@@ -207,6 +207,99 @@ pub mod overhead {
     pub const CPU_TOTAL: &str = "cpu total";
     /// Clock label: GPU time from timestamps (first dispatch begin to last end).
     pub const GPU: &str = "gpu";
+
+    use std::time::Instant;
+
+    use super::{OverheadPlan, OverheadRecorder, OverheadRow, elapsed_ns};
+
+    /// One run of a dispatch chain, timed by the API's side.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct ChainSample {
+        /// CPU time recording the commands, ns.
+        pub record_ns: f64,
+        /// CPU time from submit until the GPU is done, ns.
+        pub submit_wait_ns: f64,
+        /// GPU time from the timestamps around the chain, ns (None without timestamps).
+        pub gpu_ns: Option<f64>,
+    }
+
+    /// What an API does for the overhead benchmarks; [`measure`] repeats, times and checks
+    /// it the same way on every API, so the wgpu and Vulkan columns differ only in the
+    /// calls behind these methods.
+    pub trait OverheadTarget {
+        /// The API's error.
+        type Error;
+        /// An error for a failed check.
+        fn error(what: &'static str, reason: String) -> Self::Error;
+        /// Submits an empty command buffer and waits for it.
+        fn empty_submit(&mut self) -> Result<(), Self::Error>;
+        /// Zeroes the chain buffer, records `k` dependent dispatches of the `chain` kernel
+        /// on it (a barrier between each two), submits and waits.
+        fn chain(&mut self, k: u32) -> Result<ChainSample, Self::Error>;
+        /// The chain buffer after the last chain.
+        fn chain_values(&mut self) -> Result<Vec<u32>, Self::Error>;
+        /// Makes the buffers for transfers of `bytes` bytes (a multiple of 4).
+        fn prepare_transfers(&mut self, bytes: u64) -> Result<(), Self::Error>;
+        /// Copies `data` into a device-local buffer; returns once the GPU has it.
+        fn upload(&mut self, data: &[u8]) -> Result<(), Self::Error>;
+        /// Copies that buffer back into `out`; returns once `out` holds it.
+        fn readback(&mut self, out: &mut [u8]) -> Result<(), Self::Error>;
+    }
+
+    /// Runs every benchmark of `plan` on `target`: `plan.warmup` unmeasured repetitions,
+    /// then `plan.samples` measured ones each. Every result is checked — after a chain of
+    /// k every element holds k, a readback returns what was uploaded — so that no API is
+    /// fast by skipping work.
+    pub fn measure<T: OverheadTarget>(target: &mut T, plan: &OverheadPlan) -> Result<Vec<OverheadRow>, T::Error> {
+        let mut rec = OverheadRecorder::default();
+        let measured = |i: usize| i >= plan.warmup;
+        let reps = plan.warmup + plan.samples;
+        for i in 0..reps {
+            let t = Instant::now();
+            target.empty_submit()?;
+            if measured(i) {
+                rec.record(EMPTY_SUBMIT, 0, CPU_TOTAL, elapsed_ns(t));
+            }
+        }
+        for &k in &plan.chain {
+            for i in 0..reps {
+                let s = target.chain(k)?;
+                if measured(i) {
+                    rec.record(CHAIN, k as u64, CPU_RECORD, s.record_ns);
+                    rec.record(CHAIN, k as u64, CPU_SUBMIT_WAIT, s.submit_wait_ns);
+                    if let Some(g) = s.gpu_ns {
+                        rec.record(CHAIN, k as u64, GPU, g);
+                    }
+                }
+            }
+            let got = target.chain_values()?;
+            if let Some(bad) = got.iter().find(|&&x| x != k).or(got.is_empty().then_some(&0)) {
+                return Err(T::error("checking the chain", format!("after {k} dispatches an element holds {bad}")));
+            }
+        }
+        for &bytes in &plan.bytes {
+            let size = bytes.max(4).next_multiple_of(4);
+            let pattern: Vec<u8> = (0..size).map(|i| (i * 7 % 251) as u8).collect();
+            let mut out = vec![0u8; size as usize];
+            target.prepare_transfers(size)?;
+            for i in 0..reps {
+                let t = Instant::now();
+                target.upload(&pattern)?;
+                let upload = elapsed_ns(t);
+                let t = Instant::now();
+                target.readback(&mut out)?;
+                let readback = elapsed_ns(t);
+                if measured(i) {
+                    rec.record(UPLOAD, bytes, CPU_TOTAL, upload);
+                    rec.record(READBACK, bytes, CPU_TOTAL, readback);
+                }
+            }
+            if out != pattern {
+                return Err(T::error("checking the readback", format!("{bytes} bytes came back different")));
+            }
+        }
+        Ok(rec.rows())
+    }
 }
 
 /// One API-overhead measurement: benchmark, its parameter, the clock, and the statistics
@@ -249,7 +342,67 @@ impl OverheadRecorder {
 
 #[cfg(test)]
 mod tests {
+    use super::overhead::{ChainSample, OverheadTarget};
     use super::*;
+
+    /// An API stand-in whose chain can drop a dispatch and whose readback can lose a byte.
+    struct Fake {
+        chain: Vec<u32>,
+        skip_dispatch: bool,
+        lose_byte: bool,
+        memory: Vec<u8>,
+    }
+
+    impl OverheadTarget for Fake {
+        type Error = String;
+        fn error(what: &'static str, reason: String) -> String {
+            format!("{what}: {reason}")
+        }
+        fn empty_submit(&mut self) -> Result<(), String> {
+            Ok(())
+        }
+        fn chain(&mut self, k: u32) -> Result<ChainSample, String> {
+            let done = if self.skip_dispatch { k - 1 } else { k };
+            self.chain = vec![done; 64];
+            Ok(ChainSample { record_ns: k as f64, submit_wait_ns: 10.0 * k as f64, gpu_ns: Some(5.0 * k as f64) })
+        }
+        fn chain_values(&mut self) -> Result<Vec<u32>, String> {
+            Ok(self.chain.clone())
+        }
+        fn prepare_transfers(&mut self, bytes: u64) -> Result<(), String> {
+            self.memory = vec![0; bytes as usize];
+            Ok(())
+        }
+        fn upload(&mut self, data: &[u8]) -> Result<(), String> {
+            self.memory.copy_from_slice(data);
+            Ok(())
+        }
+        fn readback(&mut self, out: &mut [u8]) -> Result<(), String> {
+            out.copy_from_slice(&self.memory);
+            if self.lose_byte {
+                out[1] ^= 1;
+            }
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn the_overhead_driver_times_every_benchmark_and_catches_skipped_work() {
+        let plan = OverheadPlan { samples: 4, warmup: 2, chain: vec![1, 8], bytes: vec![10] };
+        let fake = |skip_dispatch, lose_byte| Fake { chain: vec![], skip_dispatch, lose_byte, memory: vec![] };
+        let rows = overhead::measure(&mut fake(false, false), &plan).unwrap();
+        // empty submit, 3 clocks × 2 chain lengths, upload and readback of one size.
+        assert_eq!(rows.len(), 1 + 6 + 2);
+        assert!(rows.iter().all(|r| r.stats.samples == 4), "warm-up repetitions are not samples");
+        let gpu8 = rows.iter().find(|r| r.bench == overhead::CHAIN && r.param == 8 && r.stats.label == "gpu").unwrap();
+        assert_eq!(gpu8.stats.median_ns, 40.0);
+        // 10 bytes are sent as 12 (whole u32 words) but reported under the size asked for.
+        assert!(rows.iter().any(|r| r.bench == overhead::UPLOAD && r.param == 10));
+        let e = overhead::measure(&mut fake(true, false), &plan).unwrap_err();
+        assert!(e.contains("after 1 dispatches an element holds 0"), "{e}");
+        let e = overhead::measure(&mut fake(false, true), &plan).unwrap_err();
+        assert!(e.contains("came back different"), "{e}");
+    }
 
     #[test]
     fn median_min_max_and_capacity() {
