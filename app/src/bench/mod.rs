@@ -23,7 +23,6 @@ use clothlab_vulkan::raw::Device;
 use clothlab_vulkan::{VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
 use clothlab_wgpu::{ClothSource, GpuContext, Variant, WgpuRenderer, WgpuSolver};
 use indicatif::{ProgressBar, ProgressStyle};
-use serde::{Deserialize, Serialize};
 
 use crate::cli::{Backend, Mode, default_view, vulkan_validation};
 
@@ -88,7 +87,7 @@ const CHECK_LATTICE: u32 = 5;
 pub const CHECK_BOUND_PER_SUBSTEP: f64 = 1e-5;
 
 /// One backend × size measurement.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone)]
 pub struct Cell {
     /// Backend name.
     pub backend: String,
@@ -101,8 +100,6 @@ pub struct Cell {
     /// Whole frames with per-kernel timing off: `sim` (substeps, until the GPU is done),
     /// `render` (offscreen, until done) and `frame` (both).
     pub frames: Vec<clothlab_core::TimingRow>,
-    /// The renderer of the frame measurement (empty when none could run).
-    pub renderer: String,
     /// Positions of the check lattice after the run.
     pub probe: Vec<[f32; 3]>,
     /// Seconds the cell took.
@@ -132,7 +129,9 @@ enum Painter {
     None,
 }
 
-/// The devices found once and shared by every cell.
+/// The devices opened once: they tell which APIs have an adapter, and draw the CPU
+/// backends' frames. GPU cells and the overhead benchmarks get fresh devices (see
+/// `run_cell`).
 struct Devices {
     wgpu: Option<GpuContext>,
     vulkan: Option<Arc<Device>>,
@@ -388,11 +387,6 @@ fn run_cell(
             (None, None) => Painter::None,
         },
     };
-    let renderer = match &painter {
-        Painter::Wgpu(p) => format!("wgpu on {}", p.0.describe()),
-        Painter::Vulkan(r) => format!("Vulkan on {}", r.device().name),
-        Painter::None => String::new(),
-    };
     let adapter = match &sim {
         Sim::Cpu(_) => cpu_label(),
         Sim::Wgpu(s) => s.adapter(),
@@ -440,7 +434,6 @@ fn run_cell(
         adapter,
         kernels,
         frames: rec.table().rows,
-        renderer,
         probe: probe(&state),
         seconds: t_cell.elapsed().as_secs_f64(),
     })

@@ -341,7 +341,7 @@ pub fn report(r: &Results) -> String {
     let st = &r.settings;
     let _ = writeln!(
         s,
-        "| workload | default scene, {} substeps per frame; per cell {} warm-up frames, then {} frames timed per kernel ({} substeps), then {} frames simulated + rendered offscreen at {}×{} |",
+        "| workload | default scene, {} substeps per frame; per cell {} warm-up frames, then {} frames timed per kernel ({} substeps), then {} frames simulated + rendered offscreen at {}×{} (GPU backends drawn from their buffers by their own API, CPU backends uploaded to the wgpu renderer) |",
         st.substeps,
         st.warmup_frames,
         st.frames,
@@ -633,7 +633,6 @@ mod tests {
                 timing(CPU_SUBMIT, substep_ns / 100.0),
             ],
             frames: vec![timing("frame", 16.0 * substep_ns)],
-            renderer: String::new(),
             probe: (0..25).map(|i| [i as f32 * 0.1 + shift_m, 1.0, 0.0]).collect(),
             seconds: 1.0,
         }
