@@ -280,17 +280,6 @@ fn count_label(v: f64) -> String {
     }
 }
 
-/// Bytes for an axis, in binary units.
-fn bytes_label(v: f64) -> String {
-    if v >= 1048576.0 {
-        format!("{} MiB", sig3(v / 1048576.0))
-    } else if v >= 1024.0 {
-        format!("{} KiB", sig3(v / 1024.0))
-    } else {
-        format!("{} B", sig3(v))
-    }
-}
-
 /// `v` with three significant digits, trailing zeros dropped.
 fn sig3(v: f64) -> String {
     let digits = (2 - v.abs().max(1e-12).log10().floor() as i32).clamp(0, 6) as usize;
@@ -332,7 +321,11 @@ impl Figure for Overhead<'_> {
                 .rows
                 .iter()
                 .filter(|x| x.section == "overhead" && x.backend == api && x.label == label && x.clock == clock)
-                .map(|x| (x.size as f64, x.median_ns / 1e3))
+                // Transfers in KiB, so that the log axis's decades are round sizes.
+                .map(|x| {
+                    let size = if x.label == overhead::CHAIN { x.size as f64 } else { x.size as f64 / 1024.0 };
+                    (size, x.median_ns / 1e3)
+                })
                 .collect()
         };
         let apis = ["wgpu", "vulkan"];
@@ -350,7 +343,7 @@ impl Figure for Overhead<'_> {
             ),
             (
                 "upload / readback latency (µs)",
-                "bytes",
+                "KiB",
                 vec![(overhead::UPLOAD, overhead::CPU_TOTAL), (overhead::READBACK, overhead::CPU_TOTAL)],
             ),
         ];
@@ -377,11 +370,10 @@ impl Figure for Overhead<'_> {
                 .y_label_area_size(60)
                 .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
                 .map_err(err)?;
-            let bytes = *xdesc == "bytes";
             chart
                 .configure_mesh()
                 .x_desc(*xdesc)
-                .x_label_formatter(&|v| if bytes { bytes_label(*v) } else { count_label(*v) })
+                .x_label_formatter(&|v| count_label(*v))
                 .y_label_formatter(&|v| sig3(*v))
                 .label_style((FONT, 13))
                 .axis_desc_style((FONT, 14))
