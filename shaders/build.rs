@@ -97,7 +97,7 @@ fn check_layouts(types_src: &str) {
 }
 
 /// How kernels declare the step constants in the uniform buffer.
-const UNIFORM_PARAMS: &str = "@group(0) @binding(0) var<uniform> p: StepParams;";
+const UNIFORM_PARAMS: &str = "@group(0) @binding(0) var<uniform> step_params: StepParams;";
 
 /// Validates `source`, writes it and its SPIR-V to `out`, and lists it in `list`.
 fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
@@ -176,7 +176,7 @@ fn main() {
             // `<name>_imm` twin reading them from immediates (push constants), unless it
             // uses immediates for something else already.
             if source.contains(UNIFORM_PARAMS) && !source.contains("var<immediate>") {
-                let imm = source.replace(UNIFORM_PARAMS, "var<immediate> p: StepParams;");
+                let imm = source.replace(UNIFORM_PARAMS, "var<immediate> step_params: StepParams;");
                 emit(&out, &mut list, &format!("{vname}_imm"), &imm);
             }
         }

@@ -2,9 +2,16 @@
 // collide — per particle: push out of spheres and boxes.
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
     let i = flat_id(id, groups);
     if i >= num_particles() {
         return;
     }
-    collide_at(i);
+    let x4 = pos[i];
+    if !is_free(i, x4.w) {
+        return;
+    }
+    let m = collided(Moved(x4.xyz, prev[i].xyz));
+    pos[i] = vec4<f32>(m.x, x4.w);
+    prev[i] = vec4<f32>(m.xp, 0.0);
 }

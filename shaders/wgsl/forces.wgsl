@@ -2,9 +2,10 @@
 // forces — per particle: gravity and drag added to the wind force in the force buffer.
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
     let i = flat_id(id, groups);
     if i >= num_particles() {
         return;
     }
-    force[i] = forces_at(i, force[i]);
+    force[i] = forces_at(force[i], pos[i].xyz, prev[i].xyz);
 }

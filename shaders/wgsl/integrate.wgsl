@@ -2,9 +2,13 @@
 // integrate — per particle: Verlet, pins, grab, floor.
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
     let i = flat_id(id, groups);
     if i >= num_particles() {
         return;
     }
-    integrate_at(i);
+    let x4 = pos[i];
+    let m = integrated(i, x4, prev[i].xyz);
+    prev[i] = vec4<f32>(m.xp, 0.0);
+    pos[i] = vec4<f32>(m.x, x4.w);
 }

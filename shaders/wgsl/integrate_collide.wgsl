@@ -1,11 +1,18 @@
 //! include: state, colliders
-// integrate + collide fused (optimized variant): both touch only their own particle.
+// integrate + collide fused (optimized variant): both touch only their own particle, which
+// is loaded once and stored once.
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
     let i = flat_id(id, groups);
     if i >= num_particles() {
         return;
     }
-    integrate_at(i);
-    collide_at(i);
+    let x4 = pos[i];
+    var m = integrated(i, x4, prev[i].xyz);
+    if is_free(i, x4.w) {
+        m = collided(m);
+    }
+    prev[i] = vec4<f32>(m.xp, 0.0);
+    pos[i] = vec4<f32>(m.x, x4.w);
 }

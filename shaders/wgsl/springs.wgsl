@@ -2,9 +2,12 @@
 // springs — per particle: gather the 12 slots of the spring table (optimized variant).
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    interior = interior_slots;
     let i = flat_id(id, groups);
     if i >= num_particles() {
         return;
     }
-    force[i] = springs_at(i, force[i]);
+    let x = pos[i].xyz;
+    force[i] = springs_at(i, x, x - prev[i].xyz, force[i]);
 }

@@ -1,6 +1,8 @@
 //! include: atomic_cas
 // springs — per spring: add the force to both ends with atomics (naive variant).
-@group(0) @binding(0) var<uniform> p: StepParams;
+@group(0) @binding(0) var<uniform> step_params: StepParams;
+// Copied from step_params by the kernel's first statement (see shared/state.wgsl).
+var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> prev: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> accum: array<AtomicF32>;
@@ -11,6 +13,7 @@
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
     let k = flat_id(id, groups);
     let half = arrayLength(&springs);
     if k >= half + arrayLength(&springs_b) {

@@ -15,6 +15,7 @@ fn main(
     @builtin(subgroup_invocation_id) lane: u32,
     @builtin(subgroup_size) sg_size: u32,
 ) {
+    p = step_params;
     let i = flat_id(id, groups);
     // No early return: every invocation takes part in the reductions.
     var v = vec2<f32>(0.0);

@@ -15,6 +15,7 @@ fn main(
     @builtin(subgroup_invocation_id) lane: u32,
     @builtin(subgroup_size) sg_size: u32,
 ) {
+    p = step_params;
     let count = (p.n * p.n + WORKGROUP - 1u) / WORKGROUP;
     var acc = vec2<f32>(0.0);
     for (var k = li; k < count; k += WORKGROUP) {

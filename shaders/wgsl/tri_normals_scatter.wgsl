@@ -1,7 +1,9 @@
 //! include: atomic_cas
 // tri_normals — per triangle (naive variant): the face normal, also added to its three
 // corners' normal accumulators with atomics.
-@group(0) @binding(0) var<uniform> p: StepParams;
+@group(0) @binding(0) var<uniform> step_params: StepParams;
+// Copied from step_params by the kernel's first statement (see shared/state.wgsl).
+var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> accum: array<AtomicF32>;
 @group(0) @binding(9) var<storage, read> triangles: array<u32>;
@@ -9,6 +11,7 @@
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
     let t = flat_id(id, groups);
     if t >= arrayLength(&faces) {
         return;

@@ -1,19 +1,55 @@
 //! include: wind
 // vertex_normals — per particle: sum of the adjacent face normals (gathered in slot order),
-// normalised, and the wind force into the force buffer (optimized variant).
+// normalised, and the wind force into the force buffer (optimized variant): each face is
+// read once for both.
+
+// The normal sum and the wind force of the faces gathered so far.
+struct Gathered {
+    sum: vec3<f32>,
+    wind: vec3<f32>,
+}
+
+fn add_face(g: ptr<function, Gathered>, t: u32, wind: bool) {
+    let f4 = faces[t];
+    (*g).sum += f4.xyz;
+    if wind {
+        (*g).wind += face_wind(f4);
+    }
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
     let i = flat_id(id, groups);
-    if i >= p.n * p.n {
+    let n = p.n;
+    if i >= n * n {
         return;
     }
-    var sum = vec3<f32>(0.0);
-    for (var s = 0u; s < FACE_SLOTS; s++) {
+    let wind = windy();
+    var g = Gathered(vec3<f32>(0.0), vec3<f32>(0.0));
+    // Away from the border all six faces exist, numbered as core::grid::build numbers them
+    // (triangles 2q and 2q + 1 of quad q = qj (n - 1) + qi): no face-slot reads. The border
+    // walks its slots in a loop interior particles do not enter.
+    let col = i % n;
+    let row = i / n;
+    let inner = col >= 1u && col + 1u < n && row >= 1u && row + 1u < n;
+    if inner {
+        let up = 2u * ((row - 1u) * (n - 1u) + col - 1u);
+        let down = 2u * (row * (n - 1u) + col - 1u);
+        add_face(&g, up, wind);
+        add_face(&g, up + 1u, wind);
+        add_face(&g, up + 2u, wind);
+        add_face(&g, down + 1u, wind);
+        add_face(&g, down + 2u, wind);
+        add_face(&g, down + 3u, wind);
+    }
+    let slots = select(FACE_SLOTS, 0u, inner);
+    for (var s = 0u; s < slots; s++) {
         let t = face_slots[i * FACE_SLOTS + s];
         if t >= 0 {
-            sum += faces[u32(t)].xyz;
+            add_face(&g, u32(t), wind);
         }
     }
-    normal[i] = vec4<f32>(normalize_or_zero(sum), 0.0);
-    force[i] = vec4<f32>(wind_at(i), 0.0);
+    normal[i] = vec4<f32>(normalize_or_zero(g.sum), 0.0);
+    force[i] = vec4<f32>(g.wind, 0.0);
 }

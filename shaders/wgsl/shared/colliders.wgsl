@@ -3,13 +3,11 @@
 @group(0) @binding(12) var<storage, read> spheres: array<Sphere>;
 @group(0) @binding(13) var<storage, read> boxes: array<Aabb>;
 
-// core::cpu::collide::collide_at, in place.
-fn collide_at(i: u32) {
-    if pos[i].w == 0.0 || i32(i) == p.grab_index {
-        return;
-    }
-    var x = pos[i].xyz;
-    var xp = prev[i].xyz;
+// core::cpu::collide::collide_at for a free particle (is_free): m pushed out of the
+// spheres and boxes.
+fn collided(m: Moved) -> Moved {
+    var x = m.x;
+    var xp = m.xp;
     for (var k = 0u; k < p.num_spheres; k++) {
         let s = spheres[k];
         let r = s.radius + p.margin;
@@ -44,6 +42,5 @@ fn collide_at(i: u32) {
             xp = contact_prev(x, xp, nrm, p.friction);
         }
     }
-    pos[i] = vec4<f32>(x, pos[i].w);
-    prev[i] = vec4<f32>(xp, 0.0);
+    return Moved(x, xp);
 }

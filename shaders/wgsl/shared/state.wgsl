@@ -1,6 +1,11 @@
 // The particle state and the per-particle kernels that touch only their own particle.
 
-@group(0) @binding(0) var<uniform> p: StepParams;
+@group(0) @binding(0) var<uniform> step_params: StepParams;
+// The step constants, copied from the uniform block (immediates in the `_imm` twins) by
+// the first statement of every kernel, outside all control flow: llvmpipe reads uniforms
+// as scalars only where every invocation is known to be active, and gathers them lane by
+// lane inside any branch (including the one an early `return` opens).
+var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> prev: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> force: array<vec4<f32>>;
@@ -9,35 +14,44 @@ fn num_particles() -> u32 {
     return p.n * p.n;
 }
 
-// core::cpu::forces::forces_at: f + m g - drag (x - x*).
-fn forces_at(i: u32, f: vec4<f32>) -> vec4<f32> {
+// core::cpu::forces::forces_at: f + m g - drag (x - x*), for x = pos[i], x* = prev[i]
+// (passed in, so a kernel that needs them again loads them once).
+fn forces_at(f: vec4<f32>, x: vec3<f32>, xp: vec3<f32>) -> vec4<f32> {
     let g = p.gravity.xyz * p.particle_mass;
     let drag = p.air_drag * p.particle_mass / p.dt;
-    let v_dt = pos[i].xyz - prev[i].xyz;
+    let v_dt = x - xp;
     return vec4<f32>(f.xyz + g - v_dt * drag, 0.0);
 }
 
-// core::cpu::integrate::integrate_at, in place.
-fn integrate_at(i: u32) {
-    let x4 = pos[i];
-    let w = x4.w;
+// A particle's position and previous position. The per-particle kernels load each once
+// and store each once: on drivers that emulate storage-buffer access lane by lane
+// (llvmpipe) every access counts.
+struct Moved {
+    x: vec3<f32>,
+    xp: vec3<f32>,
+}
+
+// core::cpu::integrate::integrate_at: the new (x, x*) of particle i at x4 (w: inverse mass
+// flag) with previous position xp.
+fn integrated(i: u32, x4: vec4<f32>, xp: vec3<f32>) -> Moved {
     let x = x4.xyz;
     if i32(i) == p.grab_index {
-        prev[i] = vec4<f32>(x, 0.0);
-        pos[i] = vec4<f32>(p.grab_target.xyz, w);
-        return;
+        return Moved(p.grab_target.xyz, x);
     }
-    if w == 0.0 {
-        prev[i] = vec4<f32>(x, 0.0);
-        return;
+    if x4.w == 0.0 {
+        return Moved(x, x);
     }
-    var xn = x + (x - prev[i].xyz) * (1.0 - p.damping) + force[i].xyz * (p.dt * p.dt / p.particle_mass);
-    var xp = x;
+    var xn = x + (x - xp) * (1.0 - p.damping) + force[i].xyz * (p.dt * p.dt / p.particle_mass);
+    var xq = x;
     let floor = p.floor_y + p.margin;
     if xn.y < floor {
         xn.y = floor;
-        xp = contact_prev(xn, xp, vec3<f32>(0.0, 1.0, 0.0), p.friction);
+        xq = contact_prev(xn, xq, vec3<f32>(0.0, 1.0, 0.0), p.friction);
     }
-    prev[i] = vec4<f32>(xp, 0.0);
-    pos[i] = vec4<f32>(xn, w);
+    return Moved(xn, xq);
+}
+
+// Whether particle i (w: its pos.w) moves freely: not pinned, not grabbed.
+fn is_free(i: u32, w: f32) -> bool {
+    return w != 0.0 && i32(i) != p.grab_index;
 }

@@ -3,7 +3,9 @@
 // and the kinetic energy 1/2 m |x - x*|² / dt². The substep's index comes in immediates
 // (push constants), so every substep of a frame writes its own entry.
 
-@group(0) @binding(0) var<uniform> p: StepParams;
+@group(0) @binding(0) var<uniform> step_params: StepParams;
+// Copied from step_params by the kernel's first statement (see shared/state.wgsl).
+var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> prev: array<vec4<f32>>;
 

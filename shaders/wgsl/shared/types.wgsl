@@ -63,9 +63,6 @@ const SLOTS: u32 = 12u;
 const STRAIN_SLOTS: u32 = 8u;
 const FACE_SLOTS: u32 = 6u;
 const TETHER_SLOTS: u32 = 2u;
-// core::grid::SLOT_OFFSETS: (di, dj) of the 12 slots.
-const SLOT_DI = array<i32, 12>(-1, 1, 0, 0, -1, 1, -1, 1, -2, 2, 0, 0);
-const SLOT_DJ = array<i32, 12>(0, 0, -1, 1, -1, -1, 1, 1, 0, 0, -2, 2);
 
 // Whether particle i of an n × n grid is at least two away from the border (all 12 of
 // its slots are filled and equal to the interior's).
