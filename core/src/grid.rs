@@ -73,10 +73,11 @@ impl Tether {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct InteriorSlots {
-    /// Rest length and constants of slot `s` for every particle at least two away from
-    /// the border.
+    /// Rest length and constants of slot `s` for every particle that has that slot
+    /// ([`ClothTopology::grid_slots`]).
     pub slots: [SpringSlot; SLOTS],
-    /// 1 when `slots` is valid, 0 when kernels must read the table everywhere.
+    /// 1 when `slots` is valid (the table is the grid's, so kernels compute neighbours
+    /// from offsets everywhere), 0 when kernels must read the table.
     pub enabled: u32,
     /// Padding to 16 bytes (three scalars: a WGSL uniform array needs a 16-byte stride,
     /// and a `vec3` pad would be aligned to 16).
@@ -90,7 +91,7 @@ pub struct InteriorSlots {
 impl InteriorSlots {
     /// From the topology's uniform interior slots, if it has them.
     pub fn new(topo: &ClothTopology) -> Self {
-        match topo.uniform_interior_slots() {
+        match topo.grid_slots() {
             Some(slots) => Self { slots, enabled: 1, _pad0: 0, _pad1: 0, _pad2: 0 },
             None => Self { slots: [SpringSlot::EMPTY; SLOTS], enabled: 0, _pad0: 0, _pad1: 0, _pad2: 0 },
         }
@@ -218,6 +219,42 @@ impl ClothTopology {
             }
         }
         Some(uni)
+    }
+
+    /// The 12 slots of the regular grid, if the whole table is one: slot `s` of every
+    /// particle is filled exactly when the neighbour at [`SLOT_OFFSETS`]`[s]` exists, points
+    /// at it, and has these rest length and constants (true for every grid that [`build`]
+    /// makes). GPU kernels then compute neighbours and read constants from a uniform block
+    /// everywhere, border included, and never read the table. A slot no particle has
+    /// (n ≤ 2) is [`SpringSlot::EMPTY`].
+    pub fn grid_slots(&self) -> Option<[SpringSlot; SLOTS]> {
+        let n = self.n as i64;
+        let mut uni = [None::<SpringSlot>; SLOTS];
+        for j in 0..n {
+            for i in 0..n {
+                let p = (j * n + i) as usize;
+                for (s, u) in uni.iter_mut().enumerate() {
+                    let t = self.slots[p * SLOTS + s];
+                    let (ni, nj) = (i + SLOT_OFFSETS[s].0 as i64, j + SLOT_OFFSETS[s].1 as i64);
+                    if ni < 0 || nj < 0 || ni >= n || nj >= n {
+                        if t.neighbor >= 0 {
+                            return None;
+                        }
+                        continue;
+                    }
+                    if t.neighbor as i64 != nj * n + ni {
+                        return None;
+                    }
+                    let t = SpringSlot { neighbor: 0, ..t };
+                    match u {
+                        None => *u = Some(t),
+                        Some(u) if *u != t => return None,
+                        Some(_) => {}
+                    }
+                }
+            }
+        }
+        Some(uni.map(|u| u.unwrap_or(SpringSlot::EMPTY)))
     }
 
     /// Rebuilds the spring constants for new parameters (rest lengths stay).
@@ -486,5 +523,30 @@ mod tests {
         }
         let pinned = state.pos.iter().filter(|p| p[3] == 0.0).count();
         assert_eq!(pinned, 2);
+    }
+
+    /// What the GPU kernels assume of every grid `build` makes: a regular spring table
+    /// (`grid_slots`), and triangles 2q, 2q + 1 of quad q = qj (n - 1) + qi being
+    /// (p00, p01, p11) and (p00, p11, p10).
+    #[test]
+    fn grids_are_regular() {
+        for n in [2u32, 3, 5, 8] {
+            let (_, mut topo) = build(&Scene::with_n(n), &SimParams::default()).unwrap();
+            let g = topo.grid_slots().expect("build makes a regular table");
+            assert_eq!(g[0].rest, topo.slots[SLOTS].rest, "n = {n}: slot 0 from particle 1");
+            for (t, tri) in topo.triangles.iter().enumerate() {
+                let q = t as u32 / 2;
+                let p00 = q / (n - 1) * n + q % (n - 1);
+                let want = if t % 2 == 0 { [p00, p00 + n, p00 + n + 1] } else { [p00, p00 + n + 1, p00 + 1] };
+                assert_eq!(*tri, want, "n = {n}, triangle {t}");
+            }
+            // A changed constant, or a neighbour moved, makes the table irregular.
+            topo.slots[SLOTS].ks *= 2.0;
+            assert!(topo.grid_slots().is_none(), "n = {n}");
+            topo.slots[SLOTS].ks /= 2.0;
+            assert!(topo.grid_slots().is_some());
+            topo.slots[SLOTS].neighbor = -1;
+            assert!(topo.grid_slots().is_none(), "n = {n}");
+        }
     }
 }

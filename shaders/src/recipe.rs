@@ -18,6 +18,10 @@ pub enum Variant {
 pub enum Count {
     /// One invocation per particle.
     Particles,
+    /// One per [`BLOCK`] consecutive particles of a row (`n · ⌈n / BLOCK⌉`).
+    Blocks,
+    /// One per quad of the grid (two triangles).
+    Quads,
     /// One per spring of the flat list.
     Springs,
     /// One per triangle.
@@ -58,6 +62,10 @@ pub fn dispatch_for(kernel: &'static str) -> Dispatch {
     let base = base_name(kernel);
     let count = if base.starts_with("springs_scatter") {
         Count::Springs
+    } else if base == "forces_springs" {
+        Count::Blocks
+    } else if base == "tri_normals" {
+        Count::Quads
     } else if base.starts_with("tri_normals") {
         Count::Triangles
     } else {
@@ -113,10 +121,10 @@ pub fn recipe(variant: Variant, strain_passes: u32, caps: Caps) -> Vec<Dispatch>
             r.push(d("vertex_normals_naive", KernelId::VertexNormals.name(), Count::Particles));
         }
         Variant::Optimized => {
-            r.push(d("forces_springs", FORCES_SPRINGS, Count::Particles));
+            r.push(d("forces_springs", FORCES_SPRINGS, Count::Blocks));
             r.push(d("integrate_collide", INTEGRATE_COLLIDE, Count::Particles));
             r.extend((0..strain_passes).map(|_| strain));
-            r.push(d("tri_normals", KernelId::TriNormals.name(), Count::Triangles));
+            r.push(d("tri_normals", KernelId::TriNormals.name(), Count::Quads));
             r.push(d("vertex_normals", KernelId::VertexNormals.name(), Count::Particles));
             for dsp in &mut r {
                 if caps.table_image {
@@ -170,6 +178,9 @@ pub fn table_texels(topo: &clothlab_core::ClothTopology) -> (Vec<[u32; 4]>, u32)
     (texels, height as u32)
 }
 
+/// Particles per invocation of the blocked kernels (`BLOCK` in shared/types.wgsl).
+pub const BLOCK: u32 = 4;
+
 /// Texels per row of the spring-table image (`TABLE_WIDTH` in shared/table_tex.wgsl).
 pub const TABLE_WIDTH: u32 = 4096;
 
@@ -185,6 +196,8 @@ impl Count {
     pub fn of(self, topo: &clothlab_core::ClothTopology) -> u32 {
         match self {
             Count::Particles => topo.num_particles() as u32,
+            Count::Blocks => topo.n * topo.n.div_ceil(BLOCK),
+            Count::Quads => (topo.triangles.len() / 2) as u32,
             Count::Springs => topo.springs.len() as u32,
             Count::Triangles => topo.triangles.len() as u32,
             Count::Workgroup => 64,

@@ -1,14 +1,79 @@
 //! include: state, table, gather
-// forces + springs fused (optimized variant): one read and one write of the force.
+// forces + springs fused (optimized variant): one read and one write of the force, four
+// consecutive particles of a row (BLOCK) per invocation. Their 4 × 13 points overlap:
+// loading the 28 distinct ones once (a window of rows j - 2 … j + 2) reads 46 % fewer
+// positions than a particle per invocation. On a regular grid (interior.enabled) there are
+// no table reads and no branches around loads; otherwise each particle walks its table.
+
+// Force on particle k of the block: a its point, s0 … s11 its neighbours in slot order.
+fn block_particle(
+    row: u32, col: u32, a: Nb, s0: Nb, s1: Nb, s2: Nb, s3: Nb, s4: Nb, s5: Nb, s6: Nb, s7: Nb,
+    s8: Nb, s9: Nb, s10: Nb, s11: Nb, inv_dt: f32,
+) {
+    let i = row * p.n + col;
+    let here = a.inside;
+    let f = forces_at(force[select(0u, i, here)], a.pt.v).xyz;
+    let acc = grid_springs(f, a.pt, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11, inv_dt);
+    if here && interior.enabled != 0u {
+        force[i] = vec4<f32>(acc, 0.0);
+    }
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     interior = interior_slots;
-    let i = flat_id(id, groups);
-    if i >= num_particles() {
-        return;
+    let inv_dt = 1.0 / p.dt;
+    let n = p.n;
+    let per_row = (n + BLOCK - 1u) / BLOCK;
+    let b = flat_id(id, groups);
+    let row = b / per_row;
+    let c0 = (b % per_row) * BLOCK;
+    let r = i32(row);
+    let c = i32(c0);
+    // Row j: columns c - 2 … c + 5; rows j ± 1: c - 1 … c + 4; rows j ± 2: c … c + 3.
+    let r0 = grid_point(c - 2, r);
+    let r1 = grid_point(c - 1, r);
+    let r2 = grid_point(c, r);
+    let r3 = grid_point(c + 1, r);
+    let r4 = grid_point(c + 2, r);
+    let r5 = grid_point(c + 3, r);
+    let r6 = grid_point(c + 4, r);
+    let r7 = grid_point(c + 5, r);
+    let u0 = grid_point(c - 1, r - 1);
+    let u1 = grid_point(c, r - 1);
+    let u2 = grid_point(c + 1, r - 1);
+    let u3 = grid_point(c + 2, r - 1);
+    let u4 = grid_point(c + 3, r - 1);
+    let u5 = grid_point(c + 4, r - 1);
+    let d0 = grid_point(c - 1, r + 1);
+    let d1 = grid_point(c, r + 1);
+    let d2 = grid_point(c + 1, r + 1);
+    let d3 = grid_point(c + 2, r + 1);
+    let d4 = grid_point(c + 3, r + 1);
+    let d5 = grid_point(c + 4, r + 1);
+    let uu0 = grid_point(c, r - 2);
+    let uu1 = grid_point(c + 1, r - 2);
+    let uu2 = grid_point(c + 2, r - 2);
+    let uu3 = grid_point(c + 3, r - 2);
+    let dd0 = grid_point(c, r + 2);
+    let dd1 = grid_point(c + 1, r + 2);
+    let dd2 = grid_point(c + 2, r + 2);
+    let dd3 = grid_point(c + 3, r + 2);
+    // Particle k (at r[k + 2]), slots (-1,0) (1,0) (0,-1) (0,1) (-1,-1) (1,-1) (-1,1) (1,1)
+    // (-2,0) (2,0) (0,-2) (0,2) = r[k+1] r[k+3] u[k+1] d[k+1] u[k] u[k+2] d[k] d[k+2] r[k]
+    // r[k+4] uu[k] dd[k].
+    block_particle(row, c0, r2, r1, r3, u1, d1, u0, u2, d0, d2, r0, r4, uu0, dd0, inv_dt);
+    block_particle(row, c0 + 1u, r3, r2, r4, u2, d2, u1, u3, d1, d3, r1, r5, uu1, dd1, inv_dt);
+    block_particle(row, c0 + 2u, r4, r3, r5, u3, d3, u2, u4, d2, d4, r2, r6, uu2, dd2, inv_dt);
+    block_particle(row, c0 + 3u, r5, r4, r6, u4, d4, u3, u5, d3, d5, r3, r7, uu3, dd3, inv_dt);
+    // An irregular table (a loop with no iteration on a regular grid).
+    let table = select(BLOCK, 0u, interior.enabled != 0u);
+    for (var k = 0u; k < table; k++) {
+        let i = row * n + c0 + k;
+        if row < n && c0 + k < n {
+            let a = point(i);
+            force[i] = vec4<f32>(table_springs(i, a, forces_at(force[i], a.v).xyz), 0.0);
+        }
     }
-    let x = pos[i].xyz;
-    let xp = prev[i].xyz;
-    force[i] = springs_at(i, x, x - xp, forces_at(force[i], x, xp));
 }

@@ -1,5 +1,5 @@
 //! include: state, table, gather
-// springs — per particle: gather the 12 slots of the spring table (optimized variant).
+// springs — per particle: gather the 12 slots of the spring table.
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
@@ -8,6 +8,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let x = pos[i].xyz;
-    force[i] = springs_at(i, x, x - prev[i].xyz, force[i]);
+    force[i] = vec4<f32>(table_springs(i, point(i), force[i].xyz), 0.0);
 }

@@ -1,21 +1,30 @@
-// tri_normals — per triangle: area-weighted face normal, |N| in w.
+// tri_normals — area-weighted face normals, |N| in w (optimized variant): one invocation per
+// quad computes both its triangles from its four corners, numbered as core::grid::build
+// numbers them (triangles 2q = (p00, p01, p11) and 2q + 1 = (p00, p11, p10) of quad
+// q = qj (n - 1) + qi): four position loads for two faces instead of six plus six
+// index loads.
 @group(0) @binding(0) var<uniform> step_params: StepParams;
 // Copied from step_params by the kernel's first statement (see shared/state.wgsl).
 var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
-@group(0) @binding(9) var<storage, read> triangles: array<u32>;
 @group(0) @binding(11) var<storage, read_write> faces: array<vec4<f32>>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
-    let t = flat_id(id, groups);
-    if t >= arrayLength(&faces) {
+    let q = flat_id(id, groups);
+    let m = p.n - 1u;
+    if q >= m * m {
         return;
     }
-    let xa = pos[triangles[3u * t]].xyz;
-    let xb = pos[triangles[3u * t + 1u]].xyz;
-    let xc = pos[triangles[3u * t + 2u]].xyz;
-    let nrm = cross(xb - xa, xc - xa);
-    faces[t] = vec4<f32>(nrm, length(nrm));
+    let qj = q / m;
+    let p00 = qj * p.n + q - qj * m;
+    let x00 = pos[p00].xyz;
+    let x10 = pos[p00 + 1u].xyz;
+    let x01 = pos[p00 + p.n].xyz;
+    let x11 = pos[p00 + p.n + 1u].xyz;
+    let n0 = cross(x01 - x00, x11 - x00);
+    let n1 = cross(x11 - x00, x10 - x00);
+    faces[2u * q] = vec4<f32>(n0, length(n0));
+    faces[2u * q + 1u] = vec4<f32>(n1, length(n1));
 }

@@ -1,55 +1,78 @@
 // The spring gather (needs state.wgsl and table.wgsl or table_tex.wgsl).
 
-// The interior's shared spring constants (the thesis's constant memory).
 @group(0) @binding(16) var<uniform> interior_slots: InteriorSlots;
-// Copied at the top of the kernel like `p`.
+// The grid's spring constants (the thesis's constant memory), copied at the top of the
+// kernel like `p`; `enabled` when the table is the regular grid's (core's grid_slots).
 var<private> interior: InteriorSlots;
 
-// The force of interior slot s on a particle at xa with velocity·dt va: the neighbour at
-// offset (di, dj) in the grid, the constants from the uniform block.
-fn interior_spring(i: u32, di: i32, dj: i32, s: u32, xa: vec3<f32>, va: vec3<f32>, inv_dt: f32) -> vec3<f32> {
-    let b = u32(i32(i) + di + dj * i32(p.n));
-    let xb = pos[b].xyz;
-    let vb = xb - prev[b].xyz;
-    return spring_force(xa - xb, va - vb, interior.slots[s], inv_dt);
+// A particle's position and velocity·dt (x - x*).
+struct Pt {
+    x: vec3<f32>,
+    v: vec3<f32>,
 }
 
-// core::cpu::springs::gather_at: f plus the springs of particle i (at xa, with velocity·dt
-// va), in slot order.
-//
-// Interior particles take their neighbours by offset and the constants from the uniform
-// block, written out slot by slot (core::grid::SLOT_OFFSETS) so that every offset and
-// uniform address is a compile-time constant. Border particles walk their table in a loop
-// that has no iteration for interior ones: drivers that run a SIMD group through both
-// sides of a branch (llvmpipe) skip a loop that no lane enters, but not an `if`.
-fn springs_at(i: u32, xa: vec3<f32>, va: vec3<f32>, f: vec4<f32>) -> vec4<f32> {
+fn point(k: u32) -> Pt {
+    let x = pos[k].xyz;
+    return Pt(x, x - prev[k].xyz);
+}
+
+// Grid point (c, r), which may lie outside the grid: its particle's point (particle 0's
+// when outside, so that every lane loads something) and whether it is inside.
+struct Nb {
+    pt: Pt,
+    inside: bool,
+}
+
+fn grid_point(c: i32, r: i32) -> Nb {
+    let n = i32(p.n);
+    let inside = c >= 0 && c < n && r >= 0 && r < n;
+    return Nb(point(u32(select(0, r * n + c, inside))), inside);
+}
+
+// acc plus the force of slot s's spring between a and b, if b exists (acc unchanged
+// otherwise, as core's gather skips an empty slot).
+fn grid_spring(acc: vec3<f32>, a: Pt, b: Nb, s: u32, inv_dt: f32) -> vec3<f32> {
+    let f = spring_force(a.x - b.pt.x, a.v - b.pt.v, interior.slots[s], inv_dt);
+    return select(acc, acc + f, b.inside);
+}
+
+// core::cpu::springs::gather_at on a regular grid: f plus the springs of particle a, its
+// neighbours s0 … s11 in slot order (core::grid::SLOT_OFFSETS), the constants from the
+// uniform block. No table reads and no branches: on drivers that run every branch of a
+// SIMD group and emulate storage loads lane by lane (llvmpipe), every load in the code
+// costs, taken or not.
+fn grid_springs(
+    f: vec3<f32>, a: Pt, s0: Nb, s1: Nb, s2: Nb, s3: Nb, s4: Nb, s5: Nb, s6: Nb, s7: Nb, s8: Nb,
+    s9: Nb, s10: Nb, s11: Nb, inv_dt: f32,
+) -> vec3<f32> {
+    var acc = f;
+    acc = grid_spring(acc, a, s0, 0u, inv_dt);
+    acc = grid_spring(acc, a, s1, 1u, inv_dt);
+    acc = grid_spring(acc, a, s2, 2u, inv_dt);
+    acc = grid_spring(acc, a, s3, 3u, inv_dt);
+    acc = grid_spring(acc, a, s4, 4u, inv_dt);
+    acc = grid_spring(acc, a, s5, 5u, inv_dt);
+    acc = grid_spring(acc, a, s6, 6u, inv_dt);
+    acc = grid_spring(acc, a, s7, 7u, inv_dt);
+    acc = grid_spring(acc, a, s8, 8u, inv_dt);
+    acc = grid_spring(acc, a, s9, 9u, inv_dt);
+    acc = grid_spring(acc, a, s10, 10u, inv_dt);
+    acc = grid_spring(acc, a, s11, 11u, inv_dt);
+    return acc;
+}
+
+// core::cpu::springs::gather_at from the table: f plus the springs of particle i (a = its
+// point), in slot order.
+fn table_springs(i: u32, a: Pt, f: vec3<f32>) -> vec3<f32> {
     let inv_dt = 1.0 / p.dt;
-    var acc = f.xyz;
-    let inner = interior.enabled != 0u && is_interior(i, p.n);
-    if inner {
-        acc += interior_spring(i, -1, 0, 0u, xa, va, inv_dt);
-        acc += interior_spring(i, 1, 0, 1u, xa, va, inv_dt);
-        acc += interior_spring(i, 0, -1, 2u, xa, va, inv_dt);
-        acc += interior_spring(i, 0, 1, 3u, xa, va, inv_dt);
-        acc += interior_spring(i, -1, -1, 4u, xa, va, inv_dt);
-        acc += interior_spring(i, 1, -1, 5u, xa, va, inv_dt);
-        acc += interior_spring(i, -1, 1, 6u, xa, va, inv_dt);
-        acc += interior_spring(i, 1, 1, 7u, xa, va, inv_dt);
-        acc += interior_spring(i, -2, 0, 8u, xa, va, inv_dt);
-        acc += interior_spring(i, 2, 0, 9u, xa, va, inv_dt);
-        acc += interior_spring(i, 0, -2, 10u, xa, va, inv_dt);
-        acc += interior_spring(i, 0, 2, 11u, xa, va, inv_dt);
-    }
-    let table_slots = select(SLOTS, 0u, inner);
-    for (var s = 0u; s < table_slots; s++) {
+    var acc = f;
+    for (var s = 0u; s < SLOTS; s++) {
         let slot = slot_at(i, s);
         if slot.neighbor < 0 {
             continue;
         }
-        let b = u32(slot.neighbor);
-        let xb = pos[b].xyz;
-        let vb = xb - prev[b].xyz;
-        acc += spring_force(xa - xb, va - vb, slot, inv_dt);
+        let b = point(u32(slot.neighbor));
+        acc += spring_force(a.x - b.x, a.v - b.v, slot, inv_dt);
     }
-    return vec4<f32>(acc, 0.0);
+    return acc;
 }

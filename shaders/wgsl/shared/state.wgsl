@@ -14,12 +14,11 @@ fn num_particles() -> u32 {
     return p.n * p.n;
 }
 
-// core::cpu::forces::forces_at: f + m g - drag (x - x*), for x = pos[i], x* = prev[i]
-// (passed in, so a kernel that needs them again loads them once).
-fn forces_at(f: vec4<f32>, x: vec3<f32>, xp: vec3<f32>) -> vec4<f32> {
+// core::cpu::forces::forces_at: f + m g - drag (x - x*), with v_dt = x - x* of the particle
+// (passed in, so that a kernel that needs x and x* again loads them once).
+fn forces_at(f: vec4<f32>, v_dt: vec3<f32>) -> vec4<f32> {
     let g = p.gravity.xyz * p.particle_mass;
     let drag = p.air_drag * p.particle_mass / p.dt;
-    let v_dt = x - xp;
     return vec4<f32>(f.xyz + g - v_dt * drag, 0.0);
 }
 

@@ -63,6 +63,8 @@ const SLOTS: u32 = 12u;
 const STRAIN_SLOTS: u32 = 8u;
 const FACE_SLOTS: u32 = 6u;
 const TETHER_SLOTS: u32 = 2u;
+// Particles per invocation of the blocked kernels (clothlab_shaders::recipe::BLOCK).
+const BLOCK: u32 = 4u;
 
 // Whether particle i of an n × n grid is at least two away from the border (all 12 of
 // its slots are filled and equal to the interior's).
