@@ -62,7 +62,7 @@ pub fn dispatch_for(kernel: &'static str) -> Dispatch {
     let base = base_name(kernel);
     let count = if base.starts_with("springs_scatter") {
         Count::Springs
-    } else if base == "forces_springs" {
+    } else if base == "forces_springs" || base == "strain_limit" {
         Count::Blocks
     } else if base == "tri_normals" {
         Count::Quads
@@ -103,7 +103,7 @@ pub struct Caps {
 /// read the step constants from immediates where it has those.
 pub fn recipe(variant: Variant, strain_passes: u32, caps: Caps) -> Vec<Dispatch> {
     let float_atomics = caps.float_atomics;
-    let strain = Dispatch { flips: true, ..d("strain_limit", "strain_limit", Count::Particles) };
+    let strain = Dispatch { flips: true, ..d("strain_limit", "strain_limit", Count::Blocks) };
     let mut r = Vec::new();
     match variant {
         Variant::Naive => {

@@ -1,6 +1,10 @@
 //! include: table
-// strain_limit — per particle, one Jacobi pass of Provot's strain limit plus the tethers
-// (core::cpu::strain_limit::limit_at). Reads pos, writes pos_out.
+// strain_limit — one Jacobi pass of Provot's strain limit plus the tethers
+// (core::cpu::strain_limit::limit_at). Reads pos, writes pos_out. Four consecutive
+// particles of a row (BLOCK) per invocation share one window of 18 points (rows j - 1 …
+// j + 1); on a regular grid (interior.enabled) neighbours come from offsets and rest
+// lengths from the uniform block, with no branches around loads (see shared/gather.wgsl);
+// otherwise each particle walks its table.
 @group(0) @binding(0) var<uniform> step_params: StepParams;
 // Copied from step_params by the kernel's first statement (see shared/state.wgsl).
 var<private> p: StepParams;
@@ -8,7 +12,6 @@ var<private> p: StepParams;
 @group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read> tethers: array<Tether>;
 @group(0) @binding(16) var<uniform> interior_slots: InteriorSlots;
-// Copied at the top of the kernel like `p`.
 var<private> interior: InteriorSlots;
 
 // Mobility of particle k with pos[k].w = w: 0 when pinned or grabbed.
@@ -25,12 +28,11 @@ struct Correction {
     count: f32,
 }
 
-// Adds the share of the spring to neighbour b (rest length `rest`) to c when it is
+// Adds the share of the spring to particle b at xb4 (rest length `rest`) to c when it is
 // stretched past the limit; xi and wi are the particle's position and mobility.
-fn limit_spring(c: ptr<function, Correction>, b: u32, rest: f32, xi: vec3<f32>, wi: f32) {
+fn limit_spring(c: ptr<function, Correction>, b: u32, xb4: vec4<f32>, rest: f32, xi: vec3<f32>, wi: f32) {
     let stretch = 1.0 + p.strain_limit;
     let aim = 1.0 + STRAIN_AIM * p.strain_limit;
-    let xb4 = pos[b];
     let d = xb4.xyz - xi;
     let len = length(d);
     if len > stretch * rest {
@@ -40,65 +42,124 @@ fn limit_spring(c: ptr<function, Correction>, b: u32, rest: f32, xi: vec3<f32>, 
     }
 }
 
-// Interior slot s (structural or shear) at grid offset (di, dj).
-fn limit_interior(c: ptr<function, Correction>, i: u32, di: i32, dj: i32, s: u32, xi: vec3<f32>, wi: f32) {
-    limit_spring(c, u32(i32(i) + di + dj * i32(p.n)), interior.slots[s].rest, xi, wi);
+// Grid point (c, r): its particle (particle 0 when outside the grid, so that every lane
+// loads something), that particle's pos, and whether it is inside.
+struct Gp {
+    k: u32,
+    x4: vec4<f32>,
+    inside: bool,
+}
+
+fn grid_point(c: i32, r: i32) -> Gp {
+    let n = i32(p.n);
+    let inside = c >= 0 && c < n && r >= 0 && r < n;
+    let k = u32(select(0, r * n + c, inside));
+    return Gp(k, pos[k], inside);
+}
+
+fn limit_grid(c: ptr<function, Correction>, b: Gp, s: u32, xi: vec3<f32>, wi: f32) {
+    if b.inside {
+        limit_spring(c, b.k, b.x4, interior.slots[s].rest, xi, wi);
+    }
+}
+
+// The corrected position of particle i (at x4, mobility wi) from correction c, pulled back
+// by its tethers; x4 itself when it does not move (wi = 0).
+fn finish(i: u32, x4: vec4<f32>, wi: f32, c: Correction) -> vec4<f32> {
+    var x = x4.xyz;
+    if c.count > 0.0 {
+        x = x4.xyz + c.sum / c.count;
+    }
+    let stretch = 1.0 + p.strain_limit;
+    for (var t = 0u; t < TETHER_SLOTS; t++) {
+        let tether = tethers[i * TETHER_SLOTS + t];
+        let pin = pos[u32(max(tether.pin, 0))].xyz;
+        let d = x - pin;
+        let len = length(d);
+        let max_len = stretch * tether.rest;
+        if tether.pin >= 0 && len > max_len {
+            x = pin + d * (max_len / len);
+        }
+    }
+    return select(vec4<f32>(x, x4.w), x4, wi == 0.0);
+}
+
+// Particle (row, col) of a block: a its point, s0 … s7 its neighbours in slot order
+// (core::grid::SLOT_OFFSETS).
+fn block_particle(row: u32, col: u32, a: Gp, s0: Gp, s1: Gp, s2: Gp, s3: Gp, s4: Gp, s5: Gp, s6: Gp, s7: Gp) {
+    let xi = a.x4.xyz;
+    let wi = mobility(a.k, a.x4.w);
+    var c = Correction(vec3<f32>(0.0), 0.0);
+    limit_grid(&c, s0, 0u, xi, wi);
+    limit_grid(&c, s1, 1u, xi, wi);
+    limit_grid(&c, s2, 2u, xi, wi);
+    limit_grid(&c, s3, 3u, xi, wi);
+    limit_grid(&c, s4, 4u, xi, wi);
+    limit_grid(&c, s5, 5u, xi, wi);
+    limit_grid(&c, s6, 6u, xi, wi);
+    limit_grid(&c, s7, 7u, xi, wi);
+    let out = finish(a.k, a.x4, wi, c);
+    if a.inside && interior.enabled != 0u {
+        pos_out[a.k] = out;
+    }
+}
+
+// Particle i from its table (an irregular table).
+fn table_particle(i: u32) {
+    let x4 = pos[i];
+    let wi = mobility(i, x4.w);
+    var c = Correction(vec3<f32>(0.0), 0.0);
+    for (var s = 0u; s < STRAIN_SLOTS; s++) {
+        let slot = slot_at(i, s);
+        if slot.neighbor >= 0 {
+            let b = u32(slot.neighbor);
+            limit_spring(&c, b, pos[b], slot.rest, x4.xyz, wi);
+        }
+    }
+    pos_out[i] = finish(i, x4, wi, c);
 }
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     interior = interior_slots;
-    let i = flat_id(id, groups);
-    if i >= p.n * p.n {
-        return;
-    }
-    let x4 = pos[i];
-    let xi = x4.xyz;
-    let wi = mobility(i, x4.w);
-    if wi == 0.0 {
-        pos_out[i] = x4;
-        return;
-    }
-    var c = Correction(vec3<f32>(0.0), 0.0);
-    // Interior: neighbours by offset, rest lengths from the uniform block, slot by slot
-    // (core::grid::SLOT_OFFSETS); the border walks its table in a loop that interior
-    // particles do not enter (see springs_at in shared/gather.wgsl).
-    let inner = interior.enabled != 0u && is_interior(i, p.n);
-    if inner {
-        limit_interior(&c, i, -1, 0, 0u, xi, wi);
-        limit_interior(&c, i, 1, 0, 1u, xi, wi);
-        limit_interior(&c, i, 0, -1, 2u, xi, wi);
-        limit_interior(&c, i, 0, 1, 3u, xi, wi);
-        limit_interior(&c, i, -1, -1, 4u, xi, wi);
-        limit_interior(&c, i, 1, -1, 5u, xi, wi);
-        limit_interior(&c, i, -1, 1, 6u, xi, wi);
-        limit_interior(&c, i, 1, 1, 7u, xi, wi);
-    }
-    let table_slots = select(STRAIN_SLOTS, 0u, inner);
-    for (var s = 0u; s < table_slots; s++) {
-        let slot = slot_at(i, s);
-        if slot.neighbor >= 0 {
-            limit_spring(&c, u32(slot.neighbor), slot.rest, xi, wi);
+    let n = p.n;
+    let per_row = (n + BLOCK - 1u) / BLOCK;
+    let b = flat_id(id, groups);
+    let row = b / per_row;
+    let c0 = (b % per_row) * BLOCK;
+    let r = i32(row);
+    let c = i32(c0);
+    // Rows j - 1, j, j + 1: columns c - 1 … c + 4.
+    let u0 = grid_point(c - 1, r - 1);
+    let u1 = grid_point(c, r - 1);
+    let u2 = grid_point(c + 1, r - 1);
+    let u3 = grid_point(c + 2, r - 1);
+    let u4 = grid_point(c + 3, r - 1);
+    let u5 = grid_point(c + 4, r - 1);
+    let m0 = grid_point(c - 1, r);
+    let m1 = grid_point(c, r);
+    let m2 = grid_point(c + 1, r);
+    let m3 = grid_point(c + 2, r);
+    let m4 = grid_point(c + 3, r);
+    let m5 = grid_point(c + 4, r);
+    let d0 = grid_point(c - 1, r + 1);
+    let d1 = grid_point(c, r + 1);
+    let d2 = grid_point(c + 1, r + 1);
+    let d3 = grid_point(c + 2, r + 1);
+    let d4 = grid_point(c + 3, r + 1);
+    let d5 = grid_point(c + 4, r + 1);
+    // Particle k (at m[k + 1]), slots (-1,0) (1,0) (0,-1) (0,1) (-1,-1) (1,-1) (-1,1) (1,1)
+    // = m[k] m[k+2] u[k+1] d[k+1] u[k] u[k+2] d[k] d[k+2].
+    block_particle(row, c0, m1, m0, m2, u1, d1, u0, u2, d0, d2);
+    block_particle(row, c0 + 1u, m2, m1, m3, u2, d2, u1, u3, d1, d3);
+    block_particle(row, c0 + 2u, m3, m2, m4, u3, d3, u2, u4, d2, d4);
+    block_particle(row, c0 + 3u, m4, m3, m5, u4, d4, u3, u5, d3, d5);
+    // An irregular table (a loop with no iteration on a regular grid).
+    let table = select(BLOCK, 0u, interior.enabled != 0u);
+    for (var k = 0u; k < table; k++) {
+        if row < n && c0 + k < n {
+            table_particle(row * n + c0 + k);
         }
     }
-    var x = xi;
-    if c.count > 0.0 {
-        x = xi + c.sum / c.count;
-    }
-    let stretch = 1.0 + p.strain_limit;
-    for (var t = 0u; t < TETHER_SLOTS; t++) {
-        let tether = tethers[i * TETHER_SLOTS + t];
-        if tether.pin < 0 {
-            continue;
-        }
-        let pin = pos[u32(tether.pin)].xyz;
-        let d = x - pin;
-        let len = length(d);
-        let max_len = stretch * tether.rest;
-        if len > max_len {
-            x = pin + d * (max_len / len);
-        }
-    }
-    pos_out[i] = vec4<f32>(x, x4.w);
 }
