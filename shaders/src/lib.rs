@@ -59,6 +59,9 @@ mod tests {
             assert_eq!(k.spirv.len() % 4, 0);
         }
         let imm = kernel("forces_springs_imm").expect("immediates twin");
-        assert!(imm.wgsl.contains("var<immediate> p: StepParams;") && !imm.wgsl.contains("var<uniform> p"));
+        assert!(
+            imm.wgsl.contains("var<immediate> step_params: StepParams;")
+                && !imm.wgsl.contains("var<uniform> step_params")
+        );
     }
 }
