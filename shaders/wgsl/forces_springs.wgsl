@@ -25,10 +25,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     interior = interior_slots;
     let inv_dt = 1.0 / p.dt;
     let n = p.n;
-    let per_row = (n + BLOCK - 1u) / BLOCK;
-    let b = flat_id(id, groups);
-    let row = b / per_row;
-    let c0 = (b % per_row) * BLOCK;
+    let origin = block_origin(flat_id(id, groups), n);
+    let row = origin.x;
+    let c0 = origin.y;
     let r = i32(row);
     let c = i32(c0);
     // Row j: columns c - 2 … c + 5; rows j ± 1: c - 1 … c + 4; rows j ± 2: c … c + 3.

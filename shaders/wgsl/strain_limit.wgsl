@@ -124,10 +124,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     p = step_params;
     interior = interior_slots;
     let n = p.n;
-    let per_row = (n + BLOCK - 1u) / BLOCK;
-    let b = flat_id(id, groups);
-    let row = b / per_row;
-    let c0 = (b % per_row) * BLOCK;
+    let origin = block_origin(flat_id(id, groups), n);
+    let row = origin.x;
+    let c0 = origin.y;
     let r = i32(row);
     let c = i32(c0);
     // Rows j - 1, j, j + 1: columns c - 1 … c + 4.

@@ -66,6 +66,14 @@ const TETHER_SLOTS: u32 = 2u;
 // Particles per invocation of the blocked kernels (clothlab_shaders::recipe::BLOCK).
 const BLOCK: u32 = 4u;
 
+// (row, first column) of the BLOCK consecutive particles block b of an n × n grid covers:
+// n · ceil(n / BLOCK) blocks, a row's last one cut short when BLOCK does not divide n.
+fn block_origin(b: u32, n: u32) -> vec2<u32> {
+    let per_row = (n + BLOCK - 1u) / BLOCK;
+    let row = b / per_row;
+    return vec2<u32>(row, (b - row * per_row) * BLOCK);
+}
+
 // Whether particle i of an n × n grid is at least two away from the border (all 12 of
 // its slots are filled and equal to the interior's).
 fn is_interior(i: u32, n: u32) -> bool {
