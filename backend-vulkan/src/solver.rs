@@ -41,8 +41,9 @@ const TABLE_BINDING: u32 = 20;
 /// Where the gathers read the spring table from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SpringTable {
-    /// Interior particles take their 12 springs' constants from a uniform block and their
-    /// neighbours by offset; only border particles read the table (storage buffers).
+    /// Every particle takes its springs' constants from a uniform block and its neighbours
+    /// by offset (border included) when the table is the regular grid's; the table is read
+    /// (storage buffers) only for an irregular one.
     #[default]
     Interior,
     /// Every particle reads its slots from read-only storage buffers.

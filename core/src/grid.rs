@@ -66,9 +66,9 @@ impl Tether {
     pub const EMPTY: Self = Self { pin: -1, rest: 0.0 };
 }
 
-/// The spring constants every interior particle shares (see
-/// [`ClothTopology::uniform_interior_slots`]), for GPU kernels to read from a uniform block
-/// (the thesis's constant memory) instead of the per-particle table. `#[repr(C)]`,
+/// The spring constants of the regular grid (see [`ClothTopology::grid_slots`]), for GPU
+/// kernels to read from a uniform block (the thesis's constant memory) instead of the
+/// per-particle table; named for when only the interior used it. `#[repr(C)]`,
 /// mirrored in the shaders; `neighbor` is unused (the offsets are [`SLOT_OFFSETS`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]

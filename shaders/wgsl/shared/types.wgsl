@@ -74,14 +74,6 @@ fn block_origin(b: u32, n: u32) -> vec2<u32> {
     return vec2<u32>(row, (b - row * per_row) * BLOCK);
 }
 
-// Whether particle i of an n × n grid is at least two away from the border (all 12 of
-// its slots are filled and equal to the interior's).
-fn is_interior(i: u32, n: u32) -> bool {
-    let col = i % n;
-    let row = i / n;
-    return col >= 2u && col + 2u < n && row >= 2u && row + 2u < n;
-}
-
 // core::cpu::strain_limit::STRAIN_AIM
 const STRAIN_AIM: f32 = 0.95;
 
