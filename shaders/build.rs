@@ -1,7 +1,11 @@
 //! Validates every WGSL kernel with naga (a shader error fails `cargo build`), checks that
 //! the shared structs have the size and field offsets of clothlab-core's `#[repr(C)]`
 //! types, and emits each kernel as WGSL (for wgpu) and SPIR-V 1.3 (for Vulkan) into
-//! OUT_DIR, with `kernels.rs` listing them.
+//! OUT_DIR, with `kernels.rs` listing them. The WGSL constants shared with Rust are
+//! generated here from `clothlab_core::layout` (put between `shared/types.wgsl` and the
+//! rest), and every `@binding(k)` of every kernel is checked against core's binding table
+//! (`layout::Buf`): a number it does not know, or a uniform where it says storage, fails
+//! the build.
 
 use std::fmt::Write as _;
 use std::fs;
@@ -9,6 +13,7 @@ use std::mem::{offset_of, size_of};
 use std::path::{Path, PathBuf};
 
 use clothlab_core::grid::{InteriorSlots, Spring, SpringSlot, StepParams, Tether};
+use clothlab_core::layout::{BindKind, Buf, wgsl_constants};
 use clothlab_core::scene::{Aabb, Sphere};
 
 /// A struct as core lays it out: name, size, and (field, offset) pairs.
@@ -68,7 +73,7 @@ fn parse_and_validate(name: &str, source: &str) -> (naga::Module, naga::valid::M
 }
 
 fn check_layouts(types_src: &str) {
-    let (module, _) = parse_and_validate("shared/types.wgsl", types_src);
+    let (module, _) = parse_and_validate("prelude (constants + shared/types.wgsl)", types_src);
     let mut layouter = naga::proc::Layouter::default();
     layouter.update(module.to_ctx()).unwrap_or_else(|e| fail(format!("layout: {e}")));
     for (name, size, fields) in expected_layouts() {
@@ -99,9 +104,57 @@ fn check_layouts(types_src: &str) {
 /// How kernels declare the step constants in the uniform buffer.
 const UNIFORM_PARAMS: &str = "@group(0) @binding(0) var<uniform> step_params: StepParams;";
 
+/// The group-0 bindings the kernel's entry point reads and writes (atomics count as
+/// both), each checked against core's [`Buf`] table: a number it does not know, or a
+/// uniform where it says storage, fails the build. (The renderer's and the overhead
+/// benchmark's bindings are not the step's and are not checked.)
+fn bindings(name: &str, module: &naga::Module, info: &naga::valid::ModuleInfo) -> (Vec<u32>, Vec<u32>) {
+    let (mut reads, mut writes) = (Vec::new(), Vec::new());
+    if name == "render" || name == "chain" || module.entry_points.is_empty() {
+        return (reads, writes);
+    }
+    let uses = info.get_entry_point(0);
+    for (handle, g) in module.global_variables.iter() {
+        let Some(rb) = &g.binding else { continue };
+        let var = g.name.as_deref().unwrap_or("?");
+        let Some(buf) = Buf::from_binding(rb.binding).filter(|_| rb.group == 0) else {
+            fail(format!(
+                "{name}: `{var}` at @group({}) @binding({}), which clothlab_core::layout::Buf does not have",
+                rb.group, rb.binding
+            ));
+        };
+        let kind = match g.space {
+            naga::AddressSpace::Uniform => BindKind::Uniform,
+            naga::AddressSpace::Storage { .. } => BindKind::Storage,
+            naga::AddressSpace::Handle => BindKind::Image,
+            other => fail(format!("{name}: `{var}` in address space {other:?} at a binding")),
+        };
+        if kind != buf.kind() {
+            fail(format!(
+                "{name}: `{var}` at @binding({}) is a {kind:?} binding, layout::Buf::{buf:?} is {:?}",
+                rb.binding,
+                buf.kind()
+            ));
+        }
+        let used = uses[handle];
+        let atomic = used.contains(naga::valid::GlobalUse::ATOMIC);
+        // (arrayLength is a query of the binding's size, not of its data: no hazard.)
+        if atomic || used.contains(naga::valid::GlobalUse::READ) {
+            reads.push(rb.binding);
+        }
+        if atomic || used.contains(naga::valid::GlobalUse::WRITE) {
+            writes.push(rb.binding);
+        }
+    }
+    reads.sort();
+    writes.sort();
+    (reads, writes)
+}
+
 /// Validates `source`, writes it and its SPIR-V to `out`, and lists it in `list`.
 fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
     let (module, info) = parse_and_validate(&format!("{name}.wgsl"), source);
+    let (reads, writes) = bindings(name, &module, &info);
     // The render shader gets what wgpu does to WGSL for Vulkan: y flipped into Vulkan's
     // clip space, and a point size of 1 written (Vulkan leaves it undefined otherwise).
     let flags = if name == "render" {
@@ -118,7 +171,7 @@ fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
     writeln!(
         list,
         "    Kernel {{ name: {name:?}, wgsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.wgsl\")), \
-         spirv: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")) }},"
+         spirv: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")), reads: &{reads:?}, writes: &{writes:?} }},"
     )
     .expect("write to string");
 }
@@ -133,7 +186,28 @@ fn main() {
         fs::read_to_string(&p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())))
     };
     let types = shared("types");
-    check_layouts(&types);
+    // The constants shared with Rust, then the structs: every kernel starts with these.
+    let prelude = format!("{}\n{types}", wgsl_constants());
+    check_layouts(&prelude);
+    let mut shared_list = String::from(
+        "/// The shared files, by name (for kernels composed at run time).\npub const SHARED: &[(&str, &str)] = &[\n",
+    );
+    let mut shared_files: Vec<PathBuf> = fs::read_dir(dir.join("shared"))
+        .unwrap_or_else(|e| fail(format!("shared/: {e}")))
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    shared_files.sort();
+    for path in shared_files {
+        let Some(stem) = path.file_stem().and_then(|s| s.to_str()) else { continue };
+        if stem == "types" || path.extension().is_none_or(|x| x != "wgsl") {
+            continue;
+        }
+        writeln!(shared_list, "    ({stem:?}, include_str!({:?})),", path.display().to_string())
+            .expect("write to string");
+    }
+    shared_list.push_str("];\n");
+    fs::write(out.join("prelude.wgsl"), &prelude).expect("write prelude");
 
     let mut kernels: Vec<PathBuf> = fs::read_dir(&dir)
         .unwrap_or_else(|e| fail(format!("{}: {e}", dir.display())))
@@ -164,7 +238,7 @@ fn main() {
             }
         }
         for (vname, incs) in variants {
-            let mut source = types.clone();
+            let mut source = prelude.clone();
             for inc in &incs {
                 source.push_str(&format!("\n// ---- shared/{inc}.wgsl\n"));
                 source.push_str(&shared(inc));
@@ -182,5 +256,6 @@ fn main() {
         }
     }
     list.push_str("];\n");
+    list.push_str(&shared_list);
     fs::write(out.join("kernels.rs"), list).expect("write kernels.rs");
 }

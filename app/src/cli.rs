@@ -8,12 +8,16 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
+use clothlab_core::layout::Buf;
 use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
-use clothlab_core::validate::{KernelRunner, validate_kernels, validate_rollout};
+use clothlab_core::validate::validate_rollout;
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_engine::recipe::Command as StepCommand;
+use clothlab_engine::validate::{KernelRunner, bisect, validate_kernels};
+use clothlab_engine::{KernelRef, Variant};
 use clothlab_vulkan::{SpringTable, StatsMode, VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
-use clothlab_wgpu::{ClothSource, Variant, WgpuRenderer, WgpuSolver};
+use clothlab_wgpu::{ClothSource, WgpuRenderer, WgpuSolver};
 
 #[derive(Parser)]
 #[command(name = "clothlab", version, about = "Interactive, GPU-accelerated cloth simulation testbed")]
@@ -99,6 +103,12 @@ struct ValidateArgs {
     /// Substeps of the rollout (rounded up to whole frames).
     #[arg(long, default_value_t = 200)]
     steps: u32,
+    /// Instead of the checks: a rollout in which every substep runs its first k
+    /// dispatches on the CPU engine and the rest on the GPU, for every k, naming the first
+    /// kernel after which the GPU leaves the rollout bound (`--steps` substeps of an
+    /// `--n` cloth; n = 32 keeps it quick).
+    #[arg(long)]
+    bisect: bool,
 }
 
 #[derive(clap::Args, Debug)]
@@ -441,39 +451,38 @@ fn sim(args: SimArgs) -> Result<ExitCode> {
     Ok(if summary.nan_count == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }
 
-/// The buffer a kernel exists to write (shown when every buffer matches exactly).
-fn primary_output(kernel: &str) -> &'static str {
-    match kernel.trim_end_matches("_imm") {
-        k if k.starts_with("forces") || k.starts_with("springs") => "force",
-        k if k.starts_with("tri_normals_scatter") || k.starts_with("vertex_normals") => "normal",
-        "tri_normals" => "faces",
-        _ => "pos",
+/// The buffer a kernel exists to write (shown when every buffer matches exactly): the
+/// first its row writes.
+fn primary_output(kernel: KernelRef) -> &'static str {
+    match kernel.def.writes.first() {
+        Some(Buf::PosOut) | None => "pos",
+        Some(b) => b.name(),
     }
 }
 
 /// A GPU backend's kernels, runnable one by one.
 trait GpuRunner: KernelRunner {
     /// The kernels its recipe dispatches.
-    fn recipe_kernels(&self) -> Vec<&'static str>;
-    /// The adapter, in one line.
-    fn adapter(&self) -> String;
+    fn recipe_kernels(&self) -> Vec<KernelRef>;
+    /// The commands of one substep.
+    fn substep_commands(&self) -> Vec<StepCommand>;
 }
 
 impl GpuRunner for WgpuSolver {
-    fn recipe_kernels(&self) -> Vec<&'static str> {
+    fn recipe_kernels(&self) -> Vec<KernelRef> {
         WgpuSolver::recipe_kernels(self)
     }
-    fn adapter(&self) -> String {
-        WgpuSolver::adapter(self)
+    fn substep_commands(&self) -> Vec<StepCommand> {
+        self.commands().to_vec()
     }
 }
 
 impl GpuRunner for VulkanSolver {
-    fn recipe_kernels(&self) -> Vec<&'static str> {
+    fn recipe_kernels(&self) -> Vec<KernelRef> {
         VulkanSolver::recipe_kernels(self)
     }
-    fn adapter(&self) -> String {
-        VulkanSolver::adapter(self)
+    fn substep_commands(&self) -> Vec<StepCommand> {
+        self.commands()
     }
 }
 
@@ -488,27 +497,6 @@ fn gpu_runner(backend: Backend, n: u32, params: &SimParams) -> Result<Box<dyn Gp
         Backend::Vulkan => Box::new(VulkanSolver::new(Variant::Optimized, scene, params.clone(), vulkan_validation())?),
         Backend::Cpu | Backend::CpuPar => bail!("{backend:?} is not a GPU backend"),
     })
-}
-
-/// Only the named kernels of a runner.
-struct Only<'a> {
-    inner: &'a mut dyn GpuRunner,
-    names: Vec<&'static str>,
-}
-
-impl KernelRunner for Only<'_> {
-    fn kernel_names(&self) -> Vec<&'static str> {
-        self.names.clone()
-    }
-    fn run_kernel(
-        &mut self,
-        kernel: &str,
-        state: &clothlab_core::ClothState,
-        faces: &[[f32; 4]],
-        p: &clothlab_core::StepParams,
-    ) -> Result<(clothlab_core::ClothState, Vec<[f32; 4]>), clothlab_core::SolverError> {
-        self.inner.run_kernel(kernel, state, faces, p)
-    }
 }
 
 fn validate(args: ValidateArgs) -> Result<ExitCode> {
@@ -537,15 +525,45 @@ fn validate(args: ValidateArgs) -> Result<ExitCode> {
                 "backend", "check", "buffer", "max abs", "rms", "error", "bound"
             );
         }
+        if args.bisect {
+            let commands = solver.substep_commands();
+            let b = bisect(solver.as_mut(), &commands, &Scene::with_n(args.n), &params, args.steps)?;
+            let name = backend.name();
+            for split in &b.splits {
+                let c = &split.check;
+                println!(
+                    "{:<13} {:<26} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
+                    name,
+                    c.what,
+                    c.buffer,
+                    c.max_abs,
+                    c.rms,
+                    c.error,
+                    c.bound,
+                    if c.passed() { "ok" } else { "FAILED" }
+                );
+            }
+            match &b.culprit {
+                Some(k) => {
+                    failed += 1;
+                    println!(
+                        "{name:<13} leaves the bound first after kernel {k} (on the GPU; the CPU engine's twin runs before it)"
+                    );
+                }
+                None => println!("{name:<13} no kernel leaves the bound: every split within it"),
+            }
+            println!("{:<13} adapter: {}", name, solver.adapter());
+            continue;
+        }
         let names = solver.recipe_kernels();
-        let kernel_checks =
-            validate_kernels(&mut Only { inner: solver.as_mut(), names: names.clone() }, args.n, 0x5eed)?;
+        let kernel_checks = validate_kernels(solver.as_mut(), &names, args.n, 0x5eed)?;
         // One row per kernel: its worst buffer relative to the bound.
         let mut rows = Vec::new();
-        for name in &names {
+        for &name in &names {
+            let shader = name.shader_name();
             let worst = kernel_checks
                 .iter()
-                .filter(|c| c.what == *name)
+                .filter(|c| c.what == shader)
                 .max_by(|a, b| {
                     let key =
                         |c: &clothlab_core::validate::Check| (c.error / c.bound, c.buffer == primary_output(name));

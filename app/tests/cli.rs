@@ -95,6 +95,26 @@ fn validate_checks_the_gpu_backends_or_says_why_not() {
 }
 
 #[test]
+fn validate_bisects_a_rollout_and_prints_nothing_about_a_display() {
+    // Without XDG_RUNTIME_DIR (CI's case) the headless commands print no Wayland noise.
+    let out = Command::new(env!("CARGO_BIN_EXE_clothlab"))
+        .args(["validate", "--bisect", "--n", "16", "--steps", "32", "--backends", "wgpu,vulkan-naive"])
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .expect("run clothlab");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    if no_gpu(&err) {
+        return;
+    }
+    assert!(out.status.success(), "validate --bisect failed: {text}\n{err}");
+    assert!(!err.contains("XDG_RUNTIME_DIR"), "{err}");
+    // One split per dispatch: 5 optimized, 7 naive (one strain pass); all within the bound.
+    assert_eq!(text.lines().filter(|l| l.contains("bisect") && l.ends_with(" ok")).count(), 5 + 7, "{text}");
+    assert_eq!(text.matches("no kernel leaves the bound").count(), 2, "{text}");
+}
+
+#[test]
 fn a_grid_too_big_for_the_adapter_is_refused_with_the_size_it_takes() {
     // lavapipe binds at most 128 MiB per storage buffer; n = 2048 needs 768 MiB of springs.
     let out = clothlab(&["sim", "--backend", "wgpu", "--n", "2048", "--steps", "16"]);

@@ -14,7 +14,7 @@ mod solver;
 
 use thiserror::Error;
 
-pub use clothlab_shaders::recipe::StatsMode;
+pub use clothlab_engine::recipe::StatsMode;
 pub use present::{Overlay, Presented, Presenter, Screenshot};
 pub use render::{FRAMES_IN_FLIGHT, VkCloth, VulkanRenderer};
 pub use solver::{SpringTable, VulkanOptions, VulkanSolver};

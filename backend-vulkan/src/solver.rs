@@ -14,16 +14,18 @@ use clothlab_core::cpu::SubstepStats;
 use clothlab_core::grid::{
     ClothState, ClothTopology, Grab, InteriorSlots, STRAIN_SLOTS, SpringSlot, StepParams, V4, build, spring_constants,
 };
+use clothlab_core::layout::{Buf, TABLE_WIDTH};
 use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::solver::{Solver, SolverError};
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, TimingRecorder};
-use clothlab_core::validate::KernelRunner;
 use clothlab_core::{SimParams, cpu};
-use clothlab_shaders::recipe::{
-    Caps, Dispatch, Hazards, Output, StatsMode, TABLE_WIDTH, Variant, base_name, dispatch_for, groups, kernels_of,
-    pure_outputs, recipe, record_times, res, split_slots, spring_halves, stats_dispatches, table_texels,
+use clothlab_engine::kernels::{HostBuffers, Immediates, KernelRef, groups};
+use clothlab_engine::recipe::{
+    Caps, Command, Hazards, StatsMode, Variant, dispatches, kernels_for, kernels_of, recipe, res, stats_commands,
 };
+use clothlab_engine::tables::{record_times, split_slots, spring_halves, table_texels};
+use clothlab_engine::validate::KernelRunner;
 use gpu_allocator::MemoryLocation;
 
 use crate::VkError;
@@ -35,8 +37,6 @@ const UNIFORM: vk::DescriptorType = vk::DescriptorType::UNIFORM_BUFFER;
 const MAX_QUERIES: u32 = 4096;
 /// Where the frame's statistics land in the staging buffer (after the step constants).
 const STATS_OFFSET: u64 = 256;
-/// Binding of the spring-table image (shared/table_tex.wgsl).
-const TABLE_BINDING: u32 = 20;
 
 /// Where the gathers read the spring table from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -123,7 +123,7 @@ pub struct VulkanSolver {
     grab: Option<Grab>,
     topo: ClothTopology,
     sp: StepParams,
-    recipe: Vec<Dispatch>,
+    recipe: Vec<Command>,
     caps: Caps,
     options: VulkanOptions,
     stats: Vec<SubstepStats>,
@@ -134,8 +134,8 @@ pub struct VulkanSolver {
     /// Record per-dispatch GPU timestamps.
     pub time_kernels: bool,
     // Vulkan objects; each holds the device alive, and is dropped before it.
-    kernels: HashMap<&'static str, (Kernel, [vk::DescriptorSet; 2])>,
-    _sets: Sets,
+    kernels: HashMap<KernelRef, (Kernel, [vk::DescriptorSet; 2])>,
+    sets: Sets,
     cmds: Commands,
     staging: Buffer,
     buffers: Buffers,
@@ -312,45 +312,16 @@ impl VulkanSolver {
             immediates: dev.max_push_constants as usize >= std::mem::size_of::<StepParams>(),
             table_image: options.table == SpringTable::Image,
         };
-        let mut names = vec!["springs", "springs_scatter", "tri_normals_scatter"];
+        let mut build: Vec<KernelRef> = kernels_for(caps);
+        build.extend(dispatches(&stats_commands(options.stats, caps)));
         if caps.table_image {
-            names.extend(["springs_tex", "strain_limit_tex"]);
+            // The storage-table twins too, so that both homes of the table are checked.
+            build.extend(kernels_for(Caps { table_image: false, ..caps }));
         }
-        for v in [Variant::Naive, Variant::Optimized] {
-            names.extend(recipe(v, 1, caps).iter().map(|d| d.kernel));
-            names.extend(recipe(v, 1, Caps { immediates: false, ..caps }).iter().map(|d| d.kernel));
-        }
-        names.extend(stats_dispatches(options.stats, caps).iter().map(|d| d.kernel));
-        names.sort();
-        names.dedup();
-        let sets = Sets::new(&dev, 2 * names.len() as u32).map_err(backend)?;
-        let mut kernels = HashMap::new();
-        for name in names {
-            let k = clothlab_shaders::kernel(name)
-                .ok_or_else(|| SolverError::Backend(format!("kernel {name} missing from clothlab-shaders")))?;
-            let mut layout: Vec<(u32, vk::DescriptorType)> =
-                buffers.bindings(0).iter().map(|(b, t, _)| (*b, *t)).collect();
-            let image = buffers.table.as_ref().filter(|_| name.contains("_tex")).map(|i| (TABLE_BINDING, i));
-            if image.is_some() {
-                layout.push((TABLE_BINDING, vk::DescriptorType::SAMPLED_IMAGE));
-            }
-            let push = if name.ends_with("_imm") {
-                std::mem::size_of::<StepParams>() as u32
-            } else if name.starts_with("stats") {
-                4
-            } else {
-                0
-            };
-            let kernel = Kernel::new(&dev, k.spirv, &layout, push).map_err(backend)?;
-            let s0 = sets.allocate(&kernel, &buffers.bindings(0), image).map_err(backend)?;
-            let s1 = sets.allocate(&kernel, &buffers.bindings(1), image).map_err(backend)?;
-            kernels.insert(name, (kernel, [s0, s1]));
-        }
-        let messages = dev.take_messages();
-        if !messages.is_empty() {
-            return Err(backend(VkError::Validation(messages.join(" | "))));
-        }
-        Ok(Self {
+        build.dedup();
+        // Room for every kernel built now and for kernels added later (add_kernel).
+        let sets = Sets::new(&dev, 2 * (build.len() as u32 + EXTRA_KERNELS)).map_err(backend)?;
+        let mut solver = Self {
             variant,
             scene,
             params: params.clone(),
@@ -366,13 +337,59 @@ impl VulkanSolver {
             cur: 0,
             timer: TimingRecorder::default(),
             time_kernels: true,
-            kernels,
-            _sets: sets,
+            kernels: HashMap::new(),
+            sets,
             cmds,
             staging,
             buffers,
             dev,
-        })
+        };
+        for k in build {
+            solver.build(k)?;
+        }
+        solver.check()?;
+        Ok(solver)
+    }
+
+    /// Builds the pipeline and the two descriptor sets (one per position parity) of `k`.
+    fn build(&mut self, k: KernelRef) -> Result<(), SolverError> {
+        if self.kernels.contains_key(&k) {
+            return Ok(());
+        }
+        if self.kernels.len() as u32 >= self.sets.capacity() / 2 {
+            return Err(SolverError::Shader {
+                kernel: k.shader_name(),
+                reason: format!("at most {EXTRA_KERNELS} kernels can be added to a Vulkan solver"),
+            });
+        }
+        let spirv = k.spirv()?;
+        let b = &self.buffers;
+        let mut layout: Vec<(u32, vk::DescriptorType)> = b.bindings(0).iter().map(|(b, t, _)| (*b, *t)).collect();
+        let image = match (&b.table, k.flavor.table_image) {
+            (Some(i), true) => Some((Buf::Table.binding(), i)),
+            (None, true) => {
+                return Err(SolverError::Shader {
+                    kernel: k.shader_name(),
+                    reason: "built without the table image".into(),
+                });
+            }
+            _ => None,
+        };
+        if image.is_some() {
+            layout.push((Buf::Table.binding(), vk::DescriptorType::SAMPLED_IMAGE));
+        }
+        let push = if k.step_immediates() {
+            std::mem::size_of::<StepParams>() as u32
+        } else if k.def.immediates == Immediates::Substep {
+            4
+        } else {
+            0
+        };
+        let kernel = Kernel::new(&self.dev, &spirv, &layout, push).map_err(backend)?;
+        let s0 = self.sets.allocate(&kernel, &b.bindings(0), image).map_err(backend)?;
+        let s1 = self.sets.allocate(&kernel, &b.bindings(1), image).map_err(backend)?;
+        self.kernels.insert(k, (kernel, [s0, s1]));
+        Ok(())
     }
 
     /// The device's name.
@@ -391,8 +408,13 @@ impl VulkanSolver {
     }
 
     /// The kernels one substep dispatches, in order (statistics included).
-    pub fn recipe_kernels(&self) -> Vec<&'static str> {
+    pub fn recipe_kernels(&self) -> Vec<KernelRef> {
         kernels_of(&self.substep_recipe())
+    }
+
+    /// The commands of one substep (statistics included).
+    pub fn commands(&self) -> Vec<Command> {
+        self.substep_recipe()
     }
 
     /// The options it was built with.
@@ -432,48 +454,49 @@ impl VulkanSolver {
         self.dev.clone()
     }
 
-    /// The dispatches of one substep: the step, then the statistics.
-    fn substep_recipe(&self) -> Vec<Dispatch> {
+    /// The commands of one substep: the step, then the statistics.
+    fn substep_recipe(&self) -> Vec<Command> {
         let mut r = self.recipe.clone();
-        r.extend(stats_dispatches(self.options.stats, self.caps));
+        r.extend(stats_commands(self.options.stats, self.caps));
         r
     }
 
-    /// Records `dispatches` of substep `substep` (after a barrier each), timestamps from
-    /// query `*q` while timing.
-    fn record(&mut self, dispatches: &[Dispatch], substep: u32, q: &mut u32, labels: &mut Vec<&'static str>) {
+    /// Records `commands` of substep `substep` (each after the barrier it needs),
+    /// timestamps from query `*q` while timing.
+    fn record(&mut self, commands: &[Command], substep: u32, q: &mut u32, labels: &mut Vec<&'static str>) {
         let substep_bytes = substep.to_le_bytes();
-        for dsp in dispatches {
+        for c in commands {
             // Only the barriers the data needs (see recipe::Hazards).
-            let (before_clear, before) = self.hazards.dispatch(dsp, self.cur);
-            if before_clear {
+            let mut cur = self.cur;
+            if self.hazards.command(c, &mut cur) {
                 self.cmds.barrier();
                 self.barriers += 1;
             }
-            if dsp.clear_normal {
-                self.cmds.zero(&self.buffers.normal);
-            }
-            if before {
-                self.cmds.barrier();
-                self.barriers += 1;
-            }
-            let (kernel, sets) = &self.kernels[dsp.kernel];
-            let push: &[u8] = if dsp.kernel.ends_with("_imm") {
+            self.cur = cur;
+            let k = match c {
+                Command::Clear(buf) => {
+                    if let Some(b) = self.buffers.get(*buf, self.cur) {
+                        self.cmds.zero(b);
+                    }
+                    continue;
+                }
+                Command::Swap => continue,
+                Command::Dispatch(k) => *k,
+            };
+            let (kernel, sets) = &self.kernels[&k];
+            let push: &[u8] = if k.step_immediates() {
                 bytemuck::bytes_of(&self.sp)
-            } else if dsp.substep_push {
+            } else if k.def.immediates == Immediates::Substep {
                 &substep_bytes
             } else {
                 &[]
             };
             let timed = self.time_kernels && self.dev.timestamps && *q + 2 <= MAX_QUERIES;
-            let d = raw::Dispatch { kernel, set: sets[self.cur], push, groups: groups(dsp.count.of(&self.topo)) };
+            let d = raw::Dispatch { kernel, set: sets[self.cur], push, groups: groups(k.def.count.of(&self.topo)) };
             self.cmds.dispatch(&d, timed.then_some(*q));
             if timed {
                 *q += 2;
-                labels.push(dsp.label);
-            }
-            if dsp.flips {
-                self.cur ^= 1;
+                labels.push(k.def.label);
             }
         }
     }
@@ -485,7 +508,8 @@ impl VulkanSolver {
         if q == 0 {
             return Ok(None);
         }
-        Ok(Some(record_times(&mut self.timer, labels, &ticks, self.dev.timestamp_period as f64, self.recipe.len())))
+        let per_substep = clothlab_engine::cpu::dispatch_count(&self.recipe);
+        Ok(Some(record_times(&mut self.timer, labels, &ticks, self.dev.timestamp_period as f64, per_substep)))
     }
 
     /// Fails if the validation layer reported anything.
@@ -496,84 +520,80 @@ impl VulkanSolver {
 
     fn write(&mut self, which: Target, bytes: &[u8]) -> Result<(), SolverError> {
         self.hazards.dirty();
-        upload(&mut self.cmds, &mut self.staging, which.of(&self.buffers), bytes).map_err(backend)
+        let dst = target(&self.buffers, which, self.cur)?;
+        upload(&mut self.cmds, &mut self.staging, dst, bytes).map_err(backend)
     }
 
     fn read(&mut self, which: Target) -> Result<Vec<V4>, SolverError> {
-        let buf = which.of(&self.buffers);
+        let buf = target(&self.buffers, which, self.cur)?;
         let bytes = download(&mut self.cmds, &mut self.staging, buf, buf.size).map_err(backend)?;
         Ok(bytes.chunks_exact(16).map(bytemuck::pod_read_unaligned::<V4>).collect())
     }
 
-    fn run_one(
-        &mut self,
-        kernel: &str,
-        state: &ClothState,
-        faces: &[V4],
-        sp: &StepParams,
-    ) -> Result<(ClothState, Vec<V4>), SolverError> {
-        if sp.n != self.topo.n {
-            return Err(SolverError::Backend("step constants for another grid".into()));
+    /// Uploads `bufs` and `sp`, runs `commands`, reads the buffers back (see
+    /// [`KernelRunner::run_commands`]).
+    fn run_host(&mut self, commands: &[Command], sp: &StepParams, bufs: &mut HostBuffers) -> Result<(), SolverError> {
+        if sp.n != self.topo.n || sp.num_spheres as usize > MAX_COLLIDERS || sp.num_boxes as usize > MAX_COLLIDERS {
+            return Err(SolverError::Backend("step constants for another grid or too many colliders".into()));
         }
-        let name = *self
-            .kernels
-            .keys()
-            .find(|k| **k == kernel)
-            .ok_or_else(|| SolverError::Backend(format!("no kernel named {kernel} on this device")))?;
-        if faces.len() != self.topo.triangles.len() {
-            return Err(SolverError::Backend("faces of another grid".into()));
+        let np = self.topo.num_particles();
+        let particles = [&bufs.pos, &bufs.pos_out, &bufs.prev, &bufs.force, &bufs.normal];
+        if bufs.faces.len() != self.topo.triangles.len() || particles.iter().any(|v| v.len() != np) {
+            return Err(SolverError::GridMismatch { want: self.topo.n, got: (bufs.pos.len() as f64).sqrt() as u32 });
         }
-        self.set_state(state)?;
-        self.write(Target::Faces, bytemuck::cast_slice(faces))?;
+        for k in dispatches(commands) {
+            self.build(k)?;
+        }
         self.write(Target::Params, bytemuck::bytes_of(sp))?;
         self.sp = *sp;
-        let nan = vec![[f32::NAN; 4]; state.pos.len()];
-        for out in pure_outputs(kernel) {
-            match out {
-                Output::PosOut => self.write(Target::Pos(1 - self.cur), bytemuck::cast_slice(&nan))?,
-                Output::Faces => self.write(Target::Faces, bytemuck::cast_slice(&vec![[f32::NAN; 4]; faces.len()]))?,
-                Output::Normal => self.write(Target::Normal, bytemuck::cast_slice(&nan))?,
-                Output::Force => self.write(Target::Force, bytemuck::cast_slice(&nan))?,
+        for buf in HOST_BUFFERS {
+            if let Some(v) = bufs.get(buf) {
+                self.write(Target::Buf(buf), bytemuck::cast_slice(v))?;
             }
         }
-        let dispatch = dispatch_for(name);
         let was = self.time_kernels;
         self.time_kernels = false;
         self.cmds.begin(0).map_err(backend)?;
-        self.record(&[dispatch], 0, &mut 0, &mut Vec::new());
+        self.record(commands, 0, &mut 0, &mut Vec::new());
         let r = self.submit(0, &[]);
         self.time_kernels = was;
         r?;
-        let out = self.state()?;
-        let out_faces = self.read(Target::Faces)?;
-        if dispatch.flips {
-            self.cur ^= 1;
+        for buf in HOST_BUFFERS {
+            let v = self.read(Target::Buf(buf))?;
+            if let Some(dst) = bufs.get_mut(buf) {
+                *dst = v;
+            }
         }
-        Ok((out, out_faces))
+        Ok(())
     }
 }
+
+/// The buffers a kernel test or a bisection moves between host and device.
+const HOST_BUFFERS: [Buf; 6] = [Buf::Pos, Buf::PosOut, Buf::Prev, Buf::Force, Buf::Normal, Buf::Faces];
+
+/// Kernels that can be added to a solver after it is built (descriptor sets are set
+/// aside for them).
+const EXTRA_KERNELS: u32 = 16;
 
 /// A buffer the host writes or reads.
 #[derive(Clone, Copy)]
 enum Target {
     Params,
-    Pos(usize),
-    Prev,
-    Force,
-    Normal,
-    Faces,
+    /// A step buffer, the position pair by the current parity.
+    Buf(Buf),
 }
 
-impl Target {
-    fn of(self, b: &Buffers) -> &Buffer {
-        match self {
-            Target::Params => &b.params,
-            Target::Pos(k) => &b.pos[k],
-            Target::Prev => &b.prev,
-            Target::Force => &b.force,
-            Target::Normal => &b.normal,
-            Target::Faces => &b.faces,
-        }
+fn target(b: &Buffers, which: Target, cur: usize) -> Result<&Buffer, SolverError> {
+    match which {
+        Target::Params => Ok(&b.params),
+        Target::Buf(buf) => b.get(buf, cur).ok_or_else(|| SolverError::Backend(format!("no buffer {buf:?}"))),
+    }
+}
+
+impl Buffers {
+    /// The buffer bound as `buf` when the current positions are `pos[cur]`.
+    fn get(&self, buf: Buf, cur: usize) -> Option<&Buffer> {
+        self.bindings(cur).into_iter().find(|(b, _, _)| *b == buf.binding()).map(|(_, _, b)| b)
     }
 }
 
@@ -602,22 +622,28 @@ pub(crate) fn download(cmds: &mut Commands, staging: &mut Buffer, src: &Buffer, 
 }
 
 impl KernelRunner for VulkanSolver {
-    fn kernel_names(&self) -> Vec<&'static str> {
-        // The statistics kernels write no state; they are checked by their own test.
-        let mut v: Vec<&'static str> =
-            self.kernels.keys().copied().filter(|k| !base_name(k).starts_with("stats")).collect();
-        v.sort();
+    fn kernels(&self) -> Vec<KernelRef> {
+        let mut v: Vec<KernelRef> = self.kernels.keys().copied().collect();
+        v.sort_by_key(|k| k.shader_name());
         v
     }
 
-    fn run_kernel(
+    fn run_commands(
         &mut self,
-        kernel: &str,
-        state: &ClothState,
-        faces: &[V4],
+        commands: &[Command],
         p: &StepParams,
-    ) -> Result<(ClothState, Vec<V4>), SolverError> {
-        self.run_one(kernel, state, faces, p)
+        bufs: &mut HostBuffers,
+    ) -> Result<(), SolverError> {
+        self.run_host(commands, p, bufs)
+    }
+
+    fn adapter(&self) -> String {
+        self.dev.name.clone()
+    }
+
+    fn add_kernel(&mut self, kernel: KernelRef) -> Result<(), SolverError> {
+        self.build(kernel)?;
+        self.check()
     }
 }
 
@@ -760,7 +786,13 @@ impl Solver for VulkanSolver {
             self.timer.record(CPU_RECORD, record_ns);
             self.timer.record(CPU_SUBMIT, submit_ns);
             let gpu_ns = (q > 0).then(|| {
-                record_times(&mut self.timer, &labels, &ticks, self.dev.timestamp_period as f64, recipe.len())
+                record_times(
+                    &mut self.timer,
+                    &labels,
+                    &ticks,
+                    self.dev.timestamp_period as f64,
+                    clothlab_engine::cpu::dispatch_count(&recipe),
+                )
             });
             self.timer.record(FRAME, gpu_ns.unwrap_or_else(|| t0.elapsed().as_nanos() as f64));
         }
@@ -770,19 +802,19 @@ impl Solver for VulkanSolver {
     fn state(&mut self) -> Result<ClothState, SolverError> {
         Ok(ClothState {
             n: self.topo.n,
-            pos: self.read(Target::Pos(self.cur))?,
-            prev: self.read(Target::Prev)?,
-            force: self.read(Target::Force)?,
-            normal: self.read(Target::Normal)?,
+            pos: self.read(Target::Buf(Buf::Pos))?,
+            prev: self.read(Target::Buf(Buf::Prev))?,
+            force: self.read(Target::Buf(Buf::Force))?,
+            normal: self.read(Target::Buf(Buf::Normal))?,
         })
     }
 
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
         state.check(self.topo.n)?;
-        self.write(Target::Pos(self.cur), bytemuck::cast_slice(&state.pos))?;
-        self.write(Target::Prev, bytemuck::cast_slice(&state.prev))?;
-        self.write(Target::Force, bytemuck::cast_slice(&state.force))?;
-        self.write(Target::Normal, bytemuck::cast_slice(&state.normal))?;
+        self.write(Target::Buf(Buf::Pos), bytemuck::cast_slice(&state.pos))?;
+        self.write(Target::Buf(Buf::Prev), bytemuck::cast_slice(&state.prev))?;
+        self.write(Target::Buf(Buf::Force), bytemuck::cast_slice(&state.force))?;
+        self.write(Target::Buf(Buf::Normal), bytemuck::cast_slice(&state.normal))?;
         Ok(())
     }
 

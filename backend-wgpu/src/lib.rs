@@ -17,7 +17,7 @@ pub mod overhead;
 mod render;
 mod solver;
 
-pub use clothlab_shaders::recipe::Variant;
+pub use clothlab_engine::recipe::Variant;
 pub use context::{GpuContext, GpuError};
 pub use render::{ClothSource, WgpuRenderer};
 pub use solver::WgpuSolver;

@@ -6,15 +6,15 @@ use std::time::Instant;
 use clothlab_core::grid::{
     ClothState, ClothTopology, Grab, InteriorSlots, STRAIN_SLOTS, SpringSlot, StepParams, V4, build, spring_constants,
 };
+use clothlab_core::layout::Buf;
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::solver::{Solver, SolverError};
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, TimingRecorder};
-use clothlab_core::validate::KernelRunner;
 use clothlab_core::{SimParams, cpu};
-use clothlab_shaders::recipe::{
-    Caps, Dispatch, Output, Variant, dispatch_for, groups, kernels_of, pure_outputs, recipe, record_times, split_slots,
-    spring_halves,
-};
+use clothlab_engine::kernels::{self, HostBuffers, KernelRef, groups};
+use clothlab_engine::recipe::{Caps, Command, Variant, kernels_for, kernels_of, recipe};
+use clothlab_engine::tables::{record_times, split_slots, spring_halves};
+use clothlab_engine::validate::KernelRunner;
 use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
@@ -68,8 +68,10 @@ pub struct WgpuSolver {
     topo: ClothTopology,
     buffers: Buffers,
     bind_groups: [wgpu::BindGroup; 2],
-    pipelines: HashMap<&'static str, wgpu::ComputePipeline>,
-    recipe: Vec<Dispatch>,
+    pipelines: HashMap<KernelRef, wgpu::ComputePipeline>,
+    plain_layout: wgpu::PipelineLayout,
+    imm_layout: Option<wgpu::PipelineLayout>,
+    recipe: Vec<Command>,
     /// Which of `buffers.pos` holds the current positions.
     cur: usize,
     /// The step constants of the frame being recorded (for kernels reading immediates).
@@ -234,36 +236,6 @@ impl WgpuSolver {
         };
         let plain_layout = pipeline_layout(0);
         let imm_layout = caps.immediates.then(|| pipeline_layout(std::mem::size_of::<StepParams>() as u32));
-        let mut pipelines = HashMap::new();
-        let mut kernels = vec!["springs", "springs_scatter", "tri_normals_scatter"];
-        // Every kernel either recipe can use on this adapter, so that all can be validated.
-        for v in [Variant::Naive, Variant::Optimized] {
-            kernels.extend(recipe(v, 1, caps).iter().map(|d| d.kernel));
-            kernels.extend(recipe(v, 1, Caps { immediates: false, ..caps }).iter().map(|d| d.kernel));
-        }
-        for name in kernels {
-            if pipelines.contains_key(name) {
-                continue;
-            }
-            let k = clothlab_shaders::kernel(name)
-                .ok_or_else(|| SolverError::Backend(format!("kernel {name} missing from clothlab-shaders")))?;
-            let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(name),
-                source: wgpu::ShaderSource::Wgsl(k.wgsl.into()),
-            });
-            let pipeline = dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(name),
-                layout: Some(match (&imm_layout, name.ends_with("_imm")) {
-                    (Some(l), true) => l,
-                    _ => &plain_layout,
-                }),
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-            pipelines.insert(name, pipeline);
-        }
         let timestamps = ctx.timestamps.then(|| Timestamps {
             set: dev.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("kernel timestamps"),
@@ -278,9 +250,8 @@ impl WgpuSolver {
             }),
             period_ns: ctx.queue.get_timestamp_period() as f64,
         });
-        ctx.check("creating the solver").map_err(backend)?;
         let recipe = recipe(variant, params.strain_iterations, caps);
-        Ok(Self {
+        let mut solver = Self {
             ctx,
             variant,
             scene,
@@ -289,7 +260,9 @@ impl WgpuSolver {
             topo,
             buffers,
             bind_groups,
-            pipelines,
+            pipelines: HashMap::new(),
+            plain_layout,
+            imm_layout,
             recipe,
             cur: 0,
             sp,
@@ -297,6 +270,61 @@ impl WgpuSolver {
             timestamps,
             timer: TimingRecorder::default(),
             time_kernels: true,
+        };
+        for k in kernels_for(caps) {
+            solver.build(k)?;
+        }
+        solver.ctx.check("creating the solver").map_err(backend)?;
+        Ok(solver)
+    }
+
+    /// Builds the pipeline of `k` (once).
+    fn build(&mut self, k: KernelRef) -> Result<(), SolverError> {
+        if self.pipelines.contains_key(&k) {
+            return Ok(());
+        }
+        let name = k.shader_name();
+        let wgsl = k.wgsl()?;
+        if !matches!(k.def.source, kernels::Source::Builtin) {
+            // naga's message, with the line, before wgpu sees it.
+            clothlab_shaders::compile_spirv(&name, &wgsl)
+                .map_err(|reason| SolverError::Shader { kernel: name.clone(), reason })?;
+        }
+        let dev = &self.ctx.device;
+        let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(&name),
+            source: wgpu::ShaderSource::Wgsl(wgsl),
+        });
+        let layout = match (&self.imm_layout, k.step_immediates()) {
+            (Some(l), true) => l,
+            (None, true) => {
+                return Err(SolverError::Shader { kernel: name, reason: "this adapter has no immediates".into() });
+            }
+            _ => &self.plain_layout,
+        };
+        let pipeline = dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(&name),
+            layout: Some(layout),
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        self.pipelines.insert(k, pipeline);
+        Ok(())
+    }
+
+    fn buffer(&self, buf: Buf) -> Option<&wgpu::Buffer> {
+        let b = &self.buffers;
+        Some(match buf {
+            Buf::Pos => &b.pos[self.cur],
+            Buf::PosOut => &b.pos[1 - self.cur],
+            Buf::Prev => &b.prev,
+            Buf::Force => &b.force,
+            Buf::Normal => &b.normal,
+            Buf::Faces => &b.faces,
+            Buf::Params => &b.params,
+            _ => return None,
         })
     }
 
@@ -306,8 +334,13 @@ impl WgpuSolver {
     }
 
     /// The kernels one substep dispatches, in order (strain passes once).
-    pub fn recipe_kernels(&self) -> Vec<&'static str> {
+    pub fn recipe_kernels(&self) -> Vec<KernelRef> {
         kernels_of(&self.recipe)
+    }
+
+    /// The commands of one substep.
+    pub fn commands(&self) -> &[Command] {
+        &self.recipe
     }
 
     /// Whether the optimized kernels read the step constants from immediates.
@@ -330,19 +363,29 @@ impl WgpuSolver {
         (&self.buffers.pos[self.cur], &self.buffers.normal)
     }
 
-    /// Records `dispatches` into `enc`, writing timestamps from query `*q` on while there
+    /// Records `commands` into `enc`, writing timestamps from query `*q` on while there
     /// is room. Returns the labels of the timed dispatches in order.
     fn record(
         &mut self,
         enc: &mut wgpu::CommandEncoder,
-        dispatches: &[Dispatch],
+        commands: &[Command],
         q: &mut u32,
         labels: &mut Vec<&'static str>,
     ) {
-        for dsp in dispatches {
-            if dsp.clear_normal {
-                enc.clear_buffer(&self.buffers.normal, 0, None);
-            }
+        for c in commands {
+            let k = match c {
+                Command::Clear(buf) => {
+                    if let Some(b) = self.buffer(*buf) {
+                        enc.clear_buffer(b, 0, None);
+                    }
+                    continue;
+                }
+                Command::Swap => {
+                    self.cur ^= 1;
+                    continue;
+                }
+                Command::Dispatch(k) => *k,
+            };
             let timed = self.time_kernels && self.timestamps.is_some() && *q + 2 <= MAX_QUERIES;
             let timestamp_writes = match (&self.timestamps, timed) {
                 (Some(ts), true) => Some(wgpu::ComputePassTimestampWrites {
@@ -353,21 +396,18 @@ impl WgpuSolver {
                 _ => None,
             };
             let mut pass =
-                enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(dsp.label), timestamp_writes });
-            pass.set_pipeline(&self.pipelines[dsp.kernel]);
-            if dsp.kernel.ends_with("_imm") {
+                enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(k.def.label), timestamp_writes });
+            pass.set_pipeline(&self.pipelines[&k]);
+            if k.step_immediates() {
                 pass.set_immediates(0, bytemuck::bytes_of(&self.sp));
             }
             pass.set_bind_group(0, &self.bind_groups[self.cur], &[]);
-            let (x, y) = groups(dsp.count.of(&self.topo));
+            let (x, y) = groups(k.def.count.of(&self.topo));
             pass.dispatch_workgroups(x, y, 1);
             drop(pass);
             if timed {
                 *q += 2;
-                labels.push(dsp.label);
-            }
-            if dsp.flips {
-                self.cur ^= 1;
+                labels.push(k.def.label);
             }
         }
     }
@@ -385,86 +425,78 @@ impl WgpuSolver {
         self.ctx.queue.submit([enc.finish()]);
         let raw = self.ctx.read_buffer(&ts.resolve, 0, q as u64 * 8).map_err(backend)?;
         let ticks: &[u64] = bytemuck::cast_slice(&raw);
-        Ok(Some(record_times(&mut self.timer, labels, ticks, ts.period_ns, self.recipe.len())))
+        Ok(Some(record_times(
+            &mut self.timer,
+            labels,
+            ticks,
+            ts.period_ns,
+            clothlab_engine::cpu::dispatch_count(&self.recipe),
+        )))
     }
 
-    /// Runs `kernel` once on `state` (and `faces`, one per triangle, for the kernels that
-    /// read them) with constants `sp` and returns the state and faces afterwards. The
-    /// kernel's pure outputs are filled with NaN first, so an element it fails to write
-    /// shows. For tests and `clothlab validate`; the strain kernel's output is returned as
-    /// `pos`. The next frame uploads the solver's own constants again.
-    fn run_one(
-        &mut self,
-        kernel: &str,
-        state: &ClothState,
-        faces: &[V4],
-        sp: &StepParams,
-    ) -> Result<(ClothState, Vec<V4>), SolverError> {
+    /// Uploads `bufs` and `sp`, runs `commands`, reads the buffers back (see
+    /// [`KernelRunner::run_commands`]). The next frame uploads the solver's own constants.
+    fn run_host(&mut self, commands: &[Command], sp: &StepParams, bufs: &mut HostBuffers) -> Result<(), SolverError> {
         if sp.n != self.topo.n || sp.num_spheres as usize > MAX_COLLIDERS || sp.num_boxes as usize > MAX_COLLIDERS {
             return Err(SolverError::Backend("step constants for another grid or too many colliders".into()));
         }
-        let name = *self
-            .pipelines
-            .keys()
-            .find(|k| **k == kernel)
-            .ok_or_else(|| SolverError::Backend(format!("no kernel named {kernel} on this adapter")))?;
-        let dispatch = dispatch_for(name);
-        self.set_state(state)?;
-        if faces.len() != self.topo.triangles.len() {
-            return Err(SolverError::Backend(format!(
-                "{} faces given, the grid has {}",
-                faces.len(),
-                self.topo.triangles.len()
-            )));
+        let np = self.topo.num_particles();
+        let particles = [&bufs.pos, &bufs.pos_out, &bufs.prev, &bufs.force, &bufs.normal];
+        if bufs.faces.len() != self.topo.triangles.len() || particles.iter().any(|v| v.len() != np) {
+            return Err(SolverError::GridMismatch { want: self.topo.n, got: (bufs.pos.len() as f64).sqrt() as u32 });
         }
-        let q = &self.ctx.queue;
-        q.write_buffer(&self.buffers.faces, 0, bytemuck::cast_slice(faces));
-        q.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(sp));
+        for k in clothlab_engine::recipe::dispatches(commands) {
+            self.build(k)?;
+        }
         self.sp = *sp;
-        let nan_particles = vec![[f32::NAN; 4]; state.pos.len()];
-        let nan = bytemuck::cast_slice::<V4, u8>(&nan_particles);
-        for out in pure_outputs(kernel) {
-            match out {
-                Output::PosOut => q.write_buffer(&self.buffers.pos[1 - self.cur], 0, nan),
-                Output::Faces => {
-                    q.write_buffer(&self.buffers.faces, 0, bytemuck::cast_slice(&vec![[f32::NAN; 4]; faces.len()]))
-                }
-                Output::Normal => q.write_buffer(&self.buffers.normal, 0, nan),
-                Output::Force => q.write_buffer(&self.buffers.force, 0, nan),
-            }
+        let q = &self.ctx.queue;
+        q.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(sp));
+        for buf in [Buf::Pos, Buf::PosOut, Buf::Prev, Buf::Force, Buf::Normal, Buf::Faces] {
+            let (Some(dst), Some(src)) = (self.buffer(buf), bufs.get(buf)) else { continue };
+            q.write_buffer(dst, 0, bytemuck::cast_slice(src));
         }
-        let mut enc = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(kernel) });
+        let mut enc =
+            self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("commands") });
         let was = self.time_kernels;
         self.time_kernels = false;
-        self.record(&mut enc, &[dispatch], &mut 0, &mut Vec::new());
+        self.record(&mut enc, commands, &mut 0, &mut Vec::new());
         self.time_kernels = was;
         self.ctx.queue.submit([enc.finish()]);
-        self.ctx.check("running a kernel").map_err(backend)?;
-        let out_state = self.state()?;
-        let raw = self.ctx.read_buffer(&self.buffers.faces, 0, self.buffers.faces.size()).map_err(backend)?;
-        let out_faces = bytemuck::cast_slice::<u8, V4>(&raw).to_vec();
-        if dispatch.flips {
-            self.cur ^= 1; // leave the solver's own positions where they were
+        self.ctx.check("running commands").map_err(backend)?;
+        for buf in [Buf::Pos, Buf::PosOut, Buf::Prev, Buf::Force, Buf::Normal, Buf::Faces] {
+            let Some(src) = self.buffer(buf) else { continue };
+            let raw = self.ctx.read_buffer(src, 0, src.size()).map_err(backend)?;
+            if let Some(dst) = bufs.get_mut(buf) {
+                *dst = bytemuck::cast_slice::<u8, V4>(&raw).to_vec();
+            }
         }
-        Ok((out_state, out_faces))
+        Ok(())
     }
 }
 
 impl KernelRunner for WgpuSolver {
-    fn kernel_names(&self) -> Vec<&'static str> {
-        let mut v: Vec<&'static str> = self.pipelines.keys().copied().collect();
-        v.sort();
+    fn kernels(&self) -> Vec<KernelRef> {
+        let mut v: Vec<KernelRef> = self.pipelines.keys().copied().collect();
+        v.sort_by_key(|k| k.shader_name());
         v
     }
 
-    fn run_kernel(
+    fn run_commands(
         &mut self,
-        kernel: &str,
-        state: &ClothState,
-        faces: &[V4],
+        commands: &[Command],
         p: &StepParams,
-    ) -> Result<(ClothState, Vec<V4>), SolverError> {
-        self.run_one(kernel, state, faces, p)
+        bufs: &mut HostBuffers,
+    ) -> Result<(), SolverError> {
+        self.run_host(commands, p, bufs)
+    }
+
+    fn adapter(&self) -> String {
+        self.ctx.describe()
+    }
+
+    fn add_kernel(&mut self, kernel: KernelRef) -> Result<(), SolverError> {
+        self.build(kernel)?;
+        self.ctx.check("building a kernel").map_err(backend)
     }
 }
 

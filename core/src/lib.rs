@@ -9,6 +9,7 @@
 pub mod camera;
 pub mod cpu;
 pub mod grid;
+pub mod layout;
 pub mod params;
 pub mod render;
 pub mod scene;

@@ -22,6 +22,14 @@ pub enum SolverError {
         /// The state's n.
         got: u32,
     },
+    /// A kernel's WGSL was refused (a kernel given at run time: the compiler's message).
+    #[error("kernel {kernel}: {reason}")]
+    Shader {
+        /// The shader's name.
+        kernel: String,
+        /// What the compiler or driver said.
+        reason: String,
+    },
     /// The backend failed (device lost, out of memory, …).
     #[error("{0}")]
     Backend(String),

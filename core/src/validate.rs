@@ -1,28 +1,13 @@
-//! Checking a GPU backend against the CPU twins: every kernel alone on the same input,
-//! and whole rollouts. Used by the cross-backend tests and by `clothlab validate`.
+//! Comparing a backend with the CPU reference: the measure ([`compare`], [`Check`]), the
+//! disturbed input of the kernel checks, and whole rollouts. The kernel-by-kernel checks
+//! and the bisection run through the kernel registry in `clothlab_engine::validate`.
 
 use crate::CpuSolver;
 use crate::cpu::{self, Exec};
-use crate::grid::{ClothState, ClothTopology, Grab, StepParams, V4};
+use crate::grid::{ClothState, ClothTopology, V4};
 use crate::params::SimParams;
 use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};
-
-/// A backend that can run one kernel of its step alone.
-pub trait KernelRunner {
-    /// The kernels it has, by shader name.
-    fn kernel_names(&self) -> Vec<&'static str>;
-    /// Runs `kernel` once on `state` and `faces` (one per triangle) with the constants
-    /// `p`, and returns the state and faces afterwards (the strain kernel's output as
-    /// `pos`). The kernel's pure outputs must be poisoned (NaN) before it runs.
-    fn run_kernel(
-        &mut self,
-        kernel: &str,
-        state: &ClothState,
-        faces: &[V4],
-        p: &StepParams,
-    ) -> Result<(ClothState, Vec<V4>), SolverError>;
-}
 
 /// One line of a validation report.
 #[derive(Debug, Clone, PartialEq)]
@@ -110,98 +95,6 @@ pub fn disturbed_state(
     let mut faces = vec![[0.0f32; 4]; topo.triangles.len()];
     cpu::tri_normals(Exec::Serial, &topo.triangles, &st.pos, &mut faces);
     Ok((st, topo, faces))
-}
-
-/// Per-vertex sums of the adjacent face normals (what the naive scatter accumulates).
-pub fn face_sums(topo: &ClothTopology, faces: &[V4]) -> Vec<V4> {
-    topo.face_slots
-        .iter()
-        .map(|slots| {
-            let mut s = [0.0f32; 4];
-            for &t in slots.iter().filter(|&&t| t >= 0) {
-                for k in 0..3 {
-                    s[k] += faces[t as usize][k];
-                }
-            }
-            s
-        })
-        .collect()
-}
-
-/// The bound of a kernel, relative to the largest magnitude in the compared buffer:
-/// * 1e-5 for per-element kernels: a handful of f32 operations, each within the few ulps
-///   Vulkan allows for division and square root (2.5–3 ulp), plus FMA contraction;
-/// * 2e-5 for the gathers over up to 12 springs (and the tethers): more operations;
-/// * 1e-5 for the atomic scatters: the summation order is arbitrary and spring forces
-///   cancel, so rounding is amplified (measured on lavapipe: ≤ 1.4e-7; 0 for gathers,
-///   which llvmpipe evaluates in the twins' order).
-pub fn kernel_bound(kernel: &str) -> f32 {
-    match kernel {
-        "springs" | "forces_springs" | "strain_limit" | "vertex_normals" | "vertex_normals_naive" => 2e-5,
-        _ => 1e-5,
-    }
-}
-
-/// Runs every kernel of `runner` alone on a disturbed `n × n` cloth (wind on, a particle
-/// grabbed) and compares every buffer with the CPU twins' result.
-pub fn validate_kernels(runner: &mut dyn KernelRunner, n: u32, seed: u64) -> Result<Vec<Check>, SolverError> {
-    let scene = Scene::with_n(n);
-    let params = SimParams { wind: [1.5, 0.3, -2.0], ..SimParams::default() };
-    let (st, topo, faces) = disturbed_state(&scene, &params, seed)?;
-    let grab = Some(Grab { particle: n * n / 2 + 3, target: [0.1, 1.2, 0.3] });
-    let p = StepParams::new(&params, &scene, grab);
-    let e = Exec::Serial;
-    let mut checks = Vec::new();
-    for kernel in runner.kernel_names() {
-        let mut input = st.clone();
-        // `<name>_imm` is `<name>` reading its constants from immediates, `<name>_tex` is
-        // `<name>` reading the spring table from an image: the same twin.
-        let base = kernel.trim_end_matches("_imm").trim_end_matches("_tex");
-        if base == "vertex_normals_naive" {
-            input.normal = face_sums(&topo, &faces);
-        }
-        let (out, out_faces) = runner.run_kernel(kernel, &input, &faces, &p)?;
-        let mut want = input.clone();
-        let mut want_faces = faces.clone();
-        match base {
-            "forces" => cpu::forces(e, &p, &want.pos, &want.prev, &mut want.force),
-            "springs" => cpu::springs(e, p.dt, &topo.slots, &want.pos, &want.prev, &mut want.force),
-            "forces_springs" => {
-                cpu::forces(e, &p, &want.pos, &want.prev, &mut want.force);
-                cpu::springs(e, p.dt, &topo.slots, &want.pos, &want.prev, &mut want.force);
-            }
-            "springs_scatter" | "springs_scatter_f32" => {
-                cpu::springs_scatter(p.dt, &topo.springs, &want.pos, &want.prev, &mut want.force)
-            }
-            "integrate" => cpu::integrate(e, &p, &want.force, &mut want.pos, &mut want.prev),
-            "collide" => cpu::collide(e, &p, &scene.spheres, &scene.boxes, &mut want.pos, &mut want.prev),
-            "integrate_collide" => {
-                cpu::integrate(e, &p, &want.force, &mut want.pos, &mut want.prev);
-                cpu::collide(e, &p, &scene.spheres, &scene.boxes, &mut want.pos, &mut want.prev);
-            }
-            "strain_limit" => {
-                let mut o = want.pos.clone();
-                cpu::strain_limit(e, &p, &topo.slots, &topo.tethers, &want.pos, &mut o);
-                want.pos = o;
-            }
-            "tri_normals" => cpu::tri_normals(e, &topo.triangles, &want.pos, &mut want_faces),
-            "tri_normals_scatter" | "tri_normals_scatter_f32" => {
-                cpu::tri_normals(e, &topo.triangles, &want.pos, &mut want_faces);
-                want.normal = face_sums(&topo, &want_faces);
-            }
-            "vertex_normals" | "vertex_normals_naive" => {
-                cpu::vertex_normals(e, &p, &topo.face_slots, &faces, &mut want.normal, &mut want.force)
-            }
-            other => return Err(SolverError::Backend(format!("no CPU twin known for kernel {other}"))),
-        }
-        let bound = kernel_bound(base);
-        checks.push(compare(kernel, "pos", &out.pos, &want.pos, true, bound));
-        checks.push(compare(kernel, "prev", &out.prev, &want.prev, true, bound));
-        checks.push(compare(kernel, "force", &out.force, &want.force, true, bound));
-        checks.push(compare(kernel, "normal", &out.normal, &want.normal, true, bound));
-        checks.push(compare(kernel, "faces", &out_faces, &want_faces, true, bound));
-    }
-    Ok(checks)
 }
 
 /// Position error allowed per substep of a rollout, m. Differences start at a few ulps of

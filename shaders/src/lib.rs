@@ -21,11 +21,48 @@ pub struct Kernel {
     pub wgsl: &'static str,
     /// SPIR-V 1.3, little-endian words as bytes.
     pub spirv: &'static [u8],
+    /// The `@binding` numbers (group 0) its entry point reads (atomics included), as naga
+    /// finds them; each checked against `clothlab_core::layout::Buf` by the build.
+    pub reads: &'static [u32],
+    /// The `@binding` numbers it writes.
+    pub writes: &'static [u32],
 }
 
 include!(concat!(env!("OUT_DIR"), "/kernels.rs"));
 
-pub mod recipe;
+/// What every kernel starts with: the constants generated from `clothlab_core::layout`,
+/// then `shared/types.wgsl`.
+pub const PRELUDE: &str = include_str!(concat!(env!("OUT_DIR"), "/prelude.wgsl"));
+
+/// A kernel's complete WGSL as the build composes it: [`PRELUDE`], the shared files named
+/// in `includes` (file stems of `shared/`, e.g. `state`), then `body`. For kernels given
+/// at run time; an unknown include is refused.
+pub fn compose(includes: &[&str], body: &str) -> Result<String, String> {
+    let mut source = String::from(PRELUDE);
+    for inc in includes {
+        let (_, text) = SHARED.iter().find(|(name, _)| name == inc).ok_or_else(|| {
+            let known: Vec<&str> = SHARED.iter().map(|(n, _)| *n).collect();
+            format!("no shared file `{inc}` (there are: {})", known.join(", "))
+        })?;
+        source.push_str(&format!("\n// ---- shared/{inc}.wgsl\n"));
+        source.push_str(text);
+    }
+    source.push_str("\n// ---- kernel\n");
+    source.push_str(body);
+    Ok(source)
+}
+
+/// Parses and validates `wgsl` with naga and writes SPIR-V 1.3 (what the build does for the
+/// built-in kernels, at run time); the error is naga's message with the source location.
+pub fn compile_spirv(name: &str, wgsl: &str) -> Result<Vec<u32>, String> {
+    let path = format!("{name}.wgsl");
+    let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| e.emit_to_string_with_path(wgsl, &path))?;
+    let mut validator =
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());
+    let info = validator.validate(&module).map_err(|e| e.emit_to_string_with_path(wgsl, &path))?;
+    let options = naga::back::spv::Options { lang_version: (1, 3), ..Default::default() };
+    naga::back::spv::write_vec(&module, &info, &options, None).map_err(|e| format!("SPIR-V output: {e}"))
+}
 
 /// The kernel called `name`.
 pub fn kernel(name: &str) -> Option<&'static Kernel> {
@@ -58,10 +95,24 @@ mod tests {
             assert_eq!(&k.spirv[..4], &[0x03, 0x02, 0x23, 0x07], "{name}");
             assert_eq!(k.spirv.len() % 4, 0);
         }
+        let forces = kernel("forces").expect("forces");
+        assert_eq!((forces.reads, forces.writes), (&[0, 1, 2, 3][..], &[3][..]));
         let imm = kernel("forces_springs_imm").expect("immediates twin");
         assert!(
             imm.wgsl.contains("var<immediate> step_params: StepParams;")
                 && !imm.wgsl.contains("var<uniform> step_params")
         );
+    }
+
+    #[test]
+    fn kernels_compose_and_compile_at_run_time_and_errors_say_where() {
+        let body = "@compute @workgroup_size(WORKGROUP)\nfn main(@builtin(global_invocation_id) id: vec3<u32>) {\n    p = step_params;\n}\n";
+        let src = compose(&["state"], body).expect("state is a shared file");
+        let words = compile_spirv("ok", &src).expect("valid WGSL compiles");
+        assert_eq!(words[0], 0x0723_0203);
+        let bad = compose(&["state"], "fn main() { let x: f32 = 1u; }").unwrap();
+        let e = compile_spirv("bad", &bad).unwrap_err();
+        assert!(e.contains("bad.wgsl"), "{e}");
+        assert!(compose(&["nonexistent"], body).unwrap_err().contains("nonexistent"));
     }
 }

@@ -4,7 +4,7 @@
 // that each dispatch ran and saw its predecessor's writes.
 @group(0) @binding(0) var<storage, read_write> data: array<u32>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x < arrayLength(&data) {
         data[id.x] = data[id.x] + 1u;

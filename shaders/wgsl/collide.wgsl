@@ -1,6 +1,6 @@
 //! include: state, colliders
 // collide — per particle: push out of spheres and boxes.
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     let i = flat_id(id, groups);

@@ -1,7 +1,7 @@
 //! include: state, colliders
 // integrate + collide fused (optimized variant): both touch only their own particle, which
 // is loaded once and stored once.
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     let i = flat_id(id, groups);

@@ -11,7 +11,7 @@ var<private> p: StepParams;
 @group(0) @binding(7) var<storage, read> springs: array<Spring>;
 @group(0) @binding(15) var<storage, read> springs_b: array<Spring>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     let k = flat_id(id, groups);

@@ -5,7 +5,7 @@
 @group(0) @binding(19) var<storage, read_write> partials: array<vec2<f32>>;
 
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn main(
     @builtin(global_invocation_id) id: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,

@@ -5,7 +5,7 @@
 @group(0) @binding(17) var<storage, read_write> stats_max: array<atomic<u32>>;
 @group(0) @binding(18) var<storage, read_write> accum: array<AtomicF32>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     let i = flat_id(id, groups);

@@ -7,7 +7,7 @@
 @group(0) @binding(19) var<storage, read_write> partials: array<vec2<f32>>;
 
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn main(
     @builtin(local_invocation_index) li: u32,
     @builtin(subgroup_id) sg: u32,

@@ -119,7 +119,7 @@ fn table_particle(i: u32) {
     pos_out[i] = finish(i, x4, wi, c);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     interior = interior_slots;

@@ -17,7 +17,7 @@ fn add_face(g: ptr<function, Gathered>, t: u32, wind: bool) {
     }
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     let i = flat_id(id, groups);

@@ -1,7 +1,7 @@
 //! include: wind
 // vertex_normals — per particle (naive variant): normalise the sum tri_normals_scatter
 // accumulated with atomics, and the wind force into the force buffer.
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     let i = flat_id(id, groups);

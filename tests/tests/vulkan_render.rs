@@ -4,7 +4,7 @@
 
 use clothlab_core::grid::ClothState;
 use clothlab_core::{RenderMode, Scene, SimParams, Solver, View};
-use clothlab_shaders::recipe::Variant;
+use clothlab_engine::Variant;
 use clothlab_tests::{image_diff, or_skip, test_view};
 use clothlab_vulkan::{VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
 use clothlab_wgpu::{ClothSource, GpuContext, WgpuRenderer};

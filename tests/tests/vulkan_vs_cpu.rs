@@ -3,9 +3,11 @@
 
 use clothlab_core::cpu::substep_stats;
 use clothlab_core::grid::StepParams;
-use clothlab_core::validate::{KernelRunner, validate_kernels, validate_rollout};
+use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Scene, SimParams, Solver};
-use clothlab_shaders::recipe::Variant;
+use clothlab_engine::Variant;
+use clothlab_engine::kernels::Check;
+use clothlab_engine::validate::{KernelRunner, validate_kernels};
 use clothlab_tests::{assert_checks, or_skip};
 use clothlab_vulkan::{SpringTable, StatsMode, VulkanOptions, VulkanSolver};
 
@@ -26,13 +28,17 @@ fn no_validation_messages(s: &VulkanSolver) {
 fn every_vulkan_kernel_matches_its_cpu_twin() {
     for n in [64, 65] {
         let Some(mut v) = vulkan(Variant::Optimized, n) else { return };
-        let names = v.kernel_names();
-        assert!(names.contains(&"forces_springs") && names.contains(&"springs_scatter"), "{names:?}");
+        let kernels = v.kernels();
+        let names: Vec<String> = kernels.iter().map(|k| k.shader_name()).collect();
+        let has = |n: &str| names.iter().any(|k| k == n);
+        assert!(has("forces_springs") && has("springs_scatter"), "{names:?}");
         if v.float_atomics() {
-            assert!(names.contains(&"springs_scatter_f32") && names.contains(&"tri_normals_scatter_f32"), "{names:?}");
+            assert!(has("springs_scatter_f32") && has("tri_normals_scatter_f32"), "{names:?}");
         }
-        let checks = validate_kernels(&mut v, n, 0x5eed + n as u64).unwrap();
-        assert_eq!(checks.len(), 5 * names.len());
+        let checks = validate_kernels(&mut v, &kernels, n, 0x5eed + n as u64).unwrap();
+        let bounded = kernels.iter().filter(|k| matches!(k.def.check, Check::Bound { .. })).count();
+        assert!(bounded >= 12, "{names:?}");
+        assert_eq!(checks.len(), 5 * bounded);
         assert_checks(&format!("vk n={n}"), &checks);
         no_validation_messages(&v);
     }
@@ -79,13 +85,16 @@ fn the_spring_table_from_storage_or_an_image_gives_the_twins_results() {
     for table in [SpringTable::Storage, SpringTable::Image] {
         let options = VulkanOptions { validation: true, table, ..Default::default() };
         let Some(mut v) = vulkan_with(Variant::Optimized, 65, options) else { return };
-        let names = v.kernel_names();
+        let kernels = v.kernels();
         if table == SpringTable::Image {
+            let names: Vec<String> = kernels.iter().map(|k| k.shader_name()).collect();
             assert!(names.iter().any(|k| k.starts_with("forces_springs_tex")), "{names:?}");
             assert!(names.iter().any(|k| k.starts_with("strain_limit_tex")), "{names:?}");
-            assert!(v.recipe_kernels().iter().all(|k| !k.contains("springs") || k.contains("_tex")));
+            // Every kernel of the recipe that reads the table reads it from the image.
+            let recipe = v.recipe_kernels();
+            assert!(recipe.iter().all(|k| !k.def.variants.table_image || k.flavor.table_image), "{recipe:?}");
         }
-        let checks = validate_kernels(&mut v, 65, 0x7ab1e).unwrap();
+        let checks = validate_kernels(&mut v, &kernels, 65, 0x7ab1e).unwrap();
         assert_checks(&format!("{table:?}"), &checks);
         no_validation_messages(&v);
         // A fresh solver: the kernel checks left the disturbed state in this one.

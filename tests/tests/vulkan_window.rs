@@ -5,7 +5,7 @@
 use std::time::Duration;
 
 use clothlab_core::{OrbitCamera, RenderMode, Scene, SimParams, Solver, View};
-use clothlab_shaders::recipe::Variant;
+use clothlab_engine::Variant;
 use clothlab_vulkan::raw::Device;
 use clothlab_vulkan::{Overlay, Presented, Presenter, VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
 use winit::application::ApplicationHandler;

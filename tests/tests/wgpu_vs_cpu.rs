@@ -1,8 +1,10 @@
-//! The wgpu kernels and solvers against the CPU twins (bounds and their reasons:
-//! `clothlab_core::validate`).
+//! The wgpu kernels and solvers against the CPU twins (bounds and their reasons: the rows
+//! of `clothlab_engine::kernels`).
 
-use clothlab_core::validate::{KernelRunner, compare, validate_kernels, validate_rollout};
+use clothlab_core::validate::{compare, validate_rollout};
 use clothlab_core::{Scene, SimParams, Solver};
+use clothlab_engine::kernels::{self as k, Check};
+use clothlab_engine::validate::{KernelRunner, validate_kernels};
 use clothlab_tests::{assert_checks, or_skip};
 use clothlab_wgpu::{Variant, WgpuSolver};
 
@@ -14,24 +16,30 @@ fn gpu(variant: Variant, n: u32) -> Option<WgpuSolver> {
 
 fn kernels_match_on(n: u32) {
     let Some(mut g) = gpu(Variant::Optimized, n) else { return };
-    let names = g.kernel_names();
+    let kernels = g.kernels();
+    let names: Vec<String> = kernels.iter().map(|k| k.shader_name()).collect();
+    let has = |n: &str| names.iter().any(|k| k == n);
     // Both variants' kernels, and both atomic paths where the adapter has float atomics.
-    for k in ["forces", "springs_scatter", "integrate", "collide", "tri_normals_scatter", "vertex_normals_naive"] {
-        assert!(names.contains(&k), "naive kernel {k} missing");
+    for def in
+        [&k::FORCES, &k::SPRINGS_SCATTER, &k::INTEGRATE, &k::COLLIDE, &k::TRI_NORMALS_SCATTER, &k::VERTEX_NORMALS_NAIVE]
+    {
+        assert!(has(def.name), "naive kernel {} missing", def.name);
     }
-    for k in ["forces_springs", "integrate_collide", "strain_limit", "tri_normals", "vertex_normals"] {
-        assert!(names.contains(&k), "optimized kernel {k} missing");
+    for def in [&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE, &k::STRAIN_LIMIT, &k::TRI_NORMALS, &k::VERTEX_NORMALS] {
+        assert!(has(def.name), "optimized kernel {} missing", def.name);
         // And the twins reading the constants from immediates, where the adapter has them.
-        let imm = format!("{k}_imm");
-        assert_eq!(names.iter().any(|n| *n == imm), g.immediates(), "{imm}");
+        let imm = format!("{}_imm", def.name);
+        assert_eq!(has(&imm), g.immediates(), "{imm}");
     }
     if g.float_atomics() {
-        assert!(names.contains(&"springs_scatter_f32") && names.contains(&"tri_normals_scatter_f32"));
+        assert!(has("springs_scatter_f32") && has("tri_normals_scatter_f32"));
     } else {
         println!("float atomics not available on this adapter: only the compare-exchange path is tested");
     }
-    let checks = validate_kernels(&mut g, n, 0x5eed + n as u64).unwrap();
-    assert_eq!(checks.len(), 5 * names.len());
+    let checks = validate_kernels(&mut g, &kernels, n, 0x5eed + n as u64).unwrap();
+    let bounded = kernels.iter().filter(|k| matches!(k.def.check, Check::Bound { .. })).count();
+    assert_eq!(bounded, kernels.len(), "wgpu builds no statistics kernels");
+    assert_eq!(checks.len(), 5 * bounded);
     assert_checks(&format!("n = {n}"), &checks);
 }
 

@@ -24,7 +24,7 @@ pub use normals::{FaceLanes, tri_normals, tri_normals_lanes, vertex_normals, ver
 pub use solver::CpuSolver;
 pub use springs::{springs, springs_rows, springs_scatter};
 pub use stats::{SubstepStats, particle_stats, substep_stats};
-pub use strain_limit::{strain_limit, strain_limit_rows};
+pub use strain_limit::{STRAIN_AIM, strain_limit, strain_limit_rows};
 
 use glam::Vec3;
 use rayon::prelude::*;

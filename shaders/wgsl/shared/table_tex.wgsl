@@ -1,11 +1,10 @@
 // The per-particle spring table in a sampled image (the thesis's texture memory): one
 // rgba32uint texel per slot (neighbour, rest, ks, kd as bits), slot s of particle i at
 // texel t = 12 i + s, row t / TABLE_WIDTH, column t % TABLE_WIDTH
-// (clothlab_shaders::recipe::table_texels lays it out).
+// (clothlab_engine::tables::table_texels lays it out; TABLE_WIDTH is generated from
+// clothlab_core::layout).
 
 @group(0) @binding(20) var table: texture_2d<u32>;
-
-const TABLE_WIDTH: u32 = 4096u;
 
 fn slot_at(i: u32, s: u32) -> SpringSlot {
     let t = i * SLOTS + s;

@@ -1,0 +1,234 @@
+//! The CPU engine: runs any commands through the kernels' twins, on [`HostBuffers`].
+//! It is the reference the GPU backends are checked against kernel by kernel, and the
+//! CPU half of `clothlab validate --bisect`. The fast CPU solvers (`cpu`, `cpu-par`: SIMD
+//! rows, fused sweeps) are a separate path, tested to give its bits.
+
+use std::time::Instant;
+
+use clothlab_core::cpu::{self as twins, Exec};
+use clothlab_core::grid::{ClothState, ClothTopology, Grab, StepParams, V4, build};
+use clothlab_core::layout::Buf;
+use clothlab_core::scene::Scene;
+use clothlab_core::timing::{FRAME, KernelTimings, SUBSTEP, TimingRecorder};
+use clothlab_core::{SimParams, Solver, SolverError};
+
+use crate::kernels::{HostBuffers, KernelRef, TwinArgs};
+use crate::recipe::{Caps, Command, Variant, dispatches, kernels_of, recipe};
+use crate::validate::KernelRunner;
+
+/// Runs commands through the twins.
+#[derive(Debug, Clone)]
+pub struct CpuEngine {
+    exec: Exec,
+    scene: Scene,
+    topo: ClothTopology,
+}
+
+impl CpuEngine {
+    /// An engine for the cloth of `scene` with connectivity `topo`.
+    pub fn new(exec: Exec, scene: Scene, topo: ClothTopology) -> Self {
+        Self { exec, scene, topo }
+    }
+
+    /// The connectivity and spring tables.
+    pub fn topology(&self) -> &ClothTopology {
+        &self.topo
+    }
+
+    /// Replaces the spring constants (after a parameter change).
+    pub fn set_spring_constants(&mut self, params: &SimParams) {
+        self.topo.set_spring_constants(params);
+    }
+
+    /// Runs one command of substep `substep` on `bufs`.
+    pub fn command(&self, command: &Command, p: &StepParams, substep: u32, bufs: &mut HostBuffers) {
+        match command {
+            Command::Dispatch(k) => (k.def.twin)(&self.args(p, substep), bufs),
+            Command::Clear(buf) => {
+                if let Some(v) = bufs.get_mut(*buf) {
+                    v.iter_mut().for_each(|x| *x = [0.0; 4]);
+                } else if matches!(buf, Buf::StatsMax | Buf::StatsEnergy) {
+                    bufs.stats.clear();
+                }
+            }
+            Command::Swap => std::mem::swap(&mut bufs.pos, &mut bufs.pos_out),
+        }
+    }
+
+    /// Runs `commands` of substep `substep` on `bufs`.
+    pub fn run(&self, commands: &[Command], p: &StepParams, substep: u32, bufs: &mut HostBuffers) {
+        for c in commands {
+            self.command(c, p, substep, bufs);
+        }
+    }
+
+    /// What the twins see besides the buffers.
+    pub fn args<'a>(&'a self, p: &'a StepParams, substep: u32) -> TwinArgs<'a> {
+        TwinArgs {
+            exec: self.exec,
+            p,
+            topo: &self.topo,
+            spheres: &self.scene.spheres,
+            boxes: &self.scene.boxes,
+            substep,
+        }
+    }
+
+    /// The buffers of `state`, with its face normals computed.
+    pub fn buffers(&self, state: &ClothState) -> HostBuffers {
+        let mut faces = vec![[0.0f32; 4]; self.topo.triangles.len()];
+        twins::tri_normals(self.exec, &self.topo.triangles, &state.pos, &mut faces);
+        HostBuffers::new(state, faces)
+    }
+}
+
+/// Every kernel of the registry, in every flavor the caps allow, runs on the CPU engine.
+impl KernelRunner for CpuEngine {
+    fn kernels(&self) -> Vec<KernelRef> {
+        crate::kernels::ALL.iter().flat_map(|d| d.flavors()).collect()
+    }
+
+    fn run_commands(
+        &mut self,
+        commands: &[Command],
+        p: &StepParams,
+        bufs: &mut HostBuffers,
+    ) -> Result<(), SolverError> {
+        self.run(commands, p, 0, bufs);
+        Ok(())
+    }
+
+    fn adapter(&self) -> String {
+        "the CPU engine (twins)".into()
+    }
+
+    /// Any kernel runs: its twin is in its row.
+    fn add_kernel(&mut self, _kernel: KernelRef) -> Result<(), SolverError> {
+        Ok(())
+    }
+}
+
+/// A [`Solver`] that runs a variant's recipe on the [`CpuEngine`]: slow (one twin after
+/// another, no SIMD), but exactly the commands a GPU backend records.
+pub struct RecipeSolver {
+    engine: CpuEngine,
+    variant: Variant,
+    params: SimParams,
+    grab: Option<Grab>,
+    bufs: HostBuffers,
+    commands: Vec<Command>,
+    timer: TimingRecorder,
+}
+
+impl RecipeSolver {
+    /// The cloth of `scene`, stepped by `variant`'s recipe (float atomics and immediates
+    /// change only which GPU shader runs, not the twin: the CPU recipe uses neither).
+    pub fn new(exec: Exec, variant: Variant, scene: Scene, params: SimParams) -> Result<Self, SolverError> {
+        let (mut state, topo) = build(&scene, &params)?;
+        let engine = CpuEngine::new(exec, scene, topo);
+        let sp = StepParams::new(&params, &engine.scene, None);
+        let mut bufs = engine.buffers(&state);
+        // Initial normals and wind, as every solver starts.
+        twins::vertex_normals(exec, &sp, &engine.topo.face_slots, &bufs.faces, &mut state.normal, &mut state.force);
+        bufs.normal = state.normal;
+        bufs.force = state.force;
+        let commands = recipe(variant, params.strain_iterations, CPU_CAPS);
+        Ok(Self { engine, variant, params, grab: None, bufs, commands, timer: TimingRecorder::default() })
+    }
+
+    /// The commands of one substep.
+    pub fn commands(&self) -> &[Command] {
+        &self.commands
+    }
+
+    /// The distinct kernels of a substep.
+    pub fn kernels(&self) -> Vec<KernelRef> {
+        kernels_of(&self.commands)
+    }
+
+    /// The engine.
+    pub fn engine(&self) -> &CpuEngine {
+        &self.engine
+    }
+
+    /// The face normals of the last substep.
+    pub fn faces(&self) -> &[V4] {
+        &self.bufs.faces
+    }
+}
+
+/// The CPU engine's caps: plain flavors (their twins are the same functions anyway).
+const CPU_CAPS: Caps = Caps { float_atomics: false, immediates: false, table_image: false };
+
+impl Solver for RecipeSolver {
+    fn name(&self) -> &str {
+        match self.variant {
+            Variant::Naive => "cpu-recipe-naive",
+            Variant::Optimized => "cpu-recipe",
+        }
+    }
+
+    fn scene(&self) -> &Scene {
+        &self.engine.scene
+    }
+
+    fn params(&self) -> &SimParams {
+        &self.params
+    }
+
+    fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
+        params.validate()?;
+        self.engine.set_spring_constants(&params);
+        self.commands = recipe(self.variant, params.strain_iterations, CPU_CAPS);
+        self.params = params;
+        Ok(())
+    }
+
+    fn set_grab(&mut self, grab: Option<Grab>) {
+        self.grab = grab.filter(|g| {
+            (g.particle as usize) < self.engine.topo.num_particles() && g.target.iter().all(|v| v.is_finite())
+        });
+    }
+
+    fn step_frame(&mut self) -> Result<(), SolverError> {
+        let t_frame = Instant::now();
+        let p = StepParams::new(&self.params, &self.engine.scene, self.grab);
+        for s in 0..self.params.substeps {
+            let t_substep = Instant::now();
+            for c in &self.commands {
+                let t = Instant::now();
+                self.engine.command(c, &p, s, &mut self.bufs);
+                if let Command::Dispatch(k) = c {
+                    self.timer.record(k.def.label, t.elapsed().as_nanos() as f64);
+                }
+            }
+            self.timer.record(SUBSTEP, t_substep.elapsed().as_nanos() as f64);
+        }
+        self.timer.record(FRAME, t_frame.elapsed().as_nanos() as f64);
+        Ok(())
+    }
+
+    fn state(&mut self) -> Result<ClothState, SolverError> {
+        Ok(self.bufs.state(self.engine.topo.n))
+    }
+
+    fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
+        state.check(self.engine.topo.n)?;
+        let faces = std::mem::take(&mut self.bufs.faces);
+        self.bufs = HostBuffers::new(state, faces);
+        Ok(())
+    }
+
+    fn timings(&self) -> KernelTimings {
+        self.timer.table()
+    }
+
+    fn reset_timings(&mut self) {
+        self.timer.clear();
+    }
+}
+
+/// The number of dispatches of a substep (the points `--bisect` splits at).
+pub fn dispatch_count(commands: &[Command]) -> usize {
+    dispatches(commands).count()
+}

@@ -1,0 +1,717 @@
+//! The kernel registry: one [`KernelDef`] per kernel says everything about it — its WGSL,
+//! its CPU twin, what it runs over, the bindings it reads and writes, its pure outputs
+//! (poisoned before a kernel test), the buffers it accumulates into (cleared before it),
+//! its validation bound with the reason, its timing label and its variants. Recipes,
+//! barriers, validation, the CLI's listings and the backends read this table; nothing
+//! else matches on a kernel's name.
+//!
+//! A kernel from outside the crate is a `static KernelDef` with [`Source::Wgsl`]: its WGSL
+//! is compiled when a backend first needs it (see `tests/tests/custom_kernel.rs`).
+
+use std::borrow::Cow;
+use std::hash::{Hash, Hasher};
+
+use clothlab_core::cpu::{self, Exec, SubstepStats};
+use clothlab_core::grid::{ClothTopology, StepParams, V4};
+use clothlab_core::layout::{BLOCK, Buf, WORKGROUP};
+use clothlab_core::scene::{Aabb, Sphere};
+use clothlab_core::timing;
+
+use crate::EngineError;
+
+/// What a dispatch runs over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Count {
+    /// One invocation per particle.
+    Particles,
+    /// One per [`BLOCK`] consecutive particles of a row (`n · ⌈n / BLOCK⌉`).
+    Blocks,
+    /// One per quad of the grid (two triangles).
+    Quads,
+    /// One per spring of the flat list.
+    Springs,
+    /// One per triangle.
+    Triangles,
+    /// One workgroup (a final reduction).
+    Workgroup,
+}
+
+impl Count {
+    /// How many invocations this is on `topo`.
+    pub fn of(self, topo: &ClothTopology) -> u32 {
+        match self {
+            Count::Particles => topo.num_particles() as u32,
+            Count::Blocks => topo.n * topo.n.div_ceil(BLOCK),
+            Count::Quads => (topo.triangles.len() / 2) as u32,
+            Count::Springs => topo.springs.len() as u32,
+            Count::Triangles => topo.triangles.len() as u32,
+            Count::Workgroup => WORKGROUP,
+        }
+    }
+}
+
+/// Workgroups for `count` invocations, as a 2-D grid (x ≤ 65535).
+pub fn groups(count: u32) -> (u32, u32) {
+    let g = count.div_ceil(WORKGROUP).max(1);
+    let x = g.min(65535);
+    (x, g.div_ceil(x))
+}
+
+/// Where a kernel's WGSL comes from.
+#[derive(Debug, Clone, Copy)]
+pub enum Source {
+    /// `shaders/wgsl/<name>.wgsl`, validated and compiled to SPIR-V when clothlab-shaders
+    /// builds.
+    Builtin,
+    /// WGSL given at run time: `body` after `shared/types.wgsl`, the generated constants
+    /// and the shared files named in `includes` (e.g. `["state"]`); compiled (naga to
+    /// SPIR-V for Vulkan) when a backend first builds it.
+    Wgsl {
+        /// Shared files to put before the body.
+        includes: &'static [&'static str],
+        /// The kernel itself, entry point `main`.
+        body: &'static str,
+    },
+}
+
+/// Which twins `shaders/build.rs` generates for a kernel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Variants {
+    /// `<name>_imm`: the step constants from immediates (push constants).
+    pub immediates: bool,
+    /// `<name>_tex`: the spring table from a sampled image.
+    pub table_image: bool,
+    /// `<name>_f32`: float atomics instead of compare-exchange loops.
+    pub float_atomics: bool,
+}
+
+/// One concrete shader of a kernel: which of its variants it is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct Flavor {
+    /// Step constants from immediates.
+    pub immediates: bool,
+    /// Spring table from an image.
+    pub table_image: bool,
+    /// Float atomics.
+    pub float_atomics: bool,
+}
+
+/// What a kernel's immediates (push constants) hold, apart from the `_imm` twins' step
+/// constants.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Immediates {
+    /// Nothing.
+    None,
+    /// The substep's index in the frame, a `u32` (the statistics kernels).
+    Substep,
+}
+
+/// How a kernel is checked against its twin.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Check {
+    /// Every buffer within `relative` of the largest magnitude in it, for `reason`.
+    Bound {
+        /// The bound, relative to the buffer's largest magnitude.
+        relative: f32,
+        /// Why this bound.
+        reason: &'static str,
+    },
+    /// Checked by a test of its own (named), not by the kernel loop.
+    Own(&'static str),
+}
+
+/// What a twin sees besides the buffers.
+#[derive(Debug, Clone, Copy)]
+pub struct TwinArgs<'a> {
+    /// Serial or rayon loops (both give the same bits).
+    pub exec: Exec,
+    /// The step constants.
+    pub p: &'a StepParams,
+    /// Connectivity and spring tables.
+    pub topo: &'a ClothTopology,
+    /// The scene's spheres.
+    pub spheres: &'a [Sphere],
+    /// The scene's boxes.
+    pub boxes: &'a [Aabb],
+    /// The substep's index in the frame.
+    pub substep: u32,
+}
+
+/// The buffers the step writes, on the host: what the CPU engine runs on and what a GPU
+/// runner uploads before and reads back after the commands it is given.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HostBuffers {
+    /// Current positions ([`Buf::Pos`]).
+    pub pos: Vec<V4>,
+    /// The other buffer of the pair ([`Buf::PosOut`]).
+    pub pos_out: Vec<V4>,
+    /// [`Buf::Prev`].
+    pub prev: Vec<V4>,
+    /// [`Buf::Force`].
+    pub force: Vec<V4>,
+    /// [`Buf::Normal`].
+    pub normal: Vec<V4>,
+    /// [`Buf::Faces`].
+    pub faces: Vec<V4>,
+    /// Per-substep statistics ([`Buf::StatsMax`] and [`Buf::StatsEnergy`]), by substep.
+    pub stats: Vec<SubstepStats>,
+}
+
+impl HostBuffers {
+    /// The buffers of `state` (`pos_out` a copy of `pos`) with face normals `faces`.
+    pub fn new(state: &clothlab_core::ClothState, faces: Vec<V4>) -> Self {
+        Self {
+            pos: state.pos.clone(),
+            pos_out: state.pos.clone(),
+            prev: state.prev.clone(),
+            force: state.force.clone(),
+            normal: state.normal.clone(),
+            faces,
+            stats: Vec::new(),
+        }
+    }
+
+    /// The per-particle or per-face buffer `buf`, if it is one of these.
+    pub fn get(&self, buf: Buf) -> Option<&Vec<V4>> {
+        Some(match buf {
+            Buf::Pos => &self.pos,
+            Buf::PosOut => &self.pos_out,
+            Buf::Prev => &self.prev,
+            Buf::Force => &self.force,
+            Buf::Normal => &self.normal,
+            Buf::Faces => &self.faces,
+            _ => return None,
+        })
+    }
+
+    /// As [`HostBuffers::get`], mutably.
+    pub fn get_mut(&mut self, buf: Buf) -> Option<&mut Vec<V4>> {
+        Some(match buf {
+            Buf::Pos => &mut self.pos,
+            Buf::PosOut => &mut self.pos_out,
+            Buf::Prev => &mut self.prev,
+            Buf::Force => &mut self.force,
+            Buf::Normal => &mut self.normal,
+            Buf::Faces => &mut self.faces,
+            _ => return None,
+        })
+    }
+
+    /// The state these buffers hold.
+    pub fn state(&self, n: u32) -> clothlab_core::ClothState {
+        clothlab_core::ClothState {
+            n,
+            pos: self.pos.clone(),
+            prev: self.prev.clone(),
+            force: self.force.clone(),
+            normal: self.normal.clone(),
+        }
+    }
+}
+
+/// A kernel's CPU twin: reads and writes the buffers as the kernel does.
+pub type Twin = fn(&TwinArgs, &mut HostBuffers);
+
+/// Everything about one kernel.
+#[derive(Debug)]
+pub struct KernelDef {
+    /// File stem and shader name, e.g. `forces_springs`.
+    pub name: &'static str,
+    /// Where its WGSL comes from.
+    pub source: Source,
+    /// Its CPU twin.
+    pub twin: Twin,
+    /// What one dispatch runs over.
+    pub count: Count,
+    /// The bindings it reads (atomic read-modify-writes count as reads and writes).
+    pub reads: &'static [Buf],
+    /// The bindings it writes.
+    pub writes: &'static [Buf],
+    /// The outputs it writes in full without reading: poisoned with NaN before a kernel
+    /// test, so an element it fails to write shows.
+    pub pure: &'static [Buf],
+    /// The buffers it adds into: a recipe clears them before it.
+    pub accumulates: &'static [Buf],
+    /// How it is checked against its twin.
+    pub check: Check,
+    /// Its row in the timing table.
+    pub label: &'static str,
+    /// Its generated variants.
+    pub variants: Variants,
+    /// What its immediates hold (besides the `_imm` twins' step constants).
+    pub immediates: Immediates,
+    /// Sets up a kernel test's input beyond the disturbed state (the naive normals kernel
+    /// starts from the scatter's sums).
+    pub test_input: Option<Twin>,
+}
+
+impl PartialEq for KernelDef {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
+}
+
+impl Eq for KernelDef {}
+
+impl KernelDef {
+    /// Whether the kernel has the shader `flavor`.
+    pub fn has(&self, f: Flavor) -> bool {
+        let v = self.variants;
+        (!f.immediates || v.immediates)
+            && (!f.table_image || v.table_image)
+            && (!f.float_atomics || v.float_atomics)
+            && !(f.table_image && f.float_atomics)
+    }
+
+    /// The closest flavor to `want` that the kernel has: each variant it lacks is left
+    /// out, and a table image wins over float atomics (no kernel has both at once).
+    pub fn flavor(&'static self, want: Flavor) -> KernelRef {
+        let v = self.variants;
+        let table_image = want.table_image && v.table_image;
+        let flavor = Flavor {
+            immediates: want.immediates && v.immediates,
+            table_image,
+            float_atomics: want.float_atomics && v.float_atomics && !table_image,
+        };
+        KernelRef { def: self, flavor }
+    }
+
+    /// The kernel in its plain flavor.
+    pub fn plain(&'static self) -> KernelRef {
+        KernelRef { def: self, flavor: Flavor::default() }
+    }
+
+    /// Every flavor the kernel has.
+    pub fn flavors(&'static self) -> Vec<KernelRef> {
+        let mut v = Vec::new();
+        for bits in 0..8u8 {
+            let f = Flavor { immediates: bits & 1 != 0, table_image: bits & 2 != 0, float_atomics: bits & 4 != 0 };
+            if self.has(f) {
+                v.push(KernelRef { def: self, flavor: f });
+            }
+        }
+        v
+    }
+
+    /// Whether it writes the other buffer of the position pair (a recipe swaps the pair
+    /// after it).
+    pub fn swaps(&self) -> bool {
+        self.writes.contains(&Buf::PosOut)
+    }
+}
+
+/// One shader: a kernel in one flavor. What recipes dispatch and backends build pipelines
+/// for.
+#[derive(Debug, Clone, Copy)]
+pub struct KernelRef {
+    /// The kernel.
+    pub def: &'static KernelDef,
+    /// Which of its variants.
+    pub flavor: Flavor,
+}
+
+impl PartialEq for KernelRef {
+    fn eq(&self, other: &Self) -> bool {
+        self.def.name == other.def.name && self.flavor == other.flavor
+    }
+}
+
+impl Eq for KernelRef {}
+
+impl Hash for KernelRef {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        self.def.name.hash(state);
+        self.flavor.hash(state);
+    }
+}
+
+impl std::fmt::Display for KernelRef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.shader_name())
+    }
+}
+
+impl KernelRef {
+    /// The shader's name: `<name>[_f32|_tex][_imm]`, as shaders/build.rs names the twins.
+    pub fn shader_name(&self) -> String {
+        let f = self.flavor;
+        format!(
+            "{}{}{}{}",
+            self.def.name,
+            if f.float_atomics { "_f32" } else { "" },
+            if f.table_image { "_tex" } else { "" },
+            if f.immediates { "_imm" } else { "" }
+        )
+    }
+
+    /// Whether the shader reads the step constants from immediates.
+    pub fn step_immediates(&self) -> bool {
+        self.flavor.immediates
+    }
+
+    /// The complete WGSL.
+    pub fn wgsl(&self) -> Result<Cow<'static, str>, EngineError> {
+        match self.def.source {
+            Source::Builtin => Ok(Cow::Borrowed(self.builtin()?.wgsl)),
+            Source::Wgsl { includes, body } => {
+                clothlab_shaders::compose(includes, body).map(Cow::Owned).map_err(|e| self.error(e))
+            }
+        }
+    }
+
+    /// SPIR-V 1.3, little-endian words as bytes.
+    pub fn spirv(&self) -> Result<Cow<'static, [u8]>, EngineError> {
+        match self.def.source {
+            Source::Builtin => Ok(Cow::Borrowed(self.builtin()?.spirv)),
+            Source::Wgsl { .. } => {
+                let wgsl = self.wgsl()?;
+                let words = clothlab_shaders::compile_spirv(self.def.name, &wgsl).map_err(|e| self.error(e))?;
+                Ok(Cow::Owned(words.iter().flat_map(|w| w.to_le_bytes()).collect()))
+            }
+        }
+    }
+
+    fn builtin(&self) -> Result<&'static clothlab_shaders::Kernel, EngineError> {
+        clothlab_shaders::kernel(&self.shader_name())
+            .ok_or_else(|| self.error(format!("no shader {} in clothlab-shaders", self.shader_name())))
+    }
+
+    fn error(&self, reason: String) -> EngineError {
+        EngineError::Shader { kernel: self.shader_name(), reason }
+    }
+}
+
+// ---- the twins ---------------------------------------------------------------------
+
+fn forces(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::forces(a.exec, a.p, &b.pos, &b.prev, &mut b.force);
+}
+
+fn springs(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::springs(a.exec, a.p.dt, &a.topo.slots, &b.pos, &b.prev, &mut b.force);
+}
+
+fn forces_springs(a: &TwinArgs, b: &mut HostBuffers) {
+    forces(a, b);
+    springs(a, b);
+}
+
+fn springs_scatter(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::springs_scatter(a.p.dt, &a.topo.springs, &b.pos, &b.prev, &mut b.force);
+}
+
+fn integrate(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::integrate(a.exec, a.p, &b.force, &mut b.pos, &mut b.prev);
+}
+
+fn collide(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::collide(a.exec, a.p, a.spheres, a.boxes, &mut b.pos, &mut b.prev);
+}
+
+fn integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
+    integrate(a, b);
+    collide(a, b);
+}
+
+fn strain_limit(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::strain_limit(a.exec, a.p, &a.topo.slots, &a.topo.tethers, &b.pos, &mut b.pos_out);
+}
+
+fn tri_normals(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::tri_normals(a.exec, &a.topo.triangles, &b.pos, &mut b.faces);
+}
+
+/// Adds every vertex's adjacent face normals into its normal (what the naive scatter
+/// accumulates; the recipe clears the normals first).
+fn add_face_sums(a: &TwinArgs, b: &mut HostBuffers) {
+    for (n, slots) in b.normal.iter_mut().zip(&a.topo.face_slots) {
+        for &t in slots.iter().filter(|&&t| t >= 0) {
+            let f = b.faces[t as usize];
+            n.iter_mut().zip(f).take(3).for_each(|(x, y)| *x += y);
+        }
+    }
+}
+
+fn tri_normals_scatter(a: &TwinArgs, b: &mut HostBuffers) {
+    tri_normals(a, b);
+    add_face_sums(a, b);
+}
+
+/// The naive normals kernel's input: the scatter's sums of the current faces.
+fn face_sums_input(a: &TwinArgs, b: &mut HostBuffers) {
+    b.normal.iter_mut().for_each(|n| *n = [0.0; 4]);
+    add_face_sums(a, b);
+}
+
+fn vertex_normals(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::vertex_normals(a.exec, a.p, &a.topo.face_slots, &b.faces, &mut b.normal, &mut b.force);
+}
+
+fn stats(a: &TwinArgs, b: &mut HostBuffers) {
+    let k = a.substep as usize;
+    if b.stats.len() <= k {
+        b.stats.resize(k + 1, SubstepStats { max_strain: 0.0, kinetic_energy: 0.0 });
+    }
+    b.stats[k] = cpu::substep_stats(a.p, &a.topo.slots, &b.pos, &b.prev);
+}
+
+/// The reduction's work is done by `stats`' twin, which reduces on the spot.
+fn nothing(_: &TwinArgs, _: &mut HostBuffers) {}
+
+// ---- the table -----------------------------------------------------------------------
+
+use Buf::*;
+
+/// Per-element kernels: a handful of f32 operations, each within the few ulps Vulkan
+/// allows for division and square root (2.5–3 ulp), plus FMA contraction.
+const ELEMENT: Check = Check::Bound {
+    relative: 1e-5,
+    reason: "a handful of f32 operations per element, each within Vulkan's 2.5–3 ulp, plus FMA contraction",
+};
+/// Gathers over up to 12 springs (and the tethers): more operations per element.
+const GATHER: Check = Check::Bound { relative: 2e-5, reason: "a gather over up to 12 springs: more operations" };
+/// Atomic scatters: any summation order, and spring forces cancel, so rounding is
+/// amplified (measured on lavapipe: ≤ 1.4e-7).
+const SCATTER: Check = Check::Bound {
+    relative: 1e-5,
+    reason: "atomic adds in any order over cancelling spring forces (lavapipe: ≤ 1.4e-7)",
+};
+const STATS_TEST: Check = Check::Own("gpu_statistics_match_the_cpu_twin_by_subgroups_and_by_atomics");
+
+const STATE: &[Buf] = &[Params, Pos, Prev, Force];
+/// The gathers' reads: the state and the spring table (storage buffers, or the image in
+/// the `_tex` twins, or the uniform block for the regular grid).
+const TABLE: &[Buf] = &[Params, Pos, Prev, Force, Slots, BendSlots, Interior, Table];
+const COLLIDERS: &[Buf] = &[Params, Pos, Prev, Spheres, Boxes];
+const NONE: &[Buf] = &[];
+
+const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf], writes: &'static [Buf]) -> KernelDef {
+    KernelDef {
+        name,
+        source: Source::Builtin,
+        twin,
+        count,
+        reads,
+        writes,
+        pure: NONE,
+        accumulates: NONE,
+        check: ELEMENT,
+        label: name,
+        variants: Variants { immediates: true, table_image: false, float_atomics: false },
+        immediates: Immediates::None,
+        test_input: None,
+    }
+}
+
+const PLAIN: Variants = Variants { immediates: false, table_image: false, float_atomics: false };
+const IMM_TEX: Variants = Variants { immediates: true, table_image: true, float_atomics: false };
+const IMM_F32: Variants = Variants { immediates: true, table_image: false, float_atomics: true };
+
+/// Gravity and drag into the force buffer (added to the wind force already there).
+pub static FORCES: KernelDef = def("forces", forces, Count::Particles, STATE, &[Force]);
+/// The spring gather per particle over its 12-slot table.
+pub static SPRINGS: KernelDef =
+    KernelDef { check: GATHER, variants: IMM_TEX, ..def("springs", springs, Count::Particles, TABLE, &[Force]) };
+/// The naive spring scatter: one invocation per spring, forces added with atomics.
+pub static SPRINGS_SCATTER: KernelDef = KernelDef {
+    check: SCATTER,
+    label: "springs",
+    variants: IMM_F32,
+    ..def("springs_scatter", springs_scatter, Count::Springs, &[Params, Pos, Prev, Force, Springs, SpringsB], &[Force])
+};
+/// `forces` fused into the spring gather, four particles of a row per invocation.
+pub static FORCES_SPRINGS: KernelDef = KernelDef {
+    check: GATHER,
+    label: timing::FORCES_SPRINGS,
+    variants: IMM_TEX,
+    ..def("forces_springs", forces_springs, Count::Blocks, TABLE, &[Force])
+};
+/// Verlet, pins, the grab and the floor.
+pub static INTEGRATE: KernelDef = def("integrate", integrate, Count::Particles, STATE, &[Pos, Prev]);
+/// Spheres and boxes.
+pub static COLLIDE: KernelDef = def("collide", collide, Count::Particles, COLLIDERS, &[Pos, Prev]);
+/// `integrate` and `collide` fused: each particle loaded and stored once.
+pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
+    label: timing::INTEGRATE_COLLIDE,
+    ..def(
+        "integrate_collide",
+        integrate_collide,
+        Count::Particles,
+        &[Params, Pos, Prev, Force, Spheres, Boxes],
+        &[Pos, Prev],
+    )
+};
+/// One Provot pass plus the tethers, into the other buffer of the pair.
+pub static STRAIN_LIMIT: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[PosOut],
+    variants: IMM_TEX,
+    ..def(
+        "strain_limit",
+        strain_limit,
+        Count::Blocks,
+        &[Params, Pos, Slots, BendSlots, Interior, Table, Tethers],
+        &[PosOut],
+    )
+};
+/// Face normals per quad of the grid.
+pub static TRI_NORMALS: KernelDef =
+    KernelDef { pure: &[Faces], ..def("tri_normals", tri_normals, Count::Quads, &[Params, Pos], &[Faces]) };
+/// The naive face normals: per triangle, also added to the corners' normals with atomics.
+pub static TRI_NORMALS_SCATTER: KernelDef = KernelDef {
+    check: SCATTER,
+    pure: &[Faces],
+    accumulates: &[Normal],
+    label: "tri_normals",
+    variants: IMM_F32,
+    ..def(
+        "tri_normals_scatter",
+        tri_normals_scatter,
+        Count::Triangles,
+        &[Params, Pos, Normal, Triangles],
+        &[Faces, Normal],
+    )
+};
+/// Vertex normals gathered from the face normals, and the wind force.
+pub static VERTEX_NORMALS: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[Normal, Force],
+    ..def(
+        "vertex_normals",
+        vertex_normals,
+        Count::Particles,
+        &[Params, Pos, Prev, Faces, FaceSlots, Normal, Force],
+        &[Normal, Force],
+    )
+};
+/// The naive vertex normals: the scatter's sums normalised, and the wind force.
+pub static VERTEX_NORMALS_NAIVE: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[Force],
+    label: "vertex_normals",
+    test_input: Some(face_sums_input),
+    ..def(
+        "vertex_normals_naive",
+        vertex_normals,
+        Count::Particles,
+        &[Params, Pos, Prev, Faces, FaceSlots, Normal, Force],
+        &[Normal, Force],
+    )
+};
+/// Statistics by subgroup and workgroup reductions: one partial per workgroup.
+pub static STATS: KernelDef = KernelDef {
+    check: STATS_TEST,
+    variants: Variants { immediates: false, table_image: true, float_atomics: false },
+    immediates: Immediates::Substep,
+    ..def("stats", stats, Count::Particles, &[Params, Pos, Prev, Slots, BendSlots, Table], &[Partials])
+};
+/// Statistics by atomics from every invocation.
+pub static STATS_ATOMIC: KernelDef = KernelDef {
+    check: STATS_TEST,
+    variants: Variants { immediates: false, table_image: true, float_atomics: true },
+    immediates: Immediates::Substep,
+    ..def(
+        "stats_atomic",
+        stats,
+        Count::Particles,
+        &[Params, Pos, Prev, Slots, BendSlots, Table, StatsMax, StatsEnergy],
+        &[StatsMax, StatsEnergy],
+    )
+};
+/// The statistics' final fold of the partials.
+pub static STATS_REDUCE: KernelDef = KernelDef {
+    check: STATS_TEST,
+    variants: PLAIN,
+    immediates: Immediates::Substep,
+    ..def(
+        "stats_reduce",
+        nothing,
+        Count::Workgroup,
+        &[Params, Partials, StatsMax, StatsEnergy],
+        &[StatsMax, StatsEnergy],
+    )
+};
+
+/// Every built-in kernel of the step.
+pub static ALL: [&KernelDef; 15] = [
+    &FORCES,
+    &SPRINGS,
+    &SPRINGS_SCATTER,
+    &FORCES_SPRINGS,
+    &INTEGRATE,
+    &COLLIDE,
+    &INTEGRATE_COLLIDE,
+    &STRAIN_LIMIT,
+    &TRI_NORMALS,
+    &TRI_NORMALS_SCATTER,
+    &VERTEX_NORMALS,
+    &VERTEX_NORMALS_NAIVE,
+    &STATS,
+    &STATS_ATOMIC,
+    &STATS_REDUCE,
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_flavor_of_every_kernel_is_built_and_declares_only_bindings_the_table_names() {
+        let mut seen = 0;
+        for def in ALL {
+            for k in def.flavors() {
+                let shader = clothlab_shaders::kernel(&k.shader_name()).unwrap_or_else(|| {
+                    panic!("{k}: the registry says it exists, the shaders build has no such shader")
+                });
+                // What naga finds the shader reading and writing is what the row says, so
+                // the barriers derived from the row are the ones the shader needs. (A row
+                // may name more reads than one flavor makes: the table's three homes.)
+                for (what, used, declared) in
+                    [("reads", shader.reads, def.reads), ("writes", shader.writes, def.writes)]
+                {
+                    for &b in used {
+                        let buf = Buf::from_binding(b).expect("build.rs checks the binding numbers");
+                        assert!(
+                            declared.contains(&buf),
+                            "{k} {what} {buf:?} (binding {b}), which its row does not say"
+                        );
+                    }
+                }
+                for &w in def.writes {
+                    assert!(
+                        shader.writes.contains(&w.binding()),
+                        "{k}: its row says it writes {w:?}, the shader does not"
+                    );
+                }
+                for w in def.pure.iter().chain(def.accumulates) {
+                    assert!(def.writes.contains(w), "{k}: pure or accumulated {w:?} not among its writes");
+                }
+                seen += 1;
+            }
+        }
+        // And the other way: every shader the build made belongs to a row (or is chain,
+        // the overhead benchmark's, or render).
+        let names: Vec<String> = ALL.iter().flat_map(|d| d.flavors()).map(|k| k.shader_name()).collect();
+        for k in clothlab_shaders::KERNELS {
+            assert!(
+                names.iter().any(|n| n == k.name) || k.name == "chain" || k.name == "render",
+                "shader {} has no row in the registry",
+                k.name
+            );
+        }
+        assert_eq!(seen, names.len());
+    }
+
+    #[test]
+    fn flavors_fall_back_to_what_a_kernel_has() {
+        let want = Flavor { immediates: true, table_image: true, float_atomics: true };
+        assert_eq!(FORCES_SPRINGS.flavor(want).shader_name(), "forces_springs_tex_imm");
+        assert_eq!(SPRINGS_SCATTER.flavor(want).shader_name(), "springs_scatter_f32_imm");
+        assert_eq!(STATS_REDUCE.flavor(want).shader_name(), "stats_reduce");
+        assert_eq!(
+            STATS_ATOMIC.flavor(Flavor { float_atomics: true, ..Flavor::default() }).shader_name(),
+            "stats_atomic_f32"
+        );
+        assert_eq!(groups(64 * 65535 + 1), (65535, 2));
+    }
+}

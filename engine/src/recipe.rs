@@ -1,0 +1,337 @@
+//! Recipes: the commands of one substep for each variant, as data — dispatches that name
+//! their kernel (whose row names its bindings), explicit clears and ping-pong swaps. Every
+//! engine executes the same recipe, so two backends running one variant differ only in
+//! the API and how it is driven; barriers follow from the rows' reads and writes
+//! ([`Hazards`]).
+
+use clothlab_core::layout::Buf;
+
+use crate::kernels::{self as k, Flavor, KernelDef, KernelRef};
+
+/// Which formulation of the step runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Variant {
+    /// One dispatch per kernel, scatter with atomics, a submission per substep.
+    Naive,
+    /// Fused kernels, gathers, one submission per frame.
+    Optimized,
+}
+
+/// One command of a recipe.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Command {
+    /// Run a kernel over its [`k::Count`].
+    Dispatch(KernelRef),
+    /// Zero a buffer (before a kernel that accumulates into it).
+    Clear(Buf),
+    /// Swap the position pair: [`Buf::PosOut`] becomes [`Buf::Pos`] (after a kernel that
+    /// writes the other buffer).
+    Swap,
+}
+
+impl Command {
+    /// The kernel it dispatches, if it is a dispatch.
+    pub fn kernel(&self) -> Option<KernelRef> {
+        match self {
+            Command::Dispatch(k) => Some(*k),
+            _ => None,
+        }
+    }
+}
+
+/// What the adapter offers that the recipes use.
+#[derive(Debug, Clone, Copy)]
+pub struct Caps {
+    /// `atomic<f32>` add in storage buffers.
+    pub float_atomics: bool,
+    /// Immediates (push constants) large enough for the step constants.
+    pub immediates: bool,
+    /// Read the spring table from a sampled image (`<kernel>_tex` twins) instead of
+    /// storage buffers (Vulkan only: the thesis's texture memory).
+    pub table_image: bool,
+}
+
+/// The commands that run `kernel` once: clears of what it accumulates into, the
+/// dispatch, and a swap if it writes the other position buffer.
+pub fn run(kernel: KernelRef) -> Vec<Command> {
+    let mut v: Vec<Command> = kernel.def.accumulates.iter().map(|b| Command::Clear(*b)).collect();
+    v.push(Command::Dispatch(kernel));
+    if kernel.def.swaps() {
+        v.push(Command::Swap);
+    }
+    v
+}
+
+/// The commands of one substep for `variant` with `strain_passes` strain passes; the
+/// naive scatters use float atomics where the adapter has them, the optimized kernels
+/// read the step constants from immediates where it has those.
+pub fn recipe(variant: Variant, strain_passes: u32, caps: Caps) -> Vec<Command> {
+    let (kernels, flavor): (Vec<&'static KernelDef>, Flavor) = match variant {
+        Variant::Naive => (
+            [&k::FORCES, &k::SPRINGS_SCATTER, &k::INTEGRATE, &k::COLLIDE]
+                .into_iter()
+                .chain((0..strain_passes).map(|_| &k::STRAIN_LIMIT))
+                .chain([&k::TRI_NORMALS_SCATTER, &k::VERTEX_NORMALS_NAIVE])
+                .collect(),
+            Flavor { float_atomics: caps.float_atomics, ..Flavor::default() },
+        ),
+        Variant::Optimized => (
+            [&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE]
+                .into_iter()
+                .chain((0..strain_passes).map(|_| &k::STRAIN_LIMIT))
+                .chain([&k::TRI_NORMALS, &k::VERTEX_NORMALS])
+                .collect(),
+            Flavor { immediates: caps.immediates, table_image: caps.table_image, ..Flavor::default() },
+        ),
+    };
+    kernels.into_iter().flat_map(|d| run(d.flavor(flavor))).collect()
+}
+
+/// The shaders a backend with `caps` builds when it starts: everything either recipe
+/// dispatches, with and without immediates, and the plain flavor of every kernel of the
+/// step (so that each can be validated). The statistics kernels are built with their
+/// option.
+pub fn kernels_for(caps: Caps) -> Vec<KernelRef> {
+    let mut all: Vec<Command> = Vec::new();
+    for variant in [Variant::Naive, Variant::Optimized] {
+        all.extend(recipe(variant, 1, caps));
+        all.extend(recipe(variant, 1, Caps { immediates: false, ..caps }));
+    }
+    let mut v = kernels_of(&all);
+    for def in k::ALL.iter().filter(|d| d.immediates == k::Immediates::None) {
+        if !v.contains(&def.plain()) {
+            v.push(def.plain());
+        }
+    }
+    v
+}
+
+/// How a substep's statistics (max strain, kinetic energy) are reduced on the GPU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StatsMode {
+    /// Not computed.
+    #[default]
+    Off,
+    /// Every invocation adds into the substep's entry with atomics (`stats_atomic`).
+    Atomics,
+    /// Subgroup and workgroup reductions, one partial per workgroup, then one workgroup
+    /// folds the partials (`stats` + `stats_reduce`): no atomics.
+    Subgroups,
+}
+
+/// The commands that compute a substep's statistics at its end.
+pub fn stats_commands(mode: StatsMode, caps: Caps) -> Vec<Command> {
+    let f32 = Flavor { float_atomics: caps.float_atomics, ..Flavor::default() };
+    let kernels: &[&'static KernelDef] = match mode {
+        StatsMode::Off => &[],
+        StatsMode::Atomics => &[&k::STATS_ATOMIC],
+        StatsMode::Subgroups => &[&k::STATS, &k::STATS_REDUCE],
+    };
+    kernels.iter().flat_map(|d| run(d.flavor(f32))).collect()
+}
+
+/// The dispatches of `commands`.
+pub fn dispatches(commands: &[Command]) -> impl Iterator<Item = KernelRef> + '_ {
+    commands.iter().filter_map(Command::kernel)
+}
+
+/// The distinct kernels of a recipe, in order.
+pub fn kernels_of(commands: &[Command]) -> Vec<KernelRef> {
+    let mut v: Vec<KernelRef> = Vec::new();
+    for d in dispatches(commands) {
+        if !v.contains(&d) {
+            v.push(d);
+        }
+    }
+    v
+}
+
+/// The buffers a frame's commands read and write, as bits, the position pair by physical
+/// buffer (the tables, written only between frames, are left out).
+pub mod res {
+    /// Position buffer 0 of the pair.
+    pub const POS0: u32 = 1 << 0;
+    /// Position buffer 1 of the pair.
+    pub const POS1: u32 = 1 << 1;
+    /// Previous positions.
+    pub const PREV: u32 = 1 << 2;
+    /// Forces.
+    pub const FORCE: u32 = 1 << 3;
+    /// Vertex normals.
+    pub const NORMAL: u32 = 1 << 4;
+    /// Face normals.
+    pub const FACES: u32 = 1 << 5;
+    /// Step constants.
+    pub const PARAMS: u32 = 1 << 6;
+    /// The per-substep statistics.
+    pub const STATS: u32 = 1 << 7;
+    /// The statistics' per-workgroup partials.
+    pub const PARTIALS: u32 = 1 << 8;
+    /// Everything.
+    pub const ALL: u32 = (1 << 9) - 1;
+}
+
+/// The hazard bits of `buf` when the current positions are `pos[cur]`.
+pub fn bits(buf: Buf, cur: usize) -> u32 {
+    use res::*;
+    match buf {
+        Buf::Pos if cur == 0 => POS0,
+        Buf::Pos => POS1,
+        Buf::PosOut if cur == 0 => POS1,
+        Buf::PosOut => POS0,
+        Buf::Prev => PREV,
+        Buf::Force => FORCE,
+        Buf::Normal => NORMAL,
+        Buf::Faces => FACES,
+        Buf::Params => PARAMS,
+        Buf::StatsMax | Buf::StatsEnergy => STATS,
+        Buf::Partials => PARTIALS,
+        // Tables: written only between frames, with a full barrier.
+        _ => 0,
+    }
+}
+
+/// What `kernel` reads and writes when the current positions are `pos[cur]`.
+pub fn access(kernel: &KernelDef, cur: usize) -> (u32, u32) {
+    let mask = |bufs: &[Buf]| bufs.iter().fold(0, |m, b| m | bits(*b, cur));
+    (mask(kernel.reads), mask(kernel.writes))
+}
+
+/// Tracks what was read and written since the last barrier, so that a recorder places a
+/// barrier only before an access that depends on an earlier one: a read or write of
+/// something written (read-after-write, write-after-write) or a write of something read
+/// (write-after-read). A global memory barrier clears both sets.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Hazards {
+    read: u32,
+    written: u32,
+}
+
+impl Hazards {
+    /// Whether an access reading `reads` and writing `writes` must wait for a barrier.
+    pub fn conflicts(&self, reads: u32, writes: u32) -> bool {
+        (reads | writes) & self.written != 0 || writes & self.read != 0
+    }
+
+    /// Notes an access (after any barrier it needed).
+    pub fn add(&mut self, reads: u32, writes: u32) {
+        self.read |= reads;
+        self.written |= writes;
+    }
+
+    /// Notes a barrier.
+    pub fn clear(&mut self) {
+        *self = Self::default();
+    }
+
+    /// Notes an access the tracker cannot see (an upload): everything is suspect.
+    pub fn dirty(&mut self) {
+        self.written = res::ALL;
+    }
+
+    /// Notes `command` at parity `*cur` (a swap flips it); returns whether a barrier must
+    /// come before it.
+    pub fn command(&mut self, command: &Command, cur: &mut usize) -> bool {
+        let (r, w) = match command {
+            Command::Dispatch(k) => access(k.def, *cur),
+            Command::Clear(b) => (0, bits(*b, *cur)),
+            Command::Swap => {
+                *cur ^= 1;
+                return false;
+            }
+        };
+        let before = self.conflicts(r, w);
+        if before {
+            self.clear();
+        }
+        self.add(r, w);
+        before
+    }
+
+    /// The number of barriers `commands` need from parity `cur`.
+    pub fn plan(&mut self, commands: &[Command], mut cur: usize) -> usize {
+        commands.iter().filter(|c| self.command(c, &mut cur)).count()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CAPS: Caps = Caps { float_atomics: false, immediates: true, table_image: false };
+
+    fn barriers_per_substep(r: &[Command]) -> usize {
+        // Two substeps, counted in the second (the first also pays for the frame start).
+        let mut h = Hazards::default();
+        let first = h.plan(r, 0);
+        assert!(first >= 1);
+        // Parity after one substep: flipped once per swap.
+        let cur = r.iter().filter(|c| **c == Command::Swap).count() % 2;
+        h.plan(r, cur)
+    }
+
+    #[test]
+    fn every_dependent_dispatch_gets_a_barrier_and_no_other() {
+        let count = |r: &[Command]| dispatches(r).count();
+        // Optimized: each of its five kernels reads what the one before wrote.
+        let opt = recipe(Variant::Optimized, 1, CAPS);
+        assert_eq!(count(&opt), 5);
+        assert_eq!(barriers_per_substep(&opt), count(&opt));
+        // Statistics read only the positions: they need no barrier after the normals,
+        // and the reduction's barrier also covers the next substep's force write, so
+        // they cost no barrier at all.
+        let mut with_stats = opt.clone();
+        with_stats.extend(stats_commands(StatsMode::Subgroups, CAPS));
+        assert_eq!(barriers_per_substep(&with_stats), count(&opt));
+        let mut with_atomics = opt.clone();
+        with_atomics.extend(stats_commands(StatsMode::Atomics, CAPS));
+        // stats_atomic writes the substep's own entry: the next substep's forces depend
+        // on the normals' force write, so one barrier covers both.
+        assert_eq!(barriers_per_substep(&with_atomics), count(&opt));
+        // Naive: every dispatch waits for the one before; the normal clear needs none (the
+        // normals were last read several barriers ago), the scatter after it does.
+        let naive = recipe(Variant::Naive, 1, CAPS);
+        assert!(naive.contains(&Command::Clear(Buf::Normal)));
+        assert_eq!(barriers_per_substep(&naive), count(&naive));
+        // Two strain passes: the second reads the first's output.
+        let two_passes = recipe(Variant::Optimized, 2, CAPS);
+        assert_eq!(barriers_per_substep(&two_passes), count(&two_passes));
+    }
+
+    #[test]
+    fn a_read_after_a_write_always_waits() {
+        let mut h = Hazards::default();
+        assert!(!h.conflicts(res::POS0, res::FORCE));
+        h.add(res::POS0, res::FORCE);
+        assert!(h.conflicts(res::FORCE, 0), "read after write");
+        assert!(h.conflicts(0, res::FORCE), "write after write");
+        assert!(h.conflicts(0, res::POS0), "write after read");
+        assert!(!h.conflicts(res::POS0 | res::PREV, res::FACES), "reads of unwritten buffers");
+        h.clear();
+        assert!(!h.conflicts(res::FORCE, res::FORCE));
+        h.dirty();
+        assert!(h.conflicts(res::PREV, 0));
+    }
+
+    #[test]
+    fn recipes_swap_after_each_strain_pass_and_pick_the_flavors_of_the_caps() {
+        let r = recipe(Variant::Optimized, 3, Caps { float_atomics: true, immediates: true, table_image: true });
+        assert_eq!(r.iter().filter(|c| **c == Command::Swap).count(), 3);
+        let names: Vec<String> = dispatches(&r).map(|k| k.shader_name()).collect();
+        assert_eq!(
+            names,
+            [
+                "forces_springs_tex_imm",
+                "integrate_collide_imm",
+                "strain_limit_tex_imm",
+                "strain_limit_tex_imm",
+                "strain_limit_tex_imm",
+                "tri_normals_imm",
+                "vertex_normals_imm"
+            ]
+        );
+        let naive = recipe(Variant::Naive, 1, Caps { float_atomics: true, immediates: true, table_image: true });
+        let names: Vec<String> = dispatches(&naive).map(|k| k.shader_name()).collect();
+        assert!(names.contains(&"springs_scatter_f32".to_string()) && names.contains(&"forces".to_string()));
+    }
+}

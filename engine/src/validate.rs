@@ -1,0 +1,198 @@
+//! Checking a backend against the twins: every kernel alone on the same input
+//! ([`validate_kernels`]), and the bisection of a rollout between the CPU engine and a
+//! GPU backend ([`bisect`]). Used by the cross-backend tests and by `clothlab validate`.
+
+use clothlab_core::cpu::{self as twins, Exec};
+use clothlab_core::grid::{Grab, StepParams, build};
+use clothlab_core::validate::{Check, ROLLOUT_BOUND_PER_SUBSTEP, compare, disturbed_state};
+use clothlab_core::{Scene, SimParams, SolverError};
+
+use crate::cpu::CpuEngine;
+use crate::kernels::{self, HostBuffers, KernelRef};
+use crate::recipe::{Command, run};
+
+/// A backend that runs commands on buffers given from the host: what the kernel checks
+/// and the bisection need of a GPU solver.
+pub trait KernelRunner {
+    /// Every shader it can run.
+    fn kernels(&self) -> Vec<KernelRef>;
+    /// Uploads `bufs` (and `p` as the step constants), runs `commands`, and reads the
+    /// buffers back into `bufs` (after a [`Command::Swap`], `bufs.pos` is what was
+    /// `pos_out`).
+    fn run_commands(&mut self, commands: &[Command], p: &StepParams, bufs: &mut HostBuffers)
+    -> Result<(), SolverError>;
+    /// The adapter, in one line.
+    fn adapter(&self) -> String;
+    /// Builds a kernel that is not built in (WGSL compiled now), so that it can be run;
+    /// an error says what the compiler said.
+    fn add_kernel(&mut self, kernel: KernelRef) -> Result<(), SolverError> {
+        Err(SolverError::Shader {
+            kernel: kernel.shader_name(),
+            reason: format!("{} takes no extra kernels", self.adapter()),
+        })
+    }
+}
+
+/// The scene, parameters, disturbed buffers and constants every kernel check starts from:
+/// an `n × n` cloth draped for 15 frames, then disturbed (seeded), wind on, a particle
+/// grabbed.
+pub struct KernelInput {
+    /// The CPU engine of that cloth.
+    pub engine: CpuEngine,
+    /// The disturbed buffers, face normals of the disturbed positions.
+    pub bufs: HostBuffers,
+    /// The step constants.
+    pub p: StepParams,
+}
+
+impl KernelInput {
+    /// The input for an `n × n` cloth, disturbed with `seed`.
+    pub fn new(n: u32, seed: u64) -> Result<Self, SolverError> {
+        let scene = Scene::with_n(n);
+        let params = SimParams { wind: [1.5, 0.3, -2.0], ..SimParams::default() };
+        let (st, topo, faces) = disturbed_state(&scene, &params, seed)?;
+        let grab = Some(Grab { particle: n * n / 2 + 3, target: [0.1, 1.2, 0.3] });
+        let p = StepParams::new(&params, &scene, grab);
+        Ok(Self { engine: CpuEngine::new(Exec::Serial, scene, topo), bufs: HostBuffers::new(&st, faces), p })
+    }
+
+    /// The input of `kernel`: the disturbed buffers, plus what its row sets up.
+    pub fn for_kernel(&self, kernel: KernelRef) -> HostBuffers {
+        let mut b = self.bufs.clone();
+        if let Some(setup) = kernel.def.test_input {
+            setup(&self.engine.args(&self.p, 0), &mut b);
+        }
+        b
+    }
+}
+
+/// Runs each of `kernels` alone on `runner` and on the CPU engine, from the same disturbed
+/// `n × n` cloth, and compares every buffer; the kernel's pure outputs are poisoned with
+/// NaN on the runner's side first, so an element it fails to write shows. Kernels whose
+/// row says they are checked by a test of their own are left out.
+pub fn validate_kernels(
+    runner: &mut dyn KernelRunner,
+    kernels: &[KernelRef],
+    n: u32,
+    seed: u64,
+) -> Result<Vec<Check>, SolverError> {
+    let input = KernelInput::new(n, seed)?;
+    let mut checks = Vec::new();
+    for &k in kernels {
+        let kernels::Check::Bound { relative, .. } = k.def.check else { continue };
+        let commands = run(k);
+        let mut want = input.for_kernel(k);
+        let mut got = want.clone();
+        for &buf in k.def.pure {
+            if let Some(v) = got.get_mut(buf) {
+                v.iter_mut().for_each(|x| *x = [f32::NAN; 4]);
+            }
+        }
+        input.engine.run(&commands, &input.p, 0, &mut want);
+        runner.run_commands(&commands, &input.p, &mut got)?;
+        let what = k.shader_name();
+        for (name, g, w) in [
+            ("pos", &got.pos, &want.pos),
+            ("prev", &got.prev, &want.prev),
+            ("force", &got.force, &want.force),
+            ("normal", &got.normal, &want.normal),
+            ("faces", &got.faces, &want.faces),
+        ] {
+            checks.push(compare(&what, name, g, w, true, relative));
+        }
+    }
+    Ok(checks)
+}
+
+/// One split of a bisected rollout.
+#[derive(Debug, Clone)]
+pub struct Split {
+    /// Dispatches of each substep run on the CPU engine (the rest on the GPU).
+    pub cpu_dispatches: usize,
+    /// The first command run on the GPU, if any.
+    pub first_gpu: Option<String>,
+    /// Largest position difference from the CPU engine's rollout over the run, m.
+    pub check: Check,
+}
+
+/// What [`bisect`] found.
+#[derive(Debug, Clone)]
+pub struct Bisection {
+    /// One row per split, from everything on the GPU (0 dispatches on the CPU) to all but
+    /// the last on the CPU.
+    pub splits: Vec<Split>,
+    /// The kernel after which the GPU leaves its bound: the first GPU kernel of the split
+    /// with the most CPU dispatches that still fails (running it on the CPU instead
+    /// brings the rollout back within its bound). `None` when every split passes.
+    pub culprit: Option<String>,
+}
+
+/// A rollout of `substeps` substeps of `scene` in which every substep runs its first k
+/// dispatches of `commands` on the CPU engine and the rest on `runner`, for every k,
+/// against the CPU engine running all of them; see [`Bisection`].
+pub fn bisect(
+    runner: &mut dyn KernelRunner,
+    commands: &[Command],
+    scene: &Scene,
+    params: &SimParams,
+    substeps: u32,
+) -> Result<Bisection, SolverError> {
+    let (mut state, topo) = build(scene, params)?;
+    let engine = CpuEngine::new(Exec::Serial, scene.clone(), topo);
+    let p = StepParams::new(params, scene, None);
+    let mut start = engine.buffers(&state);
+    twins::vertex_normals(
+        Exec::Serial,
+        &p,
+        &engine.topology().face_slots,
+        &start.faces,
+        &mut state.normal,
+        &mut state.force,
+    );
+    start.normal = state.normal;
+    start.force = state.force;
+    // The reference: every command on the CPU engine, positions after every substep.
+    let mut reference = Vec::with_capacity(substeps as usize);
+    let mut bufs = start.clone();
+    for s in 0..substeps {
+        engine.run(commands, &p, s, &mut bufs);
+        reference.push(bufs.pos.clone());
+    }
+    // Split points: before each dispatch (a clear goes with the dispatch after it, a swap
+    // with the one before).
+    let mut points: Vec<usize> = Vec::new();
+    for (i, c) in commands.iter().enumerate() {
+        if let Command::Dispatch(_) = c {
+            let mut at = i;
+            while at > 0 && matches!(commands[at - 1], Command::Clear(_)) {
+                at -= 1;
+            }
+            points.push(at);
+        }
+    }
+    let bound = ROLLOUT_BOUND_PER_SUBSTEP * substeps as f32;
+    let mut splits = Vec::new();
+    for (k, &at) in points.iter().enumerate() {
+        let (cpu, gpu) = commands.split_at(at);
+        let mut bufs = start.clone();
+        let mut worst = compare("", "pos", &[], &[], false, 0.0);
+        for (s, want) in reference.iter().enumerate() {
+            engine.run(cpu, &p, s as u32, &mut bufs);
+            runner.run_commands(gpu, &p, &mut bufs)?;
+            let c = compare("", "pos", &bufs.pos, want, false, 0.0);
+            // (compare() counts NaN as infinite, so max_abs is ordered.)
+            if c.max_abs > worst.max_abs {
+                worst = c;
+            }
+        }
+        let first_gpu = gpu.iter().find_map(Command::kernel).map(|k| k.shader_name());
+        let what = format!("bisect {k}: {} on GPU", first_gpu.as_deref().unwrap_or("-"));
+        splits.push(Split {
+            cpu_dispatches: k,
+            first_gpu,
+            check: Check { what, bound, error: worst.max_abs, ..worst },
+        });
+    }
+    let culprit = splits.iter().rev().find(|s| !s.check.passed()).and_then(|s| s.first_gpu.clone());
+    Ok(Bisection { splits, culprit })
+}
