@@ -532,7 +532,7 @@ fn validate(args: ValidateArgs) -> Result<ExitCode> {
             for split in &b.splits {
                 let c = &split.check;
                 println!(
-                    "{:<13} {:<26} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
+                    "{:<13} {:<40} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
                     name,
                     c.what,
                     c.buffer,

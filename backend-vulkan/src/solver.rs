@@ -143,7 +143,10 @@ pub struct VulkanSolver {
 }
 
 fn backend(e: VkError) -> SolverError {
-    SolverError::Backend(e.to_string())
+    match e {
+        VkError::NoVulkan(_) | VkError::NoAdapter => SolverError::NoAdapter(e.to_string()),
+        e => SolverError::Driver(e.to_string()),
+    }
 }
 
 impl VulkanSolver {
@@ -174,26 +177,16 @@ impl VulkanSolver {
         options: VulkanOptions,
     ) -> Result<Self, SolverError> {
         if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
-            return Err(SolverError::Backend(format!("at most {MAX_COLLIDERS} spheres and boxes")));
+            return Err(SolverError::Invalid(format!("at most {MAX_COLLIDERS} spheres and boxes")));
         }
         if options.stats == StatsMode::Subgroups && !dev.subgroup_arithmetic {
-            return Err(SolverError::Backend(format!(
+            return Err(SolverError::Unsupported(format!(
                 "{} has no subgroup arithmetic in compute shaders: use statistics by atomics",
                 dev.name
             )));
         }
         let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
-        let np = scene.num_particles() as u64;
-        if np * per_particle > dev.max_storage_range {
-            let max_n = ((dev.max_storage_range / per_particle) as f64).sqrt().floor() as u64;
-            return Err(SolverError::Backend(format!(
-                "n = {} needs a {} MiB spring table, more than the {} MiB this device ({}) binds per storage buffer: use n ≤ {max_n} on it",
-                scene.cloth.n,
-                (np * per_particle) >> 20,
-                dev.max_storage_range >> 20,
-                dev.name
-            )));
-        }
+        SolverError::check_table(scene.cloth.n, per_particle, dev.max_storage_range, &dev.name)?;
         let (mut state, topo) = build(&scene, &params)?;
         let sp = StepParams::new(&params, &scene, None);
         let mut face = vec![[0.0f32; 4]; topo.triangles.len()];
@@ -296,7 +289,7 @@ impl VulkanSolver {
         let mut buffers = buffers;
         if options.table == SpringTable::Image {
             let image = Image::new(&dev, "spring table", TABLE_WIDTH, table_height).map_err(backend)?;
-            let map = staging.mapped().ok_or_else(|| SolverError::Backend("staging not host visible".into()))?;
+            let map = staging.mapped().ok_or_else(|| SolverError::Driver("staging not host visible".into()))?;
             map[..texels.len() * 16].copy_from_slice(bytemuck::cast_slice(&texels));
             cmds.begin(0).map_err(backend)?;
             cmds.copy_to_image(&staging, &image);
@@ -534,7 +527,7 @@ impl VulkanSolver {
     /// [`KernelRunner::run_commands`]).
     fn run_host(&mut self, commands: &[Command], sp: &StepParams, bufs: &mut HostBuffers) -> Result<(), SolverError> {
         if sp.n != self.topo.n || sp.num_spheres as usize > MAX_COLLIDERS || sp.num_boxes as usize > MAX_COLLIDERS {
-            return Err(SolverError::Backend("step constants for another grid or too many colliders".into()));
+            return Err(SolverError::Invalid("step constants for another grid or too many colliders".into()));
         }
         let np = self.topo.num_particles();
         let particles = [&bufs.pos, &bufs.pos_out, &bufs.prev, &bufs.force, &bufs.normal];
@@ -586,7 +579,7 @@ enum Target {
 fn target(b: &Buffers, which: Target, cur: usize) -> Result<&Buffer, SolverError> {
     match which {
         Target::Params => Ok(&b.params),
-        Target::Buf(buf) => b.get(buf, cur).ok_or_else(|| SolverError::Backend(format!("no buffer {buf:?}"))),
+        Target::Buf(buf) => b.get(buf, cur).ok_or_else(|| SolverError::Driver(format!("no buffer {buf:?}"))),
     }
 }
 
@@ -683,7 +676,7 @@ impl Solver for VulkanSolver {
         }
         if let Some(image) = &self.buffers.table {
             let (texels, _) = table_texels(&self.topo);
-            let map = self.staging.mapped().ok_or_else(|| SolverError::Backend("staging not host visible".into()))?;
+            let map = self.staging.mapped().ok_or_else(|| SolverError::Driver("staging not host visible".into()))?;
             map[..texels.len() * 16].copy_from_slice(bytemuck::cast_slice(&texels));
             self.cmds.begin(0).map_err(backend)?;
             self.cmds.copy_to_image(&self.staging, image);
@@ -715,8 +708,7 @@ impl Solver for VulkanSolver {
         // buffer (a copy and a barrier before the first dispatch), not in a submission of
         // their own.
         let bytes = bytemuck::bytes_of(&self.sp);
-        let map =
-            self.staging.mapped().ok_or_else(|| SolverError::Backend("staging buffer not host visible".into()))?;
+        let map = self.staging.mapped().ok_or_else(|| SolverError::Driver("staging buffer not host visible".into()))?;
         map[..bytes.len()].copy_from_slice(bytes);
         let recipe = self.substep_recipe();
         let stats = self.options.stats != StatsMode::Off;
@@ -775,7 +767,7 @@ impl Solver for VulkanSolver {
         self.check()?;
         if stats {
             let map =
-                self.staging.mapped().ok_or_else(|| SolverError::Backend("staging buffer not host visible".into()))?;
+                self.staging.mapped().ok_or_else(|| SolverError::Driver("staging buffer not host visible".into()))?;
             let words: &[u8] = &map[STATS_OFFSET as usize..(STATS_OFFSET + 8 * substeps as u64) as usize];
             let word =
                 |k: usize| f32::from_le_bytes([words[4 * k], words[4 * k + 1], words[4 * k + 2], words[4 * k + 3]]);

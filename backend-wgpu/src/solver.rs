@@ -115,24 +115,14 @@ impl WgpuSolver {
         params: SimParams,
     ) -> Result<Self, SolverError> {
         if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
-            return Err(SolverError::Backend(format!("at most {MAX_COLLIDERS} spheres and boxes")));
+            return Err(SolverError::Invalid(format!("at most {MAX_COLLIDERS} spheres and boxes")));
         }
         // Refuse a grid whose buffers the adapter cannot bind, naming the size it can take.
         let limits = ctx.device.limits();
         let max_binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
         // The largest buffer is the structural and shear half of the spring table.
         let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
-        let np = scene.num_particles() as u64;
-        if np * per_particle > max_binding {
-            let max_n = ((max_binding / per_particle) as f64).sqrt().floor() as u64;
-            return Err(SolverError::Backend(format!(
-                "n = {} needs a {} MiB spring table, more than the {} MiB this adapter ({}) binds per storage buffer: use n ≤ {max_n} on it",
-                scene.cloth.n,
-                (np * per_particle) >> 20,
-                max_binding >> 20,
-                ctx.info.name
-            )));
-        }
+        SolverError::check_table(scene.cloth.n, per_particle, max_binding, &ctx.info.name)?;
         let (mut state, topo) = build(&scene, &params)?;
         // Initial normals and wind, as the CPU solvers start.
         let sp = StepParams::new(&params, &scene, None);
@@ -438,7 +428,7 @@ impl WgpuSolver {
     /// [`KernelRunner::run_commands`]). The next frame uploads the solver's own constants.
     fn run_host(&mut self, commands: &[Command], sp: &StepParams, bufs: &mut HostBuffers) -> Result<(), SolverError> {
         if sp.n != self.topo.n || sp.num_spheres as usize > MAX_COLLIDERS || sp.num_boxes as usize > MAX_COLLIDERS {
-            return Err(SolverError::Backend("step constants for another grid or too many colliders".into()));
+            return Err(SolverError::Invalid("step constants for another grid or too many colliders".into()));
         }
         let np = self.topo.num_particles();
         let particles = [&bufs.pos, &bufs.pos_out, &bufs.prev, &bufs.force, &bufs.normal];
@@ -501,7 +491,10 @@ impl KernelRunner for WgpuSolver {
 }
 
 fn backend(e: GpuError) -> SolverError {
-    SolverError::Backend(e.to_string())
+    match e {
+        GpuError::NoAdapter => SolverError::NoAdapter(e.to_string()),
+        e => SolverError::Driver(e.to_string()),
+    }
 }
 
 impl Solver for WgpuSolver {

@@ -161,7 +161,7 @@ impl ClothState {
             return Err(crate::solver::SolverError::GridMismatch { want: n, got: self.n });
         }
         if !bufs.iter().all(|v| v.iter().flatten().all(|x| x.is_finite())) {
-            return Err(crate::solver::SolverError::Backend("state holds non-finite values".into()));
+            return Err(crate::solver::SolverError::Invalid("state holds non-finite values".into()));
         }
         Ok(())
     }

@@ -30,9 +30,54 @@ pub enum SolverError {
         /// What the compiler or driver said.
         reason: String,
     },
-    /// The backend failed (device lost, out of memory, …).
+    /// No GPU adapter, or no Vulkan loader, on this machine (the message says what to
+    /// install).
     #[error("{0}")]
-    Backend(String),
+    NoAdapter(String),
+    /// The grid's spring table is larger than the adapter binds per storage buffer.
+    #[error(
+        "n = {n} needs a {need_mib} MiB spring table, more than the {limit_mib} MiB this adapter ({adapter}) binds per storage buffer: use n ≤ {max_n} on it"
+    )]
+    GridTooLarge {
+        /// The grid asked for.
+        n: u32,
+        /// The largest grid the adapter takes.
+        max_n: u32,
+        /// The table's size, MiB.
+        need_mib: u64,
+        /// What the adapter binds, MiB.
+        limit_mib: u64,
+        /// The adapter.
+        adapter: String,
+    },
+    /// The adapter lacks what an option needs (subgroup arithmetic, immediates, …).
+    #[error("{0}")]
+    Unsupported(String),
+    /// A value handed to the solver was refused (a non-finite state, constants or buffers
+    /// of another grid, too many colliders).
+    #[error("{0}")]
+    Invalid(String),
+    /// The driver or the API failed (device lost, out of memory, a validation message).
+    #[error("{0}")]
+    Driver(String),
+}
+
+impl SolverError {
+    /// [`SolverError::GridTooLarge`] for a table of `per_particle` bytes per particle
+    /// against a binding limit of `limit` bytes, or `None` when it fits.
+    pub fn check_table(n: u32, per_particle: u64, limit: u64, adapter: &str) -> Result<(), SolverError> {
+        let np = n as u64 * n as u64;
+        if np * per_particle <= limit {
+            return Ok(());
+        }
+        Err(SolverError::GridTooLarge {
+            n,
+            max_n: ((limit / per_particle) as f64).sqrt().floor() as u32,
+            need_mib: (np * per_particle) >> 20,
+            limit_mib: limit >> 20,
+            adapter: adapter.to_owned(),
+        })
+    }
 }
 
 /// A cloth simulation on some backend.
