@@ -427,14 +427,7 @@ impl WgpuSolver {
     /// Uploads `bufs` and `sp`, runs `commands`, reads the buffers back (see
     /// [`KernelRunner::run_commands`]). The next frame uploads the solver's own constants.
     fn run_host(&mut self, commands: &[Command], sp: &StepParams, bufs: &mut HostBuffers) -> Result<(), SolverError> {
-        if sp.n != self.topo.n || sp.num_spheres as usize > MAX_COLLIDERS || sp.num_boxes as usize > MAX_COLLIDERS {
-            return Err(SolverError::Invalid("step constants for another grid or too many colliders".into()));
-        }
-        let np = self.topo.num_particles();
-        let particles = [&bufs.pos, &bufs.pos_out, &bufs.prev, &bufs.force, &bufs.normal];
-        if bufs.faces.len() != self.topo.triangles.len() || particles.iter().any(|v| v.len() != np) {
-            return Err(SolverError::GridMismatch { want: self.topo.n, got: (bufs.pos.len() as f64).sqrt() as u32 });
-        }
+        bufs.check(&self.topo, sp)?;
         for k in clothlab_engine::recipe::dispatches(commands) {
             self.build(k)?;
         }
@@ -539,8 +532,7 @@ impl Solver for WgpuSolver {
     }
 
     fn set_grab(&mut self, grab: Option<Grab>) {
-        self.grab = grab
-            .filter(|g| (g.particle as usize) < self.topo.num_particles() && g.target.iter().all(|v| v.is_finite()));
+        self.grab = Grab::checked(grab, self.topo.num_particles());
     }
 
     fn step_frame(&mut self) -> Result<(), SolverError> {

@@ -426,6 +426,14 @@ pub struct Grab {
     pub target: [f32; 3],
 }
 
+impl Grab {
+    /// `grab` if it names one of `particles` particles and a finite target, else `None`
+    /// (what every solver's `set_grab` keeps).
+    pub fn checked(grab: Option<Grab>, particles: usize) -> Option<Grab> {
+        grab.filter(|g| (g.particle as usize) < particles && g.target.iter().all(|v| v.is_finite()))
+    }
+}
+
 /// Per-step constants every kernel reads, derived from [`SimParams`] and [`Scene`]
 /// (`#[repr(C)]`: the GPU backends upload exactly these bytes).
 #[repr(C)]

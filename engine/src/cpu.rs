@@ -185,9 +185,7 @@ impl Solver for RecipeSolver {
     }
 
     fn set_grab(&mut self, grab: Option<Grab>) {
-        self.grab = grab.filter(|g| {
-            (g.particle as usize) < self.engine.topo.num_particles() && g.target.iter().all(|v| v.is_finite())
-        });
+        self.grab = Grab::checked(grab, self.engine.topo.num_particles());
     }
 
     fn step_frame(&mut self) -> Result<(), SolverError> {

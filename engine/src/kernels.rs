@@ -197,6 +197,26 @@ impl HostBuffers {
         })
     }
 
+    /// Refuses buffers or constants of another grid than `topo`'s, or more colliders than
+    /// a backend binds (what a GPU runner checks before uploading them).
+    pub fn check(&self, topo: &ClothTopology, p: &StepParams) -> Result<(), clothlab_core::SolverError> {
+        use clothlab_core::scene::MAX_COLLIDERS;
+        if p.n != topo.n || p.num_spheres as usize > MAX_COLLIDERS || p.num_boxes as usize > MAX_COLLIDERS {
+            return Err(clothlab_core::SolverError::Invalid(
+                "step constants for another grid or too many colliders".into(),
+            ));
+        }
+        let np = topo.num_particles();
+        let particles = [&self.pos, &self.pos_out, &self.prev, &self.force, &self.normal];
+        if self.faces.len() != topo.triangles.len() || particles.iter().any(|v| v.len() != np) {
+            return Err(clothlab_core::SolverError::GridMismatch {
+                want: topo.n,
+                got: (self.pos.len() as f64).sqrt() as u32,
+            });
+        }
+        Ok(())
+    }
+
     /// The state these buffers hold.
     pub fn state(&self, n: u32) -> clothlab_core::ClothState {
         clothlab_core::ClothState {

@@ -169,8 +169,7 @@ impl Solver for CpuSolver {
     }
 
     fn set_grab(&mut self, grab: Option<Grab>) {
-        self.grab =
-            grab.filter(|g| (g.particle as usize) < self.state.pos.len() && g.target.iter().all(|v| v.is_finite()));
+        self.grab = Grab::checked(grab, self.state.pos.len());
     }
 
     fn step_frame(&mut self) -> Result<(), SolverError> {
