@@ -499,6 +499,20 @@ fn gpu_runner(backend: Backend, n: u32, params: &SimParams) -> Result<Box<dyn Gp
     })
 }
 
+/// One row of `validate`'s table; `width` for the check column.
+fn print_check(backend: &str, c: &clothlab_core::validate::Check, width: usize) {
+    println!(
+        "{backend:<13} {:<width$} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
+        c.what,
+        c.buffer,
+        c.max_abs,
+        c.rms,
+        c.error,
+        c.bound,
+        if c.passed() { "ok" } else { "FAILED" }
+    );
+}
+
 fn validate(args: ValidateArgs) -> Result<ExitCode> {
     if !(2..=1024).contains(&args.n) {
         bail!("invalid --n {}: must be in 2 ..= 1024", args.n);
@@ -530,18 +544,7 @@ fn validate(args: ValidateArgs) -> Result<ExitCode> {
             let b = bisect(solver.as_mut(), &commands, &Scene::with_n(args.n), &params, args.steps)?;
             let name = backend.name();
             for split in &b.splits {
-                let c = &split.check;
-                println!(
-                    "{:<13} {:<40} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
-                    name,
-                    c.what,
-                    c.buffer,
-                    c.max_abs,
-                    c.rms,
-                    c.error,
-                    c.bound,
-                    if c.passed() { "ok" } else { "FAILED" }
-                );
+                print_check(name, &split.check, 40);
             }
             match &b.culprit {
                 Some(k) => {
@@ -577,19 +580,8 @@ fn validate(args: ValidateArgs) -> Result<ExitCode> {
         rows.push(validate_rollout(rollout_solver.as_mut(), frames)?);
         let name = rollout_solver.name().to_owned();
         for c in rows {
-            let ok = c.passed();
-            failed += usize::from(!ok);
-            println!(
-                "{:<13} {:<26} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
-                name,
-                c.what,
-                c.buffer,
-                c.max_abs,
-                c.rms,
-                c.error,
-                c.bound,
-                if ok { "ok" } else { "FAILED" }
-            );
+            failed += usize::from(!c.passed());
+            print_check(&name, &c, 26);
         }
         println!("{:<13} adapter: {}", name, solver.adapter());
     }

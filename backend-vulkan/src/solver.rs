@@ -578,8 +578,20 @@ fn target(b: &Buffers, which: Target, cur: usize) -> Result<&Buffer, SolverError
 
 impl Buffers {
     /// The buffer bound as `buf` when the current positions are `pos[cur]`.
+    /// (Only the buffers the host or a clear touches; the tables are bound, never moved.)
     fn get(&self, buf: Buf, cur: usize) -> Option<&Buffer> {
-        self.bindings(cur).into_iter().find(|(b, _, _)| *b == buf.binding()).map(|(_, _, b)| b)
+        Some(match buf {
+            Buf::Params => &self.params,
+            Buf::Pos => &self.pos[cur],
+            Buf::PosOut => &self.pos[1 - cur],
+            Buf::Prev => &self.prev,
+            Buf::Force => &self.force,
+            Buf::Normal => &self.normal,
+            Buf::Faces => &self.faces,
+            Buf::StatsMax => &self.stats_max,
+            Buf::StatsEnergy => &self.stats_energy,
+            _ => return None,
+        })
     }
 }
 
