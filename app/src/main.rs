@@ -4,7 +4,9 @@
 
 mod bench;
 mod cli;
+mod commands;
 mod gui;
+mod solvers;
 
 use std::process::ExitCode;
 
@@ -38,7 +40,7 @@ fn main() -> ExitCode {
         return code;
     }
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    match cli::run() {
+    match commands::run() {
         Ok(code) => code,
         Err(e) => {
             // One line: the error and its causes, no backtrace.

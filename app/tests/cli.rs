@@ -223,12 +223,22 @@ fn render_draws_through_vulkan_and_refuses_mixed_apis() {
 }
 
 #[test]
-fn vulkan_options_reach_the_solver_or_are_refused_elsewhere() {
-    refused(&["sim", "--backend", "cpu", "--stats", "atomics"], "Vulkan backends");
-    refused(&["sim", "--backend", "wgpu", "--table", "image"], "Vulkan backends");
+fn gpu_options_reach_the_solver_or_are_refused_elsewhere() {
+    refused(&["sim", "--backend", "cpu", "--stats", "atomics"], "GPU backends");
     refused(&["sim", "--backend", "vulkan", "--stats", "sometimes"], "invalid value");
-    for extra in [&["--stats", "subgroups"][..], &["--stats", "atomics", "--table", "image"]] {
-        let mut args = vec!["sim", "--backend", "vulkan", "--n", "20", "--steps", "32"];
+    // What the generic solver asks of an engine that wgpu's does not offer.
+    if !no_gpu(&String::from_utf8_lossy(&clothlab(&["sim", "--backend", "wgpu", "--n", "4", "--steps", "1"]).stderr)) {
+        refused(&["sim", "--backend", "wgpu", "--table", "image"], "image is not implemented on wgpu");
+    }
+    let runs: [(&str, &[&str]); 5] = [
+        ("wgpu", &["--stats", "subgroups"]),
+        ("vulkan", &["--stats", "subgroups"]),
+        ("vulkan", &["--stats", "atomics", "--table", "image"]),
+        ("wgpu", &["--stats", "atomics", "--table", "storage"]),
+        ("wgpu-naive", &["--stats", "atomics"]),
+    ];
+    for (backend, extra) in runs {
+        let mut args = vec!["sim", "--backend", backend, "--n", "20", "--steps", "32"];
         args.extend_from_slice(extra);
         let out = clothlab(&args);
         let err = String::from_utf8_lossy(&out.stderr);

@@ -8,16 +8,18 @@
 
 pub mod overhead;
 mod present;
-pub mod raw;
+pub(crate) mod raw;
 mod render;
 mod solver;
 
 use thiserror::Error;
 
 pub use clothlab_engine::recipe::StatsMode;
+pub use clothlab_engine::{GpuSolver, SolverOptions, SpringTable};
 pub use present::{Overlay, Presented, Presenter, Screenshot};
+pub use raw::Device;
 pub use render::{FRAMES_IN_FLIGHT, VkCloth, VulkanRenderer};
-pub use solver::{SpringTable, VulkanOptions, VulkanSolver};
+pub use solver::{VulkanEngine, VulkanSolver, vulkan_solver};
 
 /// Why Vulkan could not be used.
 #[derive(Debug, Error)]

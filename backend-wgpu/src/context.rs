@@ -50,6 +50,8 @@ pub struct GpuContext {
     pub float_atomics: bool,
     /// Immediates (push constants) big enough for the step constants are available.
     pub immediates: bool,
+    /// Subgroup operations in compute shaders (`Features::SUBGROUP`) are available.
+    pub subgroups: bool,
     /// Errors wgpu reported outside an error scope, oldest first.
     uncaptured: Arc<Mutex<Vec<String>>>,
 }
@@ -109,6 +111,10 @@ impl GpuContext {
         if float_atomics {
             required_features |= wgpu::Features::SHADER_FLOAT32_ATOMIC;
         }
+        let subgroups = adapter.features().contains(wgpu::Features::SUBGROUP);
+        if subgroups {
+            required_features |= wgpu::Features::SUBGROUP;
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("clothlab"),
             required_features,
@@ -126,7 +132,7 @@ impl GpuContext {
             }
         }));
         log::info!("wgpu adapter: {} ({:?}, {})", info.name, info.backend, info.driver_info);
-        Ok(Self { adapter, device, queue, info, timestamps, float_atomics, immediates, uncaptured })
+        Ok(Self { adapter, device, queue, info, timestamps, float_atomics, immediates, subgroups, uncaptured })
     }
 
     /// One line naming the adapter: `llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Mesa 22.3.6)`.

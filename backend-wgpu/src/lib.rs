@@ -18,6 +18,7 @@ mod render;
 mod solver;
 
 pub use clothlab_engine::recipe::Variant;
+pub use clothlab_engine::{GpuSolver, SolverOptions, SpringTable};
 pub use context::{GpuContext, GpuError};
 pub use render::{ClothSource, WgpuRenderer};
-pub use solver::WgpuSolver;
+pub use solver::{WgpuEngine, WgpuSolver, wgpu_solver};

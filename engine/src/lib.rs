@@ -5,6 +5,9 @@
 //! * [`recipe`] — the commands of a substep per variant (dispatches, clears, swaps) and
 //!   the barriers they need;
 //! * [`cpu`] — the CPU engine: runs any commands through the twins;
+//! * [`gpu`] — the [`Engine`] trait: the API's part of a GPU solver (buffers, uploads,
+//!   downloads, dispatches, barriers, timestamps, submit and wait);
+//! * [`solver`] — [`GpuSolver`]: `Solver` and `KernelRunner` written once over any engine;
 //! * [`validate`] — every kernel of a GPU runner against its twin, and the bisection of a
 //!   rollout between the CPU engine and a GPU backend;
 //! * [`tables`] — the spring tables as the GPU backends upload them, and their timing.
@@ -12,14 +15,18 @@
 #![warn(missing_docs)]
 
 pub mod cpu;
+pub mod gpu;
 pub mod kernels;
 pub mod recipe;
+pub mod solver;
 pub mod tables;
 pub mod validate;
 
 pub use cpu::{CpuEngine, RecipeSolver};
+pub use gpu::Engine;
 pub use kernels::{Flavor, HostBuffers, KernelDef, KernelRef, TwinArgs};
 pub use recipe::{Caps, Command, StatsMode, Variant};
+pub use solver::{GpuSolver, SolverOptions, SpringTable};
 pub use validate::KernelRunner;
 
 use clothlab_core::SolverError;

@@ -4,13 +4,14 @@
 
 use clothlab_core::layout::Buf;
 use clothlab_core::{Exec, Scene, SimParams, SolverError};
+use clothlab_engine::SolverOptions;
 use clothlab_engine::kernels::{Check, Count, HostBuffers, Immediates, KernelDef, Source, TwinArgs, Variants};
 use clothlab_engine::recipe::{Command, run};
 use clothlab_engine::validate::{KernelInput, KernelRunner, bisect, validate_kernels};
 use clothlab_engine::{CpuEngine, Variant};
 use clothlab_tests::{assert_checks, or_skip};
-use clothlab_vulkan::{VulkanOptions, VulkanSolver};
-use clothlab_wgpu::WgpuSolver;
+use clothlab_vulkan::vulkan_solver;
+use clothlab_wgpu::wgpu_solver;
 
 /// The twin: halves every particle's force (exact in f32, so GPU and CPU agree bit for bit).
 fn halve_force(_: &TwinArgs, b: &mut HostBuffers) {
@@ -68,11 +69,13 @@ fn runners(n: u32) -> Vec<Box<dyn KernelRunner>> {
     let mut v: Vec<Box<dyn KernelRunner>> = Vec::new();
     let (_, topo) = clothlab_core::build(&scene, &params).unwrap();
     v.push(Box::new(CpuEngine::new(Exec::Serial, scene.clone(), topo)));
-    if let Some(g) = or_skip(WgpuSolver::new(Variant::Optimized, scene.clone(), params.clone()), "wgpu") {
+    if let Some(g) =
+        or_skip(wgpu_solver(Variant::Optimized, scene.clone(), params.clone(), SolverOptions::default()), "wgpu")
+    {
         v.push(Box::new(g));
     }
-    let options = VulkanOptions { validation: true, ..Default::default() };
-    if let Some(k) = or_skip(VulkanSolver::with_options(Variant::Optimized, scene, params, options), "vulkan") {
+    let options = SolverOptions::default();
+    if let Some(k) = or_skip(vulkan_solver(Variant::Optimized, scene, params, true, options), "vulkan") {
         v.push(Box::new(k));
     }
     v
@@ -135,13 +138,13 @@ fn bisection_on_both_gpu_apis_finds_no_kernel_out_of_bounds() {
     let params = SimParams::default();
     for variant in [Variant::Naive, Variant::Optimized] {
         let mut gpu: Vec<(Box<dyn KernelRunner>, Vec<Command>)> = Vec::new();
-        if let Some(g) = or_skip(WgpuSolver::new(variant, scene.clone(), params.clone()), "wgpu") {
+        if let Some(g) = or_skip(wgpu_solver(variant, scene.clone(), params.clone(), SolverOptions::default()), "wgpu")
+        {
             let c = g.commands().to_vec();
             gpu.push((Box::new(g), c));
         }
-        let options = VulkanOptions { validation: true, ..Default::default() };
-        if let Some(v) = or_skip(VulkanSolver::with_options(variant, scene.clone(), params.clone(), options), "vulkan")
-        {
+        let options = SolverOptions::default();
+        if let Some(v) = or_skip(vulkan_solver(variant, scene.clone(), params.clone(), true, options), "vulkan") {
             let c = v.commands();
             gpu.push((Box::new(v), c));
         }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clothlab_core::cpu::Exec;
 use clothlab_core::{CpuSolver, RenderError, RenderMode, Scene, SimParams, Solver, View};
 use clothlab_tests::{image_diff, or_skip, test_view};
-use clothlab_wgpu::{ClothSource, Variant, WgpuRenderer, WgpuSolver};
+use clothlab_wgpu::{ClothSource, SolverOptions, Variant, WgpuRenderer, WgpuSolver, wgpu_solver};
 
 const W: u32 = 320;
 const H: u32 = 240;
@@ -18,7 +18,10 @@ fn view(mode: RenderMode) -> View {
 
 /// The optimized wgpu solver after `FRAMES` frames, or `None` without an adapter.
 fn simulated() -> Option<WgpuSolver> {
-    let mut s = or_skip(WgpuSolver::new(Variant::Optimized, Scene::with_n(N), SimParams::default()), "wgpu solver")?;
+    let mut s = or_skip(
+        wgpu_solver(Variant::Optimized, Scene::with_n(N), SimParams::default(), SolverOptions::default()),
+        "wgpu solver",
+    )?;
     for _ in 0..FRAMES {
         s.step_frame().unwrap();
     }
@@ -27,13 +30,13 @@ fn simulated() -> Option<WgpuSolver> {
 
 fn renderer(s: &WgpuSolver) -> WgpuRenderer {
     let (_, topo) = clothlab_core::build(s.scene(), s.params()).unwrap();
-    WgpuRenderer::new(s.context(), s.scene(), &topo, W, H).unwrap()
+    WgpuRenderer::new(s.engine().context(), s.scene(), &topo, W, H).unwrap()
 }
 
 fn draw(s: &WgpuSolver, r: &mut WgpuRenderer, mode: RenderMode) -> Vec<u8> {
     let (pos, normal) = s.vertex_buffers();
-    r.render(s.context(), &view(mode), ClothSource::Gpu { pos, normal }).unwrap();
-    r.read_image(s.context()).unwrap()
+    r.render(s.engine().context(), &view(mode), ClothSource::Gpu { pos, normal }).unwrap();
+    r.read_image(s.engine().context()).unwrap()
 }
 
 fn out_dir() -> PathBuf {
@@ -106,8 +109,8 @@ fn the_cloth_is_in_the_picture_and_cpu_and_gpu_solvers_draw_the_same() {
     for _ in 0..FRAMES {
         cpu.step_frame().unwrap();
     }
-    r.render(s.context(), &view(RenderMode::Triangles), ClothSource::Cpu(cpu.state_ref())).unwrap();
-    let cpu_img = r.read_image(s.context()).unwrap();
+    r.render(s.engine().context(), &view(RenderMode::Triangles), ClothSource::Cpu(cpu.state_ref())).unwrap();
+    let cpu_img = r.read_image(s.engine().context()).unwrap();
     let (mean, bad) = image_diff(&gpu_img, &cpu_img);
     // Same thresholds as the golden images: the solvers agree to rounding, so the
     // pictures may differ only where an edge moves by a fraction of a pixel.
@@ -127,7 +130,7 @@ fn picking_returns_the_particle_under_the_cursor() {
         let p = glam::Vec3::new(state.pos[k][0], state.pos[k][1], state.pos[k][2]);
         let [x, y] = v.camera.project(p, W, H).unwrap();
         let (pos, normal) = s.vertex_buffers();
-        let got = r.pick(s.context(), &v, ClothSource::Gpu { pos, normal }, x as u32, y as u32).unwrap();
+        let got = r.pick(s.engine().context(), &v, ClothSource::Gpu { pos, normal }, x as u32, y as u32).unwrap();
         let Some(id) = got else {
             // Hidden behind a sphere from this camera: nothing to check for this one.
             continue;
@@ -142,14 +145,14 @@ fn picking_returns_the_particle_under_the_cursor() {
     assert!(hits >= 3, "only {hits} of 4 probes hit the cloth");
     // The sky is not the cloth.
     let (pos, normal) = s.vertex_buffers();
-    assert_eq!(r.pick(s.context(), &v, ClothSource::Gpu { pos, normal }, 2, 2).unwrap(), None);
+    assert_eq!(r.pick(s.engine().context(), &v, ClothSource::Gpu { pos, normal }, 2, 2).unwrap(), None);
 }
 
 #[test]
 fn resizing_to_one_pixel_and_back_and_refusing_zero() {
     let Some(s) = simulated() else { return };
     let mut r = renderer(&s);
-    let ctx = s.context();
+    let ctx = s.engine().context();
     let before = draw(&s, &mut r, RenderMode::Lines);
     r.resize(ctx, 1, 1).unwrap();
     assert_eq!(draw(&s, &mut r, RenderMode::Triangles).len(), 4);

@@ -6,7 +6,7 @@ use clothlab_core::grid::ClothState;
 use clothlab_core::{RenderMode, Scene, SimParams, Solver, View};
 use clothlab_engine::Variant;
 use clothlab_tests::{image_diff, or_skip, test_view};
-use clothlab_vulkan::{VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
+use clothlab_vulkan::{SolverOptions, VkCloth, VulkanRenderer, VulkanSolver, vulkan_solver};
 use clothlab_wgpu::{ClothSource, GpuContext, WgpuRenderer};
 
 const W: u32 = 320;
@@ -21,9 +21,9 @@ fn view(mode: RenderMode) -> View {
 /// The optimized Vulkan solver after `FRAMES` frames (validation on), or `None` without
 /// an adapter.
 fn simulated() -> Option<VulkanSolver> {
-    let options = VulkanOptions { validation: true, ..Default::default() };
+    let options = SolverOptions::default();
     let mut s = or_skip(
-        VulkanSolver::with_options(Variant::Optimized, Scene::with_n(N), SimParams::default(), options),
+        vulkan_solver(Variant::Optimized, Scene::with_n(N), SimParams::default(), true, options),
         "vulkan solver",
     )?;
     for _ in 0..FRAMES {
@@ -34,7 +34,7 @@ fn simulated() -> Option<VulkanSolver> {
 
 fn vulkan_renderer(s: &VulkanSolver) -> VulkanRenderer {
     let (_, topo) = clothlab_core::build(s.scene(), s.params()).unwrap();
-    VulkanRenderer::new(&s.device(), s.scene(), &topo, W, H).unwrap()
+    VulkanRenderer::new(&s.engine().device(), s.scene(), &topo, W, H).unwrap()
 }
 
 /// The wgpu renderer's picture of `state`.
@@ -47,7 +47,7 @@ fn wgpu_picture(state: &ClothState, scene: &Scene, mode: RenderMode) -> Vec<u8> 
 }
 
 fn no_validation_messages(s: &VulkanSolver) {
-    let m = s.take_validation_messages();
+    let m = s.engine().take_validation_messages();
     assert!(m.is_empty(), "validation layer: {m:#?}");
 }
 

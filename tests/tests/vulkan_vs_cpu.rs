@@ -9,18 +9,18 @@ use clothlab_engine::Variant;
 use clothlab_engine::kernels::Check;
 use clothlab_engine::validate::{KernelRunner, validate_kernels};
 use clothlab_tests::{assert_checks, or_skip};
-use clothlab_vulkan::{SpringTable, StatsMode, VulkanOptions, VulkanSolver};
+use clothlab_vulkan::{SolverOptions, SpringTable, StatsMode, VulkanSolver, vulkan_solver};
 
 fn vulkan(variant: Variant, n: u32) -> Option<VulkanSolver> {
-    vulkan_with(variant, n, VulkanOptions { validation: true, ..Default::default() })
+    vulkan_with(variant, n, SolverOptions::default())
 }
 
-fn vulkan_with(variant: Variant, n: u32, options: VulkanOptions) -> Option<VulkanSolver> {
-    or_skip(VulkanSolver::with_options(variant, Scene::with_n(n), SimParams::default(), options), "vulkan solver")
+fn vulkan_with(variant: Variant, n: u32, options: SolverOptions) -> Option<VulkanSolver> {
+    or_skip(vulkan_solver(variant, Scene::with_n(n), SimParams::default(), true, options), "vulkan solver")
 }
 
 fn no_validation_messages(s: &VulkanSolver) {
-    let m = s.take_validation_messages();
+    let m = s.engine().take_validation_messages();
     assert!(m.is_empty(), "validation layer: {m:#?}");
 }
 
@@ -83,7 +83,7 @@ fn the_spring_table_from_storage_or_an_image_gives_the_twins_results() {
     // Same arithmetic as the twins, so the kernel bounds of validate_kernels apply; and a
     // rollout stays within the rollout bound.
     for table in [SpringTable::Storage, SpringTable::Image] {
-        let options = VulkanOptions { validation: true, table, ..Default::default() };
+        let options = SolverOptions { table, ..Default::default() };
         let Some(mut v) = vulkan_with(Variant::Optimized, 65, options) else { return };
         let kernels = v.kernels();
         if table == SpringTable::Image {
@@ -119,8 +119,8 @@ fn gpu_statistics_match_the_cpu_twin_by_subgroups_and_by_atomics() {
         (Variant::Optimized, StatsMode::Atomics, 2.5e-4),
         (Variant::Naive, StatsMode::Atomics, 2.5e-4),
     ] {
-        let options = VulkanOptions { validation: true, stats, ..Default::default() };
-        let v = match VulkanSolver::with_options(variant, Scene::with_n(n), SimParams::default(), options) {
+        let options = SolverOptions { stats, ..Default::default() };
+        let v = match vulkan_solver(variant, Scene::with_n(n), SimParams::default(), true, options) {
             Ok(v) => Some(v),
             Err(e @ clothlab_core::SolverError::Unsupported(_)) => {
                 // A device without subgroup arithmetic refuses the mode with a message.
@@ -163,10 +163,10 @@ fn gpu_statistics_match_the_cpu_twin_by_subgroups_and_by_atomics() {
 
 #[test]
 fn dropping_the_solver_frees_every_allocation() {
-    let options = VulkanOptions { validation: true, table: SpringTable::Image, stats: StatsMode::Atomics };
+    let options = SolverOptions { table: SpringTable::Image, stats: StatsMode::Atomics };
     let Some(mut v) = vulkan_with(Variant::Naive, 33, options) else { return };
     v.step_frame().unwrap();
-    let dev = v.device();
+    let dev = v.engine().device();
     // 21 buffers (state, tables, constants, statistics, staging) and the table image.
     assert!(dev.live_allocations() >= 22, "{} allocations", dev.live_allocations());
     drop(v);

@@ -6,8 +6,10 @@ use std::time::Duration;
 
 use clothlab_core::{OrbitCamera, RenderMode, Scene, SimParams, Solver, View};
 use clothlab_engine::Variant;
-use clothlab_vulkan::raw::Device;
-use clothlab_vulkan::{Overlay, Presented, Presenter, VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
+use clothlab_vulkan::{
+    Device, GpuSolver, Overlay, Presented, Presenter, SolverOptions, VkCloth, VulkanEngine, VulkanRenderer,
+    VulkanSolver,
+};
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::WindowEvent;
@@ -71,14 +73,9 @@ fn frames_with_an_egui_overlay_reach_the_swapchain_across_a_resize() {
     let dev = Device::for_window(true, &window).expect("a Vulkan device presenting to the window");
     let scene = Scene::with_n(24);
     let params = SimParams::default();
-    let mut solver = VulkanSolver::on_device(
-        dev.clone(),
-        Variant::Optimized,
-        scene.clone(),
-        params.clone(),
-        VulkanOptions::default(),
-    )
-    .unwrap();
+    let engine = VulkanEngine::on_device(dev.clone()).unwrap();
+    let mut solver =
+        GpuSolver::new(engine, Variant::Optimized, scene.clone(), params.clone(), SolverOptions::default()).unwrap();
     let (_, topo) = clothlab_core::build(&scene, &params).unwrap();
     let size = window.inner_size();
     let mut renderer = VulkanRenderer::new(&dev, &scene, &topo, size.width, size.height).unwrap();
@@ -152,7 +149,7 @@ fn frames_with_an_egui_overlay_reach_the_swapchain_across_a_resize() {
     // Teardown in reverse order, with the validation layer watching.
     drop(presenter);
     drop(renderer);
-    let m = solver.take_validation_messages();
+    let m = solver.engine().take_validation_messages();
     assert!(m.is_empty(), "validation layer: {m:#?}");
     drop(solver);
     drop(dev);

@@ -6,12 +6,12 @@ use clothlab_core::{Scene, SimParams, Solver};
 use clothlab_engine::kernels::{self as k, Check};
 use clothlab_engine::validate::{KernelRunner, validate_kernels};
 use clothlab_tests::{assert_checks, or_skip};
-use clothlab_wgpu::{Variant, WgpuSolver};
+use clothlab_wgpu::{SolverOptions, Variant, WgpuSolver, wgpu_solver};
 
 /// A wgpu solver, or `None` (with the reason printed) where no adapter exists and the
 /// environment does not require one.
 fn gpu(variant: Variant, n: u32) -> Option<WgpuSolver> {
-    or_skip(WgpuSolver::new(variant, Scene::with_n(n), SimParams::default()), "wgpu solver")
+    or_skip(wgpu_solver(variant, Scene::with_n(n), SimParams::default(), SolverOptions::default()), "wgpu solver")
 }
 
 fn kernels_match_on(n: u32) {

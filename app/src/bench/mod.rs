@@ -11,67 +11,20 @@
 mod output;
 mod plot;
 
-use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clothlab_core::timing::{OverheadPlan, OverheadRow};
-use clothlab_core::{ClothState, CpuSolver, Exec, Scene, SimParams, Solver};
-use clothlab_vulkan::raw::Device;
-use clothlab_vulkan::{VkCloth, VulkanOptions, VulkanRenderer, VulkanSolver};
-use clothlab_wgpu::{ClothSource, GpuContext, Variant, WgpuRenderer, WgpuSolver};
+use clothlab_core::{ClothState, Scene, SimParams};
+use clothlab_vulkan::{Device, VkCloth, VulkanRenderer};
+use clothlab_wgpu::{ClothSource, GpuContext, WgpuRenderer};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::cli::{Backend, Mode, default_view, vulkan_validation};
-
-/// Arguments of `clothlab bench`.
-#[derive(clap::Args, Debug)]
-pub struct BenchArgs {
-    /// Backends to measure (comma-separated). GPU backends without an adapter are skipped
-    /// with a note.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::CpuPar, Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan])]
-    backends: Vec<Backend>,
-    /// Grid sizes, particles per side (comma-separated, 2 ..= 4096). Sizes a backend would
-    /// take longer than `--cell-budget` for are skipped for that backend.
-    #[arg(long, value_delimiter = ',', default_values_t = [100, 200, 300, 400, 500, 1024, 2048])]
-    sizes: Vec<u32>,
-    /// Substeps measured per kernel at each size (the thesis: 1000 iterations); rounded up
-    /// to whole frames. The frame table gets as many frames again.
-    #[arg(long, default_value_t = 1000)]
-    iters: u32,
-    /// Output folder (created if missing).
-    #[arg(long, default_value = "bench-out")]
-    out: PathBuf,
-    /// Most seconds one backend × size cell may take, predicted from the backend's
-    /// previous size; larger cells are skipped and listed in the report.
-    #[arg(long, default_value_t = 300.0)]
-    cell_budget: f64,
-    /// Offscreen render target of the frame measurement, pixels (WIDTHxHEIGHT).
-    #[arg(long, default_value = "1280x720", value_parser = parse_resolution)]
-    resolution: (u32, u32),
-    /// Skip the API-overhead micro-benchmarks.
-    #[arg(long)]
-    no_overhead: bool,
-    /// Label of the machine in the report (default: CPU model and core count).
-    #[arg(long)]
-    machine: Option<String>,
-    /// Measure nothing: read `--out`/results.json (e.g. copied from another machine) and
-    /// write report.md and the plots again.
-    #[arg(long)]
-    replot: bool,
-}
-
-fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once('x').ok_or_else(|| format!("`{s}`: expected WIDTHxHEIGHT, e.g. 1280x720"))?;
-    let w: u32 = w.trim().parse().map_err(|_| format!("`{s}`: width is not a whole number"))?;
-    let h: u32 = h.trim().parse().map_err(|_| format!("`{s}`: height is not a whole number"))?;
-    if !(16..=8192).contains(&w) || !(16..=8192).contains(&h) {
-        return Err(format!("`{s}`: width and height must be in 16 ..= 8192"));
-    }
-    Ok((w, h))
-}
+use crate::cli::{BenchArgs, Mode};
+use crate::commands::render::default_view;
+use crate::solvers::{AnySolver, Backend, make_solver, vulkan_validation};
 
 /// Unmeasured frames at the start of every cell (pipelines, caches, clocks, the cloth's
 /// first fall).
@@ -104,23 +57,6 @@ pub struct Cell {
     pub probe: Vec<[f32; 3]>,
     /// Seconds the cell took.
     pub seconds: f64,
-}
-
-/// The solver of a cell, with what its renderer needs to draw it.
-enum Sim {
-    Cpu(Box<CpuSolver>),
-    Wgpu(Box<WgpuSolver>),
-    Vulkan(Box<VulkanSolver>),
-}
-
-impl Sim {
-    fn solver(&mut self) -> &mut dyn Solver {
-        match self {
-            Sim::Cpu(s) => s.as_mut(),
-            Sim::Wgpu(s) => s.as_mut(),
-            Sim::Vulkan(s) => s.as_mut(),
-        }
-    }
 }
 
 enum Painter {
@@ -361,25 +297,18 @@ fn run_cell(
     let t_cell = Instant::now();
     let scene = Scene::with_n(n);
     let p = params.clone();
-    let options = VulkanOptions { validation: vulkan_validation(), ..Default::default() };
-    let variant = if matches!(backend, Backend::Wgpu | Backend::Vulkan) { Variant::Optimized } else { Variant::Naive };
-    let mut sim = match backend {
-        Backend::Cpu => Sim::Cpu(Box::new(CpuSolver::new(Exec::Serial, scene.clone(), p)?)),
-        Backend::CpuPar => Sim::Cpu(Box::new(CpuSolver::new(Exec::Parallel, scene.clone(), p)?)),
-        // A device of its own (see below).
-        Backend::WgpuNaive | Backend::Wgpu => Sim::Wgpu(Box::new(WgpuSolver::new(variant, scene.clone(), p)?)),
-        Backend::VulkanNaive | Backend::Vulkan => {
-            Sim::Vulkan(Box::new(VulkanSolver::with_options(variant, scene.clone(), p, options)?))
-        }
-    };
+    // A device of its own for every GPU cell (see below).
+    let mut sim = make_solver(backend, scene.clone(), p)?;
     let (_, topo) = clothlab_core::build(&scene, params)?;
     let mut painter = match &sim {
-        Sim::Wgpu(s) => {
-            let r = WgpuRenderer::new(s.context(), &scene, &topo, width, height)?;
-            Painter::Wgpu(Box::new((s.context().clone(), r)))
+        AnySolver::Wgpu(s, _) => {
+            let ctx = s.engine().context();
+            Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, &topo, width, height)?)))
         }
-        Sim::Vulkan(s) => Painter::Vulkan(Box::new(VulkanRenderer::new(&s.device(), &scene, &topo, width, height)?)),
-        Sim::Cpu(_) => match (&devices.wgpu, &devices.vulkan) {
+        AnySolver::Vulkan(s, _) => {
+            Painter::Vulkan(Box::new(VulkanRenderer::new(&s.engine().device(), &scene, &topo, width, height)?))
+        }
+        AnySolver::Cpu(_) => match (&devices.wgpu, &devices.vulkan) {
             (Some(ctx), _) => {
                 Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, &topo, width, height)?)))
             }
@@ -388,9 +317,8 @@ fn run_cell(
         },
     };
     let adapter = match &sim {
-        Sim::Cpu(_) => cpu_label(),
-        Sim::Wgpu(s) => s.adapter(),
-        Sim::Vulkan(s) => format!("{} (Vulkan)", s.adapter()),
+        AnySolver::Cpu(_) => cpu_label(),
+        gpu => gpu.adapter(),
     };
     let view = default_view(Mode::Triangles);
 
@@ -399,24 +327,24 @@ fn run_cell(
     // queries through the rasterizer's scene, at the next flush), so every GPU cell runs
     // on a device of its own and draws only after its kernels were timed.
     for _ in 0..WARMUP_FRAMES {
-        sim.solver().step_frame()?;
+        sim.get().step_frame()?;
     }
     // Per-kernel table.
-    sim.solver().set_kernel_timing(true);
-    sim.solver().reset_timings();
+    sim.get().set_kernel_timing(true);
+    sim.get().reset_timings();
     for _ in 0..frames {
-        sim.solver().step_frame()?;
+        sim.get().step_frame()?;
     }
-    let kernels = sim.solver().timings().rows;
+    let kernels = sim.get().timings().rows;
     // Frame table: per-kernel timestamps off, each frame simulated, waited for, drawn
     // (after one unmeasured draw that builds the renderer's pipelines and shadow map).
-    sim.solver().set_kernel_timing(false);
+    sim.get().set_kernel_timing(false);
     draw(&mut sim, &mut painter, &view)?;
     let mut rec = clothlab_core::TimingRecorder::new(frames as usize);
     for _ in 0..frames {
         let t = Instant::now();
-        sim.solver().step_frame()?;
-        finish(&sim)?;
+        sim.get().step_frame()?;
+        sim.finish()?;
         let t_sim = t.elapsed().as_nanos() as f64;
         let t = Instant::now();
         let drew = draw(&mut sim, &mut painter, &view)?;
@@ -427,7 +355,7 @@ fn run_cell(
         }
         rec.record("frame", t_sim + if drew { t_render } else { 0.0 });
     }
-    let state = sim.solver().state()?;
+    let state = sim.get().state()?;
     Ok(Cell {
         backend: backend.name().to_owned(),
         n,
@@ -439,32 +367,23 @@ fn run_cell(
     })
 }
 
-/// Waits until the solver's last frame is done on the GPU.
-fn finish(sim: &Sim) -> Result<()> {
-    match sim {
-        Sim::Cpu(_) => Ok(()),
-        Sim::Wgpu(s) => Ok(s.context().wait_idle()?),
-        Sim::Vulkan(s) => Ok(s.device().wait_idle()?),
-    }
-}
-
 /// Draws the cloth offscreen and waits for the picture; false when there is no renderer.
-fn draw(sim: &mut Sim, painter: &mut Painter, view: &clothlab_core::View) -> Result<bool> {
+fn draw(sim: &mut AnySolver, painter: &mut Painter, view: &clothlab_core::View) -> Result<bool> {
     match (painter, sim) {
         (Painter::None, _) => return Ok(false),
-        (Painter::Wgpu(p), Sim::Cpu(s)) => {
+        (Painter::Wgpu(p), AnySolver::Cpu(s)) => {
             let (ctx, r) = &mut **p;
             r.render(ctx, view, ClothSource::Cpu(s.state_ref()))?;
             ctx.wait_idle()?;
         }
-        (Painter::Wgpu(p), Sim::Wgpu(s)) => {
+        (Painter::Wgpu(p), AnySolver::Wgpu(s, _)) => {
             let (ctx, r) = &mut **p;
             let (pos, normal) = s.vertex_buffers();
             r.render(ctx, view, ClothSource::Gpu { pos, normal })?;
             ctx.wait_idle()?;
         }
-        (Painter::Vulkan(r), Sim::Cpu(s)) => r.render(view, VkCloth::Cpu(s.state_ref()))?,
-        (Painter::Vulkan(r), Sim::Vulkan(s)) => {
+        (Painter::Vulkan(r), AnySolver::Cpu(s)) => r.render(view, VkCloth::Cpu(s.state_ref()))?,
+        (Painter::Vulkan(r), AnySolver::Vulkan(s, _)) => {
             let (pos, normal) = s.vertex_buffers();
             r.render(view, VkCloth::Gpu { pos, normal })?;
         }

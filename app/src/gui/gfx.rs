@@ -5,13 +5,13 @@ use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
 use clothlab_core::{Scene, View};
-use clothlab_vulkan::raw::Device;
+use clothlab_vulkan::Device;
 use clothlab_vulkan::{Overlay, Presenter, VulkanRenderer};
 use clothlab_wgpu::{GpuContext, WgpuRenderer};
 use winit::window::Window;
 
-use super::sim::{AnySolver, Shared, vulkan_cloth, wgpu_cloth};
-use crate::cli::Api;
+use crate::solvers::Api;
+use crate::solvers::{AnySolver, Shared, vulkan_cloth, wgpu_cloth};
 
 /// A picture of the whole window (scene and panels), sRGB RGBA8.
 pub struct Shot {
@@ -106,7 +106,7 @@ impl Gfx {
                 Gfx::Wgpu(Box::new(WgpuGfx { ctx, surface, config, renderer, egui, scene_tex, capturable }))
             }
             Api::Vulkan => {
-                let dev = Device::for_window(crate::cli::vulkan_validation(), window.as_ref())?;
+                let dev = Device::for_window(crate::solvers::vulkan_validation(), window.as_ref())?;
                 let renderer = VulkanRenderer::new(&dev, scene, &topo, w, h)?;
                 let presenter = Presenter::new(&dev, w, h)?;
                 Gfx::Vulkan(Box::new(VulkanGfx { renderer, presenter, dev }))

@@ -19,7 +19,7 @@ use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::window::{Window, WindowId};
 
-use crate::cli::{Api, Backend};
+use crate::solvers::{Api, Backend};
 use gfx::{EguiFrame, Gfx, Shot};
 use input::{Action, Panel, Tool};
 use sim::Sim;
@@ -384,7 +384,7 @@ impl Running {
             return Ok(());
         }
         let backend = self.sim.backend;
-        self.sim.switch(Backend::Cpu, &sim::Shared::None)?;
+        self.sim.switch(Backend::Cpu, &crate::solvers::Shared::None)?;
         let scene = self.sim.solver.get_ref().scene().clone();
         let params = self.sim.solver.get_ref().params().clone();
         // The old surface must be gone before the new one is made.

@@ -744,7 +744,6 @@ impl Drop for Kernel {
 pub struct Sets {
     dev: Arc<Device>,
     pool: vk::DescriptorPool,
-    max_sets: u32,
 }
 
 impl Sets {
@@ -760,12 +759,7 @@ impl Sets {
         // SAFETY: valid device and create info; destroyed in Drop.
         let pool =
             unsafe { dev.device.create_descriptor_pool(&info, None) }.map_err(vk_err("creating a descriptor pool"))?;
-        Ok(Self { dev: dev.clone(), pool, max_sets })
-    }
-
-    /// The most sets the pool holds.
-    pub fn capacity(&self) -> u32 {
-        self.max_sets
+        Ok(Self { dev: dev.clone(), pool })
     }
 
     /// A set for `kernel` with `buffers[k]` (binding, type, buffer) bound whole, and

@@ -1,0 +1,108 @@
+//! `clothlab render`: simulate headless, then draw the scene into a PNG.
+
+use std::process::ExitCode;
+
+use anyhow::{Context, Result, bail};
+use clap::ValueEnum;
+use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_vulkan::{VkCloth, VulkanRenderer};
+use clothlab_wgpu::{ClothSource, WgpuRenderer};
+
+use crate::cli::{Mode, RenderArgs};
+use crate::solvers::{AnySolver, Api, Backend, make_solver, vulkan_validation};
+
+/// The default view of the scene: the orbit camera's start and a light above and in front.
+pub fn default_view(mode: Mode) -> clothlab_core::View {
+    clothlab_core::View {
+        camera: clothlab_core::OrbitCamera::default(),
+        light: [2.0, 5.5, 3.0],
+        mode: match mode {
+            Mode::Points => clothlab_core::RenderMode::Points,
+            Mode::Lines => clothlab_core::RenderMode::Lines,
+            Mode::Triangles => clothlab_core::RenderMode::Triangles,
+        },
+    }
+}
+
+/// Runs `render`.
+pub fn render(args: RenderArgs) -> Result<ExitCode> {
+    let scene = Scene::with_n(args.n);
+    scene.validate()?;
+    if args.frames > 100_000 {
+        bail!("invalid --frames {}: must be in 0 ..= 100000", args.frames);
+    }
+    if !matches!(args.out.extension().and_then(|e| e.to_str()), Some("png" | "PNG")) {
+        bail!("--out {}: the image is written as PNG, use a .png file name", args.out.display());
+    }
+    let params = SimParams::default();
+    let view = default_view(args.mode);
+    let is_vulkan = matches!(args.backend, Backend::VulkanNaive | Backend::Vulkan);
+    let api = args.api.unwrap_or(if is_vulkan { Api::Vulkan } else { Api::Wgpu });
+    if api == Api::Wgpu && is_vulkan || api == Api::Vulkan && matches!(args.backend, Backend::WgpuNaive | Backend::Wgpu)
+    {
+        bail!(
+            "--backend {} draws through its own API: a GPU solver's buffers are drawn without a copy, so pick --api {} (or a CPU backend)",
+            args.backend.to_possible_value().map(|v| v.get_name().to_owned()).unwrap_or_default(),
+            if is_vulkan { "vulkan" } else { "wgpu" }
+        );
+    }
+    let (pixels, adapter) = match args.backend {
+        Backend::Cpu | Backend::CpuPar if api == Api::Vulkan => {
+            let exec = if args.backend == Backend::Cpu { Exec::Serial } else { Exec::Parallel };
+            let mut solver = CpuSolver::new(exec, scene.clone(), params)?;
+            for _ in 0..args.frames {
+                solver.step_frame()?;
+            }
+            let dev = clothlab_vulkan::Device::new(vulkan_validation())?;
+            let mut r = VulkanRenderer::new(&dev, &scene, solver.topology(), args.width, args.height)?;
+            r.render(&view, VkCloth::Cpu(solver.state_ref()))?;
+            (r.read_image()?, format!("{} (Vulkan)", dev.name))
+        }
+        Backend::Cpu | Backend::CpuPar => {
+            let exec = if args.backend == Backend::Cpu { Exec::Serial } else { Exec::Parallel };
+            let mut solver = CpuSolver::new(exec, scene.clone(), params)?;
+            for _ in 0..args.frames {
+                solver.step_frame()?;
+            }
+            let ctx = clothlab_wgpu::GpuContext::new()?;
+            let mut r = WgpuRenderer::new(&ctx, &scene, solver.topology(), args.width, args.height)?;
+            r.render(&ctx, &view, ClothSource::Cpu(solver.state_ref()))?;
+            (r.read_image(&ctx)?, ctx.describe())
+        }
+        _ => {
+            let mut any = make_solver(args.backend, scene.clone(), params.clone())?;
+            for _ in 0..args.frames {
+                any.get().step_frame()?;
+            }
+            let (_, topo) = clothlab_core::build(&scene, &params)?;
+            let adapter = any.adapter();
+            match &any {
+                AnySolver::Vulkan(solver, _) => {
+                    let mut r = VulkanRenderer::new(&solver.engine().device(), &scene, &topo, args.width, args.height)?;
+                    let (pos, normal) = solver.vertex_buffers();
+                    r.render(&view, VkCloth::Gpu { pos, normal })?;
+                    (r.read_image()?, adapter)
+                }
+                AnySolver::Wgpu(solver, _) => {
+                    let ctx = solver.engine().context();
+                    let mut r = WgpuRenderer::new(ctx, &scene, &topo, args.width, args.height)?;
+                    let (pos, normal) = solver.vertex_buffers();
+                    r.render(ctx, &view, ClothSource::Gpu { pos, normal })?;
+                    (r.read_image(ctx)?, adapter)
+                }
+                AnySolver::Cpu(_) => bail!("a CPU solver is drawn above"),
+            }
+        }
+    };
+    image::save_buffer(&args.out, &pixels, args.width, args.height, image::ExtendedColorType::Rgba8)
+        .with_context(|| format!("cannot write {}", args.out.display()))?;
+    println!(
+        "wrote {} ({}x{}, {} frames, {:?}, adapter {adapter})",
+        args.out.display(),
+        args.width,
+        args.height,
+        args.frames,
+        args.mode
+    );
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,29 @@
+//! `clothlab run` (and `clothlab` alone): the interactive app.
+
+use std::process::ExitCode;
+
+use anyhow::{Result, bail};
+
+use crate::cli::RunArgs;
+use crate::solvers::{Api, Backend};
+
+/// Opens the app.
+pub fn run_app(args: RunArgs) -> Result<ExitCode> {
+    if !(10..=1024).contains(&args.n) {
+        bail!("invalid --n {}: the app takes 10 ..= 1024 particles per side", args.n);
+    }
+    let backend = args.backend.unwrap_or(match args.api {
+        Api::Wgpu => Backend::Wgpu,
+        Api::Vulkan => Backend::Vulkan,
+    });
+    crate::gui::run(crate::gui::RunOptions {
+        api: args.api,
+        backend,
+        n: args.n,
+        frames: args.frames,
+        screenshot: args.screenshot,
+        size: (args.width, args.height),
+        drag_test: args.drag_test,
+        switch_api: args.switch_api,
+    })
+}

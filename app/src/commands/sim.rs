@@ -1,0 +1,140 @@
+//! `clothlab sim`: simulate headless and print a summary.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clothlab_core::stats::{summarize, write_json, write_obj};
+use clothlab_core::timing::SUBSTEP;
+use clothlab_core::{Scene, SimParams};
+
+use crate::cli::{SimArgs, StatsArg};
+use crate::solvers::{Shared, make};
+
+/// Most substeps one `sim` run may ask for.
+const MAX_STEPS: u64 = 100_000_000;
+
+/// Applies `NAME=VALUE` overrides to `params` through its serde form, so every field is
+/// reachable and an unknown name or a value of the wrong type is refused.
+pub fn apply_overrides(params: &SimParams, sets: &[String]) -> Result<SimParams> {
+    let mut value = serde_json::to_value(params)?;
+    for s in sets {
+        let Some((name, raw)) = s.split_once('=') else {
+            bail!("--set expects NAME=VALUE, got `{s}`");
+        };
+        let name = name.trim();
+        let obj = value.as_object_mut().context("parameters are not an object")?;
+        let Some(slot) = obj.get_mut(name) else {
+            let mut known: Vec<&String> = obj.keys().collect();
+            known.sort();
+            let known: Vec<&str> = known.iter().map(|s| s.as_str()).collect();
+            bail!("unknown parameter `{name}` (known: {})", known.join(", "));
+        };
+        let parsed: serde_json::Value = match raw.trim() {
+            // JSON has no NaN or infinities; name them so that validate() refuses them
+            // with its own message instead of a parse error.
+            "nan" | "NaN" | "inf" | "-inf" | "infinity" | "-infinity" => {
+                bail!("invalid parameter `{name}` = {raw}: must be a finite number")
+            }
+            r => serde_json::from_str(r).with_context(|| format!("`{name}`: cannot parse `{r}`"))?,
+        };
+        *slot = parsed;
+    }
+    let out: SimParams = serde_json::from_value(value).context("parameter of the wrong type")?;
+    out.validate()?;
+    Ok(out)
+}
+
+/// Runs `sim`.
+pub fn sim(args: SimArgs) -> Result<ExitCode> {
+    let params = apply_overrides(&SimParams::default(), &args.set)?;
+    let scene = Scene::with_n(args.n);
+    scene.validate()?;
+    if args.steps == 0 || args.steps > MAX_STEPS {
+        bail!("invalid --steps {}: must be in 1 ..= {MAX_STEPS}", args.steps);
+    }
+    // Open the output before simulating, so a bad path fails at once, not after the run.
+    let out = match &args.out {
+        Some(path) => {
+            let format = out_format(path)?;
+            let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+            Some((path, format, BufWriter::new(file)))
+        }
+        None => None,
+    };
+    let frames = args.steps.div_ceil(params.substeps as u64);
+    let substeps = frames * params.substeps as u64;
+    let mut any = make(args.backend, scene.clone(), params, args.gpu.options(), &Shared::None)?;
+    let solver = any.get();
+    let t0 = Instant::now();
+    for _ in 0..frames {
+        solver.step_frame()?;
+    }
+    let wall = t0.elapsed();
+    let state = solver.state()?;
+    let (_, topo) = clothlab_core::build(&scene, solver.params())?;
+    let summary = summarize(&state, &topo);
+    let np = scene.num_particles() as f64;
+    let per_substep =
+        solver.timings().get(SUBSTEP).map(|r| r.median_ns).unwrap_or(wall.as_nanos() as f64 / substeps as f64);
+
+    println!("backend        {}", solver.name());
+    println!("grid           {n}x{n} ({np} particles)", n = args.n);
+    println!("substeps       {substeps} ({frames} frames of {})", solver.params().substeps);
+    println!("wall time      {:.3} s", wall.as_secs_f64());
+    println!("time/substep   {:.1} us median ({:.2} ns per particle-substep)", per_substep / 1e3, per_substep / np);
+    println!("max strain     {:.4} (structural springs, |L|/rest - 1)", summary.max_strain);
+    println!("lowest point   {:.4} m (floor at {} m)", summary.lowest_y, scene.floor_y);
+    println!(
+        "NaN            {}",
+        if summary.nan_count == 0 { "none".to_string() } else { format!("{} components", summary.nan_count) }
+    );
+
+    if let Some(last) = solver.substep_stats().last() {
+        println!(
+            "GPU statistics max strain {:.4}, kinetic energy {:.4e} J (last substep, reduced by {})",
+            last.max_strain,
+            last.kinetic_energy,
+            if args.gpu.stats == StatsArg::Atomics { "atomics" } else { "subgroups" }
+        );
+    }
+
+    println!("kernel              median us    min us    max us  samples");
+    for r in solver.timings().rows {
+        println!(
+            "  {:<16} {:>10.1} {:>9.1} {:>9.1} {:>8}",
+            r.label,
+            r.median_ns / 1e3,
+            r.min_ns / 1e3,
+            r.max_ns / 1e3,
+            r.samples
+        );
+    }
+
+    if let Some((path, format, mut w)) = out {
+        match format {
+            OutFormat::Obj => write_obj(&mut w, &state, &topo),
+            OutFormat::Json => write_json(&mut w, &state),
+        }
+        .and_then(|_| w.flush())
+        .with_context(|| format!("cannot write {}", path.display()))?;
+        println!("state written  {}", path.display());
+    }
+    Ok(if summary.nan_count == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+}
+
+enum OutFormat {
+    Obj,
+    Json,
+}
+
+fn out_format(path: &Path) -> Result<OutFormat> {
+    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
+        Some("obj") => Ok(OutFormat::Obj),
+        Some("json") => Ok(OutFormat::Json),
+        _ => bail!("--out {}: unknown format, use a .obj or .json file name", path.display()),
+    }
+}

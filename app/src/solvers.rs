@@ -1,0 +1,231 @@
+//! The one place that turns a backend name into a solver, for every command and the app:
+//! the backends and graphics APIs the user names, and [`AnySolver`], a solver of any
+//! backend kept by type so that a GPU solver can hand its buffers to its API's renderer.
+//! This module imports nothing of the app's own, so the command modules, the app and the
+//! benchmark can all use it without importing each other.
+
+use std::sync::Arc;
+
+use anyhow::{Result, bail};
+use clap::ValueEnum;
+use clothlab_core::grid::ClothState;
+use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_engine::recipe::Command as StepCommand;
+use clothlab_engine::validate::KernelRunner;
+use clothlab_engine::{GpuSolver, KernelRef, SolverOptions, Variant};
+use clothlab_vulkan::{Device, VkCloth, VulkanEngine, VulkanSolver};
+use clothlab_wgpu::{ClothSource, GpuContext, WgpuEngine, WgpuSolver};
+
+/// Solver backends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Backend {
+    /// CPU, one thread (the thesis's CPU variant).
+    Cpu,
+    /// CPU, rayon threads (the thesis's OpenMP variant).
+    CpuPar,
+    /// wgpu, the direct port: a dispatch per kernel, atomics (the thesis's CUDA port).
+    WgpuNaive,
+    /// wgpu, optimized: fused kernels, gathers, one submission per frame.
+    Wgpu,
+    /// Raw Vulkan, the naive recipe (same kernels as wgpu-naive).
+    VulkanNaive,
+    /// Raw Vulkan, the optimized recipe with push constants.
+    Vulkan,
+}
+
+impl Backend {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Cpu => "cpu",
+            Backend::CpuPar => "cpu-par",
+            Backend::WgpuNaive => "wgpu-naive",
+            Backend::Wgpu => "wgpu",
+            Backend::VulkanNaive => "vulkan-naive",
+            Backend::Vulkan => "vulkan",
+        }
+    }
+
+    /// The graphics API of a GPU backend (`None` for the CPU backends).
+    pub fn api(self) -> Option<Api> {
+        match self {
+            Backend::Cpu | Backend::CpuPar => None,
+            Backend::WgpuNaive | Backend::Wgpu => Some(Api::Wgpu),
+            Backend::VulkanNaive | Backend::Vulkan => Some(Api::Vulkan),
+        }
+    }
+
+    /// The recipe a GPU backend runs.
+    pub fn variant(self) -> Variant {
+        match self {
+            Backend::Wgpu | Backend::Vulkan | Backend::Cpu | Backend::CpuPar => Variant::Optimized,
+            Backend::WgpuNaive | Backend::VulkanNaive => Variant::Naive,
+        }
+    }
+}
+
+/// Graphics APIs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Api {
+    /// wgpu (Vulkan, Metal, DX12 or GL underneath).
+    Wgpu,
+    /// Raw Vulkan through ash.
+    Vulkan,
+}
+
+/// Whether the Vulkan backends run with the Khronos validation layer: in debug builds,
+/// or when CLOTHLAB_VALIDATION=1.
+pub fn vulkan_validation() -> bool {
+    cfg!(debug_assertions) || std::env::var("CLOTHLAB_VALIDATION").as_deref() == Ok("1")
+}
+
+/// The device a GPU solver must share with a renderer.
+pub enum Shared<'a> {
+    /// Draw through wgpu on this context.
+    Wgpu(&'a GpuContext),
+    /// Draw through raw Vulkan on this device.
+    Vulkan(&'a Arc<Device>),
+    /// Every GPU solver opens its own device.
+    None,
+}
+
+/// A solver of any backend, kept by type so that a GPU solver on a renderer's device can
+/// hand its buffers to the renderer.
+pub enum AnySolver {
+    /// Serial or rayon.
+    Cpu(Box<CpuSolver>),
+    /// wgpu; `true` when on the shared context.
+    Wgpu(Box<WgpuSolver>, bool),
+    /// Raw Vulkan; `true` when on the shared device.
+    Vulkan(Box<VulkanSolver>, bool),
+}
+
+/// Makes a solver of `backend`: on `shared`'s device where it is a GPU solver of that
+/// API (its buffers drawn with no copy), else on a device of its own. `options` (GPU
+/// statistics, table home) are refused for the CPU backends unless default.
+pub fn make(
+    backend: Backend,
+    scene: Scene,
+    params: SimParams,
+    options: SolverOptions,
+    shared: &Shared<'_>,
+) -> Result<AnySolver> {
+    if backend.api().is_none() && options != SolverOptions::default() {
+        bail!("--stats and --table apply to the GPU backends only");
+    }
+    let v = backend.variant();
+    Ok(match (backend, shared) {
+        (Backend::Cpu, _) => AnySolver::Cpu(Box::new(CpuSolver::new(Exec::Serial, scene, params)?)),
+        (Backend::CpuPar, _) => AnySolver::Cpu(Box::new(CpuSolver::new(Exec::Parallel, scene, params)?)),
+        (Backend::WgpuNaive | Backend::Wgpu, Shared::Wgpu(ctx)) => {
+            let engine = WgpuEngine::on((*ctx).clone());
+            AnySolver::Wgpu(Box::new(GpuSolver::new(engine, v, scene, params, options)?), true)
+        }
+        (Backend::WgpuNaive | Backend::Wgpu, _) => {
+            AnySolver::Wgpu(Box::new(GpuSolver::new(WgpuEngine::new()?, v, scene, params, options)?), false)
+        }
+        (Backend::VulkanNaive | Backend::Vulkan, Shared::Vulkan(dev)) => {
+            let engine = VulkanEngine::on_device((*dev).clone())?;
+            AnySolver::Vulkan(Box::new(GpuSolver::new(engine, v, scene, params, options)?), true)
+        }
+        (Backend::VulkanNaive | Backend::Vulkan, _) => {
+            let engine = VulkanEngine::new(vulkan_validation())?;
+            AnySolver::Vulkan(Box::new(GpuSolver::new(engine, v, scene, params, options)?), false)
+        }
+    })
+}
+
+/// A solver of `backend` on a device of its own.
+pub fn make_solver(backend: Backend, scene: Scene, params: SimParams) -> Result<AnySolver> {
+    make(backend, scene, params, SolverOptions::default(), &Shared::None)
+}
+
+impl AnySolver {
+    /// The solver.
+    pub fn get(&mut self) -> &mut dyn Solver {
+        match self {
+            AnySolver::Cpu(s) => s.as_mut(),
+            AnySolver::Wgpu(s, _) => s.as_mut(),
+            AnySolver::Vulkan(s, _) => s.as_mut(),
+        }
+    }
+
+    /// The solver, read only.
+    pub fn get_ref(&self) -> &dyn Solver {
+        match self {
+            AnySolver::Cpu(s) => s.as_ref(),
+            AnySolver::Wgpu(s, _) => s.as_ref(),
+            AnySolver::Vulkan(s, _) => s.as_ref(),
+        }
+    }
+
+    /// A GPU solver's kernels, runnable one by one (`None` for the CPU solvers).
+    pub fn runner(&mut self) -> Option<&mut dyn KernelRunner> {
+        match self {
+            AnySolver::Cpu(_) => None,
+            AnySolver::Wgpu(s, _) => Some(s.as_mut()),
+            AnySolver::Vulkan(s, _) => Some(s.as_mut()),
+        }
+    }
+
+    /// The commands of one substep of a GPU solver (empty for the CPU solvers).
+    pub fn commands(&self) -> Vec<StepCommand> {
+        match self {
+            AnySolver::Cpu(_) => Vec::new(),
+            AnySolver::Wgpu(s, _) => s.commands(),
+            AnySolver::Vulkan(s, _) => s.commands(),
+        }
+    }
+
+    /// The kernels one substep of a GPU solver dispatches.
+    pub fn recipe_kernels(&self) -> Vec<KernelRef> {
+        match self {
+            AnySolver::Cpu(_) => Vec::new(),
+            AnySolver::Wgpu(s, _) => s.recipe_kernels(),
+            AnySolver::Vulkan(s, _) => s.recipe_kernels(),
+        }
+    }
+
+    /// Where it runs: the adapter (and API), or the CPU.
+    pub fn adapter(&self) -> String {
+        match self {
+            AnySolver::Cpu(_) => "CPU".into(),
+            AnySolver::Wgpu(s, _) => s.adapter(),
+            AnySolver::Vulkan(s, _) => format!("{} (Vulkan)", s.adapter()),
+        }
+    }
+
+    /// Waits until the solver's last frame is done on the GPU.
+    pub fn finish(&self) -> Result<()> {
+        match self {
+            AnySolver::Cpu(_) => Ok(()),
+            AnySolver::Wgpu(s, _) => Ok(s.engine().context().wait_idle()?),
+            AnySolver::Vulkan(s, _) => Ok(s.engine().device().wait_idle()?),
+        }
+    }
+}
+
+/// The cloth as the wgpu renderer takes it: the solver's buffers when it is a wgpu solver
+/// on the shared context, else a state (`copy` holds a read-back one).
+pub fn wgpu_cloth<'a>(solver: &'a mut AnySolver, copy: &'a mut Option<ClothState>) -> Result<ClothSource<'a>> {
+    Ok(match solver {
+        AnySolver::Wgpu(s, true) => {
+            let (pos, normal) = s.vertex_buffers();
+            ClothSource::Gpu { pos, normal }
+        }
+        AnySolver::Cpu(s) => ClothSource::Cpu(s.state_ref()),
+        other => ClothSource::Cpu(copy.insert(other.get().state()?)),
+    })
+}
+
+/// The cloth as the Vulkan renderer takes it (see [`wgpu_cloth`]).
+pub fn vulkan_cloth<'a>(solver: &'a mut AnySolver, copy: &'a mut Option<ClothState>) -> Result<VkCloth<'a>> {
+    Ok(match solver {
+        AnySolver::Vulkan(s, true) => {
+            let (pos, normal) = s.vertex_buffers();
+            VkCloth::Gpu { pos, normal }
+        }
+        AnySolver::Cpu(s) => VkCloth::Cpu(s.state_ref()),
+        other => VkCloth::Cpu(copy.insert(other.get().state()?)),
+    })
+}

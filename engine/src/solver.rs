@@ -1,0 +1,595 @@
+//! The one GPU solver: [`GpuSolver`] implements [`Solver`] and [`KernelRunner`] once, for
+//! any [`Engine`] — buffers from the step's binding table, the recipe of the variant
+//! recorded with the barriers its hazards need, one submission per frame (optimized) or
+//! per substep (naive), per-kernel timestamps, NaN-poisoned kernel checks, statistics, and
+//! parameter changes that rewrite the spring tables in place.
+
+use std::time::Instant;
+
+use clothlab_core::cpu::{self as twins, SubstepStats};
+use clothlab_core::grid::{
+    ClothState, ClothTopology, Grab, InteriorSlots, STRAIN_SLOTS, SpringSlot, StepParams, V4, build, spring_constants,
+};
+use clothlab_core::layout::Buf;
+use clothlab_core::params::MAX_SUBSTEPS;
+use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
+use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, TimingRecorder};
+use clothlab_core::{SimParams, Solver, SolverError};
+
+use crate::gpu::{BufferId, Dispatch, Engine};
+use crate::kernels::{HostBuffers, Immediates, KernelRef, groups};
+use crate::recipe::{
+    Caps, Command, Hazards, StatsMode, Variant, dispatches, kernels_for, kernels_of, recipe, res, stats_commands,
+};
+use crate::tables::{record_times, split_slots, spring_halves, table_texels};
+use crate::validate::KernelRunner;
+
+/// Timestamp queries per frame.
+pub const MAX_QUERIES: u32 = 4096;
+
+/// Where the gathers read the spring table from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SpringTable {
+    /// Every particle takes its springs' constants from a uniform block and its neighbours
+    /// by offset (border included) when the table is the regular grid's; the table is read
+    /// (storage buffers) only for an irregular one.
+    #[default]
+    Interior,
+    /// Every particle reads its slots from read-only storage buffers.
+    Storage,
+    /// Every particle reads its slots from a sampled image (the thesis's texture memory).
+    Image,
+}
+
+/// What a GPU solver computes besides the step, and where it reads the table from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SolverOptions {
+    /// Per-substep statistics (max strain, kinetic energy) computed on the GPU.
+    pub stats: StatsMode,
+    /// Where the spring table is read from.
+    pub table: SpringTable,
+}
+
+/// The buffers a kernel test or a bisection moves between host and device.
+const HOST_BUFFERS: [Buf; 6] = [Buf::Pos, Buf::PosOut, Buf::Prev, Buf::Force, Buf::Normal, Buf::Faces];
+
+/// The cloth solver on any [`Engine`].
+pub struct GpuSolver<E: Engine> {
+    engine: E,
+    name: String,
+    variant: Variant,
+    options: SolverOptions,
+    scene: Scene,
+    params: SimParams,
+    grab: Option<Grab>,
+    topo: ClothTopology,
+    /// The step constants of the frame being recorded (for kernels reading immediates).
+    sp: StepParams,
+    recipe: Vec<Command>,
+    caps: Caps,
+    /// Every buffer by binding; the position pair as `[pos0, pos1]`.
+    ids: Vec<(Buf, BufferId)>,
+    pos: [BufferId; 2],
+    /// Which of `pos` holds the current positions.
+    cur: usize,
+    hazards: Hazards,
+    barriers: usize,
+    stats: Vec<SubstepStats>,
+    timer: TimingRecorder,
+    time_kernels: bool,
+}
+
+impl<E: Engine> GpuSolver<E> {
+    /// Builds the cloth of `scene` on `engine`.
+    pub fn new(
+        mut engine: E,
+        variant: Variant,
+        scene: Scene,
+        params: SimParams,
+        options: SolverOptions,
+    ) -> Result<Self, SolverError> {
+        if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
+            return Err(SolverError::Invalid(format!("at most {MAX_COLLIDERS} spheres and boxes")));
+        }
+        let info = engine.info().clone();
+        if options.stats == StatsMode::Subgroups && !info.subgroup_arithmetic {
+            return Err(SolverError::Unsupported(format!(
+                "{} has no subgroup arithmetic in compute shaders on {}: use statistics by atomics",
+                info.adapter, info.api
+            )));
+        }
+        // Refuse a grid whose buffers the adapter cannot bind, naming the size it can take
+        // (the largest buffer is the structural and shear half of the spring table).
+        let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
+        SolverError::check_table(scene.cloth.n, per_particle, info.max_binding, &info.adapter)?;
+        let (mut state, topo) = build(&scene, &params)?;
+        // Initial normals and wind, as the CPU solvers start.
+        let sp = StepParams::new(&params, &scene, None);
+        let mut face = vec![[0.0f32; 4]; topo.triangles.len()];
+        twins::tri_normals(twins::Exec::Serial, &topo.triangles, &state.pos, &mut face);
+        twins::vertex_normals(twins::Exec::Serial, &sp, &topo.face_slots, &face, &mut state.normal, &mut state.force);
+
+        let mut spheres = [Sphere { center: [0.0; 3], radius: 0.0 }; MAX_COLLIDERS];
+        spheres[..scene.spheres.len()].copy_from_slice(&scene.spheres);
+        let mut boxes = [Aabb::new([0.0; 3], [0.0; 3]); MAX_COLLIDERS];
+        boxes[..scene.boxes.len()].copy_from_slice(&scene.boxes);
+        let tri_flat: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
+        let face_flat: Vec<i32> = topo.face_slots.iter().flatten().copied().collect();
+        let (strain, bend) = split_slots(&topo);
+        let (springs_a, springs_b) = spring_halves(&topo.springs);
+        let interior = interior_block(&topo, options.table);
+        let (x, y) = groups(topo.num_particles() as u32);
+        let stats_zero = vec![0u8; 4 * MAX_SUBSTEPS as usize];
+        let partials_zero = vec![0u8; 8 * (x * y) as usize];
+        let pos_bytes: &[u8] = bytemuck::cast_slice(&state.pos);
+        // Positions and normals are the renderer's vertex buffers too (no copy).
+        let contents: [(Buf, &[u8]); 20] = [
+            (Buf::Params, bytemuck::bytes_of(&sp)),
+            (Buf::Pos, pos_bytes),
+            (Buf::PosOut, pos_bytes),
+            (Buf::Prev, bytemuck::cast_slice(&state.prev)),
+            (Buf::Force, bytemuck::cast_slice(&state.force)),
+            (Buf::Normal, bytemuck::cast_slice(&state.normal)),
+            (Buf::Slots, bytemuck::cast_slice(&strain)),
+            (Buf::Springs, bytemuck::cast_slice(springs_a)),
+            (Buf::Tethers, bytemuck::cast_slice(&topo.tethers)),
+            (Buf::Triangles, bytemuck::cast_slice(&tri_flat)),
+            (Buf::FaceSlots, bytemuck::cast_slice(&face_flat)),
+            (Buf::Faces, bytemuck::cast_slice(&face)),
+            (Buf::Spheres, bytemuck::cast_slice(&spheres)),
+            (Buf::Boxes, bytemuck::cast_slice(&boxes)),
+            (Buf::BendSlots, bytemuck::cast_slice(&bend)),
+            (Buf::SpringsB, bytemuck::cast_slice(springs_b)),
+            (Buf::Interior, bytemuck::bytes_of(&interior)),
+            (Buf::StatsMax, &stats_zero),
+            (Buf::StatsEnergy, &stats_zero),
+            (Buf::Partials, &partials_zero),
+        ];
+        let mut ids = Vec::with_capacity(contents.len());
+        for (buf, bytes) in contents {
+            let vertex = matches!(buf, Buf::Pos | Buf::PosOut | Buf::Normal);
+            let label = match buf {
+                Buf::Pos => "pos0",
+                Buf::PosOut => "pos1",
+                b => b.name(),
+            };
+            ids.push((buf, engine.create_buffer(buf, label, bytes, vertex)?));
+        }
+        let table_image = options.table == SpringTable::Image;
+        if table_image {
+            let (texels, height) = table_texels(&topo);
+            engine.set_table_image(&texels, height)?;
+        }
+        let id = |b: Buf| ids.iter().find(|(x, _)| *x == b).map(|(_, id)| *id).expect("every binding created");
+        let pos = [id(Buf::Pos), id(Buf::PosOut)];
+        let set = |k: usize| -> Vec<(Buf, BufferId)> {
+            ids.iter()
+                .map(|&(b, i)| match b {
+                    Buf::Pos => (b, pos[k]),
+                    Buf::PosOut => (b, pos[1 - k]),
+                    _ => (b, i),
+                })
+                .collect()
+        };
+        engine.bind([set(0), set(1)])?;
+        // Immediates hold the step constants where the device has room; the naive scatters
+        // use float atomics where the device has them, compare-exchange otherwise: the same
+        // choice on every API, so that the naive pair compares only the APIs.
+        let caps = Caps { float_atomics: info.float_atomics, immediates: info.immediates, table_image };
+        let mut build_list: Vec<KernelRef> = kernels_for(caps);
+        build_list.extend(dispatches(&stats_commands(options.stats, caps)));
+        if caps.table_image {
+            // The storage-table twins too, so that both homes of the table are checked.
+            build_list.extend(kernels_for(Caps { table_image: false, ..caps }));
+        }
+        let name = match variant {
+            Variant::Naive => format!("{}-naive", info.api),
+            Variant::Optimized => info.api.to_string(),
+        };
+        let mut solver = Self {
+            engine,
+            name,
+            variant,
+            options,
+            recipe: recipe(variant, params.strain_iterations, caps),
+            scene,
+            params,
+            grab: None,
+            topo,
+            sp,
+            caps,
+            ids,
+            pos,
+            cur: 0,
+            hazards: Hazards::default(),
+            barriers: 0,
+            stats: Vec::new(),
+            timer: TimingRecorder::default(),
+            time_kernels: true,
+        };
+        for k in build_list {
+            solver.build(k)?;
+        }
+        solver.engine.check("creating the solver")?;
+        Ok(solver)
+    }
+
+    /// Builds `k`'s pipeline (once), with room for the immediates it reads.
+    fn build(&mut self, k: KernelRef) -> Result<(), SolverError> {
+        let immediates = if k.step_immediates() {
+            if !self.caps.immediates {
+                return Err(SolverError::Shader {
+                    kernel: k.shader_name(),
+                    reason: format!("{} has no immediates", self.engine.info().adapter),
+                });
+            }
+            std::mem::size_of::<StepParams>() as u32
+        } else if k.def.immediates == Immediates::Substep {
+            4
+        } else {
+            0
+        };
+        if k.flavor.table_image && !self.caps.table_image {
+            return Err(SolverError::Shader {
+                kernel: k.shader_name(),
+                reason: "built without the table image".into(),
+            });
+        }
+        self.engine.build(k, immediates)
+    }
+
+    /// The engine (the API's device and buffers).
+    pub fn engine(&self) -> &E {
+        &self.engine
+    }
+
+    /// The buffer bound as `buf` now (the position pair by the current parity).
+    fn id(&self, buf: Buf) -> Option<BufferId> {
+        match buf {
+            Buf::Pos => Some(self.pos[self.cur]),
+            Buf::PosOut => Some(self.pos[1 - self.cur]),
+            b => self.ids.iter().find(|(x, _)| *x == b).map(|(_, id)| *id),
+        }
+    }
+
+    fn must(&self, buf: Buf) -> Result<BufferId, SolverError> {
+        self.id(buf).ok_or_else(|| SolverError::Invalid(format!("no buffer {}", buf.name())))
+    }
+
+    /// The buffers holding the current positions and the normals (the renderer's vertex
+    /// buffers: drawn with no copy).
+    pub fn vertex_buffers(&self) -> (&E::Buffer, &E::Buffer) {
+        (self.engine.buffer(self.pos[self.cur]), self.engine.buffer(self.id(Buf::Normal).expect("normal buffer")))
+    }
+
+    /// The adapter, in one line.
+    pub fn adapter(&self) -> String {
+        self.engine.info().adapter.clone()
+    }
+
+    /// Whether the naive scatters use float atomics (else compare-exchange loops).
+    pub fn float_atomics(&self) -> bool {
+        self.caps.float_atomics
+    }
+
+    /// Whether the optimized kernels read the step constants from immediates.
+    pub fn immediates(&self) -> bool {
+        self.caps.immediates
+    }
+
+    /// The options it was built with.
+    pub fn options(&self) -> SolverOptions {
+        self.options
+    }
+
+    /// The commands of one substep (statistics included).
+    pub fn commands(&self) -> Vec<Command> {
+        let mut r = self.recipe.clone();
+        r.extend(stats_commands(self.options.stats, self.caps));
+        r
+    }
+
+    /// The kernels one substep dispatches, in order (statistics included).
+    pub fn recipe_kernels(&self) -> Vec<KernelRef> {
+        kernels_of(&self.commands())
+    }
+
+    /// Pipeline barriers recorded in the last frame (none on an API that places its own).
+    pub fn barriers_last_frame(&self) -> usize {
+        self.barriers
+    }
+
+    /// Records a barrier and notes it.
+    fn barrier(&mut self, after_all: bool) {
+        self.engine.barrier(after_all);
+        self.hazards.clear();
+        self.barriers += 1;
+    }
+
+    /// Records `commands` of substep `substep` (each after the barrier it needs),
+    /// timestamps from query `*q` on while timing and there is room.
+    fn record(&mut self, commands: &[Command], substep: u32, q: &mut u32, labels: &mut Vec<&'static str>) {
+        let substep_bytes = substep.to_le_bytes();
+        let timestamps = self.time_kernels && self.engine.info().timestamps;
+        for c in commands {
+            // Only the barriers the data needs (see recipe::Hazards); a swap flips `cur`.
+            let mut cur = self.cur;
+            if self.hazards.command(c, &mut cur) {
+                self.engine.barrier(false);
+                self.barriers += 1;
+            }
+            self.cur = cur;
+            let k = match c {
+                Command::Clear(buf) => {
+                    if let Some(id) = self.id(*buf) {
+                        self.engine.clear(id);
+                    }
+                    continue;
+                }
+                Command::Swap => continue,
+                Command::Dispatch(k) => *k,
+            };
+            let immediates: &[u8] = if k.step_immediates() {
+                bytemuck::bytes_of(&self.sp)
+            } else if k.def.immediates == Immediates::Substep {
+                &substep_bytes
+            } else {
+                &[]
+            };
+            let timed = timestamps && *q + 2 <= MAX_QUERIES;
+            self.engine.dispatch(&Dispatch {
+                kernel: k,
+                parity: self.cur,
+                groups: groups(k.def.count.of(&self.topo)),
+                immediates,
+                timestamps: timed.then_some(*q),
+            });
+            if timed {
+                *q += 2;
+                labels.push(k.def.label);
+            }
+        }
+    }
+
+    /// Writes `bytes` into `buf` now (everything recorded later must wait for it).
+    fn write(&mut self, buf: Buf, bytes: &[u8]) -> Result<(), SolverError> {
+        self.hazards.dirty();
+        let id = self.must(buf)?;
+        self.engine.write(id, bytes)
+    }
+
+    fn read(&mut self, buf: Buf) -> Result<Vec<V4>, SolverError> {
+        let id = self.must(buf)?;
+        let bytes = self.engine.read(id)?;
+        Ok(bytes.chunks_exact(16).map(bytemuck::pod_read_unaligned::<V4>).collect())
+    }
+
+    /// Uploads `bufs` and `sp`, runs `commands`, reads the buffers back (see
+    /// [`KernelRunner::run_commands`]). The next frame uploads the solver's own constants.
+    fn run_host(&mut self, commands: &[Command], sp: &StepParams, bufs: &mut HostBuffers) -> Result<(), SolverError> {
+        bufs.check(&self.topo, sp)?;
+        for k in dispatches(commands) {
+            self.build(k)?;
+        }
+        self.write(Buf::Params, bytemuck::bytes_of(sp))?;
+        self.sp = *sp;
+        for buf in HOST_BUFFERS {
+            if let Some(v) = bufs.get(buf) {
+                self.write(buf, bytemuck::cast_slice(v))?;
+            }
+        }
+        let was = std::mem::replace(&mut self.time_kernels, false);
+        let recorded = self.engine.begin(0, 0).map(|_| self.record(commands, 0, &mut 0, &mut Vec::new()));
+        self.time_kernels = was;
+        recorded?;
+        self.engine.submit(true)?;
+        self.engine.wait(0)?;
+        self.engine.check("running commands")?;
+        for buf in HOST_BUFFERS {
+            let v = self.read(buf)?;
+            if let Some(dst) = bufs.get_mut(buf) {
+                *dst = v;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The uniform block of the regular grid's spring constants, switched off when the table
+/// is to be read from storage or an image everywhere.
+fn interior_block(topo: &ClothTopology, table: SpringTable) -> InteriorSlots {
+    let mut interior = InteriorSlots::new(topo);
+    if table != SpringTable::Interior {
+        interior.enabled = 0;
+    }
+    interior
+}
+
+impl<E: Engine> KernelRunner for GpuSolver<E> {
+    fn kernels(&self) -> Vec<KernelRef> {
+        let mut v = self.engine.kernels();
+        v.sort_by_key(|k| k.shader_name());
+        v
+    }
+
+    fn run_commands(
+        &mut self,
+        commands: &[Command],
+        p: &StepParams,
+        bufs: &mut HostBuffers,
+    ) -> Result<(), SolverError> {
+        self.run_host(commands, p, bufs)
+    }
+
+    fn adapter(&self) -> String {
+        self.engine.info().adapter.clone()
+    }
+
+    fn add_kernel(&mut self, kernel: KernelRef) -> Result<(), SolverError> {
+        self.build(kernel)?;
+        self.engine.check("building a kernel")
+    }
+}
+
+impl<E: Engine> Solver for GpuSolver<E> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    fn params(&self) -> &SimParams {
+        &self.params
+    }
+
+    fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
+        params.validate()?;
+        let n = self.topo.n;
+        if spring_constants(&params, n) != spring_constants(&self.params, n) {
+            // The spring constants depend on dt and the stiffness fractions: rewrite the
+            // tables in place (the binding sets keep pointing at the same buffers). Wind,
+            // gravity and the like reach the kernels with the next frame's constants.
+            self.topo.set_spring_constants(&params);
+            if self.caps.table_image {
+                let (texels, height) = table_texels(&self.topo);
+                self.engine.set_table_image(&texels, height)?;
+            }
+            let (strain, bend) = split_slots(&self.topo);
+            let (a, b) = spring_halves(&self.topo.springs);
+            let (a, b) = (a.to_vec(), b.to_vec());
+            let interior = interior_block(&self.topo, self.options.table);
+            self.write(Buf::Slots, bytemuck::cast_slice(&strain))?;
+            self.write(Buf::BendSlots, bytemuck::cast_slice(&bend))?;
+            self.write(Buf::Springs, bytemuck::cast_slice(&a))?;
+            self.write(Buf::SpringsB, bytemuck::cast_slice(&b))?;
+            self.write(Buf::Interior, bytemuck::bytes_of(&interior))?;
+        }
+        self.recipe = recipe(self.variant, params.strain_iterations, self.caps);
+        self.params = params;
+        Ok(())
+    }
+
+    fn set_grab(&mut self, grab: Option<Grab>) {
+        self.grab = Grab::checked(grab, self.topo.num_particles());
+    }
+
+    fn step_frame(&mut self) -> Result<(), SolverError> {
+        let t0 = Instant::now();
+        self.sp = StepParams::new(&self.params, &self.scene, self.grab);
+        let commands = self.commands();
+        let stats = self.options.stats != StatsMode::Off;
+        let substeps = self.params.substeps;
+        // Optimized: one submission for the frame. Naive: one per substep, submitted
+        // without waiting in between; the wait on the last covers all of them.
+        let submissions = match self.variant {
+            Variant::Optimized => 1,
+            Variant::Naive => substeps,
+        };
+        let per_submission = substeps / submissions;
+        let max_q = if self.time_kernels && self.engine.info().timestamps {
+            (2 * substeps as usize * dispatches(&commands).count()).min(MAX_QUERIES as usize) as u32
+        } else {
+            0
+        };
+        let (mut q, mut labels) = (0, Vec::new());
+        let (mut record_ns, mut submit_ns) = (0.0, 0.0);
+        let (params, stats_max, stats_energy) =
+            (self.must(Buf::Params)?, self.must(Buf::StatsMax)?, self.must(Buf::StatsEnergy)?);
+        self.barriers = 0;
+        for k in 0..submissions {
+            let t_record = Instant::now();
+            self.engine.begin(k as usize, if k == 0 { max_q } else { 0 })?;
+            if k == 0 {
+                // The frame's constants are recorded into the frame itself (Vulkan: a copy
+                // before the first dispatch; wgpu: a queue write), not a submission of
+                // their own.
+                self.engine.record_write(params, bytemuck::bytes_of(&self.sp))?;
+                let mut written = res::PARAMS;
+                if stats {
+                    self.engine.clear(stats_max);
+                    self.engine.clear(stats_energy);
+                    written |= res::STATS;
+                }
+                // One barrier after all earlier work (the renderer may still have been
+                // reading the positions as vertices) and the writes above.
+                self.hazards.add(0, written);
+                self.barrier(true);
+            }
+            for s in 0..per_submission {
+                self.record(&commands, k * per_submission + s, &mut q, &mut labels);
+            }
+            let last = k + 1 == submissions;
+            if last && stats {
+                if self.hazards.conflicts(res::STATS, 0) {
+                    self.barrier(false);
+                }
+                self.hazards.add(res::STATS, 0);
+                self.engine.readback(stats_max, 4 * substeps as u64)?;
+                self.engine.readback(stats_energy, 4 * substeps as u64)?;
+            }
+            record_ns += t_record.elapsed().as_nanos() as f64;
+            let t_submit = Instant::now();
+            self.engine.submit(last)?;
+            submit_ns += t_submit.elapsed().as_nanos() as f64;
+        }
+        let finished = self.engine.wait(q)?;
+        self.engine.check("simulating a frame")?;
+        if let [max, energy] = &finished.readbacks[..] {
+            let word = |b: &[u8], k: usize| f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]);
+            self.stats = (0..substeps as usize)
+                .map(|k| SubstepStats { max_strain: word(max, k), kinetic_energy: word(energy, k) })
+                .collect();
+        }
+        if self.time_kernels {
+            self.timer.record(CPU_RECORD, record_ns);
+            self.timer.record(CPU_SUBMIT, submit_ns);
+            let frame = if q > 0 {
+                let period = self.engine.info().timestamp_period_ns;
+                let per_substep = dispatches(&commands).count();
+                record_times(&mut self.timer, &labels, &finished.ticks, period, per_substep)
+            } else {
+                self.engine.finish()?;
+                t0.elapsed().as_nanos() as f64
+            };
+            self.timer.record(FRAME, frame);
+        }
+        Ok(())
+    }
+
+    fn state(&mut self) -> Result<ClothState, SolverError> {
+        Ok(ClothState {
+            n: self.topo.n,
+            pos: self.read(Buf::Pos)?,
+            prev: self.read(Buf::Prev)?,
+            force: self.read(Buf::Force)?,
+            normal: self.read(Buf::Normal)?,
+        })
+    }
+
+    fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
+        state.check(self.topo.n)?;
+        self.write(Buf::Pos, bytemuck::cast_slice(&state.pos))?;
+        self.write(Buf::Prev, bytemuck::cast_slice(&state.prev))?;
+        self.write(Buf::Force, bytemuck::cast_slice(&state.force))?;
+        self.write(Buf::Normal, bytemuck::cast_slice(&state.normal))?;
+        Ok(())
+    }
+
+    fn timings(&self) -> KernelTimings {
+        self.timer.table()
+    }
+
+    fn reset_timings(&mut self) {
+        self.timer.clear();
+    }
+
+    fn set_kernel_timing(&mut self, on: bool) {
+        self.time_kernels = on;
+    }
+
+    fn substep_stats(&self) -> Vec<SubstepStats> {
+        self.stats.clone()
+    }
+}
