@@ -13,7 +13,7 @@ use clothlab_core::timing::{OverheadPlan, OverheadRow, elapsed_ns};
 use gpu_allocator::MemoryLocation;
 
 use crate::VkError;
-use crate::raw::{Buffer, Commands, Device, Dispatch, Kernel, Sets};
+use crate::raw::{Buffer, Commands, Device, Dispatch, Kernel, Set, Sets};
 use crate::solver::{download, upload};
 
 /// Elements of the chain's buffer: one workgroup of the `chain` kernel.
@@ -29,7 +29,7 @@ struct Target {
     dev: Arc<Device>,
     cmds: Commands,
     kernel: Kernel,
-    set: vk::DescriptorSet,
+    set: Set,
     data: Buffer,
     /// Host-visible copy of the chain buffer for the check.
     check: Buffer,
@@ -51,7 +51,7 @@ impl OverheadTarget for Target {
 
     fn chain(&mut self, k: u32) -> Result<ChainSample, VkError> {
         let queries = if self.dev.timestamps { 2 } else { 0 };
-        let dispatch = Dispatch { kernel: &self.kernel, set: self.set, push: &[], groups: (1, 1) };
+        let dispatch = Dispatch { kernel: &self.kernel, set: &self.set, push: &[], groups: (1, 1) };
         let t = Instant::now();
         self.cmds.begin(queries)?;
         self.cmds.zero(&self.data);

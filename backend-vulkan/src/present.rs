@@ -274,12 +274,12 @@ impl Presenter {
         let c = &slot.cmds;
         VulkanRenderer::record_inputs_barrier(c);
         renderer.record(c, k, view, &cloth);
-        let image = swapchain.images[index as usize];
         use vk::AccessFlags as A;
         use vk::ImageLayout as L;
         use vk::PipelineStageFlags as P;
         c.transition_swapchain(
-            image,
+            swapchain,
+            index,
             Transition {
                 old: L::UNDEFINED,
                 new: L::TRANSFER_DST_OPTIMAL,
@@ -289,9 +289,10 @@ impl Presenter {
                 dst_access: A::TRANSFER_WRITE,
             },
         );
-        c.blit_to_swapchain(renderer.image(), image, extent);
+        c.blit_to_swapchain(renderer.image(), swapchain, index);
         c.transition_swapchain(
-            image,
+            swapchain,
+            index,
             Transition {
                 old: L::TRANSFER_DST_OPTIMAL,
                 new: L::COLOR_ATTACHMENT_OPTIMAL,
@@ -302,18 +303,19 @@ impl Presenter {
             },
         );
         if let Some(o) = &overlay {
-            c.begin_overlay(swapchain.view(index), extent);
+            c.begin_overlay(swapchain, index);
             self.egui.cmd_draw(c.buffer(), extent, o.pixels_per_point, o.primitives).map_err(eerr)?;
             c.end_rendering();
         }
         let mut last = (L::COLOR_ATTACHMENT_OPTIMAL, P::COLOR_ATTACHMENT_OUTPUT, A::COLOR_ATTACHMENT_WRITE);
-        if let Some((buf, extent)) = &capture {
-            c.transition_swapchain(image, Transition::color_to_transfer_src());
-            c.copy_swapchain_to_buffer(image, *extent, buf);
+        if let Some((buf, _)) = &capture {
+            c.transition_swapchain(swapchain, index, Transition::color_to_transfer_src());
+            c.copy_swapchain_to_buffer(swapchain, index, buf);
             last = (L::TRANSFER_SRC_OPTIMAL, P::TRANSFER, A::empty());
         }
         c.transition_swapchain(
-            image,
+            swapchain,
+            index,
             Transition {
                 old: last.0,
                 new: L::PRESENT_SRC_KHR,

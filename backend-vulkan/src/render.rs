@@ -14,8 +14,8 @@ use gpu_allocator::MemoryLocation;
 
 use crate::VkError;
 use crate::raw::{
-    Binding, Buffer, Commands, Device, GraphicsPipeline, Image, ImageDesc, PipelineDesc, PipelineLayout, Sampler, Sets,
-    Transition, VertexBinding,
+    Binding, Buffer, Commands, Device, GraphicsPipeline, Image, ImageDesc, PipelineDesc, PipelineLayout, Sampler, Set,
+    Sets, Transition, VertexBinding,
 };
 use crate::solver::upload;
 
@@ -84,7 +84,7 @@ fn make_targets(dev: &Arc<Device>, width: u32, height: u32) -> Result<Targets, V
 
 struct Slot {
     frame: Buffer,
-    frame_set: vk::DescriptorSet,
+    frame_set: Set,
     cpu_pos: Buffer,
     cpu_normal: Buffer,
 }
@@ -172,7 +172,7 @@ pub struct VulkanRenderer {
     pipelines: Pipelines,
     /// Per frame slot: the constants, their set, and the CPU solvers' vertices.
     slots: Vec<Slot>,
-    texture_set: vk::DescriptorSet,
+    texture_set: Set,
     static_vb: Buffer,
     static_ib: Buffer,
     static_count: u32,
@@ -444,7 +444,7 @@ impl VulkanRenderer {
         cloth: &GraphicsPipeline,
         pos: &Buffer,
     ) {
-        let frame_set = self.slots[slot % FRAMES_IN_FLIGHT].frame_set;
+        let frame_set = &self.slots[slot % FRAMES_IN_FLIGHT].frame_set;
         c.bind_graphics(stat, &[frame_set]);
         c.bind_vertices(&[&self.static_vb], Some(&self.static_ib));
         c.draw(self.static_count, true);
@@ -474,7 +474,7 @@ impl VulkanRenderer {
     /// [`VulkanRenderer::prepare`]); leaves the resolved image in TRANSFER_SRC_OPTIMAL.
     pub fn record(&self, c: &Commands, slot: usize, view: &View, cloth: &VkCloth<'_>) {
         let (pos, normal) = self.cloth_buffers(slot, cloth);
-        let frame_set = self.slots[slot % FRAMES_IN_FLIGHT].frame_set;
+        let frame_set = &self.slots[slot % FRAMES_IN_FLIGHT].frame_set;
         let t = &self.targets;
         use vk::AccessFlags as A;
         use vk::ImageLayout as L;
@@ -524,22 +524,22 @@ impl VulkanRenderer {
         c.transition(&t.depth, Transition::fresh_depth());
         c.begin_rendering(Some((&t.msaa, Some(&t.resolve), vk::ClearColorValue { float32: SKY })), &t.depth);
         let p = &self.pipelines;
-        c.bind_graphics(&p.lit_static, &[frame_set, self.texture_set]);
+        c.bind_graphics(&p.lit_static, &[frame_set, &self.texture_set]);
         c.bind_vertices(&[&self.static_vb], Some(&self.static_ib));
         c.draw(self.static_count, true);
         match view.mode {
             RenderMode::Triangles => {
-                c.bind_graphics(&p.lit_cloth, &[frame_set, self.texture_set]);
+                c.bind_graphics(&p.lit_cloth, &[frame_set, &self.texture_set]);
                 c.bind_vertices(&[pos, normal, &self.uv], Some(&self.tri_ib));
                 c.draw(self.tri_count, true);
             }
             RenderMode::Lines => {
-                c.bind_graphics(&p.lines_cloth, &[frame_set, self.texture_set]);
+                c.bind_graphics(&p.lines_cloth, &[frame_set, &self.texture_set]);
                 c.bind_vertices(&[pos, normal, &self.uv], Some(&self.line_ib));
                 c.draw(self.line_count, true);
             }
             RenderMode::Points => {
-                c.bind_graphics(&p.points_cloth, &[frame_set, self.texture_set]);
+                c.bind_graphics(&p.points_cloth, &[frame_set, &self.texture_set]);
                 c.bind_vertices(&[pos, normal, &self.uv], None);
                 c.draw(self.num_particles, false);
             }

@@ -18,7 +18,7 @@ use clothlab_engine::{GpuSolver, SolverOptions, Variant};
 use gpu_allocator::MemoryLocation;
 
 use crate::VkError;
-use crate::raw::{self, Buffer, Commands, Device, Image, Kernel, Sets};
+use crate::raw::{self, Buffer, Commands, Device, Image, Kernel, Set, Sets};
 
 /// The cloth solver on raw Vulkan.
 pub type VulkanSolver = GpuSolver<VulkanEngine>;
@@ -45,7 +45,7 @@ pub struct VulkanEngine {
     sync2: bool,
     bindings: [Vec<(u32, vk::DescriptorType, BufferId)>; 2],
     // Vulkan objects; each holds the device alive, and is dropped before it.
-    kernels: HashMap<KernelRef, (Kernel, [vk::DescriptorSet; 2])>,
+    kernels: HashMap<KernelRef, (Kernel, [Set; 2])>,
     sets: Sets,
     cmds: Commands,
     staging: Buffer,
@@ -233,12 +233,12 @@ impl Engine for VulkanEngine {
             layout.push((Buf::Table.binding(), descriptor(BindKind::Image)));
         }
         let kernel = Kernel::new(&self.dev, &spirv, &layout, immediates).map_err(backend)?;
-        let mut sets = [vk::DescriptorSet::null(); 2];
-        for (parity, set) in sets.iter_mut().enumerate() {
+        let set = |parity: usize| {
             let bound: Vec<(u32, vk::DescriptorType, &Buffer)> =
                 self.bindings[parity].iter().map(|&(b, t, id)| (b, t, &self.buffers[id.0 as usize])).collect();
-            *set = self.sets.allocate(&kernel, &bound, image).map_err(backend)?;
-        }
+            self.sets.allocate(&kernel, &bound, image).map_err(backend)
+        };
+        let sets = [set(0)?, set(1)?];
         self.kernels.insert(k, (kernel, sets));
         Ok(())
     }
@@ -291,7 +291,7 @@ impl Engine for VulkanEngine {
 
     fn dispatch(&mut self, d: &Dispatch<'_>) {
         let Some((kernel, sets)) = self.kernels.get(&d.kernel) else { return };
-        let dsp = raw::Dispatch { kernel, set: sets[d.parity & 1], push: d.immediates, groups: d.groups };
+        let dsp = raw::Dispatch { kernel, set: &sets[d.parity & 1], push: d.immediates, groups: d.groups };
         self.cmds.dispatch(&dsp, d.timestamps);
     }
 

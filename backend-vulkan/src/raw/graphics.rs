@@ -4,6 +4,9 @@
 
 use std::ffi::CStr;
 
+use std::sync::Arc;
+
+use super::pipelines::Set;
 use super::*;
 
 /// A sampler.
@@ -11,6 +14,7 @@ pub struct Sampler {
     dev: Arc<Device>,
     /// The Vulkan sampler.
     pub sampler: vk::Sampler,
+    alive: super::device::Alive,
 }
 
 impl Sampler {
@@ -30,14 +34,16 @@ impl Sampler {
             .max_lod(0.25);
         // SAFETY: valid device and create info; destroyed in Drop.
         let sampler = unsafe { dev.device.create_sampler(&info, None) }.map_err(vk_err("creating a sampler"))?;
-        Ok(Self { dev: dev.clone(), sampler })
+        Ok(Self { dev: dev.clone(), sampler, alive: super::device::Alive::new() })
     }
 }
 
 impl Drop for Sampler {
     fn drop(&mut self) {
-        // SAFETY: the owner waited for the GPU.
-        unsafe { self.dev.device.destroy_sampler(self.sampler, None) };
+        self.alive.end();
+        let sampler = self.sampler;
+        // SAFETY: retire runs this once the device is idle.
+        self.dev.retire(|d| unsafe { d.destroy_sampler(sampler, None) });
     }
 }
 
@@ -87,13 +93,14 @@ impl PipelineLayout {
 
 impl Drop for PipelineLayout {
     fn drop(&mut self) {
-        // SAFETY: no pipeline using it is in flight; null handles are ignored.
-        unsafe {
-            self.dev.device.destroy_pipeline_layout(self.layout, None);
-            for l in &self.sets {
-                self.dev.device.destroy_descriptor_set_layout(*l, None);
+        let (layout, sets) = (self.layout, std::mem::take(&mut self.sets));
+        // SAFETY: retire runs this once the device is idle; null handles are ignored.
+        self.dev.retire(|d| unsafe {
+            d.destroy_pipeline_layout(layout, None);
+            for l in &sets {
+                d.destroy_descriptor_set_layout(*l, None);
             }
-        }
+        });
     }
 }
 
@@ -248,8 +255,9 @@ impl GraphicsPipeline {
 
 impl Drop for GraphicsPipeline {
     fn drop(&mut self) {
-        // SAFETY: the owner waited for the GPU.
-        unsafe { self.dev.device.destroy_pipeline(self.pipeline, None) };
+        let pipeline = self.pipeline;
+        // SAFETY: retire runs this once the device is idle.
+        self.dev.retire(|d| unsafe { d.destroy_pipeline(pipeline, None) });
     }
 }
 
@@ -265,11 +273,7 @@ pub enum Binding<'a> {
 
 impl Sets {
     /// A set of layout `layout` with `bindings` written.
-    pub fn allocate_with(
-        &self,
-        layout: vk::DescriptorSetLayout,
-        bindings: &[Binding<'_>],
-    ) -> Result<vk::DescriptorSet, VkError> {
+    pub fn allocate_with(&self, layout: vk::DescriptorSetLayout, bindings: &[Binding<'_>]) -> Result<Set, VkError> {
         let layouts = [layout];
         let info = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.pool).set_layouts(&layouts);
         // SAFETY: pool and layout belong to this device; the set lives as long as the pool.
@@ -313,7 +317,13 @@ impl Sets {
             .collect();
         // SAFETY: the writes reference live objects and the set just allocated.
         unsafe { self.dev.device.update_descriptor_sets(&writes, &[]) };
-        Ok(set)
+        let mut alive = vec![self.alive.clone()];
+        alive.extend(bindings.iter().map(|b| match b {
+            Binding::Buffer(_, _, buf) => buf.alive.clone(),
+            Binding::Image(_, img) => img.alive.clone(),
+            Binding::Sampler(_, s) => s.alive.clone(),
+        }));
+        Ok(Set { set, layout, alive })
     }
 }
 
@@ -478,7 +488,13 @@ impl Commands {
     }
 
     /// Binds a graphics pipeline and its descriptor sets from set 0.
-    pub fn bind_graphics(&self, pipeline: &GraphicsPipeline, sets: &[vk::DescriptorSet]) {
+    pub fn bind_graphics(&self, pipeline: &GraphicsPipeline, sets: &[&Set]) {
+        if sets.iter().any(|s| !s.valid()) {
+            self.poison("a descriptor set whose buffer, image or pool was dropped");
+            return;
+        }
+        let sets: Vec<vk::DescriptorSet> = sets.iter().map(|s| s.set).collect();
+        let sets = &sets[..];
         let d = &self.dev.device;
         // SAFETY: recording state; pipeline and sets are live and compatible.
         unsafe {

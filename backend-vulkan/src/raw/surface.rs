@@ -1,6 +1,8 @@
 //! The window half of the raw layer: semaphores, the swapchain on the device's surface,
 //! and the commands that put a rendered image on screen.
 
+use std::sync::Arc;
+
 use super::*;
 
 /// A binary semaphore.
@@ -22,8 +24,9 @@ impl Semaphore {
 
 impl Drop for Semaphore {
     fn drop(&mut self) {
-        // SAFETY: the owner waited for the queue to be idle.
-        unsafe { self.dev.device.destroy_semaphore(self.semaphore, None) };
+        let semaphore = self.semaphore;
+        // SAFETY: retire runs this once the device is idle.
+        self.dev.retire(|d| unsafe { d.destroy_semaphore(semaphore, None) });
     }
 }
 
@@ -177,7 +180,12 @@ impl Swapchain {
         let waits = [wait.semaphore];
         let info =
             vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&swapchains).image_indices(&indices);
-        // SAFETY: the image was acquired and the submission rendering it signals `wait`.
+        if index as usize >= self.images.len() {
+            return Err(VkError::Vulkan { what: "presenting", reason: format!("no swapchain image {index}") });
+        }
+        let _queue = self.dev.queue();
+        // SAFETY: the queue lock is held; the image exists (checked), was acquired, and the
+        // submission rendering it signals `wait`.
         match unsafe { loader.queue_present(self.dev.queue, &info) } {
             Ok(false) => Ok(true),
             Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(false),
@@ -188,15 +196,17 @@ impl Swapchain {
 
 impl Drop for Swapchain {
     fn drop(&mut self) {
-        // SAFETY: the owner waits for the device to be idle before dropping a swapchain.
-        unsafe {
-            for v in &self.views {
-                self.dev.device.destroy_image_view(*v, None);
+        let (views, swapchain) = (std::mem::take(&mut self.views), self.swapchain);
+        let loader = self.dev.swapchain_loader.clone();
+        // SAFETY: retire runs this once the device is idle.
+        self.dev.retire(|d| unsafe {
+            for v in &views {
+                d.destroy_image_view(*v, None);
             }
-            if let Some(loader) = &self.dev.swapchain_loader {
-                loader.destroy_swapchain(self.swapchain, None);
+            if let Some(loader) = &loader {
+                loader.destroy_swapchain(swapchain, None);
             }
-        }
+        });
     }
 }
 
@@ -208,32 +218,31 @@ impl Commands {
         wait: &[(&Semaphore, vk::PipelineStageFlags)],
         signal: &[&Semaphore],
     ) -> Result<(), VkError> {
-        let d = &self.dev.device;
         let wait_sems: Vec<vk::Semaphore> = wait.iter().map(|(s, _)| s.semaphore).collect();
         let stages: Vec<vk::PipelineStageFlags> = wait.iter().map(|(_, st)| *st).collect();
         let signal_sems: Vec<vk::Semaphore> = signal.iter().map(|s| s.semaphore).collect();
-        // SAFETY: the buffer is recording; the fence is unsignalled; the semaphores are
-        // live and each wait has a pending signal (an acquire).
-        unsafe {
-            d.end_command_buffer(self.cmd()).map_err(vk_err("ending a command buffer"))?;
-            let cmds = [self.cmd()];
-            let submit = [vk::SubmitInfo::default()
-                .command_buffers(&cmds)
-                .wait_semaphores(&wait_sems)
-                .wait_dst_stage_mask(&stages)
-                .signal_semaphores(&signal_sems)];
-            d.queue_submit(self.dev.queue, &submit, self.fence).map_err(vk_err("submitting"))
-        }
+        self.submit_info(true, &wait_sems, &stages, &signal_sems)
     }
 
-    /// A layout transition of swapchain image `image` (colour).
-    pub fn transition_swapchain(&self, image: vk::Image, t: Transition) {
+    /// A layout transition of image `index` of `swapchain` (colour).
+    pub fn transition_swapchain(&self, swapchain: &Swapchain, index: u32, t: Transition) {
+        let Some(&image) = swapchain.images.get(index as usize) else {
+            self.poison("no such swapchain image");
+            return;
+        };
         self.transition_handle(image, vk::ImageAspectFlags::COLOR, t);
     }
 
     /// Copies all of `src` (TRANSFER_SRC_OPTIMAL) onto swapchain image `dst`
     /// (TRANSFER_DST_OPTIMAL) of the same size, converting the format.
-    pub fn blit_to_swapchain(&self, src: &Image, dst: vk::Image, extent: vk::Extent2D) {
+    pub fn blit_to_swapchain(&self, src: &Image, swapchain: &Swapchain, index: u32) {
+        let (Some(&dst), extent) = (swapchain.images.get(index as usize), swapchain.extent) else {
+            self.poison("no such swapchain image");
+            return;
+        };
+        if !self.recording() {
+            return;
+        }
         let corner = |w: u32, h: u32| [vk::Offset3D::default(), vk::Offset3D { x: w as i32, y: h as i32, z: 1 }];
         let layers = vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1);
         let region = [vk::ImageBlit::default()
@@ -257,7 +266,14 @@ impl Commands {
 
     /// Begins dynamic rendering onto `view` (COLOR_ATTACHMENT_OPTIMAL) keeping what is
     /// there: the egui pass over the scene.
-    pub fn begin_overlay(&self, view: vk::ImageView, extent: vk::Extent2D) {
+    pub fn begin_overlay(&self, swapchain: &Swapchain, index: u32) {
+        let (Some(&view), extent) = (swapchain.views.get(index as usize), swapchain.extent) else {
+            self.poison("no such swapchain image");
+            return;
+        };
+        if !self.recording() {
+            return;
+        }
         let color = [vk::RenderingAttachmentInfo::default()
             .image_view(view)
             .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
@@ -272,7 +288,15 @@ impl Commands {
     }
 
     /// Copies swapchain image `image` (TRANSFER_SRC_OPTIMAL) into `dst`, tightly packed.
-    pub fn copy_swapchain_to_buffer(&self, image: vk::Image, extent: vk::Extent2D, dst: &Buffer) {
+    pub fn copy_swapchain_to_buffer(&self, swapchain: &Swapchain, index: u32, dst: &Buffer) {
+        let (Some(&image), extent) = (swapchain.images.get(index as usize), swapchain.extent) else {
+            self.poison("no such swapchain image");
+            return;
+        };
+        if !self.recording() || !swapchain.capturable || dst.size < extent.width as u64 * extent.height as u64 * 4 {
+            self.poison("a screenshot into a buffer too small, or of a swapchain that cannot be copied");
+            return;
+        }
         let region = [vk::BufferImageCopy::default()
             .image_subresource(
                 vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
