@@ -2,8 +2,8 @@
 //! the same SPIR-V kernels (from clothlab-shaders) and the same recipes as the wgpu backend,
 //! so that the two differ only in the API and how it is driven.
 //!
-//! All `unsafe` is in the [`raw`] module, each block with a `// SAFETY:` line; the solver
-//! above it is safe code over RAII types.
+//! All `unsafe` is in the crate-private `raw` module, each block with a `// SAFETY:` line;
+//! the engine, renderer and presenter above it are safe code over its RAII types.
 #![deny(unsafe_code)]
 
 pub mod overhead;

@@ -13,7 +13,7 @@ use clothlab_core::timing::{FRAME, KernelTimings, SUBSTEP, TimingRecorder};
 use clothlab_core::{SimParams, Solver, SolverError};
 
 use crate::kernels::{HostBuffers, KernelRef, TwinArgs};
-use crate::recipe::{Caps, Command, Variant, dispatches, kernels_of, recipe};
+use crate::recipe::{Caps, Command, Variant, kernels_of, recipe};
 use crate::validate::KernelRunner;
 
 /// Runs commands through the twins.
@@ -124,14 +124,10 @@ impl RecipeSolver {
     /// The cloth of `scene`, stepped by `variant`'s recipe (float atomics and immediates
     /// change only which GPU shader runs, not the twin: the CPU recipe uses neither).
     pub fn new(exec: Exec, variant: Variant, scene: Scene, params: SimParams) -> Result<Self, SolverError> {
-        let (mut state, topo) = build(&scene, &params)?;
+        let (state, topo) = build(&scene, &params)?;
         let engine = CpuEngine::new(exec, scene, topo);
         let sp = StepParams::new(&params, &engine.scene, None);
-        let mut bufs = engine.buffers(&state);
-        // Initial normals and wind, as every solver starts.
-        twins::vertex_normals(exec, &sp, &engine.topo.face_slots, &bufs.faces, &mut state.normal, &mut state.force);
-        bufs.normal = state.normal;
-        bufs.force = state.force;
+        let bufs = start_buffers(exec, &sp, &engine.topo, &state);
         let commands = recipe(variant, params.strain_iterations, CPU_CAPS);
         Ok(Self { engine, variant, params, grab: None, bufs, commands, timer: TimingRecorder::default() })
     }
@@ -226,7 +222,12 @@ impl Solver for RecipeSolver {
     }
 }
 
-/// The number of dispatches of a substep (the points `--bisect` splits at).
-pub fn dispatch_count(commands: &[Command]) -> usize {
-    dispatches(commands).count()
+/// The buffers every solver starts from: `state` with its face normals, vertex normals
+/// and wind force computed (with the step constants `p`).
+pub fn start_buffers(exec: Exec, p: &StepParams, topo: &ClothTopology, state: &ClothState) -> HostBuffers {
+    let mut faces = vec![[0.0f32; 4]; topo.triangles.len()];
+    twins::tri_normals(exec, &topo.triangles, &state.pos, &mut faces);
+    let mut b = HostBuffers::new(state, faces);
+    twins::vertex_normals(exec, p, &topo.face_slots, &b.faces, &mut b.normal, &mut b.force);
+    b
 }

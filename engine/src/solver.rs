@@ -16,6 +16,7 @@ use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, TimingRecorder};
 use clothlab_core::{SimParams, Solver, SolverError};
 
+use crate::cpu::start_buffers;
 use crate::gpu::{BufferId, Dispatch, Engine};
 use crate::kernels::{HostBuffers, Immediates, KernelRef, groups};
 use crate::recipe::{
@@ -102,12 +103,11 @@ impl<E: Engine> GpuSolver<E> {
         // (the largest buffer is the structural and shear half of the spring table).
         let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
         SolverError::check_table(scene.cloth.n, per_particle, info.max_binding, &info.adapter)?;
-        let (mut state, topo) = build(&scene, &params)?;
-        // Initial normals and wind, as the CPU solvers start.
+        let (state, topo) = build(&scene, &params)?;
+        // Initial normals and wind, as every solver starts.
         let sp = StepParams::new(&params, &scene, None);
-        let mut face = vec![[0.0f32; 4]; topo.triangles.len()];
-        twins::tri_normals(twins::Exec::Serial, &topo.triangles, &state.pos, &mut face);
-        twins::vertex_normals(twins::Exec::Serial, &sp, &topo.face_slots, &face, &mut state.normal, &mut state.force);
+        let state = start_buffers(twins::Exec::Serial, &sp, &topo, &state);
+        let face = &state.faces;
 
         let mut spheres = [Sphere { center: [0.0; 3], radius: 0.0 }; MAX_COLLIDERS];
         spheres[..scene.spheres.len()].copy_from_slice(&scene.spheres);
@@ -135,7 +135,7 @@ impl<E: Engine> GpuSolver<E> {
             (Buf::Tethers, bytemuck::cast_slice(&topo.tethers)),
             (Buf::Triangles, bytemuck::cast_slice(&tri_flat)),
             (Buf::FaceSlots, bytemuck::cast_slice(&face_flat)),
-            (Buf::Faces, bytemuck::cast_slice(&face)),
+            (Buf::Faces, bytemuck::cast_slice(face)),
             (Buf::Spheres, bytemuck::cast_slice(&spheres)),
             (Buf::Boxes, bytemuck::cast_slice(&boxes)),
             (Buf::BendSlots, bytemuck::cast_slice(&bend)),

@@ -2,7 +2,7 @@
 //! ([`validate_kernels`]), and the bisection of a rollout between the CPU engine and a
 //! GPU backend ([`bisect`]). Used by the cross-backend tests and by `clothlab validate`.
 
-use clothlab_core::cpu::{self as twins, Exec};
+use clothlab_core::cpu::Exec;
 use clothlab_core::grid::{Grab, StepParams, build};
 use clothlab_core::validate::{Check, ROLLOUT_BOUND_PER_SUBSTEP, compare, disturbed_state};
 use clothlab_core::{Scene, SimParams, SolverError};
@@ -137,20 +137,10 @@ pub fn bisect(
     params: &SimParams,
     substeps: u32,
 ) -> Result<Bisection, SolverError> {
-    let (mut state, topo) = build(scene, params)?;
+    let (state, topo) = build(scene, params)?;
     let engine = CpuEngine::new(Exec::Serial, scene.clone(), topo);
     let p = StepParams::new(params, scene, None);
-    let mut start = engine.buffers(&state);
-    twins::vertex_normals(
-        Exec::Serial,
-        &p,
-        &engine.topology().face_slots,
-        &start.faces,
-        &mut state.normal,
-        &mut state.force,
-    );
-    start.normal = state.normal;
-    start.force = state.force;
+    let start = crate::cpu::start_buffers(Exec::Serial, &p, engine.topology(), &state);
     // The reference: every command on the CPU engine, positions after every substep.
     let mut reference = Vec::with_capacity(substeps as usize);
     let mut bufs = start.clone();

@@ -153,7 +153,7 @@ fn bisection_on_both_gpu_apis_finds_no_kernel_out_of_bounds() {
             let checks: Vec<_> = b.splits.iter().map(|s| s.check.clone()).collect();
             assert_checks(&format!("{variant:?}"), &checks);
             assert_eq!(b.culprit, None);
-            assert_eq!(b.splits.len(), clothlab_engine::cpu::dispatch_count(&commands));
+            assert_eq!(b.splits.len(), clothlab_engine::recipe::dispatches(&commands).count());
         }
     }
 }
