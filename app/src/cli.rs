@@ -43,6 +43,22 @@ pub enum Mode {
     Triangles,
 }
 
+impl Mode {
+    /// The default view of the scene in this mode: the orbit camera's start and a light
+    /// above and in front.
+    pub fn view(self) -> clothlab_core::View {
+        clothlab_core::View {
+            camera: clothlab_core::OrbitCamera::default(),
+            light: [2.0, 5.5, 3.0],
+            mode: match self {
+                Mode::Points => clothlab_core::RenderMode::Points,
+                Mode::Lines => clothlab_core::RenderMode::Lines,
+                Mode::Triangles => clothlab_core::RenderMode::Triangles,
+            },
+        }
+    }
+}
+
 #[derive(clap::Args)]
 pub struct RenderArgs {
     /// Solver backend.

@@ -4,8 +4,6 @@
 //! This module imports nothing of the app's own, so the command modules, the app and the
 //! benchmark can all use it without importing each other.
 
-use std::sync::Arc;
-
 use anyhow::{Result, bail};
 use clap::ValueEnum;
 use clothlab_core::grid::ClothState;
@@ -84,7 +82,7 @@ pub enum Shared<'a> {
     /// Draw through wgpu on this context.
     Wgpu(&'a GpuContext),
     /// Draw through raw Vulkan on this device.
-    Vulkan(&'a Arc<Device>),
+    Vulkan(&'a Device),
     /// Every GPU solver opens its own device.
     None,
 }
@@ -125,7 +123,7 @@ pub fn make(
             AnySolver::Wgpu(Box::new(GpuSolver::new(WgpuEngine::new()?, v, scene, params, options)?), false)
         }
         (Backend::VulkanNaive | Backend::Vulkan, Shared::Vulkan(dev)) => {
-            let engine = VulkanEngine::on_device((*dev).clone())?;
+            let engine = VulkanEngine::on_device(dev)?;
             AnySolver::Vulkan(Box::new(GpuSolver::new(engine, v, scene, params, options)?), true)
         }
         (Backend::VulkanNaive | Backend::Vulkan, _) => {

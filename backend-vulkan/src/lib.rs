@@ -6,6 +6,7 @@
 //! the engine, renderer and presenter above it are safe code over its RAII types.
 #![deny(unsafe_code)]
 
+mod device;
 pub mod overhead;
 mod present;
 pub(crate) mod raw;
@@ -16,8 +17,8 @@ use thiserror::Error;
 
 pub use clothlab_engine::recipe::StatsMode;
 pub use clothlab_engine::{GpuSolver, SolverOptions, SpringTable};
+pub use device::Device;
 pub use present::{Overlay, Presented, Presenter, Screenshot};
-pub use raw::Device;
 pub use render::{FRAMES_IN_FLIGHT, VkCloth, VulkanRenderer};
 pub use solver::{VulkanEngine, VulkanSolver, vulkan_solver};
 

@@ -112,7 +112,8 @@ impl OverheadTarget for Target {
 }
 
 /// Runs every micro-benchmark of `plan` on `dev` (see clothlab_core::timing::overhead::measure).
-pub fn measure(dev: &Arc<Device>, plan: &OverheadPlan) -> Result<Vec<OverheadRow>, VkError> {
+pub fn measure(dev: &crate::Device, plan: &OverheadPlan) -> Result<Vec<OverheadRow>, VkError> {
+    let dev = dev.raw();
     let spirv = clothlab_shaders::kernel("chain")
         .ok_or_else(|| VkError::Vulkan { what: "loading the chain kernel", reason: "missing".into() })?
         .spirv;

@@ -84,7 +84,8 @@ pub struct Presenter {
 impl Presenter {
     /// A presenter for the window the device was opened for ([`Device::for_window`]),
     /// whose drawable size is `width × height` pixels.
-    pub fn new(dev: &Arc<Device>, width: u32, height: u32) -> Result<Self, RenderError> {
+    pub fn new(dev: &crate::Device, width: u32, height: u32) -> Result<Self, RenderError> {
+        let dev = dev.raw();
         if dev.swapchain_loader.is_none() || !dev.dynamic_rendering {
             return Err(RenderError::Backend(format!(
                 "{} cannot present: the device was not opened for a window, or lacks dynamic rendering",

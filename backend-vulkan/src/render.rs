@@ -198,12 +198,13 @@ pub struct VulkanRenderer {
 impl VulkanRenderer {
     /// A renderer of `scene` with its cloth `topo` on `dev`, drawing `width × height`.
     pub fn new(
-        dev: &Arc<Device>,
+        dev: &crate::Device,
         scene: &Scene,
         topo: &ClothTopology,
         width: u32,
         height: u32,
     ) -> Result<Self, RenderError> {
+        let dev = dev.raw();
         if !dev.dynamic_rendering {
             return Err(RenderError::Backend(format!(
                 "{} cannot draw with dynamic rendering (Vulkan 1.3 with a graphics queue): use the wgpu renderer",
@@ -597,8 +598,8 @@ impl VulkanRenderer {
     }
 
     /// The device it draws on.
-    pub fn device(&self) -> &Arc<Device> {
-        &self.dev
+    pub fn device(&self) -> crate::Device {
+        crate::Device::from_raw(&self.dev)
     }
 }
 

@@ -62,11 +62,12 @@ impl VulkanEngine {
     /// Opens the first Vulkan device with a compute queue; with `validation`, the Khronos
     /// validation layer checks every call (when installed).
     pub fn new(validation: bool) -> Result<Self, SolverError> {
-        Self::on_device(Device::new(validation).map_err(backend)?)
+        Self::on_device(&crate::Device::new(validation).map_err(backend)?)
     }
 
     /// An engine on `dev` (a window's device: the presenter draws the solver's buffers).
-    pub fn on_device(dev: Arc<Device>) -> Result<Self, SolverError> {
+    pub fn on_device(dev: &crate::Device) -> Result<Self, SolverError> {
+        let dev = dev.raw().clone();
         let info = EngineInfo {
             api: "vulkan",
             adapter: dev.name.clone(),
@@ -99,8 +100,8 @@ impl VulkanEngine {
     }
 
     /// The device (for the renderer, the presenter and checks that outlive the solver).
-    pub fn device(&self) -> Arc<Device> {
-        self.dev.clone()
+    pub fn device(&self) -> crate::Device {
+        crate::Device::from_raw(&self.dev)
     }
 
     /// Validation-layer messages gathered since the last call (none when it is off).

@@ -154,14 +154,14 @@ pub struct ClothState {
 impl ClothState {
     /// Checks that this is a finite state of an `n × n` grid (what `Solver::set_state`
     /// accepts).
-    pub fn check(&self, n: u32) -> Result<(), crate::solver::SolverError> {
+    pub fn check(&self, n: u32) -> Result<(), crate::error::SolverError> {
         let np = n as usize * n as usize;
         let bufs = [&self.pos, &self.prev, &self.force, &self.normal];
         if self.n != n || bufs.iter().any(|v| v.len() != np) {
-            return Err(crate::solver::SolverError::GridMismatch { want: n, got: self.n });
+            return Err(crate::error::SolverError::GridMismatch { want: n, got: self.n });
         }
         if !bufs.iter().all(|v| v.iter().flatten().all(|x| x.is_finite())) {
-            return Err(crate::solver::SolverError::Invalid("state holds non-finite values".into()));
+            return Err(crate::error::SolverError::Invalid("state holds non-finite values".into()));
         }
         Ok(())
     }

@@ -8,6 +8,7 @@
 
 pub mod camera;
 pub mod cpu;
+pub mod error;
 pub mod grid;
 pub mod layout;
 pub mod params;

@@ -2,9 +2,18 @@
 
 use std::io::Write;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::grid::{ClothState, ClothTopology, SpringKind};
+
+/// Statistics of the state at the end of one substep.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct SubstepStats {
+    /// Largest structural strain `|L| / rest - 1`, 0 when nothing is stretched.
+    pub max_strain: f32,
+    /// Kinetic energy `Σ ½ m |x - x*|² / dt²`, J.
+    pub kinetic_energy: f32,
+}
 
 /// What `clothlab sim` reports about a state.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

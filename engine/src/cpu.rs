@@ -13,8 +13,8 @@ use clothlab_core::timing::{FRAME, KernelTimings, SUBSTEP, TimingRecorder};
 use clothlab_core::{SimParams, Solver, SolverError};
 
 use crate::kernels::{HostBuffers, KernelRef, TwinArgs};
+use crate::recipe::KernelRunner;
 use crate::recipe::{Caps, Command, Variant, kernels_of, recipe};
-use crate::validate::KernelRunner;
 
 /// Runs commands through the twins.
 #[derive(Debug, Clone)]

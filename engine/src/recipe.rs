@@ -4,9 +4,11 @@
 //! the API and how it is driven; barriers follow from the rows' reads and writes
 //! ([`Hazards`]).
 
+use clothlab_core::SolverError;
+use clothlab_core::grid::StepParams;
 use clothlab_core::layout::Buf;
 
-use crate::kernels::{self as k, Flavor, KernelDef, KernelRef};
+use crate::kernels::{self as k, Flavor, HostBuffers, KernelDef, KernelRef};
 
 /// Which formulation of the step runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -36,6 +38,28 @@ impl Command {
             Command::Dispatch(k) => Some(*k),
             _ => None,
         }
+    }
+}
+
+/// A backend that runs commands on buffers given from the host: what the kernel checks
+/// and the bisection need of a GPU solver.
+pub trait KernelRunner {
+    /// Every shader it can run.
+    fn kernels(&self) -> Vec<KernelRef>;
+    /// Uploads `bufs` (and `p` as the step constants), runs `commands`, and reads the
+    /// buffers back into `bufs` (after a [`Command::Swap`], `bufs.pos` is what was
+    /// `pos_out`).
+    fn run_commands(&mut self, commands: &[Command], p: &StepParams, bufs: &mut HostBuffers)
+    -> Result<(), SolverError>;
+    /// The adapter, in one line.
+    fn adapter(&self) -> String;
+    /// Builds a kernel that is not built in (WGSL compiled now), so that it can be run;
+    /// an error says what the compiler said.
+    fn add_kernel(&mut self, kernel: KernelRef) -> Result<(), SolverError> {
+        Err(SolverError::Shader {
+            kernel: kernel.shader_name(),
+            reason: format!("{} takes no extra kernels", self.adapter()),
+        })
     }
 }
 

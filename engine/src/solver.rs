@@ -19,11 +19,11 @@ use clothlab_core::{SimParams, Solver, SolverError};
 use crate::cpu::start_buffers;
 use crate::gpu::{BufferId, Dispatch, Engine};
 use crate::kernels::{HostBuffers, Immediates, KernelRef, groups};
+use crate::recipe::KernelRunner;
 use crate::recipe::{
     Caps, Command, Hazards, StatsMode, Variant, dispatches, kernels_for, kernels_of, recipe, res, stats_commands,
 };
 use crate::tables::{record_times, split_slots, spring_halves, table_texels};
-use crate::validate::KernelRunner;
 
 /// Timestamp queries per frame.
 pub const MAX_QUERIES: u32 = 4096;

@@ -9,29 +9,8 @@ use clothlab_core::{Scene, SimParams, SolverError};
 
 use crate::cpu::CpuEngine;
 use crate::kernels::{self, HostBuffers, KernelRef};
+pub use crate::recipe::KernelRunner;
 use crate::recipe::{Command, run};
-
-/// A backend that runs commands on buffers given from the host: what the kernel checks
-/// and the bisection need of a GPU solver.
-pub trait KernelRunner {
-    /// Every shader it can run.
-    fn kernels(&self) -> Vec<KernelRef>;
-    /// Uploads `bufs` (and `p` as the step constants), runs `commands`, and reads the
-    /// buffers back into `bufs` (after a [`Command::Swap`], `bufs.pos` is what was
-    /// `pos_out`).
-    fn run_commands(&mut self, commands: &[Command], p: &StepParams, bufs: &mut HostBuffers)
-    -> Result<(), SolverError>;
-    /// The adapter, in one line.
-    fn adapter(&self) -> String;
-    /// Builds a kernel that is not built in (WGSL compiled now), so that it can be run;
-    /// an error says what the compiler said.
-    fn add_kernel(&mut self, kernel: KernelRef) -> Result<(), SolverError> {
-        Err(SolverError::Shader {
-            kernel: kernel.shader_name(),
-            reason: format!("{} takes no extra kernels", self.adapter()),
-        })
-    }
-}
 
 /// The scene, parameters, disturbed buffers and constants every kernel check starts from:
 /// an `n × n` cloth draped for 15 frames, then disturbed (seeded), wind on, a particle

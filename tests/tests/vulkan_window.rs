@@ -73,7 +73,7 @@ fn frames_with_an_egui_overlay_reach_the_swapchain_across_a_resize() {
     let dev = Device::for_window(true, &window).expect("a Vulkan device presenting to the window");
     let scene = Scene::with_n(24);
     let params = SimParams::default();
-    let engine = VulkanEngine::on_device(dev.clone()).unwrap();
+    let engine = VulkanEngine::on_device(&dev).unwrap();
     let mut solver =
         GpuSolver::new(engine, Variant::Optimized, scene.clone(), params.clone(), SolverOptions::default()).unwrap();
     let (_, topo) = clothlab_core::build(&scene, &params).unwrap();

@@ -12,7 +12,6 @@ mod output;
 mod plot;
 
 use std::process::ExitCode;
-use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -23,7 +22,6 @@ use clothlab_wgpu::{ClothSource, GpuContext, WgpuRenderer};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::cli::{BenchArgs, Mode};
-use crate::commands::render::default_view;
 use crate::solvers::{AnySolver, Backend, make_solver, vulkan_validation};
 
 /// Unmeasured frames at the start of every cell (pipelines, caches, clocks, the cloth's
@@ -70,7 +68,7 @@ enum Painter {
 /// `run_cell`).
 struct Devices {
     wgpu: Option<GpuContext>,
-    vulkan: Option<Arc<Device>>,
+    vulkan: Option<Device>,
     wgpu_error: Option<String>,
     vulkan_error: Option<String>,
 }
@@ -250,7 +248,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
             bar.set_message("API overhead: Vulkan");
             let dev = Device::new(vulkan_validation())?;
             let rows = clothlab_vulkan::overhead::measure(&dev, &plan).context("Vulkan overhead benchmarks")?;
-            overhead.push(("vulkan".into(), format!("{} (Vulkan)", dev.name), rows));
+            overhead.push(("vulkan".into(), format!("{} (Vulkan)", dev.name()), rows));
             bar.inc(1);
         }
     }
@@ -259,7 +257,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     let results = output::Results::new(output::Inputs {
         machine: args.machine.clone().unwrap_or_else(cpu_label),
         wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
-        vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name.clone()),
+        vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name().to_owned()),
         params: params.clone(),
         frames,
         warmup_frames: WARMUP_FRAMES,
@@ -320,7 +318,7 @@ fn run_cell(
         AnySolver::Cpu(_) => cpu_label(),
         gpu => gpu.adapter(),
     };
-    let view = default_view(Mode::Triangles);
+    let view = Mode::Triangles.view();
 
     // Nothing is drawn before the per-kernel table: on lavapipe, once a device has drawn,
     // its timestamps no longer bracket compute dispatches (llvmpipe then takes timestamp

@@ -8,21 +8,8 @@ use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
 use clothlab_vulkan::{VkCloth, VulkanRenderer};
 use clothlab_wgpu::{ClothSource, WgpuRenderer};
 
-use crate::cli::{Mode, RenderArgs};
+use crate::cli::RenderArgs;
 use crate::solvers::{AnySolver, Api, Backend, make_solver, vulkan_validation};
-
-/// The default view of the scene: the orbit camera's start and a light above and in front.
-pub fn default_view(mode: Mode) -> clothlab_core::View {
-    clothlab_core::View {
-        camera: clothlab_core::OrbitCamera::default(),
-        light: [2.0, 5.5, 3.0],
-        mode: match mode {
-            Mode::Points => clothlab_core::RenderMode::Points,
-            Mode::Lines => clothlab_core::RenderMode::Lines,
-            Mode::Triangles => clothlab_core::RenderMode::Triangles,
-        },
-    }
-}
 
 /// Runs `render`.
 pub fn render(args: RenderArgs) -> Result<ExitCode> {
@@ -35,7 +22,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
         bail!("--out {}: the image is written as PNG, use a .png file name", args.out.display());
     }
     let params = SimParams::default();
-    let view = default_view(args.mode);
+    let view = args.mode.view();
     let is_vulkan = matches!(args.backend, Backend::VulkanNaive | Backend::Vulkan);
     let api = args.api.unwrap_or(if is_vulkan { Api::Vulkan } else { Api::Wgpu });
     if api == Api::Wgpu && is_vulkan || api == Api::Vulkan && matches!(args.backend, Backend::WgpuNaive | Backend::Wgpu)
@@ -56,7 +43,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
             let dev = clothlab_vulkan::Device::new(vulkan_validation())?;
             let mut r = VulkanRenderer::new(&dev, &scene, solver.topology(), args.width, args.height)?;
             r.render(&view, VkCloth::Cpu(solver.state_ref()))?;
-            (r.read_image()?, format!("{} (Vulkan)", dev.name))
+            (r.read_image()?, format!("{} (Vulkan)", dev.name()))
         }
         Backend::Cpu | Backend::CpuPar => {
             let exec = if args.backend == Backend::Cpu { Exec::Serial } else { Exec::Parallel };

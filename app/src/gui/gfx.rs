@@ -48,7 +48,7 @@ pub struct WgpuGfx {
 pub struct VulkanGfx {
     renderer: VulkanRenderer,
     presenter: Presenter,
-    dev: Arc<Device>,
+    dev: Device,
 }
 
 /// The window's graphics.
@@ -135,7 +135,7 @@ impl Gfx {
     pub fn adapter(&self) -> String {
         match self {
             Gfx::Wgpu(g) => g.ctx.describe(),
-            Gfx::Vulkan(g) => format!("{} (raw Vulkan)", g.dev.name),
+            Gfx::Vulkan(g) => format!("{} (raw Vulkan)", g.dev.name()),
             Gfx::None => String::new(),
         }
     }

@@ -1,19 +1,9 @@
 //! Twin of the `stats` kernels: per-substep statistics of the state, the numbers a GPU
 //! solver can report every substep without reading the state back.
 
-use serde::{Deserialize, Serialize};
-
 use super::v3;
 use crate::grid::{SLOTS, SpringSlot, StepParams, V4};
-
-/// Statistics of the state at the end of one substep.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-pub struct SubstepStats {
-    /// Largest structural strain `|L| / rest - 1`, 0 when nothing is stretched.
-    pub max_strain: f32,
-    /// Kinetic energy `Σ ½ m |x - x*|² / dt²`, J.
-    pub kinetic_energy: f32,
-}
+pub use crate::stats::SubstepStats;
 
 /// Particle `i`'s share: the largest strain of the structural springs that start at it
 /// (slots 1 and 3, to its +i and +j neighbours, so that every structural spring is counted

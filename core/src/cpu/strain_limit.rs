@@ -21,15 +21,7 @@ use wide::f32x8;
 
 use super::{Exec, LANES, Lanes, for_each, v3, v4};
 use crate::grid::{SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
-
-/// A spring over `(1 + τ)·rest` is pulled towards `(1 + STRAIN_AIM·τ)·rest`, a little
-/// inside the limit: corrections proportional to the excess over the limit itself make
-/// Jacobi approach the bound only asymptotically (measured: 0.1002 after 400 passes for
-/// τ = 0.1), aiming inside ends the passes in finitely many steps. Aiming far inside
-/// (0.9) injects velocity: springs that carry the cloth's weight are pulled in every
-/// substep and the pinned corners jitter; 0.95 measured no jitter (max speed of a cloth
-/// at rest 0.09 m/s vs 1.1 m/s at 0.9).
-pub const STRAIN_AIM: f32 = 0.95;
+pub use crate::layout::STRAIN_AIM;
 
 /// One pass: reads `pos`, writes the corrected positions to `out` (same length).
 pub fn strain_limit(
