@@ -103,6 +103,10 @@ fn check_layouts(types_src: &str) {
 
 /// How kernels declare the step constants in the uniform buffer.
 const UNIFORM_PARAMS: &str = "@group(0) @binding(0) var<uniform> step_params: StepParams;";
+/// How the `_sto` twins declare them (at `layout::Buf::ParamsStorage`).
+fn storage_params() -> String {
+    format!("@group(0) @binding({}) var<storage, read> step_params: StepParams;", Buf::ParamsStorage.binding())
+}
 
 /// The group-0 bindings the kernel's entry point reads and writes (atomics count as
 /// both), each checked against core's [`Buf`] table: a number it does not know, or a
@@ -231,7 +235,13 @@ fn main() {
         // using float atomics; one reading the spring table from storage buffers also gets
         // a `<name>_tex` twin reading it from a sampled image.
         let mut variants = vec![(name.clone(), includes.clone())];
-        for (from, to, suffix) in [("atomic_cas", "atomic_f32", "_f32"), ("table", "table_tex", "_tex")] {
+        // One reading the colliders from storage buffers also gets a `<name>_cu` twin
+        // reading them from uniform blocks (the thesis's constant memory).
+        for (from, to, suffix) in [
+            ("atomic_cas", "atomic_f32", "_f32"),
+            ("table", "table_tex", "_tex"),
+            ("colliders", "colliders_uni", "_cu"),
+        ] {
             if includes.iter().any(|i| i == from) {
                 let twin = includes.iter().map(|i| if i == from { to.to_owned() } else { i.clone() });
                 variants.push((format!("{name}{suffix}"), twin.collect()));
@@ -249,9 +259,12 @@ fn main() {
             // A kernel that reads the step constants from the uniform buffer also gets a
             // `<name>_imm` twin reading them from immediates (push constants), unless it
             // uses immediates for something else already.
+            // And a `<name>_sto` twin reading them from a storage buffer (`constants=storage`).
             if source.contains(UNIFORM_PARAMS) && !source.contains("var<immediate>") {
                 let imm = source.replace(UNIFORM_PARAMS, "var<immediate> step_params: StepParams;");
                 emit(&out, &mut list, &format!("{vname}_imm"), &imm);
+                let sto = source.replace(UNIFORM_PARAMS, &storage_params());
+                emit(&out, &mut list, &format!("{vname}_sto"), &sto);
             }
         }
     }

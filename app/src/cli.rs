@@ -5,9 +5,9 @@
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use clothlab_engine::{SolverOptions, SpringTable, StatsMode};
+use clothlab_engine::{SolverOptions, StatsMode, VariantSpec};
 
-use crate::solvers::{Api, Backend};
+use crate::solvers::{Api, Backend, GpuSetup};
 
 #[derive(Parser)]
 #[command(name = "clothlab", version, about = "Interactive, GPU-accelerated cloth simulation testbed")]
@@ -87,6 +87,8 @@ pub struct RenderArgs {
     /// to either).
     #[arg(long, value_enum)]
     pub api: Option<Api>,
+    #[command(flatten)]
+    pub variant: VariantArgs,
 }
 
 #[derive(clap::Args)]
@@ -106,6 +108,15 @@ pub struct ValidateArgs {
     /// `--n` cloth; n = 32 keeps it quick).
     #[arg(long)]
     pub bisect: bool,
+    /// Check every switch: every flavor of every kernel (constants in storage, uniform
+    /// or push constants; colliders in storage or uniform blocks; float or
+    /// compare-exchange atomics; the table from storage, an image or uniform constants)
+    /// against its twin, and a rollout of every rung of the ladder, the thesis preset and
+    /// the other atomics, per GPU API.
+    #[arg(long, conflicts_with = "bisect")]
+    pub every_switch: bool,
+    #[command(flatten)]
+    pub variant: VariantArgs,
 }
 
 #[derive(clap::Args, Debug)]
@@ -178,16 +189,63 @@ pub struct SimArgs {
     pub gpu: GpuArgs,
 }
 
-/// Options of the GPU backends.
-#[derive(clap::Args, Clone, Copy, Debug, Default)]
+/// What `--set-variant` takes (kept in step with `clothlab_engine::variant::SWITCHES` by a
+/// test).
+pub const SET_VARIANT_HELP: &str = "GPU backends: change one switch of the variant, KEY=VALUE (repeatable). \
+The switches (values in ladder order, the naive one first):
+  springs=scatter|gather          spring forces per spring with atomics, or per particle
+  normals=scatter|gather          vertex normals per triangle with atomics, or per vertex
+  atomics=float|cas               the scatters' atomics: float add, or compare-exchange
+  fusion=none|thesis|clothlab     no fusion; the thesis's forces+Verlet+collisions;
+                                  clothlab's forces+springs and integrate+collide
+  submit=substep|frame            one queue submission per substep, or per frame
+  constants=storage|uniform|push  the step constants: storage, uniform, push constants
+  table=storage|image|uniform     the spring table: storage buffers, a sampled image,
+                                  or uniform constants with neighbours by offset
+  colliders=storage|uniform       spheres and boxes: storage or uniform buffers
+A switch the adapter lacks, or two that exclude each other, is refused in one line.";
+
+/// The variant of the GPU backends: a preset and changes of single switches.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct VariantArgs {
+    /// GPU backends: the variant preset, `naive`, `optimized` or `thesis` (the thesis's
+    /// optimized CUDA recipe); default: the backend's (`wgpu-naive`: naive, `wgpu`:
+    /// optimized). A preset falls back to what the adapter has.
+    #[arg(long, value_name = "PRESET")]
+    pub variant: Option<String>,
+    #[arg(long = "set-variant", value_name = "KEY=VALUE", long_help = SET_VARIANT_HELP)]
+    pub set_variant: Vec<String>,
+}
+
+impl VariantArgs {
+    /// The variant asked for `backend` (`--variant`, else the backend's preset, with the
+    /// `--set-variant` changes), or `None` when neither option is given. Refused for a CPU
+    /// backend.
+    pub fn spec(&self, backend: Backend) -> anyhow::Result<Option<VariantSpec>> {
+        if self.variant.is_none() && self.set_variant.is_empty() {
+            return Ok(None);
+        }
+        let preset = self.variant.as_deref().or(backend.preset()).unwrap_or("optimized");
+        let spec = VariantSpec::parse(preset, &self.set_variant)?;
+        if backend.api().is_none() {
+            anyhow::bail!(
+                "--variant and --set-variant apply to the GPU backends only ({} runs its own SIMD step)",
+                backend.name()
+            );
+        }
+        Ok(Some(spec))
+    }
+}
+
+/// Options of the GPU backends: the variant and what is computed besides the step.
+#[derive(clap::Args, Clone, Debug, Default)]
 pub struct GpuArgs {
     /// GPU backends: per-substep statistics (max strain, kinetic energy) on the GPU, by
     /// subgroup reductions (where the API offers them) or by atomics.
     #[arg(long, value_enum, default_value_t = StatsArg::Off)]
     pub stats: StatsArg,
-    /// GPU backends: where the gathers read the spring table (`image`: Vulkan only).
-    #[arg(long, value_enum, default_value_t = TableArg::Interior)]
-    pub table: TableArg,
+    #[command(flatten)]
+    pub variant: VariantArgs,
 }
 
 /// `--stats` values.
@@ -202,33 +260,30 @@ pub enum StatsArg {
     Subgroups,
 }
 
-/// `--table` values.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, ValueEnum)]
-pub enum TableArg {
-    /// Uniform constants in the interior, storage buffers at the border.
-    #[default]
-    Interior,
-    /// Read-only storage buffers everywhere.
-    Storage,
-    /// A sampled image (texture memory) everywhere.
-    Image,
-}
-
 impl GpuArgs {
     /// The GPU solvers' options.
-    pub fn options(self) -> SolverOptions {
+    pub fn options(&self) -> SolverOptions {
         SolverOptions {
             stats: match self.stats {
                 StatsArg::Off => StatsMode::Off,
                 StatsArg::Atomics => StatsMode::Atomics,
                 StatsArg::Subgroups => StatsMode::Subgroups,
             },
-            table: match self.table {
-                TableArg::Interior => SpringTable::Interior,
-                TableArg::Storage => SpringTable::Storage,
-                TableArg::Image => SpringTable::Image,
-            },
         }
+    }
+
+    /// The GPU set-up for `backend`: the options and the variant asked for. Refused for
+    /// a CPU backend unless left at the defaults.
+    pub fn setup(&self, backend: Backend) -> anyhow::Result<GpuSetup> {
+        let variant = self.variant.spec(backend)?;
+        let setup = GpuSetup { options: self.options(), variant };
+        if backend.api().is_none() && setup != GpuSetup::default() {
+            anyhow::bail!(
+                "--stats, --variant and --set-variant apply to the GPU backends only ({} runs its own SIMD step)",
+                backend.name()
+            );
+        }
+        Ok(setup)
     }
 }
 
@@ -257,6 +312,13 @@ pub struct BenchArgs {
     /// Offscreen render target of the frame measurement, pixels (WIDTHxHEIGHT).
     #[arg(long, default_value = "1280x720", value_parser = parse_resolution)]
     pub resolution: (u32, u32),
+    /// Climb the optimisation ladder instead: on each GPU API named in --backends, from
+    /// naive to the fastest combination one switch at a time, plus the thesis preset; the
+    /// report adds a table and a waterfall plot per API and size.
+    #[arg(long)]
+    pub ladder: bool,
+    #[command(flatten)]
+    pub variant: VariantArgs,
     /// Skip the API-overhead micro-benchmarks.
     #[arg(long)]
     pub no_overhead: bool,

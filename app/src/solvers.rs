@@ -8,9 +8,10 @@ use anyhow::{Result, bail};
 use clap::ValueEnum;
 use clothlab_core::grid::ClothState;
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_engine::gpu::Engine as _;
 use clothlab_engine::recipe::Command as StepCommand;
 use clothlab_engine::validate::KernelRunner;
-use clothlab_engine::{GpuSolver, KernelRef, SolverOptions, Variant};
+use clothlab_engine::{Caps, GpuSolver, KernelRef, SolverOptions, Variant, VariantSpec};
 use clothlab_vulkan::{Device, VkCloth, VulkanEngine, VulkanSolver};
 use clothlab_wgpu::{ClothSource, GpuContext, WgpuEngine, WgpuSolver};
 
@@ -53,11 +54,20 @@ impl Backend {
         }
     }
 
-    /// The recipe a GPU backend runs.
+    /// The preset a GPU backend runs unless told otherwise.
+    pub fn preset(self) -> Option<&'static str> {
+        match self {
+            Backend::Wgpu | Backend::Vulkan => Some("optimized"),
+            Backend::WgpuNaive | Backend::VulkanNaive => Some("naive"),
+            Backend::Cpu | Backend::CpuPar => None,
+        }
+    }
+
+    /// The variant a GPU backend runs unless told otherwise.
     pub fn variant(self) -> Variant {
         match self {
-            Backend::Wgpu | Backend::Vulkan | Backend::Cpu | Backend::CpuPar => Variant::Optimized,
-            Backend::WgpuNaive | Backend::VulkanNaive => Variant::Naive,
+            Backend::WgpuNaive | Backend::VulkanNaive => Variant::NAIVE,
+            _ => Variant::OPTIMIZED,
         }
     }
 }
@@ -87,6 +97,16 @@ pub enum Shared<'a> {
     None,
 }
 
+/// How a GPU solver is set up: its options and, where given, its variant (else its
+/// backend's preset).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct GpuSetup {
+    /// Statistics computed besides the step.
+    pub options: SolverOptions,
+    /// The variant; `None`: the backend's preset.
+    pub variant: Option<VariantSpec>,
+}
+
 /// A solver of any backend, kept by type so that a GPU solver on a renderer's device can
 /// hand its buffers to the renderer.
 pub enum AnySolver {
@@ -99,19 +119,20 @@ pub enum AnySolver {
 }
 
 /// Makes a solver of `backend`: on `shared`'s device where it is a GPU solver of that
-/// API (its buffers drawn with no copy), else on a device of its own. `options` (GPU
-/// statistics, table home) are refused for the CPU backends unless default.
+/// API (its buffers drawn with no copy), else on a device of its own. A GPU set-up other
+/// than the default is refused for the CPU backends.
 pub fn make(
     backend: Backend,
     scene: Scene,
     params: SimParams,
-    options: SolverOptions,
+    setup: &GpuSetup,
     shared: &Shared<'_>,
 ) -> Result<AnySolver> {
-    if backend.api().is_none() && options != SolverOptions::default() {
-        bail!("--stats and --table apply to the GPU backends only");
+    if backend.api().is_none() && *setup != GpuSetup::default() {
+        bail!("--stats, --variant and --set-variant apply to the GPU backends only");
     }
-    let v = backend.variant();
+    let options = setup.options;
+    let v = setup.variant.clone().unwrap_or_else(|| backend.variant().into());
     Ok(match (backend, shared) {
         (Backend::Cpu, _) => AnySolver::Cpu(Box::new(CpuSolver::new(Exec::Serial, scene, params)?)),
         (Backend::CpuPar, _) => AnySolver::Cpu(Box::new(CpuSolver::new(Exec::Parallel, scene, params)?)),
@@ -131,11 +152,6 @@ pub fn make(
             AnySolver::Vulkan(Box::new(GpuSolver::new(engine, v, scene, params, options)?), false)
         }
     })
-}
-
-/// A solver of `backend` on a device of its own.
-pub fn make_solver(backend: Backend, scene: Scene, params: SimParams) -> Result<AnySolver> {
-    make(backend, scene, params, SolverOptions::default(), &Shared::None)
 }
 
 impl AnySolver {
@@ -181,6 +197,24 @@ impl AnySolver {
             AnySolver::Cpu(_) => Vec::new(),
             AnySolver::Wgpu(s, _) => s.recipe_kernels(),
             AnySolver::Vulkan(s, _) => s.recipe_kernels(),
+        }
+    }
+
+    /// What the adapter of a GPU solver offers that variants use, and its API's name.
+    pub fn caps(&self) -> Option<(Caps, &'static str)> {
+        match self {
+            AnySolver::Cpu(_) => None,
+            AnySolver::Wgpu(s, _) => Some((s.caps(), s.engine().info().api)),
+            AnySolver::Vulkan(s, _) => Some((s.caps(), s.engine().info().api)),
+        }
+    }
+
+    /// The variant a GPU solver runs.
+    pub fn variant(&self) -> Option<Variant> {
+        match self {
+            AnySolver::Cpu(_) => None,
+            AnySolver::Wgpu(s, _) => Some(s.variant()),
+            AnySolver::Vulkan(s, _) => Some(s.variant()),
         }
     }
 

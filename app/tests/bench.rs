@@ -184,6 +184,61 @@ fn a_cell_over_the_budget_is_skipped_and_reported() {
 }
 
 #[test]
+fn the_ladder_climbs_one_switch_at_a_time_and_plots_what_each_buys() {
+    let out = tmp("ladder");
+    let o = clothlab(&[
+        "bench",
+        "--ladder",
+        "--backends",
+        "wgpu,vulkan",
+        "--sizes",
+        "16",
+        "--iters",
+        "16",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    if err.contains("no wgpu adapter") && !gpu_required() {
+        return;
+    }
+    assert!(o.status.success(), "{err}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for api in ["wgpu", "vulkan"] {
+        let table: Vec<&str> = report
+            .split(&format!("### {api}, n = 16"))
+            .nth(1)
+            .unwrap_or_else(|| panic!("no {api} ladder in {report}"))
+            .lines()
+            .take_while(|l| !l.starts_with("Fastest"))
+            .filter(|l| l.starts_with("| ") && !l.starts_with("| rung"))
+            .collect();
+        // naive, the ten rungs of the ladder, the thesis preset.
+        assert_eq!(table.len(), 12, "{api}: {table:#?}");
+        assert!(table[0].starts_with("| naive | ") && table[0].contains("| 1.00× |"), "{}", table[0]);
+        assert!(table[11].starts_with("| **thesis (preset)** |"), "{}", table[11]);
+        // Every measured rung names its bound with the numbers that decided it.
+        for row in table.iter().filter(|r| !r.contains("skipped")) {
+            assert!(
+                ["dispatch overhead (", "submission / CPU (", "memory (", "arithmetic / latency ("]
+                    .iter()
+                    .any(|b| row.contains(b)),
+                "{row}"
+            );
+        }
+        check_png(&out.join(format!("ladder_{api}_16.png")));
+    }
+    // wgpu's engine has no table image: that rung is skipped, saying why.
+    assert!(report.contains("| +table=image | – |") && report.contains("skipped: switch table=image"), "{report}");
+    assert!(report.contains("The thesis preset draws"), "{report}");
+    // The same report from the JSON.
+    let o = clothlab(&["bench", "--replot", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(out.join("report.md")).unwrap(), report);
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
 fn bad_bench_input_is_refused_in_one_line() {
     for (args, expect) in [
         (&["bench", "--sizes", "1"][..], "grid sizes must be in 2 ..= 4096"),
@@ -195,6 +250,11 @@ fn bad_bench_input_is_refused_in_one_line() {
         (&["bench", "--backends", "cuda"], "invalid value 'cuda'"),
         (&["bench", "--sizes", "8", "--out", "/proc/clothlab-bench"], "cannot create /proc/clothlab-bench"),
         (&["bench", "--replot", "--out", "/nonexistent-dir"], "cannot read /nonexistent-dir/results.json"),
+        (&["bench", "--ladder", "--backends", "cpu,cpu-par", "--sizes", "8"], "name at least one GPU backend"),
+        (
+            &["bench", "--backends", "vulkan", "--variant", "turbo", "--sizes", "8"],
+            "the presets are naive, optimized, thesis",
+        ),
     ] {
         let o = clothlab(args);
         let err = String::from_utf8_lossy(&o.stderr);

@@ -225,19 +225,28 @@ fn render_draws_through_vulkan_and_refuses_mixed_apis() {
 #[test]
 fn gpu_options_reach_the_solver_or_are_refused_elsewhere() {
     refused(&["sim", "--backend", "cpu", "--stats", "atomics"], "GPU backends");
+    refused(&["sim", "--backend", "cpu-par", "--variant", "thesis"], "GPU backends");
     refused(&["sim", "--backend", "vulkan", "--stats", "sometimes"], "invalid value");
-    // What the generic solver asks of an engine that wgpu's does not offer.
+    // Bad variants: one line naming the preset or the switch, before any device opens.
+    refused(&["sim", "--backend", "vulkan", "--variant", "fast"], "the presets are naive, optimized, thesis");
+    refused(&["sim", "--backend", "wgpu", "--set-variant", "fusion=cuda"], "fusion=cuda");
+    refused(&["sim", "--backend", "wgpu", "--set-variant", "fusion"], "key=value");
+    refused(&["sim", "--backend", "wgpu", "--set-variant", "warp=on"], "unknown variant switch `warp`");
     if !no_gpu(&String::from_utf8_lossy(&clothlab(&["sim", "--backend", "wgpu", "--n", "4", "--steps", "1"]).stderr)) {
-        refused(&["sim", "--backend", "wgpu", "--table", "image"], "image is not implemented on wgpu");
+        // Two switches that exclude each other; a switch the wgpu engine lacks.
+        refused(&["sim", "--backend", "wgpu-naive", "--set-variant", "fusion=clothlab"], "exclude each other");
+        refused(&["sim", "--backend", "wgpu", "--set-variant", "table=image"], "switch table=image");
     }
-    let runs: [(&str, &[&str]); 5] = [
-        ("wgpu", &["--stats", "subgroups"]),
-        ("vulkan", &["--stats", "subgroups"]),
-        ("vulkan", &["--stats", "atomics", "--table", "image"]),
-        ("wgpu", &["--stats", "atomics", "--table", "storage"]),
-        ("wgpu-naive", &["--stats", "atomics"]),
+    let runs: [(&str, &[&str], &str); 6] = [
+        ("wgpu", &["--stats", "subgroups"], " wgpu"),
+        ("vulkan", &["--stats", "subgroups"], " vulkan"),
+        ("vulkan", &["--stats", "atomics", "--set-variant", "table=image"], "vulkan-optimized+table=image"),
+        ("wgpu", &["--stats", "atomics", "--set-variant", "table=storage"], "wgpu-optimized+table=storage"),
+        ("wgpu-naive", &["--stats", "atomics"], "wgpu-naive"),
+        // The thesis preset on wgpu, which has no table image: it falls back to storage.
+        ("wgpu", &["--stats", "atomics", "--variant", "thesis"], "wgpu-thesis+table=storage"),
     ];
-    for (backend, extra) in runs {
+    for (backend, extra, name) in runs {
         let mut args = vec!["sim", "--backend", backend, "--n", "20", "--steps", "32"];
         args.extend_from_slice(extra);
         let out = clothlab(&args);
@@ -247,6 +256,7 @@ fn gpu_options_reach_the_solver_or_are_refused_elsewhere() {
         }
         assert!(out.status.success(), "{args:?}: {err}");
         let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.lines().any(|l| l.starts_with("backend") && l.ends_with(name)), "{args:?}: want {name}\n{text}");
         let line = text.lines().find(|l| l.starts_with("GPU statistics")).unwrap_or_else(|| panic!("{text}"));
         // The cloth is falling after two frames: a positive kinetic energy.
         let energy: f64 =

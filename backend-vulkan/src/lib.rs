@@ -16,7 +16,7 @@ mod solver;
 use thiserror::Error;
 
 pub use clothlab_engine::recipe::StatsMode;
-pub use clothlab_engine::{GpuSolver, SolverOptions, SpringTable};
+pub use clothlab_engine::{GpuSolver, SolverOptions, VariantSpec};
 pub use device::Device;
 pub use present::{Overlay, Presented, Presenter, Screenshot};
 pub use render::{FRAMES_IN_FLIGHT, VkCloth, VulkanRenderer};

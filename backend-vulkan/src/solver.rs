@@ -14,7 +14,7 @@ use clothlab_core::solver::SolverError;
 use clothlab_engine::gpu::{BufferId, Dispatch, Engine, EngineInfo, Finished};
 use clothlab_engine::kernels::KernelRef;
 use clothlab_engine::solver::MAX_QUERIES;
-use clothlab_engine::{GpuSolver, SolverOptions, Variant};
+use clothlab_engine::{GpuSolver, SolverOptions, VariantSpec};
 use gpu_allocator::MemoryLocation;
 
 use crate::VkError;
@@ -25,7 +25,7 @@ pub type VulkanSolver = GpuSolver<VulkanEngine>;
 
 /// Sets the descriptor pool holds: two per kernel, for the built-in kernels in every
 /// flavor and the kernels added from outside.
-const MAX_KERNELS: u32 = 96;
+const MAX_KERNELS: u32 = 256;
 /// Alignment of the pieces of a frame in the staging buffer (constants, readbacks).
 const STAGING_ALIGN: u64 = 256;
 /// The staging room a frame's recorded writes and readbacks may use.
@@ -331,7 +331,7 @@ impl Engine for VulkanEngine {
 /// The Vulkan solver of `variant` on the first Vulkan device (validated by the Khronos
 /// layer with `validation`, where it is installed).
 pub fn vulkan_solver(
-    variant: Variant,
+    variant: impl Into<VariantSpec>,
     scene: clothlab_core::Scene,
     params: clothlab_core::SimParams,
     validation: bool,

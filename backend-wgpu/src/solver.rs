@@ -11,7 +11,7 @@ use clothlab_core::layout::{BindKind, Buf};
 use clothlab_engine::gpu::{BufferId, Dispatch, Engine, EngineInfo, Finished};
 use clothlab_engine::kernels::{self, KernelRef};
 use clothlab_engine::solver::MAX_QUERIES;
-use clothlab_engine::{GpuSolver, SolverOptions, Variant};
+use clothlab_engine::{GpuSolver, SolverOptions, VariantSpec};
 use wgpu::util::DeviceExt;
 
 use crate::context::{GpuContext, GpuError};
@@ -331,7 +331,7 @@ impl Engine for WgpuEngine {
 
 /// The wgpu solver of `variant` on the first adapter wgpu finds.
 pub fn wgpu_solver(
-    variant: Variant,
+    variant: impl Into<VariantSpec>,
     scene: clothlab_core::Scene,
     params: clothlab_core::SimParams,
     options: SolverOptions,

@@ -79,11 +79,17 @@ pub enum Buf {
     Partials = 19,
     /// The spring table as an image.
     Table = 20,
+    /// The spheres in a uniform block (`colliders=uniform`: the thesis's constant memory).
+    SpheresUniform = 21,
+    /// The boxes in a uniform block.
+    BoxesUniform = 22,
+    /// The step constants in a storage buffer (`constants=storage`).
+    ParamsStorage = 23,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 21] = [
+    pub const ALL: [Buf; 24] = [
         Buf::Params,
         Buf::Pos,
         Buf::Prev,
@@ -105,6 +111,9 @@ impl Buf {
         Buf::StatsEnergy,
         Buf::Partials,
         Buf::Table,
+        Buf::SpheresUniform,
+        Buf::BoxesUniform,
+        Buf::ParamsStorage,
     ];
 
     /// The `@binding` number.
@@ -120,7 +129,7 @@ impl Buf {
     /// What kind of binding it is.
     pub const fn kind(self) -> BindKind {
         match self {
-            Buf::Params | Buf::Interior => BindKind::Uniform,
+            Buf::Params | Buf::Interior | Buf::SpheresUniform | Buf::BoxesUniform => BindKind::Uniform,
             Buf::Table => BindKind::Image,
             _ => BindKind::Storage,
         }
@@ -150,6 +159,31 @@ impl Buf {
             Buf::StatsEnergy => "stats_energy",
             Buf::Partials => "partials",
             Buf::Table => "table",
+            Buf::SpheresUniform => "spheres_uniform",
+            Buf::BoxesUniform => "boxes_uniform",
+            Buf::ParamsStorage => "params_storage",
+        }
+    }
+
+    /// The buffer whose data this binding holds: a second home of the same data (the
+    /// constants in storage, the colliders in uniform blocks) names the first, so that
+    /// registry rows, hazards and host copies need to know only one.
+    pub const fn data(self) -> Buf {
+        match self {
+            Buf::ParamsStorage => Buf::Params,
+            Buf::SpheresUniform => Buf::Spheres,
+            Buf::BoxesUniform => Buf::Boxes,
+            b => b,
+        }
+    }
+
+    /// The other homes of this buffer's data (see [`Buf::data`]).
+    pub const fn homes(self) -> &'static [Buf] {
+        match self {
+            Buf::Params => &[Buf::ParamsStorage],
+            Buf::Spheres => &[Buf::SpheresUniform],
+            Buf::Boxes => &[Buf::BoxesUniform],
+            _ => &[],
         }
     }
 }
@@ -165,6 +199,7 @@ pub fn wgsl_constants() -> String {
     s += &u("TETHER_SLOTS", TETHER_SLOTS as u32);
     s += &u("BLOCK", BLOCK);
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
+    s += &u("MAX_COLLIDERS", crate::scene::MAX_COLLIDERS as u32);
     s += &format!("const STRAIN_AIM: f32 = {STRAIN_AIM:?};\n");
     s
 }

@@ -54,6 +54,8 @@ impl KernelId {
 pub const FORCES_SPRINGS: &str = "forces+springs";
 /// Label of the CPU solvers' fused `integrate` + `collide` sweep.
 pub const INTEGRATE_COLLIDE: &str = "integrate+collide";
+/// Label of the thesis's fused `forces` + `integrate` + `collide` kernel.
+pub const FORCES_INTEGRATE_COLLIDE: &str = "forces+integrate+collide";
 /// Label of the whole-substep row.
 pub const SUBSTEP: &str = "substep";
 /// Label of the whole-frame row (all substeps of a frame).

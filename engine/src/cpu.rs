@@ -14,7 +14,7 @@ use clothlab_core::{SimParams, Solver, SolverError};
 
 use crate::kernels::{HostBuffers, KernelRef, TwinArgs};
 use crate::recipe::KernelRunner;
-use crate::recipe::{Caps, Command, Variant, kernels_of, recipe};
+use crate::recipe::{Command, Variant, kernels_of, recipe};
 
 /// Runs commands through the twins.
 #[derive(Debug, Clone)]
@@ -112,6 +112,7 @@ impl KernelRunner for CpuEngine {
 /// another, no SIMD), but exactly the commands a GPU backend records.
 pub struct RecipeSolver {
     engine: CpuEngine,
+    name: String,
     variant: Variant,
     params: SimParams,
     grab: Option<Grab>,
@@ -121,15 +122,20 @@ pub struct RecipeSolver {
 }
 
 impl RecipeSolver {
-    /// The cloth of `scene`, stepped by `variant`'s recipe (float atomics and immediates
-    /// change only which GPU shader runs, not the twin: the CPU recipe uses neither).
+    /// The cloth of `scene`, stepped by `variant`'s recipe (where constants, tables and
+    /// colliders live and which atomics add change only which GPU shader runs, not the
+    /// twin).
     pub fn new(exec: Exec, variant: Variant, scene: Scene, params: SimParams) -> Result<Self, SolverError> {
         let (state, topo) = build(&scene, &params)?;
         let engine = CpuEngine::new(exec, scene, topo);
         let sp = StepParams::new(&params, &engine.scene, None);
         let bufs = start_buffers(exec, &sp, &engine.topo, &state);
-        let commands = recipe(variant, params.strain_iterations, CPU_CAPS);
-        Ok(Self { engine, variant, params, grab: None, bufs, commands, timer: TimingRecorder::default() })
+        let commands = recipe(&variant, params.strain_iterations);
+        let name = match variant.label().as_str() {
+            "optimized" => "cpu-recipe".to_string(),
+            label => format!("cpu-recipe-{label}"),
+        };
+        Ok(Self { engine, name, variant, params, grab: None, bufs, commands, timer: TimingRecorder::default() })
     }
 
     /// The commands of one substep.
@@ -153,15 +159,9 @@ impl RecipeSolver {
     }
 }
 
-/// The CPU engine's caps: plain flavors (their twins are the same functions anyway).
-const CPU_CAPS: Caps = Caps { float_atomics: false, immediates: false, table_image: false };
-
 impl Solver for RecipeSolver {
     fn name(&self) -> &str {
-        match self.variant {
-            Variant::Naive => "cpu-recipe-naive",
-            Variant::Optimized => "cpu-recipe",
-        }
+        &self.name
     }
 
     fn scene(&self) -> &Scene {
@@ -175,7 +175,7 @@ impl Solver for RecipeSolver {
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         params.validate()?;
         self.engine.set_spring_constants(&params);
-        self.commands = recipe(self.variant, params.strain_iterations, CPU_CAPS);
+        self.commands = recipe(&self.variant, params.strain_iterations);
         self.params = params;
         Ok(())
     }

@@ -77,23 +77,58 @@ pub enum Source {
 /// Which twins `shaders/build.rs` generates for a kernel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Variants {
-    /// `<name>_imm`: the step constants from immediates (push constants).
+    /// `<name>_imm` and `<name>_sto`: the step constants from immediates (push
+    /// constants), or from a storage buffer, instead of the uniform block.
     pub immediates: bool,
     /// `<name>_tex`: the spring table from a sampled image.
     pub table_image: bool,
     /// `<name>_f32`: float atomics instead of compare-exchange loops.
     pub float_atomics: bool,
+    /// `<name>_cu`: the colliders from uniform blocks instead of storage buffers.
+    pub colliders_uniform: bool,
+}
+
+/// Where a shader reads the step constants from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum ConstantsHome {
+    /// The uniform block (`var<uniform>`, binding [`Buf::Params`]).
+    #[default]
+    Uniform,
+    /// Immediates (push constants): the `_imm` twins.
+    Immediates,
+    /// A read-only storage buffer ([`Buf::ParamsStorage`]): the `_sto` twins.
+    Storage,
 }
 
 /// One concrete shader of a kernel: which of its variants it is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct Flavor {
-    /// Step constants from immediates.
-    pub immediates: bool,
+    /// Where the step constants come from.
+    pub constants: ConstantsHome,
     /// Spring table from an image.
     pub table_image: bool,
     /// Float atomics.
     pub float_atomics: bool,
+    /// Colliders from uniform blocks.
+    pub colliders_uniform: bool,
+}
+
+impl Flavor {
+    /// Every flavor there is (the registry keeps those a kernel has).
+    pub fn all() -> Vec<Flavor> {
+        let mut v = Vec::new();
+        for constants in [ConstantsHome::Uniform, ConstantsHome::Immediates, ConstantsHome::Storage] {
+            for bits in 0..8u8 {
+                v.push(Flavor {
+                    constants,
+                    table_image: bits & 1 != 0,
+                    float_atomics: bits & 2 != 0,
+                    colliders_uniform: bits & 4 != 0,
+                });
+            }
+        }
+        v
+    }
 }
 
 /// What a kernel's immediates (push constants) hold, apart from the `_imm` twins' step
@@ -277,9 +312,10 @@ impl KernelDef {
     /// Whether the kernel has the shader `flavor`.
     pub fn has(&self, f: Flavor) -> bool {
         let v = self.variants;
-        (!f.immediates || v.immediates)
+        (f.constants == ConstantsHome::Uniform || v.immediates)
             && (!f.table_image || v.table_image)
             && (!f.float_atomics || v.float_atomics)
+            && (!f.colliders_uniform || v.colliders_uniform)
             && !(f.table_image && f.float_atomics)
     }
 
@@ -289,9 +325,10 @@ impl KernelDef {
         let v = self.variants;
         let table_image = want.table_image && v.table_image;
         let flavor = Flavor {
-            immediates: want.immediates && v.immediates,
+            constants: if v.immediates { want.constants } else { ConstantsHome::Uniform },
             table_image,
             float_atomics: want.float_atomics && v.float_atomics && !table_image,
+            colliders_uniform: want.colliders_uniform && v.colliders_uniform,
         };
         KernelRef { def: self, flavor }
     }
@@ -303,14 +340,7 @@ impl KernelDef {
 
     /// Every flavor the kernel has.
     pub fn flavors(&'static self) -> Vec<KernelRef> {
-        let mut v = Vec::new();
-        for bits in 0..8u8 {
-            let f = Flavor { immediates: bits & 1 != 0, table_image: bits & 2 != 0, float_atomics: bits & 4 != 0 };
-            if self.has(f) {
-                v.push(KernelRef { def: self, flavor: f });
-            }
-        }
-        v
+        Flavor::all().into_iter().filter(|f| self.has(*f)).map(|flavor| KernelRef { def: self, flavor }).collect()
     }
 
     /// Whether it writes the other buffer of the position pair (a recipe swaps the pair
@@ -352,21 +382,27 @@ impl std::fmt::Display for KernelRef {
 }
 
 impl KernelRef {
-    /// The shader's name: `<name>[_f32|_tex][_imm]`, as shaders/build.rs names the twins.
+    /// The shader's name: `<name>[_f32|_tex|_cu][_imm|_sto]`, as shaders/build.rs names
+    /// the twins.
     pub fn shader_name(&self) -> String {
         let f = self.flavor;
         format!(
-            "{}{}{}{}",
+            "{}{}{}{}{}",
             self.def.name,
             if f.float_atomics { "_f32" } else { "" },
             if f.table_image { "_tex" } else { "" },
-            if f.immediates { "_imm" } else { "" }
+            if f.colliders_uniform { "_cu" } else { "" },
+            match f.constants {
+                ConstantsHome::Uniform => "",
+                ConstantsHome::Immediates => "_imm",
+                ConstantsHome::Storage => "_sto",
+            }
         )
     }
 
     /// Whether the shader reads the step constants from immediates.
     pub fn step_immediates(&self) -> bool {
-        self.flavor.immediates
+        self.flavor.constants == ConstantsHome::Immediates
     }
 
     /// The complete WGSL.
@@ -401,6 +437,40 @@ impl KernelRef {
     }
 }
 
+/// The bytes `k` must move at least once per dispatch on `topo` (its compulsory
+/// traffic): every buffer its row reads or writes, once, at its size — the spring table
+/// from the image in a `_tex` flavor, from the storage buffers otherwise, and not at all
+/// when `table_uniform` (the regular grid's constants in the uniform block). Neighbour
+/// loads that a cache serves are not counted: what `clothlab bench --ladder` divides by
+/// a kernel's time to say how close it runs to the memory's bandwidth.
+pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool) -> u64 {
+    use clothlab_core::grid::{FACE_SLOTS, SLOTS, STRAIN_SLOTS, TETHER_SLOTS};
+    let np = topo.num_particles() as u64;
+    let tris = topo.triangles.len() as u64;
+    let springs = topo.springs.len() as u64;
+    let table = |b: Buf| match b {
+        Buf::Slots | Buf::BendSlots if k.flavor.table_image || table_uniform => 0,
+        Buf::Table if !k.flavor.table_image => 0,
+        Buf::Slots => np * STRAIN_SLOTS as u64 * 16,
+        Buf::BendSlots => np * (SLOTS - STRAIN_SLOTS) as u64 * 16,
+        Buf::Table => np * SLOTS as u64 * 16,
+        _ => 0,
+    };
+    let size = |b: Buf| -> u64 {
+        match b {
+            Buf::Pos | Buf::PosOut | Buf::Prev | Buf::Force | Buf::Normal => np * 16,
+            Buf::Faces => tris * 16,
+            Buf::Triangles => tris * 12,
+            Buf::FaceSlots => np * FACE_SLOTS as u64 * 4,
+            Buf::Tethers => np * TETHER_SLOTS as u64 * 8,
+            Buf::Springs | Buf::SpringsB => springs / 2 * 24,
+            Buf::Slots | Buf::BendSlots | Buf::Table => table(b),
+            _ => 0,
+        }
+    };
+    k.def.reads.iter().chain(k.def.writes).map(|&b| size(b)).sum()
+}
+
 // ---- the twins ---------------------------------------------------------------------
 
 fn forces(a: &TwinArgs, b: &mut HostBuffers) {
@@ -431,6 +501,15 @@ fn collide(a: &TwinArgs, b: &mut HostBuffers) {
 fn integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
     integrate(a, b);
     collide(a, b);
+}
+
+/// The fused kernel keeps the total force in a register: the force buffer is left as the
+/// springs left it.
+fn forces_integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
+    let springs = b.force.clone();
+    forces(a, b);
+    integrate_collide(a, b);
+    b.force = springs;
 }
 
 fn strain_limit(a: &TwinArgs, b: &mut HostBuffers) {
@@ -517,15 +596,17 @@ const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf]
         accumulates: NONE,
         check: ELEMENT,
         label: name,
-        variants: Variants { immediates: true, table_image: false, float_atomics: false },
+        variants: Variants { immediates: true, ..PLAIN },
         immediates: Immediates::None,
         test_input: None,
     }
 }
 
-const PLAIN: Variants = Variants { immediates: false, table_image: false, float_atomics: false };
-const IMM_TEX: Variants = Variants { immediates: true, table_image: true, float_atomics: false };
-const IMM_F32: Variants = Variants { immediates: true, table_image: false, float_atomics: true };
+const PLAIN: Variants =
+    Variants { immediates: false, table_image: false, float_atomics: false, colliders_uniform: false };
+const IMM_TEX: Variants = Variants { immediates: true, table_image: true, ..PLAIN };
+const IMM_F32: Variants = Variants { immediates: true, float_atomics: true, ..PLAIN };
+const IMM_CU: Variants = Variants { immediates: true, colliders_uniform: true, ..PLAIN };
 
 /// Gravity and drag into the force buffer (added to the wind force already there).
 pub static FORCES: KernelDef = def("forces", forces, Count::Particles, STATE, &[Force]);
@@ -549,13 +630,29 @@ pub static FORCES_SPRINGS: KernelDef = KernelDef {
 /// Verlet, pins, the grab and the floor.
 pub static INTEGRATE: KernelDef = def("integrate", integrate, Count::Particles, STATE, &[Pos, Prev]);
 /// Spheres and boxes.
-pub static COLLIDE: KernelDef = def("collide", collide, Count::Particles, COLLIDERS, &[Pos, Prev]);
+pub static COLLIDE: KernelDef =
+    KernelDef { variants: IMM_CU, ..def("collide", collide, Count::Particles, COLLIDERS, &[Pos, Prev]) };
 /// `integrate` and `collide` fused: each particle loaded and stored once.
 pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
     label: timing::INTEGRATE_COLLIDE,
+    variants: IMM_CU,
     ..def(
         "integrate_collide",
         integrate_collide,
+        Count::Particles,
+        &[Params, Pos, Prev, Force, Spheres, Boxes],
+        &[Pos, Prev],
+    )
+};
+/// `forces`, `integrate` and `collide` fused: the thesis's optimized "Verlet" kernel. The
+/// total force is used, not stored (the normals kernel rewrites the force buffer later in
+/// the substep, so nothing reads it).
+pub static FORCES_INTEGRATE_COLLIDE: KernelDef = KernelDef {
+    label: timing::FORCES_INTEGRATE_COLLIDE,
+    variants: IMM_CU,
+    ..def(
+        "forces_integrate_collide",
+        forces_integrate_collide,
         Count::Particles,
         &[Params, Pos, Prev, Force, Spheres, Boxes],
         &[Pos, Prev],
@@ -621,14 +718,14 @@ pub static VERTEX_NORMALS_NAIVE: KernelDef = KernelDef {
 /// Statistics by subgroup and workgroup reductions: one partial per workgroup.
 pub static STATS: KernelDef = KernelDef {
     check: STATS_TEST,
-    variants: Variants { immediates: false, table_image: true, float_atomics: false },
+    variants: Variants { table_image: true, ..PLAIN },
     immediates: Immediates::Substep,
     ..def("stats", stats, Count::Particles, &[Params, Pos, Prev, Slots, BendSlots, Table], &[Partials])
 };
 /// Statistics by atomics from every invocation.
 pub static STATS_ATOMIC: KernelDef = KernelDef {
     check: STATS_TEST,
-    variants: Variants { immediates: false, table_image: true, float_atomics: true },
+    variants: Variants { table_image: true, float_atomics: true, ..PLAIN },
     immediates: Immediates::Substep,
     ..def(
         "stats_atomic",
@@ -653,7 +750,7 @@ pub static STATS_REDUCE: KernelDef = KernelDef {
 };
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 15] = [
+pub static ALL: [&KernelDef; 16] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -661,6 +758,7 @@ pub static ALL: [&KernelDef; 15] = [
     &INTEGRATE,
     &COLLIDE,
     &INTEGRATE_COLLIDE,
+    &FORCES_INTEGRATE_COLLIDE,
     &STRAIN_LIMIT,
     &TRI_NORMALS,
     &TRI_NORMALS_SCATTER,
@@ -690,7 +788,8 @@ mod tests {
                     [("reads", shader.reads, def.reads), ("writes", shader.writes, def.writes)]
                 {
                     for &b in used {
-                        let buf = Buf::from_binding(b).expect("build.rs checks the binding numbers");
+                        // (A second home of a buffer's data counts as the buffer.)
+                        let buf = Buf::from_binding(b).expect("build.rs checks the binding numbers").data();
                         assert!(
                             declared.contains(&buf),
                             "{k} {what} {buf:?} (binding {b}), which its row does not say"
@@ -724,7 +823,12 @@ mod tests {
 
     #[test]
     fn flavors_fall_back_to_what_a_kernel_has() {
-        let want = Flavor { immediates: true, table_image: true, float_atomics: true };
+        let want = Flavor {
+            constants: ConstantsHome::Immediates,
+            table_image: true,
+            float_atomics: true,
+            colliders_uniform: true,
+        };
         assert_eq!(FORCES_SPRINGS.flavor(want).shader_name(), "forces_springs_tex_imm");
         assert_eq!(SPRINGS_SCATTER.flavor(want).shader_name(), "springs_scatter_f32_imm");
         assert_eq!(STATS_REDUCE.flavor(want).shader_name(), "stats_reduce");
@@ -732,6 +836,10 @@ mod tests {
             STATS_ATOMIC.flavor(Flavor { float_atomics: true, ..Flavor::default() }).shader_name(),
             "stats_atomic_f32"
         );
+        assert_eq!(INTEGRATE_COLLIDE.flavor(want).shader_name(), "integrate_collide_cu_imm");
+        let sto = Flavor { constants: ConstantsHome::Storage, ..Flavor::default() };
+        assert_eq!(STRAIN_LIMIT.flavor(sto).shader_name(), "strain_limit_sto");
+        assert_eq!(STATS.flavor(sto).shader_name(), "stats", "the statistics kernels use immediates for the substep");
         assert_eq!(groups(64 * 65535 + 1), (65535, 2));
     }
 }

@@ -2,6 +2,9 @@
 //!
 //! * [`kernels`] — the kernel registry: one row per kernel (WGSL, CPU twin, what it runs
 //!   over, bindings read and written, pure outputs, bound, label, variants);
+//! * [`variant`] — variants as sets of switches (springs, normals, atomics, fusion,
+//!   submissions, constants, table, colliders) and the presets `naive`, `optimized`,
+//!   `thesis`;
 //! * [`recipe`] — the commands of a substep per variant (dispatches, clears, swaps) and
 //!   the barriers they need;
 //! * [`cpu`] — the CPU engine: runs any commands through the twins;
@@ -21,13 +24,15 @@ pub mod recipe;
 pub mod solver;
 pub mod tables;
 pub mod validate;
+pub mod variant;
 
 pub use cpu::{CpuEngine, RecipeSolver};
 pub use gpu::Engine;
 pub use kernels::{Flavor, HostBuffers, KernelDef, KernelRef, TwinArgs};
 pub use recipe::{Caps, Command, StatsMode, Variant};
-pub use solver::{GpuSolver, SolverOptions, SpringTable};
+pub use solver::{GpuSolver, SolverOptions};
 pub use validate::KernelRunner;
+pub use variant::{VariantError, VariantSpec};
 
 use clothlab_core::SolverError;
 

@@ -10,14 +10,8 @@ use clothlab_core::layout::Buf;
 
 use crate::kernels::{self as k, Flavor, HostBuffers, KernelDef, KernelRef};
 
-/// Which formulation of the step runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Variant {
-    /// One dispatch per kernel, scatter with atomics, a submission per substep.
-    Naive,
-    /// Fused kernels, gathers, one submission per frame.
-    Optimized,
-}
+use crate::variant::{Accumulate, Fusion};
+pub use crate::variant::{Caps, Variant};
 
 /// One command of a recipe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -63,18 +57,6 @@ pub trait KernelRunner {
     }
 }
 
-/// What the adapter offers that the recipes use.
-#[derive(Debug, Clone, Copy)]
-pub struct Caps {
-    /// `atomic<f32>` add in storage buffers.
-    pub float_atomics: bool,
-    /// Immediates (push constants) large enough for the step constants.
-    pub immediates: bool,
-    /// Read the spring table from a sampled image (`<kernel>_tex` twins) instead of
-    /// storage buffers (Vulkan only: the thesis's texture memory).
-    pub table_image: bool,
-}
-
 /// The commands that run `kernel` once: clears of what it accumulates into, the
 /// dispatch, and a swap if it writes the other position buffer.
 pub fn run(kernel: KernelRef) -> Vec<Command> {
@@ -86,42 +68,35 @@ pub fn run(kernel: KernelRef) -> Vec<Command> {
     v
 }
 
-/// The commands of one substep for `variant` with `strain_passes` strain passes; the
-/// naive scatters use float atomics where the adapter has them, the optimized kernels
-/// read the step constants from immediates where it has those.
-pub fn recipe(variant: Variant, strain_passes: u32, caps: Caps) -> Vec<Command> {
-    let (kernels, flavor): (Vec<&'static KernelDef>, Flavor) = match variant {
-        Variant::Naive => (
-            [&k::FORCES, &k::SPRINGS_SCATTER, &k::INTEGRATE, &k::COLLIDE]
-                .into_iter()
-                .chain((0..strain_passes).map(|_| &k::STRAIN_LIMIT))
-                .chain([&k::TRI_NORMALS_SCATTER, &k::VERTEX_NORMALS_NAIVE])
-                .collect(),
-            Flavor { float_atomics: caps.float_atomics, ..Flavor::default() },
-        ),
-        Variant::Optimized => (
-            [&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE]
-                .into_iter()
-                .chain((0..strain_passes).map(|_| &k::STRAIN_LIMIT))
-                .chain([&k::TRI_NORMALS, &k::VERTEX_NORMALS])
-                .collect(),
-            Flavor { immediates: caps.immediates, table_image: caps.table_image, ..Flavor::default() },
-        ),
+/// The commands of one substep for `variant` with `strain_passes` strain passes, each
+/// kernel in the flavor the variant's switches pick (see [`Variant::flavor`]).
+pub fn recipe(variant: &Variant, strain_passes: u32) -> Vec<Command> {
+    let springs = match variant.springs {
+        Accumulate::Scatter => &k::SPRINGS_SCATTER,
+        Accumulate::Gather => &k::SPRINGS,
     };
-    kernels.into_iter().flat_map(|d| run(d.flavor(flavor))).collect()
+    let step: Vec<&'static KernelDef> = match variant.fusion {
+        Fusion::None => vec![&k::FORCES, springs, &k::INTEGRATE, &k::COLLIDE],
+        Fusion::Thesis => vec![springs, &k::FORCES_INTEGRATE_COLLIDE],
+        Fusion::Clothlab => vec![&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE],
+    };
+    let normals: [&'static KernelDef; 2] = match variant.normals {
+        Accumulate::Scatter => [&k::TRI_NORMALS_SCATTER, &k::VERTEX_NORMALS_NAIVE],
+        Accumulate::Gather => [&k::TRI_NORMALS, &k::VERTEX_NORMALS],
+    };
+    let flavor = variant.flavor();
+    step.into_iter()
+        .chain((0..strain_passes).map(|_| &k::STRAIN_LIMIT))
+        .chain(normals)
+        .flat_map(|d| run(d.flavor(flavor)))
+        .collect()
 }
 
-/// The shaders a backend with `caps` builds when it starts: everything either recipe
-/// dispatches, with and without immediates, and the plain flavor of every kernel of the
-/// step (so that each can be validated). The statistics kernels are built with their
-/// option.
-pub fn kernels_for(caps: Caps) -> Vec<KernelRef> {
-    let mut all: Vec<Command> = Vec::new();
-    for variant in [Variant::Naive, Variant::Optimized] {
-        all.extend(recipe(variant, 1, caps));
-        all.extend(recipe(variant, 1, Caps { immediates: false, ..caps }));
-    }
-    let mut v = kernels_of(&all);
+/// The shaders a solver of `variant` builds when it starts: what its recipe dispatches,
+/// and the plain flavor of every kernel of the step (so that each can be validated). The
+/// statistics kernels are built with their option.
+pub fn kernels_for(variant: &Variant) -> Vec<KernelRef> {
+    let mut v = kernels_of(&recipe(variant, 1));
     for def in k::ALL.iter().filter(|d| d.immediates == k::Immediates::None) {
         if !v.contains(&def.plain()) {
             v.push(def.plain());
@@ -198,7 +173,7 @@ pub mod res {
 /// The hazard bits of `buf` when the current positions are `pos[cur]`.
 pub fn bits(buf: Buf, cur: usize) -> u32 {
     use res::*;
-    match buf {
+    match buf.data() {
         Buf::Pos if cur == 0 => POS0,
         Buf::Pos => POS1,
         Buf::PosOut if cur == 0 => POS1,
@@ -298,7 +273,7 @@ mod tests {
     fn every_dependent_dispatch_gets_a_barrier_and_no_other() {
         let count = |r: &[Command]| dispatches(r).count();
         // Optimized: each of its five kernels reads what the one before wrote.
-        let opt = recipe(Variant::Optimized, 1, CAPS);
+        let opt = recipe(&Variant::OPTIMIZED, 1);
         assert_eq!(count(&opt), 5);
         assert_eq!(barriers_per_substep(&opt), count(&opt));
         // Statistics read only the positions: they need no barrier after the normals,
@@ -314,11 +289,16 @@ mod tests {
         assert_eq!(barriers_per_substep(&with_atomics), count(&opt));
         // Naive: every dispatch waits for the one before; the normal clear needs none (the
         // normals were last read several barriers ago), the scatter after it does.
-        let naive = recipe(Variant::Naive, 1, CAPS);
+        let naive = recipe(&Variant::NAIVE, 1);
         assert!(naive.contains(&Command::Clear(Buf::Normal)));
         assert_eq!(barriers_per_substep(&naive), count(&naive));
         // Two strain passes: the second reads the first's output.
-        let two_passes = recipe(Variant::Optimized, 2, CAPS);
+        let two_passes = recipe(&Variant::OPTIMIZED, 2);
+        assert_eq!(barriers_per_substep(&two_passes), count(&two_passes));
+        // The thesis's: the springs scatter, then the fused Verlet kernel.
+        let thesis = recipe(&Variant::THESIS, 2);
+        assert_eq!(count(&thesis), 6);
+        assert_eq!(barriers_per_substep(&thesis), count(&thesis));
         assert_eq!(barriers_per_substep(&two_passes), count(&two_passes));
     }
 
@@ -338,8 +318,10 @@ mod tests {
     }
 
     #[test]
-    fn recipes_swap_after_each_strain_pass_and_pick_the_flavors_of_the_caps() {
-        let r = recipe(Variant::Optimized, 3, Caps { float_atomics: true, immediates: true, table_image: true });
+    fn recipes_swap_after_each_strain_pass_and_pick_the_flavors_of_the_switches() {
+        let mut v = Variant::OPTIMIZED;
+        v.set("table", "image").unwrap();
+        let r = recipe(&v, 3);
         assert_eq!(r.iter().filter(|c| **c == Command::Swap).count(), 3);
         let names: Vec<String> = dispatches(&r).map(|k| k.shader_name()).collect();
         assert_eq!(
@@ -354,8 +336,22 @@ mod tests {
                 "vertex_normals_imm"
             ]
         );
-        let naive = recipe(Variant::Naive, 1, Caps { float_atomics: true, immediates: true, table_image: true });
-        let names: Vec<String> = dispatches(&naive).map(|k| k.shader_name()).collect();
-        assert!(names.contains(&"springs_scatter_f32".to_string()) && names.contains(&"forces".to_string()));
+        let names = |v: &Variant| dispatches(&recipe(v, 1)).map(|k| k.shader_name()).collect::<Vec<_>>();
+        assert_eq!(
+            names(&Variant::NAIVE),
+            [
+                "forces_sto",
+                "springs_scatter_f32_sto",
+                "integrate_sto",
+                "collide_sto",
+                "strain_limit_sto",
+                "tri_normals_scatter_f32_sto",
+                "vertex_normals_naive_sto"
+            ]
+        );
+        assert_eq!(
+            names(&Variant::THESIS),
+            ["springs_scatter_f32", "forces_integrate_collide_cu", "strain_limit_tex", "tri_normals", "vertex_normals"]
+        );
     }
 }

@@ -21,34 +21,19 @@ use crate::gpu::{BufferId, Dispatch, Engine};
 use crate::kernels::{HostBuffers, Immediates, KernelRef, groups};
 use crate::recipe::KernelRunner;
 use crate::recipe::{
-    Caps, Command, Hazards, StatsMode, Variant, dispatches, kernels_for, kernels_of, recipe, res, stats_commands,
+    Caps, Command, Hazards, StatsMode, dispatches, kernels_for, kernels_of, recipe, res, stats_commands,
 };
 use crate::tables::{record_times, split_slots, spring_halves, table_texels};
+use crate::variant::{Submit, Table, Variant, VariantSpec};
 
 /// Timestamp queries per frame.
 pub const MAX_QUERIES: u32 = 4096;
 
-/// Where the gathers read the spring table from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum SpringTable {
-    /// Every particle takes its springs' constants from a uniform block and its neighbours
-    /// by offset (border included) when the table is the regular grid's; the table is read
-    /// (storage buffers) only for an irregular one.
-    #[default]
-    Interior,
-    /// Every particle reads its slots from read-only storage buffers.
-    Storage,
-    /// Every particle reads its slots from a sampled image (the thesis's texture memory).
-    Image,
-}
-
-/// What a GPU solver computes besides the step, and where it reads the table from.
+/// What a GPU solver computes besides the step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct SolverOptions {
     /// Per-substep statistics (max strain, kinetic energy) computed on the GPU.
     pub stats: StatsMode,
-    /// Where the spring table is read from.
-    pub table: SpringTable,
 }
 
 /// The buffers a kernel test or a bisection moves between host and device.
@@ -81,10 +66,11 @@ pub struct GpuSolver<E: Engine> {
 }
 
 impl<E: Engine> GpuSolver<E> {
-    /// Builds the cloth of `scene` on `engine`.
+    /// Builds the cloth of `scene` on `engine`, stepped by `variant` (a preset falls back
+    /// to what the adapter has; a switch set explicitly is refused where it lacks it).
     pub fn new(
         mut engine: E,
-        variant: Variant,
+        variant: impl Into<VariantSpec>,
         scene: Scene,
         params: SimParams,
         options: SolverOptions,
@@ -93,6 +79,12 @@ impl<E: Engine> GpuSolver<E> {
             return Err(SolverError::Invalid(format!("at most {MAX_COLLIDERS} spheres and boxes")));
         }
         let info = engine.info().clone();
+        // Immediates hold the step constants where the device has room; the scatters use
+        // float atomics where the device has them, compare-exchange otherwise: the same
+        // choice on every API, so that one variant on two APIs compares only the APIs.
+        let caps =
+            Caps { float_atomics: info.float_atomics, immediates: info.immediates, table_image: info.table_image };
+        let variant = variant.into().resolve(&caps, info.api).map_err(|e| SolverError::Unsupported(e.0))?;
         if options.stats == StatsMode::Subgroups && !info.subgroup_arithmetic {
             return Err(SolverError::Unsupported(format!(
                 "{} has no subgroup arithmetic in compute shaders on {}: use statistics by atomics",
@@ -117,14 +109,17 @@ impl<E: Engine> GpuSolver<E> {
         let face_flat: Vec<i32> = topo.face_slots.iter().flatten().copied().collect();
         let (strain, bend) = split_slots(&topo);
         let (springs_a, springs_b) = spring_halves(&topo.springs);
-        let interior = interior_block(&topo, options.table);
+        let interior = interior_block(&topo, variant.table);
         let (x, y) = groups(topo.num_particles() as u32);
         let stats_zero = vec![0u8; 4 * MAX_SUBSTEPS as usize];
         let partials_zero = vec![0u8; 8 * (x * y) as usize];
         let pos_bytes: &[u8] = bytemuck::cast_slice(&state.pos);
         // Positions and normals are the renderer's vertex buffers too (no copy).
-        let contents: [(Buf, &[u8]); 20] = [
+        let contents: [(Buf, &[u8]); 23] = [
             (Buf::Params, bytemuck::bytes_of(&sp)),
+            (Buf::ParamsStorage, bytemuck::bytes_of(&sp)),
+            (Buf::SpheresUniform, bytemuck::cast_slice(&spheres)),
+            (Buf::BoxesUniform, bytemuck::cast_slice(&boxes)),
             (Buf::Pos, pos_bytes),
             (Buf::PosOut, pos_bytes),
             (Buf::Prev, bytemuck::cast_slice(&state.prev)),
@@ -155,7 +150,7 @@ impl<E: Engine> GpuSolver<E> {
             };
             ids.push((buf, engine.create_buffer(buf, label, bytes, vertex)?));
         }
-        let table_image = options.table == SpringTable::Image;
+        let table_image = variant.table == Table::Image;
         if table_image {
             let (texels, height) = table_texels(&topo);
             engine.set_table_image(&texels, height)?;
@@ -172,26 +167,20 @@ impl<E: Engine> GpuSolver<E> {
                 .collect()
         };
         engine.bind([set(0), set(1)])?;
-        // Immediates hold the step constants where the device has room; the naive scatters
-        // use float atomics where the device has them, compare-exchange otherwise: the same
-        // choice on every API, so that the naive pair compares only the APIs.
-        let caps = Caps { float_atomics: info.float_atomics, immediates: info.immediates, table_image };
-        let mut build_list: Vec<KernelRef> = kernels_for(caps);
+        let mut build_list: Vec<KernelRef> = kernels_for(&variant);
         build_list.extend(dispatches(&stats_commands(options.stats, caps)));
-        if caps.table_image {
-            // The storage-table twins too, so that both homes of the table are checked.
-            build_list.extend(kernels_for(Caps { table_image: false, ..caps }));
-        }
-        let name = match variant {
-            Variant::Naive => format!("{}-naive", info.api),
-            Variant::Optimized => info.api.to_string(),
+        // `wgpu`, `vulkan` for the optimized preset (the backends' names), else
+        // `<api>-<label>`: `vulkan-naive`, `wgpu-thesis+table=storage`.
+        let name = match variant.label().as_str() {
+            "optimized" => info.api.to_string(),
+            label => format!("{}-{label}", info.api),
         };
         let mut solver = Self {
             engine,
             name,
             variant,
             options,
-            recipe: recipe(variant, params.strain_iterations, caps),
+            recipe: recipe(&variant, params.strain_iterations),
             scene,
             params,
             grab: None,
@@ -229,10 +218,10 @@ impl<E: Engine> GpuSolver<E> {
         } else {
             0
         };
-        if k.flavor.table_image && !self.caps.table_image {
+        if k.flavor.table_image && self.variant.table != Table::Image {
             return Err(SolverError::Shader {
                 kernel: k.shader_name(),
-                reason: "built without the table image".into(),
+                reason: "the spring-table image is uploaded only for table=image".into(),
             });
         }
         self.engine.build(k, immediates)
@@ -267,14 +256,14 @@ impl<E: Engine> GpuSolver<E> {
         self.engine.info().adapter.clone()
     }
 
-    /// Whether the naive scatters use float atomics (else compare-exchange loops).
-    pub fn float_atomics(&self) -> bool {
-        self.caps.float_atomics
+    /// The variant it runs (the preset fitted to the adapter, the switches applied).
+    pub fn variant(&self) -> Variant {
+        self.variant
     }
 
-    /// Whether the optimized kernels read the step constants from immediates.
-    pub fn immediates(&self) -> bool {
-        self.caps.immediates
+    /// What the adapter offers that variants use.
+    pub fn caps(&self) -> Caps {
+        self.caps
     }
 
     /// The options it was built with.
@@ -372,6 +361,7 @@ impl<E: Engine> GpuSolver<E> {
             self.build(k)?;
         }
         self.write(Buf::Params, bytemuck::bytes_of(sp))?;
+        self.write(Buf::ParamsStorage, bytemuck::bytes_of(sp))?;
         self.sp = *sp;
         for buf in HOST_BUFFERS {
             if let Some(v) = bufs.get(buf) {
@@ -397,9 +387,9 @@ impl<E: Engine> GpuSolver<E> {
 
 /// The uniform block of the regular grid's spring constants, switched off when the table
 /// is to be read from storage or an image everywhere.
-fn interior_block(topo: &ClothTopology, table: SpringTable) -> InteriorSlots {
+fn interior_block(topo: &ClothTopology, table: Table) -> InteriorSlots {
     let mut interior = InteriorSlots::new(topo);
-    if table != SpringTable::Interior {
+    if table != Table::Uniform {
         interior.enabled = 0;
     }
     interior
@@ -452,21 +442,21 @@ impl<E: Engine> Solver for GpuSolver<E> {
             // tables in place (the binding sets keep pointing at the same buffers). Wind,
             // gravity and the like reach the kernels with the next frame's constants.
             self.topo.set_spring_constants(&params);
-            if self.caps.table_image {
+            if self.variant.table == Table::Image {
                 let (texels, height) = table_texels(&self.topo);
                 self.engine.set_table_image(&texels, height)?;
             }
             let (strain, bend) = split_slots(&self.topo);
             let (a, b) = spring_halves(&self.topo.springs);
             let (a, b) = (a.to_vec(), b.to_vec());
-            let interior = interior_block(&self.topo, self.options.table);
+            let interior = interior_block(&self.topo, self.variant.table);
             self.write(Buf::Slots, bytemuck::cast_slice(&strain))?;
             self.write(Buf::BendSlots, bytemuck::cast_slice(&bend))?;
             self.write(Buf::Springs, bytemuck::cast_slice(&a))?;
             self.write(Buf::SpringsB, bytemuck::cast_slice(&b))?;
             self.write(Buf::Interior, bytemuck::bytes_of(&interior))?;
         }
-        self.recipe = recipe(self.variant, params.strain_iterations, self.caps);
+        self.recipe = recipe(&self.variant, params.strain_iterations);
         self.params = params;
         Ok(())
     }
@@ -481,11 +471,11 @@ impl<E: Engine> Solver for GpuSolver<E> {
         let commands = self.commands();
         let stats = self.options.stats != StatsMode::Off;
         let substeps = self.params.substeps;
-        // Optimized: one submission for the frame. Naive: one per substep, submitted
-        // without waiting in between; the wait on the last covers all of them.
-        let submissions = match self.variant {
-            Variant::Optimized => 1,
-            Variant::Naive => substeps,
+        // One submission for the frame, or one per substep submitted without waiting in
+        // between (the wait on the last covers all of them).
+        let submissions = match self.variant.submit {
+            Submit::Frame => 1,
+            Submit::Substep => substeps,
         };
         let per_submission = substeps / submissions;
         let max_q = if self.time_kernels && self.engine.info().timestamps {
@@ -495,8 +485,12 @@ impl<E: Engine> Solver for GpuSolver<E> {
         };
         let (mut q, mut labels) = (0, Vec::new());
         let (mut record_ns, mut submit_ns) = (0.0, 0.0);
-        let (params, stats_max, stats_energy) =
-            (self.must(Buf::Params)?, self.must(Buf::StatsMax)?, self.must(Buf::StatsEnergy)?);
+        let (params, params_storage, stats_max, stats_energy) = (
+            self.must(Buf::Params)?,
+            self.must(Buf::ParamsStorage)?,
+            self.must(Buf::StatsMax)?,
+            self.must(Buf::StatsEnergy)?,
+        );
         self.barriers = 0;
         for k in 0..submissions {
             let t_record = Instant::now();
@@ -506,6 +500,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 // before the first dispatch; wgpu: a queue write), not a submission of
                 // their own.
                 self.engine.record_write(params, bytemuck::bytes_of(&self.sp))?;
+                self.engine.record_write(params_storage, bytemuck::bytes_of(&self.sp))?;
                 let mut written = res::PARAMS;
                 if stats {
                     self.engine.clear(stats_max);

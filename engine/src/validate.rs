@@ -8,9 +8,10 @@ use clothlab_core::validate::{Check, ROLLOUT_BOUND_PER_SUBSTEP, compare, disturb
 use clothlab_core::{Scene, SimParams, SolverError};
 
 use crate::cpu::CpuEngine;
-use crate::kernels::{self, HostBuffers, KernelRef};
+use crate::kernels::{self, ConstantsHome, HostBuffers, KernelRef};
 pub use crate::recipe::KernelRunner;
 use crate::recipe::{Command, run};
+use crate::variant::Caps;
 
 /// The scene, parameters, disturbed buffers and constants every kernel check starts from:
 /// an `n × n` cloth draped for 15 frames, then disturbed (seeded), wind on, a particle
@@ -81,6 +82,24 @@ pub fn validate_kernels(
         }
     }
     Ok(checks)
+}
+
+/// Every flavor of every built-in kernel of the step (the statistics kernels have their
+/// own test) that a solver with `caps` runs: immediates and float atomics where it has
+/// them, the table image only with `table_image` (a solver uploads the image only for
+/// `table=image`). What `clothlab validate` checks, so that every switch is covered.
+pub fn flavors(caps: &Caps, table_image: bool) -> Vec<KernelRef> {
+    kernels::ALL
+        .iter()
+        .filter(|d| matches!(d.check, kernels::Check::Bound { .. }))
+        .flat_map(|d| d.flavors())
+        .filter(|k| {
+            let f = k.flavor;
+            (caps.immediates || f.constants != ConstantsHome::Immediates)
+                && (caps.float_atomics || !f.float_atomics)
+                && (table_image || !f.table_image)
+        })
+        .collect()
 }
 
 /// One split of a bisected rollout.

@@ -5,7 +5,7 @@ use clothlab_core::grid::StepParams;
 use clothlab_core::validate::ROLLOUT_BOUND_PER_SUBSTEP;
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver, SolverError};
 use clothlab_engine::kernels::{self as k, HostBuffers, KernelRef};
-use clothlab_engine::recipe::{Caps, Command, recipe};
+use clothlab_engine::recipe::{Command, recipe};
 use clothlab_engine::validate::{KernelRunner, bisect, validate_kernels};
 use clothlab_engine::{CpuEngine, RecipeSolver, Variant};
 
@@ -21,7 +21,7 @@ fn the_rows_solvers_compute_the_bits_of_the_cpu_engine_running_the_optimized_rec
     let params = SimParams { wind: [2.0, 0.0, 1.0], strain_iterations: 2, ..SimParams::default() };
     for n in [37, 64] {
         let scene = Scene::with_n(n);
-        let mut engine = RecipeSolver::new(Exec::Serial, Variant::Optimized, scene.clone(), params.clone()).unwrap();
+        let mut engine = RecipeSolver::new(Exec::Serial, Variant::OPTIMIZED, scene.clone(), params.clone()).unwrap();
         let mut serial = CpuSolver::new(Exec::Serial, scene.clone(), params.clone()).unwrap();
         let mut rayon = CpuSolver::new(Exec::Parallel, scene, params.clone()).unwrap();
         for frame in 0..6 {
@@ -54,8 +54,8 @@ fn the_naive_recipe_on_the_cpu_engine_stays_within_the_rollout_bound_of_the_opti
     // order: rounding differs, within the rollout bound (1e-6 m per substep).
     let scene = Scene::with_n(32);
     let params = SimParams::default();
-    let mut naive = RecipeSolver::new(Exec::Serial, Variant::Naive, scene.clone(), params.clone()).unwrap();
-    let mut opt = RecipeSolver::new(Exec::Serial, Variant::Optimized, scene, params.clone()).unwrap();
+    let mut naive = RecipeSolver::new(Exec::Serial, Variant::NAIVE, scene.clone(), params.clone()).unwrap();
+    let mut opt = RecipeSolver::new(Exec::Serial, Variant::OPTIMIZED, scene, params.clone()).unwrap();
     let frames = 8;
     for _ in 0..frames {
         naive.step_frame().unwrap();
@@ -105,12 +105,11 @@ fn bisection_names_the_kernel_that_is_wrong_and_none_when_all_are_right() {
     let scene = Scene::with_n(16);
     let params = SimParams::default();
     let (_, topo) = clothlab_core::build(&scene, &params).unwrap();
-    let caps = Caps { float_atomics: false, immediates: false, table_image: false };
-    let commands = recipe(Variant::Optimized, 1, caps);
+    let commands = recipe(&Variant::OPTIMIZED, 1);
     let substeps = 32;
     for (bad, delta, want) in [
-        ("integrate_collide", 1e-3, Some("integrate_collide")),
-        ("tri_normals", 1e-3, Some("tri_normals")),
+        ("integrate_collide", 1e-3, Some("integrate_collide_imm")),
+        ("tri_normals", 1e-3, Some("tri_normals_imm")),
         // Below the bound of 32 substeps (3.2e-5 m) even as Verlet turns each offset into velocity
         // (Σ s · 1e-8 ≈ 5e-6 m).
         ("integrate_collide", 1e-8, None),

@@ -3,7 +3,9 @@
 // consecutive particles of a row (BLOCK) per invocation. Their 4 × 13 points overlap:
 // loading the 28 distinct ones once (a window of rows j - 2 … j + 2) reads 46 % fewer
 // positions than a particle per invocation. On a regular grid (interior.enabled) there are
-// no table reads and no branches around loads; otherwise each particle walks its table.
+// no table reads and no branches around loads; otherwise (an irregular table, or
+// `table=storage|image`) each particle walks its table and the window is not loaded: the
+// branch is uniform, so every mode does only its own loads.
 
 // Force on particle k of the block: a its point, s0 … s11 its neighbours in slot order.
 fn block_particle(
@@ -19,15 +21,8 @@ fn block_particle(
     }
 }
 
-@compute @workgroup_size(WORKGROUP)
-fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    p = step_params;
-    interior = interior_slots;
-    let inv_dt = 1.0 / p.dt;
-    let n = p.n;
-    let origin = block_origin(flat_id(id, groups), n);
-    let row = origin.x;
-    let c0 = origin.y;
+// The block at (row, c0) on the regular grid: the window of rows j - 2 … j + 2 loaded once.
+fn grid_block(row: u32, c0: u32, inv_dt: f32) {
     let r = i32(row);
     let c = i32(c0);
     // Row j: columns c - 2 … c + 5; rows j ± 1: c - 1 … c + 4; rows j ± 2: c … c + 3.
@@ -66,9 +61,23 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     block_particle(row, c0 + 1u, r3, r2, r4, u2, d2, u1, u3, d1, d3, r1, r5, uu1, dd1, inv_dt);
     block_particle(row, c0 + 2u, r4, r3, r5, u3, d3, u2, u4, d2, d4, r2, r6, uu2, dd2, inv_dt);
     block_particle(row, c0 + 3u, r5, r4, r6, u4, d4, u3, u5, d3, d5, r3, r7, uu3, dd3, inv_dt);
-    // An irregular table (a loop with no iteration on a regular grid).
-    let table = select(BLOCK, 0u, interior.enabled != 0u);
-    for (var k = 0u; k < table; k++) {
+}
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    interior = interior_slots;
+    let inv_dt = 1.0 / p.dt;
+    let n = p.n;
+    let origin = block_origin(flat_id(id, groups), n);
+    let row = origin.x;
+    let c0 = origin.y;
+    if interior.enabled != 0u {
+        grid_block(row, c0, inv_dt);
+        return;
+    }
+    // The table: storage buffers or the image (an irregular table, or table=storage|image).
+    for (var k = 0u; k < BLOCK; k++) {
         let i = row * n + c0 + k;
         if row < n && c0 + k < n {
             let a = point(i);

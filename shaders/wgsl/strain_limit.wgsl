@@ -119,14 +119,8 @@ fn table_particle(i: u32) {
     pos_out[i] = finish(i, x4, wi, c);
 }
 
-@compute @workgroup_size(WORKGROUP)
-fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    p = step_params;
-    interior = interior_slots;
-    let n = p.n;
-    let origin = block_origin(flat_id(id, groups), n);
-    let row = origin.x;
-    let c0 = origin.y;
+// The block at (row, c0) on the regular grid: the window of rows j - 1 … j + 1 loaded once.
+fn grid_block(row: u32, c0: u32) {
     let r = i32(row);
     let c = i32(c0);
     // Rows j - 1, j, j + 1: columns c - 1 … c + 4.
@@ -154,9 +148,23 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     block_particle(row, c0 + 1u, m2, m1, m3, u2, d2, u1, u3, d1, d3);
     block_particle(row, c0 + 2u, m3, m2, m4, u3, d3, u2, u4, d2, d4);
     block_particle(row, c0 + 3u, m4, m3, m5, u4, d4, u3, u5, d3, d5);
-    // An irregular table (a loop with no iteration on a regular grid).
-    let table = select(BLOCK, 0u, interior.enabled != 0u);
-    for (var k = 0u; k < table; k++) {
+}
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    interior = interior_slots;
+    let n = p.n;
+    let origin = block_origin(flat_id(id, groups), n);
+    let row = origin.x;
+    let c0 = origin.y;
+    // A uniform branch: each table mode does only its own loads.
+    if interior.enabled != 0u {
+        grid_block(row, c0);
+        return;
+    }
+    // The table: storage buffers or the image (an irregular table, or table=storage|image).
+    for (var k = 0u; k < BLOCK; k++) {
         if row < n && c0 + k < n {
             table_particle(row * n + c0 + k);
         }

@@ -48,7 +48,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     accumulates: &[],
     check: Check::Bound { relative: 0.0, reason: "one exact multiplication by 0.5" },
     label: "halve_force",
-    variants: Variants { immediates: false, table_image: false, float_atomics: false },
+    variants: Variants { immediates: false, table_image: false, float_atomics: false, colliders_uniform: false },
     immediates: Immediates::None,
     test_input: None,
 };
@@ -70,12 +70,12 @@ fn runners(n: u32) -> Vec<Box<dyn KernelRunner>> {
     let (_, topo) = clothlab_core::build(&scene, &params).unwrap();
     v.push(Box::new(CpuEngine::new(Exec::Serial, scene.clone(), topo)));
     if let Some(g) =
-        or_skip(wgpu_solver(Variant::Optimized, scene.clone(), params.clone(), SolverOptions::default()), "wgpu")
+        or_skip(wgpu_solver(Variant::OPTIMIZED, scene.clone(), params.clone(), SolverOptions::default()), "wgpu")
     {
         v.push(Box::new(g));
     }
     let options = SolverOptions::default();
-    if let Some(k) = or_skip(vulkan_solver(Variant::Optimized, scene, params, true, options), "vulkan") {
+    if let Some(k) = or_skip(vulkan_solver(Variant::OPTIMIZED, scene, params, true, options), "vulkan") {
         v.push(Box::new(k));
     }
     v
@@ -98,8 +98,7 @@ fn a_kernel_defined_outside_runs_validated_on_every_engine_and_in_a_recipe() {
         // integration, three substeps from the disturbed cloth, against the CPU engine.
         // Bit for bit: the optimized kernels are (checked elsewhere) and so is this one.
         let input = KernelInput::new(n, 11).unwrap();
-        let caps = clothlab_engine::Caps { float_atomics: false, immediates: false, table_image: false };
-        let mut commands = clothlab_engine::recipe::recipe(Variant::Optimized, 1, caps);
+        let mut commands = clothlab_engine::recipe::recipe(&Variant::OPTIMIZED, 1);
         commands.splice(1..1, run(HALVE_FORCE.plain()));
         let (mut want, mut got) = (input.bufs.clone(), input.bufs.clone());
         for _ in 0..3 {
@@ -136,7 +135,7 @@ fn bisection_on_both_gpu_apis_finds_no_kernel_out_of_bounds() {
     // the rollout bound and no culprit is named.
     let scene = Scene::with_n(24);
     let params = SimParams::default();
-    for variant in [Variant::Naive, Variant::Optimized] {
+    for variant in [Variant::NAIVE, Variant::OPTIMIZED] {
         let mut gpu: Vec<(Box<dyn KernelRunner>, Vec<Command>)> = Vec::new();
         if let Some(g) = or_skip(wgpu_solver(variant, scene.clone(), params.clone(), SolverOptions::default()), "wgpu")
         {

@@ -19,7 +19,7 @@ fn view(mode: RenderMode) -> View {
 /// The optimized wgpu solver after `FRAMES` frames, or `None` without an adapter.
 fn simulated() -> Option<WgpuSolver> {
     let mut s = or_skip(
-        wgpu_solver(Variant::Optimized, Scene::with_n(N), SimParams::default(), SolverOptions::default()),
+        wgpu_solver(Variant::OPTIMIZED, Scene::with_n(N), SimParams::default(), SolverOptions::default()),
         "wgpu solver",
     )?;
     for _ in 0..FRAMES {

@@ -23,7 +23,7 @@ fn view(mode: RenderMode) -> View {
 fn simulated() -> Option<VulkanSolver> {
     let options = SolverOptions::default();
     let mut s = or_skip(
-        vulkan_solver(Variant::Optimized, Scene::with_n(N), SimParams::default(), true, options),
+        vulkan_solver(Variant::OPTIMIZED, Scene::with_n(N), SimParams::default(), true, options),
         "vulkan solver",
     )?;
     for _ in 0..FRAMES {

@@ -75,7 +75,7 @@ fn frames_with_an_egui_overlay_reach_the_swapchain_across_a_resize() {
     let params = SimParams::default();
     let engine = VulkanEngine::on_device(&dev).unwrap();
     let mut solver =
-        GpuSolver::new(engine, Variant::Optimized, scene.clone(), params.clone(), SolverOptions::default()).unwrap();
+        GpuSolver::new(engine, Variant::OPTIMIZED, scene.clone(), params.clone(), SolverOptions::default()).unwrap();
     let (_, topo) = clothlab_core::build(&scene, &params).unwrap();
     let size = window.inner_size();
     let mut renderer = VulkanRenderer::new(&dev, &scene, &topo, size.width, size.height).unwrap();

@@ -4,7 +4,7 @@
 use clothlab_core::validate::{compare, validate_rollout};
 use clothlab_core::{Scene, SimParams, Solver};
 use clothlab_engine::kernels::{self as k, Check};
-use clothlab_engine::validate::{KernelRunner, validate_kernels};
+use clothlab_engine::validate::{KernelRunner, flavors, validate_kernels};
 use clothlab_tests::{assert_checks, or_skip};
 use clothlab_wgpu::{SolverOptions, Variant, WgpuSolver, wgpu_solver};
 
@@ -14,27 +14,41 @@ fn gpu(variant: Variant, n: u32) -> Option<WgpuSolver> {
     or_skip(wgpu_solver(variant, Scene::with_n(n), SimParams::default(), SolverOptions::default()), "wgpu solver")
 }
 
-fn kernels_match_on(n: u32) {
-    let Some(mut g) = gpu(Variant::Optimized, n) else { return };
-    let kernels = g.kernels();
+fn kernels_match_on(n: u32, every_flavor: bool) {
+    let Some(mut g) = gpu(Variant::OPTIMIZED, n) else { return };
+    // Every flavor (every switch: where constants, colliders live, which atomics), or the
+    // kernels the solver built: the optimized recipe's and the plain flavor of each.
+    let kernels = if every_flavor { flavors(&g.caps(), false) } else { g.kernels() };
     let names: Vec<String> = kernels.iter().map(|k| k.shader_name()).collect();
     let has = |n: &str| names.iter().any(|k| k == n);
-    // Both variants' kernels, and both atomic paths where the adapter has float atomics.
-    for def in
-        [&k::FORCES, &k::SPRINGS_SCATTER, &k::INTEGRATE, &k::COLLIDE, &k::TRI_NORMALS_SCATTER, &k::VERTEX_NORMALS_NAIVE]
-    {
-        assert!(has(def.name), "naive kernel {} missing", def.name);
+    for def in [
+        &k::FORCES,
+        &k::SPRINGS,
+        &k::SPRINGS_SCATTER,
+        &k::INTEGRATE,
+        &k::COLLIDE,
+        &k::FORCES_INTEGRATE_COLLIDE,
+        &k::TRI_NORMALS_SCATTER,
+        &k::VERTEX_NORMALS_NAIVE,
+        &k::FORCES_SPRINGS,
+        &k::INTEGRATE_COLLIDE,
+        &k::STRAIN_LIMIT,
+        &k::TRI_NORMALS,
+        &k::VERTEX_NORMALS,
+    ] {
+        assert!(has(def.name), "kernel {} missing", def.name);
+        if every_flavor {
+            assert!(has(&format!("{}_sto", def.name)), "{}_sto missing", def.name);
+            assert_eq!(has(&format!("{}_imm", def.name)), g.caps().immediates, "{}_imm", def.name);
+        }
     }
-    for def in [&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE, &k::STRAIN_LIMIT, &k::TRI_NORMALS, &k::VERTEX_NORMALS] {
-        assert!(has(def.name), "optimized kernel {} missing", def.name);
-        // And the twins reading the constants from immediates, where the adapter has them.
-        let imm = format!("{}_imm", def.name);
-        assert_eq!(has(&imm), g.immediates(), "{imm}");
-    }
-    if g.float_atomics() {
-        assert!(has("springs_scatter_f32") && has("tri_normals_scatter_f32"));
-    } else {
-        println!("float atomics not available on this adapter: only the compare-exchange path is tested");
+    if every_flavor {
+        assert!(has("integrate_collide_cu") && has("forces_integrate_collide_cu_imm") == g.caps().immediates);
+        if g.caps().float_atomics {
+            assert!(has("springs_scatter_f32") && has("tri_normals_scatter_f32_sto"));
+        } else {
+            println!("float atomics not available on this adapter: only the compare-exchange path is tested");
+        }
     }
     let checks = validate_kernels(&mut g, &kernels, n, 0x5eed + n as u64).unwrap();
     let bounded = kernels.iter().filter(|k| matches!(k.def.check, Check::Bound { .. })).count();
@@ -45,21 +59,21 @@ fn kernels_match_on(n: u32) {
 
 #[test]
 fn every_kernel_matches_its_cpu_twin_at_n_64() {
-    kernels_match_on(64);
+    kernels_match_on(64, true);
 }
 
 #[test]
 fn every_kernel_matches_its_cpu_twin_at_sizes_that_are_not_multiples_of_64() {
     for n in [63, 65, 257] {
-        kernels_match_on(n);
+        kernels_match_on(n, false);
     }
 }
 
 #[test]
 fn rollouts_of_200_substeps_stay_close_to_the_cpu() {
     let frames = 13; // 208 substeps of the default 16 per frame
-    let Some(mut naive) = gpu(Variant::Naive, 64) else { return };
-    let Some(mut opt) = gpu(Variant::Optimized, 64) else { return };
+    let Some(mut naive) = gpu(Variant::NAIVE, 64) else { return };
+    let Some(mut opt) = gpu(Variant::OPTIMIZED, 64) else { return };
     let a = validate_rollout(&mut naive, frames).unwrap();
     let b = validate_rollout(&mut opt, frames).unwrap();
     // Naive against optimized: both differ from the CPU within the bound, so from each
@@ -81,7 +95,7 @@ fn changed_parameters_reach_the_wgpu_kernels() {
     // measured on lavapipe; the optimized variants stay bit-exact.)
     let light = SimParams { wind: [2.0, 0.0, 1.0], gravity: [0.0, -9.0, 0.0], ..SimParams::default() };
     for (what, p) in [("tables", &params), ("constants only", &light)] {
-        for variant in [Variant::Naive, Variant::Optimized] {
+        for variant in [Variant::NAIVE, Variant::OPTIMIZED] {
             let Some(mut g) = gpu(variant, 48) else { return };
             g.set_params(p.clone()).unwrap();
             let c = validate_rollout(&mut g, 8).unwrap();

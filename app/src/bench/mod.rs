@@ -8,6 +8,7 @@
 //! frame table). The final positions of 25 particles are compared with the first backend
 //! that ran at that size, so a backend cannot be fast by doing less.
 
+mod ladder;
 mod output;
 mod plot;
 
@@ -22,7 +23,11 @@ use clothlab_wgpu::{ClothSource, GpuContext, WgpuRenderer};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::cli::{BenchArgs, Mode};
-use crate::solvers::{AnySolver, Backend, make_solver, vulkan_validation};
+use crate::solvers::{AnySolver, Api, Backend, GpuSetup, Shared, make, vulkan_validation};
+use clothlab_engine::kernels::compulsory_bytes;
+use clothlab_engine::recipe::{dispatches, recipe};
+use clothlab_engine::variant::{Submit, Table, Variant, ladder as ladder_rungs};
+use ladder::LadderCell;
 
 /// Unmeasured frames at the start of every cell (pipelines, caches, clocks, the cloth's
 /// first fall).
@@ -182,9 +187,58 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
         bail!("none of the requested backends can run here (no GPU adapter); try --backends cpu,cpu-par");
     }
 
+    // What runs at every size: the backends (a GPU one with the variant asked for), or with
+    // --ladder the rungs of each GPU API's ladder and the thesis preset.
+    let mut jobs: Vec<Job> = Vec::new();
+    if args.ladder {
+        for api in [Api::Wgpu, Api::Vulkan] {
+            if !backends.iter().any(|b| b.api() == Some(api)) {
+                continue;
+            }
+            let backend = if api == Api::Wgpu { Backend::WgpuNaive } else { Backend::VulkanNaive };
+            let probe = make(backend, Scene::with_n(4), params.clone(), &GpuSetup::default(), &Shared::None)
+                .with_context(|| format!("probing {} for the ladder", backend.name()))?;
+            let (caps, api_name) = probe.caps().context("a GPU backend")?;
+            drop(probe);
+            let rungs = ladder_rungs(&caps, api_name);
+            let last = rungs.len();
+            for (index, rung) in rungs.into_iter().enumerate() {
+                jobs.push(Job { backend, variant: Some(rung.variant), rung: Some((index, rung.name(), rung.skipped)) });
+            }
+            let thesis = Variant::THESIS.fit(&caps);
+            jobs.push(Job { backend, variant: Some(thesis), rung: Some((last, "thesis (preset)".into(), None)) });
+        }
+        if jobs.is_empty() {
+            bail!("--ladder climbs the GPU backends' variants: name at least one GPU backend in --backends");
+        }
+    } else {
+        for &backend in &backends {
+            let variant = match args.variant.spec(backend) {
+                Ok(v) => v,
+                // The CPU backends run their own step whatever the variant.
+                Err(_) if backend.api().is_none() => None,
+                Err(e) => return Err(e),
+            };
+            let variant = match variant {
+                Some(spec) => {
+                    let probe = make(
+                        backend,
+                        Scene::with_n(4),
+                        params.clone(),
+                        &GpuSetup { variant: Some(spec), ..GpuSetup::default() },
+                        &Shared::None,
+                    )?;
+                    probe.variant()
+                }
+                None => None,
+            };
+            jobs.push(Job { backend, variant, rung: None });
+        }
+    }
+
     let overhead_apis = usize::from(!args.no_overhead && devices.wgpu.is_some())
         + usize::from(!args.no_overhead && devices.vulkan.is_some());
-    let bar = ProgressBar::new((sizes.len() * backends.len() + overhead_apis) as u64);
+    let bar = ProgressBar::new((sizes.len() * jobs.len() + overhead_apis) as u64);
     bar.set_style(
         ProgressStyle::with_template("{bar:32} {pos}/{len} [{elapsed_precise}] {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -194,28 +248,32 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     let started = Instant::now();
     let mut cells: Vec<Cell> = Vec::new();
     let mut skipped: Vec<String> = Vec::new();
+    let mut ladder: Vec<LadderCell> = Vec::new();
     for &n in &sizes {
-        for &backend in &backends {
-            bar.set_message(format!("{} n={n}", backend.name()));
-            // Predict the cell's time from this backend's previous size (time ∝ particles).
-            let predicted = cells
-                .iter()
-                .rev()
-                .find(|c| c.backend == backend.name())
-                .map(|c| c.seconds * (n as f64 / c.n as f64).powi(2));
+        for job in &jobs {
+            let label = job.label();
+            bar.set_message(format!("{label} n={n}"));
+            if let Some((index, rung, Some(why))) = &job.rung {
+                ladder.push(job.ladder_cell(*index, rung, n, &label, &params, Some(why.clone()))?);
+                bar.inc(1);
+                continue;
+            }
+            // Predict the cell's time from this job's previous size (time ∝ particles).
+            let predicted =
+                cells.iter().rev().find(|c| c.backend == label).map(|c| c.seconds * (n as f64 / c.n as f64).powi(2));
             if let Some(p) = predicted.filter(|&p| p > args.cell_budget) {
-                let line = format!(
-                    "{} at n={n}: skipped, predicted {p:.0} s > --cell-budget {:.0} s",
-                    backend.name(),
-                    args.cell_budget
-                );
+                let line =
+                    format!("{label} at n={n}: skipped, predicted {p:.0} s > --cell-budget {:.0} s", args.cell_budget);
                 say(&bar, line.clone());
                 skipped.push(line);
                 bar.inc(1);
                 continue;
             }
-            let cell = run_cell(backend, n, &params, frames, args.resolution, &devices)
-                .with_context(|| format!("{} at n={n}", backend.name()))?;
+            let cell = run_cell(job, n, &params, frames, args.resolution, &devices)
+                .with_context(|| format!("{label} at n={n}"))?;
+            if let Some((index, rung, None)) = &job.rung {
+                ladder.push(job.ladder_cell(*index, rung, n, &cell.backend, &params, None)?);
+            }
             let sub = cell.kernels.iter().find(|r| r.label == clothlab_core::timing::SUBSTEP);
             let frame = cell.frames.iter().find(|r| r.label == "frame");
             say(
@@ -269,6 +327,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
         notes,
         seconds: started.elapsed().as_secs_f64(),
         command: std::env::args().collect::<Vec<_>>().join(" "),
+        ladder,
     });
     let files = output::write_all(&results, &args.out)?;
     for f in &files {
@@ -284,8 +343,60 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     Ok(if failed.is_empty() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }
 
-fn run_cell(
+/// What one cell of every size runs: a backend, with a variant for a GPU one; on the
+/// ladder, the rung (index, name, why it is skipped).
+struct Job {
     backend: Backend,
+    variant: Option<Variant>,
+    rung: Option<(usize, String, Option<String>)>,
+}
+
+impl Job {
+    /// The name its cells get: the solver's (`vulkan-naive+submit=frame`), or the backend's.
+    fn label(&self) -> String {
+        match (self.variant, self.backend.api()) {
+            (Some(v), Some(api)) => {
+                let api = if api == Api::Wgpu { "wgpu" } else { "vulkan" };
+                match v.label().as_str() {
+                    "optimized" => api.to_string(),
+                    l => format!("{api}-{l}"),
+                }
+            }
+            _ => self.backend.name().to_string(),
+        }
+    }
+
+    /// The ladder's record of this job at size `n`.
+    fn ladder_cell(
+        &self,
+        index: usize,
+        rung: &str,
+        n: u32,
+        backend: &str,
+        params: &SimParams,
+        skipped: Option<String>,
+    ) -> Result<LadderCell> {
+        let v = self.variant.context("a ladder job has a variant")?;
+        let (_, topo) = clothlab_core::build(&Scene::with_n(n), params)?;
+        let commands = recipe(&v, params.strain_iterations);
+        let uniform = v.table == Table::Uniform;
+        Ok(LadderCell {
+            api: if self.backend.api() == Some(Api::Wgpu) { "wgpu" } else { "vulkan" }.into(),
+            n,
+            index,
+            rung: rung.to_string(),
+            backend: backend.to_string(),
+            switches: v.switches(),
+            skipped,
+            dispatches: dispatches(&commands).count(),
+            bytes: dispatches(&commands).map(|k| compulsory_bytes(k, &topo, uniform)).sum(),
+            submissions: if v.submit == Submit::Frame { 1 } else { params.substeps },
+        })
+    }
+}
+
+fn run_cell(
+    job: &Job,
     n: u32,
     params: &SimParams,
     frames: u32,
@@ -296,7 +407,8 @@ fn run_cell(
     let scene = Scene::with_n(n);
     let p = params.clone();
     // A device of its own for every GPU cell (see below).
-    let mut sim = make_solver(backend, scene.clone(), p)?;
+    let setup = GpuSetup { variant: job.variant.map(Into::into), ..GpuSetup::default() };
+    let mut sim = make(job.backend, scene.clone(), p, &setup, &Shared::None)?;
     let (_, topo) = clothlab_core::build(&scene, params)?;
     let mut painter = match &sim {
         AnySolver::Wgpu(s, _) => {
@@ -355,7 +467,7 @@ fn run_cell(
     }
     let state = sim.get().state()?;
     Ok(Cell {
-        backend: backend.name().to_owned(),
+        backend: sim.get_ref().name().to_owned(),
         n,
         adapter,
         kernels,

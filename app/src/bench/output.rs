@@ -8,6 +8,7 @@ use clothlab_core::SimParams;
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, OverheadPlan, OverheadRow, SUBSTEP, overhead};
 use serde::{Deserialize, Serialize};
 
+use super::ladder::LadderCell;
 use super::{CHECK_BOUND_PER_SUBSTEP, Cell};
 
 /// One measured quantity: the unit of results.csv and results.json.
@@ -99,6 +100,9 @@ pub struct Results {
     pub notes: Vec<String>,
     /// Wall time of the whole run, s.
     pub seconds: f64,
+    /// The optimisation ladder's cells (`--ladder`; empty otherwise).
+    #[serde(default)]
+    pub ladder: Vec<LadderCell>,
 }
 
 /// What [`Results::new`] is made from.
@@ -117,6 +121,7 @@ pub struct Inputs {
     pub notes: Vec<String>,
     pub seconds: f64,
     pub command: String,
+    pub ladder: Vec<LadderCell>,
 }
 
 impl Results {
@@ -189,6 +194,7 @@ impl Results {
             skipped: i.skipped,
             notes: i.notes,
             seconds: i.seconds,
+            ladder: i.ladder,
         }
     }
 
@@ -474,6 +480,8 @@ pub fn report(r: &Results) -> String {
         }
     }
 
+    s.push_str(&super::ladder::report(r));
+
     let _ = writeln!(s, "\n## Targets\n");
     for line in targets(r) {
         let _ = writeln!(s, "- {line}");
@@ -654,6 +662,7 @@ mod tests {
             notes: vec![],
             seconds: 1.0,
             command: "test".into(),
+            ladder: vec![],
         })
     }
 

@@ -66,19 +66,33 @@ fn both(fig: &impl Figure) -> Result<(String, Vec<u8>)> {
 }
 
 /// Every plot of `r`: (file stem, SVG text, PNG bytes).
-pub fn all(r: &Results) -> Result<Vec<(&'static str, String, Vec<u8>)>> {
+pub fn all(r: &Results) -> Result<Vec<(String, String, Vec<u8>)>> {
     let mut out = Vec::new();
+    if !r.ladder.is_empty() {
+        // The ladder: one waterfall per API and size (the backends are its rungs).
+        let mut keys: Vec<(String, u32)> = Vec::new();
+        for c in &r.ladder {
+            if !keys.contains(&(c.api.clone(), c.n)) {
+                keys.push((c.api.clone(), c.n));
+            }
+        }
+        for (api, n) in keys {
+            let (svg, png) = both(&Waterfall { r, api: &api, n })?;
+            out.push((format!("ladder_{api}_{n}"), svg, png));
+        }
+        return Ok(out);
+    }
     if let Some(n) = r.kernel_size() {
         let (svg, png) = both(&Kernels { r, n })?;
-        out.push(("kernels", svg, png));
+        out.push(("kernels".into(), svg, png));
     }
     let (svg, png) = both(&Scaling { r, fps: false })?;
-    out.push(("frame_time", svg, png));
+    out.push(("frame_time".into(), svg, png));
     let (svg, png) = both(&Scaling { r, fps: true })?;
-    out.push(("fps", svg, png));
+    out.push(("fps".into(), svg, png));
     if r.rows.iter().any(|x| x.section == "overhead") {
         let (svg, png) = both(&Overhead { r })?;
-        out.push(("overhead", svg, png));
+        out.push(("overhead".into(), svg, png));
     }
     Ok(out)
 }
@@ -264,6 +278,106 @@ impl Figure for Scaling<'_> {
             .border_style(BLACK.mix(0.3))
             .label_font((FONT, 14))
             .draw()
+            .map_err(err)?;
+        Ok(())
+    }
+}
+
+/// "What each optimisation buys": a waterfall of the substep time down the ladder of one
+/// API at one size — naive's bar from zero, then each rung's change (green: saved, red:
+/// cost), the thesis preset's bar from zero at the end.
+struct Waterfall<'a> {
+    r: &'a Results,
+    api: &'a str,
+    n: u32,
+}
+
+impl Figure for Waterfall<'_> {
+    fn size(&self) -> (u32, u32) {
+        let rungs = self.r.ladder.iter().filter(|c| c.api == self.api && c.n == self.n).count() as u32;
+        (1100, 110 + 34 * rungs.max(1))
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE).map_err(err)?;
+        // (label, from, to, colour) per rung, ms.
+        let mut bars: Vec<(String, f64, f64, RGBColor)> = Vec::new();
+        let mut prev: Option<f64> = None;
+        for c in self.r.ladder.iter().filter(|c| c.api == self.api && c.n == self.n) {
+            let ms = self
+                .r
+                .get("kernel", &c.backend, self.n as u64, clothlab_core::timing::SUBSTEP, None)
+                .map(|x| x.median_ns / 1e6);
+            let Some(ms) = ms.filter(|_| c.skipped.is_none()) else {
+                bars.push((format!("{} (skipped)", c.rung), 0.0, 0.0, WHITE));
+                continue;
+            };
+            if c.rung.starts_with("thesis") {
+                bars.push((c.rung.clone(), 0.0, ms, RGBColor(20, 90, 200)));
+            } else if let Some(p) = prev {
+                let col = if ms <= p { RGBColor(40, 150, 60) } else { RGBColor(200, 40, 30) };
+                bars.push((c.rung.clone(), p, ms, col));
+                prev = Some(ms);
+            } else {
+                bars.push((c.rung.clone(), 0.0, ms, RGBColor(120, 120, 120)));
+                prev = Some(ms);
+            }
+        }
+        let top = bars.iter().map(|b| b.1.max(b.2)).fold(0.0, f64::max).max(1e-6) * 1.25;
+        let k = bars.len().max(1) as i32;
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                format!(
+                    "What each optimisation buys — {}, n = {}, ms per substep (GPU) — {}",
+                    self.api, self.n, self.r.machine
+                ),
+                (FONT, 18),
+            )
+            .margin(12)
+            .x_label_area_size(36)
+            .y_label_area_size(230)
+            .build_cartesian_2d(0.0..top, (0..k - 1).into_segmented())
+            .map_err(err)?;
+        let names: Vec<String> = bars.iter().map(|b| b.0.clone()).collect();
+        chart
+            .configure_mesh()
+            .disable_y_mesh()
+            .x_desc("ms per substep")
+            .x_label_formatter(&|v| sig3(*v))
+            .y_labels(k as usize)
+            .y_label_formatter(&|v| match v {
+                SegmentValue::CenterOf(i) | SegmentValue::Exact(i) => {
+                    names.get((k - 1 - *i) as usize).cloned().unwrap_or_default()
+                }
+                SegmentValue::Last => String::new(),
+            })
+            .label_style((FONT, 14))
+            .axis_desc_style((FONT, 14))
+            .draw()
+            .map_err(err)?;
+        chart
+            .draw_series(bars.iter().enumerate().filter(|(_, b)| b.1 != b.2).map(|(i, b)| {
+                let y = k - 1 - i as i32;
+                let (lo, hi) = (b.1.min(b.2), b.1.max(b.2));
+                let mut r =
+                    Rectangle::new([(lo, SegmentValue::Exact(y)), (hi, SegmentValue::Exact(y + 1))], b.3.filled());
+                r.set_margin(5, 5, 0, 0);
+                r
+            }))
+            .map_err(err)?;
+        chart
+            .draw_series(bars.iter().enumerate().filter(|(_, b)| b.1 != b.2).map(|(i, b)| {
+                let y = k - 1 - i as i32;
+                let change = if b.1 > 0.0 { format!(" ({:+.0} %)", (b.2 / b.1 - 1.0) * 100.0) } else { String::new() };
+                Text::new(
+                    format!("{}{change}", sig3(b.2)),
+                    (b.1.max(b.2) + top * 0.01, SegmentValue::CenterOf(y)),
+                    (FONT, 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center)),
+                )
+            }))
             .map_err(err)?;
         Ok(())
     }

@@ -9,7 +9,7 @@ use clothlab_vulkan::{VkCloth, VulkanRenderer};
 use clothlab_wgpu::{ClothSource, WgpuRenderer};
 
 use crate::cli::RenderArgs;
-use crate::solvers::{AnySolver, Api, Backend, make_solver, vulkan_validation};
+use crate::solvers::{AnySolver, Api, Backend, GpuSetup, Shared, make, vulkan_validation};
 
 /// Runs `render`.
 pub fn render(args: RenderArgs) -> Result<ExitCode> {
@@ -23,6 +23,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     }
     let params = SimParams::default();
     let view = args.mode.view();
+    let setup = GpuSetup { variant: args.variant.spec(args.backend)?, ..GpuSetup::default() };
     let is_vulkan = matches!(args.backend, Backend::VulkanNaive | Backend::Vulkan);
     let api = args.api.unwrap_or(if is_vulkan { Api::Vulkan } else { Api::Wgpu });
     if api == Api::Wgpu && is_vulkan || api == Api::Vulkan && matches!(args.backend, Backend::WgpuNaive | Backend::Wgpu)
@@ -57,7 +58,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
             (r.read_image(&ctx)?, ctx.describe())
         }
         _ => {
-            let mut any = make_solver(args.backend, scene.clone(), params.clone())?;
+            let mut any = make(args.backend, scene.clone(), params.clone(), &setup, &Shared::None)?;
             for _ in 0..args.frames {
                 any.get().step_frame()?;
             }

@@ -67,7 +67,8 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     };
     let frames = args.steps.div_ceil(params.substeps as u64);
     let substeps = frames * params.substeps as u64;
-    let mut any = make(args.backend, scene.clone(), params, args.gpu.options(), &Shared::None)?;
+    let setup = args.gpu.setup(args.backend)?;
+    let mut any = make(args.backend, scene.clone(), params, &setup, &Shared::None)?;
     let solver = any.get();
     let t0 = Instant::now();
     for _ in 0..frames {

@@ -5,13 +5,15 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
 use clothlab_core::layout::Buf;
+use clothlab_core::validate::Check;
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Scene, SimParams};
-use clothlab_engine::KernelRef;
-use clothlab_engine::validate::{bisect, validate_kernels};
+use clothlab_engine::validate::{bisect, flavors, validate_kernels};
+use clothlab_engine::variant::covering;
+use clothlab_engine::{KernelRef, VariantSpec};
 
 use crate::cli::ValidateArgs;
-use crate::solvers::{Backend, make_solver};
+use crate::solvers::{Backend, GpuSetup, Shared, make};
 
 /// The buffer a kernel exists to write (shown when every buffer matches exactly): the
 /// first its row writes.
@@ -23,7 +25,7 @@ fn primary_output(kernel: KernelRef) -> &'static str {
 }
 
 /// One row of `validate`'s table; `width` for the check column.
-fn print_check(backend: &str, c: &clothlab_core::validate::Check, width: usize) {
+fn print_check(backend: &str, c: &Check, width: usize) {
     println!(
         "{backend:<13} {:<width$} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
         c.what,
@@ -34,6 +36,28 @@ fn print_check(backend: &str, c: &clothlab_core::validate::Check, width: usize) 
         c.bound,
         if c.passed() { "ok" } else { "FAILED" }
     );
+}
+
+/// The one row per kernel of `checks`: its worst buffer relative to the bound.
+fn worst_rows(kernels: &[KernelRef], checks: &[Check], suffix: &str) -> Vec<Check> {
+    let mut rows = Vec::new();
+    for &k in kernels {
+        let shader = k.shader_name();
+        let worst = checks
+            .iter()
+            .filter(|c| c.what == shader)
+            .max_by(|a, b| {
+                let key = |c: &Check| (c.error / c.bound, c.buffer == primary_output(k));
+                let (ka, kb) = (key(a), key(b));
+                ka.0.total_cmp(&kb.0).then(ka.1.cmp(&kb.1))
+            })
+            .cloned();
+        rows.extend(worst.map(|mut c| {
+            c.what.push_str(suffix);
+            c
+        }));
+    }
+    rows
 }
 
 /// Runs `validate`.
@@ -51,26 +75,49 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
             bail!("validate checks GPU backends; {backend:?} is the reference itself");
         }
     }
+    if args.every_switch && (args.variant.variant.is_some() || !args.variant.set_variant.is_empty()) {
+        bail!("--every-switch checks every variant: leave out --variant and --set-variant");
+    }
+    // --every-switch: one pass per API (the variants, not the backend's preset, vary).
+    let mut backends = args.backends.clone();
+    if args.every_switch {
+        let mut seen = Vec::new();
+        backends.retain(|b| {
+            let fresh = !seen.contains(&b.api());
+            seen.push(b.api());
+            fresh
+        });
+    }
+    let scene = Scene::with_n(args.n);
     let mut failed = 0;
     let mut header = false;
-    for &backend in &args.backends {
+    let width = if args.bisect {
+        40
+    } else if args.every_switch {
+        48
+    } else {
+        26
+    };
+    for backend in backends {
+        let setup = GpuSetup { variant: args.variant.spec(backend)?, ..GpuSetup::default() };
         // The first solver also tells whether there is an adapter at all: print the header
         // only once there is.
-        let mut any = make_solver(backend, Scene::with_n(args.n), params.clone())?;
+        let mut any = make(backend, scene.clone(), params.clone(), &setup, &Shared::None)?;
         let commands = any.commands();
         let names = any.recipe_kernels();
+        let (caps, api) = any.caps().context("validate checks GPU backends")?;
         let solver = any.runner().context("validate checks GPU backends")?;
         if !std::mem::replace(&mut header, true) {
             println!(
-                "{:<13} {:<26} {:<7} {:>10} {:>10} {:>10} {:>8}  result",
+                "{:<13} {:<width$} {:<7} {:>10} {:>10} {:>10} {:>8}  result",
                 "backend", "check", "buffer", "max abs", "rms", "error", "bound"
             );
         }
         if args.bisect {
-            let b = bisect(solver, &commands, &Scene::with_n(args.n), &params, args.steps)?;
+            let b = bisect(solver, &commands, &scene, &params, args.steps)?;
             let name = backend.name();
             for split in &b.splits {
-                print_check(name, &split.check, 40);
+                print_check(name, &split.check, width);
             }
             match &b.culprit {
                 Some(k) => {
@@ -85,29 +132,49 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
             continue;
         }
         let adapter = solver.adapter();
-        let kernel_checks = validate_kernels(solver, &names, args.n, 0x5eed)?;
-        // One row per kernel: its worst buffer relative to the bound.
         let mut rows = Vec::new();
-        for &name in &names {
-            let shader = name.shader_name();
-            let worst = kernel_checks
-                .iter()
-                .filter(|c| c.what == shader)
-                .max_by(|a, b| {
-                    let key =
-                        |c: &clothlab_core::validate::Check| (c.error / c.bound, c.buffer == primary_output(name));
-                    let (ka, kb) = (key(a), key(b));
-                    ka.0.total_cmp(&kb.0).then(ka.1.cmp(&kb.1))
-                })
-                .cloned();
-            rows.extend(worst);
+        let mut rollouts: Vec<GpuSetup> = vec![setup.clone()];
+        if args.every_switch {
+            // Every flavor on this solver (the table as uniform constants on the regular
+            // grid), then on one reading the table from the image (storage where the
+            // API's engine has none): the two loads of the gathers and every home.
+            let all = flavors(&caps, false);
+            let checks = validate_kernels(solver, &all, args.n, 0x5eed)?;
+            rows.extend(worst_rows(&all, &checks, " (table=uniform)"));
+            let table = if caps.table_image { "image" } else { "storage" };
+            let spec = VariantSpec::parse("optimized", &[format!("table={table}")])?;
+            let mut other = make(
+                backend,
+                scene.clone(),
+                params.clone(),
+                &GpuSetup { variant: Some(spec), ..GpuSetup::default() },
+                &Shared::None,
+            )?;
+            let table_kernels: Vec<KernelRef> =
+                flavors(&caps, caps.table_image).into_iter().filter(|k| k.def.variants.table_image).collect();
+            let runner = other.runner().context("validate checks GPU backends")?;
+            let checks = validate_kernels(runner, &table_kernels, args.n, 0x5eed)?;
+            rows.extend(worst_rows(&table_kernels, &checks, &format!(" (table={table})")));
+            rollouts = covering(&caps, api)
+                .into_iter()
+                .map(|v| GpuSetup { variant: Some(v.into()), ..GpuSetup::default() })
+                .collect();
+        } else {
+            let checks = validate_kernels(solver, &names, args.n, 0x5eed)?;
+            rows.extend(worst_rows(&names, &checks, ""));
         }
-        let mut rollout_solver = make_solver(backend, Scene::with_n(args.n), params.clone())?;
-        rows.push(validate_rollout(rollout_solver.get(), frames)?);
-        let name = rollout_solver.get_ref().name().to_owned();
+        for r in &rollouts {
+            let mut rollout_solver = make(backend, scene.clone(), params.clone(), r, &Shared::None)?;
+            let mut c = validate_rollout(rollout_solver.get(), frames)?;
+            if args.every_switch {
+                c.what = format!("rollout {}", rollout_solver.variant().map(|v| v.label()).unwrap_or_default());
+            }
+            rows.push(c);
+        }
+        let name = if args.every_switch { api.to_string() } else { any.get_ref().name().to_owned() };
         for c in rows {
             failed += usize::from(!c.passed());
-            print_check(&name, &c, 26);
+            print_check(&name, &c, width);
         }
         println!("{:<13} adapter: {}", name, adapter);
     }

@@ -86,6 +86,8 @@ pub enum Command {
     Action(Action),
     /// Another solver, keeping the cloth.
     Backend(Backend),
+    /// Another variant of the running GPU solver, keeping the cloth.
+    Variant(clothlab_engine::Variant),
     /// Another grid size.
     Grid(u32),
     /// New parameters.
@@ -296,6 +298,7 @@ impl Running {
         let out = self.egui_ctx.run_ui(raw, |root| {
             let info = ui::Info {
                 backend: self.sim.backend,
+                variant: self.sim.solver.variant(),
                 api: self.gfx.api(),
                 adapter: self.gfx.adapter(),
                 substep_ns: self.sim.substep_ns(),
@@ -359,6 +362,10 @@ impl Running {
                 Ok(()) => self.ui.message = format!("switched to {}", b.name()),
                 Err(e) => self.ui.message = format!("cannot switch to {}: {e:#}", b.name()),
             },
+            Command::Variant(v) => match self.sim.set_variant(v, &self.gfx.shared()) {
+                Ok(()) => self.ui.message = format!("variant {}", v.label()),
+                Err(e) => self.ui.message = format!("variant refused: {e:#}"),
+            },
             Command::Grid(n) => {
                 self.sim.regrid(n, &self.gfx.shared())?;
                 let scene = self.sim.solver.get_ref().scene().clone();
@@ -384,6 +391,7 @@ impl Running {
             return Ok(());
         }
         let backend = self.sim.backend;
+        let variant = self.sim.solver.variant();
         self.sim.switch(Backend::Cpu, &crate::solvers::Shared::None)?;
         let scene = self.sim.solver.get_ref().scene().clone();
         let params = self.sim.solver.get_ref().params().clone();
@@ -399,6 +407,12 @@ impl Running {
             (b, _) => b,
         };
         self.sim.switch(target, &self.gfx.shared())?;
+        // The same variant on the other API, where it has every switch of it.
+        if let Some(v) = variant.filter(|v| Some(*v) != self.sim.solver.variant())
+            && let Err(e) = self.sim.set_variant(v, &self.gfx.shared())
+        {
+            self.ui.message = format!("variant {} not kept: {e:#}", v.label());
+        }
         self.egui_ctx = egui::Context::default();
         self.egui_state = egui_winit::State::new(
             self.egui_ctx.clone(),

@@ -7,9 +7,10 @@ use anyhow::{Context, Result};
 use clothlab_core::grid::{ClothState, Grab};
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, SUBSTEP};
 use clothlab_core::{Scene, SimParams};
-use clothlab_engine::SolverOptions;
 
-use crate::solvers::{AnySolver, Backend, Shared, make};
+use clothlab_engine::{Variant, VariantSpec};
+
+use crate::solvers::{AnySolver, Backend, GpuSetup, Shared, make};
 
 /// Frames of timing history the chart shows.
 pub const HISTORY: usize = 240;
@@ -33,7 +34,7 @@ impl Sim {
     pub fn new(backend: Backend, n: u32, params: SimParams, shared: &Shared<'_>) -> Result<Self> {
         let scene = Scene::with_n(n);
         scene.validate()?;
-        let solver = make(backend, scene, params, SolverOptions::default(), shared).context("starting the solver")?;
+        let solver = make(backend, scene, params, &GpuSetup::default(), shared).context("starting the solver")?;
         Ok(Self { backend, solver, grab: None, history: VecDeque::new(), frames: 0 })
     }
 
@@ -67,11 +68,23 @@ impl Sim {
         self.history.back()?.iter().find(|(l, _)| l == SUBSTEP).map(|(_, v)| *v)
     }
 
-    /// Switches to `backend`, keeping the cloth where it is.
+    /// Switches to `backend` (its preset), keeping the cloth where it is.
     pub fn switch(&mut self, backend: Backend, shared: &Shared<'_>) -> Result<()> {
+        self.rebuild(backend, &GpuSetup::default(), shared)
+    }
+
+    /// Runs variant `v` on the same GPU backend, keeping the cloth where it is; a switch
+    /// the adapter lacks is refused and the running solver kept.
+    pub fn set_variant(&mut self, v: Variant, shared: &Shared<'_>) -> Result<()> {
+        let setup = GpuSetup { variant: Some(VariantSpec::exact(v)), ..GpuSetup::default() };
+        self.rebuild(self.backend, &setup, shared)
+    }
+
+    /// Moves the cloth onto a new solver of `backend` set up as `setup`.
+    fn rebuild(&mut self, backend: Backend, setup: &GpuSetup, shared: &Shared<'_>) -> Result<()> {
         let old = self.solver.get();
         let state: ClothState = old.state()?;
-        let mut solver = make(backend, old.scene().clone(), old.params().clone(), SolverOptions::default(), shared)?;
+        let mut solver = make(backend, old.scene().clone(), old.params().clone(), setup, shared)?;
         solver.get().set_state(&state)?;
         self.solver = solver;
         self.backend = backend;

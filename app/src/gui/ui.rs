@@ -17,6 +17,8 @@ use crate::solvers::{Api, Backend};
 pub struct Info<'a> {
     /// Running solver.
     pub backend: Backend,
+    /// Its variant (GPU solvers).
+    pub variant: Option<clothlab_engine::Variant>,
     /// Drawing API.
     pub api: Api,
     /// Adapter in one line.
@@ -102,6 +104,9 @@ pub fn draw(root: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
             egui::ScrollArea::vertical().show(ui, |ui| {
                 ui.label(RichText::new("Backend").strong());
                 backend_picker(ui, info, out);
+                if let Some(v) = info.variant {
+                    variant_panel(ui, v, out);
+                }
                 ui.horizontal(|ui| {
                     ui.label("API");
                     for api in [Api::Wgpu, Api::Vulkan] {
@@ -270,6 +275,39 @@ fn backend_picker(ui: &mut egui::Ui, info: &Info<'_>, out: &mut Vec<Command>) {
                 out.push(Command::Backend(b));
             }
         }
+    });
+}
+
+/// The GPU solver's variant: the presets, and one picker per switch (see
+/// `clothlab_engine::variant::SWITCHES`); a pick the adapter lacks is refused with the
+/// reason in the status bar.
+fn variant_panel(ui: &mut egui::Ui, v: clothlab_engine::Variant, out: &mut Vec<Command>) {
+    use clothlab_engine::variant::{PRESETS, SWITCHES};
+    egui::CollapsingHeader::new(format!("Variant: {}", v.label())).id_salt("variant").show(ui, |ui| {
+        ui.horizontal(|ui| {
+            for (name, preset) in PRESETS {
+                if ui.selectable_label(v == preset, name).clicked() && v != preset {
+                    out.push(Command::Variant(preset));
+                }
+            }
+        });
+        egui::Grid::new("switches").num_columns(2).show(ui, |ui| {
+            for s in SWITCHES {
+                ui.label(s.key).on_hover_text(s.help);
+                let now = v.get(s.key).unwrap_or_default();
+                egui::ComboBox::from_id_salt(s.key).selected_text(now).show_ui(ui, |ui| {
+                    for value in s.values {
+                        if ui.selectable_label(*value == now, *value).clicked() && *value != now {
+                            let mut next = v;
+                            if next.set(s.key, value).is_ok() {
+                                out.push(Command::Variant(next));
+                            }
+                        }
+                    }
+                });
+                ui.end_row();
+            }
+        });
     });
 }
 

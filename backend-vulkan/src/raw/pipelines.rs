@@ -114,7 +114,7 @@ impl Sets {
     pub fn new(dev: &Arc<Device>, max_sets: u32) -> Result<Self, VkError> {
         let sizes = [
             vk::DescriptorPoolSize::default().ty(vk::DescriptorType::STORAGE_BUFFER).descriptor_count(32 * max_sets),
-            vk::DescriptorPoolSize::default().ty(vk::DescriptorType::UNIFORM_BUFFER).descriptor_count(4 * max_sets),
+            vk::DescriptorPoolSize::default().ty(vk::DescriptorType::UNIFORM_BUFFER).descriptor_count(8 * max_sets),
             vk::DescriptorPoolSize::default().ty(vk::DescriptorType::SAMPLED_IMAGE).descriptor_count(2 * max_sets),
             vk::DescriptorPoolSize::default().ty(vk::DescriptorType::SAMPLER).descriptor_count(2 * max_sets),
         ];

@@ -33,6 +33,11 @@ struct Moved {
 // core::cpu::integrate::integrate_at: the new (x, x*) of particle i at x4 (w: inverse mass
 // flag) with previous position xp.
 fn integrated(i: u32, x4: vec4<f32>, xp: vec3<f32>) -> Moved {
+    return integrated_with(i, x4, xp, force[i].xyz);
+}
+
+// integrated with the total force f given (the fused forces + integrate kernel).
+fn integrated_with(i: u32, x4: vec4<f32>, xp: vec3<f32>, f: vec3<f32>) -> Moved {
     let x = x4.xyz;
     if i32(i) == p.grab_index {
         return Moved(p.grab_target.xyz, x);
@@ -40,7 +45,7 @@ fn integrated(i: u32, x4: vec4<f32>, xp: vec3<f32>) -> Moved {
     if x4.w == 0.0 {
         return Moved(x, x);
     }
-    var xn = x + (x - xp) * (1.0 - p.damping) + force[i].xyz * (p.dt * p.dt / p.particle_mass);
+    var xn = x + (x - xp) * (1.0 - p.damping) + f * (p.dt * p.dt / p.particle_mass);
     var xq = x;
     let floor = p.floor_y + p.margin;
     if xn.y < floor {

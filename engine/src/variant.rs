@@ -1,0 +1,541 @@
+//! Variants as sets of switches: each CUDA-style optimisation of the step is one
+//! independent choice, so that each can be measured alone (`clothlab bench --ladder`).
+//! `naive`, `optimized` and `thesis` are presets, names for sets of switches; `--variant`
+//! names a preset and `--set-variant key=value` changes one switch of it.
+//!
+//! A switch the adapter lacks, or two that exclude each other, is refused with one line
+//! naming the switch ([`Variant::check`]); a preset instead falls back to what the adapter
+//! has ([`VariantSpec::resolve`]), so that `naive` and `optimized` run everywhere.
+
+use std::fmt;
+
+use crate::kernels::{ConstantsHome, Flavor};
+
+/// What the adapter offers that the recipes use.
+#[derive(Debug, Clone, Copy)]
+pub struct Caps {
+    /// `atomic<f32>` add in storage buffers.
+    pub float_atomics: bool,
+    /// Immediates (push constants) large enough for the step constants.
+    pub immediates: bool,
+    /// The engine can read the spring table from a sampled image (`<kernel>_tex` twins:
+    /// the thesis's texture memory).
+    pub table_image: bool,
+}
+
+/// How forces of springs (or normals of faces) reach the particles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Accumulate {
+    /// One invocation per spring (per triangle), added into both ends with atomics.
+    Scatter,
+    /// One invocation per particle, summing what acts on it: no atomics.
+    Gather,
+}
+
+/// Which atomics the scatters add with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Atomics {
+    /// `atomic<f32>` add (float atomics: Vulkan's shaderBufferFloat32AtomicAdd).
+    Float,
+    /// A compare-exchange loop on the float's bits (works everywhere).
+    Cas,
+}
+
+/// Which kernels of the step are fused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Fusion {
+    /// One dispatch per kernel: forces, springs, integrate, collide.
+    None,
+    /// The thesis's: springs alone, then forces + Verlet + collisions in one kernel.
+    Thesis,
+    /// clothlab's: forces + springs gathered (four particles of a row per invocation),
+    /// then integrate + collide.
+    Clothlab,
+}
+
+/// How often the step is submitted to the queue.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Submit {
+    /// One submission per substep (the last one waited for).
+    Substep,
+    /// One submission per frame.
+    Frame,
+}
+
+/// Where the step constants live.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Constants {
+    /// A read-only storage buffer.
+    Storage,
+    /// A uniform buffer (constant memory).
+    Uniform,
+    /// Immediates (push constants), recorded into the command buffer.
+    Push,
+}
+
+/// Where the gathers read the spring table from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Table {
+    /// Every particle reads its 12 slots from read-only storage buffers.
+    Storage,
+    /// Every particle reads its slots from a sampled image (the thesis's texture memory).
+    Image,
+    /// The springs' constants in a uniform block and neighbours by offset on the regular
+    /// grid (storage buffers only for an irregular table).
+    Uniform,
+}
+
+/// Where the sphere and box colliders live.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Colliders {
+    /// Read-only storage buffers.
+    Storage,
+    /// Uniform blocks (the thesis's constant memory).
+    Uniform,
+}
+
+/// A formulation of the step: one value per switch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Variant {
+    /// Spring forces: scattered with atomics or gathered per particle.
+    pub springs: Accumulate,
+    /// Vertex normals: face normals scattered into the corners, or gathered per vertex.
+    pub normals: Accumulate,
+    /// The scatters' atomics.
+    pub atomics: Atomics,
+    /// Which kernels are fused.
+    pub fusion: Fusion,
+    /// Submissions per frame.
+    pub submit: Submit,
+    /// Where the step constants live.
+    pub constants: Constants,
+    /// Where the spring table lives.
+    pub table: Table,
+    /// Where the colliders live.
+    pub colliders: Colliders,
+}
+
+/// One switch: its key, its values (in ladder order: the naive one first) and what it
+/// chooses.
+#[derive(Debug, Clone, Copy)]
+pub struct Switch {
+    /// The key of `--set-variant key=value`.
+    pub key: &'static str,
+    /// Its values.
+    pub values: &'static [&'static str],
+    /// What it chooses, in one line.
+    pub help: &'static str,
+}
+
+/// Every switch.
+pub const SWITCHES: [Switch; 8] = [
+    Switch {
+        key: "springs",
+        values: &["scatter", "gather"],
+        help: "spring forces: per spring with atomics, or per particle",
+    },
+    Switch {
+        key: "normals",
+        values: &["scatter", "gather"],
+        help: "vertex normals: per triangle with atomics, or per vertex",
+    },
+    Switch {
+        key: "atomics",
+        values: &["float", "cas"],
+        help: "the scatters' atomics: float add, or a compare-exchange loop",
+    },
+    Switch {
+        key: "fusion",
+        values: &["none", "thesis", "clothlab"],
+        help: "none; the thesis's forces+Verlet+collisions; clothlab's forces+springs and integrate+collide",
+    },
+    Switch { key: "submit", values: &["substep", "frame"], help: "one queue submission per substep, or per frame" },
+    Switch {
+        key: "constants",
+        values: &["storage", "uniform", "push"],
+        help: "the step constants: storage buffer, uniform buffer, or immediates (push constants)",
+    },
+    Switch {
+        key: "table",
+        values: &["storage", "image", "uniform"],
+        help: "the spring table: storage buffers, a sampled image, or a uniform block with neighbours by offset",
+    },
+    Switch { key: "colliders", values: &["storage", "uniform"], help: "spheres and boxes: storage or uniform buffers" },
+];
+
+/// The presets, by name.
+pub const PRESETS: [(&str, Variant); 3] =
+    [("naive", Variant::NAIVE), ("optimized", Variant::OPTIMIZED), ("thesis", Variant::THESIS)];
+
+impl Variant {
+    /// The direct port: every kernel on its own, scatters with float atomics, a
+    /// submission per substep, everything read from storage buffers.
+    pub const NAIVE: Variant = Variant {
+        springs: Accumulate::Scatter,
+        normals: Accumulate::Scatter,
+        atomics: Atomics::Float,
+        fusion: Fusion::None,
+        submit: Submit::Substep,
+        constants: Constants::Storage,
+        table: Table::Storage,
+        colliders: Colliders::Storage,
+    };
+    /// clothlab's optimized step: gathers, its fusion, one submission per frame, push
+    /// constants, the table as uniform constants with neighbours by offset.
+    pub const OPTIMIZED: Variant = Variant {
+        springs: Accumulate::Gather,
+        normals: Accumulate::Gather,
+        atomics: Atomics::Float,
+        fusion: Fusion::Clothlab,
+        submit: Submit::Frame,
+        constants: Constants::Push,
+        table: Table::Uniform,
+        colliders: Colliders::Storage,
+    };
+    /// The thesis's optimized CUDA program (ch. 6.3.1): springs scattered with atomics,
+    /// forces + Verlet + collisions fused, normals gathered from stored face normals, the
+    /// spring table in texture memory, the spheres and the constants in constant memory.
+    pub const THESIS: Variant = Variant {
+        springs: Accumulate::Scatter,
+        normals: Accumulate::Gather,
+        atomics: Atomics::Float,
+        fusion: Fusion::Thesis,
+        submit: Submit::Frame,
+        constants: Constants::Uniform,
+        table: Table::Image,
+        colliders: Colliders::Uniform,
+    };
+
+    /// The value of switch `key`.
+    pub fn get(&self, key: &str) -> Option<&'static str> {
+        let k = |a: Accumulate| if a == Accumulate::Scatter { "scatter" } else { "gather" };
+        Some(match key {
+            "springs" => k(self.springs),
+            "normals" => k(self.normals),
+            "atomics" => ["float", "cas"][self.atomics as usize],
+            "fusion" => ["none", "thesis", "clothlab"][self.fusion as usize],
+            "submit" => ["substep", "frame"][self.submit as usize],
+            "constants" => ["storage", "uniform", "push"][self.constants as usize],
+            "table" => ["storage", "image", "uniform"][self.table as usize],
+            "colliders" => ["storage", "uniform"][self.colliders as usize],
+            _ => return None,
+        })
+    }
+
+    /// Sets switch `key` to `value`; an unknown key or value is refused in one line
+    /// listing the known ones.
+    pub fn set(&mut self, key: &str, value: &str) -> Result<(), VariantError> {
+        let switch = SWITCHES.iter().find(|s| s.key == key).ok_or_else(|| {
+            VariantError(format!(
+                "unknown variant switch `{key}`: the switches are {}",
+                SWITCHES.iter().map(|s| s.key).collect::<Vec<_>>().join(", ")
+            ))
+        })?;
+        let i = switch.values.iter().position(|v| *v == value).ok_or_else(|| {
+            VariantError(format!("switch {key}={value}: {key} is one of {}", switch.values.join(", ")))
+        })?;
+        let acc = [Accumulate::Scatter, Accumulate::Gather];
+        match key {
+            "springs" => self.springs = acc[i],
+            "normals" => self.normals = acc[i],
+            "atomics" => self.atomics = [Atomics::Float, Atomics::Cas][i],
+            "fusion" => self.fusion = [Fusion::None, Fusion::Thesis, Fusion::Clothlab][i],
+            "submit" => self.submit = [Submit::Substep, Submit::Frame][i],
+            "constants" => self.constants = [Constants::Storage, Constants::Uniform, Constants::Push][i],
+            "table" => self.table = [Table::Storage, Table::Image, Table::Uniform][i],
+            _ => self.colliders = [Colliders::Storage, Colliders::Uniform][i],
+        }
+        Ok(())
+    }
+
+    /// The preset named `name`.
+    pub fn preset(name: &str) -> Result<Variant, VariantError> {
+        PRESETS.iter().find(|(n, _)| *n == name).map(|(_, v)| *v).ok_or_else(|| {
+            VariantError(format!(
+                "unknown variant `{name}`: the presets are {}",
+                PRESETS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+            ))
+        })
+    }
+
+    /// Every switch as `key=value`, comma-separated.
+    pub fn switches(&self) -> String {
+        SWITCHES.iter().map(|s| format!("{}={}", s.key, self.get(s.key).unwrap_or("?"))).collect::<Vec<_>>().join(",")
+    }
+
+    /// A short name: the preset it is, or the closest preset plus the switches that
+    /// differ (`naive+submit=frame`).
+    pub fn label(&self) -> String {
+        let diff = |p: &Variant| -> Vec<String> {
+            SWITCHES
+                .iter()
+                .filter(|s| self.get(s.key) != p.get(s.key))
+                .map(|s| format!("{}={}", s.key, self.get(s.key).unwrap_or("?")))
+                .collect()
+        };
+        let (name, d) =
+            PRESETS.iter().map(|(n, p)| (*n, diff(p))).min_by_key(|(_, d)| d.len()).expect("there are presets");
+        if d.is_empty() { name.to_string() } else { format!("{name}+{}", d.join("+")) }
+    }
+
+    /// Whether it runs on an adapter with `caps`, and whether its switches fit together:
+    /// the first that does not, in one line naming the switch.
+    pub fn check(&self, caps: &Caps, api: &str) -> Result<(), VariantError> {
+        let scatters = self.springs == Accumulate::Scatter || self.normals == Accumulate::Scatter;
+        if scatters && self.atomics == Atomics::Float && !caps.float_atomics {
+            return Err(VariantError(format!(
+                "switch atomics=float: this adapter has no float atomic add on {api}; use atomics=cas"
+            )));
+        }
+        if self.constants == Constants::Push && !caps.immediates {
+            return Err(VariantError(format!(
+                "switch constants=push: this adapter has no immediates (push constants) for the step constants on {api}; use constants=uniform"
+            )));
+        }
+        if self.table == Table::Image && !caps.table_image {
+            return Err(VariantError(format!(
+                "switch table=image: the {api} engine has no spring-table image; use table=storage or table=uniform"
+            )));
+        }
+        if self.fusion == Fusion::Clothlab && self.springs == Accumulate::Scatter {
+            return Err(VariantError(
+                "switches fusion=clothlab and springs=scatter exclude each other: clothlab's fusion puts forces into the spring gather (use springs=gather, or fusion=none|thesis)".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The variant with what `caps` lack replaced by the nearest thing they have (how a
+    /// preset runs everywhere).
+    pub fn fit(mut self, caps: &Caps) -> Variant {
+        if !caps.float_atomics {
+            self.atomics = Atomics::Cas;
+        }
+        if !caps.immediates && self.constants == Constants::Push {
+            self.constants = Constants::Uniform;
+        }
+        if !caps.table_image && self.table == Table::Image {
+            self.table = Table::Storage;
+        }
+        self
+    }
+
+    /// The shader flavor its kernels are picked in.
+    pub fn flavor(&self) -> Flavor {
+        Flavor {
+            constants: match self.constants {
+                Constants::Storage => ConstantsHome::Storage,
+                Constants::Uniform => ConstantsHome::Uniform,
+                Constants::Push => ConstantsHome::Immediates,
+            },
+            table_image: self.table == Table::Image,
+            float_atomics: self.atomics == Atomics::Float,
+            colliders_uniform: self.colliders == Colliders::Uniform,
+        }
+    }
+}
+
+/// The optimisation ladder: from `naive`, one switch at a time, in this order (each rung
+/// keeps the switches of the rungs before it).
+pub const LADDER: [(&str, &str); 10] = [
+    ("submit", "frame"),
+    ("constants", "uniform"),
+    ("constants", "push"),
+    ("colliders", "uniform"),
+    ("normals", "gather"),
+    ("springs", "gather"),
+    ("fusion", "thesis"),
+    ("fusion", "clothlab"),
+    ("table", "image"),
+    ("table", "uniform"),
+];
+
+/// One rung of the ladder.
+#[derive(Debug, Clone)]
+pub struct Rung {
+    /// The switch it sets (`None`: the first rung, naive).
+    pub step: Option<(&'static str, &'static str)>,
+    /// The variant it runs (the rung before's when skipped).
+    pub variant: Variant,
+    /// Why the rung is skipped on this adapter (the switch it lacks).
+    pub skipped: Option<String>,
+}
+
+impl Rung {
+    /// The rung's name: `naive`, or the switch it sets (`+submit=frame`).
+    pub fn name(&self) -> String {
+        match self.step {
+            None => "naive".into(),
+            Some((k, v)) => format!("+{k}={v}"),
+        }
+    }
+}
+
+/// The ladder on an adapter with `caps`: naive (fitted to the adapter), then one rung per
+/// [`LADDER`] step; a step the adapter lacks is kept as a skipped rung with the reason.
+pub fn ladder(caps: &Caps, api: &str) -> Vec<Rung> {
+    let mut v = Variant::NAIVE.fit(caps);
+    let mut rungs = vec![Rung { step: None, variant: v, skipped: None }];
+    for (k, val) in LADDER {
+        let mut next = v;
+        let ok = next.set(k, val).and_then(|_| next.check(caps, api));
+        match ok {
+            Ok(()) => {
+                v = next;
+                rungs.push(Rung { step: Some((k, val)), variant: v, skipped: None });
+            }
+            Err(e) => rungs.push(Rung { step: Some((k, val)), variant: v, skipped: Some(e.0) }),
+        }
+    }
+    rungs
+}
+
+/// Variants that together set every switch to every value the adapter has at least once,
+/// each in a recipe: the ladder's rungs, the thesis preset, and naive with the other
+/// atomics. What `clothlab validate --every-switch` rolls out.
+pub fn covering(caps: &Caps, api: &str) -> Vec<Variant> {
+    let mut v: Vec<Variant> =
+        ladder(caps, api).into_iter().filter(|r| r.skipped.is_none()).map(|r| r.variant).collect();
+    let mut cas = Variant::NAIVE.fit(caps);
+    cas.atomics = if cas.atomics == Atomics::Float { Atomics::Cas } else { Atomics::Float };
+    for extra in [Variant::THESIS.fit(caps), cas] {
+        if extra.check(caps, api).is_ok() && !v.contains(&extra) {
+            v.push(extra);
+        }
+    }
+    v
+}
+
+impl fmt::Display for Variant {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.label())
+    }
+}
+
+/// A refused variant, in one line.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct VariantError(pub String);
+
+/// A variant as the user asked for it: a preset (which falls back to what the adapter
+/// has) and the switches set explicitly (which are refused where the adapter lacks them).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct VariantSpec {
+    /// The preset.
+    pub base: Variant,
+    /// `key=value` changes on top, in order.
+    pub set: Vec<(String, String)>,
+}
+
+impl From<Variant> for VariantSpec {
+    fn from(base: Variant) -> Self {
+        Self { base, set: Vec::new() }
+    }
+}
+
+impl VariantSpec {
+    /// Exactly `v`: every switch set explicitly, so that one the adapter lacks is refused
+    /// rather than replaced (what the app asks for when a switch is picked by hand).
+    pub fn exact(v: Variant) -> VariantSpec {
+        VariantSpec {
+            base: v,
+            set: SWITCHES.iter().map(|s| (s.key.to_string(), v.get(s.key).unwrap_or_default().to_string())).collect(),
+        }
+    }
+
+    /// `preset` with the `key=value` changes of `set` (each checked as a switch now).
+    pub fn parse(preset: &str, set: &[String]) -> Result<VariantSpec, VariantError> {
+        let base = Variant::preset(preset)?;
+        let mut spec = VariantSpec { base, set: Vec::new() };
+        let mut probe = base;
+        for s in set {
+            let (k, v) = s
+                .split_once('=')
+                .ok_or_else(|| VariantError(format!("--set-variant {s}: expected key=value, e.g. fusion=thesis")))?;
+            let (k, v) = (k.trim(), v.trim());
+            probe.set(k, v)?;
+            spec.set.push((k.to_string(), v.to_string()));
+        }
+        Ok(spec)
+    }
+
+    /// The variant to run on an adapter with `caps`: the preset fitted to them, then the
+    /// explicit switches, all checked.
+    pub fn resolve(&self, caps: &Caps, api: &str) -> Result<Variant, VariantError> {
+        let mut v = self.base.fit(caps);
+        for (k, val) in &self.set {
+            v.set(k, val)?;
+        }
+        v.check(caps, api)?;
+        Ok(v)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ALL_CAPS: Caps = Caps { float_atomics: true, immediates: true, table_image: true };
+
+    #[test]
+    fn every_switch_value_round_trips_and_bad_ones_name_the_switch() {
+        for s in SWITCHES {
+            for v in s.values {
+                let mut x = Variant::NAIVE;
+                x.set(s.key, v).unwrap();
+                assert_eq!(x.get(s.key), Some(*v));
+            }
+        }
+        let e = Variant::NAIVE.clone().set("fusion", "cuda").unwrap_err().0;
+        assert!(e.contains("fusion=cuda") && e.contains("none, thesis, clothlab"), "{e}");
+        assert!(Variant::preset("fast").unwrap_err().0.contains("naive, optimized, thesis"));
+        assert!(VariantSpec::parse("naive", &["fusion".into()]).unwrap_err().0.contains("key=value"));
+    }
+
+    #[test]
+    fn presets_fit_the_adapter_and_explicit_switches_are_refused_where_it_lacks_them() {
+        let bare = Caps { float_atomics: false, immediates: false, table_image: false };
+        let opt = VariantSpec::from(Variant::OPTIMIZED).resolve(&bare, "wgpu").unwrap();
+        assert_eq!((opt.constants, opt.atomics), (Constants::Uniform, Atomics::Cas));
+        let thesis = VariantSpec::from(Variant::THESIS).resolve(&bare, "wgpu").unwrap();
+        assert_eq!(thesis.table, Table::Storage);
+        assert!(VariantSpec::exact(Variant::THESIS).resolve(&bare, "wgpu").unwrap_err().0.contains("atomics=float"));
+        let strict = VariantSpec::parse("naive", &["constants=push".into()]).unwrap();
+        assert!(strict.resolve(&bare, "wgpu").unwrap_err().0.contains("constants=push"));
+        assert!(strict.resolve(&ALL_CAPS, "vulkan").is_ok());
+        let clash = VariantSpec::parse("naive", &["fusion=clothlab".into()]).unwrap();
+        let e = clash.resolve(&ALL_CAPS, "vulkan").unwrap_err().0;
+        assert!(e.contains("fusion=clothlab") && e.contains("springs=scatter"), "{e}");
+    }
+
+    #[test]
+    fn the_ladder_climbs_from_naive_to_optimized_and_skips_what_the_adapter_lacks() {
+        let rungs = ladder(&ALL_CAPS, "vulkan");
+        assert_eq!(rungs.len(), LADDER.len() + 1);
+        assert_eq!(rungs[0].variant, Variant::NAIVE);
+        let top = rungs.last().unwrap().variant;
+        assert_eq!(top, Variant { colliders: Colliders::Uniform, ..Variant::OPTIMIZED });
+        assert!(rungs.iter().all(|r| r.skipped.is_none()));
+        let bare = Caps { float_atomics: false, immediates: false, table_image: false };
+        let rungs = ladder(&bare, "wgpu");
+        let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
+        assert_eq!(skipped, ["+constants=push", "+table=image"]);
+        assert_eq!(rungs[0].variant.atomics, Atomics::Cas);
+        // Every value of every switch the adapter has is in some covering variant.
+        let cover = covering(&ALL_CAPS, "vulkan");
+        for s in SWITCHES {
+            for v in s.values {
+                assert!(cover.iter().any(|x| x.get(s.key) == Some(*v)), "{}={v} not covered", s.key);
+            }
+        }
+    }
+
+    #[test]
+    fn labels_name_the_nearest_preset_and_what_differs() {
+        assert_eq!(Variant::OPTIMIZED.label(), "optimized");
+        let mut v = Variant::NAIVE;
+        v.set("submit", "frame").unwrap();
+        assert_eq!(v.label(), "naive+submit=frame");
+        assert_eq!(Variant::THESIS.switches().split(',').count(), SWITCHES.len());
+    }
+}

@@ -1,0 +1,24 @@
+//! include: state, colliders
+// forces + integrate + collide fused: the thesis's optimized CUDA kernel ("Verlet"). The
+// springs were added into the force buffer by a kernel before (scattered with atomics in
+// the thesis, or gathered); gravity and drag are added here and the total force goes
+// straight into the integration without being stored (one global-memory round trip less,
+// as the thesis puts it), and the new position is pushed out of the colliders before it is
+// written.
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    let i = flat_id(id, groups);
+    if i >= num_particles() {
+        return;
+    }
+    let x4 = pos[i];
+    let xp = prev[i].xyz;
+    let f = forces_at(force[i], x4.xyz - xp).xyz;
+    var m = integrated_with(i, x4, xp, f);
+    if is_free(i, x4.w) {
+        m = collided(m);
+    }
+    prev[i] = vec4<f32>(m.xp, 0.0);
+    pos[i] = vec4<f32>(m.x, x4.w);
+}

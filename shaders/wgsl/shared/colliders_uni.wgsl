@@ -1,0 +1,49 @@
+// Sphere and box colliders in uniform blocks (the thesis's constant memory; needs
+// state.wgsl). The build emits every kernel that includes shared/colliders.wgsl as
+// `<kernel>_cu` with this file instead: the same code, the colliders read from uniform
+// blocks of MAX_COLLIDERS entries (`colliders=uniform`).
+
+@group(0) @binding(21) var<uniform> spheres: array<Sphere, MAX_COLLIDERS>;
+@group(0) @binding(22) var<uniform> boxes: array<Aabb, MAX_COLLIDERS>;
+
+// core::cpu::collide::collide_at for a free particle (is_free): m pushed out of the
+// spheres and boxes.
+fn collided(m: Moved) -> Moved {
+    var x = m.x;
+    var xp = m.xp;
+    for (var k = 0u; k < p.num_spheres; k++) {
+        let s = spheres[k];
+        let r = s.radius + p.margin;
+        let d = x - s.center;
+        let dist2 = dot(d, d);
+        if dist2 < r * r {
+            let dist = sqrt(dist2);
+            var nrm = vec3<f32>(0.0, 1.0, 0.0);
+            if dist > 1e-12 {
+                nrm = d / dist;
+            }
+            x = s.center + nrm * r;
+            xp = contact_prev(x, xp, nrm, p.friction);
+        }
+    }
+    for (var k = 0u; k < p.num_boxes; k++) {
+        let lo = boxes[k].min.xyz - vec3<f32>(p.margin);
+        let hi = boxes[k].max.xyz + vec3<f32>(p.margin);
+        if all(x > lo) && all(x < hi) {
+            let below = x - lo;
+            let above = hi - x;
+            var best = below.x;
+            var nrm = vec3<f32>(-1.0, 0.0, 0.0);
+            var face = lo.x;
+            if above.x < best { best = above.x; nrm = vec3<f32>(1.0, 0.0, 0.0); face = hi.x; }
+            if below.y < best { best = below.y; nrm = vec3<f32>(0.0, -1.0, 0.0); face = lo.y; }
+            if above.y < best { best = above.y; nrm = vec3<f32>(0.0, 1.0, 0.0); face = hi.y; }
+            if below.z < best { best = below.z; nrm = vec3<f32>(0.0, 0.0, -1.0); face = lo.z; }
+            if above.z < best { best = above.z; nrm = vec3<f32>(0.0, 0.0, 1.0); face = hi.z; }
+            let axis = abs(nrm);
+            x = x * (vec3<f32>(1.0) - axis) + axis * face;
+            xp = contact_prev(x, xp, nrm, p.friction);
+        }
+    }
+    return Moved(x, xp);
+}
