@@ -228,8 +228,10 @@ fn the_ladder_climbs_one_switch_at_a_time_and_plots_what_each_buys() {
         }
         check_png(&out.join(format!("ladder_{api}_16.png")));
     }
-    // wgpu's engine has no table image: that rung is skipped, saying why.
-    assert!(report.contains("| +table=image | – |") && report.contains("skipped: switch table=image"), "{report}");
+    // A rung the adapter lacks is skipped saying which switch (lavapipe has them all).
+    for row in report.lines().filter(|l| l.contains("skipped:")) {
+        assert!(row.contains("skipped: switch "), "{row}");
+    }
     assert!(report.contains("The thesis preset draws"), "{report}");
     // The same report from the JSON.
     let o = clothlab(&["bench", "--replot", "--out", out.to_str().unwrap()]);

@@ -182,6 +182,13 @@ impl Engine for VulkanEngine {
     }
 
     fn set_table_image(&mut self, texels: &[[u32; 4]], height: u32) -> Result<(), SolverError> {
+        let max = self.dev.max_image_2d;
+        if height > max {
+            return Err(SolverError::Unsupported(format!(
+                "table=image: this grid's spring table needs a {TABLE_WIDTH}×{height} image, taller than the {max} texels {} allows; use table=storage or table=uniform",
+                self.info.adapter
+            )));
+        }
         if self.table.as_ref().is_none_or(|t| t.height != height) {
             if !self.kernels.is_empty() {
                 return Err(SolverError::Invalid("the spring-table image cannot change size once bound".into()));

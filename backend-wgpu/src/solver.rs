@@ -7,7 +7,7 @@
 use std::collections::HashMap;
 
 use clothlab_core::SolverError;
-use clothlab_core::layout::{BindKind, Buf};
+use clothlab_core::layout::{BindKind, Buf, TABLE_WIDTH};
 use clothlab_engine::gpu::{BufferId, Dispatch, Engine, EngineInfo, Finished};
 use clothlab_engine::kernels::{self, KernelRef};
 use clothlab_engine::solver::MAX_QUERIES;
@@ -44,6 +44,8 @@ pub struct WgpuEngine {
     timestamps: Option<Timestamps>,
     encoder: Option<wgpu::CommandEncoder>,
     readbacks: Vec<(BufferId, u64)>,
+    /// The spring table as a texture (`table=image`), and its height.
+    table: Option<(wgpu::Texture, u32)>,
 }
 
 impl WgpuEngine {
@@ -64,7 +66,7 @@ impl WgpuEngine {
             timestamp_period_ns: ctx.queue.get_timestamp_period() as f64,
             max_binding: limits.max_storage_buffer_binding_size.min(limits.max_buffer_size),
             subgroup_arithmetic: ctx.subgroups,
-            table_image: false,
+            table_image: true,
         };
         let timestamps = ctx.timestamps.then(|| Timestamps {
             set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -90,6 +92,7 @@ impl WgpuEngine {
             timestamps,
             encoder: None,
             readbacks: Vec::new(),
+            table: None,
         }
     }
 
@@ -146,8 +149,62 @@ impl Engine for WgpuEngine {
         &self.buffers[id.0 as usize]
     }
 
+    /// The table as an `Rgba32Uint` texture, TABLE_WIDTH texels a row (the thesis's
+    /// texture memory), written through the queue; rewritten in place when the
+    /// constants change.
+    fn set_table_image(&mut self, texels: &[[u32; 4]], height: u32) -> Result<(), SolverError> {
+        let max = self.ctx.device.limits().max_texture_dimension_2d;
+        if height > max {
+            return Err(SolverError::Unsupported(format!(
+                "table=image: this grid's spring table needs a {TABLE_WIDTH}×{height} image, taller than the {max} texels {} allows; use table=storage or table=uniform",
+                self.info.adapter
+            )));
+        }
+        if self.table.as_ref().is_none_or(|(_, h)| *h != height) {
+            if self.layout.is_some() {
+                return Err(SolverError::Invalid("the spring-table image cannot change size once bound".into()));
+            }
+            let texture = self.ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("spring table"),
+                size: wgpu::Extent3d { width: TABLE_WIDTH, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Uint,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            });
+            self.table = Some((texture, height));
+        }
+        let (texture, _) = self.table.as_ref().expect("made above");
+        let mut bytes: Vec<u8> = bytemuck::cast_slice(texels).to_vec();
+        bytes.resize((TABLE_WIDTH * height * 16) as usize, 0);
+        self.ctx.queue.write_texture(
+            texture.as_image_copy(),
+            &bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(TABLE_WIDTH * 16),
+                rows_per_image: Some(height),
+            },
+            wgpu::Extent3d { width: TABLE_WIDTH, height, depth_or_array_layers: 1 },
+        );
+        self.ctx.check("uploading the spring-table image").map_err(backend)
+    }
+
     fn bind(&mut self, sets: [Vec<(Buf, BufferId)>; 2]) -> Result<(), SolverError> {
         let dev = &self.ctx.device;
+        let view = self.table.as_ref().map(|(t, _)| t.create_view(&wgpu::TextureViewDescriptor::default()));
+        let image_entry = view.as_ref().map(|_| wgpu::BindGroupLayoutEntry {
+            binding: Buf::Table.binding(),
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Uint,
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        });
         let entries: Vec<wgpu::BindGroupLayoutEntry> = sets[0]
             .iter()
             .map(|&(b, _)| wgpu::BindGroupLayoutEntry {
@@ -163,6 +220,7 @@ impl Engine for WgpuEngine {
                 },
                 count: None,
             })
+            .chain(image_entry)
             .collect();
         let layout =
             dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("cloth"), entries: &entries });
@@ -176,6 +234,10 @@ impl Engine for WgpuEngine {
                         binding: b.binding(),
                         resource: self.buffers[id.0 as usize].as_entire_binding(),
                     })
+                    .chain(view.as_ref().map(|v| wgpu::BindGroupEntry {
+                        binding: Buf::Table.binding(),
+                        resource: wgpu::BindingResource::TextureView(v),
+                    }))
                     .collect();
                 dev.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some(if k == 0 { "cloth (pos0)" } else { "cloth (pos1)" }),

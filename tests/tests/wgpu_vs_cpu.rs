@@ -3,6 +3,7 @@
 
 use clothlab_core::validate::{compare, validate_rollout};
 use clothlab_core::{Scene, SimParams, Solver};
+use clothlab_engine::VariantSpec;
 use clothlab_engine::kernels::{self as k, Check};
 use clothlab_engine::validate::{KernelRunner, flavors, validate_kernels};
 use clothlab_tests::{assert_checks, or_skip};
@@ -102,4 +103,26 @@ fn changed_parameters_reach_the_wgpu_kernels() {
             assert_checks(&format!("{} set_params {what}", g.name()), &[c]);
         }
     }
+}
+
+#[test]
+fn the_spring_table_from_a_texture_gives_the_twins_results_on_wgpu_too() {
+    // The thesis's texture memory on wgpu: every `_tex` flavor against its twin (bounds of
+    // the rows), then the thesis preset (springs scattered, the strain limit reading the
+    // image) rolled out, with stiffer springs set midway so that the image is rewritten.
+    let spec = VariantSpec::parse("optimized", &["table=image".into()]).unwrap();
+    let Some(mut g) =
+        or_skip(wgpu_solver(spec, Scene::with_n(65), SimParams::default(), SolverOptions::default()), "wgpu solver")
+    else {
+        return;
+    };
+    let tex: Vec<_> = flavors(&g.caps(), true).into_iter().filter(|k| k.flavor.table_image).collect();
+    assert!(tex.len() >= 9, "{tex:?}");
+    let checks = validate_kernels(&mut g, &tex, 65, 0x7ab1e).unwrap();
+    assert_checks("wgpu table=image", &checks);
+    let Some(mut t) = gpu(Variant::THESIS, 48) else { return };
+    assert_eq!(t.name(), "wgpu-thesis");
+    t.set_params(SimParams { bend_stiffness: 0.1, ..SimParams::default() }).unwrap();
+    let c = validate_rollout(&mut t, 8).unwrap();
+    assert_checks("wgpu thesis rollout", &[c]);
 }
