@@ -266,6 +266,46 @@ fn gpu_options_reach_the_solver_or_are_refused_elsewhere() {
     }
 }
 
+#[test]
+fn the_substep_time_the_app_shows_agrees_with_the_wall_clock() {
+    // At n = 128 on lavapipe the timestamps of a device that has drawn say 0.18 ms per
+    // substep while a substep takes about 3 ms: the app must not show such a figure. What
+    // it shows lies within [0.6, 1.05] × the frame's wall time per substep (the rule of
+    // gui::sim::substep_time), or is the wall time itself.
+    if !display() {
+        return;
+    }
+    for api in ["vulkan", "wgpu"] {
+        let args = [
+            "run",
+            "--api",
+            api,
+            "--backend",
+            api,
+            "--n",
+            "128",
+            "--frames",
+            "24",
+            "--width",
+            "640",
+            "--height",
+            "400",
+        ];
+        let o = clothlab(&args);
+        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        let out = String::from_utf8_lossy(&o.stdout);
+        let line = out.lines().find(|l| l.starts_with("status: ")).unwrap_or_else(|| panic!("{out}"));
+        let num = |s: &str| -> f64 { s.trim().split(' ').next().unwrap().parse().unwrap() };
+        let shown = num(line.trim_start_matches("status: "));
+        let wall = num(line.split("| wall ").nth(1).unwrap());
+        assert!(wall > 0.0 && shown > 0.0, "{line}");
+        assert!(
+            (0.6 * wall..=1.05 * wall).contains(&shown) || wall < 0.125,
+            "{api}: the app shows {shown} ms per substep against {wall} ms of wall clock: {line}"
+        );
+    }
+}
+
 /// Whether a window can be opened; a missing display fails only where CI requires one.
 fn display() -> bool {
     let ok = std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();

@@ -251,6 +251,10 @@ impl ApplicationHandler for App {
                 }
                 match r.frame(limit, shot_path.as_deref()) {
                     Ok(true) => {
+                        // What the status bar showed last, and the wall clock beside it.
+                        if let (Some(t), Some(wall)) = (r.sim.substep_time(), r.sim.wall_substep_ns) {
+                            println!("status: {} | wall {:.3} ms per substep", ui::substep_label(&t), wall / 1e6);
+                        }
                         event_loop.exit();
                         Ok(())
                     }
@@ -301,7 +305,7 @@ impl Running {
                 variant: self.sim.solver.variant(),
                 api: self.gfx.api(),
                 adapter: self.gfx.adapter(),
-                substep_ns: self.sim.substep_ns(),
+                substep: self.sim.substep_time(),
                 history: &self.sim.history,
                 frames: self.sim.frames,
                 scene_tex,

@@ -23,8 +23,8 @@ pub struct Info<'a> {
     pub api: Api,
     /// Adapter in one line.
     pub adapter: String,
-    /// Last substep time, ns.
-    pub substep_ns: Option<f64>,
+    /// Last substep time.
+    pub substep: Option<super::sim::SubstepTime>,
     /// Per-frame kernel timings.
     pub history: &'a VecDeque<Vec<(String, f64)>>,
     /// Frames since reset.
@@ -252,8 +252,8 @@ fn status_bar(ui: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
     ui.horizontal(|ui| {
         ui.label(format!("{:.0} fps", s.fps));
         ui.separator();
-        match info.substep_ns {
-            Some(ns) => ui.label(format!("{:.2} ms per substep", ns / 1e6)),
+        match &info.substep {
+            Some(t) => ui.label(substep_label(t)),
             None => ui.label("— ms per substep"),
         };
         ui.separator();
@@ -266,6 +266,18 @@ fn status_bar(ui: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
         ui.separator();
         ui.label(&s.message);
     });
+}
+
+/// The status bar's substep time, saying which clock measured it.
+pub fn substep_label(t: &super::sim::SubstepTime) -> String {
+    match t {
+        super::sim::SubstepTime::Measured(ns) => format!("{:.2} ms per substep", ns / 1e6),
+        super::sim::SubstepTime::Wall { wall, timestamps } => format!(
+            "{:.2} ms per substep (wall clock: the GPU timestamps say {:.2}, which cannot be true here)",
+            wall / 1e6,
+            timestamps / 1e6
+        ),
+    }
 }
 
 fn backend_picker(ui: &mut egui::Ui, info: &Info<'_>, out: &mut Vec<Command>) {
@@ -366,6 +378,12 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
 
 fn timing_chart(ui: &mut egui::Ui, info: &Info<'_>) {
     ui.label(RichText::new("Kernel timings (ms, median per frame)").strong());
+    if matches!(info.substep, Some(super::sim::SubstepTime::Wall { .. })) {
+        ui.colored_label(
+            Color32::from_rgb(200, 120, 0),
+            "GPU timestamps disagree with the wall clock on this adapter once it has drawn: the per-kernel figures below are not true (clothlab sim / bench measure on an undrawn device)",
+        );
+    }
     let mut labels: Vec<&str> = Vec::new();
     for row in info.history {
         for (l, _) in row {
