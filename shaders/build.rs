@@ -232,19 +232,33 @@ fn main() {
             .map(|list| list.split(',').map(str::trim).filter(|s| !s.is_empty()).map(String::from).collect())
             .unwrap_or_default();
         // A kernel using compare-exchange float addition also gets a `<name>_f32` twin
-        // using float atomics; one reading the spring table from storage buffers also gets
-        // a `<name>_tex` twin reading it from a sampled image.
-        let mut variants = vec![(name.clone(), includes.clone())];
-        // One reading the colliders from storage buffers also gets a `<name>_cu` twin
-        // reading them from uniform blocks (the thesis's constant memory).
-        for (from, to, suffix) in [
+        // using float atomics; one reading the spring table from storage buffers a `_tex`
+        // twin reading it from a sampled image; one reading the colliders from storage a
+        // `_cu` twin reading them from uniform blocks. Every combination of the substitutions a kernel's includes allow (each suffix in
+        // this order, as clothlab_engine::kernels::KernelRef::shader_name writes them). A
+        // kernel with shared/window.wgsl also gets `<name>_sh`, passing its window's
+        // neighbours by subgroup shuffles (shared/window_sh.wgsl).
+        let subs = [
             ("atomic_cas", "atomic_f32", "_f32"),
             ("table", "table_tex", "_tex"),
             ("colliders", "colliders_uni", "_cu"),
-        ] {
-            if includes.iter().any(|i| i == from) {
-                let twin = includes.iter().map(|i| if i == from { to.to_owned() } else { i.clone() });
-                variants.push((format!("{name}{suffix}"), twin.collect()));
+            ("window", "window_sh", "_sh"),
+        ];
+        let applicable: Vec<_> = subs.iter().filter(|(from, ..)| includes.iter().any(|i| i == from)).collect();
+        let mut variants = Vec::new();
+        for mask in 0..1u32 << applicable.len() {
+            let mut vname = name.clone();
+            let mut incs = includes.clone();
+            for (k, (from, to, suffix)) in applicable.iter().enumerate() {
+                if mask & (1 << k) != 0 {
+                    vname.push_str(suffix);
+                    incs.iter_mut().filter(|i| *i == from).for_each(|i| *i = (*to).to_owned());
+                }
+            }
+            // (Float atomics and the table image never meet: the registry's flavors have
+            // one or the other, the image winning.)
+            if !(vname.contains("_f32") && vname.contains("_tex")) {
+                variants.push((vname, incs));
             }
         }
         for (vname, incs) in variants {

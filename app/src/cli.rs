@@ -203,6 +203,8 @@ The switches (values in ladder order, the naive one first):
   table=storage|image|uniform     the spring table: storage buffers, a sampled image,
                                   or uniform constants with neighbours by offset
   colliders=storage|uniform       spheres and boxes: storage or uniform buffers
+  neighbours=load|shuffle         the blocked gathers' neighbour positions: loaded, or
+                                  passed between lanes by subgroup shuffles
 A switch the adapter lacks, or two that exclude each other, is refused in one line.";
 
 /// The variant of the GPU backends: a preset and changes of single switches.

@@ -78,6 +78,7 @@ impl VulkanEngine {
             timestamp_period_ns: dev.timestamp_period as f64,
             max_binding: dev.max_storage_range,
             subgroup_arithmetic: dev.subgroup_arithmetic,
+            subgroup_shuffle: dev.subgroup_shuffle,
             table_image: true,
         };
         let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;

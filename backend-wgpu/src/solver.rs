@@ -66,6 +66,7 @@ impl WgpuEngine {
             timestamp_period_ns: ctx.queue.get_timestamp_period() as f64,
             max_binding: limits.max_storage_buffer_binding_size.min(limits.max_buffer_size),
             subgroup_arithmetic: ctx.subgroups,
+            subgroup_shuffle: ctx.subgroups,
             table_image: true,
         };
         let timestamps = ctx.timestamps.then(|| Timestamps {

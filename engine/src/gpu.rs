@@ -39,6 +39,9 @@ pub struct EngineInfo {
     pub max_binding: u64,
     /// Subgroup arithmetic in compute shaders (the subgroup statistics).
     pub subgroup_arithmetic: bool,
+    /// Relative subgroup shuffles (`subgroupShuffleUp`/`Down`) with the arithmetic: the
+    /// `_sh` flavors (`neighbours=shuffle`).
+    pub subgroup_shuffle: bool,
     /// The spring table can be read from a sampled image ([`Engine::set_table_image`]).
     pub table_image: bool,
 }

@@ -86,6 +86,8 @@ pub struct Variants {
     pub float_atomics: bool,
     /// `<name>_cu`: the colliders from uniform blocks instead of storage buffers.
     pub colliders_uniform: bool,
+    /// `<name>_sh`: the window's neighbours passed by subgroup shuffles.
+    pub shuffle: bool,
 }
 
 /// Where a shader reads the step constants from.
@@ -111,6 +113,8 @@ pub struct Flavor {
     pub float_atomics: bool,
     /// Colliders from uniform blocks.
     pub colliders_uniform: bool,
+    /// Neighbours by subgroup shuffles.
+    pub shuffle: bool,
 }
 
 impl Flavor {
@@ -118,12 +122,13 @@ impl Flavor {
     pub fn all() -> Vec<Flavor> {
         let mut v = Vec::new();
         for constants in [ConstantsHome::Uniform, ConstantsHome::Immediates, ConstantsHome::Storage] {
-            for bits in 0..8u8 {
+            for bits in 0..16u8 {
                 v.push(Flavor {
                     constants,
                     table_image: bits & 1 != 0,
                     float_atomics: bits & 2 != 0,
                     colliders_uniform: bits & 4 != 0,
+                    shuffle: bits & 8 != 0,
                 });
             }
         }
@@ -316,6 +321,7 @@ impl KernelDef {
             && (!f.table_image || v.table_image)
             && (!f.float_atomics || v.float_atomics)
             && (!f.colliders_uniform || v.colliders_uniform)
+            && (!f.shuffle || v.shuffle)
             && !(f.table_image && f.float_atomics)
     }
 
@@ -329,6 +335,7 @@ impl KernelDef {
             table_image,
             float_atomics: want.float_atomics && v.float_atomics && !table_image,
             colliders_uniform: want.colliders_uniform && v.colliders_uniform,
+            shuffle: want.shuffle && v.shuffle,
         };
         KernelRef { def: self, flavor }
     }
@@ -382,16 +389,17 @@ impl std::fmt::Display for KernelRef {
 }
 
 impl KernelRef {
-    /// The shader's name: `<name>[_f32|_tex|_cu][_imm|_sto]`, as shaders/build.rs names
-    /// the twins.
+    /// The shader's name: `<name>[_f32][_tex][_cu][_sh][_imm|_sto]`, as shaders/build.rs
+    /// names the twins.
     pub fn shader_name(&self) -> String {
         let f = self.flavor;
         format!(
-            "{}{}{}{}{}",
+            "{}{}{}{}{}{}",
             self.def.name,
             if f.float_atomics { "_f32" } else { "" },
             if f.table_image { "_tex" } else { "" },
             if f.colliders_uniform { "_cu" } else { "" },
+            if f.shuffle { "_sh" } else { "" },
             match f.constants {
                 ConstantsHome::Uniform => "",
                 ConstantsHome::Immediates => "_imm",
@@ -603,10 +611,12 @@ const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf]
 }
 
 const PLAIN: Variants =
-    Variants { immediates: false, table_image: false, float_atomics: false, colliders_uniform: false };
+    Variants { immediates: false, table_image: false, float_atomics: false, colliders_uniform: false, shuffle: false };
 const IMM_TEX: Variants = Variants { immediates: true, table_image: true, ..PLAIN };
 const IMM_F32: Variants = Variants { immediates: true, float_atomics: true, ..PLAIN };
 const IMM_CU: Variants = Variants { immediates: true, colliders_uniform: true, ..PLAIN };
+/// The blocked gathers: the table's homes, and shuffles for the window.
+const BLOCKED: Variants = Variants { shuffle: true, ..IMM_TEX };
 
 /// Gravity and drag into the force buffer (added to the wind force already there).
 pub static FORCES: KernelDef = def("forces", forces, Count::Particles, STATE, &[Force]);
@@ -624,7 +634,7 @@ pub static SPRINGS_SCATTER: KernelDef = KernelDef {
 pub static FORCES_SPRINGS: KernelDef = KernelDef {
     check: GATHER,
     label: timing::FORCES_SPRINGS,
-    variants: IMM_TEX,
+    variants: BLOCKED,
     ..def("forces_springs", forces_springs, Count::Blocks, TABLE, &[Force])
 };
 /// Verlet, pins, the grab and the floor.
@@ -662,7 +672,7 @@ pub static FORCES_INTEGRATE_COLLIDE: KernelDef = KernelDef {
 pub static STRAIN_LIMIT: KernelDef = KernelDef {
     check: GATHER,
     pure: &[PosOut],
-    variants: IMM_TEX,
+    variants: BLOCKED,
     ..def(
         "strain_limit",
         strain_limit,
@@ -828,8 +838,9 @@ mod tests {
             table_image: true,
             float_atomics: true,
             colliders_uniform: true,
+            shuffle: true,
         };
-        assert_eq!(FORCES_SPRINGS.flavor(want).shader_name(), "forces_springs_tex_imm");
+        assert_eq!(FORCES_SPRINGS.flavor(want).shader_name(), "forces_springs_tex_sh_imm");
         assert_eq!(SPRINGS_SCATTER.flavor(want).shader_name(), "springs_scatter_f32_imm");
         assert_eq!(STATS_REDUCE.flavor(want).shader_name(), "stats_reduce");
         assert_eq!(

@@ -257,7 +257,7 @@ impl Hazards {
 mod tests {
     use super::*;
 
-    const CAPS: Caps = Caps { float_atomics: false, immediates: true, table_image: false };
+    const CAPS: Caps = Caps { float_atomics: false, immediates: true, table_image: false, subgroups: false };
 
     fn barriers_per_substep(r: &[Command]) -> usize {
         // Two substeps, counted in the second (the first also pays for the frame start).

@@ -82,8 +82,12 @@ impl<E: Engine> GpuSolver<E> {
         // Immediates hold the step constants where the device has room; the scatters use
         // float atomics where the device has them, compare-exchange otherwise: the same
         // choice on every API, so that one variant on two APIs compares only the APIs.
-        let caps =
-            Caps { float_atomics: info.float_atomics, immediates: info.immediates, table_image: info.table_image };
+        let caps = Caps {
+            float_atomics: info.float_atomics,
+            immediates: info.immediates,
+            table_image: info.table_image,
+            subgroups: info.subgroup_shuffle,
+        };
         let variant = variant.into().resolve(&caps, info.api).map_err(|e| SolverError::Unsupported(e.0))?;
         if options.stats == StatsMode::Subgroups && !info.subgroup_arithmetic {
             return Err(SolverError::Unsupported(format!(

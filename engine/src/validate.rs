@@ -98,6 +98,7 @@ pub fn flavors(caps: &Caps, table_image: bool) -> Vec<KernelRef> {
             (caps.immediates || f.constants != ConstantsHome::Immediates)
                 && (caps.float_atomics || !f.float_atomics)
                 && (table_image || !f.table_image)
+                && (caps.subgroups || !f.shuffle)
         })
         .collect()
 }

@@ -21,6 +21,8 @@ pub struct Caps {
     /// The engine can read the spring table from a sampled image (`<kernel>_tex` twins:
     /// the thesis's texture memory).
     pub table_image: bool,
+    /// Subgroup arithmetic and relative shuffles in compute shaders (`neighbours=shuffle`).
+    pub subgroups: bool,
 }
 
 /// How forces of springs (or normals of faces) reach the particles.
@@ -94,6 +96,16 @@ pub enum Colliders {
     Uniform,
 }
 
+/// How the blocked gathers get the points beside their own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Neighbours {
+    /// Every lane loads its whole window.
+    Load,
+    /// Lanes holding consecutive blocks of a row pass each other their points by subgroup
+    /// shuffles (the warp-shuffle idiom of CUDA).
+    Shuffle,
+}
+
 /// A formulation of the step: one value per switch.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Variant {
@@ -113,6 +125,8 @@ pub struct Variant {
     pub table: Table,
     /// Where the colliders live.
     pub colliders: Colliders,
+    /// Neighbour positions in the blocked gathers: loaded, or passed by shuffles.
+    pub neighbours: Neighbours,
 }
 
 /// One switch: its key, its values (in ladder order: the naive one first) and what it
@@ -128,7 +142,7 @@ pub struct Switch {
 }
 
 /// Every switch.
-pub const SWITCHES: [Switch; 8] = [
+pub const SWITCHES: [Switch; 9] = [
     Switch {
         key: "springs",
         values: &["scatter", "gather"],
@@ -161,6 +175,11 @@ pub const SWITCHES: [Switch; 8] = [
         help: "the spring table: storage buffers, a sampled image, or a uniform block with neighbours by offset",
     },
     Switch { key: "colliders", values: &["storage", "uniform"], help: "spheres and boxes: storage or uniform buffers" },
+    Switch {
+        key: "neighbours",
+        values: &["load", "shuffle"],
+        help: "the blocked gathers' neighbour positions: loaded, or passed between lanes by subgroup shuffles",
+    },
 ];
 
 /// The presets, by name.
@@ -179,6 +198,7 @@ impl Variant {
         constants: Constants::Storage,
         table: Table::Storage,
         colliders: Colliders::Storage,
+        neighbours: Neighbours::Load,
     };
     /// clothlab's optimized step: gathers, its fusion, one submission per frame, push
     /// constants, the table as uniform constants with neighbours by offset.
@@ -191,6 +211,7 @@ impl Variant {
         constants: Constants::Push,
         table: Table::Uniform,
         colliders: Colliders::Storage,
+        neighbours: Neighbours::Load,
     };
     /// The thesis's optimized CUDA program (ch. 6.3.1): springs scattered with atomics,
     /// forces + Verlet + collisions fused, normals gathered from stored face normals, the
@@ -204,6 +225,7 @@ impl Variant {
         constants: Constants::Uniform,
         table: Table::Image,
         colliders: Colliders::Uniform,
+        neighbours: Neighbours::Load,
     };
 
     /// The value of switch `key`.
@@ -218,6 +240,7 @@ impl Variant {
             "constants" => ["storage", "uniform", "push"][self.constants as usize],
             "table" => ["storage", "image", "uniform"][self.table as usize],
             "colliders" => ["storage", "uniform"][self.colliders as usize],
+            "neighbours" => ["load", "shuffle"][self.neighbours as usize],
             _ => return None,
         })
     }
@@ -243,7 +266,8 @@ impl Variant {
             "submit" => self.submit = [Submit::Substep, Submit::Frame][i],
             "constants" => self.constants = [Constants::Storage, Constants::Uniform, Constants::Push][i],
             "table" => self.table = [Table::Storage, Table::Image, Table::Uniform][i],
-            _ => self.colliders = [Colliders::Storage, Colliders::Uniform][i],
+            "colliders" => self.colliders = [Colliders::Storage, Colliders::Uniform][i],
+            _ => self.neighbours = [Neighbours::Load, Neighbours::Shuffle][i],
         }
         Ok(())
     }
@@ -297,6 +321,11 @@ impl Variant {
                 "switch table=image: the {api} engine has no spring-table image; use table=storage or table=uniform"
             )));
         }
+        if self.neighbours == Neighbours::Shuffle && !caps.subgroups {
+            return Err(VariantError(format!(
+                "switch neighbours=shuffle: this adapter has no subgroup shuffles in compute shaders on {api}; use neighbours=load"
+            )));
+        }
         if self.fusion == Fusion::Clothlab && self.springs == Accumulate::Scatter {
             return Err(VariantError(
                 "switches fusion=clothlab and springs=scatter exclude each other: clothlab's fusion puts forces into the spring gather (use springs=gather, or fusion=none|thesis)".into(),
@@ -317,6 +346,9 @@ impl Variant {
         if !caps.table_image && self.table == Table::Image {
             self.table = Table::Storage;
         }
+        if !caps.subgroups {
+            self.neighbours = Neighbours::Load;
+        }
         self
     }
 
@@ -331,13 +363,14 @@ impl Variant {
             table_image: self.table == Table::Image,
             float_atomics: self.atomics == Atomics::Float,
             colliders_uniform: self.colliders == Colliders::Uniform,
+            shuffle: self.neighbours == Neighbours::Shuffle,
         }
     }
 }
 
 /// The optimisation ladder: from `naive`, one switch at a time, in this order (each rung
 /// keeps the switches of the rungs before it).
-pub const LADDER: [(&str, &str); 10] = [
+pub const LADDER: [(&str, &str); 11] = [
     ("submit", "frame"),
     ("constants", "uniform"),
     ("constants", "push"),
@@ -348,6 +381,7 @@ pub const LADDER: [(&str, &str); 10] = [
     ("fusion", "clothlab"),
     ("table", "image"),
     ("table", "uniform"),
+    ("neighbours", "shuffle"),
 ];
 
 /// One rung of the ladder.
@@ -475,7 +509,7 @@ impl VariantSpec {
 mod tests {
     use super::*;
 
-    const ALL_CAPS: Caps = Caps { float_atomics: true, immediates: true, table_image: true };
+    const ALL_CAPS: Caps = Caps { float_atomics: true, immediates: true, table_image: true, subgroups: true };
 
     #[test]
     fn every_switch_value_round_trips_and_bad_ones_name_the_switch() {
@@ -494,7 +528,7 @@ mod tests {
 
     #[test]
     fn presets_fit_the_adapter_and_explicit_switches_are_refused_where_it_lacks_them() {
-        let bare = Caps { float_atomics: false, immediates: false, table_image: false };
+        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false };
         let opt = VariantSpec::from(Variant::OPTIMIZED).resolve(&bare, "wgpu").unwrap();
         assert_eq!((opt.constants, opt.atomics), (Constants::Uniform, Atomics::Cas));
         let thesis = VariantSpec::from(Variant::THESIS).resolve(&bare, "wgpu").unwrap();
@@ -514,12 +548,15 @@ mod tests {
         assert_eq!(rungs.len(), LADDER.len() + 1);
         assert_eq!(rungs[0].variant, Variant::NAIVE);
         let top = rungs.last().unwrap().variant;
-        assert_eq!(top, Variant { colliders: Colliders::Uniform, ..Variant::OPTIMIZED });
+        assert_eq!(
+            top,
+            Variant { colliders: Colliders::Uniform, neighbours: Neighbours::Shuffle, ..Variant::OPTIMIZED }
+        );
         assert!(rungs.iter().all(|r| r.skipped.is_none()));
-        let bare = Caps { float_atomics: false, immediates: false, table_image: false };
+        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false };
         let rungs = ladder(&bare, "wgpu");
         let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
-        assert_eq!(skipped, ["+constants=push", "+table=image"]);
+        assert_eq!(skipped, ["+constants=push", "+table=image", "+neighbours=shuffle"]);
         assert_eq!(rungs[0].variant.atomics, Atomics::Cas);
         // Every value of every switch the adapter has is in some covering variant.
         let cover = covering(&ALL_CAPS, "vulkan");

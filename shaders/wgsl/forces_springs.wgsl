@@ -1,4 +1,4 @@
-//! include: state, table, gather
+//! include: state, table, gather, window
 // forces + springs fused (optimized variant): one read and one write of the force, four
 // consecutive particles of a row (BLOCK) per invocation. Their 4 × 13 points overlap:
 // loading the 28 distinct ones once (a window of rows j - 2 … j + 2) reads 46 % fewer
@@ -21,31 +21,48 @@ fn block_particle(
     }
 }
 
-// The block at (row, c0) on the regular grid: the window of rows j - 2 … j + 2 loaded once.
-fn grid_block(row: u32, c0: u32, inv_dt: f32) {
+// Grid point (c, r), which the lane on the left (right) holds as its point `theirs`: passed
+// by a subgroup shuffle where the flavor has them and that lane holds the block beside
+// (shared/window_sh.wgsl), loaded otherwise.
+fn left_point(theirs: Nb, c: i32, r: i32) -> Nb {
+    let x = from_left3(theirs.pt.x);
+    let v = from_left3(theirs.pt.v);
+    if have_left() {
+        return Nb(Pt(x, v), on_grid(c, r));
+    }
+    return grid_point(c, r);
+}
+
+fn right_point(theirs: Nb, c: i32, r: i32) -> Nb {
+    let x = from_right3(theirs.pt.x);
+    let v = from_right3(theirs.pt.v);
+    if have_right() {
+        return Nb(Pt(x, v), on_grid(c, r));
+    }
+    return grid_point(c, r);
+}
+
+// Block b at (row, c0) on the regular grid: the window of rows j - 2 … j + 2, each of its
+// 28 points loaded once — or, with shuffles, its own 20 loaded and the 8 beside passed.
+fn grid_block(b: u32, row: u32, c0: u32, inv_dt: f32) {
+    window_start(b, (p.n + BLOCK - 1u) / BLOCK);
     let r = i32(row);
     let c = i32(c0);
-    // Row j: columns c - 2 … c + 5; rows j ± 1: c - 1 … c + 4; rows j ± 2: c … c + 3.
-    let r0 = grid_point(c - 2, r);
-    let r1 = grid_point(c - 1, r);
+    // Row j: columns c - 2 … c + 5; rows j ± 1: c - 1 … c + 4; rows j ± 2: c … c + 3. A
+    // block's own columns first, then those of the blocks beside (their c + 2 … c + 3 on
+    // the left, c … c + 1 on the right).
     let r2 = grid_point(c, r);
     let r3 = grid_point(c + 1, r);
     let r4 = grid_point(c + 2, r);
     let r5 = grid_point(c + 3, r);
-    let r6 = grid_point(c + 4, r);
-    let r7 = grid_point(c + 5, r);
-    let u0 = grid_point(c - 1, r - 1);
     let u1 = grid_point(c, r - 1);
     let u2 = grid_point(c + 1, r - 1);
     let u3 = grid_point(c + 2, r - 1);
     let u4 = grid_point(c + 3, r - 1);
-    let u5 = grid_point(c + 4, r - 1);
-    let d0 = grid_point(c - 1, r + 1);
     let d1 = grid_point(c, r + 1);
     let d2 = grid_point(c + 1, r + 1);
     let d3 = grid_point(c + 2, r + 1);
     let d4 = grid_point(c + 3, r + 1);
-    let d5 = grid_point(c + 4, r + 1);
     let uu0 = grid_point(c, r - 2);
     let uu1 = grid_point(c + 1, r - 2);
     let uu2 = grid_point(c + 2, r - 2);
@@ -54,6 +71,14 @@ fn grid_block(row: u32, c0: u32, inv_dt: f32) {
     let dd1 = grid_point(c + 1, r + 2);
     let dd2 = grid_point(c + 2, r + 2);
     let dd3 = grid_point(c + 3, r + 2);
+    let r0 = left_point(r4, c - 2, r);
+    let r1 = left_point(r5, c - 1, r);
+    let r6 = right_point(r2, c + 4, r);
+    let r7 = right_point(r3, c + 5, r);
+    let u0 = left_point(u4, c - 1, r - 1);
+    let u5 = right_point(u1, c + 4, r - 1);
+    let d0 = left_point(d4, c - 1, r + 1);
+    let d5 = right_point(d1, c + 4, r + 1);
     // Particle k (at r[k + 2]), slots (-1,0) (1,0) (0,-1) (0,1) (-1,-1) (1,-1) (-1,1) (1,1)
     // (-2,0) (2,0) (0,-2) (0,2) = r[k+1] r[k+3] u[k+1] d[k+1] u[k] u[k+2] d[k] d[k+2] r[k]
     // r[k+4] uu[k] dd[k].
@@ -69,11 +94,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     interior = interior_slots;
     let inv_dt = 1.0 / p.dt;
     let n = p.n;
-    let origin = block_origin(flat_id(id, groups), n);
+    let b = flat_id(id, groups);
+    let origin = block_origin(b, n);
     let row = origin.x;
     let c0 = origin.y;
     if interior.enabled != 0u {
-        grid_block(row, c0, inv_dt);
+        grid_block(b, row, c0, inv_dt);
         return;
     }
     // The table: storage buffers or the image (an irregular table, or table=storage|image).

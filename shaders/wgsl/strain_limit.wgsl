@@ -1,4 +1,4 @@
-//! include: table
+//! include: table, window
 // strain_limit — one Jacobi pass of Provot's strain limit plus the tethers
 // (core::cpu::strain_limit::limit_at). Reads pos, writes pos_out. Four consecutive
 // particles of a row (BLOCK) per invocation share one window of 18 points (rows j - 1 …
@@ -119,29 +119,54 @@ fn table_particle(i: u32) {
     pos_out[i] = finish(i, x4, wi, c);
 }
 
-// The block at (row, c0) on the regular grid: the window of rows j - 1 … j + 1 loaded once.
-fn grid_block(row: u32, c0: u32) {
+// Grid point (c, r), which the lane on the left (right) holds as `theirs`: passed by a
+// subgroup shuffle where the flavor has them and that lane holds the block beside,
+// loaded otherwise (see shared/window_sh.wgsl).
+fn left_point(theirs: Gp, c: i32, r: i32) -> Gp {
+    let x4 = from_left4(theirs.x4);
+    let n = i32(p.n);
+    if have_left() {
+        let inside = c >= 0 && c < n && r >= 0 && r < n;
+        return Gp(u32(select(0, r * n + c, inside)), x4, inside);
+    }
+    return grid_point(c, r);
+}
+
+fn right_point(theirs: Gp, c: i32, r: i32) -> Gp {
+    let x4 = from_right4(theirs.x4);
+    let n = i32(p.n);
+    if have_right() {
+        let inside = c >= 0 && c < n && r >= 0 && r < n;
+        return Gp(u32(select(0, r * n + c, inside)), x4, inside);
+    }
+    return grid_point(c, r);
+}
+
+// Block b at (row, c0) on the regular grid: the window of rows j - 1 … j + 1 loaded once
+// — or, with shuffles, its own 12 points loaded and the 6 beside passed.
+fn grid_block(b: u32, row: u32, c0: u32) {
+    window_start(b, (p.n + BLOCK - 1u) / BLOCK);
     let r = i32(row);
     let c = i32(c0);
-    // Rows j - 1, j, j + 1: columns c - 1 … c + 4.
-    let u0 = grid_point(c - 1, r - 1);
+    // Rows j - 1, j, j + 1: columns c - 1 … c + 4, the block's own first.
     let u1 = grid_point(c, r - 1);
     let u2 = grid_point(c + 1, r - 1);
     let u3 = grid_point(c + 2, r - 1);
     let u4 = grid_point(c + 3, r - 1);
-    let u5 = grid_point(c + 4, r - 1);
-    let m0 = grid_point(c - 1, r);
     let m1 = grid_point(c, r);
     let m2 = grid_point(c + 1, r);
     let m3 = grid_point(c + 2, r);
     let m4 = grid_point(c + 3, r);
-    let m5 = grid_point(c + 4, r);
-    let d0 = grid_point(c - 1, r + 1);
     let d1 = grid_point(c, r + 1);
     let d2 = grid_point(c + 1, r + 1);
     let d3 = grid_point(c + 2, r + 1);
     let d4 = grid_point(c + 3, r + 1);
-    let d5 = grid_point(c + 4, r + 1);
+    let u0 = left_point(u4, c - 1, r - 1);
+    let u5 = right_point(u1, c + 4, r - 1);
+    let m0 = left_point(m4, c - 1, r);
+    let m5 = right_point(m1, c + 4, r);
+    let d0 = left_point(d4, c - 1, r + 1);
+    let d5 = right_point(d1, c + 4, r + 1);
     // Particle k (at m[k + 1]), slots (-1,0) (1,0) (0,-1) (0,1) (-1,-1) (1,-1) (-1,1) (1,1)
     // = m[k] m[k+2] u[k+1] d[k+1] u[k] u[k+2] d[k] d[k+2].
     block_particle(row, c0, m1, m0, m2, u1, d1, u0, u2, d0, d2);
@@ -155,12 +180,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     p = step_params;
     interior = interior_slots;
     let n = p.n;
-    let origin = block_origin(flat_id(id, groups), n);
+    let b = flat_id(id, groups);
+    let origin = block_origin(b, n);
     let row = origin.x;
     let c0 = origin.y;
     // A uniform branch: each table mode does only its own loads.
     if interior.enabled != 0u {
-        grid_block(row, c0);
+        grid_block(b, row, c0);
         return;
     }
     // The table: storage buffers or the image (an irregular table, or table=storage|image).

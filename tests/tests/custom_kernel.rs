@@ -48,7 +48,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     accumulates: &[],
     check: Check::Bound { relative: 0.0, reason: "one exact multiplication by 0.5" },
     label: "halve_force",
-    variants: Variants { immediates: false, table_image: false, float_atomics: false, colliders_uniform: false },
+    variants: Variants {
+        immediates: false,
+        table_image: false,
+        float_atomics: false,
+        colliders_uniform: false,
+        shuffle: false,
+    },
     immediates: Immediates::None,
     test_input: None,
 };

@@ -80,6 +80,8 @@ pub struct Device {
     pub subgroup_size: u32,
     /// Subgroup arithmetic (subgroupAdd, subgroupMax) in compute shaders.
     pub subgroup_arithmetic: bool,
+    /// Relative subgroup shuffles (subgroupShuffleUp/Down) besides the arithmetic.
+    pub subgroup_shuffle: bool,
     /// synchronization2 (Vulkan 1.3) enabled: timestamps by `vkCmdWriteTimestamp2`,
     /// barriers by `vkCmdPipelineBarrier2`.
     pub sync2: bool,
@@ -290,6 +292,8 @@ impl Device {
             && subgroup
                 .supported_operations
                 .contains(vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC);
+        let subgroup_shuffle =
+            subgroup_arithmetic && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::SHUFFLE_RELATIVE);
         // synchronization2, where the device is Vulkan 1.3.
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
         if props.api_version >= vk::API_VERSION_1_3 {
@@ -370,6 +374,7 @@ impl Device {
             max_storage_range: props.limits.max_storage_buffer_range as u64,
             subgroup_size: subgroup.subgroup_size,
             subgroup_arithmetic,
+            subgroup_shuffle,
             sync2,
             max_image_2d: props.limits.max_image_dimension2_d,
             dynamic_rendering,

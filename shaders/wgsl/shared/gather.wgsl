@@ -23,9 +23,15 @@ struct Nb {
     inside: bool,
 }
 
+// Whether grid point (c, r) lies on the grid.
+fn on_grid(c: i32, r: i32) -> bool {
+    let n = i32(p.n);
+    return c >= 0 && c < n && r >= 0 && r < n;
+}
+
 fn grid_point(c: i32, r: i32) -> Nb {
     let n = i32(p.n);
-    let inside = c >= 0 && c < n && r >= 0 && r < n;
+    let inside = on_grid(c, r);
     return Nb(point(u32(select(0, r * n + c, inside))), inside);
 }
 
