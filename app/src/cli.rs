@@ -205,6 +205,8 @@ The switches (values in ladder order, the naive one first):
   colliders=storage|uniform       spheres and boxes: storage or uniform buffers
   neighbours=load|shuffle         the blocked gathers' neighbour positions: loaded, or
                                   passed between lanes by subgroup shuffles
+  draw=copy|shared                the renderer draws from copies made every frame, or
+                                  from the simulation's own buffers
 A switch the adapter lacks, or two that exclude each other, is refused in one line.";
 
 /// The variant of the GPU backends: a preset and changes of single switches.
@@ -341,4 +343,19 @@ fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
         return Err(format!("`{s}`: width and height must be in 16 ..= 8192"));
     }
     Ok((w, h))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_set_variant_help_lists_every_switch_and_value() {
+        // The help is a fixed text (clap takes a constant); a switch added to the engine
+        // without it here fails this test.
+        for s in clothlab_engine::variant::SWITCHES {
+            let entry = format!("{}={}", s.key, s.values.join("|"));
+            assert!(SET_VARIANT_HELP.contains(&entry), "--set-variant's help lacks `{entry}`");
+        }
+    }
 }

@@ -223,6 +223,44 @@ fn render_draws_through_vulkan_and_refuses_mixed_apis() {
 }
 
 #[test]
+fn drawing_from_copies_gives_the_picture_of_drawing_from_the_simulations_buffers() {
+    // draw=copy copies the positions and normals into vertex buffers of the renderer's own
+    // at every frame's end: the same bytes, so the same picture, bit for bit.
+    for backend in ["vulkan", "wgpu"] {
+        let mut pictures = Vec::new();
+        for draw in ["draw=copy", "draw=shared"] {
+            let path = std::env::temp_dir().join(format!("clothlab-draw-{}-{backend}-{draw}.png", std::process::id()));
+            let args = [
+                "render",
+                "--backend",
+                backend,
+                "--n",
+                "24",
+                "--frames",
+                "20",
+                "--width",
+                "160",
+                "--height",
+                "120",
+                "--set-variant",
+                draw,
+                "--out",
+                path.to_str().unwrap(),
+            ];
+            let out = clothlab(&args);
+            let err = String::from_utf8_lossy(&out.stderr);
+            if no_gpu(&err) {
+                return;
+            }
+            assert!(out.status.success(), "{args:?}: {err}");
+            pictures.push(image::open(&path).unwrap().to_rgba8().into_raw());
+            std::fs::remove_file(&path).ok();
+        }
+        assert!(pictures[0] == pictures[1], "{backend}: draw=copy and draw=shared drew different pictures");
+    }
+}
+
+#[test]
 fn gpu_options_reach_the_solver_or_are_refused_elsewhere() {
     refused(&["sim", "--backend", "cpu", "--stats", "atomics"], "GPU backends");
     refused(&["sim", "--backend", "cpu-par", "--variant", "thesis"], "GPU backends");

@@ -294,6 +294,13 @@ impl Engine for VulkanEngine {
         }
     }
 
+    fn copy(&mut self, src: BufferId, dst: BufferId, size: u64) {
+        // (A range outside either buffer poisons the recording: refused at submit.)
+        if let (Some(a), Some(b)) = (self.buffers.get(src.0 as usize), self.buffers.get(dst.0 as usize)) {
+            self.cmds.copy_range(a, 0, b, 0, size);
+        }
+    }
+
     fn barrier(&mut self, after_all: bool) {
         if after_all { self.cmds.barrier_after_all() } else { self.cmds.barrier() }
     }

@@ -320,6 +320,15 @@ impl Engine for WgpuEngine {
         self.encoder().clear_buffer(&b, 0, None);
     }
 
+    fn copy(&mut self, src: BufferId, dst: BufferId, size: u64) {
+        let (Some(a), Some(b)) = (self.buffers.get(src.0 as usize).cloned(), self.buffers.get(dst.0 as usize).cloned())
+        else {
+            return;
+        };
+        let size = size.min(a.size()).min(b.size());
+        self.encoder().copy_buffer_to_buffer(&a, 0, &b, 0, size);
+    }
+
     /// wgpu tracks the hazards between passes itself.
     fn barrier(&mut self, _after_all: bool) {}
 

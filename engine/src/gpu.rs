@@ -111,6 +111,8 @@ pub trait Engine {
     fn record_write(&mut self, id: BufferId, bytes: &[u8]) -> Result<(), SolverError>;
     /// Records a fill of `id` with zeros.
     fn clear(&mut self, id: BufferId);
+    /// Records a copy of the first `size` bytes of `src` into `dst` (after a barrier).
+    fn copy(&mut self, src: BufferId, dst: BufferId, size: u64);
     /// Records a barrier: writes of earlier compute and transfer commands become visible
     /// to later ones; with `after_all`, everything submitted before (the renderer's vertex
     /// reads) completes first.

@@ -21,10 +21,10 @@ use crate::gpu::{BufferId, Dispatch, Engine};
 use crate::kernels::{HostBuffers, Immediates, KernelRef, groups};
 use crate::recipe::KernelRunner;
 use crate::recipe::{
-    Caps, Command, Hazards, StatsMode, dispatches, kernels_for, kernels_of, recipe, res, stats_commands,
+    Caps, Command, Hazards, StatsMode, bits, dispatches, kernels_for, kernels_of, recipe, res, stats_commands,
 };
 use crate::tables::{record_times, split_slots, spring_halves, table_texels};
-use crate::variant::{Submit, Table, Variant, VariantSpec};
+use crate::variant::{Draw, Submit, Table, Variant, VariantSpec};
 
 /// Timestamp queries per frame.
 pub const MAX_QUERIES: u32 = 4096;
@@ -58,6 +58,8 @@ pub struct GpuSolver<E: Engine> {
     pos: [BufferId; 2],
     /// Which of `pos` holds the current positions.
     cur: usize,
+    /// The renderer's own vertex buffers (positions, normals) with `draw=copy`.
+    draw: Option<[BufferId; 2]>,
     hazards: Hazards,
     barriers: usize,
     stats: Vec<SubstepStats>,
@@ -154,6 +156,16 @@ impl<E: Engine> GpuSolver<E> {
             };
             ids.push((buf, engine.create_buffer(buf, label, bytes, vertex)?));
         }
+        // draw=copy: vertex buffers of the renderer's own, refreshed at every frame's end.
+        let draw = if variant.draw == Draw::Copy {
+            let normal_bytes: &[u8] = bytemuck::cast_slice(&state.normal);
+            Some([
+                engine.create_buffer(Buf::Pos, "draw pos", pos_bytes, true)?,
+                engine.create_buffer(Buf::Normal, "draw normal", normal_bytes, true)?,
+            ])
+        } else {
+            None
+        };
         let table_image = variant.table == Table::Image;
         if table_image {
             let (texels, height) = table_texels(&topo);
@@ -194,6 +206,7 @@ impl<E: Engine> GpuSolver<E> {
             ids,
             pos,
             cur: 0,
+            draw,
             hazards: Hazards::default(),
             barriers: 0,
             stats: Vec::new(),
@@ -249,10 +262,32 @@ impl<E: Engine> GpuSolver<E> {
         self.id(buf).ok_or_else(|| SolverError::Invalid(format!("no buffer {}", buf.name())))
     }
 
-    /// The buffers holding the current positions and the normals (the renderer's vertex
-    /// buffers: drawn with no copy).
+    /// The renderer's vertex buffers, positions and normals: the simulation's own
+    /// (`draw=shared`), or the copies made at the end of every frame (`draw=copy`).
     pub fn vertex_buffers(&self) -> (&E::Buffer, &E::Buffer) {
-        (self.engine.buffer(self.pos[self.cur]), self.engine.buffer(self.id(Buf::Normal).expect("normal buffer")))
+        match self.draw {
+            Some([pos, normal]) => (self.engine.buffer(pos), self.engine.buffer(normal)),
+            None => (
+                self.engine.buffer(self.pos[self.cur]),
+                self.engine.buffer(self.id(Buf::Normal).expect("normal buffer")),
+            ),
+        }
+    }
+
+    /// Records the copies of the positions and normals into the renderer's buffers
+    /// (`draw=copy`), after the barrier they need.
+    fn record_draw_copy(&mut self) -> Result<(), SolverError> {
+        let Some([pos, normal]) = self.draw else { return Ok(()) };
+        let (from_pos, from_normal) = (self.pos[self.cur], self.must(Buf::Normal)?);
+        let bytes = 16 * self.topo.num_particles() as u64;
+        let reads = bits(Buf::Pos, self.cur) | bits(Buf::Normal, self.cur);
+        if self.hazards.conflicts(reads, 0) {
+            self.barrier(false);
+        }
+        self.hazards.add(reads, 0);
+        self.engine.copy(from_pos, pos, bytes);
+        self.engine.copy(from_normal, normal, bytes);
+        Ok(())
     }
 
     /// The adapter, in one line.
@@ -520,6 +555,9 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 self.record(&commands, k * per_submission + s, &mut q, &mut labels);
             }
             let last = k + 1 == submissions;
+            if last {
+                self.record_draw_copy()?;
+            }
             if last && stats {
                 if self.hazards.conflicts(res::STATS, 0) {
                     self.barrier(false);
@@ -573,6 +611,10 @@ impl<E: Engine> Solver for GpuSolver<E> {
         self.write(Buf::Prev, bytemuck::cast_slice(&state.prev))?;
         self.write(Buf::Force, bytemuck::cast_slice(&state.force))?;
         self.write(Buf::Normal, bytemuck::cast_slice(&state.normal))?;
+        if let Some([pos, normal]) = self.draw {
+            self.engine.write(pos, bytemuck::cast_slice(&state.pos))?;
+            self.engine.write(normal, bytemuck::cast_slice(&state.normal))?;
+        }
         Ok(())
     }
 

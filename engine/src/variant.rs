@@ -106,6 +106,17 @@ pub enum Neighbours {
     Shuffle,
 }
 
+/// What the renderer draws from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Draw {
+    /// Vertex buffers of their own, which every frame's positions and normals are copied
+    /// into at its end (what an API without shared buffers does).
+    Copy,
+    /// The simulation's own position and normal buffers (shared between compute and
+    /// drawing: no copy).
+    Shared,
+}
+
 /// A formulation of the step: one value per switch.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Variant {
@@ -127,6 +138,8 @@ pub struct Variant {
     pub colliders: Colliders,
     /// Neighbour positions in the blocked gathers: loaded, or passed by shuffles.
     pub neighbours: Neighbours,
+    /// What the renderer draws from.
+    pub draw: Draw,
 }
 
 /// One switch: its key, its values (in ladder order: the naive one first) and what it
@@ -142,7 +155,7 @@ pub struct Switch {
 }
 
 /// Every switch.
-pub const SWITCHES: [Switch; 9] = [
+pub const SWITCHES: [Switch; 10] = [
     Switch {
         key: "springs",
         values: &["scatter", "gather"],
@@ -180,6 +193,11 @@ pub const SWITCHES: [Switch; 9] = [
         values: &["load", "shuffle"],
         help: "the blocked gathers' neighbour positions: loaded, or passed between lanes by subgroup shuffles",
     },
+    Switch {
+        key: "draw",
+        values: &["copy", "shared"],
+        help: "the renderer draws from copies made every frame, or from the simulation's own buffers",
+    },
 ];
 
 /// The presets, by name.
@@ -188,7 +206,8 @@ pub const PRESETS: [(&str, Variant); 3] =
 
 impl Variant {
     /// The direct port: every kernel on its own, scatters with float atomics, a
-    /// submission per substep, everything read from storage buffers.
+    /// submission per substep, everything read from storage buffers, the renderer's
+    /// vertex buffers copies.
     pub const NAIVE: Variant = Variant {
         springs: Accumulate::Scatter,
         normals: Accumulate::Scatter,
@@ -199,6 +218,7 @@ impl Variant {
         table: Table::Storage,
         colliders: Colliders::Storage,
         neighbours: Neighbours::Load,
+        draw: Draw::Copy,
     };
     /// clothlab's optimized step: gathers, its fusion, one submission per frame, push
     /// constants, the table as uniform constants with neighbours by offset.
@@ -212,6 +232,7 @@ impl Variant {
         table: Table::Uniform,
         colliders: Colliders::Storage,
         neighbours: Neighbours::Load,
+        draw: Draw::Shared,
     };
     /// The thesis's optimized CUDA program (ch. 6.3.1): springs scattered with atomics,
     /// forces + Verlet + collisions fused, normals gathered from stored face normals, the
@@ -226,6 +247,7 @@ impl Variant {
         table: Table::Image,
         colliders: Colliders::Uniform,
         neighbours: Neighbours::Load,
+        draw: Draw::Shared,
     };
 
     /// The value of switch `key`.
@@ -241,6 +263,7 @@ impl Variant {
             "table" => ["storage", "image", "uniform"][self.table as usize],
             "colliders" => ["storage", "uniform"][self.colliders as usize],
             "neighbours" => ["load", "shuffle"][self.neighbours as usize],
+            "draw" => ["copy", "shared"][self.draw as usize],
             _ => return None,
         })
     }
@@ -267,7 +290,8 @@ impl Variant {
             "constants" => self.constants = [Constants::Storage, Constants::Uniform, Constants::Push][i],
             "table" => self.table = [Table::Storage, Table::Image, Table::Uniform][i],
             "colliders" => self.colliders = [Colliders::Storage, Colliders::Uniform][i],
-            _ => self.neighbours = [Neighbours::Load, Neighbours::Shuffle][i],
+            "neighbours" => self.neighbours = [Neighbours::Load, Neighbours::Shuffle][i],
+            _ => self.draw = [Draw::Copy, Draw::Shared][i],
         }
         Ok(())
     }
@@ -370,8 +394,9 @@ impl Variant {
 
 /// The optimisation ladder: from `naive`, one switch at a time, in this order (each rung
 /// keeps the switches of the rungs before it).
-pub const LADDER: [(&str, &str); 11] = [
+pub const LADDER: [(&str, &str); 12] = [
     ("submit", "frame"),
+    ("draw", "shared"),
     ("constants", "uniform"),
     ("constants", "push"),
     ("colliders", "uniform"),
