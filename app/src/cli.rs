@@ -316,6 +316,11 @@ pub struct BenchArgs {
     /// Offscreen render target of the frame measurement, pixels (WIDTHxHEIGHT).
     #[arg(long, default_value = "1280x720", value_parser = parse_resolution)]
     pub resolution: (u32, u32),
+    /// Rounds of every cell, interleaved (all jobs of a size, then all again, …): each
+    /// cell reports the median of its rounds' medians, and the report the spread between
+    /// rounds — the machine's run-to-run noise, against which a difference must stand.
+    #[arg(long, default_value_t = 1)]
+    pub repeat: u32,
     /// Climb the optimisation ladder instead: on each GPU API named in --backends, from
     /// naive to the fastest combination one switch at a time, plus the thesis preset; the
     /// report adds a table and a waterfall plot per API and size.

@@ -249,6 +249,7 @@ fn bad_bench_input_is_refused_in_one_line() {
         (&["bench", "--resolution", "10x10"], "width and height must be in 16 ..= 8192"),
         (&["bench", "--resolution", "wide"], "expected WIDTHxHEIGHT"),
         (&["bench", "--cell-budget", "0"], "invalid --cell-budget"),
+        (&["bench", "--repeat", "0"], "invalid --repeat 0"),
         (&["bench", "--backends", "cuda"], "invalid value 'cuda'"),
         (&["bench", "--sizes", "8", "--out", "/proc/clothlab-bench"], "cannot create /proc/clothlab-bench"),
         (&["bench", "--replot", "--out", "/nonexistent-dir"], "cannot read /nonexistent-dir/results.json"),

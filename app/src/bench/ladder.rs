@@ -141,6 +141,7 @@ pub fn report(r: &Results) -> String {
         let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|");
         let naive = cells.iter().find(|c| c.index == 0).and_then(|c| measured(r, c));
         let mut prev: Option<f64> = None;
+        let mut prev_backend: Option<String> = None;
         let np = (n as f64).powi(2);
         for c in &cells {
             if let Some(why) = &c.skipped {
@@ -156,8 +157,19 @@ pub fn report(r: &Results) -> String {
                 .map(|x| format!("{} {:.0}", x.label, x.median_ns / 1e3))
                 .collect();
             let thesis = c.rung.starts_with("thesis");
+            // A change inside the rounds' spread (of this rung or the one before) is noise.
+            let spread =
+                |backend: &str| r.rounds.iter().find(|x| x.backend == backend && x.n == c.n).map(|x| x.spread());
+            let noise = match (spread(&c.backend), prev_backend.as_deref().and_then(spread)) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            };
             let vs_prev = match (prev, thesis) {
-                (Some(p), false) => format!("{:+.0} %", (m.substep_ns / p - 1.0) * 100.0),
+                (Some(p), false) => {
+                    let change = m.substep_ns / p - 1.0;
+                    let within = noise.is_some_and(|nz| change.abs() < nz);
+                    format!("{:+.0} %{}", change * 100.0, if within { " (noise)" } else { "" })
+                }
                 _ => "–".into(),
             };
             let vs_naive = naive.as_ref().map(|a| format!("{:.2}×", a.substep_ns / m.substep_ns)).unwrap_or_default();
@@ -177,6 +189,7 @@ pub fn report(r: &Results) -> String {
             );
             if !thesis {
                 prev = Some(m.substep_ns);
+                prev_backend = Some(c.backend.clone());
             }
         }
         let fastest = cells
@@ -221,6 +234,7 @@ mod tests {
             frames: vec![t("sim", sim_ns), t(FRAME, sim_ns + 1e6)],
             probe: vec![[0.0; 3]; 25],
             seconds: 1.0,
+            runs: vec![],
         }
     }
 
@@ -283,5 +297,50 @@ mod tests {
         assert!(row("+rung1").contains("submission / CPU (75 %"), "{}", row("+rung1"));
         assert!(row("+rung2").contains("memory (10.0 GB/s, 100 %"), "{}", row("+rung2"));
         assert!(row("+rung3").contains("arithmetic / latency (2.0 GB/s, 20 %"), "{}", row("+rung3"));
+    }
+
+    #[test]
+    fn a_change_inside_the_rounds_spread_is_called_noise() {
+        // Rung 1 is 5 % faster than naive, whose rounds spread 10 %: noise. Rung 2 is 50 %
+        // faster again: not.
+        let mut a = cell("a", 1.00e5, 16.0 * 1e5);
+        a.runs = vec![1.00e5, 1.10e5, 1.05e5];
+        let mut b = cell("b", 0.95e5, 16.0 * 1e5);
+        b.runs = vec![0.95e5, 0.96e5, 0.94e5];
+        let mut c = cell("c", 0.475e5, 16.0 * 1e5);
+        c.runs = vec![0.475e5, 0.48e5, 0.47e5];
+        let r = Results::new(Inputs {
+            machine: "test".into(),
+            wgpu_adapter: None,
+            vulkan_adapter: Some("test".into()),
+            params: SimParams::default(),
+            frames: 8,
+            warmup_frames: 3,
+            resolution: (64, 64),
+            plan: OverheadPlan::default(),
+            cells: vec![a, b, c],
+            overhead: vec![],
+            skipped: vec![],
+            notes: vec![],
+            seconds: 1.0,
+            command: "test".into(),
+            ladder: vec![rung(0, "a", 1, 0), rung(1, "b", 1, 0), rung(2, "c", 1, 0)],
+        });
+        assert_eq!(r.rounds.len(), 3);
+        assert!((r.rounds[0].spread() - 0.10).abs() < 1e-12, "{}", r.rounds[0].spread());
+        let text = report(&r);
+        let row = |name: &str| text.lines().find(|l| l.starts_with(&format!("| {name} |"))).unwrap().to_string();
+        assert!(row("+rung1").contains("| -5 % (noise) |"), "{}", row("+rung1"));
+        assert!(row("+rung2").contains("| -50 % |"), "{}", row("+rung2"));
+    }
+
+    #[test]
+    fn rounds_merge_to_the_median_of_their_medians() {
+        let rounds: Vec<Cell> = [3.0e5, 1.0e5, 2.0e5].iter().map(|&ns| cell("a", ns, 16.0 * ns)).collect();
+        let m = Cell::merge(rounds).unwrap();
+        let sub = m.kernels.iter().find(|r| r.label == SUBSTEP).unwrap();
+        assert_eq!((sub.median_ns, sub.min_ns, sub.max_ns, sub.samples), (2.0e5, 1.0e5, 3.0e5, 24));
+        assert_eq!(m.runs, vec![3.0e5, 1.0e5, 2.0e5]);
+        assert_eq!(m.seconds, 3.0);
     }
 }

@@ -60,6 +60,48 @@ pub struct Cell {
     pub probe: Vec<[f32; 3]>,
     /// Seconds the cell took.
     pub seconds: f64,
+    /// The substep median of every round (`--repeat`), ns, in the order run.
+    pub runs: Vec<f64>,
+}
+
+impl Cell {
+    /// One cell from the rounds of one job at one size: per label the median of the
+    /// rounds' medians, the smallest minimum and the largest maximum, the samples summed;
+    /// the probe of the first round (each is checked against the reference alike).
+    fn merge(rounds: Vec<Cell>) -> Option<Cell> {
+        let first = rounds.first()?.clone();
+        let merge_rows = |pick: &dyn Fn(&Cell) -> &Vec<clothlab_core::TimingRow>| -> Vec<clothlab_core::TimingRow> {
+            pick(&first)
+                .iter()
+                .map(|row| {
+                    let same: Vec<&clothlab_core::TimingRow> =
+                        rounds.iter().filter_map(|c| pick(c).iter().find(|r| r.label == row.label)).collect();
+                    let mut medians: Vec<f64> = same.iter().map(|r| r.median_ns).collect();
+                    medians.sort_by(f64::total_cmp);
+                    let m = medians.len();
+                    let median = if m % 2 == 1 { medians[m / 2] } else { (medians[m / 2 - 1] + medians[m / 2]) / 2.0 };
+                    clothlab_core::TimingRow {
+                        label: row.label.clone(),
+                        samples: same.iter().map(|r| r.samples).sum(),
+                        median_ns: median,
+                        min_ns: same.iter().map(|r| r.min_ns).fold(f64::INFINITY, f64::min),
+                        max_ns: same.iter().map(|r| r.max_ns).fold(0.0, f64::max),
+                    }
+                })
+                .collect()
+        };
+        let runs = rounds
+            .iter()
+            .filter_map(|c| c.kernels.iter().find(|r| r.label == clothlab_core::timing::SUBSTEP).map(|r| r.median_ns))
+            .collect();
+        Some(Cell {
+            kernels: merge_rows(&|c| &c.kernels),
+            frames: merge_rows(&|c| &c.frames),
+            seconds: rounds.iter().map(|c| c.seconds).sum(),
+            runs,
+            ..first
+        })
+    }
 }
 
 enum Painter {
@@ -145,6 +187,9 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     sizes.dedup();
     if args.iters == 0 || args.iters > 1_000_000 {
         bail!("invalid --iters {}: must be in 1 ..= 1000000", args.iters);
+    }
+    if !(1..=20).contains(&args.repeat) {
+        bail!("invalid --repeat {}: must be in 1 ..= 20", args.repeat);
     }
     if !(args.cell_budget > 0.0 && args.cell_budget.is_finite()) {
         bail!("invalid --cell-budget {}: must be a positive number of seconds", args.cell_budget);
@@ -238,7 +283,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
 
     let overhead_apis = usize::from(!args.no_overhead && devices.wgpu.is_some())
         + usize::from(!args.no_overhead && devices.vulkan.is_some());
-    let bar = ProgressBar::new((sizes.len() * jobs.len() + overhead_apis) as u64);
+    let bar = ProgressBar::new((sizes.len() * jobs.len() * args.repeat as usize + overhead_apis) as u64);
     bar.set_style(
         ProgressStyle::with_template("{bar:32} {pos}/{len} [{elapsed_precise}] {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -250,45 +295,64 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     let mut skipped: Vec<String> = Vec::new();
     let mut ladder: Vec<LadderCell> = Vec::new();
     for &n in &sizes {
-        for job in &jobs {
-            let label = job.label();
-            bar.set_message(format!("{label} n={n}"));
+        // --repeat rounds, interleaved (A B C … A B C …), so that the machine's slow and
+        // fast phases fall on every job alike; merged below.
+        let mut runs: Vec<Vec<Cell>> = vec![Vec::new(); jobs.len()];
+        let mut skip = vec![false; jobs.len()];
+        for round in 0..args.repeat {
+            for (j, job) in jobs.iter().enumerate() {
+                let label = job.label();
+                bar.set_message(format!("{label} n={n} round {}/{}", round + 1, args.repeat));
+                if skip[j] || matches!(&job.rung, Some((_, _, Some(_)))) {
+                    bar.inc(1);
+                    continue;
+                }
+                // Predict the cell's time from this job's previous size (time ∝ particles).
+                let predicted = cells
+                    .iter()
+                    .rev()
+                    .find(|c| c.backend == label)
+                    .map(|c| c.seconds / c.runs.len().max(1) as f64 * (n as f64 / c.n as f64).powi(2));
+                if let Some(p) = predicted.filter(|&p| p > args.cell_budget) {
+                    let line = format!(
+                        "{label} at n={n}: skipped, predicted {p:.0} s > --cell-budget {:.0} s",
+                        args.cell_budget
+                    );
+                    say(&bar, line.clone());
+                    skipped.push(line);
+                    skip[j] = true;
+                    bar.inc(1);
+                    continue;
+                }
+                let cell = run_cell(job, n, &params, frames, args.resolution, &devices)
+                    .with_context(|| format!("{label} at n={n}"))?;
+                let sub = cell.kernels.iter().find(|r| r.label == clothlab_core::timing::SUBSTEP);
+                let frame = cell.frames.iter().find(|r| r.label == "frame");
+                say(
+                    &bar,
+                    format!(
+                        "{:<13} n={n:<5} substep {:>10.3} ms   frame {:>10.2} ms ({:.1} fps)   [{:.1} s]",
+                        cell.backend,
+                        sub.map(|r| r.median_ns / 1e6).unwrap_or(f64::NAN),
+                        frame.map(|r| r.median_ns / 1e6).unwrap_or(f64::NAN),
+                        frame.map(|r| 1e9 / r.median_ns).unwrap_or(f64::NAN),
+                        cell.seconds
+                    ),
+                );
+                runs[j].push(cell);
+                bar.inc(1);
+            }
+        }
+        for (job, list) in jobs.iter().zip(runs) {
             if let Some((index, rung, Some(why))) = &job.rung {
-                ladder.push(job.ladder_cell(*index, rung, n, &label, &params, Some(why.clone()))?);
-                bar.inc(1);
+                ladder.push(job.ladder_cell(*index, rung, n, &job.label(), &params, Some(why.clone()))?);
                 continue;
             }
-            // Predict the cell's time from this job's previous size (time ∝ particles).
-            let predicted =
-                cells.iter().rev().find(|c| c.backend == label).map(|c| c.seconds * (n as f64 / c.n as f64).powi(2));
-            if let Some(p) = predicted.filter(|&p| p > args.cell_budget) {
-                let line =
-                    format!("{label} at n={n}: skipped, predicted {p:.0} s > --cell-budget {:.0} s", args.cell_budget);
-                say(&bar, line.clone());
-                skipped.push(line);
-                bar.inc(1);
-                continue;
-            }
-            let cell = run_cell(job, n, &params, frames, args.resolution, &devices)
-                .with_context(|| format!("{label} at n={n}"))?;
+            let Some(cell) = Cell::merge(list) else { continue };
             if let Some((index, rung, None)) = &job.rung {
                 ladder.push(job.ladder_cell(*index, rung, n, &cell.backend, &params, None)?);
             }
-            let sub = cell.kernels.iter().find(|r| r.label == clothlab_core::timing::SUBSTEP);
-            let frame = cell.frames.iter().find(|r| r.label == "frame");
-            say(
-                &bar,
-                format!(
-                    "{:<13} n={n:<5} substep {:>10.3} ms   frame {:>10.2} ms ({:.1} fps)   [{:.1} s]",
-                    cell.backend,
-                    sub.map(|r| r.median_ns / 1e6).unwrap_or(f64::NAN),
-                    frame.map(|r| r.median_ns / 1e6).unwrap_or(f64::NAN),
-                    frame.map(|r| 1e9 / r.median_ns).unwrap_or(f64::NAN),
-                    cell.seconds
-                ),
-            );
             cells.push(cell);
-            bar.inc(1);
         }
     }
 
@@ -474,6 +538,7 @@ fn run_cell(
         frames: rec.table().rows,
         probe: probe(&state),
         seconds: t_cell.elapsed().as_secs_f64(),
+        runs: Vec::new(),
     })
 }
 

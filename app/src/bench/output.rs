@@ -103,6 +103,29 @@ pub struct Results {
     /// The optimisation ladder's cells (`--ladder`; empty otherwise).
     #[serde(default)]
     pub ladder: Vec<LadderCell>,
+    /// The substep median of every round of every cell run more than once (`--repeat`).
+    #[serde(default)]
+    pub rounds: Vec<Rounds>,
+}
+
+/// The rounds of one cell (`--repeat`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Rounds {
+    /// Backend (the cell's name).
+    pub backend: String,
+    /// Particles per side.
+    pub n: u32,
+    /// The substep median of each round, ns, in the order run.
+    pub substep_ns: Vec<f64>,
+}
+
+impl Rounds {
+    /// (max − min) / min of the rounds: the run-to-run noise of this cell.
+    pub fn spread(&self) -> f64 {
+        let lo = self.substep_ns.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = self.substep_ns.iter().copied().fold(0.0, f64::max);
+        if lo > 0.0 && lo.is_finite() { (hi - lo) / lo } else { 0.0 }
+    }
 }
 
 /// What [`Results::new`] is made from.
@@ -195,6 +218,12 @@ impl Results {
             notes: i.notes,
             seconds: i.seconds,
             ladder: i.ladder,
+            rounds: i
+                .cells
+                .iter()
+                .filter(|c| c.runs.len() > 1)
+                .map(|c| Rounds { backend: c.backend.clone(), n: c.n, substep_ns: c.runs.clone() })
+                .collect(),
         }
     }
 
@@ -480,6 +509,18 @@ pub fn report(r: &Results) -> String {
         }
     }
 
+    if !r.rounds.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Rounds\n\nEvery cell ran {} rounds, interleaved; its numbers above are the medians of the rounds' medians. The spread, (max − min) / min of the rounds' substep medians, is this machine's run-to-run noise: a difference smaller than it is not a difference.\n",
+            r.rounds.iter().map(|x| x.substep_ns.len()).max().unwrap_or(0)
+        );
+        let _ = writeln!(s, "| backend | n | substep per round (ms) | spread |\n|---|---:|---|---:|");
+        for x in &r.rounds {
+            let runs: Vec<String> = x.substep_ns.iter().map(|v| format!("{:.2}", v / 1e6)).collect();
+            let _ = writeln!(s, "| {} | {} | {} | {:.0} % |", x.backend, x.n, runs.join(" / "), x.spread() * 100.0);
+        }
+    }
     s.push_str(&super::ladder::report(r));
 
     let _ = writeln!(s, "\n## Targets\n");
@@ -643,6 +684,7 @@ mod tests {
             frames: vec![timing("frame", 16.0 * substep_ns)],
             probe: (0..25).map(|i| [i as f32 * 0.1 + shift_m, 1.0, 0.0]).collect(),
             seconds: 1.0,
+            runs: vec![],
         }
     }
 
