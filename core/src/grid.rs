@@ -151,6 +151,22 @@ pub struct ClothState {
     pub normal: Vec<V4>,
 }
 
+/// Rescales Verlet's history for a new time step: the previous positions become
+/// `x − (x − x*)·new_dt/old_dt`, so that the velocity `(x − x*)/dt` is kept (without it a
+/// changed `frame_dt` or `substeps` injects or removes velocity: the thesis's warning).
+/// Pinned particles (x* = x) are unchanged.
+pub fn rescale_history(pos: &[V4], prev: &mut [V4], old_dt: f32, new_dt: f32) {
+    if old_dt == new_dt || old_dt <= 0.0 || new_dt <= 0.0 {
+        return;
+    }
+    let r = new_dt / old_dt;
+    for (x, xp) in pos.iter().zip(prev.iter_mut()) {
+        for c in 0..3 {
+            xp[c] = x[c] - (x[c] - xp[c]) * r;
+        }
+    }
+}
+
 impl ClothState {
     /// Checks that this is a finite state of an `n × n` grid (what `Solver::set_state`
     /// accepts).

@@ -174,6 +174,7 @@ impl Solver for RecipeSolver {
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         params.validate()?;
+        clothlab_core::grid::rescale_history(&self.bufs.pos, &mut self.bufs.prev, self.params.dt(), params.dt());
         self.engine.set_spring_constants(&params);
         self.commands = recipe(&self.variant, params.strain_iterations);
         self.params = params;

@@ -475,6 +475,14 @@ impl<E: Engine> Solver for GpuSolver<E> {
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         params.validate()?;
+        if params.dt() != self.params.dt() {
+            // A new dt keeps the velocity: Verlet's history rescaled (read, rescaled on the
+            // host, written back: a rare event, between frames).
+            let pos = self.read(Buf::Pos)?;
+            let mut prev = self.read(Buf::Prev)?;
+            clothlab_core::grid::rescale_history(&pos, &mut prev, self.params.dt(), params.dt());
+            self.write(Buf::Prev, bytemuck::cast_slice(&prev))?;
+        }
         let n = self.topo.n;
         if spring_constants(&params, n) != spring_constants(&self.params, n) {
             // The spring constants depend on dt and the stiffness fractions: rewrite the

@@ -162,6 +162,7 @@ impl Solver for CpuSolver {
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         params.validate()?;
+        crate::grid::rescale_history(&self.state.pos, &mut self.state.prev, self.params.dt(), params.dt());
         self.params = params;
         self.topo.set_spring_constants(&self.params);
         self.uniform = self.topo.uniform_interior_slots();
