@@ -155,6 +155,36 @@ fn bindings(name: &str, module: &naga::Module, info: &naga::valid::ModuleInfo) -
     (reads, writes)
 }
 
+/// shared/colliders.wgsl with the spheres and boxes in uniform blocks of MAX_COLLIDERS
+/// entries at `layout::Buf::SpheresUniform` and `BoxesUniform` (the thesis's constant
+/// memory): `colliders=uniform`.
+fn colliders_uniform(storage: &str) -> String {
+    let swaps = [
+        (
+            format!("@group(0) @binding({}) var<storage, read> spheres: array<Sphere>;", Buf::Spheres.binding()),
+            format!(
+                "@group(0) @binding({}) var<uniform> spheres: array<Sphere, MAX_COLLIDERS>;",
+                Buf::SpheresUniform.binding()
+            ),
+        ),
+        (
+            format!("@group(0) @binding({}) var<storage, read> boxes: array<Aabb>;", Buf::Boxes.binding()),
+            format!(
+                "@group(0) @binding({}) var<uniform> boxes: array<Aabb, MAX_COLLIDERS>;",
+                Buf::BoxesUniform.binding()
+            ),
+        ),
+    ];
+    let mut s = storage.to_owned();
+    for (from, to) in swaps {
+        if !s.contains(&from) {
+            fail(format!("shared/colliders.wgsl: expected the declaration `{from}`"));
+        }
+        s = s.replace(&from, &to);
+    }
+    s
+}
+
 /// Validates `source`, writes it and its SPIR-V to `out`, and lists it in `list`.
 fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
     let (module, info) = parse_and_validate(&format!("{name}.wgsl"), source);
@@ -184,10 +214,15 @@ fn main() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("OUT_DIR"));
     println!("cargo:rerun-if-changed={}", dir.display());
-    let shared = |name: &str| {
+    let read_shared = |name: &str| {
         let p = dir.join("shared").join(format!("{name}.wgsl"));
         println!("cargo:rerun-if-changed={}", p.display());
         fs::read_to_string(&p).unwrap_or_else(|e| fail(format!("{}: {e}", p.display())))
+    };
+    // `colliders_uni`, the `_cu` twins' include, is shared/colliders.wgsl with the two
+    // declarations swapped for uniform blocks (the same code after them).
+    let shared = |name: &str| {
+        if name == "colliders_uni" { colliders_uniform(&read_shared("colliders")) } else { read_shared(name) }
     };
     let types = shared("types");
     // The constants shared with Rust, then the structs: every kernel starts with these.
@@ -210,6 +245,9 @@ fn main() {
         writeln!(shared_list, "    ({stem:?}, include_str!({:?})),", path.display().to_string())
             .expect("write to string");
     }
+    fs::write(out.join("colliders_uni.wgsl"), shared("colliders_uni")).expect("write colliders_uni");
+    shared_list
+        .push_str("    (\"colliders_uni\", include_str!(concat!(env!(\"OUT_DIR\"), \"/colliders_uni.wgsl\"))),\n");
     shared_list.push_str("];\n");
     fs::write(out.join("prelude.wgsl"), &prelude).expect("write prelude");
 

@@ -253,6 +253,30 @@ mod tests {
         }
     }
 
+    fn results(
+        cells: Vec<Cell>,
+        overhead: Vec<(String, String, Vec<OverheadRow>)>,
+        ladder: Vec<LadderCell>,
+    ) -> Results {
+        Results::new(Inputs {
+            machine: "test".into(),
+            wgpu_adapter: None,
+            vulkan_adapter: Some("test".into()),
+            params: SimParams::default(),
+            frames: 8,
+            warmup_frames: 3,
+            resolution: (64, 64),
+            plan: OverheadPlan::default(),
+            cells,
+            overhead,
+            skipped: vec![],
+            notes: vec![],
+            seconds: 1.0,
+            command: "test".into(),
+            ladder,
+        })
+    }
+
     #[test]
     fn each_rung_is_bound_by_what_its_numbers_say() {
         // Chain: 10 µs per dispatch. Substeps of 16 per frame.
@@ -274,23 +298,8 @@ mod tests {
             // 1 dispatch, GPU-bound, 2 GB/s (20 % of the best): arithmetic / latency.
             cell("d", 1e5, 16.0 * 1e5),
         ];
-        let r = Results::new(Inputs {
-            machine: "test".into(),
-            wgpu_adapter: None,
-            vulkan_adapter: Some("test".into()),
-            params: SimParams::default(),
-            frames: 8,
-            warmup_frames: 3,
-            resolution: (64, 64),
-            plan: OverheadPlan::default(),
-            cells,
-            overhead: vec![("vulkan".into(), "test".into(), chain)],
-            skipped: vec![],
-            notes: vec![],
-            seconds: 1.0,
-            command: "test".into(),
-            ladder: vec![rung(0, "a", 7, 0), rung(1, "b", 1, 0), rung(2, "c", 1, 1_000_000), rung(3, "d", 1, 200_000)],
-        });
+        let ladder = vec![rung(0, "a", 7, 0), rung(1, "b", 1, 0), rung(2, "c", 1, 1_000_000), rung(3, "d", 1, 200_000)];
+        let r = results(cells, vec![("vulkan".into(), "test".into(), chain)], ladder);
         let text = report(&r);
         let row = |name: &str| text.lines().find(|l| l.starts_with(&format!("| {name} |"))).unwrap().to_string();
         assert!(row("naive").contains("dispatch overhead (7 × 10.0 µs = 70 % of the substep)"), "{}", row("naive"));
@@ -309,23 +318,7 @@ mod tests {
         b.runs = vec![0.95e5, 0.96e5, 0.94e5];
         let mut c = cell("c", 0.475e5, 16.0 * 1e5);
         c.runs = vec![0.475e5, 0.48e5, 0.47e5];
-        let r = Results::new(Inputs {
-            machine: "test".into(),
-            wgpu_adapter: None,
-            vulkan_adapter: Some("test".into()),
-            params: SimParams::default(),
-            frames: 8,
-            warmup_frames: 3,
-            resolution: (64, 64),
-            plan: OverheadPlan::default(),
-            cells: vec![a, b, c],
-            overhead: vec![],
-            skipped: vec![],
-            notes: vec![],
-            seconds: 1.0,
-            command: "test".into(),
-            ladder: vec![rung(0, "a", 1, 0), rung(1, "b", 1, 0), rung(2, "c", 1, 0)],
-        });
+        let r = results(vec![a, b, c], vec![], vec![rung(0, "a", 1, 0), rung(1, "b", 1, 0), rung(2, "c", 1, 0)]);
         assert_eq!(r.rounds.len(), 3);
         assert!((r.rounds[0].spread() - 0.10).abs() < 1e-12, "{}", r.rounds[0].spread());
         let text = report(&r);

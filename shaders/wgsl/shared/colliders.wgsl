@@ -1,4 +1,6 @@
-// Sphere and box colliders (needs state.wgsl).
+// Sphere and box colliders (needs state.wgsl). The build also emits every kernel that
+// includes this file as `<kernel>_cu`, with these two declarations swapped for uniform
+// blocks of MAX_COLLIDERS entries (the thesis's constant memory: `colliders=uniform`).
 
 @group(0) @binding(12) var<storage, read> spheres: array<Sphere>;
 @group(0) @binding(13) var<storage, read> boxes: array<Aabb>;
