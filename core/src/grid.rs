@@ -200,6 +200,8 @@ pub struct ClothTopology {
     pub face_slots: Vec<[i32; FACE_SLOTS]>,
     /// Per particle, the tethers to the nearest pins.
     pub tethers: Vec<[Tether; TETHER_SLOTS]>,
+    /// Distance between neighbouring particles at rest, m.
+    pub spacing: f32,
 }
 
 impl ClothTopology {
@@ -275,8 +277,7 @@ impl ClothTopology {
 
     /// Rebuilds the spring constants for new parameters (rest lengths stay).
     pub fn set_spring_constants(&mut self, params: &SimParams) {
-        let n = self.n;
-        let consts = spring_constants(params, n);
+        let consts = params.spring_constants(self.n, self.spacing);
         for (k, slot) in self.slots.iter_mut().enumerate() {
             if slot.neighbor >= 0 {
                 let (ks, kd) = consts[slot_kind(k % SLOTS) as usize];
@@ -292,17 +293,10 @@ impl ClothTopology {
     }
 }
 
-/// (ks, kd) per [`SpringKind`] for an `n × n` cloth: what the spring tables hold, so a
+/// (ks, kd) per [`SpringKind`] for `topo`'s cloth: what the spring tables hold, so a
 /// parameter change that leaves these equal (wind, gravity, …) needs no table upload.
-pub fn spring_constants(params: &SimParams, n: u32) -> [(f32, f32); 3] {
-    [
-        (
-            params.stiffness_n_per_m(params.structural_stiffness, n),
-            params.damping_ns_per_m(params.structural_damping, n),
-        ),
-        (params.stiffness_n_per_m(params.shear_stiffness, n), params.damping_ns_per_m(params.shear_damping, n)),
-        (params.stiffness_n_per_m(params.bend_stiffness, n), params.damping_ns_per_m(params.bend_damping, n)),
-    ]
+pub fn spring_constants(params: &SimParams, topo: &ClothTopology) -> [(f32, f32); 3] {
+    params.spring_constants(topo.n, topo.spacing)
 }
 
 /// Index of triangle `t` (0 or 1) of quad `(qi, qj)`; quads are `(n-1) × (n-1)`.
@@ -381,7 +375,8 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
         }
     }
 
-    let consts = spring_constants(params, n);
+    params.validate_for(n, spacing)?;
+    let consts = params.spring_constants(n, spacing);
     let mut slots = Vec::with_capacity(np * SLOTS);
     let mut springs = Vec::new();
     for j in 0..n as i32 {
@@ -429,7 +424,7 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
 
     let zero = vec![[0.0f32; 4]; np];
     let state = ClothState { n, prev: pos.clone(), pos, force: zero.clone(), normal: zero };
-    let topo = ClothTopology { n, uv, triangles, slots, springs, face_slots, tethers };
+    let topo = ClothTopology { n, uv, triangles, slots, springs, face_slots, tethers, spacing };
     Ok((state, topo))
 }
 

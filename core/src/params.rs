@@ -41,6 +41,21 @@ impl ParamError {
     }
 }
 
+/// How the spring families' stiffness and damping are given.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StiffnessUnits {
+    /// Fractions of the explicit stability limit (`k = κ m / dt²`, `c = ζ m / dt`): stable
+    /// at every n and dt, but the fabric softens as the grid gets finer.
+    #[default]
+    Fraction,
+    /// A material: stretch and shear moduli (N/m) and a bending modulus (N·m), turned
+    /// into spring constants by the grid spacing, so the same fabric at every n; the
+    /// `*_damping` fields are then damping ratios (fractions of each spring's critical
+    /// damping `2√(k m)`). Verlet refuses a dt it cannot integrate, naming the substeps.
+    Physical,
+}
+
 /// Every simulation parameter. Plain data: change fields, then call [`SimParams::validate`]
 /// before handing it to a solver (solvers validate again and refuse bad values).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -86,6 +101,18 @@ pub struct SimParams {
     pub collision_margin: f32,
     /// Wind velocity, m/s. Default (0, 0, 0): no wind.
     pub wind: [f32; 3],
+    /// How stiffness and damping are given. Default [`StiffnessUnits::Fraction`].
+    pub stiffness_units: StiffnessUnits,
+    /// `stiffness_units = physical`: in-plane stretch modulus, N/m (the structural
+    /// springs' k: a square lattice's axial springs of constant k have a 2-D Young's
+    /// modulus of k). Default 50.6: what the fraction defaults give at n = 64.
+    pub stretch_modulus: f32,
+    /// `stiffness_units = physical`: in-plane shear modulus, N/m (the shear springs' k).
+    /// Default 16.9.
+    pub shear_modulus: f32,
+    /// `stiffness_units = physical`: bending modulus, N·m; a bend spring over two
+    /// spacings h gets `k = B / h²`. Default 5.67e-3.
+    pub bend_modulus: f32,
     /// Wind pressure coefficient, kg/(m²·s): a triangle of area A and unit normal n̂ feels
     /// `wind_coefficient · A · (n̂·w) n̂`, shared by its three corners. Default 0.5.
     pub wind_coefficient: f32,
@@ -112,6 +139,10 @@ impl Default for SimParams {
             collision_margin: 0.01,
             wind: [0.0; 3],
             wind_coefficient: 0.5,
+            stiffness_units: StiffnessUnits::Fraction,
+            stretch_modulus: 50.6,
+            shear_modulus: 16.9,
+            bend_modulus: 5.67e-3,
         }
     }
 }
@@ -140,6 +171,51 @@ impl SimParams {
     /// Spring damping in N·s/m for a family with fraction `zeta` on an `n × n` cloth.
     pub fn damping_ns_per_m(&self, zeta: f32, n: u32) -> f32 {
         zeta * self.particle_mass(n) / self.dt()
+    }
+
+    /// (k N/m, c N·s/m) of the structural, shear and bend springs of an `n × n` cloth with
+    /// grid spacing `spacing` m, in either unit system.
+    pub fn spring_constants(&self, n: u32, spacing: f32) -> [(f32, f32); 3] {
+        let families = [
+            (self.structural_stiffness, self.structural_damping, self.stretch_modulus),
+            (self.shear_stiffness, self.shear_damping, self.shear_modulus),
+            (self.bend_stiffness, self.bend_damping, self.bend_modulus / (spacing * spacing).max(1e-12)),
+        ];
+        let m = self.particle_mass(n);
+        families.map(|(kappa, zeta, k_physical)| match self.stiffness_units {
+            StiffnessUnits::Fraction => (self.stiffness_n_per_m(kappa, n), self.damping_ns_per_m(zeta, n)),
+            StiffnessUnits::Physical => (k_physical, zeta * 2.0 * (k_physical * m).sqrt()),
+        })
+    }
+
+    /// [`SimParams::validate`], and for physical stiffness whether Verlet can integrate it
+    /// on an `n × n` cloth of spacing `spacing`: the springs' fraction of the stability
+    /// limit `Σk·dt²/m` must stay under 0.95 and the damping's `Σc·dt/m` under 0.5, the
+    /// bounds the fraction mode enforces; a refusal names the substeps that would do.
+    pub fn validate_for(&self, n: u32, spacing: f32) -> Result<(), ParamError> {
+        self.validate()?;
+        if self.stiffness_units == StiffnessUnits::Fraction {
+            return Ok(());
+        }
+        let m = self.particle_mass(n);
+        let consts = self.spring_constants(n, spacing);
+        let k: f32 = consts.iter().map(|c| c.0).sum();
+        let c: f32 = consts.iter().map(|c| c.1).sum();
+        let dt = self.dt();
+        // Largest stable dt: k dt²/m < 0.95 and c dt/m < 0.5.
+        let dt_max = (0.95 * m / k.max(1e-30)).sqrt().min(0.5 * m / c.max(1e-30));
+        if dt >= dt_max {
+            let need = (self.frame_dt / dt_max).floor() as u64 + 1;
+            return Err(ParamError::new(
+                "substeps",
+                self.substeps,
+                format!(
+                    "stiffness_units = physical at n = {n}: particles of {m:.3e} kg held by springs of Σk = {k:.1} N/m are stable with Verlet only for dt < {dt_max:.3e} s; this dt is {dt:.3e} s — use substeps ≥ {need} (at frame_dt {}), a coarser grid, or softer moduli",
+                    self.frame_dt
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// Checks every field; the first bad one is reported. Nothing that passes can make a
@@ -195,6 +271,9 @@ impl SimParams {
             finite_in(["wind.x", "wind.y", "wind.z"][i], *w, -1000.0, 1000.0)?;
         }
         finite_in("wind_coefficient", self.wind_coefficient, 0.0, 1000.0)?;
+        finite_in("stretch_modulus", self.stretch_modulus, 0.0, 1e9)?;
+        finite_in("shear_modulus", self.shear_modulus, 0.0, 1e9)?;
+        finite_in("bend_modulus", self.bend_modulus, 0.0, 1e6)?;
         Ok(())
     }
 }
@@ -217,6 +296,33 @@ mod tests {
     #[test]
     fn defaults_validate() {
         assert_eq!(SimParams::default().validate(), Ok(()));
+    }
+
+    #[test]
+    fn physical_stiffness_is_the_same_at_every_n_and_verlet_names_the_substeps_it_needs() {
+        let p = SimParams { stiffness_units: StiffnessUnits::Physical, ..Default::default() };
+        let h = |n: u32| 2.0 / (n - 1) as f32;
+        // The structural and shear k are the moduli whatever n; bend k = B / h².
+        for n in [64, 512] {
+            let c = p.spring_constants(n, h(n));
+            assert_eq!((c[0].0, c[1].0), (50.6, 16.9));
+            assert!((c[2].0 - 5.67e-3 / (h(n) * h(n))).abs() <= 1e-3 * c[2].0, "{c:?}");
+        }
+        // At n = 64 they reproduce the fraction defaults (κ 0.45, 0.15, 0.05 of m/dt²)
+        // within 1 %.
+        let f = SimParams::default().spring_constants(64, h(64));
+        let q = p.spring_constants(64, h(64));
+        for k in 0..3 {
+            assert!((q[k].0 / f[k].0 - 1.0).abs() < 0.01, "{k}: {q:?} vs {f:?}");
+        }
+        assert_eq!(p.validate_for(64, h(64)), Ok(()));
+        // At n = 512 the bend springs (k = B/h² ≈ 365 N/m) on particles of 1.9e-6 kg need
+        // dt < 6.8e-5 s: 16 substeps are refused, naming how many would do.
+        let e = p.validate_for(512, h(512)).unwrap_err();
+        let need: u32 = e.reason.split("substeps ≥ ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+        assert!((200..300).contains(&need), "{e}");
+        assert_eq!(SimParams { substeps: need, ..p.clone() }.validate_for(512, h(512)), Ok(()));
+        assert!(SimParams { substeps: need - 1, ..p }.validate_for(512, h(512)).is_err());
     }
 
     #[test]

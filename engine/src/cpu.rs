@@ -173,7 +173,7 @@ impl Solver for RecipeSolver {
     }
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
-        params.validate()?;
+        params.validate_for(self.engine.topo.n, self.engine.topo.spacing)?;
         clothlab_core::grid::rescale_history(&self.bufs.pos, &mut self.bufs.prev, self.params.dt(), params.dt());
         self.engine.set_spring_constants(&params);
         self.commands = recipe(&self.variant, params.strain_iterations);

@@ -474,7 +474,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
     }
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
-        params.validate()?;
+        params.validate_for(self.topo.n, self.topo.spacing)?;
         if params.dt() != self.params.dt() {
             // A new dt keeps the velocity: Verlet's history rescaled (read, rescaled on the
             // host, written back: a rare event, between frames).
@@ -483,8 +483,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
             clothlab_core::grid::rescale_history(&pos, &mut prev, self.params.dt(), params.dt());
             self.write(Buf::Prev, bytemuck::cast_slice(&prev))?;
         }
-        let n = self.topo.n;
-        if spring_constants(&params, n) != spring_constants(&self.params, n) {
+        if spring_constants(&params, &self.topo) != spring_constants(&self.params, &self.topo) {
             // The spring constants depend on dt and the stiffness fractions: rewrite the
             // tables in place (the binding sets keep pointing at the same buffers). Wind,
             // gravity and the like reach the kernels with the next frame's constants.

@@ -39,11 +39,13 @@ pub fn apply_overrides(params: &SimParams, sets: &[String]) -> Result<SimParams>
             "nan" | "NaN" | "inf" | "-inf" | "infinity" | "-infinity" => {
                 bail!("invalid parameter `{name}` = {raw}: must be a finite number")
             }
-            r => serde_json::from_str(r).with_context(|| format!("`{name}`: cannot parse `{r}`"))?,
+            // A word that is not JSON is a string (`stiffness_units=physical`).
+            r => serde_json::from_str(r).unwrap_or_else(|_| serde_json::Value::String(r.to_owned())),
         };
         *slot = parsed;
     }
-    let out: SimParams = serde_json::from_value(value).context("parameter of the wrong type")?;
+    let out: SimParams =
+        serde_json::from_value(value).map_err(|e| anyhow::anyhow!("a parameter of the wrong type: {e}"))?;
     out.validate()?;
     Ok(out)
 }

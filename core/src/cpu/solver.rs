@@ -161,7 +161,7 @@ impl Solver for CpuSolver {
     }
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
-        params.validate()?;
+        params.validate_for(self.topo.n, self.topo.spacing)?;
         crate::grid::rescale_history(&self.state.pos, &mut self.state.prev, self.params.dt(), params.dt());
         self.params = params;
         self.topo.set_spring_constants(&self.params);
