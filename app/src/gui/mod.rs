@@ -371,7 +371,13 @@ impl Running {
                 Err(e) => self.ui.message = format!("variant refused: {e:#}"),
             },
             Command::Grid(n) => {
-                self.sim.regrid(n, &self.gfx.shared())?;
+                // A grid the parameters cannot run (physical stiffness needing more
+                // substeps at this n) is refused, the old cloth kept.
+                if let Err(e) = self.sim.regrid(n, &self.gfx.shared()) {
+                    self.ui.message = format!("grid {n}×{n} refused: {e:#}");
+                    self.ui.grid_n = self.sim.solver.get_ref().scene().cloth.n;
+                    return Ok(());
+                }
                 let scene = self.sim.solver.get_ref().scene().clone();
                 self.gfx.rebuild(&scene, &self.ui.params)?;
                 self.dragging = None;
@@ -380,7 +386,11 @@ impl Running {
             Command::Api(api) => self.switch_api(api)?,
             Command::Params(p) => match self.sim.solver.get().set_params(p.clone()) {
                 Ok(()) => {}
-                Err(e) => self.ui.message = format!("parameters refused: {e}"),
+                Err(e) => {
+                    self.ui.message = format!("parameters refused: {e}");
+                    // The panels show what runs.
+                    self.ui.params = self.sim.solver.get_ref().params().clone();
+                }
             },
         }
         Ok(())

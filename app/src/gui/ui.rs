@@ -4,6 +4,7 @@
 use std::collections::VecDeque;
 
 use clothlab_core::RenderMode;
+use clothlab_core::params::StiffnessUnits;
 use clothlab_core::params::{MAX_STRAIN_ITERATIONS, MAX_SUBSTEPS};
 use clothlab_core::timing::SUBSTEP;
 use egui::{Color32, RichText};
@@ -342,7 +343,20 @@ fn light_panel(ui: &mut egui::Ui, s: &mut UiState) {
 fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     ui.label(RichText::new("Parameters").strong());
     let p = &mut s.params;
-    let mut changed = false;
+    // Stiffness as fractions of the explicit limit, or a material in physical units (a
+    // substep count Verlet cannot integrate is refused, naming the one it needs).
+    let mut units_changed = false;
+    ui.horizontal(|ui| {
+        ui.label("stiffness");
+        for (units, name) in [(StiffnessUnits::Fraction, "fraction of limit"), (StiffnessUnits::Physical, "physical")] {
+            if ui.selectable_label(p.stiffness_units == units, name).clicked() && p.stiffness_units != units {
+                p.stiffness_units = units;
+                units_changed = true;
+            }
+        }
+    });
+    let physical = p.stiffness_units == StiffnessUnits::Physical;
+    let mut changed = units_changed;
     let mut f = |ui: &mut egui::Ui, v: &mut f32, r: std::ops::RangeInclusive<f32>, label: &str, log: bool| {
         changed |= ui.add(egui::Slider::new(v, r).text(label).logarithmic(log)).changed();
     };
@@ -351,12 +365,19 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     f(ui, &mut p.cloth_mass, 0.01..=10.0, "cloth mass kg", true);
     f(ui, &mut p.air_drag, 0.0..=5.0, "air drag 1/s", false);
     f(ui, &mut p.damping, 0.0..=0.1, "damping", false);
-    f(ui, &mut p.structural_stiffness, 0.001..=1.0, "structural κ", true);
-    f(ui, &mut p.shear_stiffness, 0.001..=1.0, "shear κ", true);
-    f(ui, &mut p.bend_stiffness, 0.0001..=1.0, "bend κ", true);
-    f(ui, &mut p.structural_damping, 0.0..=1.0, "structural damping", false);
-    f(ui, &mut p.shear_damping, 0.0..=1.0, "shear damping", false);
-    f(ui, &mut p.bend_damping, 0.0..=1.0, "bend damping", false);
+    if physical {
+        f(ui, &mut p.stretch_modulus, 1.0..=5000.0, "stretch modulus N/m", true);
+        f(ui, &mut p.shear_modulus, 0.1..=5000.0, "shear modulus N/m", true);
+        f(ui, &mut p.bend_modulus, 1e-6..=1.0, "bend modulus N·m", true);
+    } else {
+        f(ui, &mut p.structural_stiffness, 0.001..=1.0, "structural κ", true);
+        f(ui, &mut p.shear_stiffness, 0.001..=1.0, "shear κ", true);
+        f(ui, &mut p.bend_stiffness, 0.0001..=1.0, "bend κ", true);
+    }
+    let damping = if physical { "damping ratio" } else { "damping" };
+    f(ui, &mut p.structural_damping, 0.0..=1.0, &format!("structural {damping}"), false);
+    f(ui, &mut p.shear_damping, 0.0..=1.0, &format!("shear {damping}"), false);
+    f(ui, &mut p.bend_damping, 0.0..=1.0, &format!("bend {damping}"), false);
     f(ui, &mut p.strain_limit, 0.01..=1.0, "strain limit τ", false);
     f(ui, &mut p.friction, 0.0..=1.0, "friction", false);
     f(ui, &mut p.collision_margin, 0.0..=0.05, "collision margin m", false);
