@@ -316,8 +316,9 @@ mod tests {
             assert!((q[k].0 / f[k].0 - 1.0).abs() < 0.01, "{k}: {q:?} vs {f:?}");
         }
         assert_eq!(p.validate_for(64, h(64)), Ok(()));
-        // At n = 512 the bend springs (k = B/h² ≈ 365 N/m) on particles of 1.9e-6 kg need
-        // dt < 6.8e-5 s: 16 substeps are refused, naming how many would do.
+        // At n = 512 the bend springs (k = B/h² ≈ 370 N/m, Σk ≈ 438 N/m) on particles of
+        // 1.9e-6 kg need dt < 6.4e-5 s: 16 substeps are refused, naming how many would do
+        // (260 at frame_dt 1/60).
         let e = p.validate_for(512, h(512)).unwrap_err();
         let need: u32 = e.reason.split("substeps ≥ ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
         assert!((200..300).contains(&need), "{e}");

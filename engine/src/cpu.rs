@@ -131,10 +131,7 @@ impl RecipeSolver {
         let sp = StepParams::new(&params, &engine.scene, None);
         let bufs = start_buffers(exec, &sp, &engine.topo, &state);
         let commands = recipe(&variant, params.strain_iterations);
-        let name = match variant.label().as_str() {
-            "optimized" => "cpu-recipe".to_string(),
-            label => format!("cpu-recipe-{label}"),
-        };
+        let name = variant.solver_name("cpu-recipe");
         Ok(Self { engine, name, variant, params, grab: None, bufs, commands, timer: TimingRecorder::default() })
     }
 

@@ -24,7 +24,7 @@ use crate::recipe::{
     Caps, Command, Hazards, StatsMode, bits, dispatches, kernels_for, kernels_of, recipe, res, stats_commands,
 };
 use crate::tables::{record_times, split_slots, spring_halves, table_texels};
-use crate::variant::{Draw, Submit, Table, Variant, VariantSpec};
+use crate::variant::{Constants, Draw, Submit, Table, Variant, VariantSpec};
 
 /// Timestamp queries per frame.
 pub const MAX_QUERIES: u32 = 4096;
@@ -185,12 +185,7 @@ impl<E: Engine> GpuSolver<E> {
         engine.bind([set(0), set(1)])?;
         let mut build_list: Vec<KernelRef> = kernels_for(&variant);
         build_list.extend(dispatches(&stats_commands(options.stats, caps)));
-        // `wgpu`, `vulkan` for the optimized preset (the backends' names), else
-        // `<api>-<label>`: `vulkan-naive`, `wgpu-thesis+table=storage`.
-        let name = match variant.label().as_str() {
-            "optimized" => info.api.to_string(),
-            label => format!("{}-{label}", info.api),
-        };
+        let name = variant.solver_name(info.api);
         let mut solver = Self {
             engine,
             name,
@@ -546,7 +541,10 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 // before the first dispatch; wgpu: a queue write), not a submission of
                 // their own.
                 self.engine.record_write(params, bytemuck::bytes_of(&self.sp))?;
-                self.engine.record_write(params_storage, bytemuck::bytes_of(&self.sp))?;
+                // The storage copy only for a recipe that reads it (kernel checks write both).
+                if self.variant.constants == Constants::Storage {
+                    self.engine.record_write(params_storage, bytemuck::bytes_of(&self.sp))?;
+                }
                 let mut written = res::PARAMS;
                 if stats {
                     self.engine.clear(stats_max);

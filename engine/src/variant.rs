@@ -250,22 +250,29 @@ impl Variant {
         draw: Draw::Shared,
     };
 
-    /// The value of switch `key`.
-    pub fn get(&self, key: &str) -> Option<&'static str> {
-        let k = |a: Accumulate| if a == Accumulate::Scatter { "scatter" } else { "gather" };
+    /// Which value of switch `key` it has: the position in the switch's
+    /// [`Switch::values`] (each enum's variants are declared in that order, the naive one
+    /// first).
+    fn position(&self, key: &str) -> Option<usize> {
         Some(match key {
-            "springs" => k(self.springs),
-            "normals" => k(self.normals),
-            "atomics" => ["float", "cas"][self.atomics as usize],
-            "fusion" => ["none", "thesis", "clothlab"][self.fusion as usize],
-            "submit" => ["substep", "frame"][self.submit as usize],
-            "constants" => ["storage", "uniform", "push"][self.constants as usize],
-            "table" => ["storage", "image", "uniform"][self.table as usize],
-            "colliders" => ["storage", "uniform"][self.colliders as usize],
-            "neighbours" => ["load", "shuffle"][self.neighbours as usize],
-            "draw" => ["copy", "shared"][self.draw as usize],
+            "springs" => self.springs as usize,
+            "normals" => self.normals as usize,
+            "atomics" => self.atomics as usize,
+            "fusion" => self.fusion as usize,
+            "submit" => self.submit as usize,
+            "constants" => self.constants as usize,
+            "table" => self.table as usize,
+            "colliders" => self.colliders as usize,
+            "neighbours" => self.neighbours as usize,
+            "draw" => self.draw as usize,
             _ => return None,
         })
+    }
+
+    /// The value of switch `key`.
+    pub fn get(&self, key: &str) -> Option<&'static str> {
+        let i = self.position(key)?;
+        SWITCHES.iter().find(|s| s.key == key).and_then(|s| s.values.get(i).copied())
     }
 
     /// Sets switch `key` to `value`; an unknown key or value is refused in one line
@@ -309,6 +316,16 @@ impl Variant {
     /// Every switch as `key=value`, comma-separated.
     pub fn switches(&self) -> String {
         SWITCHES.iter().map(|s| format!("{}={}", s.key, self.get(s.key).unwrap_or("?"))).collect::<Vec<_>>().join(",")
+    }
+
+    /// The name of a solver of this variant: `prefix` alone for the optimized preset
+    /// (`wgpu`, `vulkan`: the backends' names), else `<prefix>-<label>`
+    /// (`vulkan-naive`, `wgpu-thesis+table=storage`).
+    pub fn solver_name(&self, prefix: &str) -> String {
+        match self.label().as_str() {
+            "optimized" => prefix.to_string(),
+            label => format!("{prefix}-{label}"),
+        }
     }
 
     /// A short name: the preset it is, or the closest preset plus the switches that

@@ -32,8 +32,6 @@ pub struct LadderCell {
     pub dispatches: usize,
     /// Compulsory bytes per substep (`clothlab_engine::kernels::compulsory_bytes`).
     pub bytes: u64,
-    /// Queue submissions per frame.
-    pub submissions: u32,
 }
 
 /// The thesis's own figure for its optimized CUDA port against the direct one
@@ -217,9 +215,9 @@ pub fn report(r: &Results) -> String {
 mod tests {
     use super::*;
     use crate::bench::Cell;
-    use crate::bench::output::Inputs;
-    use clothlab_core::timing::{OverheadPlan, OverheadRow, overhead};
-    use clothlab_core::{SimParams, TimingRow};
+    use crate::bench::output::test_results as results;
+    use clothlab_core::TimingRow;
+    use clothlab_core::timing::{OverheadRow, overhead};
 
     fn t(label: &str, ns: f64) -> TimingRow {
         TimingRow { label: label.into(), samples: 8, median_ns: ns, min_ns: ns, max_ns: ns }
@@ -249,32 +247,7 @@ mod tests {
             skipped: None,
             dispatches,
             bytes,
-            submissions: 1,
         }
-    }
-
-    fn results(
-        cells: Vec<Cell>,
-        overhead: Vec<(String, String, Vec<OverheadRow>)>,
-        ladder: Vec<LadderCell>,
-    ) -> Results {
-        Results::new(Inputs {
-            machine: "test".into(),
-            wgpu_adapter: None,
-            vulkan_adapter: Some("test".into()),
-            params: SimParams::default(),
-            frames: 8,
-            warmup_frames: 3,
-            resolution: (64, 64),
-            plan: OverheadPlan::default(),
-            cells,
-            overhead,
-            skipped: vec![],
-            notes: vec![],
-            seconds: 1.0,
-            command: "test".into(),
-            ladder,
-        })
     }
 
     #[test]

@@ -26,7 +26,7 @@ use crate::cli::{BenchArgs, Mode};
 use crate::solvers::{AnySolver, Api, Backend, GpuSetup, Shared, make, vulkan_validation};
 use clothlab_engine::kernels::compulsory_bytes;
 use clothlab_engine::recipe::{dispatches, recipe};
-use clothlab_engine::variant::{Submit, Table, Variant, ladder as ladder_rungs};
+use clothlab_engine::variant::{Table, Variant, ladder as ladder_rungs};
 use ladder::LadderCell;
 
 /// Unmeasured frames at the start of every cell (pipelines, caches, clocks, the cloth's
@@ -257,23 +257,17 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
             bail!("--ladder climbs the GPU backends' variants: name at least one GPU backend in --backends");
         }
     } else {
+        let asked = args.variant.variant.is_some() || !args.variant.set_variant.is_empty();
+        if asked && backends.iter().all(|b| b.api().is_none()) {
+            bail!("--variant and --set-variant apply to the GPU backends: name one in --backends");
+        }
         for &backend in &backends {
-            let variant = match args.variant.spec(backend) {
-                Ok(v) => v,
-                // The CPU backends run their own step whatever the variant.
-                Err(_) if backend.api().is_none() => None,
-                Err(e) => return Err(e),
-            };
-            let variant = match variant {
+            // The CPU backends run their own step whatever the variant; a GPU backend's
+            // is resolved on its adapter now (a switch it lacks is refused before any cell).
+            let variant = match backend.api().and(args.variant.spec(backend).transpose()) {
                 Some(spec) => {
-                    let probe = make(
-                        backend,
-                        Scene::with_n(4),
-                        params.clone(),
-                        &GpuSetup { variant: Some(spec), ..GpuSetup::default() },
-                        &Shared::None,
-                    )?;
-                    probe.variant()
+                    let setup = GpuSetup { variant: Some(spec?), ..GpuSetup::default() };
+                    make(backend, Scene::with_n(4), params.clone(), &setup, &Shared::None)?.variant()
                 }
                 None => None,
             };
@@ -419,13 +413,7 @@ impl Job {
     /// The name its cells get: the solver's (`vulkan-naive+submit=frame`), or the backend's.
     fn label(&self) -> String {
         match (self.variant, self.backend.api()) {
-            (Some(v), Some(api)) => {
-                let api = if api == Api::Wgpu { "wgpu" } else { "vulkan" };
-                match v.label().as_str() {
-                    "optimized" => api.to_string(),
-                    l => format!("{api}-{l}"),
-                }
-            }
+            (Some(v), Some(api)) => v.solver_name(if api == Api::Wgpu { "wgpu" } else { "vulkan" }),
             _ => self.backend.name().to_string(),
         }
     }
@@ -454,7 +442,6 @@ impl Job {
             skipped,
             dispatches: dispatches(&commands).count(),
             bytes: dispatches(&commands).map(|k| compulsory_bytes(k, &topo, uniform)).sum(),
-            submissions: if v.submit == Submit::Frame { 1 } else { params.substeps },
         })
     }
 }

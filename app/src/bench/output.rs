@@ -662,6 +662,32 @@ pub fn write_report(results: &Results, dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
+/// The results of a made-up run (the report's tests): 10 frames of 16 substeps per cell.
+#[cfg(test)]
+pub(crate) fn test_results(
+    cells: Vec<Cell>,
+    overhead: Vec<(String, String, Vec<OverheadRow>)>,
+    ladder: Vec<LadderCell>,
+) -> Results {
+    Results::new(Inputs {
+        machine: "test machine".into(),
+        wgpu_adapter: None,
+        vulkan_adapter: None,
+        params: SimParams::default(),
+        frames: 10,
+        warmup_frames: 3,
+        resolution: (64, 64),
+        plan: OverheadPlan::default(),
+        cells,
+        overhead,
+        skipped: vec![],
+        notes: vec![],
+        seconds: 1.0,
+        command: "test".into(),
+        ladder,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -689,23 +715,7 @@ mod tests {
     }
 
     fn results(cells: Vec<Cell>, overhead: Vec<(String, String, Vec<OverheadRow>)>) -> Results {
-        Results::new(Inputs {
-            machine: "test machine".into(),
-            wgpu_adapter: None,
-            vulkan_adapter: None,
-            params: SimParams::default(),
-            frames: 10,
-            warmup_frames: 3,
-            resolution: (64, 64),
-            plan: OverheadPlan::default(),
-            cells,
-            overhead,
-            skipped: vec![],
-            notes: vec![],
-            seconds: 1.0,
-            command: "test".into(),
-            ladder: vec![],
-        })
+        test_results(cells, overhead, vec![])
     }
 
     #[test]

@@ -158,12 +158,7 @@ impl Figure for Kernels<'_> {
                 .disable_y_mesh()
                 .x_label_formatter(&|v| sig3(*v))
                 .y_labels(k as usize)
-                .y_label_formatter(&|v| match v {
-                    SegmentValue::CenterOf(i) | SegmentValue::Exact(i) => {
-                        names.get((k - 1 - *i) as usize).cloned().unwrap_or_default()
-                    }
-                    SegmentValue::Last => String::new(),
-                })
+                .y_label_formatter(&|v| row_name(&names, v))
                 .label_style((FONT, 13))
                 .draw()
                 .map_err(err)?;
@@ -348,12 +343,7 @@ impl Figure for Waterfall<'_> {
             .x_desc("ms per substep")
             .x_label_formatter(&|v| sig3(*v))
             .y_labels(k as usize)
-            .y_label_formatter(&|v| match v {
-                SegmentValue::CenterOf(i) | SegmentValue::Exact(i) => {
-                    names.get((k - 1 - *i) as usize).cloned().unwrap_or_default()
-                }
-                SegmentValue::Last => String::new(),
-            })
+            .y_label_formatter(&|v| row_name(&names, v))
             .label_style((FONT, 14))
             .axis_desc_style((FONT, 14))
             .draw()
@@ -380,6 +370,18 @@ impl Figure for Waterfall<'_> {
             }))
             .map_err(err)?;
         Ok(())
+    }
+}
+
+/// The name of the horizontal bar at segment `v` of a chart listing `names` top down.
+fn row_name(names: &[String], v: &SegmentValue<i32>) -> String {
+    match v {
+        SegmentValue::CenterOf(i) | SegmentValue::Exact(i) => usize::try_from(*i)
+            .ok()
+            .and_then(|i| names.len().checked_sub(1 + i))
+            .and_then(|j| names.get(j).cloned())
+            .unwrap_or_default(),
+        SegmentValue::Last => String::new(),
     }
 }
 
