@@ -88,6 +88,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     pub api: Option<Api>,
     #[command(flatten)]
+    pub physics: PhysicsArgs,
+    #[command(flatten)]
     pub variant: VariantArgs,
 }
 
@@ -115,6 +117,8 @@ pub struct ValidateArgs {
     /// the other atomics, per GPU API.
     #[arg(long, conflicts_with = "bisect")]
     pub every_switch: bool,
+    #[command(flatten)]
+    pub physics: PhysicsArgs,
     #[command(flatten)]
     pub variant: VariantArgs,
 }
@@ -149,6 +153,8 @@ pub struct RunArgs {
     /// Test hook: halfway through `--frames`, switch to the other graphics API.
     #[arg(long, hide = true)]
     pub switch_api: bool,
+    #[command(flatten)]
+    pub physics: PhysicsArgs,
 }
 
 impl Default for RunArgs {
@@ -163,6 +169,7 @@ impl Default for RunArgs {
             height: 800,
             drag_test: false,
             switch_api: false,
+            physics: PhysicsArgs::default(),
         }
     }
 }
@@ -178,15 +185,35 @@ pub struct SimArgs {
     /// Substeps to simulate (rounded up to whole frames of `substeps` each).
     #[arg(long, default_value_t = 1000)]
     pub steps: u64,
-    /// Override a simulation parameter, e.g. `--set damping=0.001 --set wind=[2,0,1]`
-    /// (names as in `SimParams`; see docs/parameters.md).
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub set: Vec<String>,
+    #[command(flatten)]
+    pub physics: PhysicsArgs,
     /// Write the final state: `.obj` (mesh with normals and uvs) or `.json` (full state).
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
     pub gpu: GpuArgs,
+}
+
+/// The simulation parameters every command that simulates takes.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct PhysicsArgs {
+    /// How a substep integrates: verlet (the thesis's, default), euler, symplectic-euler,
+    /// rk2, rk4, implicit (backward Euler, one Newton step by conjugate gradients) or
+    /// xpbd. Explicit ones refuse springs they cannot integrate, naming the substeps.
+    #[arg(long, value_parser = parse_integrator)]
+    pub integrator: Option<clothlab_core::Integrator>,
+    /// Override a simulation parameter, e.g. `--set damping=0.001 --set wind=[2,0,1]`
+    /// (names as in `SimParams`; see docs/parameters.md).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+}
+
+/// `--integrator`'s value, by its name.
+fn parse_integrator(s: &str) -> Result<clothlab_core::Integrator, String> {
+    clothlab_core::Integrator::parse(s).ok_or_else(|| {
+        let names: Vec<&str> = clothlab_core::Integrator::ALL.iter().map(|i| i.name()).collect();
+        format!("unknown integrator `{s}` (known: {})", names.join(", "))
+    })
 }
 
 /// What `--set-variant` takes (kept in step with `clothlab_engine::variant::SWITCHES` by a
@@ -300,7 +327,7 @@ pub struct BenchArgs {
     pub backends: Vec<Backend>,
     /// Grid sizes, particles per side (comma-separated, 2 ..= 4096). Sizes a backend would
     /// take longer than `--cell-budget` for are skipped for that backend.
-    #[arg(long, value_delimiter = ',', default_values_t = [100, 200, 300, 400, 500, 1024, 2048])]
+    #[arg(long, value_delimiter = ',', default_values_t = BenchArgs::default_sizes())]
     pub sizes: Vec<u32>,
     /// Substeps measured per kernel at each size (the thesis: 1000 iterations); rounded up
     /// to whole frames. The frame table gets as many frames again.
@@ -326,6 +353,14 @@ pub struct BenchArgs {
     /// report adds a table and a waterfall plot per API and size.
     #[arg(long)]
     pub ladder: bool,
+    /// Measure the integrators instead: work against precision for each (the cost per
+    /// simulated second against the error from a reference run) on each backend, at
+    /// --sizes (64 and 128 unless given; the backends cpu-par, wgpu and vulkan unless
+    /// given). Writes integrators.{md,csv} and a plot per size.
+    #[arg(long, conflicts_with = "ladder")]
+    pub integrators: bool,
+    #[command(flatten)]
+    pub physics: PhysicsArgs,
     #[command(flatten)]
     pub variant: VariantArgs,
     /// Skip the API-overhead micro-benchmarks.
@@ -338,6 +373,13 @@ pub struct BenchArgs {
     /// write report.md and the plots again.
     #[arg(long)]
     pub replot: bool,
+}
+
+impl BenchArgs {
+    /// `--sizes` when not given.
+    pub fn default_sizes() -> Vec<u32> {
+        vec![100, 200, 300, 400, 500, 1024, 2048]
+    }
 }
 
 fn parse_resolution(s: &str) -> Result<(u32, u32), String> {

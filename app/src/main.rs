@@ -6,6 +6,7 @@ mod bench;
 mod cli;
 mod commands;
 mod gui;
+mod overrides;
 mod solvers;
 
 use std::process::ExitCode;

@@ -85,11 +85,23 @@ pub enum Buf {
     BoxesUniform = 22,
     /// The step constants in a storage buffer (`constants=storage`).
     ParamsStorage = 23,
+    /// Integrator scratch 0 (RK: x₀; implicit: Δu). See `core::cpu::integrators`.
+    Aux0 = 24,
+    /// Integrator scratch 1 (RK: u₀; implicit: r, w the preconditioner's diagonal).
+    Aux1 = 25,
+    /// Integrator scratch 2 (RK: Σ bₛuₛ; implicit: p).
+    Aux2 = 26,
+    /// Integrator scratch 3 (RK: Σ bₛgₛ; implicit: q = A p).
+    Aux3 = 27,
+    /// Integrator scratch 4 (RK: the substep's wind force).
+    Aux4 = 28,
+    /// The conjugate-gradient scalars `r·z`, `p·q`, `α`, `β` (one `vec4<f32>`).
+    Scalars = 29,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 24] = [
+    pub const ALL: [Buf; 30] = [
         Buf::Params,
         Buf::Pos,
         Buf::Prev,
@@ -114,7 +126,16 @@ impl Buf {
         Buf::SpheresUniform,
         Buf::BoxesUniform,
         Buf::ParamsStorage,
+        Buf::Aux0,
+        Buf::Aux1,
+        Buf::Aux2,
+        Buf::Aux3,
+        Buf::Aux4,
+        Buf::Scalars,
     ];
+
+    /// The integrators' scratch particle buffers, in order.
+    pub const AUX: [Buf; 5] = [Buf::Aux0, Buf::Aux1, Buf::Aux2, Buf::Aux3, Buf::Aux4];
 
     /// The `@binding` number.
     pub const fn binding(self) -> u32 {
@@ -162,6 +183,12 @@ impl Buf {
             Buf::SpheresUniform => "spheres_uniform",
             Buf::BoxesUniform => "boxes_uniform",
             Buf::ParamsStorage => "params_storage",
+            Buf::Aux0 => "aux0",
+            Buf::Aux1 => "aux1",
+            Buf::Aux2 => "aux2",
+            Buf::Aux3 => "aux3",
+            Buf::Aux4 => "aux4",
+            Buf::Scalars => "scalars",
         }
     }
 

@@ -22,7 +22,7 @@ pub mod validate;
 pub use camera::OrbitCamera;
 pub use cpu::{CpuSolver, Exec};
 pub use grid::{ClothState, ClothTopology, Grab, Spring, SpringKind, SpringSlot, StepParams, build};
-pub use params::{ParamError, SimParams, StiffnessUnits};
+pub use params::{Integrator, ParamError, SimParams, StiffnessUnits};
 pub use scene::{Aabb, ClothSpec, Pinning, Scene, Sphere};
 pub use solver::{RenderError, RenderMode, Renderer, Solver, SolverError, View};
 pub use timing::{KernelId, KernelTimings, TimingRecorder, TimingRow};

@@ -56,6 +56,98 @@ pub enum StiffnessUnits {
     Physical,
 }
 
+/// How a substep advances the particles (thesis §4.1.1–4.1.2). Every integrator but
+/// Verlet keeps the velocity in the same two buffers Verlet uses: `prev = x − v·dt`, so
+/// the force kernels (which read `x − prev` as `v·dt`) serve all of them unchanged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Integrator {
+    /// Position Verlet `x' = x + (1 − damping)(x − x*) + a dt²` (the thesis's program).
+    #[default]
+    Verlet,
+    /// Explicit (forward) Euler: `x' = x + v dt`, `v' = v + a dt`. Order 1, unstable for
+    /// any undamped oscillation: refused where the springs' damping cannot hold it.
+    Euler,
+    /// Symplectic (semi-implicit) Euler: `v' = v + a dt`, `x' = x + v' dt`. Order 1. In the
+    /// `(x, x − v·dt)` state it is Verlet's recurrence step for step (Verlet's kernels run
+    /// it); it differs in reading `prev` as `x − v·dt` where Verlet reads `x(t − dt)`.
+    SymplecticEuler,
+    /// The midpoint method (RK2): two force evaluations per substep. Order 2.
+    Rk2,
+    /// Classical Runge–Kutta (RK4): four force evaluations per substep. Order 4.
+    Rk4,
+    /// Backward Euler with one Newton step (Baraff & Witkin 1998): `(M + dt D + dt² K) Δv
+    /// = dt (f + dt ∂f/∂x v)`, solved by Jacobi-preconditioned conjugate gradients
+    /// (`cg_iterations`). Order 1, stable at any dt.
+    Implicit,
+    /// Extended position-based dynamics (Macklin, Müller & Chentanez 2016) with small
+    /// steps (one pass per substep, λ not kept): every spring a distance constraint of
+    /// compliance `1/k`, solved by Jacobi with averaging. Stable at any dt.
+    Xpbd,
+}
+
+impl Integrator {
+    /// Every integrator, in the order the app lists them.
+    pub const ALL: [Integrator; 7] = [
+        Integrator::Verlet,
+        Integrator::Euler,
+        Integrator::SymplecticEuler,
+        Integrator::Rk2,
+        Integrator::Rk4,
+        Integrator::Implicit,
+        Integrator::Xpbd,
+    ];
+
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Verlet => "verlet",
+            Integrator::Euler => "euler",
+            Integrator::SymplecticEuler => "symplectic-euler",
+            Integrator::Rk2 => "rk2",
+            Integrator::Rk4 => "rk4",
+            Integrator::Implicit => "implicit",
+            Integrator::Xpbd => "xpbd",
+        }
+    }
+
+    /// The integrator named `s`.
+    pub fn parse(s: &str) -> Option<Integrator> {
+        Self::ALL.into_iter().find(|i| i.name() == s)
+    }
+
+    /// Whether it is explicit (bounded by a stability limit on dt).
+    pub fn explicit(self) -> bool {
+        !matches!(self, Integrator::Implicit | Integrator::Xpbd)
+    }
+
+    /// Whether `|amplification| ≤ 1` for the mode `s` (an eigenvalue of the linearised
+    /// system, 1/s) at step `dt` with the per-substep velocity factor `keep = 1 − damping`.
+    fn stable_mode(self, s: (f64, f64), dt: f64, keep: f64) -> bool {
+        // z = s dt as a complex number; R(z) the method's amplification.
+        let z = (s.0 * dt, s.1 * dt);
+        let mul = |a: (f64, f64), b: (f64, f64)| (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
+        let taylor = |order: usize| {
+            // 1 + z + z²/2 + … + z^order/order!
+            let (mut sum, mut term) = ((1.0, 0.0), (1.0, 0.0));
+            for k in 1..=order {
+                term = mul(term, z);
+                term = (term.0 / k as f64, term.1 / k as f64);
+                sum = (sum.0 + term.0, sum.1 + term.1);
+            }
+            sum
+        };
+        let r = match self {
+            Integrator::Euler => taylor(1),
+            Integrator::Rk2 => taylor(2),
+            Integrator::Rk4 => taylor(4),
+            // Verlet and symplectic Euler: the classical bound of `validate_for`.
+            _ => return true,
+        };
+        (r.0 * r.0 + r.1 * r.1).sqrt() * keep <= 1.0 + 1e-9
+    }
+}
+
 /// Every simulation parameter. Plain data: change fields, then call [`SimParams::validate`]
 /// before handing it to a solver (solvers validate again and refuse bad values).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -116,6 +208,11 @@ pub struct SimParams {
     /// Wind pressure coefficient, kg/(m²·s): a triangle of area A and unit normal n̂ feels
     /// `wind_coefficient · A · (n̂·w) n̂`, shared by its three corners. Default 0.5.
     pub wind_coefficient: f32,
+    /// How a substep integrates. Default [`Integrator::Verlet`].
+    pub integrator: Integrator,
+    /// `integrator = implicit`: conjugate-gradient iterations per substep, 1 ..= 256.
+    /// Default 16.
+    pub cg_iterations: u32,
 }
 
 impl Default for SimParams {
@@ -143,12 +240,20 @@ impl Default for SimParams {
             stretch_modulus: 50.6,
             shear_modulus: 16.9,
             bend_modulus: 5.67e-3,
+            integrator: Integrator::Verlet,
+            cg_iterations: 16,
         }
     }
 }
 
 /// Upper bound on substeps per frame (a frame of more would never be interactive).
 pub const MAX_SUBSTEPS: u32 = 1024;
+/// The distance from the origin within which clothlab's scenes lie, m: the f32 positions
+/// there are resolved to `ulp(4 m)` = 4.8e-7 m.
+pub const POSITION_SCALE: f32 = 4.0;
+
+/// Upper bound on conjugate-gradient iterations per implicit substep.
+pub const MAX_CG_ITERATIONS: u32 = 256;
 /// Upper bound on strain-limit passes per substep.
 pub const MAX_STRAIN_ITERATIONS: u32 = 64;
 
@@ -188,13 +293,19 @@ impl SimParams {
         })
     }
 
-    /// [`SimParams::validate`], and for physical stiffness whether Verlet can integrate it
-    /// on an `n × n` cloth of spacing `spacing`: the springs' fraction of the stability
-    /// limit `Σk·dt²/m` must stay under 0.95 and the damping's `Σc·dt/m` under 0.5, the
-    /// bounds the fraction mode enforces; a refusal names the substeps that would do.
+    /// [`SimParams::validate`], and whether the integrator can integrate the springs of
+    /// an `n × n` cloth of spacing `spacing` at this dt. Verlet and symplectic Euler: the
+    /// springs' fraction of the stability limit `Σk·dt²/m` must stay under 0.95 and the
+    /// damping's `Σc·dt/m` under 0.5 (the bounds the fraction mode enforces). Euler, RK2
+    /// and RK4: every mode of the grid, `s² + (μ·4Σc/m + drag)s + μ·4Σk/m = 0` for
+    /// μ ∈ (0, 1], must have an amplification of at most 1. `implicit` and `xpbd` are
+    /// stable at any dt. A refusal names the substeps that would do.
     pub fn validate_for(&self, n: u32, spacing: f32) -> Result<(), ParamError> {
         self.validate()?;
-        if self.stiffness_units == StiffnessUnits::Fraction {
+        self.resolvable()?;
+        let explicit = self.integrator.explicit();
+        let classical = matches!(self.integrator, Integrator::Verlet | Integrator::SymplecticEuler);
+        if !explicit || (classical && self.stiffness_units == StiffnessUnits::Fraction) {
             return Ok(());
         }
         let m = self.particle_mass(n);
@@ -202,20 +313,112 @@ impl SimParams {
         let k: f32 = consts.iter().map(|c| c.0).sum();
         let c: f32 = consts.iter().map(|c| c.1).sum();
         let dt = self.dt();
-        // Largest stable dt: k dt²/m < 0.95 and c dt/m < 0.5.
-        let dt_max = (0.95 * m / k.max(1e-30)).sqrt().min(0.5 * m / c.max(1e-30));
+        let name = self.integrator.name();
+        let dt_max = if classical {
+            // Largest stable dt: k dt²/m < 0.95 and c dt/m < 0.5.
+            (0.95 * m / k.max(1e-30)).sqrt().min(0.5 * m / c.max(1e-30))
+        } else {
+            let stable = |dt: f64| self.modes_stable(dt, m, k, c);
+            if stable(dt as f64) {
+                return Ok(());
+            }
+            if self.stiffness_units == StiffnessUnits::Fraction {
+                // k = κ m/dt², c = ζ m/dt: every dt gives the same modes in units of dt.
+                return Err(ParamError::new(
+                    "integrator",
+                    name,
+                    format!(
+                        "{name} cannot integrate springs given as fractions of the stability limit (Σκ = {:.2}, Σζ = {:.2}): some mode grows at every dt — use verlet, symplectic-euler, rk4, implicit or xpbd, much softer springs (Euler needs Σζ > Σκ), or stiffness_units = physical",
+                        self.structural_stiffness + self.shear_stiffness + self.bend_stiffness,
+                        self.structural_damping + self.shear_damping + self.bend_damping
+                    ),
+                ));
+            }
+            // Bisection for the largest stable dt below this one.
+            let (mut lo, mut hi) = (0.0f64, dt as f64);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if stable(mid) { lo = mid } else { hi = mid }
+            }
+            lo as f32
+        };
         if dt >= dt_max {
-            let need = (self.frame_dt / dt_max).floor() as u64 + 1;
+            let need = (self.frame_dt as f64 / dt_max.max(1e-30) as f64).floor() as u64 + 1;
+            let units = match self.stiffness_units {
+                StiffnessUnits::Fraction => "fraction",
+                StiffnessUnits::Physical => "physical",
+            };
+            let most = self.most_resolvable_substeps();
+            let fix = if most.is_some_and(|m| m < need) {
+                format!(
+                    "and beyond {} substeps per frame f32 positions no longer resolve the motion: use integrator = implicit or xpbd, a coarser grid, or softer moduli",
+                    most.unwrap_or(0)
+                )
+            } else {
+                format!(
+                    "use substeps ≥ {need} (at frame_dt {}), a coarser grid, softer moduli, or integrator = implicit or xpbd",
+                    self.frame_dt
+                )
+            };
             return Err(ParamError::new(
                 "substeps",
                 self.substeps,
                 format!(
-                    "stiffness_units = physical at n = {n}: particles of {m:.3e} kg held by springs of Σk = {k:.1} N/m are stable with Verlet only for dt < {dt_max:.3e} s; this dt is {dt:.3e} s — use substeps ≥ {need} (at frame_dt {}), a coarser grid, or softer moduli",
+                    "stiffness_units = {units} at n = {n}: particles of {m:.3e} kg held by springs of Σk = {k:.1} N/m are stable with {name} only for dt < {dt_max:.3e} s; this dt is {dt:.3e} s — {fix}"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Refuses a dt at which a particle falling from rest moves less in a substep than f32
+    /// resolves at [`POSITION_SCALE`]: every integrator keeps the velocity as the
+    /// difference `x − prev` of two f32 positions, so `|g|·dt²` under one ulp is lost
+    /// (the cloth hangs in mid-air) and a few ulps quantise the weight. The refusal names
+    /// the most substeps per frame that still resolve the motion.
+    pub fn resolvable(&self) -> Result<(), ParamError> {
+        let g = self.gravity.iter().map(|v| v * v).sum::<f32>().sqrt();
+        let ulp = POSITION_SCALE * f32::EPSILON;
+        let dt = self.dt();
+        if g > 0.0 && g * dt * dt < ulp {
+            let most = self.most_resolvable_substeps().unwrap_or(0);
+            return Err(ParamError::new(
+                "substeps",
+                self.substeps,
+                format!(
+                    "at dt = {dt:.2e} s a particle falling from rest moves {:.1e} m per substep, under the {ulp:.1e} m an f32 position resolves at {POSITION_SCALE} m: the velocity (kept as x − prev) would be lost — use substeps ≤ {most} at frame_dt {} (with stiff physical springs, integrator = implicit or xpbd)",
+                    g * dt * dt,
                     self.frame_dt
                 ),
             ));
         }
         Ok(())
+    }
+
+    /// The most substeps per frame at which [`SimParams::resolvable`] passes (`None`: no
+    /// gravity, no limit).
+    pub fn most_resolvable_substeps(&self) -> Option<u64> {
+        let g = self.gravity.iter().map(|v| v * v).sum::<f32>().sqrt();
+        (g > 0.0).then(|| (self.frame_dt / (POSITION_SCALE * f32::EPSILON / g).sqrt()).floor() as u64)
+    }
+
+    /// Whether every mode of the grid is stable with the integrator at step `dt` (see
+    /// [`SimParams::validate_for`]): particles of mass `m` held by springs of total
+    /// stiffness `k` and damping `c`.
+    fn modes_stable(&self, dt: f64, m: f32, k: f32, c: f32) -> bool {
+        let (a, b, drag) = (4.0 * k as f64 / m as f64, 4.0 * c as f64 / m as f64, self.air_drag as f64);
+        let keep = 1.0 - self.damping as f64;
+        (1..=256).all(|q| {
+            let mu = q as f64 / 256.0;
+            let (bb, aa) = (mu * b + drag, mu * a);
+            let disc = bb * bb - 4.0 * aa;
+            let roots = if disc >= 0.0 {
+                [(0.5 * (-bb + disc.sqrt()), 0.0), (0.5 * (-bb - disc.sqrt()), 0.0)]
+            } else {
+                [(-0.5 * bb, 0.5 * (-disc).sqrt()), (-0.5 * bb, -0.5 * (-disc).sqrt())]
+            };
+            roots.iter().all(|&s| self.integrator.stable_mode(s, dt, keep))
+        })
     }
 
     /// Checks every field; the first bad one is reported. Nothing that passes can make a
@@ -274,6 +477,13 @@ impl SimParams {
         finite_in("stretch_modulus", self.stretch_modulus, 0.0, 1e9)?;
         finite_in("shear_modulus", self.shear_modulus, 0.0, 1e9)?;
         finite_in("bend_modulus", self.bend_modulus, 0.0, 1e6)?;
+        if self.cg_iterations == 0 || self.cg_iterations > MAX_CG_ITERATIONS {
+            return Err(ParamError::new(
+                "cg_iterations",
+                self.cg_iterations,
+                format!("must be in 1 ..= {MAX_CG_ITERATIONS}"),
+            ));
+        }
         Ok(())
     }
 }
@@ -316,14 +526,28 @@ mod tests {
             assert!((q[k].0 / f[k].0 - 1.0).abs() < 0.01, "{k}: {q:?} vs {f:?}");
         }
         assert_eq!(p.validate_for(64, h(64)), Ok(()));
+        // At n = 128, Verlet needs 30 substeps per frame (dt < 5.7e-4 s): it names them,
+        // and that many pass.
+        let need = |e: ParamError| -> u32 {
+            e.reason.split("substeps ≥ ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap()
+        };
+        let e = p.validate_for(128, h(128)).unwrap_err();
+        let k = need(e.clone());
+        assert!((25..35).contains(&k), "{e}");
+        assert_eq!(SimParams { substeps: k, ..p.clone() }.validate_for(128, h(128)), Ok(()));
+        assert!(SimParams { substeps: k - 1, ..p.clone() }.validate_for(128, h(128)).is_err());
         // At n = 512 the bend springs (k = B/h² ≈ 370 N/m, Σk ≈ 438 N/m) on particles of
-        // 1.9e-6 kg need dt < 6.4e-5 s: 16 substeps are refused, naming how many would do
-        // (260 at frame_dt 1/60).
+        // 1.9e-6 kg need dt < 6.4e-5 s (260 substeps), but a particle falling from rest
+        // moves g·dt² = 4e-8 m per substep there, under an f32 ulp at 4 m (4.8e-7 m): no
+        // substep count does, and the refusal says so and names implicit and XPBD.
         let e = p.validate_for(512, h(512)).unwrap_err();
-        let need: u32 = e.reason.split("substeps ≥ ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
-        assert!((200..300).contains(&need), "{e}");
-        assert_eq!(SimParams { substeps: need, ..p.clone() }.validate_for(512, h(512)), Ok(()));
-        assert!(SimParams { substeps: need - 1, ..p }.validate_for(512, h(512)).is_err());
+        assert!(e.reason.contains("no longer resolve") && e.reason.contains("implicit"), "{e}");
+        let most = p.most_resolvable_substeps().unwrap();
+        assert_eq!(most, 75, "sqrt(4.8e-7 / 9.81) = 2.2e-4 s: 75 substeps per 1/60 s");
+        assert!(SimParams { substeps: 76, ..p.clone() }.resolvable().is_err());
+        assert_eq!(SimParams { substeps: 75, ..p.clone() }.resolvable(), Ok(()));
+        let implicit = SimParams { integrator: Integrator::Implicit, ..p };
+        assert_eq!(implicit.validate_for(512, h(512)), Ok(()));
     }
 
     #[test]

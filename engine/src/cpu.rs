@@ -14,7 +14,7 @@ use clothlab_core::{SimParams, Solver, SolverError};
 
 use crate::kernels::{HostBuffers, KernelRef, TwinArgs};
 use crate::recipe::KernelRunner;
-use crate::recipe::{Command, Variant, kernels_of, recipe};
+use crate::recipe::{Command, Integration, Variant, kernels_of, recipe};
 
 /// Runs commands through the twins.
 #[derive(Debug, Clone)]
@@ -130,7 +130,7 @@ impl RecipeSolver {
         let engine = CpuEngine::new(exec, scene, topo);
         let sp = StepParams::new(&params, &engine.scene, None);
         let bufs = start_buffers(exec, &sp, &engine.topo, &state);
-        let commands = recipe(&variant, params.strain_iterations);
+        let commands = recipe(&variant, params.strain_iterations, Integration::of(&params));
         let name = variant.solver_name("cpu-recipe");
         Ok(Self { engine, name, variant, params, grab: None, bufs, commands, timer: TimingRecorder::default() })
     }
@@ -173,7 +173,7 @@ impl Solver for RecipeSolver {
         params.validate_for(self.engine.topo.n, self.engine.topo.spacing)?;
         clothlab_core::grid::rescale_history(&self.bufs.pos, &mut self.bufs.prev, self.params.dt(), params.dt());
         self.engine.set_spring_constants(&params);
-        self.commands = recipe(&self.variant, params.strain_iterations);
+        self.commands = recipe(&self.variant, params.strain_iterations, Integration::of(&params));
         self.params = params;
         Ok(())
     }

@@ -195,6 +195,10 @@ pub struct HostBuffers {
     pub faces: Vec<V4>,
     /// Per-substep statistics ([`Buf::StatsMax`] and [`Buf::StatsEnergy`]), by substep.
     pub stats: Vec<SubstepStats>,
+    /// The integrators' scratch buffers ([`Buf::AUX`]), one element per particle.
+    pub aux: Vec<Vec<V4>>,
+    /// The conjugate-gradient scalars ([`Buf::Scalars`]): one element.
+    pub scalars: Vec<V4>,
 }
 
 impl HostBuffers {
@@ -208,6 +212,8 @@ impl HostBuffers {
             normal: state.normal.clone(),
             faces,
             stats: Vec::new(),
+            aux: vec![vec![[0.0; 4]; state.pos.len()]; Buf::AUX.len()],
+            scalars: vec![[0.0; 4]],
         }
     }
 
@@ -220,7 +226,8 @@ impl HostBuffers {
             Buf::Force => &self.force,
             Buf::Normal => &self.normal,
             Buf::Faces => &self.faces,
-            _ => return None,
+            Buf::Scalars => &self.scalars,
+            b => return Buf::AUX.iter().position(|a| *a == b).map(|k| &self.aux[k]),
         })
     }
 
@@ -233,7 +240,8 @@ impl HostBuffers {
             Buf::Force => &mut self.force,
             Buf::Normal => &mut self.normal,
             Buf::Faces => &mut self.faces,
-            _ => return None,
+            Buf::Scalars => &mut self.scalars,
+            b => return Buf::AUX.iter().position(|a| *a == b).map(|k| &mut self.aux[k]),
         })
     }
 
@@ -248,7 +256,11 @@ impl HostBuffers {
         }
         let np = topo.num_particles();
         let particles = [&self.pos, &self.pos_out, &self.prev, &self.force, &self.normal];
-        if self.faces.len() != topo.triangles.len() || particles.iter().any(|v| v.len() != np) {
+        if self.faces.len() != topo.triangles.len()
+            || particles.into_iter().chain(&self.aux).any(|v| v.len() != np)
+            || self.aux.len() != Buf::AUX.len()
+            || self.scalars.len() != 1
+        {
             return Err(clothlab_core::SolverError::GridMismatch {
                 want: topo.n,
                 got: (self.pos.len() as f64).sqrt() as u32,
@@ -467,6 +479,8 @@ pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool)
     let size = |b: Buf| -> u64 {
         match b {
             Buf::Pos | Buf::PosOut | Buf::Prev | Buf::Force | Buf::Normal => np * 16,
+            Buf::Aux0 | Buf::Aux1 | Buf::Aux2 | Buf::Aux3 | Buf::Aux4 => np * 16,
+            Buf::Scalars => 16,
             Buf::Faces => tris * 16,
             Buf::Triangles => tris * 12,
             Buf::FaceSlots => np * FACE_SLOTS as u64 * 4,
@@ -560,6 +574,92 @@ fn stats(a: &TwinArgs, b: &mut HostBuffers) {
         b.stats.resize(k + 1, SubstepStats { max_strain: 0.0, kinetic_energy: 0.0 });
     }
     b.stats[k] = cpu::substep_stats(a.p, &a.topo.slots, &b.pos, &b.prev);
+}
+
+fn euler(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::euler(a.exec, a.p, &b.force, &mut b.pos, &mut b.prev);
+}
+
+fn rk_begin(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::rk_begin(a.exec, a.p, &b.force, &b.pos, &mut b.prev, &mut b.aux);
+}
+
+fn rk_stage(a: &TwinArgs, b: &mut HostBuffers, st: &cpu::RkStage) {
+    cpu::rk_stage(a.exec, a.p, st, &mut b.force, &mut b.pos, &mut b.prev, &mut b.aux);
+}
+
+fn rk2_1(a: &TwinArgs, b: &mut HostBuffers) {
+    rk_stage(a, b, &cpu::RK2[0]);
+}
+
+fn rk2_2(a: &TwinArgs, b: &mut HostBuffers) {
+    rk_stage(a, b, &cpu::RK2[1]);
+}
+
+fn rk4_1(a: &TwinArgs, b: &mut HostBuffers) {
+    rk_stage(a, b, &cpu::RK4[0]);
+}
+
+fn rk4_2(a: &TwinArgs, b: &mut HostBuffers) {
+    rk_stage(a, b, &cpu::RK4[1]);
+}
+
+fn rk4_3(a: &TwinArgs, b: &mut HostBuffers) {
+    rk_stage(a, b, &cpu::RK4[2]);
+}
+
+fn rk4_4(a: &TwinArgs, b: &mut HostBuffers) {
+    rk_stage(a, b, &cpu::RK4[3]);
+}
+
+fn xpbd(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::xpbd(a.exec, a.p, &a.topo.slots, &b.pos, &b.prev, &mut b.pos_out);
+}
+
+/// Leaves the per-workgroup sums of `terms` in `aux[4]` (the GPU kernels' partials).
+fn store_partials(b: &mut HostBuffers, terms: &[f32]) {
+    for (g, s) in cpu::partial_sums(terms).into_iter().enumerate() {
+        b.aux[4][g] = [s, 0.0, 0.0, 0.0];
+    }
+}
+
+/// The partials' fold (what the reduction kernels compute in one workgroup).
+fn partials_total(a: &TwinArgs, b: &HostBuffers) -> f32 {
+    let groups = (a.topo.num_particles() as u32).div_ceil(WORKGROUP) as usize;
+    cpu::fold(&b.aux[4][..groups].iter().map(|v| v[0]).collect::<Vec<_>>())
+}
+
+fn cg_begin(a: &TwinArgs, b: &mut HostBuffers) {
+    let terms = cpu::cg_begin(a.exec, a.p, &a.topo.slots, &b.force, &b.pos, &b.prev, &mut b.aux);
+    store_partials(b, &terms);
+}
+
+fn cg_matvec(a: &TwinArgs, b: &mut HostBuffers) {
+    let terms = cpu::cg_matvec(a.exec, a.p, &a.topo.slots, &b.pos, &mut b.aux);
+    store_partials(b, &terms);
+}
+
+fn cg_step(a: &TwinArgs, b: &mut HostBuffers) {
+    let terms = cpu::cg_step(a.exec, &b.scalars[0], &mut b.aux);
+    store_partials(b, &terms);
+}
+
+fn cg_reduce_pq(a: &TwinArgs, b: &mut HostBuffers) {
+    let total = partials_total(a, b);
+    cpu::cg_alpha(&mut b.scalars[0], total);
+}
+
+fn cg_reduce_rz(a: &TwinArgs, b: &mut HostBuffers) {
+    let total = partials_total(a, b);
+    cpu::cg_beta(&mut b.scalars[0], total);
+}
+
+fn cg_direction(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::cg_direction(a.exec, &b.scalars[0], &mut b.aux);
+}
+
+fn implicit_finish(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::implicit_finish(a.exec, a.p, &mut b.pos, &mut b.prev, &b.aux);
 }
 
 /// The reduction's work is done by `stats`' twin, which reduces on the spot.
@@ -759,8 +859,102 @@ pub static STATS_REDUCE: KernelDef = KernelDef {
     )
 };
 
+// ---- the integrators other than Verlet (core::cpu::integrators) ----
+
+/// Conjugate gradients: dot products summed per workgroup (in a tree on the GPU, in order
+/// on the CPU) and over 16 iterations; the rollout's bound covers the rest.
+const CG: Check = Check::Bound {
+    relative: 1e-4,
+    reason: "dot products summed in another order (tree per workgroup vs in order), divided into α and β",
+};
+const RK_READS: &[Buf] = &[Params, Pos, Prev, Force, Aux0, Aux1, Aux2, Aux3, Aux4];
+const CG_PARTIALS: &[Buf] = &[Params, Aux4, Scalars];
+
+/// Explicit Euler: `x' = x + u`, `u' = u + f dt²/m`.
+pub static EULER: KernelDef =
+    KernelDef { label: "integrate", ..def("euler", euler, Count::Particles, STATE, &[Pos, Prev]) };
+/// Saves x₀, the damped u₀ and the wind for a Runge–Kutta substep.
+pub static RK_BEGIN: KernelDef = KernelDef {
+    label: "integrate",
+    pure: &[Aux0, Aux1, Aux4],
+    ..def("rk_begin", rk_begin, Count::Particles, STATE, &[Prev, Aux0, Aux1, Aux4])
+};
+/// A stage kernel (every stage's shader has the force write; the last one never runs it).
+const fn rk(name: &'static str, twin: Twin) -> KernelDef {
+    KernelDef { label: "integrate", ..def(name, twin, Count::Particles, RK_READS, &[Pos, Prev, Force, Aux2, Aux3]) }
+}
+/// RK2's first stage (to the midpoint).
+pub static RK2_1: KernelDef = rk("rk2_1", rk2_1);
+/// RK2's second stage (the end of the substep).
+pub static RK2_2: KernelDef = rk("rk2_2", rk2_2);
+/// RK4's first stage.
+pub static RK4_1: KernelDef = rk("rk4_1", rk4_1);
+/// RK4's second stage.
+pub static RK4_2: KernelDef = rk("rk4_2", rk4_2);
+/// RK4's third stage.
+pub static RK4_3: KernelDef = rk("rk4_3", rk4_3);
+/// RK4's fourth stage (the end of the substep).
+pub static RK4_4: KernelDef = rk("rk4_4", rk4_4);
+/// One XPBD pass over every particle's springs, into the other buffer of the pair.
+pub static XPBD: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[PosOut],
+    label: "xpbd",
+    variants: IMM_TEX,
+    ..def("xpbd", xpbd, Count::Particles, &[Params, Pos, Prev, Slots, BendSlots, Table], &[PosOut])
+};
+/// Implicit: r = dt²(f − K u), p = z, Δu = 0, and the partials of r·z.
+pub static CG_BEGIN: KernelDef = KernelDef {
+    check: GATHER,
+    label: "cg",
+    variants: IMM_TEX,
+    ..def(
+        "cg_begin",
+        cg_begin,
+        Count::Particles,
+        &[Params, Pos, Prev, Force, Slots, BendSlots, Table, Aux2],
+        &[Aux0, Aux1, Aux2, Aux4],
+    )
+};
+/// Implicit: q = A p and the partials of p·q.
+pub static CG_MATVEC: KernelDef = KernelDef {
+    check: GATHER,
+    label: "cg",
+    variants: IMM_TEX,
+    ..def("cg_matvec", cg_matvec, Count::Particles, &[Params, Pos, Prev, Slots, BendSlots, Table, Aux2], &[Aux3, Aux4])
+};
+/// Implicit: p·q folded, α = r·z / p·q.
+pub static CG_REDUCE_PQ: KernelDef = KernelDef {
+    check: CG,
+    label: "cg",
+    ..def("cg_reduce_pq", cg_reduce_pq, Count::Workgroup, CG_PARTIALS, &[Scalars])
+};
+/// Implicit: Δu += α p, r −= α q, and the partials of r·z.
+pub static CG_STEP: KernelDef = KernelDef {
+    check: CG,
+    label: "cg",
+    ..def("cg_step", cg_step, Count::Particles, &[Params, Aux0, Aux1, Aux2, Aux3, Scalars], &[Aux0, Aux1, Aux4])
+};
+/// Implicit: r·z folded, β = new / old.
+pub static CG_REDUCE_RZ: KernelDef = KernelDef {
+    check: CG,
+    label: "cg",
+    ..def("cg_reduce_rz", cg_reduce_rz, Count::Workgroup, CG_PARTIALS, &[Scalars])
+};
+/// Implicit: p = z + β p.
+pub static CG_DIRECTION: KernelDef = KernelDef {
+    check: CG,
+    label: "cg",
+    ..def("cg_direction", cg_direction, Count::Particles, &[Params, Aux1, Aux2, Scalars], &[Aux2])
+};
+/// Implicit: u₁ = (1 − damping) u₀ + Δu, x₁ = x₀ + u₁, with pins, grab and floor.
+pub static IMPLICIT_FINISH: KernelDef = KernelDef {
+    label: "integrate",
+    ..def("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Prev, Aux0], &[Pos, Prev])
+};
+
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 16] = [
+pub static ALL: [&KernelDef; 32] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -777,6 +971,22 @@ pub static ALL: [&KernelDef; 16] = [
     &STATS,
     &STATS_ATOMIC,
     &STATS_REDUCE,
+    &EULER,
+    &RK_BEGIN,
+    &RK2_1,
+    &RK2_2,
+    &RK4_1,
+    &RK4_2,
+    &RK4_3,
+    &RK4_4,
+    &XPBD,
+    &CG_BEGIN,
+    &CG_MATVEC,
+    &CG_REDUCE_PQ,
+    &CG_STEP,
+    &CG_REDUCE_RZ,
+    &CG_DIRECTION,
+    &IMPLICIT_FINISH,
 ];
 
 #[cfg(test)]

@@ -4,9 +4,9 @@
 //! the API and how it is driven; barriers follow from the rows' reads and writes
 //! ([`Hazards`]).
 
-use clothlab_core::SolverError;
 use clothlab_core::grid::StepParams;
 use clothlab_core::layout::Buf;
+use clothlab_core::{Integrator, SolverError};
 
 use crate::kernels::{self as k, Flavor, HostBuffers, KernelDef, KernelRef};
 
@@ -68,18 +68,84 @@ pub fn run(kernel: KernelRef) -> Vec<Command> {
     v
 }
 
-/// The commands of one substep for `variant` with `strain_passes` strain passes, each
-/// kernel in the flavor the variant's switches pick (see [`Variant::flavor`]).
-pub fn recipe(variant: &Variant, strain_passes: u32) -> Vec<Command> {
+/// How a recipe integrates: the integrator, and for `implicit` its CG iterations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Integration {
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Conjugate-gradient iterations (`implicit` only).
+    pub cg_iterations: u32,
+}
+
+impl Integration {
+    /// Verlet, the thesis's.
+    pub const VERLET: Integration = Integration { integrator: Integrator::Verlet, cg_iterations: 0 };
+
+    /// What `params` ask for.
+    pub fn of(params: &clothlab_core::SimParams) -> Self {
+        Self { integrator: params.integrator, cg_iterations: params.cg_iterations }
+    }
+}
+
+impl From<Integrator> for Integration {
+    fn from(integrator: Integrator) -> Self {
+        Self { integrator, cg_iterations: clothlab_core::SimParams::default().cg_iterations }
+    }
+}
+
+/// The kernels that integrate one substep with `how`, before the strain limit: the force
+/// evaluations in the variant's form (fused with `fusion=clothlab`, the springs scattered
+/// with `springs=scatter`; the thesis's fusion is Verlet's own) and the integrator's
+/// kernels (core::cpu::integrators).
+fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
     let springs = match variant.springs {
         Accumulate::Scatter => &k::SPRINGS_SCATTER,
         Accumulate::Gather => &k::SPRINGS,
     };
-    let step: Vec<&'static KernelDef> = match variant.fusion {
-        Fusion::None => vec![&k::FORCES, springs, &k::INTEGRATE, &k::COLLIDE],
-        Fusion::Thesis => vec![springs, &k::FORCES_INTEGRATE_COLLIDE],
-        Fusion::Clothlab => vec![&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE],
+    let eval: Vec<&'static KernelDef> = match variant.fusion {
+        Fusion::Clothlab => vec![&k::FORCES_SPRINGS],
+        _ => vec![&k::FORCES, springs],
     };
+    let stages = |kernels: &[&'static KernelDef]| -> Vec<&'static KernelDef> {
+        let mut v = vec![&k::RK_BEGIN];
+        for s in kernels {
+            v.extend(&eval);
+            v.push(s);
+        }
+        v.push(&k::COLLIDE);
+        v
+    };
+    let then = |mut v: Vec<&'static KernelDef>, rest: &[&'static KernelDef]| {
+        v.extend(rest);
+        v
+    };
+    match how.integrator {
+        // In the (x, x − v·dt) state both are one recurrence, x' = x + u + f dt²/m with
+        // prev' = x: Verlet's kernels run both (core::cpu::integrators).
+        Integrator::Verlet | Integrator::SymplecticEuler => match variant.fusion {
+            Fusion::None => vec![&k::FORCES, springs, &k::INTEGRATE, &k::COLLIDE],
+            Fusion::Thesis => vec![springs, &k::FORCES_INTEGRATE_COLLIDE],
+            Fusion::Clothlab => vec![&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE],
+        },
+        Integrator::Euler => then(eval, &[&k::EULER, &k::COLLIDE]),
+        Integrator::Rk2 => stages(&[&k::RK2_1, &k::RK2_2]),
+        Integrator::Rk4 => stages(&[&k::RK4_1, &k::RK4_2, &k::RK4_3, &k::RK4_4]),
+        Integrator::Implicit => {
+            let mut v = then(eval, &[&k::CG_BEGIN, &k::CG_REDUCE_RZ]);
+            for _ in 0..how.cg_iterations {
+                v.extend([&k::CG_MATVEC, &k::CG_REDUCE_PQ, &k::CG_STEP, &k::CG_REDUCE_RZ, &k::CG_DIRECTION]);
+            }
+            then(v, &[&k::IMPLICIT_FINISH, &k::COLLIDE])
+        }
+        Integrator::Xpbd => vec![&k::FORCES, &k::INTEGRATE, &k::XPBD, &k::COLLIDE],
+    }
+}
+
+/// The commands of one substep for `variant` with `strain_passes` strain passes,
+/// integrated by `how`, each kernel in the flavor the variant's switches pick (see
+/// [`Variant::flavor`]).
+pub fn recipe(variant: &Variant, strain_passes: u32, how: impl Into<Integration>) -> Vec<Command> {
+    let step = integration(variant, how.into());
     let normals: [&'static KernelDef; 2] = match variant.normals {
         Accumulate::Scatter => [&k::TRI_NORMALS_SCATTER, &k::VERTEX_NORMALS_NAIVE],
         Accumulate::Gather => [&k::TRI_NORMALS, &k::VERTEX_NORMALS],
@@ -96,7 +162,7 @@ pub fn recipe(variant: &Variant, strain_passes: u32) -> Vec<Command> {
 /// and the plain flavor of every kernel of the step (so that each can be validated). The
 /// statistics kernels are built with their option.
 pub fn kernels_for(variant: &Variant) -> Vec<KernelRef> {
-    let mut v = kernels_of(&recipe(variant, 1));
+    let mut v = kernels_of(&recipe(variant, 1, Integration::VERLET));
     for def in k::ALL.iter().filter(|d| d.immediates == k::Immediates::None) {
         if !v.contains(&def.plain()) {
             v.push(def.plain());
@@ -166,8 +232,12 @@ pub mod res {
     pub const STATS: u32 = 1 << 7;
     /// The statistics' per-workgroup partials.
     pub const PARTIALS: u32 = 1 << 8;
+    /// The integrators' scratch buffers (all five: one bit).
+    pub const AUX: u32 = 1 << 9;
+    /// The conjugate-gradient scalars.
+    pub const SCALARS: u32 = 1 << 10;
     /// Everything.
-    pub const ALL: u32 = (1 << 9) - 1;
+    pub const ALL: u32 = (1 << 11) - 1;
 }
 
 /// The hazard bits of `buf` when the current positions are `pos[cur]`.
@@ -185,6 +255,8 @@ pub fn bits(buf: Buf, cur: usize) -> u32 {
         Buf::Params => PARAMS,
         Buf::StatsMax | Buf::StatsEnergy => STATS,
         Buf::Partials => PARTIALS,
+        Buf::Aux0 | Buf::Aux1 | Buf::Aux2 | Buf::Aux3 | Buf::Aux4 => AUX,
+        Buf::Scalars => SCALARS,
         // Tables: written only between frames, with a full barrier.
         _ => 0,
     }
@@ -273,7 +345,7 @@ mod tests {
     fn every_dependent_dispatch_gets_a_barrier_and_no_other() {
         let count = |r: &[Command]| dispatches(r).count();
         // Optimized: each of its five kernels reads what the one before wrote.
-        let opt = recipe(&Variant::OPTIMIZED, 1);
+        let opt = recipe(&Variant::OPTIMIZED, 1, Integration::VERLET);
         assert_eq!(count(&opt), 5);
         assert_eq!(barriers_per_substep(&opt), count(&opt));
         // Statistics read only the positions: they need no barrier after the normals,
@@ -289,14 +361,14 @@ mod tests {
         assert_eq!(barriers_per_substep(&with_atomics), count(&opt));
         // Naive: every dispatch waits for the one before; the normal clear needs none (the
         // normals were last read several barriers ago), the scatter after it does.
-        let naive = recipe(&Variant::NAIVE, 1);
+        let naive = recipe(&Variant::NAIVE, 1, Integration::VERLET);
         assert!(naive.contains(&Command::Clear(Buf::Normal)));
         assert_eq!(barriers_per_substep(&naive), count(&naive));
         // Two strain passes: the second reads the first's output.
-        let two_passes = recipe(&Variant::OPTIMIZED, 2);
+        let two_passes = recipe(&Variant::OPTIMIZED, 2, Integration::VERLET);
         assert_eq!(barriers_per_substep(&two_passes), count(&two_passes));
         // The thesis's: the springs scatter, then the fused Verlet kernel.
-        let thesis = recipe(&Variant::THESIS, 2);
+        let thesis = recipe(&Variant::THESIS, 2, Integration::VERLET);
         assert_eq!(count(&thesis), 6);
         assert_eq!(barriers_per_substep(&thesis), count(&thesis));
         assert_eq!(barriers_per_substep(&two_passes), count(&two_passes));
@@ -321,7 +393,7 @@ mod tests {
     fn recipes_swap_after_each_strain_pass_and_pick_the_flavors_of_the_switches() {
         let mut v = Variant::OPTIMIZED;
         v.set("table", "image").unwrap();
-        let r = recipe(&v, 3);
+        let r = recipe(&v, 3, Integration::VERLET);
         assert_eq!(r.iter().filter(|c| **c == Command::Swap).count(), 3);
         let names: Vec<String> = dispatches(&r).map(|k| k.shader_name()).collect();
         assert_eq!(
@@ -336,7 +408,8 @@ mod tests {
                 "vertex_normals_imm"
             ]
         );
-        let names = |v: &Variant| dispatches(&recipe(v, 1)).map(|k| k.shader_name()).collect::<Vec<_>>();
+        let names =
+            |v: &Variant| dispatches(&recipe(v, 1, Integration::VERLET)).map(|k| k.shader_name()).collect::<Vec<_>>();
         assert_eq!(
             names(&Variant::NAIVE),
             [

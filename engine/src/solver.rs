@@ -21,7 +21,8 @@ use crate::gpu::{BufferId, Dispatch, Engine};
 use crate::kernels::{HostBuffers, Immediates, KernelRef, groups};
 use crate::recipe::KernelRunner;
 use crate::recipe::{
-    Caps, Command, Hazards, StatsMode, bits, dispatches, kernels_for, kernels_of, recipe, res, stats_commands,
+    Caps, Command, Hazards, Integration, StatsMode, bits, dispatches, kernels_for, kernels_of, recipe, res,
+    stats_commands,
 };
 use crate::tables::{record_times, split_slots, spring_halves, table_texels};
 use crate::variant::{Constants, Draw, Submit, Table, Variant, VariantSpec};
@@ -37,7 +38,20 @@ pub struct SolverOptions {
 }
 
 /// The buffers a kernel test or a bisection moves between host and device.
-const HOST_BUFFERS: [Buf; 6] = [Buf::Pos, Buf::PosOut, Buf::Prev, Buf::Force, Buf::Normal, Buf::Faces];
+const HOST_BUFFERS: [Buf; 12] = [
+    Buf::Pos,
+    Buf::PosOut,
+    Buf::Prev,
+    Buf::Force,
+    Buf::Normal,
+    Buf::Faces,
+    Buf::Aux0,
+    Buf::Aux1,
+    Buf::Aux2,
+    Buf::Aux3,
+    Buf::Aux4,
+    Buf::Scalars,
+];
 
 /// The cloth solver on any [`Engine`].
 pub struct GpuSolver<E: Engine> {
@@ -120,8 +134,9 @@ impl<E: Engine> GpuSolver<E> {
         let stats_zero = vec![0u8; 4 * MAX_SUBSTEPS as usize];
         let partials_zero = vec![0u8; 8 * (x * y) as usize];
         let pos_bytes: &[u8] = bytemuck::cast_slice(&state.pos);
+        let aux_zero = vec![0u8; 16 * topo.num_particles()];
         // Positions and normals are the renderer's vertex buffers too (no copy).
-        let contents: [(Buf, &[u8]); 23] = [
+        let contents: [(Buf, &[u8]); 29] = [
             (Buf::Params, bytemuck::bytes_of(&sp)),
             (Buf::ParamsStorage, bytemuck::bytes_of(&sp)),
             (Buf::SpheresUniform, bytemuck::cast_slice(&spheres)),
@@ -145,6 +160,12 @@ impl<E: Engine> GpuSolver<E> {
             (Buf::StatsMax, &stats_zero),
             (Buf::StatsEnergy, &stats_zero),
             (Buf::Partials, &partials_zero),
+            (Buf::Aux0, &aux_zero),
+            (Buf::Aux1, &aux_zero),
+            (Buf::Aux2, &aux_zero),
+            (Buf::Aux3, &aux_zero),
+            (Buf::Aux4, &aux_zero),
+            (Buf::Scalars, &[0u8; 16]),
         ];
         let mut ids = Vec::with_capacity(contents.len());
         for (buf, bytes) in contents {
@@ -183,7 +204,9 @@ impl<E: Engine> GpuSolver<E> {
                 .collect()
         };
         engine.bind([set(0), set(1)])?;
+        let step = recipe(&variant, params.strain_iterations, Integration::of(&params));
         let mut build_list: Vec<KernelRef> = kernels_for(&variant);
+        build_list.extend(kernels_of(&step));
         build_list.extend(dispatches(&stats_commands(options.stats, caps)));
         let name = variant.solver_name(info.api);
         let mut solver = Self {
@@ -191,7 +214,7 @@ impl<E: Engine> GpuSolver<E> {
             name,
             variant,
             options,
-            recipe: recipe(&variant, params.strain_iterations),
+            recipe: step,
             scene,
             params,
             grab: None,
@@ -497,7 +520,12 @@ impl<E: Engine> Solver for GpuSolver<E> {
             self.write(Buf::SpringsB, bytemuck::cast_slice(&b))?;
             self.write(Buf::Interior, bytemuck::bytes_of(&interior))?;
         }
-        self.recipe = recipe(&self.variant, params.strain_iterations);
+        let step = recipe(&self.variant, params.strain_iterations, Integration::of(&params));
+        for k in kernels_of(&step) {
+            self.build(k)?;
+        }
+        self.engine.check("building the integrator's kernels")?;
+        self.recipe = step;
         self.params = params;
         Ok(())
     }

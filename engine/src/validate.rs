@@ -28,12 +28,34 @@ pub struct KernelInput {
 impl KernelInput {
     /// The input for an `n × n` cloth, disturbed with `seed`.
     pub fn new(n: u32, seed: u64) -> Result<Self, SolverError> {
+        Self::with_params(n, seed, &SimParams::default())
+    }
+
+    /// The input for an `n × n` cloth with `params` (the spring constants a runner built
+    /// with them has), disturbed with `seed`; wind on if `params` have none.
+    pub fn with_params(n: u32, seed: u64, params: &SimParams) -> Result<Self, SolverError> {
         let scene = Scene::with_n(n);
-        let params = SimParams { wind: [1.5, 0.3, -2.0], ..SimParams::default() };
+        let wind = if params.wind == [0.0; 3] { [1.5, 0.3, -2.0] } else { params.wind };
+        let params = SimParams { wind, ..params.clone() };
         let (st, topo, faces) = disturbed_state(&scene, &params, seed)?;
         let grab = Some(Grab { particle: n * n / 2 + 3, target: [0.1, 1.2, 0.3] });
         let p = StepParams::new(&params, &scene, grab);
-        Ok(Self { engine: CpuEngine::new(Exec::Serial, scene, topo), bufs: HostBuffers::new(&st, faces), p })
+        let mut bufs = HostBuffers::new(&st, faces);
+        // The integrators' scratch state, made from the disturbed cloth so that every
+        // kernel of every integrator sees values of the sizes it meets in a substep: a
+        // saved x₀ and u₀ (w: a preconditioner's diagonal, positive), stage sums, a wind
+        // force, and CG scalars.
+        for (i, (x, xp)) in st.pos.iter().zip(&st.prev).enumerate() {
+            let u = [x[0] - xp[0], x[1] - xp[1], x[2] - xp[2]];
+            let f = st.force[i];
+            bufs.aux[0][i] = *x;
+            bufs.aux[1][i] = [0.9 * u[0], 0.9 * u[1], 0.9 * u[2], p.particle_mass * (2.0 + (i % 7) as f32 * 0.1)];
+            bufs.aux[2][i] = [0.5 * u[0] - 1e-4, 0.5 * u[1], 0.5 * u[2] + 1e-4, 0.0];
+            bufs.aux[3][i] = [-0.3 * u[1], 0.2 * u[0], 0.1 * u[2], 0.0];
+            bufs.aux[4][i] = [f[0], f[1], f[2], 0.0];
+        }
+        bufs.scalars[0] = [2e-6, 3e-6, 0.6, 0.25];
+        Ok(Self { engine: CpuEngine::new(Exec::Serial, scene, topo), bufs, p })
     }
 
     /// The input of `kernel`: the disturbed buffers, plus what its row sets up.
@@ -46,6 +68,11 @@ impl KernelInput {
     }
 }
 
+/// The buffers [`validate_kernels`] compares after each kernel: the positions, previous
+/// positions, forces, normals, face normals, the five integrator scratch buffers and the
+/// CG scalars.
+pub const COMPARED_BUFFERS: usize = 11;
+
 /// Runs each of `kernels` alone on `runner` and on the CPU engine, from the same disturbed
 /// `n × n` cloth, and compares every buffer; the kernel's pure outputs are poisoned with
 /// NaN on the runner's side first, so an element it fails to write shows. Kernels whose
@@ -56,7 +83,19 @@ pub fn validate_kernels(
     n: u32,
     seed: u64,
 ) -> Result<Vec<Check>, SolverError> {
-    let input = KernelInput::new(n, seed)?;
+    validate_kernels_with(runner, kernels, n, seed, &SimParams::default())
+}
+
+/// [`validate_kernels`] for a runner built with `params` (its spring tables hold their
+/// constants).
+pub fn validate_kernels_with(
+    runner: &mut dyn KernelRunner,
+    kernels: &[KernelRef],
+    n: u32,
+    seed: u64,
+    params: &SimParams,
+) -> Result<Vec<Check>, SolverError> {
+    let input = KernelInput::with_params(n, seed, params)?;
     let mut checks = Vec::new();
     for &k in kernels {
         let kernels::Check::Bound { relative, .. } = k.def.check else { continue };
@@ -71,13 +110,21 @@ pub fn validate_kernels(
         input.engine.run(&commands, &input.p, 0, &mut want);
         runner.run_commands(&commands, &input.p, &mut got)?;
         let what = k.shader_name();
-        for (name, g, w) in [
+        type Pair<'a> = (&'static str, &'a Vec<[f32; 4]>, &'a Vec<[f32; 4]>);
+        let compared: [Pair; COMPARED_BUFFERS] = [
             ("pos", &got.pos, &want.pos),
             ("prev", &got.prev, &want.prev),
             ("force", &got.force, &want.force),
             ("normal", &got.normal, &want.normal),
             ("faces", &got.faces, &want.faces),
-        ] {
+            ("aux0", &got.aux[0], &want.aux[0]),
+            ("aux1", &got.aux[1], &want.aux[1]),
+            ("aux2", &got.aux[2], &want.aux[2]),
+            ("aux3", &got.aux[3], &want.aux[3]),
+            ("aux4", &got.aux[4], &want.aux[4]),
+            ("scalars", &got.scalars, &want.scalars),
+        ];
+        for (name, g, w) in compared {
             checks.push(compare(&what, name, g, w, true, relative));
         }
     }

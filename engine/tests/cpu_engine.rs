@@ -105,7 +105,7 @@ fn bisection_names_the_kernel_that_is_wrong_and_none_when_all_are_right() {
     let scene = Scene::with_n(16);
     let params = SimParams::default();
     let (_, topo) = clothlab_core::build(&scene, &params).unwrap();
-    let commands = recipe(&Variant::OPTIMIZED, 1);
+    let commands = recipe(&Variant::OPTIMIZED, 1, clothlab_engine::recipe::Integration::VERLET);
     let substeps = 32;
     for (bad, delta, want) in [
         ("integrate_collide", 1e-3, Some("integrate_collide_imm")),

@@ -7,7 +7,7 @@ use clothlab_core::{Exec, Scene, SimParams, SolverError};
 use clothlab_engine::SolverOptions;
 use clothlab_engine::kernels::{Check, Count, HostBuffers, Immediates, KernelDef, Source, TwinArgs, Variants};
 use clothlab_engine::recipe::{Command, run};
-use clothlab_engine::validate::{KernelInput, KernelRunner, bisect, validate_kernels};
+use clothlab_engine::validate::{COMPARED_BUFFERS, KernelInput, KernelRunner, bisect, validate_kernels};
 use clothlab_engine::{CpuEngine, Variant};
 use clothlab_tests::{assert_checks, or_skip};
 use clothlab_vulkan::vulkan_solver;
@@ -98,13 +98,14 @@ fn a_kernel_defined_outside_runs_validated_on_every_engine_and_in_a_recipe() {
         }
         r.add_kernel(HALVE_FORCE.plain()).unwrap_or_else(|e| panic!("{name}: {e}"));
         let checks = validate_kernels(r.as_mut(), &[HALVE_FORCE.plain()], n, 3).unwrap();
-        assert_eq!(checks.len(), 5);
+        assert_eq!(checks.len(), COMPARED_BUFFERS);
         assert_checks(&name, &checks);
         // A recipe that uses it: the optimized step with the force halved before the
         // integration, three substeps from the disturbed cloth, against the CPU engine.
         // Bit for bit: the optimized kernels are (checked elsewhere) and so is this one.
         let input = KernelInput::new(n, 11).unwrap();
-        let mut commands = clothlab_engine::recipe::recipe(&Variant::OPTIMIZED, 1);
+        let mut commands =
+            clothlab_engine::recipe::recipe(&Variant::OPTIMIZED, 1, clothlab_engine::recipe::Integration::VERLET);
         commands.splice(1..1, run(HALVE_FORCE.plain()));
         let (mut want, mut got) = (input.bufs.clone(), input.bufs.clone());
         for _ in 0..3 {

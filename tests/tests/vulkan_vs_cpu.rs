@@ -6,7 +6,7 @@ use clothlab_core::grid::StepParams;
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Scene, SimParams, Solver};
 use clothlab_engine::kernels::Check;
-use clothlab_engine::validate::{KernelRunner, flavors, validate_kernels};
+use clothlab_engine::validate::{COMPARED_BUFFERS, KernelRunner, flavors, validate_kernels};
 use clothlab_engine::{Variant, VariantSpec};
 use clothlab_tests::{assert_checks, or_skip};
 use clothlab_vulkan::{SolverOptions, StatsMode, VulkanSolver, vulkan_solver};
@@ -43,7 +43,7 @@ fn every_vulkan_kernel_matches_its_cpu_twin() {
         let checks = validate_kernels(&mut v, &kernels, n, 0x5eed + n as u64).unwrap();
         let bounded = kernels.iter().filter(|k| matches!(k.def.check, Check::Bound { .. })).count();
         assert!(bounded >= 13, "{names:?}");
-        assert_eq!(checks.len(), 5 * bounded);
+        assert_eq!(checks.len(), COMPARED_BUFFERS * bounded);
         assert_checks(&format!("vk n={n}"), &checks);
         no_validation_messages(&v);
     }

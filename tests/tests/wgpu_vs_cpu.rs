@@ -5,7 +5,7 @@ use clothlab_core::validate::{compare, validate_rollout};
 use clothlab_core::{Scene, SimParams, Solver};
 use clothlab_engine::VariantSpec;
 use clothlab_engine::kernels::{self as k, Check};
-use clothlab_engine::validate::{KernelRunner, flavors, validate_kernels};
+use clothlab_engine::validate::{COMPARED_BUFFERS, KernelRunner, flavors, validate_kernels};
 use clothlab_tests::{assert_checks, or_skip};
 use clothlab_wgpu::{SolverOptions, Variant, WgpuSolver, wgpu_solver};
 
@@ -54,7 +54,7 @@ fn kernels_match_on(n: u32, every_flavor: bool) {
     let checks = validate_kernels(&mut g, &kernels, n, 0x5eed + n as u64).unwrap();
     let bounded = kernels.iter().filter(|k| matches!(k.def.check, Check::Bound { .. })).count();
     assert_eq!(bounded, kernels.len(), "wgpu builds no statistics kernels");
-    assert_eq!(checks.len(), 5 * bounded);
+    assert_eq!(checks.len(), COMPARED_BUFFERS * bounded);
     assert_checks(&format!("n = {n}"), &checks);
 }
 

@@ -8,6 +8,7 @@
 //! frame table). The final positions of 25 particles are compared with the first backend
 //! that ran at that size, so a backend cannot be fast by doing less.
 
+mod integrators;
 mod ladder;
 mod output;
 mod plot;
@@ -28,6 +29,21 @@ use clothlab_engine::kernels::compulsory_bytes;
 use clothlab_engine::recipe::{dispatches, recipe};
 use clothlab_engine::variant::{Table, Variant, ladder as ladder_rungs};
 use ladder::LadderCell;
+
+/// `bench --integrators`: see `integrators.rs`. The default size list (for the kernel
+/// tables) becomes 64 and 128, and the backends, if left at all six, the fast three.
+fn integrators_bench(args: &BenchArgs, params: &SimParams, backends: &[Backend], sizes: &[u32]) -> Result<ExitCode> {
+    let defaults = BenchArgs::default_sizes();
+    let sizes: Vec<u32> = if sizes == defaults.as_slice() { vec![64, 128] } else { sizes.to_vec() };
+    let backends: Vec<Backend> =
+        if backends.len() == 6 { vec![Backend::CpuPar, Backend::Wgpu, Backend::Vulkan] } else { backends.to_vec() };
+    let (runs, notes) = integrators::measure(params, &backends, &sizes, args.cell_budget)?;
+    let machine = args.machine.clone().unwrap_or_else(cpu_label);
+    integrators::write(&args.out, &runs, &notes, &machine)?;
+    println!("{}", integrators::report(&runs, &notes, &machine));
+    println!("wrote {}/integrators.{{md,csv}} and the plots", args.out.display());
+    Ok(ExitCode::SUCCESS)
+}
 
 /// Unmeasured frames at the start of every cell (pipelines, caches, clocks, the cloth's
 /// first fall).
@@ -205,7 +221,10 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
 
-    let params = SimParams::default();
+    let params = args.physics.params()?;
+    if args.integrators {
+        return integrators_bench(&args, &params, &backends, &sizes);
+    }
     let frames = args.iters.div_ceil(params.substeps);
     let plan = OverheadPlan {
         samples: args.iters.clamp(5, 1000) as usize,
@@ -430,7 +449,7 @@ impl Job {
     ) -> Result<LadderCell> {
         let v = self.variant.context("a ladder job has a variant")?;
         let (_, topo) = clothlab_core::build(&Scene::with_n(n), params)?;
-        let commands = recipe(&v, params.strain_iterations);
+        let commands = recipe(&v, params.strain_iterations, clothlab_engine::recipe::Integration::of(params));
         let uniform = v.table == Table::Uniform;
         Ok(LadderCell {
             api: if self.backend.api() == Some(Api::Wgpu) { "wgpu" } else { "vulkan" }.into(),

@@ -12,7 +12,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::output::Results;
 
-const FONT: &str = "sans-serif";
+pub(super) const FONT: &str = "sans-serif";
 static FONTS: Once = Once::new();
 
 fn register_fonts() {
@@ -37,14 +37,15 @@ fn colour(name: &str) -> RGBColor {
 }
 
 /// One figure, drawable on any plotters backend.
-trait Figure {
+pub(super) trait Figure {
     fn size(&self) -> (u32, u32);
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
     where
         DB::ErrorType: 'static;
 }
 
-fn both(fig: &impl Figure) -> Result<(String, Vec<u8>)> {
+/// The figure as SVG text and PNG bytes.
+pub(super) fn both(fig: &impl Figure) -> Result<(String, Vec<u8>)> {
     register_fonts();
     let (w, h) = fig.size();
     let mut svg = String::new();
@@ -97,7 +98,7 @@ pub fn all(r: &Results) -> Result<Vec<(String, String, Vec<u8>)>> {
     Ok(out)
 }
 
-fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
+pub(super) fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("plotting: {e}")
 }
 

@@ -4,7 +4,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
-use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_core::{CpuSolver, Exec, Scene, Solver};
 use clothlab_vulkan::{VkCloth, VulkanRenderer};
 use clothlab_wgpu::{ClothSource, WgpuRenderer};
 
@@ -21,7 +21,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     if !matches!(args.out.extension().and_then(|e| e.to_str()), Some("png" | "PNG")) {
         bail!("--out {}: the image is written as PNG, use a .png file name", args.out.display());
     }
-    let params = SimParams::default();
+    let params = args.physics.params()?;
     let view = args.mode.view();
     let setup = GpuSetup { variant: args.variant.spec(args.backend)?, ..GpuSetup::default() };
     let is_vulkan = matches!(args.backend, Backend::VulkanNaive | Backend::Vulkan);

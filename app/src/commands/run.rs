@@ -25,5 +25,6 @@ pub fn run_app(args: RunArgs) -> Result<ExitCode> {
         size: (args.width, args.height),
         drag_test: args.drag_test,
         switch_api: args.switch_api,
+        params: args.physics.params()?,
     })
 }

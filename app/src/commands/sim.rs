@@ -7,9 +7,9 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use clothlab_core::Scene;
 use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
-use clothlab_core::{Scene, SimParams};
 
 use crate::cli::{SimArgs, StatsArg};
 use crate::solvers::{Shared, make};
@@ -17,42 +17,9 @@ use crate::solvers::{Shared, make};
 /// Most substeps one `sim` run may ask for.
 const MAX_STEPS: u64 = 100_000_000;
 
-/// Applies `NAME=VALUE` overrides to `params` through its serde form, so every field is
-/// reachable and an unknown name or a value of the wrong type is refused.
-pub fn apply_overrides(params: &SimParams, sets: &[String]) -> Result<SimParams> {
-    let mut value = serde_json::to_value(params)?;
-    for s in sets {
-        let Some((name, raw)) = s.split_once('=') else {
-            bail!("--set expects NAME=VALUE, got `{s}`");
-        };
-        let name = name.trim();
-        let obj = value.as_object_mut().context("parameters are not an object")?;
-        let Some(slot) = obj.get_mut(name) else {
-            let mut known: Vec<&String> = obj.keys().collect();
-            known.sort();
-            let known: Vec<&str> = known.iter().map(|s| s.as_str()).collect();
-            bail!("unknown parameter `{name}` (known: {})", known.join(", "));
-        };
-        let parsed: serde_json::Value = match raw.trim() {
-            // JSON has no NaN or infinities; name them so that validate() refuses them
-            // with its own message instead of a parse error.
-            "nan" | "NaN" | "inf" | "-inf" | "infinity" | "-infinity" => {
-                bail!("invalid parameter `{name}` = {raw}: must be a finite number")
-            }
-            // A word that is not JSON is a string (`stiffness_units=physical`).
-            r => serde_json::from_str(r).unwrap_or_else(|_| serde_json::Value::String(r.to_owned())),
-        };
-        *slot = parsed;
-    }
-    let out: SimParams =
-        serde_json::from_value(value).map_err(|e| anyhow::anyhow!("a parameter of the wrong type: {e}"))?;
-    out.validate()?;
-    Ok(out)
-}
-
 /// Runs `sim`.
 pub fn sim(args: SimArgs) -> Result<ExitCode> {
-    let params = apply_overrides(&SimParams::default(), &args.set)?;
+    let params = args.physics.params()?;
     let scene = Scene::with_n(args.n);
     scene.validate()?;
     if args.steps == 0 || args.steps > MAX_STEPS {

@@ -43,6 +43,8 @@ pub struct RunOptions {
     pub drag_test: bool,
     /// Switch to the other API halfway through `frames` (a test).
     pub switch_api: bool,
+    /// The simulation parameters to start with (`--set`, `--integrator`).
+    pub params: SimParams,
 }
 
 /// Everything the panels show and change.
@@ -156,7 +158,7 @@ impl App {
             .with_inner_size(PhysicalSize::new(w, h))
             .with_min_inner_size(PhysicalSize::new(64, 64));
         let window = Arc::new(event_loop.create_window(attrs).context("cannot open a window")?);
-        let params = SimParams::default();
+        let params = self.opts.params.clone();
         let scene = clothlab_core::Scene::with_n(self.opts.n);
         scene.validate()?;
         let gfx = Gfx::new(self.opts.api, &window, &scene, &params)?;

@@ -355,6 +355,27 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
             }
         }
     });
+    // The integrator (thesis §4.1): an explicit one that cannot integrate these springs
+    // at this dt is refused in the status bar, naming the substeps it needs.
+    ui.horizontal(|ui| {
+        ui.label("integrator");
+        egui::ComboBox::from_id_salt("integrator").selected_text(p.integrator.name()).show_ui(ui, |ui| {
+            for i in clothlab_core::Integrator::ALL {
+                if ui.selectable_label(p.integrator == i, i.name()).clicked() && p.integrator != i {
+                    p.integrator = i;
+                    units_changed = true;
+                }
+            }
+        });
+    });
+    if p.integrator == clothlab_core::Integrator::Implicit {
+        units_changed |= ui
+            .add(
+                egui::Slider::new(&mut p.cg_iterations, 1..=clothlab_core::params::MAX_CG_ITERATIONS.min(64))
+                    .text("CG iterations"),
+            )
+            .changed();
+    }
     let physical = p.stiffness_units == StiffnessUnits::Physical;
     let mut changed = units_changed;
     let mut f = |ui: &mut egui::Ui, v: &mut f32, r: std::ops::RangeInclusive<f32>, label: &str, log: bool| {

@@ -9,6 +9,7 @@
 mod collide;
 mod forces;
 mod integrate;
+mod integrators;
 mod lanes;
 mod normals;
 mod solver;
@@ -19,6 +20,10 @@ mod strain_limit;
 pub use collide::{collide, integrate_collide};
 pub use forces::forces;
 pub use integrate::integrate;
+pub use integrators::{
+    AUX, CgScalars, RK2, RK4, RkStage, cg_alpha, cg_begin, cg_beta, cg_direction, cg_matvec, cg_step, euler, fold,
+    implicit_finish, partial_sums, rk_begin, rk_stage, xpbd,
+};
 pub use lanes::Lanes;
 pub use normals::{FaceLanes, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows};
 pub use solver::CpuSolver;

@@ -3,11 +3,12 @@
 use std::time::Instant;
 
 use super::{
-    Exec, FaceLanes, Lanes, integrate_collide, springs_rows, strain_limit_rows, tri_normals, tri_normals_lanes,
-    vertex_normals, vertex_normals_rows,
+    AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, cg_alpha, cg_begin, cg_beta, cg_direction, cg_matvec, cg_step,
+    collide, euler, fold, forces, implicit_finish, integrate, integrate_collide, partial_sums, rk_begin, rk_stage,
+    springs_rows, strain_limit_rows, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd,
 };
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
-use crate::params::SimParams;
+use crate::params::{Integrator, SimParams};
 use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};
 use crate::timing::{FORCES_SPRINGS, FRAME, INTEGRATE_COLLIDE, KernelId, KernelTimings, SUBSTEP, TimingRecorder};
@@ -31,6 +32,10 @@ pub struct CpuSolver {
     face_lanes: FaceLanes,
     /// The interior's uniform spring slots, if the table has them (the fast path).
     uniform: Option<[SpringSlot; SLOTS]>,
+    /// The integrators' scratch buffers (see `integrators.rs`), allocated when one needs them.
+    aux: Vec<Vec<V4>>,
+    /// The conjugate-gradient scalars.
+    cg: CgScalars,
     timer: TimingRecorder,
     /// Record per-kernel timings (costs two `Instant::now` per kernel).
     pub time_kernels: bool,
@@ -51,6 +56,8 @@ impl CpuSolver {
             uniform: topo.uniform_interior_slots(),
             lanes: Lanes::default(),
             face_lanes: FaceLanes::default(),
+            aux: Vec::new(),
+            cg: [0.0; 4],
             state,
             topo,
             timer: TimingRecorder::default(),
@@ -102,19 +109,76 @@ impl CpuSolver {
         let e = self.exec;
         let on = self.time_kernels;
         let t0 = Instant::now();
-        let Self { state, topo, scratch, face, timer, scene, params, uniform, lanes, face_lanes, .. } = self;
+        let Self { state, topo, scratch, face, timer, scene, params, uniform, lanes, face_lanes, aux, cg, .. } = self;
         let n = topo.n as usize;
         let fast = uniform.is_some();
         let ClothState { pos, prev, force, normal, .. } = state;
-        Self::timed(timer, on, FORCES_SPRINGS, || {
+        // The force of the current (pos, prev): forces fused into the spring gather.
+        let eval = |lanes: &mut Lanes, pos: &[V4], prev: &[V4], force: &mut [V4]| {
             if fast {
                 lanes.fill(e, n, pos, Some(prev));
             }
             springs_rows(e, n, p.dt, &topo.slots, uniform.as_ref(), Some(&p), lanes, pos, prev, force)
-        });
-        Self::timed(timer, on, INTEGRATE_COLLIDE, || {
-            integrate_collide(e, &p, &scene.spheres, &scene.boxes, force, pos, prev)
-        });
+        };
+        let (spheres, boxes) = (&scene.spheres, &scene.boxes);
+        if !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler) && aux.len() != AUX {
+            *aux = vec![vec![[0.0; 4]; pos.len()]; AUX];
+        }
+        // The same kernels in the same order as the engine's recipe for the integrator
+        // (engine/src/recipe.rs; tests/tests/integrators.rs checks the bits).
+        match params.integrator {
+            // Symplectic Euler is Verlet's recurrence in this state (see `euler`).
+            Integrator::Verlet | Integrator::SymplecticEuler => {
+                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, prev, force));
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
+                    integrate_collide(e, &p, spheres, boxes, force, pos, prev)
+                });
+            }
+            Integrator::Euler => {
+                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, prev, force));
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
+                    euler(e, &p, force, pos, prev);
+                    collide(e, &p, spheres, boxes, pos, prev)
+                });
+            }
+            Integrator::Rk2 | Integrator::Rk4 => {
+                let stages: &[super::RkStage] = if params.integrator == Integrator::Rk2 { &RK2 } else { &RK4 };
+                rk_begin(e, &p, force, pos, prev, aux);
+                for st in stages {
+                    Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, prev, force));
+                    Self::timed(timer, on, INTEGRATE_COLLIDE, || rk_stage(e, &p, st, force, pos, prev, aux));
+                }
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || collide(e, &p, spheres, boxes, pos, prev));
+            }
+            Integrator::Implicit => {
+                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, prev, force));
+                let cg = &mut *cg;
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
+                    // Sums as the kernels make them: per workgroup, then folded.
+                    let total = |terms: Vec<f32>| fold(&partial_sums(&terms));
+                    let rz = total(cg_begin(e, &p, &topo.slots, force, pos, prev, aux));
+                    cg_beta(cg, rz);
+                    for _ in 0..params.cg_iterations {
+                        let pq = total(cg_matvec(e, &p, &topo.slots, pos, aux));
+                        cg_alpha(cg, pq);
+                        let rz = total(cg_step(e, cg, aux));
+                        cg_beta(cg, rz);
+                        cg_direction(e, cg, aux);
+                    }
+                    implicit_finish(e, &p, pos, prev, aux);
+                    collide(e, &p, spheres, boxes, pos, prev)
+                });
+            }
+            Integrator::Xpbd => {
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
+                    forces(e, &p, pos, prev, force);
+                    integrate(e, &p, force, pos, prev);
+                    xpbd(e, &p, &topo.slots, pos, prev, scratch);
+                    std::mem::swap(pos, scratch);
+                    collide(e, &p, spheres, boxes, pos, prev)
+                });
+            }
+        }
         Self::timed(timer, on, KernelId::StrainLimit.name(), || {
             for _ in 0..params.strain_iterations {
                 if fast {

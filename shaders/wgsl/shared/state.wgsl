@@ -59,3 +59,34 @@ fn integrated_with(i: u32, x4: vec4<f32>, xp: vec3<f32>, f: vec3<f32>) -> Moved 
 fn is_free(i: u32, w: f32) -> bool {
     return w != 0.0 && i32(i) != p.grab_index;
 }
+
+// Whether particle i (w: its pos.w) is held: pinned or grabbed.
+fn held(i: u32, w: f32) -> bool {
+    return !is_free(i, w);
+}
+
+// core::cpu::integrators::accel_dt2: a force as the displacement it adds in one substep.
+fn accel_dt2(f: vec3<f32>) -> vec3<f32> {
+    return f * (p.dt * p.dt / p.particle_mass);
+}
+
+// core::cpu::integrators::finish_at: the end of a substep for particle i at x4 that
+// integrates to x1 with velocity displacement u1 — pins, the grab and the floor as in
+// `integrated_with`.
+fn finish_at(i: u32, x4: vec4<f32>, x1: vec3<f32>, u1: vec3<f32>) -> Moved {
+    let x = x4.xyz;
+    if i32(i) == p.grab_index {
+        return Moved(p.grab_target.xyz, x);
+    }
+    if x4.w == 0.0 {
+        return Moved(x, x);
+    }
+    var xn = x1;
+    var xp = x1 - u1;
+    let floor = p.floor_y + p.margin;
+    if xn.y < floor {
+        xn.y = floor;
+        xp = contact_prev(xn, xp, vec3<f32>(0.0, 1.0, 0.0), p.friction);
+    }
+    return Moved(xn, xp);
+}

@@ -1,0 +1,406 @@
+//! The integrators other than Verlet (thesis §4.1.1–4.1.2), one function per GPU kernel.
+//!
+//! Every integrator keeps its state in Verlet's two buffers: `prev = x − u` with
+//! `u = v·dt`, the velocity as a displacement per substep. The force kernels read
+//! `x − prev` as `v·dt`, so `forces`, `springs` and their fused and scattered forms
+//! evaluate the force for every integrator unchanged; the integrators differ only in
+//! where they evaluate it and how they combine the results. Working in displacements
+//! (`u`, and `g = f·dt²/m` for the force) needs no division by dt anywhere.
+//!
+//! Scratch state lives in [`AUX`] particle buffers (`aux`), whose meaning depends on the
+//! integrator:
+//!
+//! | buffer | RK2, RK4 | implicit |
+//! |---|---|---|
+//! | `aux[0]` | `x₀` (w: pin flag) | `Δu`, the Newton step |
+//! | `aux[1]` | `u₀` (damped) | `r` (w: the Jacobi preconditioner's diagonal) |
+//! | `aux[2]` | `Σ bₛ uₛ` | `p` |
+//! | `aux[3]` | `Σ bₛ gₛ` | `q = A p` |
+//! | `aux[4]` | the substep's wind force | — |
+//!
+//! Pins, the grab and the floor end every integrator's substep as [`super::integrate`]
+//! ends Verlet's (`finish_at`); spheres and boxes are the `collide` kernel's, run after.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::integrate::contact_prev;
+use super::{Exec, v3, v4};
+use crate::grid::{SLOTS, SpringSlot, StepParams, V4};
+
+/// Scratch particle buffers the integrators use.
+pub const AUX: usize = 5;
+
+/// The conjugate-gradient scalars (a `vec4<f32>` on the GPU): `r·z`, `p·q`, `α`, `β`.
+pub type CgScalars = [f32; 4];
+
+/// One stage of an explicit Runge–Kutta method in the kernels' form: the stage's force
+/// is in the force buffer; `b` is its weight in the final sum, `c_next` where the next
+/// stage evaluates (`x₀ + c_next·dt·k`). The first stage starts the sum, the last one
+/// ends the substep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RkStage {
+    /// The next stage's point, in substeps from the start.
+    pub c_next: f32,
+    /// The stage's weight.
+    pub b: f32,
+    /// Starts the weighted sum (else adds to it).
+    pub first: bool,
+    /// Ends the substep.
+    pub last: bool,
+}
+
+/// The midpoint method: `k₁ = f(y₀)`, `k₂ = f(y₀ + dt/2·k₁)`, `y₁ = y₀ + dt·k₂`.
+pub const RK2: [RkStage; 2] = [
+    RkStage { c_next: 0.5, b: 0.0, first: true, last: false },
+    RkStage { c_next: 0.0, b: 1.0, first: false, last: true },
+];
+
+/// Classical RK4: weights 1/6, 1/3, 1/3, 1/6 at 0, 1/2, 1/2, 1.
+pub const RK4: [RkStage; 4] = [
+    RkStage { c_next: 0.5, b: 1.0 / 6.0, first: true, last: false },
+    RkStage { c_next: 0.5, b: 1.0 / 3.0, first: false, last: false },
+    RkStage { c_next: 1.0, b: 1.0 / 3.0, first: false, last: false },
+    RkStage { c_next: 0.0, b: 1.0 / 6.0, first: false, last: true },
+];
+
+/// `f(i)` for every particle, in parallel or not (each result depends on `i` only, so
+/// both give the same bits).
+fn per_particle<T: Send>(exec: Exec, count: usize, f: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
+    match exec {
+        Exec::Serial => (0..count).map(f).collect(),
+        Exec::Parallel => (0..count).into_par_iter().with_min_len(1024).map(f).collect(),
+    }
+}
+
+/// Whether particle `i` at `x4` is held (pinned or grabbed): it does not integrate.
+#[inline(always)]
+fn held(i: usize, p: &StepParams, x4: V4) -> bool {
+    i as i32 == p.grab_index || x4[3] == 0.0
+}
+
+/// The end of a substep for particle `i` at `x4` that integrates to `x1` with velocity
+/// displacement `u1`: the new `(pos, prev)` with the pins, the grab and the floor handled
+/// as [`super::integrate`] handles them.
+#[inline(always)]
+pub(crate) fn finish_at(i: usize, p: &StepParams, x4: V4, x1: Vec3, u1: Vec3) -> (V4, V4) {
+    let x = v3(x4);
+    if i as i32 == p.grab_index {
+        return (v4(v3(p.grab_target), x4[3]), v4(x, 0.0));
+    }
+    if x4[3] == 0.0 {
+        return (x4, v4(x, 0.0));
+    }
+    let mut xn = x1;
+    let mut xp = x1 - u1;
+    let floor = p.floor_y + p.margin;
+    if xn.y < floor {
+        xn.y = floor;
+        xp = contact_prev(xn, xp, Vec3::Y, p.friction);
+    }
+    (v4(xn, x4[3]), v4(xp, 0.0))
+}
+
+/// `f·dt²/m`: a force as the displacement it adds in one substep.
+#[inline(always)]
+fn accel_dt2(p: &StepParams, f: V4) -> Vec3 {
+    v3(f) * (p.dt * p.dt / p.particle_mass)
+}
+
+/// Explicit Euler: `x' = x + u`, `u' = u + g`, with `u = (1 − damping)(x − prev)`.
+///
+/// (Symplectic Euler, `u' = u + g`, `x' = x + u'`, needs no kernel of its own: in this
+/// state it is `x' = x + u + g`, `prev' = x` — Verlet's recurrence, step for step, so
+/// Verlet's kernels run it. The two differ in how a state with a velocity is read: Verlet
+/// takes `prev` as `x(t − dt)`, symplectic Euler as `x − v·dt`, which makes one second-
+/// and the other first-order in the positions from a given `(x, v)`.)
+pub fn euler(exec: Exec, p: &StepParams, force: &[V4], pos: &mut [V4], prev: &mut [V4]) {
+    let out = per_particle(exec, pos.len(), |i| {
+        let x = v3(pos[i]);
+        let u0 = (x - v3(prev[i])) * (1.0 - p.damping);
+        let u1 = u0 + accel_dt2(p, force[i]);
+        finish_at(i, p, pos[i], x + u0, u1)
+    });
+    for (i, (x, xp)) in out.into_iter().enumerate() {
+        pos[i] = x;
+        prev[i] = xp;
+    }
+}
+
+/// The start of a Runge–Kutta substep: saves `x₀`, the damped `u₀` and the wind force
+/// (which the force kernels add to), and writes `prev = x₀ − u₀` so that the first force
+/// evaluation sees the damped velocity.
+pub fn rk_begin(exec: Exec, p: &StepParams, force: &[V4], pos: &[V4], prev: &mut [V4], aux: &mut [Vec<V4>]) {
+    let out = per_particle(exec, pos.len(), |i| {
+        let x = v3(pos[i]);
+        let u0 = (x - v3(prev[i])) * (1.0 - p.damping);
+        (v4(u0, 0.0), v4(x - u0, 0.0))
+    });
+    for (i, (u0, xp)) in out.into_iter().enumerate() {
+        aux[0][i] = pos[i];
+        aux[1][i] = u0;
+        aux[4][i] = force[i];
+        prev[i] = xp;
+    }
+}
+
+/// One Runge–Kutta stage (see [`RkStage`]): adds the stage's `(u, g)` to the weighted
+/// sum, then either puts the particles at the next stage's point (velocity in `prev`, the
+/// wind back in the force buffer) or ends the substep at `y₀ + Σ bₛ kₛ`.
+pub fn rk_stage(
+    exec: Exec,
+    p: &StepParams,
+    st: &RkStage,
+    force: &mut [V4],
+    pos: &mut [V4],
+    prev: &mut [V4],
+    aux: &mut [Vec<V4>],
+) {
+    let out = per_particle(exec, pos.len(), |i| {
+        let x4 = pos[i];
+        // The first stage evaluates at y₀: its u is the saved one, exactly.
+        let us = if st.first { v3(aux[1][i]) } else { v3(x4) - v3(prev[i]) };
+        let gs = accel_dt2(p, force[i]);
+        let (sx, su) =
+            if st.first { (us * st.b, gs * st.b) } else { (v3(aux[2][i]) + us * st.b, v3(aux[3][i]) + gs * st.b) };
+        let (x0, u0) = (v3(aux[0][i]), v3(aux[1][i]));
+        let (x, xp) = if st.last {
+            finish_at(i, p, x4, x0 + sx, u0 + su)
+        } else if held(i, p, x4) {
+            (x4, v4(v3(x4), 0.0))
+        } else {
+            let x = x0 + us * st.c_next;
+            let u = u0 + gs * st.c_next;
+            (v4(x, x4[3]), v4(x - u, 0.0))
+        };
+        (x, xp, v4(sx, 0.0), v4(su, 0.0))
+    });
+    for (i, (x, xp, sx, su)) in out.into_iter().enumerate() {
+        pos[i] = x;
+        prev[i] = xp;
+        aux[2][i] = sx;
+        aux[3][i] = su;
+        if !st.last {
+            force[i] = aux[4][i];
+        }
+    }
+}
+
+/// Mobility of particle `k` at `x4`: 0 when pinned or grabbed, else its flag (1).
+#[inline(always)]
+fn mobility(k: usize, p: &StepParams, x4: V4) -> f32 {
+    if k as i32 == p.grab_index { 0.0 } else { x4[3] }
+}
+
+/// One XPBD pass (Jacobi, averaged): every spring of particle `i` with `ks > 0` is a
+/// distance constraint `C = |xᵢ − x_b| − rest` of compliance `α̃ = 1/(ks·dt²)` and damping
+/// `γ = kd/(ks·dt)` (XPBD's eq. 26 with λ = 0: one pass per substep), whose correction to
+/// `i` is `wᵢ Δλ n`; the corrections are averaged over the particle's constraints. Reads
+/// `pos` (the predicted positions) and `prev` (where the substep began), writes `out`.
+pub fn xpbd(exec: Exec, p: &StepParams, slots: &[SpringSlot], pos: &[V4], prev: &[V4], out: &mut [V4]) {
+    super::for_each(exec, out, |i, o| *o = xpbd_at(i, p, slots, pos, prev));
+}
+
+#[inline(always)]
+fn xpbd_at(i: usize, p: &StepParams, slots: &[SpringSlot], pos: &[V4], prev: &[V4]) -> V4 {
+    let wi = mobility(i, p, pos[i]);
+    if wi == 0.0 {
+        return pos[i];
+    }
+    let inv_m = 1.0 / p.particle_mass;
+    let xi = v3(pos[i]);
+    let ui = xi - v3(prev[i]);
+    let mut corr = Vec3::ZERO;
+    let mut count = 0.0f32;
+    for s in &slots[i * SLOTS..(i + 1) * SLOTS] {
+        if s.neighbor < 0 || s.ks <= 0.0 {
+            continue;
+        }
+        let b = s.neighbor as usize;
+        let xb = v3(pos[b]);
+        let d = xi - xb;
+        let len = d.length();
+        if len <= f32::MIN_POSITIVE {
+            continue;
+        }
+        let n = d * (1.0 / len);
+        let alpha = 1.0 / (s.ks * p.dt * p.dt);
+        let gamma = s.kd / (s.ks * p.dt);
+        let wb = mobility(b, p, pos[b]);
+        let rel = n.dot(ui - (xb - v3(prev[b])));
+        let dl = -((len - s.rest) + gamma * rel) / ((1.0 + gamma) * (wi + wb) * inv_m + alpha);
+        corr += n * (dl * wi * inv_m);
+        count += 1.0;
+    }
+    if count > 0.0 { v4(xi + corr / count, pos[i][3]) } else { pos[i] }
+}
+
+// ---- implicit Euler: one Newton step, preconditioned conjugate gradients -------------
+//
+// In displacements (Δu = Δv·dt, u₀ = v₀·dt) the Newton step of backward Euler is
+// `A Δu = dt²(f₀ − K u₀)`, `A = m(1 + dt·drag) I + Σₛ (dt² Kₛ + dt Dₛ)` over the springs,
+// with `Kₛ = ks [n nᵀ + max(0, 1 − rest/len)(I − n nᵀ)]` (the stiffness Jacobian with its
+// compressive part dropped, so that A is positive definite: Choi & Ko 2002) and
+// `Dₛ = kd n nᵀ`. Held particles are filtered out (Baraff & Witkin's modified PCG: their
+// rows of r, p and q are zero). The preconditioner is the diagonal of A (a third of each
+// block's trace).
+
+/// `(dt² Kₛ + dt Dₛ) y` (without `Dₛ` unless `with_damping`) for the spring from `xa` to
+/// `xb`, and a third of the trace of `dt² Kₛ + dt Dₛ`.
+#[inline(always)]
+fn spring_block(p: &StepParams, s: &SpringSlot, xa: Vec3, xb: Vec3, y: Vec3, with_damping: bool) -> (Vec3, f32) {
+    let d = xa - xb;
+    let len = d.length();
+    if len <= f32::MIN_POSITIVE {
+        return (Vec3::ZERO, 0.0);
+    }
+    let n = d * (1.0 / len);
+    let soft = (1.0 - s.rest / len).max(0.0);
+    let ny = n.dot(y);
+    let k2 = s.ks * p.dt * p.dt;
+    let c = if with_damping { s.kd * p.dt } else { 0.0 };
+    let v = n * ((k2 + c) * ny) + (y - n * ny) * (k2 * soft);
+    (v, (k2 * (1.0 + 2.0 * soft) + s.kd * p.dt) / 3.0)
+}
+
+/// `(A y)ᵢ` (or, without damping and mass, `dt² (K y)ᵢ`) over particle `i`'s slots, and
+/// the diagonal of A.
+#[inline(always)]
+fn apply_at(
+    i: usize,
+    p: &StepParams,
+    slots: &[SpringSlot],
+    pos: &[V4],
+    y: &dyn Fn(usize) -> Vec3,
+    full: bool,
+) -> (Vec3, f32) {
+    let xa = v3(pos[i]);
+    let ya = y(i);
+    let m = p.particle_mass * (1.0 + p.dt * p.air_drag);
+    let (mut acc, mut diag) = if full { (ya * m, m) } else { (Vec3::ZERO, m) };
+    for s in &slots[i * SLOTS..(i + 1) * SLOTS] {
+        if s.neighbor < 0 {
+            continue;
+        }
+        let b = s.neighbor as usize;
+        let (v, tr) = spring_block(p, s, xa, v3(pos[b]), ya - y(b), full);
+        acc += v;
+        diag += tr;
+    }
+    (acc, diag)
+}
+
+/// `z = r / diag` (zero where the diagonal is, for held particles).
+#[inline(always)]
+fn precondition(r4: V4) -> Vec3 {
+    if r4[3] > 0.0 { v3(r4) / r4[3] } else { Vec3::ZERO }
+}
+
+/// The sums of `terms` per workgroup of particles (as the GPU kernels leave them, one per
+/// workgroup, in `aux[4]`; within a workgroup the GPU adds in a tree, here in order).
+pub fn partial_sums(terms: &[f32]) -> Vec<f32> {
+    terms.chunks(crate::layout::WORKGROUP as usize).map(|c| c.iter().sum()).collect()
+}
+
+/// The reduction kernels' fold of the partial sums.
+pub fn fold(partials: &[f32]) -> f32 {
+    partials.iter().sum()
+}
+
+/// Starts the solve from the force `f₀` in `force`: `Δu = 0`, `r = dt²(f₀ − K u₀)` (w: the
+/// diagonal), `p = z = r/diag`; returns `r·z`.
+pub fn cg_begin(
+    exec: Exec,
+    p: &StepParams,
+    slots: &[SpringSlot],
+    force: &[V4],
+    pos: &[V4],
+    prev: &[V4],
+    aux: &mut [Vec<V4>],
+) -> Vec<f32> {
+    let u = |k: usize| v3(pos[k]) - v3(prev[k]);
+    let out = per_particle(exec, pos.len(), |i| {
+        let (ku, diag) = apply_at(i, p, slots, pos, &u, false);
+        let r = if held(i, p, pos[i]) { Vec3::ZERO } else { v3(force[i]) * (p.dt * p.dt) - ku };
+        let r4 = v4(r, diag);
+        let z = precondition(r4);
+        (r4, z, r.dot(z))
+    });
+    let mut terms = Vec::with_capacity(out.len());
+    for (i, (r4, z, rz)) in out.into_iter().enumerate() {
+        aux[0][i] = [0.0; 4];
+        aux[1][i] = r4;
+        aux[2][i] = v4(z, 0.0);
+        terms.push(rz);
+    }
+    terms
+}
+
+/// `q = S A p` (zero for held particles); returns the terms of `p·q`.
+pub fn cg_matvec(exec: Exec, p: &StepParams, slots: &[SpringSlot], pos: &[V4], aux: &mut [Vec<V4>]) -> Vec<f32> {
+    let dir = &aux[2];
+    let y = |k: usize| v3(dir[k]);
+    let out = per_particle(exec, pos.len(), |i| {
+        let q = if held(i, p, pos[i]) { Vec3::ZERO } else { apply_at(i, p, slots, pos, &y, true).0 };
+        (q, y(i).dot(q))
+    });
+    let mut terms = Vec::with_capacity(out.len());
+    for (i, (q, pq)) in out.into_iter().enumerate() {
+        aux[3][i] = v4(q, 0.0);
+        terms.push(pq);
+    }
+    terms
+}
+
+/// After `p·q`: `α = r·z / p·q` (0 when `p·q` is not positive: the solve has converged).
+pub fn cg_alpha(s: &mut CgScalars, pq: f32) {
+    s[1] = pq;
+    s[2] = if pq > 0.0 { s[0] / pq } else { 0.0 };
+}
+
+/// `Δu += α p`, `r −= α q`; returns the terms of the new `r·z`.
+pub fn cg_step(exec: Exec, s: &CgScalars, aux: &mut [Vec<V4>]) -> Vec<f32> {
+    let alpha = s[2];
+    let out = per_particle(exec, aux[0].len(), |i| {
+        let x = v3(aux[0][i]) + v3(aux[2][i]) * alpha;
+        let r = v3(aux[1][i]) - v3(aux[3][i]) * alpha;
+        let r4 = v4(r, aux[1][i][3]);
+        (x, r4, r.dot(precondition(r4)))
+    });
+    let mut terms = Vec::with_capacity(out.len());
+    for (i, (x, r4, rz)) in out.into_iter().enumerate() {
+        aux[0][i] = v4(x, 0.0);
+        aux[1][i] = r4;
+        terms.push(rz);
+    }
+    terms
+}
+
+/// After a new `r·z`: `β = new / old` (0 when the old one was not positive), then the new
+/// one is kept.
+pub fn cg_beta(s: &mut CgScalars, rz: f32) {
+    s[3] = if s[0] > 0.0 { rz / s[0] } else { 0.0 };
+    s[0] = rz;
+}
+
+/// `p = z + β p`.
+pub fn cg_direction(exec: Exec, s: &CgScalars, aux: &mut [Vec<V4>]) {
+    let beta = s[3];
+    let out = per_particle(exec, aux[0].len(), |i| precondition(aux[1][i]) + v3(aux[2][i]) * beta);
+    for (i, d) in out.into_iter().enumerate() {
+        aux[2][i] = v4(d, 0.0);
+    }
+}
+
+/// Ends the implicit substep: `u₁ = (1 − damping) u₀ + Δu`, `x₁ = x₀ + u₁`.
+pub fn implicit_finish(exec: Exec, p: &StepParams, pos: &mut [V4], prev: &mut [V4], aux: &[Vec<V4>]) {
+    let out = per_particle(exec, pos.len(), |i| {
+        let x = v3(pos[i]);
+        let u1 = (x - v3(prev[i])) * (1.0 - p.damping) + v3(aux[0][i]);
+        finish_at(i, p, pos[i], x + u1, u1)
+    });
+    for (i, (x, xp)) in out.into_iter().enumerate() {
+        pos[i] = x;
+        prev[i] = xp;
+    }
+}

@@ -1,0 +1,24 @@
+//! include: state, aux
+// cg_step — Δu += α p, r −= α q (core::cpu::integrators::cg_step); the partial sums of
+// the new r·z.
+@compute @workgroup_size(WORKGROUP)
+fn main(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(local_invocation_index) li: u32,
+) {
+    p = step_params;
+    let i = flat_id(id, groups);
+    // No early return: every invocation takes part in the workgroup sum.
+    var term = 0.0;
+    if i < num_particles() {
+        let alpha = scalars[0].z;
+        let x = aux0[i].xyz + aux2[i].xyz * alpha;
+        let r4 = vec4<f32>(aux1[i].xyz - aux3[i].xyz * alpha, aux1[i].w);
+        aux0[i] = vec4<f32>(x, 0.0);
+        aux1[i] = r4;
+        term = dot(r4.xyz, precondition(r4));
+    }
+    store_partial(workgroup_sum(term, li), li, wg, groups);
+}

@@ -1,0 +1,16 @@
+//! include: state, aux
+// implicit_finish — u₁ = (1 − damping) u₀ + Δu, x₁ = x₀ + u₁, with pins, grab and floor
+// (core::cpu::integrators::implicit_finish).
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    let i = flat_id(id, groups);
+    if i >= num_particles() {
+        return;
+    }
+    let x4 = pos[i];
+    let u1 = (x4.xyz - prev[i].xyz) * (1.0 - p.damping) + aux0[i].xyz;
+    let m = finish_at(i, x4, x4.xyz + u1, u1);
+    prev[i] = vec4<f32>(m.xp, 0.0);
+    pos[i] = vec4<f32>(m.x, x4.w);
+}

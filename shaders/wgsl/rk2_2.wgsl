@@ -1,0 +1,11 @@
+//! include: state, aux, rk
+// rk2_2 — the midpoint method's second stage: the end of the substep (core::cpu::integrators::RK2).
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    let i = flat_id(id, groups);
+    if i >= num_particles() {
+        return;
+    }
+    rk_stage(i, 0.0, 1.0, false, true);
+}

@@ -1,0 +1,11 @@
+//! include: state, aux, rk
+// rk4_2 — RK4's second stage (core::cpu::integrators::RK4).
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    let i = flat_id(id, groups);
+    if i >= num_particles() {
+        return;
+    }
+    rk_stage(i, 0.5, 1.0 / 3.0, false, false);
+}
