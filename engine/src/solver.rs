@@ -37,21 +37,14 @@ pub struct SolverOptions {
     pub stats: StatsMode,
 }
 
-/// The buffers a kernel test or a bisection moves between host and device.
-const HOST_BUFFERS: [Buf; 12] = [
-    Buf::Pos,
-    Buf::PosOut,
-    Buf::Prev,
-    Buf::Force,
-    Buf::Normal,
-    Buf::Faces,
-    Buf::Aux0,
-    Buf::Aux1,
-    Buf::Aux2,
-    Buf::Aux3,
-    Buf::Aux4,
-    Buf::Scalars,
-];
+/// The buffers a kernel test or a bisection moves between host and device: the state,
+/// the face normals, the integrators' scratch buffers and the CG scalars.
+fn host_buffers() -> impl Iterator<Item = Buf> {
+    [Buf::Pos, Buf::PosOut, Buf::Prev, Buf::Force, Buf::Normal, Buf::Faces]
+        .into_iter()
+        .chain(Buf::AUX)
+        .chain([Buf::Scalars])
+}
 
 /// The cloth solver on any [`Engine`].
 pub struct GpuSolver<E: Engine> {
@@ -420,7 +413,7 @@ impl<E: Engine> GpuSolver<E> {
         self.write(Buf::Params, bytemuck::bytes_of(sp))?;
         self.write(Buf::ParamsStorage, bytemuck::bytes_of(sp))?;
         self.sp = *sp;
-        for buf in HOST_BUFFERS {
+        for buf in host_buffers() {
             if let Some(v) = bufs.get(buf) {
                 self.write(buf, bytemuck::cast_slice(v))?;
             }
@@ -432,7 +425,7 @@ impl<E: Engine> GpuSolver<E> {
         self.engine.submit(true)?;
         self.engine.wait(0)?;
         self.engine.check("running commands")?;
-        for buf in HOST_BUFFERS {
+        for buf in host_buffers() {
             let v = self.read(buf)?;
             if let Some(dst) = bufs.get_mut(buf) {
                 *dst = v;
