@@ -612,9 +612,28 @@ fn rk4_4(a: &TwinArgs, b: &mut HostBuffers) {
     rk_stage(a, b, &cpu::RK4[3]);
 }
 
-fn xpbd(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::xpbd(a.exec, a.p, &a.topo.slots, &b.pos, &b.prev, &mut b.pos_out);
+/// The twins of the 12 XPBD passes (core::cpu::XPBD_PASSES).
+macro_rules! xpbd_twins {
+    ($($name:ident = $k:expr),*) => {
+        $(fn $name(a: &TwinArgs, b: &mut HostBuffers) {
+            cpu::xpbd_pass(a.p, &a.topo.slots, $k, &mut b.pos, &b.prev);
+        })*
+    };
 }
+xpbd_twins!(
+    xpbd_0 = 0,
+    xpbd_1 = 1,
+    xpbd_2 = 2,
+    xpbd_3 = 3,
+    xpbd_4 = 4,
+    xpbd_5 = 5,
+    xpbd_6 = 6,
+    xpbd_7 = 7,
+    xpbd_8 = 8,
+    xpbd_9 = 9,
+    xpbd_10 = 10,
+    xpbd_11 = 11
+);
 
 /// Leaves the per-workgroup sums of `terms` in `aux[4]` (the GPU kernels' partials).
 fn store_partials(b: &mut HostBuffers, terms: &[f32]) {
@@ -895,14 +914,31 @@ pub static RK4_2: KernelDef = rk("rk4_2", rk4_2);
 pub static RK4_3: KernelDef = rk("rk4_3", rk4_3);
 /// RK4's fourth stage (the end of the substep).
 pub static RK4_4: KernelDef = rk("rk4_4", rk4_4);
-/// One XPBD pass over every particle's springs, into the other buffer of the pair.
-pub static XPBD: KernelDef = KernelDef {
-    check: GATHER,
-    pure: &[PosOut],
-    label: "xpbd",
-    variants: IMM_TEX,
-    ..def("xpbd", xpbd, Count::Particles, &[Params, Pos, Prev, Slots, BendSlots, Table], &[PosOut])
-};
+/// One XPBD pass: the springs of one direction and colour (core::cpu::XPBD_PASSES),
+/// both ends moved in place.
+const fn xpbd(name: &'static str, twin: Twin) -> KernelDef {
+    KernelDef {
+        check: GATHER,
+        label: "xpbd",
+        variants: IMM_TEX,
+        ..def(name, twin, Count::Particles, &[Params, Pos, Prev, Slots, BendSlots, Table], &[Pos])
+    }
+}
+/// The 12 passes of one XPBD iteration, in order.
+pub static XPBD: [KernelDef; 12] = [
+    xpbd("xpbd_0", xpbd_0),
+    xpbd("xpbd_1", xpbd_1),
+    xpbd("xpbd_2", xpbd_2),
+    xpbd("xpbd_3", xpbd_3),
+    xpbd("xpbd_4", xpbd_4),
+    xpbd("xpbd_5", xpbd_5),
+    xpbd("xpbd_6", xpbd_6),
+    xpbd("xpbd_7", xpbd_7),
+    xpbd("xpbd_8", xpbd_8),
+    xpbd("xpbd_9", xpbd_9),
+    xpbd("xpbd_10", xpbd_10),
+    xpbd("xpbd_11", xpbd_11),
+];
 /// Implicit: r = dt²(f − K u), p = z, Δu = 0, and the partials of r·z.
 pub static CG_BEGIN: KernelDef = KernelDef {
     check: GATHER,
@@ -954,7 +990,7 @@ pub static IMPLICIT_FINISH: KernelDef = KernelDef {
 };
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 32] = [
+pub static ALL: [&KernelDef; 43] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -979,7 +1015,18 @@ pub static ALL: [&KernelDef; 32] = [
     &RK4_2,
     &RK4_3,
     &RK4_4,
-    &XPBD,
+    &XPBD[0],
+    &XPBD[1],
+    &XPBD[2],
+    &XPBD[3],
+    &XPBD[4],
+    &XPBD[5],
+    &XPBD[6],
+    &XPBD[7],
+    &XPBD[8],
+    &XPBD[9],
+    &XPBD[10],
+    &XPBD[11],
     &CG_BEGIN,
     &CG_MATVEC,
     &CG_REDUCE_PQ,

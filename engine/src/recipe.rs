@@ -137,7 +137,11 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
             }
             then(v, &[&k::IMPLICIT_FINISH, &k::COLLIDE])
         }
-        Integrator::Xpbd => vec![&k::FORCES, &k::INTEGRATE, &k::XPBD, &k::COLLIDE],
+        Integrator::Xpbd => {
+            let mut v: Vec<&'static KernelDef> = vec![&k::FORCES, &k::INTEGRATE];
+            v.extend(k::XPBD.iter());
+            then(v, &[&k::COLLIDE])
+        }
     }
 }
 

@@ -192,47 +192,79 @@ fn mobility(k: usize, p: &StepParams, x4: V4) -> f32 {
     if k as i32 == p.grab_index { 0.0 } else { x4[3] }
 }
 
-/// One XPBD pass (Jacobi, averaged): every spring of particle `i` with `ks > 0` is a
-/// distance constraint `C = |xᵢ − x_b| − rest` of compliance `α̃ = 1/(ks·dt²)` and damping
-/// `γ = kd/(ks·dt)` (XPBD's eq. 26 with λ = 0: one pass per substep), whose correction to
-/// `i` is `wᵢ Δλ n`; the corrections are averaged over the particle's constraints. Reads
-/// `pos` (the predicted positions) and `prev` (where the substep began), writes `out`.
-pub fn xpbd(exec: Exec, p: &StepParams, slots: &[SpringSlot], pos: &[V4], prev: &[V4], out: &mut [V4]) {
-    super::for_each(exec, out, |i, o| *o = xpbd_at(i, p, slots, pos, prev));
+/// The passes of one XPBD iteration: (forward slot, colour). Every spring of the grid is
+/// the forward slot (offset `(1,0)`, `(0,1)`, `(1,1)`, `(−1,1)`, `(2,0)` or `(0,2)`) of
+/// exactly one particle `a`; within one direction, the springs of the particles of one
+/// colour share no particle, so a pass solves them all at once with no conflicts, and the
+/// 12 passes one after another are Gauss–Seidel over the colours.
+pub const XPBD_PASSES: [(usize, u32); 12] =
+    [(1, 0), (1, 1), (3, 0), (3, 1), (7, 0), (7, 1), (6, 0), (6, 1), (9, 0), (9, 1), (11, 0), (11, 1)];
+
+/// The colour of particle `(i, j)` for the springs of slot `s`: the parity of its
+/// coordinate along the spring, in steps of the spring's length (1, or 2 for bend springs),
+/// so that the spring before it along that line has the other colour.
+#[inline(always)]
+pub fn xpbd_colour(s: usize, i: u32, j: u32) -> u32 {
+    let (di, dj) = crate::grid::SLOT_OFFSETS[s];
+    let (key, step) = if di != 0 { (i, di.unsigned_abs()) } else { (j, dj.unsigned_abs()) };
+    (key / step) % 2
 }
 
+/// One XPBD pass (see [`XPBD_PASSES`]): every spring in slot `s` of a particle of colour
+/// `colour` with `ks > 0` is a distance constraint `C = |x_a − x_b| − rest` of compliance
+/// `α̃ = 1/(ks·dt²)` and damping `γ = kd/(ks·dt)` (XPBD's eq. 26 with λ = 0: one iteration
+/// per substep, Macklin et al. 2019), solved for both ends by their mobilities, in place.
+/// `prev` holds where the substep began.
+pub fn xpbd_pass(p: &StepParams, slots: &[SpringSlot], pass: usize, pos: &mut [V4], prev: &[V4]) {
+    let (s, colour) = XPBD_PASSES[pass];
+    let n = p.n;
+    for a in 0..pos.len() {
+        if xpbd_colour(s, a as u32 % n, a as u32 / n) != colour {
+            continue;
+        }
+        let slot = slots[a * SLOTS + s];
+        if slot.neighbor < 0 || slot.ks <= 0.0 {
+            continue;
+        }
+        let b = slot.neighbor as usize;
+        if let Some((xa, xb)) = xpbd_solve(p, &slot, a, b, pos[a], pos[b], prev[a], prev[b]) {
+            pos[a] = xa;
+            pos[b] = xb;
+        }
+    }
+}
+
+/// The constraint of `slot` between `a` (at `xa4`) and `b`: their new positions, or
+/// `None` when neither moves.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn xpbd_at(i: usize, p: &StepParams, slots: &[SpringSlot], pos: &[V4], prev: &[V4]) -> V4 {
-    let wi = mobility(i, p, pos[i]);
-    if wi == 0.0 {
-        return pos[i];
-    }
+fn xpbd_solve(
+    p: &StepParams,
+    slot: &SpringSlot,
+    a: usize,
+    b: usize,
+    xa4: V4,
+    xb4: V4,
+    pa: V4,
+    pb: V4,
+) -> Option<(V4, V4)> {
     let inv_m = 1.0 / p.particle_mass;
-    let xi = v3(pos[i]);
-    let ui = xi - v3(prev[i]);
-    let mut corr = Vec3::ZERO;
-    let mut count = 0.0f32;
-    for s in &slots[i * SLOTS..(i + 1) * SLOTS] {
-        if s.neighbor < 0 || s.ks <= 0.0 {
-            continue;
-        }
-        let b = s.neighbor as usize;
-        let xb = v3(pos[b]);
-        let d = xi - xb;
-        let len = d.length();
-        if len <= f32::MIN_POSITIVE {
-            continue;
-        }
-        let n = d * (1.0 / len);
-        let alpha = 1.0 / (s.ks * p.dt * p.dt);
-        let gamma = s.kd / (s.ks * p.dt);
-        let wb = mobility(b, p, pos[b]);
-        let rel = n.dot(ui - (xb - v3(prev[b])));
-        let dl = -((len - s.rest) + gamma * rel) / ((1.0 + gamma) * (wi + wb) * inv_m + alpha);
-        corr += n * (dl * wi * inv_m);
-        count += 1.0;
+    let (wa, wb) = (mobility(a, p, xa4) * inv_m, mobility(b, p, xb4) * inv_m);
+    if wa + wb == 0.0 {
+        return None;
     }
-    if count > 0.0 { v4(xi + corr / count, pos[i][3]) } else { pos[i] }
+    let (xa, xb) = (v3(xa4), v3(xb4));
+    let d = xa - xb;
+    let len = d.length();
+    if len <= f32::MIN_POSITIVE {
+        return None;
+    }
+    let n = d * (1.0 / len);
+    let alpha = 1.0 / (slot.ks * p.dt * p.dt);
+    let gamma = slot.kd / (slot.ks * p.dt);
+    let rel = n.dot((xa - v3(pa)) - (xb - v3(pb)));
+    let dl = -((len - slot.rest) + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
+    Some((v4(xa + n * (dl * wa), xa4[3]), v4(xb - n * (dl * wb), xb4[3])))
 }
 
 // ---- implicit Euler: one Newton step, preconditioned conjugate gradients -------------
@@ -402,5 +434,36 @@ pub fn implicit_finish(exec: Exec, p: &StepParams, pos: &mut [V4], prev: &mut [V
     for (i, (x, xp)) in out.into_iter().enumerate() {
         pos[i] = x;
         prev[i] = xp;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::build;
+    use crate::{Scene, SimParams};
+
+    #[test]
+    fn the_xpbd_passes_solve_every_spring_once_and_no_pass_touches_a_particle_twice() {
+        // Grids with odd and even sides, and sides not a multiple of the bend springs' 4.
+        for n in [5u32, 8, 13] {
+            let (_, topo) = build(&Scene::with_n(n), &SimParams::default()).unwrap();
+            let mut solved = 0;
+            for &(s, colour) in &XPBD_PASSES {
+                let mut touched = vec![false; topo.num_particles()];
+                for a in 0..topo.num_particles() {
+                    let slot = topo.slots[a * SLOTS + s];
+                    if slot.neighbor < 0 || xpbd_colour(s, a as u32 % n, a as u32 / n) != colour {
+                        continue;
+                    }
+                    for k in [a, slot.neighbor as usize] {
+                        assert!(!touched[k], "n = {n}, slot {s}, colour {colour}: particle {k} in two springs");
+                        touched[k] = true;
+                    }
+                    solved += 1;
+                }
+            }
+            assert_eq!(solved, topo.springs.len(), "n = {n}: every spring in exactly one pass");
+        }
     }
 }

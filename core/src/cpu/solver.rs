@@ -3,9 +3,10 @@
 use std::time::Instant;
 
 use super::{
-    AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, cg_alpha, cg_begin, cg_beta, cg_direction, cg_matvec, cg_step,
-    collide, euler, fold, forces, implicit_finish, integrate, integrate_collide, partial_sums, rk_begin, rk_stage,
-    springs_rows, strain_limit_rows, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd,
+    AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_PASSES, cg_alpha, cg_begin, cg_beta, cg_direction,
+    cg_matvec, cg_step, collide, euler, fold, forces, implicit_finish, integrate, integrate_collide, partial_sums,
+    rk_begin, rk_stage, springs_rows, strain_limit_rows, tri_normals, tri_normals_lanes, vertex_normals,
+    vertex_normals_rows, xpbd_pass,
 };
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
 use crate::params::{Integrator, SimParams};
@@ -173,8 +174,9 @@ impl CpuSolver {
                 Self::timed(timer, on, INTEGRATE_COLLIDE, || {
                     forces(e, &p, pos, prev, force);
                     integrate(e, &p, force, pos, prev);
-                    xpbd(e, &p, &topo.slots, pos, prev, scratch);
-                    std::mem::swap(pos, scratch);
+                    for pass in 0..XPBD_PASSES.len() {
+                        xpbd_pass(&p, &topo.slots, pass, pos, prev);
+                    }
                     collide(e, &p, spheres, boxes, pos, prev)
                 });
             }

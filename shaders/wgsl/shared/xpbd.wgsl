@@ -1,0 +1,50 @@
+// One XPBD pass (core::cpu::integrators::xpbd_pass): the springs in slot s of the
+// particles of one colour — no two share a particle — each a distance constraint of
+// compliance 1/(ks dt²) and damping kd/(ks dt), λ = 0 (one iteration per substep), solved
+// for both ends by their mobilities, in place. prev holds where the substep began.
+
+fn mobility(k: u32, w: f32) -> f32 {
+    if i32(k) == p.grab_index {
+        return 0.0;
+    }
+    return w;
+}
+
+// core::cpu::integrators::xpbd_colour.
+fn xpbd_colour(di: i32, dj: i32, i: u32, j: u32) -> u32 {
+    if di != 0 {
+        return (i / u32(abs(di))) % 2u;
+    }
+    return (j / u32(abs(dj))) % 2u;
+}
+
+fn xpbd_pass(a: u32, s: u32, di: i32, dj: i32, colour: u32) {
+    if xpbd_colour(di, dj, a % p.n, a / p.n) != colour {
+        return;
+    }
+    let slot = slot_at(a, s);
+    if slot.neighbor < 0 || slot.ks <= 0.0 {
+        return;
+    }
+    let b = u32(slot.neighbor);
+    let xa4 = pos[a];
+    let xb4 = pos[b];
+    let inv_m = 1.0 / p.particle_mass;
+    let wa = mobility(a, xa4.w) * inv_m;
+    let wb = mobility(b, xb4.w) * inv_m;
+    if wa + wb == 0.0 {
+        return;
+    }
+    let d = xa4.xyz - xb4.xyz;
+    let len = length(d);
+    if len <= 1.17549435e-38 {
+        return;
+    }
+    let n = d * (1.0 / len);
+    let alpha = 1.0 / (slot.ks * p.dt * p.dt);
+    let gamma = slot.kd / (slot.ks * p.dt);
+    let rel = dot(n, (xa4.xyz - prev[a].xyz) - (xb4.xyz - prev[b].xyz));
+    let dl = -((len - slot.rest) + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
+    pos[a] = vec4<f32>(xa4.xyz + n * (dl * wa), xa4.w);
+    pos[b] = vec4<f32>(xb4.xyz - n * (dl * wb), xb4.w);
+}

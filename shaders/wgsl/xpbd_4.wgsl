@@ -1,0 +1,12 @@
+//! include: state, table, xpbd
+// xpbd_4 — XPBD pass 4 of 12: the springs in slot 7 (offset (1, 1)) of the particles of
+// colour 0 (core::cpu::integrators::XPBD_PASSES).
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    let i = flat_id(id, groups);
+    if i >= num_particles() {
+        return;
+    }
+    xpbd_pass(i, 7u, 1, 1, 0u);
+}
