@@ -80,10 +80,10 @@ pub enum Integrator {
     /// = dt (f + dt ∂f/∂x v)`, solved by Jacobi-preconditioned conjugate gradients
     /// (`cg_iterations`). Order 1, stable at any dt.
     Implicit,
-    /// Extended position-based dynamics (Macklin, Müller & Chentanez 2016) with small
-    /// steps (one iteration per substep, λ not kept): every spring a distance constraint
-    /// of compliance `1/k`, solved by Gauss–Seidel over a colouring of the grid's springs
-    /// (12 passes). Stable at any dt.
+    /// Extended position-based dynamics (Macklin, Müller & Chentanez 2016): every spring a
+    /// distance constraint of compliance `1/k`, solved by Gauss–Seidel over a colouring of
+    /// the grid's springs (12 passes), `xpbd_iterations` times per substep with each
+    /// spring's λ kept. Stable at any dt.
     Xpbd,
 }
 
@@ -214,6 +214,9 @@ pub struct SimParams {
     /// `integrator = implicit`: conjugate-gradient iterations per substep, 1 ..= 256.
     /// Default 16.
     pub cg_iterations: u32,
+    /// `integrator = xpbd`: Gauss–Seidel iterations (of 12 passes each) per substep, with
+    /// each spring's λ kept across them, 1 ..= 64. Default 1.
+    pub xpbd_iterations: u32,
 }
 
 impl Default for SimParams {
@@ -243,6 +246,7 @@ impl Default for SimParams {
             bend_modulus: 5.67e-3,
             integrator: Integrator::Verlet,
             cg_iterations: 16,
+            xpbd_iterations: 1,
         }
     }
 }
@@ -478,6 +482,9 @@ impl SimParams {
         finite_in("stretch_modulus", self.stretch_modulus, 0.0, 1e9)?;
         finite_in("shear_modulus", self.shear_modulus, 0.0, 1e9)?;
         finite_in("bend_modulus", self.bend_modulus, 0.0, 1e6)?;
+        if self.xpbd_iterations == 0 || self.xpbd_iterations > 64 {
+            return Err(ParamError::new("xpbd_iterations", self.xpbd_iterations, "must be in 1 ..= 64"));
+        }
         if self.cg_iterations == 0 || self.cg_iterations > MAX_CG_ITERATIONS {
             return Err(ParamError::new(
                 "cg_iterations",

@@ -616,7 +616,7 @@ fn rk4_4(a: &TwinArgs, b: &mut HostBuffers) {
 macro_rules! xpbd_twins {
     ($($name:ident = $k:expr),*) => {
         $(fn $name(a: &TwinArgs, b: &mut HostBuffers) {
-            cpu::xpbd_pass(a.p, &a.topo.slots, $k, &mut b.pos, &b.prev);
+            cpu::xpbd_pass(a.p, &a.topo.slots, $k, &mut b.pos, &b.prev, &mut b.aux);
         })*
     };
 }
@@ -921,7 +921,13 @@ const fn xpbd(name: &'static str, twin: Twin) -> KernelDef {
         check: GATHER,
         label: "xpbd",
         variants: IMM_TEX,
-        ..def(name, twin, Count::Particles, &[Params, Pos, Prev, Slots, BendSlots, Table], &[Pos])
+        ..def(
+            name,
+            twin,
+            Count::Particles,
+            &[Params, Pos, Prev, Slots, BendSlots, Table, Aux0, Aux1],
+            &[Pos, Aux0, Aux1],
+        )
     }
 }
 /// The 12 passes of one XPBD iteration, in order.

@@ -75,21 +75,29 @@ pub struct Integration {
     pub integrator: Integrator,
     /// Conjugate-gradient iterations (`implicit` only).
     pub cg_iterations: u32,
+    /// Gauss–Seidel iterations (`xpbd` only).
+    pub xpbd_iterations: u32,
 }
 
 impl Integration {
     /// Verlet, the thesis's.
-    pub const VERLET: Integration = Integration { integrator: Integrator::Verlet, cg_iterations: 0 };
+    pub const VERLET: Integration =
+        Integration { integrator: Integrator::Verlet, cg_iterations: 0, xpbd_iterations: 0 };
 
     /// What `params` ask for.
     pub fn of(params: &clothlab_core::SimParams) -> Self {
-        Self { integrator: params.integrator, cg_iterations: params.cg_iterations }
+        Self {
+            integrator: params.integrator,
+            cg_iterations: params.cg_iterations,
+            xpbd_iterations: params.xpbd_iterations,
+        }
     }
 }
 
 impl From<Integrator> for Integration {
     fn from(integrator: Integrator) -> Self {
-        Self { integrator, cg_iterations: clothlab_core::SimParams::default().cg_iterations }
+        let d = clothlab_core::SimParams::default();
+        Self { integrator, cg_iterations: d.cg_iterations, xpbd_iterations: d.xpbd_iterations }
     }
 }
 
@@ -139,7 +147,9 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
         }
         Integrator::Xpbd => {
             let mut v: Vec<&'static KernelDef> = vec![&k::FORCES, &k::INTEGRATE];
-            v.extend(k::XPBD.iter());
+            for _ in 0..how.xpbd_iterations {
+                v.extend(k::XPBD.iter());
+            }
             then(v, &[&k::COLLIDE])
         }
     }
@@ -149,17 +159,24 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
 /// integrated by `how`, each kernel in the flavor the variant's switches pick (see
 /// [`Variant::flavor`]).
 pub fn recipe(variant: &Variant, strain_passes: u32, how: impl Into<Integration>) -> Vec<Command> {
-    let step = integration(variant, how.into());
+    let how = how.into();
+    let step = integration(variant, how);
     let normals: [&'static KernelDef; 2] = match variant.normals {
         Accumulate::Scatter => [&k::TRI_NORMALS_SCATTER, &k::VERTEX_NORMALS_NAIVE],
         Accumulate::Gather => [&k::TRI_NORMALS, &k::VERTEX_NORMALS],
     };
     let flavor = variant.flavor();
-    step.into_iter()
+    let mut commands: Vec<Command> = step
+        .into_iter()
         .chain((0..strain_passes).map(|_| &k::STRAIN_LIMIT))
         .chain(normals)
         .flat_map(|d| run(d.flavor(flavor)))
-        .collect()
+        .collect();
+    // XPBD's λ (aux0, aux1) starts from zero every substep: cleared before its first pass.
+    if let Some(first) = commands.iter().position(|c| c.kernel().is_some_and(|k| k.def == &k::XPBD[0])) {
+        commands.splice(first..first, [Command::Clear(Buf::Aux0), Command::Clear(Buf::Aux1)]);
+    }
+    commands
 }
 
 /// The shaders a solver of `variant` builds when it starts: what its recipe dispatches,

@@ -68,7 +68,7 @@ impl Oscillator {
         }
         let bufs = start_buffers(Exec::Serial, &p, &topo, &state);
         let engine = CpuEngine::new(Exec::Serial, scene, topo);
-        let how = Integration { integrator, cg_iterations: 16 };
+        let how = Integration { integrator, cg_iterations: 16, xpbd_iterations: 1 };
         Self { engine, bufs, p, commands: recipe(&Variant::OPTIMIZED, 0, how), k }
     }
 
@@ -277,6 +277,7 @@ fn the_fast_cpu_solvers_compute_the_bits_of_every_integrators_recipe() {
             shear_damping: 0.1,
             bend_damping: 0.05,
             cg_iterations: 8,
+            xpbd_iterations: 2,
             ..SimParams::default()
         };
         let scene = Scene::with_n(37);

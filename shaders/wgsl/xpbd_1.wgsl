@@ -1,4 +1,4 @@
-//! include: state, table, xpbd
+//! include: state, table, aux, xpbd
 // xpbd_1 — XPBD pass 1 of 12: the springs in slot 1 (offset (1, 0)) of the particles of
 // colour 1 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)
@@ -8,5 +8,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    xpbd_pass(i, 1u, 1, 0, 1u);
+    xpbd_pass(i, 1u, 1, 0, 1u, 0u, 0u);
 }

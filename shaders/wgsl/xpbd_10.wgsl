@@ -1,4 +1,4 @@
-//! include: state, table, xpbd
+//! include: state, table, aux, xpbd
 // xpbd_10 — XPBD pass 10 of 12: the springs in slot 11 (offset (0, 2)) of the particles of
 // colour 0 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)
@@ -8,5 +8,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    xpbd_pass(i, 11u, 0, 2, 0u);
+    xpbd_pass(i, 11u, 0, 2, 0u, 1u, 2u);
 }

@@ -1,4 +1,4 @@
-//! include: state, table, xpbd
+//! include: state, table, aux, xpbd
 // xpbd_2 — XPBD pass 2 of 12: the springs in slot 3 (offset (0, 1)) of the particles of
 // colour 0 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)
@@ -8,5 +8,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    xpbd_pass(i, 3u, 0, 1, 0u);
+    xpbd_pass(i, 3u, 0, 1, 0u, 0u, 1u);
 }

@@ -1,4 +1,4 @@
-//! include: state, table, xpbd
+//! include: state, table, aux, xpbd
 // xpbd_4 — XPBD pass 4 of 12: the springs in slot 7 (offset (1, 1)) of the particles of
 // colour 0 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)
@@ -8,5 +8,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    xpbd_pass(i, 7u, 1, 1, 0u);
+    xpbd_pass(i, 7u, 1, 1, 0u, 0u, 2u);
 }

@@ -1,4 +1,4 @@
-//! include: state, table, xpbd
+//! include: state, table, aux, xpbd
 // xpbd_7 — XPBD pass 7 of 12: the springs in slot 6 (offset (-1, 1)) of the particles of
 // colour 1 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)
@@ -8,5 +8,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    xpbd_pass(i, 6u, -1, 1, 1u);
+    xpbd_pass(i, 6u, -1, 1, 1u, 1u, 0u);
 }

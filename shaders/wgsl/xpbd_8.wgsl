@@ -1,4 +1,4 @@
-//! include: state, table, xpbd
+//! include: state, table, aux, xpbd
 // xpbd_8 — XPBD pass 8 of 12: the springs in slot 9 (offset (2, 0)) of the particles of
 // colour 0 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)
@@ -8,5 +8,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    xpbd_pass(i, 9u, 2, 0, 0u);
+    xpbd_pass(i, 9u, 2, 0, 0u, 1u, 1u);
 }

@@ -18,6 +18,9 @@
 //! | `aux[3]` | `Σ bₛ gₛ` | `q = A p` |
 //! | `aux[4]` | the substep's wind force | — |
 //!
+//! XPBD keeps each spring's λ at the spring's first end: slots 1, 3, 7 in `aux[0]`'s x,
+//! y, z and slots 6, 9, 11 in `aux[1]`'s (cleared at every substep's start).
+//!
 //! Pins, the grab and the floor end every integrator's substep as [`super::integrate`]
 //! ends Verlet's (`finish_at`); spheres and boxes are the `collide` kernel's, run after.
 
@@ -210,13 +213,26 @@ pub fn xpbd_colour(s: usize, i: u32, j: u32) -> u32 {
     (key / step) % 2
 }
 
+/// Where pass `pass` keeps its springs' λ: (`aux` buffer, component).
+pub fn xpbd_lambda_home(pass: usize) -> (usize, usize) {
+    (pass / 6, (pass / 2) % 3)
+}
+
 /// One XPBD pass (see [`XPBD_PASSES`]): every spring in slot `s` of a particle of colour
 /// `colour` with `ks > 0` is a distance constraint `C = |x_a − x_b| − rest` of compliance
-/// `α̃ = 1/(ks·dt²)` and damping `γ = kd/(ks·dt)` (XPBD's eq. 26 with λ = 0: one iteration
-/// per substep, Macklin et al. 2019), solved for both ends by their mobilities, in place.
+/// `α̃ = 1/(ks·dt²)` and damping `γ = kd/(ks·dt)`, its λ kept in `lambda` (XPBD's eq. 26;
+/// λ starts at zero every substep), solved for both ends by their mobilities, in place.
 /// `prev` holds where the substep began.
-pub fn xpbd_pass(p: &StepParams, slots: &[SpringSlot], pass: usize, pos: &mut [V4], prev: &[V4]) {
+pub fn xpbd_pass(
+    p: &StepParams,
+    slots: &[SpringSlot],
+    pass: usize,
+    pos: &mut [V4],
+    prev: &[V4],
+    lambda: &mut [Vec<V4>],
+) {
     let (s, colour) = XPBD_PASSES[pass];
+    let (buf, c) = xpbd_lambda_home(pass);
     let n = p.n;
     for a in 0..pos.len() {
         if xpbd_colour(s, a as u32 % n, a as u32 / n) != colour {
@@ -227,15 +243,17 @@ pub fn xpbd_pass(p: &StepParams, slots: &[SpringSlot], pass: usize, pos: &mut [V
             continue;
         }
         let b = slot.neighbor as usize;
-        if let Some((xa, xb)) = xpbd_solve(p, &slot, a, b, pos[a], pos[b], prev[a], prev[b]) {
+        let l = lambda[buf][a][c];
+        if let Some((xa, xb, dl)) = xpbd_solve(p, &slot, a, b, pos[a], pos[b], prev[a], prev[b], l) {
             pos[a] = xa;
             pos[b] = xb;
+            lambda[buf][a][c] = l + dl;
         }
     }
 }
 
-/// The constraint of `slot` between `a` (at `xa4`) and `b`: their new positions, or
-/// `None` when neither moves.
+/// The constraint of `slot` between `a` (at `xa4`) and `b` with multiplier `l`: their
+/// new positions and Δλ, or `None` when neither moves.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn xpbd_solve(
@@ -247,7 +265,8 @@ fn xpbd_solve(
     xb4: V4,
     pa: V4,
     pb: V4,
-) -> Option<(V4, V4)> {
+    l: f32,
+) -> Option<(V4, V4, f32)> {
     let inv_m = 1.0 / p.particle_mass;
     let (wa, wb) = (mobility(a, p, xa4) * inv_m, mobility(b, p, xb4) * inv_m);
     if wa + wb == 0.0 {
@@ -263,8 +282,8 @@ fn xpbd_solve(
     let alpha = 1.0 / (slot.ks * p.dt * p.dt);
     let gamma = slot.kd / (slot.ks * p.dt);
     let rel = n.dot((xa - v3(pa)) - (xb - v3(pb)));
-    let dl = -((len - slot.rest) + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
-    Some((v4(xa + n * (dl * wa), xa4[3]), v4(xb - n * (dl * wb), xb4[3])))
+    let dl = -((len - slot.rest) + alpha * l + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
+    Some((v4(xa + n * (dl * wa), xa4[3]), v4(xb - n * (dl * wb), xb4[3]), dl))
 }
 
 // ---- implicit Euler: one Newton step, preconditioned conjugate gradients -------------

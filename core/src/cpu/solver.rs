@@ -174,8 +174,12 @@ impl CpuSolver {
                 Self::timed(timer, on, INTEGRATE_COLLIDE, || {
                     forces(e, &p, pos, prev, force);
                     integrate(e, &p, force, pos, prev);
-                    for pass in 0..XPBD_PASSES.len() {
-                        xpbd_pass(&p, &topo.slots, pass, pos, prev);
+                    // λ per spring, from zero every substep (the recipe's clears).
+                    aux[..2].iter_mut().flatten().for_each(|v| *v = [0.0; 4]);
+                    for _ in 0..params.xpbd_iterations {
+                        for pass in 0..XPBD_PASSES.len() {
+                            xpbd_pass(&p, &topo.slots, pass, pos, prev, aux);
+                        }
                     }
                     collide(e, &p, spheres, boxes, pos, prev)
                 });

@@ -1,7 +1,8 @@
 // One XPBD pass (core::cpu::integrators::xpbd_pass): the springs in slot s of the
 // particles of one colour — no two share a particle — each a distance constraint of
-// compliance 1/(ks dt²) and damping kd/(ks dt), λ = 0 (one iteration per substep), solved
-// for both ends by their mobilities, in place. prev holds where the substep began.
+// compliance 1/(ks dt²) and damping kd/(ks dt), its λ kept in component c of aux0 (buf 0)
+// or aux1 (buf 1) at its first end, solved for both ends by their mobilities, in place.
+// prev holds where the substep began.
 
 fn mobility(k: u32, w: f32) -> f32 {
     if i32(k) == p.grab_index {
@@ -18,7 +19,22 @@ fn xpbd_colour(di: i32, dj: i32, i: u32, j: u32) -> u32 {
     return (j / u32(abs(dj))) % 2u;
 }
 
-fn xpbd_pass(a: u32, s: u32, di: i32, dj: i32, colour: u32) {
+fn lambda_at(a: u32, buf: u32, c: u32) -> f32 {
+    if buf == 0u {
+        return aux0[a][c];
+    }
+    return aux1[a][c];
+}
+
+fn set_lambda(a: u32, buf: u32, c: u32, l: f32) {
+    if buf == 0u {
+        aux0[a][c] = l;
+    } else {
+        aux1[a][c] = l;
+    }
+}
+
+fn xpbd_pass(a: u32, s: u32, di: i32, dj: i32, colour: u32, buf: u32, c: u32) {
     if xpbd_colour(di, dj, a % p.n, a / p.n) != colour {
         return;
     }
@@ -44,7 +60,9 @@ fn xpbd_pass(a: u32, s: u32, di: i32, dj: i32, colour: u32) {
     let alpha = 1.0 / (slot.ks * p.dt * p.dt);
     let gamma = slot.kd / (slot.ks * p.dt);
     let rel = dot(n, (xa4.xyz - prev[a].xyz) - (xb4.xyz - prev[b].xyz));
-    let dl = -((len - slot.rest) + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
+    let l = lambda_at(a, buf, c);
+    let dl = -((len - slot.rest) + alpha * l + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
     pos[a] = vec4<f32>(xa4.xyz + n * (dl * wa), xa4.w);
     pos[b] = vec4<f32>(xb4.xyz - n * (dl * wb), xb4.w);
+    set_lambda(a, buf, c, l + dl);
 }
