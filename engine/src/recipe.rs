@@ -94,13 +94,6 @@ impl Integration {
     }
 }
 
-impl From<Integrator> for Integration {
-    fn from(integrator: Integrator) -> Self {
-        let d = clothlab_core::SimParams::default();
-        Self { integrator, cg_iterations: d.cg_iterations, xpbd_iterations: d.xpbd_iterations }
-    }
-}
-
 /// The kernels that integrate one substep with `how`, before the strain limit: the force
 /// evaluations in the variant's form (fused with `fusion=clothlab`, the springs scattered
 /// with `springs=scatter`; the thesis's fusion is Verlet's own) and the integrator's
@@ -158,8 +151,7 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
 /// The commands of one substep for `variant` with `strain_passes` strain passes,
 /// integrated by `how`, each kernel in the flavor the variant's switches pick (see
 /// [`Variant::flavor`]).
-pub fn recipe(variant: &Variant, strain_passes: u32, how: impl Into<Integration>) -> Vec<Command> {
-    let how = how.into();
+pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Command> {
     let step = integration(variant, how);
     let normals: [&'static KernelDef; 2] = match variant.normals {
         Accumulate::Scatter => [&k::TRI_NORMALS_SCATTER, &k::VERTEX_NORMALS_NAIVE],

@@ -37,13 +37,23 @@ pub struct SolverOptions {
     pub stats: StatsMode,
 }
 
-/// The buffers a kernel test or a bisection moves between host and device: the state,
-/// the face normals, the integrators' scratch buffers and the CG scalars.
-fn host_buffers() -> impl Iterator<Item = Buf> {
-    [Buf::Pos, Buf::PosOut, Buf::Prev, Buf::Force, Buf::Normal, Buf::Faces]
-        .into_iter()
-        .chain(Buf::AUX)
-        .chain([Buf::Scalars])
+/// The buffers a kernel test or a bisection moves between host and device for
+/// `commands`: the state and the face normals, and the integrators' scratch buffers and
+/// CG scalars only when a command touches them (a Verlet bisection moves no more than
+/// before there were any).
+fn host_buffers(commands: &[Command]) -> Vec<Buf> {
+    let scratch = |b: &Buf| Buf::AUX.contains(b) || *b == Buf::Scalars;
+    let touched = commands.iter().any(|c| match c {
+        Command::Dispatch(k) => k.def.reads.iter().chain(k.def.writes).any(scratch),
+        Command::Clear(b) => scratch(b),
+        Command::Swap => false,
+    });
+    let mut v = vec![Buf::Pos, Buf::PosOut, Buf::Prev, Buf::Force, Buf::Normal, Buf::Faces];
+    if touched {
+        v.extend(Buf::AUX);
+        v.push(Buf::Scalars);
+    }
+    v
 }
 
 /// The cloth solver on any [`Engine`].
@@ -413,7 +423,8 @@ impl<E: Engine> GpuSolver<E> {
         self.write(Buf::Params, bytemuck::bytes_of(sp))?;
         self.write(Buf::ParamsStorage, bytemuck::bytes_of(sp))?;
         self.sp = *sp;
-        for buf in host_buffers() {
+        let moved = host_buffers(commands);
+        for &buf in &moved {
             if let Some(v) = bufs.get(buf) {
                 self.write(buf, bytemuck::cast_slice(v))?;
             }
@@ -425,7 +436,7 @@ impl<E: Engine> GpuSolver<E> {
         self.engine.submit(true)?;
         self.engine.wait(0)?;
         self.engine.check("running commands")?;
-        for buf in host_buffers() {
+        for &buf in &moved {
             let v = self.read(buf)?;
             if let Some(dst) = bufs.get_mut(buf) {
                 *dst = v;
