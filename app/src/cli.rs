@@ -64,9 +64,9 @@ pub struct RenderArgs {
     /// Solver backend.
     #[arg(long, value_enum, default_value_t = Backend::Wgpu)]
     pub backend: Backend,
-    /// Particles per side of the cloth.
-    #[arg(long, default_value_t = 100)]
-    pub n: u32,
+    /// Particles per side of the cloth (default 100, or the scene file's).
+    #[arg(long)]
+    pub n: Option<u32>,
     /// Frames to simulate before the picture (of `substeps` substeps each).
     #[arg(long, default_value_t = 120)]
     pub frames: u32,
@@ -98,9 +98,10 @@ pub struct ValidateArgs {
     /// GPU backends to check (comma-separated).
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan])]
     pub backends: Vec<Backend>,
-    /// Particles per side for the kernel checks and the rollout (2 ..= 1024).
-    #[arg(long, default_value_t = 64)]
-    pub n: u32,
+    /// Particles per side for the kernel checks and the rollout (2 ..= 1024; default 64,
+    /// or the scene file's).
+    #[arg(long)]
+    pub n: Option<u32>,
     /// Substeps of the rollout (rounded up to whole frames).
     #[arg(long, default_value_t = 200)]
     pub steps: u32,
@@ -131,9 +132,10 @@ pub struct RunArgs {
     /// Solver (default: the optimized GPU solver of the API).
     #[arg(long, value_enum)]
     pub backend: Option<Backend>,
-    /// Particles per side of the cloth (10 ..= 1024 in the app).
-    #[arg(long, default_value_t = 64)]
-    pub n: u32,
+    /// Particles per side of the cloth (10 ..= 1024 in the app; default 64, or the scene
+    /// file's).
+    #[arg(long)]
+    pub n: Option<u32>,
     /// Quit after this many frames (for tests and screenshots).
     #[arg(long)]
     pub frames: Option<u64>,
@@ -153,6 +155,10 @@ pub struct RunArgs {
     /// Test hook: halfway through `--frames`, switch to the other graphics API.
     #[arg(long, hide = true)]
     pub switch_api: bool,
+    /// Test hook: at frame 3, drop this file on the window (File → Open scene's path),
+    /// printing the status bar's message.
+    #[arg(long, hide = true, value_name = "FILE")]
+    pub drop_file: Option<PathBuf>,
     #[command(flatten)]
     pub physics: PhysicsArgs,
 }
@@ -162,13 +168,14 @@ impl Default for RunArgs {
         Self {
             api: Api::Wgpu,
             backend: None,
-            n: 64,
+            n: None,
             frames: None,
             screenshot: None,
             width: 1280,
             height: 800,
             drag_test: false,
             switch_api: false,
+            drop_file: None,
             physics: PhysicsArgs::default(),
         }
     }
@@ -179,9 +186,9 @@ pub struct SimArgs {
     /// Solver backend.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     pub backend: Backend,
-    /// Particles per side of the cloth (2 ..= 4096).
-    #[arg(long, default_value_t = 100)]
-    pub n: u32,
+    /// Particles per side of the cloth (2 ..= 4096; default 100, or the scene file's).
+    #[arg(long)]
+    pub n: Option<u32>,
     /// Substeps to simulate (rounded up to whole frames of `substeps` each).
     #[arg(long, default_value_t = 1000)]
     pub steps: u64,
@@ -206,6 +213,10 @@ pub struct PhysicsArgs {
     /// (names as in `SimParams`; see docs/parameters.md).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
+    /// A scene file (TOML; see scenes/ and docs/scenes.md): the cloth, floor, spheres,
+    /// boxes, parameters, camera and light. `--n`, `--integrator` and `--set` apply over it.
+    #[arg(long, value_name = "FILE")]
+    pub scene: Option<PathBuf>,
 }
 
 /// `--integrator`'s value, by its name.

@@ -1,15 +1,64 @@
-//! The simulation parameters of a command line: `--set NAME=VALUE` through the serde form
-//! of `SimParams`, and `--integrator`.
+//! What a command simulates: the scene and parameters of `--scene FILE` (or the defaults),
+//! with `--n`, `--integrator` and `--set NAME=VALUE` (through the serde form of
+//! `SimParams`) applied over them.
 
 use anyhow::{Context, Result, bail};
-use clothlab_core::SimParams;
+use clothlab_core::{OrbitCamera, Scene, SceneFile, SimParams};
 
 use crate::cli::PhysicsArgs;
 
+/// A scene and its parameters, checked, with what a scene file says about the view.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    /// The scene.
+    pub scene: Scene,
+    /// The parameters.
+    pub params: SimParams,
+    /// The file's camera, if it sets one.
+    pub camera: Option<OrbitCamera>,
+    /// The file's light position, if it sets one.
+    pub light: Option<[f32; 3]>,
+    /// The file's title, if it has one.
+    pub title: Option<String>,
+}
+
+impl Setup {
+    /// The default scene with an `n × n` cloth and the default parameters.
+    pub fn default_with_n(n: u32) -> Self {
+        Self { scene: Scene::with_n(n), params: SimParams::default(), camera: None, light: None, title: None }
+    }
+
+    /// A scene file's contents.
+    pub fn from_file(f: SceneFile) -> Self {
+        Self { scene: f.scene, params: f.params, camera: f.camera, light: f.light, title: f.title }
+    }
+}
+
 impl PhysicsArgs {
-    /// The defaults with `--set` and `--integrator` applied, validated.
-    pub fn params(&self) -> Result<SimParams> {
-        let mut p = apply_overrides(&SimParams::default(), &self.set)?;
+    /// The scene file's scene and parameters (without `--scene`: the default scene with an
+    /// `default_n × default_n` cloth), with `--n` (`n`), `--integrator` and `--set`
+    /// applied, all checked; nothing of a refused file is used.
+    pub fn setup(&self, n: Option<u32>, default_n: u32) -> Result<Setup> {
+        let mut setup = match &self.scene {
+            Some(path) => Setup::from_file(SceneFile::load(path)?),
+            None => Setup::default_with_n(default_n),
+        };
+        if let Some(n) = n {
+            setup.scene.cloth.n = n;
+        }
+        if let Err(e) = setup.scene.validate() {
+            match n {
+                Some(n) if e.field == "cloth.n" => bail!("invalid --n {n}: {}", e.reason),
+                _ => return Err(e.into()),
+            }
+        }
+        setup.params = self.apply(&setup.params)?;
+        Ok(setup)
+    }
+
+    /// `params` with `--set` and `--integrator` applied, validated.
+    pub fn apply(&self, params: &SimParams) -> Result<SimParams> {
+        let mut p = apply_overrides(params, &self.set)?;
         if let Some(i) = self.integrator {
             p.integrator = i;
         }

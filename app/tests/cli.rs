@@ -506,3 +506,68 @@ fn switching_the_api_while_running_keeps_drawing_the_cloth_and_the_panels() {
         assert!(text_px > 30, "{api} → {other}: no menu text ({text_px} light pixels)");
     }
 }
+
+fn scene_path(name: &str) -> String {
+    format!("{}/../scenes/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn scene_files_reach_every_command_and_bad_ones_are_refused_in_one_line() {
+    // A scene file's cloth, colliders and parameters; --n and --set over them.
+    let table = scene_path("tablecloth.toml");
+    let o = clothlab(&["sim", "--scene", &table, "--n", "16", "--steps", "32"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(text.contains("A tablecloth falling on a box") && text.contains("grid           16x16"), "{text}");
+    let o = clothlab(&["sim", "--scene", &scene_path("free-fall.toml"), "--steps", "16", "--set", "substeps=8"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("(no floor)") && text.contains("frames of 8"), "{text}");
+    for cmd in ["validate", "render", "bench", "run"] {
+        let o = clothlab(&[cmd, "--help"]);
+        assert!(String::from_utf8_lossy(&o.stdout).contains("--scene <FILE>"), "{cmd} --help");
+    }
+    // Bad files: the file, line and column, and what is expected; nothing runs.
+    let dir = std::env::temp_dir().join(format!("clothlab-scenes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_owned()
+    };
+    let syntax = bad("syntax.toml", "[cloth]\nn = = 3\n");
+    refused(&["sim", "--scene", &syntax], "syntax.toml:2:5: ");
+    let radius = bad("radius.toml", "[[spheres]]\ncenter = [0, 1, 0]\nradius = -1\n");
+    refused(&["render", "--scene", &radius, "--out", "/tmp/never.png"], "radius.toml:3:10: `spheres[0].radius` = -1");
+    let typo = bad("typo.toml", "[floor]\nheight = 1\n");
+    refused(&["validate", "--scene", &typo], "typo.toml:2:1: unknown field `height`, expected `enabled` or `y`");
+    refused(&["sim", "--scene", "/nonexistent/scene.toml"], "/nonexistent/scene.toml: cannot read");
+    // A file the app cannot take, refused before a window opens.
+    let big = bad("big.toml", "[cloth]\nn = 2000\n");
+    refused(&["run", "--scene", &big], "10 ..= 1024");
+    for path in [&syntax, &radius] {
+        let o = clothlab(&["sim", "--scene", path]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_scene_file_dropped_on_the_window_opens_and_a_bad_one_changes_nothing() {
+    if !display() {
+        return;
+    }
+    let bad = std::env::temp_dir().join(format!("clothlab-drop-{}.toml", std::process::id()));
+    std::fs::write(&bad, "[cloth]\nn = 32\npinning = \"corners\"\n").unwrap();
+    for api in ["wgpu", "vulkan"] {
+        let (text, px) = run_app(api, "24", &["--drop-file", &scene_path("tablecloth.toml")]);
+        assert!(text.contains("dropped: opened A tablecloth falling on a box"), "{api}: {text}");
+        let cloth = cloth_pixels(&px);
+        assert!(cloth > 2000, "{api}: only {cloth} cloth pixels after opening the tablecloth");
+        // A bad file: its one line in the status bar, the running cloth kept.
+        let (text, px) = run_app(api, "24", &["--drop-file", bad.to_str().unwrap()]);
+        assert!(text.contains(":3:11: unknown variant `corners`"), "{api}: {text}");
+        assert!(cloth_pixels(&px) > 2000, "{api}: the cloth is gone after a refused file");
+    }
+    std::fs::remove_file(&bad).ok();
+}

@@ -312,20 +312,14 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
     let nu = n as usize;
     let np = nu * nu;
     let spacing = scene.cloth.size / (n - 1) as f32;
-    let [cx, cy, cz] = scene.cloth.top_center;
 
     let mut pos = Vec::with_capacity(np);
     let mut uv = Vec::with_capacity(np);
     for j in 0..n {
         for i in 0..n {
-            let pinned = match scene.cloth.pinning {
-                Pinning::TopCorners => j == 0 && (i == 0 || i == n - 1),
-                Pinning::TopEdge => j == 0,
-                Pinning::None => false,
-            };
-            let x = cx - 0.5 * scene.cloth.size + i as f32 * spacing;
-            let z = cz + j as f32 * spacing;
-            pos.push([x, cy, z, if pinned { 0.0 } else { 1.0 }]);
+            let pinned = scene.cloth.pinning.holds(n, i, j);
+            let [x, y, z] = scene.cloth.rest_position(i, j);
+            pos.push([x, y, z, if pinned { 0.0 } else { 1.0 }]);
             uv.push([i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32]);
         }
     }
@@ -400,22 +394,45 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
         }
     }
 
-    // Tethers: to both corners for TopCorners, to the pin straight above for TopEdge.
+    // Tethers: to both corners for TopCorners, to the pin straight above for TopEdge, to
+    // the two nearest (in the flat sheet) for a list of points. A list is searched by brute
+    // force, so a very long list on a very large grid (over 2.5e8 pairs) gets no tethers.
+    let listed: Vec<u32> = match &scene.cloth.pinning {
+        Pinning::Points(p) if p.len() * np <= 250_000_000 => {
+            let mut v: Vec<u32> = p.iter().map(|q| q[1] * n + q[0]).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        }
+        _ => Vec::new(),
+    };
+    let dist = |a: V4, b: V4| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
     let mut tethers = Vec::with_capacity(np);
     for j in 0..n {
         for i in 0..n {
             let me = (j * n + i) as usize;
             let mut t = [Tether::EMPTY; TETHER_SLOTS];
+            let mut nearest = [(f32::INFINITY, 0u32); TETHER_SLOTS];
             let pins: &[u32] = match scene.cloth.pinning {
                 Pinning::TopCorners => &[0, n - 1],
                 Pinning::TopEdge => &[i],
                 Pinning::None => &[],
+                Pinning::Points(_) => {
+                    for &pin in &listed {
+                        let d = (dist(pos[me], pos[pin as usize]), pin);
+                        if d < nearest[1] {
+                            nearest[1] = d;
+                            if nearest[1] < nearest[0] {
+                                nearest.swap(0, 1);
+                            }
+                        }
+                    }
+                    &[nearest[0].1, nearest[1].1][..listed.len().min(TETHER_SLOTS)]
+                }
             };
             if pos[me][3] != 0.0 {
                 for (slot, &pin) in t.iter_mut().zip(pins) {
-                    let (a, b) = (pos[me], pos[pin as usize]);
-                    let rest = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
-                    *slot = Tether { pin: pin as i32, rest };
+                    *slot = Tether { pin: pin as i32, rest: dist(pos[me], pos[pin as usize]) };
                 }
             }
             tethers.push(t);
@@ -501,7 +518,7 @@ impl StepParams {
             damping: params.damping,
             air_drag: params.air_drag,
             particle_mass: params.particle_mass(scene.cloth.n),
-            floor_y: scene.floor_y,
+            floor_y: scene.floor_height(),
             margin: params.collision_margin,
             friction: params.friction,
             strain_limit: params.strain_limit,

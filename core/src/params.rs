@@ -27,8 +27,9 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Error)]
 #[error("invalid parameter `{field}` = {value}: {reason}")]
 pub struct ParamError {
-    /// The field's name as written in the struct (and on the CLI).
-    pub field: &'static str,
+    /// The field's name as written in the struct (and on the CLI); for a scene, its path
+    /// in a scene file (`cloth.n`, `spheres[1].radius`).
+    pub field: String,
     /// The refused value, formatted.
     pub value: String,
     /// What would be accepted.
@@ -36,8 +37,8 @@ pub struct ParamError {
 }
 
 impl ParamError {
-    pub(crate) fn new(field: &'static str, value: impl std::fmt::Display, reason: impl Into<String>) -> Self {
-        Self { field, value: value.to_string(), reason: reason.into() }
+    pub(crate) fn new(field: impl Into<String>, value: impl std::fmt::Display, reason: impl Into<String>) -> Self {
+        Self { field: field.into(), value: value.to_string(), reason: reason.into() }
     }
 }
 
@@ -152,7 +153,7 @@ impl Integrator {
 /// Every simulation parameter. Plain data: change fields, then call [`SimParams::validate`]
 /// before handing it to a solver (solvers validate again and refuse bad values).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct SimParams {
     /// Simulated time per rendered frame, seconds. Default 1/60.
     pub frame_dt: f32,
@@ -497,7 +498,7 @@ impl SimParams {
 }
 
 /// Refuses NaN, infinities and values outside `[lo, hi]`.
-pub(crate) fn finite_in(field: &'static str, v: f32, lo: f32, hi: f32) -> Result<(), ParamError> {
+pub(crate) fn finite_in(field: impl Into<String>, v: f32, lo: f32, hi: f32) -> Result<(), ParamError> {
     if !v.is_finite() {
         return Err(ParamError::new(field, v, "must be a finite number"));
     }

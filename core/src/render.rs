@@ -81,7 +81,7 @@ pub fn cloth_lines(topo: &ClothTopology) -> Vec<u32> {
     edges.iter().flat_map(|&(a, b)| [a, b]).collect()
 }
 
-/// Floor, spheres and boxes as one triangle list.
+/// Floor, spheres and boxes as one triangle list (never empty).
 pub fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
     let mut v = Vec::new();
     let mut idx = Vec::new();
@@ -93,9 +93,10 @@ pub fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
         }
         idx.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
     };
-    let y = scene.floor_y;
-    let s = 6.0;
-    quad(&mut v, [[-s, y, -s], [-s, y, s], [s, y, s], [s, y, -s]], [0.0, 1.0, 0.0], 0);
+    if let Some(y) = scene.floor_y {
+        let s = 6.0;
+        quad(&mut v, [[-s, y, -s], [-s, y, s], [s, y, s], [s, y, -s]], [0.0, 1.0, 0.0], 0);
+    }
     for b in &scene.boxes {
         let (lo, hi) = (b.min, b.max);
         let faces: [([[f32; 3]; 4], [f32; 3]); 6] = [
@@ -151,6 +152,12 @@ pub fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
                 idx.extend_from_slice(&[a, a + 1, b, a + 1, b + 1, b]);
             }
         }
+    }
+    if idx.is_empty() {
+        // Nothing but the cloth (no floor, no colliders): one degenerate triangle, so that
+        // every renderer still has a buffer to bind (Vulkan has no empty buffers).
+        v.push(StaticVertex { pos: [0.0; 3], normal: [0.0, 1.0, 0.0], uv: [0.0; 2], material: 0 });
+        idx.extend_from_slice(&[0, 0, 0]);
     }
     (v, idx)
 }

@@ -15,10 +15,14 @@ pub const MIN_N: u32 = 2;
 pub const MAX_N: u32 = 4096;
 /// Most spheres / boxes a scene may hold (they live in a uniform buffer on the GPU).
 pub const MAX_COLLIDERS: usize = 16;
+/// The floor height kernels see when a scene has no floor: far below anything a cloth
+/// reaches (finite, so that `floor + margin` stays finite).
+pub const NO_FLOOR: f32 = -1e30;
 
 /// A sphere collider. `#[repr(C)]`, mirrored in the shaders.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Sphere {
     /// Centre, m.
     pub center: [f32; 3],
@@ -44,7 +48,10 @@ impl Aabb {
 }
 
 /// Which particles are held still.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+///
+/// In a scene file: `"top-corners"`, `"top-edge"`, `"none"`, or a list of grid
+/// coordinates `[[i, j], …]` (column `i`, row `j`, both `0 … n-1`).
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Pinning {
     /// The two corners of the top edge (`j = 0`): the thesis's scene.
     TopCorners,
@@ -52,25 +59,113 @@ pub enum Pinning {
     TopEdge,
     /// Nothing: the cloth falls freely.
     None,
+    /// These particles, as `[i, j]` grid coordinates.
+    Points(Vec<[u32; 2]>),
+}
+
+impl Pinning {
+    /// The names a scene file may give.
+    pub const NAMES: [&'static str; 3] = ["top-corners", "top-edge", "none"];
+
+    /// Whether particle `(i, j)` of an `n × n` grid is held.
+    pub fn holds(&self, n: u32, i: u32, j: u32) -> bool {
+        match self {
+            Pinning::TopCorners => j == 0 && (i == 0 || i == n - 1),
+            Pinning::TopEdge => j == 0,
+            Pinning::None => false,
+            Pinning::Points(p) => p.contains(&[i, j]),
+        }
+    }
+
+    /// A short description for the app and `sim`.
+    pub fn label(&self) -> String {
+        match self {
+            Pinning::TopCorners => "top corners".into(),
+            Pinning::TopEdge => "top edge".into(),
+            Pinning::None => "none".into(),
+            Pinning::Points(p) => format!("{} points", p.len()),
+        }
+    }
+}
+
+impl Serialize for Pinning {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Pinning::TopCorners => s.serialize_str("top-corners"),
+            Pinning::TopEdge => s.serialize_str("top-edge"),
+            Pinning::None => s.serialize_str("none"),
+            Pinning::Points(p) => p.serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Pinning {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Pinning;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                write!(f, "\"top-corners\", \"top-edge\", \"none\" or a list of [i, j] grid points")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Pinning, E> {
+                match v {
+                    "top-corners" => Ok(Pinning::TopCorners),
+                    "top-edge" => Ok(Pinning::TopEdge),
+                    "none" => Ok(Pinning::None),
+                    _ => Err(E::unknown_variant(v, &Pinning::NAMES)),
+                }
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Pinning, A::Error> {
+                let mut points = Vec::new();
+                while let Some(p) = seq.next_element::<[u32; 2]>()? {
+                    points.push(p);
+                }
+                Ok(Pinning::Points(points))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 /// The cloth: an `n × n` grid of particles.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct ClothSpec {
     /// Particles per side. Default 100. Valid: 2 ..= 4096.
     pub n: u32,
     /// Side length of the square cloth, m. Default 2.
     pub size: f32,
-    /// Centre of the top edge (`j = 0`), m; the cloth starts horizontal, extending from
-    /// there towards +z. Default (0, 2.2, -0.9).
+    /// Centre of the top edge (`j = 0`), m. Default (0, 2.2, -0.9).
     pub top_center: [f32; 3],
+    /// Direction of the rows (increasing `i`): a unit vector. Default +x.
+    pub across: [f32; 3],
+    /// Direction from the top edge into the cloth (increasing `j`): a unit vector
+    /// perpendicular to `across`. Default +z (the cloth starts horizontal); -y hangs it.
+    pub down: [f32; 3],
     /// Which particles are pinned. Default [`Pinning::TopCorners`].
     pub pinning: Pinning,
 }
 
 impl Default for ClothSpec {
     fn default() -> Self {
-        Self { n: 100, size: 2.0, top_center: [0.0, 2.2, -0.9], pinning: Pinning::TopCorners }
+        Self {
+            n: 100,
+            size: 2.0,
+            top_center: [0.0, 2.2, -0.9],
+            across: [1.0, 0.0, 0.0],
+            down: [0.0, 0.0, 1.0],
+            pinning: Pinning::TopCorners,
+        }
+    }
+}
+
+impl ClothSpec {
+    /// Rest position of particle `(i, j)`: `top_center + (i·h − size/2)·across + j·h·down`
+    /// with `h = size / (n − 1)`.
+    pub fn rest_position(&self, i: u32, j: u32) -> [f32; 3] {
+        let h = self.size / (self.n - 1) as f32;
+        let (u, v) = (i as f32 * h - 0.5 * self.size, j as f32 * h);
+        std::array::from_fn(|k| self.top_center[k] + u * self.across[k] + v * self.down[k])
     }
 }
 
@@ -79,8 +174,8 @@ impl Default for ClothSpec {
 pub struct Scene {
     /// The cloth.
     pub cloth: ClothSpec,
-    /// Height of the floor plane y = floor_y, m. Default 0.
-    pub floor_y: f32,
+    /// Height of the floor plane, m, or `None`: no floor. Default 0.
+    pub floor_y: Option<f32>,
     /// Sphere colliders. Default: three spheres resting on the floor under the cloth.
     pub spheres: Vec<Sphere>,
     /// Axis-aligned box colliders. Default: none.
@@ -91,7 +186,7 @@ impl Default for Scene {
     fn default() -> Self {
         Self {
             cloth: ClothSpec::default(),
-            floor_y: 0.0,
+            floor_y: Some(0.0),
             spheres: vec![
                 Sphere { center: [-0.55, 0.35, -0.35], radius: 0.35 },
                 Sphere { center: [0.45, 0.45, -0.1], radius: 0.45 },
@@ -115,35 +210,80 @@ impl Scene {
         self.cloth.n as usize * self.cloth.n as usize
     }
 
-    /// Checks the scene; the first bad value is reported.
+    /// The floor height the kernels test against: far below anything when there is no floor.
+    pub fn floor_height(&self) -> f32 {
+        self.floor_y.unwrap_or(NO_FLOOR)
+    }
+
+    /// Checks the scene; the first bad value is reported, named by its path in a scene
+    /// file (`cloth.n`, `spheres[1].radius`).
     pub fn validate(&self) -> Result<(), ParamError> {
-        let n = self.cloth.n;
+        let c = &self.cloth;
+        let n = c.n;
         if !(MIN_N..=MAX_N).contains(&n) {
-            return Err(ParamError::new("n", n, format!("grid side must be in {MIN_N} ..= {MAX_N}")));
+            return Err(ParamError::new("cloth.n", n, format!("grid side must be in {MIN_N} ..= {MAX_N}")));
         }
-        finite_in("cloth.size", self.cloth.size, 1e-3, 1e3)?;
-        for v in self.cloth.top_center {
+        finite_in("cloth.size", c.size, 1e-3, 1e3)?;
+        for v in c.top_center {
             finite_in("cloth.top_center", v, -1e4, 1e4)?;
         }
-        finite_in("floor_y", self.floor_y, -1e4, 1e4)?;
+        let unit = |name: &str, a: [f32; 3]| -> Result<f32, ParamError> {
+            for v in a {
+                finite_in(format!("cloth.{name}"), v, -1.0, 1.0)?;
+            }
+            let len = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            if (len - 1.0).abs() > 1e-3 {
+                return Err(ParamError::new(
+                    format!("cloth.{name}"),
+                    format!("{a:?}"),
+                    format!("must be a unit vector (its length is {len})"),
+                ));
+            }
+            Ok(len)
+        };
+        unit("across", c.across)?;
+        unit("down", c.down)?;
+        let dot: f32 = (0..3).map(|k| c.across[k] * c.down[k]).sum();
+        if dot.abs() > 1e-3 {
+            return Err(ParamError::new(
+                "cloth.down",
+                format!("{:?}", c.down),
+                format!("must be perpendicular to cloth.across (their dot product is {dot})"),
+            ));
+        }
+        if let Pinning::Points(p) = &c.pinning {
+            if p.len() > n as usize * n as usize {
+                return Err(ParamError::new("cloth.pinning", p.len(), "more points than particles"));
+            }
+            if let Some(k) = p.iter().position(|q| q[0] >= n || q[1] >= n) {
+                return Err(ParamError::new(
+                    format!("cloth.pinning[{k}]"),
+                    format!("{:?}", p[k]),
+                    format!("a grid point [i, j] needs i, j < n = {n}"),
+                ));
+            }
+        }
+        if let Some(y) = self.floor_y {
+            finite_in("floor.y", y, -1e4, 1e4)?;
+        }
         if self.spheres.len() > MAX_COLLIDERS {
             return Err(ParamError::new("spheres", self.spheres.len(), format!("at most {MAX_COLLIDERS}")));
         }
         if self.boxes.len() > MAX_COLLIDERS {
             return Err(ParamError::new("boxes", self.boxes.len(), format!("at most {MAX_COLLIDERS}")));
         }
-        for s in &self.spheres {
+        for (i, s) in self.spheres.iter().enumerate() {
             for v in s.center {
-                finite_in("sphere.center", v, -1e4, 1e4)?;
+                finite_in(format!("spheres[{i}].center"), v, -1e4, 1e4)?;
             }
-            finite_in("sphere.radius", s.radius, 1e-4, 1e4)?;
+            finite_in(format!("spheres[{i}].radius"), s.radius, 1e-4, 1e4)?;
         }
-        for b in &self.boxes {
+        for (i, b) in self.boxes.iter().enumerate() {
             for k in 0..3 {
-                finite_in("box.min", b.min[k], -1e4, 1e4)?;
-                finite_in("box.max", b.max[k], -1e4, 1e4)?;
+                finite_in(format!("boxes[{i}].min"), b.min[k], -1e4, 1e4)?;
+                finite_in(format!("boxes[{i}].max"), b.max[k], -1e4, 1e4)?;
                 if b.max[k] <= b.min[k] {
-                    return Err(ParamError::new("box.max", b.max[k], "every max must exceed its min"));
+                    return Err(ParamError::new(format!("boxes[{i}].max"), b.max[k], "every max must exceed its min"));
                 }
             }
         }

@@ -40,7 +40,7 @@ fn free_fall_follows_half_g_t_squared() {
     let mut scene = Scene::with_n(2);
     scene.cloth.pinning = Pinning::None;
     scene.cloth.top_center = [0.0, 0.0, 0.0];
-    scene.floor_y = -1000.0;
+    scene.floor_y = None;
     scene.spheres.clear();
     let mut s = CpuSolver::new(Exec::Serial, scene, params.clone()).unwrap();
     let dt = params.dt();
@@ -118,7 +118,7 @@ fn pins_hold_and_nothing_ends_below_the_floor_or_inside_a_sphere() {
             // Collisions push to the surface plus the margin (1 cm); the strain pass that
             // runs after `collide` moves a particle by far less than that per substep, so
             // the geometric surfaces themselves are never crossed.
-            assert!(p[1] >= scene.floor_y, "particle {i} below the floor: {p:?}");
+            assert!(p[1] >= scene.floor_height(), "particle {i} below the floor: {p:?}");
             for sp in &scene.spheres {
                 let d = ((p[0] - sp.center[0]).powi(2) + (p[1] - sp.center[1]).powi(2) + (p[2] - sp.center[2]).powi(2))
                     .sqrt();
@@ -343,7 +343,7 @@ fn ten_thousand_substeps_stay_finite_and_bounded() {
     // 0.2 leaves room for harmless changes and still catches a strain limit that stops
     // working (without tethers the corners reach 0.2 at n = 64).
     assert!(worst < 0.2, "max structural strain reached {worst}");
-    assert!(sum.lowest_y >= scene.floor_y, "below the floor: {}", sum.lowest_y);
+    assert!(sum.lowest_y >= scene.floor_height(), "below the floor: {}", sum.lowest_y);
     // At rest, nearly: the hanging cloth's kinetic energy has decayed.
     let st = s.state_ref();
     let vmax = st

@@ -31,13 +31,26 @@ impl KernelInput {
         Self::with_params(n, seed, &SimParams::default())
     }
 
-    /// The input for an `n × n` cloth with `params` (the spring constants a runner built
-    /// with them has), disturbed with `seed`; wind on if `params` have none.
+    /// The input for an `n × n` cloth of the default scene with `params` (the spring
+    /// constants a runner built with them has), disturbed with `seed`; wind on if `params`
+    /// have none.
     pub fn with_params(n: u32, seed: u64, params: &SimParams) -> Result<Self, SolverError> {
-        let scene = Scene::with_n(n);
+        Self::for_scene(&Scene::with_n(n), seed, params)
+    }
+
+    /// The input for `scene` (the colliders a runner built with it has) and `params`,
+    /// disturbed with `seed`; wind on if `params` have none. Some free particles are then
+    /// put inside every collider and under the floor, so that the collision code of every
+    /// collider the scene has runs in every kernel that collides.
+    pub fn for_scene(scene: &Scene, seed: u64, params: &SimParams) -> Result<Self, SolverError> {
+        let scene = scene.clone();
+        let n = scene.cloth.n;
         let wind = if params.wind == [0.0; 3] { [1.5, 0.3, -2.0] } else { params.wind };
         let params = SimParams { wind, ..params.clone() };
-        let (st, topo, faces) = disturbed_state(&scene, &params, seed)?;
+        let (mut st, topo, mut faces) = disturbed_state(&scene, &params, seed)?;
+        if sink_into_colliders(&scene, &mut st.pos, &mut st.prev) {
+            clothlab_core::cpu::tri_normals(Exec::Serial, &topo.triangles, &st.pos, &mut faces);
+        }
         let grab = Some(Grab { particle: n * n / 2 + 3, target: [0.1, 1.2, 0.3] });
         let p = StepParams::new(&params, &scene, grab);
         let mut bufs = HostBuffers::new(&st, faces);
@@ -68,6 +81,45 @@ impl KernelInput {
     }
 }
 
+/// Moves a few free particles of `pos` into each collider of `scene` (and under its floor):
+/// every 97th free particle, taking the colliders in turn, to a point just inside the
+/// surface below it (2 % of a sphere's radius deep, 1 cm into a box's top, 1 cm under the
+/// floor), its previous position moved alike (its velocity kept). Returns whether any moved.
+fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]], prev: &mut [[f32; 4]]) -> bool {
+    let targets = scene.spheres.len() + scene.boxes.len() + usize::from(scene.floor_y.is_some());
+    if targets == 0 {
+        return false;
+    }
+    let mut k = 0;
+    for (i, (p, q)) in pos.iter_mut().zip(prev.iter_mut()).enumerate() {
+        if p[3] == 0.0 || i % 97 != 13 {
+            continue;
+        }
+        let was = *p;
+        let t = k % targets;
+        k += 1;
+        if let Some(s) = scene.spheres.get(t) {
+            let d = [p[0] - s.center[0], p[2] - s.center[2]];
+            let len = (d[0] * d[0] + d[1] * d[1]).sqrt().max(1e-6);
+            // On the upper half, towards the particle's side.
+            let r = 0.98 * s.radius;
+            let (dx, dz) = (0.5 * r * d[0] / len, 0.5 * r * d[1] / len);
+            let dy = (r * r - dx * dx - dz * dz).max(0.0).sqrt();
+            *p = [s.center[0] + dx, s.center[1] + dy, s.center[2] + dz, p[3]];
+        } else if let Some(b) = scene.boxes.get(t - scene.spheres.len()) {
+            let clamp = |v: f32, lo: f32, hi: f32| v.clamp(lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo));
+            let depth = 0.01f32.min(0.25 * (b.max[1] - b.min[1]));
+            *p = [clamp(p[0], b.min[0], b.max[0]), b.max[1] - depth, clamp(p[2], b.min[2], b.max[2]), p[3]];
+        } else if let Some(y) = scene.floor_y {
+            p[1] = y - 0.01;
+        }
+        for c in 0..3 {
+            q[c] += p[c] - was[c];
+        }
+    }
+    k > 0
+}
+
 /// The buffers [`validate_kernels`] compares after each kernel: the positions, previous
 /// positions, forces, normals, face normals, the five integrator scratch buffers and the
 /// CG scalars.
@@ -83,19 +135,19 @@ pub fn validate_kernels(
     n: u32,
     seed: u64,
 ) -> Result<Vec<Check>, SolverError> {
-    validate_kernels_with(runner, kernels, n, seed, &SimParams::default())
+    validate_kernels_with(runner, kernels, &Scene::with_n(n), seed, &SimParams::default())
 }
 
-/// [`validate_kernels`] for a runner built with `params` (its spring tables hold their
-/// constants).
+/// [`validate_kernels`] for a runner built with `scene` and `params` (its colliders are
+/// the scene's, its spring tables hold the parameters' constants).
 pub fn validate_kernels_with(
     runner: &mut dyn KernelRunner,
     kernels: &[KernelRef],
-    n: u32,
+    scene: &Scene,
     seed: u64,
     params: &SimParams,
 ) -> Result<Vec<Check>, SolverError> {
-    let input = KernelInput::with_params(n, seed, params)?;
+    let input = KernelInput::for_scene(scene, seed, params)?;
     let mut checks = Vec::new();
     for &k in kernels {
         let kernels::Check::Bound { relative, .. } = k.def.check else { continue };

@@ -221,7 +221,14 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
 
-    let params = args.physics.params()?;
+    // The scene of --scene (or the default one), at every size of --sizes.
+    let loaded = args.physics.setup(None, sizes[0])?;
+    let (base, params) = (loaded.scene, loaded.params);
+    let sized = |n: u32| {
+        let mut s = base.clone();
+        s.cloth.n = n;
+        s
+    };
     if args.integrators {
         return integrators_bench(&args, &params, &backends, &sizes);
     }
@@ -337,7 +344,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
                     bar.inc(1);
                     continue;
                 }
-                let cell = run_cell(job, n, &params, frames, args.resolution, &devices)
+                let cell = run_cell(job, sized(n), &params, frames, args.resolution, &devices)
                     .with_context(|| format!("{label} at n={n}"))?;
                 let sub = cell.kernels.iter().find(|r| r.label == clothlab_core::timing::SUBSTEP);
                 let frame = cell.frames.iter().find(|r| r.label == "frame");
@@ -467,14 +474,14 @@ impl Job {
 
 fn run_cell(
     job: &Job,
-    n: u32,
+    scene: Scene,
     params: &SimParams,
     frames: u32,
     (width, height): (u32, u32),
     devices: &Devices,
 ) -> Result<Cell> {
     let t_cell = Instant::now();
-    let scene = Scene::with_n(n);
+    let n = scene.cloth.n;
     let p = params.clone();
     // A device of its own for every GPU cell (see below).
     let setup = GpuSetup { variant: job.variant.map(Into::into), ..GpuSetup::default() };

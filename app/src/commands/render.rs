@@ -4,7 +4,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
-use clothlab_core::{CpuSolver, Exec, Scene, Solver};
+use clothlab_core::{CpuSolver, Exec, Solver};
 use clothlab_vulkan::{VkCloth, VulkanRenderer};
 use clothlab_wgpu::{ClothSource, WgpuRenderer};
 
@@ -13,16 +13,21 @@ use crate::solvers::{AnySolver, Api, Backend, GpuSetup, Shared, make, vulkan_val
 
 /// Runs `render`.
 pub fn render(args: RenderArgs) -> Result<ExitCode> {
-    let scene = Scene::with_n(args.n);
-    scene.validate()?;
+    let setup = args.physics.setup(args.n, 100)?;
+    let (scene, params) = (setup.scene.clone(), setup.params.clone());
     if args.frames > 100_000 {
         bail!("invalid --frames {}: must be in 0 ..= 100000", args.frames);
     }
     if !matches!(args.out.extension().and_then(|e| e.to_str()), Some("png" | "PNG")) {
         bail!("--out {}: the image is written as PNG, use a .png file name", args.out.display());
     }
-    let params = args.physics.params()?;
-    let view = args.mode.view();
+    let mut view = args.mode.view();
+    if let Some(c) = setup.camera {
+        view.camera = c;
+    }
+    if let Some(l) = setup.light {
+        view.light = l;
+    }
     let setup = GpuSetup { variant: args.variant.spec(args.backend)?, ..GpuSetup::default() };
     let is_vulkan = matches!(args.backend, Backend::VulkanNaive | Backend::Vulkan);
     let api = args.api.unwrap_or(if is_vulkan { Api::Vulkan } else { Api::Wgpu });

@@ -9,8 +9,10 @@ use crate::solvers::{Api, Backend};
 
 /// Opens the app.
 pub fn run_app(args: RunArgs) -> Result<ExitCode> {
-    if !(10..=1024).contains(&args.n) {
-        bail!("invalid --n {}: the app takes 10 ..= 1024 particles per side", args.n);
+    let setup = args.physics.setup(args.n, 64)?;
+    let n = setup.scene.cloth.n;
+    if !(10..=1024).contains(&n) {
+        bail!("invalid --n {n}: the app takes 10 ..= 1024 particles per side");
     }
     let backend = args.backend.unwrap_or(match args.api {
         Api::Wgpu => Backend::Wgpu,
@@ -19,12 +21,12 @@ pub fn run_app(args: RunArgs) -> Result<ExitCode> {
     crate::gui::run(crate::gui::RunOptions {
         api: args.api,
         backend,
-        n: args.n,
         frames: args.frames,
         screenshot: args.screenshot,
         size: (args.width, args.height),
         drag_test: args.drag_test,
         switch_api: args.switch_api,
-        params: args.physics.params()?,
+        drop_file: args.drop_file,
+        setup,
     })
 }

@@ -7,7 +7,6 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use clothlab_core::Scene;
 use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 
@@ -19,9 +18,8 @@ const MAX_STEPS: u64 = 100_000_000;
 
 /// Runs `sim`.
 pub fn sim(args: SimArgs) -> Result<ExitCode> {
-    let params = args.physics.params()?;
-    let scene = Scene::with_n(args.n);
-    scene.validate()?;
+    let loaded = args.physics.setup(args.n, 100)?;
+    let (scene, params) = (loaded.scene, loaded.params);
     if args.steps == 0 || args.steps > MAX_STEPS {
         bail!("invalid --steps {}: must be in 1 ..= {MAX_STEPS}", args.steps);
     }
@@ -52,12 +50,18 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         solver.timings().get(SUBSTEP).map(|r| r.median_ns).unwrap_or(wall.as_nanos() as f64 / substeps as f64);
 
     println!("backend        {}", solver.name());
-    println!("grid           {n}x{n} ({np} particles)", n = args.n);
+    if let Some(path) = &args.physics.scene {
+        println!("scene          {} ({})", loaded.title.as_deref().unwrap_or("untitled"), path.display());
+    }
+    println!("grid           {n}x{n} ({np} particles)", n = scene.cloth.n);
     println!("substeps       {substeps} ({frames} frames of {})", solver.params().substeps);
     println!("wall time      {:.3} s", wall.as_secs_f64());
     println!("time/substep   {:.1} us median ({:.2} ns per particle-substep)", per_substep / 1e3, per_substep / np);
     println!("max strain     {:.4} (structural springs, |L|/rest - 1)", summary.max_strain);
-    println!("lowest point   {:.4} m (floor at {} m)", summary.lowest_y, scene.floor_y);
+    match scene.floor_y {
+        Some(y) => println!("lowest point   {:.4} m (floor at {y} m)", summary.lowest_y),
+        None => println!("lowest point   {:.4} m (no floor)", summary.lowest_y),
+    }
     println!(
         "NaN            {}",
         if summary.nan_count == 0 { "none".to_string() } else { format!("{} components", summary.nan_count) }

@@ -4,7 +4,6 @@
 use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
-use clothlab_core::Scene;
 use clothlab_core::layout::Buf;
 use clothlab_core::validate::Check;
 use clothlab_core::validate::validate_rollout;
@@ -62,13 +61,15 @@ fn worst_rows(kernels: &[KernelRef], checks: &[Check], suffix: &str) -> Vec<Chec
 
 /// Runs `validate`.
 pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
-    if !(2..=1024).contains(&args.n) {
-        bail!("invalid --n {}: must be in 2 ..= 1024", args.n);
+    let setup = args.physics.setup(args.n, 64)?;
+    let (scene, params) = (setup.scene, setup.params);
+    let n = scene.cloth.n;
+    if !(2..=1024).contains(&n) {
+        bail!("invalid --n {n}: must be in 2 ..= 1024");
     }
     if args.steps == 0 || args.steps > 100_000 {
         bail!("invalid --steps {}: must be in 1 ..= 100000", args.steps);
     }
-    let params = args.physics.params()?;
     let frames = args.steps.div_ceil(params.substeps);
     for &backend in &args.backends {
         if matches!(backend, Backend::Cpu | Backend::CpuPar) {
@@ -88,7 +89,6 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
             fresh
         });
     }
-    let scene = Scene::with_n(args.n);
     let mut failed = 0;
     let mut header = false;
     let width = if args.bisect {
@@ -139,7 +139,7 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
             // grid), then on one reading the table from the image (storage where the
             // API's engine has none): the two loads of the gathers and every home.
             let all = flavors(&caps, false);
-            let checks = validate_kernels_with(solver, &all, args.n, 0x5eed, &params)?;
+            let checks = validate_kernels_with(solver, &all, &scene, 0x5eed, &params)?;
             rows.extend(worst_rows(&all, &checks, " (table=uniform)"));
             let table = if caps.table_image { "image" } else { "storage" };
             let spec = VariantSpec::parse("optimized", &[format!("table={table}")])?;
@@ -153,14 +153,14 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
             let table_kernels: Vec<KernelRef> =
                 flavors(&caps, caps.table_image).into_iter().filter(|k| k.def.variants.table_image).collect();
             let runner = other.runner().context("validate checks GPU backends")?;
-            let checks = validate_kernels_with(runner, &table_kernels, args.n, 0x5eed, &params)?;
+            let checks = validate_kernels_with(runner, &table_kernels, &scene, 0x5eed, &params)?;
             rows.extend(worst_rows(&table_kernels, &checks, &format!(" (table={table})")));
             rollouts = covering(&caps, api)
                 .into_iter()
                 .map(|v| GpuSetup { variant: Some(v.into()), ..GpuSetup::default() })
                 .collect();
         } else {
-            let checks = validate_kernels_with(solver, &names, args.n, 0x5eed, &params)?;
+            let checks = validate_kernels_with(solver, &names, &scene, 0x5eed, &params)?;
             rows.extend(worst_rows(&names, &checks, ""));
         }
         for r in &rollouts {

@@ -36,12 +36,22 @@ pub enum Panel {
     Parameters,
     /// The per-kernel timing chart.
     Timings,
+    /// The floor, spheres and boxes.
+    Scene,
 }
 
 impl Panel {
     /// Every panel, in menu order.
-    pub const ALL: [Panel; 7] =
-        [Panel::Animation, Panel::Toolbar, Panel::Wind, Panel::Light, Panel::Status, Panel::Parameters, Panel::Timings];
+    pub const ALL: [Panel; 8] = [
+        Panel::Animation,
+        Panel::Toolbar,
+        Panel::Wind,
+        Panel::Light,
+        Panel::Status,
+        Panel::Parameters,
+        Panel::Scene,
+        Panel::Timings,
+    ];
 
     /// Its menu name.
     pub fn name(self) -> &'static str {
@@ -53,6 +63,7 @@ impl Panel {
             Panel::Status => "Status bar",
             Panel::Parameters => "Parameters",
             Panel::Timings => "Kernel timings",
+            Panel::Scene => "Scene panel",
         }
     }
 }

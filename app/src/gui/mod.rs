@@ -31,8 +31,6 @@ pub struct RunOptions {
     pub api: Api,
     /// Solver.
     pub backend: Backend,
-    /// Particles per side.
-    pub n: u32,
     /// Quit after this many frames (tests, screenshots).
     pub frames: Option<u64>,
     /// Save a picture of the window when quitting after `frames`.
@@ -43,8 +41,10 @@ pub struct RunOptions {
     pub drag_test: bool,
     /// Switch to the other API halfway through `frames` (a test).
     pub switch_api: bool,
-    /// The simulation parameters to start with (`--set`, `--integrator`).
-    pub params: SimParams,
+    /// Drop this file on the window at frame 3, as a user would (a test).
+    pub drop_file: Option<PathBuf>,
+    /// The scene and parameters to start with (`--scene`, `--n`, `--set`, `--integrator`).
+    pub setup: crate::overrides::Setup,
 }
 
 /// Everything the panels show and change.
@@ -73,6 +73,14 @@ pub struct UiState {
     pub grid_n: u32,
     /// Parameters being edited (applied when valid).
     pub params: SimParams,
+    /// The scene's colliders and floor being edited (applied with the panel's Apply).
+    pub scene: clothlab_core::Scene,
+    /// The scene's title (the file's), or its file name.
+    pub scene_title: String,
+    /// The Open scene window is open.
+    pub open_dialog: bool,
+    /// The path typed into the Open scene window.
+    pub open_path: String,
     /// The About window is open.
     pub about: bool,
     /// The last message for the status bar (errors, saved files).
@@ -94,6 +102,10 @@ pub enum Command {
     Grid(u32),
     /// New parameters.
     Params(SimParams),
+    /// New colliders and floor under the same cloth (the Scene panel's Apply).
+    Scene(clothlab_core::Scene),
+    /// Open a scene file (File → Open scene, or a file dropped on the window).
+    OpenScene(PathBuf),
     /// Draw through the other API (the solver follows where it is a GPU solver).
     Api(Api),
 }
@@ -150,6 +162,27 @@ pub fn run(opts: RunOptions) -> Result<ExitCode> {
     }
 }
 
+impl UiState {
+    /// Shows a new scene: its cloth size, parameters, colliders, the file's camera and
+    /// light (or the defaults), and its wind in the wind panel (steady: no gusts).
+    fn take_setup(&mut self, setup: &crate::overrides::Setup, title: String) {
+        self.grid_n = setup.scene.cloth.n;
+        self.params = setup.params.clone();
+        self.scene = setup.scene.clone();
+        self.scene_title = title;
+        self.camera = setup.camera.clone().unwrap_or_default();
+        self.light = setup.light.unwrap_or([2.0, 5.5, 3.0]);
+        let [wx, _, wz] = setup.params.wind;
+        let speed = (wx * wx + wz * wz).sqrt();
+        self.wind_on = speed > 0.0;
+        if speed > 0.0 {
+            self.wind_speed = speed;
+            self.wind_azimuth = wz.atan2(wx).to_degrees().rem_euclid(360.0);
+            self.gusts = 0.0;
+        }
+    }
+}
+
 impl App {
     fn start(&mut self, event_loop: &ActiveEventLoop) -> Result<Running> {
         let (w, h) = self.opts.size;
@@ -158,11 +191,10 @@ impl App {
             .with_inner_size(PhysicalSize::new(w, h))
             .with_min_inner_size(PhysicalSize::new(64, 64));
         let window = Arc::new(event_loop.create_window(attrs).context("cannot open a window")?);
-        let params = self.opts.params.clone();
-        let scene = clothlab_core::Scene::with_n(self.opts.n);
-        scene.validate()?;
-        let gfx = Gfx::new(self.opts.api, &window, &scene, &params)?;
-        let sim = Sim::new(self.opts.backend, self.opts.n, params.clone(), &gfx.shared())?;
+        let setup = self.opts.setup.clone();
+        let params = setup.params.clone();
+        let gfx = Gfx::new(self.opts.api, &window, &setup.scene, &params)?;
+        let sim = Sim::new(self.opts.backend, setup.scene.clone(), params.clone(), &gfx.shared())?;
         let egui_ctx = egui::Context::default();
         let egui_state = egui_winit::State::new(
             egui_ctx.clone(),
@@ -173,7 +205,7 @@ impl App {
             None,
         );
         log::info!("window on {}", gfx.adapter());
-        let ui = UiState {
+        let mut ui = UiState {
             tool: Tool::RotateFree,
             mode: RenderMode::Triangles,
             paused: false,
@@ -184,12 +216,17 @@ impl App {
             wind_speed: 3.0,
             wind_azimuth: 200.0,
             gusts: 0.3,
-            grid_n: self.opts.n,
+            grid_n: setup.scene.cloth.n,
             params,
+            scene: setup.scene.clone(),
+            scene_title: String::new(),
+            open_dialog: false,
+            open_path: String::new(),
             about: false,
             message: String::new(),
             fps: 0.0,
         };
+        ui.take_setup(&setup, setup.title.clone().unwrap_or_else(|| "default scene".into()));
         Ok(Running {
             window,
             gfx,
@@ -234,6 +271,7 @@ impl ApplicationHandler for App {
                 Ok(())
             }
             WindowEvent::Resized(size) => r.gfx.resize(size.width, size.height),
+            WindowEvent::DroppedFile(path) => r.command(Command::OpenScene(path)),
             WindowEvent::RedrawRequested => {
                 let limit = self.opts.frames;
                 let shot_path = self.opts.screenshot.clone();
@@ -242,6 +280,13 @@ impl ApplicationHandler for App {
                 {
                     self.fail(event_loop, e);
                     return;
+                }
+                if let Some(path) = self.opts.drop_file.clone().filter(|_| r.drawn == 3) {
+                    if let Err(e) = r.command(Command::OpenScene(path)) {
+                        self.fail(event_loop, e);
+                        return;
+                    }
+                    println!("dropped: {}", r.ui.message);
                 }
                 if self.opts.switch_api && limit.is_some_and(|l| r.drawn == l / 2) {
                     let other = if r.gfx.api() == Api::Wgpu { Api::Vulkan } else { Api::Wgpu };
@@ -386,6 +431,23 @@ impl Running {
                 self.ui.message = format!("new cloth: {n}×{n}");
             }
             Command::Api(api) => self.switch_api(api)?,
+            Command::Scene(scene) => match self.sim.set_scene(scene, &self.gfx.shared()) {
+                Ok(()) => {
+                    let scene = self.sim.solver.get_ref().scene().clone();
+                    self.gfx.rebuild(&scene, &self.ui.params)?;
+                    self.ui.message = format!(
+                        "scene: {} spheres, {} boxes, {}",
+                        scene.spheres.len(),
+                        scene.boxes.len(),
+                        scene.floor_y.map_or("no floor".into(), |y| format!("floor at {y} m"))
+                    );
+                }
+                Err(e) => {
+                    self.ui.message = format!("scene refused: {e:#}");
+                    self.ui.scene = self.sim.solver.get_ref().scene().clone();
+                }
+            },
+            Command::OpenScene(path) => self.open_scene(&path)?,
             Command::Params(p) => match self.sim.solver.get().set_params(p.clone()) {
                 Ok(()) => {}
                 Err(e) => {
@@ -395,6 +457,41 @@ impl Running {
                 }
             },
         }
+        Ok(())
+    }
+
+    /// Opens a scene file: a new cloth, colliders, parameters and view on the same
+    /// backend. A file that is refused (unreadable, malformed, a refused value, a cloth the
+    /// app does not take) changes nothing and says why in the status bar.
+    fn open_scene(&mut self, path: &std::path::Path) -> Result<()> {
+        let file = match clothlab_core::SceneFile::load(path) {
+            Ok(f) => f,
+            Err(e) => {
+                self.ui.message = e.to_string();
+                return Ok(());
+            }
+        };
+        let n = file.scene.cloth.n;
+        if !(10..=1024).contains(&n) {
+            self.ui.message = format!("{}: the app takes 10 ..= 1024 particles per side, not {n}", path.display());
+            return Ok(());
+        }
+        let setup = crate::overrides::Setup::from_file(file);
+        let sim = match Sim::new(self.sim.backend, setup.scene.clone(), setup.params.clone(), &self.gfx.shared()) {
+            Ok(sim) => sim,
+            Err(e) => {
+                self.ui.message = format!("{}: {e:#}", path.display());
+                return Ok(());
+            }
+        };
+        self.sim = sim;
+        self.gfx.rebuild(&setup.scene, &setup.params)?;
+        self.dragging = None;
+        let name = path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+        let title = setup.title.clone().unwrap_or(name);
+        self.ui.take_setup(&setup, title.clone());
+        self.ui.open_dialog = false;
+        self.ui.message = format!("opened {title} ({})", path.display());
         Ok(())
     }
 
@@ -530,7 +627,7 @@ impl Running {
             }
             ui::Drag::Move { x, y } => {
                 if let Some((id, at)) = self.dragging {
-                    let floor = self.sim.solver.get_ref().scene().floor_y;
+                    let floor = self.sim.solver.get_ref().scene().floor_height();
                     let target = input::drag_target(&view.camera, at, x, y, w, h, floor);
                     self.sim.grab = Some(clothlab_core::Grab { particle: id, target });
                 }

@@ -61,9 +61,8 @@ pub fn substep_time(gpu: f64, wall: f64) -> SubstepTime {
 }
 
 impl Sim {
-    /// A fresh cloth of `n × n` on `backend`.
-    pub fn new(backend: Backend, n: u32, params: SimParams, shared: &Shared<'_>) -> Result<Self> {
-        let scene = Scene::with_n(n);
+    /// A fresh cloth of `scene` on `backend`.
+    pub fn new(backend: Backend, scene: Scene, params: SimParams, shared: &Shared<'_>) -> Result<Self> {
         scene.validate()?;
         let solver = make(backend, scene, params, &GpuSetup::default(), shared).context("starting the solver")?;
         Ok(Self { backend, solver, grab: None, history: VecDeque::new(), frames: 0, wall_substep_ns: None })
@@ -122,11 +121,29 @@ impl Sim {
         self.rebuild(self.backend, &setup, shared)
     }
 
+    /// New colliders (and floor) under the same cloth, which stays where it is; a scene
+    /// with another cloth is refused (that is a new cloth: [`Sim::new`]).
+    pub fn set_scene(&mut self, scene: Scene, shared: &Shared<'_>) -> Result<()> {
+        scene.validate()?;
+        if scene.cloth != self.solver.get_ref().scene().cloth {
+            anyhow::bail!("the colliders change under the same cloth; a new cloth is a new simulation");
+        }
+        let variant = self.solver.variant();
+        let setup = GpuSetup { variant: variant.map(VariantSpec::exact), ..GpuSetup::default() };
+        self.rebuild_with(self.backend, scene, &setup, shared)
+    }
+
     /// Moves the cloth onto a new solver of `backend` set up as `setup`.
     fn rebuild(&mut self, backend: Backend, setup: &GpuSetup, shared: &Shared<'_>) -> Result<()> {
+        let scene = self.solver.get_ref().scene().clone();
+        self.rebuild_with(backend, scene, setup, shared)
+    }
+
+    /// Moves the cloth onto a new solver of `backend` for `scene`, set up as `setup`.
+    fn rebuild_with(&mut self, backend: Backend, scene: Scene, setup: &GpuSetup, shared: &Shared<'_>) -> Result<()> {
         let old = self.solver.get();
         let state: ClothState = old.state()?;
-        let mut solver = make(backend, old.scene().clone(), old.params().clone(), setup, shared)?;
+        let mut solver = make(backend, scene, old.params().clone(), setup, shared)?;
         solver.get().set_state(&state)?;
         self.solver = solver;
         self.backend = backend;
@@ -134,11 +151,13 @@ impl Sim {
         Ok(())
     }
 
-    /// A new cloth of `n × n` (or the same size: a reset), on the same backend and
-    /// parameters.
+    /// A new cloth of `n × n` (or the same size: a reset) in the same scene, on the same
+    /// backend and parameters.
     pub fn regrid(&mut self, n: u32, shared: &Shared<'_>) -> Result<()> {
         let params = self.solver.get_ref().params().clone();
-        *self = Self::new(self.backend, n, params, shared)?;
+        let mut scene = self.solver.get_ref().scene().clone();
+        scene.cloth.n = n;
+        *self = Self::new(self.backend, scene, params, shared)?;
         Ok(())
     }
 }
@@ -163,7 +182,7 @@ mod tests {
 
     #[test]
     fn switching_the_solver_keeps_the_cloth_where_it_is() {
-        let mut sim = Sim::new(Backend::Cpu, 24, SimParams::default(), &Shared::None).unwrap();
+        let mut sim = Sim::new(Backend::Cpu, Scene::with_n(24), SimParams::default(), &Shared::None).unwrap();
         for _ in 0..6 {
             sim.step().unwrap();
         }

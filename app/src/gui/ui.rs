@@ -99,7 +99,8 @@ pub fn draw(root: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
     if shown(s, Panel::Animation) {
         egui::Panel::bottom("animation").show(root, |ui| animation_bar(ui, s, info, out));
     }
-    let side = [Panel::Wind, Panel::Light, Panel::Parameters, Panel::Timings].iter().any(|p| shown(s, *p));
+    let side =
+        [Panel::Wind, Panel::Light, Panel::Parameters, Panel::Scene, Panel::Timings].iter().any(|p| shown(s, *p));
     if side {
         egui::Panel::right("side").resizable(true).default_size(300.0).show(root, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
@@ -128,12 +129,19 @@ pub fn draw(root: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
                     ui.separator();
                     params_panel(ui, s, out);
                 }
+                if shown(s, Panel::Scene) {
+                    ui.separator();
+                    scene_panel(ui, s, out);
+                }
                 if shown(s, Panel::Timings) {
                     ui.separator();
                     timing_chart(ui, info);
                 }
             });
         });
+    }
+    if s.open_dialog {
+        open_dialog(&ctx, s, out);
     }
     if s.about {
         egui::Window::new("About clothlab").collapsible(false).open(&mut s.about).show(&ctx, |ui| {
@@ -151,6 +159,10 @@ pub fn draw(root: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
 fn menu_bar(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     egui::MenuBar::new().ui(ui, |ui| {
         ui.menu_button("File", |ui| {
+            if ui.button("Open scene…").clicked() {
+                s.open_dialog = true;
+                ui.close();
+            }
             item(ui, "Reset", "Ctrl+R", Action::Reset, out);
             item(ui, "Save image", "Ctrl+S", Action::SaveImage, out);
             item(ui, "Exit", "Ctrl+Q", Action::Exit, out);
@@ -330,6 +342,116 @@ fn wind_panel(ui: &mut egui::Ui, s: &mut UiState) {
     ui.add(egui::Slider::new(&mut s.wind_speed, 0.0..=15.0).text("speed m/s"));
     ui.add(egui::Slider::new(&mut s.wind_azimuth, 0.0..=360.0).text("direction °"));
     ui.add(egui::Slider::new(&mut s.gusts, 0.0..=1.0).text("gusts"));
+}
+
+/// Scene files the Open scene window lists: `*.toml` in `./scenes` and `./`, sorted.
+fn scene_files() -> Vec<std::path::PathBuf> {
+    let mut files: Vec<std::path::PathBuf> = ["scenes", "."]
+        .iter()
+        .filter_map(|d| std::fs::read_dir(d).ok())
+        .flatten()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml") && p.file_name().is_some_and(|f| f != "Cargo.toml"))
+        .collect();
+    files.sort();
+    files
+}
+
+/// File → Open scene: the scene files found here, or a path typed in (or drop a file on
+/// the window).
+fn open_dialog(ctx: &egui::Context, s: &mut UiState, out: &mut Vec<Command>) {
+    let mut open = true;
+    egui::Window::new("Open scene").collapsible(false).open(&mut open).show(ctx, |ui| {
+        let files = scene_files();
+        if files.is_empty() {
+            ui.label("No scene files in ./scenes or here.");
+        }
+        for f in files {
+            if ui.button(f.display().to_string()).clicked() {
+                out.push(Command::OpenScene(f));
+            }
+        }
+        ui.separator();
+        ui.horizontal(|ui| {
+            ui.label("file");
+            let edit = ui.text_edit_singleline(&mut s.open_path);
+            let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+            if (ui.button("Open").clicked() || enter) && !s.open_path.trim().is_empty() {
+                out.push(Command::OpenScene(s.open_path.trim().into()));
+            }
+        });
+        ui.label(RichText::new("or drop a .toml file on the window").weak());
+    });
+    s.open_dialog &= open;
+}
+
+/// The floor, spheres and boxes: edited here, applied under the same cloth with Apply.
+fn scene_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
+    ui.label(RichText::new(format!("Scene — {}", s.scene_title)).strong());
+    let c = &s.scene.cloth;
+    ui.label(format!("cloth {n}×{n}, {} m, pinned: {}", c.size, c.pinning.label(), n = c.n));
+    let sc = &mut s.scene;
+    let mut floor = sc.floor_y.is_some();
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut floor, "floor");
+        let mut y = sc.floor_y.unwrap_or(0.0);
+        if floor {
+            ui.add(egui::DragValue::new(&mut y).speed(0.01).range(-100.0..=100.0).suffix(" m"));
+        }
+        sc.floor_y = floor.then_some(y);
+    });
+    let xyz = |ui: &mut egui::Ui, v: &mut [f32]| {
+        for c in v.iter_mut().take(3) {
+            ui.add(egui::DragValue::new(c).speed(0.01).range(-100.0..=100.0));
+        }
+    };
+    let mut remove = None;
+    for (i, sp) in sc.spheres.iter_mut().enumerate() {
+        ui.horizontal(|ui| {
+            ui.label(format!("sphere {i}"));
+            xyz(ui, &mut sp.center);
+            ui.label("r");
+            ui.add(egui::DragValue::new(&mut sp.radius).speed(0.01).range(0.01..=50.0));
+            if ui.small_button("remove").clicked() {
+                remove = Some(i);
+            }
+        });
+    }
+    if let Some(i) = remove.take() {
+        sc.spheres.remove(i);
+    }
+    for (i, b) in sc.boxes.iter_mut().enumerate() {
+        ui.horizontal(|ui| {
+            ui.label(format!("box {i} min"));
+            xyz(ui, &mut b.min);
+        });
+        ui.horizontal(|ui| {
+            ui.label(format!("box {i} max"));
+            xyz(ui, &mut b.max);
+            if ui.small_button("remove").clicked() {
+                remove = Some(i);
+            }
+        });
+        // Keep every max above its min while dragging.
+        for k in 0..3 {
+            b.max[k] = b.max[k].max(b.min[k] + 0.01);
+        }
+    }
+    if let Some(i) = remove {
+        sc.boxes.remove(i);
+    }
+    ui.horizontal(|ui| {
+        let room = clothlab_core::scene::MAX_COLLIDERS;
+        if ui.add_enabled(sc.spheres.len() < room, egui::Button::new("+ sphere")).clicked() {
+            sc.spheres.push(clothlab_core::Sphere { center: [0.0, 0.4, 0.0], radius: 0.4 });
+        }
+        if ui.add_enabled(sc.boxes.len() < room, egui::Button::new("+ box")).clicked() {
+            sc.boxes.push(clothlab_core::Aabb::new([-0.4, 0.0, -0.4], [0.4, 0.6, 0.4]));
+        }
+        if ui.button("Apply").on_hover_text("the cloth stays where it is").clicked() {
+            out.push(Command::Scene(sc.clone()));
+        }
+    });
 }
 
 fn light_panel(ui: &mut egui::Ui, s: &mut UiState) {

@@ -1,0 +1,369 @@
+//! Scene files: a whole scene — the cloth, the floor, spheres, boxes, the simulation
+//! parameters and optionally the camera and the light — in TOML.
+//!
+//! TOML rather than RON: scene files are written by hand, and TOML is what Rust users
+//! already write (`Cargo.toml`): comments, `[tables]` and `[[arrays of tables]]` for the
+//! colliders, no Rust type names or tuple syntax to get right. The `toml` crate reports the
+//! byte span of every error, which becomes the line and column of the message.
+//!
+//! ```toml
+//! title = "The thesis's scene"
+//! [cloth]
+//! n = 100
+//! size = 2.0
+//! top_center = [0.0, 2.2, -0.9]
+//! across = [1.0, 0.0, 0.0]     # direction of the rows (i)
+//! down = [0.0, 0.0, 1.0]       # from the top edge into the cloth (j); [0, -1, 0] hangs it
+//! pinning = "top-corners"      # "top-edge", "none", or [[i, j], …]
+//! [floor]
+//! y = 0.0                      # `enabled = false`: no floor
+//! [[spheres]]
+//! center = [0.45, 0.45, -0.1]
+//! radius = 0.45
+//! [[boxes]]
+//! min = [-0.5, 0.0, -0.5]
+//! max = [0.5, 0.8, 0.5]
+//! [params]                     # any SimParams field; the rest keep their defaults
+//! substeps = 16
+//! [camera]                     # optional
+//! target = [0.0, 0.9, 0.0]
+//! distance = 4.8
+//! yaw_deg = 34.0
+//! pitch_deg = 20.0
+//! [light]                      # optional
+//! position = [2.0, 5.5, 3.0]
+//! ```
+//!
+//! A missing table or field takes the default of the thesis's scene, except the colliders:
+//! a file without `[[spheres]]` has none. Unknown fields are refused (a misspelt field
+//! would otherwise be silently ignored).
+
+use std::path::Path;
+
+use serde::Deserialize;
+use thiserror::Error;
+
+use crate::camera::OrbitCamera;
+use crate::params::{ParamError, SimParams};
+use crate::scene::{Aabb, ClothSpec, Scene, Sphere};
+
+/// A scene file, read and checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneFile {
+    /// The file's `title`, if it has one.
+    pub title: Option<String>,
+    /// The scene.
+    pub scene: Scene,
+    /// The simulation parameters: the defaults with the file's `[params]` applied.
+    pub params: SimParams,
+    /// The camera, if the file sets one.
+    pub camera: Option<OrbitCamera>,
+    /// The light's position, m, if the file sets one.
+    pub light: Option<[f32; 3]>,
+}
+
+/// Why a scene file was refused: one line naming the file and, where the problem is in
+/// the text, its line and column.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("{file}{}: {message}", at.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default())]
+pub struct SceneFileError {
+    /// The file as given.
+    pub file: String,
+    /// Line and column (1-based) of the problem, where it has one.
+    pub at: Option<(usize, usize)>,
+    /// What is wrong and what is expected.
+    pub message: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Repr {
+    #[serde(default)]
+    title: Option<String>,
+    #[serde(default)]
+    #[allow(dead_code)]
+    description: Option<String>,
+    #[serde(default)]
+    cloth: ClothSpec,
+    #[serde(default)]
+    floor: FloorRepr,
+    #[serde(default)]
+    spheres: Vec<Sphere>,
+    #[serde(default)]
+    boxes: Vec<BoxRepr>,
+    #[serde(default)]
+    params: SimParams,
+    #[serde(default)]
+    camera: Option<CameraRepr>,
+    #[serde(default)]
+    light: Option<LightRepr>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct FloorRepr {
+    enabled: bool,
+    y: f32,
+}
+
+impl Default for FloorRepr {
+    fn default() -> Self {
+        Self { enabled: true, y: 0.0 }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoxRepr {
+    min: [f32; 3],
+    max: [f32; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraRepr {
+    #[serde(default)]
+    target: Option<[f32; 3]>,
+    #[serde(default)]
+    distance: Option<f32>,
+    #[serde(default)]
+    yaw_deg: Option<f32>,
+    #[serde(default)]
+    pitch_deg: Option<f32>,
+    #[serde(default)]
+    fov_deg: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightRepr {
+    position: [f32; 3],
+}
+
+impl SceneFile {
+    /// Reads and checks `path`.
+    pub fn load(path: &Path) -> Result<Self, SceneFileError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneFileError {
+            file: file.clone(),
+            at: None,
+            message: format!("cannot read: {e}"),
+        })?;
+        Self::parse(&text, &file)
+    }
+
+    /// Parses and checks the text of a scene file (`file` names it in errors). Every value
+    /// is checked before anything is returned: a caller applies all of it or none.
+    pub fn parse(text: &str, file: &str) -> Result<Self, SceneFileError> {
+        let err = |at: Option<(usize, usize)>, message: String| SceneFileError { file: file.to_owned(), at, message };
+        let repr: Repr = toml::from_str(text).map_err(|e| {
+            // The message may run over several lines (a syntax error lists what was
+            // expected): one line.
+            let msg = e.message().lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
+            err(e.span().map(|s| line_col(text, s.start)), msg)
+        })?;
+        let refused = |e: ParamError, path: String| {
+            let at = locate(text, &path).map(|s| line_col(text, s));
+            err(at, format!("`{path}` = {}: {}", e.value, e.reason))
+        };
+        let scene = Scene {
+            cloth: repr.cloth,
+            floor_y: repr.floor.enabled.then_some(repr.floor.y),
+            spheres: repr.spheres,
+            boxes: repr.boxes.iter().map(|b| Aabb::new(b.min, b.max)).collect(),
+        };
+        scene.validate().map_err(|e| {
+            let path = e.field.clone();
+            refused(e, path)
+        })?;
+        repr.params.validate().map_err(|e| {
+            let path = format!("params.{}", e.field);
+            refused(e, path)
+        })?;
+        let camera = match repr.camera {
+            None => None,
+            Some(c) => {
+                let mut cam = OrbitCamera::default();
+                let check = |name: &str, v: f32, lo: f32, hi: f32| {
+                    crate::params::finite_in(format!("camera.{name}"), v, lo, hi).map_err(|e| {
+                        let path = e.field.clone();
+                        refused(e, path)
+                    })
+                };
+                if let Some(t) = c.target {
+                    for v in t {
+                        check("target", v, -1e4, 1e4)?;
+                    }
+                    cam.target = glam::Vec3::from(t);
+                }
+                if let Some(d) = c.distance {
+                    check("distance", d, OrbitCamera::MIN_DISTANCE, OrbitCamera::MAX_DISTANCE)?;
+                    cam.distance = d;
+                }
+                if let Some(y) = c.yaw_deg {
+                    check("yaw_deg", y, -3600.0, 3600.0)?;
+                    cam.yaw = y.to_radians();
+                }
+                if let Some(p) = c.pitch_deg {
+                    check("pitch_deg", p, -88.0, 88.0)?;
+                    cam.pitch = p.to_radians();
+                }
+                if let Some(f) = c.fov_deg {
+                    check("fov_deg", f, 5.0, 150.0)?;
+                    cam.fov_y = f.to_radians();
+                }
+                Some(cam)
+            }
+        };
+        let light = match repr.light {
+            None => None,
+            Some(l) => {
+                for v in l.position {
+                    crate::params::finite_in("light.position", v, -1e4, 1e4)
+                        .map_err(|e| refused(e, "light.position".into()))?;
+                }
+                Some(l.position)
+            }
+        };
+        Ok(Self { title: repr.title, scene, params: repr.params, camera, light })
+    }
+}
+
+/// 1-based line and column (in characters) of byte offset `at` of `text`.
+fn line_col(text: &str, at: usize) -> (usize, usize) {
+    let before = &text[..at.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+/// Byte offset of the value at `path` (`spheres[1].radius`, `params.gravity.x`) in the
+/// TOML `text`: the deepest part of the path the file spells out, or `None` when not even
+/// its first key is in the file (a default was refused).
+fn locate(text: &str, path: &str) -> Option<usize> {
+    let doc = toml::de::DeTable::parse(text).ok()?;
+    let mut segments = Vec::new();
+    for part in path.split('.') {
+        let mut it = part.split('[');
+        segments.push(Seg::Key(it.next()?.to_owned()));
+        for idx in it {
+            segments.push(Seg::Index(idx.trim_end_matches(']').parse().ok()?));
+        }
+    }
+    let mut segs = segments.into_iter();
+    let Some(Seg::Key(first)) = segs.next() else { return None };
+    let (_, mut value) = doc.get_ref().iter().find(|(k, _)| k.get_ref() == &first)?;
+    let mut found = value.span().start;
+    for seg in segs {
+        let next = match seg {
+            Seg::Key(k) => value.get_ref().get(k.as_str()),
+            Seg::Index(i) => value.get_ref().get(i),
+        };
+        match next {
+            Some(v) => {
+                value = v;
+                found = v.span().start;
+            }
+            None => break,
+        }
+    }
+    Some(found)
+}
+
+enum Seg {
+    Key(String),
+    Index(usize),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Pinning;
+
+    #[test]
+    fn a_full_file_reads_into_the_scene_it_describes() {
+        let text = r#"
+title = "t"
+[cloth]
+n = 40
+size = 1.5
+top_center = [0.0, 2.0, 0.0]
+across = [1.0, 0.0, 0.0]
+down = [0.0, -1.0, 0.0]
+pinning = [[0, 0], [39, 0]]
+[floor]
+enabled = false
+[[spheres]]
+center = [0.0, 0.5, 0.0]
+radius = 0.3
+[[boxes]]
+min = [-0.5, 0.0, -0.5]
+max = [0.5, 0.8, 0.5]
+[params]
+substeps = 20
+integrator = "xpbd"
+[camera]
+distance = 6.0
+[light]
+position = [1.0, 4.0, 2.0]
+"#;
+        let f = SceneFile::parse(text, "t.toml").unwrap();
+        assert_eq!(f.title.as_deref(), Some("t"));
+        assert_eq!(f.scene.cloth.n, 40);
+        assert_eq!(f.scene.cloth.down, [0.0, -1.0, 0.0]);
+        assert_eq!(f.scene.cloth.pinning, Pinning::Points(vec![[0, 0], [39, 0]]));
+        assert_eq!(f.scene.floor_y, None);
+        assert_eq!(f.scene.spheres.len(), 1);
+        assert_eq!(f.scene.boxes, vec![Aabb::new([-0.5, 0.0, -0.5], [0.5, 0.8, 0.5])]);
+        assert_eq!(f.params.substeps, 20);
+        assert_eq!(f.params.integrator, crate::params::Integrator::Xpbd);
+        // Unset parameters keep their defaults.
+        assert_eq!(f.params.strain_limit, SimParams::default().strain_limit);
+        assert_eq!(f.camera.as_ref().map(|c| c.distance), Some(6.0));
+        assert_eq!(f.light, Some([1.0, 4.0, 2.0]));
+    }
+
+    #[test]
+    fn an_empty_file_is_the_default_cloth_on_the_floor_with_no_colliders() {
+        let f = SceneFile::parse("", "e.toml").unwrap();
+        assert_eq!(f.scene.cloth, ClothSpec::default());
+        assert_eq!(f.scene.floor_y, Some(0.0));
+        assert!(f.scene.spheres.is_empty() && f.scene.boxes.is_empty());
+        assert_eq!(f.params, SimParams::default());
+    }
+
+    /// Each bad file: (text, the line and column expected, words the message must hold).
+    #[test]
+    fn a_bad_file_gets_one_line_with_its_line_column_and_what_is_expected() {
+        type Case<'a> = (&'a str, Option<(usize, usize)>, &'a [&'a str]);
+        let cases: [Case; 9] = [
+            // Syntax.
+            ("[cloth]\nn = = 3\n", Some((2, 5)), &["b.toml:2:5"]),
+            // A misspelt field.
+            ("[cloth]\nn = 30\nsiez = 2.0\n", Some((3, 1)), &["unknown field `siez`", "expected"]),
+            // A value of the wrong type.
+            ("[cloth]\nn = \"big\"\n", Some((2, 5)), &["invalid type", "u32"]),
+            // A pinning that is no pinning.
+            ("[cloth]\npinning = \"corners\"\n", Some((2, 11)), &["unknown variant `corners`", "top-corners"]),
+            // Refused values name the field, and where it is.
+            ("[cloth]\nn = 1\n", Some((2, 5)), &["`cloth.n` = 1", "2 ..= 4096"]),
+            (
+                "[[spheres]]\ncenter = [0, 1, 0]\nradius = 0.5\n[[spheres]]\ncenter = [0, 1, 0]\nradius = -1\n",
+                Some((6, 10)),
+                &["`spheres[1].radius` = -1"],
+            ),
+            ("[[boxes]]\nmin = [0, 0, 0]\nmax = [1, -1, 1]\n", Some((3, 7)), &["`boxes[0].max`", "exceed its min"]),
+            ("[params]\nsubsteps = 0\n", Some((2, 12)), &["`params.substeps` = 0"]),
+            ("[cloth]\nn = 8\npinning = [[0, 0], [8, 0]]\n", Some((3, 20)), &["`cloth.pinning[1]`", "i, j < n = 8"]),
+        ];
+        for (text, at, words) in cases {
+            let e = SceneFile::parse(text, "b.toml").expect_err(text);
+            let line = e.to_string();
+            assert_eq!(e.at, at, "{text:?}: {line}");
+            assert!(!line.contains('\n'), "one line: {line}");
+            for w in words {
+                assert!(line.contains(w), "{text:?}: `{line}` lacks `{w}`");
+            }
+        }
+    }
+}

@@ -1,0 +1,211 @@
+//! The scene files of `scenes/` on every backend: each loads and builds; the free-falling
+//! cloth falls as y0 − ½ g t²; the tablecloth ends outside its box, every GPU backend
+//! following the CPU, every kernel against its twin with the box in the scene.
+
+use std::path::{Path, PathBuf};
+
+use clothlab_core::validate::validate_rollout;
+use clothlab_core::{CpuSolver, Exec, Scene, SceneFile, SimParams, Solver};
+use clothlab_engine::Variant;
+use clothlab_engine::validate::{KernelRunner, validate_kernels_with};
+use clothlab_tests::{assert_checks, or_skip};
+use clothlab_vulkan::vulkan_solver;
+use clothlab_wgpu::{SolverOptions, wgpu_solver};
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+}
+
+fn load(name: &str) -> SceneFile {
+    SceneFile::load(&scenes_dir().join(name)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Every backend on `scene`: the two CPU solvers, then wgpu and Vulkan, naive and
+/// optimized (Vulkan under the validation layer); the GPU ones only where an adapter is.
+fn every_backend(scene: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>)> {
+    let mut out: Vec<(String, Box<dyn Solver>)> = Vec::new();
+    for exec in [Exec::Serial, Exec::Parallel] {
+        let s = CpuSolver::new(exec, scene.clone(), params.clone()).unwrap();
+        out.push((s.name().to_owned(), Box::new(s)));
+    }
+    for v in [Variant::NAIVE, Variant::OPTIMIZED] {
+        if let Some(s) = or_skip(wgpu_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "wgpu") {
+            out.push((format!("wgpu {}", v.label()), Box::new(s)));
+        }
+        if let Some(s) =
+            or_skip(vulkan_solver(v, scene.clone(), params.clone(), true, SolverOptions::default()), "vulkan")
+        {
+            out.push((format!("vulkan {}", v.label()), Box::new(s)));
+        }
+    }
+    out
+}
+
+#[test]
+fn every_scene_file_loads_and_builds() {
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(scenes_dir()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let f = SceneFile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            clothlab_core::build(&f.scene, &f.params).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            assert!(f.title.is_some(), "{} has no title", path.display());
+            names.push(path.file_stem().unwrap().to_string_lossy().into_owned());
+        }
+    }
+    // The scenes the issue names.
+    for want in ["thesis", "curtain", "tablecloth", "free-fall", "flag"] {
+        assert!(names.iter().any(|n| n == want), "scenes/{want}.toml missing: {names:?}");
+    }
+    // The thesis's file is the built-in default scene (100 × 100) exactly.
+    let thesis = load("thesis.toml");
+    assert_eq!(thesis.scene, Scene::default());
+    assert_eq!(thesis.params, SimParams::default());
+}
+
+#[test]
+fn the_free_falling_scene_falls_as_y0_minus_half_g_t_squared_on_every_backend() {
+    // The scene holds nothing and has no floor, drag or damping: every particle falls
+    // freely. prev is set to where a particle at rest at t = 0 was at t = −dt, for which
+    // Verlet (a central difference) is exact on a parabola; what remains is f32 rounding.
+    // Each substep rounds the new position (≤ 1 ulp of |y|), and Verlet carries that error
+    // on as velocity, so after k substeps it is at most k²/2 ulps. At the scene's own dt
+    // (1/960 s) g·dt² = 1.1e-5 m is only 44 ulps of y = 2 m and the rounding is 2 % of the
+    // fall (measured 4.4e-4 m of 0.136 m over 160 substeps; an f32 replay of the
+    // recurrence gives the same), so the test takes substeps of 20 ms instead: 20 of them
+    // (0.4 s, 0.78 m of fall), bound 20²/2 ulps of 2 m = 4.8e-5 m.
+    let f = load("free-fall.toml");
+    assert!(f.scene.floor_y.is_none() && f.scene.spheres.is_empty() && f.scene.boxes.is_empty());
+    let scene = f.scene;
+    let p = SimParams { frame_dt: 0.02, substeps: 1, ..f.params };
+    let (dt, g) = (p.dt(), p.gravity[1]);
+    let frames = 20u32;
+    let t = frames as f32 * p.frame_dt;
+    let ulp = 2.0f32.powi(-22); // of |y| in [2, 4): the cloth starts at y = 2
+    let bound = (frames * frames) as f32 / 2.0 * ulp;
+    for (name, mut s) in every_backend(&scene, &p) {
+        let mut st = s.state().unwrap();
+        let start = st.pos.clone();
+        for (q, x) in st.prev.iter_mut().zip(&st.pos) {
+            *q = *x;
+            q[1] = x[1] + 0.5 * g * dt * dt;
+        }
+        s.set_state(&st).unwrap();
+        for _ in 0..frames {
+            s.step_frame().unwrap();
+        }
+        let end = s.state().unwrap().pos;
+        let mut worst = 0.0f32;
+        let mut sideways = 0.0f32;
+        for (a, b) in start.iter().zip(&end) {
+            let want = a[1] + 0.5 * g * t * t;
+            worst = worst.max((b[1] - want).abs());
+            sideways = sideways.max((b[0] - a[0]).abs().max((b[2] - a[2]).abs()));
+        }
+        println!(
+            "{name:16} free fall: max |y − (y0 − ½gt²)| = {worst:.2e} m (bound {bound:.1e}), sideways {sideways:.2e} m"
+        );
+        assert!(worst <= bound, "{name}: {worst} m from y0 − ½gt² after {t} s (bound {bound})");
+        // A uniform fall stretches no spring: nothing moves sideways but by rounding of
+        // spring forces at rest length (a few ulps of x ≈ 0.5 m per substep).
+        assert!(sideways < 20.0 * 2.0f32.powi(-24) * frames as f32, "{name}: moved {sideways} m sideways");
+    }
+}
+
+/// Deepest a particle is inside any of `scene`'s boxes, m (0 when none is).
+fn deepest_in_a_box(scene: &Scene, pos: &[[f32; 4]]) -> f32 {
+    let mut deepest = 0.0f32;
+    for b in &scene.boxes {
+        for p in pos {
+            let depth = (0..3).map(|k| (p[k] - b.min[k]).min(b.max[k] - p[k])).fold(f32::INFINITY, f32::min);
+            deepest = deepest.max(depth);
+        }
+    }
+    deepest
+}
+
+#[test]
+fn the_tablecloth_ends_outside_its_box_on_every_backend_and_the_gpu_follows_the_cpu() {
+    // The tablecloth at n = 32, 90 frames (1.5 s: it lands on the table at 0.3 s and
+    // drapes). No particle may be inside the box: collisions push particles out to the
+    // margin every substep, so depth 0 (a particle exactly on a face counts as outside).
+    let f = load("tablecloth.toml");
+    let mut scene = f.scene.clone();
+    scene.cloth.n = 32;
+    let p = f.params.clone();
+    assert_eq!(scene.boxes.len(), 1);
+    let table_top = scene.boxes[0].max[1];
+    for (name, mut s) in every_backend(&scene, &p) {
+        for _ in 0..90 {
+            s.step_frame().unwrap();
+        }
+        let pos = s.state().unwrap().pos;
+        let deepest = deepest_in_a_box(&scene, &pos);
+        // Draped: the middle of the cloth rests on the table top, the corners hang below it.
+        let n = 32;
+        let middle = pos[(n / 2) * n + n / 2][1];
+        let corner = pos[0][1];
+        println!("{name:16} deepest in the box {deepest:.2e} m; middle at {middle:.3} m, a corner at {corner:.3} m");
+        assert!(deepest <= 0.0, "{name}: a particle {deepest} m inside the box");
+        assert!((middle - table_top).abs() < 0.03, "{name}: the middle at {middle} m, the table top at {table_top} m");
+        assert!(corner < table_top - 0.1, "{name}: the corner at {corner} m does not hang over the edge");
+    }
+}
+
+#[test]
+fn with_a_box_in_the_scene_every_gpu_kernel_matches_its_twin_and_rollouts_follow_the_cpu() {
+    // Kernel checks start from a cloth with particles put inside the box and under the
+    // floor (engine::validate::KernelInput), so the box's collision code runs in them.
+    // The rollout runs on a fresh solver (the checks leave their inputs in its buffers).
+    let f = load("tablecloth.toml");
+    let mut scene = f.scene.clone();
+    scene.cloth.n = 33;
+    let p = f.params.clone();
+    for v in [Variant::NAIVE, Variant::OPTIMIZED] {
+        let wgpu = || or_skip(wgpu_solver(v, scene.clone(), p.clone(), SolverOptions::default()), "wgpu");
+        if let (Some(mut w), Some(mut fresh)) = (wgpu(), wgpu()) {
+            let kernels = w.kernels();
+            let label = format!("wgpu {}", v.label());
+            assert_checks(&label, &validate_kernels_with(&mut w, &kernels, &scene, 5, &p).unwrap());
+            assert_checks(&label, &[validate_rollout(&mut fresh, 20).unwrap()]);
+        }
+        let vulkan = || or_skip(vulkan_solver(v, scene.clone(), p.clone(), true, SolverOptions::default()), "vulkan");
+        if let (Some(mut k), Some(mut fresh)) = (vulkan(), vulkan()) {
+            let kernels = k.kernels();
+            let label = format!("vk {}", v.label());
+            assert_checks(&label, &validate_kernels_with(&mut k, &kernels, &scene, 5, &p).unwrap());
+            assert_checks(&label, &[validate_rollout(&mut fresh, 20).unwrap()]);
+            for s in [&k, &fresh] {
+                let m = s.engine().take_validation_messages();
+                assert!(m.is_empty(), "validation layer: {m:#?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn the_kernel_checks_input_puts_particles_inside_every_collider_and_collide_takes_them_out() {
+    // What makes the kernel checks above exercise the box: particles inside it (and in
+    // the spheres, and under the floor) before, none in a collider after the CPU's collide.
+    let mut scene = load("tablecloth.toml").scene;
+    scene.cloth.n = 33;
+    scene.spheres.push(clothlab_core::Sphere { center: [1.5, 0.3, 0.0], radius: 0.3 });
+    let input = clothlab_engine::validate::KernelInput::for_scene(&scene, 5, &SimParams::default()).unwrap();
+    let inside_sphere = |pos: &[[f32; 4]]| {
+        let s = scene.spheres[0];
+        pos.iter().filter(|p| (0..3).map(|k| (p[k] - s.center[k]).powi(2)).sum::<f32>() < s.radius * s.radius).count()
+    };
+    let below_floor = |pos: &[[f32; 4]]| pos.iter().filter(|p| p[1] < 0.0).count();
+    let (mut pos, mut prev) = (input.bufs.pos.clone(), input.bufs.prev.clone());
+    let in_box = pos.iter().filter(|p| deepest_in_a_box(&scene, &[**p]) > 0.0).count();
+    println!(
+        "before collide: {in_box} in the box, {} in the sphere, {} under the floor",
+        inside_sphere(&pos),
+        below_floor(&pos)
+    );
+    assert!(in_box >= 2 && inside_sphere(&pos) >= 2 && below_floor(&pos) >= 2);
+    clothlab_core::cpu::collide(Exec::Serial, &input.p, &scene.spheres, &scene.boxes, &mut pos, &mut prev);
+    assert_eq!(deepest_in_a_box(&scene, &pos), 0.0);
+    assert_eq!(inside_sphere(&pos), 0);
+    // The floor is the integration's (integrate, forces_integrate_collide): collide leaves it.
+}
