@@ -44,7 +44,11 @@ fn expected_layouts() -> Vec<Layout> {
                 n,
                 num_spheres,
                 num_boxes,
-                grab_index
+                grab_index,
+                self_thickness,
+                spacing,
+                inv_cell,
+                _pad0
             ]
         ),
         layout!(SpringSlot, "SpringSlot", [neighbor, rest, ks, kd]),

@@ -497,6 +497,15 @@ pub struct StepParams {
     pub num_boxes: u32,
     /// Grabbed particle, or -1.
     pub grab_index: i32,
+    /// Self-collision's thickness, m; 0 when self-collision is off.
+    pub self_thickness: f32,
+    /// Rest distance between neighbouring particles, m.
+    pub spacing: f32,
+    /// `1 / self_thickness` (the hash's cells are cubes of side `self_thickness`),
+    /// computed here so that every backend multiplies by the same number; 0 when off.
+    pub inv_cell: f32,
+    /// Padding to 16 bytes.
+    pub _pad0: u32,
 }
 
 impl StepParams {
@@ -526,6 +535,10 @@ impl StepParams {
             num_spheres: scene.spheres.len() as u32,
             num_boxes: scene.boxes.len() as u32,
             grab_index,
+            self_thickness: if params.self_collision { params.self_thickness } else { 0.0 },
+            spacing: scene.cloth.size / (scene.cloth.n - 1) as f32,
+            inv_cell: if params.self_collision { 1.0 / params.self_thickness } else { 0.0 },
+            _pad0: 0,
         }
     }
 }

@@ -218,6 +218,12 @@ pub struct SimParams {
     /// `integrator = xpbd`: Gauss–Seidel iterations (of 12 passes each) per substep, with
     /// each spring's λ kept across them, 1 ..= 64. Default 1.
     pub xpbd_iterations: u32,
+    /// Self-collision: particles that are not neighbours in the grid keep
+    /// `self_thickness` apart (found through a spatial hash rebuilt every substep; see
+    /// `core::cpu::self_collide`). Default off.
+    pub self_collision: bool,
+    /// The cloth's thickness for self-collision, m, in 0.001 ..= 0.5. Default 0.02.
+    pub self_thickness: f32,
 }
 
 impl Default for SimParams {
@@ -248,6 +254,8 @@ impl Default for SimParams {
             integrator: Integrator::Verlet,
             cg_iterations: 16,
             xpbd_iterations: 1,
+            self_collision: false,
+            self_thickness: 0.02,
         }
     }
 }
@@ -486,6 +494,7 @@ impl SimParams {
         if self.xpbd_iterations == 0 || self.xpbd_iterations > 64 {
             return Err(ParamError::new("xpbd_iterations", self.xpbd_iterations, "must be in 1 ..= 64"));
         }
+        finite_in("self_thickness", self.self_thickness, 1e-3, 0.5)?;
         if self.cg_iterations == 0 || self.cg_iterations > MAX_CG_ITERATIONS {
             return Err(ParamError::new(
                 "cg_iterations",

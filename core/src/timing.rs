@@ -58,6 +58,10 @@ pub const INTEGRATE_COLLIDE: &str = "integrate+collide";
 pub const FORCES_INTEGRATE_COLLIDE: &str = "forces+integrate+collide";
 /// Label of the whole-substep row.
 pub const SUBSTEP: &str = "substep";
+/// Self-collision's hash build (count, prefix sum, scatter, sort).
+pub const SELF_HASH: &str = "self_hash";
+/// Self-collision's response.
+pub const SELF_COLLIDE: &str = "self_collide";
 /// Label of the whole-frame row (all substeps of a frame).
 pub const FRAME: &str = "frame";
 /// Label of a GPU solver's CPU time per frame spent recording its commands (wgpu: encoding

@@ -25,6 +25,10 @@ fn bare_params(n: u32, dt: f32, mass: f32) -> StepParams {
         num_spheres: 0,
         num_boxes: 0,
         grab_index: -1,
+        self_thickness: 0.0,
+        spacing: 1.0,
+        inv_cell: 0.0,
+        _pad0: 0,
     }
 }
 

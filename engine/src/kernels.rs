@@ -681,6 +681,102 @@ fn implicit_finish(a: &TwinArgs, b: &mut HostBuffers) {
     cpu::implicit_finish(a.exec, a.p, &mut b.pos, &mut b.prev, &b.aux);
 }
 
+// ---- self-collision (core::cpu::self_collide): the hash in aux2 (cells) and aux3 ----
+
+fn hash_buffers(b: &mut HostBuffers) -> (&mut Vec<V4>, &mut Vec<V4>) {
+    let [.., cells, sorted, _] = &mut b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
+    (cells, sorted)
+}
+
+fn hash_count(a: &TwinArgs, b: &mut HostBuffers) {
+    let pos = std::mem::take(&mut b.pos);
+    let (cells, sorted) = hash_buffers(b);
+    cpu::hash_count(a.p, &pos, cells, sorted);
+    b.pos = pos;
+}
+
+fn hash_scan_blocks(_: &TwinArgs, b: &mut HostBuffers) {
+    cpu::hash_scan_blocks(hash_buffers(b).0);
+}
+
+fn hash_scan_top(_: &TwinArgs, b: &mut HostBuffers) {
+    cpu::hash_scan_top(hash_buffers(b).0);
+}
+
+fn hash_scan_add(_: &TwinArgs, b: &mut HostBuffers) {
+    cpu::hash_scan_add(hash_buffers(b).0);
+}
+
+fn hash_scatter(_: &TwinArgs, b: &mut HostBuffers) {
+    let (cells, sorted) = hash_buffers(b);
+    cpu::hash_scatter(cells, sorted);
+}
+
+fn hash_sort(_: &TwinArgs, b: &mut HostBuffers) {
+    let (cells, sorted) = hash_buffers(b);
+    cpu::hash_sort(cells, sorted);
+}
+
+fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {
+    let [.., cells, sorted, _] = &b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
+    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.prev, cells, sorted, &mut b.pos_out);
+}
+
+/// Kernel-test inputs: the hash built by the twins up to the kernel under test (the
+/// counts cleared first, as the recipe does).
+fn hash_input(upto: usize) -> impl Fn(&TwinArgs, &mut HostBuffers) {
+    move |a, b| {
+        hash_buffers(b).0.iter_mut().for_each(|c| *c = [0.0; 4]);
+        let steps: [Twin; 5] = [hash_count, hash_scan_blocks, hash_scan_top, hash_scan_add, hash_scatter];
+        for step in &steps[..upto] {
+            step(a, b);
+        }
+        if upto == steps.len() {
+            hash_sort(a, b);
+        }
+    }
+}
+
+fn after_count(a: &TwinArgs, b: &mut HostBuffers) {
+    hash_input(1)(a, b)
+}
+
+fn after_blocks(a: &TwinArgs, b: &mut HostBuffers) {
+    hash_input(2)(a, b)
+}
+
+fn after_top(a: &TwinArgs, b: &mut HostBuffers) {
+    hash_input(3)(a, b)
+}
+
+fn after_scan(a: &TwinArgs, b: &mut HostBuffers) {
+    hash_input(4)(a, b)
+}
+
+fn after_scatter(a: &TwinArgs, b: &mut HostBuffers) {
+    // (hash_input(5) also sorts: the scatter of the twin is in index order already.)
+    hash_input(4)(a, b);
+    hash_scatter(a, b);
+}
+
+/// The response's input: every 7th particle put within 0.3–0.8 thicknesses of one far
+/// away in the grid (half the cloth on), velocity kept, so that contacts are many; then
+/// the hash built.
+fn built_hash(a: &TwinArgs, b: &mut HostBuffers) {
+    let (np, t) = (b.pos.len(), a.p.self_thickness);
+    for i in (0..np).step_by(7) {
+        let q = (i + np / 2) % np;
+        let off = t * (0.3 + 0.5 * ((i / 7) % 5) as f32 / 4.0);
+        let dir: [f32; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.6, 0.8, 0.0]][(i / 7) % 4];
+        for (c, d) in dir.iter().enumerate() {
+            let to = b.pos[q][c] + off * d;
+            b.prev[i][c] += to - b.pos[i][c];
+            b.pos[i][c] = to;
+        }
+    }
+    hash_input(5)(a, b)
+}
+
 /// The reduction's work is done by `stats`' twin, which reduces on the spot.
 fn nothing(_: &TwinArgs, _: &mut HostBuffers) {}
 
@@ -995,8 +1091,68 @@ pub static IMPLICIT_FINISH: KernelDef = KernelDef {
     ..def("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Prev, Aux0], &[Pos, Prev])
 };
 
+// ---- self-collision (core::cpu::self_collide) ----
+
+/// Integer work (counts, prefix sums, indices): the same bits everywhere.
+const EXACT: Check = Check::Bound { relative: 0.0, reason: "integers: counts, prefix sums and indices" };
+const fn hash(
+    name: &'static str,
+    twin: Twin,
+    count: Count,
+    reads: &'static [Buf],
+    writes: &'static [Buf],
+) -> KernelDef {
+    KernelDef { check: EXACT, label: timing::SELF_HASH, ..def(name, twin, count, reads, writes) }
+}
+/// Each particle's bucket, and the buckets' counts (atomics).
+pub static HASH_COUNT: KernelDef = KernelDef {
+    accumulates: &[Aux2],
+    ..hash("hash_count", hash_count, Count::Particles, &[Params, Pos, Aux2], &[Aux2, Aux3])
+};
+/// The counts' exclusive prefix within each workgroup of buckets, and its total.
+pub static HASH_SCAN_BLOCKS: KernelDef = KernelDef {
+    test_input: Some(after_count),
+    ..hash("hash_scan_blocks", hash_scan_blocks, Count::Particles, &[Params, Aux2], &[Aux2])
+};
+/// The workgroups' totals' exclusive prefix (one workgroup).
+pub static HASH_SCAN_TOP: KernelDef = KernelDef {
+    test_input: Some(after_blocks),
+    ..hash("hash_scan_top", hash_scan_top, Count::Workgroup, &[Params, Aux2], &[Aux2])
+};
+/// Every bucket's start and cursor.
+pub static HASH_SCAN_ADD: KernelDef = KernelDef {
+    test_input: Some(after_top),
+    ..hash("hash_scan_add", hash_scan_add, Count::Particles, &[Params, Aux2], &[Aux2])
+};
+/// Every particle into its bucket's range, in any order (atomics): checked after the sort.
+pub static HASH_SCATTER: KernelDef = KernelDef {
+    test_input: Some(after_scan),
+    check: Check::Own("the_gpu_hash_lists_what_the_cpu_lists_after_its_scatter_and_sort"),
+    ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Aux2, Aux3], &[Aux2, Aux3])
+};
+/// Every bucket's range sorted by particle index.
+pub static HASH_SORT: KernelDef = KernelDef {
+    test_input: Some(after_scatter),
+    ..hash("hash_sort", hash_sort, Count::Particles, &[Params, Aux2, Aux3], &[Aux3])
+};
+/// The response: every particle pushed out of its close candidates, into the other
+/// position buffer.
+pub static SELF_COLLIDE: KernelDef = KernelDef {
+    check: Check::Bound {
+        relative: 2e-5,
+        reason: "a gather over the contacts with divisions and square roots (exact on lavapipe)",
+    },
+    pure: &[PosOut],
+    label: timing::SELF_COLLIDE,
+    test_input: Some(built_hash),
+    ..def("self_collide", self_collide, Count::Particles, &[Params, Pos, Prev, Aux2, Aux3], &[PosOut, Prev])
+};
+/// Self-collision's kernels, in recipe order.
+pub static SELF_COLLISION: [&KernelDef; 7] =
+    [&HASH_COUNT, &HASH_SCAN_BLOCKS, &HASH_SCAN_TOP, &HASH_SCAN_ADD, &HASH_SCATTER, &HASH_SORT, &SELF_COLLIDE];
+
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 43] = [
+pub static ALL: [&KernelDef; 50] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -1040,6 +1196,13 @@ pub static ALL: [&KernelDef; 43] = [
     &CG_REDUCE_RZ,
     &CG_DIRECTION,
     &IMPLICIT_FINISH,
+    &HASH_COUNT,
+    &HASH_SCAN_BLOCKS,
+    &HASH_SCAN_TOP,
+    &HASH_SCAN_ADD,
+    &HASH_SCATTER,
+    &HASH_SORT,
+    &SELF_COLLIDE,
 ];
 
 #[cfg(test)]

@@ -77,12 +77,14 @@ pub struct Integration {
     pub cg_iterations: u32,
     /// Gauss–Seidel iterations (`xpbd` only).
     pub xpbd_iterations: u32,
+    /// Self-collision after the strain limit (core::cpu::self_collide).
+    pub self_collision: bool,
 }
 
 impl Integration {
     /// Verlet, the thesis's.
     pub const VERLET: Integration =
-        Integration { integrator: Integrator::Verlet, cg_iterations: 0, xpbd_iterations: 0 };
+        Integration { integrator: Integrator::Verlet, cg_iterations: 0, xpbd_iterations: 0, self_collision: false };
 
     /// What `params` ask for.
     pub fn of(params: &clothlab_core::SimParams) -> Self {
@@ -90,6 +92,7 @@ impl Integration {
             integrator: params.integrator,
             cg_iterations: params.cg_iterations,
             xpbd_iterations: params.xpbd_iterations,
+            self_collision: params.self_collision,
         }
     }
 }
@@ -161,6 +164,7 @@ pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Co
     let mut commands: Vec<Command> = step
         .into_iter()
         .chain((0..strain_passes).map(|_| &k::STRAIN_LIMIT))
+        .chain(k::SELF_COLLISION.iter().copied().filter(|_| how.self_collision))
         .chain(normals)
         .flat_map(|d| run(d.flavor(flavor)))
         .collect();

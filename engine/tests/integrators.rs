@@ -68,7 +68,7 @@ impl Oscillator {
         }
         let bufs = start_buffers(Exec::Serial, &p, &topo, &state);
         let engine = CpuEngine::new(Exec::Serial, scene, topo);
-        let how = Integration { integrator, cg_iterations: 16, xpbd_iterations: 1 };
+        let how = Integration { integrator, cg_iterations: 16, xpbd_iterations: 1, self_collision: false };
         Self { engine, bufs, p, commands: recipe(&Variant::OPTIMIZED, 0, how), k }
     }
 

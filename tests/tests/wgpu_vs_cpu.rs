@@ -53,7 +53,11 @@ fn kernels_match_on(n: u32, every_flavor: bool) {
     }
     let checks = validate_kernels(&mut g, &kernels, n, 0x5eed + n as u64).unwrap();
     let bounded = kernels.iter().filter(|k| matches!(k.def.check, Check::Bound { .. })).count();
-    assert_eq!(bounded, kernels.len(), "wgpu builds no statistics kernels");
+    // No statistics kernels (wgpu builds them only with the option); the one other kernel
+    // with a test of its own is the hash's scatter (tests/tests/self_collision.rs).
+    let own: Vec<String> =
+        kernels.iter().filter(|k| !matches!(k.def.check, Check::Bound { .. })).map(|k| k.shader_name()).collect();
+    assert!(own.iter().all(|k| k.starts_with("hash_scatter")), "kernels checked elsewhere: {own:?}");
     assert_eq!(checks.len(), COMPARED_BUFFERS * bounded);
     assert_checks(&format!("n = {n}"), &checks);
 }

@@ -531,6 +531,15 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     changed |= ui
         .add(egui::Slider::new(&mut p.strain_iterations, 0..=MAX_STRAIN_ITERATIONS.min(16)).text("strain passes"))
         .changed();
+    // Self-collision (off by default): a spatial hash every substep, then the response.
+    ui.horizontal(|ui| {
+        changed |= ui.checkbox(&mut p.self_collision, "self-collision").changed();
+        if p.self_collision {
+            changed |= ui
+                .add(egui::Slider::new(&mut p.self_thickness, 0.002..=0.1).logarithmic(true).text("thickness m"))
+                .changed();
+        }
+    });
     if changed {
         match p.validate() {
             Ok(()) => out.push(Command::Params(p.clone())),

@@ -3,16 +3,18 @@
 use std::time::Instant;
 
 use super::{
-    AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_PASSES, cg_alpha, cg_begin, cg_beta, cg_direction,
-    cg_matvec, cg_step, collide, euler, fold, forces, implicit_finish, integrate, integrate_collide, partial_sums,
-    rk_begin, rk_stage, springs_rows, strain_limit_rows, tri_normals, tri_normals_lanes, vertex_normals,
-    vertex_normals_rows, xpbd_pass,
+    AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_PASSES, build_hash, cg_alpha, cg_begin, cg_beta,
+    cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, implicit_finish, integrate, integrate_collide,
+    partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit_rows, tri_normals, tri_normals_lanes,
+    vertex_normals, vertex_normals_rows, xpbd_pass,
 };
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
 use crate::params::{Integrator, SimParams};
 use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};
-use crate::timing::{FORCES_SPRINGS, FRAME, INTEGRATE_COLLIDE, KernelId, KernelTimings, SUBSTEP, TimingRecorder};
+use crate::timing::{
+    FORCES_SPRINGS, FRAME, INTEGRATE_COLLIDE, KernelId, KernelTimings, SELF_COLLIDE, SELF_HASH, SUBSTEP, TimingRecorder,
+};
 
 /// The CPU solver; [`Exec::Serial`] is the thesis's CPU variant, [`Exec::Parallel`] its
 /// OpenMP one. Both run the same gather kernels, so they agree bit for bit.
@@ -122,7 +124,9 @@ impl CpuSolver {
             springs_rows(e, n, p.dt, &topo.slots, uniform.as_ref(), Some(&p), lanes, pos, prev, force)
         };
         let (spheres, boxes) = (&scene.spheres, &scene.boxes);
-        if !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler) && aux.len() != AUX {
+        let needs_aux =
+            params.self_collision || !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler);
+        if needs_aux && aux.len() != AUX {
             *aux = vec![vec![[0.0; 4]; pos.len()]; AUX];
         }
         // The same kernels in the same order as the engine's recipe for the integrator
@@ -194,6 +198,14 @@ impl CpuSolver {
                 std::mem::swap(pos, scratch);
             }
         });
+        // Self-collision: the hash in aux2 and aux3 (dead after the integrator's kernels),
+        // the response into the other position buffer (self_collide.rs).
+        if params.self_collision {
+            let [.., cells, sorted, _] = &mut aux[..] else { unreachable!("AUX scratch buffers") };
+            Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, cells, sorted));
+            Self::timed(timer, on, SELF_COLLIDE, || self_collide(e, &p, pos, prev, cells, sorted, scratch));
+            std::mem::swap(pos, scratch);
+        }
         if fast {
             Self::timed(timer, on, KernelId::TriNormals.name(), || {
                 lanes.fill(e, n, pos, None);

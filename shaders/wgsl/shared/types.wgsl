@@ -17,6 +17,10 @@ struct StepParams {
     num_spheres: u32,
     num_boxes: u32,
     grab_index: i32,
+    self_thickness: f32,
+    spacing: f32,
+    inv_cell: f32,
+    _pad0: u32,
 }
 
 struct SpringSlot {

@@ -1,0 +1,147 @@
+//! Self-collision on every backend: the heap scene keeps its layers apart, every GPU
+//! kernel of it matches its twin on both APIs (the hash's scatter, which places with
+//! atomics in any order, after its sort), and a rollout through the contacts follows the
+//! CPU.
+
+use std::path::Path;
+
+use clothlab_core::validate::validate_rollout;
+use clothlab_core::{CpuSolver, Exec, Scene, SceneFile, SimParams, Solver};
+use clothlab_engine::Variant;
+use clothlab_engine::kernels::{HASH_SCATTER, HASH_SORT, KernelRef, SELF_COLLISION};
+use clothlab_engine::recipe::Command;
+use clothlab_engine::validate::{KernelInput, KernelRunner, validate_kernels_with};
+use clothlab_tests::{assert_checks, or_skip};
+use clothlab_vulkan::vulkan_solver;
+use clothlab_wgpu::{SolverOptions, wgpu_solver};
+
+fn heap(n: u32) -> (Scene, SimParams) {
+    let f = SceneFile::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/heap.toml")).unwrap();
+    assert!(f.params.self_collision);
+    let mut scene = f.scene;
+    scene.cloth.n = n;
+    (scene, f.params)
+}
+
+/// The smallest distance between two particles that may collide (not grid neighbours,
+/// farther apart at rest than 2t), by brute force.
+fn closest_candidates(pos: &[[f32; 4]], p: &clothlab_core::StepParams) -> f32 {
+    let mut best = f32::INFINITY;
+    for a in 0..pos.len() {
+        for b in a + 1..pos.len() {
+            if clothlab_core::cpu::self_collide::candidates(p, a as u32, b as u32) {
+                let d = (0..3).map(|k| (pos[a][k] - pos[b][k]).powi(2)).sum::<f32>().sqrt();
+                best = best.min(d);
+            }
+        }
+    }
+    best
+}
+
+#[test]
+fn the_heap_keeps_its_layers_apart_on_every_backend() {
+    // n = 32, 100 frames (1.7 s: the cloth lands at 0.25 s, folds over and lies still).
+    // Every pair that may collide ends at least half the thickness apart (the issue's
+    // bound; the response aims at the whole thickness, and a substep's motion and several
+    // contacts at once leave less). Without self-collision the layers pass through each
+    // other: the same check fails, so it can.
+    let (scene, params) = heap(32);
+    let t = params.self_thickness;
+    let frames = 100;
+    let sp = clothlab_core::StepParams::new(&params, &scene, None);
+    let mut solvers: Vec<(String, Box<dyn Solver>)> = Vec::new();
+    for exec in [Exec::Serial, Exec::Parallel] {
+        let s = CpuSolver::new(exec, scene.clone(), params.clone()).unwrap();
+        solvers.push((s.name().to_owned(), Box::new(s)));
+    }
+    for v in [Variant::NAIVE, Variant::OPTIMIZED] {
+        if let Some(s) = or_skip(wgpu_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "wgpu") {
+            solvers.push((format!("wgpu {}", v.label()), Box::new(s)));
+        }
+        if let Some(s) = or_skip(vulkan_solver(v, scene.clone(), params.clone(), true, SolverOptions::default()), "vk")
+        {
+            solvers.push((format!("vulkan {}", v.label()), Box::new(s)));
+        }
+    }
+    for (name, mut s) in solvers {
+        for _ in 0..frames {
+            s.step_frame().unwrap();
+        }
+        let pos = s.state().unwrap().pos;
+        let closest = closest_candidates(&pos, &sp);
+        let lowest = pos.iter().map(|p| p[1]).fold(f32::INFINITY, f32::min);
+        println!("{name:16} closest pair that may collide {closest:.4} m (thickness {t} m); lowest {lowest:.4} m");
+        assert!(closest >= 0.5 * t, "{name}: two layers {closest} m apart, under half the thickness {t}");
+        assert!(lowest < 0.05, "{name}: the cloth has not landed (lowest point {lowest} m)");
+    }
+    let off = SimParams { self_collision: false, ..params };
+    let mut s = CpuSolver::new(Exec::Parallel, scene, off).unwrap();
+    for _ in 0..frames {
+        s.step_frame().unwrap();
+    }
+    let closest = closest_candidates(&s.state().unwrap().pos, &sp);
+    println!("without self-collision  closest pair {closest:.4} m");
+    assert!(closest < 0.5 * t, "without self-collision the layers should meet ({closest} m)");
+}
+
+/// Every self-collision kernel of `runner`'s recipe (`recipe`) against its twin, and the
+/// scatter (atomics, in any order) followed by the sort against the twins' hash, bit for
+/// bit.
+fn check_kernels(
+    label: &str,
+    runner: &mut dyn KernelRunner,
+    recipe: Vec<KernelRef>,
+    scene: &Scene,
+    params: &SimParams,
+) {
+    let kernels: Vec<_> = recipe.into_iter().filter(|k| SELF_COLLISION.contains(&k.def)).collect();
+    assert_eq!(kernels.len(), SELF_COLLISION.len(), "{label}: {kernels:?}");
+    let checks = validate_kernels_with(runner, &kernels, scene, 9, params).unwrap();
+    // Six checked by the loop (the scatter by the test below), every buffer of each.
+    assert_eq!(checks.len(), 6 * clothlab_engine::validate::COMPARED_BUFFERS, "{label}");
+    assert_checks(label, &checks);
+    let input = KernelInput::for_scene(scene, 9, params).unwrap();
+    let scatter = kernels.iter().find(|k| k.def == &HASH_SCATTER).unwrap();
+    let sort = kernels.iter().find(|k| k.def == &HASH_SORT).unwrap();
+    let commands = [Command::Dispatch(*scatter), Command::Dispatch(*sort)];
+    let mut want = input.for_kernel(*scatter);
+    let mut got = want.clone();
+    input.engine.run(&commands, &input.p, 0, &mut want);
+    runner.run_commands(&commands, &input.p, &mut got).unwrap();
+    for k in [2, 3] {
+        let bits = |v: &Vec<[f32; 4]>| v.iter().map(|e| e.map(f32::to_bits)).collect::<Vec<_>>();
+        assert!(bits(&got.aux[k]) == bits(&want.aux[k]), "{label}: aux{k} after scatter and sort");
+    }
+}
+
+#[test]
+fn every_self_collision_kernel_matches_its_twin_and_a_rollout_through_the_contacts_follows_the_cpu() {
+    // n = 33 (not a multiple of the workgroup; 1089 particles, 1024 buckets). The rollout
+    // of the optimized variant runs 40 frames (640 substeps): the cloth lands at frame 14
+    // and folds onto itself. The naive variant adds spring forces with float atomics in
+    // any order: a folding cloth amplifies those last-bit differences into other folds
+    // (measured: 0.13 m apart after 640 substeps, every kernel within its bound), so its
+    // rollout stops before the landing (12 frames), and its self-collision kernels are
+    // checked one by one above.
+    let (scene, params) = heap(33);
+    for (v, frames) in [(Variant::NAIVE, 12), (Variant::OPTIMIZED, 40)] {
+        let wgpu = || or_skip(wgpu_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "wgpu");
+        if let (Some(mut w), Some(mut fresh)) = (wgpu(), wgpu()) {
+            let label = format!("wgpu {}", v.label());
+            let recipe = w.recipe_kernels();
+            check_kernels(&label, &mut w, recipe, &scene, &params);
+            assert_checks(&label, &[validate_rollout(&mut fresh, frames).unwrap()]);
+        }
+        let vulkan = || or_skip(vulkan_solver(v, scene.clone(), params.clone(), true, SolverOptions::default()), "vk");
+        if let (Some(mut k), Some(mut fresh)) = (vulkan(), vulkan()) {
+            let label = format!("vk {}", v.label());
+            let recipe = k.recipe_kernels();
+            check_kernels(&label, &mut k, recipe, &scene, &params);
+            assert_checks(&label, &[validate_rollout(&mut fresh, frames).unwrap()]);
+            for s in [&k, &fresh] {
+                let m = s.engine().take_validation_messages();
+                assert!(m.is_empty(), "validation layer: {m:#?}");
+            }
+        }
+    }
+}
