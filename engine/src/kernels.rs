@@ -34,6 +34,8 @@ pub enum Count {
     Triangles,
     /// One workgroup (a final reduction).
     Workgroup,
+    /// One per [`WORKGROUP`] buckets of the self-collision hash (`hash_scan_blocks`).
+    HashBlocks,
 }
 
 impl Count {
@@ -46,6 +48,7 @@ impl Count {
             Count::Springs => topo.springs.len() as u32,
             Count::Triangles => topo.triangles.len() as u32,
             Count::Workgroup => WORKGROUP,
+            Count::HashBlocks => cpu::self_collide::table_size(topo.num_particles()).div_ceil(WORKGROUP),
         }
     }
 }
@@ -707,9 +710,9 @@ fn hash_scan_add(_: &TwinArgs, b: &mut HostBuffers) {
     cpu::hash_scan_add(hash_buffers(b).0);
 }
 
-fn hash_scatter(_: &TwinArgs, b: &mut HostBuffers) {
+fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
     let (cells, sorted) = hash_buffers(b);
-    cpu::hash_scatter(cells, sorted);
+    cpu::hash_scatter(a.p, cells, sorted);
 }
 
 fn hash_sort(_: &TwinArgs, b: &mut HostBuffers) {
@@ -1112,7 +1115,7 @@ pub static HASH_COUNT: KernelDef = KernelDef {
 /// The counts' exclusive prefix within each workgroup of buckets, and its total.
 pub static HASH_SCAN_BLOCKS: KernelDef = KernelDef {
     test_input: Some(after_count),
-    ..hash("hash_scan_blocks", hash_scan_blocks, Count::Particles, &[Params, Aux2], &[Aux2])
+    ..hash("hash_scan_blocks", hash_scan_blocks, Count::HashBlocks, &[Params, Aux2], &[Aux2])
 };
 /// The workgroups' totals' exclusive prefix (one workgroup).
 pub static HASH_SCAN_TOP: KernelDef = KernelDef {
@@ -1130,10 +1133,10 @@ pub static HASH_SCATTER: KernelDef = KernelDef {
     check: Check::Own("the_gpu_hash_lists_what_the_cpu_lists_after_its_scatter_and_sort"),
     ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Aux2, Aux3], &[Aux2, Aux3])
 };
-/// Every bucket's range sorted by particle index.
+/// Every bucket's range sorted by particle, and its particles' grid bounding box.
 pub static HASH_SORT: KernelDef = KernelDef {
     test_input: Some(after_scatter),
-    ..hash("hash_sort", hash_sort, Count::Particles, &[Params, Aux2, Aux3], &[Aux3])
+    ..hash("hash_sort", hash_sort, Count::Particles, &[Params, Aux2, Aux3], &[Aux2, Aux3])
 };
 /// The response: every particle pushed out of its close candidates, into the other
 /// position buffer.

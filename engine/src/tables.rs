@@ -36,9 +36,9 @@ pub fn spring_halves(springs: &[Spring]) -> (&[Spring], &[Spring]) {
     springs.split_at(springs.len() / 2)
 }
 
-/// Records the per-dispatch GPU times of one submission: `ticks` holds a begin and an end
-/// timestamp per entry of `labels`; every `per_substep` dispatches also make a substep
-/// row. Returns the submission's span in ns (first begin to last end).
+/// Records the GPU times of one submission: `ticks` holds a begin and an end timestamp
+/// per entry of `labels`; consecutive entries of one label make one sample, and every
+/// `per_substep` dispatches also make a substep row. Returns the submission's span in ns (first begin to last end).
 pub fn record_times(
     timer: &mut clothlab_core::TimingRecorder,
     labels: &[&'static str],
@@ -47,11 +47,19 @@ pub fn record_times(
     per_substep: usize,
 ) -> f64 {
     let mut substep_ns = 0.0;
+    // Consecutive dispatches of one label (the hash's six kernels, XPBD's passes, the CG
+    // loop) make one sample: a row is that work's time per substep, not per dispatch.
+    let mut run_ns = 0.0;
     for (k, label) in labels.iter().enumerate() {
         let ns = ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * period_ns;
-        timer.record(label, ns);
+        run_ns += ns;
         substep_ns += ns;
-        if (k + 1) % per_substep.max(1) == 0 {
+        let end_of_substep = (k + 1) % per_substep.max(1) == 0;
+        if end_of_substep || labels.get(k + 1) != Some(label) {
+            timer.record(label, run_ns);
+            run_ns = 0.0;
+        }
+        if end_of_substep {
             timer.record(clothlab_core::timing::SUBSTEP, substep_ns);
             substep_ns = 0.0;
         }

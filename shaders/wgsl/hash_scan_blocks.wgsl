@@ -1,26 +1,23 @@
 //! include: state, hash, hash_fn
-// hash_scan_blocks — per bucket: the exclusive prefix of the counts within its workgroup
-// into cells[b].y, the workgroup's total into cells[g].w (core::cpu::self_collide).
+// hash_scan_blocks — per WORKGROUP consecutive buckets (one invocation each, in order, no
+// barriers: on lavapipe a workgroup-wide scan's twelve barriers cost more than the sums):
+// the exclusive prefix of the counts into cells[b].y, the total into cells[g].w
+// (core::cpu::self_collide::hash_scan_blocks).
 @compute @workgroup_size(WORKGROUP)
-fn main(
-    @builtin(global_invocation_id) id: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(local_invocation_index) li: u32,
-) {
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
-    let b = flat_id(id, groups);
+    let g = flat_id(id, groups);
     let size = table_size();
-    var c = 0u;
-    if b < size {
-        c = cells[4u * b];
+    let first = g * WORKGROUP;
+    if first >= size {
+        return;
     }
-    let incl = workgroup_scan(c, li);
-    if b < size {
-        cells[4u * b + 1u] = incl - c;
+    let last = min(first + WORKGROUP, size);
+    var acc = 0u;
+    for (var b = first; b < last; b++) {
+        let c = cells[4u * b];
+        cells[4u * b + 1u] = acc;
+        acc += c;
     }
-    let g = wg.x + wg.y * groups.x;
-    if li == WORKGROUP - 1u && g * WORKGROUP < size {
-        cells[4u * g + 3u] = incl;
-    }
+    cells[4u * g + 3u] = acc;
 }

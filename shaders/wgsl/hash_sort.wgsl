@@ -23,4 +23,20 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         }
         sorted[4u * m + 1u] = v;
     }
+    // The bounding box of the bucket's grid coordinates, where the cursor and the block
+    // total were (core::cpu::self_collide::hash_sort).
+    if start == end {
+        return;
+    }
+    let mask = (1u << COORD_BITS) - 1u;
+    var lo = vec2<u32>(0xffffffffu);
+    var hi = vec2<u32>(0u);
+    for (var k = start; k < end; k++) {
+        let w = sorted[4u * k + 1u];
+        let c = vec2<u32>(w & mask, w >> COORD_BITS);
+        lo = min(lo, c);
+        hi = max(hi, c);
+    }
+    cells[4u * b + 2u] = lo.x | (lo.y << COORD_BITS);
+    cells[4u * b + 3u] = hi.x | (hi.y << COORD_BITS);
 }

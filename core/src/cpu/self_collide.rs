@@ -1,7 +1,7 @@
 //! Self-collision: particles that are not neighbours in the grid are kept
 //! `self_thickness` apart. The twins of the GPU kernels, in their order:
 //!
-//! 1. [`hash_count`]: each particle's cell (a cube of side `self_thickness`) is hashed to
+//! 1. [`hash_count`]: each particle's cell (a cube of side `2·self_thickness`) is hashed to
 //!    one of [`table_size`]`(n²)` buckets; the buckets count their particles (atomics on the GPU).
 //! 2. [`hash_scan_blocks`], [`hash_scan_top`], [`hash_scan_add`]: an exclusive prefix sum
 //!    of the counts gives every bucket the start of its range in one array of particle
@@ -10,9 +10,11 @@
 //! 3. [`hash_scatter`]: every particle writes its index into its bucket's range (atomics on
 //!    the GPU, in any order), and [`hash_sort`] sorts each bucket's range (insertion sort:
 //!    a bucket holds a few particles), so that what follows sums in one order everywhere.
-//! 4. [`self_collide`]: every particle looks through the buckets of the 27 cells around
-//!    its own and moves away from each particle closer than the thickness: a counting
-//!    sort into a uniform grid, no per-particle lists.
+//! 4. [`self_collide`]: every particle looks through the buckets of the 2 × 2 × 2 cells
+//!    nearest to it (its own and the neighbour on its side per axis: cells are twice the
+//!    thickness wide; a bucket two of them share once), refuses grid neighbours by the
+//!    coordinates in the slot before loading them, and moves away from each particle
+//!    closer than the thickness: a counting sort into a uniform grid, no per-particle lists.
 //!
 //! A pair is a candidate when its grid offset is outside the 5 × 5 stencil of the springs
 //! and its rest distance exceeds twice the thickness (closer ones would be pushed apart by
@@ -24,8 +26,9 @@
 //! thickness (spacing > t·√2) or moves more than the thickness in one substep.
 //!
 //! The hash lives in integrator scratch buffers that are dead by then (aux2: per bucket
-//! `[count, start, cursor, block total]`; aux3: per particle `[bucket, particle at this
-//! slot, –, –]`), as `u32` bits in the `f32` elements.
+//! `[count, start, cursor, block total]`; aux3: `[bucket of particle i, particle at slot
+//! i as its grid coordinates `i | j << 12`, –, –]`), as `u32` bits in the `f32`
+//! elements.
 
 use crate::grid::{StepParams, V4};
 use crate::layout::WORKGROUP;
@@ -47,8 +50,8 @@ fn word(v: u32) -> f32 {
     f32::from_bits(v)
 }
 
-/// The cell of a point: `floor(x / t)` per axis, with `1/t` passed in (a product is
-/// rounded alike everywhere, a quotient is not).
+/// The cell of a point: `floor(x / s)` per axis for cells of side `s = 2t`, with `1/s`
+/// passed in (a product is rounded alike everywhere, a quotient is not).
 #[inline]
 pub fn cell_of(x: &V4, inv_cell: f32) -> [i32; 3] {
     std::array::from_fn(|k| {
@@ -69,14 +72,36 @@ pub fn table_size(len: usize) -> u32 {
     1 << (31 - len.leading_zeros())
 }
 
+/// The 32-bit hash of a cell.
+#[inline]
+pub fn cell_hash(c: [i32; 3]) -> u32 {
+    (c[0].wrapping_mul(PRIMES[0]) ^ c[1].wrapping_mul(PRIMES[1]) ^ c[2].wrapping_mul(PRIMES[2])) as u32
+}
+
+/// Bits of a grid coordinate in a slot's word (n ≤ 4096).
+const COORD_BITS: u32 = 12;
+
+/// What a slot holds for particle `i` of an `n`-wide grid: its grid coordinates,
+/// `i | j << 12` — in index order as the particle's index is, and enough to refuse a grid
+/// neighbour without loading it (below 2²⁴: as an `f32` element, a finite number).
+#[inline]
+pub fn slot_word(i: u32, n: u32) -> u32 {
+    (i % n) | (i / n) << COORD_BITS
+}
+
+/// The grid coordinates `(i, j)` of a slot's word.
+#[inline]
+pub fn slot_coords(w: u32) -> (u32, u32) {
+    (w & ((1 << COORD_BITS) - 1), w >> COORD_BITS)
+}
+
 /// The bucket of a cell among `size` (a power of two).
 #[inline]
 pub fn bucket(c: [i32; 3], size: u32) -> u32 {
-    let h = c[0].wrapping_mul(PRIMES[0]) ^ c[1].wrapping_mul(PRIMES[1]) ^ c[2].wrapping_mul(PRIMES[2]);
-    (h as u32) & (size - 1)
+    cell_hash(c) & (size - 1)
 }
 
-/// `1 / self_thickness`, the cells' inverse size (computed once, in [`StepParams::new`]).
+/// `1 / (2·self_thickness)`, the cells' inverse size (computed once, in [`StepParams::new`]).
 #[inline]
 pub fn inv_cell(p: &StepParams) -> f32 {
     p.inv_cell
@@ -136,17 +161,17 @@ pub fn hash_scan_add(cells: &mut [V4]) {
     }
 }
 
-/// Step 3a: every particle's index into the next free slot of its bucket's range
+/// Step 3a: every particle's [`slot_word`] into the next free slot of its bucket's range
 /// (`sorted[slot].y`), in index order (a GPU's order differs; [`hash_sort`] follows).
 /// Buckets and cursors out of range (never from [`hash_count`] and the scans) are skipped.
-pub fn hash_scatter(cells: &mut [V4], sorted: &mut [V4]) {
+pub fn hash_scatter(p: &StepParams, cells: &mut [V4], sorted: &mut [V4]) {
     for i in 0..sorted.len() {
         let b = bits(sorted[i][0]) as usize;
         let Some(cell) = cells.get_mut(b) else { continue };
         let slot = bits(cell[2]);
         cell[2] = word(slot.wrapping_add(1));
         if let Some(s) = sorted.get_mut(slot as usize) {
-            s[1] = word(i as u32);
+            s[1] = word(slot_word(i as u32, p.n));
         }
     }
 }
@@ -158,20 +183,43 @@ fn range(c: &V4, len: usize) -> (usize, usize) {
     (start, (start + bits(c[0]) as usize).min(len))
 }
 
-/// Step 3b: each bucket's range sorted by particle index (insertion sort).
-pub fn hash_sort(cells: &[V4], sorted: &mut [V4]) {
-    for c in &cells[..table_size(cells.len()) as usize] {
+/// Step 3b: each bucket's range sorted by particle (insertion sort), and the bounding box
+/// of its particles' grid coordinates into `cells[b].z` (smallest i and j, as a slot word)
+/// and `.w` (largest), where the cursor and the block total were: a probe skips a bucket
+/// whose particles are all grid neighbours without reading them.
+pub fn hash_sort(cells: &mut [V4], sorted: &mut [V4]) {
+    let size = table_size(cells.len()) as usize;
+    for c in &mut cells[..size] {
         let (start, end) = range(c, sorted.len());
+        if start == end {
+            continue;
+        }
         for k in start + 1..end {
-            let v = bits(sorted[k][1]);
+            let v = sorted[k][1];
             let mut m = k;
-            while m > start && bits(sorted[m - 1][1]) > v {
+            while m > start && bits(sorted[m - 1][1]) > bits(v) {
                 sorted[m][1] = sorted[m - 1][1];
                 m -= 1;
             }
-            sorted[m][1] = word(v);
+            sorted[m][1] = v;
         }
+        let (mut lo, mut hi) = ((u32::MAX, u32::MAX), (0, 0));
+        for s in &sorted[start..end] {
+            let (i, j) = slot_coords(bits(s[1]));
+            lo = (lo.0.min(i), lo.1.min(j));
+            hi = (hi.0.max(i), hi.1.max(j));
+        }
+        c[2] = word(lo.0 | lo.1 << COORD_BITS);
+        c[3] = word(hi.0 | hi.1 << COORD_BITS);
     }
+}
+
+/// Whether every particle of bucket `c` (by its bounding box) is within the springs'
+/// 5 × 5 stencil around `me`: nothing there may collide with it.
+#[inline]
+fn all_neighbours(c: &V4, me: (i32, i32)) -> bool {
+    let (lo, hi) = (slot_coords(bits(c[2])), slot_coords(bits(c[3])));
+    lo.0 as i32 >= me.0 - 2 && hi.0 as i32 <= me.0 + 2 && lo.1 as i32 >= me.1 - 2 && hi.1 as i32 <= me.1 + 2
 }
 
 /// Steps 1 to 3: the hash of `pos` in `cells` and `sorted` (one element per particle).
@@ -181,7 +229,7 @@ pub fn build_hash(p: &StepParams, pos: &[V4], cells: &mut [V4], sorted: &mut [V4
     hash_scan_blocks(cells);
     hash_scan_top(cells);
     hash_scan_add(cells);
-    hash_scatter(cells, sorted);
+    hash_scatter(p, cells, sorted);
     hash_sort(cells, sorted);
 }
 
@@ -189,8 +237,14 @@ pub fn build_hash(p: &StepParams, pos: &[V4], cells: &mut [V4], sorted: &mut [V4
 /// 5 × 5 stencil and farther apart at rest than twice the thickness.
 #[inline]
 pub fn candidates(p: &StepParams, a: u32, b: u32) -> bool {
-    let (ai, aj, bi, bj) = ((a % p.n) as i32, (a / p.n) as i32, (b % p.n) as i32, (b / p.n) as i32);
-    let (di, dj) = (ai - bi, aj - bj);
+    let ((ai, aj), (bi, bj)) = ((a % p.n, a / p.n), (b % p.n, b / p.n));
+    candidate_coords(p, (ai as i32, aj as i32), (bi as i32, bj as i32))
+}
+
+/// [`candidates`] by grid coordinates.
+#[inline]
+pub fn candidate_coords(p: &StepParams, a: (i32, i32), b: (i32, i32)) -> bool {
+    let (di, dj) = (a.0 - b.0, a.1 - b.1);
     if di.abs() <= 2 && dj.abs() <= 2 {
         return false;
     }
@@ -198,11 +252,21 @@ pub fn candidates(p: &StepParams, a: u32, b: u32) -> bool {
     ((di * di + dj * dj) as f32) * (p.spacing * p.spacing) > t2 * t2
 }
 
-/// The 27 cells around `c` (and `c`), x fastest.
+/// Cell `k` (0 ..= 7, x fastest) of the 2 × 2 × 2 around a point in cell `c`: per axis,
+/// `c` or the neighbour on the point's side (`side`: ±1). A point within `t` of the
+/// point lies in one of them, cells being `2t` wide.
 #[inline]
-fn around(c: [i32; 3], k: usize) -> [i32; 3] {
-    let d = [(k % 3) as i32 - 1, ((k / 3) % 3) as i32 - 1, (k / 9) as i32 - 1];
-    [c[0].wrapping_add(d[0]), c[1].wrapping_add(d[1]), c[2].wrapping_add(d[2])]
+fn around(c: [i32; 3], side: [i32; 3], k: usize) -> [i32; 3] {
+    std::array::from_fn(|a| c[a].wrapping_add(if k >> a & 1 == 1 { side[a] } else { 0 }))
+}
+
+/// Per axis, the side of its cell a point lies on: +1 in the upper half, −1 in the lower.
+#[inline]
+fn sides(x: &V4, c: [i32; 3], inv: f32) -> [i32; 3] {
+    std::array::from_fn(|a| {
+        let v = (x[a] * inv).clamp(-CELL_LIMIT, CELL_LIMIT);
+        if v - c[a] as f32 >= 0.5 { 1 } else { -1 }
+    })
 }
 
 /// Particle `i`'s new position and previous position: pushed out of every candidate
@@ -216,24 +280,34 @@ pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], prev: V4, cells: &[
     let size = table_size(cells.len());
     let inv = inv_cell(p);
     let c = cell_of(&x4, inv);
+    let side = sides(&x4, c, inv);
+    let me = ((i as u32 % p.n) as i32, (i as u32 / p.n) as i32);
+    let mut buckets = [0u32; 8];
     let mut delta = [0.0f32; 3];
-    for k in 0..27 {
-        let cell = around(c, k);
-        let (start, end) = range(&cells[bucket(cell, size) as usize], sorted.len());
+    for k in 0..8 {
+        let b = bucket(around(c, side, k), size);
+        buckets[k] = b;
+        // Two of the 8 cells may share a bucket: each bucket once, so each particle once
+        // (whichever of the cells it is in: the distance decides).
+        if buckets[..k].contains(&b) {
+            continue;
+        }
+        let cell = &cells[b as usize];
+        let (start, end) = range(cell, sorted.len());
+        if start == end || all_neighbours(cell, me) {
+            continue;
+        }
         for s in &sorted[start..end] {
-            let q = bits(s[1]) as usize;
-            if q == i || q >= pos.len() {
+            // Grid neighbours (most entries of a flat cloth) refused before loading them.
+            let (qi, qj) = slot_coords(bits(s[1]));
+            let q = (qj * p.n + qi) as usize;
+            if qi >= p.n || q >= pos.len() || !candidate_coords(p, me, (qi as i32, qj as i32)) {
                 continue;
             }
             let y4 = pos[q];
-            // Only the particles of this cell: another cell hashed to the same bucket is
-            // one of the 27 itself (each particle counted once) or far away.
-            if cell_of(&y4, inv) != cell {
-                continue;
-            }
             let e = [x4[0] - y4[0], x4[1] - y4[1], x4[2] - y4[2]];
             let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-            if d2 >= t * t || d2 < 1e-12 || !candidates(p, i as u32, q as u32) {
+            if d2 >= t * t || d2 < 1e-12 {
                 continue;
             }
             let d = d2.sqrt();
@@ -304,7 +378,13 @@ mod tests {
         assert_eq!(table_size(np), 256);
         for (b, c) in cells[..256].iter().enumerate() {
             let (start, end) = range(c, np);
-            let ids: Vec<u32> = sorted[start..end].iter().map(|s| bits(s[1])).collect();
+            let ids: Vec<u32> = sorted[start..end]
+                .iter()
+                .map(|s| {
+                    let (i, j) = slot_coords(bits(s[1]));
+                    j * n + i
+                })
+                .collect();
             assert!(ids.windows(2).all(|w| w[0] < w[1]), "bucket {b}: {ids:?} not sorted");
             for &q in &ids {
                 assert_eq!(bucket(cell_of(&pos[q as usize], inv_cell(&p)), table_size(np)), b as u32);

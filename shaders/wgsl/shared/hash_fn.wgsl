@@ -1,6 +1,6 @@
-// The hash of core::cpu::self_collide: cells are cubes of side self_thickness (the point
-// times 1/t, computed on the host: a product rounds alike everywhere, a quotient does
-// not), buckets a power of two, the primes of Teschner et al. 2003.
+// The hash of core::cpu::self_collide: cells are cubes of side 2 self_thickness (the
+// point times 1/(2t), computed on the host: a product rounds alike everywhere, a quotient
+// does not), buckets a power of two, the primes of Teschner et al. 2003.
 const CELL_LIMIT: f32 = 1e9;
 const PRIME_X: i32 = 92837111;
 const PRIME_Y: i32 = 689287499;
@@ -15,10 +15,14 @@ fn table_size() -> u32 {
     return 1u << firstLeadingBit(max(num_particles(), 1u));
 }
 
+// The cell's bucket among size (a power of two).
 fn bucket(c: vec3<i32>, size: u32) -> u32 {
-    let h = (c.x * PRIME_X) ^ (c.y * PRIME_Y) ^ (c.z * PRIME_Z);
-    return bitcast<u32>(h) & (size - 1u);
+    return bitcast<u32>((c.x * PRIME_X) ^ (c.y * PRIME_Y) ^ (c.z * PRIME_Z)) & (size - 1u);
 }
+
+// What a slot holds for particle i: its grid coordinates i | j << 12
+// (core::cpu::self_collide::slot_word).
+const COORD_BITS: u32 = 12u;
 
 // Inclusive prefix sum of v over the workgroup (Hillis-Steele through workgroup memory).
 // Every invocation must call it (barriers inside); scan_acc[WORKGROUP - 1] is the total.
