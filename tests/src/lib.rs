@@ -7,7 +7,10 @@
 #![forbid(unsafe_code)]
 
 use clothlab_core::validate::Check;
-use clothlab_core::{OrbitCamera, RenderMode, View};
+use clothlab_core::{CpuSolver, Exec, OrbitCamera, RenderMode, Scene, SimParams, Solver, View};
+use clothlab_engine::Variant;
+use clothlab_vulkan::vulkan_solver;
+use clothlab_wgpu::{SolverOptions, wgpu_solver};
 
 /// The view the picture tests draw: the default camera, the light up and to the side.
 pub fn test_view(mode: RenderMode) -> View {
@@ -34,6 +37,28 @@ pub fn or_skip<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> Option<T
             }
         }
     }
+}
+
+/// Every backend on `scene`: the two CPU solvers, then wgpu and Vulkan, naive and
+/// optimized (Vulkan under the validation layer); the GPU ones only where an adapter is
+/// (see [`or_skip`]).
+pub fn every_backend(scene: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>)> {
+    let mut out: Vec<(String, Box<dyn Solver>)> = Vec::new();
+    for exec in [Exec::Serial, Exec::Parallel] {
+        let s = CpuSolver::new(exec, scene.clone(), params.clone()).expect("a CPU solver of a checked scene");
+        out.push((s.name().to_owned(), Box::new(s)));
+    }
+    for v in [Variant::NAIVE, Variant::OPTIMIZED] {
+        if let Some(s) = or_skip(wgpu_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "wgpu") {
+            out.push((format!("wgpu {}", v.label()), Box::new(s)));
+        }
+        if let Some(s) =
+            or_skip(vulkan_solver(v, scene.clone(), params.clone(), true, SolverOptions::default()), "vulkan")
+        {
+            out.push((format!("vulkan {}", v.label()), Box::new(s)));
+        }
+    }
+    out
 }
 
 /// Prints every check and fails on the first one over its bound.

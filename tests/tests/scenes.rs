@@ -5,10 +5,10 @@
 use std::path::{Path, PathBuf};
 
 use clothlab_core::validate::validate_rollout;
-use clothlab_core::{CpuSolver, Exec, Scene, SceneFile, SimParams, Solver};
+use clothlab_core::{Exec, Scene, SceneFile, SimParams};
 use clothlab_engine::Variant;
 use clothlab_engine::validate::{KernelRunner, validate_kernels_with};
-use clothlab_tests::{assert_checks, or_skip};
+use clothlab_tests::{assert_checks, every_backend, or_skip};
 use clothlab_vulkan::vulkan_solver;
 use clothlab_wgpu::{SolverOptions, wgpu_solver};
 
@@ -18,27 +18,6 @@ fn scenes_dir() -> PathBuf {
 
 fn load(name: &str) -> SceneFile {
     SceneFile::load(&scenes_dir().join(name)).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// Every backend on `scene`: the two CPU solvers, then wgpu and Vulkan, naive and
-/// optimized (Vulkan under the validation layer); the GPU ones only where an adapter is.
-fn every_backend(scene: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>)> {
-    let mut out: Vec<(String, Box<dyn Solver>)> = Vec::new();
-    for exec in [Exec::Serial, Exec::Parallel] {
-        let s = CpuSolver::new(exec, scene.clone(), params.clone()).unwrap();
-        out.push((s.name().to_owned(), Box::new(s)));
-    }
-    for v in [Variant::NAIVE, Variant::OPTIMIZED] {
-        if let Some(s) = or_skip(wgpu_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "wgpu") {
-            out.push((format!("wgpu {}", v.label()), Box::new(s)));
-        }
-        if let Some(s) =
-            or_skip(vulkan_solver(v, scene.clone(), params.clone(), true, SolverOptions::default()), "vulkan")
-        {
-            out.push((format!("vulkan {}", v.label()), Box::new(s)));
-        }
-    }
-    out
 }
 
 #[test]

@@ -11,7 +11,7 @@ use clothlab_engine::Variant;
 use clothlab_engine::kernels::{HASH_SCATTER, HASH_SORT, KernelRef, SELF_COLLISION};
 use clothlab_engine::recipe::Command;
 use clothlab_engine::validate::{KernelInput, KernelRunner, validate_kernels_with};
-use clothlab_tests::{assert_checks, or_skip};
+use clothlab_tests::{assert_checks, every_backend, or_skip};
 use clothlab_vulkan::vulkan_solver;
 use clothlab_wgpu::{SolverOptions, wgpu_solver};
 
@@ -49,21 +49,7 @@ fn the_heap_keeps_its_layers_apart_on_every_backend() {
     let t = params.self_thickness;
     let frames = 100;
     let sp = clothlab_core::StepParams::new(&params, &scene, None);
-    let mut solvers: Vec<(String, Box<dyn Solver>)> = Vec::new();
-    for exec in [Exec::Serial, Exec::Parallel] {
-        let s = CpuSolver::new(exec, scene.clone(), params.clone()).unwrap();
-        solvers.push((s.name().to_owned(), Box::new(s)));
-    }
-    for v in [Variant::NAIVE, Variant::OPTIMIZED] {
-        if let Some(s) = or_skip(wgpu_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "wgpu") {
-            solvers.push((format!("wgpu {}", v.label()), Box::new(s)));
-        }
-        if let Some(s) = or_skip(vulkan_solver(v, scene.clone(), params.clone(), true, SolverOptions::default()), "vk")
-        {
-            solvers.push((format!("vulkan {}", v.label()), Box::new(s)));
-        }
-    }
-    for (name, mut s) in solvers {
+    for (name, mut s) in every_backend(&scene, &params) {
         for _ in 0..frames {
             s.step_frame().unwrap();
         }
