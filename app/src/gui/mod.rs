@@ -427,6 +427,8 @@ impl Running {
                 }
                 let scene = self.sim.solver.get_ref().scene().clone();
                 self.gfx.rebuild(&scene, &self.ui.params)?;
+                // The Scene panel edits colliders under this cloth from now on.
+                self.ui.scene = scene;
                 self.dragging = None;
                 self.ui.message = format!("new cloth: {n}×{n}");
             }

@@ -206,4 +206,26 @@ mod tests {
         let moved = next.pos.iter().zip(&before.pos).map(|(a, b)| (a[1] - b[1]).abs()).fold(0.0f32, f32::max);
         assert!(moved > 0.0 && moved < 0.1, "one frame moves the cloth by {moved} m");
     }
+
+    #[test]
+    fn new_colliders_go_under_the_running_cloth_and_another_cloth_is_refused() {
+        let mut sim = Sim::new(Backend::Cpu, Scene::with_n(16), SimParams::default(), &Shared::None).unwrap();
+        for _ in 0..4 {
+            sim.step().unwrap();
+        }
+        let before = sim.solver.get().state().unwrap();
+        let mut scene = sim.solver.get_ref().scene().clone();
+        scene.spheres.clear();
+        scene.boxes.push(clothlab_core::Aabb::new([-0.5, 0.0, -0.5], [0.5, 0.6, 0.5]));
+        sim.set_scene(scene.clone(), &Shared::None).unwrap();
+        assert_eq!(sim.solver.get_ref().scene(), &scene);
+        // The cloth is moved, not rebuilt: bit for bit where it was.
+        assert_eq!(sim.solver.get().state().unwrap().pos, before.pos);
+        // A scene with another cloth is a new simulation, not new colliders.
+        let mut other = scene.clone();
+        other.cloth.n = 20;
+        let e = sim.set_scene(other, &Shared::None).unwrap_err();
+        assert!(e.to_string().contains("new cloth"), "{e}");
+        assert_eq!(sim.solver.get_ref().scene(), &scene);
+    }
 }
