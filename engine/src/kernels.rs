@@ -686,9 +686,8 @@ fn implicit_finish(a: &TwinArgs, b: &mut HostBuffers) {
 
 // ---- self-collision (core::cpu::self_collide): the hash in aux2 (cells) and aux3 ----
 
-fn hash_buffers(b: &mut HostBuffers) -> (&mut Vec<V4>, &mut Vec<V4>) {
-    let [.., cells, sorted, _] = &mut b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
-    (cells, sorted)
+fn hash_buffers(b: &mut HostBuffers) -> (&mut [V4], &mut [V4]) {
+    cpu::hash_buffers(&mut b.aux)
 }
 
 fn hash_count(a: &TwinArgs, b: &mut HostBuffers) {

@@ -176,6 +176,13 @@ pub fn hash_scatter(p: &StepParams, cells: &mut [V4], sorted: &mut [V4]) {
     }
 }
 
+/// The hash's two buffers among the integrators' scratch buffers (`aux`, [`super::AUX`]
+/// of them): aux2 (cells) and aux3 (slots).
+pub fn hash_buffers(aux: &mut [Vec<V4>]) -> (&mut [V4], &mut [V4]) {
+    let [_, _, cells, sorted, ..] = aux else { panic!("the {} integrator scratch buffers", super::AUX) };
+    (cells, sorted)
+}
+
 /// The range `[start, end)` of bucket `c`'s particles in `sorted`, clamped to it.
 #[inline]
 fn range(c: &V4, len: usize) -> (usize, usize) {

@@ -4,9 +4,9 @@ use std::time::Instant;
 
 use super::{
     AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_PASSES, build_hash, cg_alpha, cg_begin, cg_beta,
-    cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, implicit_finish, integrate, integrate_collide,
-    partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit_rows, tri_normals, tri_normals_lanes,
-    vertex_normals, vertex_normals_rows, xpbd_pass,
+    cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, hash_buffers, implicit_finish, integrate,
+    integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit_rows, tri_normals,
+    tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_pass,
 };
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
 use crate::params::{Integrator, SimParams};
@@ -201,7 +201,7 @@ impl CpuSolver {
         // Self-collision: the hash in aux2 and aux3 (dead after the integrator's kernels),
         // the response into the other position buffer (self_collide.rs).
         if params.self_collision {
-            let [.., cells, sorted, _] = &mut aux[..] else { unreachable!("AUX scratch buffers") };
+            let (cells, sorted) = hash_buffers(aux);
             Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, cells, sorted));
             Self::timed(timer, on, SELF_COLLIDE, || self_collide(e, &p, pos, prev, cells, sorted, scratch));
             std::mem::swap(pos, scratch);
