@@ -21,7 +21,7 @@ pub mod timing;
 pub mod validate;
 
 pub use camera::OrbitCamera;
-pub use cpu::{CpuSolver, Exec};
+pub use cpu::{CpuSolver, Exec, SIMD_ENV, Simd};
 pub use grid::{ClothState, ClothTopology, Grab, Spring, SpringKind, SpringSlot, StepParams, build};
 pub use params::{Integrator, ParamError, SimParams, StiffnessUnits};
 pub use scene::{Aabb, ClothSpec, Pinning, Scene, Sphere};

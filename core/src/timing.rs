@@ -56,6 +56,8 @@ pub const FORCES_SPRINGS: &str = "forces+springs";
 pub const INTEGRATE_COLLIDE: &str = "integrate+collide";
 /// Label of the thesis's fused `forces` + `integrate` + `collide` kernel.
 pub const FORCES_INTEGRATE_COLLIDE: &str = "forces+integrate+collide";
+/// Label of the CPU solvers' fused sweep: every kernel of a Verlet substep, row by row.
+pub const FUSED_STEP: &str = "fused substep";
 /// Label of the whole-substep row.
 pub const SUBSTEP: &str = "substep";
 /// Self-collision's hash build (count, prefix sum, scatter, sort).

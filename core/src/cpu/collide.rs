@@ -37,7 +37,7 @@ pub fn integrate_collide(
 
 /// Particle `i` against `spheres` and `boxes` (already cut to their counts), in place.
 #[inline(always)]
-fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], x4: &mut V4, xp4: &mut V4) {
+pub(crate) fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], x4: &mut V4, xp4: &mut V4) {
     if x4[3] == 0.0 || i as i32 == p.grab_index {
         return;
     }

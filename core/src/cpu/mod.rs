@@ -8,11 +8,13 @@
 
 mod collide;
 mod forces;
+mod fused;
 mod integrate;
 mod integrators;
 mod lanes;
 mod normals;
 pub mod self_collide;
+mod simd;
 mod solver;
 mod springs;
 mod stats;
@@ -31,6 +33,7 @@ pub use self_collide::{
     build_hash, hash_buffers, hash_count, hash_scan_add, hash_scan_blocks, hash_scan_top, hash_scatter, hash_sort,
     self_collide, self_collide_at,
 };
+pub use simd::{SIMD_ENV, Simd};
 pub use solver::CpuSolver;
 pub use springs::{springs, springs_rows, springs_scatter};
 pub use stats::{SubstepStats, particle_stats, substep_stats};

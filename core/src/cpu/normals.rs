@@ -36,7 +36,7 @@ pub fn vertex_normals(
 
 /// Normal and wind force of a particle whose faces are `slots`, read through `fetch`.
 #[inline(always)]
-fn vnormal_at(slots: &[i32; FACE_SLOTS], fetch: impl Fn(usize) -> V4, w: Vec3, c: f32) -> (V4, V4) {
+pub(crate) fn vnormal_at(slots: &[i32; FACE_SLOTS], fetch: impl Fn(usize) -> V4, w: Vec3, c: f32) -> (V4, V4) {
     let mut sum = Vec3::ZERO;
     let mut wind = Vec3::ZERO;
     for &t in slots {

@@ -2,6 +2,8 @@
 
 use std::time::Instant;
 
+use super::fused::{self, Band, TetherLanes};
+use super::simd::Simd;
 use super::{
     AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_PASSES, build_hash, cg_alpha, cg_begin, cg_beta,
     cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, hash_buffers, implicit_finish, integrate,
@@ -13,7 +15,8 @@ use crate::params::{Integrator, SimParams};
 use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};
 use crate::timing::{
-    FORCES_SPRINGS, FRAME, INTEGRATE_COLLIDE, KernelId, KernelTimings, SELF_COLLIDE, SELF_HASH, SUBSTEP, TimingRecorder,
+    FORCES_SPRINGS, FRAME, FUSED_STEP, INTEGRATE_COLLIDE, KernelId, KernelTimings, SELF_COLLIDE, SELF_HASH, SUBSTEP,
+    TimingRecorder,
 };
 
 /// The CPU solver; [`Exec::Serial`] is the thesis's CPU variant, [`Exec::Parallel`] its
@@ -42,6 +45,19 @@ pub struct CpuSolver {
     timer: TimingRecorder,
     /// Record per-kernel timings (costs two `Instant::now` per kernel).
     pub time_kernels: bool,
+    /// Run Verlet substeps as one sweep (`fused.rs`) where the grid allows; off, kernel by
+    /// kernel with a timing per kernel. The two compute the same bits.
+    pub fused: bool,
+    /// The instruction set of the fused sweep.
+    simd: Simd,
+    /// The fused sweep's per-band rings.
+    bands: Vec<Band>,
+    /// The fused sweep's new `prev` and `force` (the new positions go to `scratch`).
+    next: [Vec<V4>; 2],
+    /// The particles the tethers hold to (the fused sweep needs them pinned).
+    pins: Vec<usize>,
+    /// The tethers as component arrays, for the fused sweep.
+    tether_lanes: TetherLanes,
 }
 
 impl CpuSolver {
@@ -65,7 +81,17 @@ impl CpuSolver {
             topo,
             timer: TimingRecorder::default(),
             time_kernels: true,
+            fused: true,
+            simd: Simd::from_env().map_err(SolverError::Unsupported)?,
+            bands: Vec::new(),
+            next: Default::default(),
+            pins: Vec::new(),
+            tether_lanes: TetherLanes::default(),
         };
+        s.tether_lanes = TetherLanes::new(&s.topo.tethers);
+        s.pins = s.topo.tethers.iter().flatten().filter(|t| t.pin >= 0).map(|t| t.pin as usize).collect();
+        s.pins.sort_unstable();
+        s.pins.dedup();
         s.update_normals();
         Ok(s)
     }
@@ -73,6 +99,73 @@ impl CpuSolver {
     /// The connectivity and spring constants.
     pub fn topology(&self) -> &ClothTopology {
         &self.topo
+    }
+
+    /// The instruction set (and so the vector width) of the fused sweep.
+    pub fn simd(&self) -> Simd {
+        self.simd
+    }
+
+    /// Runs the fused sweep on `simd` (refused when this CPU lacks it).
+    pub fn set_simd(&mut self, simd: Simd) -> Result<(), SolverError> {
+        if !simd.available() {
+            return Err(SolverError::Unsupported(format!(
+                "this CPU has no {}; it has {}",
+                simd.name(),
+                Simd::detect()
+            )));
+        }
+        self.simd = simd;
+        Ok(())
+    }
+
+    /// Whether the next substep runs fused: Verlet (or symplectic Euler) on a regular grid
+    /// without self-collision, every tether's pin pinned, and `fused` on.
+    pub fn runs_fused(&self) -> bool {
+        self.fused
+            && self.uniform.is_some()
+            && matches!(self.params.integrator, Integrator::Verlet | Integrator::SymplecticEuler)
+            && !self.params.self_collision
+            && self.topo.n >= 8
+            && self.pins.iter().all(|&k| self.state.pos[k][3] == 0.0)
+    }
+
+    /// The fused substep (see `fused.rs`).
+    fn substep_fused(&mut self) {
+        let p = self.step_params();
+        let t0 = Instant::now();
+        let np = self.state.pos.len();
+        for v in &mut self.next {
+            v.resize(np, [0.0; 4]);
+        }
+        let Self { state, topo, scratch, timer, scene, params, uniform, bands, next, exec, simd, tether_lanes, .. } =
+            self;
+        let Some(uni) = uniform.as_ref() else { return };
+        let [next_prev, next_force] = next;
+        let step = fused::Step {
+            p: &p,
+            iters: params.strain_iterations as usize,
+            slots: &topo.slots,
+            uni,
+            tethers: &topo.tethers,
+            tether_lanes,
+            face_slots: &topo.face_slots,
+            spheres: &scene.spheres,
+            boxes: &scene.boxes,
+            pos: &state.pos,
+            prev: &state.prev,
+            force: &state.force,
+        };
+        let out = fused::Next { pos: scratch, prev: next_prev, force: next_force, normal: &mut state.normal };
+        fused::substep(*exec, *simd, &step, bands, out);
+        std::mem::swap(&mut state.pos, scratch);
+        std::mem::swap(&mut state.prev, next_prev);
+        std::mem::swap(&mut state.force, next_force);
+        if self.time_kernels {
+            let ns = t0.elapsed().as_nanos() as f64;
+            timer.record(FUSED_STEP, ns);
+            timer.record(SUBSTEP, ns);
+        }
     }
 
     /// The current state, borrowed (no copy).
@@ -108,6 +201,9 @@ impl CpuSolver {
     /// SIMD lanes; every path computes the twins' bits (tests/physics.rs checks it), so
     /// GPU kernels compared with the twins are compared with this solver.
     pub fn substep(&mut self) {
+        if self.runs_fused() {
+            return self.substep_fused();
+        }
         let p = self.step_params();
         let e = self.exec;
         let on = self.time_kernels;

@@ -10,7 +10,7 @@ use crate::grid::{SLOT_OFFSETS, SLOTS, Spring, SpringSlot, StepParams, V4};
 
 /// Force on end `a` of a spring with `l = x_a - x_b` and `dv = (v_a - v_b)·dt`.
 #[inline(always)]
-fn spring_force(l: Vec3, dv: Vec3, s: &SpringSlot, inv_dt: f32) -> Vec3 {
+pub(crate) fn spring_force(l: Vec3, dv: Vec3, s: &SpringSlot, inv_dt: f32) -> Vec3 {
     let len = l.length();
     if len <= f32::MIN_POSITIVE {
         return Vec3::ZERO;
@@ -28,7 +28,7 @@ pub fn springs(exec: Exec, dt: f32, slots: &[SpringSlot], pos: &[V4], prev: &[V4
 
 /// The gather of particle `i`: `f` plus its springs' forces in slot order.
 #[inline(always)]
-fn gather_at(i: usize, inv_dt: f32, slots: &[SpringSlot], pos: &[V4], prev: &[V4], f: V4) -> V4 {
+pub(crate) fn gather_at(i: usize, inv_dt: f32, slots: &[SpringSlot], pos: &[V4], prev: &[V4], f: V4) -> V4 {
     let xa = v3(pos[i]);
     let va = xa - v3(prev[i]);
     let mut acc = v3(f);

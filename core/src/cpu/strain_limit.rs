@@ -32,19 +32,25 @@ pub fn strain_limit(
     pos: &[V4],
     out: &mut [V4],
 ) {
-    for_each(exec, out, |i, o| *o = limit_at(i, p, slots, tethers, pos));
+    for_each(exec, out, |i, o| *o = limit_at(i, p, slots, tethers, |k| pos[k]));
 }
 
 /// The pass for particle `i`.
 #[inline(always)]
-fn limit_at(i: usize, p: &StepParams, slots: &[SpringSlot], tethers: &[[Tether; TETHER_SLOTS]], pos: &[V4]) -> V4 {
+pub(crate) fn limit_at(
+    i: usize,
+    p: &StepParams,
+    slots: &[SpringSlot],
+    tethers: &[[Tether; TETHER_SLOTS]],
+    pos: impl Fn(usize) -> V4,
+) -> V4 {
     let stretch = 1.0 + p.strain_limit;
     let aim = 1.0 + STRAIN_AIM * p.strain_limit;
-    let mobility = |k: usize| if k as i32 == p.grab_index { 0.0 } else { pos[k][3] };
-    let xi = v3(pos[i]);
+    let mobility = |k: usize| if k as i32 == p.grab_index { 0.0 } else { pos(k)[3] };
+    let xi = v3(pos(i));
     let wi = mobility(i);
     if wi == 0.0 {
-        return pos[i];
+        return pos(i);
     }
     let mut corr = glam::Vec3::ZERO;
     let mut count = 0.0f32;
@@ -53,7 +59,7 @@ fn limit_at(i: usize, p: &StepParams, slots: &[SpringSlot], tethers: &[[Tether; 
             continue;
         }
         let b = s.neighbor as usize;
-        let d = v3(pos[b]) - xi;
+        let d = v3(pos(b)) - xi;
         let len = d.length();
         if len > stretch * s.rest {
             let wb = mobility(b);
@@ -67,7 +73,7 @@ fn limit_at(i: usize, p: &StepParams, slots: &[SpringSlot], tethers: &[[Tether; 
         if t.pin < 0 {
             continue;
         }
-        let pin = v3(pos[t.pin as usize]);
+        let pin = v3(pos(t.pin as usize));
         let d = x - pin;
         let len = d.length();
         let max = stretch * t.rest;
@@ -75,7 +81,7 @@ fn limit_at(i: usize, p: &StepParams, slots: &[SpringSlot], tethers: &[[Tether; 
             x = pin + d * (max / len);
         }
     }
-    v4(x, pos[i][3])
+    v4(x, pos(i)[3])
 }
 
 /// [`strain_limit`] row by row, the interior of each row eight particles at a time when
@@ -98,7 +104,7 @@ pub fn strain_limit_rows(
         match uni {
             Some(uni) if j >= 2 && j + 2 < n && n > 4 => {
                 for i in [0, 1, n - 2, n - 1] {
-                    row[i] = limit_at(base + i, p, slots, tethers, pos);
+                    row[i] = limit_at(base + i, p, slots, tethers, |k| pos[k]);
                 }
                 let len = n - 4;
                 let groups = len / LANES;
@@ -108,12 +114,12 @@ pub fn strain_limit_rows(
                     limit_lanes(a0, p, uni, tethers, lanes, pos, o);
                 }
                 for (i, o) in row.iter_mut().enumerate().take(n - 2).skip(2 + groups * LANES) {
-                    *o = limit_at(base + i, p, slots, tethers, pos);
+                    *o = limit_at(base + i, p, slots, tethers, |k| pos[k]);
                 }
             }
             _ => {
                 for (i, o) in row.iter_mut().enumerate() {
-                    *o = limit_at(base + i, p, slots, tethers, pos);
+                    *o = limit_at(base + i, p, slots, tethers, |k| pos[k]);
                 }
             }
         }

@@ -1,0 +1,690 @@
+//! The Verlet substep of the CPU solvers in one sweep over the grid.
+//!
+//! Kernel by kernel, a substep passes over the whole state six times or more (forces and
+//! springs, integrate and collide, each strain-limit pass, the two normal kernels, and a
+//! transpose before each SIMD kernel); at n ≥ 512 the state no longer fits in the caches
+//! and every pass goes to memory. Here each row goes through every kernel while its
+//! neighbours are still in cache: a wavefront over the rows, in which at row `j`
+//!
+//! | stage | row | reads |
+//! |---|---|---|
+//! | `forces` + `springs` + `integrate` + `collide` (A) | `j` | old rows `j−2 ..= j+2` |
+//! | strain-limit pass `k` (1 ..= L) | `j − k` | pass `k−1`'s rows `j−k−1 ..= j−k+1` |
+//! | `tri_normals` | quad row `j − L − 1` | final rows `j−L−1`, `j−L` |
+//! | `vertex_normals` | `j − L − 1` | quad rows `j−L−2`, `j−L−1` |
+//!
+//! Each stage keeps its last four rows in a ring, so what a substep moves to and from
+//! memory is the old state once and the new state once. The kernels are the same
+//! functions as the twins' (the grid's edges, and lanes the fast path cannot take, run
+//! the scalar twins themselves), so the result is the twins' bit for bit; the tests check
+//! it at every vector width.
+//!
+//! In parallel the rows are cut into bands, one task each; a band recomputes the `L + 1`
+//! rows of stage A (and `L` of the strain passes) beyond each of its edges that its
+//! neighbour owns, instead of waiting for them, and writes only its own rows. The new
+//! state goes to other buffers (the old one is read by the bands' edges throughout).
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::collide::collide_at;
+use super::forces::{forces_at, forces_consts};
+use super::integrate::integrate_at;
+use super::normals::vnormal_at;
+use super::simd::{F, Lanewise, M, Simd, dispatch};
+use super::springs::gather_at;
+use super::strain_limit::limit_at;
+use super::{Exec, v3};
+use crate::grid::{FACE_SLOTS, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
+use crate::layout::STRAIN_AIM;
+use crate::scene::{Aabb, Sphere};
+use pulp::Simd as Isa;
+
+/// Rows of a few component arrays; row `r` lives in slot `r % rows` (`rows` a power of
+/// two), so a stage keeps the rows the next one still reads.
+#[derive(Debug, Default)]
+struct Ring {
+    data: Vec<f32>,
+    comps: usize,
+    width: usize,
+    rows: usize,
+}
+
+impl Ring {
+    fn reset(&mut self, comps: usize, width: usize, rows: usize) {
+        (self.comps, self.width, self.rows) = (comps, width, rows);
+        self.data.resize(rows * comps * width, 0.0);
+    }
+
+    #[inline(always)]
+    fn at(&self, row: usize, c: usize) -> usize {
+        ((row & (self.rows - 1)) * self.comps + c) * self.width
+    }
+
+    /// Component slices `c0 .. c0 + C` of `row`.
+    #[inline(always)]
+    fn comps_mut<const C: usize>(&mut self, row: usize, c0: usize) -> [&mut [f32]; C] {
+        let (a, w) = (self.at(row, c0), self.width);
+        let mut it = self.data[a..a + C * w].chunks_exact_mut(w);
+        std::array::from_fn(|_| it.next().expect("C components"))
+    }
+
+    /// Writes lanes `x` (x, y, z) and `w` to components 0 ..= 3 of `row` from `i`.
+    #[inline(always)]
+    fn store4<S: Isa>(&mut self, row: usize, i: usize, x: &[F<S>; 3], w: F<S>) {
+        for (c, v) in x.iter().chain([&w]).enumerate() {
+            self.store(row, c, i, *v);
+        }
+    }
+
+    #[inline(always)]
+    fn lanes<S: Isa>(&self, sd: S, row: usize, c: usize, i: usize) -> F<S> {
+        F::load(sd, &self.data, self.at(row, c) + i)
+    }
+
+    #[inline(always)]
+    fn lanes3<S: Isa>(&self, sd: S, row: usize, c0: usize, i: usize) -> [F<S>; 3] {
+        [self.lanes(sd, row, c0, i), self.lanes(sd, row, c0 + 1, i), self.lanes(sd, row, c0 + 2, i)]
+    }
+
+    #[inline(always)]
+    fn get(&self, row: usize, c: usize, i: usize) -> f32 {
+        self.data[self.at(row, c) + i]
+    }
+
+    #[inline(always)]
+    fn get4(&self, row: usize, c0: usize, i: usize) -> V4 {
+        std::array::from_fn(|c| self.get(row, c0 + c, i))
+    }
+
+    #[inline(always)]
+    fn set(&mut self, row: usize, c: usize, i: usize, v: f32) {
+        let a = self.at(row, c) + i;
+        self.data[a] = v;
+    }
+
+    #[inline(always)]
+    fn put4(&mut self, row: usize, c0: usize, i: usize, v: V4) {
+        for (c, x) in v.into_iter().enumerate() {
+            self.set(row, c0 + c, i, x);
+        }
+    }
+
+    #[inline(always)]
+    fn store<S: Isa>(&mut self, row: usize, c: usize, i: usize, v: F<S>) {
+        let a = self.at(row, c) + i;
+        v.store(&mut self.data, a);
+    }
+}
+
+/// One band's rings, kept between substeps.
+#[derive(Debug, Default)]
+pub(crate) struct Band {
+    /// The old positions, `pos − prev` and force (x, y, z, w, vx, vy, vz, fx, fy, fz),
+    /// eight rows.
+    input: Ring,
+    /// Stage A's positions (x, y, z, w), then each strain pass's.
+    stages: Vec<Ring>,
+    /// The face normals of a quad row: triangle 0's x, y, z, |N|, then triangle 1's.
+    faces: Ring,
+}
+
+/// The tethers as component arrays, per slot: the pins and the rest lengths.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct TetherLanes {
+    pin: [Vec<i32>; TETHER_SLOTS],
+    rest: [Vec<f32>; TETHER_SLOTS],
+}
+
+impl TetherLanes {
+    pub(crate) fn new(tethers: &[[Tether; TETHER_SLOTS]]) -> Self {
+        Self {
+            pin: std::array::from_fn(|t| tethers.iter().map(|x| x[t].pin).collect()),
+            rest: std::array::from_fn(|t| tethers.iter().map(|x| x[t].rest).collect()),
+        }
+    }
+}
+
+/// What a substep reads: the old state, the topology and the step's constants.
+pub(crate) struct Step<'a> {
+    pub p: &'a StepParams,
+    pub iters: usize,
+    pub slots: &'a [SpringSlot],
+    pub uni: &'a [SpringSlot; SLOTS],
+    pub tethers: &'a [[Tether; TETHER_SLOTS]],
+    pub tether_lanes: &'a TetherLanes,
+    pub face_slots: &'a [[i32; FACE_SLOTS]],
+    pub spheres: &'a [Sphere],
+    pub boxes: &'a [Aabb],
+    pub pos: &'a [V4],
+    pub prev: &'a [V4],
+    pub force: &'a [V4],
+}
+
+/// Where a substep writes: the new state (normals in place, the rest into other buffers).
+pub(crate) struct Next<'a> {
+    pub pos: &'a mut [V4],
+    pub prev: &'a mut [V4],
+    pub force: &'a mut [V4],
+    pub normal: &'a mut [V4],
+}
+
+/// One Verlet substep (forces, springs, integrate, collide, `iters` strain passes,
+/// normals) from `s` into `out`, at `simd`'s width.
+pub(crate) fn substep(exec: Exec, simd: Simd, s: &Step<'_>, bands: &mut Vec<Band>, out: Next<'_>) {
+    let n = s.p.n as usize;
+    let rows = match exec {
+        Exec::Serial => n,
+        // Two bands per thread, so that a thread slowed down (the VM's other load) holds
+        // up at most half a thread's work; no band under 32 rows, whose edges would cost
+        // more than a tenth of it again.
+        Exec::Parallel => n.div_ceil(2 * rayon::current_num_threads()).max(32),
+    };
+    let count = n.div_ceil(rows);
+    bands.resize_with(count, Band::default);
+    let Next { pos, prev, force, normal } = out;
+    let chunk = rows * n;
+    let run = |(b, (band, (((pos, prev), force), normal))): (usize, (&mut Band, Chunks4<'_>))| {
+        let r0 = b * rows;
+        let r1 = (r0 + rows).min(n);
+        dispatch(simd, BandJob { s, band, r0, r1, out: Next { pos, prev, force, normal } });
+    };
+    match exec {
+        Exec::Serial => bands
+            .iter_mut()
+            .zip(
+                pos.chunks_mut(chunk)
+                    .zip(prev.chunks_mut(chunk))
+                    .zip(force.chunks_mut(chunk))
+                    .zip(normal.chunks_mut(chunk)),
+            )
+            .enumerate()
+            .for_each(run),
+        Exec::Parallel => bands
+            .par_iter_mut()
+            .zip(
+                pos.par_chunks_mut(chunk)
+                    .zip(prev.par_chunks_mut(chunk))
+                    .zip(force.par_chunks_mut(chunk))
+                    .zip(normal.par_chunks_mut(chunk)),
+            )
+            .enumerate()
+            .for_each(run),
+    }
+}
+
+type Chunks4<'a> = (((&'a mut [V4], &'a mut [V4]), &'a mut [V4]), &'a mut [V4]);
+
+/// One band's rows `r0 .. r1`.
+struct BandJob<'a, 'b> {
+    s: &'a Step<'a>,
+    band: &'b mut Band,
+    r0: usize,
+    r1: usize,
+    out: Next<'b>,
+}
+
+impl Lanewise for BandJob<'_, '_> {
+    type Out = ();
+    #[inline(always)]
+    fn run<S: Isa>(self, sd: S) {
+        run_band(sd, self.s, self.band, self.r0, self.r1, self.out)
+    }
+}
+
+/// The wavefront over rows `r0 .. r1` (see the module notes).
+#[inline(always)]
+fn run_band<S: Isa>(sd: S, s: &Step<'_>, band: &mut Band, r0: usize, r1: usize, mut out: Next<'_>) {
+    let n = s.p.n as usize;
+    let l = s.iters;
+    band.input.reset(10, n, 8);
+    band.stages.resize_with(l + 1, Ring::default);
+    for r in &mut band.stages {
+        r.reset(4, n, 4);
+    }
+    band.faces.reset(8, n - 1, 4);
+    // Stage k (0: A, k: strain pass k) computes rows lo(k) .. hi(k); quad rows
+    // r0 − 1 .. r1 are needed for the normals of r0 .. r1.
+    let lo = |k: usize| r0.saturating_sub(1 + l - k);
+    let hi = |k: usize| (r1 + 1 + l - k).min(n);
+    let (q_lo, q_hi) = (r0.saturating_sub(1), r1.min(n - 1));
+    let mut loaded = lo(0).saturating_sub(2);
+    for j in lo(0)..=r1 + l {
+        if j < hi(0) {
+            while loaded < (j + 3).min(n) {
+                load_row(s, &mut band.input, loaded);
+                loaded += 1;
+            }
+            let own = (r0..r1).contains(&j).then(|| ((j - r0) * n, l == 0));
+            stage_a(sd, s, &band.input, &mut band.stages[0], j, own, &mut out);
+        }
+        for k in 1..=l {
+            let Some(r) = j.checked_sub(k) else { continue };
+            if r < lo(k) || r >= hi(k) {
+                continue;
+            }
+            let (done, rest) = band.stages.split_at_mut(k);
+            let own = (r0..r1).contains(&r) && k == l;
+            stage_strain(
+                sd,
+                s,
+                &done[k - 1],
+                &mut rest[0],
+                r,
+                own.then(|| &mut out.pos[(r - r0) * n..(r - r0 + 1) * n]),
+            );
+        }
+        let Some(q) = j.checked_sub(l + 1) else { continue };
+        if (q_lo..q_hi).contains(&q) {
+            stage_tri(sd, n, &band.stages[l], &mut band.faces, q);
+        }
+        if (r0..r1).contains(&q) {
+            let rows = (q - r0) * n..(q - r0 + 1) * n;
+            stage_vert(sd, s, &band.faces, q, &mut out.normal[rows.clone()], &mut out.force[rows]);
+        }
+    }
+}
+
+/// Old row `j` into the input ring: positions, `pos − prev` and force.
+#[inline(always)]
+fn load_row(s: &Step<'_>, input: &mut Ring, j: usize) {
+    let n = s.p.n as usize;
+    let rows = j * n..(j + 1) * n;
+    let (pos, prev, force) = (&s.pos[rows.clone()], &s.prev[rows.clone()], &s.force[rows]);
+    let [x, y, z, w, vx, vy, vz, fx, fy, fz] = input.comps_mut::<10>(j, 0);
+    for i in 0..n {
+        let (a, b, f) = (pos[i], prev[i], force[i]);
+        (x[i], y[i], z[i], w[i]) = (a[0], a[1], a[2], a[3]);
+        (vx[i], vy[i], vz[i]) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+        (fx[i], fy[i], fz[i]) = (f[0], f[1], f[2]);
+    }
+}
+
+/// Stage A's scalar path for particle `k`: the twins themselves.
+#[inline(always)]
+fn a_scalar(s: &Step<'_>, k: usize) -> (V4, V4) {
+    let (g, drag) = forces_consts(s.p);
+    let f = forces_at(s.force[k], s.pos[k], s.prev[k], g, drag);
+    finish_at(s, k, gather_at(k, 1.0 / s.p.dt, s.slots, s.pos, s.prev, f))
+}
+
+/// The twins' `integrate` then `collide` for particle `k` under force `f`.
+#[inline(always)]
+fn finish_at(s: &Step<'_>, k: usize, f: V4) -> (V4, V4) {
+    let (mut x4, mut xp4) = (s.pos[k], s.prev[k]);
+    integrate_at(k, s.p, f, &mut x4, &mut xp4);
+    collide_at(k, s.p, s.spheres, s.boxes, &mut x4, &mut xp4);
+    (x4, xp4)
+}
+
+/// Stage A for row `j` into `dst`; for a row of the band, `own` is where it starts in
+/// `out`, and whether the positions are final (no strain passes).
+#[inline(always)]
+fn stage_a<S: Isa>(
+    sd: S,
+    s: &Step<'_>,
+    input: &Ring,
+    dst: &mut Ring,
+    j: usize,
+    own: Option<(usize, bool)>,
+    out: &mut Next<'_>,
+) {
+    let p = s.p;
+    let n = p.n as usize;
+    let base = j * n;
+    let put = |dst: &mut Ring, out: &mut Next<'_>, i: usize, (x4, xp4): (V4, V4)| {
+        dst.put4(j, 0, i, x4);
+        if let Some((o, fin)) = own {
+            out.prev[o + i] = xp4;
+            if fin {
+                out.pos[o + i] = x4;
+            }
+        }
+    };
+    if !(j >= 2 && j + 2 < n) {
+        for i in 0..n {
+            put(dst, out, i, a_scalar(s, base + i));
+        }
+        return;
+    }
+    for i in [0, 1, n - 2, n - 1] {
+        put(dst, out, i, a_scalar(s, base + i));
+    }
+    let inv_dt = 1.0 / p.dt;
+    let (g, drag) = forces_consts(p);
+    let zero = F::splat(sd, 0.0);
+    let tiny = F::splat(sd, f32::MIN_POSITIVE);
+    let (gl, dragl) = ([F::splat(sd, g.x), F::splat(sd, g.y), F::splat(sd, g.z)], F::splat(sd, drag));
+    let (keep, kick) = (F::splat(sd, 1.0 - p.damping), F::splat(sd, p.dt * p.dt / p.particle_mass));
+    let floor = F::splat(sd, p.floor_y + p.margin);
+    let lanes = S::F32_LANES;
+    let mut i0 = 2;
+    while i0 + lanes <= n - 2 {
+        let xa = input.lanes3(sd, j, 0, i0);
+        let va = input.lanes3(sd, j, 4, i0);
+        let w = input.lanes(sd, j, 3, i0);
+        let mut acc = input.lanes3(sd, j, 7, i0);
+        for c in 0..3 {
+            acc[c] = (acc[c] + gl[c]) - va[c] * dragl;
+        }
+        for (sl, slot) in s.uni.iter().enumerate() {
+            let (di, dj) = SLOT_OFFSETS[sl];
+            let (row, col) = ((j as isize + dj as isize) as usize, (i0 as isize + di as isize) as usize);
+            let xb = input.lanes3(sd, row, 0, col);
+            let vb = input.lanes3(sd, row, 4, col);
+            let l = [xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2]];
+            let dv = [va[0] - vb[0], va[1] - vb[1], va[2] - vb[2]];
+            let len = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+            let inv = F::splat(sd, 1.0) / len;
+            let dir = [l[0] * inv, l[1] * inv, l[2] * inv];
+            let dot = dv[0] * dir[0] + dv[1] * dir[1] + dv[2] * dir[2];
+            let m = -(F::splat(sd, slot.ks) * (len - F::splat(sd, slot.rest)) + F::splat(sd, slot.kd * inv_dt) * dot);
+            let live = len.gt(tiny);
+            for c in 0..3 {
+                acc[c] += F::select(live, m * dir[c], zero);
+            }
+        }
+        // Verlet for every lane; lanes that are held, or end in the floor or a collider,
+        // go through the twins' scalar code instead.
+        let mut x = [
+            (xa[0] + va[0] * keep) + acc[0] * kick,
+            (xa[1] + va[1] * keep) + acc[1] * kick,
+            (xa[2] + va[2] * keep) + acc[2] * kick,
+        ];
+        let (mut wo, mut xp) = (w, xa);
+        let special = w.eq(zero) | x[1].lt(floor) | inside(sd, p, s.spheres, s.boxes, &x);
+        let mut bits = if special.any() { special.bits() } else { 0 };
+        let grab = p.grab_index as isize - (base + i0) as isize;
+        if (0..lanes as isize).contains(&grab) {
+            bits |= 1 << grab;
+        }
+        while bits != 0 {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let (x4, xp4) = finish_at(s, base + i0 + k, [acc[0].lane(k), acc[1].lane(k), acc[2].lane(k), 0.0]);
+            for c in 0..3 {
+                x[c].set_lane(k, x4[c]);
+                xp[c].set_lane(k, xp4[c]);
+            }
+            wo.set_lane(k, x4[3]);
+        }
+        dst.store4(j, i0, &x, wo);
+        if let Some((o, fin)) = own {
+            for k in 0..lanes {
+                out.prev[o + i0 + k] = [xp[0].lane(k), xp[1].lane(k), xp[2].lane(k), 0.0];
+                if fin {
+                    out.pos[o + i0 + k] = [x[0].lane(k), x[1].lane(k), x[2].lane(k), wo.lane(k)];
+                }
+            }
+        }
+        i0 += lanes;
+    }
+    for i in i0..n - 2 {
+        put(dst, out, i, a_scalar(s, base + i));
+    }
+}
+
+/// Lanes at `x` inside a sphere or a box (inflated by the margin), by `collide`'s tests.
+#[inline(always)]
+fn inside<S: Isa>(sd: S, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], x: &[F<S>; 3]) -> M<S> {
+    let mut any = M::splat(sd, false);
+    for sp in &spheres[..p.num_spheres as usize] {
+        let r = sp.radius + p.margin;
+        let d: [F<S>; 3] = std::array::from_fn(|c| x[c] - F::splat(sd, sp.center[c]));
+        any = any | (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).lt(F::splat(sd, r * r));
+    }
+    for b in &boxes[..p.num_boxes as usize] {
+        let mut all = M::splat(sd, true);
+        for (c, xc) in x.iter().enumerate() {
+            all = all & xc.gt(F::splat(sd, b.min[c] - p.margin)) & xc.lt(F::splat(sd, b.max[c] + p.margin));
+        }
+        any = any | all;
+    }
+    any
+}
+
+/// The position pinned particle `k` has after stage A (its old one, or the grab target),
+/// which the strain passes read through the tethers.
+#[inline(always)]
+fn pin_at(s: &Step<'_>, k: usize) -> V4 {
+    let q = s.pos[k];
+    if k as i32 == s.p.grab_index {
+        let t = s.p.grab_target;
+        [t[0], t[1], t[2], q[3]]
+    } else {
+        q
+    }
+}
+
+/// Mobility of the lanes from `(row, i)`: w, with the grabbed particle's lane at 0.
+#[inline(always)]
+fn mobility<S: Isa>(sd: S, src: &Ring, n: usize, grab: i32, row: usize, i: usize) -> F<S> {
+    let mut w = src.lanes(sd, row, 3, i);
+    let k = grab as isize - (row * n + i) as isize;
+    if (0..S::F32_LANES as isize).contains(&k) {
+        w.set_lane(k as usize, 0.0);
+    }
+    w
+}
+
+/// The strain pass's scalar path for particle `(i, j)`: the twin, reading the previous
+/// stage `src` (neighbours are within a row; a tether's pin anywhere is fixed: `pin_at`).
+#[inline(always)]
+fn strain_scalar(s: &Step<'_>, src: &Ring, j: usize, i: usize) -> V4 {
+    let n = s.p.n as usize;
+    let fetch = |k: usize| {
+        let r = k / n;
+        if r + 1 >= j && r <= j + 1 { src.get4(r, 0, k % n) } else { pin_at(s, k) }
+    };
+    limit_at(j * n + i, s.p, s.slots, s.tethers, fetch)
+}
+
+/// One strain-limit pass for row `j`, from the previous stage `src` into `dst` (and,
+/// for the band's own rows after the last pass, `out`).
+#[inline(always)]
+fn stage_strain<S: Isa>(sd: S, s: &Step<'_>, src: &Ring, dst: &mut Ring, j: usize, mut out: Option<&mut [V4]>) {
+    let p = s.p;
+    let n = p.n as usize;
+    let base = j * n;
+    let put = |dst: &mut Ring, out: &mut Option<&mut [V4]>, i: usize, x4: V4| {
+        dst.put4(j, 0, i, x4);
+        if let Some(o) = out.as_deref_mut() {
+            o[i] = x4;
+        }
+    };
+    if !(j >= 2 && j + 2 < n) {
+        for i in 0..n {
+            put(dst, &mut out, i, strain_scalar(s, src, j, i));
+        }
+        return;
+    }
+    for i in [0, 1, n - 2, n - 1] {
+        put(dst, &mut out, i, strain_scalar(s, src, j, i));
+    }
+    let stretch = 1.0 + p.strain_limit;
+    let aim = 1.0 + STRAIN_AIM * p.strain_limit;
+    let zero = F::splat(sd, 0.0);
+    let one = F::splat(sd, 1.0);
+    let lanes = S::F32_LANES;
+    let mut i0 = 2;
+    while i0 + lanes <= n - 2 {
+        let xi = src.lanes3(sd, j, 0, i0);
+        let wi = mobility(sd, src, n, p.grab_index, j, i0);
+        let mut corr = [zero; 3];
+        let mut count = zero;
+        for (sl, slot) in s.uni[..STRAIN_SLOTS].iter().enumerate() {
+            let (di, dj) = SLOT_OFFSETS[sl];
+            let (row, col) = ((j as isize + dj as isize) as usize, (i0 as isize + di as isize) as usize);
+            let xb = src.lanes3(sd, row, 0, col);
+            let d = [xb[0] - xi[0], xb[1] - xi[1], xb[2] - xi[2]];
+            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let live = len.gt(F::splat(sd, stretch * slot.rest));
+            let wb = mobility(sd, src, n, p.grab_index, row, col);
+            let f = wi * (len - F::splat(sd, aim * slot.rest)) / ((wi + wb) * len);
+            for c in 0..3 {
+                corr[c] += F::select(live, d[c] * f, zero);
+            }
+            count += F::select(live, one, zero);
+        }
+        let has = count.gt(zero);
+        let mut x = [
+            F::select(has, xi[0] + corr[0] / count, xi[0]),
+            F::select(has, xi[1] + corr[1] / count, xi[1]),
+            F::select(has, xi[2] + corr[2] / count, xi[2]),
+        ];
+        for t in 0..TETHER_SLOTS {
+            let pins = &s.tether_lanes.pin[t][base + i0..base + i0 + lanes];
+            let first = pins[0];
+            let same = pins.iter().fold(true, |a, &q| a & (q == first));
+            if same && first < 0 {
+                continue;
+            }
+            // Most groups hold to one pin (all of a corner's side of the sheet); others
+            // gather, empty slots reading particle 0, masked out.
+            let (pin, live) = if same {
+                let q = pin_at(s, first as usize);
+                ([F::splat(sd, q[0]), F::splat(sd, q[1]), F::splat(sd, q[2])], M::splat(sd, true))
+            } else {
+                let mut pin = [zero; 3];
+                let mut held = zero;
+                for (k, &q) in pins.iter().enumerate() {
+                    let x4 = pin_at(s, q.max(0) as usize);
+                    for c in 0..3 {
+                        pin[c].set_lane(k, x4[c]);
+                    }
+                    held.set_lane(k, (q >= 0) as u8 as f32);
+                }
+                (pin, held.gt(zero))
+            };
+            let rest = F::load(sd, &s.tether_lanes.rest[t], base + i0);
+            let d = [x[0] - pin[0], x[1] - pin[1], x[2] - pin[2]];
+            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let max = F::splat(sd, stretch) * rest;
+            let apply = len.gt(max) & live;
+            let q = max / len;
+            for c in 0..3 {
+                x[c] = F::select(apply, pin[c] + d[c] * q, x[c]);
+            }
+        }
+        // Pinned and grabbed particles keep their position.
+        let fixed = wi.eq(zero);
+        let x = [F::select(fixed, xi[0], x[0]), F::select(fixed, xi[1], x[1]), F::select(fixed, xi[2], x[2])];
+        let w = src.lanes(sd, j, 3, i0);
+        dst.store4(j, i0, &x, w);
+        if let Some(o) = out.as_deref_mut() {
+            for k in 0..lanes {
+                o[i0 + k] = [x[0].lane(k), x[1].lane(k), x[2].lane(k), w.lane(k)];
+            }
+        }
+        i0 += lanes;
+    }
+    for i in i0..n - 2 {
+        put(dst, &mut out, i, strain_scalar(s, src, j, i));
+    }
+}
+
+/// `(b − a) × (c − a)` and its length, lane-wise, in glam's operation order.
+#[inline(always)]
+fn cross_len<S: Isa>(a: &[F<S>; 3], b: &[F<S>; 3], c: &[F<S>; 3]) -> [F<S>; 4] {
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let x = u[1] * v[2] - v[1] * u[2];
+    let y = u[2] * v[0] - v[2] * u[0];
+    let z = u[0] * v[1] - v[0] * u[1];
+    [x, y, z, (x * x + y * y + z * z).sqrt()]
+}
+
+/// `tri_normals` for quad row `q` from the final positions `src` into `faces`.
+#[inline(always)]
+fn stage_tri<S: Isa>(sd: S, n: usize, src: &Ring, faces: &mut Ring, q: usize) {
+    let m = n - 1;
+    let mut qi = 0;
+    while qi + S::F32_LANES <= m {
+        let p00 = src.lanes3(sd, q, 0, qi);
+        let p10 = src.lanes3(sd, q, 0, qi + 1);
+        let p01 = src.lanes3(sd, q + 1, 0, qi);
+        let p11 = src.lanes3(sd, q + 1, 0, qi + 1);
+        for (c, v) in cross_len(&p00, &p01, &p11).into_iter().chain(cross_len(&p00, &p11, &p10)).enumerate() {
+            faces.store(q, c, qi, v);
+        }
+        qi += S::F32_LANES;
+    }
+    let at = |r: usize, i: usize| Vec3::new(src.get(r, 0, i), src.get(r, 1, i), src.get(r, 2, i));
+    for qi in qi..m {
+        let (p00, p10, p01, p11) = (at(q, qi), at(q, qi + 1), at(q + 1, qi), at(q + 1, qi + 1));
+        let t0 = (p01 - p00).cross(p11 - p00);
+        let t1 = (p11 - p00).cross(p10 - p00);
+        faces.put4(q, 0, qi, [t0.x, t0.y, t0.z, t0.length()]);
+        faces.put4(q, 4, qi, [t1.x, t1.y, t1.z, t1.length()]);
+    }
+}
+
+/// `vertex_normals` for row `r` from the face normals of quad rows `r − 1` and `r`.
+#[inline(always)]
+fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, normal: &mut [V4], force: &mut [V4]) {
+    let p = s.p;
+    let n = p.n as usize;
+    let m = n - 1;
+    let w = v3(p.wind);
+    let c = p.wind[3] / 6.0;
+    let windy = c != 0.0 && w != Vec3::ZERO;
+    let face = |t: usize| {
+        let (q, k) = (t / 2, t % 2);
+        faces.get4(q / m, 4 * k, q % m)
+    };
+    let scalar = |i: usize| vnormal_at(&s.face_slots[r * n + i], face, w, c);
+    if !(r >= 1 && r + 1 < n) {
+        for i in 0..n {
+            (normal[i], force[i]) = scalar(i);
+        }
+        return;
+    }
+    (normal[0], force[0]) = scalar(0);
+    let zero = F::splat(sd, 0.0);
+    let (wl, cl) = ([F::splat(sd, w.x), F::splat(sd, w.y), F::splat(sd, w.z)], F::splat(sd, c));
+    let lanes = S::F32_LANES;
+    let mut i0 = 1;
+    while i0 + lanes < n {
+        // Quads (i−1, r−1), (i, r−1), (i−1, r), (i, r), in the order of the face slots.
+        let faces6 = [
+            faces_lanes(sd, faces, r - 1, 0, i0 - 1),
+            faces_lanes(sd, faces, r - 1, 4, i0 - 1),
+            faces_lanes(sd, faces, r - 1, 0, i0),
+            faces_lanes(sd, faces, r, 4, i0 - 1),
+            faces_lanes(sd, faces, r, 0, i0),
+            faces_lanes(sd, faces, r, 4, i0),
+        ];
+        let mut sum = [zero; 3];
+        let mut wind = [zero; 3];
+        for f4 in &faces6 {
+            for k in 0..3 {
+                sum[k] += f4[k];
+            }
+            if !windy {
+                continue;
+            }
+            let dot = f4[0] * wl[0] + f4[1] * wl[1] + f4[2] * wl[2];
+            let q = cl * dot / f4[3];
+            let live = f4[3].gt(zero);
+            for k in 0..3 {
+                wind[k] += F::select(live, f4[k] * q, zero);
+            }
+        }
+        let rcp = F::splat(sd, 1.0) / (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
+        let ok = rcp.lt(F::splat(sd, f32::INFINITY)) & rcp.gt(zero);
+        let nv: [F<S>; 3] = std::array::from_fn(|k| F::select(ok, sum[k] * rcp, zero));
+        for k in 0..lanes {
+            normal[i0 + k] = [nv[0].lane(k), nv[1].lane(k), nv[2].lane(k), 0.0];
+            force[i0 + k] = [wind[0].lane(k), wind[1].lane(k), wind[2].lane(k), 0.0];
+        }
+        i0 += lanes;
+    }
+    for i in i0..n {
+        (normal[i], force[i]) = scalar(i);
+    }
+}
+
+#[inline(always)]
+fn faces_lanes<S: Isa>(sd: S, faces: &Ring, q: usize, c0: usize, qi: usize) -> [F<S>; 4] {
+    std::array::from_fn(|c| faces.lanes(sd, q, c0 + c, qi))
+}
