@@ -7,8 +7,10 @@
 use clothlab_core::grid::V4;
 use clothlab_core::{Aabb, CpuSolver, Exec, Grab, Pinning, Scene, SimParams, Simd, Solver};
 
-fn bits(v: &[V4]) -> Vec<u32> {
-    v.iter().flatten().map(|x| x.to_bits()).collect()
+/// The first particle whose bits differ, with both values; `None` when all agree.
+fn first_difference(want: &[V4], got: &[V4]) -> Option<String> {
+    let k = want.iter().zip(got).position(|(a, b)| a.map(f32::to_bits) != b.map(f32::to_bits))?;
+    Some(format!("particle {k} of {}: want {:?}, got {:?}", want.len(), want[k], got[k]))
 }
 
 /// Runs `frames` frames kernel by kernel and fused (every width, both executions) from
@@ -35,10 +37,14 @@ fn compare(scene: &Scene, params: &SimParams, frames: u32, grab: Option<Grab>) {
             s.step_frame().unwrap();
             let got = s.state().unwrap();
             let at = format!("n = {n}, {} strain passes, frame {f}, {name}", params.strain_iterations);
-            assert_eq!(bits(&want.pos), bits(&got.pos), "{at}: positions");
-            assert_eq!(bits(&want.prev), bits(&got.prev), "{at}: previous positions");
-            assert_eq!(bits(&want.normal), bits(&got.normal), "{at}: normals");
-            assert_eq!(bits(&want.force), bits(&got.force), "{at}: wind force");
+            for (what, w, g) in [
+                ("positions", &want.pos, &got.pos),
+                ("previous positions", &want.prev, &got.prev),
+                ("normals", &want.normal, &got.normal),
+                ("wind force", &want.force, &got.force),
+            ] {
+                assert_eq!(first_difference(w, g), None, "{at}: {what}");
+            }
         }
     }
     // And the run went through contacts: some particle ends within 2 cm (twice the

@@ -31,11 +31,13 @@ use super::collide::collide_at;
 use super::forces::{forces_at, forces_consts};
 use super::integrate::integrate_at;
 use super::normals::vnormal_at;
-use super::simd::{F, Lanewise, M, Simd, dispatch};
+use super::simd::{F, Lanewise, M, Simd, dispatch, groups, leftover};
 use super::springs::gather_at;
 use super::strain_limit::limit_at;
 use super::{Exec, v3};
-use crate::grid::{FACE_SLOTS, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
+use crate::grid::{
+    ClothState, FACE_SLOTS, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4,
+};
 use crate::layout::STRAIN_AIM;
 use crate::scene::{Aabb, Sphere};
 use pulp::Simd as Isa;
@@ -59,14 +61,6 @@ impl Ring {
     #[inline(always)]
     fn at(&self, row: usize, c: usize) -> usize {
         ((row & (self.rows - 1)) * self.comps + c) * self.width
-    }
-
-    /// Component slices `c0 .. c0 + C` of `row`.
-    #[inline(always)]
-    fn comps_mut<const C: usize>(&mut self, row: usize, c0: usize) -> [&mut [f32]; C] {
-        let (a, w) = (self.at(row, c0), self.width);
-        let mut it = self.data[a..a + C * w].chunks_exact_mut(w);
-        std::array::from_fn(|_| it.next().expect("C components"))
     }
 
     /// Writes lanes `x` (x, y, z) and `w` to components 0 ..= 3 of `row` from `i`.
@@ -145,6 +139,78 @@ impl TetherLanes {
     }
 }
 
+/// Components of [`Soa`]: x, y, z, w of the positions, then x, y, z of `prev`, the
+/// force and the normal.
+const POS: usize = 0;
+const PREV: usize = 4;
+const FORCE: usize = 7;
+const NORMAL: usize = 10;
+const COMPS: usize = 13;
+
+/// The state as component arrays, the fused sweep's layout: a vector of eight or
+/// sixteen particles is then one load, where `[x, y, z, w]` particles would need a
+/// transpose at every read and write (measured: a third of the sweep's time at n = 512).
+/// `ClothState` is converted to it before the first fused substep and back after the
+/// last one of a frame.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct Soa {
+    c: [Vec<f32>; COMPS],
+}
+
+impl Soa {
+    /// Takes `st`.
+    pub(crate) fn load(&mut self, exec: Exec, st: &ClothState) {
+        let np = st.pos.len();
+        for v in &mut self.c {
+            v.resize(np, 0.0);
+        }
+        let comp = |k: usize, v: &mut Vec<f32>| {
+            let (src, c) = match k {
+                0..4 => (&st.pos, k),
+                4..7 => (&st.prev, k - 4),
+                7..10 => (&st.force, k - 7),
+                _ => (&st.normal, k - 10),
+            };
+            for (o, p) in v.iter_mut().zip(src) {
+                *o = p[c];
+            }
+        };
+        match exec {
+            Exec::Serial => self.c.iter_mut().enumerate().for_each(|(k, v)| comp(k, v)),
+            Exec::Parallel => self.c.par_iter_mut().enumerate().for_each(|(k, v)| comp(k, v)),
+        }
+    }
+
+    /// Writes the state to `st` (w of `prev`, force and normal 0, as every kernel leaves
+    /// it).
+    pub(crate) fn store(&self, exec: Exec, st: &mut ClothState) {
+        let c = &self.c;
+        let at =
+            |k: usize, c0: usize, w: Option<usize>| [c[c0][k], c[c0 + 1][k], c[c0 + 2][k], w.map_or(0.0, |w| c[w][k])];
+        let bufs = [
+            (&mut st.pos, POS, Some(POS + 3)),
+            (&mut st.prev, PREV, None),
+            (&mut st.force, FORCE, None),
+            (&mut st.normal, NORMAL, None),
+        ];
+        match exec {
+            Exec::Serial => {
+                bufs.into_iter().for_each(|(b, c0, w)| b.iter_mut().enumerate().for_each(|(k, o)| *o = at(k, c0, w)))
+            }
+            Exec::Parallel => bufs.into_par_iter().for_each(|(b, c0, w)| {
+                b.par_iter_mut().with_min_len(4096).enumerate().for_each(|(k, o)| *o = at(k, c0, w))
+            }),
+        }
+    }
+
+    /// Room for `np` particles.
+    pub(crate) fn resize(&mut self, np: usize) {
+        for v in &mut self.c {
+            v.resize(np, 0.0);
+        }
+    }
+}
+
 /// What a substep reads: the old state, the topology and the step's constants.
 pub(crate) struct Step<'a> {
     pub p: &'a StepParams,
@@ -156,22 +222,55 @@ pub(crate) struct Step<'a> {
     pub face_slots: &'a [[i32; FACE_SLOTS]],
     pub spheres: &'a [Sphere],
     pub boxes: &'a [Aabb],
-    pub pos: &'a [V4],
-    pub prev: &'a [V4],
-    pub force: &'a [V4],
+    pub old: &'a Soa,
 }
 
-/// Where a substep writes: the new state (normals in place, the rest into other buffers).
-pub(crate) struct Next<'a> {
-    pub pos: &'a mut [V4],
-    pub prev: &'a mut [V4],
-    pub force: &'a mut [V4],
-    pub normal: &'a mut [V4],
+impl Step<'_> {
+    #[inline(always)]
+    fn pos(&self, k: usize) -> V4 {
+        let c = &self.old.c;
+        [c[0][k], c[1][k], c[2][k], c[3][k]]
+    }
+
+    #[inline(always)]
+    fn prev(&self, k: usize) -> V4 {
+        let c = &self.old.c;
+        [c[4][k], c[5][k], c[6][k], 0.0]
+    }
+
+    #[inline(always)]
+    fn force(&self, k: usize) -> V4 {
+        let c = &self.old.c;
+        [c[7][k], c[8][k], c[9][k], 0.0]
+    }
+}
+
+/// A band's rows of the new state, component by component (as [`Soa`]).
+struct Next<'a> {
+    c: [&'a mut [f32]; COMPS],
+}
+
+impl Next<'_> {
+    /// Sets components `c0 .. c0 + len` of particle `i` from `v`.
+    #[inline(always)]
+    fn put(&mut self, c0: usize, len: usize, i: usize, v: V4) {
+        for (c, x) in v.into_iter().enumerate().take(len) {
+            self.c[c0 + c][i] = x;
+        }
+    }
+
+    /// Stores vectors `v` as components `c0 ..` from particle `i`.
+    #[inline(always)]
+    fn store<S: Isa>(&mut self, c0: usize, i: usize, v: &[F<S>]) {
+        for (c, x) in v.iter().enumerate() {
+            x.store(self.c[c0 + c], i);
+        }
+    }
 }
 
 /// One Verlet substep (forces, springs, integrate, collide, `iters` strain passes,
-/// normals) from `s` into `out`, at `simd`'s width.
-pub(crate) fn substep(exec: Exec, simd: Simd, s: &Step<'_>, bands: &mut Vec<Band>, out: Next<'_>) {
+/// normals) from `s` into `next`, at `simd`'s width.
+pub(crate) fn substep(exec: Exec, simd: Simd, s: &Step<'_>, bands: &mut Vec<Band>, next: &mut Soa) {
     let n = s.p.n as usize;
     let rows = match exec {
         Exec::Serial => n,
@@ -182,38 +281,19 @@ pub(crate) fn substep(exec: Exec, simd: Simd, s: &Step<'_>, bands: &mut Vec<Band
     };
     let count = n.div_ceil(rows);
     bands.resize_with(count, Band::default);
-    let Next { pos, prev, force, normal } = out;
-    let chunk = rows * n;
-    let run = |(b, (band, (((pos, prev), force), normal))): (usize, (&mut Band, Chunks4<'_>))| {
+    let mut chunks = next.c.each_mut().map(|v| v.chunks_mut(rows * n));
+    let outs: Vec<Next<'_>> =
+        (0..count).map(|_| Next { c: chunks.each_mut().map(|it| it.next().expect("a chunk per band")) }).collect();
+    let run = |(b, (band, out)): (usize, (&mut Band, Next<'_>))| {
         let r0 = b * rows;
         let r1 = (r0 + rows).min(n);
-        dispatch(simd, BandJob { s, band, r0, r1, out: Next { pos, prev, force, normal } });
+        dispatch(simd, BandJob { s, band, r0, r1, out });
     };
     match exec {
-        Exec::Serial => bands
-            .iter_mut()
-            .zip(
-                pos.chunks_mut(chunk)
-                    .zip(prev.chunks_mut(chunk))
-                    .zip(force.chunks_mut(chunk))
-                    .zip(normal.chunks_mut(chunk)),
-            )
-            .enumerate()
-            .for_each(run),
-        Exec::Parallel => bands
-            .par_iter_mut()
-            .zip(
-                pos.par_chunks_mut(chunk)
-                    .zip(prev.par_chunks_mut(chunk))
-                    .zip(force.par_chunks_mut(chunk))
-                    .zip(normal.par_chunks_mut(chunk)),
-            )
-            .enumerate()
-            .for_each(run),
+        Exec::Serial => bands.iter_mut().zip(outs).enumerate().for_each(run),
+        Exec::Parallel => bands.par_iter_mut().zip(outs).enumerate().for_each(run),
     }
 }
-
-type Chunks4<'a> = (((&'a mut [V4], &'a mut [V4]), &'a mut [V4]), &'a mut [V4]);
 
 /// One band's rows `r0 .. r1`.
 struct BandJob<'a, 'b> {
@@ -252,7 +332,7 @@ fn run_band<S: Isa>(sd: S, s: &Step<'_>, band: &mut Band, r0: usize, r1: usize, 
     for j in lo(0)..=r1 + l {
         if j < hi(0) {
             while loaded < (j + 3).min(n) {
-                load_row(s, &mut band.input, loaded);
+                load_row(sd, s, &mut band.input, loaded);
                 loaded += 1;
             }
             let own = (r0..r1).contains(&j).then(|| ((j - r0) * n, l == 0));
@@ -264,39 +344,43 @@ fn run_band<S: Isa>(sd: S, s: &Step<'_>, band: &mut Band, r0: usize, r1: usize, 
                 continue;
             }
             let (done, rest) = band.stages.split_at_mut(k);
-            let own = (r0..r1).contains(&r) && k == l;
-            stage_strain(
-                sd,
-                s,
-                &done[k - 1],
-                &mut rest[0],
-                r,
-                own.then(|| &mut out.pos[(r - r0) * n..(r - r0 + 1) * n]),
-            );
+            let own = ((r0..r1).contains(&r) && k == l).then(|| (r - r0) * n);
+            stage_strain(sd, s, &done[k - 1], &mut rest[0], r, own, &mut out);
         }
         let Some(q) = j.checked_sub(l + 1) else { continue };
         if (q_lo..q_hi).contains(&q) {
             stage_tri(sd, n, &band.stages[l], &mut band.faces, q);
         }
         if (r0..r1).contains(&q) {
-            let rows = (q - r0) * n..(q - r0 + 1) * n;
-            stage_vert(sd, s, &band.faces, q, &mut out.normal[rows.clone()], &mut out.force[rows]);
+            stage_vert(sd, s, &band.faces, q, (q - r0) * n, &mut out);
         }
     }
 }
 
 /// Old row `j` into the input ring: positions, `pos − prev` and force.
 #[inline(always)]
-fn load_row(s: &Step<'_>, input: &mut Ring, j: usize) {
+fn load_row<S: Isa>(sd: S, s: &Step<'_>, input: &mut Ring, j: usize) {
     let n = s.p.n as usize;
-    let rows = j * n..(j + 1) * n;
-    let (pos, prev, force) = (&s.pos[rows.clone()], &s.prev[rows.clone()], &s.force[rows]);
-    let [x, y, z, w, vx, vy, vz, fx, fy, fz] = input.comps_mut::<10>(j, 0);
-    for i in 0..n {
-        let (a, b, f) = (pos[i], prev[i], force[i]);
-        (x[i], y[i], z[i], w[i]) = (a[0], a[1], a[2], a[3]);
-        (vx[i], vy[i], vz[i]) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-        (fx[i], fy[i], fz[i]) = (f[0], f[1], f[2]);
+    let c = &s.old.c;
+    for i in groups(0, n, S::F32_LANES) {
+        let k = j * n + i;
+        let at = |c: &[f32]| F::load(sd, c, k);
+        for q in 0..4 {
+            input.store(j, q, i, at(&c[POS + q]));
+        }
+        for q in 0..3 {
+            input.store(j, 4 + q, i, at(&c[POS + q]) - at(&c[PREV + q]));
+            input.store(j, 7 + q, i, at(&c[FORCE + q]));
+        }
+    }
+    for i in leftover(0, n, S::F32_LANES) {
+        let k = j * n + i;
+        let (a, b, f) = (s.pos(k), s.prev(k), s.force(k));
+        input.put4(j, 0, i, a);
+        for q in 0..3 {
+            input.set(j, 4 + q, i, a[q] - b[q]);
+            input.set(j, 7 + q, i, f[q]);
+        }
     }
 }
 
@@ -304,14 +388,14 @@ fn load_row(s: &Step<'_>, input: &mut Ring, j: usize) {
 #[inline(always)]
 fn a_scalar(s: &Step<'_>, k: usize) -> (V4, V4) {
     let (g, drag) = forces_consts(s.p);
-    let f = forces_at(s.force[k], s.pos[k], s.prev[k], g, drag);
-    finish_at(s, k, gather_at(k, 1.0 / s.p.dt, s.slots, s.pos, s.prev, f))
+    let f = forces_at(s.force(k), s.pos(k), s.prev(k), g, drag);
+    finish_at(s, k, gather_at(k, 1.0 / s.p.dt, s.slots, |b| s.pos(b), |b| s.prev(b), f))
 }
 
 /// The twins' `integrate` then `collide` for particle `k` under force `f`.
 #[inline(always)]
 fn finish_at(s: &Step<'_>, k: usize, f: V4) -> (V4, V4) {
-    let (mut x4, mut xp4) = (s.pos[k], s.prev[k]);
+    let (mut x4, mut xp4) = (s.pos(k), s.prev(k));
     integrate_at(k, s.p, f, &mut x4, &mut xp4);
     collide_at(k, s.p, s.spheres, s.boxes, &mut x4, &mut xp4);
     (x4, xp4)
@@ -335,9 +419,9 @@ fn stage_a<S: Isa>(
     let put = |dst: &mut Ring, out: &mut Next<'_>, i: usize, (x4, xp4): (V4, V4)| {
         dst.put4(j, 0, i, x4);
         if let Some((o, fin)) = own {
-            out.prev[o + i] = xp4;
+            out.put(PREV, 3, o + i, xp4);
             if fin {
-                out.pos[o + i] = x4;
+                out.put(POS, 4, o + i, x4);
             }
         }
     };
@@ -358,8 +442,8 @@ fn stage_a<S: Isa>(
     let (keep, kick) = (F::splat(sd, 1.0 - p.damping), F::splat(sd, p.dt * p.dt / p.particle_mass));
     let floor = F::splat(sd, p.floor_y + p.margin);
     let lanes = S::F32_LANES;
-    let mut i0 = 2;
-    while i0 + lanes <= n - 2 {
+
+    for i0 in groups(2, n - 2, lanes) {
         let xa = input.lanes3(sd, j, 0, i0);
         let va = input.lanes3(sd, j, 4, i0);
         let w = input.lanes(sd, j, 3, i0);
@@ -410,16 +494,13 @@ fn stage_a<S: Isa>(
         }
         dst.store4(j, i0, &x, wo);
         if let Some((o, fin)) = own {
-            for k in 0..lanes {
-                out.prev[o + i0 + k] = [xp[0].lane(k), xp[1].lane(k), xp[2].lane(k), 0.0];
-                if fin {
-                    out.pos[o + i0 + k] = [x[0].lane(k), x[1].lane(k), x[2].lane(k), wo.lane(k)];
-                }
+            out.store(PREV, o + i0, &xp);
+            if fin {
+                out.store(POS, o + i0, &[x[0], x[1], x[2], wo]);
             }
         }
-        i0 += lanes;
     }
-    for i in i0..n - 2 {
+    for i in leftover(2, n - 2, lanes) {
         put(dst, out, i, a_scalar(s, base + i));
     }
 }
@@ -447,7 +528,7 @@ fn inside<S: Isa>(sd: S, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], x: 
 /// which the strain passes read through the tethers.
 #[inline(always)]
 fn pin_at(s: &Step<'_>, k: usize) -> V4 {
-    let q = s.pos[k];
+    let q = s.pos(k);
     if k as i32 == s.p.grab_index {
         let t = s.p.grab_target;
         [t[0], t[1], t[2], q[3]]
@@ -482,32 +563,40 @@ fn strain_scalar(s: &Step<'_>, src: &Ring, j: usize, i: usize) -> V4 {
 /// One strain-limit pass for row `j`, from the previous stage `src` into `dst` (and,
 /// for the band's own rows after the last pass, `out`).
 #[inline(always)]
-fn stage_strain<S: Isa>(sd: S, s: &Step<'_>, src: &Ring, dst: &mut Ring, j: usize, mut out: Option<&mut [V4]>) {
+fn stage_strain<S: Isa>(
+    sd: S,
+    s: &Step<'_>,
+    src: &Ring,
+    dst: &mut Ring,
+    j: usize,
+    own: Option<usize>,
+    out: &mut Next<'_>,
+) {
     let p = s.p;
     let n = p.n as usize;
     let base = j * n;
-    let put = |dst: &mut Ring, out: &mut Option<&mut [V4]>, i: usize, x4: V4| {
+    let put = |dst: &mut Ring, out: &mut Next<'_>, i: usize, x4: V4| {
         dst.put4(j, 0, i, x4);
-        if let Some(o) = out.as_deref_mut() {
-            o[i] = x4;
+        if let Some(o) = own {
+            out.put(POS, 4, o + i, x4);
         }
     };
     if !(j >= 2 && j + 2 < n) {
         for i in 0..n {
-            put(dst, &mut out, i, strain_scalar(s, src, j, i));
+            put(dst, out, i, strain_scalar(s, src, j, i));
         }
         return;
     }
     for i in [0, 1, n - 2, n - 1] {
-        put(dst, &mut out, i, strain_scalar(s, src, j, i));
+        put(dst, out, i, strain_scalar(s, src, j, i));
     }
     let stretch = 1.0 + p.strain_limit;
     let aim = 1.0 + STRAIN_AIM * p.strain_limit;
     let zero = F::splat(sd, 0.0);
     let one = F::splat(sd, 1.0);
     let lanes = S::F32_LANES;
-    let mut i0 = 2;
-    while i0 + lanes <= n - 2 {
+
+    for i0 in groups(2, n - 2, lanes) {
         let xi = src.lanes3(sd, j, 0, i0);
         let wi = mobility(sd, src, n, p.grab_index, j, i0);
         let mut corr = [zero; 3];
@@ -571,15 +660,12 @@ fn stage_strain<S: Isa>(sd: S, s: &Step<'_>, src: &Ring, dst: &mut Ring, j: usiz
         let x = [F::select(fixed, xi[0], x[0]), F::select(fixed, xi[1], x[1]), F::select(fixed, xi[2], x[2])];
         let w = src.lanes(sd, j, 3, i0);
         dst.store4(j, i0, &x, w);
-        if let Some(o) = out.as_deref_mut() {
-            for k in 0..lanes {
-                o[i0 + k] = [x[0].lane(k), x[1].lane(k), x[2].lane(k), w.lane(k)];
-            }
+        if let Some(o) = own {
+            out.store(POS, o + i0, &[x[0], x[1], x[2], w]);
         }
-        i0 += lanes;
     }
-    for i in i0..n - 2 {
-        put(dst, &mut out, i, strain_scalar(s, src, j, i));
+    for i in leftover(2, n - 2, lanes) {
+        put(dst, out, i, strain_scalar(s, src, j, i));
     }
 }
 
@@ -598,8 +684,8 @@ fn cross_len<S: Isa>(a: &[F<S>; 3], b: &[F<S>; 3], c: &[F<S>; 3]) -> [F<S>; 4] {
 #[inline(always)]
 fn stage_tri<S: Isa>(sd: S, n: usize, src: &Ring, faces: &mut Ring, q: usize) {
     let m = n - 1;
-    let mut qi = 0;
-    while qi + S::F32_LANES <= m {
+
+    for qi in groups(0, m, S::F32_LANES) {
         let p00 = src.lanes3(sd, q, 0, qi);
         let p10 = src.lanes3(sd, q, 0, qi + 1);
         let p01 = src.lanes3(sd, q + 1, 0, qi);
@@ -607,10 +693,9 @@ fn stage_tri<S: Isa>(sd: S, n: usize, src: &Ring, faces: &mut Ring, q: usize) {
         for (c, v) in cross_len(&p00, &p01, &p11).into_iter().chain(cross_len(&p00, &p11, &p10)).enumerate() {
             faces.store(q, c, qi, v);
         }
-        qi += S::F32_LANES;
     }
     let at = |r: usize, i: usize| Vec3::new(src.get(r, 0, i), src.get(r, 1, i), src.get(r, 2, i));
-    for qi in qi..m {
+    for qi in leftover(0, m, S::F32_LANES) {
         let (p00, p10, p01, p11) = (at(q, qi), at(q, qi + 1), at(q + 1, qi), at(q + 1, qi + 1));
         let t0 = (p01 - p00).cross(p11 - p00);
         let t1 = (p11 - p00).cross(p10 - p00);
@@ -621,7 +706,7 @@ fn stage_tri<S: Isa>(sd: S, n: usize, src: &Ring, faces: &mut Ring, q: usize) {
 
 /// `vertex_normals` for row `r` from the face normals of quad rows `r − 1` and `r`.
 #[inline(always)]
-fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, normal: &mut [V4], force: &mut [V4]) {
+fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, o: usize, out: &mut Next<'_>) {
     let p = s.p;
     let n = p.n as usize;
     let m = n - 1;
@@ -632,19 +717,23 @@ fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, normal: &mut 
         let (q, k) = (t / 2, t % 2);
         faces.get4(q / m, 4 * k, q % m)
     };
-    let scalar = |i: usize| vnormal_at(&s.face_slots[r * n + i], face, w, c);
+    let scalar = |out: &mut Next<'_>, i: usize| {
+        let (nrm, wind) = vnormal_at(&s.face_slots[r * n + i], face, w, c);
+        out.put(NORMAL, 3, o + i, nrm);
+        out.put(FORCE, 3, o + i, wind);
+    };
     if !(r >= 1 && r + 1 < n) {
         for i in 0..n {
-            (normal[i], force[i]) = scalar(i);
+            scalar(out, i);
         }
         return;
     }
-    (normal[0], force[0]) = scalar(0);
+    scalar(out, 0);
     let zero = F::splat(sd, 0.0);
     let (wl, cl) = ([F::splat(sd, w.x), F::splat(sd, w.y), F::splat(sd, w.z)], F::splat(sd, c));
     let lanes = S::F32_LANES;
-    let mut i0 = 1;
-    while i0 + lanes < n {
+
+    for i0 in groups(1, n - 1, lanes) {
         // Quads (i−1, r−1), (i, r−1), (i−1, r), (i, r), in the order of the face slots.
         let faces6 = [
             faces_lanes(sd, faces, r - 1, 0, i0 - 1),
@@ -673,14 +762,11 @@ fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, normal: &mut 
         let rcp = F::splat(sd, 1.0) / (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
         let ok = rcp.lt(F::splat(sd, f32::INFINITY)) & rcp.gt(zero);
         let nv: [F<S>; 3] = std::array::from_fn(|k| F::select(ok, sum[k] * rcp, zero));
-        for k in 0..lanes {
-            normal[i0 + k] = [nv[0].lane(k), nv[1].lane(k), nv[2].lane(k), 0.0];
-            force[i0 + k] = [wind[0].lane(k), wind[1].lane(k), wind[2].lane(k), 0.0];
-        }
-        i0 += lanes;
+        out.store(NORMAL, o + i0, &nv);
+        out.store(FORCE, o + i0, &wind);
     }
-    for i in i0..n {
-        (normal[i], force[i]) = scalar(i);
+    for i in leftover(1, n - 1, lanes).chain([n - 1]) {
+        scalar(out, i);
     }
 }
 

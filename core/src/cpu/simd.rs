@@ -103,6 +103,22 @@ impl<S: Isa> F<S> {
     }
 }
 
+/// The starts of the lane groups that cover `lo .. hi`: every `lanes`, the last one moved
+/// back to end at `hi` (it recomputes a few lanes, which write what they wrote before:
+/// each lane depends on its inputs only). None when the range is narrower than a group.
+#[inline(always)]
+pub(crate) fn groups(lo: usize, hi: usize, lanes: usize) -> impl Iterator<Item = usize> {
+    let end = if hi >= lo + lanes { hi } else { lo };
+    (lo..end).step_by(lanes).map(move |i| i.min(hi - lanes))
+}
+
+/// What [`groups`] leaves to scalar code: all of `lo .. hi` when it is narrower than a
+/// group, else nothing.
+#[inline(always)]
+pub(crate) fn leftover(lo: usize, hi: usize, lanes: usize) -> std::ops::Range<usize> {
+    if hi >= lo + lanes { hi..hi } else { lo..hi }
+}
+
 impl<S: Isa> M<S> {
     /// Every lane `v`.
     #[inline(always)]

@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use super::fused::{self, Band, TetherLanes};
+use super::fused::{self, Band, Soa, TetherLanes};
 use super::simd::Simd;
 use super::{
     AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_PASSES, build_hash, cg_alpha, cg_begin, cg_beta,
@@ -52,8 +52,12 @@ pub struct CpuSolver {
     simd: Simd,
     /// The fused sweep's per-band rings.
     bands: Vec<Band>,
-    /// The fused sweep's new `prev` and `force` (the new positions go to `scratch`).
-    next: [Vec<V4>; 2],
+    /// The state as the fused sweep keeps it, and where a sweep writes the next one.
+    soa: [Soa; 2],
+    /// `soa[0]` holds the current state (else `state` does, and `soa` is loaded from it).
+    soa_valid: bool,
+    /// `state` is behind `soa[0]` (fused substeps ran since it was last written).
+    aos_stale: bool,
     /// The particles the tethers hold to (the fused sweep needs them pinned).
     pins: Vec<usize>,
     /// The tethers as component arrays, for the fused sweep.
@@ -84,7 +88,9 @@ impl CpuSolver {
             fused: true,
             simd: Simd::from_env().map_err(SolverError::Unsupported)?,
             bands: Vec::new(),
-            next: Default::default(),
+            soa: Default::default(),
+            soa_valid: false,
+            aos_stale: false,
             pins: Vec::new(),
             tether_lanes: TetherLanes::default(),
         };
@@ -130,18 +136,19 @@ impl CpuSolver {
             && self.pins.iter().all(|&k| self.state.pos[k][3] == 0.0)
     }
 
-    /// The fused substep (see `fused.rs`).
+    /// The fused substep (see `fused.rs`), on `soa`; `state` is left behind until
+    /// [`Self::sync`].
     fn substep_fused(&mut self) {
         let p = self.step_params();
         let t0 = Instant::now();
-        let np = self.state.pos.len();
-        for v in &mut self.next {
-            v.resize(np, [0.0; 4]);
+        if !self.soa_valid {
+            self.soa[0].load(self.exec, &self.state);
+            self.soa_valid = true;
         }
-        let Self { state, topo, scratch, timer, scene, params, uniform, bands, next, exec, simd, tether_lanes, .. } =
-            self;
+        self.soa[1].resize(self.state.pos.len());
+        let Self { topo, timer, scene, params, uniform, bands, soa, exec, simd, tether_lanes, .. } = self;
         let Some(uni) = uniform.as_ref() else { return };
-        let [next_prev, next_force] = next;
+        let [old, next] = soa;
         let step = fused::Step {
             p: &p,
             iters: params.strain_iterations as usize,
@@ -152,19 +159,34 @@ impl CpuSolver {
             face_slots: &topo.face_slots,
             spheres: &scene.spheres,
             boxes: &scene.boxes,
-            pos: &state.pos,
-            prev: &state.prev,
-            force: &state.force,
+            old,
         };
-        let out = fused::Next { pos: scratch, prev: next_prev, force: next_force, normal: &mut state.normal };
-        fused::substep(*exec, *simd, &step, bands, out);
-        std::mem::swap(&mut state.pos, scratch);
-        std::mem::swap(&mut state.prev, next_prev);
-        std::mem::swap(&mut state.force, next_force);
+        fused::substep(*exec, *simd, &step, bands, next);
+        std::mem::swap(old, next);
+        self.aos_stale = true;
         if self.time_kernels {
             let ns = t0.elapsed().as_nanos() as f64;
             timer.record(FUSED_STEP, ns);
             timer.record(SUBSTEP, ns);
+        }
+    }
+
+    /// Brings `state` up to the fused substeps run since it was last written.
+    fn sync(&mut self) {
+        if self.aos_stale {
+            self.soa[0].store(self.exec, &mut self.state);
+            self.aos_stale = false;
+        }
+    }
+
+    /// One substep, fused or kernel by kernel, leaving `state` behind after a fused one.
+    fn substep_inner(&mut self) {
+        if self.runs_fused() {
+            self.substep_fused();
+        } else {
+            self.sync();
+            self.substep_kernels();
+            self.soa_valid = false;
         }
     }
 
@@ -201,9 +223,12 @@ impl CpuSolver {
     /// SIMD lanes; every path computes the twins' bits (tests/physics.rs checks it), so
     /// GPU kernels compared with the twins are compared with this solver.
     pub fn substep(&mut self) {
-        if self.runs_fused() {
-            return self.substep_fused();
-        }
+        self.substep_inner();
+        self.sync();
+    }
+
+    /// One substep kernel by kernel.
+    fn substep_kernels(&mut self) {
         let p = self.step_params();
         let e = self.exec;
         let on = self.time_kernels;
@@ -340,6 +365,8 @@ impl Solver for CpuSolver {
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         params.validate_for(self.topo.n, self.topo.spacing)?;
+        self.sync();
+        self.soa_valid = false;
         crate::grid::rescale_history(&self.state.pos, &mut self.state.prev, self.params.dt(), params.dt());
         self.params = params;
         self.topo.set_spring_constants(&self.params);
@@ -354,8 +381,9 @@ impl Solver for CpuSolver {
     fn step_frame(&mut self) -> Result<(), SolverError> {
         let t0 = Instant::now();
         for _ in 0..self.params.substeps {
-            self.substep();
+            self.substep_inner();
         }
+        self.sync();
         if self.time_kernels {
             self.timer.record(FRAME, t0.elapsed().as_nanos() as f64);
         }
@@ -369,6 +397,7 @@ impl Solver for CpuSolver {
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
         state.check(self.state.n)?;
         self.state = state.clone();
+        (self.soa_valid, self.aos_stale) = (false, false);
         Ok(())
     }
 

@@ -23,22 +23,29 @@ pub(crate) fn spring_force(l: Vec3, dv: Vec3, s: &SpringSlot, inv_dt: f32) -> Ve
 /// Gather (optimized kernels, CPU solvers): each particle adds its 12 slots in slot order.
 pub fn springs(exec: Exec, dt: f32, slots: &[SpringSlot], pos: &[V4], prev: &[V4], force: &mut [V4]) {
     let inv_dt = 1.0 / dt;
-    for_each(exec, force, |i, f| *f = gather_at(i, inv_dt, slots, pos, prev, *f));
+    for_each(exec, force, |i, f| *f = gather_at(i, inv_dt, slots, |k| pos[k], |k| prev[k], *f));
 }
 
 /// The gather of particle `i`: `f` plus its springs' forces in slot order.
 #[inline(always)]
-pub(crate) fn gather_at(i: usize, inv_dt: f32, slots: &[SpringSlot], pos: &[V4], prev: &[V4], f: V4) -> V4 {
-    let xa = v3(pos[i]);
-    let va = xa - v3(prev[i]);
+pub(crate) fn gather_at(
+    i: usize,
+    inv_dt: f32,
+    slots: &[SpringSlot],
+    pos: impl Fn(usize) -> V4,
+    prev: impl Fn(usize) -> V4,
+    f: V4,
+) -> V4 {
+    let xa = v3(pos(i));
+    let va = xa - v3(prev(i));
     let mut acc = v3(f);
     for s in &slots[i * SLOTS..(i + 1) * SLOTS] {
         if s.neighbor < 0 {
             continue;
         }
         let b = s.neighbor as usize;
-        let xb = v3(pos[b]);
-        let vb = xb - v3(prev[b]);
+        let xb = v3(pos(b));
+        let vb = xb - v3(prev(b));
         acc += spring_force(xa - xb, va - vb, s, inv_dt);
     }
     v4(acc, 0.0)
@@ -69,7 +76,7 @@ pub fn springs_rows(
             Some((g, drag)) => forces_at(f, pos[i], prev[i], g, drag),
             None => f,
         };
-        gather_at(i, inv_dt, slots, pos, prev, f)
+        gather_at(i, inv_dt, slots, |k| pos[k], |k| prev[k], f)
     };
     let offs: [isize; SLOTS] = SLOT_OFFSETS.map(|(di, dj)| di as isize + dj as isize * n as isize);
     super::for_each_row(exec, n, force, |j, row| {
