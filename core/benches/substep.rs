@@ -1,9 +1,15 @@
 //! Whole-substep cost of the CPU solvers: `cargo bench -p clothlab-core`.
-//! Reports time per substep; divide by n² for ns per particle-substep (printed too).
+//!
+//! Per grid size, the serial and rayon solvers as they run (the fused sweep at the
+//! instruction set chosen at run time) and kernel by kernel (`*-kernels`, the path the
+//! fused sweep replaced), each timed over whole frames and reported per substep (divide by
+//! n² for ns per particle-substep). `CLOTHLAB_CPU_SIMD` picks a narrower instruction set;
+//! `CLOTHLAB_BENCH_SIZES=512` measures one size.
 
 use std::hint::black_box;
+use std::time::{Duration, Instant};
 
-use clothlab_core::{CpuSolver, Exec, Scene, SimParams};
+use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
 fn substep(c: &mut Criterion) {
@@ -13,21 +19,42 @@ fn substep(c: &mut Criterion) {
         .ok()
         .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect())
         .unwrap_or_else(|| vec![128, 256, 512, 1024]);
+    let params = SimParams::default();
     for &n in &sizes {
         group.throughput(Throughput::Elements(n as u64 * n as u64));
-        for (name, exec) in [("serial", Exec::Serial), ("rayon", Exec::Parallel)] {
-            let mut s = CpuSolver::new(exec, Scene::with_n(n), SimParams::default()).unwrap();
+        for (name, exec, fused) in [
+            ("serial", Exec::Serial, true),
+            ("rayon", Exec::Parallel, true),
+            ("serial-kernels", Exec::Serial, false),
+            ("rayon-kernels", Exec::Parallel, false),
+        ] {
+            let mut s = CpuSolver::new(exec, Scene::with_n(n), params.clone()).unwrap();
             s.time_kernels = false;
+            s.fused = fused;
             // Let the cloth fall for a few frames so the measured step sees contacts and
             // stretched springs, not only the flat sheet.
-            for _ in 0..8 * 16 {
-                s.substep();
+            for _ in 0..8 {
+                s.step_frame().unwrap();
             }
-            group.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| b.iter(|| black_box(&mut s).substep()));
+            // Whole frames (the fused sweep writes the state back once a frame), reported
+            // per substep.
+            group.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
+                b.iter_custom(|frames| {
+                    let t = Instant::now();
+                    for _ in 0..frames {
+                        black_box(&mut s).step_frame().unwrap();
+                    }
+                    t.elapsed() / params.substeps
+                });
+            });
         }
     }
     group.finish();
 }
 
-criterion_group!(benches, substep);
+fn config() -> Criterion {
+    Criterion::default().warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(4))
+}
+
+criterion_group! { name = benches; config = config(); targets = substep }
 criterion_main!(benches);

@@ -400,6 +400,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
         machine: args.machine.clone().unwrap_or_else(cpu_label),
         wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
         vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name().to_owned()),
+        cpu_simd: clothlab_core::cpu::fused_path_label(),
         params: params.clone(),
         frames,
         warmup_frames: WARMUP_FRAMES,

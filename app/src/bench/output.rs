@@ -88,6 +88,10 @@ pub struct Results {
     pub wgpu_adapter: Option<String>,
     /// The Vulkan device, if any.
     pub vulkan_adapter: Option<String>,
+    /// The CPU solvers' instruction set, chosen at run time (empty in reports from before
+    /// it was recorded).
+    #[serde(default)]
+    pub cpu_simd: String,
     /// Settings.
     pub settings: Settings,
     /// Every measurement.
@@ -133,6 +137,7 @@ pub struct Inputs {
     pub machine: String,
     pub wgpu_adapter: Option<String>,
     pub vulkan_adapter: Option<String>,
+    pub cpu_simd: String,
     pub params: SimParams,
     pub frames: u32,
     pub warmup_frames: u32,
@@ -204,6 +209,7 @@ impl Results {
             os: os.trim().to_owned(),
             wgpu_adapter: i.wgpu_adapter,
             vulkan_adapter: i.vulkan_adapter,
+            cpu_simd: i.cpu_simd,
             settings: Settings {
                 substeps: i.params.substeps,
                 frames: i.frames,
@@ -371,6 +377,9 @@ pub fn report(r: &Results) -> String {
     let _ = writeln!(s, "| OS | {} |", r.os);
     let _ = writeln!(s, "| wgpu adapter | {} |", r.wgpu_adapter.as_deref().unwrap_or("none"));
     let _ = writeln!(s, "| Vulkan device | {} |", r.vulkan_adapter.as_deref().unwrap_or("none"));
+    if !r.cpu_simd.is_empty() {
+        let _ = writeln!(s, "| CPU solvers | {} |", r.cpu_simd);
+    }
     let _ = writeln!(s, "| clothlab | {} ({}) |", r.clothlab, r.date);
     let _ = writeln!(s, "| command | `{}` |", r.command);
     let st = &r.settings;
@@ -673,6 +682,7 @@ pub(crate) fn test_results(
         machine: "test machine".into(),
         wgpu_adapter: None,
         vulkan_adapter: None,
+        cpu_simd: "fused sweep on AVX2, 8 lanes".into(),
         params: SimParams::default(),
         frames: 10,
         warmup_frames: 3,

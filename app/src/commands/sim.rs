@@ -36,6 +36,10 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     let substeps = frames * params.substeps as u64;
     let setup = args.gpu.setup(args.backend)?;
     let mut any = make(args.backend, scene.clone(), params, &setup, &Shared::None)?;
+    let cpu_path = match &any {
+        crate::solvers::AnySolver::Cpu(cpu) => Some(cpu.path()),
+        _ => None,
+    };
     let solver = any.get();
     let t0 = Instant::now();
     for _ in 0..frames {
@@ -50,6 +54,9 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         solver.timings().get(SUBSTEP).map(|r| r.median_ns).unwrap_or(wall.as_nanos() as f64 / substeps as f64);
 
     println!("backend        {}", solver.name());
+    if let Some(path) = &cpu_path {
+        println!("cpu path       {path}");
+    }
     if let Some(path) = &args.physics.scene {
         println!("scene          {} ({})", loaded.title.as_deref().unwrap_or("untitled"), path.display());
     }

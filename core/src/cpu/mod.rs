@@ -33,7 +33,7 @@ pub use self_collide::{
     build_hash, hash_buffers, hash_count, hash_scan_add, hash_scan_blocks, hash_scan_top, hash_scatter, hash_sort,
     self_collide, self_collide_at,
 };
-pub use simd::{SIMD_ENV, Simd};
+pub use simd::{FUSED_ENV, SIMD_ENV, Simd, fused_from_env};
 pub use solver::CpuSolver;
 pub use springs::{springs, springs_rows, springs_scatter};
 pub use stats::{SubstepStats, particle_stats, substep_stats};
@@ -43,6 +43,16 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::grid::V4;
+
+/// What the CPU solvers run a Verlet substep on here, for reports: the fused sweep at
+/// the instruction set chosen (by detection or `CLOTHLAB_CPU_SIMD`), or why not.
+pub fn fused_path_label() -> String {
+    match (fused_from_env(), Simd::from_env()) {
+        (Err(e), _) | (_, Err(e)) => e,
+        (Ok(false), _) => format!("kernel by kernel ({FUSED_ENV}=off)"),
+        (Ok(true), Ok(s)) => format!("fused sweep on {s} (chosen at run time; {SIMD_ENV} picks another)"),
+    }
+}
 
 /// How a kernel's loop runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

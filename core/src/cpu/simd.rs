@@ -210,6 +210,20 @@ pub enum Simd {
 /// the CPU has (`avx512`, `avx2`, `sse4.2`, `neon`, `scalar`), to compare them.
 pub const SIMD_ENV: &str = "CLOTHLAB_CPU_SIMD";
 
+/// The environment variable that switches the fused sweep off (`off`; `on` is the
+/// default), for the kernel-by-kernel step and its per-kernel timings.
+pub const FUSED_ENV: &str = "CLOTHLAB_CPU_FUSED";
+
+/// Whether `CLOTHLAB_CPU_FUSED` leaves the fused sweep on; a value other than `on` or
+/// `off` is refused with a line that says so.
+pub fn fused_from_env() -> Result<bool, String> {
+    match std::env::var(FUSED_ENV).as_deref() {
+        Err(_) | Ok("" | "on") => Ok(true),
+        Ok("off") => Ok(false),
+        Ok(v) => Err(format!("{FUSED_ENV}={v}: expected on or off")),
+    }
+}
+
 impl Simd {
     /// Every instruction set, widest first.
     pub const ALL: [Simd; 5] = [Simd::Avx512, Simd::Avx2, Simd::Sse42, Simd::Neon, Simd::Scalar];

@@ -85,7 +85,7 @@ impl CpuSolver {
             topo,
             timer: TimingRecorder::default(),
             time_kernels: true,
-            fused: true,
+            fused: super::simd::fused_from_env().map_err(SolverError::Unsupported)?,
             simd: Simd::from_env().map_err(SolverError::Unsupported)?,
             bands: Vec::new(),
             soa: Default::default(),
@@ -134,6 +134,26 @@ impl CpuSolver {
             && !self.params.self_collision
             && self.topo.n >= 8
             && self.pins.iter().all(|&k| self.state.pos[k][3] == 0.0)
+    }
+
+    /// How the next Verlet substeps run, in words: the fused sweep and its instruction
+    /// set, or kernel by kernel and why.
+    pub fn path(&self) -> String {
+        if self.runs_fused() {
+            return format!("fused sweep on {}", self.simd);
+        }
+        let why = if !self.fused {
+            "the fused sweep switched off: CLOTHLAB_CPU_FUSED=off".to_owned()
+        } else if !matches!(self.params.integrator, Integrator::Verlet | Integrator::SymplecticEuler) {
+            format!("the fused sweep runs Verlet only, not {:?}", self.params.integrator)
+        } else if self.params.self_collision {
+            "the fused sweep has no self-collision".to_owned()
+        } else if self.uniform.is_none() || self.topo.n < 8 {
+            "the grid is too small or not uniform for the fused sweep".to_owned()
+        } else {
+            "a tether's pin is not pinned".to_owned()
+        };
+        format!("kernel by kernel ({why})")
     }
 
     /// The fused substep (see `fused.rs`), on `soa`; `state` is left behind until
