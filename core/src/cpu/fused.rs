@@ -32,7 +32,7 @@ use super::forces::{forces_at, forces_consts};
 use super::integrate::integrate_at;
 use super::normals::vnormal_at;
 use super::simd::{F, Lanewise, M, Simd, dispatch, groups, leftover};
-use super::springs::gather_at;
+use super::springs::{GridSlots, gather_at};
 use super::strain_limit::limit_at;
 use super::{Exec, v3};
 use crate::grid::{
@@ -215,7 +215,7 @@ impl Soa {
 pub(crate) struct Step<'a> {
     pub p: &'a StepParams,
     pub iters: usize,
-    pub slots: &'a [SpringSlot],
+    /// The regular grid's slots (`ClothTopology::grid_slots`): the sweep reads no table.
     pub uni: &'a [SpringSlot; SLOTS],
     pub tethers: &'a [[Tether; TETHER_SLOTS]],
     pub tether_lanes: &'a TetherLanes,
@@ -389,7 +389,8 @@ fn load_row<S: Isa>(sd: S, s: &Step<'_>, input: &mut Ring, j: usize) {
 fn a_scalar(s: &Step<'_>, k: usize) -> (V4, V4) {
     let (g, drag) = forces_consts(s.p);
     let f = forces_at(s.force(k), s.pos(k), s.prev(k), g, drag);
-    finish_at(s, k, gather_at(k, 1.0 / s.p.dt, s.slots, |b| s.pos(b), |b| s.prev(b), f))
+    let grid = GridSlots { n: s.p.n as usize, uni: s.uni };
+    finish_at(s, k, gather_at(k, 1.0 / s.p.dt, &grid, |b| s.pos(b), |b| s.prev(b), f))
 }
 
 /// The twins' `integrate` then `collide` for particle `k` under force `f`.
@@ -425,12 +426,9 @@ fn stage_a<S: Isa>(
             }
         }
     };
-    if !(j >= 2 && j + 2 < n) {
-        for i in 0..n {
-            put(dst, out, i, a_scalar(s, base + i));
-        }
-        return;
-    }
+    // The grid's edge columns take the scalar path; every row's other columns the lanes
+    // (the rows near the top and bottom skip the slots that would leave the grid, as the
+    // twins do).
     for i in [0, 1, n - 2, n - 1] {
         put(dst, out, i, a_scalar(s, base + i));
     }
@@ -453,7 +451,8 @@ fn stage_a<S: Isa>(
         }
         for (sl, slot) in s.uni.iter().enumerate() {
             let (di, dj) = SLOT_OFFSETS[sl];
-            let (row, col) = ((j as isize + dj as isize) as usize, (i0 as isize + di as isize) as usize);
+            let Some(row) = j.checked_add_signed(dj as isize).filter(|&r| r < n) else { continue };
+            let col = (i0 as isize + di as isize) as usize;
             let xb = input.lanes3(sd, row, 0, col);
             let vb = input.lanes3(sd, row, 4, col);
             let l = [xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2]];
@@ -557,7 +556,7 @@ fn strain_scalar(s: &Step<'_>, src: &Ring, j: usize, i: usize) -> V4 {
         let r = k / n;
         if r + 1 >= j && r <= j + 1 { src.get4(r, 0, k % n) } else { pin_at(s, k) }
     };
-    limit_at(j * n + i, s.p, s.slots, s.tethers, fetch)
+    limit_at(j * n + i, s.p, &GridSlots { n, uni: s.uni }, s.tethers, fetch)
 }
 
 /// One strain-limit pass for row `j`, from the previous stage `src` into `dst` (and,
@@ -581,12 +580,6 @@ fn stage_strain<S: Isa>(
             out.put(POS, 4, o + i, x4);
         }
     };
-    if !(j >= 2 && j + 2 < n) {
-        for i in 0..n {
-            put(dst, out, i, strain_scalar(s, src, j, i));
-        }
-        return;
-    }
     for i in [0, 1, n - 2, n - 1] {
         put(dst, out, i, strain_scalar(s, src, j, i));
     }
@@ -603,7 +596,8 @@ fn stage_strain<S: Isa>(
         let mut count = zero;
         for (sl, slot) in s.uni[..STRAIN_SLOTS].iter().enumerate() {
             let (di, dj) = SLOT_OFFSETS[sl];
-            let (row, col) = ((j as isize + dj as isize) as usize, (i0 as isize + di as isize) as usize);
+            let Some(row) = j.checked_add_signed(dj as isize).filter(|&r| r < n) else { continue };
+            let col = (i0 as isize + di as isize) as usize;
             let xb = src.lanes3(sd, row, 0, col);
             let d = [xb[0] - xi[0], xb[1] - xi[1], xb[2] - xi[2]];
             let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();

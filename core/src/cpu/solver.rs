@@ -38,6 +38,8 @@ pub struct CpuSolver {
     face_lanes: FaceLanes,
     /// The interior's uniform spring slots, if the table has them (the fast path).
     uniform: Option<[SpringSlot; SLOTS]>,
+    /// The slots of the regular grid, if the whole table is one (the fused sweep's).
+    grid: Option<[SpringSlot; SLOTS]>,
     /// The integrators' scratch buffers (see `integrators.rs`), allocated when one needs them.
     aux: Vec<Vec<V4>>,
     /// The conjugate-gradient scalars.
@@ -77,6 +79,7 @@ impl CpuSolver {
             scratch: vec![[0.0; 4]; np],
             face: vec![[0.0; 4]; topo.triangles.len()],
             uniform: topo.uniform_interior_slots(),
+            grid: topo.grid_slots(),
             lanes: Lanes::default(),
             face_lanes: FaceLanes::default(),
             aux: Vec::new(),
@@ -129,7 +132,7 @@ impl CpuSolver {
     /// without self-collision, every tether's pin pinned, and `fused` on.
     pub fn runs_fused(&self) -> bool {
         self.fused
-            && self.uniform.is_some()
+            && self.grid.is_some()
             && matches!(self.params.integrator, Integrator::Verlet | Integrator::SymplecticEuler)
             && !self.params.self_collision
             && self.topo.n >= 8
@@ -148,7 +151,7 @@ impl CpuSolver {
             format!("the fused sweep runs Verlet only, not {:?}", self.params.integrator)
         } else if self.params.self_collision {
             "the fused sweep has no self-collision".to_owned()
-        } else if self.uniform.is_none() || self.topo.n < 8 {
+        } else if self.grid.is_none() || self.topo.n < 8 {
             "the grid is too small or not uniform for the fused sweep".to_owned()
         } else {
             "a tether's pin is not pinned".to_owned()
@@ -166,13 +169,12 @@ impl CpuSolver {
             self.soa_valid = true;
         }
         self.soa[1].resize(self.state.pos.len());
-        let Self { topo, timer, scene, params, uniform, bands, soa, exec, simd, tether_lanes, .. } = self;
-        let Some(uni) = uniform.as_ref() else { return };
+        let Self { topo, timer, scene, params, grid, bands, soa, exec, simd, tether_lanes, .. } = self;
+        let Some(uni) = grid.as_ref() else { return };
         let [old, next] = soa;
         let step = fused::Step {
             p: &p,
             iters: params.strain_iterations as usize,
-            slots: &topo.slots,
             uni,
             tethers: &topo.tethers,
             tether_lanes,
@@ -391,6 +393,7 @@ impl Solver for CpuSolver {
         self.params = params;
         self.topo.set_spring_constants(&self.params);
         self.uniform = self.topo.uniform_interior_slots();
+        self.grid = self.topo.grid_slots();
         Ok(())
     }
 

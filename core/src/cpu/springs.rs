@@ -8,6 +8,40 @@ use super::forces::{forces_at, forces_consts};
 use super::{Exec, LANES, Lanes, for_each, load3, store3, v3, v4};
 use crate::grid::{SLOT_OFFSETS, SLOTS, Spring, SpringSlot, StepParams, V4};
 
+/// Where a particle's spring slots come from: the table, or (for the fused sweep) the
+/// regular grid's, computed from the particle's place.
+pub(crate) trait SlotSource {
+    /// Slot `s` of particle `i`.
+    fn slot(&self, i: usize, s: usize) -> SpringSlot;
+}
+
+impl SlotSource for [SpringSlot] {
+    #[inline(always)]
+    fn slot(&self, i: usize, s: usize) -> SpringSlot {
+        self[i * SLOTS + s]
+    }
+}
+
+/// The slots of a grid whose table is regular ([`crate::ClothTopology::grid_slots`]):
+/// slot `s` holds `uni[s]` wherever the neighbour at its offset exists.
+pub(crate) struct GridSlots<'a> {
+    pub n: usize,
+    pub uni: &'a [SpringSlot; SLOTS],
+}
+
+impl SlotSource for GridSlots<'_> {
+    #[inline(always)]
+    fn slot(&self, i: usize, s: usize) -> SpringSlot {
+        let n = self.n as isize;
+        let (di, dj) = SLOT_OFFSETS[s];
+        let (x, y) = ((i as isize % n) + di as isize, (i as isize / n) + dj as isize);
+        if x < 0 || y < 0 || x >= n || y >= n {
+            return SpringSlot::EMPTY;
+        }
+        SpringSlot { neighbor: (y * n + x) as i32, ..self.uni[s] }
+    }
+}
+
 /// Force on end `a` of a spring with `l = x_a - x_b` and `dv = (v_a - v_b)·dt`.
 #[inline(always)]
 pub(crate) fn spring_force(l: Vec3, dv: Vec3, s: &SpringSlot, inv_dt: f32) -> Vec3 {
@@ -31,7 +65,7 @@ pub fn springs(exec: Exec, dt: f32, slots: &[SpringSlot], pos: &[V4], prev: &[V4
 pub(crate) fn gather_at(
     i: usize,
     inv_dt: f32,
-    slots: &[SpringSlot],
+    slots: &(impl SlotSource + ?Sized),
     pos: impl Fn(usize) -> V4,
     prev: impl Fn(usize) -> V4,
     f: V4,
@@ -39,7 +73,8 @@ pub(crate) fn gather_at(
     let xa = v3(pos(i));
     let va = xa - v3(prev(i));
     let mut acc = v3(f);
-    for s in &slots[i * SLOTS..(i + 1) * SLOTS] {
+    for s in 0..SLOTS {
+        let s = &slots.slot(i, s);
         if s.neighbor < 0 {
             continue;
         }

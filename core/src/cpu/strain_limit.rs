@@ -19,6 +19,7 @@
 
 use wide::f32x8;
 
+use super::springs::SlotSource;
 use super::{Exec, LANES, Lanes, for_each, v3, v4};
 use crate::grid::{SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
 pub use crate::layout::STRAIN_AIM;
@@ -40,7 +41,7 @@ pub fn strain_limit(
 pub(crate) fn limit_at(
     i: usize,
     p: &StepParams,
-    slots: &[SpringSlot],
+    slots: &(impl SlotSource + ?Sized),
     tethers: &[[Tether; TETHER_SLOTS]],
     pos: impl Fn(usize) -> V4,
 ) -> V4 {
@@ -54,7 +55,8 @@ pub(crate) fn limit_at(
     }
     let mut corr = glam::Vec3::ZERO;
     let mut count = 0.0f32;
-    for s in &slots[i * SLOTS..i * SLOTS + STRAIN_SLOTS] {
+    for s in 0..STRAIN_SLOTS {
+        let s = &slots.slot(i, s);
         if s.neighbor < 0 {
             continue;
         }
