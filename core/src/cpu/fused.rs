@@ -30,7 +30,7 @@ use rayon::prelude::*;
 use super::collide::collide_at;
 use super::forces::{forces_at, forces_consts};
 use super::integrate::integrate_at;
-use super::normals::vnormal_at;
+use super::normals::{vnormal_at, vnormal_lanes};
 use super::simd::{F, Lanewise, M, Simd, dispatch, groups, leftover};
 use super::springs::{GridSlots, gather_at};
 use super::strain_limit::limit_at;
@@ -706,7 +706,6 @@ fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, o: usize, out
     let m = n - 1;
     let w = v3(p.wind);
     let c = p.wind[3] / 6.0;
-    let windy = c != 0.0 && w != Vec3::ZERO;
     let face = |t: usize| {
         let (q, k) = (t / 2, t % 2);
         faces.get4(q / m, 4 * k, q % m)
@@ -723,10 +722,7 @@ fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, o: usize, out
         return;
     }
     scalar(out, 0);
-    let zero = F::splat(sd, 0.0);
-    let (wl, cl) = ([F::splat(sd, w.x), F::splat(sd, w.y), F::splat(sd, w.z)], F::splat(sd, c));
     let lanes = S::F32_LANES;
-
     for i0 in groups(1, n - 1, lanes) {
         // Quads (i−1, r−1), (i, r−1), (i−1, r), (i, r), in the order of the face slots.
         let faces6 = [
@@ -737,25 +733,7 @@ fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, o: usize, out
             faces_lanes(sd, faces, r, 0, i0),
             faces_lanes(sd, faces, r, 4, i0),
         ];
-        let mut sum = [zero; 3];
-        let mut wind = [zero; 3];
-        for f4 in &faces6 {
-            for k in 0..3 {
-                sum[k] += f4[k];
-            }
-            if !windy {
-                continue;
-            }
-            let dot = f4[0] * wl[0] + f4[1] * wl[1] + f4[2] * wl[2];
-            let q = cl * dot / f4[3];
-            let live = f4[3].gt(zero);
-            for k in 0..3 {
-                wind[k] += F::select(live, f4[k] * q, zero);
-            }
-        }
-        let rcp = F::splat(sd, 1.0) / (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
-        let ok = rcp.lt(F::splat(sd, f32::INFINITY)) & rcp.gt(zero);
-        let nv: [F<S>; 3] = std::array::from_fn(|k| F::select(ok, sum[k] * rcp, zero));
+        let (nv, wind) = vnormal_lanes(sd, &faces6, w, c);
         out.store(NORMAL, o + i0, &nv);
         out.store(FORCE, o + i0, &wind);
     }

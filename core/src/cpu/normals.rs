@@ -6,8 +6,10 @@ use glam::Vec3;
 use rayon::prelude::*;
 use wide::f32x8;
 
+use super::simd::{F, Lanewise, Simd, dispatch, groups, leftover};
 use super::{Exec, LANES, Lanes, for_each, for_each2, v3, v4};
 use crate::grid::{FACE_SLOTS, StepParams, V4};
+use pulp::Simd as Isa;
 
 /// Face normals `N` with `|N| = 2 · area(t)`; w holds `|N|`.
 pub fn tri_normals(exec: Exec, triangles: &[[u32; 3]], pos: &[V4], face: &mut [V4]) {
@@ -68,14 +70,6 @@ impl FaceLanes {
     pub fn get(&self, t: usize) -> V4 {
         let (q, k) = (t / 2, t % 2);
         [self.f[k][0][q], self.f[k][1][q], self.f[k][2][q], self.f[k][3][q]]
-    }
-
-    #[inline(always)]
-    fn lanes(&self, k: usize, q: usize) -> [f32x8; 4] {
-        std::array::from_fn(|c| {
-            let a: [f32; LANES] = self.f[k][c][q..q + LANES].try_into().expect("LANES elements");
-            f32x8::from(a)
-        })
     }
 }
 
@@ -144,8 +138,75 @@ pub fn tri_normals_lanes(exec: Exec, n: usize, lanes: &Lanes, out: &mut FaceLane
 
 type Quad4<'a> = ((&'a mut [f32], &'a mut [f32]), (&'a mut [f32], &'a mut [f32]));
 
-/// [`vertex_normals`] row by row from [`FaceLanes`], the interior of each row eight
-/// particles at a time. Bit-identical to [`vertex_normals`].
+/// The vertex normals and wind forces of one lane group from its six faces (x, y, z,
+/// |N| each, in the face slots' order): [`vnormal_at`]'s arithmetic, lane by lane.
+#[inline(always)]
+pub(crate) fn vnormal_lanes<S: Isa>(sd: S, faces6: &[[F<S>; 4]; 6], w: Vec3, c: f32) -> ([F<S>; 3], [F<S>; 3]) {
+    let zero = F::splat(sd, 0.0);
+    let (wl, cl) = ([F::splat(sd, w.x), F::splat(sd, w.y), F::splat(sd, w.z)], F::splat(sd, c));
+    let windy = c != 0.0 && w != Vec3::ZERO;
+    let mut sum = [zero; 3];
+    let mut wind = [zero; 3];
+    for f4 in faces6 {
+        for k in 0..3 {
+            sum[k] += f4[k];
+        }
+        // No wind (c = 0 or w = 0) adds exact zeros: skip the division.
+        if !windy {
+            continue;
+        }
+        let dot = f4[0] * wl[0] + f4[1] * wl[1] + f4[2] * wl[2];
+        let q = cl * dot / f4[3];
+        let live = f4[3].gt(zero);
+        for k in 0..3 {
+            wind[k] += F::select(live, f4[k] * q, zero);
+        }
+    }
+    let rcp = F::splat(sd, 1.0) / (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
+    let ok = rcp.lt(F::splat(sd, f32::INFINITY)) & rcp.gt(zero);
+    (sum.map(|v| F::select(ok, v * rcp, zero)), wind)
+}
+
+/// One row of [`vertex_normals_rows`], at the width `dispatch` picks.
+struct VertexRow<'a> {
+    j: usize,
+    n: usize,
+    faces: &'a FaceLanes,
+    face_slots: &'a [[i32; FACE_SLOTS]],
+    wind: (Vec3, f32),
+    nrow: &'a mut [V4],
+    frow: &'a mut [V4],
+}
+
+impl Lanewise for VertexRow<'_> {
+    type Out = ();
+    #[inline(always)]
+    fn run<S: Isa>(self, sd: S) {
+        let Self { j, n, faces, face_slots, wind: (w, c), nrow, frow } = self;
+        let m = n - 1;
+        let lanes = S::F32_LANES;
+        let interior = j >= 1 && j + 1 < n;
+        let (lo, hi) = if interior { (1, n - 1) } else { (0, 0) };
+        for i0 in groups(lo, hi, lanes) {
+            // Quads (i-1, j-1), (i, j-1), (i-1, j), (i, j) for i = i0 .. i0 + lanes.
+            let (qa, qb, qc, qd) = ((j - 1) * m + i0 - 1, (j - 1) * m + i0, j * m + i0 - 1, j * m + i0);
+            let at = |t: usize, q: usize| std::array::from_fn(|c| F::load(sd, &faces.f[t][c], q));
+            let faces6 = [at(0, qa), at(1, qa), at(0, qb), at(1, qc), at(0, qd), at(1, qd)];
+            let (nv, wv) = vnormal_lanes(sd, &faces6, w, c);
+            for k in 0..lanes {
+                nrow[i0 + k] = [nv[0].lane(k), nv[1].lane(k), nv[2].lane(k), 0.0];
+                frow[i0 + k] = [wv[0].lane(k), wv[1].lane(k), wv[2].lane(k), 0.0];
+            }
+        }
+        let edges = if interior { vec![0, n - 1] } else { (0..n).collect() };
+        for i in leftover(lo, hi, lanes).chain(edges) {
+            (nrow[i], frow[i]) = vnormal_at(&face_slots[j * n + i], |t| faces.get(t), w, c);
+        }
+    }
+}
+
+/// [`vertex_normals`] row by row from [`FaceLanes`], the interior of each row in lanes
+/// of the widest instruction set this CPU has. Bit-identical to [`vertex_normals`].
 pub fn vertex_normals_rows(
     exec: Exec,
     p: &StepParams,
@@ -155,57 +216,10 @@ pub fn vertex_normals_rows(
     force: &mut [V4],
 ) {
     let n = p.n as usize;
-    let m = n - 1;
-    let w = v3(p.wind);
-    let c = p.wind[3] / 6.0;
-    let windy = c != 0.0 && w != Vec3::ZERO;
-    let scalar = |i: usize| vnormal_at(&face_slots[i], |t| faces.get(t), w, c);
-    let (wl, cl, zero) = ([f32x8::splat(w.x), f32x8::splat(w.y), f32x8::splat(w.z)], f32x8::splat(c), f32x8::ZERO);
+    let simd = Simd::detect();
+    let wind = (v3(p.wind), p.wind[3] / 6.0);
     let row = |j: usize, nrow: &mut [V4], frow: &mut [V4]| {
-        let base = j * n;
-        let interior = j >= 1 && j + 1 < n && n > 2;
-        let groups = if interior { (n - 2) / LANES } else { 0 };
-        for g in 0..groups {
-            let i0 = 1 + g * LANES;
-            // Quads (i-1, j-1), (i, j-1), (i-1, j), (i, j) for i = i0 .. i0 + LANES.
-            let (qa, qb, qc, qd) = ((j - 1) * m + i0 - 1, (j - 1) * m + i0, j * m + i0 - 1, j * m + i0);
-            let faces6 = [
-                faces.lanes(0, qa),
-                faces.lanes(1, qa),
-                faces.lanes(0, qb),
-                faces.lanes(1, qc),
-                faces.lanes(0, qd),
-                faces.lanes(1, qd),
-            ];
-            let mut sum = [zero; 3];
-            let mut wind = [zero; 3];
-            for f4 in &faces6 {
-                for k in 0..3 {
-                    sum[k] += f4[k];
-                }
-                if !windy {
-                    continue;
-                }
-                let dot = f4[0] * wl[0] + f4[1] * wl[1] + f4[2] * wl[2];
-                let q = cl * dot / f4[3];
-                let live = f4[3].simd_gt(zero);
-                for k in 0..3 {
-                    wind[k] += live.bitselect(f4[k] * q, zero);
-                }
-            }
-            let rcp = f32x8::ONE / (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
-            let ok = rcp.simd_lt(f32x8::splat(f32::INFINITY)) & rcp.simd_gt(zero);
-            let nv: [[f32; LANES]; 3] = std::array::from_fn(|k| ok.bitselect(sum[k] * rcp, zero).to_array());
-            let wv: [[f32; LANES]; 3] = std::array::from_fn(|k| wind[k].to_array());
-            for k in 0..LANES {
-                nrow[i0 + k] = [nv[0][k], nv[1][k], nv[2][k], 0.0];
-                frow[i0 + k] = [wv[0][k], wv[1][k], wv[2][k], 0.0];
-            }
-        }
-        let done = if interior { 1..1 + groups * LANES } else { 0..0 };
-        for i in (0..n).filter(|i| !done.contains(i)) {
-            (nrow[i], frow[i]) = scalar(base + i);
-        }
+        dispatch(simd, VertexRow { j, n, faces, face_slots, wind, nrow, frow });
     };
     match exec {
         Exec::Serial => normal.chunks_mut(n).zip(force.chunks_mut(n)).enumerate().for_each(|(j, (a, b))| row(j, a, b)),
