@@ -30,7 +30,7 @@ use rayon::prelude::*;
 use super::collide::collide_at;
 use super::forces::{forces_at, forces_consts};
 use super::integrate::integrate_at;
-use super::normals::{vnormal_at, vnormal_lanes};
+use super::normals::{cross_len, quad_normals, vnormal_at, vnormal_lanes};
 use super::simd::{F, Lanewise, M, Simd, dispatch, groups, leftover};
 use super::springs::{GridSlots, gather_at};
 use super::strain_limit::limit_at;
@@ -663,17 +663,6 @@ fn stage_strain<S: Isa>(
     }
 }
 
-/// `(b − a) × (c − a)` and its length, lane-wise, in glam's operation order.
-#[inline(always)]
-fn cross_len<S: Isa>(a: &[F<S>; 3], b: &[F<S>; 3], c: &[F<S>; 3]) -> [F<S>; 4] {
-    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    let x = u[1] * v[2] - v[1] * u[2];
-    let y = u[2] * v[0] - v[2] * u[0];
-    let z = u[0] * v[1] - v[0] * u[1];
-    [x, y, z, (x * x + y * y + z * z).sqrt()]
-}
-
 /// `tri_normals` for quad row `q` from the final positions `src` into `faces`.
 #[inline(always)]
 fn stage_tri<S: Isa>(sd: S, n: usize, src: &Ring, faces: &mut Ring, q: usize) {
@@ -690,11 +679,9 @@ fn stage_tri<S: Isa>(sd: S, n: usize, src: &Ring, faces: &mut Ring, q: usize) {
     }
     let at = |r: usize, i: usize| Vec3::new(src.get(r, 0, i), src.get(r, 1, i), src.get(r, 2, i));
     for qi in leftover(0, m, S::F32_LANES) {
-        let (p00, p10, p01, p11) = (at(q, qi), at(q, qi + 1), at(q + 1, qi), at(q + 1, qi + 1));
-        let t0 = (p01 - p00).cross(p11 - p00);
-        let t1 = (p11 - p00).cross(p10 - p00);
-        faces.put4(q, 0, qi, [t0.x, t0.y, t0.z, t0.length()]);
-        faces.put4(q, 4, qi, [t1.x, t1.y, t1.z, t1.length()]);
+        let [t0, t1] = quad_normals(at(q, qi), at(q, qi + 1), at(q + 1, qi), at(q + 1, qi + 1));
+        faces.put4(q, 0, qi, t0);
+        faces.put4(q, 4, qi, t1);
     }
 }
 

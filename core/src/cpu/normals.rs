@@ -4,10 +4,9 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
-use wide::f32x8;
 
 use super::simd::{F, Lanewise, Simd, dispatch, groups, leftover};
-use super::{Exec, LANES, Lanes, for_each, for_each2, v3, v4};
+use super::{Exec, Lanes, for_each, for_each2, v3, v4};
 use crate::grid::{FACE_SLOTS, StepParams, V4};
 use pulp::Simd as Isa;
 
@@ -73,9 +72,9 @@ impl FaceLanes {
     }
 }
 
-/// `(b - a) × (c - a)` and its length, lane-wise, in glam's operation order.
+/// `(b − a) × (c − a)` and its length, lane-wise, in glam's operation order.
 #[inline(always)]
-fn cross_len(a: &[f32x8; 3], b: &[f32x8; 3], c: &[f32x8; 3]) -> [f32x8; 4] {
+pub(crate) fn cross_len<S: Isa>(a: &[F<S>; 3], b: &[F<S>; 3], c: &[F<S>; 3]) -> [F<S>; 4] {
     let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
     let x = u[1] * v[2] - v[1] * u[2];
@@ -84,39 +83,59 @@ fn cross_len(a: &[f32x8; 3], b: &[f32x8; 3], c: &[f32x8; 3]) -> [f32x8; 4] {
     [x, y, z, (x * x + y * y + z * z).sqrt()]
 }
 
-/// [`tri_normals`] for a regular grid into [`FaceLanes`], eight quads at a time;
+/// The two face normals of quad `(i, j)` (corners `p00 = (i, j)`, `p10`, `p01`, `p11`),
+/// each `[x, y, z, |N|]`: [`tri_normals`]' arithmetic.
+#[inline(always)]
+pub(crate) fn quad_normals(p00: Vec3, p10: Vec3, p01: Vec3, p11: Vec3) -> [V4; 2] {
+    let t0 = (p01 - p00).cross(p11 - p00);
+    let t1 = (p11 - p00).cross(p10 - p00);
+    [v4(t0, t0.length()), v4(t1, t1.length())]
+}
+
+/// One quad row of [`tri_normals_lanes`], at the width `dispatch` picks.
+struct TriRow<'a> {
+    qj: usize,
+    n: usize,
+    pos: &'a [Vec<f32>; 4],
+    out: [&'a mut [f32]; 8],
+}
+
+impl Lanewise for TriRow<'_> {
+    type Out = ();
+    #[inline(always)]
+    fn run<S: Isa>(self, sd: S) {
+        let Self { qj, n, pos, mut out } = self;
+        let (m, base) = (n - 1, qj * n);
+        for qi in groups(0, m, S::F32_LANES) {
+            let at = |k: usize| std::array::from_fn(|c| F::load(sd, &pos[c], k));
+            let (p00, p10, p01, p11) = (at(base + qi), at(base + qi + 1), at(base + n + qi), at(base + n + qi + 1));
+            for (c, v) in cross_len(&p00, &p01, &p11).into_iter().chain(cross_len(&p00, &p11, &p10)).enumerate() {
+                v.store(out[c], qi);
+            }
+        }
+        let at = |i: usize| Vec3::new(pos[0][i], pos[1][i], pos[2][i]);
+        for qi in leftover(0, m, S::F32_LANES) {
+            let k = base + qi;
+            let t = quad_normals(at(k), at(k + 1), at(k + n), at(k + n + 1));
+            for (c, o) in out.iter_mut().enumerate() {
+                o[qi] = t[c / 4][c % 4];
+            }
+        }
+    }
+}
+
+/// [`tri_normals`] for a regular grid into [`FaceLanes`], in lanes of the widest
+/// instruction set this CPU has;
 /// `lanes` must hold the positions. Bit-identical to [`tri_normals`].
 pub fn tri_normals_lanes(exec: Exec, n: usize, lanes: &Lanes, out: &mut FaceLanes) {
     let m = n - 1;
     for v in out.f.iter_mut().flatten() {
         v.resize(m * m, 0.0);
     }
+    let simd = Simd::detect();
     let [[a0, a1, a2, a3], [b0, b1, b2, b3]] = &mut out.f;
     let row = |qj: usize, ((a0, a1), (a2, a3)): Quad4, ((b0, b1), (b2, b3)): Quad4| {
-        let base = qj * n;
-        let groups = m / LANES;
-        let mut put = |qi: usize, t0: [f32; 4], t1: [f32; 4]| {
-            (a0[qi], a1[qi], a2[qi], a3[qi]) = (t0[0], t0[1], t0[2], t0[3]);
-            (b0[qi], b1[qi], b2[qi], b3[qi]) = (t1[0], t1[1], t1[2], t1[3]);
-        };
-        for g in 0..groups {
-            let p00 = lanes.pos3(base + g * LANES);
-            let p10 = lanes.pos3(base + g * LANES + 1);
-            let p01 = lanes.pos3(base + n + g * LANES);
-            let p11 = lanes.pos3(base + n + g * LANES + 1);
-            let t0 = cross_len(&p00, &p01, &p11).map(|v| v.to_array());
-            let t1 = cross_len(&p00, &p11, &p10).map(|v| v.to_array());
-            for k in 0..LANES {
-                put(g * LANES + k, std::array::from_fn(|c| t0[c][k]), std::array::from_fn(|c| t1[c][k]));
-            }
-        }
-        let at = |i: usize| Vec3::new(lanes.pos[0][i], lanes.pos[1][i], lanes.pos[2][i]);
-        for qi in groups * LANES..m {
-            let (p00, p10, p01, p11) = (at(base + qi), at(base + qi + 1), at(base + n + qi), at(base + n + qi + 1));
-            let t0 = (p01 - p00).cross(p11 - p00);
-            let t1 = (p11 - p00).cross(p10 - p00);
-            put(qi, v4(t0, t0.length()), v4(t1, t1.length()));
-        }
+        dispatch(simd, TriRow { qj, n, pos: &lanes.pos, out: [a0, a1, a2, a3, b0, b1, b2, b3] });
     };
     match exec {
         Exec::Serial => a0
