@@ -34,7 +34,7 @@ use super::normals::{cross_len, quad_normals, vnormal_at, vnormal_lanes};
 use super::simd::{F, Lanewise, M, Simd, dispatch, groups, leftover};
 use super::springs::{GridSlots, gather_at};
 use super::strain_limit::limit_at;
-use super::{Exec, v3};
+use super::{Exec, Fetch, v3};
 use crate::grid::{
     ClothState, FACE_SLOTS, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4,
 };
@@ -184,22 +184,37 @@ impl Soa {
     /// Writes the state to `st` (w of `prev`, force and normal 0, as every kernel leaves
     /// it).
     pub(crate) fn store(&self, exec: Exec, st: &mut ClothState) {
+        const CHUNK: usize = 4096;
         let c = &self.c;
-        let at =
-            |k: usize, c0: usize, w: Option<usize>| [c[c0][k], c[c0 + 1][k], c[c0 + 2][k], w.map_or(0.0, |w| c[w][k])];
-        let bufs = [
-            (&mut st.pos, POS, Some(POS + 3)),
-            (&mut st.prev, PREV, None),
-            (&mut st.force, FORCE, None),
-            (&mut st.normal, NORMAL, None),
-        ];
-        match exec {
-            Exec::Serial => {
-                bufs.into_iter().for_each(|(b, c0, w)| b.iter_mut().enumerate().for_each(|(k, o)| *o = at(k, c0, w)))
+        // Zipped slices, so that the loops have no bounds checks and vectorise.
+        let put = |dst: &mut [V4], x: &[f32], y: &[f32], z: &[f32], w: Option<&[f32]>| match w {
+            Some(w) => {
+                for ((((o, x), y), z), w) in dst.iter_mut().zip(x).zip(y).zip(z).zip(w) {
+                    *o = [*x, *y, *z, *w];
+                }
             }
-            Exec::Parallel => bufs.into_par_iter().for_each(|(b, c0, w)| {
-                b.par_iter_mut().with_min_len(4096).enumerate().for_each(|(k, o)| *o = at(k, c0, w))
-            }),
+            None => {
+                for (((o, x), y), z) in dst.iter_mut().zip(x).zip(y).zip(z) {
+                    *o = [*x, *y, *z, 0.0];
+                }
+            }
+        };
+        let bufs = [
+            (&mut st.pos, POS, true),
+            (&mut st.prev, PREV, false),
+            (&mut st.force, FORCE, false),
+            (&mut st.normal, NORMAL, false),
+        ];
+        for (dst, c0, has_w) in bufs {
+            let part = |(k, dst): (usize, &mut [V4])| {
+                let r = k * CHUNK..k * CHUNK + dst.len();
+                let w = has_w.then(|| &c[c0 + 3][r.clone()]);
+                put(dst, &c[c0][r.clone()], &c[c0 + 1][r.clone()], &c[c0 + 2][r], w)
+            };
+            match exec {
+                Exec::Serial => dst.chunks_mut(CHUNK).enumerate().for_each(part),
+                Exec::Parallel => dst.par_chunks_mut(CHUNK).enumerate().for_each(part),
+            }
         }
     }
 
@@ -384,13 +399,63 @@ fn load_row<S: Isa>(sd: S, s: &Step<'_>, input: &mut Ring, j: usize) {
     }
 }
 
+/// The old positions and previous positions, by particle.
+struct OldPos<'a>(&'a Step<'a>);
+struct OldPrev<'a>(&'a Step<'a>);
+
+impl Fetch for OldPos<'_> {
+    #[inline(always)]
+    fn at(&self, k: usize) -> V4 {
+        self.0.pos(k)
+    }
+}
+
+impl Fetch for OldPrev<'_> {
+    #[inline(always)]
+    fn at(&self, k: usize) -> V4 {
+        self.0.prev(k)
+    }
+}
+
+/// The previous stage's positions around row `j` (neighbours are within a row; a
+/// tether's pin anywhere is fixed: [`pin_at`]).
+struct RingFetch<'a> {
+    s: &'a Step<'a>,
+    src: &'a Ring,
+    j: usize,
+}
+
+impl Fetch for RingFetch<'_> {
+    #[inline(always)]
+    fn at(&self, k: usize) -> V4 {
+        let n = self.s.p.n as usize;
+        let r = k / n;
+        if r + 1 >= self.j && r <= self.j + 1 { self.src.get4(r, 0, k % n) } else { pin_at(self.s, k) }
+    }
+}
+
+/// Face normals by triangle, from the ring of quad rows.
+#[derive(Clone, Copy)]
+struct FaceFetch<'a> {
+    faces: &'a Ring,
+    m: usize,
+}
+
+impl Fetch for FaceFetch<'_> {
+    #[inline(always)]
+    fn at(&self, t: usize) -> V4 {
+        let (q, k) = (t / 2, t % 2);
+        self.faces.get4(q / self.m, 4 * k, q % self.m)
+    }
+}
+
 /// Stage A's scalar path for particle `k`: the twins themselves.
 #[inline(always)]
 fn a_scalar(s: &Step<'_>, k: usize) -> (V4, V4) {
     let (g, drag) = forces_consts(s.p);
     let f = forces_at(s.force(k), s.pos(k), s.prev(k), g, drag);
     let grid = GridSlots { n: s.p.n as usize, uni: s.uni };
-    finish_at(s, k, gather_at(k, 1.0 / s.p.dt, &grid, |b| s.pos(b), |b| s.prev(b), f))
+    finish_at(s, k, gather_at(k, 1.0 / s.p.dt, &grid, OldPos(s), OldPrev(s), f))
 }
 
 /// The twins' `integrate` then `collide` for particle `k` under force `f`.
@@ -552,11 +617,7 @@ fn mobility<S: Isa>(sd: S, src: &Ring, n: usize, grab: i32, row: usize, i: usize
 #[inline(always)]
 fn strain_scalar(s: &Step<'_>, src: &Ring, j: usize, i: usize) -> V4 {
     let n = s.p.n as usize;
-    let fetch = |k: usize| {
-        let r = k / n;
-        if r + 1 >= j && r <= j + 1 { src.get4(r, 0, k % n) } else { pin_at(s, k) }
-    };
-    limit_at(j * n + i, s.p, &GridSlots { n, uni: s.uni }, s.tethers, fetch)
+    limit_at(j * n + i, s.p, &GridSlots { n, uni: s.uni }, s.tethers, RingFetch { s, src, j })
 }
 
 /// One strain-limit pass for row `j`, from the previous stage `src` into `dst` (and,
@@ -693,10 +754,7 @@ fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, o: usize, out
     let m = n - 1;
     let w = v3(p.wind);
     let c = p.wind[3] / 6.0;
-    let face = |t: usize| {
-        let (q, k) = (t / 2, t % 2);
-        faces.get4(q / m, 4 * k, q % m)
-    };
+    let face = FaceFetch { faces, m };
     let scalar = |out: &mut Next<'_>, i: usize| {
         let (nrm, wind) = vnormal_at(&s.face_slots[r * n + i], face, w, c);
         out.put(NORMAL, 3, o + i, nrm);

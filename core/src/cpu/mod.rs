@@ -121,6 +121,22 @@ pub(crate) fn store3(buf: &mut [V4], v: &[wide::f32x8; 3]) {
     }
 }
 
+/// Particles (or faces) read by index: a buffer, a closure, or the fused sweep's rings.
+/// A trait rather than `Fn` so that the sweep's readers can be `#[inline(always)]` (a
+/// closure is a function of its own, which LLVM did not always inline into the sweep's
+/// wide-vector code).
+pub(crate) trait Fetch {
+    /// Element `k`.
+    fn at(&self, k: usize) -> V4;
+}
+
+impl<F: Fn(usize) -> V4> Fetch for F {
+    #[inline(always)]
+    fn at(&self, k: usize) -> V4 {
+        self(k)
+    }
+}
+
 #[inline(always)]
 pub(crate) fn v3(a: V4) -> Vec3 {
     Vec3::new(a[0], a[1], a[2])

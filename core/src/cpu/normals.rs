@@ -6,7 +6,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::simd::{F, Lanewise, Simd, dispatch, groups, leftover};
-use super::{Exec, Lanes, for_each, for_each2, v3, v4};
+use super::{Exec, Fetch, Lanes, for_each, for_each2, v3, v4};
 use crate::grid::{FACE_SLOTS, StepParams, V4};
 use pulp::Simd as Isa;
 
@@ -37,14 +37,14 @@ pub fn vertex_normals(
 
 /// Normal and wind force of a particle whose faces are `slots`, read through `fetch`.
 #[inline(always)]
-pub(crate) fn vnormal_at(slots: &[i32; FACE_SLOTS], fetch: impl Fn(usize) -> V4, w: Vec3, c: f32) -> (V4, V4) {
+pub(crate) fn vnormal_at(slots: &[i32; FACE_SLOTS], fetch: impl Fetch, w: Vec3, c: f32) -> (V4, V4) {
     let mut sum = Vec3::ZERO;
     let mut wind = Vec3::ZERO;
     for &t in slots {
         if t < 0 {
             continue;
         }
-        let f4 = fetch(t as usize);
+        let f4 = fetch.at(t as usize);
         let nf = v3(f4);
         sum += nf;
         // No wind (c = 0 or w = 0) adds exact zeros: skip the division.

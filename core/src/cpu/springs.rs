@@ -5,7 +5,7 @@ use glam::Vec3;
 use wide::f32x8;
 
 use super::forces::{forces_at, forces_consts};
-use super::{Exec, LANES, Lanes, for_each, load3, store3, v3, v4};
+use super::{Exec, Fetch, LANES, Lanes, for_each, load3, store3, v3, v4};
 use crate::grid::{SLOT_OFFSETS, SLOTS, Spring, SpringSlot, StepParams, V4};
 
 /// Where a particle's spring slots come from: the table, or (for the fused sweep) the
@@ -66,12 +66,12 @@ pub(crate) fn gather_at(
     i: usize,
     inv_dt: f32,
     slots: &(impl SlotSource + ?Sized),
-    pos: impl Fn(usize) -> V4,
-    prev: impl Fn(usize) -> V4,
+    pos: impl Fetch,
+    prev: impl Fetch,
     f: V4,
 ) -> V4 {
-    let xa = v3(pos(i));
-    let va = xa - v3(prev(i));
+    let xa = v3(pos.at(i));
+    let va = xa - v3(prev.at(i));
     let mut acc = v3(f);
     for s in 0..SLOTS {
         let s = &slots.slot(i, s);
@@ -79,8 +79,8 @@ pub(crate) fn gather_at(
             continue;
         }
         let b = s.neighbor as usize;
-        let xb = v3(pos(b));
-        let vb = xb - v3(prev(b));
+        let xb = v3(pos.at(b));
+        let vb = xb - v3(prev.at(b));
         acc += spring_force(xa - xb, va - vb, s, inv_dt);
     }
     v4(acc, 0.0)

@@ -20,7 +20,7 @@
 use wide::f32x8;
 
 use super::springs::SlotSource;
-use super::{Exec, LANES, Lanes, for_each, v3, v4};
+use super::{Exec, Fetch, LANES, Lanes, for_each, v3, v4};
 use crate::grid::{SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
 pub use crate::layout::STRAIN_AIM;
 
@@ -43,15 +43,15 @@ pub(crate) fn limit_at(
     p: &StepParams,
     slots: &(impl SlotSource + ?Sized),
     tethers: &[[Tether; TETHER_SLOTS]],
-    pos: impl Fn(usize) -> V4,
+    pos: impl Fetch,
 ) -> V4 {
     let stretch = 1.0 + p.strain_limit;
     let aim = 1.0 + STRAIN_AIM * p.strain_limit;
-    let mobility = |k: usize| if k as i32 == p.grab_index { 0.0 } else { pos(k)[3] };
-    let xi = v3(pos(i));
+    let mobility = |k: usize| if k as i32 == p.grab_index { 0.0 } else { pos.at(k)[3] };
+    let xi = v3(pos.at(i));
     let wi = mobility(i);
     if wi == 0.0 {
-        return pos(i);
+        return pos.at(i);
     }
     let mut corr = glam::Vec3::ZERO;
     let mut count = 0.0f32;
@@ -61,7 +61,7 @@ pub(crate) fn limit_at(
             continue;
         }
         let b = s.neighbor as usize;
-        let d = v3(pos(b)) - xi;
+        let d = v3(pos.at(b)) - xi;
         let len = d.length();
         if len > stretch * s.rest {
             let wb = mobility(b);
@@ -75,7 +75,7 @@ pub(crate) fn limit_at(
         if t.pin < 0 {
             continue;
         }
-        let pin = v3(pos(t.pin as usize));
+        let pin = v3(pos.at(t.pin as usize));
         let d = x - pin;
         let len = d.length();
         let max = stretch * t.rest;
@@ -83,7 +83,7 @@ pub(crate) fn limit_at(
             x = pin + d * (max / len);
         }
     }
-    v4(x, pos(i)[3])
+    v4(x, pos.at(i)[3])
 }
 
 /// [`strain_limit`] row by row, the interior of each row eight particles at a time when
