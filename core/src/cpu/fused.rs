@@ -575,7 +575,8 @@ fn inside<S: Isa>(sd: S, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], x: 
     let mut any = M::splat(sd, false);
     for sp in &spheres[..p.num_spheres as usize] {
         let r = sp.radius + p.margin;
-        let d: [F<S>; 3] = std::array::from_fn(|c| x[c] - F::splat(sd, sp.center[c]));
+        let c = sp.center;
+        let d = [x[0] - F::splat(sd, c[0]), x[1] - F::splat(sd, c[1]), x[2] - F::splat(sd, c[2])];
         any = any | (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).lt(F::splat(sd, r * r));
     }
     for b in &boxes[..p.num_boxes as usize] {
@@ -755,11 +756,21 @@ fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, o: usize, out
     let w = v3(p.wind);
     let c = p.wind[3] / 6.0;
     let face = FaceFetch { faces, m };
-    let scalar = |out: &mut Next<'_>, i: usize| {
+    // A function, not a closure: closures were left out of line, in baseline code.
+    #[inline(always)]
+    fn scalar(
+        s: &Step<'_>,
+        face: FaceFetch<'_>,
+        (r, o, w, c): (usize, usize, Vec3, f32),
+        out: &mut Next<'_>,
+        i: usize,
+    ) {
+        let n = s.p.n as usize;
         let (nrm, wind) = vnormal_at(&s.face_slots[r * n + i], face, w, c);
         out.put(NORMAL, 3, o + i, nrm);
         out.put(FORCE, 3, o + i, wind);
-    };
+    }
+    let scalar = |out: &mut Next<'_>, i: usize| scalar(s, face, (r, o, w, c), out, i);
     if !(r >= 1 && r + 1 < n) {
         for i in 0..n {
             scalar(out, i);
@@ -789,5 +800,10 @@ fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, o: usize, out
 
 #[inline(always)]
 fn faces_lanes<S: Isa>(sd: S, faces: &Ring, q: usize, c0: usize, qi: usize) -> [F<S>; 4] {
-    std::array::from_fn(|c| faces.lanes(sd, q, c0 + c, qi))
+    [
+        faces.lanes(sd, q, c0, qi),
+        faces.lanes(sd, q, c0 + 1, qi),
+        faces.lanes(sd, q, c0 + 2, qi),
+        faces.lanes(sd, q, c0 + 3, qi),
+    ]
 }

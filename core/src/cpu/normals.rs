@@ -107,7 +107,7 @@ impl Lanewise for TriRow<'_> {
         let Self { qj, n, pos, mut out } = self;
         let (m, base) = (n - 1, qj * n);
         for qi in groups(0, m, S::F32_LANES) {
-            let at = |k: usize| std::array::from_fn(|c| F::load(sd, &pos[c], k));
+            let at = |k: usize| [F::load(sd, &pos[0], k), F::load(sd, &pos[1], k), F::load(sd, &pos[2], k)];
             let (p00, p10, p01, p11) = (at(base + qi), at(base + qi + 1), at(base + n + qi), at(base + n + qi + 1));
             for (c, v) in cross_len(&p00, &p01, &p11).into_iter().chain(cross_len(&p00, &p11, &p10)).enumerate() {
                 v.store(out[c], qi);
@@ -183,7 +183,10 @@ pub(crate) fn vnormal_lanes<S: Isa>(sd: S, faces6: &[[F<S>; 4]; 6], w: Vec3, c: 
     }
     let rcp = F::splat(sd, 1.0) / (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
     let ok = rcp.lt(F::splat(sd, f32::INFINITY)) & rcp.gt(zero);
-    (sum.map(|v| F::select(ok, v * rcp, zero)), wind)
+    // Written out: `array::map` is not always inlined, and out of line it runs the
+    // vector instructions as calls.
+    let nrm = [F::select(ok, sum[0] * rcp, zero), F::select(ok, sum[1] * rcp, zero), F::select(ok, sum[2] * rcp, zero)];
+    (nrm, wind)
 }
 
 /// One row of [`vertex_normals_rows`], at the width `dispatch` picks.
@@ -209,7 +212,10 @@ impl Lanewise for VertexRow<'_> {
         for i0 in groups(lo, hi, lanes) {
             // Quads (i-1, j-1), (i, j-1), (i-1, j), (i, j) for i = i0 .. i0 + lanes.
             let (qa, qb, qc, qd) = ((j - 1) * m + i0 - 1, (j - 1) * m + i0, j * m + i0 - 1, j * m + i0);
-            let at = |t: usize, q: usize| std::array::from_fn(|c| F::load(sd, &faces.f[t][c], q));
+            let f = &faces.f;
+            let at = |t: usize, q: usize| {
+                [F::load(sd, &f[t][0], q), F::load(sd, &f[t][1], q), F::load(sd, &f[t][2], q), F::load(sd, &f[t][3], q)]
+            };
             let faces6 = [at(0, qa), at(1, qa), at(0, qb), at(1, qc), at(0, qd), at(1, qd)];
             let (nv, wv) = vnormal_lanes(sd, &faces6, w, c);
             for k in 0..lanes {
