@@ -8,7 +8,7 @@ use super::{
     AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_PASSES, build_hash, cg_alpha, cg_begin, cg_beta,
     cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, hash_buffers, implicit_finish, integrate,
     integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit_rows, tri_normals,
-    tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_pass,
+    tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_pass, xpbd_pass_rows,
 };
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
 use crate::params::{Integrator, SimParams};
@@ -255,7 +255,9 @@ impl CpuSolver {
         let e = self.exec;
         let on = self.time_kernels;
         let t0 = Instant::now();
-        let Self { state, topo, scratch, face, timer, scene, params, uniform, lanes, face_lanes, aux, cg, .. } = self;
+        let Self {
+            state, topo, scratch, face, timer, scene, params, uniform, lanes, face_lanes, aux, cg, grid, ..
+        } = self;
         let n = topo.n as usize;
         let fast = uniform.is_some();
         let ClothState { pos, prev, force, normal, .. } = state;
@@ -325,7 +327,11 @@ impl CpuSolver {
                     aux[..2].iter_mut().flatten().for_each(|v| *v = [0.0; 4]);
                     for _ in 0..params.xpbd_iterations {
                         for pass in 0..XPBD_PASSES.len() {
-                            xpbd_pass(&p, &topo.slots, pass, pos, prev, aux);
+                            if grid.is_some() {
+                                xpbd_pass_rows(e, &p, &topo.slots, pass, pos, prev, aux);
+                            } else {
+                                xpbd_pass(&p, &topo.slots, pass, pos, prev, aux);
+                            }
                         }
                     }
                     collide(e, &p, spheres, boxes, pos, prev)
