@@ -547,8 +547,7 @@ mod tests {
         // cloth so that every constraint moves, and a grabbed particle.
         for n in [3u32, 5, 8, 13, 40] {
             let (st, topo) = build(&Scene::with_n(n), &SimParams::default()).unwrap();
-            let mut params = SimParams::default();
-            params.xpbd_iterations = 2;
+            let params = SimParams::default();
             let grab = crate::grid::Grab { particle: n + 1, target: [0.1, 2.0, 0.3] };
             let p = StepParams::new(&params, &Scene::with_n(n), Some(grab));
             let jitter = |k: usize, c: usize| ((k * 7919 + c * 104729) % 1000) as f32 * 1e-4;
