@@ -231,18 +231,9 @@ pub fn xpbd_pass(
     prev: &[V4],
     lambda: &mut [Vec<V4>],
 ) {
-    let (s, colour) = XPBD_PASSES[pass];
     let (buf, c) = xpbd_lambda_home(pass);
-    let n = p.n;
     for a in 0..pos.len() {
-        if xpbd_colour(s, a as u32 % n, a as u32 / n) != colour {
-            continue;
-        }
-        let slot = slots[a * SLOTS + s];
-        if slot.neighbor < 0 || slot.ks <= 0.0 {
-            continue;
-        }
-        let b = slot.neighbor as usize;
+        let Some((slot, b)) = pass_spring(p, slots, pass, a) else { continue };
         let l = lambda[buf][a][c];
         if let Some((xa, xb, dl)) = xpbd_solve(p, &slot, a, b, pos[a], pos[b], prev[a], prev[b], l) {
             pos[a] = xa;
@@ -250,6 +241,19 @@ pub fn xpbd_pass(
             lambda[buf][a][c] = l + dl;
         }
     }
+}
+
+/// The spring pass `pass` solves at particle `a` (its first end), if any: the slot and
+/// the other end.
+#[inline(always)]
+fn pass_spring(p: &StepParams, slots: &[SpringSlot], pass: usize, a: usize) -> Option<(SpringSlot, usize)> {
+    let (s, colour) = XPBD_PASSES[pass];
+    let n = p.n as usize;
+    if xpbd_colour(s, (a % n) as u32, (a / n) as u32) != colour {
+        return None;
+    }
+    let slot = slots[a * SLOTS + s];
+    (slot.neighbor >= 0 && slot.ks > 0.0).then_some((slot, slot.neighbor as usize))
 }
 
 /// [`xpbd_pass`] on rayon's threads, for a grid whose every spring points at its slot's
@@ -267,26 +271,17 @@ pub fn xpbd_pass_rows(
     prev: &[V4],
     lambda: &mut [Vec<V4>],
 ) {
-    let (s, colour) = XPBD_PASSES[pass];
     let (buf, c) = xpbd_lambda_home(pass);
     let n = p.n as usize;
-    let dj = crate::grid::SLOT_OFFSETS[s].1.unsigned_abs() as usize;
+    let dj = crate::grid::SLOT_OFFSETS[XPBD_PASSES[pass].0].1.unsigned_abs() as usize;
     let (block, firsts, phases) = if dj == 0 { (1, 1, 1) } else { (2 * dj, dj, 2) };
     for phase in 0..phases {
         let skip = phase * dj * n;
         let solve = |(k, (xs, ls)): (usize, (&mut [V4], &mut [V4]))| {
             let start = skip + k * block * n;
             for r in 0..firsts.min(xs.len() / n) {
-                for i in 0..n {
-                    let a = start + r * n + i;
-                    if xpbd_colour(s, i as u32, (a / n) as u32) != colour {
-                        continue;
-                    }
-                    let slot = slots[a * SLOTS + s];
-                    if slot.neighbor < 0 || slot.ks <= 0.0 {
-                        continue;
-                    }
-                    let b = slot.neighbor as usize;
+                for a in start + r * n..start + (r + 1) * n {
+                    let Some((slot, b)) = pass_spring(p, slots, pass, a) else { continue };
                     let (la, lb) = (a - start, b - start);
                     let l = ls[la][c];
                     if let Some((xa, xb, dl)) = xpbd_solve(p, &slot, a, b, xs[la], xs[lb], prev[a], prev[b], l) {
