@@ -6,7 +6,7 @@
 
 use clothlab_core::grid::StepParams;
 use clothlab_core::layout::Buf;
-use clothlab_core::{Integrator, SolverError};
+use clothlab_core::{Integrator, SolverError, cpu};
 
 use crate::kernels::{self as k, Flavor, HostBuffers, KernelDef, KernelRef};
 
@@ -144,7 +144,7 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
         Integrator::Xpbd => {
             let mut v: Vec<&'static KernelDef> = vec![&k::FORCES, &k::INTEGRATE];
             for _ in 0..how.xpbd_iterations {
-                v.extend(k::XPBD.iter());
+                v.extend(cpu::XPBD_ORDER.iter().map(|&pass| &k::XPBD[pass]));
             }
             then(v, &[&k::COLLIDE])
         }
@@ -169,7 +169,8 @@ pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Co
         .flat_map(|d| run(d.flavor(flavor)))
         .collect();
     // XPBD's λ (aux0, aux1) starts from zero every substep: cleared before its first pass.
-    if let Some(first) = commands.iter().position(|c| c.kernel().is_some_and(|k| k.def == &k::XPBD[0])) {
+    if let Some(first) = commands.iter().position(|c| c.kernel().is_some_and(|k| k.def == &k::XPBD[cpu::XPBD_ORDER[0]]))
+    {
         commands.splice(first..first, [Command::Clear(Buf::Aux0), Command::Clear(Buf::Aux1)]);
     }
     commands

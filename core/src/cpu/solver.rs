@@ -5,7 +5,7 @@ use std::time::Instant;
 use super::fused::{self, Band, Soa, TetherLanes};
 use super::simd::Simd;
 use super::{
-    AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_PASSES, build_hash, cg_alpha, cg_begin, cg_beta,
+    AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_ORDER, build_hash, cg_alpha, cg_begin, cg_beta,
     cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, hash_buffers, implicit_finish, integrate,
     integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit_rows, tri_normals,
     tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_pass, xpbd_pass_rows,
@@ -326,7 +326,7 @@ impl CpuSolver {
                     // λ per spring, from zero every substep (the recipe's clears).
                     aux[..2].iter_mut().flatten().for_each(|v| *v = [0.0; 4]);
                     for _ in 0..params.xpbd_iterations {
-                        for pass in 0..XPBD_PASSES.len() {
+                        for pass in XPBD_ORDER {
                             if grid.is_some() {
                                 xpbd_pass_rows(e, &p, &topo.slots, pass, pos, prev, aux);
                             } else {
