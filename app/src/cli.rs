@@ -232,7 +232,9 @@ fn parse_integrator(s: &str) -> Result<clothlab_core::Integrator, String> {
 pub const SET_VARIANT_HELP: &str = "GPU backends: change one switch of the variant, KEY=VALUE (repeatable). \
 The switches (values in ladder order, the naive one first):
   springs=scatter|gather          spring forces per spring with atomics, or per particle
-  normals=scatter|gather          vertex normals per triangle with atomics, or per vertex
+  normals=scatter|gather|frame    vertex normals per triangle with atomics, or per vertex,
+                                  every substep; or once per frame, the wind in the
+                                  forces gather (needs fusion=clothlab)
   atomics=float|cas               the scatters' atomics: float add, or compare-exchange
   fusion=none|thesis|clothlab     no fusion; the thesis's forces+Verlet+collisions;
                                   clothlab's forces+springs and integrate+collide

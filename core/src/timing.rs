@@ -52,6 +52,9 @@ impl KernelId {
 
 /// Label of the CPU solvers' fused `forces` + `springs` sweep.
 pub const FORCES_SPRINGS: &str = "forces+springs";
+/// Label of the forces + springs gather that computes the wind of its faces itself
+/// (`normals=frame`).
+pub const FORCES_SPRINGS_WIND: &str = "forces+springs+wind";
 /// Label of the CPU solvers' fused `integrate` + `collide` sweep.
 pub const INTEGRATE_COLLIDE: &str = "integrate+collide";
 /// Label of the thesis's fused `forces` + `integrate` + `collide` kernel.

@@ -14,7 +14,7 @@ use clothlab_core::{SimParams, Solver, SolverError};
 
 use crate::kernels::{HostBuffers, KernelRef, TwinArgs};
 use crate::recipe::KernelRunner;
-use crate::recipe::{Command, Integration, Variant, kernels_of, recipe};
+use crate::recipe::{Command, Integration, Variant, frame_end, kernels_of, recipe};
 
 /// Runs commands through the twins.
 #[derive(Debug, Clone)]
@@ -118,6 +118,8 @@ pub struct RecipeSolver {
     grab: Option<Grab>,
     bufs: HostBuffers,
     commands: Vec<Command>,
+    /// What runs once after a frame's last substep.
+    end: Vec<Command>,
     timer: TimingRecorder,
 }
 
@@ -131,8 +133,9 @@ impl RecipeSolver {
         let sp = StepParams::new(&params, &engine.scene, None);
         let bufs = start_buffers(exec, &sp, &engine.topo, &state);
         let commands = recipe(&variant, params.strain_iterations, Integration::of(&params));
+        let end = frame_end(&variant, Integration::of(&params));
         let name = variant.solver_name("cpu-recipe");
-        Ok(Self { engine, name, variant, params, grab: None, bufs, commands, timer: TimingRecorder::default() })
+        Ok(Self { engine, name, variant, params, grab: None, bufs, commands, end, timer: TimingRecorder::default() })
     }
 
     /// The commands of one substep.
@@ -140,9 +143,16 @@ impl RecipeSolver {
         &self.commands
     }
 
-    /// The distinct kernels of a substep.
+    /// What runs once after a frame's last substep.
+    pub fn frame_end(&self) -> &[Command] {
+        &self.end
+    }
+
+    /// The distinct kernels of a substep, then those of the frame's end.
     pub fn kernels(&self) -> Vec<KernelRef> {
-        kernels_of(&self.commands)
+        let mut v = kernels_of(&self.commands);
+        v.extend(kernels_of(&self.end).into_iter().filter(|k| !v.contains(k)).collect::<Vec<_>>());
+        v
     }
 
     /// The engine.
@@ -174,6 +184,7 @@ impl Solver for RecipeSolver {
         clothlab_core::grid::rescale_history(&self.bufs.pos, &mut self.bufs.prev, self.params.dt(), params.dt());
         self.engine.set_spring_constants(&params);
         self.commands = recipe(&self.variant, params.strain_iterations, Integration::of(&params));
+        self.end = frame_end(&self.variant, Integration::of(&params));
         self.params = params;
         Ok(())
     }
@@ -195,6 +206,10 @@ impl Solver for RecipeSolver {
                 }
             }
             self.timer.record(SUBSTEP, t_substep.elapsed().as_nanos() as f64);
+        }
+        let last = self.params.substeps.saturating_sub(1);
+        for c in &self.end {
+            self.engine.command(c, &p, last, &mut self.bufs);
         }
         self.timer.record(FRAME, t_frame.elapsed().as_nanos() as f64);
         Ok(())

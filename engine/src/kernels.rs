@@ -511,6 +511,18 @@ fn forces_springs(a: &TwinArgs, b: &mut HostBuffers) {
     springs(a, b);
 }
 
+/// The wind of the faces around each particle, computed from the positions as
+/// `tri_normals` and `vertex_normals` compute it, then `forces_springs` from it: the force
+/// the three kernels leave, without the face and vertex normals (the kernel keeps those in
+/// registers).
+fn forces_springs_wind(a: &TwinArgs, b: &mut HostBuffers) {
+    let mut faces = vec![[0.0; 4]; a.topo.triangles.len()];
+    cpu::tri_normals(a.exec, &a.topo.triangles, &b.pos, &mut faces);
+    let mut normal = vec![[0.0; 4]; b.pos.len()];
+    cpu::vertex_normals(a.exec, a.p, &a.topo.face_slots, &faces, &mut normal, &mut b.force);
+    forces_springs(a, b);
+}
+
 fn springs_scatter(a: &TwinArgs, b: &mut HostBuffers) {
     cpu::springs_scatter(a.p.dt, &a.topo.springs, &b.pos, &b.prev, &mut b.force);
 }
@@ -854,6 +866,21 @@ pub static FORCES_SPRINGS: KernelDef = KernelDef {
     variants: BLOCKED,
     ..def("forces_springs", forces_springs, Count::Blocks, TABLE, &[Force])
 };
+/// `forces_springs` with the wind of the faces around each particle computed from the
+/// positions the gather loads anyway (`normals=frame`): the force buffer is only written.
+pub static FORCES_SPRINGS_WIND: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[Force],
+    label: timing::FORCES_SPRINGS_WIND,
+    variants: BLOCKED,
+    ..def(
+        "forces_springs_wind",
+        forces_springs_wind,
+        Count::Blocks,
+        &[Params, Pos, Prev, Slots, BendSlots, Interior, Table, Triangles, FaceSlots],
+        &[Force],
+    )
+};
 /// Verlet, pins, the grab and the floor.
 pub static INTEGRATE: KernelDef = def("integrate", integrate, Count::Particles, STATE, &[Pos, Prev]);
 /// Spheres and boxes.
@@ -1154,11 +1181,12 @@ pub static SELF_COLLISION: [&KernelDef; 7] =
     [&HASH_COUNT, &HASH_SCAN_BLOCKS, &HASH_SCAN_TOP, &HASH_SCAN_ADD, &HASH_SCATTER, &HASH_SORT, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 50] = [
+pub static ALL: [&KernelDef; 51] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
     &FORCES_SPRINGS,
+    &FORCES_SPRINGS_WIND,
     &INTEGRATE,
     &COLLIDE,
     &INTEGRATE_COLLIDE,

@@ -10,7 +10,7 @@ use clothlab_core::{Integrator, SolverError, cpu};
 
 use crate::kernels::{self as k, Flavor, HostBuffers, KernelDef, KernelRef};
 
-use crate::variant::{Accumulate, Fusion};
+use crate::variant::{Accumulate, Fusion, Normals};
 pub use crate::variant::{Caps, Variant};
 
 /// One command of a recipe.
@@ -129,6 +129,9 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
         Integrator::Verlet | Integrator::SymplecticEuler => match variant.fusion {
             Fusion::None => vec![&k::FORCES, springs, &k::INTEGRATE, &k::COLLIDE],
             Fusion::Thesis => vec![springs, &k::FORCES_INTEGRATE_COLLIDE],
+            Fusion::Clothlab if normals_at_frame_end(variant, how) => {
+                vec![&k::FORCES_SPRINGS_WIND, &k::INTEGRATE_COLLIDE]
+            }
             Fusion::Clothlab => vec![&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE],
         },
         Integrator::Euler => then(eval, &[&k::EULER, &k::COLLIDE]),
@@ -151,21 +154,37 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
     }
 }
 
+/// Whether `variant` integrated by `how` computes the normals once per frame
+/// (`normals=frame` where the forces gather computes the wind itself: Verlet and
+/// symplectic Euler fused by clothlab; the other integrators' force kernels read the
+/// wind that the normals kernels leave in the force buffer every substep).
+fn normals_at_frame_end(variant: &Variant, how: Integration) -> bool {
+    variant.normals == Normals::Frame
+        && variant.fusion == Fusion::Clothlab
+        && matches!(how.integrator, Integrator::Verlet | Integrator::SymplecticEuler)
+}
+
+/// The normals kernels of `variant`: scattered, or gathered.
+fn normals_kernels(variant: &Variant) -> [&'static KernelDef; 2] {
+    match variant.normals {
+        Normals::Scatter => [&k::TRI_NORMALS_SCATTER, &k::VERTEX_NORMALS_NAIVE],
+        Normals::Gather | Normals::Frame => [&k::TRI_NORMALS, &k::VERTEX_NORMALS],
+    }
+}
+
 /// The commands of one substep for `variant` with `strain_passes` strain passes,
 /// integrated by `how`, each kernel in the flavor the variant's switches pick (see
-/// [`Variant::flavor`]).
+/// [`Variant::flavor`]). What runs once after a frame's last substep is [`frame_end`].
 pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Command> {
     let step = integration(variant, how);
-    let normals: [&'static KernelDef; 2] = match variant.normals {
-        Accumulate::Scatter => [&k::TRI_NORMALS_SCATTER, &k::VERTEX_NORMALS_NAIVE],
-        Accumulate::Gather => [&k::TRI_NORMALS, &k::VERTEX_NORMALS],
-    };
+    let normals: &[&'static KernelDef] =
+        if normals_at_frame_end(variant, how) { &[] } else { &normals_kernels(variant) };
     let flavor = variant.flavor();
     let mut commands: Vec<Command> = step
         .into_iter()
         .chain((0..strain_passes).map(|_| &k::STRAIN_LIMIT))
         .chain(k::SELF_COLLISION.iter().copied().filter(|_| how.self_collision))
-        .chain(normals)
+        .chain(normals.iter().copied())
         .flat_map(|d| run(d.flavor(flavor)))
         .collect();
     // XPBD's λ (aux0, aux1) starts from zero every substep: cleared before its first pass.
@@ -176,11 +195,24 @@ pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Co
     commands
 }
 
+/// The commands that run once after the last substep of a frame: the normals with
+/// `normals=frame` (for drawing, and the state a frame leaves: normals and the wind force
+/// of the final positions, as every other recipe leaves them); nothing otherwise.
+pub fn frame_end(variant: &Variant, how: Integration) -> Vec<Command> {
+    if !normals_at_frame_end(variant, how) {
+        return Vec::new();
+    }
+    let flavor = variant.flavor();
+    normals_kernels(variant).iter().flat_map(|d| run(d.flavor(flavor))).collect()
+}
+
 /// The shaders a solver of `variant` builds when it starts: what its recipe dispatches,
 /// and the plain flavor of every kernel of the step (so that each can be validated). The
 /// statistics kernels are built with their option.
 pub fn kernels_for(variant: &Variant) -> Vec<KernelRef> {
-    let mut v = kernels_of(&recipe(variant, 1, Integration::VERLET));
+    let mut commands = recipe(variant, 1, Integration::VERLET);
+    commands.extend(frame_end(variant, Integration::VERLET));
+    let mut v = kernels_of(&commands);
     for def in k::ALL.iter().filter(|d| d.immediates == k::Immediates::None) {
         if !v.contains(&def.plain()) {
             v.push(def.plain());
@@ -444,5 +476,25 @@ mod tests {
             names(&Variant::THESIS),
             ["springs_scatter_f32", "forces_integrate_collide_cu", "strain_limit_tex", "tri_normals", "vertex_normals"]
         );
+    }
+
+    #[test]
+    fn normals_once_per_frame_leave_the_substep_to_the_wind_gather_where_the_integrator_allows() {
+        let mut v = Variant::OPTIMIZED;
+        v.set("normals", "frame").unwrap();
+        let names = |c: &[Command]| dispatches(c).map(|k| k.shader_name()).collect::<Vec<_>>();
+        let r = recipe(&v, 1, Integration::VERLET);
+        assert_eq!(names(&r), ["forces_springs_wind_imm", "integrate_collide_imm", "strain_limit_imm"]);
+        assert_eq!(names(&frame_end(&v, Integration::VERLET)), ["tri_normals_imm", "vertex_normals_imm"]);
+        // Three dependent kernels, three barriers; the frame's end reads the last pass.
+        assert_eq!(barriers_per_substep(&r), 3);
+        // RK4's stages read the wind the normals kernels leave: normals every substep.
+        let rk4 = Integration { integrator: Integrator::Rk4, ..Integration::VERLET };
+        assert!(frame_end(&v, rk4).is_empty());
+        let r = recipe(&v, 1, rk4);
+        assert!(names(&r).ends_with(&["tri_normals_imm".to_string(), "vertex_normals_imm".to_string()]));
+        assert!(!names(&r).iter().any(|k| k.starts_with("forces_springs_wind")));
+        // Every other variant: nothing at the frame's end.
+        assert!(frame_end(&Variant::OPTIMIZED, Integration::VERLET).is_empty());
     }
 }

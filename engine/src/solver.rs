@@ -21,7 +21,7 @@ use crate::gpu::{BufferId, Dispatch, Engine};
 use crate::kernels::{HostBuffers, Immediates, KernelRef, groups};
 use crate::recipe::KernelRunner;
 use crate::recipe::{
-    Caps, Command, Hazards, Integration, StatsMode, bits, dispatches, kernels_for, kernels_of, recipe, res,
+    Caps, Command, Hazards, Integration, StatsMode, bits, dispatches, frame_end, kernels_for, kernels_of, recipe, res,
     stats_commands,
 };
 use crate::tables::{record_times, split_slots, spring_halves, table_texels};
@@ -69,6 +69,8 @@ pub struct GpuSolver<E: Engine> {
     /// The step constants of the frame being recorded (for kernels reading immediates).
     sp: StepParams,
     recipe: Vec<Command>,
+    /// What runs once after the frame's last substep (recipe::frame_end).
+    end: Vec<Command>,
     caps: Caps,
     /// Every buffer by binding; the position pair as `[pos0, pos1]`.
     ids: Vec<(Buf, BufferId)>,
@@ -208,8 +210,10 @@ impl<E: Engine> GpuSolver<E> {
         };
         engine.bind([set(0), set(1)])?;
         let step = recipe(&variant, params.strain_iterations, Integration::of(&params));
+        let end = frame_end(&variant, Integration::of(&params));
         let mut build_list: Vec<KernelRef> = kernels_for(&variant);
         build_list.extend(kernels_of(&step));
+        build_list.extend(kernels_of(&end));
         build_list.extend(dispatches(&stats_commands(options.stats, caps)));
         let name = variant.solver_name(info.api);
         let mut solver = Self {
@@ -218,6 +222,7 @@ impl<E: Engine> GpuSolver<E> {
             variant,
             options,
             recipe: step,
+            end,
             scene,
             params,
             grab: None,
@@ -338,9 +343,18 @@ impl<E: Engine> GpuSolver<E> {
         r
     }
 
-    /// The kernels one substep dispatches, in order (statistics included).
+    /// The commands that run once after a frame's last substep (`normals=frame`: the
+    /// normals; usually none).
+    pub fn frame_end(&self) -> &[Command] {
+        &self.end
+    }
+
+    /// The kernels one substep dispatches, in order (statistics included), then those the
+    /// frame's end adds.
     pub fn recipe_kernels(&self) -> Vec<KernelRef> {
-        kernels_of(&self.commands())
+        let mut v = kernels_of(&self.commands());
+        v.extend(kernels_of(&self.end).into_iter().filter(|k| !v.contains(k)).collect::<Vec<_>>());
+        v
     }
 
     /// Pipeline barriers recorded in the last frame (none on an API that places its own).
@@ -525,11 +539,13 @@ impl<E: Engine> Solver for GpuSolver<E> {
             self.write(Buf::Interior, bytemuck::bytes_of(&interior))?;
         }
         let step = recipe(&self.variant, params.strain_iterations, Integration::of(&params));
-        for k in kernels_of(&step) {
+        let end = frame_end(&self.variant, Integration::of(&params));
+        for k in kernels_of(&step).into_iter().chain(kernels_of(&end)) {
             self.build(k)?;
         }
         self.engine.check("building the integrator's kernels")?;
         self.recipe = step;
+        self.end = end;
         self.params = params;
         Ok(())
     }
@@ -551,8 +567,10 @@ impl<E: Engine> Solver for GpuSolver<E> {
             Submit::Substep => substeps,
         };
         let per_submission = substeps / submissions;
+        let end = self.end.clone();
+        let (per_substep, per_end) = (dispatches(&commands).count(), dispatches(&end).count());
         let max_q = if self.time_kernels && self.engine.info().timestamps {
-            (2 * substeps as usize * dispatches(&commands).count()).min(MAX_QUERIES as usize) as u32
+            (2 * (substeps as usize * per_substep + per_end)).min(MAX_QUERIES as usize) as u32
         } else {
             0
         };
@@ -593,6 +611,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
             }
             let last = k + 1 == submissions;
             if last {
+                self.record(&end, substeps - 1, &mut q, &mut labels);
                 self.record_draw_copy()?;
             }
             if last && stats {
@@ -621,8 +640,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
             self.timer.record(CPU_SUBMIT, submit_ns);
             let frame = if q > 0 {
                 let period = self.engine.info().timestamp_period_ns;
-                let per_substep = dispatches(&commands).count();
-                record_times(&mut self.timer, &labels, &finished.ticks, period, per_substep)
+                record_times(&mut self.timer, &labels, &finished.ticks, period, per_substep, per_end, substeps)
             } else {
                 self.engine.finish()?;
                 t0.elapsed().as_nanos() as f64

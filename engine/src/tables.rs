@@ -36,22 +36,35 @@ pub fn spring_halves(springs: &[Spring]) -> (&[Spring], &[Spring]) {
     springs.split_at(springs.len() / 2)
 }
 
-/// Records the GPU times of one submission: `ticks` holds a begin and an end timestamp
-/// per entry of `labels`; consecutive entries of one label make one sample, and every
-/// `per_substep` dispatches also make a substep row. Returns the submission's span in ns (first begin to last end).
+/// Records the GPU times of one frame: `ticks` holds a begin and an end timestamp per
+/// entry of `labels`; consecutive entries of one label make one sample, and every
+/// `per_substep` dispatches also make a substep row. The `per_end` dispatches after the
+/// `substeps` substeps run once per frame (recipe::frame_end): each is recorded as its
+/// time per substep (divided by `substeps`), and their sum divided alike is added to every
+/// substep sample, so that a substep row is what the frame costs per substep. An end that
+/// was not timed in full (the query limit) is left out. Returns the span in ns (first
+/// begin to last end).
 pub fn record_times(
     timer: &mut clothlab_core::TimingRecorder,
     labels: &[&'static str],
     ticks: &[u64],
     period_ns: f64,
     per_substep: usize,
+    per_end: usize,
+    substeps: u32,
 ) -> f64 {
-    let mut substep_ns = 0.0;
+    let ns_of = |k: usize| ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * period_ns;
+    let in_substeps = labels.len().min(substeps as usize * per_substep);
+    let end = &labels[in_substeps..];
+    let per = f64::from(substeps.max(1));
+    let timed_end = per_end > 0 && end.len() == per_end;
+    let share = if timed_end { (in_substeps..labels.len()).map(ns_of).sum::<f64>() / per } else { 0.0 };
+    let mut substep_ns = share;
     // Consecutive dispatches of one label (the hash's six kernels, XPBD's passes, the CG
     // loop) make one sample: a row is that work's time per substep, not per dispatch.
     let mut run_ns = 0.0;
-    for (k, label) in labels.iter().enumerate() {
-        let ns = ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * period_ns;
+    for (k, label) in labels[..in_substeps].iter().enumerate() {
+        let ns = ns_of(k);
         run_ns += ns;
         substep_ns += ns;
         let end_of_substep = (k + 1) % per_substep.max(1) == 0;
@@ -61,11 +74,50 @@ pub fn record_times(
         }
         if end_of_substep {
             timer.record(clothlab_core::timing::SUBSTEP, substep_ns);
-            substep_ns = 0.0;
+            substep_ns = share;
+        }
+    }
+    if timed_end {
+        for (k, label) in end.iter().enumerate() {
+            timer.record(label, ns_of(in_substeps + k) / per);
         }
     }
     match (ticks.first(), ticks.get(2 * labels.len().max(1) - 1)) {
         (Some(a), Some(b)) => b.saturating_sub(*a) as f64 * period_ns,
         _ => 0.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clothlab_core::TimingRecorder;
+    use clothlab_core::timing::SUBSTEP;
+
+    #[test]
+    fn a_frame_end_adds_its_share_to_every_substep_and_its_rows_per_substep() {
+        // Two substeps of (a 10 ns, b 20 ns), then an end of c 40 ns and d 60 ns: each
+        // substep costs 30 + 100 / 2 = 80 ns of the frame, c 20 and d 30 per substep.
+        let labels = ["a", "b", "a", "b", "c", "d"];
+        let ns = [10u64, 20, 10, 20, 40, 60];
+        let mut ticks = Vec::new();
+        let mut t = 1000;
+        for d in ns {
+            ticks.extend([t, t + d]);
+            t += d + 5;
+        }
+        let mut timer = TimingRecorder::default();
+        let span = record_times(&mut timer, &labels, &ticks, 1.0, 2, 2, 2);
+        let table = timer.table();
+        let median = |l: &str| table.get(l).map(|r| r.median_ns).unwrap();
+        assert_eq!(median(SUBSTEP), 80.0);
+        assert_eq!((median("a"), median("b"), median("c"), median("d")), (10.0, 20.0, 20.0, 30.0));
+        assert_eq!(span, (t - 5 - 1000) as f64);
+        // An end cut short by the query limit is left out, not counted as a substep.
+        let mut timer = TimingRecorder::default();
+        record_times(&mut timer, &labels[..5], &ticks[..10], 1.0, 2, 2, 2);
+        let table = timer.table();
+        assert_eq!(table.get(SUBSTEP).map(|r| (r.median_ns, r.samples)), Some((30.0, 2)));
+        assert!(table.get("c").is_none());
     }
 }

@@ -25,13 +25,27 @@ pub struct Caps {
     pub subgroups: bool,
 }
 
-/// How forces of springs (or normals of faces) reach the particles.
+/// How the forces of springs reach the particles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Accumulate {
     /// One invocation per spring (per triangle), added into both ends with atomics.
     Scatter,
     /// One invocation per particle, summing what acts on it: no atomics.
     Gather,
+}
+
+/// How the vertex normals (and the wind, which the faces' normals give) are computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Normals {
+    /// Every substep, one invocation per triangle, added into the corners with atomics.
+    Scatter,
+    /// Every substep, one invocation per vertex, summing its stored face normals.
+    Gather,
+    /// Once per frame, gathered, for drawing: within the frame the forces gather computes
+    /// the wind of the faces around each particle itself from the positions it loads
+    /// (Verlet and symplectic Euler with `fusion=clothlab`; the other integrators' force
+    /// kernels read the wind from the buffer, so they keep the normals every substep).
+    Frame,
 }
 
 /// Which atomics the scatters add with.
@@ -122,8 +136,9 @@ pub enum Draw {
 pub struct Variant {
     /// Spring forces: scattered with atomics or gathered per particle.
     pub springs: Accumulate,
-    /// Vertex normals: face normals scattered into the corners, or gathered per vertex.
-    pub normals: Accumulate,
+    /// Vertex normals: face normals scattered into the corners, or gathered per vertex,
+    /// every substep; or gathered once per frame, the wind computed in the forces gather.
+    pub normals: Normals,
     /// The scatters' atomics.
     pub atomics: Atomics,
     /// Which kernels are fused.
@@ -163,8 +178,8 @@ pub const SWITCHES: [Switch; 10] = [
     },
     Switch {
         key: "normals",
-        values: &["scatter", "gather"],
-        help: "vertex normals: per triangle with atomics, or per vertex",
+        values: &["scatter", "gather", "frame"],
+        help: "vertex normals: per triangle with atomics, or per vertex, every substep; or once per frame, the wind in the forces gather",
     },
     Switch {
         key: "atomics",
@@ -210,7 +225,7 @@ impl Variant {
     /// vertex buffers copies.
     pub const NAIVE: Variant = Variant {
         springs: Accumulate::Scatter,
-        normals: Accumulate::Scatter,
+        normals: Normals::Scatter,
         atomics: Atomics::Float,
         fusion: Fusion::None,
         submit: Submit::Substep,
@@ -224,7 +239,7 @@ impl Variant {
     /// constants, the table as uniform constants with neighbours by offset.
     pub const OPTIMIZED: Variant = Variant {
         springs: Accumulate::Gather,
-        normals: Accumulate::Gather,
+        normals: Normals::Gather,
         atomics: Atomics::Float,
         fusion: Fusion::Clothlab,
         submit: Submit::Frame,
@@ -239,7 +254,7 @@ impl Variant {
     /// spring table in texture memory, the spheres and the constants in constant memory.
     pub const THESIS: Variant = Variant {
         springs: Accumulate::Scatter,
-        normals: Accumulate::Gather,
+        normals: Normals::Gather,
         atomics: Atomics::Float,
         fusion: Fusion::Thesis,
         submit: Submit::Frame,
@@ -290,7 +305,7 @@ impl Variant {
         let acc = [Accumulate::Scatter, Accumulate::Gather];
         match key {
             "springs" => self.springs = acc[i],
-            "normals" => self.normals = acc[i],
+            "normals" => self.normals = [Normals::Scatter, Normals::Gather, Normals::Frame][i],
             "atomics" => self.atomics = [Atomics::Float, Atomics::Cas][i],
             "fusion" => self.fusion = [Fusion::None, Fusion::Thesis, Fusion::Clothlab][i],
             "submit" => self.submit = [Submit::Substep, Submit::Frame][i],
@@ -346,7 +361,7 @@ impl Variant {
     /// Whether it runs on an adapter with `caps`, and whether its switches fit together:
     /// the first that does not, in one line naming the switch.
     pub fn check(&self, caps: &Caps, api: &str) -> Result<(), VariantError> {
-        let scatters = self.springs == Accumulate::Scatter || self.normals == Accumulate::Scatter;
+        let scatters = self.springs == Accumulate::Scatter || self.normals == Normals::Scatter;
         if scatters && self.atomics == Atomics::Float && !caps.float_atomics {
             return Err(VariantError(format!(
                 "switch atomics=float: this adapter has no float atomic add on {api}; use atomics=cas"
@@ -366,6 +381,11 @@ impl Variant {
             return Err(VariantError(format!(
                 "switch neighbours=shuffle: this adapter has no subgroup shuffles in compute shaders on {api}; use neighbours=load"
             )));
+        }
+        if self.normals == Normals::Frame && self.fusion != Fusion::Clothlab {
+            return Err(VariantError(
+                "switch normals=frame needs fusion=clothlab: the wind is computed inside clothlab's forces+springs gather".into(),
+            ));
         }
         if self.fusion == Fusion::Clothlab && self.springs == Accumulate::Scatter {
             return Err(VariantError(
@@ -411,7 +431,7 @@ impl Variant {
 
 /// The optimisation ladder: from `naive`, one switch at a time, in this order (each rung
 /// keeps the switches of the rungs before it).
-pub const LADDER: [(&str, &str); 12] = [
+pub const LADDER: [(&str, &str); 13] = [
     ("submit", "frame"),
     ("draw", "shared"),
     ("constants", "uniform"),
@@ -424,6 +444,7 @@ pub const LADDER: [(&str, &str); 12] = [
     ("table", "image"),
     ("table", "uniform"),
     ("neighbours", "shuffle"),
+    ("normals", "frame"),
 ];
 
 /// One rung of the ladder.
@@ -582,6 +603,10 @@ mod tests {
         let clash = VariantSpec::parse("naive", &["fusion=clothlab".into()]).unwrap();
         let e = clash.resolve(&ALL_CAPS, "vulkan").unwrap_err().0;
         assert!(e.contains("fusion=clothlab") && e.contains("springs=scatter"), "{e}");
+        let clash = VariantSpec::parse("thesis", &["normals=frame".into()]).unwrap();
+        let e = clash.resolve(&ALL_CAPS, "vulkan").unwrap_err().0;
+        assert!(e.contains("normals=frame") && e.contains("fusion=clothlab"), "{e}");
+        assert!(VariantSpec::parse("optimized", &["normals=frame".into()]).unwrap().resolve(&ALL_CAPS, "wgpu").is_ok());
     }
 
     #[test]
@@ -592,7 +617,12 @@ mod tests {
         let top = rungs.last().unwrap().variant;
         assert_eq!(
             top,
-            Variant { colliders: Colliders::Uniform, neighbours: Neighbours::Shuffle, ..Variant::OPTIMIZED }
+            Variant {
+                colliders: Colliders::Uniform,
+                neighbours: Neighbours::Shuffle,
+                normals: Normals::Frame,
+                ..Variant::OPTIMIZED
+            }
         );
         assert!(rungs.iter().all(|r| r.skipped.is_none()));
         let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false };

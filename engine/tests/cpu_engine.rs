@@ -17,11 +17,16 @@ fn bits(v: &[[f32; 4]]) -> Vec<[u32; 4]> {
 fn the_rows_solvers_compute_the_bits_of_the_cpu_engine_running_the_optimized_recipe() {
     // 37: rows that are not a multiple of the 8 SIMD lanes; 64: whole lanes. Wind on and
     // two strain passes, so every kernel matters. Bit for bit: the rows solvers are the
-    // same arithmetic fused and on lanes, so any difference is a bug, not rounding.
+    // same arithmetic fused and on lanes, so any difference is a bug, not rounding. The
+    // recipe with normals once per frame (the wind computed in the forces gather) too: the
+    // same arithmetic in another order of kernels, so the same bits after every frame.
     let params = SimParams { wind: [2.0, 0.0, 1.0], strain_iterations: 2, ..SimParams::default() };
-    for n in [37, 64] {
+    let mut frame_normals = Variant::OPTIMIZED;
+    frame_normals.set("normals", "frame").unwrap();
+    for (n, variant) in [(37, Variant::OPTIMIZED), (64, Variant::OPTIMIZED), (37, frame_normals)] {
         let scene = Scene::with_n(n);
-        let mut engine = RecipeSolver::new(Exec::Serial, Variant::OPTIMIZED, scene.clone(), params.clone()).unwrap();
+        let mut engine = RecipeSolver::new(Exec::Serial, variant, scene.clone(), params.clone()).unwrap();
+        assert_eq!(engine.frame_end().is_empty(), variant == Variant::OPTIMIZED);
         let mut serial = CpuSolver::new(Exec::Serial, scene.clone(), params.clone()).unwrap();
         let mut rayon = CpuSolver::new(Exec::Parallel, scene, params.clone()).unwrap();
         for frame in 0..6 {
@@ -39,7 +44,7 @@ fn the_rows_solvers_compute_the_bits_of_the_cpu_engine_running_the_optimized_rec
                 ] {
                     assert!(
                         bits(a) == bits(b),
-                        "n = {n}, frame {frame}: {} {name} differs from the CPU engine",
+                        "n = {n}, frame {frame}: {} {name} differs from the CPU engine running {variant}",
                         s.name()
                     );
                 }

@@ -1,4 +1,4 @@
-//! include: wind
+//! include: wind, wind_fn
 // vertex_normals — per particle: sum of the adjacent face normals (gathered in slot order),
 // normalised, and the wind force into the force buffer (optimized variant): each face is
 // read once for both.

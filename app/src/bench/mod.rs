@@ -457,8 +457,15 @@ impl Job {
     ) -> Result<LadderCell> {
         let v = self.variant.context("a ladder job has a variant")?;
         let (_, topo) = clothlab_core::build(&Scene::with_n(n), params)?;
-        let commands = recipe(&v, params.strain_iterations, clothlab_engine::recipe::Integration::of(params));
+        let how = clothlab_engine::recipe::Integration::of(params);
+        let commands = recipe(&v, params.strain_iterations, how);
+        // What runs once per frame (normals=frame) counts its share per substep in the
+        // bytes; its dispatches (two per frame) are left out of the per-substep count.
+        let end = clothlab_engine::recipe::frame_end(&v, how);
         let uniform = v.table == Table::Uniform;
+        let bytes_of = |c: &[clothlab_engine::recipe::Command]| -> u64 {
+            dispatches(c).map(|k| compulsory_bytes(k, &topo, uniform)).sum()
+        };
         Ok(LadderCell {
             api: if self.backend.api() == Some(Api::Wgpu) { "wgpu" } else { "vulkan" }.into(),
             n,
@@ -468,7 +475,7 @@ impl Job {
             switches: v.switches(),
             skipped,
             dispatches: dispatches(&commands).count(),
-            bytes: dispatches(&commands).map(|k| compulsory_bytes(k, &topo, uniform)).sum(),
+            bytes: bytes_of(&commands) + bytes_of(&end) / u64::from(params.substeps.max(1)),
         })
     }
 }

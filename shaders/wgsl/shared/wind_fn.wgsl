@@ -1,0 +1,17 @@
+// Wind from face normals (no bindings: shared/wind.wgsl's kernels and the forces gather
+// that computes its faces itself, shared/face_wind.wgsl, both use it).
+
+// Whether there is wind at all (no wind adds exact zeros: the division is skipped).
+fn windy() -> bool {
+    return p.wind.w / 6.0 != 0.0 && any(p.wind.xyz != vec3<f32>(0.0));
+}
+
+// Wind force of one adjacent face f4 (N, |N|) on a particle: a third of c (N.w) N / (2 |N|)
+// (core::cpu::normals::vnormal_at).
+fn face_wind(f4: vec4<f32>) -> vec3<f32> {
+    let c = p.wind.w / 6.0;
+    if f4.w > 0.0 {
+        return f4.xyz * (c * dot(f4.xyz, p.wind.xyz) / f4.w);
+    }
+    return vec3<f32>(0.0);
+}
