@@ -204,6 +204,12 @@ fn the_ladder_climbs_one_switch_at_a_time_and_plots_what_each_buys() {
     }
     assert!(o.status.success(), "{err}");
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    // Every figure the report shows was written beside it.
+    let figures: Vec<&str> = report.split("](").skip(1).filter_map(|s| s.split(')').next()).collect();
+    assert!(figures.iter().any(|f| f.starts_with("ladder_")) && figures.contains(&"kernels.png"), "{figures:?}");
+    for f in figures.iter().filter(|f| f.ends_with(".png")) {
+        assert!(out.join(f).is_file(), "the report shows {f}, which the bench did not write");
+    }
     for api in ["wgpu", "vulkan"] {
         let table: Vec<&str> = report
             .split(&format!("### {api}, n = 16"))

@@ -132,6 +132,7 @@ pub fn report(r: &Results) -> String {
             .filter_map(|c| measured(r, c).map(|m| c.bytes as f64 / m.substep_ns))
             .fold(0.0, f64::max);
         let _ = writeln!(s, "### {api}, n = {n}\n");
+        let _ = writeln!(s, "![what each optimisation buys, {api}, n = {n}](ladder_{api}_{n}.png)\n");
         let _ = writeln!(
             s,
             "| rung | substep ms | vs previous | vs naive | ns / particle | frame ms (fps) | cpu record µs | cpu submit µs | dispatches | kernels (µs) | bound |"

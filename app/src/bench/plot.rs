@@ -81,8 +81,8 @@ pub fn all(r: &Results) -> Result<Vec<(String, String, Vec<u8>)>> {
             let (svg, png) = both(&Waterfall { r, api: &api, n })?;
             out.push((format!("ladder_{api}_{n}"), svg, png));
         }
-        return Ok(out);
     }
+    // The report's figures (a ladder's report shows them too: every rung is a cell).
     if let Some(n) = r.kernel_size() {
         let (svg, png) = both(&Kernels { r, n })?;
         out.push(("kernels".into(), svg, png));
