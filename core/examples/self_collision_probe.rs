@@ -44,6 +44,9 @@ fn main() {
         let t = p.self_thickness;
         let (mut probed, mut skipped_empty, mut skipped_box, mut entries, mut cands, mut near, mut max_entries) =
             (0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
+        // What a bucket sorted by height would let a particle skip: entries farther than t
+        // in y (read only up to the window's end), and the candidates within it.
+        let (mut in_window, mut window_cands) = (0u64, 0u64);
         let occupied = cells.iter().filter(|c| c[0].to_bits() > 0).count();
         for i in 0..np {
             let x = st.pos[i];
@@ -80,11 +83,14 @@ fn main() {
                     entries += 1;
                     mine += 1;
                     let (qi, qj) = slot_coords(s[1].to_bits());
+                    let y = st.pos[(qj * p.n + qi) as usize];
+                    let in_y = (y[1] - x[1]).abs() < t;
+                    in_window += u64::from(in_y);
                     if !candidate_coords(&p, me, (qi as i32, qj as i32)) {
                         continue;
                     }
                     cands += 1;
-                    let y = st.pos[(qj * p.n + qi) as usize];
+                    window_cands += u64::from(in_y);
                     let d2: f32 = (0..3).map(|a| (x[a] - y[a]) * (x[a] - y[a])).sum();
                     if d2 < t * t {
                         near += 1;
@@ -96,7 +102,7 @@ fn main() {
         let per = |v: u64| v as f64 / np as f64;
         // SIMD-8 groups of consecutive particles: the loop runs the max of its lanes.
         println!(
-            "n={n} frame {fr}: occupied buckets {occupied} ({:.2} of {np}); per particle: probed {:.2}, empty {:.2}, box-skipped {:.2}, entries read {:.2} (max {max_entries}), candidates {:.2}, closer than t {:.3}; lowest y {:.3}",
+            "n={n} frame {fr}: occupied buckets {occupied} ({:.2} of {np}); per particle: probed {:.2}, empty {:.2}, box-skipped {:.2}, entries read {:.2} (max {max_entries}), candidates {:.2}, closer than t {:.3}; within t in y {:.2} (candidates {:.2}); lowest y {:.3}",
             occupied as f64 / np as f64,
             per(probed),
             per(skipped_empty),
@@ -104,6 +110,8 @@ fn main() {
             per(entries),
             per(cands),
             per(near),
+            per(in_window),
+            per(window_cands),
             st.pos.iter().map(|x| x[1]).fold(f32::MAX, f32::min)
         );
     }
