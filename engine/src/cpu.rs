@@ -150,9 +150,7 @@ impl RecipeSolver {
 
     /// The distinct kernels of a substep, then those of the frame's end.
     pub fn kernels(&self) -> Vec<KernelRef> {
-        let mut v = kernels_of(&self.commands);
-        v.extend(kernels_of(&self.end).into_iter().filter(|k| !v.contains(k)).collect::<Vec<_>>());
-        v
+        kernels_of(&[&self.commands[..], &self.end[..]].concat())
     }
 
     /// The engine.

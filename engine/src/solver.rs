@@ -352,9 +352,7 @@ impl<E: Engine> GpuSolver<E> {
     /// The kernels one substep dispatches, in order (statistics included), then those the
     /// frame's end adds.
     pub fn recipe_kernels(&self) -> Vec<KernelRef> {
-        let mut v = kernels_of(&self.commands());
-        v.extend(kernels_of(&self.end).into_iter().filter(|k| !v.contains(k)).collect::<Vec<_>>());
-        v
+        kernels_of(&[self.commands(), self.end.clone()].concat())
     }
 
     /// Pipeline barriers recorded in the last frame (none on an API that places its own).

@@ -28,7 +28,7 @@ pub struct Caps {
 /// How the forces of springs reach the particles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Accumulate {
-    /// One invocation per spring (per triangle), added into both ends with atomics.
+    /// One invocation per spring, added into both ends with atomics.
     Scatter,
     /// One invocation per particle, summing what acts on it: no atomics.
     Gather,
