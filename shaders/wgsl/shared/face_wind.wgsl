@@ -6,14 +6,6 @@
 @group(0) @binding(9) var<storage, read> triangles: array<u32>;
 @group(0) @binding(10) var<storage, read> face_slots: array<i32>;
 
-// What the four particles of a block start from.
-struct Base4 {
-    k0: vec3<f32>,
-    k1: vec3<f32>,
-    k2: vec3<f32>,
-    k3: vec3<f32>,
-}
-
 // Face normal and |N| of triangle (a, b, c), as tri_normals computes it.
 fn face_of(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec4<f32> {
     let nrm = cross(b - a, c - a);
@@ -76,22 +68,14 @@ fn block_base(row: u32, c0: u32, u: array<vec3<f32>, 6>, r: array<vec3<f32>, 6>,
     );
 }
 
+// Face t computed from its corners in the triangle list (for wind_at, shared/wind_fn.wgsl).
+fn face_at(t: u32) -> vec4<f32> {
+    let k = 3u * t;
+    return face_of(pos[triangles[k]].xyz, pos[triangles[k + 1u]].xyz, pos[triangles[k + 2u]].xyz);
+}
+
 // Particle i (on the grid, any table): its faces from the slots, their corners from the
 // triangle list.
 fn particle_base(i: u32) -> vec3<f32> {
-    var wind = vec3<f32>(0.0);
-    if !windy() {
-        return wind;
-    }
-    for (var s = 0u; s < FACE_SLOTS; s++) {
-        let t = face_slots[i * FACE_SLOTS + s];
-        if t >= 0 {
-            let k = 3u * u32(t);
-            let a = pos[triangles[k]].xyz;
-            let b = pos[triangles[k + 1u]].xyz;
-            let c = pos[triangles[k + 2u]].xyz;
-            wind += face_wind(face_of(a, b, c));
-        }
-    }
-    return wind;
+    return wind_at(i);
 }

@@ -1,14 +1,6 @@
 // What forces_springs' particles start from (shared/spring_block.wgsl): the force buffer,
 // where the normals kernel of the substep before left the wind.
 
-// What the four particles of a block start from.
-struct Base4 {
-    k0: vec3<f32>,
-    k1: vec3<f32>,
-    k2: vec3<f32>,
-    k3: vec3<f32>,
-}
-
 // The force of particle (c, row) (particle 0's, unused, off the grid: every lane loads).
 fn buffered(c: u32, row: u32) -> vec3<f32> {
     return force[select(0u, row * p.n + c, c < p.n && row < p.n)].xyz;

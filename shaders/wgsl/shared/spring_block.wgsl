@@ -13,6 +13,14 @@
 // (shared/force_buffer.wgsl); forces_springs_wind computes the wind of the faces around
 // each particle here, from the positions (shared/face_wind.wgsl, `normals=frame`).
 
+// What the four particles of a block start from (the including kernel's `block_base`).
+struct Base4 {
+    k0: vec3<f32>,
+    k1: vec3<f32>,
+    k2: vec3<f32>,
+    k3: vec3<f32>,
+}
+
 // Force on particle k of the block: a its point, base what its force starts from, s0 … s11
 // its neighbours in slot order.
 fn block_particle(

@@ -1,5 +1,7 @@
-// Wind from face normals (no bindings: shared/wind.wgsl's kernels and the forces gather
-// that computes its faces itself, shared/face_wind.wgsl, both use it).
+// Wind from face normals, for shared/wind.wgsl's kernels (faces stored by tri_normals)
+// and the forces gather that computes its faces itself (shared/face_wind.wgsl). No
+// bindings of its own: `wind_at` walks the includer's `face_slots` and asks the includer's
+// `face_at(t)` for each face.
 
 // Whether there is wind at all (no wind adds exact zeros: the division is skipped).
 fn windy() -> bool {
@@ -14,4 +16,20 @@ fn face_wind(f4: vec4<f32>) -> vec3<f32> {
         return f4.xyz * (c * dot(f4.xyz, p.wind.xyz) / f4.w);
     }
     return vec3<f32>(0.0);
+}
+
+// Wind force on particle i from its adjacent faces, in slot order
+// (core::cpu::normals::vnormal_at).
+fn wind_at(i: u32) -> vec3<f32> {
+    var wind = vec3<f32>(0.0);
+    if !windy() {
+        return wind;
+    }
+    for (var s = 0u; s < FACE_SLOTS; s++) {
+        let t = face_slots[i * FACE_SLOTS + s];
+        if t >= 0 {
+            wind += face_wind(face_at(u32(t)));
+        }
+    }
+    return wind;
 }
