@@ -1,8 +1,9 @@
 //! What self-collision's response reads, per particle, on the heap scene (scenes/heap.toml)
 //! at grid size N with the thickness equal to the grid spacing, after the given frames:
-//! buckets probed (and how many were empty or skipped by their grid-coordinate box),
-//! entries read, candidates (entries outside the springs' stencil, whose positions are
-//! loaded) and contacts (candidates closer than the thickness).
+//! rows and buckets probed (how many empty), entries read, candidates (entries outside the
+//! springs' stencil, whose positions are loaded) and contacts (candidates closer than the
+//! thickness), the foreign entries among the candidates (from other cells hashed to the
+//! same bucket), and the most entries one particle reads.
 //!
 //! `cargo run --release -p clothlab-core --example self_collision_probe -- 128 20,50,100`
 //! (docs/scenes.md quotes its output).
@@ -33,85 +34,62 @@ fn main() {
         let np = st.pos.len();
         let mut cells = vec![[0.0f32; 4]; np];
         let mut sorted = vec![[0.0f32; 4]; np];
-        hash_count(&p, &st.pos, &mut cells, &mut sorted);
-        hash_scan_blocks(&mut cells);
-        hash_scan_top(&mut cells);
-        hash_scan_add(&mut cells);
-        hash_scatter(&p, &mut cells, &mut sorted);
-        hash_sort(&mut cells, &mut sorted);
+        build_hash(&p, &st.pos, &mut cells, &mut sorted);
+        let (cw, sw) = (hash_words(&cells), hash_words(&sorted));
         let size = table_size(np);
-        let inv = p.inv_cell;
-        let t = p.self_thickness;
-        let (mut probed, mut skipped_empty, mut skipped_box, mut entries, mut cands, mut near, mut max_entries) =
-            (0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
-        // What a bucket sorted by height would let a particle skip: entries farther than t
-        // in y (read only up to the window's end), and the candidates within it.
-        let (mut in_window, mut window_cands) = (0u64, 0u64);
-        let occupied = cells.iter().filter(|c| c[0].to_bits() > 0).count();
+        let (inv, t) = (p.inv_cell, p.self_thickness);
+        let (mut rows_n, mut probed, mut empty, mut entries, mut cands, mut foreign, mut near, mut max_entries) =
+            (0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
+        let occupied = (0..size)
+            .filter(|&b| bucket_range(cw, b, size, np as u32).0 < bucket_range(cw, b, size, np as u32).1)
+            .count();
         for i in 0..np {
             let x = st.pos[i];
-            let c = cell_of(&x, inv);
-            let side: [i32; 3] = std::array::from_fn(|a| if x[a] * inv - c[a] as f32 >= 0.5 { 1 } else { -1 });
             let me = ((i as u32 % p.n) as i32, (i as u32 / p.n) as i32);
-            let mut bs = vec![];
+            let c = cell_of(&x, inv);
+            let mut rows = [Row::default(); 9];
+            let count = rows_around(&x, inv, size, &mut rows);
+            rows_n += count as u64;
             let mut mine = 0u64;
-            for k in 0..8 {
-                let cc: [i32; 3] = std::array::from_fn(|a| c[a] + if k >> a & 1 == 1 { side[a] } else { 0 });
-                let b = bucket(cc, size);
-                if bs.contains(&b) {
-                    continue;
-                }
-                bs.push(b);
-                probed += 1;
-                let cell = cells[b as usize];
-                let count = cell[0].to_bits() as usize;
-                let start = cell[1].to_bits() as usize;
-                if count == 0 {
-                    skipped_empty += 1;
-                    continue;
-                }
-                let (lo, hi) = (slot_coords(cell[2].to_bits()), slot_coords(cell[3].to_bits()));
-                if lo.0 as i32 >= me.0 - 2
-                    && lo.1 as i32 >= me.1 - 2
-                    && hi.0 as i32 <= me.0 + 2
-                    && hi.1 as i32 <= me.1 + 2
-                {
-                    skipped_box += 1;
-                    continue;
-                }
-                for s in &sorted[start..start + count] {
-                    entries += 1;
-                    mine += 1;
-                    let (qi, qj) = slot_coords(s[1].to_bits());
-                    let y = st.pos[(qj * p.n + qi) as usize];
-                    let in_y = (y[1] - x[1]).abs() < t;
-                    in_window += u64::from(in_y);
-                    if !candidate_coords(&p, me, (qi as i32, qj as i32)) {
+            let mut seen = vec![];
+            for row in &rows[..count] {
+                for o in 0..row.len {
+                    let b = row.first.wrapping_add(o) & (size - 1);
+                    if seen.contains(&b) {
                         continue;
                     }
-                    cands += 1;
-                    window_cands += u64::from(in_y);
-                    let d2: f32 = (0..3).map(|a| (x[a] - y[a]) * (x[a] - y[a])).sum();
-                    if d2 < t * t {
-                        near += 1;
+                    seen.push(b);
+                    probed += 1;
+                    let (start, end) = bucket_range(cw, b, size, np as u32);
+                    empty += u64::from(start == end);
+                    for s in start..end {
+                        entries += 1;
+                        mine += 1;
+                        let (qi, qj) = slot_coords(sw[4 * s as usize + 1]);
+                        if !candidate_coords(&p, me, (qi as i32, qj as i32)) {
+                            continue;
+                        }
+                        cands += 1;
+                        let y = st.pos[(qj * p.n + qi) as usize];
+                        let cy = cell_of(&y, inv);
+                        foreign += u64::from((0..3).any(|a| (cy[a] - c[a]).abs() > 1));
+                        let d2: f32 = (0..3).map(|a| (x[a] - y[a]) * (x[a] - y[a])).sum();
+                        near += u64::from(d2 < t * t);
                     }
                 }
             }
             max_entries = max_entries.max(mine);
         }
         let per = |v: u64| v as f64 / np as f64;
-        // SIMD-8 groups of consecutive particles: the loop runs the max of its lanes.
         println!(
-            "n={n} frame {fr}: occupied buckets {occupied} ({:.2} of {np}); per particle: probed {:.2}, empty {:.2}, box-skipped {:.2}, entries read {:.2} (max {max_entries}), candidates {:.2}, closer than t {:.3}; within t in y {:.2} (candidates {:.2}); lowest y {:.3}",
-            occupied as f64 / np as f64,
+            "n={n} frame {fr}: occupied buckets {occupied} of {size}; per particle: rows {:.2}, buckets {:.2} (empty {:.2}), entries read {:.2} (max {max_entries}), candidates {:.2} (foreign {:.2}), closer than t {:.3}; lowest y {:.3}",
+            per(rows_n),
             per(probed),
-            per(skipped_empty),
-            per(skipped_box),
+            per(empty),
             per(entries),
             per(cands),
+            per(foreign),
             per(near),
-            per(in_window),
-            per(window_cands),
             st.pos.iter().map(|x| x[1]).fold(f32::MAX, f32::min)
         );
     }

@@ -501,8 +501,8 @@ pub struct StepParams {
     pub self_thickness: f32,
     /// Rest distance between neighbouring particles, m.
     pub spacing: f32,
-    /// `1 / (2·self_thickness)` (the hash's cells are cubes of side twice the thickness),
-    /// computed here so that every backend multiplies by the same number; 0 when off.
+    /// `1 / self_thickness` (the hash's cells are cubes of side the thickness), computed
+    /// here so that every backend multiplies by the same number; 0 when off.
     pub inv_cell: f32,
     /// Padding to 16 bytes.
     pub _pad0: u32,
@@ -537,7 +537,7 @@ impl StepParams {
             grab_index,
             self_thickness: if params.self_collision { params.self_thickness } else { 0.0 },
             spacing: scene.cloth.size / (scene.cloth.n - 1) as f32,
-            inv_cell: if params.self_collision { 1.0 / (2.0 * params.self_thickness) } else { 0.0 },
+            inv_cell: if params.self_collision { 1.0 / params.self_thickness } else { 0.0 },
             _pad0: 0,
         }
     }

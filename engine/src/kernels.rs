@@ -36,6 +36,8 @@ pub enum Count {
     Workgroup,
     /// One per [`WORKGROUP`] buckets of the self-collision hash (`hash_scan_blocks`).
     HashBlocks,
+    /// One per bucket of the self-collision hash (`hash_scan_add`).
+    HashBuckets,
 }
 
 impl Count {
@@ -48,7 +50,8 @@ impl Count {
             Count::Springs => topo.springs.len() as u32,
             Count::Triangles => topo.triangles.len() as u32,
             Count::Workgroup => WORKGROUP,
-            Count::HashBlocks => cpu::self_collide::table_size(topo.num_particles()).div_ceil(WORKGROUP),
+            Count::HashBlocks => cpu::self_collide::hash_blocks(topo.num_particles()),
+            Count::HashBuckets => cpu::self_collide::table_size(topo.num_particles()),
         }
     }
 }
@@ -710,25 +713,22 @@ fn hash_count(a: &TwinArgs, b: &mut HostBuffers) {
 }
 
 fn hash_scan_blocks(_: &TwinArgs, b: &mut HostBuffers) {
-    cpu::hash_scan_blocks(hash_buffers(b).0);
+    let (cells, sorted) = hash_buffers(b);
+    cpu::hash_scan_blocks(cells, sorted);
 }
 
 fn hash_scan_top(_: &TwinArgs, b: &mut HostBuffers) {
-    cpu::hash_scan_top(hash_buffers(b).0);
+    cpu::hash_scan_top(hash_buffers(b).1);
 }
 
 fn hash_scan_add(_: &TwinArgs, b: &mut HostBuffers) {
-    cpu::hash_scan_add(hash_buffers(b).0);
+    let (cells, sorted) = hash_buffers(b);
+    cpu::hash_scan_add(cells, sorted);
 }
 
 fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
     let (cells, sorted) = hash_buffers(b);
     cpu::hash_scatter(a.p, cells, sorted);
-}
-
-fn hash_sort(_: &TwinArgs, b: &mut HostBuffers) {
-    let (cells, sorted) = hash_buffers(b);
-    cpu::hash_sort(cells, sorted);
 }
 
 fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {
@@ -744,9 +744,6 @@ fn hash_input(upto: usize) -> impl Fn(&TwinArgs, &mut HostBuffers) {
         let steps: [Twin; 5] = [hash_count, hash_scan_blocks, hash_scan_top, hash_scan_add, hash_scatter];
         for step in &steps[..upto] {
             step(a, b);
-        }
-        if upto == steps.len() {
-            hash_sort(a, b);
         }
     }
 }
@@ -765,12 +762,6 @@ fn after_top(a: &TwinArgs, b: &mut HostBuffers) {
 
 fn after_scan(a: &TwinArgs, b: &mut HostBuffers) {
     hash_input(4)(a, b)
-}
-
-fn after_scatter(a: &TwinArgs, b: &mut HostBuffers) {
-    // (hash_input(5) also sorts: the scatter of the twin is in index order already.)
-    hash_input(4)(a, b);
-    hash_scatter(a, b);
 }
 
 /// The response's input: every 7th particle put within 0.3–0.8 thicknesses of one far
@@ -1144,31 +1135,27 @@ pub static HASH_COUNT: KernelDef = KernelDef {
     accumulates: &[Aux2],
     ..hash("hash_count", hash_count, Count::Particles, &[Params, Pos, Aux2], &[Aux2, Aux3])
 };
-/// The counts' exclusive prefix within each workgroup of buckets, and its total.
+/// The counts' inclusive prefix within each block of buckets, and the block's total.
 pub static HASH_SCAN_BLOCKS: KernelDef = KernelDef {
     test_input: Some(after_count),
-    ..hash("hash_scan_blocks", hash_scan_blocks, Count::HashBlocks, &[Params, Aux2], &[Aux2])
+    ..hash("hash_scan_blocks", hash_scan_blocks, Count::HashBlocks, &[Params, Aux2, Aux3], &[Aux2, Aux3])
 };
-/// The workgroups' totals' exclusive prefix (one workgroup).
+/// The blocks' totals' exclusive prefix (one workgroup).
 pub static HASH_SCAN_TOP: KernelDef = KernelDef {
     test_input: Some(after_blocks),
-    ..hash("hash_scan_top", hash_scan_top, Count::Workgroup, &[Params, Aux2], &[Aux2])
+    ..hash("hash_scan_top", hash_scan_top, Count::Workgroup, &[Params, Aux3], &[Aux3])
 };
-/// Every bucket's start and cursor.
+/// Every bucket's end in the whole array.
 pub static HASH_SCAN_ADD: KernelDef = KernelDef {
     test_input: Some(after_top),
-    ..hash("hash_scan_add", hash_scan_add, Count::Particles, &[Params, Aux2], &[Aux2])
+    ..hash("hash_scan_add", hash_scan_add, Count::HashBuckets, &[Params, Aux2, Aux3], &[Aux2])
 };
-/// Every particle into its bucket's range, in any order (atomics): checked after the sort.
+/// Every particle into its bucket's range, in any order (atomics), each bucket's word
+/// moved to its start: checked bucket by bucket as sets.
 pub static HASH_SCATTER: KernelDef = KernelDef {
     test_input: Some(after_scan),
-    check: Check::Own("the_gpu_hash_lists_what_the_cpu_lists_after_its_scatter_and_sort"),
+    check: Check::Own("the_gpu_hash_lists_what_the_cpu_lists_after_its_scatter"),
     ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Aux2, Aux3], &[Aux2, Aux3])
-};
-/// Every bucket's range sorted by particle, and its particles' grid bounding box.
-pub static HASH_SORT: KernelDef = KernelDef {
-    test_input: Some(after_scatter),
-    ..hash("hash_sort", hash_sort, Count::Particles, &[Params, Aux2, Aux3], &[Aux2, Aux3])
 };
 /// The response: every particle pushed out of its close candidates, into the other
 /// position buffer.
@@ -1183,11 +1170,11 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     ..def("self_collide", self_collide, Count::Particles, &[Params, Pos, Prev, Aux2, Aux3], &[PosOut, Prev])
 };
 /// Self-collision's kernels, in recipe order.
-pub static SELF_COLLISION: [&KernelDef; 7] =
-    [&HASH_COUNT, &HASH_SCAN_BLOCKS, &HASH_SCAN_TOP, &HASH_SCAN_ADD, &HASH_SCATTER, &HASH_SORT, &SELF_COLLIDE];
+pub static SELF_COLLISION: [&KernelDef; 6] =
+    [&HASH_COUNT, &HASH_SCAN_BLOCKS, &HASH_SCAN_TOP, &HASH_SCAN_ADD, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 51] = [
+pub static ALL: [&KernelDef; 50] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -1237,7 +1224,6 @@ pub static ALL: [&KernelDef; 51] = [
     &HASH_SCAN_TOP,
     &HASH_SCAN_ADD,
     &HASH_SCATTER,
-    &HASH_SORT,
     &SELF_COLLIDE,
 ];
 

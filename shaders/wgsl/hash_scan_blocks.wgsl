@@ -1,7 +1,7 @@
 //! include: state, hash, hash_fn
 // hash_scan_blocks — per WORKGROUP consecutive buckets (one invocation each, in order, no
 // barriers: on lavapipe a workgroup-wide scan's twelve barriers cost more than the sums):
-// the exclusive prefix of the counts into cells[b].y, the total into cells[g].w
+// the inclusive prefix of the counts in place, the block's total into sorted[4g + 2]
 // (core::cpu::self_collide::hash_scan_blocks).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -15,9 +15,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     let last = min(first + WORKGROUP, size);
     var acc = 0u;
     for (var b = first; b < last; b++) {
-        let c = cells[4u * b];
-        cells[4u * b + 1u] = acc;
-        acc += c;
+        acc += cells[b];
+        cells[b] = acc;
     }
-    cells[4u * g + 3u] = acc;
+    sorted[4u * g + 2u] = acc;
 }

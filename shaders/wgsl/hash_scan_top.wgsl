@@ -1,7 +1,10 @@
 //! include: state, hash, hash_fn
-// hash_scan_top — one workgroup: the exclusive prefix of the workgroups' totals
-// (cells[g].w), WORKGROUP of them at a time with the running total carried.
+// hash_scan_top — one workgroup: the exclusive prefix of the blocks' totals (sorted[4g + 2])
+// in place (core::cpu::self_collide::hash_scan_top). Each invocation sums a run of
+// consecutive totals, one scan over the workgroup offsets the runs, and each invocation
+// writes its run's prefixes: two barrier rounds, however many blocks.
 var<workgroup> wg_count: u32;
+var<workgroup> run_sums: array<u32, WORKGROUP>;
 
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(local_invocation_index) li: u32) {
@@ -10,18 +13,24 @@ fn main(@builtin(local_invocation_index) li: u32) {
         wg_count = (table_size() + WORKGROUP - 1u) / WORKGROUP;
     }
     let count = workgroupUniformLoad(&wg_count);
-    var carry = 0u;
-    for (var base = 0u; base < count; base += WORKGROUP) {
-        let g = base + li;
-        var c = 0u;
-        if g < count {
-            c = cells[4u * g + 3u];
-        }
-        let incl = workgroup_scan(c, li);
-        if g < count {
-            cells[4u * g + 3u] = carry + incl - c;
-        }
-        carry += scan_acc[WORKGROUP - 1u];
-        workgroupBarrier();
+    let per = (count + WORKGROUP - 1u) / WORKGROUP;
+    let first = min(li * per, count);
+    let last = min(first + per, count);
+    var sum = 0u;
+    for (var g = first; g < last; g++) {
+        sum += sorted[4u * g + 2u];
+    }
+    run_sums[li] = sum;
+    workgroupBarrier();
+    // The runs before this one (WORKGROUP adds from workgroup memory: cheaper on lavapipe
+    // than a Hillis-Steele scan's barriers).
+    var acc = 0u;
+    for (var k = 0u; k < li; k++) {
+        acc += run_sums[k];
+    }
+    for (var g = first; g < last; g++) {
+        let total = sorted[4u * g + 2u];
+        sorted[4u * g + 2u] = acc;
+        acc += total;
     }
 }

@@ -1,17 +1,21 @@
 //! include: state, hash_atomic, hash_fn
-// hash_scatter — per particle: its grid coordinates (i | j << 12) into the next free slot
-// of its bucket's range (atomics: in any order; hash_sort follows).
-// core::cpu::self_collide::hash_scatter.
+// hash_scatter — per particle: its grid coordinates (i | j << 12) into the slot before its
+// bucket's end (atomics: in any order), which leaves the bucket's word at its start
+// (core::cpu::self_collide::hash_scatter).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
+    let np = num_particles();
     let i = flat_id(id, groups);
-    if i >= num_particles() {
+    if i >= np {
         return;
     }
     let b = sorted[4u * i];
-    let slot = atomicAdd(&cells[4u * b + 2u], 1u);
-    if slot < num_particles() {
+    if b >= table_size() {
+        return;
+    }
+    let slot = atomicSub(&cells[b], 1u) - 1u;
+    if slot < np {
         sorted[4u * slot + 1u] = (i % p.n) | ((i / p.n) << COORD_BITS);
     }
 }

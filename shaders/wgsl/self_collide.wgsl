@@ -4,6 +4,11 @@
 // (core::cpu::self_collide::self_collide_at).
 @group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
 
+// core::cpu::self_collide::{REACH, UNITS, MAX_CONTACTS}.
+const REACH: f32 = 1.001;
+const UNITS: f32 = 65536.0;
+const MAX_CONTACTS: u32 = 32767u;
+
 // core::cpu::self_collide::candidate_coords: outside the springs' 5 x 5 stencil and
 // farther apart at rest than twice the thickness.
 fn candidates(a: vec2<i32>, b: vec2<i32>) -> bool {
@@ -13,6 +18,14 @@ fn candidates(a: vec2<i32>, b: vec2<i32>) -> bool {
     }
     let t2 = 2.0 * p.self_thickness;
     return f32(d.x * d.x + d.y * d.y) * (p.spacing * p.spacing) > t2 * t2;
+}
+
+// core::cpu::self_collide::gap: the distance (cells) to the neighbour cell at offset d.
+fn gap(f: f32, d: i32) -> f32 {
+    if d == 0 {
+        return 0.0;
+    }
+    return select(1.0 - f, f, d < 0);
 }
 
 @compute @workgroup_size(WORKGROUP)
@@ -31,59 +44,73 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     let t = p.self_thickness;
     let size = table_size();
-    let c = cell_of(x4.xyz);
-    // Per axis the neighbour cell on the point's side (core::cpu::self_collide::sides).
-    let v = clamp(x4.xyz * p.inv_cell, vec3<f32>(-CELL_LIMIT), vec3<f32>(CELL_LIMIT));
-    let side = select(vec3<i32>(-1), vec3<i32>(1), v - vec3<f32>(c) >= vec3<f32>(0.5));
+    let v = scaled(x4.xyz);
+    let cf = floor(v);
+    let c = vec3<i32>(cf);
+    let f = v - cf;
     let me = vec2<i32>(i32(i % p.n), i32(i / p.n));
-    var buckets: array<u32, 8>;
-    var delta = vec3<f32>(0.0);
-    for (var k = 0u; k < 8u; k++) {
-        let cell = c + select(vec3<i32>(0), side, (vec3<u32>(k) >> vec3<u32>(0u, 1u, 2u) & vec3<u32>(1u)) == vec3<u32>(1u));
-        let b = bucket(cell, size);
-        buckets[k] = b;
-        // Two of the 8 cells may share a bucket: each bucket once.
-        var seen = false;
-        for (var m = 0u; m < k; m++) {
-            seen = seen || buckets[m] == b;
-        }
-        if seen {
-            continue;
-        }
-        let start = min(cells[4u * b + 1u], np);
-        let end = min(start + cells[4u * b], np);
-        if start == end {
-            continue;
-        }
-        // A bucket whose particles are all grid neighbours (its bounding box within the
-        // stencil: most of a flat cloth's) is skipped unread.
-        let mask = (1u << COORD_BITS) - 1u;
-        let lo_w = cells[4u * b + 2u];
-        let hi_w = cells[4u * b + 3u];
-        let lo = vec2<i32>(vec2<u32>(lo_w & mask, lo_w >> COORD_BITS));
-        let hi = vec2<i32>(vec2<u32>(hi_w & mask, hi_w >> COORD_BITS));
-        if all(lo >= me - vec2<i32>(2)) && all(hi <= me + vec2<i32>(2)) {
-            continue;
-        }
-        for (var s = start; s < end; s++) {
-            // Grid neighbours refused by the slot's coordinates before loading them.
-            let w = sorted[4u * s + 1u];
-            let qc = vec2<u32>(w & ((1u << COORD_BITS) - 1u), w >> COORD_BITS);
-            let q = qc.y * p.n + qc.x;
-            if qc.x >= p.n || q >= np || !candidates(me, vec2<i32>(qc)) {
+    let scale = UNITS * p.inv_cell;
+    var sum = vec3<i32>(0);
+    var contacts = 0u;
+    for (var dz = -1; dz <= 1; dz++) {
+        for (var dy = -1; dy <= 1; dy++) {
+            // core::cpu::self_collide::rows_around: the rows the sphere reaches, trimmed.
+            let gy = gap(f.y, dy);
+            let gz = gap(f.z, dz);
+            let r2 = REACH * REACH - gy * gy - gz * gz;
+            if r2 <= 0.0 {
                 continue;
             }
-            let y4 = pos[q];
-            let e = x4.xyz - y4.xyz;
-            let d2 = e.x * e.x + e.y * e.y + e.z * e.z;
-            if d2 >= t * t || d2 < 1e-12 {
-                continue;
+            let r = sqrt(r2);
+            let lo = c.x - select(0, 1, f.x < r);
+            let hi = c.x + select(0, 1, 1.0 - f.x < r);
+            let first = bucket(vec3<i32>(lo, c.y + dy, c.z + dz), size);
+            let stop = first + u32(hi - lo) + 1u;
+            // core::cpu::self_collide::row_ranges: one range, or two where the row's
+            // buckets wrap around the table's end; walked as one.
+            let start0 = min(cells[first], np);
+            var end0 = np;
+            var start1 = 0u;
+            var end1 = 0u;
+            if stop <= size {
+                if stop < size {
+                    end0 = cells[stop];
+                }
+                end0 = clamp(end0, start0, np);
+            } else {
+                start1 = min(cells[0], np);
+                end1 = clamp(cells[stop - size], start1, np);
             }
-            let d = sqrt(d2);
-            let share = select(0.5, 1.0, y4.w == 0.0);
-            delta += e * ((t - d) / d * share);
+            let n0 = end0 - start0;
+            let total = n0 + (end1 - start1);
+            for (var k = 0u; k < total; k++) {
+                let s = select(start1 + (k - n0), start0 + k, k < n0);
+                // Grid neighbours refused by the slot's coordinates before loading them.
+                let w = sorted[4u * s + 1u];
+                let qc = vec2<u32>(w & ((1u << COORD_BITS) - 1u), w >> COORD_BITS);
+                let q = qc.y * p.n + qc.x;
+                if qc.x >= p.n || q >= np || !candidates(me, vec2<i32>(qc)) {
+                    continue;
+                }
+                let y4 = pos[q];
+                let e = x4.xyz - y4.xyz;
+                let d2 = e.x * e.x + e.y * e.y + e.z * e.z;
+                if d2 >= t * t || d2 < 1e-12 {
+                    continue;
+                }
+                contacts += 1u;
+                let d = sqrt(d2);
+                let share = select(0.5, 1.0, y4.w == 0.0);
+                let push = (t - d) / d * share * scale;
+                sum += vec3<i32>(e * push);
+            }
         }
     }
+    if contacts > MAX_CONTACTS {
+        pos_out[i] = x4;
+        return;
+    }
+    let delta = vec3<f32>(sum) * (t * (1.0 / UNITS));
     let dd = delta.x * delta.x + delta.y * delta.y + delta.z * delta.z;
     if dd == 0.0 {
         pos_out[i] = x4;

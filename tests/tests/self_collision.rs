@@ -1,14 +1,15 @@
 //! Self-collision on every backend: the heap scene keeps its layers apart, every GPU
 //! kernel of it matches its twin on both APIs (the hash's scatter, which places with
-//! atomics in any order, after its sort), and a rollout through the contacts follows the
-//! CPU.
+//! atomics in any order, bucket by bucket as sets), and a rollout through the contacts
+//! follows the CPU.
 
 use std::path::Path;
 
+use clothlab_core::cpu::self_collide::{bucket_range, hash_words, table_size};
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{CpuSolver, Exec, Scene, SceneFile, SimParams, Solver};
 use clothlab_engine::Variant;
-use clothlab_engine::kernels::{HASH_SCATTER, HASH_SORT, KernelRef, SELF_COLLISION};
+use clothlab_engine::kernels::{HASH_SCATTER, KernelRef, SELF_COLLISION};
 use clothlab_engine::recipe::Command;
 use clothlab_engine::validate::{KernelInput, KernelRunner, validate_kernels_with};
 use clothlab_tests::{assert_checks, every_backend, or_skip};
@@ -73,8 +74,8 @@ fn the_heap_keeps_its_layers_apart_on_every_backend() {
 }
 
 /// Every self-collision kernel of `runner`'s recipe (`recipe`) against its twin, and the
-/// scatter (atomics, in any order) followed by the sort against the twins' hash, bit for
-/// bit.
+/// scatter (atomics, in any order) against the twins' hash: the buckets' words (their
+/// starts) and the other words bit for bit, each bucket's slots as a set.
 fn check_kernels(
     label: &str,
     runner: &mut dyn KernelRunner,
@@ -85,26 +86,43 @@ fn check_kernels(
     let kernels: Vec<_> = recipe.into_iter().filter(|k| SELF_COLLISION.contains(&k.def)).collect();
     assert_eq!(kernels.len(), SELF_COLLISION.len(), "{label}: {kernels:?}");
     let checks = validate_kernels_with(runner, &kernels, scene, 9, params).unwrap();
-    // Six checked by the loop (the scatter by the test below), every buffer of each.
-    assert_eq!(checks.len(), 6 * clothlab_engine::validate::COMPARED_BUFFERS, "{label}");
+    // Five checked by the loop (the scatter by the test below), every buffer of each.
+    assert_eq!(checks.len(), 5 * clothlab_engine::validate::COMPARED_BUFFERS, "{label}");
     assert_checks(label, &checks);
     let input = KernelInput::for_scene(scene, 9, params).unwrap();
     let scatter = kernels.iter().find(|k| k.def == &HASH_SCATTER).unwrap();
-    let sort = kernels.iter().find(|k| k.def == &HASH_SORT).unwrap();
-    let commands = [Command::Dispatch(*scatter), Command::Dispatch(*sort)];
+    let commands = [Command::Dispatch(*scatter)];
     let mut want = input.for_kernel(*scatter);
     let mut got = want.clone();
     input.engine.run(&commands, &input.p, 0, &mut want);
     runner.run_commands(&commands, &input.p, &mut got).unwrap();
-    for k in [2, 3] {
-        let bits = |v: &Vec<[f32; 4]>| v.iter().map(|e| e.map(f32::to_bits)).collect::<Vec<_>>();
-        assert!(bits(&got.aux[k]) == bits(&want.aux[k]), "{label}: aux{k} after scatter and sort");
+    let np = want.pos.len();
+    let size = table_size(np);
+    let (cw, cg) = (hash_words(&want.aux[2]), hash_words(&got.aux[2]));
+    assert!(cw == cg, "{label}: the buckets' starts after the scatter");
+    let (sw, sg) = (hash_words(&want.aux[3]), hash_words(&got.aux[3]));
+    for (k, (w, g)) in sw.iter().zip(sg).enumerate() {
+        if k % 4 != 1 {
+            assert_eq!(w, g, "{label}: aux3 word {k} after the scatter");
+        }
     }
+    let mut slots = 0;
+    for b in 0..size {
+        let (start, end) = bucket_range(cw, b, size, np as u32);
+        let set = |v: &[u32]| {
+            let mut s: Vec<u32> = (start..end).map(|s| v[4 * s as usize + 1]).collect();
+            s.sort_unstable();
+            s
+        };
+        assert_eq!(set(sw), set(sg), "{label}: bucket {b}'s particles");
+        slots += end - start;
+    }
+    assert_eq!(slots as usize, np, "{label}: every slot in one bucket");
 }
 
 #[test]
 fn every_self_collision_kernel_matches_its_twin_and_a_rollout_through_the_contacts_follows_the_cpu() {
-    // n = 33 (not a multiple of the workgroup; 1089 particles, 1024 buckets). The rollout
+    // n = 33 (not a multiple of the workgroup; 1089 particles, 4096 buckets). The rollout
     // of the optimized variant runs 40 frames (640 substeps): the cloth lands at frame 14
     // and folds onto itself. The naive variant adds spring forces with float atomics in
     // any order: a folding cloth amplifies those last-bit differences into other folds

@@ -1,20 +1,26 @@
 //! Self-collision: particles that are not neighbours in the grid are kept
 //! `self_thickness` apart. The twins of the GPU kernels, in their order:
 //!
-//! 1. [`hash_count`]: each particle's cell (a cube of side `2·self_thickness`) is hashed to
-//!    one of [`table_size`]`(n²)` buckets; the buckets count their particles (atomics on the GPU).
-//! 2. [`hash_scan_blocks`], [`hash_scan_top`], [`hash_scan_add`]: an exclusive prefix sum
-//!    of the counts gives every bucket the start of its range in one array of particle
-//!    indices — per workgroup of [`WORKGROUP`] buckets, then over the workgroups' totals
-//!    in one workgroup, then added back.
-//! 3. [`hash_scatter`]: every particle writes its index into its bucket's range (atomics on
-//!    the GPU, in any order), and [`hash_sort`] sorts each bucket's range (insertion sort:
-//!    a bucket holds a few particles), so that what follows sums in one order everywhere.
-//! 4. [`self_collide`]: every particle looks through the buckets of the 2 × 2 × 2 cells
-//!    nearest to it (its own and the neighbour on its side per axis: cells are twice the
-//!    thickness wide; a bucket two of them share once), refuses grid neighbours by the
-//!    coordinates in the slot before loading them, and moves away from each particle
-//!    closer than the thickness: a counting sort into a uniform grid, no per-particle lists.
+//! 1. [`hash_count`]: each particle's cell (a cube of side `t = self_thickness`) is hashed
+//!    to one of [`table_size`]`(n²)` buckets (four times the largest power of two not
+//!    above n²); the buckets count their particles (atomics on the GPU). A cell's bucket
+//!    is its row's hash plus its x ([`bucket`]): the three cells of a row in x are three
+//!    consecutive buckets, whose particles lie in one range of the sorted array.
+//! 2. [`hash_scan_blocks`], [`hash_scan_top`], [`hash_scan_add`]: an inclusive prefix sum
+//!    of the counts gives every bucket the end of its range in one array of particles —
+//!    per block of [`WORKGROUP`] buckets, then over the blocks' totals in one workgroup,
+//!    then added back.
+//! 3. [`hash_scatter`]: every particle takes the slot before its bucket's end (atomics on
+//!    the GPU, in any order), which leaves each bucket's word at the start of its range:
+//!    bucket `b`'s particles are the slots `[cells[b], cells[b + 1])`. No sort: the
+//!    response sums in fixed point, which is the same in any order.
+//! 4. [`self_collide`]: every particle looks through the cells of the 3 × 3 × 3 around
+//!    its own that the sphere of radius `t` around it reaches — row by row: nine rows in
+//!    x, a row the sphere misses skipped, the others trimmed to the cells it reaches, each
+//!    one range of the sorted array read between two words of `cells` (rows never share
+//!    a bucket: [`row_start`]) — refuses grid neighbours by the coordinates in the slot
+//!    before loading them, and moves away from each particle closer than the thickness:
+//!    a counting sort into a uniform grid, no per-particle lists.
 //!
 //! A pair is a candidate when its grid offset is outside the 5 × 5 stencil of the springs
 //! and its rest distance exceeds twice the thickness (closer ones would be pushed apart by
@@ -25,65 +31,109 @@
 //! other's particles, and an edge can cross an edge, when the cloth is coarse next to its
 //! thickness (spacing > t·√2) or moves more than the thickness in one substep.
 //!
-//! The hash lives in integrator scratch buffers that are dead by then (aux2: per bucket
-//! `[count, start, cursor, block total]`; aux3: `[bucket of particle i, particle at slot
-//! i as its grid coordinates `i | j << 12`, –, –]`), as `u32` bits in the `f32`
-//! elements.
+//! The pushes are summed in fixed point ([`UNITS`] per thickness, truncated, at most
+//! [`MAX_CONTACTS`] of them): integers add up to the same bits in any order, so the
+//! scatter's atomic order needs no sort and every backend computes the CPU's sum.
+//!
+//! The hash lives in integrator scratch buffers that are dead by then, as `u32` words:
+//! aux2 holds one word per bucket (count, then end, then start); aux3 per particle
+//! `[bucket of particle i, particle at slot i as its grid coordinates i | j << 12, block
+//! total (the first table_size / WORKGROUP), –]`.
 
 use crate::grid::{StepParams, V4};
 use crate::layout::WORKGROUP;
 
 use super::{Exec, for_each2};
 
-/// The hash's primes (Teschner et al. 2003).
-pub const PRIMES: [i32; 3] = [92_837_111, 689_287_499, 283_923_481];
+/// The hash's primes for a cell's row (y, z) (Teschner et al. 2003).
+pub const PRIMES: [i32; 2] = [689_287_499, 283_923_481];
 /// Cell coordinates are clamped to ±1e9 before they are converted to integers.
 const CELL_LIMIT: f32 = 1e9;
+/// Buckets per particle, about (the table is this times the largest power of two not
+/// above the particle count): few foreign cells share a bucket a probe reads.
+pub const TABLE_FACTOR: u32 = 4;
+/// Fixed-point units of a push per thickness (a push is at most `t`: 2¹⁶ units).
+pub const UNITS: f32 = 65536.0;
+/// Contacts a particle's pushes are summed for at most: below 2³¹ / 2¹⁶, so the sum never
+/// overflows. A particle with more (a pile far denser than cloth lies) is not pushed:
+/// decided by the count, which is the same in any order.
+pub const MAX_CONTACTS: u32 = 32767;
+/// How far the response looks, in cells (thicknesses): a little more than one, so that
+/// rounding never drops a cell that holds a contact (the distance decides).
+const REACH: f32 = 1.001;
 
-#[inline]
-fn bits(v: f32) -> u32 {
-    v.to_bits()
+/// Word views of the hash's two buffers.
+fn words(v: &[V4]) -> &[u32] {
+    bytemuck::cast_slice(v)
 }
 
-#[inline]
-fn word(v: u32) -> f32 {
-    f32::from_bits(v)
+fn words_mut(v: &mut [V4]) -> &mut [u32] {
+    bytemuck::cast_slice_mut(v)
 }
 
-/// The cell of a point: `floor(x / s)` per axis for cells of side `s = 2t`, with `1/s`
-/// passed in (a product is rounded alike everywhere, a quotient is not).
+/// `floor(v)` without libm's call (baseline x86-64 has no rounding instruction): the
+/// truncation, one less below zero where it was not exact. Equal to floor for every
+/// value in ±1e9.
+#[inline]
+fn floor_i32(v: f32) -> i32 {
+    let t = v as i32;
+    t - i32::from((t as f32) > v)
+}
+
+/// A point in cell units: the position times `1/t` (computed on the host: a product is
+/// rounded alike everywhere, a quotient is not), clamped to ±1e9.
+#[inline]
+fn scaled(x: &V4, inv_cell: f32) -> [f32; 3] {
+    std::array::from_fn(|k| (x[k] * inv_cell).clamp(-CELL_LIMIT, CELL_LIMIT))
+}
+
+/// The cell of a point: `floor(x / t)` per axis.
 #[inline]
 pub fn cell_of(x: &V4, inv_cell: f32) -> [i32; 3] {
-    std::array::from_fn(|k| {
-        // floor without libm's call (baseline x86-64 has no rounding instruction): the
-        // truncation, one less below zero where it was not exact. Equal to floor for
-        // every value in ±1e9.
-        let v = (x[k] * inv_cell).clamp(-CELL_LIMIT, CELL_LIMIT);
-        let t = v as i32;
-        t - i32::from((t as f32) > v)
-    })
+    scaled(x, inv_cell).map(floor_i32)
 }
 
-/// Buckets of a hash over `len` elements: the largest power of two not above it (at
-/// most two particles a bucket on average; the bucket is a mask, not a division).
+/// Buckets of the hash over `len` particles: [`TABLE_FACTOR`] times the largest power of
+/// two not above it (a power of two: the bucket is a mask, not a division; at most four
+/// words a particle: aux2 holds them).
 #[inline]
 pub fn table_size(len: usize) -> u32 {
     let len = len.max(1) as u32;
-    1 << (31 - len.leading_zeros())
+    TABLE_FACTOR << (31 - len.leading_zeros())
 }
 
-/// The 32-bit hash of a cell.
+/// The blocks of [`WORKGROUP`] buckets the scan sums separately.
 #[inline]
-pub fn cell_hash(c: [i32; 3]) -> u32 {
-    (c[0].wrapping_mul(PRIMES[0]) ^ c[1].wrapping_mul(PRIMES[1]) ^ c[2].wrapping_mul(PRIMES[2])) as u32
+pub fn hash_blocks(len: usize) -> u32 {
+    table_size(len).div_ceil(WORKGROUP)
+}
+
+/// Where a row of cells (y, z) starts among the buckets: `4·((y mod 4) + 4·(z mod 4))`
+/// plus 64 times its hash. Two different rows within two cells of each other in y and z
+/// differ in the first part (by a multiple of 4 below 64) and so start at least four
+/// buckets apart modulo any table of 64 or more: the three cells of one row never share a
+/// bucket with those of another row around the same point, and a probe needs no check
+/// for buckets read twice. (Tables are 64 or more from n = 4; smaller grids have no pair
+/// that may collide.)
+#[inline]
+pub fn row_start(y: i32, z: i32) -> u32 {
+    let low = ((y & 3) + 4 * (z & 3)) as u32;
+    let hash = (y.wrapping_mul(PRIMES[0]) ^ z.wrapping_mul(PRIMES[1])) as u32;
+    4 * low + hash.wrapping_mul(64)
+}
+
+/// The bucket of a cell among `size` (a power of two): its row's start plus its x, so
+/// that neighbours in x are consecutive buckets.
+#[inline]
+pub fn bucket(c: [i32; 3], size: u32) -> u32 {
+    row_start(c[1], c[2]).wrapping_add(c[0] as u32) & (size - 1)
 }
 
 /// Bits of a grid coordinate in a slot's word (n ≤ 4096).
 const COORD_BITS: u32 = 12;
 
 /// What a slot holds for particle `i` of an `n`-wide grid: its grid coordinates,
-/// `i | j << 12` — in index order as the particle's index is, and enough to refuse a grid
-/// neighbour without loading it (below 2²⁴: as an `f32` element, a finite number).
+/// `i | j << 12` — enough to refuse a grid neighbour without loading it.
 #[inline]
 pub fn slot_word(i: u32, n: u32) -> u32 {
     (i % n) | (i / n) << COORD_BITS
@@ -95,83 +145,79 @@ pub fn slot_coords(w: u32) -> (u32, u32) {
     (w & ((1 << COORD_BITS) - 1), w >> COORD_BITS)
 }
 
-/// The bucket of a cell among `size` (a power of two).
-#[inline]
-pub fn bucket(c: [i32; 3], size: u32) -> u32 {
-    cell_hash(c) & (size - 1)
-}
-
-/// `1 / (2·self_thickness)`, the cells' inverse size (computed once, in [`StepParams::new`]).
+/// `1 / self_thickness`, the cells' inverse size (computed once, in [`StepParams::new`]).
 #[inline]
 pub fn inv_cell(p: &StepParams) -> f32 {
     p.inv_cell
 }
 
 /// Step 1: each particle's bucket into `sorted[i].x`, the buckets' counts into
-/// `cells[b].x` (cleared before).
+/// `cells` (cleared before).
 pub fn hash_count(p: &StepParams, pos: &[V4], cells: &mut [V4], sorted: &mut [V4]) {
-    let (size, inv) = (table_size(cells.len()), inv_cell(p));
-    for (x, s) in pos.iter().zip(sorted.iter_mut()) {
+    let (size, inv) = (table_size(pos.len()), inv_cell(p));
+    let (cells, sorted) = (words_mut(cells), words_mut(sorted));
+    for (i, x) in pos.iter().enumerate() {
         let b = bucket(cell_of(x, inv), size);
-        s[0] = word(b);
-        let c = &mut cells[b as usize][0];
-        *c = word(bits(*c).wrapping_add(1));
+        sorted[4 * i] = b;
+        cells[b as usize] = cells[b as usize].wrapping_add(1);
     }
 }
 
-/// Step 2a: within each workgroup of buckets, the exclusive prefix of the counts into
-/// `cells[b].y`, and the workgroup's total into `cells[g].w`.
-pub fn hash_scan_blocks(cells: &mut [V4]) {
-    let size = table_size(cells.len()) as usize;
-    let cells = &mut cells[..size];
+/// Step 2a: within each block of [`WORKGROUP`] buckets, the inclusive prefix of the
+/// counts in place, and the block's total into `sorted[g].z`.
+pub fn hash_scan_blocks(cells: &mut [V4], sorted: &mut [V4]) {
+    let size = table_size(sorted.len()) as usize;
+    let (cells, sorted) = (words_mut(cells), words_mut(sorted));
     let w = WORKGROUP as usize;
-    for g in 0..cells.len().div_ceil(w) {
+    for (g, block) in cells[..size].chunks_mut(w).enumerate() {
         let mut acc = 0u32;
-        for b in g * w..((g + 1) * w).min(cells.len()) {
-            cells[b][1] = word(acc);
-            acc = acc.wrapping_add(bits(cells[b][0]));
+        for c in block {
+            acc = acc.wrapping_add(*c);
+            *c = acc;
         }
-        cells[g][3] = word(acc);
+        sorted[4 * g + 2] = acc;
     }
 }
 
-/// Step 2b: the exclusive prefix of the workgroups' totals, in place (`cells[g].w`).
-pub fn hash_scan_top(cells: &mut [V4]) {
-    let size = table_size(cells.len()) as usize;
-    let cells = &mut cells[..size];
-    let groups = cells.len().div_ceil(WORKGROUP as usize);
+/// Step 2b: the exclusive prefix of the blocks' totals, in place (`sorted[g].z`).
+pub fn hash_scan_top(sorted: &mut [V4]) {
+    let blocks = hash_blocks(sorted.len()) as usize;
+    let sorted = words_mut(sorted);
     let mut acc = 0u32;
-    for c in cells.iter_mut().take(groups) {
-        let total = bits(c[3]);
-        c[3] = word(acc);
+    for g in 0..blocks {
+        let total = sorted[4 * g + 2];
+        sorted[4 * g + 2] = acc;
         acc = acc.wrapping_add(total);
     }
 }
 
-/// Step 2c: each bucket's start (`cells[b].y`, its workgroup's offset added) and its
-/// scatter cursor (`cells[b].z`, the same).
-pub fn hash_scan_add(cells: &mut [V4]) {
-    let size = table_size(cells.len()) as usize;
-    let cells = &mut cells[..size];
+/// Step 2c: each bucket's end in the whole array (its block's offset added).
+pub fn hash_scan_add(cells: &mut [V4], sorted: &[V4]) {
+    let size = table_size(sorted.len()) as usize;
+    let (cells, sorted) = (words_mut(cells), words(sorted));
     let w = WORKGROUP as usize;
-    for b in 0..cells.len() {
-        let start = bits(cells[b][1]).wrapping_add(bits(cells[b / w][3]));
-        cells[b][1] = word(start);
-        cells[b][2] = word(start);
+    for (b, c) in cells[..size].iter_mut().enumerate() {
+        *c = c.wrapping_add(sorted[4 * (b / w) + 2]);
     }
 }
 
-/// Step 3a: every particle's [`slot_word`] into the next free slot of its bucket's range
-/// (`sorted[slot].y`), in index order (a GPU's order differs; [`hash_sort`] follows).
-/// Buckets and cursors out of range (never from [`hash_count`] and the scans) are skipped.
+/// Step 3: every particle's [`slot_word`] into the slot before its bucket's end
+/// (`sorted[slot].y`; the particles of a bucket in index order here, in any order on a
+/// GPU), which moves the bucket's word down to its start. Buckets and slots out of range
+/// (never from [`hash_count`] and the scans) are skipped.
 pub fn hash_scatter(p: &StepParams, cells: &mut [V4], sorted: &mut [V4]) {
-    for i in 0..sorted.len() {
-        let b = bits(sorted[i][0]) as usize;
-        let Some(cell) = cells.get_mut(b) else { continue };
-        let slot = bits(cell[2]);
-        cell[2] = word(slot.wrapping_add(1));
-        if let Some(s) = sorted.get_mut(slot as usize) {
-            s[1] = word(slot_word(i as u32, p.n));
+    let (np, size) = (sorted.len(), table_size(sorted.len()));
+    let (cells, sorted) = (words_mut(cells), words_mut(sorted));
+    for i in (0..np).rev() {
+        let b = sorted[4 * i];
+        if b >= size {
+            continue;
+        }
+        let c = &mut cells[b as usize];
+        let slot = c.wrapping_sub(1);
+        *c = slot;
+        if (slot as usize) < np {
+            sorted[4 * slot as usize + 1] = slot_word(i as u32, p.n);
         }
     }
 }
@@ -183,61 +229,43 @@ pub fn hash_buffers(aux: &mut [Vec<V4>]) -> (&mut [V4], &mut [V4]) {
     (cells, sorted)
 }
 
-/// The range `[start, end)` of bucket `c`'s particles in `sorted`, clamped to it.
-#[inline]
-fn range(c: &V4, len: usize) -> (usize, usize) {
-    let start = (bits(c[1]) as usize).min(len);
-    (start, (start + bits(c[0]) as usize).min(len))
-}
-
-/// Step 3b: each bucket's range sorted by particle (insertion sort), and the bounding box
-/// of its particles' grid coordinates into `cells[b].z` (smallest i and j, as a slot word)
-/// and `.w` (largest), where the cursor and the block total were: a probe skips a bucket
-/// whose particles are all grid neighbours without reading them.
-pub fn hash_sort(cells: &mut [V4], sorted: &mut [V4]) {
-    let size = table_size(cells.len()) as usize;
-    for c in &mut cells[..size] {
-        let (start, end) = range(c, sorted.len());
-        if start == end {
-            continue;
-        }
-        for k in start + 1..end {
-            let v = sorted[k][1];
-            let mut m = k;
-            while m > start && bits(sorted[m - 1][1]) > bits(v) {
-                sorted[m][1] = sorted[m - 1][1];
-                m -= 1;
-            }
-            sorted[m][1] = v;
-        }
-        let (mut lo, mut hi) = ((u32::MAX, u32::MAX), (0, 0));
-        for s in &sorted[start..end] {
-            let (i, j) = slot_coords(bits(s[1]));
-            lo = (lo.0.min(i), lo.1.min(j));
-            hi = (hi.0.max(i), hi.1.max(j));
-        }
-        c[2] = word(lo.0 | lo.1 << COORD_BITS);
-        c[3] = word(hi.0 | hi.1 << COORD_BITS);
-    }
-}
-
-/// Whether every particle of bucket `c` (by its bounding box) is within the springs'
-/// 5 × 5 stencil around `me`: nothing there may collide with it.
-#[inline]
-fn all_neighbours(c: &V4, me: (i32, i32)) -> bool {
-    let (lo, hi) = (slot_coords(bits(c[2])), slot_coords(bits(c[3])));
-    lo.0 as i32 >= me.0 - 2 && hi.0 as i32 <= me.0 + 2 && lo.1 as i32 >= me.1 - 2 && hi.1 as i32 <= me.1 + 2
-}
-
 /// Steps 1 to 3: the hash of `pos` in `cells` and `sorted` (one element per particle).
 pub fn build_hash(p: &StepParams, pos: &[V4], cells: &mut [V4], sorted: &mut [V4]) {
     cells.iter_mut().for_each(|c| *c = [0.0; 4]);
     hash_count(p, pos, cells, sorted);
-    hash_scan_blocks(cells);
-    hash_scan_top(cells);
-    hash_scan_add(cells);
+    hash_scan_blocks(cells, sorted);
+    hash_scan_top(sorted);
+    hash_scan_add(cells, sorted);
     hash_scatter(p, cells, sorted);
-    hash_sort(cells, sorted);
+}
+
+/// The slots `[start, end)` of bucket `b` after the scatter, clamped to the `np` slots
+/// (`cells` as words).
+#[inline]
+pub fn bucket_range(cells: &[u32], b: u32, size: u32, np: u32) -> (u32, u32) {
+    let start = cells[b as usize].min(np);
+    let end = if b + 1 < size { cells[b as usize + 1] } else { np };
+    (start, end.clamp(start, np))
+}
+
+/// The slots of a row's buckets: one range, or two where its buckets wrap around the
+/// table's end (the second empty otherwise).
+#[inline]
+pub fn row_ranges(cells: &[u32], row: Row, size: u32, np: u32) -> [(u32, u32); 2] {
+    let stop = row.first + row.len;
+    let start = cells[row.first as usize].min(np);
+    if stop <= size {
+        let end = if stop < size { cells[stop as usize] } else { np };
+        [(start, end.clamp(start, np)), (0, 0)]
+    } else {
+        let wrapped = cells[0].min(np);
+        [(start, np), (wrapped, cells[(stop - size) as usize].clamp(wrapped, np))]
+    }
+}
+
+/// The words of a hash buffer (aux2, aux3), for probes and tests.
+pub fn hash_words(v: &[V4]) -> &[u32] {
+    words(v)
 }
 
 /// Whether particles `a` and `b` of an `n`-wide grid may collide: outside the springs'
@@ -259,21 +287,51 @@ pub fn candidate_coords(p: &StepParams, a: (i32, i32), b: (i32, i32)) -> bool {
     ((di * di + dj * dj) as f32) * (p.spacing * p.spacing) > t2 * t2
 }
 
-/// Cell `k` (0 ..= 7, x fastest) of the 2 × 2 × 2 around a point in cell `c`: per axis,
-/// `c` or the neighbour on the point's side (`side`: ±1). A point within `t` of the
-/// point lies in one of them, cells being `2t` wide.
+/// The distance (in cells) from a point at fraction `f` of its cell to the neighbour
+/// cell at offset `d` (−1, 0, 1) along one axis.
 #[inline]
-fn around(c: [i32; 3], side: [i32; 3], k: usize) -> [i32; 3] {
-    std::array::from_fn(|a| c[a].wrapping_add(if k >> a & 1 == 1 { side[a] } else { 0 }))
+fn gap(f: f32, d: i32) -> f32 {
+    match d {
+        0 => 0.0,
+        d if d < 0 => f,
+        _ => 1.0 - f,
+    }
 }
 
-/// Per axis, the side of its cell a point lies on: +1 in the upper half, −1 in the lower.
-#[inline]
-fn sides(x: &V4, c: [i32; 3], inv: f32) -> [i32; 3] {
-    std::array::from_fn(|a| {
-        let v = (x[a] * inv).clamp(-CELL_LIMIT, CELL_LIMIT);
-        if v - c[a] as f32 >= 0.5 { 1 } else { -1 }
-    })
+/// One row of cells the response reads: its first bucket and how many (1 to 3); their
+/// particles are one range of the sorted array, or two where the buckets wrap around.
+#[derive(Clone, Copy, Default)]
+pub struct Row {
+    /// The bucket of its first cell.
+    pub first: u32,
+    /// Its cells (and buckets).
+    pub len: u32,
+}
+
+/// The rows of cells (in x) within [`REACH`] of a point, in the response's order (z, then
+/// y, from −1 to 1): each as its first bucket and length; rows the sphere misses are
+/// left out. Returns how many.
+pub fn rows_around(x: &V4, inv: f32, size: u32, rows: &mut [Row; 9]) -> usize {
+    let v = scaled(x, inv);
+    let c = v.map(floor_i32);
+    let f: [f32; 3] = std::array::from_fn(|a| v[a] - c[a] as f32);
+    let mut count = 0;
+    for dz in -1..=1 {
+        for dy in -1..=1 {
+            let (gy, gz) = (gap(f[1], dy), gap(f[2], dz));
+            let r2 = REACH * REACH - gy * gy - gz * gz;
+            if r2 <= 0.0 {
+                continue;
+            }
+            let r = r2.sqrt();
+            let lo = c[0].wrapping_sub(i32::from(f[0] < r));
+            let hi = c[0].wrapping_add(i32::from(1.0 - f[0] < r));
+            let first = bucket([lo, c[1].wrapping_add(dy), c[2].wrapping_add(dz)], size);
+            rows[count] = Row { first, len: hi.wrapping_sub(lo) as u32 + 1 };
+            count += 1;
+        }
+    }
+    count
 }
 
 /// Particle `i`'s new position and previous position: pushed out of every candidate
@@ -284,47 +342,47 @@ pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], prev: V4, cells: &[
         return (x4, prev);
     }
     let t = p.self_thickness;
-    let size = table_size(cells.len());
+    let np = pos.len() as u32;
+    let size = table_size(pos.len());
+    let (cells, sorted) = (words(cells), words(sorted));
     let inv = inv_cell(p);
-    let c = cell_of(&x4, inv);
-    let side = sides(&x4, c, inv);
     let me = ((i as u32 % p.n) as i32, (i as u32 / p.n) as i32);
-    let mut buckets = [0u32; 8];
-    let mut delta = [0.0f32; 3];
-    for k in 0..8 {
-        let b = bucket(around(c, side, k), size);
-        buckets[k] = b;
-        // Two of the 8 cells may share a bucket: each bucket once, so each particle once
-        // (whichever of the cells it is in: the distance decides).
-        if buckets[..k].contains(&b) {
-            continue;
-        }
-        let cell = &cells[b as usize];
-        let (start, end) = range(cell, sorted.len());
-        if start == end || all_neighbours(cell, me) {
-            continue;
-        }
-        for s in &sorted[start..end] {
-            // Grid neighbours (most entries of a flat cloth) refused before loading them.
-            let (qi, qj) = slot_coords(bits(s[1]));
-            let q = (qj * p.n + qi) as usize;
-            if qi >= p.n || q >= pos.len() || !candidate_coords(p, me, (qi as i32, qj as i32)) {
-                continue;
-            }
-            let y4 = pos[q];
-            let e = [x4[0] - y4[0], x4[1] - y4[1], x4[2] - y4[2]];
-            let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-            if d2 >= t * t || d2 < 1e-12 {
-                continue;
-            }
-            let d = d2.sqrt();
-            let share = if y4[3] == 0.0 { 1.0 } else { 0.5 };
-            let s = (t - d) / d * share;
-            for a in 0..3 {
-                delta[a] += e[a] * s;
+    let mut rows = [Row::default(); 9];
+    let count = rows_around(&x4, inv, size, &mut rows);
+    // Fixed point: UNITS per thickness (scale = UNITS / t, a product by a power of two).
+    let scale = UNITS * inv;
+    let mut sum = [0i32; 3];
+    let mut contacts = 0u32;
+    for row in &rows[..count] {
+        for (start, end) in row_ranges(cells, *row, size, np) {
+            for s in start..end {
+                // Grid neighbours refused by the slot's coordinates before loading them.
+                let (qi, qj) = slot_coords(sorted[4 * s as usize + 1]);
+                let q = qj.wrapping_mul(p.n).wrapping_add(qi);
+                if qi >= p.n || q >= np || !candidate_coords(p, me, (qi as i32, qj as i32)) {
+                    continue;
+                }
+                let y4 = pos[q as usize];
+                let e = [x4[0] - y4[0], x4[1] - y4[1], x4[2] - y4[2]];
+                let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+                if d2 >= t * t || d2 < 1e-12 {
+                    continue;
+                }
+                contacts += 1;
+                let d = d2.sqrt();
+                let share = if y4[3] == 0.0 { 1.0 } else { 0.5 };
+                let s = (t - d) / d * share * scale;
+                for a in 0..3 {
+                    sum[a] = sum[a].wrapping_add((e[a] * s) as i32);
+                }
             }
         }
     }
+    if contacts > MAX_CONTACTS {
+        return (x4, prev);
+    }
+    let unit = t * (1.0 / UNITS);
+    let delta = sum.map(|v| v as f32 * unit);
     let dd = delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2];
     if dd == 0.0 {
         return (x4, prev);
@@ -371,9 +429,19 @@ mod tests {
         StepParams::new(&sp, &Scene::with_n(n), None)
     }
 
+    /// A deterministic scatter of points in `[0, side)³` (a small LCG).
+    fn cloud(np: usize, side: f32, seed: u32) -> Vec<V4> {
+        let mut s = seed;
+        let mut next = move || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (s >> 8) as f32 / (1 << 24) as f32
+        };
+        (0..np).map(|_| [next() * side, next() * side, next() * side, 1.0]).collect()
+    }
+
     #[test]
-    fn the_hash_lists_every_particle_once_in_its_bucket_sorted() {
-        // 300 particles scattered over a few cells, so that buckets hold several.
+    fn the_hash_lists_every_particle_once_in_its_bucket_in_index_order() {
+        // 289 particles over a few cells, so that buckets hold several.
         let n = 17;
         let p = params(n, 0.05);
         let np = (n * n) as usize;
@@ -381,35 +449,98 @@ mod tests {
             (0..np).map(|i| [(i % 7) as f32 * 0.031, (i % 5) as f32 * 0.043, (i % 3) as f32 * 0.07, 1.0]).collect();
         let (mut cells, mut sorted) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
         build_hash(&p, &pos, &mut cells, &mut sorted);
+        let size = table_size(np);
+        assert_eq!(size, 1024);
+        let (cw, sw) = (words(&cells), words(&sorted));
         let mut listed = vec![0; np];
-        assert_eq!(table_size(np), 256);
-        for (b, c) in cells[..256].iter().enumerate() {
-            let (start, end) = range(c, np);
-            let ids: Vec<u32> = sorted[start..end]
-                .iter()
+        let mut tiled = 0;
+        for b in 0..size {
+            let (start, end) = bucket_range(cw, b, size, np as u32);
+            assert_eq!(start, tiled, "bucket {b} starts where the one before ends");
+            tiled = end;
+            let ids: Vec<u32> = (start..end)
                 .map(|s| {
-                    let (i, j) = slot_coords(bits(s[1]));
+                    let (i, j) = slot_coords(sw[4 * s as usize + 1]);
                     j * n + i
                 })
                 .collect();
-            assert!(ids.windows(2).all(|w| w[0] < w[1]), "bucket {b}: {ids:?} not sorted");
+            assert!(ids.windows(2).all(|w| w[0] < w[1]), "bucket {b}: {ids:?} not in index order");
             for &q in &ids {
-                assert_eq!(bucket(cell_of(&pos[q as usize], inv_cell(&p)), table_size(np)), b as u32);
+                assert_eq!(bucket(cell_of(&pos[q as usize], inv_cell(&p)), size), b);
                 listed[q as usize] += 1;
             }
         }
+        assert_eq!(tiled as usize, np, "the ranges tile the array");
         assert!(listed.iter().all(|&c| c == 1), "every particle listed exactly once");
-        // The counts add up, and the ranges tile the array.
-        let total: u32 = cells.iter().map(|c| bits(c[0])).sum();
-        assert_eq!(total as usize, np);
     }
 
     #[test]
-    fn two_particles_closer_than_the_thickness_end_exactly_the_thickness_apart() {
+    fn neighbours_in_x_are_consecutive_buckets() {
+        let size = table_size(1000);
+        for c in [[0, 0, 0], [-5, 3, 7], [1_000_000, -2, 9]] {
+            let b = bucket(c, size);
+            assert_eq!(bucket([c[0] + 1, c[1], c[2]], size), (b + 1) & (size - 1));
+            assert_eq!(bucket([c[0] - 1, c[1], c[2]], size), b.wrapping_sub(1) & (size - 1));
+        }
+    }
+
+    /// The response of particle `i` by brute force: the same fixed-point pushes from every
+    /// candidate closer than `t`, found without the hash.
+    fn brute_force_push(p: &StepParams, i: usize, pos: &[V4]) -> [i32; 3] {
+        let (t, scale) = (p.self_thickness, UNITS * p.inv_cell);
+        let mut sum = [0i32; 3];
+        for (q, y4) in pos.iter().enumerate() {
+            if !candidates(p, i as u32, q as u32) {
+                continue;
+            }
+            let e = [pos[i][0] - y4[0], pos[i][1] - y4[1], pos[i][2] - y4[2]];
+            let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+            if d2 >= t * t || d2 < 1e-12 {
+                continue;
+            }
+            let d = d2.sqrt();
+            let s = (t - d) / d * if y4[3] == 0.0 { 1.0 } else { 0.5 } * scale;
+            for a in 0..3 {
+                sum[a] = sum[a].wrapping_add((e[a] * s) as i32);
+            }
+        }
+        sum
+    }
+
+    #[test]
+    fn the_rows_find_every_contact_that_brute_force_finds() {
+        // 1024 particles in a cube four thicknesses wide (about 16 a cell, many contacts
+        // each, every offset to a cell's faces): the response through the hash moves each
+        // particle by exactly the brute-force sum of its pushes (fixed point: any order
+        // gives the same bits), so no row or cell it trims held a contact.
+        let (n, t) = (32, 0.01);
+        let p = params(n, t);
+        let np = (n * n) as usize;
+        for seed in [1, 2, 3] {
+            let pos = cloud(np, 4.0 * t, seed);
+            let (mut cells, mut sorted) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
+            build_hash(&p, &pos, &mut cells, &mut sorted);
+            let mut pushed = 0;
+            for i in 0..np {
+                let (x, _) = self_collide_at(&p, i, &pos, pos[i], &cells, &sorted);
+                let want = brute_force_push(&p, i, &pos).map(|v| v as f32 * (t * (1.0 / UNITS)));
+                let got = [x[0] - pos[i][0], x[1] - pos[i][1], x[2] - pos[i][2]];
+                let exact: [f32; 3] = std::array::from_fn(|a| (pos[i][a] + want[a]) - pos[i][a]);
+                assert_eq!(got, exact, "seed {seed} particle {i}");
+                pushed += usize::from(want != [0.0; 3]);
+            }
+            assert!(pushed > np * 9 / 10, "seed {seed}: only {pushed} of {np} particles had contacts");
+        }
+    }
+
+    #[test]
+    fn two_particles_closer_than_the_thickness_end_the_thickness_apart() {
         // Two far-apart particles of the grid (not neighbours) 0.6 t apart: each moves
-        // 0.2 t away; the one moving towards the other loses that velocity.
+        // 0.2 t away; the one moving towards the other loses that velocity. Within two
+        // fixed-point units (t / 65536 each: a push is truncated to them).
         let n = 16;
         let t = 0.02;
+        let unit = t / UNITS;
         let p = params(n, t);
         let np = (n * n) as usize;
         let mut pos: Vec<V4> = (0..np).map(|i| [i as f32 * 10.0, 5.0, 0.0, 1.0]).collect();
@@ -423,8 +554,8 @@ mod tests {
         let mut out = pos.clone();
         self_collide(Exec::Serial, &p, &pos, &mut prev, &cells, &sorted, &mut out);
         let gap = out[b][0] - out[a][0];
-        assert!((gap - t).abs() < 1e-7, "gap {gap}, thickness {t}");
-        assert!((out[a][0] - (0.3 - 0.2 * t)).abs() < 1e-7);
+        assert!((gap - t).abs() < 2.0 * unit, "gap {gap}, thickness {t}");
+        assert!((out[a][0] - (0.3 - 0.2 * t)).abs() < 2.0 * unit);
         // a's velocity into the contact (+x) is gone; b was at rest.
         assert!((out[a][0] - prev[a][0]).abs() < 1e-9, "a still moves {} m a substep", out[a][0] - prev[a][0]);
         assert_eq!(out[b][0] - prev[b][0], 0.0);
@@ -438,7 +569,7 @@ mod tests {
             let want = v.floor().clamp(-CELL_LIMIT, CELL_LIMIT) as i32;
             assert_eq!(cell_of(&[v, 0.0, 0.0, 0.0], 1.0)[0], want, "{v}");
         }
-        assert_eq!([table_size(1), table_size(4), table_size(289), table_size(4096)], [1, 4, 256, 4096]);
+        assert_eq!([table_size(1), table_size(4), table_size(289), table_size(4096)], [4, 16, 1024, 16384]);
     }
 
     #[test]

@@ -1,44 +1,40 @@
-// The hash of core::cpu::self_collide: cells are cubes of side 2 self_thickness (the
-// point times 1/(2t), computed on the host: a product rounds alike everywhere, a quotient
-// does not), buckets a power of two, the primes of Teschner et al. 2003.
+// The hash of core::cpu::self_collide: cells are cubes of side self_thickness (the point
+// times 1/t, computed on the host: a product rounds alike everywhere, a quotient does
+// not), buckets a power of two, a cell's bucket its row's start (the primes of Teschner et
+// al. 2003) plus its x: the cells of a row in x are consecutive buckets.
 const CELL_LIMIT: f32 = 1e9;
-const PRIME_X: i32 = 92837111;
 const PRIME_Y: i32 = 689287499;
 const PRIME_Z: i32 = 283923481;
+// core::cpu::self_collide::TABLE_FACTOR.
+const TABLE_FACTOR: u32 = 4u;
+
+// A point in cell units, clamped.
+fn scaled(x: vec3<f32>) -> vec3<f32> {
+    return clamp(x * p.inv_cell, vec3<f32>(-CELL_LIMIT), vec3<f32>(CELL_LIMIT));
+}
 
 fn cell_of(x: vec3<f32>) -> vec3<i32> {
-    return vec3<i32>(clamp(floor(x * p.inv_cell), vec3<f32>(-CELL_LIMIT), vec3<f32>(CELL_LIMIT)));
+    return vec3<i32>(floor(scaled(x)));
 }
 
-// The largest power of two not above n².
+// TABLE_FACTOR times the largest power of two not above n².
 fn table_size() -> u32 {
-    return 1u << firstLeadingBit(max(num_particles(), 1u));
+    return TABLE_FACTOR << firstLeadingBit(max(num_particles(), 1u));
 }
 
-// The cell's bucket among size (a power of two).
+// core::cpu::self_collide::row_start: 4 ((y mod 4) + 4 (z mod 4)) + 64 hash(y, z), so
+// that no two rows around a point share a bucket.
+fn row_start(y: i32, z: i32) -> u32 {
+    let low = bitcast<u32>((y & 3) + 4 * (z & 3));
+    let hash = bitcast<u32>((y * PRIME_Y) ^ (z * PRIME_Z));
+    return 4u * low + hash * 64u;
+}
+
+// The cell's bucket among size (a power of two): its row's start plus its x.
 fn bucket(c: vec3<i32>, size: u32) -> u32 {
-    return bitcast<u32>((c.x * PRIME_X) ^ (c.y * PRIME_Y) ^ (c.z * PRIME_Z)) & (size - 1u);
+    return (row_start(c.y, c.z) + bitcast<u32>(c.x)) & (size - 1u);
 }
 
 // What a slot holds for particle i: its grid coordinates i | j << 12
 // (core::cpu::self_collide::slot_word).
 const COORD_BITS: u32 = 12u;
-
-// Inclusive prefix sum of v over the workgroup (Hillis-Steele through workgroup memory).
-// Every invocation must call it (barriers inside); scan_acc[WORKGROUP - 1] is the total.
-var<workgroup> scan_acc: array<u32, WORKGROUP>;
-
-fn workgroup_scan(v: u32, li: u32) -> u32 {
-    scan_acc[li] = v;
-    workgroupBarrier();
-    for (var s = 1u; s < WORKGROUP; s <<= 1u) {
-        var add = 0u;
-        if li >= s {
-            add = scan_acc[li - s];
-        }
-        workgroupBarrier();
-        scan_acc[li] += add;
-        workgroupBarrier();
-    }
-    return scan_acc[li];
-}
