@@ -726,9 +726,9 @@ fn hash_scan_add(_: &TwinArgs, b: &mut HostBuffers) {
     cpu::hash_scan_add(cells, sorted);
 }
 
-fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
+fn hash_scatter(_: &TwinArgs, b: &mut HostBuffers) {
     let (cells, sorted) = hash_buffers(b);
-    cpu::hash_scatter(a.p, cells, sorted);
+    cpu::hash_scatter(cells, sorted);
 }
 
 fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {

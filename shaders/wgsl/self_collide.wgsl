@@ -37,7 +37,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let x4 = pos[i];
-    let xp4 = prev[i];
     if x4.w == 0.0 || i32(i) == p.grab_index {
         pos_out[i] = x4;
         return;
@@ -65,6 +64,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             let lo = c.x - select(0, 1, f.x < r);
             let hi = c.x + select(0, 1, 1.0 - f.x < r);
             let first = bucket(vec3<i32>(lo, c.y + dy, c.z + dz), size);
+            let tag = row_tag(c.y + dy, c.z + dz);
             let stop = first + u32(hi - lo) + 1u;
             // core::cpu::self_collide::row_ranges: one range, or two where the row's
             // buckets wrap around the table's end; walked as one.
@@ -85,9 +85,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             let total = n0 + (end1 - start1);
             for (var k = 0u; k < total; k++) {
                 let s = select(start1 + (k - n0), start0 + k, k < n0);
-                // Grid neighbours refused by the slot's coordinates before loading them.
+                // Foreign rows and grid neighbours refused by the slot's word before
+                // loading them.
                 let w = sorted[4u * s + 1u];
-                let qc = vec2<u32>(w & ((1u << COORD_BITS) - 1u), w >> COORD_BITS);
+                if (w >> (2u * COORD_BITS)) != tag {
+                    continue;
+                }
+                let qc = vec2<u32>(w & COORD_MASK, (w >> COORD_BITS) & COORD_MASK);
                 let q = qc.y * p.n + qc.x;
                 if qc.x >= p.n || q >= np || !candidates(me, vec2<i32>(qc)) {
                     continue;
@@ -116,6 +120,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         pos_out[i] = x4;
         return;
     }
+    // The previous position only where pushed (one particle in several).
+    let xp4 = prev[i];
     let x = x4.xyz + delta;
     var u = x4.xyz - xp4.xyz;
     let nrm = delta / sqrt(dd);

@@ -37,8 +37,8 @@
 //!
 //! The hash lives in integrator scratch buffers that are dead by then, as `u32` words:
 //! aux2 holds one word per bucket (count, then end, then start); aux3 per particle
-//! `[bucket of particle i, particle at slot i as its grid coordinates i | j << 12, block
-//! total (the first table_size / WORKGROUP), –]`.
+//! `[bucket of particle i, particle at slot i as its slot word (grid coordinates and row
+//! tag), block total (the first table_size / WORKGROUP), slot word of particle i]`.
 
 use crate::grid::{StepParams, V4};
 use crate::layout::WORKGROUP;
@@ -131,18 +131,34 @@ pub fn bucket(c: [i32; 3], size: u32) -> u32 {
 
 /// Bits of a grid coordinate in a slot's word (n ≤ 4096).
 const COORD_BITS: u32 = 12;
+const COORD_MASK: u32 = (1 << COORD_BITS) - 1;
 
-/// What a slot holds for particle `i` of an `n`-wide grid: its grid coordinates,
-/// `i | j << 12` — enough to refuse a grid neighbour without loading it.
+/// A cell's row tag: its y and z modulo 16, in the top byte of a slot's word. An entry
+/// whose tag is not its row's (another row hashed to the same bucket) is refused without
+/// loading its position; one in 256 of those slip through, and the distance refuses them.
 #[inline]
-pub fn slot_word(i: u32, n: u32) -> u32 {
-    (i % n) | (i / n) << COORD_BITS
+pub fn row_tag(y: i32, z: i32) -> u32 {
+    ((y & 15) | (z & 15) << 4) as u32
+}
+
+/// What a slot holds for particle `i` of an `n`-wide grid in cell `c`: its grid
+/// coordinates and its row's tag, `i | j << 12 | tag << 24` — enough to refuse a grid
+/// neighbour or a foreign row without loading it.
+#[inline]
+pub fn slot_word(i: u32, n: u32, c: [i32; 3]) -> u32 {
+    (i % n) | (i / n) << COORD_BITS | row_tag(c[1], c[2]) << (2 * COORD_BITS)
 }
 
 /// The grid coordinates `(i, j)` of a slot's word.
 #[inline]
 pub fn slot_coords(w: u32) -> (u32, u32) {
-    (w & ((1 << COORD_BITS) - 1), w >> COORD_BITS)
+    (w & COORD_MASK, w >> COORD_BITS & COORD_MASK)
+}
+
+/// The row tag of a slot's word.
+#[inline]
+pub fn slot_tag(w: u32) -> u32 {
+    w >> (2 * COORD_BITS)
 }
 
 /// `1 / self_thickness`, the cells' inverse size (computed once, in [`StepParams::new`]).
@@ -151,14 +167,16 @@ pub fn inv_cell(p: &StepParams) -> f32 {
     p.inv_cell
 }
 
-/// Step 1: each particle's bucket into `sorted[i].x`, the buckets' counts into
-/// `cells` (cleared before).
+/// Step 1: each particle's bucket into `sorted[i].x` and its [`slot_word`] into
+/// `sorted[i].w`, the buckets' counts into `cells` (cleared before).
 pub fn hash_count(p: &StepParams, pos: &[V4], cells: &mut [V4], sorted: &mut [V4]) {
     let (size, inv) = (table_size(pos.len()), inv_cell(p));
     let (cells, sorted) = (words_mut(cells), words_mut(sorted));
     for (i, x) in pos.iter().enumerate() {
-        let b = bucket(cell_of(x, inv), size);
+        let c = cell_of(x, inv);
+        let b = bucket(c, size);
         sorted[4 * i] = b;
+        sorted[4 * i + 3] = slot_word(i as u32, p.n, c);
         cells[b as usize] = cells[b as usize].wrapping_add(1);
     }
 }
@@ -201,11 +219,11 @@ pub fn hash_scan_add(cells: &mut [V4], sorted: &[V4]) {
     }
 }
 
-/// Step 3: every particle's [`slot_word`] into the slot before its bucket's end
+/// Step 3: every particle's [`slot_word`] (from `sorted[i].w`) into the slot before its bucket's end
 /// (`sorted[slot].y`; the particles of a bucket in index order here, in any order on a
 /// GPU), which moves the bucket's word down to its start. Buckets and slots out of range
 /// (never from [`hash_count`] and the scans) are skipped.
-pub fn hash_scatter(p: &StepParams, cells: &mut [V4], sorted: &mut [V4]) {
+pub fn hash_scatter(cells: &mut [V4], sorted: &mut [V4]) {
     let (np, size) = (sorted.len(), table_size(sorted.len()));
     let (cells, sorted) = (words_mut(cells), words_mut(sorted));
     for i in (0..np).rev() {
@@ -217,7 +235,7 @@ pub fn hash_scatter(p: &StepParams, cells: &mut [V4], sorted: &mut [V4]) {
         let slot = c.wrapping_sub(1);
         *c = slot;
         if (slot as usize) < np {
-            sorted[4 * slot as usize + 1] = slot_word(i as u32, p.n);
+            sorted[4 * slot as usize + 1] = sorted[4 * i + 3];
         }
     }
 }
@@ -236,7 +254,7 @@ pub fn build_hash(p: &StepParams, pos: &[V4], cells: &mut [V4], sorted: &mut [V4
     hash_scan_blocks(cells, sorted);
     hash_scan_top(sorted);
     hash_scan_add(cells, sorted);
-    hash_scatter(p, cells, sorted);
+    hash_scatter(cells, sorted);
 }
 
 /// The slots `[start, end)` of bucket `b` after the scatter, clamped to the `np` slots
@@ -306,6 +324,8 @@ pub struct Row {
     pub first: u32,
     /// Its cells (and buckets).
     pub len: u32,
+    /// Its [`row_tag`].
+    pub tag: u32,
 }
 
 /// The rows of cells (in x) within [`REACH`] of a point, in the response's order (z, then
@@ -326,8 +346,9 @@ pub fn rows_around(x: &V4, inv: f32, size: u32, rows: &mut [Row; 9]) -> usize {
             let r = r2.sqrt();
             let lo = c[0].wrapping_sub(i32::from(f[0] < r));
             let hi = c[0].wrapping_add(i32::from(1.0 - f[0] < r));
-            let first = bucket([lo, c[1].wrapping_add(dy), c[2].wrapping_add(dz)], size);
-            rows[count] = Row { first, len: hi.wrapping_sub(lo) as u32 + 1 };
+            let (y, z) = (c[1].wrapping_add(dy), c[2].wrapping_add(dz));
+            let first = bucket([lo, y, z], size);
+            rows[count] = Row { first, len: hi.wrapping_sub(lo) as u32 + 1, tag: row_tag(y, z) };
             count += 1;
         }
     }
@@ -356,8 +377,13 @@ pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], prev: V4, cells: &[
     for row in &rows[..count] {
         for (start, end) in row_ranges(cells, *row, size, np) {
             for s in start..end {
-                // Grid neighbours refused by the slot's coordinates before loading them.
-                let (qi, qj) = slot_coords(sorted[4 * s as usize + 1]);
+                // Foreign rows and grid neighbours refused by the slot's word before
+                // loading them.
+                let w = sorted[4 * s as usize + 1];
+                if slot_tag(w) != row.tag {
+                    continue;
+                }
+                let (qi, qj) = slot_coords(w);
                 let q = qj.wrapping_mul(p.n).wrapping_add(qi);
                 if qi >= p.n || q >= np || !candidate_coords(p, me, (qi as i32, qj as i32)) {
                     continue;
