@@ -699,21 +699,21 @@ fn implicit_finish(a: &TwinArgs, b: &mut HostBuffers) {
     cpu::implicit_finish(a.exec, a.p, &mut b.pos, &mut b.prev, &b.aux);
 }
 
-// ---- self-collision (core::cpu::self_collide): the hash in aux2 (cells) and aux3 ----
+// ---- self-collision (core::cpu::self_collide): the hash in aux2 (cells), aux3, aux4 ----
 
-fn hash_buffers(b: &mut HostBuffers) -> (&mut [V4], &mut [V4]) {
+fn hash_buffers(b: &mut HostBuffers) -> (&mut [V4], &mut [V4], &mut [V4]) {
     cpu::hash_buffers(&mut b.aux)
 }
 
 fn hash_count(a: &TwinArgs, b: &mut HostBuffers) {
     let pos = std::mem::take(&mut b.pos);
-    let (cells, sorted) = hash_buffers(b);
+    let (cells, sorted, _) = hash_buffers(b);
     cpu::hash_count(a.p, &pos, cells, sorted);
     b.pos = pos;
 }
 
 fn hash_scan_blocks(_: &TwinArgs, b: &mut HostBuffers) {
-    let (cells, sorted) = hash_buffers(b);
+    let (cells, sorted, _) = hash_buffers(b);
     cpu::hash_scan_blocks(cells, sorted);
 }
 
@@ -722,18 +722,20 @@ fn hash_scan_top(_: &TwinArgs, b: &mut HostBuffers) {
 }
 
 fn hash_scan_add(_: &TwinArgs, b: &mut HostBuffers) {
-    let (cells, sorted) = hash_buffers(b);
+    let (cells, sorted, _) = hash_buffers(b);
     cpu::hash_scan_add(cells, sorted);
 }
 
 fn hash_scatter(_: &TwinArgs, b: &mut HostBuffers) {
-    let (cells, sorted) = hash_buffers(b);
-    cpu::hash_scatter(cells, sorted);
+    let pos = std::mem::take(&mut b.pos);
+    let (cells, sorted, slots) = hash_buffers(b);
+    cpu::hash_scatter(&pos, cells, sorted, slots);
+    b.pos = pos;
 }
 
 fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {
-    let [.., cells, sorted, _] = &b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
-    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.prev, cells, sorted, &mut b.pos_out);
+    let [.., cells, _, slots] = &b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
+    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.prev, cells, slots, &mut b.pos_out);
 }
 
 /// Kernel-test inputs: the hash built by the twins up to the kernel under test (the
@@ -1150,12 +1152,12 @@ pub static HASH_SCAN_ADD: KernelDef = KernelDef {
     test_input: Some(after_top),
     ..hash("hash_scan_add", hash_scan_add, Count::HashBuckets, &[Params, Aux2, Aux3], &[Aux2])
 };
-/// Every particle into its bucket's range, in any order (atomics), each bucket's word
-/// moved to its start: checked bucket by bucket as sets.
+/// Every particle's position and slot word into its bucket's range, in any order
+/// (atomics), each bucket's word moved to its start: checked bucket by bucket as sets.
 pub static HASH_SCATTER: KernelDef = KernelDef {
     test_input: Some(after_scan),
     check: Check::Own("the_gpu_hash_lists_what_the_cpu_lists_after_its_scatter"),
-    ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Aux2, Aux3], &[Aux2, Aux3])
+    ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Pos, Aux2, Aux3], &[Aux2, Aux4])
 };
 /// The response: every particle pushed out of its close candidates, into the other
 /// position buffer.
@@ -1167,7 +1169,7 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     pure: &[PosOut],
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
-    ..def("self_collide", self_collide, Count::Particles, &[Params, Pos, Prev, Aux2, Aux3], &[PosOut, Prev])
+    ..def("self_collide", self_collide, Count::Particles, &[Params, Pos, Prev, Aux2, Aux4], &[PosOut, Prev])
 };
 /// Self-collision's kernels, in recipe order.
 pub static SELF_COLLISION: [&KernelDef; 6] =

@@ -9,9 +9,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let c = cell_of(pos[i].xyz);
+    let x = pos[i];
+    let c = cell_of(x.xyz);
     let b = bucket(c, table_size());
     sorted[4u * i] = b;
-    sorted[4u * i + 3u] = (i % p.n) | ((i / p.n) << COORD_BITS) | (row_tag(c.y, c.z) << (2u * COORD_BITS));
+    let pinned = select(0u, PINNED, x.w == 0.0);
+    sorted[4u * i + 3u] = (i % p.n) | ((i / p.n) << COORD_BITS) | (row_tag(c.y, c.z) << (2u * COORD_BITS)) | pinned;
     atomicAdd(&cells[b], 1u);
 }

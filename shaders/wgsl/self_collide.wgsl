@@ -85,18 +85,16 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             let total = n0 + (end1 - start1);
             for (var k = 0u; k < total; k++) {
                 let s = select(start1 + (k - n0), start0 + k, k < n0);
-                // Foreign rows and grid neighbours refused by the slot's word before
-                // loading them.
-                let w = sorted[4u * s + 1u];
-                if (w >> (2u * COORD_BITS)) != tag {
+                // Foreign rows and grid neighbours refused by the slot's word.
+                let y4 = slot_pos[s];
+                let w = bitcast<u32>(y4.w);
+                if ((w >> (2u * COORD_BITS)) & 127u) != tag {
                     continue;
                 }
                 let qc = vec2<u32>(w & COORD_MASK, (w >> COORD_BITS) & COORD_MASK);
-                let q = qc.y * p.n + qc.x;
-                if qc.x >= p.n || q >= np || !candidates(me, vec2<i32>(qc)) {
+                if !candidates(me, vec2<i32>(qc)) {
                     continue;
                 }
-                let y4 = pos[q];
                 let e = x4.xyz - y4.xyz;
                 let d2 = e.x * e.x + e.y * e.y + e.z * e.z;
                 if d2 >= t * t || d2 < 1e-12 {
@@ -104,7 +102,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
                 }
                 contacts += 1u;
                 let d = sqrt(d2);
-                let share = select(0.5, 1.0, y4.w == 0.0);
+                let share = select(0.5, 1.0, (w & PINNED) != 0u);
                 let push = (t - d) / d * share * scale;
                 sum += vec3<i32>(e * push);
             }

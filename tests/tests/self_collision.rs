@@ -9,8 +9,8 @@ use clothlab_core::cpu::self_collide::{bucket_range, hash_words, table_size};
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{CpuSolver, Exec, Scene, SceneFile, SimParams, Solver};
 use clothlab_engine::Variant;
-use clothlab_engine::kernels::{HASH_SCATTER, KernelRef, SELF_COLLISION};
-use clothlab_engine::recipe::Command;
+use clothlab_engine::kernels::{HASH_COUNT, HASH_SCATTER, KernelRef, SELF_COLLISION};
+use clothlab_engine::recipe::{Command, run};
 use clothlab_engine::validate::{KernelInput, KernelRunner, validate_kernels_with};
 use clothlab_tests::{assert_checks, every_backend, or_skip};
 use clothlab_vulkan::vulkan_solver;
@@ -75,7 +75,7 @@ fn the_heap_keeps_its_layers_apart_on_every_backend() {
 
 /// Every self-collision kernel of `runner`'s recipe (`recipe`) against its twin, and the
 /// scatter (atomics, in any order) against the twins' hash: the buckets' words (their
-/// starts) and the other words bit for bit, each bucket's slots as a set.
+/// starts) bit for bit, each bucket's slots (positions and slot words) as a set.
 fn check_kernels(
     label: &str,
     runner: &mut dyn KernelRunner,
@@ -90,6 +90,14 @@ fn check_kernels(
     assert_eq!(checks.len(), 5 * clothlab_engine::validate::COMPARED_BUFFERS, "{label}");
     assert_checks(label, &checks);
     let input = KernelInput::for_scene(scene, 9, params).unwrap();
+    let bits = |v: &Vec<[f32; 4]>| v.iter().map(|e| e.map(f32::to_bits)).collect::<Vec<_>>();
+    // The count's slot words (aux3's w, which the loop's comparison of xyz leaves out).
+    let count = kernels.iter().find(|k| k.def == &HASH_COUNT).unwrap();
+    let mut want = input.for_kernel(*count);
+    let mut got = want.clone();
+    input.engine.run(&run(*count), &input.p, 0, &mut want);
+    runner.run_commands(&run(*count), &input.p, &mut got).unwrap();
+    assert!(bits(&want.aux[3]) == bits(&got.aux[3]), "{label}: aux3 after the count");
     let scatter = kernels.iter().find(|k| k.def == &HASH_SCATTER).unwrap();
     let commands = [Command::Dispatch(*scatter)];
     let mut want = input.for_kernel(*scatter);
@@ -100,21 +108,17 @@ fn check_kernels(
     let size = table_size(np);
     let (cw, cg) = (hash_words(&want.aux[2]), hash_words(&got.aux[2]));
     assert!(cw == cg, "{label}: the buckets' starts after the scatter");
-    let (sw, sg) = (hash_words(&want.aux[3]), hash_words(&got.aux[3]));
-    for (k, (w, g)) in sw.iter().zip(sg).enumerate() {
-        if k % 4 != 1 {
-            assert_eq!(w, g, "{label}: aux3 word {k} after the scatter");
-        }
-    }
+    assert!(bits(&want.aux[3]) == bits(&got.aux[3]), "{label}: aux3 after the scatter");
+    let (pw, pg) = (bits(&want.aux[4]), bits(&got.aux[4]));
     let mut slots = 0;
     for b in 0..size {
         let (start, end) = bucket_range(cw, b, size, np as u32);
-        let set = |v: &[u32]| {
-            let mut s: Vec<u32> = (start..end).map(|s| v[4 * s as usize + 1]).collect();
+        let set = |v: &[[u32; 4]]| {
+            let mut s = v[start as usize..end as usize].to_vec();
             s.sort_unstable();
             s
         };
-        assert_eq!(set(sw), set(sg), "{label}: bucket {b}'s particles");
+        assert_eq!(set(&pw), set(&pg), "{label}: bucket {b}'s particles (positions and slot words)");
         slots += end - start;
     }
     assert_eq!(slots as usize, np, "{label}: every slot in one bucket");

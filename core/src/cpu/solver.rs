@@ -347,12 +347,12 @@ impl CpuSolver {
                 std::mem::swap(pos, scratch);
             }
         });
-        // Self-collision: the hash in aux2 and aux3 (dead after the integrator's kernels),
+        // Self-collision: the hash in aux2, aux3 and aux4 (dead after the integrator's kernels),
         // the response into the other position buffer (self_collide.rs).
         if params.self_collision {
-            let (cells, sorted) = hash_buffers(aux);
-            Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, cells, sorted));
-            Self::timed(timer, on, SELF_COLLIDE, || self_collide(e, &p, pos, prev, cells, sorted, scratch));
+            let (cells, sorted, slots) = hash_buffers(aux);
+            Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, cells, sorted, slots));
+            Self::timed(timer, on, SELF_COLLIDE, || self_collide(e, &p, pos, prev, cells, slots, scratch));
             std::mem::swap(pos, scratch);
         }
         if fast {

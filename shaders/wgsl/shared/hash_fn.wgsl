@@ -35,11 +35,13 @@ fn bucket(c: vec3<i32>, size: u32) -> u32 {
     return (row_start(c.y, c.z) + bitcast<u32>(c.x)) & (size - 1u);
 }
 
-// What a slot holds for particle i in cell c: its grid coordinates and its row's tag,
-// i | j << 12 | tag << 24 (core::cpu::self_collide::slot_word, row_tag).
+// What a slot holds for particle i in cell c besides its position: its grid coordinates,
+// its row's tag and whether it is pinned, i | j << 12 | tag << 24 | pinned << 31
+// (core::cpu::self_collide::slot_word, row_tag).
 const COORD_BITS: u32 = 12u;
 const COORD_MASK: u32 = 4095u;
+const PINNED: u32 = 0x80000000u;
 
 fn row_tag(y: i32, z: i32) -> u32 {
-    return bitcast<u32>((y & 15) | ((z & 15) << 4u));
+    return bitcast<u32>((y & 7) | ((z & 15) << 3u));
 }
