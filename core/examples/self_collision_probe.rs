@@ -1,9 +1,10 @@
 //! What self-collision's response reads, per particle, on the heap scene (scenes/heap.toml)
 //! at grid size N with the thickness equal to the grid spacing, after the given frames:
-//! rows and buckets probed (how many empty), entries read, candidates (entries outside the
-//! springs' stencil, whose positions are loaded) and contacts (candidates closer than the
-//! thickness), the foreign entries among the candidates (from other cells hashed to the
-//! same bucket), and the most entries one particle reads.
+//! rows and buckets probed (how many empty), entries read (and how many the row tag
+//! refuses), candidates (entries of the row outside the springs' stencil, whose distance
+//! is computed) and contacts (candidates closer than the thickness), the foreign entries
+//! among the candidates (from other cells hashed to the same bucket), and the most entries
+//! one particle reads.
 //!
 //! `cargo run --release -p clothlab-core --example self_collision_probe -- 128 20,50,100`
 //! (docs/scenes.md quotes its output).
@@ -34,12 +35,14 @@ fn main() {
         let np = st.pos.len();
         let mut cells = vec![[0.0f32; 4]; np];
         let mut sorted = vec![[0.0f32; 4]; np];
-        build_hash(&p, &st.pos, &mut cells, &mut sorted);
-        let (cw, sw) = (hash_words(&cells), hash_words(&sorted));
+        let mut slots = vec![[0.0f32; 4]; np];
+        build_hash(&p, &st.pos, &mut cells, &mut sorted, &mut slots);
+        let cw = hash_words(&cells);
         let size = table_size(np);
         let (inv, t) = (p.inv_cell, p.self_thickness);
         let (mut rows_n, mut probed, mut empty, mut entries, mut cands, mut foreign, mut near, mut max_entries) =
             (0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
+        let mut tagged = 0u64;
         let occupied = (0..size)
             .filter(|&b| bucket_range(cw, b, size, np as u32).0 < bucket_range(cw, b, size, np as u32).1)
             .count();
@@ -65,12 +68,17 @@ fn main() {
                     for s in start..end {
                         entries += 1;
                         mine += 1;
-                        let (qi, qj) = slot_coords(sw[4 * s as usize + 1]);
+                        let w = slots[s as usize][3].to_bits();
+                        if slot_tag(w) != row.tag {
+                            tagged += 1;
+                            continue;
+                        }
+                        let (qi, qj) = slot_coords(w);
                         if !candidate_coords(&p, me, (qi as i32, qj as i32)) {
                             continue;
                         }
                         cands += 1;
-                        let y = st.pos[(qj * p.n + qi) as usize];
+                        let y = slots[s as usize];
                         let cy = cell_of(&y, inv);
                         foreign += u64::from((0..3).any(|a| (cy[a] - c[a]).abs() > 1));
                         let d2: f32 = (0..3).map(|a| (x[a] - y[a]) * (x[a] - y[a])).sum();
@@ -82,11 +90,12 @@ fn main() {
         }
         let per = |v: u64| v as f64 / np as f64;
         println!(
-            "n={n} frame {fr}: occupied buckets {occupied} of {size}; per particle: rows {:.2}, buckets {:.2} (empty {:.2}), entries read {:.2} (max {max_entries}), candidates {:.2} (foreign {:.2}), closer than t {:.3}; lowest y {:.3}",
+            "n={n} frame {fr}: occupied buckets {occupied} of {size}; per particle: rows {:.2}, buckets {:.2} (empty {:.2}), entries read {:.2} (max {max_entries}; of another row by the tag {:.2}), candidates {:.2} (foreign {:.2}), closer than t {:.3}; lowest y {:.3}",
             per(rows_n),
             per(probed),
             per(empty),
             per(entries),
+            per(tagged),
             per(cands),
             per(foreign),
             per(near),

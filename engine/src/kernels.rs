@@ -36,8 +36,8 @@ pub enum Count {
     Workgroup,
     /// One per [`WORKGROUP`] buckets of the self-collision hash (`hash_scan_blocks`).
     HashBlocks,
-    /// One per bucket of the self-collision hash (`hash_scan_add`).
-    HashBuckets,
+    /// One per four buckets of the self-collision hash (`hash_scan_add`).
+    HashBuckets4,
 }
 
 impl Count {
@@ -51,7 +51,7 @@ impl Count {
             Count::Triangles => topo.triangles.len() as u32,
             Count::Workgroup => WORKGROUP,
             Count::HashBlocks => cpu::self_collide::hash_blocks(topo.num_particles()),
-            Count::HashBuckets => cpu::self_collide::table_size(topo.num_particles()),
+            Count::HashBuckets4 => cpu::self_collide::table_size(topo.num_particles()).div_ceil(4),
         }
     }
 }
@@ -1150,7 +1150,7 @@ pub static HASH_SCAN_TOP: KernelDef = KernelDef {
 /// Every bucket's end in the whole array.
 pub static HASH_SCAN_ADD: KernelDef = KernelDef {
     test_input: Some(after_top),
-    ..hash("hash_scan_add", hash_scan_add, Count::HashBuckets, &[Params, Aux2, Aux3], &[Aux2])
+    ..hash("hash_scan_add", hash_scan_add, Count::HashBuckets4, &[Params, Aux2, Aux3], &[Aux2])
 };
 /// Every particle's position and slot word into its bucket's range, in any order
 /// (atomics), each bucket's word moved to its start: checked bucket by bucket as sets.
