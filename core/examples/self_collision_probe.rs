@@ -34,9 +34,9 @@ fn main() {
         let p = StepParams::new(&params, &scene, None);
         let np = st.pos.len();
         let mut cells = vec![[0.0f32; 4]; np];
-        let mut sorted = vec![[0.0f32; 4]; np];
+        let mut totals = vec![[0.0f32; 4]; np];
         let mut slots = vec![[0.0f32; 4]; np];
-        build_hash(&p, &st.pos, &mut cells, &mut sorted, &mut slots);
+        build_hash(&p, &st.pos, &mut cells, &mut totals, &mut slots);
         let cw = hash_words(&cells);
         let size = table_size(np);
         let (inv, t) = (p.inv_cell, p.self_thickness);

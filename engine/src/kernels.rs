@@ -707,14 +707,13 @@ fn hash_buffers(b: &mut HostBuffers) -> (&mut [V4], &mut [V4], &mut [V4]) {
 
 fn hash_count(a: &TwinArgs, b: &mut HostBuffers) {
     let pos = std::mem::take(&mut b.pos);
-    let (cells, sorted, _) = hash_buffers(b);
-    cpu::hash_count(a.p, &pos, cells, sorted);
+    cpu::hash_count(a.p, &pos, hash_buffers(b).0);
     b.pos = pos;
 }
 
 fn hash_scan_blocks(_: &TwinArgs, b: &mut HostBuffers) {
-    let (cells, sorted, _) = hash_buffers(b);
-    cpu::hash_scan_blocks(cells, sorted);
+    let (cells, totals, _) = hash_buffers(b);
+    cpu::hash_scan_blocks(cells, totals);
 }
 
 fn hash_scan_top(_: &TwinArgs, b: &mut HostBuffers) {
@@ -722,14 +721,14 @@ fn hash_scan_top(_: &TwinArgs, b: &mut HostBuffers) {
 }
 
 fn hash_scan_add(_: &TwinArgs, b: &mut HostBuffers) {
-    let (cells, sorted, _) = hash_buffers(b);
-    cpu::hash_scan_add(cells, sorted);
+    let (cells, totals, _) = hash_buffers(b);
+    cpu::hash_scan_add(cells, totals);
 }
 
-fn hash_scatter(_: &TwinArgs, b: &mut HostBuffers) {
+fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
     let pos = std::mem::take(&mut b.pos);
-    let (cells, sorted, slots) = hash_buffers(b);
-    cpu::hash_scatter(&pos, cells, sorted, slots);
+    let (cells, _, slots) = hash_buffers(b);
+    cpu::hash_scatter(a.p, &pos, cells, slots);
     b.pos = pos;
 }
 
@@ -1135,7 +1134,7 @@ const fn hash(
 /// Each particle's bucket, and the buckets' counts (atomics).
 pub static HASH_COUNT: KernelDef = KernelDef {
     accumulates: &[Aux2],
-    ..hash("hash_count", hash_count, Count::Particles, &[Params, Pos, Aux2], &[Aux2, Aux3])
+    ..hash("hash_count", hash_count, Count::Particles, &[Params, Pos, Aux2], &[Aux2])
 };
 /// The counts' inclusive prefix within each block of buckets, and the block's total.
 pub static HASH_SCAN_BLOCKS: KernelDef = KernelDef {
@@ -1157,7 +1156,7 @@ pub static HASH_SCAN_ADD: KernelDef = KernelDef {
 pub static HASH_SCATTER: KernelDef = KernelDef {
     test_input: Some(after_scan),
     check: Check::Own("the_gpu_hash_lists_what_the_cpu_lists_after_its_scatter"),
-    ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Pos, Aux2, Aux3], &[Aux2, Aux4])
+    ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Pos, Aux2], &[Aux2, Aux4])
 };
 /// The response: every particle pushed out of its close candidates, into the other
 /// position buffer.

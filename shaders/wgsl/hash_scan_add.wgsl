@@ -11,7 +11,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     // WORKGROUP is a multiple of 4: the four share a block.
-    let offset = sorted[4u * (first / WORKGROUP) + 2u];
+    let offset = totals[4u * (first / WORKGROUP) + 2u];
     for (var b = first; b < min(first + 4u, size); b++) {
         cells[b] += offset;
     }

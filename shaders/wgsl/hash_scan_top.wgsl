@@ -1,5 +1,5 @@
 //! include: state, hash, hash_fn
-// hash_scan_top — one workgroup: the exclusive prefix of the blocks' totals (sorted[4g + 2])
+// hash_scan_top — one workgroup: the exclusive prefix of the blocks' totals (totals[4g + 2])
 // in place (core::cpu::self_collide::hash_scan_top). Each invocation sums a run of
 // consecutive totals, one scan over the workgroup offsets the runs, and each invocation
 // writes its run's prefixes: two barrier rounds, however many blocks.
@@ -18,7 +18,7 @@ fn main(@builtin(local_invocation_index) li: u32) {
     let last = min(first + per, count);
     var sum = 0u;
     for (var g = first; g < last; g++) {
-        sum += sorted[4u * g + 2u];
+        sum += totals[4u * g + 2u];
     }
     run_sums[li] = sum;
     workgroupBarrier();
@@ -29,8 +29,8 @@ fn main(@builtin(local_invocation_index) li: u32) {
         acc += run_sums[k];
     }
     for (var g = first; g < last; g++) {
-        let total = sorted[4u * g + 2u];
-        sorted[4u * g + 2u] = acc;
+        let total = totals[4u * g + 2u];
+        totals[4u * g + 2u] = acc;
         acc += total;
     }
 }

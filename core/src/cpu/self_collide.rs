@@ -37,11 +37,10 @@
 //! scatter's atomic order needs no sort and every backend computes the CPU's sum.
 //!
 //! The hash lives in integrator scratch buffers that are dead by then: aux2 holds one
-//! `u32` word per bucket (count, then end, then start); aux3 per particle `[bucket of
-//! particle i, –, block total (the first table_size / WORKGROUP), slot word of particle
-//! i]` as `u32` words; aux4 per slot the position of the particle there, its slot word
-//! (grid coordinates, row tag, pinned) as the bits of `.w`: the response reads one
-//! element per entry, in order.
+//! `u32` word per bucket (count, then end, then start); aux3 the blocks' totals (`.z` of
+//! the first table_size / WORKGROUP elements, as `u32`); aux4 per slot the position of
+//! the particle there and its slot word (grid coordinates, row tag, pinned) as the bits
+//! of `.w`: the response reads one element per entry, in order.
 
 use crate::grid::{StepParams, V4};
 use crate::layout::WORKGROUP;
@@ -175,25 +174,21 @@ pub fn inv_cell(p: &StepParams) -> f32 {
     p.inv_cell
 }
 
-/// Step 1: each particle's bucket into `sorted[i].x` and its [`slot_word`] into
-/// `sorted[i].w`, the buckets' counts into `cells` (cleared before).
-pub fn hash_count(p: &StepParams, pos: &[V4], cells: &mut [V4], sorted: &mut [V4]) {
+/// Step 1: the buckets' counts into `cells` (cleared before).
+pub fn hash_count(p: &StepParams, pos: &[V4], cells: &mut [V4]) {
     let (size, inv) = (table_size(pos.len()), inv_cell(p));
-    let (cells, sorted) = (words_mut(cells), words_mut(sorted));
-    for (i, x) in pos.iter().enumerate() {
-        let c = cell_of(x, inv);
-        let b = bucket(c, size);
-        sorted[4 * i] = b;
-        sorted[4 * i + 3] = slot_word(i as u32, p.n, c, x[3] == 0.0);
-        cells[b as usize] = cells[b as usize].wrapping_add(1);
+    let cells = words_mut(cells);
+    for x in pos {
+        let b = bucket(cell_of(x, inv), size) as usize;
+        cells[b] = cells[b].wrapping_add(1);
     }
 }
 
 /// Step 2a: within each block of [`WORKGROUP`] buckets, the inclusive prefix of the
-/// counts in place, and the block's total into `sorted[g].z`.
-pub fn hash_scan_blocks(cells: &mut [V4], sorted: &mut [V4]) {
-    let size = table_size(sorted.len()) as usize;
-    let (cells, sorted) = (words_mut(cells), words_mut(sorted));
+/// counts in place, and the block's total into `totals[g].z`.
+pub fn hash_scan_blocks(cells: &mut [V4], totals: &mut [V4]) {
+    let size = table_size(totals.len()) as usize;
+    let (cells, totals) = (words_mut(cells), words_mut(totals));
     let w = WORKGROUP as usize;
     for (g, block) in cells[..size].chunks_mut(w).enumerate() {
         let mut acc = 0u32;
@@ -201,50 +196,48 @@ pub fn hash_scan_blocks(cells: &mut [V4], sorted: &mut [V4]) {
             acc = acc.wrapping_add(*c);
             *c = acc;
         }
-        sorted[4 * g + 2] = acc;
+        totals[4 * g + 2] = acc;
     }
 }
 
-/// Step 2b: the exclusive prefix of the blocks' totals, in place (`sorted[g].z`).
-pub fn hash_scan_top(sorted: &mut [V4]) {
-    let blocks = hash_blocks(sorted.len()) as usize;
-    let sorted = words_mut(sorted);
+/// Step 2b: the exclusive prefix of the blocks' totals, in place (`totals[g].z`).
+pub fn hash_scan_top(totals: &mut [V4]) {
+    let blocks = hash_blocks(totals.len()) as usize;
+    let totals = words_mut(totals);
     let mut acc = 0u32;
     for g in 0..blocks {
-        let total = sorted[4 * g + 2];
-        sorted[4 * g + 2] = acc;
+        let total = totals[4 * g + 2];
+        totals[4 * g + 2] = acc;
         acc = acc.wrapping_add(total);
     }
 }
 
 /// Step 2c: each bucket's end in the whole array (its block's offset added).
-pub fn hash_scan_add(cells: &mut [V4], sorted: &[V4]) {
-    let size = table_size(sorted.len()) as usize;
-    let (cells, sorted) = (words_mut(cells), words(sorted));
+pub fn hash_scan_add(cells: &mut [V4], totals: &[V4]) {
+    let size = table_size(totals.len()) as usize;
+    let (cells, totals) = (words_mut(cells), words(totals));
     let w = WORKGROUP as usize;
     for (b, c) in cells[..size].iter_mut().enumerate() {
-        *c = c.wrapping_add(sorted[4 * (b / w) + 2]);
+        *c = c.wrapping_add(totals[4 * (b / w) + 2]);
     }
 }
 
-/// Step 3: every particle's position and [`slot_word`] (from `sorted[i].w`, as the bits
-/// of `.w`) into the slot of `slots` before its bucket's end (the particles of a bucket
-/// in index order here, in any order on a GPU), which moves the bucket's word down to its
-/// start. Buckets and slots out of range (never from [`hash_count`] and the scans) are
-/// skipped.
-pub fn hash_scatter(pos: &[V4], cells: &mut [V4], sorted: &[V4], slots: &mut [V4]) {
-    let (np, size) = (sorted.len(), table_size(sorted.len()));
-    let (cells, sorted) = (words_mut(cells), words(sorted));
-    for i in (0..np).rev() {
-        let b = sorted[4 * i];
-        if b >= size {
-            continue;
-        }
-        let c = &mut cells[b as usize];
-        let slot = c.wrapping_sub(1);
-        *c = slot;
+/// Step 3: every particle's position and [`slot_word`] (as the bits of `.w`; its bucket
+/// and word computed again from its position, which is cheaper than storing them in step
+/// 1 and loading them here) into the slot of `slots` before its bucket's end (the
+/// particles of a bucket in index order here, in any order on a GPU), which moves the
+/// bucket's word down to its start. Slots out of range (never after [`hash_count`] and the
+/// scans) are skipped.
+pub fn hash_scatter(p: &StepParams, pos: &[V4], cells: &mut [V4], slots: &mut [V4]) {
+    let (size, inv) = (table_size(pos.len()), inv_cell(p));
+    let cells = words_mut(cells);
+    for (i, x) in pos.iter().enumerate().rev() {
+        let c = cell_of(x, inv);
+        let cell = &mut cells[bucket(c, size) as usize];
+        let slot = cell.wrapping_sub(1);
+        *cell = slot;
         if let Some(s) = slots.get_mut(slot as usize) {
-            *s = [pos[i][0], pos[i][1], pos[i][2], f32::from_bits(sorted[4 * i + 3])];
+            *s = [x[0], x[1], x[2], f32::from_bits(slot_word(i as u32, p.n, c, x[3] == 0.0))];
         }
     }
 }
@@ -252,19 +245,19 @@ pub fn hash_scatter(pos: &[V4], cells: &mut [V4], sorted: &[V4], slots: &mut [V4
 /// The hash's three buffers among the integrators' scratch buffers (`aux`, [`super::AUX`]
 /// of them): aux2 (cells), aux3 (per particle) and aux4 (slots).
 pub fn hash_buffers(aux: &mut [Vec<V4>]) -> (&mut [V4], &mut [V4], &mut [V4]) {
-    let [_, _, cells, sorted, slots, ..] = aux else { panic!("the {} integrator scratch buffers", super::AUX) };
-    (cells, sorted, slots)
+    let [_, _, cells, totals, slots, ..] = aux else { panic!("the {} integrator scratch buffers", super::AUX) };
+    (cells, totals, slots)
 }
 
-/// Steps 1 to 3: the hash of `pos` in `cells`, `sorted` and `slots` (one element per
+/// Steps 1 to 3: the hash of `pos` in `cells`, `totals` and `slots` (one element per
 /// particle each).
-pub fn build_hash(p: &StepParams, pos: &[V4], cells: &mut [V4], sorted: &mut [V4], slots: &mut [V4]) {
+pub fn build_hash(p: &StepParams, pos: &[V4], cells: &mut [V4], totals: &mut [V4], slots: &mut [V4]) {
     cells.iter_mut().for_each(|c| *c = [0.0; 4]);
-    hash_count(p, pos, cells, sorted);
-    hash_scan_blocks(cells, sorted);
-    hash_scan_top(sorted);
-    hash_scan_add(cells, sorted);
-    hash_scatter(pos, cells, sorted, slots);
+    hash_count(p, pos, cells);
+    hash_scan_blocks(cells, totals);
+    hash_scan_top(totals);
+    hash_scan_add(cells, totals);
+    hash_scatter(p, pos, cells, slots);
 }
 
 /// The slots `[start, end)` of bucket `b` after the scatter, clamped to the `np` slots
@@ -482,8 +475,8 @@ mod tests {
         let np = (n * n) as usize;
         let pos: Vec<V4> =
             (0..np).map(|i| [(i % 7) as f32 * 0.031, (i % 5) as f32 * 0.043, (i % 3) as f32 * 0.07, 1.0]).collect();
-        let (mut cells, mut sorted, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
-        build_hash(&p, &pos, &mut cells, &mut sorted, &mut slots);
+        let (mut cells, mut totals, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
+        build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
         let size = table_size(np);
         assert_eq!(size, 1024);
         let cw = words(&cells);
@@ -556,8 +549,8 @@ mod tests {
         let np = (n * n) as usize;
         for seed in [1, 2, 3] {
             let pos = cloud(np, 4.0 * t, seed);
-            let (mut cells, mut sorted, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
-            build_hash(&p, &pos, &mut cells, &mut sorted, &mut slots);
+            let (mut cells, mut totals, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
+            build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
             let mut pushed = 0;
             for i in 0..np {
                 let (x, _) = self_collide_at(&p, i, &pos, pos[i], &cells, &slots);
@@ -591,8 +584,8 @@ mod tests {
         pos[b] = [0.3 + 0.6 * t, 1.0, 0.0, 1.0];
         let mut prev = pos.clone();
         prev[a][0] -= 0.001; // a moves towards b at 1 mm a substep
-        let (mut cells, mut sorted, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
-        build_hash(&p, &pos, &mut cells, &mut sorted, &mut slots);
+        let (mut cells, mut totals, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
+        build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
         let mut out = pos.clone();
         self_collide(Exec::Serial, &p, &pos, &mut prev, &cells, &slots, &mut out);
         let gap = out[b][0] - out[a][0];
