@@ -38,6 +38,8 @@ pub enum Count {
     HashBlocks,
     /// One per four buckets of the self-collision hash (`hash_scan_add`).
     HashBuckets4,
+    /// One per pair of neighbours in a row (`n · ⌈n / 2⌉`: `self_collide`).
+    Pairs,
 }
 
 impl Count {
@@ -52,6 +54,7 @@ impl Count {
             Count::Workgroup => WORKGROUP,
             Count::HashBlocks => cpu::self_collide::hash_blocks(topo.num_particles()),
             Count::HashBuckets4 => cpu::self_collide::table_size(topo.num_particles()).div_ceil(4),
+            Count::Pairs => topo.n * topo.n.div_ceil(2),
         }
     }
 }
@@ -1168,7 +1171,7 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     pure: &[PosOut],
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
-    ..def("self_collide", self_collide, Count::Particles, &[Params, Pos, Prev, Aux2, Aux4], &[PosOut, Prev])
+    ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Prev, Aux2, Aux4], &[PosOut, Prev])
 };
 /// Self-collision's kernels, in recipe order.
 pub static SELF_COLLISION: [&KernelDef; 6] =
