@@ -21,7 +21,9 @@
 //!    one range of the sorted array read between two words of `cells` (rows never share
 //!    a bucket: [`row_start`]) — refuses grid neighbours by the coordinates in the slot
 //!    before loading them, and moves away from each particle closer than the thickness:
-//!    a counting sort into a uniform grid, no per-particle lists.
+//!    a counting sort into a uniform grid, no per-particle lists. (The GPU kernel walks
+//!    two row neighbours' rows at once, each taking only its own cells' entries: the
+//!    same contacts, summed in another order.)
 //!
 //! A pair is a candidate when its grid offset is outside the 5 × 5 stencil of the springs
 //! and its rest distance exceeds twice the thickness (closer ones would be pushed apart by
