@@ -1,17 +1,56 @@
 //! What self-collision's response reads, per particle, on the heap scene (scenes/heap.toml)
 //! at grid size N with the thickness equal to the grid spacing, after the given frames:
-//! rows and buckets probed (how many empty), entries read (and how many the row tag
+//! rows and their buckets (how many empty), entries read (and how many the row tag
 //! refuses), candidates (entries of the row outside the springs' stencil, whose distance
 //! is computed) and contacts (candidates closer than the thickness), the foreign entries
-//! among the candidates (from other cells hashed to the same bucket), and the most entries
-//! one particle reads.
+//! among the candidates (from other cells hashed to the same bucket), the most entries
+//! one particle reads; and what the GPU kernel reads when two row neighbours walk their
+//! rows together (shaders/wgsl/self_collide.wgsl).
 //!
 //! `cargo run --release -p clothlab-core --example self_collision_probe -- 128 20,50,100`
 //! (docs/scenes.md quotes its output).
 use clothlab_core::cpu::self_collide::*;
-use clothlab_core::grid::StepParams;
+use clothlab_core::grid::{StepParams, V4};
 use clothlab_core::scene_file::SceneFile;
 use clothlab_core::{CpuSolver, Exec, Solver};
+
+/// The entries in the slots of the row that starts at bucket `first` and is `len` long.
+fn row_entries(cells: &[u32], first: u32, len: u32, size: u32, np: u32) -> u64 {
+    row_ranges(cells, Row { first, len, tag: 0 }, size, np).iter().map(|(s, e)| u64::from(e - s)).sum()
+}
+
+/// Rows and entries per particle when the pairs (2k, 2k + 1) of each grid row walk the
+/// rows either reaches once for both (cells at most one apart per axis; else one walk
+/// each), and the share of pairs that cannot.
+fn pair_walks(pos: &[V4], n: usize, inv: f32, cells: &[u32], size: u32) -> (f64, f64, f64) {
+    let np = pos.len() as u32;
+    let (mut rows, mut entries, mut apart, mut pairs) = (0u64, 0u64, 0u64, 0u64);
+    for j in 0..n {
+        for k in (0..n - 1).step_by(2) {
+            pairs += 1;
+            let two = [cell_and_fraction(&pos[j * n + k], inv), cell_and_fraction(&pos[j * n + k + 1], inv)];
+            let ((ca, _), (cb, _)) = (two[0], two[1]);
+            let walks: Vec<&[([i32; 3], [f32; 3])]> =
+                if (0..3).all(|a| (ca[a] - cb[a]).abs() <= 1) { vec![&two[..]] } else { vec![&two[..1], &two[1..]] };
+            apart += u64::from(walks.len() == 2);
+            for walk in walks {
+                let lo: [i32; 3] = std::array::from_fn(|a| walk.iter().map(|(c, _)| c[a]).min().unwrap() - 1);
+                let hi: [i32; 3] = std::array::from_fn(|a| walk.iter().map(|(c, _)| c[a]).max().unwrap() + 1);
+                for z in lo[2]..=hi[2] {
+                    for y in lo[1]..=hi[1] {
+                        let reached: Vec<(i32, i32)> = walk.iter().filter_map(|&(c, f)| reach(c, f, y, z)).collect();
+                        let Some(x0) = reached.iter().map(|r| r.0).min() else { continue };
+                        let x1 = reached.iter().map(|r| r.1).max().unwrap();
+                        rows += 1;
+                        entries += row_entries(cells, bucket([x0, y, z], size), (x1 - x0 + 1) as u32, size, np);
+                    }
+                }
+            }
+        }
+    }
+    let per = 2.0 * pairs as f64;
+    (rows as f64 / per, entries as f64 / per, 100.0 * apart as f64 / pairs as f64)
+}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -54,16 +93,10 @@ fn main() {
             let count = rows_around(&x, inv, size, &mut rows);
             rows_n += count as u64;
             let mut mine = 0u64;
-            let mut seen = vec![];
             for row in &rows[..count] {
                 for o in 0..row.len {
-                    let b = row.first.wrapping_add(o) & (size - 1);
-                    if seen.contains(&b) {
-                        continue;
-                    }
-                    seen.push(b);
+                    let (start, end) = bucket_range(cw, row.first.wrapping_add(o) & (size - 1), size, np as u32);
                     probed += 1;
-                    let (start, end) = bucket_range(cw, b, size, np as u32);
                     empty += u64::from(start == end);
                     for s in start..end {
                         entries += 1;
@@ -100,6 +133,10 @@ fn main() {
             per(foreign),
             per(near),
             st.pos.iter().map(|x| x[1]).fold(f32::MAX, f32::min)
+        );
+        let (rows, entries, apart) = pair_walks(&st.pos, n as usize, inv, cw, size);
+        println!(
+            "  pairs of row neighbours walking together: rows {rows:.2}, entries read {entries:.2} per particle ({apart:.1} % of pairs too far apart for one walk)"
         );
     }
 }

@@ -1166,7 +1166,8 @@ pub static HASH_SCATTER: KernelDef = KernelDef {
 pub static SELF_COLLIDE: KernelDef = KernelDef {
     check: Check::Bound {
         relative: 2e-5,
-        reason: "a gather over the contacts with divisions and square roots (exact on lavapipe)",
+        reason: "a gather over the contacts with divisions and square roots, truncated to fixed point \
+                 (a last-bit difference moves a push by t / 65536 at most; exact on lavapipe)",
     },
     pure: &[PosOut],
     label: timing::SELF_COLLIDE,

@@ -137,7 +137,7 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
                 if ((w >> (2u * COORD_BITS)) & 127u) != tag {
                     continue;
                 }
-                let cx = i32(floor(clamp(y4.x * p.inv_cell, -CELL_LIMIT, CELL_LIMIT)));
+                let cx = cell_of(y4.xyz).x;
                 push(a, ra, y4, w, cx);
                 push(b, rb, y4, w, cx);
             }
@@ -157,9 +157,8 @@ fn mover(i: u32, valid: bool) -> Mover {
     m.x4 = pos[i];
     m.moving = m.x4.w != 0.0 && i32(i) != p.grab_index;
     let v = scaled(m.x4.xyz);
-    let cf = floor(v);
-    m.c = vec3<i32>(cf);
-    m.f = v - cf;
+    m.c = cell_of(m.x4.xyz);
+    m.f = v - floor(v);
     m.me = vec2<i32>(i32(i % p.n), i32(i / p.n));
     return m;
 }

@@ -19,8 +19,8 @@
 //!    its own that the sphere of radius `t` around it reaches — row by row: nine rows in
 //!    x, a row the sphere misses skipped, the others trimmed to the cells it reaches, each
 //!    one range of the sorted array read between two words of `cells` (rows never share
-//!    a bucket: [`row_start`]) — refuses grid neighbours by the coordinates in the slot
-//!    before loading them, and moves away from each particle closer than the thickness:
+//!    a bucket: [`row_start`]) — refuses entries of other rows and grid neighbours by the
+//!    slot's word, and moves away from each particle closer than the thickness:
 //!    a counting sort into a uniform grid, no per-particle lists. (The GPU kernel walks
 //!    two row neighbours' rows at once, each taking only its own cells' entries: the
 //!    same contacts, summed in another order.)
@@ -66,7 +66,7 @@ pub const MAX_CONTACTS: u32 = 32767;
 /// rounding never drops a cell that holds a contact (the distance decides).
 const REACH: f32 = 1.001;
 
-/// Word views of the hash's two buffers.
+/// Word views of the hash's buffers.
 fn words(v: &[V4]) -> &[u32] {
     bytemuck::cast_slice(v)
 }
@@ -245,7 +245,7 @@ pub fn hash_scatter(p: &StepParams, pos: &[V4], cells: &mut [V4], slots: &mut [V
 }
 
 /// The hash's three buffers among the integrators' scratch buffers (`aux`, [`super::AUX`]
-/// of them): aux2 (cells), aux3 (per particle) and aux4 (slots).
+/// of them): aux2 (cells), aux3 (the blocks' totals) and aux4 (slots).
 pub fn hash_buffers(aux: &mut [Vec<V4>]) -> (&mut [V4], &mut [V4], &mut [V4]) {
     let [_, _, cells, totals, slots, ..] = aux else { panic!("the {} integrator scratch buffers", super::AUX) };
     (cells, totals, slots)
@@ -263,12 +263,10 @@ pub fn build_hash(p: &StepParams, pos: &[V4], cells: &mut [V4], totals: &mut [V4
 }
 
 /// The slots `[start, end)` of bucket `b` after the scatter, clamped to the `np` slots
-/// (`cells` as words).
+/// (`cells` as words): a row of one cell.
 #[inline]
 pub fn bucket_range(cells: &[u32], b: u32, size: u32, np: u32) -> (u32, u32) {
-    let start = cells[b as usize].min(np);
-    let end = if b + 1 < size { cells[b as usize + 1] } else { np };
-    (start, end.clamp(start, np))
+    row_ranges(cells, Row { first: b, len: 1, tag: 0 }, size, np)[0]
 }
 
 /// The slots of a row's buckets: one range, or two where its buckets wrap around the
@@ -333,25 +331,42 @@ pub struct Row {
     pub tag: u32,
 }
 
+/// A point's cell and its fraction of the way across it, per axis (cell units).
+#[inline]
+pub fn cell_and_fraction(x: &V4, inv: f32) -> ([i32; 3], [f32; 3]) {
+    let v = scaled(x, inv);
+    let c = v.map(floor_i32);
+    (c, std::array::from_fn(|a| v[a] - c[a] as f32))
+}
+
+/// The cells in x of row `(y, z)` that the sphere of radius [`REACH`] around a point in
+/// cell `c` at fraction `f` reaches, as `(lo, hi)`; `None` where it reaches none of them
+/// (the GPU kernel's `reach`).
+#[inline]
+pub fn reach(c: [i32; 3], f: [f32; 3], y: i32, z: i32) -> Option<(i32, i32)> {
+    let (dy, dz) = (y.wrapping_sub(c[1]), z.wrapping_sub(c[2]));
+    if dy.abs() > 1 || dz.abs() > 1 {
+        return None;
+    }
+    let (gy, gz) = (gap(f[1], dy), gap(f[2], dz));
+    let r2 = REACH * REACH - gy * gy - gz * gz;
+    if r2 <= 0.0 {
+        return None;
+    }
+    let r = r2.sqrt();
+    Some((c[0].wrapping_sub(i32::from(f[0] < r)), c[0].wrapping_add(i32::from(1.0 - f[0] < r))))
+}
+
 /// The rows of cells (in x) within [`REACH`] of a point, in the response's order (z, then
 /// y, from −1 to 1): each as its first bucket and length; rows the sphere misses are
 /// left out. Returns how many.
 pub fn rows_around(x: &V4, inv: f32, size: u32, rows: &mut [Row; 9]) -> usize {
-    let v = scaled(x, inv);
-    let c = v.map(floor_i32);
-    let f: [f32; 3] = std::array::from_fn(|a| v[a] - c[a] as f32);
+    let (c, f) = cell_and_fraction(x, inv);
     let mut count = 0;
     for dz in -1..=1 {
         for dy in -1..=1 {
-            let (gy, gz) = (gap(f[1], dy), gap(f[2], dz));
-            let r2 = REACH * REACH - gy * gy - gz * gz;
-            if r2 <= 0.0 {
-                continue;
-            }
-            let r = r2.sqrt();
-            let lo = c[0].wrapping_sub(i32::from(f[0] < r));
-            let hi = c[0].wrapping_add(i32::from(1.0 - f[0] < r));
             let (y, z) = (c[1].wrapping_add(dy), c[2].wrapping_add(dz));
+            let Some((lo, hi)) = reach(c, f, y, z) else { continue };
             let first = bucket([lo, y, z], size);
             rows[count] = Row { first, len: hi.wrapping_sub(lo) as u32 + 1, tag: row_tag(y, z) };
             count += 1;
@@ -400,9 +415,9 @@ pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], prev: V4, cells: &[
                 contacts += 1;
                 let d = d2.sqrt();
                 let share = if w & PINNED != 0 { 1.0 } else { 0.5 };
-                let s = (t - d) / d * share * scale;
+                let push = (t - d) / d * share * scale;
                 for a in 0..3 {
-                    sum[a] = sum[a].wrapping_add((e[a] * s) as i32);
+                    sum[a] = sum[a].wrapping_add((e[a] * push) as i32);
                 }
             }
         }
@@ -429,8 +444,9 @@ pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], prev: V4, cells: &[
     ([x[0], x[1], x[2], x4[3]], [x[0] - u[0], x[1] - u[1], x[2] - u[2], prev[3]])
 }
 
-/// Step 4: every particle pushed out of its close candidates (from `slots`) into `pos_out`, its `prev`
-/// updated in place (each element read and written only by its own particle).
+/// Step 4: every particle pushed out of its close candidates (from `slots`) into
+/// `pos_out`, its `prev` updated in place (each element read and written only by its own
+/// particle).
 pub fn self_collide(
     exec: Exec,
     p: &StepParams,
