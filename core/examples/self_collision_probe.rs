@@ -52,6 +52,69 @@ fn pair_walks(pos: &[V4], n: usize, inv: f32, cells: &[u32], size: u32) -> (f64,
     (rows as f64 / per, entries as f64 / per, 100.0 * apart as f64 / pairs as f64)
 }
 
+/// One pair's walk as the kernel loops it: per (z, y) loop index, the entries of the row
+/// (None where the row is skipped).
+fn pair_loops(pos: &[V4], n: usize, g: usize, inv: f32, cells: &[u32], size: u32) -> Vec<Vec<Option<u64>>> {
+    let np = pos.len() as u32;
+    let half = n.div_ceil(2);
+    let (j, k) = (g / half, 2 * (g % half));
+    let mut two = vec![cell_and_fraction(&pos[j * n + k], inv)];
+    if k + 1 < n {
+        two.push(cell_and_fraction(&pos[j * n + k + 1], inv));
+    }
+    let together = two.len() == 1 || (0..3).all(|a| (two[0].0[a] - two[1].0[a]).abs() <= 1);
+    let walks: Vec<&[([i32; 3], [f32; 3])]> = if together { vec![&two[..]] } else { vec![&two[..1], &two[1..]] };
+    let mut out = Vec::new();
+    for walk in walks {
+        let lo: [i32; 3] = std::array::from_fn(|a| walk.iter().map(|(c, _)| c[a]).min().unwrap() - 1);
+        let hi: [i32; 3] = std::array::from_fn(|a| walk.iter().map(|(c, _)| c[a]).max().unwrap() + 1);
+        let mut v = Vec::new();
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                let reached: Vec<(i32, i32)> = walk.iter().filter_map(|&(c, f)| reach(c, f, y, z)).collect();
+                let Some(x0) = reached.iter().map(|r| r.0).min() else {
+                    v.push(None);
+                    continue;
+                };
+                let x1 = reached.iter().map(|r| r.1).max().unwrap();
+                v.push(Some(row_entries(cells, bucket([x0, y, z], size), (x1 - x0 + 1) as u32, size, np)));
+            }
+        }
+        out.push(v);
+    }
+    out
+}
+
+/// Entry iterations that groups of 8 lanes (llvmpipe's SIMD width, which steps its lanes
+/// together: a loop runs as long as its longest lane) run per group, against the entries
+/// a lane needs: (needed per lane, a loop per row of the walk's box, a loop per non-empty
+/// row, one loop over all the walk's entries).
+fn simd_cost(pos: &[V4], n: usize, inv: f32, cells: &[u32], size: u32) -> (f64, f64, f64, f64) {
+    let count = n * n.div_ceil(2);
+    let (mut need_e, mut run_e, mut flat, mut compact) = (0u64, 0u64, 0u64, 0u64);
+    for g0 in (0..count).step_by(8) {
+        let lanes: Vec<_> = (g0..(g0 + 8).min(count)).map(|g| pair_loops(pos, n, g, inv, cells, size)).collect();
+        flat += lanes.iter().map(|l| l.iter().flatten().flatten().sum::<u64>()).max().unwrap();
+        let ranges: Vec<Vec<u64>> =
+            lanes.iter().map(|l| l.iter().flatten().flatten().copied().filter(|&e| e > 0).collect()).collect();
+        let most = ranges.iter().map(|r| r.len()).max().unwrap();
+        compact += (0..most).map(|r| ranges.iter().map(|l| l.get(r).copied().unwrap_or(0)).max().unwrap()).sum::<u64>();
+        let walks = lanes.iter().map(|l| l.len()).max().unwrap();
+        for w in 0..walks {
+            let iters = lanes.iter().map(|l| l.get(w).map_or(0, |v| v.len())).max().unwrap();
+            for it in 0..iters {
+                let e: Vec<u64> =
+                    lanes.iter().map(|l| l.get(w).and_then(|v| v.get(it).copied().flatten()).unwrap_or(0)).collect();
+                run_e += e.iter().max().unwrap();
+                need_e += e.iter().sum::<u64>();
+            }
+        }
+    }
+    let lanes = count as f64;
+    let groups = count.div_ceil(8) as f64;
+    (need_e as f64 / lanes, run_e as f64 / groups, compact as f64 / groups, flat as f64 / groups)
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: u32 = args.get(1).map(|s| s.parse().unwrap()).unwrap_or(128);
@@ -137,6 +200,10 @@ fn main() {
         let (rows, entries, apart) = pair_walks(&st.pos, n as usize, inv, cw, size);
         println!(
             "  pairs of row neighbours walking together: rows {rows:.2}, entries read {entries:.2} per particle ({apart:.1} % of pairs too far apart for one walk)"
+        );
+        let (need, per_row, per_range, flat) = simd_cost(&st.pos, n as usize, inv, cw, size);
+        println!(
+            "  8 lanes stepping together (a lane a pair): entry iterations per lane needed {need:.2}; run: a loop per row of the box {per_row:.2}, per non-empty row {per_range:.2}, one loop over all {flat:.2}"
         );
     }
 }

@@ -41,6 +41,9 @@ struct Mover {
     f: vec3<f32>,
     me: vec2<i32>,
     moving: bool,
+    // The cells of the 3 x 3 x 3 around c that its sphere reaches: bit
+    // (dx + 1) + 3 (dy + 1) + 9 (dz + 1).
+    cells: u32,
     sum: vec3<i32>,
     contacts: u32,
 }
@@ -63,12 +66,43 @@ fn reach(m: Mover, y: i32, z: i32) -> vec2<i32> {
     return vec2<i32>(m.c.x - select(0, 1, m.f.x < r), m.c.x + select(0, 1, 1.0 - m.f.x < r));
 }
 
-// m's push from the particle in a slot (position y4, word w, cell cx in x) of a row whose
-// cells m reaches in xr.
-fn push(m: ptr<function, Mover>, xr: vec2<i32>, y4: vec4<f32>, w: u32, cx: i32) {
-    if cx < xr.x || cx > xr.y {
-        return;
+// The cells of m's 3 x 3 x 3 that its sphere reaches (Mover::cells), from reach.
+fn reached_cells(m: Mover) -> u32 {
+    var bits = 0u;
+    for (var dz = -1; dz <= 1; dz++) {
+        for (var dy = -1; dy <= 1; dy++) {
+            let r = reach(m, m.c.y + dy, m.c.z + dz) - m.c.x;
+            for (var dx = -1; dx <= 1; dx++) {
+                if dx >= r.x && dx <= r.y {
+                    bits |= 1u << u32(dx + 1 + 3 * (dy + 1) + 9 * (dz + 1));
+                }
+            }
+        }
     }
+    return bits;
+}
+
+// The three bits of m's reached cells in row (y, z) (bit dx + 1), none outside its 3 x 3.
+fn row_bits(m: Mover, y: i32, z: i32) -> u32 {
+    let dy = y - m.c.y;
+    let dz = z - m.c.z;
+    if abs(dy) > 1 || abs(dz) > 1 {
+        return 0u;
+    }
+    return (m.cells >> u32(3 * (dy + 1) + 9 * (dz + 1))) & 7u;
+}
+
+// Whether m's sphere reaches cell e (reach: e's x among the cells of e's row it reaches).
+fn reaches(m: Mover, e: vec3<i32>) -> bool {
+    let d = e - m.c;
+    if any(abs(d) > vec3<i32>(1)) {
+        return false;
+    }
+    return ((m.cells >> u32(d.x + 1 + 3 * (d.y + 1) + 9 * (d.z + 1))) & 1u) != 0u;
+}
+
+// m's push from the particle in a slot (position y4, word w).
+fn push(m: ptr<function, Mover>, y4: vec4<f32>, w: u32) {
     let qc = vec2<u32>(w & COORD_MASK, (w >> COORD_BITS) & COORD_MASK);
     if !candidates((*m).me, vec2<i32>(qc)) {
         return;
@@ -86,7 +120,16 @@ fn push(m: ptr<function, Mover>, xr: vec2<i32>, y4: vec4<f32>, w: u32, cx: i32) 
     (*m).sum += vec3<i32>(e * k);
 }
 
-// The rows of cells that a's or b's sphere reaches, each read once for both.
+// The most rows one walk reads: the 4 x 4 around two cells at most one apart per axis.
+const MAX_ROWS: u32 = 16u;
+
+// The rows of cells that a's or b's sphere reaches, each read once for both: first their
+// slot ranges, then one loop over all their entries. lavapipe steps 8 lanes together, and
+// a loop runs as long as its longest lane: a loop per row ran twice the entries the lanes
+// need on the settled heap, one loop over all runs 1.25 times (self_collision_probe counts
+// both). An entry counts for a mover whose sphere reaches its cell (Mover::cells), which
+// refuses entries of other rows hashed to the same buckets and the cells of the other
+// mover's rows; what is left is the cells its twin reads.
 fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
     let size = table_size();
     let np = num_particles();
@@ -100,47 +143,88 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
         lo = min(lo, (*b).c);
         hi = max(hi, (*b).c);
     }
+    // The ranges in registers, four vec4s each (an array indexed per lane costs lavapipe a
+    // memory access per lane).
+    var st0 = vec4<u32>(0u);
+    var st1 = vec4<u32>(0u);
+    var st2 = vec4<u32>(0u);
+    var st3 = vec4<u32>(0u);
+    var ln0 = vec4<u32>(0u);
+    var ln1 = vec4<u32>(0u);
+    var ln2 = vec4<u32>(0u);
+    var ln3 = vec4<u32>(0u);
+    let lane = vec4<u32>(0u, 1u, 2u, 3u);
+    var rows = 0u;
+    var total = 0u;
+    // core::cpu::self_collide::row_ranges: a row whose buckets wrap around the table's
+    // end is two ranges, [start, np) and [cells[0], end): walked as one, past np wrapped.
+    let wrap = min(cells[0], np);
     for (var z = lo.z - 1; z <= hi.z + 1; z++) {
         for (var y = lo.y - 1; y <= hi.y + 1; y++) {
-            let ra = reach(*a, y, z);
-            let rb = reach(*b, y, z);
-            let first_x = min(select(ra.x, 1000000000, ra.x > ra.y), select(rb.x, 1000000000, rb.x > rb.y));
-            let last_x = max(select(ra.y, -1000000000, ra.x > ra.y), select(rb.y, -1000000000, rb.x > rb.y));
-            if first_x > last_x {
+            // The row's reached cells as bits of x - lo.x + 1 (b's cell at most one from a's).
+            let bits = (row_bits(*a, y, z) << u32((*a).c.x - lo.x)) | (row_bits(*b, y, z) << u32((*b).c.x - lo.x));
+            if bits == 0u {
                 continue;
             }
-            let tag = row_tag(y, z);
+            let first_x = lo.x - 1 + i32(firstTrailingBit(bits));
+            let last_x = lo.x - 1 + i32(firstLeadingBit(bits));
             let first = bucket(vec3<i32>(first_x, y, z), size);
             let stop = first + u32(last_x - first_x) + 1u;
-            // core::cpu::self_collide::row_ranges: one range, or two where the row's
-            // buckets wrap around the table's end; walked as one.
-            let start0 = min(cells[first], np);
-            var end0 = np;
-            var start1 = 0u;
-            var end1 = 0u;
+            let start = min(cells[first], np);
+            var len = 0u;
             if stop <= size {
+                var end = np;
                 if stop < size {
-                    end0 = cells[stop];
+                    end = cells[stop];
                 }
-                end0 = clamp(end0, start0, np);
+                len = clamp(end, start, np) - start;
             } else {
-                start1 = min(cells[0], np);
-                end1 = clamp(cells[stop - size], start1, np);
+                len = np - start + clamp(cells[stop - size], wrap, np) - wrap;
             }
-            let n0 = end0 - start0;
-            let total = n0 + (end1 - start1);
-            for (var k = 0u; k < total; k++) {
-                let s = select(start1 + (k - n0), start0 + k, k < n0);
-                let y4 = slot_pos[s];
-                let w = bitcast<u32>(y4.w);
-                // Entries of other rows (their tag) refused for both.
-                if ((w >> (2u * COORD_BITS)) & 127u) != tag {
-                    continue;
-                }
-                let cx = cell_of(y4.xyz).x;
-                push(a, ra, y4, w, cx);
-                push(b, rb, y4, w, cx);
+            if len > 0u && rows < MAX_ROWS {
+                let at = vec4<u32>(rows) - lane;
+                st0 = select(st0, vec4<u32>(start), at == vec4<u32>(0u));
+                st1 = select(st1, vec4<u32>(start), at == vec4<u32>(4u));
+                st2 = select(st2, vec4<u32>(start), at == vec4<u32>(8u));
+                st3 = select(st3, vec4<u32>(start), at == vec4<u32>(12u));
+                ln0 = select(ln0, vec4<u32>(len), at == vec4<u32>(0u));
+                ln1 = select(ln1, vec4<u32>(len), at == vec4<u32>(4u));
+                ln2 = select(ln2, vec4<u32>(len), at == vec4<u32>(8u));
+                ln3 = select(ln3, vec4<u32>(len), at == vec4<u32>(12u));
+                rows += 1u;
+                total += len;
             }
+        }
+    }
+    var r = 0u;
+    var base = 0u;
+    var cur = st0.x;
+    var len = ln0.x;
+    for (var k = 0u; k < total; k++) {
+        if k - base == len {
+            base += len;
+            r += 1u;
+            let b2 = (r & 4u) != 0u;
+            let b3 = (r & 8u) != 0u;
+            let sv = select(select(st0, st1, b2), select(st2, st3, b2), b3);
+            let lv = select(select(ln0, ln1, b2), select(ln2, ln3, b2), b3);
+            let sh = select(sv.xy, sv.zw, (r & 2u) != 0u);
+            let lh = select(lv.xy, lv.zw, (r & 2u) != 0u);
+            cur = select(sh.x, sh.y, (r & 1u) != 0u);
+            len = select(lh.x, lh.y, (r & 1u) != 0u);
+        }
+        var s = cur + (k - base);
+        if s >= np {
+            s = s - np + wrap;
+        }
+        let y4 = slot_pos[s];
+        let w = bitcast<u32>(y4.w);
+        let ce = cell_of(y4.xyz);
+        if reaches(*a, ce) {
+            push(a, y4, w);
+        }
+        if reaches(*b, ce) {
+            push(b, y4, w);
         }
     }
 }
@@ -149,6 +233,7 @@ fn mover(i: u32, valid: bool) -> Mover {
     var m: Mover;
     m.i = i;
     m.moving = false;
+    m.cells = 0u;
     m.sum = vec3<i32>(0);
     m.contacts = 0u;
     if !valid {
@@ -160,6 +245,7 @@ fn mover(i: u32, valid: bool) -> Mover {
     m.c = cell_of(m.x4.xyz);
     m.f = v - floor(v);
     m.me = vec2<i32>(i32(i % p.n), i32(i / p.n));
+    m.cells = select(0u, reached_cells(m), m.moving);
     return m;
 }
 
