@@ -4,9 +4,8 @@
 // pos_out, prev in place (core::cpu::self_collide::self_collide_at, per particle there).
 // The two share one walk over the rows of cells that either's sphere reaches, when their
 // cells are neighbours (almost always: grid neighbours lie about a spacing apart): half the
-// rows' reads, and each entry read once for both. Each particle still takes only the
-// entries of the cells its own walk would read, so it sums what its twin sums; in fixed
-// point, in any order, the same bits.
+// rows' reads, and each entry read once for both. Each particle's contacts are its twin's
+// (push), summed in fixed point: in any order, the same bits.
 @group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
 
 // core::cpu::self_collide::{REACH, UNITS, MAX_CONTACTS}.
@@ -92,16 +91,11 @@ fn row_bits(m: Mover, y: i32, z: i32) -> u32 {
     return (m.cells >> u32(3 * (dy + 1) + 9 * (dz + 1))) & 7u;
 }
 
-// Whether m's sphere reaches cell e (reach: e's x among the cells of e's row it reaches).
-fn reaches(m: Mover, e: vec3<i32>) -> bool {
-    let d = e - m.c;
-    if any(abs(d) > vec3<i32>(1)) {
-        return false;
-    }
-    return ((m.cells >> u32(d.x + 1 + 3 * (d.y + 1) + 9 * (d.z + 1))) & 1u) != 0u;
-}
-
-// m's push from the particle in a slot (position y4, word w).
+// m's push from the particle in a slot (position y4, word w). Every entry of the walk
+// counts: a particle closer than the thickness lies in a cell m's sphere reaches (REACH),
+// whose bucket the walk reads once (no two of its rows share one); so m sums exactly its
+// twin's contacts, and entries of other rows hashed to the same buckets, or of the other
+// mover's cells, are farther than t and push nothing.
 fn push(m: ptr<function, Mover>, y4: vec4<f32>, w: u32) {
     let qc = vec2<u32>(w & COORD_MASK, (w >> COORD_BITS) & COORD_MASK);
     if !candidates((*m).me, vec2<i32>(qc)) {
@@ -127,9 +121,7 @@ const MAX_ROWS: u32 = 16u;
 // slot ranges, then one loop over all their entries. lavapipe steps 8 lanes together, and
 // a loop runs as long as its longest lane: a loop per row ran twice the entries the lanes
 // need on the settled heap, one loop over all runs 1.25 times (self_collision_probe counts
-// both). An entry counts for a mover whose sphere reaches its cell (Mover::cells), which
-// refuses entries of other rows hashed to the same buckets and the cells of the other
-// mover's rows; what is left is the cells its twin reads.
+// both).
 fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
     let size = table_size();
     let np = num_particles();
@@ -219,13 +211,8 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
         }
         let y4 = slot_pos[s];
         let w = bitcast<u32>(y4.w);
-        let ce = cell_of(y4.xyz);
-        if reaches(*a, ce) {
-            push(a, y4, w);
-        }
-        if reaches(*b, ce) {
-            push(b, y4, w);
-        }
+        push(a, y4, w);
+        push(b, y4, w);
     }
 }
 
