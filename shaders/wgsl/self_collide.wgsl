@@ -163,15 +163,12 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
             let first = bucket(vec3<i32>(first_x, y, z), size);
             let stop = first + u32(last_x - first_x) + 1u;
             let start = min(cells[first], np);
-            var len = 0u;
-            if stop <= size {
-                var end = np;
-                if stop < size {
-                    end = cells[stop];
-                }
-                len = clamp(end, start, np) - start;
-            } else {
-                len = np - start + clamp(cells[stop - size], wrap, np) - wrap;
+            // One read for the end (both sides of a branch run on lavapipe, reads too).
+            let wraps = stop > size;
+            let at_end = cells[select(min(stop, size - 1u), stop - size, wraps)];
+            var len = clamp(select(at_end, np, stop == size), start, np) - start;
+            if wraps {
+                len = np - start + clamp(at_end, wrap, np) - wrap;
             }
             if len > 0u && rows < MAX_ROWS {
                 let at = vec4<u32>(rows) - lane;
