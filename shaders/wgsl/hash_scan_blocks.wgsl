@@ -1,8 +1,8 @@
-//! include: state, hash, hash_fn
+//! include: state, hash_vec4, hash_fn
 // hash_scan_blocks — per WORKGROUP consecutive buckets (one invocation each, in order, no
-// barriers: on lavapipe a workgroup-wide scan's twelve barriers cost more than the sums):
-// the inclusive prefix of the counts in place, the block's total into totals[4g + 2]
-// (core::cpu::self_collide::hash_scan_blocks).
+// barriers: on lavapipe a workgroup-wide scan's twelve barriers cost more than the sums),
+// read and written four at a time: the inclusive prefix of the counts in place, the
+// block's total into totals[4g + 2] (core::cpu::self_collide::hash_scan_blocks).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
@@ -12,11 +12,17 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if first >= size {
         return;
     }
+    // The table's size is a multiple of 4.
     let last = min(first + WORKGROUP, size);
     var acc = 0u;
-    for (var b = first; b < last; b++) {
-        acc += cells[b];
-        cells[b] = acc;
+    for (var q = first / 4u; q < last / 4u; q++) {
+        var v = cells4[q];
+        v.x += acc;
+        v.y += v.x;
+        v.z += v.y;
+        v.w += v.z;
+        cells4[q] = v;
+        acc = v.w;
     }
     totals[4u * g + 2u] = acc;
 }
