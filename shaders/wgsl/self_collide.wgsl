@@ -237,28 +237,24 @@ fn mover(i: u32, valid: bool) -> Mover {
 fn finish(m: Mover) {
     let x4 = m.x4;
     let i = m.i;
-    if !m.moving || m.contacts > MAX_CONTACTS {
-        pos_out[i] = x4;
-        return;
-    }
     let t = p.self_thickness;
     let delta = vec3<f32>(m.sum) * (t * (1.0 / UNITS));
     let dd = delta.x * delta.x + delta.y * delta.y + delta.z * delta.z;
-    if dd == 0.0 {
-        pos_out[i] = x4;
-        return;
-    }
-    // The previous position only where pushed (one particle in several).
-    let xp4 = prev[i];
-    let x = x4.xyz + delta;
-    var u = x4.xyz - xp4.xyz;
-    let nrm = delta / sqrt(dd);
-    let un = u.x * nrm.x + u.y * nrm.y + u.z * nrm.z;
-    if un < 0.0 {
-        u -= un * nrm;
-    }
+    let pushed = m.moving && m.contacts <= MAX_CONTACTS && dd != 0.0;
+    // One site per buffer, values chosen by select: lavapipe walks the lanes of every
+    // load and store site in the code, taken or not.
+    let x = select(x4.xyz, x4.xyz + delta, pushed);
     pos_out[i] = vec4<f32>(x, x4.w);
-    prev[i] = vec4<f32>(x - u, xp4.w);
+    if pushed {
+        let xp4 = prev[i];
+        var u = x4.xyz - xp4.xyz;
+        let nrm = delta / sqrt(dd);
+        let un = u.x * nrm.x + u.y * nrm.y + u.z * nrm.z;
+        if un < 0.0 {
+            u -= un * nrm;
+        }
+        prev[i] = vec4<f32>(x - u, xp4.w);
+    }
 }
 
 @compute @workgroup_size(WORKGROUP)
