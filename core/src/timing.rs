@@ -63,7 +63,7 @@ pub const FORCES_INTEGRATE_COLLIDE: &str = "forces+integrate+collide";
 pub const FUSED_STEP: &str = "fused substep";
 /// Label of the whole-substep row.
 pub const SUBSTEP: &str = "substep";
-/// Self-collision's hash build (count, prefix sum, scatter, sort).
+/// Self-collision's hash build (count, prefix sum, scatter).
 pub const SELF_HASH: &str = "self_hash";
 /// Self-collision's response.
 pub const SELF_COLLIDE: &str = "self_collide";
