@@ -114,6 +114,18 @@ fn push(m: ptr<function, Mover>, y4: vec4<f32>, w: u32) {
     (*m).sum += vec3<i32>(e * k);
 }
 
+// The rows of the 4 x 4 box from lo - 1 in (y, z) where m reaches a cell: bit
+// (y - lo.y + 1) + 4 (z - lo.z + 1) (m's cell at most one from lo per axis).
+fn box_rows(m: Mover, lo: vec3<i32>) -> u32 {
+    var rows = 0u;
+    for (var k = 0u; k < 9u; k++) {
+        if ((m.cells >> (3u * k)) & 7u) != 0u {
+            rows |= 1u << (k % 3u + 4u * (k / 3u));
+        }
+    }
+    return rows << u32((m.c.y - lo.y) + 4 * (m.c.z - lo.z));
+}
+
 // The most rows one walk reads: the 4 x 4 around two cells at most one apart per axis.
 const MAX_ROWS: u32 = 16u;
 
@@ -151,13 +163,16 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
     // core::cpu::self_collide::row_ranges: a row whose buckets wrap around the table's
     // end is two ranges, [start, np) and [cells[0], end): walked as one, past np wrapped.
     let wrap = min(cells[0], np);
-    for (var z = lo.z - 1; z <= hi.z + 1; z++) {
-        for (var y = lo.y - 1; y <= hi.y + 1; y++) {
+    // Only the rows of the box that a mover reaches, one iteration each.
+    var todo = box_rows(*a, lo) | box_rows(*b, lo);
+    while todo != 0u {
+        let r = firstTrailingBit(todo);
+        todo &= todo - 1u;
+        let y = lo.y - 1 + i32(r & 3u);
+        let z = lo.z - 1 + i32(r >> 2u);
+        {
             // The row's reached cells as bits of x - lo.x + 1 (b's cell at most one from a's).
             let bits = (row_bits(*a, y, z) << u32((*a).c.x - lo.x)) | (row_bits(*b, y, z) << u32((*b).c.x - lo.x));
-            if bits == 0u {
-                continue;
-            }
             let first_x = lo.x - 1 + i32(firstTrailingBit(bits));
             let last_x = lo.x - 1 + i32(firstLeadingBit(bits));
             let first = bucket(vec3<i32>(first_x, y, z), size);
