@@ -24,14 +24,6 @@ fn candidates(a: vec2<i32>, b: vec2<i32>) -> bool {
     return f32(d.x * d.x + d.y * d.y) * (p.spacing * p.spacing) > t2 * t2;
 }
 
-// core::cpu::self_collide::gap: the distance (cells) to the neighbour cell at offset d.
-fn gap(f: f32, d: i32) -> f32 {
-    if d == 0 {
-        return 0.0;
-    }
-    return select(1.0 - f, f, d < 0);
-}
-
 // One particle of the pair: where it is and what it has summed.
 struct Mover {
     i: u32,
@@ -47,35 +39,21 @@ struct Mover {
     contacts: u32,
 }
 
-// The cells in x of row (y, z) that m's sphere reaches (core::cpu::self_collide::
-// rows_around), as [lo, hi]; empty (lo > hi) where it reaches none of them.
-fn reach(m: Mover, y: i32, z: i32) -> vec2<i32> {
-    let dy = y - m.c.y;
-    let dz = z - m.c.z;
-    if !m.moving || abs(dy) > 1 || abs(dz) > 1 {
-        return vec2<i32>(1, 0);
-    }
-    let gy = gap(m.f.y, dy);
-    let gz = gap(m.f.z, dz);
-    let r2 = REACH * REACH - gy * gy - gz * gz;
-    if r2 <= 0.0 {
-        return vec2<i32>(1, 0);
-    }
-    let r = sqrt(r2);
-    return vec2<i32>(m.c.x - select(0, 1, m.f.x < r), m.c.x + select(0, 1, 1.0 - m.f.x < r));
-}
-
-// The cells of m's 3 x 3 x 3 that its sphere reaches (Mover::cells), from reach.
+// The cells of m's 3 x 3 x 3 that its sphere of radius REACH (cells) reaches: those whose
+// squared distance from m's point, the sum of its squared gaps per axis, is below REACH².
+// Any such superset of the cells within the thickness will do (see push); this one needs
+// no square root (the CPU's rows_around takes one per row).
 fn reached_cells(m: Mover) -> u32 {
+    let below = m.f * m.f;
+    let above = (1.0 - m.f) * (1.0 - m.f);
+    let r2 = REACH * REACH;
     var bits = 0u;
-    for (var dz = -1; dz <= 1; dz++) {
-        for (var dy = -1; dy <= 1; dy++) {
-            let r = reach(m, m.c.y + dy, m.c.z + dz) - m.c.x;
-            for (var dx = -1; dx <= 1; dx++) {
-                if dx >= r.x && dx <= r.y {
-                    bits |= 1u << u32(dx + 1 + 3 * (dy + 1) + 9 * (dz + 1));
-                }
-            }
+    for (var dz = 0u; dz < 3u; dz++) {
+        let gz = select(select(0.0, below.z, dz == 0u), above.z, dz == 2u);
+        for (var dy = 0u; dy < 3u; dy++) {
+            let gyz = gz + select(select(0.0, below.y, dy == 0u), above.y, dy == 2u);
+            let row = select(0u, 1u, gyz + below.x < r2) | select(0u, 2u, gyz < r2) | select(0u, 4u, gyz + above.x < r2);
+            bits |= row << (3u * dy + 9u * dz);
         }
     }
     return bits;
