@@ -15,13 +15,12 @@ const MAX_CONTACTS: u32 = 32767u;
 
 // core::cpu::self_collide::candidate_coords: outside the springs' 5 x 5 stencil and
 // farther apart at rest than twice the thickness.
+// (Written without branches here and below: on lavapipe every branch is masks on both
+// sides, and an early return is one more.)
 fn candidates(a: vec2<i32>, b: vec2<i32>) -> bool {
     let d = a - b;
-    if abs(d.x) <= 2 && abs(d.y) <= 2 {
-        return false;
-    }
     let t2 = 2.0 * p.self_thickness;
-    return f32(d.x * d.x + d.y * d.y) * (p.spacing * p.spacing) > t2 * t2;
+    return any(abs(d) > vec2<i32>(2)) && f32(d.x * d.x + d.y * d.y) * (p.spacing * p.spacing) > t2 * t2;
 }
 
 // One particle of the pair: where it is and what it has summed.
@@ -63,10 +62,8 @@ fn reached_cells(m: Mover) -> u32 {
 fn row_bits(m: Mover, y: i32, z: i32) -> u32 {
     let dy = y - m.c.y;
     let dz = z - m.c.z;
-    if abs(dy) > 1 || abs(dz) > 1 {
-        return 0u;
-    }
-    return (m.cells >> u32(3 * (dy + 1) + 9 * (dz + 1))) & 7u;
+    let inside = abs(dy) <= 1 && abs(dz) <= 1;
+    return select(0u, (m.cells >> u32(3 * (dy + 1) + 9 * (dz + 1))) & 7u, inside);
 }
 
 // m's push from the particle in a slot (position y4, word w). Every entry of the walk
@@ -76,19 +73,15 @@ fn row_bits(m: Mover, y: i32, z: i32) -> u32 {
 // mover's cells, are farther than t and push nothing.
 fn push(m: ptr<function, Mover>, y4: vec4<f32>, w: u32) {
     let qc = vec2<u32>(w & COORD_MASK, (w >> COORD_BITS) & COORD_MASK);
-    if !candidates((*m).me, vec2<i32>(qc)) {
-        return;
-    }
     let t = p.self_thickness;
     let e = (*m).x4.xyz - y4.xyz;
     let d2 = e.x * e.x + e.y * e.y + e.z * e.z;
-    if d2 >= t * t || d2 < 1e-12 {
-        return;
-    }
-    (*m).contacts += 1u;
+    let hit = candidates((*m).me, vec2<i32>(qc)) && d2 < t * t && d2 >= 1e-12;
+    (*m).contacts += select(0u, 1u, hit);
     let d = sqrt(d2);
     let share = select(0.5, 1.0, (w & PINNED) != 0u);
-    let k = (t - d) / d * share * (UNITS * p.inv_cell);
+    // A miss adds 0 (its k may be infinite or NaN: not used).
+    let k = select(0.0, (t - d) / d * share * (UNITS * p.inv_cell), hit);
     (*m).sum += vec3<i32>(e * k);
 }
 
@@ -159,10 +152,11 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
             // One read for the end (both sides of a branch run on lavapipe, reads too).
             let wraps = stop > size;
             let at_end = cells[select(min(stop, size - 1u), stop - size, wraps)];
-            var len = clamp(select(at_end, np, stop == size), start, np) - start;
-            if wraps {
-                len = np - start + clamp(at_end, wrap, np) - wrap;
-            }
+            let len = select(
+                clamp(select(at_end, np, stop == size), start, np) - start,
+                np - start + clamp(at_end, wrap, np) - wrap,
+                wraps
+            );
             if len > 0u && rows < MAX_ROWS {
                 let at = vec4<u32>(rows) - lane;
                 st0 = select(st0, vec4<u32>(start), at == vec4<u32>(0u));
@@ -195,10 +189,8 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
             cur = select(sh.x, sh.y, (r & 1u) != 0u);
             len = select(lh.x, lh.y, (r & 1u) != 0u);
         }
-        var s = cur + (k - base);
-        if s >= np {
-            s = s - np + wrap;
-        }
+        let s0 = cur + (k - base);
+        let s = select(s0, s0 - np + wrap, s0 >= np);
         let y4 = slot_pos[s];
         let w = bitcast<u32>(y4.w);
         push(a, y4, w);
@@ -213,11 +205,9 @@ fn mover(i: u32, valid: bool) -> Mover {
     m.cells = 0u;
     m.sum = vec3<i32>(0);
     m.contacts = 0u;
-    if !valid {
-        return m;
-    }
-    m.x4 = pos[i];
-    m.moving = m.x4.w != 0.0 && i32(i) != p.grab_index;
+    // Past the grid's end (an odd n's last column) a particle that stays.
+    m.x4 = pos[min(i, num_particles() - 1u)];
+    m.moving = valid && m.x4.w != 0.0 && i32(i) != p.grab_index;
     let v = scaled(m.x4.xyz);
     m.c = cell_of(m.x4.xyz);
     m.f = v - floor(v);
