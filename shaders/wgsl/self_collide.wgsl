@@ -90,9 +90,7 @@ fn push(m: ptr<function, Mover>, y4: vec4<f32>, w: u32) {
 fn box_rows(m: Mover, lo: vec3<i32>) -> u32 {
     var rows = 0u;
     for (var k = 0u; k < 9u; k++) {
-        if ((m.cells >> (3u * k)) & 7u) != 0u {
-            rows |= 1u << (k % 3u + 4u * (k / 3u));
-        }
+        rows |= select(0u, 1u, ((m.cells >> (3u * k)) & 7u) != 0u) << (k % 3u + 4u * (k / 3u));
     }
     return rows << u32((m.c.y - lo.y) + 4 * (m.c.z - lo.z));
 }
@@ -108,16 +106,10 @@ const MAX_ROWS: u32 = 16u;
 fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
     let size = table_size();
     let np = num_particles();
-    var lo = vec3<i32>(1000000000);
-    var hi = vec3<i32>(-1000000000);
-    if (*a).moving {
-        lo = min(lo, (*a).c);
-        hi = max(hi, (*a).c);
-    }
-    if (*b).moving {
-        lo = min(lo, (*b).c);
-        hi = max(hi, (*b).c);
-    }
+    let far = vec3<i32>(1000000000);
+    let ca = (*a).c;
+    let cb = (*b).c;
+    let lo = min(select(far, ca, (*a).moving), select(far, cb, (*b).moving));
     // The ranges in registers, four vec4s each (an array indexed per lane costs lavapipe a
     // memory access per lane).
     var st0 = vec4<u32>(0u);
@@ -230,12 +222,10 @@ fn finish(m: Mover) {
     pos_out[i] = vec4<f32>(x, x4.w);
     if pushed {
         let xp4 = prev[i];
-        var u = x4.xyz - xp4.xyz;
+        let u0 = x4.xyz - xp4.xyz;
         let nrm = delta / sqrt(dd);
-        let un = u.x * nrm.x + u.y * nrm.y + u.z * nrm.z;
-        if un < 0.0 {
-            u -= un * nrm;
-        }
+        let un = u0.x * nrm.x + u0.y * nrm.y + u0.z * nrm.z;
+        let u = select(u0, u0 - un * nrm, un < 0.0);
         prev[i] = vec4<f32>(x - u, xp4.w);
     }
 }
