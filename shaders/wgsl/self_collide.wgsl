@@ -190,7 +190,8 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
     }
 }
 
-fn mover(i: u32, valid: bool) -> Mover {
+fn mover(col: u32, j: u32, valid: bool) -> Mover {
+    let i = j * p.n + col;
     var m: Mover;
     m.i = i;
     m.moving = false;
@@ -203,7 +204,7 @@ fn mover(i: u32, valid: bool) -> Mover {
     let v = scaled(m.x4.xyz);
     m.c = cell_of(m.x4.xyz);
     m.f = v - floor(v);
-    m.me = vec2<i32>(i32(i % p.n), i32(i / p.n));
+    m.me = vec2<i32>(i32(col), i32(j));
     m.cells = select(0u, reached_cells(m), m.moving);
     return m;
 }
@@ -240,13 +241,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let col = 2u * (g % half);
-    var a = mover(j * p.n + col, true);
-    var b = mover(j * p.n + col + 1u, col + 1u < p.n);
+    var a = mover(col, j, true);
+    var b = mover(col + 1u, j, col + 1u < p.n);
     if all(abs(a.c - b.c) <= vec3<i32>(1)) || !a.moving || !b.moving {
         walk(&a, &b);
     } else {
         // Cells farther apart (a stretched or torn cloth): one walk each.
-        var none = mover(0u, false);
+        var none = mover(0u, 0u, false);
         walk(&a, &none);
         walk(&b, &none);
     }
