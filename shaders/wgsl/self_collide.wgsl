@@ -40,8 +40,8 @@ struct Mover {
 
 // The cells of m's 3 x 3 x 3 that its sphere of radius REACH (cells) reaches: those whose
 // squared distance from m's point, the sum of its squared gaps per axis, is below REACH².
-// Any such superset of the cells within the thickness will do (see push); this one needs
-// no square root (the CPU's rows_around takes one per row).
+// Any such superset of the cells within the thickness will do (see push); the CPU's
+// reach computes the same set row by row.
 fn reached_cells(m: Mover) -> u32 {
     let below = m.f * m.f;
     let above = (1.0 - m.f) * (1.0 - m.f);
@@ -69,8 +69,8 @@ fn row_bits(m: Mover, y: i32, z: i32) -> u32 {
 // m's push from the particle in a slot (position y4, word w). Every entry of the walk
 // counts: a particle closer than the thickness lies in a cell m's sphere reaches (REACH),
 // whose bucket the walk reads once (no two of its rows share one); so m sums exactly its
-// twin's contacts, and entries of other rows hashed to the same buckets, or of the other
-// mover's cells, are farther than t and push nothing.
+// twin's contacts. Every other entry (of another row hashed to the same bucket, of a cell
+// only the other mover reaches) is farther than t and pushes nothing.
 fn push(m: ptr<function, Mover>, y4: vec4<f32>, w: u32) {
     let qc = vec2<u32>(w & COORD_MASK, (w >> COORD_BITS) & COORD_MASK);
     let t = p.self_thickness;

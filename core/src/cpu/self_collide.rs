@@ -22,8 +22,9 @@
 //!    a bucket: [`row_start`]) — refuses entries of other rows and grid neighbours by the
 //!    slot's word, and moves away from each particle closer than the thickness:
 //!    a counting sort into a uniform grid, no per-particle lists. (The GPU kernel walks
-//!    two row neighbours' rows at once, each taking only its own cells' entries: the
-//!    same contacts, summed in another order.)
+//!    two row neighbours' rows at once and tests no entry's cell or tag: a particle
+//!    closer than `t` lies in a cell the walk reads once, so each finds the same
+//!    contacts, summed in another order.)
 //!
 //! A pair is a candidate when its grid offset is outside the 5 × 5 stencil of the springs
 //! and its rest distance exceeds twice the thickness (closer ones would be pushed apart by
@@ -308,14 +309,14 @@ pub fn candidate_coords(p: &StepParams, a: (i32, i32), b: (i32, i32)) -> bool {
     ((di * di + dj * dj) as f32) * (p.spacing * p.spacing) > t2 * t2
 }
 
-/// The distance (in cells) from a point at fraction `f` of its cell to the neighbour
-/// cell at offset `d` (−1, 0, 1) along one axis.
+/// The squared distance (in cells) from a point at fraction `f` of its cell to the
+/// neighbour cell at offset `d` (−1, 0, 1) along one axis.
 #[inline]
-fn gap(f: f32, d: i32) -> f32 {
+fn gap2(f: f32, d: i32) -> f32 {
     match d {
         0 => 0.0,
-        d if d < 0 => f,
-        _ => 1.0 - f,
+        d if d < 0 => f * f,
+        _ => (1.0 - f) * (1.0 - f),
     }
 }
 
@@ -340,21 +341,21 @@ pub fn cell_and_fraction(x: &V4, inv: f32) -> ([i32; 3], [f32; 3]) {
 }
 
 /// The cells in x of row `(y, z)` that the sphere of radius [`REACH`] around a point in
-/// cell `c` at fraction `f` reaches, as `(lo, hi)`; `None` where it reaches none of them
-/// (the GPU kernel's `reach`).
+/// cell `c` at fraction `f` reaches — those whose squared distance from the point, the
+/// sum of its squared gaps per axis, is below `REACH²` — as `(lo, hi)`; `None` where it
+/// reaches none of them (the GPU kernel's `reached_cells`, row by row: no square root).
 #[inline]
 pub fn reach(c: [i32; 3], f: [f32; 3], y: i32, z: i32) -> Option<(i32, i32)> {
     let (dy, dz) = (y.wrapping_sub(c[1]), z.wrapping_sub(c[2]));
     if dy.abs() > 1 || dz.abs() > 1 {
         return None;
     }
-    let (gy, gz) = (gap(f[1], dy), gap(f[2], dz));
-    let r2 = REACH * REACH - gy * gy - gz * gz;
-    if r2 <= 0.0 {
+    let (gyz, r2) = (gap2(f[2], dz) + gap2(f[1], dy), REACH * REACH);
+    if gyz >= r2 {
         return None;
     }
-    let r = r2.sqrt();
-    Some((c[0].wrapping_sub(i32::from(f[0] < r)), c[0].wrapping_add(i32::from(1.0 - f[0] < r))))
+    let (below, above) = (gap2(f[0], -1), gap2(f[0], 1));
+    Some((c[0].wrapping_sub(i32::from(gyz + below < r2)), c[0].wrapping_add(i32::from(gyz + above < r2))))
 }
 
 /// The rows of cells (in x) within [`REACH`] of a point, in the response's order (z, then
