@@ -23,33 +23,16 @@ fn row_entries(cells: &[u32], first: u32, len: u32, size: u32, np: u32) -> u64 {
 /// rows either reaches once for both (cells at most one apart per axis; else one walk
 /// each), and the share of pairs that cannot.
 fn pair_walks(pos: &[V4], n: usize, inv: f32, cells: &[u32], size: u32) -> (f64, f64, f64) {
-    let np = pos.len() as u32;
-    let (mut rows, mut entries, mut apart, mut pairs) = (0u64, 0u64, 0u64, 0u64);
-    for j in 0..n {
-        for k in (0..n - 1).step_by(2) {
-            pairs += 1;
-            let two = [cell_and_fraction(&pos[j * n + k], inv), cell_and_fraction(&pos[j * n + k + 1], inv)];
-            let ((ca, _), (cb, _)) = (two[0], two[1]);
-            let walks: Vec<&[([i32; 3], [f32; 3])]> =
-                if (0..3).all(|a| (ca[a] - cb[a]).abs() <= 1) { vec![&two[..]] } else { vec![&two[..1], &two[1..]] };
-            apart += u64::from(walks.len() == 2);
-            for walk in walks {
-                let lo: [i32; 3] = std::array::from_fn(|a| walk.iter().map(|(c, _)| c[a]).min().unwrap() - 1);
-                let hi: [i32; 3] = std::array::from_fn(|a| walk.iter().map(|(c, _)| c[a]).max().unwrap() + 1);
-                for z in lo[2]..=hi[2] {
-                    for y in lo[1]..=hi[1] {
-                        let reached: Vec<(i32, i32)> = walk.iter().filter_map(|&(c, f)| reach(c, f, y, z)).collect();
-                        let Some(x0) = reached.iter().map(|r| r.0).min() else { continue };
-                        let x1 = reached.iter().map(|r| r.1).max().unwrap();
-                        rows += 1;
-                        entries += row_entries(cells, bucket([x0, y, z], size), (x1 - x0 + 1) as u32, size, np);
-                    }
-                }
-            }
-        }
+    let count = n * n.div_ceil(2);
+    let (mut rows, mut entries, mut apart) = (0u64, 0u64, 0u64);
+    for g in 0..count {
+        let walks = pair_loops(pos, n, g, inv, cells, size);
+        apart += u64::from(walks.len() == 2);
+        rows += walks.iter().flatten().flatten().count() as u64;
+        entries += walks.iter().flatten().flatten().sum::<u64>();
     }
-    let per = 2.0 * pairs as f64;
-    (rows as f64 / per, entries as f64 / per, 100.0 * apart as f64 / pairs as f64)
+    let per = pos.len() as f64;
+    (rows as f64 / per, entries as f64 / per, 100.0 * apart as f64 / count as f64)
 }
 
 /// One pair's walk as the kernel loops it: per (z, y) loop index, the entries of the row

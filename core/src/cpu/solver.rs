@@ -350,8 +350,8 @@ impl CpuSolver {
         // Self-collision: the hash in aux2, aux3 and aux4 (dead after the integrator's kernels),
         // the response into the other position buffer (self_collide.rs).
         if params.self_collision {
-            let (cells, sorted, slots) = hash_buffers(aux);
-            Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, cells, sorted, slots));
+            let (cells, totals, slots) = hash_buffers(aux);
+            Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, cells, totals, slots));
             Self::timed(timer, on, SELF_COLLIDE, || self_collide(e, &p, pos, prev, cells, slots, scratch));
             std::mem::swap(pos, scratch);
         }
