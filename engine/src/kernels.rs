@@ -36,8 +36,6 @@ pub enum Count {
     Workgroup,
     /// One per [`WORKGROUP`] buckets of the self-collision hash (`hash_scan_blocks`).
     HashBlocks,
-    /// One per four buckets of the self-collision hash (`hash_scan_add`).
-    HashBuckets4,
     /// One per pair of neighbours in a row (`n · ⌈n / 2⌉`: `self_collide`).
     Pairs,
 }
@@ -53,7 +51,6 @@ impl Count {
             Count::Triangles => topo.triangles.len() as u32,
             Count::Workgroup => WORKGROUP,
             Count::HashBlocks => cpu::self_collide::hash_blocks(topo.num_particles()),
-            Count::HashBuckets4 => cpu::self_collide::table_size(topo.num_particles()).div_ceil(4),
             Count::Pairs => topo.n * topo.n.div_ceil(2),
         }
     }
@@ -710,7 +707,8 @@ fn hash_buffers(b: &mut HostBuffers) -> (&mut [V4], &mut [V4], &mut [V4]) {
 
 fn hash_count(a: &TwinArgs, b: &mut HostBuffers) {
     let pos = std::mem::take(&mut b.pos);
-    cpu::hash_count(a.p, &pos, hash_buffers(b).0);
+    let (cells, totals, _) = hash_buffers(b);
+    cpu::hash_count(a.p, &pos, cells, totals);
     b.pos = pos;
 }
 
@@ -721,11 +719,6 @@ fn hash_scan_blocks(_: &TwinArgs, b: &mut HostBuffers) {
 
 fn hash_scan_top(_: &TwinArgs, b: &mut HostBuffers) {
     cpu::hash_scan_top(hash_buffers(b).1);
-}
-
-fn hash_scan_add(_: &TwinArgs, b: &mut HostBuffers) {
-    let (cells, totals, _) = hash_buffers(b);
-    cpu::hash_scan_add(cells, totals);
 }
 
 fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
@@ -744,8 +737,9 @@ fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {
 /// counts cleared first, as the recipe does).
 fn hash_input(upto: usize) -> impl Fn(&TwinArgs, &mut HostBuffers) {
     move |a, b| {
-        hash_buffers(b).0.iter_mut().for_each(|c| *c = [0.0; 4]);
-        let steps: [Twin; 5] = [hash_count, hash_scan_blocks, hash_scan_top, hash_scan_add, hash_scatter];
+        let (cells, totals, _) = hash_buffers(b);
+        cells.iter_mut().chain(totals.iter_mut()).for_each(|c| *c = [0.0; 4]);
+        let steps: [Twin; 4] = [hash_count, hash_scan_top, hash_scan_blocks, hash_scatter];
         for step in &steps[..upto] {
             step(a, b);
         }
@@ -756,16 +750,12 @@ fn after_count(a: &TwinArgs, b: &mut HostBuffers) {
     hash_input(1)(a, b)
 }
 
-fn after_blocks(a: &TwinArgs, b: &mut HostBuffers) {
+fn after_top(a: &TwinArgs, b: &mut HostBuffers) {
     hash_input(2)(a, b)
 }
 
-fn after_top(a: &TwinArgs, b: &mut HostBuffers) {
-    hash_input(3)(a, b)
-}
-
 fn after_scan(a: &TwinArgs, b: &mut HostBuffers) {
-    hash_input(4)(a, b)
+    hash_input(3)(a, b)
 }
 
 /// The response's input: every 7th particle put within 0.3–0.8 thicknesses of one far
@@ -783,7 +773,7 @@ fn built_hash(a: &TwinArgs, b: &mut HostBuffers) {
             b.pos[i][c] = to;
         }
     }
-    hash_input(5)(a, b)
+    hash_input(4)(a, b)
 }
 
 /// The reduction's work is done by `stats`' twin, which reduces on the spot.
@@ -1134,25 +1124,21 @@ const fn hash(
 ) -> KernelDef {
     KernelDef { check: EXACT, label: timing::SELF_HASH, ..def(name, twin, count, reads, writes) }
 }
-/// Each particle's bucket, and the buckets' counts (atomics).
+/// Each particle's bucket, and the buckets' and their blocks' counts (atomics).
 pub static HASH_COUNT: KernelDef = KernelDef {
-    accumulates: &[Aux2],
-    ..hash("hash_count", hash_count, Count::Particles, &[Params, Pos, Aux2], &[Aux2])
+    accumulates: &[Aux2, Aux3],
+    ..hash("hash_count", hash_count, Count::Particles, &[Params, Pos, Aux2, Aux3], &[Aux2, Aux3])
 };
-/// The counts' inclusive prefix within each block of buckets, and the block's total.
-pub static HASH_SCAN_BLOCKS: KernelDef = KernelDef {
-    test_input: Some(after_count),
-    ..hash("hash_scan_blocks", hash_scan_blocks, Count::HashBlocks, &[Params, Aux2, Aux3], &[Aux2, Aux3])
-};
-/// The blocks' totals' exclusive prefix (one workgroup).
+/// The blocks' totals' exclusive prefix: each block's offset (one workgroup).
 pub static HASH_SCAN_TOP: KernelDef = KernelDef {
-    test_input: Some(after_blocks),
+    test_input: Some(after_count),
     ..hash("hash_scan_top", hash_scan_top, Count::Workgroup, &[Params, Aux3], &[Aux3])
 };
-/// Every bucket's end in the whole array.
-pub static HASH_SCAN_ADD: KernelDef = KernelDef {
+/// The counts' inclusive prefix within each block of buckets from its offset: every
+/// bucket's end in the whole array.
+pub static HASH_SCAN_BLOCKS: KernelDef = KernelDef {
     test_input: Some(after_top),
-    ..hash("hash_scan_add", hash_scan_add, Count::HashBuckets4, &[Params, Aux2, Aux3], &[Aux2])
+    ..hash("hash_scan_blocks", hash_scan_blocks, Count::HashBlocks, &[Params, Aux2, Aux3], &[Aux2])
 };
 /// Every particle's position and slot word into its bucket's range, in any order
 /// (atomics), each bucket's word moved to its start: checked bucket by bucket as sets.
@@ -1175,11 +1161,11 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Prev, Aux2, Aux4], &[PosOut, Prev])
 };
 /// Self-collision's kernels, in recipe order.
-pub static SELF_COLLISION: [&KernelDef; 6] =
-    [&HASH_COUNT, &HASH_SCAN_BLOCKS, &HASH_SCAN_TOP, &HASH_SCAN_ADD, &HASH_SCATTER, &SELF_COLLIDE];
+pub static SELF_COLLISION: [&KernelDef; 5] =
+    [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 50] = [
+pub static ALL: [&KernelDef; 49] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -1225,9 +1211,8 @@ pub static ALL: [&KernelDef; 50] = [
     &CG_DIRECTION,
     &IMPLICIT_FINISH,
     &HASH_COUNT,
-    &HASH_SCAN_BLOCKS,
     &HASH_SCAN_TOP,
-    &HASH_SCAN_ADD,
+    &HASH_SCAN_BLOCKS,
     &HASH_SCATTER,
     &SELF_COLLIDE,
 ];

@@ -1,6 +1,8 @@
-//! include: state, hash_atomic, hash_fn
-// hash_count — per particle: one more in its bucket's count (core::cpu::self_collide::
-// hash_count; the recipe clears the counts before).
+//! include: state, hash_atomic, hash_totals_atomic, hash_fn
+// hash_count — per particle: one more in its bucket's count and in its block's total
+// (core::cpu::self_collide::hash_count; the recipe clears both before). The blocks'
+// totals here spare the scan a pass that adds their offsets back (a dispatch costs
+// lavapipe about 50 µs; the second atomic, into a few KiB that stay cached, about none).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
@@ -8,5 +10,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    atomicAdd(&cells[bucket(cell_of(pos[i].xyz), table_size())], 1u);
+    let b = bucket(cell_of(pos[i].xyz), table_size());
+    atomicAdd(&cells[b], 1u);
+    atomicAdd(&block_totals[4u * (b / WORKGROUP) + 2u], 1u);
 }

@@ -1,8 +1,9 @@
 //! include: state, hash_vec4, hash_fn
 // hash_scan_blocks — per WORKGROUP consecutive buckets (one invocation each, in order, no
 // barriers: on lavapipe a workgroup-wide scan's twelve barriers cost more than the sums),
-// read and written four at a time: the inclusive prefix of the counts in place, the
-// block's total into totals[4g + 2] (core::cpu::self_collide::hash_scan_blocks).
+// read and written four at a time: the inclusive prefix of the counts in place, from the
+// block's offset (totals[4g + 2] after hash_scan_top): each bucket's end in the whole
+// array (core::cpu::self_collide::hash_scan_blocks).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
@@ -14,7 +15,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     // The table's size is a multiple of 4.
     let last = min(first + WORKGROUP, size);
-    var acc = 0u;
+    var acc = totals[4u * g + 2u];
     for (var q = first / 4u; q < last / 4u; q++) {
         var v = cells4[q];
         v.x += acc;
@@ -24,5 +25,4 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         cells4[q] = v;
         acc = v.w;
     }
-    totals[4u * g + 2u] = acc;
 }

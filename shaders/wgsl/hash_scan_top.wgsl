@@ -1,6 +1,7 @@
 //! include: state, hash, hash_fn
-// hash_scan_top — one workgroup: the exclusive prefix of the blocks' totals (totals[4g + 2])
-// in place (core::cpu::self_collide::hash_scan_top). Each invocation sums a run of
+// hash_scan_top — one workgroup: the exclusive prefix of the blocks' totals (totals[4g + 2],
+// counted by hash_count) in place, each block's offset (core::cpu::self_collide::
+// hash_scan_top). Each invocation sums a run of
 // consecutive totals, one scan over the workgroup offsets the runs, and each invocation
 // writes its run's prefixes: two barrier rounds, however many blocks.
 var<workgroup> wg_count: u32;

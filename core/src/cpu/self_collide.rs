@@ -3,13 +3,15 @@
 //!
 //! 1. [`hash_count`]: each particle's cell (a cube of side `t = self_thickness`) is hashed
 //!    to one of [`table_size`]`(n²)` buckets (four times the largest power of two not
-//!    above n²); the buckets count their particles (atomics on the GPU). A cell's bucket
-//!    is its row's hash plus its x ([`bucket`]): the three cells of a row in x are three
-//!    consecutive buckets, whose particles lie in one range of the sorted array.
-//! 2. [`hash_scan_blocks`], [`hash_scan_top`], [`hash_scan_add`]: an inclusive prefix sum
-//!    of the counts gives every bucket the end of its range in one array of particles —
-//!    per block of [`WORKGROUP`] buckets, then over the blocks' totals in one workgroup,
-//!    then added back.
+//!    above n²); the buckets count their particles, and so do their blocks of
+//!    [`WORKGROUP`] buckets (atomics on the GPU). A cell's bucket is its row's hash plus
+//!    its x ([`bucket`]): the three cells of a row in x are three consecutive buckets,
+//!    whose particles lie in one range of the sorted array.
+//! 2. [`hash_scan_top`], [`hash_scan_blocks`]: an inclusive prefix sum of the counts gives
+//!    every bucket the end of its range in one array of particles — first the blocks'
+//!    offsets (the exclusive prefix of their totals, in one workgroup), then within each
+//!    block from its offset. (Counting the blocks' totals with the buckets' saves the
+//!    third pass that adds the offsets back: on lavapipe a dispatch costs about 50 µs.)
 //! 3. [`hash_scatter`]: every particle copies its position and slot word into the slot
 //!    before its bucket's end (atomics on the GPU, in any order), which leaves each
 //!    bucket's word at the start of its range:
@@ -177,33 +179,37 @@ pub fn inv_cell(p: &StepParams) -> f32 {
     p.inv_cell
 }
 
-/// Step 1: the buckets' counts into `cells` (cleared before).
-pub fn hash_count(p: &StepParams, pos: &[V4], cells: &mut [V4]) {
+/// Step 1: the buckets' counts into `cells`, and their blocks' (of [`WORKGROUP`]
+/// buckets) into `totals[g].z` (both cleared before).
+pub fn hash_count(p: &StepParams, pos: &[V4], cells: &mut [V4], totals: &mut [V4]) {
     let (size, inv) = (table_size(pos.len()), inv_cell(p));
-    let cells = words_mut(cells);
+    let (cells, totals) = (words_mut(cells), words_mut(totals));
     for x in pos {
         let b = bucket(cell_of(x, inv), size) as usize;
         cells[b] = cells[b].wrapping_add(1);
+        let g = 4 * (b / WORKGROUP as usize) + 2;
+        totals[g] = totals[g].wrapping_add(1);
     }
 }
 
-/// Step 2a: within each block of [`WORKGROUP`] buckets, the inclusive prefix of the
-/// counts in place, and the block's total into `totals[g].z`.
-pub fn hash_scan_blocks(cells: &mut [V4], totals: &mut [V4]) {
+/// Step 2b: within each block of [`WORKGROUP`] buckets, the inclusive prefix of the
+/// counts in place from the block's offset (`totals[g].z` after step 2a): each bucket's
+/// end in the whole array.
+pub fn hash_scan_blocks(cells: &mut [V4], totals: &[V4]) {
     let size = table_size(totals.len()) as usize;
-    let (cells, totals) = (words_mut(cells), words_mut(totals));
+    let (cells, totals) = (words_mut(cells), words(totals));
     let w = WORKGROUP as usize;
     for (g, block) in cells[..size].chunks_mut(w).enumerate() {
-        let mut acc = 0u32;
+        let mut acc = totals[4 * g + 2];
         for c in block {
             acc = acc.wrapping_add(*c);
             *c = acc;
         }
-        totals[4 * g + 2] = acc;
     }
 }
 
-/// Step 2b: the exclusive prefix of the blocks' totals, in place (`totals[g].z`).
+/// Step 2a: the exclusive prefix of the blocks' totals, in place (`totals[g].z`): each
+/// block's offset.
 pub fn hash_scan_top(totals: &mut [V4]) {
     let blocks = hash_blocks(totals.len()) as usize;
     let totals = words_mut(totals);
@@ -212,16 +218,6 @@ pub fn hash_scan_top(totals: &mut [V4]) {
         let total = totals[4 * g + 2];
         totals[4 * g + 2] = acc;
         acc = acc.wrapping_add(total);
-    }
-}
-
-/// Step 2c: each bucket's end in the whole array (its block's offset added).
-pub fn hash_scan_add(cells: &mut [V4], totals: &[V4]) {
-    let size = table_size(totals.len()) as usize;
-    let (cells, totals) = (words_mut(cells), words(totals));
-    let w = WORKGROUP as usize;
-    for (b, c) in cells[..size].iter_mut().enumerate() {
-        *c = c.wrapping_add(totals[4 * (b / w) + 2]);
     }
 }
 
@@ -256,10 +252,10 @@ pub fn hash_buffers(aux: &mut [Vec<V4>]) -> (&mut [V4], &mut [V4], &mut [V4]) {
 /// particle each).
 pub fn build_hash(p: &StepParams, pos: &[V4], cells: &mut [V4], totals: &mut [V4], slots: &mut [V4]) {
     cells.iter_mut().for_each(|c| *c = [0.0; 4]);
-    hash_count(p, pos, cells);
-    hash_scan_blocks(cells, totals);
+    totals[..hash_blocks(pos.len()) as usize].iter_mut().for_each(|c| *c = [0.0; 4]);
+    hash_count(p, pos, cells, totals);
     hash_scan_top(totals);
-    hash_scan_add(cells, totals);
+    hash_scan_blocks(cells, totals);
     hash_scatter(p, pos, cells, slots);
 }
 
