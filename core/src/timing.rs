@@ -63,8 +63,11 @@ pub const FORCES_INTEGRATE_COLLIDE: &str = "forces+integrate+collide";
 pub const FUSED_STEP: &str = "fused substep";
 /// Label of the whole-substep row.
 pub const SUBSTEP: &str = "substep";
-/// Self-collision's hash build (count, prefix sum, scatter).
+/// Self-collision's hash build (count, prefix sum, scatter; without the count where it
+/// is fused into the strain limit's last pass: [`STRAIN_LIMIT_COUNT`]).
 pub const SELF_HASH: &str = "self_hash";
+/// Label of the strain limit's last pass fused with self-collision's hash count.
+pub const STRAIN_LIMIT_COUNT: &str = "strain_limit+hash_count";
 /// Self-collision's response.
 pub const SELF_COLLIDE: &str = "self_collide";
 /// Label of the whole-frame row (all substeps of a frame).

@@ -556,6 +556,15 @@ fn strain_limit(a: &TwinArgs, b: &mut HostBuffers) {
     cpu::strain_limit(a.exec, a.p, &a.topo.slots, &a.topo.tethers, &b.pos, &mut b.pos_out);
 }
 
+/// The strain limit's pass, then its output counted into the self-collision hash.
+fn strain_limit_count(a: &TwinArgs, b: &mut HostBuffers) {
+    strain_limit(a, b);
+    let out = std::mem::take(&mut b.pos_out);
+    let (cells, totals, _) = hash_buffers(b);
+    cpu::hash_count(a.p, &out, cells, totals);
+    b.pos_out = out;
+}
+
 fn tri_normals(a: &TwinArgs, b: &mut HostBuffers) {
     cpu::tri_normals(a.exec, &a.topo.triangles, &b.pos, &mut b.faces);
 }
@@ -916,6 +925,24 @@ pub static STRAIN_LIMIT: KernelDef = KernelDef {
         &[PosOut],
     )
 };
+/// The strain limit's last pass fused with self-collision's `hash_count` (the recipe's
+/// choice when self-collision follows a strain limit): one dispatch fewer. Its counts are
+/// checked against a recount of the positions it wrote (see
+/// [`crate::validate::validate_kernels_with`]).
+pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[PosOut],
+    accumulates: &[Aux2, Aux3],
+    variants: BLOCKED,
+    label: timing::STRAIN_LIMIT_COUNT,
+    ..def(
+        "strain_limit_count",
+        strain_limit_count,
+        Count::Blocks,
+        &[Params, Pos, Slots, BendSlots, Interior, Table, Tethers, Aux2, Aux3],
+        &[PosOut, Aux2, Aux3],
+    )
+};
 /// Face normals per quad of the grid.
 pub static TRI_NORMALS: KernelDef =
     KernelDef { pure: &[Faces], ..def("tri_normals", tri_normals, Count::Quads, &[Params, Pos], &[Faces]) };
@@ -1165,7 +1192,7 @@ pub static SELF_COLLISION: [&KernelDef; 5] =
     [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 49] = [
+pub static ALL: [&KernelDef; 50] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -1211,6 +1238,7 @@ pub static ALL: [&KernelDef; 49] = [
     &CG_DIRECTION,
     &IMPLICIT_FINISH,
     &HASH_COUNT,
+    &STRAIN_LIMIT_COUNT,
     &HASH_SCAN_TOP,
     &HASH_SCAN_BLOCKS,
     &HASH_SCATTER,

@@ -180,10 +180,18 @@ pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Co
     let normals: &[&'static KernelDef] =
         if normals_at_frame_end(variant, how) { &[] } else { &normals_kernels(variant) };
     let flavor = variant.flavor();
+    // Self-collision after a strain limit: its count fused into the last pass (one
+    // dispatch and one read of the positions fewer).
+    let fused_count = how.self_collision && strain_passes > 0;
+    let strain = |pass: u32| {
+        if fused_count && pass + 1 == strain_passes { &k::STRAIN_LIMIT_COUNT } else { &k::STRAIN_LIMIT }
+    };
     let mut commands: Vec<Command> = step
         .into_iter()
-        .chain((0..strain_passes).map(|_| &k::STRAIN_LIMIT))
-        .chain(k::SELF_COLLISION.iter().copied().filter(|_| how.self_collision))
+        .chain((0..strain_passes).map(strain))
+        .chain(
+            k::SELF_COLLISION.iter().copied().filter(|&d| how.self_collision && !(fused_count && d == &k::HASH_COUNT)),
+        )
         .chain(normals.iter().copied())
         .flat_map(|d| run(d.flavor(flavor)))
         .collect();

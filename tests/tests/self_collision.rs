@@ -9,7 +9,7 @@ use clothlab_core::cpu::self_collide::{bucket_range, hash_words, table_size};
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{CpuSolver, Exec, Scene, SceneFile, SimParams, Solver};
 use clothlab_engine::Variant;
-use clothlab_engine::kernels::{HASH_SCATTER, KernelRef, SELF_COLLISION};
+use clothlab_engine::kernels::{HASH_COUNT, HASH_SCATTER, KernelRef, SELF_COLLISION, STRAIN_LIMIT_COUNT};
 use clothlab_engine::recipe::Command;
 use clothlab_engine::validate::{KernelInput, KernelRunner, validate_kernels_with};
 use clothlab_tests::{assert_checks, every_backend, or_skip};
@@ -83,11 +83,18 @@ fn check_kernels(
     scene: &Scene,
     params: &SimParams,
 ) {
-    let kernels: Vec<_> = recipe.into_iter().filter(|k| SELF_COLLISION.contains(&k.def)).collect();
+    let mut kernels: Vec<_> =
+        recipe.into_iter().filter(|k| SELF_COLLISION.contains(&k.def) || k.def == &STRAIN_LIMIT_COUNT).collect();
+    // The heap strain-limits: the hash's count runs in the last strain pass, not alone.
+    let fused =
+        *kernels.iter().find(|k| k.def == &STRAIN_LIMIT_COUNT).unwrap_or_else(|| panic!("{label}: {kernels:?}"));
+    assert!(!kernels.iter().any(|k| k.def == &HASH_COUNT), "{label}: {kernels:?}");
     assert_eq!(kernels.len(), SELF_COLLISION.len(), "{label}: {kernels:?}");
+    // The count alone too (what a recipe without a strain pass runs).
+    kernels.push(HASH_COUNT.flavor(fused.flavor));
     let checks = validate_kernels_with(runner, &kernels, scene, 9, params).unwrap();
-    // Four checked by the loop (the scatter by the test below), every buffer of each.
-    assert_eq!(checks.len(), 4 * clothlab_engine::validate::COMPARED_BUFFERS, "{label}");
+    // Five checked by the loop (the scatter by the test below), every buffer of each.
+    assert_eq!(checks.len(), 5 * clothlab_engine::validate::COMPARED_BUFFERS, "{label}");
     assert_checks(label, &checks);
     let input = KernelInput::for_scene(scene, 9, params).unwrap();
     let bits = |v: &Vec<[f32; 4]>| v.iter().map(|e| e.map(f32::to_bits)).collect::<Vec<_>>();

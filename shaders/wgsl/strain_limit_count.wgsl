@@ -1,0 +1,17 @@
+//! include: table, window, strain_limit_pass, hash_atomic, hash_totals_atomic, hash_fn
+// strain_limit_count — the strain limit's last pass (shared/strain_limit_pass.wgsl), each
+// corrected point then counted into the self-collision hash as hash_count counts it
+// (core::cpu::strain_limit::limit_at, then core::cpu::self_collide::hash_count on the
+// pass's output; the recipe clears the counts before): one dispatch and one read of the
+// positions fewer when self-collision follows a strain limit (a dispatch costs lavapipe
+// about 50 µs).
+
+fn num_particles() -> u32 {
+    return p.n * p.n;
+}
+
+fn strained(k: u32, x4: vec4<f32>) {
+    let b = bucket(cell_of(x4.xyz), table_size());
+    atomicAdd(&cells[b], 1u);
+    atomicAdd(&block_totals[4u * (b / WORKGROUP) + 2u], 1u);
+}
