@@ -487,6 +487,26 @@ mod tests {
     }
 
     #[test]
+    fn self_collision_counts_in_the_last_strain_pass_and_alone_without_one() {
+        let sc = Integration { self_collision: true, ..Integration::VERLET };
+        let names = |passes: u32| -> Vec<String> {
+            dispatches(&recipe(&Variant::OPTIMIZED, passes, sc)).map(|k| k.def.name.to_owned()).collect()
+        };
+        let hash = ["hash_scan_top", "hash_scan_blocks", "hash_scatter", "self_collide"];
+        let with = |head: &[&str]| -> Vec<String> {
+            let mut v: Vec<String> = ["forces_springs", "integrate_collide"].iter().map(|s| s.to_string()).collect();
+            v.extend(head.iter().chain(&hash).chain(&["tri_normals", "vertex_normals"]).map(|s| s.to_string()));
+            v
+        };
+        assert_eq!(names(2), with(&["strain_limit", "strain_limit_count"]));
+        assert_eq!(names(0), with(&["hash_count"]));
+        // The fused pass clears the counts before it, as hash_count's recipe does.
+        let r = recipe(&Variant::OPTIMIZED, 1, sc);
+        let at = r.iter().position(|c| c.kernel().is_some_and(|k| k.def == &k::STRAIN_LIMIT_COUNT)).unwrap();
+        assert_eq!(r[at - 2..at], [Command::Clear(Buf::Aux2), Command::Clear(Buf::Aux3)]);
+    }
+
+    #[test]
     fn normals_once_per_frame_leave_the_substep_to_the_wind_gather_where_the_integrator_allows() {
         let mut v = Variant::OPTIMIZED;
         v.set("normals", "frame").unwrap();
