@@ -10,7 +10,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let b = bucket(cell_of(pos[i].xyz), table_size());
-    atomicAdd(&cells[b], 1u);
-    atomicAdd(&block_totals[4u * (b / WORKGROUP) + 2u], 1u);
+    count_point(pos[i].xyz);
 }
