@@ -60,8 +60,9 @@ pub fn record_times(
     let timed_end = per_end > 0 && end.len() == per_end;
     let share = if timed_end { (in_substeps..labels.len()).map(ns_of).sum::<f64>() / per } else { 0.0 };
     let mut substep_ns = share;
-    // Consecutive dispatches of one label (the hash's three or four kernels, XPBD's passes, the CG
-    // loop) make one sample: a row is that work's time per substep, not per dispatch.
+    // Consecutive dispatches of one label (the hash's three or four kernels, XPBD's
+    // passes, the CG loop) make one sample: a row is that work's time per substep, not per
+    // dispatch.
     let mut run_ns = 0.0;
     for (k, label) in labels[..in_substeps].iter().enumerate() {
         let ns = ns_of(k);

@@ -1,9 +1,9 @@
 //! include: state, hash, hash_fn
 // hash_scan_top — one workgroup: the exclusive prefix of the blocks' totals (totals[4g + 2],
 // counted by hash_count) in place, each block's offset (core::cpu::self_collide::
-// hash_scan_top). Each invocation sums a run of
-// consecutive totals, one scan over the workgroup offsets the runs, and each invocation
-// writes its run's prefixes: two barrier rounds, however many blocks.
+// hash_scan_top). Each invocation sums a run of consecutive totals, one scan over the
+// workgroup offsets the runs, and each invocation writes its run's prefixes: two barrier
+// rounds, however many blocks.
 var<workgroup> wg_count: u32;
 var<workgroup> run_sums: array<u32, WORKGROUP>;
 

@@ -6,10 +6,6 @@
 // positions fewer when self-collision follows a strain limit (a dispatch costs lavapipe
 // about 50 µs).
 
-fn num_particles() -> u32 {
-    return p.n * p.n;
-}
-
 fn strained(k: u32, x4: vec4<f32>) {
     count_point(x4.xyz);
 }
