@@ -31,32 +31,19 @@ fn main() {
     let uni = topo.uniform_interior_slots();
     let p = StepParams::new(&params, &scene, None);
     let mut lanes = cpu::Lanes::default();
-    lanes.fill(Exec::Serial, n as usize, &st.pos, Some(&st.prev));
+    lanes.fill(Exec::Serial, n as usize, &st.pos, Some(&st.vel));
     let mut lanes_p = cpu::Lanes::default();
     lanes_p.fill(Exec::Serial, n as usize, &st.pos, None);
     let mut l = cpu::Lanes::default();
-    let fill = median_us(|| l.fill(Exec::Serial, n as usize, &st.pos, Some(&st.prev)), 50);
+    let fill = median_us(|| l.fill(Exec::Serial, n as usize, &st.pos, Some(&st.vel)), 50);
     println!("Serial lanes fill (pos+vel) {:7.1} ns/particle", fill * 1e3 / (n * n) as f64);
     let np = (n * n) as f64;
     let reps = 50;
     for exec in [Exec::Serial, Exec::Parallel] {
         let mut f = st.force.clone();
-        let a = median_us(|| cpu::springs(exec, p.dt, &topo.slots, &st.pos, &st.prev, &mut f), reps);
+        let a = median_us(|| cpu::springs(exec, &topo.slots, &st.pos, &st.vel, &mut f), reps);
         let b = median_us(
-            || {
-                cpu::springs_rows(
-                    exec,
-                    n as usize,
-                    p.dt,
-                    &topo.slots,
-                    uni.as_ref(),
-                    None,
-                    &lanes,
-                    &st.pos,
-                    &st.prev,
-                    &mut f,
-                )
-            },
+            || cpu::springs_rows(exec, n as usize, &topo.slots, uni.as_ref(), None, &lanes, &st.pos, &st.vel, &mut f),
             reps,
         );
         println!("{exec:?} springs       twin {:7.1} ns/particle   rows {:7.1}", a * 1e3 / np, b * 1e3 / np);

@@ -142,8 +142,8 @@ pub struct ClothState {
     pub n: u32,
     /// Positions, m; w = mobility (1 free, 0 pinned).
     pub pos: Vec<V4>,
-    /// Positions one substep ago (Verlet's x*), m; w unused.
-    pub prev: Vec<V4>,
+    /// Velocities, m/s; w unused (0).
+    pub vel: Vec<V4>,
     /// Force accumulator, N. Between substeps it holds the wind force computed by the
     /// last `vertex_normals`; `forces` adds gravity and drag to it, `springs` the springs.
     pub force: Vec<V4>,
@@ -151,28 +151,12 @@ pub struct ClothState {
     pub normal: Vec<V4>,
 }
 
-/// Rescales Verlet's history for a new time step: the previous positions become
-/// `x − (x − x*)·new_dt/old_dt`, so that the velocity `(x − x*)/dt` is kept (without it a
-/// changed `frame_dt` or `substeps` injects or removes velocity: the thesis's warning).
-/// Pinned particles (x* = x) are unchanged.
-pub fn rescale_history(pos: &[V4], prev: &mut [V4], old_dt: f32, new_dt: f32) {
-    if old_dt == new_dt || old_dt <= 0.0 || new_dt <= 0.0 {
-        return;
-    }
-    let r = new_dt / old_dt;
-    for (x, xp) in pos.iter().zip(prev.iter_mut()) {
-        for c in 0..3 {
-            xp[c] = x[c] - (x[c] - xp[c]) * r;
-        }
-    }
-}
-
 impl ClothState {
     /// Checks that this is a finite state of an `n × n` grid (what `Solver::set_state`
     /// accepts).
     pub fn check(&self, n: u32) -> Result<(), crate::error::SolverError> {
         let np = n as usize * n as usize;
-        let bufs = [&self.pos, &self.prev, &self.force, &self.normal];
+        let bufs = [&self.pos, &self.vel, &self.force, &self.normal];
         if self.n != n || bufs.iter().any(|v| v.len() != np) {
             return Err(crate::error::SolverError::GridMismatch { want: n, got: self.n });
         }
@@ -440,7 +424,9 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
     }
 
     let zero = vec![[0.0f32; 4]; np];
-    let state = ClothState { n, prev: pos.clone(), pos, force: zero.clone(), normal: zero };
+    let v0 = scene.cloth.velocity;
+    let vel = pos.iter().map(|x| if x[3] == 0.0 { [0.0; 4] } else { [v0[0], v0[1], v0[2], 0.0] }).collect();
+    let state = ClothState { n, vel, pos, force: zero.clone(), normal: zero };
     let topo = ClothTopology { n, uv, triangles, slots, springs, face_slots, tethers, spacing };
     Ok((state, topo))
 }

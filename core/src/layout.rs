@@ -42,7 +42,7 @@ pub enum Buf {
     /// The current positions (w: 1 free, 0 pinned).
     Pos = 1,
     /// The previous positions.
-    Prev = 2,
+    Vel = 2,
     /// Forces (also the wind force the normals kernel leaves for the next substep).
     Force = 3,
     /// Vertex normals (the naive scatter's accumulators).
@@ -104,7 +104,7 @@ impl Buf {
     pub const ALL: [Buf; 30] = [
         Buf::Params,
         Buf::Pos,
-        Buf::Prev,
+        Buf::Vel,
         Buf::Force,
         Buf::Normal,
         Buf::PosOut,
@@ -161,7 +161,7 @@ impl Buf {
         match self {
             Buf::Params => "params",
             Buf::Pos => "pos",
-            Buf::Prev => "prev",
+            Buf::Vel => "vel",
             Buf::Force => "force",
             Buf::Normal => "normal",
             Buf::PosOut => "pos_out",

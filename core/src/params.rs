@@ -57,21 +57,22 @@ pub enum StiffnessUnits {
     Physical,
 }
 
-/// How a substep advances the particles (thesis §4.1.1–4.1.2). Every integrator but
-/// Verlet keeps the velocity in the same two buffers Verlet uses: `prev = x − v·dt`, so
-/// the force kernels (which read `x − prev` as `v·dt`) serve all of them unchanged.
+/// How a substep advances the particles (thesis §4.1.1–4.1.2). Every integrator keeps
+/// the same state, positions and velocities (x, v) in f32, so the force kernels (which
+/// read v) serve all of them unchanged.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Integrator {
-    /// Position Verlet `x' = x + (1 − damping)(x − x*) + a dt²` (the thesis's program).
+    /// Verlet (the thesis's program), `x' = x + (1 − damping)(x − x*) + a dt²`, run in
+    /// velocity form: `v' = (1 − damping) v + a dt`, `x' = x + v' dt` (the same recurrence
+    /// with `v = (x − x*)/dt`).
     #[default]
     Verlet,
     /// Explicit (forward) Euler: `x' = x + v dt`, `v' = v + a dt`. Order 1, unstable for
     /// any undamped oscillation: refused where the springs' damping cannot hold it.
     Euler,
-    /// Symplectic (semi-implicit) Euler: `v' = v + a dt`, `x' = x + v' dt`. Order 1. In the
-    /// `(x, x − v·dt)` state it is Verlet's recurrence step for step (Verlet's kernels run
-    /// it); it differs in reading `prev` as `x − v·dt` where Verlet reads `x(t − dt)`.
+    /// Symplectic (semi-implicit) Euler: `v' = v + a dt`, `x' = x + v' dt`. Order 1. In
+    /// the (x, v) state it is Verlet's recurrence step for step (Verlet's kernels run it).
     SymplecticEuler,
     /// The midpoint method (RK2): two force evaluations per substep. Order 2.
     Rk2,
@@ -262,9 +263,6 @@ impl Default for SimParams {
 
 /// Upper bound on substeps per frame (a frame of more would never be interactive).
 pub const MAX_SUBSTEPS: u32 = 1024;
-/// The distance from the origin within which clothlab's scenes lie, m: the f32 positions
-/// there are resolved to `ulp(4 m)` = 4.8e-7 m.
-pub const POSITION_SCALE: f32 = 4.0;
 
 /// Upper bound on conjugate-gradient iterations per implicit substep.
 pub const MAX_CG_ITERATIONS: u32 = 256;
@@ -316,7 +314,6 @@ impl SimParams {
     /// stable at any dt. A refusal names the substeps that would do.
     pub fn validate_for(&self, n: u32, spacing: f32) -> Result<(), ParamError> {
         self.validate()?;
-        self.resolvable()?;
         let explicit = self.integrator.explicit();
         let classical = matches!(self.integrator, Integrator::Verlet | Integrator::SymplecticEuler);
         if !explicit || (classical && self.stiffness_units == StiffnessUnits::Fraction) {
@@ -362,11 +359,9 @@ impl SimParams {
                 StiffnessUnits::Fraction => "fraction",
                 StiffnessUnits::Physical => "physical",
             };
-            let most = self.most_resolvable_substeps();
-            let fix = if most.is_some_and(|m| m < need) {
+            let fix = if need > MAX_SUBSTEPS as u64 {
                 format!(
-                    "and beyond {} substeps per frame f32 positions no longer resolve the motion: use integrator = implicit or xpbd, a coarser grid, or softer moduli",
-                    most.unwrap_or(0)
+                    "and no count up to {MAX_SUBSTEPS} substeps per frame does: use integrator = implicit or xpbd, a coarser grid, or softer moduli"
                 )
             } else {
                 format!(
@@ -383,37 +378,6 @@ impl SimParams {
             ));
         }
         Ok(())
-    }
-
-    /// Refuses a dt at which a particle falling from rest moves less in a substep than f32
-    /// resolves at [`POSITION_SCALE`]: every integrator keeps the velocity as the
-    /// difference `x − prev` of two f32 positions, so `|g|·dt²` under one ulp is lost
-    /// (the cloth hangs in mid-air) and a few ulps quantise the weight. The refusal names
-    /// the most substeps per frame that still resolve the motion.
-    pub fn resolvable(&self) -> Result<(), ParamError> {
-        let g = self.gravity.iter().map(|v| v * v).sum::<f32>().sqrt();
-        let ulp = POSITION_SCALE * f32::EPSILON;
-        let dt = self.dt();
-        if g > 0.0 && g * dt * dt < ulp {
-            let most = self.most_resolvable_substeps().unwrap_or(0);
-            return Err(ParamError::new(
-                "substeps",
-                self.substeps,
-                format!(
-                    "at dt = {dt:.2e} s a particle falling from rest moves {:.1e} m per substep, under the {ulp:.1e} m an f32 position resolves at {POSITION_SCALE} m: the velocity (kept as x − prev) would be lost — use substeps ≤ {most} at frame_dt {} (with stiff physical springs, integrator = implicit or xpbd)",
-                    g * dt * dt,
-                    self.frame_dt
-                ),
-            ));
-        }
-        Ok(())
-    }
-
-    /// The most substeps per frame at which [`SimParams::resolvable`] passes (`None`: no
-    /// gravity, no limit).
-    pub fn most_resolvable_substeps(&self) -> Option<u64> {
-        let g = self.gravity.iter().map(|v| v * v).sum::<f32>().sqrt();
-        (g > 0.0).then(|| (self.frame_dt / (POSITION_SCALE * f32::EPSILON / g).sqrt()).floor() as u64)
     }
 
     /// Whether every mode of the grid is stable with the integrator at step `dt` (see
@@ -555,15 +519,14 @@ mod tests {
         assert_eq!(SimParams { substeps: k, ..p.clone() }.validate_for(128, h(128)), Ok(()));
         assert!(SimParams { substeps: k - 1, ..p.clone() }.validate_for(128, h(128)).is_err());
         // At n = 512 the bend springs (k = B/h² ≈ 370 N/m, Σk ≈ 438 N/m) on particles of
-        // 1.9e-6 kg need dt < 6.4e-5 s (260 substeps), but a particle falling from rest
-        // moves g·dt² = 4e-8 m per substep there, under an f32 ulp at 4 m (4.8e-7 m): no
-        // substep count does, and the refusal says so and names implicit and XPBD.
-        let e = p.validate_for(512, h(512)).unwrap_err();
-        assert!(e.reason.contains("no longer resolve") && e.reason.contains("implicit"), "{e}");
-        let most = p.most_resolvable_substeps().unwrap();
-        assert_eq!(most, 75, "sqrt(4.8e-7 / 9.81) = 2.2e-4 s: 75 substeps per 1/60 s");
-        assert!(SimParams { substeps: 76, ..p.clone() }.resolvable().is_err());
-        assert_eq!(SimParams { substeps: 75, ..p.clone() }.resolvable(), Ok(()));
+        // 1.9e-6 kg need dt < 6.4e-5 s: 260 substeps per frame, which the state in (x, v)
+        // integrates (the old prev-based state lost the motion beyond 75).
+        let k = need(p.validate_for(512, h(512)).unwrap_err());
+        assert!((250..275).contains(&k), "{k}");
+        assert_eq!(SimParams { substeps: k, ..p.clone() }.validate_for(512, h(512)), Ok(()));
+        // At n = 2048 no count up to 1024 does, and the refusal says so and names implicit.
+        let e = p.validate_for(2048, 2.0 / 2047.0).unwrap_err();
+        assert!(e.reason.contains("no count up to 1024") && e.reason.contains("implicit"), "{e}");
         let implicit = SimParams { integrator: Integrator::Implicit, ..p };
         assert_eq!(implicit.validate_for(512, h(512)), Ok(()));
     }

@@ -144,6 +144,8 @@ pub struct ClothSpec {
     pub down: [f32; 3],
     /// Which particles are pinned. Default [`Pinning::TopCorners`].
     pub pinning: Pinning,
+    /// Initial velocity of every free particle, m/s (a thrown cloth). Default 0.
+    pub velocity: [f32; 3],
 }
 
 impl Default for ClothSpec {
@@ -155,6 +157,7 @@ impl Default for ClothSpec {
             across: [1.0, 0.0, 0.0],
             down: [0.0, 0.0, 1.0],
             pinning: Pinning::TopCorners,
+            velocity: [0.0; 3],
         }
     }
 }
@@ -226,6 +229,9 @@ impl Scene {
         finite_in("cloth.size", c.size, 1e-3, 1e3)?;
         for v in c.top_center {
             finite_in("cloth.top_center", v, -1e4, 1e4)?;
+        }
+        for v in c.velocity {
+            finite_in("cloth.velocity", v, -1e3, 1e3)?;
         }
         let unit = |name: &str, a: [f32; 3]| -> Result<f32, ParamError> {
             for v in a {

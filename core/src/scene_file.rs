@@ -15,6 +15,7 @@
 //! across = [1.0, 0.0, 0.0]     # direction of the rows (i)
 //! down = [0.0, 0.0, 1.0]       # from the top edge into the cloth (j); [0, -1, 0] hangs it
 //! pinning = "top-corners"      # "top-edge", "none", or [[i, j], …]
+//! velocity = [0.0, 0.0, 0.0]   # initial velocity of the free particles, m/s
 //! [floor]
 //! y = 0.0                      # `enabled = false`: no floor
 //! [[spheres]]

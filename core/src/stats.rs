@@ -22,7 +22,7 @@ pub struct StateSummary {
     pub max_strain: f32,
     /// Lowest particle height, m.
     pub lowest_y: f32,
-    /// Number of non-finite components in positions, previous positions and normals.
+    /// Number of non-finite components in positions, velocities and normals.
     pub nan_count: usize,
 }
 
@@ -42,7 +42,7 @@ pub fn max_strain(state: &ClothState, topo: &ClothTopology, kind: SpringKind) ->
 
 /// The summary of `state`.
 pub fn summarize(state: &ClothState, topo: &ClothTopology) -> StateSummary {
-    let nan_count = [&state.pos, &state.prev, &state.normal]
+    let nan_count = [&state.pos, &state.vel, &state.normal]
         .iter()
         .flat_map(|v| v.iter().flat_map(|p| p[..3].iter()))
         .filter(|x| !x.is_finite())
@@ -71,7 +71,7 @@ pub fn write_obj(w: &mut impl Write, state: &ClothState, topo: &ClothTopology) -
     Ok(())
 }
 
-/// Writes the full state as JSON: `{"n": n, "pos": [[x,y,z,w],…], "prev": …, "force": …,
+/// Writes the full state as JSON: `{"n": n, "pos": [[x,y,z,w],…], "vel": …, "force": …,
 /// "normal": …}`, particle `(i, j)` at index `j·n + i`; `pos[k][3]` is 1 for a free particle,
 /// 0 for a pinned one. [`ClothState`]'s serde form, so it loads back with serde_json.
 pub fn write_json(w: &mut impl Write, state: &ClothState) -> std::io::Result<()> {

@@ -35,11 +35,10 @@ fn bare_params(n: u32, dt: f32, mass: f32) -> StepParams {
 #[test]
 fn free_fall_follows_half_g_t_squared() {
     // The whole solver on a free 2×2 cloth: uniform gravity deforms no spring, so every
-    // particle falls freely. prev is set to the exact position at t = -dt of a particle
-    // at rest at t = 0, for which Verlet (a central difference) is exact on a parabola
-    // whatever dt is; what remains is f32 rounding. Verlet carries velocity as a
-    // difference of positions, so rounding accumulates like k^1.5·ε over k steps: 20
-    // steps of 50 ms (1 s, 4.9 m of fall from y = 0) keep it near 1e-6.
+    // particle falls freely. vel is set to the velocity at t = -dt/2 of a particle at
+    // rest at t = 0 (Verlet in velocity form keeps half-step velocities), for which it is
+    // exact on a parabola whatever dt is; what remains is f32 rounding: 20 steps of 50 ms
+    // (1 s, 4.9 m of fall from y = 0) keep it near 1e-6.
     let params = SimParams { air_drag: 0.0, damping: 0.0, frame_dt: 0.05, substeps: 1, ..Default::default() };
     let mut scene = Scene::with_n(2);
     scene.cloth.pinning = Pinning::None;
@@ -51,9 +50,8 @@ fn free_fall_follows_half_g_t_squared() {
     let g = params.gravity[1];
     let mut st = s.state().unwrap();
     let y0 = st.pos[0][1];
-    for (p, q) in st.prev.iter_mut().zip(&st.pos) {
-        *p = *q;
-        p[1] = q[1] + 0.5 * g * dt * dt; // x(-dt) = x0 + ½ g dt² (g < 0: above x0)
+    for v in st.vel.iter_mut() {
+        *v = [0.0, -0.5 * g * dt, 0.0, 0.0]; // v(-dt/2) = -½ g dt
     }
     st.force = vec![[0.0; 4]; 4];
     s.set_state(&st).unwrap();
@@ -81,16 +79,16 @@ fn spring_mass_period_is_two_pi_sqrt_m_over_k() {
     slots[0] = SpringSlot { neighbor: 1, rest, ks: k, kd: 0.0 };
     slots[SLOTS] = SpringSlot { neighbor: 0, rest, ks: k, kd: 0.0 };
     let mut pos: Vec<V4> = vec![[0.0, 0.0, 0.0, 0.0], [rest + 0.1, 0.0, 0.0, 1.0]];
-    let mut prev = pos.clone();
+    let mut vel = vec![[0.0f32; 4]; 2];
     let mut force = vec![[0.0f32; 4]; 2];
     // Record upward zero crossings of the displacement, interpolated linearly.
     let mut crossings = Vec::new();
     let mut last = pos[1][0] - rest;
     for step in 1..=4000 {
         force.iter_mut().for_each(|f| *f = [0.0; 4]);
-        cpu::forces(Exec::Serial, &p, &pos, &prev, &mut force);
-        cpu::springs(Exec::Serial, dt, &slots, &pos, &prev, &mut force);
-        cpu::integrate(Exec::Serial, &p, &force, &mut pos, &mut prev);
+        cpu::forces(Exec::Serial, &p, &vel, &mut force);
+        cpu::springs(Exec::Serial, &slots, &pos, &vel, &mut force);
+        cpu::integrate(Exec::Serial, &p, &force, &mut pos, &mut vel);
         let x = pos[1][0] - rest;
         if last < 0.0 && x >= 0.0 {
             crossings.push((step as f32 - x / (x - last)) * dt);
@@ -293,8 +291,8 @@ fn gather_and_scatter_spring_forces_agree_to_rounding() {
     let topo = s.topology();
     let mut gather = vec![[0.0f32; 4]; st.pos.len()];
     let mut scatter = gather.clone();
-    cpu::springs(Exec::Serial, params.dt(), &topo.slots, &st.pos, &st.prev, &mut gather);
-    cpu::springs_scatter(params.dt(), &topo.springs, &st.pos, &st.prev, &mut scatter);
+    cpu::springs(Exec::Serial, &topo.slots, &st.pos, &st.vel, &mut gather);
+    cpu::springs_scatter(&topo.springs, &st.pos, &st.vel, &mut scatter);
     let scale = gather.iter().flat_map(|f| f[..3].iter()).fold(0.0f32, |m, v| m.max(v.abs()));
     assert!(scale > 0.0);
     for (i, (g, c)) in gather.iter().zip(&scatter).enumerate() {
@@ -317,7 +315,7 @@ fn serial_and_rayon_agree_bit_for_bit() {
     let (sa, sb) = (a.state().unwrap(), b.state().unwrap());
     let bits = |v: &Vec<V4>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&sa.pos), bits(&sb.pos), "positions differ");
-    assert_eq!(bits(&sa.prev), bits(&sb.prev), "previous positions differ");
+    assert_eq!(bits(&sa.vel), bits(&sb.vel), "velocities differ");
     assert_eq!(bits(&sa.normal), bits(&sb.normal), "normals differ");
     // And the run did something: the cloth has fallen from its start.
     let start = clothlab_core::build(&Scene::with_n(64), &params).unwrap().0;
@@ -350,13 +348,7 @@ fn ten_thousand_substeps_stay_finite_and_bounded() {
     assert!(sum.lowest_y >= scene.floor_height(), "below the floor: {}", sum.lowest_y);
     // At rest, nearly: the hanging cloth's kinetic energy has decayed.
     let st = s.state_ref();
-    let vmax = st
-        .pos
-        .iter()
-        .zip(&st.prev)
-        .map(|(p, q)| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt())
-        .fold(0.0f32, f32::max)
-        / params.dt();
+    let vmax = st.vel.iter().map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).fold(0.0f32, f32::max);
     println!("worst strain {worst:.3}, final max speed {vmax:.3} m/s");
     // Measured 0.09 m/s (the slow sway of a cloth draped over spheres); a strain limit
     // that jitters the particles next to the pins gives about 1 m/s.
@@ -379,30 +371,19 @@ fn row_fast_path_matches_the_twin_bit_for_bit() {
         let uni = topo.uniform_interior_slots();
         assert!(uni.is_some(), "a built grid has uniform interior slots");
         let mut lanes = cpu::Lanes::default();
-        lanes.fill(Exec::Serial, n as usize, &st.pos, Some(&st.prev));
+        lanes.fill(Exec::Serial, n as usize, &st.pos, Some(&st.vel));
         let mut twin = st.force.clone();
-        cpu::springs(Exec::Serial, params.dt(), &topo.slots, &st.pos, &st.prev, &mut twin);
+        cpu::springs(Exec::Serial, &topo.slots, &st.pos, &st.vel, &mut twin);
         // And with `forces` fused in front.
         let p0 = StepParams::new(&params, s.scene(), None);
         let mut twin_fused = st.force.clone();
-        cpu::forces(Exec::Serial, &p0, &st.pos, &st.prev, &mut twin_fused);
-        cpu::springs(Exec::Serial, params.dt(), &topo.slots, &st.pos, &st.prev, &mut twin_fused);
+        cpu::forces(Exec::Serial, &p0, &st.vel, &mut twin_fused);
+        cpu::springs(Exec::Serial, &topo.slots, &st.pos, &st.vel, &mut twin_fused);
         for exec in [Exec::Serial, Exec::Parallel] {
             for (fused, want) in [(None, &twin), (Some(&p0), &twin_fused)] {
                 let mut rows = st.force.clone();
                 let (slots, uni) = (&topo.slots, uni.as_ref());
-                cpu::springs_rows(
-                    exec,
-                    n as usize,
-                    params.dt(),
-                    slots,
-                    uni,
-                    fused,
-                    &lanes,
-                    &st.pos,
-                    &st.prev,
-                    &mut rows,
-                );
+                cpu::springs_rows(exec, n as usize, slots, uni, fused, &lanes, &st.pos, &st.vel, &mut rows);
                 let bits = |v: &Vec<V4>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(want), bits(&rows), "springs, n = {n}, {exec:?}, forces fused: {}", fused.is_some());
             }
@@ -470,13 +451,14 @@ fn a_solver_substep_is_the_twin_kernels_in_order() {
         let mut st = s.state().unwrap();
         let topo = s.topology().clone();
         let p = StepParams::new(&params, &scene, Some(grab));
-        cpu::forces(Exec::Serial, &p, &st.pos, &st.prev, &mut st.force);
-        cpu::springs(Exec::Serial, p.dt, &topo.slots, &st.pos, &st.prev, &mut st.force);
-        cpu::integrate(Exec::Serial, &p, &st.force, &mut st.pos, &mut st.prev);
-        cpu::collide(Exec::Serial, &p, &scene.spheres, &scene.boxes, &mut st.pos, &mut st.prev);
+        cpu::forces(Exec::Serial, &p, &st.vel, &mut st.force);
+        cpu::springs(Exec::Serial, &topo.slots, &st.pos, &st.vel, &mut st.force);
+        cpu::integrate(Exec::Serial, &p, &st.force, &mut st.pos, &mut st.vel);
+        cpu::collide(Exec::Serial, &p, &scene.spheres, &scene.boxes, &mut st.pos, &mut st.vel);
         let mut scratch = st.pos.clone();
         for _ in 0..params.strain_iterations {
             cpu::strain_limit(Exec::Serial, &p, &topo.slots, &topo.tethers, &st.pos, &mut scratch);
+            cpu::strain_vel(Exec::Serial, &p, &st.pos, &scratch, &mut st.vel);
             std::mem::swap(&mut st.pos, &mut scratch);
         }
         let mut face = vec![[0.0; 4]; topo.triangles.len()];
@@ -486,7 +468,7 @@ fn a_solver_substep_is_the_twin_kernels_in_order() {
         let got = s.state().unwrap();
         let bits = |v: &Vec<V4>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&st.pos), bits(&got.pos), "{exec:?}: positions");
-        assert_eq!(bits(&st.prev), bits(&got.prev), "{exec:?}: previous positions");
+        assert_eq!(bits(&st.vel), bits(&got.vel), "{exec:?}: velocities");
         assert_eq!(bits(&st.normal), bits(&got.normal), "{exec:?}: normals");
         assert_eq!(bits(&st.force), bits(&got.force), "{exec:?}: wind force");
         assert_eq!(got.pos[grab.particle as usize][..3], grab.target, "the grabbed particle is on its target");

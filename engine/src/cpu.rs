@@ -179,7 +179,6 @@ impl Solver for RecipeSolver {
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         params.validate_for(self.engine.topo.n, self.engine.topo.spacing)?;
-        clothlab_core::grid::rescale_history(&self.bufs.pos, &mut self.bufs.prev, self.params.dt(), params.dt());
         self.engine.set_spring_constants(&params);
         self.commands = recipe(&self.variant, params.strain_iterations, Integration::of(&params));
         self.end = frame_end(&self.variant, Integration::of(&params));

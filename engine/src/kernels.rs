@@ -191,8 +191,8 @@ pub struct HostBuffers {
     pub pos: Vec<V4>,
     /// The other buffer of the pair ([`Buf::PosOut`]).
     pub pos_out: Vec<V4>,
-    /// [`Buf::Prev`].
-    pub prev: Vec<V4>,
+    /// [`Buf::Vel`].
+    pub vel: Vec<V4>,
     /// [`Buf::Force`].
     pub force: Vec<V4>,
     /// [`Buf::Normal`].
@@ -213,7 +213,7 @@ impl HostBuffers {
         Self {
             pos: state.pos.clone(),
             pos_out: state.pos.clone(),
-            prev: state.prev.clone(),
+            vel: state.vel.clone(),
             force: state.force.clone(),
             normal: state.normal.clone(),
             faces,
@@ -228,7 +228,7 @@ impl HostBuffers {
         Some(match buf {
             Buf::Pos => &self.pos,
             Buf::PosOut => &self.pos_out,
-            Buf::Prev => &self.prev,
+            Buf::Vel => &self.vel,
             Buf::Force => &self.force,
             Buf::Normal => &self.normal,
             Buf::Faces => &self.faces,
@@ -242,7 +242,7 @@ impl HostBuffers {
         Some(match buf {
             Buf::Pos => &mut self.pos,
             Buf::PosOut => &mut self.pos_out,
-            Buf::Prev => &mut self.prev,
+            Buf::Vel => &mut self.vel,
             Buf::Force => &mut self.force,
             Buf::Normal => &mut self.normal,
             Buf::Faces => &mut self.faces,
@@ -261,7 +261,7 @@ impl HostBuffers {
             ));
         }
         let np = topo.num_particles();
-        let particles = [&self.pos, &self.pos_out, &self.prev, &self.force, &self.normal];
+        let particles = [&self.pos, &self.pos_out, &self.vel, &self.force, &self.normal];
         if self.faces.len() != topo.triangles.len()
             || particles.into_iter().chain(&self.aux).any(|v| v.len() != np)
             || self.aux.len() != Buf::AUX.len()
@@ -280,7 +280,7 @@ impl HostBuffers {
         clothlab_core::ClothState {
             n,
             pos: self.pos.clone(),
-            prev: self.prev.clone(),
+            vel: self.vel.clone(),
             force: self.force.clone(),
             normal: self.normal.clone(),
         }
@@ -484,7 +484,7 @@ pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool)
     };
     let size = |b: Buf| -> u64 {
         match b {
-            Buf::Pos | Buf::PosOut | Buf::Prev | Buf::Force | Buf::Normal => np * 16,
+            Buf::Pos | Buf::PosOut | Buf::Vel | Buf::Force | Buf::Normal => np * 16,
             Buf::Aux0 | Buf::Aux1 | Buf::Aux2 | Buf::Aux3 | Buf::Aux4 => np * 16,
             Buf::Scalars => 16,
             Buf::Faces => tris * 16,
@@ -502,11 +502,11 @@ pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool)
 // ---- the twins ---------------------------------------------------------------------
 
 fn forces(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::forces(a.exec, a.p, &b.pos, &b.prev, &mut b.force);
+    cpu::forces(a.exec, a.p, &b.vel, &mut b.force);
 }
 
 fn springs(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::springs(a.exec, a.p.dt, &a.topo.slots, &b.pos, &b.prev, &mut b.force);
+    cpu::springs(a.exec, &a.topo.slots, &b.pos, &b.vel, &mut b.force);
 }
 
 fn forces_springs(a: &TwinArgs, b: &mut HostBuffers) {
@@ -527,15 +527,15 @@ fn forces_springs_wind(a: &TwinArgs, b: &mut HostBuffers) {
 }
 
 fn springs_scatter(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::springs_scatter(a.p.dt, &a.topo.springs, &b.pos, &b.prev, &mut b.force);
+    cpu::springs_scatter(&a.topo.springs, &b.pos, &b.vel, &mut b.force);
 }
 
 fn integrate(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::integrate(a.exec, a.p, &b.force, &mut b.pos, &mut b.prev);
+    cpu::integrate(a.exec, a.p, &b.force, &mut b.pos, &mut b.vel);
 }
 
 fn collide(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::collide(a.exec, a.p, a.spheres, a.boxes, &mut b.pos, &mut b.prev);
+    cpu::collide(a.exec, a.p, a.spheres, a.boxes, &mut b.pos, &mut b.vel);
 }
 
 fn integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
@@ -554,6 +554,7 @@ fn forces_integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
 
 fn strain_limit(a: &TwinArgs, b: &mut HostBuffers) {
     cpu::strain_limit(a.exec, a.p, &a.topo.slots, &a.topo.tethers, &b.pos, &mut b.pos_out);
+    cpu::strain_vel(a.exec, a.p, &b.pos, &b.pos_out, &mut b.vel);
 }
 
 /// The strain limit's pass, then its output counted into the self-collision hash (the
@@ -600,19 +601,19 @@ fn stats(a: &TwinArgs, b: &mut HostBuffers) {
     if b.stats.len() <= k {
         b.stats.resize(k + 1, SubstepStats { max_strain: 0.0, kinetic_energy: 0.0 });
     }
-    b.stats[k] = cpu::substep_stats(a.p, &a.topo.slots, &b.pos, &b.prev);
+    b.stats[k] = cpu::substep_stats(a.p, &a.topo.slots, &b.pos, &b.vel);
 }
 
 fn euler(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::euler(a.exec, a.p, &b.force, &mut b.pos, &mut b.prev);
+    cpu::euler(a.exec, a.p, &b.force, &mut b.pos, &mut b.vel);
 }
 
 fn rk_begin(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::rk_begin(a.exec, a.p, &b.force, &b.pos, &mut b.prev, &mut b.aux);
+    cpu::rk_begin(a.exec, a.p, &b.force, &b.pos, &mut b.vel, &mut b.aux);
 }
 
 fn rk_stage(a: &TwinArgs, b: &mut HostBuffers, st: &cpu::RkStage) {
-    cpu::rk_stage(a.exec, a.p, st, &mut b.force, &mut b.pos, &mut b.prev, &mut b.aux);
+    cpu::rk_stage(a.exec, a.p, st, &mut b.force, &mut b.pos, &mut b.vel, &mut b.aux);
 }
 
 fn rk2_1(a: &TwinArgs, b: &mut HostBuffers) {
@@ -643,7 +644,7 @@ fn rk4_4(a: &TwinArgs, b: &mut HostBuffers) {
 macro_rules! xpbd_twins {
     ($($name:ident = $k:expr),*) => {
         $(fn $name(a: &TwinArgs, b: &mut HostBuffers) {
-            cpu::xpbd_pass(a.p, &a.topo.slots, $k, &mut b.pos, &b.prev, &mut b.aux);
+            cpu::xpbd_pass(a.p, &a.topo.slots, $k, &mut b.pos, &mut b.vel, &mut b.aux);
         })*
     };
 }
@@ -676,7 +677,7 @@ fn partials_total(a: &TwinArgs, b: &HostBuffers) -> f32 {
 }
 
 fn cg_begin(a: &TwinArgs, b: &mut HostBuffers) {
-    let terms = cpu::cg_begin(a.exec, a.p, &a.topo.slots, &b.force, &b.pos, &b.prev, &mut b.aux);
+    let terms = cpu::cg_begin(a.exec, a.p, &a.topo.slots, &b.force, &b.pos, &b.vel, &mut b.aux);
     store_partials(b, &terms);
 }
 
@@ -705,7 +706,7 @@ fn cg_direction(a: &TwinArgs, b: &mut HostBuffers) {
 }
 
 fn implicit_finish(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::implicit_finish(a.exec, a.p, &mut b.pos, &mut b.prev, &b.aux);
+    cpu::implicit_finish(a.exec, a.p, &mut b.pos, &mut b.vel, &b.aux);
 }
 
 // ---- self-collision (core::cpu::self_collide): the hash in aux2 (cells), aux3, aux4 ----
@@ -739,7 +740,7 @@ fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
 
 fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {
     let [.., cells, _, slots] = &b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
-    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.prev, cells, slots, &mut b.pos_out);
+    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.vel, cells, slots, &mut b.pos_out);
 }
 
 /// Kernel-test inputs: the hash built by the twins up to the kernel under test (the
@@ -778,7 +779,6 @@ fn built_hash(a: &TwinArgs, b: &mut HostBuffers) {
         let dir: [f32; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.6, 0.8, 0.0]][(i / 7) % 4];
         for (c, d) in dir.iter().enumerate() {
             let to = b.pos[q][c] + off * d;
-            b.prev[i][c] += to - b.pos[i][c];
             b.pos[i][c] = to;
         }
     }
@@ -814,11 +814,11 @@ const SCATTER: Check = Check::Bound {
 };
 const STATS_TEST: Check = Check::Own("gpu_statistics_match_the_cpu_twin_by_subgroups_and_by_atomics");
 
-const STATE: &[Buf] = &[Params, Pos, Prev, Force];
+const STATE: &[Buf] = &[Params, Pos, Vel, Force];
 /// The gathers' reads: the state and the spring table (storage buffers, or the image in
 /// the `_tex` twins, or the uniform block for the regular grid).
-const TABLE: &[Buf] = &[Params, Pos, Prev, Force, Slots, BendSlots, Interior, Table];
-const COLLIDERS: &[Buf] = &[Params, Pos, Prev, Spheres, Boxes];
+const TABLE: &[Buf] = &[Params, Pos, Vel, Force, Slots, BendSlots, Interior, Table];
+const COLLIDERS: &[Buf] = &[Params, Pos, Vel, Spheres, Boxes];
 const NONE: &[Buf] = &[];
 
 const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf], writes: &'static [Buf]) -> KernelDef {
@@ -848,7 +848,7 @@ const IMM_CU: Variants = Variants { immediates: true, colliders_uniform: true, .
 const BLOCKED: Variants = Variants { shuffle: true, ..IMM_TEX };
 
 /// Gravity and drag into the force buffer (added to the wind force already there).
-pub static FORCES: KernelDef = def("forces", forces, Count::Particles, STATE, &[Force]);
+pub static FORCES: KernelDef = def("forces", forces, Count::Particles, &[Params, Vel, Force], &[Force]);
 /// The spring gather per particle over its 12-slot table.
 pub static SPRINGS: KernelDef =
     KernelDef { check: GATHER, variants: IMM_TEX, ..def("springs", springs, Count::Particles, TABLE, &[Force]) };
@@ -857,7 +857,7 @@ pub static SPRINGS_SCATTER: KernelDef = KernelDef {
     check: SCATTER,
     label: "springs",
     variants: IMM_F32,
-    ..def("springs_scatter", springs_scatter, Count::Springs, &[Params, Pos, Prev, Force, Springs, SpringsB], &[Force])
+    ..def("springs_scatter", springs_scatter, Count::Springs, &[Params, Pos, Vel, Force, Springs, SpringsB], &[Force])
 };
 /// `forces` fused into the spring gather, four particles of a row per invocation.
 pub static FORCES_SPRINGS: KernelDef = KernelDef {
@@ -877,15 +877,15 @@ pub static FORCES_SPRINGS_WIND: KernelDef = KernelDef {
         "forces_springs_wind",
         forces_springs_wind,
         Count::Blocks,
-        &[Params, Pos, Prev, Slots, BendSlots, Interior, Table, Triangles, FaceSlots],
+        &[Params, Pos, Vel, Slots, BendSlots, Interior, Table, Triangles, FaceSlots],
         &[Force],
     )
 };
 /// Verlet, pins, the grab and the floor.
-pub static INTEGRATE: KernelDef = def("integrate", integrate, Count::Particles, STATE, &[Pos, Prev]);
+pub static INTEGRATE: KernelDef = def("integrate", integrate, Count::Particles, STATE, &[Pos, Vel]);
 /// Spheres and boxes.
 pub static COLLIDE: KernelDef =
-    KernelDef { variants: IMM_CU, ..def("collide", collide, Count::Particles, COLLIDERS, &[Pos, Prev]) };
+    KernelDef { variants: IMM_CU, ..def("collide", collide, Count::Particles, COLLIDERS, &[Pos, Vel]) };
 /// `integrate` and `collide` fused: each particle loaded and stored once.
 pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
     label: timing::INTEGRATE_COLLIDE,
@@ -894,8 +894,8 @@ pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
         "integrate_collide",
         integrate_collide,
         Count::Particles,
-        &[Params, Pos, Prev, Force, Spheres, Boxes],
-        &[Pos, Prev],
+        &[Params, Pos, Vel, Force, Spheres, Boxes],
+        &[Pos, Vel],
     )
 };
 /// `forces`, `integrate` and `collide` fused: the thesis's optimized "Verlet" kernel. The
@@ -908,11 +908,12 @@ pub static FORCES_INTEGRATE_COLLIDE: KernelDef = KernelDef {
         "forces_integrate_collide",
         forces_integrate_collide,
         Count::Particles,
-        &[Params, Pos, Prev, Force, Spheres, Boxes],
-        &[Pos, Prev],
+        &[Params, Pos, Vel, Force, Spheres, Boxes],
+        &[Pos, Vel],
     )
 };
-/// One Provot pass plus the tethers, into the other buffer of the pair.
+/// One Provot pass plus the tethers, into the other buffer of the pair; the velocities
+/// gain the move over dt.
 pub static STRAIN_LIMIT: KernelDef = KernelDef {
     check: GATHER,
     pure: &[PosOut],
@@ -921,8 +922,8 @@ pub static STRAIN_LIMIT: KernelDef = KernelDef {
         "strain_limit",
         strain_limit,
         Count::Blocks,
-        &[Params, Pos, Slots, BendSlots, Interior, Table, Tethers],
-        &[PosOut],
+        &[Params, Pos, Vel, Slots, BendSlots, Interior, Table, Tethers],
+        &[PosOut, Vel],
     )
 };
 /// The strain limit's last pass fused with self-collision's `hash_count` (the recipe's
@@ -940,8 +941,8 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
         "strain_limit_count",
         strain_limit_count,
         Count::Blocks,
-        &[Params, Pos, Slots, BendSlots, Interior, Table, Tethers, Aux2, Aux3],
-        &[PosOut, Aux2, Aux3],
+        &[Params, Pos, Vel, Slots, BendSlots, Interior, Table, Tethers, Aux2, Aux3],
+        &[PosOut, Vel, Aux2, Aux3],
     )
 };
 /// Face normals per quad of the grid.
@@ -970,7 +971,7 @@ pub static VERTEX_NORMALS: KernelDef = KernelDef {
         "vertex_normals",
         vertex_normals,
         Count::Particles,
-        &[Params, Pos, Prev, Faces, FaceSlots, Normal, Force],
+        &[Params, Pos, Vel, Faces, FaceSlots, Normal, Force],
         &[Normal, Force],
     )
 };
@@ -984,7 +985,7 @@ pub static VERTEX_NORMALS_NAIVE: KernelDef = KernelDef {
         "vertex_normals_naive",
         vertex_normals,
         Count::Particles,
-        &[Params, Pos, Prev, Faces, FaceSlots, Normal, Force],
+        &[Params, Pos, Vel, Faces, FaceSlots, Normal, Force],
         &[Normal, Force],
     )
 };
@@ -993,7 +994,7 @@ pub static STATS: KernelDef = KernelDef {
     check: STATS_TEST,
     variants: Variants { table_image: true, ..PLAIN },
     immediates: Immediates::Substep,
-    ..def("stats", stats, Count::Particles, &[Params, Pos, Prev, Slots, BendSlots, Table], &[Partials])
+    ..def("stats", stats, Count::Particles, &[Params, Pos, Vel, Slots, BendSlots, Table], &[Partials])
 };
 /// Statistics by atomics from every invocation.
 pub static STATS_ATOMIC: KernelDef = KernelDef {
@@ -1004,7 +1005,7 @@ pub static STATS_ATOMIC: KernelDef = KernelDef {
         "stats_atomic",
         stats,
         Count::Particles,
-        &[Params, Pos, Prev, Slots, BendSlots, Table, StatsMax, StatsEnergy],
+        &[Params, Pos, Vel, Slots, BendSlots, Table, StatsMax, StatsEnergy],
         &[StatsMax, StatsEnergy],
     )
 };
@@ -1030,21 +1031,21 @@ const CG: Check = Check::Bound {
     relative: 1e-4,
     reason: "dot products summed in another order (tree per workgroup vs in order), divided into α and β",
 };
-const RK_READS: &[Buf] = &[Params, Pos, Prev, Force, Aux0, Aux1, Aux2, Aux3, Aux4];
+const RK_READS: &[Buf] = &[Params, Pos, Vel, Force, Aux0, Aux1, Aux2, Aux3, Aux4];
 const CG_PARTIALS: &[Buf] = &[Params, Aux4, Scalars];
 
 /// Explicit Euler: `x' = x + u`, `u' = u + f dt²/m`.
 pub static EULER: KernelDef =
-    KernelDef { label: "integrate", ..def("euler", euler, Count::Particles, STATE, &[Pos, Prev]) };
+    KernelDef { label: "integrate", ..def("euler", euler, Count::Particles, STATE, &[Pos, Vel]) };
 /// Saves x₀, the damped u₀ and the wind for a Runge–Kutta substep.
 pub static RK_BEGIN: KernelDef = KernelDef {
     label: "integrate",
     pure: &[Aux0, Aux1, Aux4],
-    ..def("rk_begin", rk_begin, Count::Particles, STATE, &[Prev, Aux0, Aux1, Aux4])
+    ..def("rk_begin", rk_begin, Count::Particles, STATE, &[Vel, Aux0, Aux1, Aux4])
 };
 /// A stage kernel (every stage's shader has the force write; the last one never runs it).
 const fn rk(name: &'static str, twin: Twin) -> KernelDef {
-    KernelDef { label: "integrate", ..def(name, twin, Count::Particles, RK_READS, &[Pos, Prev, Force, Aux2, Aux3]) }
+    KernelDef { label: "integrate", ..def(name, twin, Count::Particles, RK_READS, &[Pos, Vel, Force, Aux2, Aux3]) }
 }
 /// RK2's first stage (to the midpoint).
 pub static RK2_1: KernelDef = rk("rk2_1", rk2_1);
@@ -1059,7 +1060,7 @@ pub static RK4_3: KernelDef = rk("rk4_3", rk4_3);
 /// RK4's fourth stage (the end of the substep).
 pub static RK4_4: KernelDef = rk("rk4_4", rk4_4);
 /// One XPBD pass: the springs of one direction and colour (core::cpu::XPBD_PASSES),
-/// both ends moved in place.
+/// both ends moved in place, their velocities with them.
 const fn xpbd(name: &'static str, twin: Twin) -> KernelDef {
     KernelDef {
         check: GATHER,
@@ -1069,8 +1070,8 @@ const fn xpbd(name: &'static str, twin: Twin) -> KernelDef {
             name,
             twin,
             Count::Particles,
-            &[Params, Pos, Prev, Slots, BendSlots, Table, Aux0, Aux1],
-            &[Pos, Aux0, Aux1],
+            &[Params, Pos, Vel, Slots, BendSlots, Table, Aux0, Aux1],
+            &[Pos, Vel, Aux0, Aux1],
         )
     }
 }
@@ -1098,7 +1099,7 @@ pub static CG_BEGIN: KernelDef = KernelDef {
         "cg_begin",
         cg_begin,
         Count::Particles,
-        &[Params, Pos, Prev, Force, Slots, BendSlots, Table, Aux2],
+        &[Params, Pos, Vel, Force, Slots, BendSlots, Table, Aux2],
         &[Aux0, Aux1, Aux2, Aux4],
     )
 };
@@ -1107,7 +1108,7 @@ pub static CG_MATVEC: KernelDef = KernelDef {
     check: GATHER,
     label: "cg",
     variants: IMM_TEX,
-    ..def("cg_matvec", cg_matvec, Count::Particles, &[Params, Pos, Prev, Slots, BendSlots, Table, Aux2], &[Aux3, Aux4])
+    ..def("cg_matvec", cg_matvec, Count::Particles, &[Params, Pos, Vel, Slots, BendSlots, Table, Aux2], &[Aux3, Aux4])
 };
 /// Implicit: p·q folded, α = r·z / p·q.
 pub static CG_REDUCE_PQ: KernelDef = KernelDef {
@@ -1136,7 +1137,7 @@ pub static CG_DIRECTION: KernelDef = KernelDef {
 /// Implicit: u₁ = (1 − damping) u₀ + Δu, x₁ = x₀ + u₁, with pins, grab and floor.
 pub static IMPLICIT_FINISH: KernelDef = KernelDef {
     label: "integrate",
-    ..def("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Prev, Aux0], &[Pos, Prev])
+    ..def("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Vel, Aux0], &[Pos, Vel])
 };
 
 // ---- self-collision (core::cpu::self_collide) ----
@@ -1186,7 +1187,7 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     pure: &[PosOut],
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
-    ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Prev, Aux2, Aux4], &[PosOut, Prev])
+    ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, Aux2, Aux4], &[PosOut, Vel])
 };
 /// Self-collision's kernels, in recipe order.
 pub static SELF_COLLISION: [&KernelDef; 5] =

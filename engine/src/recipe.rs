@@ -124,8 +124,8 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
         v
     };
     match how.integrator {
-        // In the (x, x − v·dt) state both are one recurrence, x' = x + u + f dt²/m with
-        // prev' = x: Verlet's kernels run both (core::cpu::integrators).
+        // In the (x, v) state both are one recurrence, v' = (1 − damping) v + f dt/m,
+        // x' = x + v' dt: Verlet's kernels run both (core::cpu::integrators).
         Integrator::Verlet | Integrator::SymplecticEuler => match variant.fusion {
             Fusion::None => vec![&k::FORCES, springs, &k::INTEGRATE, &k::COLLIDE],
             Fusion::Thesis => vec![springs, &k::FORCES_INTEGRATE_COLLIDE],
@@ -276,8 +276,8 @@ pub mod res {
     pub const POS0: u32 = 1 << 0;
     /// Position buffer 1 of the pair.
     pub const POS1: u32 = 1 << 1;
-    /// Previous positions.
-    pub const PREV: u32 = 1 << 2;
+    /// Velocities.
+    pub const VEL: u32 = 1 << 2;
     /// Forces.
     pub const FORCE: u32 = 1 << 3;
     /// Vertex normals.
@@ -306,7 +306,7 @@ pub fn bits(buf: Buf, cur: usize) -> u32 {
         Buf::Pos => POS1,
         Buf::PosOut if cur == 0 => POS1,
         Buf::PosOut => POS0,
-        Buf::Prev => PREV,
+        Buf::Vel => VEL,
         Buf::Force => FORCE,
         Buf::Normal => NORMAL,
         Buf::Faces => FACES,
@@ -440,11 +440,11 @@ mod tests {
         assert!(h.conflicts(res::FORCE, 0), "read after write");
         assert!(h.conflicts(0, res::FORCE), "write after write");
         assert!(h.conflicts(0, res::POS0), "write after read");
-        assert!(!h.conflicts(res::POS0 | res::PREV, res::FACES), "reads of unwritten buffers");
+        assert!(!h.conflicts(res::POS0 | res::VEL, res::FACES), "reads of unwritten buffers");
         h.clear();
         assert!(!h.conflicts(res::FORCE, res::FORCE));
         h.dirty();
-        assert!(h.conflicts(res::PREV, 0));
+        assert!(h.conflicts(res::VEL, 0));
     }
 
     #[test]

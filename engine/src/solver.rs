@@ -48,7 +48,7 @@ fn host_buffers(commands: &[Command]) -> Vec<Buf> {
         Command::Clear(b) => scratch(b),
         Command::Swap => false,
     });
-    let mut v = vec![Buf::Pos, Buf::PosOut, Buf::Prev, Buf::Force, Buf::Normal, Buf::Faces];
+    let mut v = vec![Buf::Pos, Buf::PosOut, Buf::Vel, Buf::Force, Buf::Normal, Buf::Faces];
     if touched {
         v.extend(Buf::AUX);
         v.push(Buf::Scalars);
@@ -148,7 +148,7 @@ impl<E: Engine> GpuSolver<E> {
             (Buf::BoxesUniform, bytemuck::cast_slice(&boxes)),
             (Buf::Pos, pos_bytes),
             (Buf::PosOut, pos_bytes),
-            (Buf::Prev, bytemuck::cast_slice(&state.prev)),
+            (Buf::Vel, bytemuck::cast_slice(&state.vel)),
             (Buf::Force, bytemuck::cast_slice(&state.force)),
             (Buf::Normal, bytemuck::cast_slice(&state.normal)),
             (Buf::Slots, bytemuck::cast_slice(&strain)),
@@ -509,14 +509,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         params.validate_for(self.topo.n, self.topo.spacing)?;
-        if params.dt() != self.params.dt() {
-            // A new dt keeps the velocity: Verlet's history rescaled (read, rescaled on the
-            // host, written back: a rare event, between frames).
-            let pos = self.read(Buf::Pos)?;
-            let mut prev = self.read(Buf::Prev)?;
-            clothlab_core::grid::rescale_history(&pos, &mut prev, self.params.dt(), params.dt());
-            self.write(Buf::Prev, bytemuck::cast_slice(&prev))?;
-        }
+        // A new dt keeps the velocity as it is: the state holds it, not Verlet's history.
         if spring_constants(&params, &self.topo) != spring_constants(&self.params, &self.topo) {
             // The spring constants depend on dt and the stiffness fractions: rewrite the
             // tables in place (the binding sets keep pointing at the same buffers). Wind,
@@ -652,7 +645,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
         Ok(ClothState {
             n: self.topo.n,
             pos: self.read(Buf::Pos)?,
-            prev: self.read(Buf::Prev)?,
+            vel: self.read(Buf::Vel)?,
             force: self.read(Buf::Force)?,
             normal: self.read(Buf::Normal)?,
         })
@@ -661,7 +654,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
         state.check(self.topo.n)?;
         self.write(Buf::Pos, bytemuck::cast_slice(&state.pos))?;
-        self.write(Buf::Prev, bytemuck::cast_slice(&state.prev))?;
+        self.write(Buf::Vel, bytemuck::cast_slice(&state.vel))?;
         self.write(Buf::Force, bytemuck::cast_slice(&state.force))?;
         self.write(Buf::Normal, bytemuck::cast_slice(&state.normal))?;
         if let Some([pos, normal]) = self.draw {

@@ -48,7 +48,7 @@ impl KernelInput {
         let wind = if params.wind == [0.0; 3] { [1.5, 0.3, -2.0] } else { params.wind };
         let params = SimParams { wind, ..params.clone() };
         let (mut st, topo, mut faces) = disturbed_state(&scene, &params, seed)?;
-        if sink_into_colliders(&scene, &mut st.pos, &mut st.prev) {
+        if sink_into_colliders(&scene, &mut st.pos) {
             clothlab_core::cpu::tri_normals(Exec::Serial, &topo.triangles, &st.pos, &mut faces);
         }
         let grab = Some(Grab { particle: n * n / 2 + 3, target: [0.1, 1.2, 0.3] });
@@ -56,10 +56,9 @@ impl KernelInput {
         let mut bufs = HostBuffers::new(&st, faces);
         // The integrators' scratch state, made from the disturbed cloth so that every
         // kernel of every integrator sees values of the sizes it meets in a substep: a
-        // saved x₀ and u₀ (w: a preconditioner's diagonal, positive), stage sums, a wind
+        // saved x₀ and v₀ (w: a preconditioner's diagonal, positive), stage sums, a wind
         // force, and CG scalars.
-        for (i, (x, xp)) in st.pos.iter().zip(&st.prev).enumerate() {
-            let u = [x[0] - xp[0], x[1] - xp[1], x[2] - xp[2]];
+        for (i, (x, u)) in st.pos.iter().zip(&st.vel).enumerate() {
             let f = st.force[i];
             bufs.aux[0][i] = *x;
             bufs.aux[1][i] = [0.9 * u[0], 0.9 * u[1], 0.9 * u[2], p.particle_mass * (2.0 + (i % 7) as f32 * 0.1)];
@@ -84,18 +83,17 @@ impl KernelInput {
 /// Moves a few free particles of `pos` into each collider of `scene` (and under its floor):
 /// every 97th free particle, taking the colliders in turn, to a point just inside the
 /// surface below it (2 % of a sphere's radius deep, 1 cm into a box's top, 1 cm under the
-/// floor), its previous position moved alike (its velocity kept). Returns whether any moved.
-fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]], prev: &mut [[f32; 4]]) -> bool {
+/// floor), its velocity kept. Returns whether any moved.
+fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
     let targets = scene.spheres.len() + scene.boxes.len() + usize::from(scene.floor_y.is_some());
     if targets == 0 {
         return false;
     }
     let mut k = 0;
-    for (i, (p, q)) in pos.iter_mut().zip(prev.iter_mut()).enumerate() {
+    for (i, p) in pos.iter_mut().enumerate() {
         if p[3] == 0.0 || i % 97 != 13 {
             continue;
         }
-        let was = *p;
         let t = k % targets;
         k += 1;
         if let Some(s) = scene.spheres.get(t) {
@@ -113,15 +111,12 @@ fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]], prev: &mut [[f32; 4]
         } else if let Some(y) = scene.floor_y {
             p[1] = y - 0.01;
         }
-        for c in 0..3 {
-            q[c] += p[c] - was[c];
-        }
     }
     k > 0
 }
 
-/// The buffers [`validate_kernels`] compares after each kernel: the positions, previous
-/// positions, forces, normals, face normals, the five integrator scratch buffers and the
+/// The buffers [`validate_kernels`] compares after each kernel: the positions,
+/// velocities, forces, normals, face normals, the five integrator scratch buffers and the
 /// CG scalars.
 pub const COMPARED_BUFFERS: usize = 11;
 
@@ -174,7 +169,7 @@ pub fn validate_kernels_with(
         type Pair<'a> = (&'static str, &'a Vec<[f32; 4]>, &'a Vec<[f32; 4]>);
         let compared: [Pair; COMPARED_BUFFERS] = [
             ("pos", &got.pos, &want.pos),
-            ("prev", &got.prev, &want.prev),
+            ("vel", &got.vel, &want.vel),
             ("force", &got.force, &want.force),
             ("normal", &got.normal, &want.normal),
             ("faces", &got.faces, &want.faces),

@@ -38,7 +38,7 @@ fn the_rows_solvers_compute_the_bits_of_the_cpu_engine_running_the_optimized_rec
                 let st = s.state_ref();
                 for (name, a, b) in [
                     ("pos", &e.pos, &st.pos),
-                    ("prev", &e.prev, &st.prev),
+                    ("vel", &e.vel, &st.vel),
                     ("force", &e.force, &st.force),
                     ("normal", &e.normal, &st.normal),
                 ] {

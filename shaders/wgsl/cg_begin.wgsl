@@ -1,6 +1,6 @@
 //! include: state, table, aux, cg
-// cg_begin — implicit Euler's solve starts (core::cpu::integrators::cg_begin): Δu = 0,
-// r = dt²(f − K u) (w: the diagonal of A), p = z = r/diag; the partial sums of r·z.
+// cg_begin — implicit Euler's solve starts (core::cpu::integrators::cg_begin): Δv = 0,
+// r = dt f − dt² K v (w: the diagonal of A), p = z = r/diag; the partial sums of r·z.
 @compute @workgroup_size(WORKGROUP)
 fn main(
     @builtin(global_invocation_id) id: vec3<u32>,
@@ -17,7 +17,7 @@ fn main(
         let a = apply_at(i, false);
         var r = vec3<f32>(0.0);
         if !held(i, x4.w) {
-            r = force[i].xyz * (p.dt * p.dt) - a.v;
+            r = force[i].xyz * p.dt - a.v;
         }
         let r4 = vec4<f32>(r, a.diag);
         let z = precondition(r4);

@@ -11,7 +11,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if !is_free(i, x4.w) {
         return;
     }
-    let m = collided(Moved(x4.xyz, prev[i].xyz));
+    let m = collided(Moved(x4.xyz, vel[i].xyz));
     pos[i] = vec4<f32>(m.x, x4.w);
-    prev[i] = vec4<f32>(m.xp, 0.0);
+    vel[i] = vec4<f32>(m.v, 0.0);
 }

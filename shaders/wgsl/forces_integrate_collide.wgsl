@@ -13,12 +13,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let x4 = pos[i];
-    let xp = prev[i].xyz;
-    let f = forces_at(force[i], x4.xyz - xp).xyz;
-    var m = integrated_with(i, x4, xp, f);
+    let v = vel[i].xyz;
+    let f = forces_at(force[i], v).xyz;
+    var m = integrated_with(i, x4, v, f);
     if is_free(i, x4.w) {
         m = collided(m);
     }
-    prev[i] = vec4<f32>(m.xp, 0.0);
+    vel[i] = vec4<f32>(m.v, 0.0);
     pos[i] = vec4<f32>(m.x, x4.w);
 }

@@ -9,8 +9,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let x4 = pos[i];
-    let u1 = (x4.xyz - prev[i].xyz) * (1.0 - p.damping) + aux0[i].xyz;
-    let m = finish_at(i, x4, x4.xyz + u1, u1);
-    prev[i] = vec4<f32>(m.xp, 0.0);
+    let v1 = vel[i].xyz * (1.0 - p.damping) + aux0[i].xyz;
+    let m = finish_at(i, x4, x4.xyz + v1 * p.dt, v1);
+    vel[i] = vec4<f32>(m.v, 0.0);
     pos[i] = vec4<f32>(m.x, x4.w);
 }

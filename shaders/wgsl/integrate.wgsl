@@ -8,7 +8,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let x4 = pos[i];
-    let m = integrated(i, x4, prev[i].xyz);
-    prev[i] = vec4<f32>(m.xp, 0.0);
+    let m = integrated(i, x4, vel[i].xyz);
+    vel[i] = vec4<f32>(m.v, 0.0);
     pos[i] = vec4<f32>(m.x, x4.w);
 }

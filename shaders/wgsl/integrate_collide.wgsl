@@ -9,10 +9,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let x4 = pos[i];
-    var m = integrated(i, x4, prev[i].xyz);
+    var m = integrated(i, x4, vel[i].xyz);
     if is_free(i, x4.w) {
         m = collided(m);
     }
-    prev[i] = vec4<f32>(m.xp, 0.0);
+    vel[i] = vec4<f32>(m.v, 0.0);
     pos[i] = vec4<f32>(m.x, x4.w);
 }

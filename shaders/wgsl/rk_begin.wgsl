@@ -1,6 +1,6 @@
 //! include: state, aux
 // rk_begin — the start of a Runge–Kutta substep (core::cpu::integrators::rk_begin): saves
-// x₀, the damped u₀ and the wind force, and writes prev = x₀ − u₀.
+// x₀, the damped u₀ and the wind force, and writes vel = x₀ − u₀.
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
@@ -9,9 +9,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let x4 = pos[i];
-    let u0 = (x4.xyz - prev[i].xyz) * (1.0 - p.damping);
+    let v0 = vec4<f32>(vel[i].xyz * (1.0 - p.damping), 0.0);
     aux0[i] = x4;
-    aux1[i] = vec4<f32>(u0, 0.0);
+    aux1[i] = v0;
     aux4[i] = force[i];
-    prev[i] = vec4<f32>(x4.xyz - u0, 0.0);
+    vel[i] = v0;
 }

@@ -1,7 +1,7 @@
 //! include: state, hash, hash_fn
 // self_collide — per pair of grid neighbours (i, i + 1) of a row: each pushed out of every
 // candidate closer than the thickness, its velocity into the contact removed; into
-// pos_out, prev in place (core::cpu::self_collide::self_collide_at, per particle there).
+// pos_out, vel in place (core::cpu::self_collide::self_collide_at, per particle there).
 // The two share one walk over the rows of cells that either's sphere reaches, when their
 // cells are neighbours (almost always: grid neighbours lie about a spacing apart): half the
 // rows' reads, and each entry read once for both. Each particle's contacts are its twin's
@@ -222,12 +222,12 @@ fn finish(m: Mover) {
     let x = select(x4.xyz, x4.xyz + delta, pushed);
     pos_out[i] = vec4<f32>(x, x4.w);
     if pushed {
-        let xp4 = prev[i];
-        let u0 = x4.xyz - xp4.xyz;
+        let v4 = vel[i];
+        let u0 = v4.xyz;
         let nrm = delta / sqrt(dd);
         let un = u0.x * nrm.x + u0.y * nrm.y + u0.z * nrm.z;
         let u = select(u0, u0 - un * nrm, un < 0.0);
-        prev[i] = vec4<f32>(x - u, xp4.w);
+        vel[i] = vec4<f32>(u, v4.w);
     }
 }
 

@@ -4,7 +4,7 @@
 // Copied from step_params by the kernel's first statement (see shared/state.wgsl).
 var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read_write> prev: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> vel: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> accum: array<AtomicF32>;
 // The spring list in two halves, each within the 128 MiB a storage binding may span on
 // many adapters up to n = 1024.
@@ -27,9 +27,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     let xa = pos[s.a].xyz;
     let xb = pos[s.b].xyz;
-    let va = xa - prev[s.a].xyz;
-    let vb = xb - prev[s.b].xyz;
-    let fa = spring_force(xa - xb, va - vb, SpringSlot(i32(s.b), s.rest, s.ks, s.kd), 1.0 / p.dt);
+    let va = vel[s.a].xyz;
+    let vb = vel[s.b].xyz;
+    let fa = spring_force(xa - xb, va - vb, SpringSlot(i32(s.b), s.rest, s.ks, s.kd));
     for (var c = 0u; c < 3u; c++) {
         atomic_add_f32(4u * s.a + c, fa[c]);
         atomic_add_f32(4u * s.b + c, -fa[c]);

@@ -43,19 +43,34 @@ pub fn or_skip<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> Option<T
 /// optimized (Vulkan under the validation layer); the GPU ones only where an adapter is
 /// (see [`or_skip`]).
 pub fn every_backend(scene: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>)> {
+    backends(scene, params, |_| true)
+}
+
+/// The backends of [`every_backend`] whose names `keep` accepts (`cpu`, `cpu-par`,
+/// `wgpu naive`, `vulkan naive`, `wgpu optimized`, `vulkan optimized`); the others are
+/// not built.
+pub fn backends(scene: &Scene, params: &SimParams, keep: impl Fn(&str) -> bool) -> Vec<(String, Box<dyn Solver>)> {
     let mut out: Vec<(String, Box<dyn Solver>)> = Vec::new();
     for exec in [Exec::Serial, Exec::Parallel] {
-        let s = CpuSolver::new(exec, scene.clone(), params.clone()).expect("a CPU solver of a checked scene");
-        out.push((s.name().to_owned(), Box::new(s)));
+        let name = if exec == Exec::Serial { "cpu" } else { "cpu-par" };
+        if keep(name) {
+            let s = CpuSolver::new(exec, scene.clone(), params.clone()).expect("a CPU solver of a checked scene");
+            out.push((name.to_owned(), Box::new(s)));
+        }
     }
     for v in [Variant::NAIVE, Variant::OPTIMIZED] {
-        if let Some(s) = or_skip(wgpu_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "wgpu") {
-            out.push((format!("wgpu {}", v.label()), Box::new(s)));
-        }
-        if let Some(s) =
-            or_skip(vulkan_solver(v, scene.clone(), params.clone(), true, SolverOptions::default()), "vulkan")
+        let name = format!("wgpu {}", v.label());
+        if keep(&name)
+            && let Some(s) = or_skip(wgpu_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "wgpu")
         {
-            out.push((format!("vulkan {}", v.label()), Box::new(s)));
+            out.push((name, Box::new(s)));
+        }
+        let name = format!("vulkan {}", v.label());
+        if keep(&name)
+            && let Some(s) =
+                or_skip(vulkan_solver(v, scene.clone(), params.clone(), true, SolverOptions::default()), "vulkan")
+        {
+            out.push((name, Box::new(s)));
         }
     }
     out

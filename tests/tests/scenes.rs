@@ -45,29 +45,31 @@ fn every_scene_file_loads_and_builds() {
 #[test]
 fn the_free_falling_scene_falls_as_y0_minus_half_g_t_squared_on_every_backend() {
     // The scene holds nothing and has no floor, drag or damping: every particle falls
-    // freely. prev is set to where a particle at rest at t = 0 was at t = −dt, for which
-    // Verlet (a central difference) is exact on a parabola; what remains is f32 rounding.
-    // Each substep rounds the new position (≤ 1 ulp of |y|), and Verlet carries that error
-    // on as velocity, so after k substeps it is at most k²/2 ulps. At the scene's own dt
-    // (1/960 s) g·dt² = 1.1e-5 m is only 44 ulps of y = 2 m and the rounding is 2 % of the
-    // fall (measured 4.4e-4 m of 0.136 m over 160 substeps; an f32 replay of the
-    // recurrence gives the same), so the test takes substeps of 20 ms instead: 20 of them
-    // (0.4 s, 0.78 m of fall), bound 20²/2 ulps of 2 m = 4.8e-5 m.
+    // freely, at the scene's own dt (1/960 s), 20 frames (0.33 s, 0.54 m of fall). The
+    // velocity is set to the one at −dt/2 of a particle at rest at 0, for which Verlet (in
+    // velocity form it keeps half-step velocities) is exact on a parabola; what remains is
+    // f32 rounding. Each of the k substeps rounds y (≤ ½ ulp of |y| ≤ 2 m, 1.2e-7 m) and v
+    // (≤ ½ ulp of |v| < 4 m/s, 2.4e-7 m/s, carried on for the rest of the fall): at most
+    // k/2 · 2.4e-7 + k²/2 · 2.4e-7 · dt = 3.8e-5 + 1.3e-5 m. (When the velocity was kept
+    // as x − x*, every rounding of y was carried on as velocity: 2 % of the fall at this
+    // dt, and the test had to take 20 ms substeps.)
     let f = load("free-fall.toml");
     assert!(f.scene.floor_y.is_none() && f.scene.spheres.is_empty() && f.scene.boxes.is_empty());
     let scene = f.scene;
-    let p = SimParams { frame_dt: 0.02, substeps: 1, ..f.params };
+    let p = f.params;
     let (dt, g) = (p.dt(), p.gravity[1]);
     let frames = 20u32;
     let t = frames as f32 * p.frame_dt;
+    let k = (frames * p.substeps) as f32;
     let ulp = 2.0f32.powi(-22); // of |y| in [2, 4): the cloth starts at y = 2
-    let bound = (frames * frames) as f32 / 2.0 * ulp;
+    let bound = k / 2.0 * ulp + k * k / 2.0 * 2.0f32.powi(-22) * dt;
     for (name, mut s) in every_backend(&scene, &p) {
         let mut st = s.state().unwrap();
         let start = st.pos.clone();
-        for (q, x) in st.prev.iter_mut().zip(&st.pos) {
-            *q = *x;
-            q[1] = x[1] + 0.5 * g * dt * dt;
+        // The velocity at −dt/2 of a cloth at rest at 0: Verlet (in velocity form, it keeps
+        // half-step velocities) is then exact on the parabola but for rounding.
+        for q in st.vel.iter_mut() {
+            *q = [0.0, -0.5 * g * dt, 0.0, 0.0];
         }
         s.set_state(&st).unwrap();
         for _ in 0..frames {
@@ -87,7 +89,7 @@ fn the_free_falling_scene_falls_as_y0_minus_half_g_t_squared_on_every_backend() 
         assert!(worst <= bound, "{name}: {worst} m from y0 − ½gt² after {t} s (bound {bound})");
         // A uniform fall stretches no spring: nothing moves sideways but by rounding of
         // spring forces at rest length (a few ulps of x ≈ 0.5 m per substep).
-        assert!(sideways < 20.0 * 2.0f32.powi(-24) * frames as f32, "{name}: moved {sideways} m sideways");
+        assert!(sideways < 20.0 * 2.0f32.powi(-24) * k, "{name}: moved {sideways} m sideways");
     }
 }
 
@@ -181,7 +183,7 @@ fn the_kernel_checks_input_puts_particles_inside_every_collider_and_collide_take
         pos.iter().filter(|p| (0..3).map(|k| (p[k] - s.center[k]).powi(2)).sum::<f32>() < s.radius * s.radius).count()
     };
     let below_floor = |pos: &[[f32; 4]]| pos.iter().filter(|p| p[1] < 0.0).count();
-    let (mut pos, mut prev) = (input.bufs.pos.clone(), input.bufs.prev.clone());
+    let (mut pos, mut vel) = (input.bufs.pos.clone(), input.bufs.vel.clone());
     let in_box = pos.iter().filter(|p| deepest_in_a_box(&scene, &[**p]) > 0.0).count();
     println!(
         "before collide: {in_box} in the box, {} in the sphere, {} under the floor",
@@ -189,7 +191,7 @@ fn the_kernel_checks_input_puts_particles_inside_every_collider_and_collide_take
         below_floor(&pos)
     );
     assert!(in_box >= 2 && inside_sphere(&pos) >= 2 && below_floor(&pos) >= 2);
-    clothlab_core::cpu::collide(Exec::Serial, &input.p, &scene.spheres, &scene.boxes, &mut pos, &mut prev);
+    clothlab_core::cpu::collide(Exec::Serial, &input.p, &scene.spheres, &scene.boxes, &mut pos, &mut vel);
     assert_eq!(deepest_in_a_box(&scene, &pos), 0.0);
     assert_eq!(inside_sphere(&pos), 0);
     // The floor is the integration's (integrate, forces_integrate_collide): collide leaves it.

@@ -67,9 +67,8 @@ fn problem(base: &SimParams, integrator: Integrator, substeps: u32) -> SimParams
 fn fewest(base: &SimParams, integrator: Integrator, scene: &Scene) -> Option<u32> {
     let spacing = scene.cloth.size / (scene.cloth.n - 1) as f32;
     let ok = |s: u32| problem(base, integrator, s).validate_for(scene.cloth.n, spacing).is_ok();
-    // Stable from some count up; resolved by f32 up to `most`.
-    let most = problem(base, integrator, 1).most_resolvable_substeps().unwrap_or(MAX_SUBSTEPS as u64);
-    let most = (most as u32).min(MAX_SUBSTEPS);
+    // Stable from some count up.
+    let most = MAX_SUBSTEPS;
     if !ok(most) {
         return None;
     }
@@ -122,14 +121,11 @@ pub fn measure(
         let mut scene = Scene::with_n(n);
         scene.spheres.clear();
         scene.boxes.clear();
-        // The finest substep f32 positions still resolve (SimParams::resolvable); RK4
-        // there, or where RK4 cannot run at all, implicit Euler with 64 CG iterations.
-        let most = problem(base, Integrator::Rk4, 1).most_resolvable_substeps().unwrap_or(MAX_SUBSTEPS as u64);
-        let most = (most as u32).min(MAX_SUBSTEPS);
-        // Four times the substeps RK4 needs (its truncation error 256 times smaller than
-        // at its limit) but no more than f32 resolves: finer substeps lose more to the
-        // rounding of x − prev than they gain (measured: RK4 at 75 substeps per frame is
-        // 6e-4 m from RK4 at 5, 10 and 20 alike at n = 32).
+        // RK4 at four times the substeps it needs (its truncation error 256 times smaller
+        // than at its limit; the state in (x, v) keeps the motion at any count up to
+        // MAX_SUBSTEPS), or where RK4 cannot run at all, implicit Euler with 64 CG
+        // iterations at the most substeps a frame may have.
+        let most = MAX_SUBSTEPS;
         let (ref_integrator, ref_substeps) = match fewest(base, Integrator::Rk4, &scene) {
             Some(r) => (Integrator::Rk4, (4 * r).min(most)),
             None => (Integrator::Implicit, most),
@@ -143,11 +139,7 @@ pub fn measure(
             let ladder: Vec<u32> = match fewest(base, integrator, &scene) {
                 None => {
                     let spacing = scene.cloth.size / (n - 1) as f32;
-                    let most = problem(base, integrator, 1).most_resolvable_substeps().unwrap_or(MAX_SUBSTEPS as u64);
-                    let why = problem(base, integrator, (most as u32).min(MAX_SUBSTEPS))
-                        .validate_for(n, spacing)
-                        .err()
-                        .map(|e| e.reason);
+                    let why = problem(base, integrator, MAX_SUBSTEPS).validate_for(n, spacing).err().map(|e| e.reason);
                     notes.push(format!(
                         "n = {n}: {} at no substep count: {}",
                         integrator.name(),
@@ -156,7 +148,7 @@ pub fn measure(
                     continue;
                 }
                 Some(s) if integrator.explicit() => vec![s, 2 * s, 4 * s, 8 * s],
-                Some(_) => vec![1, 2, 4, 8, 16, 32, 64],
+                Some(_) => vec![1, 2, 4, 8, 16, 32, 64, 128, 256],
             };
             let ladder: Vec<u32> = ladder
                 .into_iter()

@@ -1,18 +1,19 @@
 //! `collide` — per particle: push particles out of spheres and boxes (inflated by the
-//! collision margin) to the nearest surface point, with friction.
+//! collision margin) to the nearest surface point; the velocity into the surface is
+//! removed and the tangential velocity reduced by friction.
 
 use glam::Vec3;
 
-use super::integrate::{contact_prev, integrate_at};
+use super::integrate::{contact_vel, integrate_at};
 use super::{Exec, for_each2, v3, v4};
 use crate::grid::{StepParams, V4};
 use crate::scene::{Aabb, Sphere};
 
 /// Resolves every particle against every collider, spheres first, in scene order.
-pub fn collide(exec: Exec, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], pos: &mut [V4], prev: &mut [V4]) {
+pub fn collide(exec: Exec, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], pos: &mut [V4], vel: &mut [V4]) {
     let spheres = &spheres[..p.num_spheres as usize];
     let boxes = &boxes[..p.num_boxes as usize];
-    for_each2(exec, pos, prev, |i, x4, xp4| collide_at(i, p, spheres, boxes, x4, xp4));
+    for_each2(exec, pos, vel, |i, x4, v4_| collide_at(i, p, spheres, boxes, x4, v4_));
 }
 
 /// `integrate` then `collide` for each particle in one sweep (both touch only their own
@@ -25,24 +26,24 @@ pub fn integrate_collide(
     boxes: &[Aabb],
     force: &[V4],
     pos: &mut [V4],
-    prev: &mut [V4],
+    vel: &mut [V4],
 ) {
     let spheres = &spheres[..p.num_spheres as usize];
     let boxes = &boxes[..p.num_boxes as usize];
-    for_each2(exec, pos, prev, |i, x4, xp4| {
-        integrate_at(i, p, force[i], x4, xp4);
-        collide_at(i, p, spheres, boxes, x4, xp4);
+    for_each2(exec, pos, vel, |i, x4, v4_| {
+        integrate_at(i, p, force[i], x4, v4_);
+        collide_at(i, p, spheres, boxes, x4, v4_);
     });
 }
 
 /// Particle `i` against `spheres` and `boxes` (already cut to their counts), in place.
 #[inline(always)]
-pub(crate) fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], x4: &mut V4, xp4: &mut V4) {
+pub(crate) fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], x4: &mut V4, vel4: &mut V4) {
     if x4[3] == 0.0 || i as i32 == p.grab_index {
         return;
     }
     let mut x = v3(*x4);
-    let mut xp = v3(*xp4);
+    let mut v = v3(*vel4);
     for s in spheres {
         let c = Vec3::from(s.center);
         let r = s.radius + p.margin;
@@ -53,7 +54,7 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[
             // A particle exactly at the centre is pushed up.
             let nrm = if dist > 1e-12 { d / dist } else { Vec3::Y };
             x = c + nrm * r;
-            xp = contact_prev(x, xp, nrm, p.friction);
+            v = contact_vel(v, nrm, p.friction);
         }
     }
     for b in boxes {
@@ -82,9 +83,9 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[
             }
             let axis = nrm.abs();
             x = x * (Vec3::ONE - axis) + axis * face;
-            xp = contact_prev(x, xp, nrm, p.friction);
+            v = contact_vel(v, nrm, p.friction);
         }
     }
     *x4 = v4(x, x4[3]);
-    *xp4 = v4(xp, 0.0);
+    *vel4 = v4(v, 0.0);
 }

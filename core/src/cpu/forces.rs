@@ -6,21 +6,20 @@ use glam::Vec3;
 use super::{Exec, for_each, v3, v4};
 use crate::grid::{StepParams, V4};
 
-/// `force[i] += m g - air_drag · m · v`, with `v = (pos - prev) / dt`.
-pub fn forces(exec: Exec, p: &StepParams, pos: &[V4], prev: &[V4], force: &mut [V4]) {
+/// `force[i] += m g - air_drag · m · v`.
+pub fn forces(exec: Exec, p: &StepParams, vel: &[V4], force: &mut [V4]) {
     let (g, drag) = forces_consts(p);
-    for_each(exec, force, |i, f| *f = forces_at(*f, pos[i], prev[i], g, drag));
+    for_each(exec, force, |i, f| *f = forces_at(*f, vel[i], g, drag));
 }
 
-/// Weight `m g` and the drag factor `air_drag · m / dt` (per unit of `pos - prev`).
+/// Weight `m g` and the drag factor `air_drag · m` (per m/s).
 #[inline(always)]
 pub(crate) fn forces_consts(p: &StepParams) -> (Vec3, f32) {
-    (v3(p.gravity) * p.particle_mass, p.air_drag * p.particle_mass / p.dt)
+    (v3(p.gravity) * p.particle_mass, p.air_drag * p.particle_mass)
 }
 
-/// The force of one particle: `f + m g - drag · (x - x*)`.
+/// The force of one particle moving at `v`: `f + m g - drag · v`.
 #[inline(always)]
-pub(crate) fn forces_at(f: V4, x: V4, xp: V4, g: Vec3, drag: f32) -> V4 {
-    let v_dt = v3(x) - v3(xp);
-    v4(v3(f) + g - v_dt * drag, 0.0)
+pub(crate) fn forces_at(f: V4, v: V4, g: Vec3, drag: f32) -> V4 {
+    v4(v3(f) + g - v3(v) * drag, 0.0)
 }

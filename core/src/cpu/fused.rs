@@ -34,7 +34,7 @@ use super::integrate::integrate_at;
 use super::normals::{cross_len, quad_normals, vnormal_at, vnormal_lanes};
 use super::simd::{F, Lanewise, M, Simd, dispatch, groups, leftover};
 use super::springs::{GridSlots, gather_at};
-use super::strain_limit::limit_at;
+use super::strain_limit::{limit_at, moved_vel};
 use super::{Exec, Fetch, v3};
 use crate::grid::{
     ClothState, FACE_SLOTS, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4,
@@ -138,10 +138,11 @@ impl Ring {
 /// One band's rings, kept between substeps.
 #[derive(Debug, Default)]
 pub(crate) struct Band {
-    /// The old positions, `pos − prev` and force (x, y, z, w, vx, vy, vz, fx, fy, fz),
+    /// The old positions, velocities and force (x, y, z, w, vx, vy, vz, fx, fy, fz),
     /// eight rows.
     input: Ring,
-    /// Stage A's positions (x, y, z, w), then each strain pass's.
+    /// Stage A's positions and velocities (x, y, z, w, vx, vy, vz), then each strain
+    /// pass's.
     stages: Vec<Ring>,
     /// The face normals of a quad row: triangle 0's x, y, z, |N|, then triangle 1's.
     faces: Ring,
@@ -163,10 +164,10 @@ impl TetherLanes {
     }
 }
 
-/// Components of [`Soa`]: x, y, z, w of the positions, then x, y, z of `prev`, the
+/// Components of [`Soa`]: x, y, z, w of the positions, then x, y, z of the velocity, the
 /// force and the normal.
 const POS: usize = 0;
-const PREV: usize = 4;
+const VEL: usize = 4;
 const FORCE: usize = 7;
 const NORMAL: usize = 10;
 const COMPS: usize = 13;
@@ -191,7 +192,7 @@ impl Soa {
         let comp = |k: usize, v: &mut Vec<f32>| {
             let (src, c) = match k {
                 0..4 => (&st.pos, k),
-                4..7 => (&st.prev, k - 4),
+                4..7 => (&st.vel, k - 4),
                 7..10 => (&st.force, k - 7),
                 _ => (&st.normal, k - 10),
             };
@@ -205,7 +206,7 @@ impl Soa {
         }
     }
 
-    /// Writes the state to `st` (w of `prev`, force and normal 0, as every kernel leaves
+    /// Writes the state to `st` (w of `vel`, force and normal 0, as every kernel leaves
     /// it).
     pub(crate) fn store(&self, exec: Exec, st: &mut ClothState) {
         const CHUNK: usize = 4096;
@@ -225,7 +226,7 @@ impl Soa {
         };
         let bufs = [
             (&mut st.pos, POS, true),
-            (&mut st.prev, PREV, false),
+            (&mut st.vel, VEL, false),
             (&mut st.force, FORCE, false),
             (&mut st.normal, NORMAL, false),
         ];
@@ -272,7 +273,7 @@ impl Step<'_> {
     }
 
     #[inline(always)]
-    fn prev(&self, k: usize) -> V4 {
+    fn vel(&self, k: usize) -> V4 {
         let c = &self.old.c;
         [c[4][k], c[5][k], c[6][k], 0.0]
     }
@@ -359,7 +360,7 @@ fn run_band<S: Isa>(sd: S, s: &Step<'_>, band: &mut Band, r0: usize, r1: usize, 
     band.input.reset(10, n, 8);
     band.stages.resize_with(l + 1, Ring::default);
     for r in &mut band.stages {
-        r.reset(4, n, 4);
+        r.reset(7, n, 4);
     }
     band.faces.reset(8, n - 1, 4);
     // Stage k (0: A, k: strain pass k) computes rows lo(k) .. hi(k); quad rows
@@ -396,7 +397,7 @@ fn run_band<S: Isa>(sd: S, s: &Step<'_>, band: &mut Band, r0: usize, r1: usize, 
     }
 }
 
-/// Old row `j` into the input ring: positions, `pos − prev` and force.
+/// Old row `j` into the input ring: positions, velocities and force.
 #[inline(always)]
 fn load_row<S: Isa>(sd: S, s: &Step<'_>, input: &mut Ring, j: usize) {
     let n = s.p.n as usize;
@@ -408,24 +409,24 @@ fn load_row<S: Isa>(sd: S, s: &Step<'_>, input: &mut Ring, j: usize) {
             input.store(j, q, i, at(&c[POS + q]));
         }
         for q in 0..3 {
-            input.store(j, 4 + q, i, at(&c[POS + q]) - at(&c[PREV + q]));
+            input.store(j, 4 + q, i, at(&c[VEL + q]));
             input.store(j, 7 + q, i, at(&c[FORCE + q]));
         }
     }
     for i in leftover(0, n, S::F32_LANES) {
         let k = j * n + i;
-        let (a, b, f) = (s.pos(k), s.prev(k), s.force(k));
+        let (a, b, f) = (s.pos(k), s.vel(k), s.force(k));
         input.put4(j, 0, i, a);
         for q in 0..3 {
-            input.set(j, 4 + q, i, a[q] - b[q]);
+            input.set(j, 4 + q, i, b[q]);
             input.set(j, 7 + q, i, f[q]);
         }
     }
 }
 
-/// The old positions and previous positions, by particle.
+/// The old positions and velocities, by particle.
 struct OldPos<'a>(&'a Step<'a>);
-struct OldPrev<'a>(&'a Step<'a>);
+struct OldVel<'a>(&'a Step<'a>);
 
 impl Fetch for OldPos<'_> {
     #[inline(always)]
@@ -434,10 +435,10 @@ impl Fetch for OldPos<'_> {
     }
 }
 
-impl Fetch for OldPrev<'_> {
+impl Fetch for OldVel<'_> {
     #[inline(always)]
     fn at(&self, k: usize) -> V4 {
-        self.0.prev(k)
+        self.0.vel(k)
     }
 }
 
@@ -477,18 +478,18 @@ impl Fetch for FaceFetch<'_> {
 #[inline(always)]
 fn a_scalar(s: &Step<'_>, k: usize) -> (V4, V4) {
     let (g, drag) = forces_consts(s.p);
-    let f = forces_at(s.force(k), s.pos(k), s.prev(k), g, drag);
+    let f = forces_at(s.force(k), s.vel(k), g, drag);
     let grid = GridSlots { n: s.p.n as usize, uni: s.uni };
-    finish_at(s, k, gather_at(k, 1.0 / s.p.dt, &grid, OldPos(s), OldPrev(s), f))
+    finish_at(s, k, gather_at(k, &grid, OldPos(s), OldVel(s), f))
 }
 
 /// The twins' `integrate` then `collide` for particle `k` under force `f`.
 #[inline(always)]
 fn finish_at(s: &Step<'_>, k: usize, f: V4) -> (V4, V4) {
-    let (mut x4, mut xp4) = (s.pos(k), s.prev(k));
-    integrate_at(k, s.p, f, &mut x4, &mut xp4);
-    collide_at(k, s.p, s.spheres, s.boxes, &mut x4, &mut xp4);
-    (x4, xp4)
+    let (mut x4, mut v4) = (s.pos(k), s.vel(k));
+    integrate_at(k, s.p, f, &mut x4, &mut v4);
+    collide_at(k, s.p, s.spheres, s.boxes, &mut x4, &mut v4);
+    (x4, v4)
 }
 
 /// Stage A for row `j` into `dst`; for a row of the band, `own` is where it starts in
@@ -506,21 +507,22 @@ fn stage_a<S: Isa>(
     let p = s.p;
     let n = p.n as usize;
     let base = j * n;
-    let put = |dst: &mut Ring, out: &mut Next<'_>, i: usize, (x4, xp4): (V4, V4)| {
+    let put = |dst: &mut Ring, out: &mut Next<'_>, i: usize, (x4, v4): (V4, V4)| {
         dst.put4(j, 0, i, x4);
-        if let Some((o, fin)) = own {
-            out.put(PREV, 3, o + i, xp4);
-            if fin {
-                out.put(POS, 4, o + i, x4);
-            }
+        for (c, vc) in v4.iter().take(3).enumerate() {
+            dst.set(j, 4 + c, i, *vc);
+        }
+        if let Some((o, true)) = own {
+            out.put(VEL, 3, o + i, v4);
+            out.put(POS, 4, o + i, x4);
         }
     };
-    let inv_dt = 1.0 / p.dt;
     let (g, drag) = forces_consts(p);
     let zero = F::splat(sd, 0.0);
     let tiny = F::splat(sd, f32::MIN_POSITIVE);
     let (gl, dragl) = ([F::splat(sd, g.x), F::splat(sd, g.y), F::splat(sd, g.z)], F::splat(sd, drag));
-    let (keep, kick) = (F::splat(sd, 1.0 - p.damping), F::splat(sd, p.dt * p.dt / p.particle_mass));
+    let (keep, kick) = (F::splat(sd, 1.0 - p.damping), F::splat(sd, p.dt / p.particle_mass));
+    let dtl = F::splat(sd, p.dt);
     let floor = F::splat(sd, p.floor_y + p.margin);
     let lanes = S::F32_LANES;
 
@@ -548,7 +550,7 @@ fn stage_a<S: Isa>(
             let inv = F::splat(sd, 1.0) / len;
             let dir = [l[0] * inv, l[1] * inv, l[2] * inv];
             let dot = dv[0] * dir[0] + dv[1] * dir[1] + dv[2] * dir[2];
-            let m = -(F::splat(sd, slot.ks) * (len - F::splat(sd, slot.rest)) + F::splat(sd, slot.kd * inv_dt) * dot);
+            let m = -(F::splat(sd, slot.ks) * (len - F::splat(sd, slot.rest)) + F::splat(sd, slot.kd) * dot);
             let mut live = len.gt(tiny);
             if edge {
                 live = live & in_grid(sd, col, n);
@@ -559,12 +561,9 @@ fn stage_a<S: Isa>(
         }
         // Verlet for every lane; lanes that are held, or end in the floor or a collider,
         // go through the twins' scalar code instead.
-        let mut x = [
-            (xa[0] + va[0] * keep) + acc[0] * kick,
-            (xa[1] + va[1] * keep) + acc[1] * kick,
-            (xa[2] + va[2] * keep) + acc[2] * kick,
-        ];
-        let (mut wo, mut xp) = (w, xa);
+        let mut v = [va[0] * keep + acc[0] * kick, va[1] * keep + acc[1] * kick, va[2] * keep + acc[2] * kick];
+        let mut x = [xa[0] + v[0] * dtl, xa[1] + v[1] * dtl, xa[2] + v[2] * dtl];
+        let mut wo = w;
         let special = w.eq(zero) | x[1].lt(floor) | inside(sd, p, s.spheres, s.boxes, &x);
         let mut bits = if special.any() { special.bits() } else { 0 };
         let grab = p.grab_index as isize - (base + i0) as isize;
@@ -574,19 +573,20 @@ fn stage_a<S: Isa>(
         while bits != 0 {
             let k = bits.trailing_zeros() as usize;
             bits &= bits - 1;
-            let (x4, xp4) = finish_at(s, base + i0 + k, [acc[0].lane(k), acc[1].lane(k), acc[2].lane(k), 0.0]);
+            let (x4, v4) = finish_at(s, base + i0 + k, [acc[0].lane(k), acc[1].lane(k), acc[2].lane(k), 0.0]);
             for c in 0..3 {
                 x[c].set_lane(k, x4[c]);
-                xp[c].set_lane(k, xp4[c]);
+                v[c].set_lane(k, v4[c]);
             }
             wo.set_lane(k, x4[3]);
         }
         dst.store4(j, i0, &x, wo);
-        if let Some((o, fin)) = own {
-            out.store(PREV, o + i0, &xp);
-            if fin {
-                out.store(POS, o + i0, &[x[0], x[1], x[2], wo]);
-            }
+        for (c, vc) in v.iter().enumerate() {
+            dst.store(j, 4 + c, i0, *vc);
+        }
+        if let Some((o, true)) = own {
+            out.store(VEL, o + i0, &v);
+            out.store(POS, o + i0, &[x[0], x[1], x[2], wo]);
         }
     }
     for i in leftover(0, n, lanes) {
@@ -669,12 +669,20 @@ fn stage_strain<S: Isa>(
     let p = s.p;
     let n = p.n as usize;
     let base = j * n;
+    let inv_dt = 1.0 / p.dt;
     let put = |dst: &mut Ring, out: &mut Next<'_>, i: usize, x4: V4| {
+        let v0 = [src.get(j, 4, i), src.get(j, 5, i), src.get(j, 6, i), 0.0];
+        let v4 = moved_vel(v0, src.get4(j, 0, i), x4, inv_dt);
         dst.put4(j, 0, i, x4);
+        for (c, vc) in v4.iter().take(3).enumerate() {
+            dst.set(j, 4 + c, i, *vc);
+        }
         if let Some(o) = own {
             out.put(POS, 4, o + i, x4);
+            out.put(VEL, 3, o + i, v4);
         }
     };
+    let inv_dtl = F::splat(sd, inv_dt);
     let stretch = 1.0 + p.strain_limit;
     let aim = 1.0 + STRAIN_AIM * p.strain_limit;
     let zero = F::splat(sd, 0.0);
@@ -749,9 +757,16 @@ fn stage_strain<S: Isa>(
         let fixed = wi.eq(zero);
         let x = [F::select(fixed, xi[0], x[0]), F::select(fixed, xi[1], x[1]), F::select(fixed, xi[2], x[2])];
         let w = src.lanes(sd, j, 3, i0);
+        // The velocity the pass's move implies (strain_vel).
+        let vi = src.lanes3(sd, j, 4, i0);
+        let v: [F<S>; 3] = std::array::from_fn(|c| vi[c] + (x[c] - xi[c]) * inv_dtl);
         dst.store4(j, i0, &x, w);
+        for (c, vc) in v.iter().enumerate() {
+            dst.store(j, 4 + c, i0, *vc);
+        }
         if let Some(o) = own {
             out.store(POS, o + i0, &[x[0], x[1], x[2], w]);
+            out.store(VEL, o + i0, &v);
         }
     }
     for i in leftover(0, n, lanes) {

@@ -1,49 +1,66 @@
-//! `integrate` — per particle: Verlet `x' = x + (1 - damping)(x - x*) + a dt²`; pinned
-//! particles stay, the grabbed particle is put on its target, and the floor clamps.
+//! `integrate` — per particle: Verlet in velocity form (symplectic Euler),
+//! `v' = (1 − damping)·v + f·dt/m`, `x' = x + v'·dt`; pinned particles stay (v = 0), the
+//! grabbed particle is put on its target (with the velocity that takes it there), and the
+//! floor clamps.
+//!
+//! The state crosses kernels as (x, v), both f32: the velocity is never a difference of two
+//! positions, so gravity's increment `g·dt` is kept at any dt (as `x − x*`, Verlet's two
+//! f32 positions round `g·dt²` to a few ulps of x, biasing every integrator that reads
+//! a velocity back from them).
 
 use glam::Vec3;
 
 use super::{Exec, for_each2, v3, v4};
 use crate::grid::{StepParams, V4};
 
-/// Resolves a contact with a surface of unit normal `nrm` on which `x` has just been put:
-/// the motion into the surface is removed and the tangential motion reduced by `friction`.
-/// Returns the new previous position (Verlet's velocity is `x - prev`).
+/// Resolves a contact with a surface of unit normal `nrm` for a particle moving at `v`:
+/// the velocity into the surface is removed and the tangential velocity reduced by
+/// `friction`; a velocity out of it is kept.
 #[inline(always)]
-pub(crate) fn contact_prev(x: Vec3, prev: Vec3, nrm: Vec3, friction: f32) -> Vec3 {
-    let v = x - prev;
+pub(crate) fn contact_vel(v: Vec3, nrm: Vec3, friction: f32) -> Vec3 {
     let vn = v.dot(nrm);
     let vt = v - vn * nrm;
-    let v_new = vt * (1.0 - friction) + vn.max(0.0) * nrm;
-    x - v_new
+    vt * (1.0 - friction) + vn.max(0.0) * nrm
+}
+
+/// The velocity that takes a particle from `x` to `target` in one substep of `dt`.
+#[inline(always)]
+pub(crate) fn grab_vel(x: Vec3, target: Vec3, dt: f32) -> Vec3 {
+    (target - x) * (1.0 / dt)
 }
 
 /// Advances every particle by one substep.
-pub fn integrate(exec: Exec, p: &StepParams, force: &[V4], pos: &mut [V4], prev: &mut [V4]) {
-    for_each2(exec, pos, prev, |i, x4, xp4| integrate_at(i, p, force[i], x4, xp4));
+pub fn integrate(exec: Exec, p: &StepParams, force: &[V4], pos: &mut [V4], vel: &mut [V4]) {
+    for_each2(exec, pos, vel, |i, x4, v4_| integrate_at(i, p, force[i], x4, v4_));
 }
 
 /// The substep of particle `i`, in place.
 #[inline(always)]
-pub(crate) fn integrate_at(i: usize, p: &StepParams, force: V4, x4: &mut V4, xp4: &mut V4) {
+pub(crate) fn integrate_at(i: usize, p: &StepParams, force: V4, x4: &mut V4, vel4: &mut V4) {
     let w = x4[3];
     let x = v3(*x4);
     if i as i32 == p.grab_index {
-        *xp4 = v4(x, 0.0);
+        *vel4 = v4(grab_vel(x, v3(p.grab_target), p.dt), 0.0);
         *x4 = v4(v3(p.grab_target), w);
         return;
     }
     if w == 0.0 {
-        *xp4 = v4(x, 0.0);
+        *vel4 = [0.0; 4];
         return;
     }
-    let mut xn = x + (x - v3(*xp4)) * (1.0 - p.damping) + v3(force) * (p.dt * p.dt / p.particle_mass);
-    let mut xp = x;
-    let floor = p.floor_y + p.margin;
-    if xn.y < floor {
-        xn.y = floor;
-        xp = contact_prev(xn, xp, Vec3::Y, p.friction);
-    }
-    *xp4 = v4(xp, 0.0);
+    let v = v3(*vel4) * (1.0 - p.damping) + v3(force) * (p.dt / p.particle_mass);
+    let (xn, vn) = floor_clamp(p, x + v * p.dt, v);
+    *vel4 = v4(vn, 0.0);
     *x4 = v4(xn, w);
+}
+
+/// The floor's contact for a particle that moves to `x` with velocity `v`.
+#[inline(always)]
+pub(crate) fn floor_clamp(p: &StepParams, mut x: Vec3, mut v: Vec3) -> (Vec3, Vec3) {
+    let floor = p.floor_y + p.margin;
+    if x.y < floor {
+        x.y = floor;
+        v = contact_vel(v, Vec3::Y, p.friction);
+    }
+    (x, v)
 }

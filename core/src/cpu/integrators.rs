@@ -1,25 +1,27 @@
 //! The integrators other than Verlet (thesis §4.1.1–4.1.2), one function per GPU kernel.
 //!
-//! Every integrator keeps its state in Verlet's two buffers: `prev = x − u` with
-//! `u = v·dt`, the velocity as a displacement per substep. The force kernels read
-//! `x − prev` as `v·dt`, so `forces`, `springs` and their fused and scattered forms
+//! Every integrator keeps its state as positions and velocities (x, v), both f32: the
+//! force kernels read `v`, so `forces`, `springs` and their fused and scattered forms
 //! evaluate the force for every integrator unchanged; the integrators differ only in
-//! where they evaluate it and how they combine the results. Working in displacements
-//! (`u`, and `g = f·dt²/m` for the force) needs no division by dt anywhere.
+//! where they evaluate it and how they combine the results. A velocity is never taken back
+//! from a difference of two positions (which in f32 rounds `g·dt²` to a few ulps of x and
+//! biased every integrator but Verlet by up to 7.5 % in free fall at 64 substeps), so each
+//! integrator follows its own recurrence at any dt.
 //!
 //! Scratch state lives in [`AUX`] particle buffers (`aux`), whose meaning depends on the
 //! integrator:
 //!
 //! | buffer | RK2, RK4 | implicit |
 //! |---|---|---|
-//! | `aux[0]` | `x₀` (w: pin flag) | `Δu`, the Newton step |
-//! | `aux[1]` | `u₀` (damped) | `r` (w: the Jacobi preconditioner's diagonal) |
-//! | `aux[2]` | `Σ bₛ uₛ` | `p` |
-//! | `aux[3]` | `Σ bₛ gₛ` | `q = A p` |
+//! | `aux[0]` | `x₀` (w: pin flag) | `Δv`, the Newton step |
+//! | `aux[1]` | `v₀` (damped) | `r` (w: the Jacobi preconditioner's diagonal) |
+//! | `aux[2]` | `Σ bₛ vₛ` | `p` |
+//! | `aux[3]` | `Σ bₛ aₛ·dt` | `q = A p` |
 //! | `aux[4]` | the substep's wind force | — |
 //!
 //! XPBD keeps each spring's λ at the spring's first end: slots 1, 3, 7 in `aux[0]`'s x,
-//! y, z and slots 6, 9, 11 in `aux[1]`'s (cleared at every substep's start).
+//! y, z and slots 6, 9, 11 in `aux[1]`'s (cleared at every substep's start); each
+//! correction of a position adds its velocity (`Δx/dt`) at once.
 //!
 //! Pins, the grab and the floor end every integrator's substep as [`super::integrate`]
 //! ends Verlet's (`finish_at`); spheres and boxes are the `collide` kernel's, run after.
@@ -27,7 +29,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::integrate::contact_prev;
+use super::integrate::{floor_clamp, grab_vel};
 use super::{Exec, v3, v4};
 use crate::grid::{SLOTS, SpringSlot, StepParams, V4};
 
@@ -83,104 +85,91 @@ fn held(i: usize, p: &StepParams, x4: V4) -> bool {
 }
 
 /// The end of a substep for particle `i` at `x4` that integrates to `x1` with velocity
-/// displacement `u1`: the new `(pos, prev)` with the pins, the grab and the floor handled
-/// as [`super::integrate`] handles them.
+/// `v1`: the new `(pos, vel)` with the pins, the grab and the floor handled as
+/// [`super::integrate`] handles them.
 #[inline(always)]
-pub(crate) fn finish_at(i: usize, p: &StepParams, x4: V4, x1: Vec3, u1: Vec3) -> (V4, V4) {
-    let x = v3(x4);
+pub(crate) fn finish_at(i: usize, p: &StepParams, x4: V4, x1: Vec3, v1: Vec3) -> (V4, V4) {
     if i as i32 == p.grab_index {
-        return (v4(v3(p.grab_target), x4[3]), v4(x, 0.0));
+        let target = v3(p.grab_target);
+        return (v4(target, x4[3]), v4(grab_vel(v3(x4), target, p.dt), 0.0));
     }
     if x4[3] == 0.0 {
-        return (x4, v4(x, 0.0));
+        return (x4, [0.0; 4]);
     }
-    let mut xn = x1;
-    let mut xp = x1 - u1;
-    let floor = p.floor_y + p.margin;
-    if xn.y < floor {
-        xn.y = floor;
-        xp = contact_prev(xn, xp, Vec3::Y, p.friction);
-    }
-    (v4(xn, x4[3]), v4(xp, 0.0))
+    let (xn, vn) = floor_clamp(p, x1, v1);
+    (v4(xn, x4[3]), v4(vn, 0.0))
 }
 
-/// `f·dt²/m`: a force as the displacement it adds in one substep.
+/// `f·dt/m`: a force as the velocity it adds in one substep.
 #[inline(always)]
-fn accel_dt2(p: &StepParams, f: V4) -> Vec3 {
-    v3(f) * (p.dt * p.dt / p.particle_mass)
+fn accel_dt(p: &StepParams, f: V4) -> Vec3 {
+    v3(f) * (p.dt / p.particle_mass)
 }
 
-/// Explicit Euler: `x' = x + u`, `u' = u + g`, with `u = (1 − damping)(x − prev)`.
+/// Explicit Euler: `x' = x + v·dt`, `v' = v + f·dt/m`, with `v` damped by
+/// `(1 − damping)` first.
 ///
-/// (Symplectic Euler, `u' = u + g`, `x' = x + u'`, needs no kernel of its own: in this
-/// state it is `x' = x + u + g`, `prev' = x` — Verlet's recurrence, step for step, so
-/// Verlet's kernels run it. The two differ in how a state with a velocity is read: Verlet
-/// takes `prev` as `x(t − dt)`, symplectic Euler as `x − v·dt`, which makes one second-
-/// and the other first-order in the positions from a given `(x, v)`.)
-pub fn euler(exec: Exec, p: &StepParams, force: &[V4], pos: &mut [V4], prev: &mut [V4]) {
+/// (Symplectic Euler, `v' = v + f·dt/m`, `x' = x + v'·dt`, needs no kernel of its own:
+/// it is Verlet's recurrence in velocity form, step for step, so Verlet's kernels run it.)
+pub fn euler(exec: Exec, p: &StepParams, force: &[V4], pos: &mut [V4], vel: &mut [V4]) {
     let out = per_particle(exec, pos.len(), |i| {
         let x = v3(pos[i]);
-        let u0 = (x - v3(prev[i])) * (1.0 - p.damping);
-        let u1 = u0 + accel_dt2(p, force[i]);
-        finish_at(i, p, pos[i], x + u0, u1)
+        let v0 = v3(vel[i]) * (1.0 - p.damping);
+        let v1 = v0 + accel_dt(p, force[i]);
+        finish_at(i, p, pos[i], x + v0 * p.dt, v1)
     });
     for (i, (x, xp)) in out.into_iter().enumerate() {
         pos[i] = x;
-        prev[i] = xp;
+        vel[i] = xp;
     }
 }
 
-/// The start of a Runge–Kutta substep: saves `x₀`, the damped `u₀` and the wind force
-/// (which the force kernels add to), and writes `prev = x₀ − u₀` so that the first force
-/// evaluation sees the damped velocity.
-pub fn rk_begin(exec: Exec, p: &StepParams, force: &[V4], pos: &[V4], prev: &mut [V4], aux: &mut [Vec<V4>]) {
-    let out = per_particle(exec, pos.len(), |i| {
-        let x = v3(pos[i]);
-        let u0 = (x - v3(prev[i])) * (1.0 - p.damping);
-        (v4(u0, 0.0), v4(x - u0, 0.0))
-    });
-    for (i, (u0, xp)) in out.into_iter().enumerate() {
+/// The start of a Runge–Kutta substep: saves `x₀`, the damped `v₀` and the wind force
+/// (which the force kernels add to), and writes `v₀` to the velocities so that the first
+/// force evaluation sees the damped velocity.
+pub fn rk_begin(exec: Exec, p: &StepParams, force: &[V4], pos: &[V4], vel: &mut [V4], aux: &mut [Vec<V4>]) {
+    let out = per_particle(exec, pos.len(), |i| v4(v3(vel[i]) * (1.0 - p.damping), 0.0));
+    for (i, v0) in out.into_iter().enumerate() {
         aux[0][i] = pos[i];
-        aux[1][i] = u0;
+        aux[1][i] = v0;
         aux[4][i] = force[i];
-        prev[i] = xp;
+        vel[i] = v0;
     }
 }
 
-/// One Runge–Kutta stage (see [`RkStage`]): adds the stage's `(u, g)` to the weighted
-/// sum, then either puts the particles at the next stage's point (velocity in `prev`, the
-/// wind back in the force buffer) or ends the substep at `y₀ + Σ bₛ kₛ`.
+/// One Runge–Kutta stage (see [`RkStage`]): adds the stage's `(v, a·dt)` to the weighted
+/// sum, then either puts the particles at the next stage's point (the wind back in the
+/// force buffer) or ends the substep at `y₀ + dt Σ bₛ kₛ`.
 pub fn rk_stage(
     exec: Exec,
     p: &StepParams,
     st: &RkStage,
     force: &mut [V4],
     pos: &mut [V4],
-    prev: &mut [V4],
+    vel: &mut [V4],
     aux: &mut [Vec<V4>],
 ) {
     let out = per_particle(exec, pos.len(), |i| {
         let x4 = pos[i];
-        // The first stage evaluates at y₀: its u is the saved one, exactly.
-        let us = if st.first { v3(aux[1][i]) } else { v3(x4) - v3(prev[i]) };
-        let gs = accel_dt2(p, force[i]);
+        let vs = v3(vel[i]);
+        let gs = accel_dt(p, force[i]);
         let (sx, su) =
-            if st.first { (us * st.b, gs * st.b) } else { (v3(aux[2][i]) + us * st.b, v3(aux[3][i]) + gs * st.b) };
-        let (x0, u0) = (v3(aux[0][i]), v3(aux[1][i]));
+            if st.first { (vs * st.b, gs * st.b) } else { (v3(aux[2][i]) + vs * st.b, v3(aux[3][i]) + gs * st.b) };
+        let (x0, v0) = (v3(aux[0][i]), v3(aux[1][i]));
         let (x, xp) = if st.last {
-            finish_at(i, p, x4, x0 + sx, u0 + su)
+            finish_at(i, p, x4, x0 + sx * p.dt, v0 + su)
         } else if held(i, p, x4) {
-            (x4, v4(v3(x4), 0.0))
+            (x4, [0.0; 4])
         } else {
-            let x = x0 + us * st.c_next;
-            let u = u0 + gs * st.c_next;
-            (v4(x, x4[3]), v4(x - u, 0.0))
+            let x = x0 + vs * (st.c_next * p.dt);
+            let v = v0 + gs * st.c_next;
+            (v4(x, x4[3]), v4(v, 0.0))
         };
         (x, xp, v4(sx, 0.0), v4(su, 0.0))
     });
     for (i, (x, xp, sx, su)) in out.into_iter().enumerate() {
         pos[i] = x;
-        prev[i] = xp;
+        vel[i] = xp;
         aux[2][i] = sx;
         aux[3][i] = su;
         if !st.last {
@@ -231,24 +220,24 @@ pub fn xpbd_lambda_home(pass: usize) -> (usize, usize) {
 /// One XPBD pass (see [`XPBD_PASSES`]): every spring in slot `s` of a particle of colour
 /// `colour` with `ks > 0` is a distance constraint `C = |x_a − x_b| − rest` of compliance
 /// `α̃ = 1/(ks·dt²)` and damping `γ = kd/(ks·dt)`, its λ kept in `lambda` (XPBD's eq. 26;
-/// λ starts at zero every substep), solved for both ends by their mobilities, in place.
-/// `prev` holds where the substep began.
+/// λ starts at zero every substep), solved for both ends by their mobilities, in place;
+/// each end's velocity gains its correction over dt (so that `v·dt` stays the particle's
+/// displacement since the substep began, which the damping term reads).
 pub fn xpbd_pass(
     p: &StepParams,
     slots: &[SpringSlot],
     pass: usize,
     pos: &mut [V4],
-    prev: &[V4],
+    vel: &mut [V4],
     lambda: &mut [Vec<V4>],
 ) {
     let (buf, c) = xpbd_lambda_home(pass);
     for a in 0..pos.len() {
         let Some((slot, b)) = pass_spring(p, slots, pass, a) else { continue };
         let l = lambda[buf][a][c];
-        if let Some((xa, xb, dl)) = xpbd_solve(p, &slot, a, b, pos[a], pos[b], prev[a], prev[b], l) {
-            pos[a] = xa;
-            pos[b] = xb;
-            lambda[buf][a][c] = l + dl;
+        if let Some(s) = xpbd_solve(p, &slot, a, b, pos[a], pos[b], vel[a], vel[b], l) {
+            (pos[a], pos[b], vel[a], vel[b]) = (s.xa, s.xb, s.va, s.vb);
+            lambda[buf][a][c] = l + s.dl;
         }
     }
 }
@@ -278,7 +267,7 @@ pub fn xpbd_pass_rows(
     slots: &[SpringSlot],
     pass: usize,
     pos: &mut [V4],
-    prev: &[V4],
+    vel: &mut [V4],
     lambda: &mut [Vec<V4>],
 ) {
     let (buf, c) = xpbd_lambda_home(pass);
@@ -287,33 +276,50 @@ pub fn xpbd_pass_rows(
     let (block, firsts, phases) = if dj == 0 { (1, 1, 1) } else { (2 * dj, dj, 2) };
     for phase in 0..phases {
         let skip = phase * dj * n;
-        let solve = |(k, (xs, ls)): (usize, (&mut [V4], &mut [V4]))| {
+        let solve = |(k, ((xs, vs), ls)): Rows<'_>| {
             let start = skip + k * block * n;
             for r in 0..firsts.min(xs.len() / n) {
                 for a in start + r * n..start + (r + 1) * n {
                     let Some((slot, b)) = pass_spring(p, slots, pass, a) else { continue };
                     let (la, lb) = (a - start, b - start);
                     let l = ls[la][c];
-                    if let Some((xa, xb, dl)) = xpbd_solve(p, &slot, a, b, xs[la], xs[lb], prev[a], prev[b], l) {
-                        xs[la] = xa;
-                        xs[lb] = xb;
-                        ls[la][c] = l + dl;
+                    if let Some(s) = xpbd_solve(p, &slot, a, b, xs[la], xs[lb], vs[la], vs[lb], l) {
+                        (xs[la], xs[lb], vs[la], vs[lb]) = (s.xa, s.xb, s.va, s.vb);
+                        ls[la][c] = l + s.dl;
                     }
                 }
             }
         };
-        let (xs, ls) = (&mut pos[skip..], &mut lambda[buf][skip..]);
+        let (xs, vs, ls) = (&mut pos[skip..], &mut vel[skip..], &mut lambda[buf][skip..]);
+        let rows = block * n;
         match exec {
-            Exec::Serial => xs.chunks_mut(block * n).zip(ls.chunks_mut(block * n)).enumerate().for_each(solve),
-            Exec::Parallel => {
-                xs.par_chunks_mut(block * n).zip(ls.par_chunks_mut(block * n)).enumerate().for_each(solve)
+            Exec::Serial => {
+                xs.chunks_mut(rows).zip(vs.chunks_mut(rows)).zip(ls.chunks_mut(rows)).enumerate().for_each(solve)
             }
+            Exec::Parallel => xs
+                .par_chunks_mut(rows)
+                .zip(vs.par_chunks_mut(rows))
+                .zip(ls.par_chunks_mut(rows))
+                .enumerate()
+                .for_each(solve),
         }
     }
 }
 
-/// The constraint of `slot` between `a` (at `xa4`) and `b` with multiplier `l`: their
-/// new positions and Δλ, or `None` when neither moves.
+/// One solved XPBD constraint: both ends' new positions and velocities, and Δλ.
+struct Solved {
+    xa: V4,
+    xb: V4,
+    va: V4,
+    vb: V4,
+    dl: f32,
+}
+
+/// A block of rows of [`xpbd_pass_rows`]: its index, positions, velocities and λ.
+type Rows<'a> = (usize, ((&'a mut [V4], &'a mut [V4]), &'a mut [V4]));
+
+/// The constraint of `slot` between `a` (at `xa4`, moving at `va4`) and `b` with
+/// multiplier `l`, or `None` when neither moves.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn xpbd_solve(
@@ -323,10 +329,10 @@ fn xpbd_solve(
     b: usize,
     xa4: V4,
     xb4: V4,
-    pa: V4,
-    pb: V4,
+    va4: V4,
+    vb4: V4,
     l: f32,
-) -> Option<(V4, V4, f32)> {
+) -> Option<Solved> {
     let inv_m = 1.0 / p.particle_mass;
     let (wa, wb) = (mobility(a, p, xa4) * inv_m, mobility(b, p, xb4) * inv_m);
     if wa + wb == 0.0 {
@@ -341,15 +347,22 @@ fn xpbd_solve(
     let n = d * (1.0 / len);
     let alpha = 1.0 / (slot.ks * p.dt * p.dt);
     let gamma = slot.kd / (slot.ks * p.dt);
-    let rel = n.dot((xa - v3(pa)) - (xb - v3(pb)));
+    let rel = n.dot(v3(va4) - v3(vb4)) * p.dt;
     let dl = -((len - slot.rest) + alpha * l + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
-    Some((v4(xa + n * (dl * wa), xa4[3]), v4(xb - n * (dl * wb), xb4[3]), dl))
+    let (da, db) = (n * (dl * wa), n * (dl * wb));
+    let inv_dt = 1.0 / p.dt;
+    Some(Solved {
+        xa: v4(xa + da, xa4[3]),
+        xb: v4(xb - db, xb4[3]),
+        va: v4(v3(va4) + da * inv_dt, 0.0),
+        vb: v4(v3(vb4) - db * inv_dt, 0.0),
+        dl,
+    })
 }
 
 // ---- implicit Euler: one Newton step, preconditioned conjugate gradients -------------
 //
-// In displacements (Δu = Δv·dt, u₀ = v₀·dt) the Newton step of backward Euler is
-// `A Δu = dt²(f₀ − K u₀)`, `A = m(1 + dt·drag) I + Σₛ (dt² Kₛ + dt Dₛ)` over the springs,
+// In velocities the Newton step of backward Euler is `A Δv = dt f₀ − dt² K v₀`, `A = m(1 + dt·drag) I + Σₛ (dt² Kₛ + dt Dₛ)` over the springs,
 // with `Kₛ = ks [n nᵀ + max(0, 1 − rest/len)(I − n nᵀ)]` (the stiffness Jacobian with its
 // compressive part dropped, so that A is positive definite: Choi & Ko 2002) and
 // `Dₛ = kd n nᵀ`. Held particles are filtered out (Baraff & Witkin's modified PCG: their
@@ -418,21 +431,21 @@ pub fn fold(partials: &[f32]) -> f32 {
     partials.iter().sum()
 }
 
-/// Starts the solve from the force `f₀` in `force`: `Δu = 0`, `r = dt²(f₀ − K u₀)` (w: the
-/// diagonal), `p = z = r/diag`; returns `r·z`.
+/// Starts the solve from the force `f₀` in `force`: `Δv = 0`, `r = dt f₀ − dt² K v₀` (w:
+/// the diagonal), `p = z = r/diag`; returns `r·z`.
 pub fn cg_begin(
     exec: Exec,
     p: &StepParams,
     slots: &[SpringSlot],
     force: &[V4],
     pos: &[V4],
-    prev: &[V4],
+    vel: &[V4],
     aux: &mut [Vec<V4>],
 ) -> Vec<f32> {
-    let u = |k: usize| v3(pos[k]) - v3(prev[k]);
+    let u = |k: usize| v3(vel[k]);
     let out = per_particle(exec, pos.len(), |i| {
         let (ku, diag) = apply_at(i, p, slots, pos, &u, false);
-        let r = if held(i, p, pos[i]) { Vec3::ZERO } else { v3(force[i]) * (p.dt * p.dt) - ku };
+        let r = if held(i, p, pos[i]) { Vec3::ZERO } else { v3(force[i]) * p.dt - ku };
         let r4 = v4(r, diag);
         let z = precondition(r4);
         (r4, z, r.dot(z))
@@ -469,7 +482,7 @@ pub fn cg_alpha(s: &mut CgScalars, pq: f32) {
     s[2] = if pq > 0.0 { s[0] / pq } else { 0.0 };
 }
 
-/// `Δu += α p`, `r −= α q`; returns the terms of the new `r·z`.
+/// `Δv += α p`, `r −= α q`; returns the terms of the new `r·z`.
 pub fn cg_step(exec: Exec, s: &CgScalars, aux: &mut [Vec<V4>]) -> Vec<f32> {
     let alpha = s[2];
     let out = per_particle(exec, aux[0].len(), |i| {
@@ -503,16 +516,16 @@ pub fn cg_direction(exec: Exec, s: &CgScalars, aux: &mut [Vec<V4>]) {
     }
 }
 
-/// Ends the implicit substep: `u₁ = (1 − damping) u₀ + Δu`, `x₁ = x₀ + u₁`.
-pub fn implicit_finish(exec: Exec, p: &StepParams, pos: &mut [V4], prev: &mut [V4], aux: &[Vec<V4>]) {
+/// Ends the implicit substep: `v₁ = (1 − damping) v₀ + Δv`, `x₁ = x₀ + v₁·dt`.
+pub fn implicit_finish(exec: Exec, p: &StepParams, pos: &mut [V4], vel: &mut [V4], aux: &[Vec<V4>]) {
     let out = per_particle(exec, pos.len(), |i| {
         let x = v3(pos[i]);
-        let u1 = (x - v3(prev[i])) * (1.0 - p.damping) + v3(aux[0][i]);
-        finish_at(i, p, pos[i], x + u1, u1)
+        let v1 = v3(vel[i]) * (1.0 - p.damping) + v3(aux[0][i]);
+        finish_at(i, p, pos[i], x + v1 * p.dt, v1)
     });
     for (i, (x, xp)) in out.into_iter().enumerate() {
         pos[i] = x;
-        prev[i] = xp;
+        vel[i] = xp;
     }
 }
 
@@ -562,18 +575,19 @@ mod tests {
                 .enumerate()
                 .map(|(k, x)| [x[0] * 1.3 + jitter(k, 0), x[1] + jitter(k, 1), x[2] * 1.2, x[3]])
                 .collect();
-            let prev: Vec<V4> =
-                pos.iter().enumerate().map(|(k, x)| [x[0] - jitter(k, 2), x[1], x[2] + jitter(k, 1), 0.0]).collect();
+            // Velocities of up to 6 cm/s, so that the damping term differs between springs.
+            let vel: Vec<V4> = (0..pos.len()).map(|k| [jitter(k, 2) * 60.0, 0.0, -jitter(k, 1) * 60.0, 0.0]).collect();
             let run = |exec: Option<Exec>| {
-                let (mut x, mut lambda) = (pos.clone(), vec![vec![[0.0f32; 4]; pos.len()]; 2]);
+                let (mut x, mut v, mut lambda) = (pos.clone(), vel.clone(), vec![vec![[0.0f32; 4]; pos.len()]; 2]);
                 for _ in 0..2 {
                     for pass in 0..XPBD_PASSES.len() {
                         match exec {
-                            None => xpbd_pass(&p, &topo.slots, pass, &mut x, &prev, &mut lambda),
-                            Some(e) => xpbd_pass_rows(e, &p, &topo.slots, pass, &mut x, &prev, &mut lambda),
+                            None => xpbd_pass(&p, &topo.slots, pass, &mut x, &mut v, &mut lambda),
+                            Some(e) => xpbd_pass_rows(e, &p, &topo.slots, pass, &mut x, &mut v, &mut lambda),
                         }
                     }
                 }
+                lambda.push(v);
                 (x, lambda)
             };
             let want = run(None);
@@ -585,6 +599,7 @@ mod tests {
                 for b in 0..2 {
                     assert_eq!(bits(&got.1[b]), bits(&want.1[b]), "n = {n}, {exec:?}: λ in aux[{b}]");
                 }
+                assert_eq!(bits(&got.1[2]), bits(&want.1[2]), "n = {n}, {exec:?}: velocities");
             }
         }
     }

@@ -12,18 +12,18 @@ use wide::f32x8;
 use super::{Exec, LANES};
 use crate::grid::V4;
 
-/// Component arrays of the positions and of `pos - prev` (velocity × dt).
+/// Component arrays of the positions and of the velocities.
 #[derive(Debug, Clone, Default)]
 pub struct Lanes {
     /// x, y, z, w of the positions.
     pub pos: [Vec<f32>; 4],
-    /// x, y, z of `pos - prev`.
+    /// x, y, z of the velocities.
     pub vel: [Vec<f32>; 3],
 }
 
 impl Lanes {
-    /// Fills `pos` from `src` (and `vel` from `src - prev` when `prev` is given).
-    pub fn fill(&mut self, exec: Exec, n: usize, src: &[V4], prev: Option<&[V4]>) {
+    /// Fills `pos` from `src` (and `vel` from `vel` when it is given).
+    pub fn fill(&mut self, exec: Exec, n: usize, src: &[V4], vel: Option<&[V4]>) {
         let np = src.len();
         for v in self.pos.iter_mut().chain(self.vel.iter_mut()) {
             v.resize(np, 0.0);
@@ -37,11 +37,11 @@ impl Lanes {
                 py[i] = a[1];
                 pz[i] = a[2];
                 pw[i] = a[3];
-                if let Some(prev) = prev {
-                    let b = prev[j * n + i];
-                    vx[i] = a[0] - b[0];
-                    vy[i] = a[1] - b[1];
-                    vz[i] = a[2] - b[2];
+                if let Some(vel) = vel {
+                    let b = vel[j * n + i];
+                    vx[i] = b[0];
+                    vy[i] = b[1];
+                    vz[i] = b[2];
                 }
             }
         };
@@ -75,7 +75,7 @@ impl Lanes {
         lane(&self.pos[3], start)
     }
 
-    /// x, y, z of `pos - prev` at `start .. start + LANES`.
+    /// x, y, z of the velocities at `start .. start + LANES`.
     #[inline(always)]
     pub fn vel3(&self, start: usize) -> [f32x8; 3] {
         std::array::from_fn(|c| lane(&self.vel[c], start))

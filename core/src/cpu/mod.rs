@@ -36,7 +36,7 @@ pub use simd::{FUSED_ENV, SIMD_ENV, Simd, fused_from_env};
 pub use solver::CpuSolver;
 pub use springs::{springs, springs_rows, springs_scatter};
 pub use stats::{SubstepStats, particle_stats, substep_stats};
-pub use strain_limit::{STRAIN_AIM, strain_limit, strain_limit_rows};
+pub use strain_limit::{STRAIN_AIM, strain_limit, strain_limit_rows, strain_vel};
 
 use glam::Vec3;
 use rayon::prelude::*;

@@ -372,12 +372,12 @@ pub fn rows_around(x: &V4, inv: f32, size: u32, rows: &mut [Row; 9]) -> usize {
     count
 }
 
-/// Particle `i`'s new position and previous position: pushed out of every candidate
+/// Particle `i`'s new position and velocity: pushed out of every candidate
 /// closer than the thickness, its velocity into the contact removed.
-pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], prev: V4, cells: &[V4], slots: &[V4]) -> (V4, V4) {
+pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], vel: V4, cells: &[V4], slots: &[V4]) -> (V4, V4) {
     let x4 = pos[i];
     if x4[3] == 0.0 || i as i32 == p.grab_index {
-        return (x4, prev);
+        return (x4, vel);
     }
     let t = p.self_thickness;
     let np = pos.len() as u32;
@@ -420,16 +420,16 @@ pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], prev: V4, cells: &[
         }
     }
     if contacts > MAX_CONTACTS {
-        return (x4, prev);
+        return (x4, vel);
     }
     let unit = t * (1.0 / UNITS);
     let delta = sum.map(|v| v as f32 * unit);
     let dd = delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2];
     if dd == 0.0 {
-        return (x4, prev);
+        return (x4, vel);
     }
     let x = [x4[0] + delta[0], x4[1] + delta[1], x4[2] + delta[2]];
-    let mut u = [x4[0] - prev[0], x4[1] - prev[1], x4[2] - prev[2]];
+    let mut u = [vel[0], vel[1], vel[2]];
     let len = dd.sqrt();
     let nrm = [delta[0] / len, delta[1] / len, delta[2] / len];
     let un = u[0] * nrm[0] + u[1] * nrm[1] + u[2] * nrm[2];
@@ -438,22 +438,22 @@ pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], prev: V4, cells: &[
             u[a] -= un * nrm[a];
         }
     }
-    ([x[0], x[1], x[2], x4[3]], [x[0] - u[0], x[1] - u[1], x[2] - u[2], prev[3]])
+    ([x[0], x[1], x[2], x4[3]], [u[0], u[1], u[2], vel[3]])
 }
 
 /// Step 4: every particle pushed out of its close candidates (from `slots`) into
-/// `pos_out`, its `prev` updated in place (each element read and written only by its own
+/// `pos_out`, its `vel` updated in place (each element read and written only by its own
 /// particle).
 pub fn self_collide(
     exec: Exec,
     p: &StepParams,
     pos: &[V4],
-    prev: &mut [V4],
+    vel: &mut [V4],
     cells: &[V4],
     slots: &[V4],
     pos_out: &mut [V4],
 ) {
-    for_each2(exec, pos_out, prev, |i, o, q| {
+    for_each2(exec, pos_out, vel, |i, o, q| {
         let (x, xp) = self_collide_at(p, i, pos, *q, cells, slots);
         *o = x;
         *q = xp;
@@ -597,18 +597,18 @@ mod tests {
         let (a, b) = (0usize, np - 1);
         pos[a] = [0.3, 1.0, 0.0, 1.0];
         pos[b] = [0.3 + 0.6 * t, 1.0, 0.0, 1.0];
-        let mut prev = pos.clone();
-        prev[a][0] -= 0.001; // a moves towards b at 1 mm a substep
+        let mut vel = vec![[0.0f32; 4]; np];
+        vel[a][0] = 0.06; // a moves towards b at 6 cm/s
         let (mut cells, mut totals, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
         build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
         let mut out = pos.clone();
-        self_collide(Exec::Serial, &p, &pos, &mut prev, &cells, &slots, &mut out);
+        self_collide(Exec::Serial, &p, &pos, &mut vel, &cells, &slots, &mut out);
         let gap = out[b][0] - out[a][0];
         assert!((gap - t).abs() < 2.0 * unit, "gap {gap}, thickness {t}");
         assert!((out[a][0] - (0.3 - 0.2 * t)).abs() < 2.0 * unit);
         // a's velocity into the contact (+x) is gone; b was at rest.
-        assert!((out[a][0] - prev[a][0]).abs() < 1e-9, "a still moves {} m a substep", out[a][0] - prev[a][0]);
-        assert_eq!(out[b][0] - prev[b][0], 0.0);
+        assert!(vel[a][0].abs() < 1e-9, "a still moves at {} m/s", vel[a][0]);
+        assert_eq!(vel[b], [0.0; 4]);
         // Everyone else is untouched.
         assert_eq!(out[1], pos[1]);
     }

@@ -7,8 +7,8 @@ use super::simd::Simd;
 use super::{
     AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_ORDER, build_hash, cg_alpha, cg_begin, cg_beta,
     cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, hash_buffers, implicit_finish, integrate,
-    integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit_rows, tri_normals,
-    tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_pass, xpbd_pass_rows,
+    integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit_rows, strain_vel,
+    tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_pass, xpbd_pass_rows,
 };
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
 use crate::params::{Integrator, SimParams};
@@ -260,13 +260,13 @@ impl CpuSolver {
         } = self;
         let n = topo.n as usize;
         let fast = uniform.is_some();
-        let ClothState { pos, prev, force, normal, .. } = state;
-        // The force of the current (pos, prev): forces fused into the spring gather.
-        let eval = |lanes: &mut Lanes, pos: &[V4], prev: &[V4], force: &mut [V4]| {
+        let ClothState { pos, vel, force, normal, .. } = state;
+        // The force of the current (pos, vel): forces fused into the spring gather.
+        let eval = |lanes: &mut Lanes, pos: &[V4], vel: &[V4], force: &mut [V4]| {
             if fast {
-                lanes.fill(e, n, pos, Some(prev));
+                lanes.fill(e, n, pos, Some(vel));
             }
-            springs_rows(e, n, p.dt, &topo.slots, uniform.as_ref(), Some(&p), lanes, pos, prev, force)
+            springs_rows(e, n, &topo.slots, uniform.as_ref(), Some(&p), lanes, pos, vel, force)
         };
         let (spheres, boxes) = (&scene.spheres, &scene.boxes);
         let needs_aux =
@@ -279,34 +279,32 @@ impl CpuSolver {
         match params.integrator {
             // Symplectic Euler is Verlet's recurrence in this state (see `euler`).
             Integrator::Verlet | Integrator::SymplecticEuler => {
-                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, prev, force));
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
-                    integrate_collide(e, &p, spheres, boxes, force, pos, prev)
-                });
+                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || integrate_collide(e, &p, spheres, boxes, force, pos, vel));
             }
             Integrator::Euler => {
-                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, prev, force));
+                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
                 Self::timed(timer, on, INTEGRATE_COLLIDE, || {
-                    euler(e, &p, force, pos, prev);
-                    collide(e, &p, spheres, boxes, pos, prev)
+                    euler(e, &p, force, pos, vel);
+                    collide(e, &p, spheres, boxes, pos, vel)
                 });
             }
             Integrator::Rk2 | Integrator::Rk4 => {
                 let stages: &[super::RkStage] = if params.integrator == Integrator::Rk2 { &RK2 } else { &RK4 };
-                rk_begin(e, &p, force, pos, prev, aux);
+                rk_begin(e, &p, force, pos, vel, aux);
                 for st in stages {
-                    Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, prev, force));
-                    Self::timed(timer, on, INTEGRATE_COLLIDE, || rk_stage(e, &p, st, force, pos, prev, aux));
+                    Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
+                    Self::timed(timer, on, INTEGRATE_COLLIDE, || rk_stage(e, &p, st, force, pos, vel, aux));
                 }
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || collide(e, &p, spheres, boxes, pos, prev));
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || collide(e, &p, spheres, boxes, pos, vel));
             }
             Integrator::Implicit => {
-                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, prev, force));
+                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
                 let cg = &mut *cg;
                 Self::timed(timer, on, INTEGRATE_COLLIDE, || {
                     // Sums as the kernels make them: per workgroup, then folded.
                     let total = |terms: Vec<f32>| fold(&partial_sums(&terms));
-                    let rz = total(cg_begin(e, &p, &topo.slots, force, pos, prev, aux));
+                    let rz = total(cg_begin(e, &p, &topo.slots, force, pos, vel, aux));
                     cg_beta(cg, rz);
                     for _ in 0..params.cg_iterations {
                         let pq = total(cg_matvec(e, &p, &topo.slots, pos, aux));
@@ -315,26 +313,26 @@ impl CpuSolver {
                         cg_beta(cg, rz);
                         cg_direction(e, cg, aux);
                     }
-                    implicit_finish(e, &p, pos, prev, aux);
-                    collide(e, &p, spheres, boxes, pos, prev)
+                    implicit_finish(e, &p, pos, vel, aux);
+                    collide(e, &p, spheres, boxes, pos, vel)
                 });
             }
             Integrator::Xpbd => {
                 Self::timed(timer, on, INTEGRATE_COLLIDE, || {
-                    forces(e, &p, pos, prev, force);
-                    integrate(e, &p, force, pos, prev);
+                    forces(e, &p, vel, force);
+                    integrate(e, &p, force, pos, vel);
                     // λ per spring, from zero every substep (the recipe's clears).
                     aux[..2].iter_mut().flatten().for_each(|v| *v = [0.0; 4]);
                     for _ in 0..params.xpbd_iterations {
                         for pass in XPBD_ORDER {
                             if grid.is_some() {
-                                xpbd_pass_rows(e, &p, &topo.slots, pass, pos, prev, aux);
+                                xpbd_pass_rows(e, &p, &topo.slots, pass, pos, vel, aux);
                             } else {
-                                xpbd_pass(&p, &topo.slots, pass, pos, prev, aux);
+                                xpbd_pass(&p, &topo.slots, pass, pos, vel, aux);
                             }
                         }
                     }
-                    collide(e, &p, spheres, boxes, pos, prev)
+                    collide(e, &p, spheres, boxes, pos, vel)
                 });
             }
         }
@@ -344,6 +342,7 @@ impl CpuSolver {
                     lanes.fill(e, n, pos, None);
                 }
                 strain_limit_rows(e, &p, &topo.slots, uniform.as_ref(), &topo.tethers, lanes, pos, scratch);
+                strain_vel(e, &p, pos, scratch, vel);
                 std::mem::swap(pos, scratch);
             }
         });
@@ -352,7 +351,7 @@ impl CpuSolver {
         if params.self_collision {
             let (cells, totals, slots) = hash_buffers(aux);
             Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, cells, totals, slots));
-            Self::timed(timer, on, SELF_COLLIDE, || self_collide(e, &p, pos, prev, cells, slots, scratch));
+            Self::timed(timer, on, SELF_COLLIDE, || self_collide(e, &p, pos, vel, cells, slots, scratch));
             std::mem::swap(pos, scratch);
         }
         if fast {
@@ -395,7 +394,6 @@ impl Solver for CpuSolver {
         params.validate_for(self.topo.n, self.topo.spacing)?;
         self.sync();
         self.soa_valid = false;
-        crate::grid::rescale_history(&self.state.pos, &mut self.state.prev, self.params.dt(), params.dt());
         self.params = params;
         self.topo.set_spring_constants(&self.params);
         self.uniform = self.topo.uniform_interior_slots();

@@ -42,36 +42,28 @@ impl SlotSource for GridSlots<'_> {
     }
 }
 
-/// Force on end `a` of a spring with `l = x_a - x_b` and `dv = (v_a - v_b)·dt`.
+/// Force on end `a` of a spring with `l = x_a - x_b` and `dv = v_a - v_b`.
 #[inline(always)]
-pub(crate) fn spring_force(l: Vec3, dv: Vec3, s: &SpringSlot, inv_dt: f32) -> Vec3 {
+pub(crate) fn spring_force(l: Vec3, dv: Vec3, s: &SpringSlot) -> Vec3 {
     let len = l.length();
     if len <= f32::MIN_POSITIVE {
         return Vec3::ZERO;
     }
     // One division per spring, not three: the kernels are bound by divisions and roots.
     let dir = l * (1.0 / len);
-    -(s.ks * (len - s.rest) + (s.kd * inv_dt) * dv.dot(dir)) * dir
+    -(s.ks * (len - s.rest) + s.kd * dv.dot(dir)) * dir
 }
 
 /// Gather (optimized kernels, CPU solvers): each particle adds its 12 slots in slot order.
-pub fn springs(exec: Exec, dt: f32, slots: &[SpringSlot], pos: &[V4], prev: &[V4], force: &mut [V4]) {
-    let inv_dt = 1.0 / dt;
-    for_each(exec, force, |i, f| *f = gather_at(i, inv_dt, slots, |k| pos[k], |k| prev[k], *f));
+pub fn springs(exec: Exec, slots: &[SpringSlot], pos: &[V4], vel: &[V4], force: &mut [V4]) {
+    for_each(exec, force, |i, f| *f = gather_at(i, slots, |k| pos[k], |k| vel[k], *f));
 }
 
 /// The gather of particle `i`: `f` plus its springs' forces in slot order.
 #[inline(always)]
-pub(crate) fn gather_at(
-    i: usize,
-    inv_dt: f32,
-    slots: &(impl SlotSource + ?Sized),
-    pos: impl Fetch,
-    prev: impl Fetch,
-    f: V4,
-) -> V4 {
+pub(crate) fn gather_at(i: usize, slots: &(impl SlotSource + ?Sized), pos: impl Fetch, vel: impl Fetch, f: V4) -> V4 {
     let xa = v3(pos.at(i));
-    let va = xa - v3(prev.at(i));
+    let va = v3(vel.at(i));
     let mut acc = v3(f);
     for s in 0..SLOTS {
         let s = &slots.slot(i, s);
@@ -80,38 +72,36 @@ pub(crate) fn gather_at(
         }
         let b = s.neighbor as usize;
         let xb = v3(pos.at(b));
-        let vb = xb - v3(prev.at(b));
-        acc += spring_force(xa - xb, va - vb, s, inv_dt);
+        let vb = v3(vel.at(b));
+        acc += spring_force(xa - xb, va - vb, s);
     }
     v4(acc, 0.0)
 }
 
 /// [`springs`], row by row, with the interior of each row on [`springs_interior`] when
-/// the grid's slots are uniform (`uni`); `lanes` must hold `pos` and `pos - prev`.
+/// the grid's slots are uniform (`uni`); `lanes` must hold `pos` and `vel`.
 /// Bit-identical to [`springs`].
 #[allow(clippy::too_many_arguments)]
 pub fn springs_rows(
     exec: Exec,
     n: usize,
-    dt: f32,
     slots: &[SpringSlot],
     uni: Option<&[SpringSlot; SLOTS]>,
     forces: Option<&StepParams>,
     lanes: &Lanes,
     pos: &[V4],
-    prev: &[V4],
+    vel: &[V4],
     force: &mut [V4],
 ) {
-    let inv_dt = 1.0 / dt;
     // With `forces`, each particle first gets `forces` (gravity and drag), then its springs:
     // the two kernels fused into one sweep, bit-identical to running them in turn.
     let ext = forces.map(forces_consts);
     let gather = |i: usize, f: V4| {
         let f = match ext {
-            Some((g, drag)) => forces_at(f, pos[i], prev[i], g, drag),
+            Some((g, drag)) => forces_at(f, vel[i], g, drag),
             None => f,
         };
-        gather_at(i, inv_dt, slots, |k| pos[k], |k| prev[k], f)
+        gather_at(i, slots, |k| pos[k], |k| vel[k], f)
     };
     let offs: [isize; SLOTS] = SLOT_OFFSETS.map(|(di, dj)| di as isize + dj as isize * n as isize);
     super::for_each_row(exec, n, force, |j, row| {
@@ -121,7 +111,7 @@ pub fn springs_rows(
                 for i in [0, 1, n - 2, n - 1] {
                     row[i] = gather(base + i, row[i]);
                 }
-                springs_interior(base + 2, n - 4, &offs, uni, inv_dt, ext, lanes, pos, prev, &mut row[2..n - 2]);
+                springs_interior(base + 2, n - 4, &offs, uni, ext, lanes, pos, vel, &mut row[2..n - 2]);
             }
             _ => {
                 for (i, f) in row.iter_mut().enumerate() {
@@ -134,14 +124,13 @@ pub fn springs_rows(
 
 /// Scatter (twin of the naive kernel): each spring adds its force to both ends. The
 /// summation order differs from [`springs`], so results agree only up to rounding.
-pub fn springs_scatter(dt: f32, springs: &[Spring], pos: &[V4], prev: &[V4], force: &mut [V4]) {
-    let inv_dt = 1.0 / dt;
+pub fn springs_scatter(springs: &[Spring], pos: &[V4], vel: &[V4], force: &mut [V4]) {
     for s in springs {
         let (a, b) = (s.a as usize, s.b as usize);
         let (xa, xb) = (v3(pos[a]), v3(pos[b]));
-        let (va, vb) = (xa - v3(prev[a]), xb - v3(prev[b]));
+        let (va, vb) = (v3(vel[a]), v3(vel[b]));
         let slot = SpringSlot { neighbor: s.b as i32, rest: s.rest, ks: s.ks, kd: s.kd };
-        let fa = spring_force(xa - xb, va - vb, &slot, inv_dt);
+        let fa = spring_force(xa - xb, va - vb, &slot);
         force[a] = v4(v3(force[a]) + fa, 0.0);
         force[b] = v4(v3(force[b]) - fa, 0.0);
     }
@@ -157,11 +146,10 @@ pub(crate) fn springs_interior(
     len: usize,
     offs: &[isize; SLOTS],
     uni: &[SpringSlot; SLOTS],
-    inv_dt: f32,
     ext: Option<(Vec3, f32)>,
     lanes: &Lanes,
     pos: &[V4],
-    prev: &[V4],
+    vel: &[V4],
     force: &mut [V4],
 ) {
     let groups = len / LANES;
@@ -189,7 +177,7 @@ pub(crate) fn springs_interior(
             let inv = f32x8::ONE / len;
             let dir = [l[0] * inv, l[1] * inv, l[2] * inv];
             let dot = dv[0] * dir[0] + dv[1] * dir[1] + dv[2] * dir[2];
-            let m = -(f32x8::splat(slot.ks) * (len - f32x8::splat(slot.rest)) + f32x8::splat(slot.kd * inv_dt) * dot);
+            let m = -(f32x8::splat(slot.ks) * (len - f32x8::splat(slot.rest)) + f32x8::splat(slot.kd) * dot);
             let live = len.simd_gt(tiny);
             for c in 0..3 {
                 acc[c] += live.bitselect(m * dir[c], zero);
@@ -201,16 +189,16 @@ pub(crate) fn springs_interior(
     for (i, f) in force.iter_mut().enumerate().take(len).skip(groups * LANES) {
         let a = base + i;
         let xa = v3(pos[a]);
-        let va = xa - v3(prev[a]);
+        let va = v3(vel[a]);
         let f0 = match ext {
-            Some((g, drag)) => forces_at(*f, pos[a], prev[a], g, drag),
+            Some((g, drag)) => forces_at(*f, vel[a], g, drag),
             None => *f,
         };
         let mut acc = v3(f0);
         for (s, slot) in uni.iter().enumerate() {
             let b = (a as isize + offs[s]) as usize;
             let xb = v3(pos[b]);
-            acc += spring_force(xa - xb, va - (xb - v3(prev[b])), slot, inv_dt);
+            acc += spring_force(xa - xb, va - v3(vel[b]), slot);
         }
         *f = v4(acc, 0.0);
     }

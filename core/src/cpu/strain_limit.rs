@@ -24,7 +24,8 @@ use super::{Exec, Fetch, LANES, Lanes, for_each, v3, v4};
 use crate::grid::{SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
 pub use crate::layout::STRAIN_AIM;
 
-/// One pass: reads `pos`, writes the corrected positions to `out` (same length).
+/// One pass: reads `pos`, writes the corrected positions to `out` (same length). The
+/// kernel also updates the velocities ([`strain_vel`]).
 pub fn strain_limit(
     exec: Exec,
     p: &StepParams,
@@ -34,6 +35,20 @@ pub fn strain_limit(
     out: &mut [V4],
 ) {
     for_each(exec, out, |i, o| *o = limit_at(i, p, slots, tethers, |k| pos[k]));
+}
+
+/// The velocity change of a pass that moved the positions from `pos` to `out`:
+/// `v += (out − pos) · (1/dt)` (Provot's velocity update: the correction is motion, as it
+/// was implicitly in Verlet's `x − x*`; pinned and grabbed particles do not move).
+pub fn strain_vel(exec: Exec, p: &StepParams, pos: &[V4], out: &[V4], vel: &mut [V4]) {
+    let inv_dt = 1.0 / p.dt;
+    for_each(exec, vel, |i, v| *v = moved_vel(*v, pos[i], out[i], inv_dt));
+}
+
+/// [`strain_vel`] of one particle.
+#[inline(always)]
+pub(crate) fn moved_vel(v: V4, from: V4, to: V4, inv_dt: f32) -> V4 {
+    v4(v3(v) + (v3(to) - v3(from)) * inv_dt, 0.0)
 }
 
 /// The pass for particle `i`.

@@ -6,12 +6,12 @@ struct Applied {
     diag: f32,
 }
 
-// The vector A (or dt² K) is applied to, at particle k: p (aux2) or u = x − prev.
+// The vector A (or dt² K) is applied to, at particle k: p (aux2) or the velocity v.
 fn y_at(k: u32, from_p: bool) -> vec3<f32> {
     if from_p {
         return aux2[k].xyz;
     }
-    return pos[k].xyz - prev[k].xyz;
+    return vel[k].xyz;
 }
 
 // (dt² Kₛ + dt Dₛ) y (without Dₛ unless with_damping) for the spring from xa to xb, and a
@@ -34,7 +34,7 @@ fn spring_block(s: SpringSlot, xa: vec3<f32>, xb: vec3<f32>, y: vec3<f32>, with_
     return Applied(v, (k2 * (1.0 + 2.0 * soft) + s.kd * p.dt) / 3.0);
 }
 
-// (A y)ᵢ with y = p (full), or dt² (K u)ᵢ (not full); and the diagonal of A.
+// (A y)ᵢ with y = p (full), or dt² (K v)ᵢ (not full); and the diagonal of A.
 fn apply_at(i: u32, full: bool) -> Applied {
     let xa = pos[i].xyz;
     let ya = y_at(i, full);

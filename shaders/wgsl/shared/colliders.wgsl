@@ -9,7 +9,7 @@
 // spheres and boxes.
 fn collided(m: Moved) -> Moved {
     var x = m.x;
-    var xp = m.xp;
+    var v = m.v;
     for (var k = 0u; k < p.num_spheres; k++) {
         let s = spheres[k];
         let r = s.radius + p.margin;
@@ -22,7 +22,7 @@ fn collided(m: Moved) -> Moved {
                 nrm = d / dist;
             }
             x = s.center + nrm * r;
-            xp = contact_prev(x, xp, nrm, p.friction);
+            v = contact_vel(v, nrm, p.friction);
         }
     }
     for (var k = 0u; k < p.num_boxes; k++) {
@@ -41,8 +41,8 @@ fn collided(m: Moved) -> Moved {
             if above.z < best { best = above.z; nrm = vec3<f32>(0.0, 0.0, 1.0); face = hi.z; }
             let axis = abs(nrm);
             x = x * (vec3<f32>(1.0) - axis) + axis * face;
-            xp = contact_prev(x, xp, nrm, p.friction);
+            v = contact_vel(v, nrm, p.friction);
         }
     }
-    return Moved(x, xp);
+    return Moved(x, v);
 }

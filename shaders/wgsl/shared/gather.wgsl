@@ -5,15 +5,14 @@
 // kernel like `p`; `enabled` when the table is the regular grid's (core's grid_slots).
 var<private> interior: InteriorSlots;
 
-// A particle's position and velocity·dt (x - x*).
+// A particle's position and velocity.
 struct Pt {
     x: vec3<f32>,
     v: vec3<f32>,
 }
 
 fn point(k: u32) -> Pt {
-    let x = pos[k].xyz;
-    return Pt(x, x - prev[k].xyz);
+    return Pt(pos[k].xyz, vel[k].xyz);
 }
 
 // Grid point (c, r), which may lie outside the grid: its particle's point (particle 0's
@@ -37,8 +36,8 @@ fn grid_point(c: i32, r: i32) -> Nb {
 
 // acc plus the force of slot s's spring between a and b, if b exists (acc unchanged
 // otherwise, as core's gather skips an empty slot).
-fn grid_spring(acc: vec3<f32>, a: Pt, b: Nb, s: u32, inv_dt: f32) -> vec3<f32> {
-    let f = spring_force(a.x - b.pt.x, a.v - b.pt.v, interior.slots[s], inv_dt);
+fn grid_spring(acc: vec3<f32>, a: Pt, b: Nb, s: u32) -> vec3<f32> {
+    let f = spring_force(a.x - b.pt.x, a.v - b.pt.v, interior.slots[s]);
     return select(acc, acc + f, b.inside);
 }
 
@@ -49,28 +48,27 @@ fn grid_spring(acc: vec3<f32>, a: Pt, b: Nb, s: u32, inv_dt: f32) -> vec3<f32> {
 // costs, taken or not.
 fn grid_springs(
     f: vec3<f32>, a: Pt, s0: Nb, s1: Nb, s2: Nb, s3: Nb, s4: Nb, s5: Nb, s6: Nb, s7: Nb, s8: Nb,
-    s9: Nb, s10: Nb, s11: Nb, inv_dt: f32,
+    s9: Nb, s10: Nb, s11: Nb,
 ) -> vec3<f32> {
     var acc = f;
-    acc = grid_spring(acc, a, s0, 0u, inv_dt);
-    acc = grid_spring(acc, a, s1, 1u, inv_dt);
-    acc = grid_spring(acc, a, s2, 2u, inv_dt);
-    acc = grid_spring(acc, a, s3, 3u, inv_dt);
-    acc = grid_spring(acc, a, s4, 4u, inv_dt);
-    acc = grid_spring(acc, a, s5, 5u, inv_dt);
-    acc = grid_spring(acc, a, s6, 6u, inv_dt);
-    acc = grid_spring(acc, a, s7, 7u, inv_dt);
-    acc = grid_spring(acc, a, s8, 8u, inv_dt);
-    acc = grid_spring(acc, a, s9, 9u, inv_dt);
-    acc = grid_spring(acc, a, s10, 10u, inv_dt);
-    acc = grid_spring(acc, a, s11, 11u, inv_dt);
+    acc = grid_spring(acc, a, s0, 0u);
+    acc = grid_spring(acc, a, s1, 1u);
+    acc = grid_spring(acc, a, s2, 2u);
+    acc = grid_spring(acc, a, s3, 3u);
+    acc = grid_spring(acc, a, s4, 4u);
+    acc = grid_spring(acc, a, s5, 5u);
+    acc = grid_spring(acc, a, s6, 6u);
+    acc = grid_spring(acc, a, s7, 7u);
+    acc = grid_spring(acc, a, s8, 8u);
+    acc = grid_spring(acc, a, s9, 9u);
+    acc = grid_spring(acc, a, s10, 10u);
+    acc = grid_spring(acc, a, s11, 11u);
     return acc;
 }
 
 // core::cpu::springs::gather_at from the table: f plus the springs of particle i (a = its
 // point), in slot order.
 fn table_springs(i: u32, a: Pt, f: vec3<f32>) -> vec3<f32> {
-    let inv_dt = 1.0 / p.dt;
     var acc = f;
     for (var s = 0u; s < SLOTS; s++) {
         let slot = slot_at(i, s);
@@ -78,7 +76,7 @@ fn table_springs(i: u32, a: Pt, f: vec3<f32>) -> vec3<f32> {
             continue;
         }
         let b = point(u32(slot.neighbor));
-        acc += spring_force(a.x - b.x, a.v - b.v, slot, inv_dt);
+        acc += spring_force(a.x - b.x, a.v - b.v, slot);
     }
     return acc;
 }

@@ -10,6 +10,6 @@ fn particle_stats(i: u32) -> vec2<f32> {
             strain = max(strain, length(pos[u32(slot.neighbor)].xyz - x) / slot.rest - 1.0);
         }
     }
-    let v = (x - prev[i].xyz) / p.dt;
+    let v = vel[i].xyz;
     return vec2<f32>(strain, 0.5 * p.particle_mass * dot(v, v));
 }

@@ -25,11 +25,11 @@ struct Base4 {
 // its neighbours in slot order.
 fn block_particle(
     row: u32, col: u32, a: Nb, base: vec3<f32>, s0: Nb, s1: Nb, s2: Nb, s3: Nb, s4: Nb, s5: Nb,
-    s6: Nb, s7: Nb, s8: Nb, s9: Nb, s10: Nb, s11: Nb, inv_dt: f32,
+    s6: Nb, s7: Nb, s8: Nb, s9: Nb, s10: Nb, s11: Nb,
 ) {
     let i = row * p.n + col;
     let f = forces_at(vec4<f32>(base, 0.0), a.pt.v).xyz;
-    let acc = grid_springs(f, a.pt, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11, inv_dt);
+    let acc = grid_springs(f, a.pt, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11);
     if a.inside && interior.enabled != 0u {
         force[i] = vec4<f32>(acc, 0.0);
     }
@@ -58,7 +58,7 @@ fn right_point(theirs: Nb, c: i32, r: i32) -> Nb {
 
 // Block b at (row, c0) on the regular grid: the window of rows j - 2 … j + 2, each of its
 // 28 points loaded once — or, with shuffles, its own 20 loaded and the 8 beside passed.
-fn grid_block(b: u32, row: u32, c0: u32, inv_dt: f32) {
+fn grid_block(b: u32, row: u32, c0: u32) {
     window_start(b, (p.n + BLOCK - 1u) / BLOCK);
     let r = i32(row);
     let c = i32(c0);
@@ -104,24 +104,23 @@ fn grid_block(b: u32, row: u32, c0: u32, inv_dt: f32) {
     // Particle k (at r[k + 2]), slots (-1,0) (1,0) (0,-1) (0,1) (-1,-1) (1,-1) (-1,1) (1,1)
     // (-2,0) (2,0) (0,-2) (0,2) = r[k+1] r[k+3] u[k+1] d[k+1] u[k] u[k+2] d[k] d[k+2] r[k]
     // r[k+4] uu[k] dd[k].
-    block_particle(row, c0, r2, base.k0, r1, r3, u1, d1, u0, u2, d0, d2, r0, r4, uu0, dd0, inv_dt);
-    block_particle(row, c0 + 1u, r3, base.k1, r2, r4, u2, d2, u1, u3, d1, d3, r1, r5, uu1, dd1, inv_dt);
-    block_particle(row, c0 + 2u, r4, base.k2, r3, r5, u3, d3, u2, u4, d2, d4, r2, r6, uu2, dd2, inv_dt);
-    block_particle(row, c0 + 3u, r5, base.k3, r4, r6, u4, d4, u3, u5, d3, d5, r3, r7, uu3, dd3, inv_dt);
+    block_particle(row, c0, r2, base.k0, r1, r3, u1, d1, u0, u2, d0, d2, r0, r4, uu0, dd0);
+    block_particle(row, c0 + 1u, r3, base.k1, r2, r4, u2, d2, u1, u3, d1, d3, r1, r5, uu1, dd1);
+    block_particle(row, c0 + 2u, r4, base.k2, r3, r5, u3, d3, u2, u4, d2, d4, r2, r6, uu2, dd2);
+    block_particle(row, c0 + 3u, r5, base.k3, r4, r6, u4, d4, u3, u5, d3, d5, r3, r7, uu3, dd3);
 }
 
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     interior = interior_slots;
-    let inv_dt = 1.0 / p.dt;
     let n = p.n;
     let b = flat_id(id, groups);
     let origin = block_origin(b, n);
     let row = origin.x;
     let c0 = origin.y;
     if interior.enabled != 0u {
-        grid_block(b, row, c0, inv_dt);
+        grid_block(b, row, c0);
         return;
     }
     // The table: storage buffers or the image (an irregular table, or table=storage|image).

@@ -7,52 +7,64 @@
 // lane inside any branch (including the one an early `return` opens).
 var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read_write> prev: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> vel: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> force: array<vec4<f32>>;
 
 fn num_particles() -> u32 {
     return p.n * p.n;
 }
 
-// core::cpu::forces::forces_at: f + m g - drag (x - x*), with v_dt = x - x* of the particle
-// (passed in, so that a kernel that needs x and x* again loads them once).
-fn forces_at(f: vec4<f32>, v_dt: vec3<f32>) -> vec4<f32> {
+// core::cpu::forces::forces_at: f + m g - drag v, with v the particle's velocity
+// (passed in, so that a kernel that needs it again loads it once).
+fn forces_at(f: vec4<f32>, v: vec3<f32>) -> vec4<f32> {
     let g = p.gravity.xyz * p.particle_mass;
-    let drag = p.air_drag * p.particle_mass / p.dt;
-    return vec4<f32>(f.xyz + g - v_dt * drag, 0.0);
+    let drag = p.air_drag * p.particle_mass;
+    return vec4<f32>(f.xyz + g - v * drag, 0.0);
 }
 
-// A particle's position and previous position. The per-particle kernels load each once
-// and store each once: on drivers that emulate storage-buffer access lane by lane
-// (llvmpipe) every access counts.
+// A particle's position and velocity. The per-particle kernels load each once and store
+// each once: on drivers that emulate storage-buffer access lane by lane (llvmpipe) every
+// access counts.
 struct Moved {
     x: vec3<f32>,
-    xp: vec3<f32>,
+    v: vec3<f32>,
 }
 
-// core::cpu::integrate::integrate_at: the new (x, x*) of particle i at x4 (w: inverse mass
-// flag) with previous position xp.
-fn integrated(i: u32, x4: vec4<f32>, xp: vec3<f32>) -> Moved {
-    return integrated_with(i, x4, xp, force[i].xyz);
+// core::cpu::integrate::grab_vel: the velocity that takes x to the grab's target in dt.
+fn grab_vel(x: vec3<f32>) -> vec3<f32> {
+    return (p.grab_target.xyz - x) * (1.0 / p.dt);
+}
+
+// core::cpu::integrate::integrate_at: the new (x, v) of particle i at x4 (w: inverse mass
+// flag) moving at v.
+fn integrated(i: u32, x4: vec4<f32>, v: vec3<f32>) -> Moved {
+    return integrated_with(i, x4, v, force[i].xyz);
 }
 
 // integrated with the total force f given (the fused forces + integrate kernel).
-fn integrated_with(i: u32, x4: vec4<f32>, xp: vec3<f32>, f: vec3<f32>) -> Moved {
+fn integrated_with(i: u32, x4: vec4<f32>, v: vec3<f32>, f: vec3<f32>) -> Moved {
     let x = x4.xyz;
     if i32(i) == p.grab_index {
-        return Moved(p.grab_target.xyz, x);
+        return Moved(p.grab_target.xyz, grab_vel(x));
     }
     if x4.w == 0.0 {
-        return Moved(x, x);
+        return Moved(x, vec3<f32>(0.0));
     }
-    var xn = x + (x - xp) * (1.0 - p.damping) + f * (p.dt * p.dt / p.particle_mass);
-    var xq = x;
+    let vn = v * (1.0 - p.damping) + f * (p.dt / p.particle_mass);
+    return floor_clamp(x + vn * p.dt, vn);
+}
+
+// core::cpu::integrate::floor_clamp: the floor's contact for a particle that moves to x
+// with velocity v.
+fn floor_clamp(x: vec3<f32>, v: vec3<f32>) -> Moved {
+    var xn = x;
+    var vn = v;
     let floor = p.floor_y + p.margin;
     if xn.y < floor {
         xn.y = floor;
-        xq = contact_prev(xn, xq, vec3<f32>(0.0, 1.0, 0.0), p.friction);
+        vn = contact_vel(vn, vec3<f32>(0.0, 1.0, 0.0), p.friction);
     }
-    return Moved(xn, xq);
+    return Moved(xn, vn);
 }
 
 // Whether particle i (w: its pos.w) moves freely: not pinned, not grabbed.
@@ -65,28 +77,21 @@ fn held(i: u32, w: f32) -> bool {
     return !is_free(i, w);
 }
 
-// core::cpu::integrators::accel_dt2: a force as the displacement it adds in one substep.
-fn accel_dt2(f: vec3<f32>) -> vec3<f32> {
-    return f * (p.dt * p.dt / p.particle_mass);
+// core::cpu::integrators::accel_dt: a force as the velocity it adds in one substep.
+fn accel_dt(f: vec3<f32>) -> vec3<f32> {
+    return f * (p.dt / p.particle_mass);
 }
 
 // core::cpu::integrators::finish_at: the end of a substep for particle i at x4 that
-// integrates to x1 with velocity displacement u1 — pins, the grab and the floor as in
+// integrates to x1 with velocity v1 — pins, the grab and the floor as in
 // `integrated_with`.
-fn finish_at(i: u32, x4: vec4<f32>, x1: vec3<f32>, u1: vec3<f32>) -> Moved {
+fn finish_at(i: u32, x4: vec4<f32>, x1: vec3<f32>, v1: vec3<f32>) -> Moved {
     let x = x4.xyz;
     if i32(i) == p.grab_index {
-        return Moved(p.grab_target.xyz, x);
+        return Moved(p.grab_target.xyz, grab_vel(x));
     }
     if x4.w == 0.0 {
-        return Moved(x, x);
+        return Moved(x, vec3<f32>(0.0));
     }
-    var xn = x1;
-    var xp = x1 - u1;
-    let floor = p.floor_y + p.margin;
-    if xn.y < floor {
-        xn.y = floor;
-        xp = contact_prev(xn, xp, vec3<f32>(0.0, 1.0, 0.0), p.friction);
-    }
-    return Moved(xn, xp);
+    return floor_clamp(x1, v1);
 }

@@ -7,7 +7,7 @@
 // Copied from step_params by the kernel's first statement (see shared/state.wgsl).
 var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read_write> prev: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> vel: array<vec4<f32>>;
 
 struct StatsPush {
     substep: u32,

@@ -5,6 +5,7 @@
 // Copied from step_params by the kernel's first statement (see shared/state.wgsl).
 var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> vel: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read> tethers: array<Tether>;
 @group(0) @binding(16) var<uniform> interior_slots: InteriorSlots;
@@ -80,6 +81,14 @@ fn finish(i: u32, x4: vec4<f32>, wi: f32, c: Correction) -> vec4<f32> {
     return select(vec4<f32>(x, x4.w), x4, wi == 0.0);
 }
 
+// Stores particle k's corrected point `out` (from x4) and the velocity its move implies
+// (core::cpu::strain_limit::strain_vel: v += (out − x)·(1/dt)).
+fn store_point(k: u32, x4: vec4<f32>, out: vec4<f32>) {
+    pos_out[k] = out;
+    vel[k] = vec4<f32>(vel[k].xyz + (out.xyz - x4.xyz) * (1.0 / p.dt), 0.0);
+    strained(k, out);
+}
+
 // Particle (row, col) of a block: a its point, s0 … s7 its neighbours in slot order
 // (core::grid::SLOT_OFFSETS).
 fn block_particle(row: u32, col: u32, a: Gp, s0: Gp, s1: Gp, s2: Gp, s3: Gp, s4: Gp, s5: Gp, s6: Gp, s7: Gp) {
@@ -96,8 +105,7 @@ fn block_particle(row: u32, col: u32, a: Gp, s0: Gp, s1: Gp, s2: Gp, s3: Gp, s4:
     limit_grid(&c, s7, 7u, xi, wi);
     let out = finish(a.k, a.x4, wi, c);
     if a.inside && interior.enabled != 0u {
-        pos_out[a.k] = out;
-        strained(a.k, out);
+        store_point(a.k, a.x4, out);
     }
 }
 
@@ -114,8 +122,7 @@ fn table_particle(i: u32) {
         }
     }
     let out = finish(i, x4, wi, c);
-    pos_out[i] = out;
-    strained(i, out);
+    store_point(i, x4, out);
 }
 
 // Grid point (c, r), which the lane on the left (right) holds as `theirs`: passed by a

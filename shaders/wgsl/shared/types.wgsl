@@ -74,25 +74,23 @@ fn block_origin(b: u32, n: u32) -> vec2<u32> {
     return vec2<u32>(row, (b - row * per_row) * BLOCK);
 }
 
-// Force on end a of a spring with l = x_a - x_b and dv = (v_a - v_b) dt
+// Force on end a of a spring with l = x_a - x_b and dv = v_a - v_b
 // (core::cpu::springs::spring_force).
-fn spring_force(l: vec3<f32>, dv: vec3<f32>, s: SpringSlot, inv_dt: f32) -> vec3<f32> {
+fn spring_force(l: vec3<f32>, dv: vec3<f32>, s: SpringSlot) -> vec3<f32> {
     let len = length(l);
     if len <= 1.17549435e-38 {
         return vec3<f32>(0.0);
     }
     let dir = l * (1.0 / len);
-    return -(s.ks * (len - s.rest) + (s.kd * inv_dt) * dot(dv, dir)) * dir;
+    return -(s.ks * (len - s.rest) + s.kd * dot(dv, dir)) * dir;
 }
 
-// New previous position after a contact with a surface of unit normal nrm
-// (core::cpu::integrate::contact_prev).
-fn contact_prev(x: vec3<f32>, prev: vec3<f32>, nrm: vec3<f32>, friction: f32) -> vec3<f32> {
-    let v = x - prev;
+// The velocity after a contact with a surface of unit normal nrm: into the surface
+// removed, tangential reduced by the friction (core::cpu::integrate::contact_vel).
+fn contact_vel(v: vec3<f32>, nrm: vec3<f32>, friction: f32) -> vec3<f32> {
     let vn = dot(v, nrm);
     let vt = v - vn * nrm;
-    let v_new = vt * (1.0 - friction) + max(vn, 0.0) * nrm;
-    return x - v_new;
+    return vt * (1.0 - friction) + max(vn, 0.0) * nrm;
 }
 
 // Invocation index of a 1-D job dispatched as a 2-D grid of workgroups (one dimension

@@ -1,8 +1,9 @@
 // One XPBD pass (core::cpu::integrators::xpbd_pass): the springs in slot s of the
 // particles of one colour — no two share a particle — each a distance constraint of
 // compliance 1/(ks dt²) and damping kd/(ks dt), its λ kept in component c of aux0 (buf 0)
-// or aux1 (buf 1) at its first end, solved for both ends by their mobilities, in place.
-// prev holds where the substep began.
+// or aux1 (buf 1) at its first end, solved for both ends by their mobilities, in place;
+// each end's velocity gains its correction over dt (so that v·dt stays its displacement
+// since the substep began, which the damping term reads).
 
 fn mobility(k: u32, w: f32) -> f32 {
     if i32(k) == p.grab_index {
@@ -59,10 +60,17 @@ fn xpbd_pass(a: u32, s: u32, di: i32, dj: i32, colour: u32, buf: u32, c: u32) {
     let n = d * (1.0 / len);
     let alpha = 1.0 / (slot.ks * p.dt * p.dt);
     let gamma = slot.kd / (slot.ks * p.dt);
-    let rel = dot(n, (xa4.xyz - prev[a].xyz) - (xb4.xyz - prev[b].xyz));
+    let va = vel[a].xyz;
+    let vb = vel[b].xyz;
+    let rel = dot(n, va - vb) * p.dt;
     let l = lambda_at(a, buf, c);
     let dl = -((len - slot.rest) + alpha * l + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
-    pos[a] = vec4<f32>(xa4.xyz + n * (dl * wa), xa4.w);
-    pos[b] = vec4<f32>(xb4.xyz - n * (dl * wb), xb4.w);
+    let da = n * (dl * wa);
+    let db = n * (dl * wb);
+    let inv_dt = 1.0 / p.dt;
+    pos[a] = vec4<f32>(xa4.xyz + da, xa4.w);
+    pos[b] = vec4<f32>(xb4.xyz - db, xb4.w);
+    vel[a] = vec4<f32>(va + da * inv_dt, 0.0);
+    vel[b] = vec4<f32>(vb - db * inv_dt, 0.0);
     set_lambda(a, buf, c, l + dl);
 }
