@@ -534,6 +534,19 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_scenes_velocity_starts_every_free_particle_and_no_pinned_one() {
+        let mut scene = Scene::with_n(6);
+        scene.cloth.velocity = [0.5, -1.0, 2.0];
+        let (state, _) = build(&scene, &SimParams::default()).unwrap();
+        let pinned = state.pos.iter().filter(|p| p[3] == 0.0).count();
+        assert_eq!(pinned, 2, "the default pins two corners");
+        for (p, v) in state.pos.iter().zip(&state.vel) {
+            let want = if p[3] == 0.0 { [0.0; 4] } else { [0.5, -1.0, 2.0, 0.0] };
+            assert_eq!(*v, want);
+        }
+    }
+
+    #[test]
     fn counts_match_the_grid() {
         let n = 7u32;
         let (state, topo) = build(&Scene::with_n(n), &SimParams::default()).unwrap();

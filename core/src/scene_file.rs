@@ -292,6 +292,7 @@ top_center = [0.0, 2.0, 0.0]
 across = [1.0, 0.0, 0.0]
 down = [0.0, -1.0, 0.0]
 pinning = [[0, 0], [39, 0]]
+velocity = [1.5, 0.0, -2.0]
 [floor]
 enabled = false
 [[spheres]]
@@ -313,6 +314,7 @@ position = [1.0, 4.0, 2.0]
         assert_eq!(f.scene.cloth.n, 40);
         assert_eq!(f.scene.cloth.down, [0.0, -1.0, 0.0]);
         assert_eq!(f.scene.cloth.pinning, Pinning::Points(vec![[0, 0], [39, 0]]));
+        assert_eq!(f.scene.cloth.velocity, [1.5, 0.0, -2.0]);
         assert_eq!(f.scene.floor_y, None);
         assert_eq!(f.scene.spheres.len(), 1);
         assert_eq!(f.scene.boxes, vec![Aabb::new([-0.5, 0.0, -0.5], [0.5, 0.8, 0.5])]);
@@ -337,7 +339,7 @@ position = [1.0, 4.0, 2.0]
     #[test]
     fn a_bad_file_gets_one_line_with_its_line_column_and_what_is_expected() {
         type Case<'a> = (&'a str, Option<(usize, usize)>, &'a [&'a str]);
-        let cases: [Case; 9] = [
+        let cases: [Case; 10] = [
             // Syntax.
             ("[cloth]\nn = = 3\n", Some((2, 5)), &["b.toml:2:5"]),
             // A misspelt field.
@@ -355,6 +357,7 @@ position = [1.0, 4.0, 2.0]
             ),
             ("[[boxes]]\nmin = [0, 0, 0]\nmax = [1, -1, 1]\n", Some((3, 7)), &["`boxes[0].max`", "exceed its min"]),
             ("[params]\nsubsteps = 0\n", Some((2, 12)), &["`params.substeps` = 0"]),
+            ("[cloth]\nvelocity = [0, 2000, 0]\n", Some((2, 12)), &["`cloth.velocity` = 2000"]),
             ("[cloth]\nn = 8\npinning = [[0, 0], [8, 0]]\n", Some((3, 20)), &["`cloth.pinning[1]`", "i, j < n = 8"]),
         ];
         for (text, at, words) in cases {

@@ -17,6 +17,20 @@ pub fn test_view(mode: RenderMode) -> View {
     View { camera: OrbitCamera::default(), light: [2.0, 5.5, 3.0], mode }
 }
 
+/// `base` with soft springs and heavy damping (Σζ > Σκ), so that explicit Euler and the
+/// midpoint method may run too.
+pub fn soft_springs(base: SimParams) -> SimParams {
+    SimParams {
+        structural_stiffness: 0.1,
+        shear_stiffness: 0.03,
+        bend_stiffness: 0.01,
+        structural_damping: 0.2,
+        shear_damping: 0.1,
+        bend_damping: 0.05,
+        ..base
+    }
+}
+
 /// Whether GPU tests must fail rather than skip without an adapter.
 pub fn gpu_required() -> bool {
     std::env::var("CLOTHLAB_REQUIRE_GPU").is_ok_and(|v| v == "1")
