@@ -250,7 +250,9 @@ fn animation_bar(ui: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut 
         }
         ui.separator();
         let mut substeps = s.params.substeps;
-        let r = ui.add(egui::Slider::new(&mut substeps, 1..=64).text("substeps per frame"));
+        // Up to 256 (logarithmic): XPBD in small steps and physical stiffness at large n
+        // take 32 … 260 (the state keeps velocities, so no count loses the motion).
+        let r = ui.add(egui::Slider::new(&mut substeps, 1..=256).logarithmic(true).text("substeps per frame"));
         if r.changed() && substeps <= MAX_SUBSTEPS {
             s.params.substeps = substeps;
             if s.params.validate().is_ok() {
