@@ -41,7 +41,7 @@ pub enum Buf {
     Params = 0,
     /// The current positions (w: 1 free, 0 pinned).
     Pos = 1,
-    /// The previous positions.
+    /// The velocities, m/s.
     Vel = 2,
     /// Forces (also the wind force the normals kernel leaves for the next substep).
     Force = 3,
@@ -85,9 +85,9 @@ pub enum Buf {
     BoxesUniform = 22,
     /// The step constants in a storage buffer (`constants=storage`).
     ParamsStorage = 23,
-    /// Integrator scratch 0 (RK: x₀; implicit: Δu). See `core::cpu::integrators`.
+    /// Integrator scratch 0 (RK: x₀; implicit: Δv). See `core::cpu::integrators`.
     Aux0 = 24,
-    /// Integrator scratch 1 (RK: u₀; implicit: r, w the preconditioner's diagonal).
+    /// Integrator scratch 1 (RK: v₀; implicit: r, w the preconditioner's diagonal).
     Aux1 = 25,
     /// Integrator scratch 2 (RK: Σ bₛuₛ; implicit: p).
     Aux2 = 26,

@@ -167,7 +167,7 @@ pub struct SimParams {
     /// Linear air drag per unit mass, 1/s: each particle feels `-air_drag · m · v`. Default 0.1.
     pub air_drag: f32,
     /// Verlet velocity damping per substep, dimensionless in [0, 1):
-    /// `x' = x + (1 - damping)(x - x*) + a dt²`. Default 0.0005.
+    /// `v' = (1 - damping) v + a dt`. Default 0.0005.
     pub damping: f32,
     /// Structural spring stiffness (i±1, j±1) as a fraction of the explicit stability
     /// limit, dimensionless: `k = κ m / dt²`. Default 0.45.

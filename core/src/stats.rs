@@ -11,7 +11,7 @@ use crate::grid::{ClothState, ClothTopology, SpringKind};
 pub struct SubstepStats {
     /// Largest structural strain `|L| / rest - 1`, 0 when nothing is stretched.
     pub max_strain: f32,
-    /// Kinetic energy `Σ ½ m |x - x*|² / dt²`, J.
+    /// Kinetic energy `Σ ½ m |v|²`, J.
     pub kinetic_energy: f32,
 }
 

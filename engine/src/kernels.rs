@@ -1037,7 +1037,7 @@ const CG_PARTIALS: &[Buf] = &[Params, Aux4, Scalars];
 /// Explicit Euler: `x' = x + u`, `u' = u + f dt²/m`.
 pub static EULER: KernelDef =
     KernelDef { label: "integrate", ..def("euler", euler, Count::Particles, STATE, &[Pos, Vel]) };
-/// Saves x₀, the damped u₀ and the wind for a Runge–Kutta substep.
+/// Saves x₀, the damped v₀ and the wind for a Runge–Kutta substep.
 pub static RK_BEGIN: KernelDef = KernelDef {
     label: "integrate",
     pure: &[Aux0, Aux1, Aux4],
@@ -1090,7 +1090,7 @@ pub static XPBD: [KernelDef; 12] = [
     xpbd("xpbd_10", xpbd_10),
     xpbd("xpbd_11", xpbd_11),
 ];
-/// Implicit: r = dt²(f − K u), p = z, Δu = 0, and the partials of r·z.
+/// Implicit: r = dt f − dt² K v, p = z, Δv = 0, and the partials of r·z.
 pub static CG_BEGIN: KernelDef = KernelDef {
     check: GATHER,
     label: "cg",
@@ -1116,7 +1116,7 @@ pub static CG_REDUCE_PQ: KernelDef = KernelDef {
     label: "cg",
     ..def("cg_reduce_pq", cg_reduce_pq, Count::Workgroup, CG_PARTIALS, &[Scalars])
 };
-/// Implicit: Δu += α p, r −= α q, and the partials of r·z.
+/// Implicit: Δv += α p, r −= α q, and the partials of r·z.
 pub static CG_STEP: KernelDef = KernelDef {
     check: CG,
     label: "cg",
@@ -1134,7 +1134,7 @@ pub static CG_DIRECTION: KernelDef = KernelDef {
     label: "cg",
     ..def("cg_direction", cg_direction, Count::Particles, &[Params, Aux1, Aux2, Scalars], &[Aux2])
 };
-/// Implicit: u₁ = (1 − damping) u₀ + Δu, x₁ = x₀ + u₁, with pins, grab and floor.
+/// Implicit: v₁ = (1 − damping) v₀ + Δv, x₁ = x₀ + v₁ dt, with pins, grab and floor.
 pub static IMPLICIT_FINISH: KernelDef = KernelDef {
     label: "integrate",
     ..def("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Vel, Aux0], &[Pos, Vel])

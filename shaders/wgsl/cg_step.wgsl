@@ -1,5 +1,5 @@
 //! include: state, aux
-// cg_step — Δu += α p, r −= α q (core::cpu::integrators::cg_step); the partial sums of
+// cg_step — Δv += α p, r −= α q (core::cpu::integrators::cg_step); the partial sums of
 // the new r·z.
 @compute @workgroup_size(WORKGROUP)
 fn main(

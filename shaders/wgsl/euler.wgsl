@@ -1,6 +1,6 @@
 //! include: state
-// euler — explicit Euler per particle (core::cpu::integrators::euler): x' = x + u,
-// u' = u + f dt²/m with u = (1 − damping)(x − vel); pins, grab, floor.
+// euler — explicit Euler per particle (core::cpu::integrators::euler): x' = x + v dt,
+// v' = v + f dt/m with v damped by (1 − damping) first; pins, grab, floor.
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;

@@ -1,5 +1,5 @@
 //! include: state, aux
-// implicit_finish — u₁ = (1 − damping) u₀ + Δu, x₁ = x₀ + u₁, with pins, grab and floor
+// implicit_finish — v₁ = (1 − damping) v₀ + Δv, x₁ = x₀ + v₁ dt, with pins, grab and floor
 // (core::cpu::integrators::implicit_finish).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

@@ -1,5 +1,5 @@
 //! include: state
-// integrate — per particle: Verlet, pins, grab, floor.
+// integrate — per particle: Verlet in velocity form, pins, grab, floor.
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;

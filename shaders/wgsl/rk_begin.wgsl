@@ -1,6 +1,6 @@
 //! include: state, aux
 // rk_begin — the start of a Runge–Kutta substep (core::cpu::integrators::rk_begin): saves
-// x₀, the damped u₀ and the wind force, and writes vel = x₀ − u₀.
+// x₀, the damped v₀ and the wind force, and writes v₀ to the velocities.
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;

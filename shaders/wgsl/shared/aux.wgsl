@@ -1,5 +1,5 @@
-// The integrators' scratch buffers (core::cpu::integrators: RK2/RK4 keep x₀, u₀, the stage
-// sums and the wind; implicit keeps Δu, r (w: the preconditioner's diagonal), p, q and
+// The integrators' scratch buffers (core::cpu::integrators: RK2/RK4 keep x₀, v₀, the stage
+// sums and the wind; implicit keeps Δv, r (w: the preconditioner's diagonal), p, q and
 // the per-workgroup partial sums in aux4) and the conjugate-gradient scalars.
 @group(0) @binding(24) var<storage, read_write> aux0: array<vec4<f32>>;
 @group(0) @binding(25) var<storage, read_write> aux1: array<vec4<f32>>;

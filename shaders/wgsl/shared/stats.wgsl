@@ -1,6 +1,6 @@
 // Per-substep statistics of the state (core::cpu::stats): the largest structural strain
 // |L| / rest - 1 (each structural spring once, from its left or lower end: slots 1 and 3)
-// and the kinetic energy 1/2 m |x - x*|² / dt². The substep's index comes in immediates
+// and the kinetic energy 1/2 m |v|². The substep's index comes in immediates
 // (push constants), so every substep of a frame writes its own entry.
 
 @group(0) @binding(0) var<uniform> step_params: StepParams;
