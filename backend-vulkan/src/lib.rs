@@ -4,6 +4,13 @@
 //!
 //! All `unsafe` is in the crate-private `raw` module, each block with a `// SAFETY:` line;
 //! the engine, renderer and presenter above it are safe code over its RAII types.
+//!
+//! How it fits: `VulkanEngine` is this API's `clothlab_engine::Engine` (device-local
+//! buffers through gpu-allocator, compute pipelines from clothlab-shaders' SPIR-V, push
+//! constants, barriers derived from each kernel's reads and writes, timestamps); the
+//! solver is `GpuSolver<VulkanEngine>`, the same generic solver the wgpu backend uses.
+//! `VulkanRenderer` draws the same passes as the wgpu renderer (pixel-identical on
+//! lavapipe) and `Presenter` puts them and egui on a window's swapchain for the app.
 #![deny(unsafe_code)]
 
 mod device;

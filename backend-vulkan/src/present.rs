@@ -82,7 +82,7 @@ pub struct Presenter {
 }
 
 impl Presenter {
-    /// A presenter for the window the device was opened for ([`Device::for_window`]),
+    /// A presenter for the window the device was opened for ([`crate::Device::for_window`]),
     /// whose drawable size is `width × height` pixels.
     pub fn new(dev: &crate::Device, width: u32, height: u32) -> Result<Self, RenderError> {
         let dev = dev.raw();

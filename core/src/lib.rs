@@ -2,6 +2,14 @@
 //!
 //! Nothing here touches a GPU. The GPU backends implement the same [`Solver`] trait and
 //! check every kernel against the functions in [`cpu`].
+//!
+//! How it fits the other crates: everything else depends on it. `clothlab-shaders`
+//! generates the WGSL constants from [`layout`] and checks its structs against this
+//! crate's `#[repr(C)]` types; `clothlab-engine` registers each kernel with its CPU twin
+//! from [`cpu`] and runs recipes on any engine; the backends (`clothlab-wgpu`,
+//! `clothlab-vulkan`) are `GpuSolver`s over that engine; the app and the tests compare
+//! them all through [`validate`]. The state every engine carries is [`ClothState`]:
+//! positions and velocities (x, v), both f32.
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -10,6 +18,7 @@ pub mod camera;
 pub mod cpu;
 pub mod error;
 pub mod grid;
+pub mod input;
 pub mod layout;
 pub mod params;
 pub mod render;
@@ -27,4 +36,4 @@ pub use params::{Integrator, ParamError, SimParams, StiffnessUnits};
 pub use scene::{Aabb, ClothSpec, Pinning, Scene, Sphere};
 pub use scene_file::{SceneFile, SceneFileError};
 pub use solver::{RenderError, RenderMode, Renderer, Solver, SolverError, View};
-pub use timing::{KernelId, KernelTimings, TimingRecorder, TimingRow};
+pub use timing::{KernelTimings, TimingRecorder, TimingRow};

@@ -145,11 +145,8 @@ impl SceneFile {
     /// Reads and checks `path`.
     pub fn load(path: &Path) -> Result<Self, SceneFileError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneFileError {
-            file: file.clone(),
-            at: None,
-            message: format!("cannot read: {e}"),
-        })?;
+        let text = crate::input::read_text_capped(path, crate::input::SCENE_FILE_MAX_BYTES)
+            .map_err(|message| SceneFileError { file: file.clone(), at: None, message })?;
         Self::parse(&text, &file)
     }
 

@@ -4,52 +4,31 @@ use std::collections::VecDeque;
 
 use serde::{Deserialize, Serialize};
 
-/// The kernels of one substep, in the thesis's order. Names are shared by the CPU twins,
-/// the WGSL files and the timing labels.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum KernelId {
-    /// Gravity and drag.
-    Forces,
-    /// Spring forces.
-    Springs,
-    /// Verlet step, pins, grab, floor.
-    Integrate,
-    /// Spheres and boxes.
-    Collide,
-    /// Provot strain limit (one label for all passes of a substep).
-    StrainLimit,
-    /// Face normals.
-    TriNormals,
-    /// Vertex normals and wind.
-    VertexNormals,
-}
+// The timing labels: the one list of them. The kernel registry
+// (clothlab_engine::kernels) labels its rows with these constants, the CPU solvers
+// time their sweeps with them, and the timing tables group rows by them; a test there checks
+// that every row's label is one of [`KERNEL_LABELS`].
 
-impl KernelId {
-    /// All kernels in step order.
-    pub const ALL: [KernelId; 7] = [
-        KernelId::Forces,
-        KernelId::Springs,
-        KernelId::Integrate,
-        KernelId::Collide,
-        KernelId::StrainLimit,
-        KernelId::TriNormals,
-        KernelId::VertexNormals,
-    ];
-
-    /// The kernel's name: file name, function name and timing label.
-    pub fn name(self) -> &'static str {
-        match self {
-            KernelId::Forces => "forces",
-            KernelId::Springs => "springs",
-            KernelId::Integrate => "integrate",
-            KernelId::Collide => "collide",
-            KernelId::StrainLimit => "strain_limit",
-            KernelId::TriNormals => "tri_normals",
-            KernelId::VertexNormals => "vertex_normals",
-        }
-    }
-}
-
+/// Label of gravity, drag and the wind's force (`forces`).
+pub const FORCES: &str = "forces";
+/// Label of the spring forces (`springs`: gathered, or scattered with atomics).
+pub const SPRINGS: &str = "springs";
+/// Label of an integrator's own step (Verlet's, Euler's, an RK stage, implicit's finish).
+pub const INTEGRATE: &str = "integrate";
+/// Label of the spheres and boxes (`collide`).
+pub const COLLIDE: &str = "collide";
+/// Label of the Provot strain limit and the tethers (one label for all passes of a substep).
+pub const STRAIN_LIMIT: &str = "strain_limit";
+/// Label of the face normals.
+pub const TRI_NORMALS: &str = "tri_normals";
+/// Label of the vertex normals and the wind force.
+pub const VERTEX_NORMALS: &str = "vertex_normals";
+/// Label of XPBD's constraint passes.
+pub const XPBD: &str = "xpbd";
+/// Label of implicit Euler's conjugate gradients (every CG kernel and reduction).
+pub const CG: &str = "cg";
+/// Label of the GPU statistics (`--stats`: the reductions and their fold).
+pub const STATS: &str = "stats";
 /// Label of the CPU solvers' fused `forces` + `springs` sweep.
 pub const FORCES_SPRINGS: &str = "forces+springs";
 /// Label of the forces + springs gather that computes the wind of its faces itself
@@ -70,6 +49,27 @@ pub const SELF_HASH: &str = "self_hash";
 pub const STRAIN_LIMIT_COUNT: &str = "strain_limit+hash_count";
 /// Self-collision's response.
 pub const SELF_COLLIDE: &str = "self_collide";
+/// Every label a kernel (a registry row or a CPU sweep) is timed under, in step order.
+pub const KERNEL_LABELS: [&str; 18] = [
+    FORCES,
+    SPRINGS,
+    FORCES_SPRINGS,
+    FORCES_SPRINGS_WIND,
+    FORCES_INTEGRATE_COLLIDE,
+    INTEGRATE,
+    CG,
+    XPBD,
+    COLLIDE,
+    INTEGRATE_COLLIDE,
+    STRAIN_LIMIT,
+    STRAIN_LIMIT_COUNT,
+    SELF_HASH,
+    SELF_COLLIDE,
+    TRI_NORMALS,
+    VERTEX_NORMALS,
+    STATS,
+    FUSED_STEP,
+];
 /// Label of the whole-frame row (all substeps of a frame).
 pub const FRAME: &str = "frame";
 /// Label of a GPU solver's CPU time per frame spent recording its commands (wgpu: encoding

@@ -855,7 +855,7 @@ pub static SPRINGS: KernelDef =
 /// The naive spring scatter: one invocation per spring, forces added with atomics.
 pub static SPRINGS_SCATTER: KernelDef = KernelDef {
     check: SCATTER,
-    label: "springs",
+    label: timing::SPRINGS,
     variants: IMM_F32,
     ..def("springs_scatter", springs_scatter, Count::Springs, &[Params, Pos, Vel, Force, Springs, SpringsB], &[Force])
 };
@@ -953,7 +953,7 @@ pub static TRI_NORMALS_SCATTER: KernelDef = KernelDef {
     check: SCATTER,
     pure: &[Faces],
     accumulates: &[Normal],
-    label: "tri_normals",
+    label: timing::TRI_NORMALS,
     variants: IMM_F32,
     ..def(
         "tri_normals_scatter",
@@ -979,7 +979,7 @@ pub static VERTEX_NORMALS: KernelDef = KernelDef {
 pub static VERTEX_NORMALS_NAIVE: KernelDef = KernelDef {
     check: GATHER,
     pure: &[Force],
-    label: "vertex_normals",
+    label: timing::VERTEX_NORMALS,
     test_input: Some(face_sums_input),
     ..def(
         "vertex_normals_naive",
@@ -992,6 +992,7 @@ pub static VERTEX_NORMALS_NAIVE: KernelDef = KernelDef {
 /// Statistics by subgroup and workgroup reductions: one partial per workgroup.
 pub static STATS: KernelDef = KernelDef {
     check: STATS_TEST,
+    label: timing::STATS,
     variants: Variants { table_image: true, ..PLAIN },
     immediates: Immediates::Substep,
     ..def("stats", stats, Count::Particles, &[Params, Pos, Vel, Slots, BendSlots, Table], &[Partials])
@@ -999,6 +1000,7 @@ pub static STATS: KernelDef = KernelDef {
 /// Statistics by atomics from every invocation.
 pub static STATS_ATOMIC: KernelDef = KernelDef {
     check: STATS_TEST,
+    label: timing::STATS,
     variants: Variants { table_image: true, float_atomics: true, ..PLAIN },
     immediates: Immediates::Substep,
     ..def(
@@ -1012,6 +1014,7 @@ pub static STATS_ATOMIC: KernelDef = KernelDef {
 /// The statistics' final fold of the partials.
 pub static STATS_REDUCE: KernelDef = KernelDef {
     check: STATS_TEST,
+    label: timing::STATS,
     variants: PLAIN,
     immediates: Immediates::Substep,
     ..def(
@@ -1036,16 +1039,19 @@ const CG_PARTIALS: &[Buf] = &[Params, Aux4, Scalars];
 
 /// Explicit Euler: `x' = x + u`, `u' = u + f dt²/m`.
 pub static EULER: KernelDef =
-    KernelDef { label: "integrate", ..def("euler", euler, Count::Particles, STATE, &[Pos, Vel]) };
+    KernelDef { label: timing::INTEGRATE, ..def("euler", euler, Count::Particles, STATE, &[Pos, Vel]) };
 /// Saves x₀, the damped v₀ and the wind for a Runge–Kutta substep.
 pub static RK_BEGIN: KernelDef = KernelDef {
-    label: "integrate",
+    label: timing::INTEGRATE,
     pure: &[Aux0, Aux1, Aux4],
     ..def("rk_begin", rk_begin, Count::Particles, STATE, &[Vel, Aux0, Aux1, Aux4])
 };
 /// A stage kernel (every stage's shader has the force write; the last one never runs it).
 const fn rk(name: &'static str, twin: Twin) -> KernelDef {
-    KernelDef { label: "integrate", ..def(name, twin, Count::Particles, RK_READS, &[Pos, Vel, Force, Aux2, Aux3]) }
+    KernelDef {
+        label: timing::INTEGRATE,
+        ..def(name, twin, Count::Particles, RK_READS, &[Pos, Vel, Force, Aux2, Aux3])
+    }
 }
 /// RK2's first stage (to the midpoint).
 pub static RK2_1: KernelDef = rk("rk2_1", rk2_1);
@@ -1064,7 +1070,7 @@ pub static RK4_4: KernelDef = rk("rk4_4", rk4_4);
 const fn xpbd(name: &'static str, twin: Twin) -> KernelDef {
     KernelDef {
         check: GATHER,
-        label: "xpbd",
+        label: timing::XPBD,
         variants: IMM_TEX,
         ..def(
             name,
@@ -1093,7 +1099,7 @@ pub static XPBD: [KernelDef; 12] = [
 /// Implicit: r = dt f − dt² K v, p = z, Δv = 0, and the partials of r·z.
 pub static CG_BEGIN: KernelDef = KernelDef {
     check: GATHER,
-    label: "cg",
+    label: timing::CG,
     variants: IMM_TEX,
     ..def(
         "cg_begin",
@@ -1106,37 +1112,37 @@ pub static CG_BEGIN: KernelDef = KernelDef {
 /// Implicit: q = A p and the partials of p·q.
 pub static CG_MATVEC: KernelDef = KernelDef {
     check: GATHER,
-    label: "cg",
+    label: timing::CG,
     variants: IMM_TEX,
     ..def("cg_matvec", cg_matvec, Count::Particles, &[Params, Pos, Vel, Slots, BendSlots, Table, Aux2], &[Aux3, Aux4])
 };
 /// Implicit: p·q folded, α = r·z / p·q.
 pub static CG_REDUCE_PQ: KernelDef = KernelDef {
     check: CG,
-    label: "cg",
+    label: timing::CG,
     ..def("cg_reduce_pq", cg_reduce_pq, Count::Workgroup, CG_PARTIALS, &[Scalars])
 };
 /// Implicit: Δv += α p, r −= α q, and the partials of r·z.
 pub static CG_STEP: KernelDef = KernelDef {
     check: CG,
-    label: "cg",
+    label: timing::CG,
     ..def("cg_step", cg_step, Count::Particles, &[Params, Aux0, Aux1, Aux2, Aux3, Scalars], &[Aux0, Aux1, Aux4])
 };
 /// Implicit: r·z folded, β = new / old.
 pub static CG_REDUCE_RZ: KernelDef = KernelDef {
     check: CG,
-    label: "cg",
+    label: timing::CG,
     ..def("cg_reduce_rz", cg_reduce_rz, Count::Workgroup, CG_PARTIALS, &[Scalars])
 };
 /// Implicit: p = z + β p.
 pub static CG_DIRECTION: KernelDef = KernelDef {
     check: CG,
-    label: "cg",
+    label: timing::CG,
     ..def("cg_direction", cg_direction, Count::Particles, &[Params, Aux1, Aux2, Scalars], &[Aux2])
 };
 /// Implicit: v₁ = (1 − damping) v₀ + Δv, x₁ = x₀ + v₁ dt, with pins, grab and floor.
 pub static IMPLICIT_FINISH: KernelDef = KernelDef {
-    label: "integrate",
+    label: timing::INTEGRATE,
     ..def("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Vel, Aux0], &[Pos, Vel])
 };
 
@@ -1250,6 +1256,20 @@ pub static ALL: [&KernelDef; 50] = [
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_row_is_timed_under_a_label_of_the_one_list_in_core() {
+        // core::timing::KERNEL_LABELS orders the reports' rows and is what the CPU solvers
+        // time under; a row with a label outside it would be a second spelling.
+        for def in ALL {
+            assert!(
+                timing::KERNEL_LABELS.contains(&def.label),
+                "{}: label `{}` is not in KERNEL_LABELS",
+                def.name,
+                def.label
+            );
+        }
+    }
 
     #[test]
     fn every_flavor_of_every_kernel_is_built_and_declares_only_bindings_the_table_names() {

@@ -2,6 +2,7 @@
 //! is wrong on purpose.
 
 use clothlab_core::grid::StepParams;
+use clothlab_core::timing;
 use clothlab_core::validate::ROLLOUT_BOUND_PER_SUBSTEP;
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver, SolverError};
 use clothlab_engine::kernels::{self as k, HostBuffers, KernelRef};
@@ -21,12 +22,13 @@ fn the_rows_solvers_compute_the_bits_of_the_cpu_engine_running_the_optimized_rec
     // recipe with normals once per frame (the wind computed in the forces gather) too: the
     // same arithmetic in another order of kernels, so the same bits after every frame.
     let params = SimParams { wind: [2.0, 0.0, 1.0], strain_iterations: 2, ..SimParams::default() };
-    let mut frame_normals = Variant::OPTIMIZED;
-    frame_normals.set("normals", "frame").unwrap();
-    for (n, variant) in [(37, Variant::OPTIMIZED), (64, Variant::OPTIMIZED), (37, frame_normals)] {
+    let frame_normals = Variant::OPTIMIZED;
+    let mut substep_normals = Variant::OPTIMIZED;
+    substep_normals.set("normals", "gather").unwrap();
+    for (n, variant) in [(37, substep_normals), (64, substep_normals), (37, frame_normals)] {
         let scene = Scene::with_n(n);
         let mut engine = RecipeSolver::new(Exec::Serial, variant, scene.clone(), params.clone()).unwrap();
-        assert_eq!(engine.frame_end().is_empty(), variant == Variant::OPTIMIZED);
+        assert_eq!(engine.frame_end().is_empty(), variant == substep_normals);
         let mut serial = CpuSolver::new(Exec::Serial, scene.clone(), params.clone()).unwrap();
         let mut rayon = CpuSolver::new(Exec::Parallel, scene, params.clone()).unwrap();
         for frame in 0..6 {
@@ -71,7 +73,7 @@ fn the_naive_recipe_on_the_cpu_engine_stays_within_the_rollout_bound_of_the_opti
         a.pos.iter().zip(&b.pos).flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs())).fold(0.0, f32::max);
     let bound = ROLLOUT_BOUND_PER_SUBSTEP * (frames * params.substeps) as f32;
     assert!(worst <= bound, "naive vs optimized on the CPU engine: {worst:e} m > {bound:e} m");
-    assert!(naive.timings().get("springs").is_some() && opt.timings().get("forces+springs").is_some());
+    assert!(naive.timings().get(timing::SPRINGS).is_some() && opt.timings().get(timing::FORCES_SPRINGS_WIND).is_some());
 }
 
 /// The CPU engine with one kernel wrong: after `bad` it adds `delta` to every free
@@ -110,7 +112,13 @@ fn bisection_names_the_kernel_that_is_wrong_and_none_when_all_are_right() {
     let scene = Scene::with_n(16);
     let params = SimParams::default();
     let (_, topo) = clothlab_core::build(&scene, &params).unwrap();
-    let commands = recipe(&Variant::OPTIMIZED, 1, clothlab_engine::recipe::Integration::VERLET);
+    // The optimized step with the normals every substep, colliders in storage and loaded
+    // neighbours: five dispatches, one of them the normals, whose fault must be found too.
+    let mut v = Variant::OPTIMIZED;
+    for (k, val) in [("normals", "gather"), ("colliders", "storage"), ("neighbours", "load")] {
+        v.set(k, val).unwrap();
+    }
+    let commands = recipe(&v, 1, clothlab_engine::recipe::Integration::VERLET);
     let substeps = 32;
     for (bad, delta, want) in [
         ("integrate_collide", 1e-3, Some("integrate_collide_imm")),

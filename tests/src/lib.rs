@@ -4,6 +4,11 @@
 //! print why and pass, unless `CLOTHLAB_REQUIRE_GPU=1` (CI sets it), which makes a
 //! missing adapter a failure. The comparisons themselves live in
 //! `clothlab_core::validate`, shared with `clothlab validate`.
+//!
+//! How it fits: it depends on every other crate and is depended on by none; this library
+//! holds what the test files share (solver factories that skip or fail without an
+//! adapter, soft-spring parameters, the backends to loop over). Where each test lives and
+//! what it checks: docs/testing.md.
 #![forbid(unsafe_code)]
 
 use clothlab_core::validate::Check;

@@ -1,7 +1,7 @@
 //! No import cycles between the top-level modules of any crate (issue 14: `grid` ↔
 //! `solver` ↔ `cpu` in core, `cli` ↔ `gui` ↔ `bench` in the app). A cycle means two
 //! modules cannot be understood, tested or moved one without the other; the layering this
-//! test keeps is the one README's "Layout" describes.
+//! test keeps is the one docs/architecture.md's "The crates" describes.
 //!
 //! How: a module's dependencies are the `crate::<module>` paths in its files (a file
 //! `src/m.rs`, or every file under `src/m/`), outside comments and `#[cfg(test)]` blocks.
@@ -37,12 +37,17 @@ fn code(text: &str) -> String {
     )
 }
 
-/// The top-level modules `code` names through `crate::`.
-fn uses(code: &str, modules: &BTreeSet<String>) -> BTreeSet<String> {
+/// The modules of `modules` that `code` names through `prefix` (`crate::` for a crate's
+/// top-level modules; `super::` or `crate::bench::` for the modules of `bench/`).
+fn uses(code: &str, prefix: &str, modules: &BTreeSet<String>) -> BTreeSet<String> {
     let ident = |s: &str| s.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect::<String>();
     let mut found = BTreeSet::new();
-    for (i, _) in code.match_indices("crate::") {
-        let rest = &code[i + "crate::".len()..];
+    for (i, _) in code.match_indices(prefix) {
+        // `crate::` inside `foo_crate::` or `super::` inside `super::super::` is not it.
+        if code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_' || c == ':') {
+            continue;
+        }
+        let rest = &code[i + prefix.len()..];
         if let Some(group) = rest.strip_prefix('{') {
             // `crate::{a::X, b, c::{..}}`: every item's first segment, at brace depth 0.
             let mut depth = 0;
@@ -68,14 +73,18 @@ fn uses(code: &str, modules: &BTreeSet<String>) -> BTreeSet<String> {
     found
 }
 
-/// The module graph of one crate: module → the modules it names.
-fn graph(krate: &str) -> BTreeMap<String, BTreeSet<String>> {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(krate).join("src");
+/// The module graph of the modules in `dir` (a crate's `src/`, or a directory module's
+/// folder): module → the modules beside it that it names. `prefixes`: how a module names a
+/// sibling (`crate::` at the top; `super::` from a file directly in a directory module,
+/// `crate::<dir>::` from anywhere); `super::` counts only in the files directly in `dir`.
+fn graph(dir: &Path, prefixes: &[String]) -> BTreeMap<String, BTreeSet<String>> {
     let mut modules = BTreeMap::new();
-    for entry in std::fs::read_dir(&src).unwrap() {
+    for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
         let name = path.file_stem().unwrap().to_string_lossy().into_owned();
-        if name != "lib" && name != "main" && (path.is_dir() || path.extension().is_some_and(|e| e == "rs")) {
+        if !["lib", "main", "mod"].contains(&name.as_str())
+            && (path.is_dir() || path.extension().is_some_and(|e| e == "rs"))
+        {
             modules.insert(name, path);
         }
     }
@@ -87,7 +96,13 @@ fn graph(krate: &str) -> BTreeMap<String, BTreeSet<String>> {
             files(&path, &mut list);
             let mut deps = BTreeSet::new();
             for f in list {
-                deps.extend(uses(&code(&std::fs::read_to_string(f).unwrap()), &names));
+                let text = code(&std::fs::read_to_string(&f).unwrap());
+                for prefix in prefixes {
+                    if prefix == "super::" && f.parent() != Some(dir) {
+                        continue;
+                    }
+                    deps.extend(uses(&text, prefix, &names));
+                }
             }
             deps.remove(&name);
             (name, deps)
@@ -128,9 +143,11 @@ fn cycle(g: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
 #[test]
 fn the_parser_sees_a_cycle_and_grouped_imports() {
     let names: BTreeSet<String> = ["a", "b", "c"].iter().map(|s| s.to_string()).collect();
-    let deps = uses(&code("use crate::{a::X, b};\n// crate::c\nfn f() { crate::c::g() }\n"), &names);
+    let deps = uses(&code("use crate::{a::X, b};\n// crate::c\nfn f() { crate::c::g() }\n"), "crate::", &names);
     assert_eq!(deps, names, "grouped items, plain paths; the comment alone would not count");
-    let in_tests = uses(&code("use crate::a;\n#[cfg(test)]\nmod tests { use crate::b; }\n"), &names);
+    let in_tests = uses(&code("use crate::a;\n#[cfg(test)]\nmod tests { use crate::b; }\n"), "crate::", &names);
+    let siblings = uses(&code("use super::{a::X, b};\nuse other_crate::c;\n"), "super::", &names);
+    assert_eq!(siblings.len(), 2, "{siblings:?}: `super::` paths, not another crate's");
     assert_eq!(in_tests.len(), 1, "{in_tests:?}: test modules may reach back");
     let g: BTreeMap<String, BTreeSet<String>> = [("a", "b"), ("b", "c"), ("c", "a")]
         .iter()
@@ -140,12 +157,30 @@ fn the_parser_sees_a_cycle_and_grouped_imports() {
 }
 
 #[test]
-fn no_crate_has_an_import_cycle() {
+fn no_crate_and_no_directory_module_has_an_import_cycle() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut directories = 0;
     for krate in CRATES {
-        let g = graph(krate);
+        let src = root.join(krate).join("src");
+        let g = graph(&src, &["crate::".to_owned()]);
         assert!(g.len() >= 2 || krate == "shaders", "{krate}: {} modules found — is the path right?", g.len());
         if let Some(c) = cycle(&g) {
             panic!("{krate}: import cycle {}\n(graph: {g:?})", c.join(" → "));
         }
+        // Inside each directory module (app/src/bench, core/src/cpu, …): its files among
+        // themselves (issue 32: bench's ladder, output and plot imported each other).
+        for entry in std::fs::read_dir(&src).unwrap() {
+            let dir = entry.unwrap().path();
+            if !dir.is_dir() {
+                continue;
+            }
+            let m = dir.file_name().unwrap().to_string_lossy().into_owned();
+            let g = graph(&dir, &["super::".to_owned(), format!("crate::{m}::")]);
+            directories += 1;
+            if let Some(c) = cycle(&g) {
+                panic!("{krate}/src/{m}: import cycle {}\n(graph: {g:?})", c.join(" → "));
+            }
+        }
     }
+    assert!(directories >= 4, "{directories} directory modules found — is the path right?");
 }

@@ -7,32 +7,8 @@
 use std::fmt::Write as _;
 
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, SUBSTEP};
-use serde::{Deserialize, Serialize};
 
-use super::output::{Results, chain_slope};
-
-/// One rung of one API's ladder at one size, as measured (results.json keeps them).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct LadderCell {
-    /// `wgpu` or `vulkan`.
-    pub api: String,
-    /// Particles per side.
-    pub n: u32,
-    /// Position on the ladder (0: naive); the thesis preset comes after the last rung.
-    pub index: usize,
-    /// `naive`, `+submit=frame`, …, or `thesis (preset)`.
-    pub rung: String,
-    /// The cell's backend name (the solver's: `vulkan-naive+submit=frame`, …).
-    pub backend: String,
-    /// Every switch of the variant, `key=value,…`.
-    pub switches: String,
-    /// Why the rung did not run on this adapter (the switch it lacks).
-    pub skipped: Option<String>,
-    /// Dispatches per substep.
-    pub dispatches: usize,
-    /// Compulsory bytes per substep (`clothlab_engine::kernels::compulsory_bytes`).
-    pub bytes: u64,
-}
+use super::results::{LadderCell, Results, chain_slope};
 
 /// The thesis's own figure for its optimized CUDA port against the direct one
 /// (ch. 7: "about 4 frames per second more").
@@ -215,8 +191,7 @@ pub fn report(r: &Results) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::Cell;
-    use crate::bench::output::test_results as results;
+    use crate::bench::results::{Cell, test_results as results};
     use clothlab_core::TimingRow;
     use clothlab_core::timing::{OverheadRow, overhead};
 

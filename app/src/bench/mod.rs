@@ -12,6 +12,7 @@ mod integrators;
 mod ladder;
 mod output;
 mod plot;
+mod results;
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -28,7 +29,7 @@ use crate::solvers::{AnySolver, Api, Backend, GpuSetup, Shared, make, vulkan_val
 use clothlab_engine::kernels::compulsory_bytes;
 use clothlab_engine::recipe::{dispatches, recipe};
 use clothlab_engine::variant::{Table, Variant, ladder as ladder_rungs};
-use ladder::LadderCell;
+use results::{Cell, LadderCell};
 
 /// `bench --integrators`: see `integrators.rs`. The default size list (for the kernel
 /// tables) becomes 64 and 128, and the backends, if left at all six, the fast three.
@@ -50,76 +51,6 @@ fn integrators_bench(args: &BenchArgs, params: &SimParams, backends: &[Backend],
 pub const WARMUP_FRAMES: u32 = 3;
 /// Particles per side of the lattice whose final positions are compared.
 const CHECK_LATTICE: u32 = 5;
-/// Bound on a sampled particle's distance from the reference backend's after the run,
-/// per simulated substep, m. Float summation order makes backends drift apart slowly (core::
-/// validate bounds a 200-substep rollout by 1e-6 m per substep); contacts and strain
-/// limiting let that drift grow over thousands of substeps, so the check allows 10× that
-/// rate, still far below what a skipped substep or kernel moves a falling cloth (about a
-/// millimetre per substep at the speeds of the default scene).
-pub const CHECK_BOUND_PER_SUBSTEP: f64 = 1e-5;
-
-/// One backend × size measurement.
-#[derive(Debug, Clone)]
-pub struct Cell {
-    /// Backend name.
-    pub backend: String,
-    /// Particles per side.
-    pub n: u32,
-    /// Where it ran: the adapter, or the CPU.
-    pub adapter: String,
-    /// Per-kernel table (per substep; `frame`, `cpu record`, `cpu submit` per frame).
-    pub kernels: Vec<clothlab_core::TimingRow>,
-    /// Whole frames with per-kernel timing off: `sim` (substeps, until the GPU is done),
-    /// `render` (offscreen, until done) and `frame` (both).
-    pub frames: Vec<clothlab_core::TimingRow>,
-    /// Positions of the check lattice after the run.
-    pub probe: Vec<[f32; 3]>,
-    /// Seconds the cell took.
-    pub seconds: f64,
-    /// The substep median of every round (`--repeat`), ns, in the order run.
-    pub runs: Vec<f64>,
-}
-
-impl Cell {
-    /// One cell from the rounds of one job at one size: per label the median of the
-    /// rounds' medians, the smallest minimum and the largest maximum, the samples summed;
-    /// the probe of the first round (each is checked against the reference alike).
-    fn merge(rounds: Vec<Cell>) -> Option<Cell> {
-        let first = rounds.first()?.clone();
-        let merge_rows = |pick: &dyn Fn(&Cell) -> &Vec<clothlab_core::TimingRow>| -> Vec<clothlab_core::TimingRow> {
-            pick(&first)
-                .iter()
-                .map(|row| {
-                    let same: Vec<&clothlab_core::TimingRow> =
-                        rounds.iter().filter_map(|c| pick(c).iter().find(|r| r.label == row.label)).collect();
-                    let mut medians: Vec<f64> = same.iter().map(|r| r.median_ns).collect();
-                    medians.sort_by(f64::total_cmp);
-                    let m = medians.len();
-                    let median = if m % 2 == 1 { medians[m / 2] } else { (medians[m / 2 - 1] + medians[m / 2]) / 2.0 };
-                    clothlab_core::TimingRow {
-                        label: row.label.clone(),
-                        samples: same.iter().map(|r| r.samples).sum(),
-                        median_ns: median,
-                        min_ns: same.iter().map(|r| r.min_ns).fold(f64::INFINITY, f64::min),
-                        max_ns: same.iter().map(|r| r.max_ns).fold(0.0, f64::max),
-                    }
-                })
-                .collect()
-        };
-        let runs = rounds
-            .iter()
-            .filter_map(|c| c.kernels.iter().find(|r| r.label == clothlab_core::timing::SUBSTEP).map(|r| r.median_ns))
-            .collect();
-        Some(Cell {
-            kernels: merge_rows(&|c| &c.kernels),
-            frames: merge_rows(&|c| &c.frames),
-            seconds: rounds.iter().map(|c| c.seconds).sum(),
-            runs,
-            ..first
-        })
-    }
-}
-
 enum Painter {
     Wgpu(Box<(GpuContext, WgpuRenderer)>),
     Vulkan(Box<VulkanRenderer>),
@@ -185,7 +116,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     if args.replot {
         let path = args.out.join("results.json");
         let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
-        let results: output::Results = serde_json::from_str(&text)
+        let results: results::Results = serde_json::from_str(&text)
             .with_context(|| format!("{} is not a clothlab bench result", path.display()))?;
         for f in output::write_report(&results, &args.out)? {
             println!("wrote {}", f.display());
@@ -396,7 +327,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     }
     bar.finish_and_clear();
 
-    let results = output::Results::new(output::Inputs {
+    let results = results::Results::new(results::Inputs {
         machine: args.machine.clone().unwrap_or_else(cpu_label),
         wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
         vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name().to_owned()),
@@ -418,7 +349,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     for f in &files {
         println!("wrote {}", f.display());
     }
-    let failed: Vec<&output::Check> = results.checks.iter().filter(|c| !c.ok).collect();
+    let failed: Vec<&results::Check> = results.checks.iter().filter(|c| !c.ok).collect();
     for c in &failed {
         eprintln!(
             "error: {} at n={} ended {:.2e} m from {} (bound {:.1e} m): not the same workload",

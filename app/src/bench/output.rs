@@ -4,303 +4,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use clothlab_core::SimParams;
-use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, OverheadPlan, OverheadRow, SUBSTEP, overhead};
-use serde::{Deserialize, Serialize};
+use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, SUBSTEP, overhead};
 
-use super::ladder::LadderCell;
-use super::{CHECK_BOUND_PER_SUBSTEP, Cell};
-
-/// One measured quantity: the unit of results.csv and results.json.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Row {
-    /// `kernel` (per substep, `frame`/`cpu record`/`cpu submit` per frame), `frame` (whole
-    /// simulated and rendered frames) or `overhead` (API micro-benchmarks).
-    pub section: String,
-    /// Backend (`cpu` … `vulkan`), or the API for `overhead`.
-    pub backend: String,
-    /// Particles per side; for `overhead`: k dispatches or bytes (0 for the empty submit).
-    pub size: u64,
-    /// Kernel, `substep`, `sim`/`render`/`frame`, or the overhead benchmark.
-    pub label: String,
-    /// What clock measured it: `gpu` (timestamps), `cpu` (wall), or the overhead clock.
-    pub clock: String,
-    /// Samples the statistics are over.
-    pub samples: usize,
-    /// Median, ns.
-    pub median_ns: f64,
-    /// Minimum, ns.
-    pub min_ns: f64,
-    /// Maximum, ns.
-    pub max_ns: f64,
-    /// Where it ran.
-    pub adapter: String,
-}
-
-/// The same-workload check of one cell.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Check {
-    /// Backend checked.
-    pub backend: String,
-    /// Particles per side.
-    pub n: u32,
-    /// The backend compared with (the first that ran at this size).
-    pub reference: String,
-    /// Largest distance of a probed particle from the reference's, m.
-    pub max_dev_m: f64,
-    /// The bound, m.
-    pub bound_m: f64,
-    /// Within the bound.
-    pub ok: bool,
-}
-
-/// How the run was set up.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Settings {
-    /// Substeps per frame.
-    pub substeps: u32,
-    /// Measured frames per table and cell.
-    pub frames: u32,
-    /// Unmeasured frames first.
-    pub warmup_frames: u32,
-    /// Offscreen render target of the frame table.
-    pub resolution: (u32, u32),
-    /// The simulation parameters (the default scene of each size).
-    pub params: SimParams,
-    /// The overhead micro-benchmarks.
-    pub overhead: OverheadPlan,
-}
-
-/// Everything a run measured, as written to results.json.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Results {
-    /// clothlab's version.
-    pub clothlab: String,
-    /// The command line.
-    pub command: String,
-    /// UTC date of the run.
-    pub date: String,
-    /// The machine's label (CPU model and threads by default).
-    pub machine: String,
-    /// Operating system and kernel.
-    pub os: String,
-    /// wgpu's adapter, if any.
-    pub wgpu_adapter: Option<String>,
-    /// The Vulkan device, if any.
-    pub vulkan_adapter: Option<String>,
-    /// The CPU solvers' instruction set, chosen at run time (empty in reports from before
-    /// it was recorded).
-    #[serde(default)]
-    pub cpu_simd: String,
-    /// Settings.
-    pub settings: Settings,
-    /// Every measurement.
-    pub rows: Vec<Row>,
-    /// Same-workload checks.
-    pub checks: Vec<Check>,
-    /// Cells skipped (over the time budget), one line each.
-    pub skipped: Vec<String>,
-    /// Other notes (missing adapters).
-    pub notes: Vec<String>,
-    /// Wall time of the whole run, s.
-    pub seconds: f64,
-    /// The optimisation ladder's cells (`--ladder`; empty otherwise).
-    #[serde(default)]
-    pub ladder: Vec<LadderCell>,
-    /// The substep median of every round of every cell run more than once (`--repeat`).
-    #[serde(default)]
-    pub rounds: Vec<Rounds>,
-}
-
-/// The rounds of one cell (`--repeat`).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Rounds {
-    /// Backend (the cell's name).
-    pub backend: String,
-    /// Particles per side.
-    pub n: u32,
-    /// The substep median of each round, ns, in the order run.
-    pub substep_ns: Vec<f64>,
-}
-
-impl Rounds {
-    /// (max − min) / min of the rounds: the run-to-run noise of this cell.
-    pub fn spread(&self) -> f64 {
-        let lo = self.substep_ns.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = self.substep_ns.iter().copied().fold(0.0, f64::max);
-        if lo > 0.0 && lo.is_finite() { (hi - lo) / lo } else { 0.0 }
-    }
-}
-
-/// What [`Results::new`] is made from.
-pub struct Inputs {
-    pub machine: String,
-    pub wgpu_adapter: Option<String>,
-    pub vulkan_adapter: Option<String>,
-    pub cpu_simd: String,
-    pub params: SimParams,
-    pub frames: u32,
-    pub warmup_frames: u32,
-    pub resolution: (u32, u32),
-    pub plan: OverheadPlan,
-    pub cells: Vec<Cell>,
-    pub overhead: Vec<(String, String, Vec<OverheadRow>)>,
-    pub skipped: Vec<String>,
-    pub notes: Vec<String>,
-    pub seconds: f64,
-    pub command: String,
-    pub ladder: Vec<LadderCell>,
-}
-
-impl Results {
-    /// Flattens the cells into rows and checks every cell against its size's reference.
-    pub fn new(i: Inputs) -> Self {
-        let mut rows = Vec::new();
-        for c in &i.cells {
-            let gpu = !c.backend.starts_with("cpu");
-            for r in &c.kernels {
-                let clock = if !gpu || r.label == CPU_RECORD || r.label == CPU_SUBMIT { "cpu" } else { "gpu" };
-                rows.push(row("kernel", &c.backend, c.n as u64, r, clock, &c.adapter));
-            }
-            for r in &c.frames {
-                rows.push(row("frame", &c.backend, c.n as u64, r, "cpu", &c.adapter));
-            }
-        }
-        for (api, adapter, list) in &i.overhead {
-            for o in list {
-                let mut r = row("overhead", api, o.param, &o.stats, &o.stats.label, adapter);
-                r.label = o.bench.clone();
-                rows.push(r);
-            }
-        }
-        let substeps_run = (i.warmup_frames + 2 * i.frames) as f64 * i.params.substeps as f64;
-        let mut checks = Vec::new();
-        for c in &i.cells {
-            let Some(reference) = i.cells.iter().find(|r| r.n == c.n) else { continue };
-            if reference.backend == c.backend {
-                continue;
-            }
-            let max_dev = c
-                .probe
-                .iter()
-                .zip(&reference.probe)
-                .map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt() as f64)
-                .fold(0.0, |m, d| if d.is_nan() { f64::INFINITY } else { m.max(d) });
-            let bound = CHECK_BOUND_PER_SUBSTEP * substeps_run;
-            checks.push(Check {
-                backend: c.backend.clone(),
-                n: c.n,
-                reference: reference.backend.clone(),
-                max_dev_m: max_dev,
-                bound_m: bound,
-                ok: max_dev <= bound,
-            });
-        }
-        let os = format!(
-            "{} {}",
-            std::env::consts::OS,
-            std::fs::read_to_string("/proc/sys/kernel/osrelease").unwrap_or_default().trim()
-        );
-        Results {
-            clothlab: env!("CARGO_PKG_VERSION").to_owned(),
-            command: i.command,
-            date: utc_date(),
-            machine: i.machine,
-            os: os.trim().to_owned(),
-            wgpu_adapter: i.wgpu_adapter,
-            vulkan_adapter: i.vulkan_adapter,
-            cpu_simd: i.cpu_simd,
-            settings: Settings {
-                substeps: i.params.substeps,
-                frames: i.frames,
-                warmup_frames: i.warmup_frames,
-                resolution: i.resolution,
-                params: i.params,
-                overhead: i.plan,
-            },
-            rows,
-            checks,
-            skipped: i.skipped,
-            notes: i.notes,
-            seconds: i.seconds,
-            ladder: i.ladder,
-            rounds: i
-                .cells
-                .iter()
-                .filter(|c| c.runs.len() > 1)
-                .map(|c| Rounds { backend: c.backend.clone(), n: c.n, substep_ns: c.runs.clone() })
-                .collect(),
-        }
-    }
-
-    /// The row of `section`/`backend`/`size`/`label` (and `clock` when given).
-    pub fn get(&self, section: &str, backend: &str, size: u64, label: &str, clock: Option<&str>) -> Option<&Row> {
-        self.rows.iter().find(|r| {
-            r.section == section
-                && r.backend == backend
-                && r.size == size
-                && r.label == label
-                && clock.is_none_or(|c| r.clock == c)
-        })
-    }
-
-    /// Backends in the order they ran (overhead APIs excluded).
-    pub fn backends(&self) -> Vec<String> {
-        let mut v: Vec<String> = Vec::new();
-        for r in self.rows.iter().filter(|r| r.section != "overhead") {
-            if !v.contains(&r.backend) {
-                v.push(r.backend.clone());
-            }
-        }
-        v
-    }
-
-    /// Grid sizes measured, ascending.
-    pub fn sizes(&self) -> Vec<u64> {
-        let mut v: Vec<u64> = self.rows.iter().filter(|r| r.section != "overhead").map(|r| r.size).collect();
-        v.sort_unstable();
-        v.dedup();
-        v
-    }
-
-    /// The size of the per-kernel plot: 500 as in the thesis, else the largest measured
-    /// below it, else the smallest.
-    pub fn kernel_size(&self) -> Option<u64> {
-        let sizes = self.sizes();
-        sizes.iter().rev().find(|&&n| n <= 500).or(sizes.first()).copied()
-    }
-}
-
-fn row(section: &str, backend: &str, size: u64, r: &clothlab_core::TimingRow, clock: &str, adapter: &str) -> Row {
-    Row {
-        section: section.to_owned(),
-        backend: backend.to_owned(),
-        size,
-        label: r.label.clone(),
-        clock: clock.to_owned(),
-        samples: r.samples,
-        median_ns: r.median_ns,
-        min_ns: r.min_ns,
-        max_ns: r.max_ns,
-        adapter: adapter.to_owned(),
-    }
-}
-
-/// Today's date (UTC) as YYYY-MM-DD.
-fn utc_date() -> String {
-    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0);
-    // Days since 1970-01-01 to a civil date (Howard Hinnant's algorithm).
-    let z = (secs / 86_400) as i64 + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!("{y:04}-{m:02}-{d:02}")
-}
+use super::results::{CHECK_BOUND_PER_SUBSTEP, Results, chain_slope};
 
 fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_owned() }
@@ -366,6 +72,95 @@ fn cpu_cost_per_substep(r: &Results, backend: &str, n: u64) -> Option<f64> {
     Some((rec + sub) / r.settings.substeps as f64)
 }
 
+/// The report's columns: the backends, in groups. A plain run is one group of backends
+/// under their own names; a ladder run (`--ladder`) has a group per API whose columns are
+/// the rungs' short labels (`naive`, `+submit=frame`, `thesis`), with the full solver
+/// names in a legend, so that no table has thirty columns named by every switch.
+struct Columns {
+    /// (group title, [(backend, column label)]); the title is empty for a plain run.
+    groups: Vec<(String, Vec<(String, String)>)>,
+}
+
+impl Columns {
+    fn of(r: &Results) -> Self {
+        let backends = r.backends();
+        if r.ladder.is_empty() {
+            return Columns {
+                groups: vec![(String::new(), backends.iter().map(|b| (b.clone(), b.clone())).collect())],
+            };
+        }
+        let mut groups: Vec<(String, Vec<(String, String)>)> = Vec::new();
+        for b in &backends {
+            let (title, label) = match r.ladder.iter().find(|c| &c.backend == b) {
+                Some(c) => (c.api.clone(), c.rung.trim_end_matches(" (preset)").to_owned()),
+                None => ("other".to_owned(), b.clone()),
+            };
+            match groups.iter_mut().find(|g| g.0 == title) {
+                Some(g) if !g.1.iter().any(|x| x.0 == *b) => g.1.push((b.clone(), label)),
+                Some(_) => {}
+                None => groups.push((title, vec![(b.clone(), label)])),
+            }
+        }
+        Columns { groups }
+    }
+
+    /// A backend's short name outside its group's table (`vulkan +submit=frame`).
+    fn name(&self, backend: &str) -> String {
+        for (title, cols) in &self.groups {
+            if let Some((_, label)) = cols.iter().find(|c| c.0 == backend) {
+                return if title.is_empty() || title == "other" { label.clone() } else { format!("{title} {label}") };
+            }
+        }
+        backend.to_owned()
+    }
+
+    /// Writes one table per group: a heading (`### title`) where there are groups, the
+    /// header `first | columns…`, and a row per `rows` item whose cells `cell` gives.
+    fn tables<K>(
+        &self,
+        s: &mut String,
+        first: &[&str],
+        rows: &[K],
+        row_head: impl Fn(&K) -> Vec<String>,
+        cell: impl Fn(&K, &str) -> String,
+    ) {
+        for (title, cols) in &self.groups {
+            if !title.is_empty() {
+                let _ = writeln!(s, "**{title}**\n");
+            }
+            let labels: Vec<&str> = cols.iter().map(|c| c.1.as_str()).collect();
+            let _ = writeln!(s, "| {} | {} |", first.join(" | "), labels.join(" | "));
+            let align = if first[0] == "n" { "---:|" } else { "---|" };
+            let _ = writeln!(s, "|{}{}{}", align, "---:|".repeat(first.len() - 1), "---:|".repeat(cols.len()));
+            for k in rows {
+                let cells: Vec<String> = cols.iter().map(|c| cell(k, &c.0)).collect();
+                let _ = writeln!(s, "| {} | {} |", row_head(k).join(" | "), cells.join(" | "));
+            }
+            let _ = writeln!(s);
+        }
+    }
+
+    /// The legend of a ladder run: each column's solver and its switches.
+    fn legend(&self, r: &Results) -> String {
+        let mut s = String::new();
+        if r.ladder.is_empty() {
+            return s;
+        }
+        let _ = writeln!(
+            s,
+            "Columns of a ladder run are its rungs, one table per API; each is the solver below (every switch: results.json, `ladder[].switches`).\n"
+        );
+        let _ = writeln!(s, "| API | column | solver |\n|---|---|---|");
+        for (title, cols) in &self.groups {
+            for (b, label) in cols {
+                let _ = writeln!(s, "| {title} | {label} | `{b}` |");
+            }
+        }
+        let _ = writeln!(s);
+        s
+    }
+}
+
 /// report.md.
 pub fn report(r: &Results) -> String {
     let mut s = String::new();
@@ -399,6 +194,8 @@ pub fn report(r: &Results) -> String {
         s,
         "Times are medians (min–max in results.csv). GPU kernel times come from timestamp queries, everything else from the CPU clock.\n"
     );
+    let cols = Columns::of(r);
+    s.push_str(&cols.legend(r));
 
     if let Some(n) = r.kernel_size() {
         let _ = writeln!(s, "## Per-kernel time at {n}×{n} (thesis Figures 7.1–7.4)\n");
@@ -414,18 +211,18 @@ pub fn report(r: &Results) -> String {
             }
         }
         labels.push("render".into());
-        let _ = writeln!(s, "| kernel | {} |", backends.join(" | "));
-        let _ = writeln!(s, "|---|{}", "---:|".repeat(backends.len()));
-        for l in &labels {
-            let section = if l == "render" { "frame" } else { "kernel" };
-            let cells: Vec<String> = backends
-                .iter()
-                .map(|b| r.get(section, b, n, l, None).map(|x| ms(x.median_ns)).unwrap_or_else(|| "–".into()))
-                .collect();
-            let _ = writeln!(s, "| {l} | {} |", cells.join(" | "));
-        }
+        cols.tables(
+            &mut s,
+            &["kernel"],
+            &labels,
+            |l| vec![l.clone()],
+            |l, b| {
+                let section = if l == "render" { "frame" } else { "kernel" };
+                r.get(section, b, n, l, None).map(|x| ms(x.median_ns)).unwrap_or_else(|| "–".into())
+            },
+        );
         let samples = r.get("kernel", &backends[0], n, SUBSTEP, None).map(|x| x.samples).unwrap_or(0);
-        let _ = writeln!(s, "\nSamples per kernel: {samples} substeps.\n");
+        let _ = writeln!(s, "Samples per kernel: {samples} substeps.\n");
     }
 
     let _ = writeln!(s, "## Time per frame and frames per second against grid size (Figures 7.5–7.8)\n");
@@ -435,33 +232,29 @@ pub fn report(r: &Results) -> String {
         "Milliseconds per frame ({} substeps + offscreen render), frames per second in brackets.\n",
         st.substeps
     );
-    let _ = writeln!(s, "| n | particles | {} |", backends.join(" | "));
-    let _ = writeln!(s, "|---:|---:|{}", "---:|".repeat(backends.len()));
-    for &n in &sizes {
-        let cells: Vec<String> = backends
-            .iter()
-            .map(|b| {
-                r.get("frame", b, n, "frame", None)
-                    .map(|x| format!("{} ({:.1})", ms(x.median_ns), 1e9 / x.median_ns))
-                    .unwrap_or_else(|| "–".into())
-            })
-            .collect();
-        let _ = writeln!(s, "| {n} | {} | {} |", n * n, cells.join(" | "));
-    }
-    let _ = writeln!(s, "\nns per particle-substep (GPU substep time, or the CPU solvers' wall time):\n");
-    let _ = writeln!(s, "| n | {} |", backends.join(" | "));
-    let _ = writeln!(s, "|---:|{}", "---:|".repeat(backends.len()));
-    for &n in &sizes {
-        let cells: Vec<String> = backends
-            .iter()
-            .map(|b| {
-                r.get("kernel", b, n, SUBSTEP, None)
-                    .map(|x| format!("{:.1}", x.median_ns / (n * n) as f64))
-                    .unwrap_or_else(|| "–".into())
-            })
-            .collect();
-        let _ = writeln!(s, "| {n} | {} |", cells.join(" | "));
-    }
+    cols.tables(
+        &mut s,
+        &["n", "particles"],
+        &sizes,
+        |n| vec![n.to_string(), (n * n).to_string()],
+        |&n, b| {
+            r.get("frame", b, n, "frame", None)
+                .map(|x| format!("{} ({:.1})", ms(x.median_ns), 1e9 / x.median_ns))
+                .unwrap_or_else(|| "–".into())
+        },
+    );
+    let _ = writeln!(s, "ns per particle-substep (GPU substep time, or the CPU solvers' wall time):\n");
+    cols.tables(
+        &mut s,
+        &["n"],
+        &sizes,
+        |n| vec![n.to_string()],
+        |&n, b| {
+            r.get("kernel", b, n, SUBSTEP, None)
+                .map(|x| format!("{:.1}", x.median_ns / (n * n) as f64))
+                .unwrap_or_else(|| "–".into())
+        },
+    );
 
     let apis: Vec<String> = {
         let mut v: Vec<String> = Vec::new();
@@ -527,7 +320,14 @@ pub fn report(r: &Results) -> String {
         let _ = writeln!(s, "| backend | n | substep per round (ms) | spread |\n|---|---:|---|---:|");
         for x in &r.rounds {
             let runs: Vec<String> = x.substep_ns.iter().map(|v| format!("{:.2}", v / 1e6)).collect();
-            let _ = writeln!(s, "| {} | {} | {} | {:.0} % |", x.backend, x.n, runs.join(" / "), x.spread() * 100.0);
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {:.0} % |",
+                cols.name(&x.backend),
+                x.n,
+                runs.join(" / "),
+                x.spread() * 100.0
+            );
         }
     }
     s.push_str(&super::ladder::report(r));
@@ -552,9 +352,9 @@ pub fn report(r: &Results) -> String {
         let _ = writeln!(
             s,
             "| {} | {} | {} | {:.2e} | {:.1e} | {} |",
-            c.backend,
+            cols.name(&c.backend),
             c.n,
-            c.reference,
+            cols.name(&c.reference),
             c.max_dev_m,
             c.bound_m,
             if c.ok { "ok" } else { "**FAILED**" }
@@ -567,19 +367,6 @@ pub fn report(r: &Results) -> String {
         }
     }
     s
-}
-
-/// Per-dispatch cost from the chain: (t(k_max) − t(k_min)) / (k_max − k_min), ns.
-pub fn chain_slope(r: &Results, api: &str, clock: &str) -> Option<f64> {
-    let pts: Vec<(u64, f64)> = r
-        .rows
-        .iter()
-        .filter(|x| x.section == "overhead" && x.backend == api && x.label == overhead::CHAIN && x.clock == clock)
-        .map(|x| (x.size, x.median_ns))
-        .collect();
-    let lo = pts.iter().min_by_key(|p| p.0)?;
-    let hi = pts.iter().max_by_key(|p| p.0)?;
-    (hi.0 > lo.0).then(|| (hi.1 - lo.1) / (hi.0 - lo.0) as f64)
 }
 
 /// The performance targets, evaluated on this run.
@@ -671,37 +458,12 @@ pub fn write_report(results: &Results, dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// The results of a made-up run (the report's tests): 10 frames of 16 substeps per cell.
-#[cfg(test)]
-pub(crate) fn test_results(
-    cells: Vec<Cell>,
-    overhead: Vec<(String, String, Vec<OverheadRow>)>,
-    ladder: Vec<LadderCell>,
-) -> Results {
-    Results::new(Inputs {
-        machine: "test machine".into(),
-        wgpu_adapter: None,
-        vulkan_adapter: None,
-        cpu_simd: "fused sweep on AVX2, 8 lanes".into(),
-        params: SimParams::default(),
-        frames: 10,
-        warmup_frames: 3,
-        resolution: (64, 64),
-        plan: OverheadPlan::default(),
-        cells,
-        overhead,
-        skipped: vec![],
-        notes: vec![],
-        seconds: 1.0,
-        command: "test".into(),
-        ladder,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bench::results::{Cell, test_results};
     use clothlab_core::TimingRow;
+    use clothlab_core::timing::OverheadRow;
 
     fn timing(label: &str, ns: f64) -> TimingRow {
         TimingRow { label: label.into(), samples: 16, median_ns: ns, min_ns: ns * 0.9, max_ns: ns * 1.2 }

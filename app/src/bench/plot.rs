@@ -10,7 +10,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::output::Results;
+use super::results::Results;
 
 pub(super) const FONT: &str = "sans-serif";
 static FONTS: Once = Once::new();

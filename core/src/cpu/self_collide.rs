@@ -336,7 +336,7 @@ pub fn cell_and_fraction(x: &V4, inv: f32) -> ([i32; 3], [f32; 3]) {
     (c, std::array::from_fn(|a| v[a] - c[a] as f32))
 }
 
-/// The cells in x of row `(y, z)` that the sphere of radius [`REACH`] around a point in
+/// The cells in x of row `(y, z)` that the sphere of radius `REACH` around a point in
 /// cell `c` at fraction `f` reaches — those whose squared distance from the point, the
 /// sum of its squared gaps per axis, is below `REACH²` — as `(lo, hi)`; `None` where it
 /// reaches none of them (the GPU kernel's `reached_cells`, row by row: no square root).
@@ -354,7 +354,7 @@ pub fn reach(c: [i32; 3], f: [f32; 3], y: i32, z: i32) -> Option<(i32, i32)> {
     Some((c[0].wrapping_sub(i32::from(gyz + below < r2)), c[0].wrapping_add(i32::from(gyz + above < r2))))
 }
 
-/// The rows of cells (in x) within [`REACH`] of a point, in the response's order (z, then
+/// The rows of cells (in x) within `REACH` of a point, in the response's order (z, then
 /// y, from −1 to 1): each as its first bucket and length; rows the sphere misses are
 /// left out. Returns how many.
 pub fn rows_around(x: &V4, inv: f32, size: u32, rows: &mut [Row; 9]) -> usize {

@@ -15,8 +15,8 @@ use crate::params::{Integrator, SimParams};
 use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};
 use crate::timing::{
-    FORCES_SPRINGS, FRAME, FUSED_STEP, INTEGRATE_COLLIDE, KernelId, KernelTimings, SELF_COLLIDE, SELF_HASH, SUBSTEP,
-    TimingRecorder,
+    FORCES_SPRINGS, FRAME, FUSED_STEP, INTEGRATE_COLLIDE, KernelTimings, SELF_COLLIDE, SELF_HASH, STRAIN_LIMIT,
+    SUBSTEP, TRI_NORMALS, TimingRecorder, VERTEX_NORMALS,
 };
 
 /// The CPU solver; [`Exec::Serial`] is the thesis's CPU variant, [`Exec::Parallel`] its
@@ -336,7 +336,7 @@ impl CpuSolver {
                 });
             }
         }
-        Self::timed(timer, on, KernelId::StrainLimit.name(), || {
+        Self::timed(timer, on, STRAIN_LIMIT, || {
             for _ in 0..params.strain_iterations {
                 if fast {
                     lanes.fill(e, n, pos, None);
@@ -355,18 +355,16 @@ impl CpuSolver {
             std::mem::swap(pos, scratch);
         }
         if fast {
-            Self::timed(timer, on, KernelId::TriNormals.name(), || {
+            Self::timed(timer, on, TRI_NORMALS, || {
                 lanes.fill(e, n, pos, None);
                 tri_normals_lanes(e, n, lanes, face_lanes)
             });
-            Self::timed(timer, on, KernelId::VertexNormals.name(), || {
+            Self::timed(timer, on, VERTEX_NORMALS, || {
                 vertex_normals_rows(e, &p, &topo.face_slots, face_lanes, normal, force)
             });
         } else {
-            Self::timed(timer, on, KernelId::TriNormals.name(), || tri_normals(e, &topo.triangles, pos, face));
-            Self::timed(timer, on, KernelId::VertexNormals.name(), || {
-                vertex_normals(e, &p, &topo.face_slots, face, normal, force)
-            });
+            Self::timed(timer, on, TRI_NORMALS, || tri_normals(e, &topo.triangles, pos, face));
+            Self::timed(timer, on, VERTEX_NORMALS, || vertex_normals(e, &p, &topo.face_slots, face, normal, force));
         }
         if on {
             timer.record(SUBSTEP, t0.elapsed().as_nanos() as f64);

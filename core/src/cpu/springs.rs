@@ -78,7 +78,7 @@ pub(crate) fn gather_at(i: usize, slots: &(impl SlotSource + ?Sized), pos: impl 
     v4(acc, 0.0)
 }
 
-/// [`springs`], row by row, with the interior of each row on [`springs_interior`] when
+/// [`springs`], row by row, with the interior of each row on `springs_interior` when
 /// the grid's slots are uniform (`uni`); `lanes` must hold `pos` and `vel`.
 /// Bit-identical to [`springs`].
 #[allow(clippy::too_many_arguments)]
