@@ -386,6 +386,12 @@ pub struct BenchArgs {
     /// write report.md and the plots again.
     #[arg(long)]
     pub replot: bool,
+    /// Continue the stopped run whose output folder is DIR: read the cells it finished
+    /// (DIR/cells.jsonl), check that the plan is the same (options, machine, adapters,
+    /// build; refused in one line if not) and measure only what is missing. Give the
+    /// stopped run's options again.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["replot", "integrators"])]
+    pub resume: Option<PathBuf>,
 }
 
 impl BenchArgs {

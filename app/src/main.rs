@@ -10,6 +10,7 @@
 mod bench;
 mod cli;
 mod commands;
+mod files;
 mod gui;
 mod overrides;
 mod solvers;

@@ -1,5 +1,6 @@
 //! `clothlab bench`: a small run writes every file, well-formed, with sane numbers; bad
-//! input is refused; cells over the time budget are skipped and said so.
+//! input is refused; cells over the time budget are skipped and said so; a stopped run
+//! keeps its cells and `--resume` completes it; an interrupted run leaves old outputs.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -261,6 +262,9 @@ fn bad_bench_input_is_refused_in_one_line() {
         (&["bench", "--sizes", "8", "--out", "/proc/clothlab-bench"], "cannot create /proc/clothlab-bench"),
         (&["bench", "--replot", "--out", "/nonexistent-dir"], "cannot read /nonexistent-dir/results.json"),
         (&["bench", "--ladder", "--backends", "cpu,cpu-par", "--sizes", "8"], "name at least one GPU backend"),
+        (&["bench", "--backends", "cpu", "--sizes", "8", "--resume", "/nonexistent-dir"], "no cells.jsonl there"),
+        (&["bench", "--resume", "/tmp/a", "--out", "/tmp/b"], "--resume /tmp/a writes there: leave out --out /tmp/b"),
+        (&["bench", "--integrators", "--resume", "/tmp/a"], "cannot be used with"),
         (
             &["bench", "--backends", "vulkan", "--variant", "turbo", "--sizes", "8"],
             "the presets are naive, optimized, thesis",
@@ -272,4 +276,115 @@ fn bad_bench_input_is_refused_in_one_line() {
         assert!(err.contains(expect), "{args:?}: expected `{expect}` in: {err}");
         assert!(!err.contains("panicked") && !err.contains("backtrace"), "{args:?}: {err}");
     }
+}
+
+/// Sends `signal` (`INT`, `TERM`) to `pid`.
+fn signal(pid: u32, signal: &str) {
+    let ok = Command::new("kill").args([&format!("-{signal}"), &pid.to_string()]).status().expect("run kill");
+    assert!(ok.success(), "kill -{signal} {pid}");
+}
+
+/// Lines of `dir`/cells.jsonl that record a measured cell.
+fn journal_cells(dir: &Path) -> Vec<String> {
+    std::fs::read_to_string(dir.join("cells.jsonl"))
+        .unwrap_or_default()
+        .lines()
+        .filter(|l| l.starts_with("{\"cell\""))
+        .map(str::to_owned)
+        .collect()
+}
+
+#[cfg(unix)]
+#[test]
+fn a_stopped_bench_keeps_its_cells_and_resume_measures_only_the_rest() {
+    let out = tmp("resume");
+    let dir = out.to_str().unwrap();
+    // 2 backends × 2 sizes × 2 rounds = 8 cells of 0.3–1 s each on the 2-core dev VM:
+    // time to stop it between its first and its last.
+    let plan = ["bench", "--backends", "cpu,cpu-par", "--sizes", "64,96", "--iters", "160", "--repeat", "2"];
+    let mut args = plan.to_vec();
+    args.extend(["--no-overhead", "--resolution", "64x64", "--out", dir]);
+    let child =
+        Command::new(env!("CARGO_BIN_EXE_clothlab")).args(&args).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    // Stop it once its first cell is in the journal (the plan is the first line).
+    let t0 = std::time::Instant::now();
+    while journal_cells(&out).is_empty() {
+        assert!(t0.elapsed().as_secs() < 120, "no cell measured in two minutes");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    signal(child.id(), "INT");
+    let stopped = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&stopped.stderr);
+    assert_eq!(stopped.status.code(), Some(130), "a stopped bench exits 130: {err}");
+    let kept = journal_cells(&out);
+    assert!((1..8).contains(&kept.len()), "{} of 8 cells kept", kept.len());
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let said = format!("**Interrupted after {} of 8 cells**", kept.len());
+    assert!(report.contains(&said), "the report says `{said}`: {report}");
+    assert!(err.contains("--resume"), "{err}");
+
+    // Another plan is refused in one line, naming what differs, and changes nothing.
+    let mut other = args.clone();
+    other[4] = "64,128";
+    let last = other.len() - 2;
+    other[last] = "--resume";
+    let o = clothlab(&other);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("sizes: [64,96] there, [64,128] here"), "{e}");
+    assert_eq!(e.trim_end().lines().count(), 1, "one line: {e}");
+    assert_eq!(journal_cells(&out), kept);
+
+    // The same plan measures what is missing: every cell exactly once.
+    let mut again = args.clone();
+    again[last] = "--resume";
+    let o = clothlab(&again);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let all = journal_cells(&out);
+    assert_eq!(all.len(), 8, "8 cells in all");
+    assert_eq!(all[..kept.len()], kept[..], "the kept cells are not measured again");
+    let mut keys: Vec<String> = all.iter().map(|l| l.split(",\"cell\":").next().unwrap().to_owned()).collect();
+    keys.sort();
+    keys.dedup();
+    assert_eq!(keys.len(), 8, "each (size, job, round) once: {keys:?}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(!report.contains("Interrupted"));
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    for (b, n) in [("cpu", 64), ("cpu-par", 64), ("cpu", 96), ("cpu-par", 96)] {
+        let rows = csv.lines().filter(|l| l.starts_with(&format!("kernel,{b},{n},substep,"))).count();
+        assert_eq!(rows, 1, "{b} at n = {n}: one substep row");
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn an_interrupted_sim_leaves_the_old_output_as_it_was() {
+    let out = tmp("sim-out");
+    std::fs::create_dir_all(&out).unwrap();
+    let path = out.join("state.json");
+    std::fs::write(&path, "the old results").unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_clothlab"))
+        .args(["sim", "--backend", "cpu", "--n", "128", "--steps", "10000000", "--out", path.to_str().unwrap()])
+        // Without XDG_RUNTIME_DIR clothlab runs itself again without Mesa's device-select
+        // layer: by exec, in this very process, so the signal below reaches the simulation.
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("NODEVICE_SELECT")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Long enough to be simulating (the output is checked before the first substep).
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let environ = std::fs::read(format!("/proc/{}/environ", child.id())).unwrap_or_default();
+    assert!(
+        environ.split(|&b| b == 0).any(|v| v == b"NODEVICE_SELECT=1"),
+        "the re-run without the device-select layer is the process that was started, not a child of it"
+    );
+    signal(child.id(), "INT");
+    let status = child.wait_with_output().unwrap().status;
+    assert!(!status.success(), "stopped, not finished");
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), "the old results");
+    let names: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(names.len(), 1, "nothing else left beside it: {names:?}");
+    std::fs::remove_dir_all(&out).ok();
 }

@@ -66,7 +66,14 @@ fn bad_input_is_refused_with_one_clear_message() {
     refused(&["sim", "--set", "no_such_thing=1"], "unknown parameter `no_such_thing`");
     refused(&["sim", "--set", "damping"], "NAME=VALUE");
     refused(&["sim", "--n", "4", "--out", "/tmp/state.txt"], "unknown format");
-    refused(&["sim", "--n", "4", "--steps", "16", "--out", "/nonexistent-dir/x.obj"], "cannot create");
+    refused(
+        &["sim", "--n", "4", "--steps", "16", "--out", "/nonexistent-dir/x.obj"],
+        "cannot write /nonexistent-dir/x.obj",
+    );
+    refused(
+        &["render", "--n", "4", "--frames", "1", "--out", "/nonexistent-dir/x.png"],
+        "cannot write /nonexistent-dir/x.png",
+    );
     refused(&["frobnicate"], "unrecognized subcommand");
 }
 

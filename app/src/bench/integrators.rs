@@ -372,14 +372,14 @@ impl Figure for WorkPrecision<'_> {
 
 /// Writes `integrators.csv`, `integrators.md` and the plots into `out`.
 pub fn write(out: &std::path::Path, runs: &[Run], notes: &[String], machine: &str) -> Result<()> {
-    std::fs::write(out.join("integrators.csv"), csv(runs))?;
-    std::fs::write(out.join("integrators.md"), report(runs, notes, machine))?;
+    crate::files::write_bytes(&out.join("integrators.csv"), csv(runs).as_bytes())?;
+    crate::files::write_bytes(&out.join("integrators.md"), report(runs, notes, machine).as_bytes())?;
     let mut sizes: Vec<u32> = runs.iter().map(|r| r.n).collect();
     sizes.dedup();
     for n in sizes {
         let (svg, png) = both(&WorkPrecision { runs, n, machine })?;
-        std::fs::write(out.join(format!("integrators-n{n}.svg")), svg)?;
-        std::fs::write(out.join(format!("integrators-n{n}.png")), png)?;
+        crate::files::write_bytes(&out.join(format!("integrators-n{n}.svg")), svg.as_bytes())?;
+        crate::files::write_bytes(&out.join(format!("integrators-n{n}.png")), &png)?;
     }
     Ok(())
 }

@@ -9,6 +9,7 @@
 //! that ran at that size, so a backend cannot be fast by doing less.
 
 mod integrators;
+mod journal;
 mod ladder;
 mod output;
 mod plot;
@@ -112,7 +113,17 @@ pub fn cpu_label() -> String {
     format!("{model}, {cores} threads")
 }
 
-pub fn bench(args: BenchArgs) -> Result<ExitCode> {
+pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
+    if let Some(dir) = &args.resume {
+        if args.out != std::path::Path::new("bench-out") && &args.out != dir {
+            bail!("--resume {} writes there: leave out --out {}", dir.display(), args.out.display());
+        }
+        // Checked before anything is created there.
+        if !dir.join(journal::FILE).is_file() {
+            bail!("--resume {}: no {} there (not a folder a bench run wrote)", dir.display(), journal::FILE);
+        }
+        args.out = dir.clone();
+    }
     if args.replot {
         let path = args.out.join("results.json");
         let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
@@ -164,7 +175,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
         return integrators_bench(&args, &params, &backends, &sizes);
     }
     let frames = args.iters.div_ceil(params.substeps);
-    let plan = OverheadPlan {
+    let overhead_plan = OverheadPlan {
         samples: args.iters.clamp(5, 1000) as usize,
         warmup: (args.iters / 10).clamp(2, 50) as usize,
         ..Default::default()
@@ -241,20 +252,68 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     );
     let say = |bar: &ProgressBar, line: String| bar.suspend(|| eprintln!("{line}"));
 
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let machine = args.machine.clone().unwrap_or_else(cpu_label);
+    let plan = journal::Plan {
+        command: command.clone(),
+        build: journal::Plan::build_id(),
+        machine: machine.clone(),
+        wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
+        vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name().to_owned()),
+        jobs: jobs.iter().map(Job::label).collect(),
+        sizes: sizes.clone(),
+        frames,
+        repeat: args.repeat,
+        resolution: args.resolution,
+        cell_budget: args.cell_budget,
+        overhead: !args.no_overhead,
+        setup: serde_json::json!({ "params": params, "scene": base }),
+    };
+    let mut journal = match &args.resume {
+        Some(dir) => journal::Journal::resume(dir, &plan)?,
+        None => journal::Journal::create(&args.out, &plan)?,
+    };
+    if args.resume.is_some() {
+        eprintln!("resuming: {} cells measured before", journal.resumed_cells());
+    }
+    journal::catch_signals();
+    let total_cells = sizes.len() * jobs.len() * args.repeat as usize;
+    let mut done_cells = 0usize;
+    let mut interrupted = false;
+    let mut resumed_seconds = 0.0;
+
     let started = Instant::now();
     let mut cells: Vec<Cell> = Vec::new();
     let mut skipped: Vec<String> = Vec::new();
     let mut ladder: Vec<LadderCell> = Vec::new();
-    for &n in &sizes {
+    'sizes: for &n in &sizes {
         // --repeat rounds, interleaved (A B C … A B C …), so that the machine's slow and
         // fast phases fall on every job alike; merged below.
         let mut runs: Vec<Vec<Cell>> = vec![Vec::new(); jobs.len()];
         let mut skip = vec![false; jobs.len()];
-        for round in 0..args.repeat {
+        'rounds: for round in 0..args.repeat {
             for (j, job) in jobs.iter().enumerate() {
+                if journal::stopping() {
+                    interrupted = true;
+                    break 'rounds;
+                }
+                done_cells += 1;
                 let label = job.label();
                 bar.set_message(format!("{label} n={n} round {}/{}", round + 1, args.repeat));
                 if skip[j] || matches!(&job.rung, Some((_, _, Some(_)))) {
+                    bar.inc(1);
+                    continue;
+                }
+                // A stopped run's cells, when resuming: taken as measured.
+                if let Some(line) = journal.skipped(n, &label) {
+                    skipped.push(line);
+                    skip[j] = true;
+                    bar.inc(1);
+                    continue;
+                }
+                if let Some(cell) = journal.cell(n, &label, round) {
+                    resumed_seconds += cell.seconds;
+                    runs[j].push(cell);
                     bar.inc(1);
                     continue;
                 }
@@ -270,6 +329,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
                         args.cell_budget
                     );
                     say(&bar, line.clone());
+                    journal.add_skipped(n, &label, &line)?;
                     skipped.push(line);
                     skip[j] = true;
                     bar.inc(1);
@@ -290,6 +350,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
                         cell.seconds
                     ),
                 );
+                journal.add_cell(n, &label, round, &cell)?;
                 runs[j].push(cell);
                 bar.inc(1);
             }
@@ -305,30 +366,53 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
             }
             cells.push(cell);
         }
+        if interrupted {
+            break 'sizes;
+        }
     }
 
     // Fresh devices, never drawn on (lavapipe's timestamps, see run_cell).
     let mut overhead: Vec<(String, String, Vec<OverheadRow>)> = Vec::new();
-    if !args.no_overhead {
-        if devices.wgpu.is_some() {
-            bar.set_message("API overhead: wgpu");
-            let ctx = GpuContext::new()?;
-            let rows = clothlab_wgpu::overhead::measure(&ctx, &plan).context("wgpu overhead benchmarks")?;
-            overhead.push(("wgpu".into(), ctx.describe(), rows));
-            bar.inc(1);
-        }
-        if devices.vulkan.is_some() {
-            bar.set_message("API overhead: Vulkan");
-            let dev = Device::new(vulkan_validation())?;
-            let rows = clothlab_vulkan::overhead::measure(&dev, &plan).context("Vulkan overhead benchmarks")?;
-            overhead.push(("vulkan".into(), format!("{} (Vulkan)", dev.name()), rows));
+    if !args.no_overhead && !interrupted {
+        for api in ["wgpu", "vulkan"] {
+            let present = if api == "wgpu" { devices.wgpu.is_some() } else { devices.vulkan.is_some() };
+            if !present || journal::stopping() {
+                continue;
+            }
+            bar.set_message(format!("API overhead: {api}"));
+            let (adapter, rows) = match journal.overhead(api) {
+                Some(done) => done,
+                None if api == "wgpu" => {
+                    let ctx = GpuContext::new()?;
+                    let rows =
+                        clothlab_wgpu::overhead::measure(&ctx, &overhead_plan).context("wgpu overhead benchmarks")?;
+                    (ctx.describe(), rows)
+                }
+                None => {
+                    let dev = Device::new(vulkan_validation())?;
+                    let rows = clothlab_vulkan::overhead::measure(&dev, &overhead_plan)
+                        .context("Vulkan overhead benchmarks")?;
+                    (format!("{} (Vulkan)", dev.name()), rows)
+                }
+            };
+            journal.add_overhead(api, &adapter, &rows)?;
+            overhead.push((api.to_owned(), adapter, rows));
             bar.inc(1);
         }
     }
     bar.finish_and_clear();
+    // A stop during the overhead benchmarks leaves every cell measured, not every API's
+    // overhead.
+    let interrupted = (interrupted || journal::stopping()).then(|| {
+        if done_cells == total_cells {
+            format!("after all {total_cells} cells, before every API's overhead benchmarks")
+        } else {
+            format!("after {done_cells} of {total_cells} cells")
+        }
+    });
 
     let results = results::Results::new(results::Inputs {
-        machine: args.machine.clone().unwrap_or_else(cpu_label),
+        machine,
         wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
         vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name().to_owned()),
         cpu_simd: clothlab_core::cpu::fused_path_label(),
@@ -336,14 +420,15 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
         frames,
         warmup_frames: WARMUP_FRAMES,
         resolution: args.resolution,
-        plan,
+        plan: overhead_plan,
         cells,
         overhead,
         skipped,
         notes,
-        seconds: started.elapsed().as_secs_f64(),
-        command: std::env::args().collect::<Vec<_>>().join(" "),
+        seconds: started.elapsed().as_secs_f64() + resumed_seconds,
+        command,
         ladder,
+        interrupted,
     });
     let files = output::write_all(&results, &args.out)?;
     for f in &files {
@@ -355,6 +440,13 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
             "error: {} at n={} ended {:.2e} m from {} (bound {:.1e} m): not the same workload",
             c.backend, c.n, c.max_dev_m, c.reference, c.bound_m
         );
+    }
+    if let Some(what) = &results.interrupted {
+        eprintln!(
+            "interrupted {what}: the report holds what was measured; `clothlab bench --resume {}` with the same options measures the rest",
+            args.out.display()
+        );
+        return Ok(ExitCode::from(130));
     }
     Ok(if failed.is_empty() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }

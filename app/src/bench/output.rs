@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, SUBSTEP, overhead};
 
 use super::results::{CHECK_BOUND_PER_SUBSTEP, Results, chain_slope};
@@ -190,6 +190,12 @@ pub fn report(r: &Results) -> String {
         st.resolution.1
     );
     let _ = writeln!(s, "| run time | {:.0} s |\n", r.seconds);
+    if let Some(what) = &r.interrupted {
+        let _ = writeln!(
+            s,
+            "**Interrupted {what}**: the tables below hold the cells it finished; `clothlab bench --resume <this folder>` with the same options measures the rest.\n"
+        );
+    }
     let _ = writeln!(
         s,
         "Times are medians (min–max in results.csv). GPU kernel times come from timestamp queries, everything else from the CPU clock.\n"
@@ -433,7 +439,7 @@ pub fn targets(r: &Results) -> Vec<String> {
 /// Writes `bytes` to `dir/name` and notes the path in `files`.
 fn put(dir: &Path, files: &mut Vec<PathBuf>, name: &str, bytes: &[u8]) -> Result<()> {
     let p = dir.join(name);
-    std::fs::write(&p, bytes).with_context(|| format!("cannot write {}", p.display()))?;
+    crate::files::write_bytes(&p, bytes)?;
     files.push(p);
     Ok(())
 }

@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 pub const CHECK_BOUND_PER_SUBSTEP: f64 = 1e-5;
 
 /// One backend × size measurement.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Cell {
     /// Backend name.
     pub backend: String,
@@ -199,6 +199,9 @@ pub struct Results {
     /// The substep median of every round of every cell run more than once (`--repeat`).
     #[serde(default)]
     pub rounds: Vec<Rounds>,
+    /// Set when the run was stopped before its end: `after k of N cells`.
+    #[serde(default)]
+    pub interrupted: Option<String>,
 }
 
 /// The rounds of one cell (`--repeat`).
@@ -239,6 +242,7 @@ pub struct Inputs {
     pub seconds: f64,
     pub command: String,
     pub ladder: Vec<LadderCell>,
+    pub interrupted: Option<String>,
 }
 
 impl Results {
@@ -313,6 +317,7 @@ impl Results {
             notes: i.notes,
             seconds: i.seconds,
             ladder: i.ladder,
+            interrupted: i.interrupted,
             rounds: i
                 .cells
                 .iter()
@@ -428,5 +433,6 @@ pub(crate) fn test_results(
         seconds: 1.0,
         command: "test".into(),
         ladder,
+        interrupted: None,
     })
 }

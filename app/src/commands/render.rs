@@ -2,7 +2,7 @@
 
 use std::process::ExitCode;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::ValueEnum;
 use clothlab_core::{CpuSolver, Exec, Solver};
 use clothlab_vulkan::{VkCloth, VulkanRenderer};
@@ -21,6 +21,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     if !matches!(args.out.extension().and_then(|e| e.to_str()), Some("png" | "PNG")) {
         bail!("--out {}: the image is written as PNG, use a .png file name", args.out.display());
     }
+    crate::files::check_writable(&args.out)?;
     let mut view = args.mode.view();
     if let Some(c) = setup.camera {
         view.camera = c;
@@ -87,8 +88,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
             }
         }
     };
-    image::save_buffer(&args.out, &pixels, args.width, args.height, image::ExtendedColorType::Rgba8)
-        .with_context(|| format!("cannot write {}", args.out.display()))?;
+    crate::files::write_png(&args.out, &pixels, args.width, args.height)?;
     println!(
         "wrote {} ({}x{}, {} frames, {:?}, adapter {adapter})",
         args.out.display(),

@@ -1,12 +1,10 @@
 //! `clothlab sim`: simulate headless and print a summary.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 
@@ -23,12 +21,13 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     if args.steps == 0 || args.steps > MAX_STEPS {
         bail!("invalid --steps {}: must be in 1 ..= {MAX_STEPS}", args.steps);
     }
-    // Open the output before simulating, so a bad path fails at once, not after the run.
+    // Check the output before simulating, so a bad path fails at once, not after the run;
+    // the file itself is written only when complete (an interrupted run leaves the old one).
     let out = match &args.out {
         Some(path) => {
             let format = out_format(path)?;
-            let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-            Some((path, format, BufWriter::new(file)))
+            crate::files::check_writable(path)?;
+            Some((path, format))
         }
         None => None,
     };
@@ -95,13 +94,11 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         );
     }
 
-    if let Some((path, format, mut w)) = out {
-        match format {
-            OutFormat::Obj => write_obj(&mut w, &state, &topo),
-            OutFormat::Json => write_json(&mut w, &state),
-        }
-        .and_then(|_| w.flush())
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    if let Some((path, format)) = out {
+        crate::files::write_atomic(path, |w| match format {
+            OutFormat::Obj => write_obj(w, &state, &topo),
+            OutFormat::Json => write_json(w, &state),
+        })?;
         println!("state written  {}", path.display());
     }
     Ok(if summary.nan_count == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })

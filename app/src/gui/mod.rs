@@ -644,6 +644,5 @@ impl Running {
 }
 
 fn save_png(path: &std::path::Path, shot: &Shot) -> Result<()> {
-    image::save_buffer(path, &shot.rgba, shot.width, shot.height, image::ExtendedColorType::Rgba8)
-        .with_context(|| format!("cannot write {}", path.display()))
+    crate::files::write_png(path, &shot.rgba, shot.width, shot.height)
 }
