@@ -19,6 +19,8 @@ use clothlab_core::scene::{Aabb, Sphere};
 /// A struct as core lays it out: name, size, and (field, offset) pairs.
 type Layout = (&'static str, usize, Vec<(&'static str, usize)>);
 
+include!("src/glsl_out.rs");
+
 fn expected_layouts() -> Vec<Layout> {
     macro_rules! layout {
         ($t:ty, $name:literal, [$($f:ident),*]) => {
@@ -206,10 +208,21 @@ fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
     fs::write(out.join(format!("{name}.wgsl")), source).expect("write WGSL");
     fs::write(out.join(format!("{name}.spv")), bytes).expect("write SPIR-V");
+    // Compute kernels also as GLSL 4.50 for OpenGL (issue 33), checked here like the
+    // SPIR-V: a flavor naga cannot write fails the build.
+    let compute = module.entry_points.iter().any(|e| e.stage == naga::ShaderStage::Compute && e.name == "main");
+    let (glsl, points) = if compute {
+        glsl_450(&module, &info).unwrap_or_else(|e| fail(format!("{name}: {e}")))
+    } else {
+        (String::new(), Vec::new())
+    };
+    fs::write(out.join(format!("{name}.glsl")), glsl).expect("write GLSL");
     writeln!(
         list,
         "    Kernel {{ name: {name:?}, wgsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.wgsl\")), \
-         spirv: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")), reads: &{reads:?}, writes: &{writes:?} }},"
+         spirv: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")), \
+         glsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.glsl\")), gl_points: &{points:?}, \
+         reads: &{reads:?}, writes: &{writes:?} }},"
     )
     .expect("write to string");
 }

@@ -1,5 +1,6 @@
 //! clothlab-shaders: the WGSL kernels of the step, validated by naga when this crate
-//! builds, as WGSL (for wgpu) and SPIR-V 1.3 (for Vulkan).
+//! builds, as WGSL (for wgpu), SPIR-V 1.3 (for Vulkan) and GLSL 4.50 core (for OpenGL;
+//! every compute flavor, with its binding points: [`Kernel::gl_points`]).
 //!
 //! Sources live in `wgsl/`: one file per kernel (its entry point is `main`), `shared/`
 //! for the structs that mirror clothlab-core's `#[repr(C)]` types and for functions
@@ -21,6 +22,12 @@ pub struct Kernel {
     pub wgsl: &'static str,
     /// SPIR-V 1.3, little-endian words as bytes.
     pub spirv: &'static [u8],
+    /// GLSL 4.50 core for OpenGL, written by naga from the same module (empty for the
+    /// render shader, which is not a compute kernel).
+    pub glsl: &'static str,
+    /// Where the GLSL's bindings go: `(@binding, GL binding point)`, each kind (storage
+    /// blocks, uniform blocks, textures) numbered from 0 in binding order.
+    pub gl_points: &'static [(u32, u8)],
     /// The `@binding` numbers (group 0) its entry point reads (atomics included), as naga
     /// finds them; each checked against `clothlab_core::layout::Buf` by the build.
     pub reads: &'static [u32],
@@ -29,6 +36,8 @@ pub struct Kernel {
 }
 
 include!(concat!(env!("OUT_DIR"), "/kernels.rs"));
+
+include!("glsl_out.rs");
 
 /// What every kernel starts with: the constants generated from `clothlab_core::layout`,
 /// then `shared/types.wgsl`.
@@ -62,6 +71,17 @@ pub fn compile_spirv(name: &str, wgsl: &str) -> Result<Vec<u32>, String> {
     let info = validator.validate(&module).map_err(|e| e.emit_to_string_with_path(wgsl, &path))?;
     let options = naga::back::spv::Options { lang_version: (1, 3), ..Default::default() };
     naga::back::spv::write_vec(&module, &info, &options, None).map_err(|e| format!("SPIR-V output: {e}"))
+}
+
+/// Parses and validates `wgsl` with naga and writes GLSL 4.50 for OpenGL with its binding
+/// points (what the build does for the built-in kernels, at run time).
+pub fn compile_glsl(name: &str, wgsl: &str) -> Result<(String, Vec<(u32, u8)>), String> {
+    let path = format!("{name}.wgsl");
+    let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| e.emit_to_string_with_path(wgsl, &path))?;
+    let mut validator =
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());
+    let info = validator.validate(&module).map_err(|e| e.emit_to_string_with_path(wgsl, &path))?;
+    glsl_450(&module, &info)
 }
 
 /// The kernel called `name`.
@@ -102,6 +122,28 @@ mod tests {
             imm.wgsl.contains("var<immediate> step_params: StepParams;")
                 && !imm.wgsl.contains("var<uniform> step_params")
         );
+    }
+
+    #[test]
+    fn every_compute_kernel_has_glsl_450_with_a_binding_point_for_each_binding_it_uses() {
+        let mut most = 0;
+        for k in KERNELS.iter().filter(|k| k.wgsl.contains("@compute")) {
+            assert!(k.glsl.starts_with("#version 450 core"), "{}: {}", k.name, &k.glsl[..k.glsl.len().min(40)]);
+            assert!(k.glsl.contains("void main()"), "{}", k.name);
+            for b in k.reads.iter().chain(k.writes) {
+                assert!(k.gl_points.iter().any(|(x, _)| x == b), "{}: binding {b} has no GL binding point", k.name);
+            }
+            // Each kind numbered from 0 without gaps: the points of a kind are 0..count.
+            let mut pts: Vec<u8> = k.gl_points.iter().map(|p| p.1).collect();
+            pts.sort_unstable();
+            assert_eq!(pts[0], 0, "{}", k.name);
+            most = most.max(k.gl_points.len());
+        }
+        assert!(most > 0);
+        // The same mapping at run time as at build time.
+        let forces = kernel("forces").unwrap();
+        let (text, points) = compile_glsl("forces", forces.wgsl).unwrap();
+        assert_eq!((text.as_str(), points.as_slice()), (forces.glsl, forces.gl_points));
     }
 
     #[test]

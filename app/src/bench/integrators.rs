@@ -225,13 +225,64 @@ pub fn csv(runs: &[Run]) -> String {
     s
 }
 
+/// The runs of an integrators.csv that [`csv`] wrote (for `--replot`).
+pub fn read_csv(text: &str) -> Result<Vec<Run>> {
+    let mut runs = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1).filter(|(_, l)| !l.trim().is_empty()) {
+        let f: Vec<&str> = line.split(',').collect();
+        let bad = || anyhow::anyhow!("integrators.csv line {}: not a row clothlab wrote", i + 1);
+        if f.len() != 9 {
+            return Err(bad());
+        }
+        let integrator = Integrator::ALL.iter().map(|x| x.name()).find(|x| *x == f[0]).ok_or_else(bad)?;
+        let num = |k: usize| f[k].parse::<f64>().map_err(|_| bad());
+        runs.push(Run {
+            integrator,
+            backend: f[1].to_owned(),
+            n: f[2].parse().map_err(|_| bad())?,
+            substeps: f[3].parse().map_err(|_| bad())?,
+            dt: num(4)?,
+            ns_per_substep: num(5)?,
+            cost: num(6)?,
+            rms: num(7)?,
+            max: num(8)?,
+        });
+    }
+    Ok(runs)
+}
+
+/// Draws the plots of `out`/integrators.csv again (`bench --integrators --replot`); the
+/// machine's label is read from integrators.md beside it.
+pub fn replot(out: &std::path::Path) -> Result<Vec<std::path::PathBuf>> {
+    use anyhow::Context as _;
+    let path = out.join("integrators.csv");
+    let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    let runs = read_csv(&text)?;
+    let md = std::fs::read_to_string(out.join("integrators.md")).unwrap_or_default();
+    let machine = md.lines().find_map(|l| l.strip_prefix("Machine: ")).unwrap_or("unknown machine").to_owned();
+    let mut sizes: Vec<u32> = runs.iter().map(|r| r.n).collect();
+    sizes.dedup();
+    let mut files = Vec::new();
+    for n in sizes {
+        let (svg, png) = both(&WorkPrecision { runs: &runs, n, machine: &machine })?;
+        for (name, bytes) in
+            [(format!("integrators-n{n}.svg"), svg.into_bytes()), (format!("integrators-n{n}.png"), png)]
+        {
+            let p = out.join(name);
+            crate::files::write_bytes(&p, &bytes)?;
+            files.push(p);
+        }
+    }
+    Ok(files)
+}
+
 /// The report section: every run, then the cost at equal accuracy.
 pub fn report(runs: &[Run], notes: &[String], machine: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# clothlab bench --integrators\n\nMachine: {machine}\n");
     let _ = writeln!(
         s,
-        "The default cloth hanging from its two corners, no colliders, no strain limit, no wind, physical stiffness (the same fabric at every n), {SIM_SECONDS} s from rest; the error is the RMS distance of the particles from a reference run on the CPU (below: RK4, or implicit Euler with 64 CG iterations where RK4 cannot run, at the most substeps f32 positions resolve). Cost: wall time per substep (GPU waited for), and compute seconds per simulated second.\n"
+        "The default cloth hanging from its two corners, no colliders, no strain limit, no wind, physical stiffness (the same fabric at every n), {SIM_SECONDS} s from rest; the error is the RMS distance of the particles from a reference run on the CPU (below: RK4 at four times the substeps it needs, or implicit Euler with 64 CG iterations at 1024 substeps where RK4 cannot run). Cost: wall time per substep (GPU waited for), and compute seconds per simulated second.\n"
     );
     let mut sizes: Vec<u32> = runs.iter().map(|r| r.n).collect();
     sizes.dedup();
@@ -327,31 +378,39 @@ impl Figure for WorkPrecision<'_> {
         let (y0, y1) = runs.iter().fold((f64::MAX, 0.0f64), |(a, b), r| (a.min(r.rms), b.max(r.rms)));
         let n = self.n;
         let mut chart = ChartBuilder::on(root)
-            .caption(format!("Work against precision at {n}×{n} — {}", self.machine), (FONT, 20))
+            .caption(
+                format!("Work against precision at {n}×{n} — {} (circles: CPU, triangles: GPU)", self.machine),
+                (FONT, 20),
+            )
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(70)
-            .build_cartesian_2d((x0 / 1.5..x1 * 1.5).log_scale(), (y0 / 2.0..y1 * 2.0).log_scale())
+            // Room on the right for the legend, clear of the costliest runs.
+            .build_cartesian_2d((x0 / 1.5..x1 * 12.0).log_scale(), (y0 / 2.0..y1 * 2.0).log_scale())
             .map_err(err)?;
         chart
             .configure_mesh()
             .x_desc("compute seconds per simulated second (log)")
             .y_desc("RMS error from the reference, m (log)")
+            .x_label_formatter(&|v| format!("{v}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
             .label_style((FONT, 13))
             .draw()
             .map_err(err)?;
         let mut keys: Vec<(&str, &str)> = runs.iter().map(|r| (r.integrator, r.backend.as_str())).collect();
         keys.sort();
         keys.dedup();
+        let mut labelled: Vec<&str> = Vec::new();
         for (i, b) in keys {
             let pts: Vec<(f64, f64)> =
                 runs.iter().filter(|r| r.integrator == i && r.backend == b).map(|r| (r.cost, r.rms)).collect();
             let c = integrator_colour(i);
-            chart
-                .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
-                .map_err(err)?
-                .label(format!("{i} ({b})"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+            let series = chart.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2))).map_err(err)?;
+            // One legend entry per integrator: the marker tells the backend.
+            if !labelled.contains(&i) {
+                labelled.push(i);
+                series.label(i).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+            }
             match b {
                 "cpu" | "cpu-par" => chart.draw_series(pts.iter().map(|p| Circle::new(*p, 4, c.filled()))).map(|_| ()),
                 _ => chart.draw_series(pts.iter().map(|p| TriangleMarker::new(*p, 5, c.filled()))).map(|_| ()),

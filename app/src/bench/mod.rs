@@ -124,6 +124,12 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
         }
         args.out = dir.clone();
     }
+    if args.replot && args.integrators {
+        for f in integrators::replot(&args.out)? {
+            println!("wrote {}", f.display());
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
     if args.replot {
         let path = args.out.join("results.json");
         let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
