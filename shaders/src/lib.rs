@@ -138,6 +138,19 @@ mod tests {
             pts.sort_unstable();
             assert_eq!(pts[0], 0, "{}", k.name);
             most = most.max(k.gl_points.len());
+            // llvmpipe (Mesa 22.3.6) offers 16 storage blocks to a compute shader
+            // (GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS, glxinfo 2026-11-24); the most any
+            // flavor uses today is 10 (cg_begin_sto). GL 4.5 guarantees only 8: a GL engine
+            // must refuse the kernels above its limit in one line.
+            let storage = k
+                .gl_points
+                .iter()
+                .filter(|(b, _)| {
+                    clothlab_core::layout::Buf::from_binding(*b)
+                        .is_some_and(|buf| buf.kind() == clothlab_core::layout::BindKind::Storage)
+                })
+                .count();
+            assert!(storage <= 16, "{}: {storage} storage blocks, more than llvmpipe's 16", k.name);
         }
         assert!(most > 0);
         // The same mapping at run time as at build time.
