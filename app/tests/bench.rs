@@ -323,6 +323,13 @@ fn a_stopped_bench_keeps_its_cells_and_resume_measures_only_the_rest() {
     assert!(report.contains(&said), "the report says `{said}`: {report}");
     assert!(err.contains("--resume"), "{err}");
 
+    // A fresh run in that folder would lose the stopped one's cells: refused, naming
+    // --resume, and nothing changes.
+    let o = clothlab(&args);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("holds a stopped run's") && e.contains("--resume"), "{e}");
+    assert_eq!(journal_cells(&out), kept);
+
     // Another plan is refused in one line, naming what differs, and changes nothing.
     let mut other = args.clone();
     other[4] = "64,128";
@@ -353,6 +360,12 @@ fn a_stopped_bench_keeps_its_cells_and_resume_measures_only_the_rest() {
         let rows = csv.lines().filter(|l| l.starts_with(&format!("kernel,{b},{n},substep,"))).count();
         assert_eq!(rows, 1, "{b} at n = {n}: one substep row");
     }
+    // A finished run's journal is replaced by the next run without a word.
+    let mut small = args.clone();
+    small[4] = "64";
+    let o = clothlab(&small);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(journal_cells(&out).len(), 4, "a new journal: 2 backends × 1 size × 2 rounds");
     std::fs::remove_dir_all(&out).ok();
 }
 

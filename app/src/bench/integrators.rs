@@ -442,3 +442,40 @@ pub fn write(out: &std::path::Path, runs: &[Run], notes: &[String], machine: &st
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_csv_reads_back_what_it_wrote_and_refuses_other_rows() {
+        let run = |integrator, substeps, rms: f64| Run {
+            integrator,
+            backend: "cpu-par".into(),
+            n: 64,
+            substeps,
+            dt: 1.0 / 60.0 / substeps as f64,
+            ns_per_substep: 1234.5,
+            cost: 0.5,
+            rms,
+            max: 2.0 * rms,
+        };
+        let runs = vec![run("xpbd", 16, 6.79e-4), run("rk4", 20, 9.57e-7)];
+        let back = read_csv(&csv(&runs)).unwrap();
+        assert_eq!(back.len(), 2);
+        for (a, b) in runs.iter().zip(&back) {
+            // `{:e}` writes the shortest text that reads back as the same f64: exact.
+            assert_eq!(
+                (a.integrator, &a.backend, a.n, a.substeps, a.dt, a.rms, a.max),
+                (b.integrator, &b.backend, b.n, b.substeps, b.dt, b.rms, b.max)
+            );
+            // Cost and time are written rounded (4 and 1 decimals): these two are exact there.
+            assert_eq!((a.cost, a.ns_per_substep), (b.cost, b.ns_per_substep));
+        }
+        let header =
+            "integrator,backend,n,substeps_per_frame,dt_s,ns_per_substep,cost_s_per_sim_s,rms_error_m,max_error_m\n";
+        let e = read_csv(&format!("{header}leapfrog,cpu,64,8,1e-3,1,1,1,1\n")).unwrap_err();
+        assert!(e.to_string().contains("line 2"), "{e}");
+        assert!(read_csv(&format!("{header}xpbd,cpu,64\n")).is_err(), "a short row");
+    }
+}

@@ -86,9 +86,69 @@ impl Plan {
 #[serde(rename_all = "snake_case")]
 enum Entry {
     Plan(Plan),
-    Cell { n: u32, job: String, round: u32, cell: Cell },
-    Skipped { n: u32, job: String, line: String },
-    Overhead { api: String, adapter: String, rows: Vec<OverheadRow> },
+    Cell {
+        n: u32,
+        job: String,
+        round: u32,
+        cell: Cell,
+    },
+    Skipped {
+        n: u32,
+        job: String,
+        line: String,
+    },
+    Overhead {
+        api: String,
+        adapter: String,
+        rows: Vec<OverheadRow>,
+    },
+    /// The run ended (completed, or stopped with its report written after the last cell
+    /// it could take); a journal without it is a run killed mid-way.
+    Done {
+        complete: bool,
+    },
+}
+
+/// What a journal file holds.
+#[derive(Default)]
+struct Contents {
+    plan: Option<Plan>,
+    cells: HashMap<(u32, String, u32), Cell>,
+    skipped: HashMap<(u32, String), String>,
+    overhead: HashMap<String, (String, Vec<OverheadRow>)>,
+    /// The last `Done` entry's `complete`, if any.
+    done: Option<bool>,
+}
+
+/// Reads the journal at `path`. A line cut short by a kill is the last one: it is skipped,
+/// and what it held is measured again.
+fn read(path: &Path) -> Result<Contents> {
+    let file = File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut c = Contents::default();
+    for (i, line) in BufReader::new(file).lines().enumerate() {
+        let line = line.with_context(|| format!("cannot read {}", path.display()))?;
+        if line.trim().is_empty() {
+            continue;
+        }
+        let Ok(entry) = serde_json::from_str::<Entry>(&line) else {
+            log::warn!("{}:{}: not a whole entry; measured again", path.display(), i + 1);
+            continue;
+        };
+        match entry {
+            Entry::Plan(p) => c.plan = Some(p),
+            Entry::Cell { n, job, round, cell } => {
+                c.cells.insert((n, job, round), cell);
+            }
+            Entry::Skipped { n, job, line } => {
+                c.skipped.insert((n, job), line);
+            }
+            Entry::Overhead { api, adapter, rows } => {
+                c.overhead.insert(api, (adapter, rows));
+            }
+            Entry::Done { complete } => c.done = Some(complete),
+        }
+    }
+    Ok(c)
 }
 
 /// The journal of a run: what was already there (when resumed) and the open file that
@@ -102,9 +162,25 @@ pub struct Journal {
 }
 
 impl Journal {
-    /// A new journal in `dir` for `plan` (any journal there before is replaced).
+    /// A new journal in `dir` for `plan`. The journal of a finished run there is
+    /// replaced; one of a stopped run (its cells not yet in a complete report) is refused
+    /// in one line, so that hours of measurement are not lost to a run started without
+    /// `--resume`.
     pub fn create(dir: &Path, plan: &Plan) -> Result<Journal> {
         let path = dir.join(FILE);
+        if path.is_file() {
+            let old = read(&path)?;
+            if old.done != Some(true) && !old.cells.is_empty() {
+                bail!(
+                    "{} holds a stopped run's {} cells: `--resume {}` with its options (`{}`) finishes it; delete {} to start over",
+                    dir.display(),
+                    old.cells.len(),
+                    dir.display(),
+                    old.plan.map(|p| p.command).unwrap_or_default(),
+                    path.display()
+                );
+            }
+        }
         let file = File::create(&path).with_context(|| format!("cannot write {}", path.display()))?;
         let mut j = Journal { path, file, cells: HashMap::new(), skipped: HashMap::new(), overhead: HashMap::new() };
         j.append(&Entry::Plan(plan.clone()))?;
@@ -115,48 +191,8 @@ impl Journal {
     /// `plan`; new entries go on at its end.
     pub fn resume(dir: &Path, plan: &Plan) -> Result<Journal> {
         let path = dir.join(FILE);
-        let file = File::open(&path).with_context(|| {
-            format!(
-                "--resume {}: no {FILE} there (not a folder a bench run wrote, or one from before resuming existed)",
-                dir.display()
-            )
-        })?;
-        let mut j = Journal {
-            path: path.clone(),
-            file: File::options()
-                .append(true)
-                .open(&path)
-                .with_context(|| format!("cannot write {}", path.display()))?,
-            cells: HashMap::new(),
-            skipped: HashMap::new(),
-            overhead: HashMap::new(),
-        };
-        let mut stored: Option<Plan> = None;
-        for (i, line) in BufReader::new(file).lines().enumerate() {
-            let line = line.with_context(|| format!("cannot read {}", path.display()))?;
-            if line.trim().is_empty() {
-                continue;
-            }
-            // A line cut short by the stop itself is the last one: what it held is
-            // measured again.
-            let Ok(entry) = serde_json::from_str::<Entry>(&line) else {
-                log::warn!("{}:{}: not a whole entry; measured again", path.display(), i + 1);
-                continue;
-            };
-            match entry {
-                Entry::Plan(p) => stored = Some(p),
-                Entry::Cell { n, job, round, cell } => {
-                    j.cells.insert((n, job, round), cell);
-                }
-                Entry::Skipped { n, job, line } => {
-                    j.skipped.insert((n, job), line);
-                }
-                Entry::Overhead { api, adapter, rows } => {
-                    j.overhead.insert(api, (adapter, rows));
-                }
-            }
-        }
-        let Some(stored) = stored else { bail!("--resume {}: {FILE} has no plan", dir.display()) };
+        let old = read(&path)?;
+        let Some(stored) = old.plan else { bail!("--resume {}: {FILE} has no plan", dir.display()) };
         if let Some(d) = stored.difference(plan) {
             bail!(
                 "--resume {}: this run's plan differs from the stopped one's ({d}); resume with the stopped run's options (`{}`) on the same machine and build",
@@ -164,7 +200,9 @@ impl Journal {
                 stored.command
             );
         }
-        Ok(j)
+        let file =
+            File::options().append(true).open(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(Journal { path, file, cells: old.cells, skipped: old.skipped, overhead: old.overhead })
     }
 
     fn append(&mut self, e: &Entry) -> Result<()> {
@@ -204,6 +242,12 @@ impl Journal {
     /// Records a cell skipped over the budget.
     pub fn add_skipped(&mut self, n: u32, job: &str, line: &str) -> Result<()> {
         self.append(&Entry::Skipped { n, job: job.to_owned(), line: line.to_owned() })
+    }
+
+    /// Records the end of the run: `complete` when every cell and overhead benchmark is
+    /// in its report.
+    pub fn finish(&mut self, complete: bool) -> Result<()> {
+        self.append(&Entry::Done { complete })
     }
 
     /// Records an API's overhead benchmarks.

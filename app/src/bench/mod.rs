@@ -387,7 +387,11 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
             }
             bar.set_message(format!("API overhead: {api}"));
             let (adapter, rows) = match journal.overhead(api) {
-                Some(done) => done,
+                Some(done) => {
+                    overhead.push((api.to_owned(), done.0, done.1));
+                    bar.inc(1);
+                    continue;
+                }
                 None if api == "wgpu" => {
                     let ctx = GpuContext::new()?;
                     let rows =
@@ -408,8 +412,10 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     }
     bar.finish_and_clear();
     // A stop during the overhead benchmarks leaves every cell measured, not every API's
-    // overhead.
-    let interrupted = (interrupted || journal::stopping()).then(|| {
+    // overhead (a stop during the last cell, with nothing after it, interrupts nothing).
+    let apis = usize::from(devices.wgpu.is_some()) + usize::from(devices.vulkan.is_some());
+    let overhead_missing = !args.no_overhead && overhead.len() < apis;
+    let interrupted = (interrupted || journal::stopping() && overhead_missing).then(|| {
         if done_cells == total_cells {
             format!("after all {total_cells} cells, before every API's overhead benchmarks")
         } else {
@@ -437,6 +443,7 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
         interrupted,
     });
     let files = output::write_all(&results, &args.out)?;
+    journal.finish(results.interrupted.is_none())?;
     for f in &files {
         println!("wrote {}", f.display());
     }
