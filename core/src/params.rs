@@ -270,6 +270,22 @@ pub const MAX_CG_ITERATIONS: u32 = 256;
 pub const MAX_STRAIN_ITERATIONS: u32 = 64;
 
 impl SimParams {
+    /// These parameters with soft springs and heavy damping (Σζ > Σκ in fractions of the
+    /// stability limit): a fabric every integrator runs at the default substeps, explicit
+    /// Euler and the midpoint method included — the common ground of the integrator
+    /// tests (engine/tests/integrators.rs, tests/tests/integrators.rs, free_fall.rs).
+    pub fn with_soft_springs(self) -> SimParams {
+        SimParams {
+            structural_stiffness: 0.1,
+            shear_stiffness: 0.03,
+            bend_stiffness: 0.01,
+            structural_damping: 0.2,
+            shear_damping: 0.1,
+            bend_damping: 0.05,
+            ..self
+        }
+    }
+
     /// Duration of one substep, seconds.
     pub fn dt(&self) -> f32 {
         self.frame_dt / self.substeps as f32

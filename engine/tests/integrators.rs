@@ -273,16 +273,11 @@ fn the_fast_cpu_solvers_compute_the_bits_of_every_integrators_recipe() {
             wind: [2.0, 0.0, 1.0],
             strain_iterations: 2,
             integrator,
-            structural_stiffness: 0.1,
-            shear_stiffness: 0.03,
-            bend_stiffness: 0.01,
-            structural_damping: 0.2,
-            shear_damping: 0.1,
-            bend_damping: 0.05,
             cg_iterations: 8,
             xpbd_iterations: 2,
             ..SimParams::default()
-        };
+        }
+        .with_soft_springs();
         let scene = Scene::with_n(37);
         let mut engine = RecipeSolver::new(Exec::Serial, Variant::OPTIMIZED, scene.clone(), params.clone()).unwrap();
         let mut serial = CpuSolver::new(Exec::Serial, scene.clone(), params.clone()).unwrap();

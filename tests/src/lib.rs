@@ -7,7 +7,7 @@
 //!
 //! How it fits: it depends on every other crate and is depended on by none; this library
 //! holds what the test files share (solver factories that skip or fail without an
-//! adapter, soft-spring parameters, the backends to loop over). Where each test lives and
+//! adapter, the backends to loop over, the test view). Where each test lives and
 //! what it checks: docs/testing.md.
 #![forbid(unsafe_code)]
 
@@ -20,20 +20,6 @@ use clothlab_wgpu::{SolverOptions, wgpu_solver};
 /// The view the picture tests draw: the default camera, the light up and to the side.
 pub fn test_view(mode: RenderMode) -> View {
     View { camera: OrbitCamera::default(), light: [2.0, 5.5, 3.0], mode }
-}
-
-/// `base` with soft springs and heavy damping (Σζ > Σκ), so that explicit Euler and the
-/// midpoint method may run too.
-pub fn soft_springs(base: SimParams) -> SimParams {
-    SimParams {
-        structural_stiffness: 0.1,
-        shear_stiffness: 0.03,
-        bend_stiffness: 0.01,
-        structural_damping: 0.2,
-        shear_damping: 0.1,
-        bend_damping: 0.05,
-        ..base
-    }
 }
 
 /// Whether GPU tests must fail rather than skip without an adapter.

@@ -16,7 +16,7 @@
 
 use clothlab_core::scene::Pinning;
 use clothlab_core::{Integrator, Scene, SimParams};
-use clothlab_tests::{backends, every_backend, soft_springs};
+use clothlab_tests::{backends, every_backend};
 
 /// A free 12 × 12 cloth of 0.5 m, tilted 37° about x, its top edge at `height` m: no pins,
 /// no floor, no colliders.
@@ -35,14 +35,8 @@ fn scene(height: f32) -> Scene {
 /// Soft springs with heavy damping (Σζ > Σκ), so that explicit Euler and the midpoint
 /// method run too; no drag, no damping of the motion, no wind.
 fn params(integrator: Integrator, substeps: u32) -> SimParams {
-    soft_springs(SimParams {
-        integrator,
-        substeps,
-        air_drag: 0.0,
-        damping: 0.0,
-        wind: [0.0; 3],
-        ..SimParams::default()
-    })
+    SimParams { integrator, substeps, air_drag: 0.0, damping: 0.0, wind: [0.0; 3], ..SimParams::default() }
+        .with_soft_springs()
 }
 
 /// The centre of mass, in f64.

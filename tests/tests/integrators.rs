@@ -7,21 +7,22 @@
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Integrator, Scene, SimParams, Solver};
 use clothlab_engine::Variant;
-use clothlab_tests::{or_skip, soft_springs};
+use clothlab_tests::or_skip;
 use clothlab_vulkan::vulkan_solver;
 use clothlab_wgpu::{SolverOptions, wgpu_solver};
 
 /// Soft springs with heavy damping (Σζ > Σκ), so that explicit Euler and the midpoint
 /// method may run too; wind on, two strain passes.
 fn params(integrator: Integrator) -> SimParams {
-    soft_springs(SimParams {
+    SimParams {
         integrator,
         wind: [2.0, 0.0, 1.0],
         strain_iterations: 2,
         // Two Gauss–Seidel iterations: λ carried from one to the next.
         xpbd_iterations: 2,
         ..SimParams::default()
-    })
+    }
+    .with_soft_springs()
 }
 
 #[test]
