@@ -211,17 +211,17 @@ fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
     // Compute kernels also as GLSL 4.50 for OpenGL (issue 33), checked here like the
     // SPIR-V: a flavor naga cannot write fails the build.
     let compute = module.entry_points.iter().any(|e| e.stage == naga::ShaderStage::Compute && e.name == "main");
-    let (glsl, points) = if compute {
+    let (glsl, points, uniforms) = if compute {
         glsl_450(&module, &info).unwrap_or_else(|e| fail(format!("{name}: {e}")))
     } else {
-        (String::new(), Vec::new())
+        (String::new(), Vec::new(), Vec::new())
     };
     fs::write(out.join(format!("{name}.glsl")), glsl).expect("write GLSL");
     writeln!(
         list,
         "    Kernel {{ name: {name:?}, wgsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.wgsl\")), \
          spirv: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")), \
-         glsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.glsl\")), gl_points: &{points:?}, \
+         glsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.glsl\")), gl_points: &{points:?}, gl_uniforms: &{uniforms:?}, \
          reads: &{reads:?}, writes: &{writes:?} }},"
     )
     .expect("write to string");

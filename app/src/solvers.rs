@@ -12,6 +12,7 @@ use clothlab_engine::gpu::Engine as _;
 use clothlab_engine::recipe::Command as StepCommand;
 use clothlab_engine::validate::KernelRunner;
 use clothlab_engine::{Caps, GpuSolver, KernelRef, SolverOptions, Variant, VariantSpec};
+use clothlab_gl::{GlEngine, GlSolver};
 use clothlab_vulkan::{Device, VkCloth, VulkanEngine, VulkanSolver};
 use clothlab_wgpu::{ClothSource, GpuContext, WgpuEngine, WgpuSolver};
 
@@ -30,6 +31,11 @@ pub enum Backend {
     VulkanNaive,
     /// Raw Vulkan, the optimized recipe with push constants.
     Vulkan,
+    /// Raw OpenGL 4.5, the naive recipe (same kernels, naga's GLSL).
+    GlNaive,
+    /// Raw OpenGL 4.5, the optimized recipe (constants in a uniform or storage block: GL
+    /// has no push constants).
+    Gl,
 }
 
 impl Backend {
@@ -42,6 +48,8 @@ impl Backend {
             Backend::Wgpu => "wgpu",
             Backend::VulkanNaive => "vulkan-naive",
             Backend::Vulkan => "vulkan",
+            Backend::GlNaive => "gl-naive",
+            Backend::Gl => "gl",
         }
     }
 
@@ -51,14 +59,15 @@ impl Backend {
             Backend::Cpu | Backend::CpuPar => None,
             Backend::WgpuNaive | Backend::Wgpu => Some(Api::Wgpu),
             Backend::VulkanNaive | Backend::Vulkan => Some(Api::Vulkan),
+            Backend::GlNaive | Backend::Gl => Some(Api::Gl),
         }
     }
 
     /// The preset a GPU backend runs unless told otherwise.
     pub fn preset(self) -> Option<&'static str> {
         match self {
-            Backend::Wgpu | Backend::Vulkan => Some("optimized"),
-            Backend::WgpuNaive | Backend::VulkanNaive => Some("naive"),
+            Backend::Wgpu | Backend::Vulkan | Backend::Gl => Some("optimized"),
+            Backend::WgpuNaive | Backend::VulkanNaive | Backend::GlNaive => Some("naive"),
             Backend::Cpu | Backend::CpuPar => None,
         }
     }
@@ -66,7 +75,7 @@ impl Backend {
     /// The variant a GPU backend runs unless told otherwise.
     pub fn variant(self) -> Variant {
         match self {
-            Backend::WgpuNaive | Backend::VulkanNaive => Variant::NAIVE,
+            Backend::WgpuNaive | Backend::VulkanNaive | Backend::GlNaive => Variant::NAIVE,
             _ => Variant::OPTIMIZED,
         }
     }
@@ -79,6 +88,40 @@ pub enum Api {
     Wgpu,
     /// Raw Vulkan through ash.
     Vulkan,
+    /// Raw OpenGL 4.5 core through glow.
+    Gl,
+}
+
+impl Api {
+    /// The name solver names start with and reports use: `wgpu`, `vulkan`, `gl`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Api::Wgpu => "wgpu",
+            Api::Vulkan => "vulkan",
+            Api::Gl => "gl",
+        }
+    }
+
+    /// The naive backend of this API (the ladder's base).
+    pub fn naive(self) -> Backend {
+        match self {
+            Api::Wgpu => Backend::WgpuNaive,
+            Api::Vulkan => Backend::VulkanNaive,
+            Api::Gl => Backend::GlNaive,
+        }
+    }
+
+    /// Refuses drawing through this API where no renderer exists for it yet, in one line.
+    pub fn check_renderer(self) -> Result<()> {
+        if self == Api::Gl { Err(no_gl_renderer()) } else { Ok(()) }
+    }
+}
+
+/// Why `--api gl` cannot draw yet.
+pub fn no_gl_renderer() -> anyhow::Error {
+    anyhow::anyhow!(
+        "--api gl: the OpenGL renderer is not built yet; the gl backends run under --api wgpu or --api vulkan (their cloth drawn from a copy)"
+    )
 }
 
 /// Whether the Vulkan backends run with the Khronos validation layer: in debug builds,
@@ -116,6 +159,8 @@ pub enum AnySolver {
     Wgpu(Box<WgpuSolver>, bool),
     /// Raw Vulkan; `true` when on the shared device.
     Vulkan(Box<VulkanSolver>, bool),
+    /// Raw OpenGL, on a headless context of its own.
+    Gl(Box<GlSolver>),
 }
 
 /// Makes a solver of `backend`: on `shared`'s device where it is a GPU solver of that
@@ -151,6 +196,9 @@ pub fn make(
             let engine = VulkanEngine::new(vulkan_validation())?;
             AnySolver::Vulkan(Box::new(GpuSolver::new(engine, v, scene, params, options)?), false)
         }
+        (Backend::GlNaive | Backend::Gl, _) => {
+            AnySolver::Gl(Box::new(GpuSolver::new(GlEngine::new()?, v, scene, params, options)?))
+        }
     })
 }
 
@@ -161,6 +209,7 @@ impl AnySolver {
             AnySolver::Cpu(s) => s.as_mut(),
             AnySolver::Wgpu(s, _) => s.as_mut(),
             AnySolver::Vulkan(s, _) => s.as_mut(),
+            AnySolver::Gl(s) => s.as_mut(),
         }
     }
 
@@ -170,6 +219,7 @@ impl AnySolver {
             AnySolver::Cpu(s) => s.as_ref(),
             AnySolver::Wgpu(s, _) => s.as_ref(),
             AnySolver::Vulkan(s, _) => s.as_ref(),
+            AnySolver::Gl(s) => s.as_ref(),
         }
     }
 
@@ -179,6 +229,7 @@ impl AnySolver {
             AnySolver::Cpu(_) => None,
             AnySolver::Wgpu(s, _) => Some(s.as_mut()),
             AnySolver::Vulkan(s, _) => Some(s.as_mut()),
+            AnySolver::Gl(s) => Some(s.as_mut()),
         }
     }
 
@@ -188,6 +239,7 @@ impl AnySolver {
             AnySolver::Cpu(_) => Vec::new(),
             AnySolver::Wgpu(s, _) => s.commands(),
             AnySolver::Vulkan(s, _) => s.commands(),
+            AnySolver::Gl(s) => s.commands(),
         }
     }
 
@@ -197,6 +249,7 @@ impl AnySolver {
             AnySolver::Cpu(_) => Vec::new(),
             AnySolver::Wgpu(s, _) => s.recipe_kernels(),
             AnySolver::Vulkan(s, _) => s.recipe_kernels(),
+            AnySolver::Gl(s) => s.recipe_kernels(),
         }
     }
 
@@ -206,6 +259,7 @@ impl AnySolver {
             AnySolver::Cpu(_) => None,
             AnySolver::Wgpu(s, _) => Some((s.caps(), s.engine().info().api)),
             AnySolver::Vulkan(s, _) => Some((s.caps(), s.engine().info().api)),
+            AnySolver::Gl(s) => Some((s.caps(), s.engine().info().api)),
         }
     }
 
@@ -215,6 +269,7 @@ impl AnySolver {
             AnySolver::Cpu(_) => None,
             AnySolver::Wgpu(s, _) => Some(s.variant()),
             AnySolver::Vulkan(s, _) => Some(s.variant()),
+            AnySolver::Gl(s) => Some(s.variant()),
         }
     }
 
@@ -224,15 +279,17 @@ impl AnySolver {
             AnySolver::Cpu(_) => "CPU".into(),
             AnySolver::Wgpu(s, _) => s.adapter(),
             AnySolver::Vulkan(s, _) => format!("{} (Vulkan)", s.adapter()),
+            AnySolver::Gl(s) => s.adapter(),
         }
     }
 
     /// Waits until the solver's last frame is done on the GPU.
-    pub fn finish(&self) -> Result<()> {
+    pub fn finish(&mut self) -> Result<()> {
         match self {
             AnySolver::Cpu(_) => Ok(()),
             AnySolver::Wgpu(s, _) => Ok(s.engine().context().wait_idle()?),
             AnySolver::Vulkan(s, _) => Ok(s.engine().device().wait_idle()?),
+            AnySolver::Gl(s) => Ok(s.finish()?),
         }
     }
 }

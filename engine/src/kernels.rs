@@ -453,6 +453,27 @@ impl KernelRef {
         }
     }
 
+    /// GLSL 4.50 core for OpenGL with where its bindings go and its immediates' uniforms
+    /// (see [`clothlab_shaders::Kernel::gl_points`] and `gl_uniforms`).
+    pub fn glsl(&self) -> Result<Glsl, EngineError> {
+        match self.def.source {
+            Source::Builtin => {
+                let k = self.builtin()?;
+                Ok(Glsl {
+                    text: Cow::Borrowed(k.glsl),
+                    points: k.gl_points.to_vec(),
+                    uniforms: k.gl_uniforms.iter().map(|&(n, o, c, w)| (n.to_string(), o, c, w)).collect(),
+                })
+            }
+            Source::Wgsl { .. } => {
+                let wgsl = self.wgsl()?;
+                let (text, points, uniforms) =
+                    clothlab_shaders::compile_glsl(self.def.name, &wgsl).map_err(|e| self.error(e))?;
+                Ok(Glsl { text: Cow::Owned(text), points, uniforms })
+            }
+        }
+    }
+
     fn builtin(&self) -> Result<&'static clothlab_shaders::Kernel, EngineError> {
         clothlab_shaders::kernel(&self.shader_name())
             .ok_or_else(|| self.error(format!("no shader {} in clothlab-shaders", self.shader_name())))
@@ -461,6 +482,17 @@ impl KernelRef {
     fn error(&self, reason: String) -> EngineError {
         EngineError::Shader { kernel: self.shader_name(), reason }
     }
+}
+
+/// A kernel's GLSL for OpenGL ([`KernelRef::glsl`]).
+#[derive(Debug, Clone)]
+pub struct Glsl {
+    /// The GLSL 4.50 core text.
+    pub text: Cow<'static, str>,
+    /// `(@binding, GL binding point)`, each kind numbered from 0.
+    pub points: Vec<(u32, u8)>,
+    /// The immediates as uniforms: `(name, byte offset, 'u' | 'i' | 'f', components)`.
+    pub uniforms: Vec<(String, u32, char, u8)>,
 }
 
 /// The bytes `k` must move at least once per dispatch on `topo` (its compulsory

@@ -275,6 +275,18 @@ impl<E: Engine> GpuSolver<E> {
         &self.engine
     }
 
+    /// Blocks until everything submitted is done (then fails with what the driver
+    /// reported, if anything).
+    pub fn finish(&mut self) -> Result<(), SolverError> {
+        self.engine.finish()?;
+        self.engine.check("finishing the frame")
+    }
+
+    /// Fails with what the driver (or validation layer) reported since the last check.
+    pub fn check(&mut self, what: &'static str) -> Result<(), SolverError> {
+        self.engine.check(what)
+    }
+
     /// The buffer bound as `buf` now (the position pair by the current parity).
     fn id(&self, buf: Buf) -> Option<BufferId> {
         match buf {

@@ -2,12 +2,19 @@
 // kernels, written at build time) and lib.rs (kernels composed at run time), through
 // `include!`, so that both map bindings the same way.
 
+/// What [`glsl_450`] writes: the text, the binding points, the immediates' uniforms.
+pub type GlslOut = (String, Vec<(u32, u8)>, Vec<(String, u32, char, u8)>);
+
 /// The GLSL of `module`'s compute entry point `main`, for OpenGL 4.5 core, and where each
 /// of its `@binding`s (group 0) goes: `(binding, binding point)`. GL numbers shader
 /// storage blocks, uniform blocks and texture units apart, and a compute shader may use
 /// only a few of each (16 storage blocks on llvmpipe), so every kind is numbered from 0
 /// in binding order, over the bindings this module declares.
-pub fn glsl_450(module: &naga::Module, info: &naga::valid::ModuleInfo) -> Result<(String, Vec<(u32, u8)>), String> {
+///
+/// GL has no push constants: naga writes a module's immediates as plain uniforms, one per
+/// scalar or vector, set with `glUniform*` before each dispatch. The third part lists them:
+/// `(uniform name, byte offset in the immediates, kind 'u' | 'i' | 'f', components)`.
+pub fn glsl_450(module: &naga::Module, info: &naga::valid::ModuleInfo) -> Result<GlslOut, String> {
     let mut points = Vec::new();
     let (mut storage, mut uniform, mut texture) = (0u8, 0u8, 0u8);
     let mut bound: Vec<(u32, &naga::GlobalVariable)> =
@@ -48,6 +55,24 @@ pub fn glsl_450(module: &naga::Module, info: &naga::valid::ModuleInfo) -> Result
         naga::proc::BoundsCheckPolicies::default(),
     )
     .map_err(|e| format!("GLSL output: {e}"))?;
-    writer.write().map_err(|e| format!("GLSL output: {e}"))?;
-    Ok((text, points))
+    let reflection = writer.write().map_err(|e| format!("GLSL output: {e}"))?;
+    let mut uniforms = Vec::new();
+    for item in reflection.immediates_items {
+        use naga::back::glsl::{GlslScalarKind as K, GlslUniformType as T};
+        let (scalar, components) = match item.ty {
+            T::Scalar(s) => (s, 1),
+            T::Vector { size, scalar } => (scalar, size as u8),
+            T::Matrix { .. } => return Err(format!("immediate {}: a matrix (not set on GL)", item.access_path)),
+        };
+        if scalar.width != 4 {
+            return Err(format!("immediate {}: {}-byte scalars (not set on GL)", item.access_path, scalar.width));
+        }
+        let kind = match scalar.kind {
+            K::Uint => 'u',
+            K::Sint => 'i',
+            K::Float => 'f',
+        };
+        uniforms.push((item.access_path, item.offset, kind, components));
+    }
+    Ok((text, points, uniforms))
 }

@@ -28,6 +28,9 @@ pub struct Kernel {
     /// Where the GLSL's bindings go: `(@binding, GL binding point)`, each kind (storage
     /// blocks, uniform blocks, textures) numbered from 0 in binding order.
     pub gl_points: &'static [(u32, u8)],
+    /// Its immediates as GL uniforms (GL has no push constants; naga writes them as
+    /// uniforms): `(name, byte offset, 'u' | 'i' | 'f', components)`.
+    pub gl_uniforms: &'static [(&'static str, u32, char, u8)],
     /// The `@binding` numbers (group 0) its entry point reads (atomics included), as naga
     /// finds them; each checked against `clothlab_core::layout::Buf` by the build.
     pub reads: &'static [u32],
@@ -75,7 +78,7 @@ pub fn compile_spirv(name: &str, wgsl: &str) -> Result<Vec<u32>, String> {
 
 /// Parses and validates `wgsl` with naga and writes GLSL 4.50 for OpenGL with its binding
 /// points (what the build does for the built-in kernels, at run time).
-pub fn compile_glsl(name: &str, wgsl: &str) -> Result<(String, Vec<(u32, u8)>), String> {
+pub fn compile_glsl(name: &str, wgsl: &str) -> Result<GlslOut, String> {
     let path = format!("{name}.wgsl");
     let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| e.emit_to_string_with_path(wgsl, &path))?;
     let mut validator =
@@ -155,8 +158,14 @@ mod tests {
         assert!(most > 0);
         // The same mapping at run time as at build time.
         let forces = kernel("forces").unwrap();
-        let (text, points) = compile_glsl("forces", forces.wgsl).unwrap();
+        let (text, points, uniforms) = compile_glsl("forces", forces.wgsl).unwrap();
         assert_eq!((text.as_str(), points.as_slice()), (forces.glsl, forces.gl_points));
+        assert!(uniforms.is_empty() && forces.gl_uniforms.is_empty());
+        // The statistics' substep index (a u32 immediate) is one uniform at offset 0; the
+        // `_imm` twins' step constants are many.
+        assert_eq!(kernel("stats_atomic").unwrap().gl_uniforms, &[("_immediates_binding_cs.substep", 0, 'u', 1)]);
+        let imm = kernel("forces_imm").unwrap().gl_uniforms;
+        assert!(imm.len() > 8 && imm.windows(2).all(|w| w[0].1 < w[1].1), "{imm:?}");
     }
 
     #[test]

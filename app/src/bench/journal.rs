@@ -35,6 +35,9 @@ pub struct Plan {
     pub wgpu_adapter: Option<String>,
     /// The Vulkan device, if any.
     pub vulkan_adapter: Option<String>,
+    /// The OpenGL context, if any (absent in journals from before GL).
+    #[serde(default)]
+    pub gl_adapter: Option<String>,
     /// The jobs of every size (backends, or the ladder's rungs), by their cells' names.
     pub jobs: Vec<String>,
     /// Grid sizes.

@@ -64,12 +64,15 @@ enum Painter {
 struct Devices {
     wgpu: Option<GpuContext>,
     vulkan: Option<Device>,
+    /// The OpenGL context's description (a probe's; every GL cell opens its own).
+    gl: Option<String>,
     wgpu_error: Option<String>,
     vulkan_error: Option<String>,
+    gl_error: Option<String>,
 }
 
 impl Devices {
-    fn open(need_wgpu: bool, need_vulkan: bool) -> Self {
+    fn open(need_wgpu: bool, need_vulkan: bool, need_gl: bool) -> Self {
         let (wgpu, wgpu_error) = if need_wgpu {
             match GpuContext::new() {
                 Ok(c) => (Some(c), None),
@@ -86,7 +89,15 @@ impl Devices {
         } else {
             (None, None)
         };
-        Self { wgpu, vulkan, wgpu_error, vulkan_error }
+        let (gl, gl_error) = if need_gl {
+            match clothlab_gl::GlEngine::new() {
+                Ok(e) => (Some(e.describe()), None),
+                Err(e) => (None, Some(e.to_string())),
+            }
+        } else {
+            (None, None)
+        };
+        Self { wgpu, vulkan, gl, wgpu_error, vulkan_error, gl_error }
     }
 }
 
@@ -96,6 +107,10 @@ fn is_vulkan(b: Backend) -> bool {
 
 fn is_wgpu(b: Backend) -> bool {
     matches!(b, Backend::WgpuNaive | Backend::Wgpu)
+}
+
+fn is_gl(b: Backend) -> bool {
+    matches!(b, Backend::GlNaive | Backend::Gl)
 }
 
 /// The CPU in one line: model and logical cores.
@@ -189,11 +204,13 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     // Every backend draws its frames; CPU backends draw through wgpu (or Vulkan without it).
     let need_wgpu = backends.iter().any(|&b| is_wgpu(b) || !is_vulkan(b)) || !args.no_overhead;
     let need_vulkan = backends.iter().any(|&b| is_vulkan(b)) || !args.no_overhead;
-    let devices = Devices::open(need_wgpu, need_vulkan);
+    let need_gl = backends.iter().any(|&b| is_gl(b)) || !args.no_overhead;
+    let devices = Devices::open(need_wgpu, need_vulkan, need_gl);
     let mut notes = Vec::new();
     for (api, err, present) in [
         ("wgpu", &devices.wgpu_error, backends.iter().any(|&b| is_wgpu(b))),
         ("Vulkan", &devices.vulkan_error, backends.iter().any(|&b| is_vulkan(b))),
+        ("OpenGL", &devices.gl_error, backends.iter().any(|&b| is_gl(b))),
     ] {
         if let Some(e) = err {
             let what = if present { "its backends and overhead benchmarks are skipped" } else { "skipped" };
@@ -201,7 +218,11 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
             notes.push(format!("no {api} adapter: {e}"));
         }
     }
-    backends.retain(|&b| !(is_wgpu(b) && devices.wgpu.is_none() || is_vulkan(b) && devices.vulkan.is_none()));
+    backends.retain(|&b| {
+        !(is_wgpu(b) && devices.wgpu.is_none()
+            || is_vulkan(b) && devices.vulkan.is_none()
+            || is_gl(b) && devices.gl.is_none())
+    });
     if backends.is_empty() {
         bail!("none of the requested backends can run here (no GPU adapter); try --backends cpu,cpu-par");
     }
@@ -210,11 +231,11 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     // --ladder the rungs of each GPU API's ladder and the thesis preset.
     let mut jobs: Vec<Job> = Vec::new();
     if args.ladder {
-        for api in [Api::Wgpu, Api::Vulkan] {
+        for api in [Api::Wgpu, Api::Vulkan, Api::Gl] {
             if !backends.iter().any(|b| b.api() == Some(api)) {
                 continue;
             }
-            let backend = if api == Api::Wgpu { Backend::WgpuNaive } else { Backend::VulkanNaive };
+            let backend = api.naive();
             let probe = make(backend, Scene::with_n(4), params.clone(), &GpuSetup::default(), &Shared::None)
                 .with_context(|| format!("probing {} for the ladder", backend.name()))?;
             let (caps, api_name) = probe.caps().context("a GPU backend")?;
@@ -250,7 +271,8 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     }
 
     let overhead_apis = usize::from(!args.no_overhead && devices.wgpu.is_some())
-        + usize::from(!args.no_overhead && devices.vulkan.is_some());
+        + usize::from(!args.no_overhead && devices.vulkan.is_some())
+        + usize::from(!args.no_overhead && devices.gl.is_some());
     let bar = ProgressBar::new((sizes.len() * jobs.len() * args.repeat as usize + overhead_apis) as u64);
     bar.set_style(
         ProgressStyle::with_template("{bar:32} {pos}/{len} [{elapsed_precise}] {msg}")
@@ -266,6 +288,7 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
         machine: machine.clone(),
         wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
         vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name().to_owned()),
+        gl_adapter: devices.gl.clone(),
         jobs: jobs.iter().map(Job::label).collect(),
         sizes: sizes.clone(),
         frames,
@@ -380,8 +403,12 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     // Fresh devices, never drawn on (lavapipe's timestamps, see run_cell).
     let mut overhead: Vec<(String, String, Vec<OverheadRow>)> = Vec::new();
     if !args.no_overhead && !interrupted {
-        for api in ["wgpu", "vulkan"] {
-            let present = if api == "wgpu" { devices.wgpu.is_some() } else { devices.vulkan.is_some() };
+        for api in ["wgpu", "vulkan", "gl"] {
+            let present = match api {
+                "wgpu" => devices.wgpu.is_some(),
+                "vulkan" => devices.vulkan.is_some(),
+                _ => devices.gl.is_some(),
+            };
             if !present || journal::stopping() {
                 continue;
             }
@@ -398,6 +425,10 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
                         clothlab_wgpu::overhead::measure(&ctx, &overhead_plan).context("wgpu overhead benchmarks")?;
                     (ctx.describe(), rows)
                 }
+                None if api == "gl" => {
+                    let rows = clothlab_gl::overhead::measure(&overhead_plan).context("OpenGL overhead benchmarks")?;
+                    (devices.gl.clone().unwrap_or_default(), rows)
+                }
                 None => {
                     let dev = Device::new(vulkan_validation())?;
                     let rows = clothlab_vulkan::overhead::measure(&dev, &overhead_plan)
@@ -413,7 +444,8 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     bar.finish_and_clear();
     // A stop during the overhead benchmarks leaves every cell measured, not every API's
     // overhead (a stop during the last cell, with nothing after it, interrupts nothing).
-    let apis = usize::from(devices.wgpu.is_some()) + usize::from(devices.vulkan.is_some());
+    let apis =
+        usize::from(devices.wgpu.is_some()) + usize::from(devices.vulkan.is_some()) + usize::from(devices.gl.is_some());
     let overhead_missing = !args.no_overhead && overhead.len() < apis;
     let interrupted = (interrupted || journal::stopping() && overhead_missing).then(|| {
         if done_cells == total_cells {
@@ -427,6 +459,7 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
         machine,
         wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
         vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name().to_owned()),
+        gl_adapter: devices.gl.clone(),
         cpu_simd: clothlab_core::cpu::fused_path_label(),
         params: params.clone(),
         frames,
@@ -476,7 +509,7 @@ impl Job {
     /// The name its cells get: the solver's (`vulkan-naive+submit=frame`), or the backend's.
     fn label(&self) -> String {
         match (self.variant, self.backend.api()) {
-            (Some(v), Some(api)) => v.solver_name(if api == Api::Wgpu { "wgpu" } else { "vulkan" }),
+            (Some(v), Some(api)) => v.solver_name(api.name()),
             _ => self.backend.name().to_string(),
         }
     }
@@ -503,7 +536,7 @@ impl Job {
             dispatches(c).map(|k| compulsory_bytes(k, &topo, uniform)).sum()
         };
         Ok(LadderCell {
-            api: if self.backend.api() == Some(Api::Wgpu) { "wgpu" } else { "vulkan" }.into(),
+            api: self.backend.api().map_or("cpu", Api::name).into(),
             n,
             index,
             rung: rung.to_string(),
@@ -539,7 +572,8 @@ fn run_cell(
         AnySolver::Vulkan(s, _) => {
             Painter::Vulkan(Box::new(VulkanRenderer::new(&s.engine().device(), &scene, &topo, width, height)?))
         }
-        AnySolver::Cpu(_) => match (&devices.wgpu, &devices.vulkan) {
+        // The CPU solvers, and GL's until it has a renderer, drawn from a state read back.
+        AnySolver::Cpu(_) | AnySolver::Gl(_) => match (&devices.wgpu, &devices.vulkan) {
             (Some(ctx), _) => {
                 Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, &topo, width, height)?)))
             }
@@ -615,6 +649,16 @@ fn draw(sim: &mut AnySolver, painter: &mut Painter, view: &clothlab_core::View) 
             ctx.wait_idle()?;
         }
         (Painter::Vulkan(r), AnySolver::Cpu(s)) => r.render(view, VkCloth::Cpu(s.state_ref()))?,
+        (Painter::Wgpu(p), AnySolver::Gl(s)) => {
+            let (ctx, r) = &mut **p;
+            let state = clothlab_core::Solver::state(s.as_mut())?;
+            r.render(ctx, view, ClothSource::Cpu(&state))?;
+            ctx.wait_idle()?;
+        }
+        (Painter::Vulkan(r), AnySolver::Gl(s)) => {
+            let state = clothlab_core::Solver::state(s.as_mut())?;
+            r.render(view, VkCloth::Cpu(&state))?;
+        }
         (Painter::Vulkan(r), AnySolver::Vulkan(s, _)) => {
             let (pos, normal) = s.vertex_buffers();
             r.render(view, VkCloth::Gpu { pos, normal })?;

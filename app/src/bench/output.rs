@@ -172,6 +172,7 @@ pub fn report(r: &Results) -> String {
     let _ = writeln!(s, "| OS | {} |", r.os);
     let _ = writeln!(s, "| wgpu adapter | {} |", r.wgpu_adapter.as_deref().unwrap_or("none"));
     let _ = writeln!(s, "| Vulkan device | {} |", r.vulkan_adapter.as_deref().unwrap_or("none"));
+    let _ = writeln!(s, "| OpenGL context | {} |", r.gl_adapter.as_deref().unwrap_or("none"));
     if !r.cpu_simd.is_empty() {
         let _ = writeln!(s, "| CPU solvers | {} |", r.cpu_simd);
     }

@@ -177,6 +177,9 @@ pub struct Results {
     pub wgpu_adapter: Option<String>,
     /// The Vulkan device, if any.
     pub vulkan_adapter: Option<String>,
+    /// The OpenGL context, if any (absent in reports from before GL).
+    #[serde(default)]
+    pub gl_adapter: Option<String>,
     /// The CPU solvers' instruction set, chosen at run time (empty in reports from before
     /// it was recorded).
     #[serde(default)]
@@ -229,6 +232,7 @@ pub struct Inputs {
     pub machine: String,
     pub wgpu_adapter: Option<String>,
     pub vulkan_adapter: Option<String>,
+    pub gl_adapter: Option<String>,
     pub cpu_simd: String,
     pub params: SimParams,
     pub frames: u32,
@@ -302,6 +306,7 @@ impl Results {
             os: os.trim().to_owned(),
             wgpu_adapter: i.wgpu_adapter,
             vulkan_adapter: i.vulkan_adapter,
+            gl_adapter: i.gl_adapter,
             cpu_simd: i.cpu_simd,
             settings: Settings {
                 substeps: i.params.substeps,
@@ -420,6 +425,7 @@ pub(crate) fn test_results(
         machine: "test machine".into(),
         wgpu_adapter: None,
         vulkan_adapter: None,
+        gl_adapter: None,
         cpu_simd: "fused sweep on AVX2, 8 lanes".into(),
         params: SimParams::default(),
         frames: 10,

@@ -32,6 +32,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     let setup = GpuSetup { variant: args.variant.spec(args.backend)?, ..GpuSetup::default() };
     let is_vulkan = matches!(args.backend, Backend::VulkanNaive | Backend::Vulkan);
     let api = args.api.unwrap_or(if is_vulkan { Api::Vulkan } else { Api::Wgpu });
+    api.check_renderer()?;
     if api == Api::Wgpu && is_vulkan || api == Api::Vulkan && matches!(args.backend, Backend::WgpuNaive | Backend::Wgpu)
     {
         bail!(
@@ -70,7 +71,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
             }
             let (_, topo) = clothlab_core::build(&scene, &params)?;
             let adapter = any.adapter();
-            match &any {
+            match &mut any {
                 AnySolver::Vulkan(solver, _) => {
                     let mut r = VulkanRenderer::new(&solver.engine().device(), &scene, &topo, args.width, args.height)?;
                     let (pos, normal) = solver.vertex_buffers();
@@ -83,6 +84,21 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
                     let (pos, normal) = solver.vertex_buffers();
                     r.render(ctx, &view, ClothSource::Gpu { pos, normal })?;
                     (r.read_image(ctx)?, adapter)
+                }
+                AnySolver::Gl(solver) => {
+                    // No GL renderer yet: the state read back, drawn by the API asked for.
+                    let state = solver.state()?;
+                    if api == Api::Vulkan {
+                        let dev = clothlab_vulkan::Device::new(vulkan_validation())?;
+                        let mut r = VulkanRenderer::new(&dev, &scene, &topo, args.width, args.height)?;
+                        r.render(&view, VkCloth::Cpu(&state))?;
+                        (r.read_image()?, format!("{adapter}; drawn by {} (Vulkan)", dev.name()))
+                    } else {
+                        let ctx = clothlab_wgpu::GpuContext::new()?;
+                        let mut r = WgpuRenderer::new(&ctx, &scene, &topo, args.width, args.height)?;
+                        r.render(&ctx, &view, ClothSource::Cpu(&state))?;
+                        (r.read_image(&ctx)?, format!("{adapter}; drawn by {}", ctx.describe()))
+                    }
                 }
                 AnySolver::Cpu(_) => bail!("a CPU solver is drawn above"),
             }

@@ -14,9 +14,10 @@ pub fn run_app(args: RunArgs) -> Result<ExitCode> {
     if !(10..=1024).contains(&n) {
         bail!("invalid --n {n}: the app takes 10 ..= 1024 particles per side");
     }
+    args.api.check_renderer()?;
     let backend = args.backend.unwrap_or(match args.api {
         Api::Wgpu => Backend::Wgpu,
-        Api::Vulkan => Backend::Vulkan,
+        Api::Vulkan | Api::Gl => Backend::Vulkan,
     });
     crate::gui::run(crate::gui::RunOptions {
         api: args.api,

@@ -74,6 +74,7 @@ impl Gfx {
         let (w, h) = (size.width.max(1), size.height.max(1));
         let (_, topo) = clothlab_core::build(scene, params)?;
         Ok(match api {
+            Api::Gl => return Err(crate::solvers::no_gl_renderer()),
             Api::Wgpu => {
                 let (ctx, surface) = GpuContext::for_window(window.clone())?;
                 let caps = surface.get_capabilities(&ctx.adapter);

@@ -1,0 +1,700 @@
+//! The only unsafe code of clothlab-gl: an OpenGL 4.5 core context through EGL and the few
+//! GL calls the engine makes, behind a safe surface.
+//!
+//! Soundness of the safe surface (no safe function relies on its caller):
+//! * [`Gl`] is neither `Send` nor `Sync`: its context is used on the thread that made it;
+//! * every call first makes the context current on this thread if EGL says another one
+//!   is (asked each time, so a context another library made current — wgpu's GL backend,
+//!   say — is noticed too), so two contexts on one thread never get each other's calls;
+//! * GL objects are named by indices into the context's own tables, never by raw GL names
+//!   from outside; a bad index is an error, not a call;
+//! * every transfer's range is checked against the buffer's size before the call, and
+//!   every slice GL writes into is sized by us;
+//! * the context is created with robust buffer access where the driver offers it (out-of-
+//!   bounds shader accesses cannot touch other memory); without it, the engine refuses
+//!   kernels from outside (`Gl::robust`);
+//! * objects live as long as the context: all are freed when [`Gl`] drops and destroys it.
+#![allow(unsafe_code)]
+
+use std::marker::PhantomData;
+use std::sync::{Arc, Mutex};
+
+use glow::HasContext;
+use khronos_egl as egl;
+
+use crate::GlError;
+
+/// `EGL_PLATFORM_SURFACELESS_MESA`: a display with no window system (headless).
+const PLATFORM_SURFACELESS_MESA: egl::Enum = 0x31DD;
+/// `GL_SUBGROUP_SUPPORTED_FEATURES_KHR` (GL_KHR_shader_subgroup; not in glow).
+const SUBGROUP_SUPPORTED_FEATURES: u32 = 0x9534;
+/// `GL_SUBGROUP_SIZE_KHR`.
+const SUBGROUP_SIZE: u32 = 0x9532;
+/// glClearNamedBufferData (GL 4.5): `(buffer, internalformat, format, type, data)`.
+type ClearNamedBufferData = unsafe extern "system" fn(u32, u32, u32, u32, *const std::ffi::c_void);
+
+/// What the context offers, read once when it is made.
+#[derive(Debug, Clone)]
+pub struct Limits {
+    /// `GL_RENDERER`.
+    pub renderer: String,
+    /// `GL_VERSION`.
+    pub version: String,
+    /// Every extension's name.
+    pub extensions: Vec<String>,
+    /// GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS.
+    pub storage_blocks: u32,
+    /// GL_MAX_SHADER_STORAGE_BLOCK_SIZE, bytes.
+    pub storage_block_size: u64,
+    /// GL_MAX_UNIFORM_BLOCK_SIZE, bytes.
+    pub uniform_block_size: u64,
+    /// GL_MAX_TEXTURE_SIZE.
+    pub texture_size: u32,
+    /// GL_SUBGROUP_SUPPORTED_FEATURES_KHR (0 without GL_KHR_shader_subgroup).
+    pub subgroup_features: u32,
+    /// GL_SUBGROUP_SIZE_KHR (0 without it).
+    pub subgroup_size: u32,
+}
+
+impl Limits {
+    /// Whether the context offers extension `name`.
+    pub fn has(&self, name: &str) -> bool {
+        self.extensions.iter().any(|e| e == name)
+    }
+}
+
+struct BufferObj {
+    name: glow::NativeBuffer,
+    size: u64,
+}
+
+struct Program {
+    program: glow::NativeProgram,
+    locations: Vec<Option<glow::NativeUniformLocation>>,
+}
+
+/// A uniform value to set before a dispatch (GL's stand-in for immediates).
+#[derive(Debug, Clone, Copy)]
+pub enum Value {
+    /// `glUniform{n}uiv`.
+    U(u8, [u32; 4]),
+    /// `glUniform{n}iv`.
+    I(u8, [i32; 4]),
+    /// `glUniform{n}fv`.
+    F(u8, [f32; 4]),
+}
+
+/// One dispatch: the program, what to bind where, and the work groups.
+pub struct DispatchDesc<'a> {
+    /// A program index from [`Gl::program`].
+    pub program: usize,
+    /// `(binding point, buffer)` for shader storage blocks.
+    pub storage: &'a [(u32, usize)],
+    /// `(binding point, buffer)` for uniform blocks.
+    pub uniform: &'a [(u32, usize)],
+    /// `(texture unit, texture)`.
+    pub textures: &'a [(u32, usize)],
+    /// `(uniform index in the program's list, value)`.
+    pub values: &'a [(usize, Value)],
+    /// Work groups in x and y.
+    pub groups: (u32, u32),
+}
+
+/// An OpenGL 4.5 core context (headless, through EGL) and the objects made in it.
+pub struct Gl {
+    egl: egl::DynamicInstance<egl::EGL1_5>,
+    display: egl::Display,
+    context: egl::Context,
+    surface: Option<egl::Surface>,
+    gl: glow::Context,
+    clear_named_buffer_data: Option<ClearNamedBufferData>,
+    limits: Limits,
+    robust: bool,
+    messages: Arc<Mutex<Vec<String>>>,
+    buffers: Vec<BufferObj>,
+    textures: Vec<(glow::NativeTexture, u32, u32)>,
+    programs: Vec<Program>,
+    queries: Vec<glow::NativeQuery>,
+    _not_send: PhantomData<*const ()>,
+}
+
+fn egl_err(what: &'static str) -> impl Fn(egl::Error) -> GlError {
+    move |e| GlError::Egl { what, reason: e.to_string() }
+}
+
+impl Gl {
+    /// A headless OpenGL 4.5 core context: Mesa's surfaceless platform where there is
+    /// one, else the default display with a 1×1 pbuffer. A debug context, its messages of
+    /// medium and high severity collected for [`Gl::messages`].
+    pub fn headless() -> Result<Gl, GlError> {
+        // SAFETY: loads the system's libEGL (libEGL.so.1), whose exported functions have
+        // the EGL 1.5 signatures khronos-egl declares; nothing is called before the
+        // version check `load_required` does.
+        let instance = unsafe { egl::DynamicInstance::<egl::EGL1_5>::load_required() }
+            .map_err(|e| GlError::NoGl(format!("no EGL 1.5 library ({e})")))?;
+        // SAFETY: the surfaceless platform takes EGL_DEFAULT_DISPLAY (no native display
+        // pointer is dereferenced) and an empty attribute list.
+        let surfaceless = unsafe {
+            instance.get_platform_display(PLATFORM_SURFACELESS_MESA, egl::DEFAULT_DISPLAY, &[egl::ATTRIB_NONE])
+        }
+        .ok()
+        .filter(|d| instance.initialize(*d).is_ok());
+        let display = match surfaceless {
+            Some(d) => d,
+            None => {
+                // SAFETY: EGL_DEFAULT_DISPLAY is the null native display EGL defines.
+                let d = unsafe { instance.get_display(egl::DEFAULT_DISPLAY) }
+                    .ok_or_else(|| GlError::NoGl("EGL has no display".into()))?;
+                instance.initialize(d).map_err(|e| GlError::NoGl(format!("eglInitialize failed: {e}")))?;
+                d
+            }
+        };
+        instance.bind_api(egl::OPENGL_API).map_err(|e| GlError::NoGl(format!("EGL offers no OpenGL ({e})")))?;
+        let config = instance
+            .choose_first_config(
+                display,
+                &[egl::RENDERABLE_TYPE, egl::OPENGL_BIT, egl::SURFACE_TYPE, egl::PBUFFER_BIT, egl::NONE],
+            )
+            .map_err(egl_err("choosing a config"))?
+            .ok_or_else(|| GlError::NoGl("EGL has no OpenGL config".into()))?;
+        let attribs = |robust: bool| {
+            let mut a = vec![
+                egl::CONTEXT_MAJOR_VERSION,
+                4,
+                egl::CONTEXT_MINOR_VERSION,
+                5,
+                egl::CONTEXT_OPENGL_PROFILE_MASK,
+                egl::CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                egl::CONTEXT_OPENGL_DEBUG,
+                egl::TRUE as i32,
+            ];
+            if robust {
+                a.extend([egl::CONTEXT_OPENGL_ROBUST_ACCESS, egl::TRUE as i32]);
+            }
+            a.push(egl::NONE);
+            a
+        };
+        let (context, robust) = match instance.create_context(display, config, None, &attribs(true)) {
+            Ok(c) => (c, true),
+            Err(_) => (
+                instance.create_context(display, config, None, &attribs(false)).map_err(|e| {
+                    GlError::NoGl(format!("no OpenGL 4.5 core context ({e}); clothlab needs GL 4.5 with compute"))
+                })?,
+                false,
+            ),
+        };
+        // Surfaceless where EGL_KHR_surfaceless_context allows it, else a 1×1 pbuffer.
+        let surface = match instance.make_current(display, None, None, Some(context)) {
+            Ok(()) => None,
+            Err(_) => {
+                let s = instance
+                    .create_pbuffer_surface(display, config, &[egl::WIDTH, 1, egl::HEIGHT, 1, egl::NONE])
+                    .map_err(egl_err("creating a pbuffer"))?;
+                instance.make_current(display, Some(s), Some(s), Some(context)).map_err(egl_err("making current"))?;
+                Some(s)
+            }
+        };
+        // SAFETY: the context is current on this thread; EGL returns GL entry points for
+        // it (EGL_KHR_get_all_proc_addresses), which glow loads by name.
+        let mut gl = unsafe {
+            glow::Context::from_loader_function(|name| {
+                instance.get_proc_address(name).map_or(std::ptr::null(), |f| f as *const std::ffi::c_void)
+            })
+        };
+        let clear_named_buffer_data = instance.get_proc_address("glClearNamedBufferData").map(|f| {
+            // SAFETY: glClearNamedBufferData's signature in the GL 4.5 core specification is
+            // `void (GLuint, GLenum, GLenum, GLenum, const void *)`, which this type spells.
+            unsafe { std::mem::transmute::<extern "system" fn(), ClearNamedBufferData>(f) }
+        });
+        let messages = Arc::new(Mutex::new(Vec::new()));
+        let sink = Arc::clone(&messages);
+        // SAFETY: the context is current; the callback only pushes the message into a
+        // mutex-guarded list (it may be called from the driver's threads).
+        let limits = unsafe {
+            gl.enable(glow::DEBUG_OUTPUT);
+            gl.debug_message_callback(move |_source, kind, _id, severity, msg| {
+                let serious = severity == glow::DEBUG_SEVERITY_HIGH
+                    || severity == glow::DEBUG_SEVERITY_MEDIUM
+                    || kind == glow::DEBUG_TYPE_ERROR;
+                if let Ok(mut m) = sink.lock()
+                    && serious
+                    && m.len() < 64
+                {
+                    m.push(msg.to_string());
+                }
+            });
+            let count = gl.get_parameter_i32(glow::NUM_EXTENSIONS).max(0) as u32;
+            let extensions: Vec<String> =
+                (0..count).map(|i| gl.get_parameter_indexed_string(glow::EXTENSIONS, i)).collect();
+            let has_subgroups = extensions.iter().any(|e| e == "GL_KHR_shader_subgroup");
+            Limits {
+                renderer: gl.get_parameter_string(glow::RENDERER),
+                version: gl.get_parameter_string(glow::VERSION),
+                storage_blocks: gl.get_parameter_i32(glow::MAX_COMPUTE_SHADER_STORAGE_BLOCKS).max(0) as u32,
+                storage_block_size: gl.get_parameter_i64(glow::MAX_SHADER_STORAGE_BLOCK_SIZE).max(0) as u64,
+                uniform_block_size: gl.get_parameter_i64(glow::MAX_UNIFORM_BLOCK_SIZE).max(0) as u64,
+                texture_size: gl.get_parameter_i32(glow::MAX_TEXTURE_SIZE).max(0) as u32,
+                subgroup_features: if has_subgroups {
+                    gl.get_parameter_i32(SUBGROUP_SUPPORTED_FEATURES) as u32
+                } else {
+                    0
+                },
+                subgroup_size: if has_subgroups { gl.get_parameter_i32(SUBGROUP_SIZE).max(0) as u32 } else { 0 },
+                extensions,
+            }
+        };
+        // SAFETY: the context is current; a query object name is all glGenQueries makes.
+        let queries: Vec<glow::NativeQuery> =
+            unsafe { (0..clothlab_engine::solver::MAX_QUERIES).map(|_| gl.create_query()).collect::<Result<_, _>>() }
+                .map_err(|e| GlError::Gl { what: "creating timestamp queries", reason: e })?;
+        let mut me = Gl {
+            egl: instance,
+            display,
+            context,
+            surface,
+            gl,
+            clear_named_buffer_data,
+            limits,
+            robust,
+            messages,
+            buffers: Vec::new(),
+            textures: Vec::new(),
+            programs: Vec::new(),
+            queries,
+            _not_send: PhantomData,
+        };
+        me.check("creating the context")?;
+        Ok(me)
+    }
+
+    /// What the context offers.
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Whether out-of-bounds shader accesses are contained (a robust-access context).
+    pub fn robust(&self) -> bool {
+        self.robust
+    }
+
+    /// The context, made current on this thread first if it is not.
+    fn cur(&self) -> Result<&glow::Context, GlError> {
+        if self.egl.get_current_context() != Some(self.context) {
+            self.egl
+                .make_current(self.display, self.surface, self.surface, Some(self.context))
+                .map_err(egl_err("making the context current"))?;
+        }
+        Ok(&self.gl)
+    }
+
+    fn buf(&self, i: usize) -> Result<&BufferObj, GlError> {
+        self.buffers.get(i).ok_or(GlError::Invalid("no such GL buffer"))
+    }
+
+    /// A buffer of `bytes.len()` bytes (at least 4) holding `bytes`, dynamic storage.
+    pub fn create_buffer(&mut self, bytes: &[u8]) -> Result<usize, GlError> {
+        let mut data = bytes.to_vec();
+        data.resize(data.len().max(4).next_multiple_of(4), 0);
+        let size = i32::try_from(data.len()).map_err(|_| GlError::Invalid("a GL buffer over 2 GiB"))?;
+        let gl = self.cur()?;
+        // SAFETY: the context is current; the buffer is bound to COPY_WRITE (no shader
+        // binding point) for its storage, which is `size` bytes copied from `data`.
+        let name = unsafe {
+            let name = gl.create_buffer().map_err(|e| GlError::Gl { what: "creating a buffer", reason: e })?;
+            gl.bind_buffer(glow::COPY_WRITE_BUFFER, Some(name));
+            gl.buffer_storage(glow::COPY_WRITE_BUFFER, size, Some(&data), glow::DYNAMIC_STORAGE_BIT);
+            gl.bind_buffer(glow::COPY_WRITE_BUFFER, None);
+            name
+        };
+        self.buffers.push(BufferObj { name, size: data.len() as u64 });
+        self.check("creating a buffer")?;
+        Ok(self.buffers.len() - 1)
+    }
+
+    /// The size of buffer `i`, bytes.
+    pub fn buffer_size(&self, i: usize) -> Result<u64, GlError> {
+        Ok(self.buf(i)?.size)
+    }
+
+    /// Writes `bytes` at `offset` in buffer `i` (in command order).
+    pub fn write(&self, i: usize, offset: u64, bytes: &[u8]) -> Result<(), GlError> {
+        let b = self.buf(i)?;
+        if offset + bytes.len() as u64 > b.size {
+            return Err(GlError::Invalid("a write past a GL buffer's end"));
+        }
+        let name = b.name;
+        let gl = self.cur()?;
+        // SAFETY: the context is current; the range lies inside the buffer (checked).
+        unsafe {
+            gl.bind_buffer(glow::COPY_WRITE_BUFFER, Some(name));
+            gl.buffer_sub_data_u8_slice(glow::COPY_WRITE_BUFFER, offset as i32, bytes);
+            gl.bind_buffer(glow::COPY_WRITE_BUFFER, None);
+        }
+        Ok(())
+    }
+
+    /// `len` bytes of buffer `i` from `at`, after every command before; a range past the
+    /// end is refused.
+    pub fn read(&self, i: usize, at: u64, len: u64) -> Result<Vec<u8>, GlError> {
+        let b = self.buf(i)?;
+        if at + len > b.size {
+            return Err(GlError::Invalid("a read past a GL buffer's end"));
+        }
+        let name = b.name;
+        let mut out = vec![0u8; len as usize];
+        let gl = self.cur()?;
+        // SAFETY: the context is current; GL writes `out.len()` bytes, all inside both
+        // the buffer (checked) and `out`.
+        unsafe {
+            gl.bind_buffer(glow::COPY_READ_BUFFER, Some(name));
+            gl.get_buffer_sub_data(glow::COPY_READ_BUFFER, at as i32, &mut out);
+            gl.bind_buffer(glow::COPY_READ_BUFFER, None);
+        }
+        Ok(out)
+    }
+
+    /// Fills buffer `i` with zeros (glClearNamedBufferData, else a zero upload).
+    pub fn clear(&self, i: usize) -> Result<(), GlError> {
+        let b = self.buf(i)?;
+        match self.clear_named_buffer_data {
+            Some(clear) => {
+                let name = b.name.0.get();
+                self.cur()?;
+                // SAFETY: the context is current; `name` is a buffer of this context; a
+                // null data pointer fills with zeros (GL 4.5 §6.2.1), R32UI words.
+                unsafe { clear(name, glow::R32UI, glow::RED_INTEGER, glow::UNSIGNED_INT, std::ptr::null()) };
+                Ok(())
+            }
+            None => self.write(i, 0, &vec![0u8; b.size as usize]),
+        }
+    }
+
+    /// Copies `size` bytes of `src` from `src_at` into `dst` at `dst_at`; a range past
+    /// either buffer's end is refused.
+    pub fn copy(&self, src: usize, src_at: u64, dst: usize, dst_at: u64, size: u64) -> Result<(), GlError> {
+        let (a, b) = (self.buf(src)?, self.buf(dst)?);
+        if src_at + size > a.size || dst_at + size > b.size {
+            return Err(GlError::Invalid("a copy past a GL buffer's end"));
+        }
+        let (a, b) = (a.name, b.name);
+        let gl = self.cur()?;
+        // SAFETY: the context is current; both ranges lie inside their buffers (checked).
+        unsafe {
+            gl.bind_buffer(glow::COPY_READ_BUFFER, Some(a));
+            gl.bind_buffer(glow::COPY_WRITE_BUFFER, Some(b));
+            gl.copy_buffer_sub_data(
+                glow::COPY_READ_BUFFER,
+                glow::COPY_WRITE_BUFFER,
+                src_at as i32,
+                dst_at as i32,
+                size as i32,
+            );
+            gl.bind_buffer(glow::COPY_READ_BUFFER, None);
+            gl.bind_buffer(glow::COPY_WRITE_BUFFER, None);
+        }
+        Ok(())
+    }
+
+    /// A `width`×`height` RGBA32UI texture (no mipmaps); returns its index.
+    pub fn create_texture_rgba32ui(&mut self, width: u32, height: u32) -> Result<usize, GlError> {
+        if width == 0 || height == 0 || width > self.limits.texture_size || height > self.limits.texture_size {
+            return Err(GlError::Invalid("a texture larger than GL_MAX_TEXTURE_SIZE"));
+        }
+        let gl = self.cur()?;
+        // SAFETY: the context is current; immutable storage of the checked size.
+        let t = unsafe {
+            let t = gl.create_texture().map_err(|e| GlError::Gl { what: "creating a texture", reason: e })?;
+            gl.bind_texture(glow::TEXTURE_2D, Some(t));
+            gl.tex_storage_2d(glow::TEXTURE_2D, 1, glow::RGBA32UI, width as i32, height as i32);
+            // An integer texture is complete only with NEAREST filters (else texelFetch
+            // reads zeros).
+            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MIN_FILTER, glow::NEAREST as i32);
+            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MAG_FILTER, glow::NEAREST as i32);
+            gl.bind_texture(glow::TEXTURE_2D, None);
+            t
+        };
+        self.textures.push((t, width, height));
+        self.check("creating a texture")?;
+        Ok(self.textures.len() - 1)
+    }
+
+    /// Writes the whole of texture `i` from `texels` (row by row).
+    pub fn write_texture(&self, i: usize, texels: &[[u32; 4]]) -> Result<(), GlError> {
+        let &(t, w, h) = self.textures.get(i).ok_or(GlError::Invalid("no such GL texture"))?;
+        if texels.len() != (w * h) as usize {
+            return Err(GlError::Invalid("texels that do not fill the texture"));
+        }
+        let gl = self.cur()?;
+        // SAFETY: the context is current; `texels` holds exactly w×h RGBA32UI texels,
+        // read with the default unpack state (alignment 4 divides 16-byte texels).
+        unsafe {
+            gl.bind_texture(glow::TEXTURE_2D, Some(t));
+            gl.tex_sub_image_2d(
+                glow::TEXTURE_2D,
+                0,
+                0,
+                0,
+                w as i32,
+                h as i32,
+                glow::RGBA_INTEGER,
+                glow::UNSIGNED_INT,
+                glow::PixelUnpackData::Slice(Some(bytemuck::cast_slice(texels))),
+            );
+            gl.bind_texture(glow::TEXTURE_2D, None);
+        }
+        Ok(())
+    }
+
+    /// Compiles and links a compute program from `glsl`; `uniforms` are the names whose
+    /// locations [`DispatchDesc::values`] refers to by index. The error is the driver's log.
+    pub fn program(&mut self, glsl: &str, uniforms: &[&str]) -> Result<usize, String> {
+        let gl = self.cur().map_err(|e| e.to_string())?;
+        // SAFETY: the context is current; the shader and program are made, used and
+        // (the shader) deleted here; strings are passed as slices glow sizes itself.
+        let (program, locations) = unsafe {
+            let shader = gl.create_shader(glow::COMPUTE_SHADER)?;
+            gl.shader_source(shader, glsl);
+            gl.compile_shader(shader);
+            if !gl.get_shader_compile_status(shader) {
+                let log = gl.get_shader_info_log(shader);
+                gl.delete_shader(shader);
+                return Err(log.trim().to_string());
+            }
+            let program = gl.create_program()?;
+            gl.attach_shader(program, shader);
+            gl.link_program(program);
+            gl.detach_shader(program, shader);
+            gl.delete_shader(shader);
+            if !gl.get_program_link_status(program) {
+                let log = gl.get_program_info_log(program);
+                gl.delete_program(program);
+                return Err(log.trim().to_string());
+            }
+            let locations = uniforms.iter().map(|n| gl.get_uniform_location(program, n)).collect();
+            (program, locations)
+        };
+        self.programs.push(Program { program, locations });
+        Ok(self.programs.len() - 1)
+    }
+
+    /// Binds what `d` names and dispatches it. Bad indices are refused before any call.
+    pub fn dispatch(&self, d: &DispatchDesc<'_>) -> Result<(), GlError> {
+        let p = self.programs.get(d.program).ok_or(GlError::Invalid("no such GL program"))?;
+        let name = |i: usize| self.buffers.get(i).map(|b| b.name).ok_or(GlError::Invalid("no such GL buffer"));
+        let storage: Vec<(u32, glow::NativeBuffer)> =
+            d.storage.iter().map(|&(pt, i)| Ok((pt, name(i)?))).collect::<Result<_, GlError>>()?;
+        let uniform: Vec<(u32, glow::NativeBuffer)> =
+            d.uniform.iter().map(|&(pt, i)| Ok((pt, name(i)?))).collect::<Result<_, GlError>>()?;
+        let textures: Vec<(u32, glow::NativeTexture)> = d
+            .textures
+            .iter()
+            .map(|&(u, i)| self.textures.get(i).map(|t| (u, t.0)).ok_or(GlError::Invalid("no such GL texture")))
+            .collect::<Result<_, GlError>>()?;
+        let gl = self.cur()?;
+        // SAFETY: the context is current; every name is an object of this context; a
+        // uniform location is the program's own (or None, which GL ignores).
+        unsafe {
+            gl.use_program(Some(p.program));
+            for (pt, b) in storage {
+                gl.bind_buffer_base(glow::SHADER_STORAGE_BUFFER, pt, Some(b));
+            }
+            for (pt, b) in uniform {
+                gl.bind_buffer_base(glow::UNIFORM_BUFFER, pt, Some(b));
+            }
+            for (unit, t) in textures {
+                gl.active_texture(glow::TEXTURE0 + unit);
+                gl.bind_texture(glow::TEXTURE_2D, Some(t));
+            }
+            for &(i, v) in d.values {
+                let loc = p.locations.get(i).and_then(|l| l.as_ref());
+                match v {
+                    Value::U(n, x) => gl.uniform_n_u32(n, loc, x),
+                    Value::I(n, x) => gl.uniform_n_i32(n, loc, x),
+                    Value::F(n, x) => gl.uniform_n_f32(n, loc, x),
+                }
+            }
+            gl.dispatch_compute(d.groups.0, d.groups.1, 1);
+        }
+        Ok(())
+    }
+
+    /// glMemoryBarrier(`bits`).
+    pub fn memory_barrier(&self, bits: u32) -> Result<(), GlError> {
+        let gl = self.cur()?;
+        // SAFETY: the context is current.
+        unsafe { gl.memory_barrier(bits) };
+        Ok(())
+    }
+
+    /// Records a timestamp into query `q` (glQueryCounter; ignored past the last query).
+    pub fn timestamp(&self, q: u32) -> Result<(), GlError> {
+        let Some(&query) = self.queries.get(q as usize) else { return Ok(()) };
+        let gl = self.cur()?;
+        // SAFETY: the context is current; the query is this context's.
+        unsafe { gl.query_counter(query, glow::TIMESTAMP) };
+        Ok(())
+    }
+
+    /// The timestamps of queries `0..n`, ns (waits for them).
+    pub fn timestamps(&self, n: u32) -> Result<Vec<u64>, GlError> {
+        let gl = self.cur()?;
+        // SAFETY: the context is current; each query was written by glQueryCounter
+        // before (an unwritten one is a GL error, reported by `check`, not UB).
+        Ok(self
+            .queries
+            .iter()
+            .take(n as usize)
+            .map(|&q| unsafe { gl.get_query_parameter_u64(q, glow::QUERY_RESULT) })
+            .collect())
+    }
+
+    /// glFlush: what is recorded starts.
+    pub fn flush(&self) -> Result<(), GlError> {
+        let gl = self.cur()?;
+        // SAFETY: the context is current.
+        unsafe { gl.flush() };
+        Ok(())
+    }
+
+    /// glFinish: everything issued is done.
+    pub fn finish(&self) -> Result<(), GlError> {
+        let gl = self.cur()?;
+        // SAFETY: the context is current.
+        unsafe { gl.finish() };
+        Ok(())
+    }
+
+    /// Fails with the GL errors and the debug messages since the last call.
+    pub fn check(&mut self, what: &'static str) -> Result<(), GlError> {
+        let gl = self.cur()?;
+        let mut found = Vec::new();
+        for _ in 0..16 {
+            // SAFETY: the context is current.
+            let e = unsafe { gl.get_error() };
+            if e == glow::NO_ERROR {
+                break;
+            }
+            found.push(format!("GL error 0x{e:04X}"));
+        }
+        if let Ok(mut m) = self.messages.lock() {
+            found.append(&mut m);
+        }
+        if found.is_empty() { Ok(()) } else { Err(GlError::Gl { what, reason: found.join("; ") }) }
+    }
+}
+
+/// glUniform{1,2,3,4}{ui,i,f} by component count.
+trait UniformN {
+    /// # Safety
+    /// The context must be current and the location its current program's.
+    unsafe fn uniform_n_u32(&self, n: u8, loc: Option<&glow::NativeUniformLocation>, x: [u32; 4]);
+    /// # Safety
+    /// As [`UniformN::uniform_n_u32`].
+    unsafe fn uniform_n_i32(&self, n: u8, loc: Option<&glow::NativeUniformLocation>, x: [i32; 4]);
+    /// # Safety
+    /// As [`UniformN::uniform_n_u32`].
+    unsafe fn uniform_n_f32(&self, n: u8, loc: Option<&glow::NativeUniformLocation>, x: [f32; 4]);
+}
+
+impl UniformN for glow::Context {
+    unsafe fn uniform_n_u32(&self, n: u8, loc: Option<&glow::NativeUniformLocation>, x: [u32; 4]) {
+        // SAFETY: as the caller promised (the context current, the location valid).
+        unsafe {
+            match n {
+                1 => self.uniform_1_u32(loc, x[0]),
+                2 => self.uniform_2_u32(loc, x[0], x[1]),
+                3 => self.uniform_3_u32(loc, x[0], x[1], x[2]),
+                _ => self.uniform_4_u32(loc, x[0], x[1], x[2], x[3]),
+            }
+        }
+    }
+    unsafe fn uniform_n_i32(&self, n: u8, loc: Option<&glow::NativeUniformLocation>, x: [i32; 4]) {
+        // SAFETY: as the caller promised.
+        unsafe {
+            match n {
+                1 => self.uniform_1_i32(loc, x[0]),
+                2 => self.uniform_2_i32(loc, x[0], x[1]),
+                3 => self.uniform_3_i32(loc, x[0], x[1], x[2]),
+                _ => self.uniform_4_i32(loc, x[0], x[1], x[2], x[3]),
+            }
+        }
+    }
+    unsafe fn uniform_n_f32(&self, n: u8, loc: Option<&glow::NativeUniformLocation>, x: [f32; 4]) {
+        // SAFETY: as the caller promised.
+        unsafe {
+            match n {
+                1 => self.uniform_1_f32(loc, x[0]),
+                2 => self.uniform_2_f32(loc, x[0], x[1]),
+                3 => self.uniform_3_f32(loc, x[0], x[1], x[2]),
+                _ => self.uniform_4_f32(loc, x[0], x[1], x[2], x[3]),
+            }
+        }
+    }
+}
+
+impl Drop for Gl {
+    fn drop(&mut self) {
+        if self.egl.get_current_context() == Some(self.context) {
+            let _ = self.egl.make_current(self.display, None, None, None);
+        }
+        // Destroying the context frees every object made in it (buffers, textures,
+        // programs, queries); the display stays initialised for the process (other
+        // contexts may use it; eglTerminate would end them too).
+        let _ = self.egl.destroy_context(self.display, self.context);
+        if let Some(s) = self.surface {
+            let _ = self.egl.destroy_surface(self.display, s);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn headless() -> Option<Gl> {
+        match Gl::headless() {
+            Ok(g) => Some(g),
+            Err(e) if std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1") => {
+                eprintln!("skipped: {e}");
+                None
+            }
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    #[test]
+    fn two_contexts_on_one_thread_keep_their_own_buffers_and_bad_ranges_are_refused() {
+        let (Some(mut a), Some(mut b)) = (headless(), headless()) else { return };
+        // Buffer 0 of each context: same index, different objects and contents.
+        let ba = a.create_buffer(&[1u8; 16]).unwrap();
+        let bb = b.create_buffer(&[2u8; 32]).unwrap();
+        assert_eq!((ba, bb), (0, 0));
+        // Interleaved use: each call must go to its own context (made current as needed).
+        a.write(ba, 4, &[7u8; 4]).unwrap();
+        b.write(bb, 0, &[9u8; 8]).unwrap();
+        assert_eq!(a.read(ba, 0, 16).unwrap(), [1, 1, 1, 1, 7, 7, 7, 7, 1, 1, 1, 1, 1, 1, 1, 1]);
+        assert_eq!(b.read(bb, 0, 8).unwrap(), [9u8; 8]);
+        assert_eq!(b.buffer_size(bb).unwrap(), 32);
+        // Ranges past an end and unknown objects are refused before any GL call.
+        assert!(a.write(ba, 12, &[0u8; 8]).is_err());
+        assert!(a.read(ba, 8, 16).is_err());
+        assert!(a.copy(ba, 0, 5, 0, 4).is_err());
+        assert!(a.write_texture(0, &[[0; 4]]).is_err());
+        a.clear(ba).unwrap();
+        assert_eq!(a.read(ba, 0, 16).unwrap(), [0u8; 16]);
+        a.check("the test").unwrap();
+        b.check("the test").unwrap();
+        // Dropping one leaves the other working.
+        drop(a);
+        assert_eq!(b.read(bb, 0, 8).unwrap(), [9u8; 8]);
+    }
+
+    #[test]
+    fn a_shader_the_driver_refuses_comes_back_with_its_log() {
+        let Some(mut gl) = headless() else { return };
+        let e =
+            gl.program("#version 450 core\nlayout(local_size_x = 1) in;\nvoid main() { undefined_thing = 1; }\n", &[]);
+        let log = e.unwrap_err();
+        assert!(log.contains("undefined_thing"), "{log}");
+    }
+}

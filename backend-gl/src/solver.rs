@@ -1,0 +1,473 @@
+//! The OpenGL engine: buffer objects with immutable storage, one compute program per
+//! kernel (naga's GLSL of the kernel's WGSL), its storage blocks, uniform blocks and the
+//! table texture bound per dispatch at the points the GLSL declares, `glMemoryBarrier`
+//! where the generic solver places a barrier, `glQueryCounter` timestamps. GL runs
+//! commands in the order they are issued, so a recorded write is a `glBufferSubData` and
+//! a submission is a `glFlush`; readbacks are copied into a staging buffer when recorded
+//! and read at the wait, as on Vulkan. The solver itself is
+//! [`clothlab_engine::GpuSolver`]: [`GlSolver`] is it on this engine.
+
+use std::collections::HashMap;
+
+use clothlab_core::layout::{BindKind, Buf, TABLE_WIDTH};
+use clothlab_core::solver::SolverError;
+use clothlab_engine::gpu::{BufferId, Dispatch, Engine, EngineInfo, Finished};
+use clothlab_engine::kernels::{self, KernelRef};
+use clothlab_engine::{GpuSolver, SolverOptions, VariantSpec};
+
+use crate::GlError;
+use crate::raw::{DispatchDesc, Gl, Value};
+
+/// The cloth solver on raw OpenGL.
+pub type GlSolver = GpuSolver<GlEngine>;
+
+/// `GL_SUBGROUP_FEATURE_{ARITHMETIC,SHUFFLE,SHUFFLE_RELATIVE}_BIT_KHR`.
+const SUBGROUP_ARITHMETIC: u32 = 0x4;
+const SUBGROUP_SHUFFLES: u32 = 0x10 | 0x20;
+/// What a dispatch's writes must be made visible to before the next dispatch reads them
+/// (storage blocks; the uniform blocks and the table are written only by GL commands,
+/// which GL orders itself).
+const DISPATCH_BARRIER: u32 = glow::SHADER_STORAGE_BARRIER_BIT;
+/// Before a GL command reads or rewrites a buffer a dispatch wrote (clears, copies,
+/// uploads, reads), and before the renderer draws from one.
+const TRANSFER_BARRIER: u32 = glow::BUFFER_UPDATE_BARRIER_BIT
+    | glow::VERTEX_ATTRIB_ARRAY_BARRIER_BIT
+    | glow::ELEMENT_ARRAY_BARRIER_BIT
+    | glow::SHADER_STORAGE_BARRIER_BIT;
+
+fn backend(e: GlError) -> SolverError {
+    match e {
+        GlError::NoGl(_) => SolverError::NoAdapter(e.to_string()),
+        e => SolverError::Driver(e.to_string()),
+    }
+}
+
+/// A buffer of the GL engine (what the GL renderer draws from).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GlBuffer {
+    index: usize,
+    /// Its size, bytes.
+    pub size: u64,
+}
+
+/// A built kernel: its program and what it binds where.
+struct Program {
+    index: usize,
+    /// `(GL binding point, buffer, kind)` of its storage and uniform blocks.
+    blocks: Vec<(u32, Buf, BindKind)>,
+    /// The texture unit of the table image, if it reads it.
+    texture: Option<u32>,
+    /// Its immediates as uniforms: `(byte offset, kind, components)`, by location index.
+    uniforms: Vec<(u32, char, u8)>,
+}
+
+/// The API's part of the OpenGL solver.
+pub struct GlEngine {
+    gl: Gl,
+    info: EngineInfo,
+    buffers: Vec<GlBuffer>,
+    sets: [Vec<(Buf, BufferId)>; 2],
+    bound: bool,
+    /// The table texture and its height.
+    table: Option<(usize, u32)>,
+    programs: HashMap<KernelRef, Program>,
+    /// Readback staging: (buffer, size); the cursor; what the frame's readbacks copied.
+    staging: Option<GlBuffer>,
+    cursor: u64,
+    readbacks: Vec<(u64, u64)>,
+    /// A dispatch wrote since the last transfer barrier.
+    dirty: bool,
+    /// The first error of a recording method (reported by the next submit or check).
+    error: Option<GlError>,
+}
+
+impl GlEngine {
+    /// An engine on a new headless OpenGL 4.5 core context.
+    pub fn new() -> Result<Self, SolverError> {
+        Self::on(Gl::headless().map_err(backend)?)
+    }
+
+    fn on(gl: Gl) -> Result<Self, SolverError> {
+        let l = gl.limits();
+        let subgroups = l.subgroup_features;
+        let info = EngineInfo {
+            api: "gl",
+            adapter: format!("{} (OpenGL {})", l.renderer, l.version.split(' ').next().unwrap_or("?")),
+            float_atomics: l.has("GL_NV_shader_atomic_float"),
+            // GL has no push constants (naga would write them as plain uniforms).
+            immediates: false,
+            timestamps: true,
+            timestamp_period_ns: 1.0,
+            max_binding: l.storage_block_size,
+            subgroup_arithmetic: subgroups & SUBGROUP_ARITHMETIC != 0,
+            subgroup_shuffle: subgroups & (SUBGROUP_ARITHMETIC | SUBGROUP_SHUFFLES)
+                == SUBGROUP_ARITHMETIC | SUBGROUP_SHUFFLES,
+            table_image: true,
+        };
+        Ok(Self {
+            gl,
+            info,
+            buffers: Vec::new(),
+            sets: [Vec::new(), Vec::new()],
+            bound: false,
+            table: None,
+            programs: HashMap::new(),
+            staging: None,
+            cursor: 0,
+            readbacks: Vec::new(),
+            dirty: false,
+            error: None,
+        })
+    }
+
+    /// The driver's limits and extensions, in lines (for `clothlab info`-like reports).
+    pub fn describe(&self) -> String {
+        let l = self.gl.limits();
+        format!(
+            "{}; {} storage blocks per compute shader, {} MiB per block, {} KiB per uniform block; float atomics: {}; subgroups: {}; robust access: {}",
+            self.info.adapter,
+            l.storage_blocks,
+            l.storage_block_size >> 20,
+            l.uniform_block_size >> 10,
+            if self.info.float_atomics { "GL_NV_shader_atomic_float" } else { "no" },
+            if l.subgroup_size > 0 { format!("{} lanes", l.subgroup_size) } else { "no".into() },
+            if self.gl.robust() { "yes" } else { "no" },
+        )
+    }
+
+    fn buf(&self, id: BufferId) -> Result<GlBuffer, SolverError> {
+        self.buffers.get(id.0 as usize).copied().ok_or_else(|| SolverError::Invalid(format!("no GL buffer {}", id.0)))
+    }
+
+    /// Makes the writes of earlier dispatches visible to GL commands (once per run of
+    /// dispatches).
+    fn settle(&mut self) -> Result<(), GlError> {
+        if self.dirty {
+            self.gl.memory_barrier(TRANSFER_BARRIER)?;
+            self.dirty = false;
+        }
+        Ok(())
+    }
+
+    /// Keeps the first error of a method that cannot return one.
+    fn note(&mut self, r: Result<(), GlError>) {
+        if let Err(e) = r {
+            self.error.get_or_insert(e);
+        }
+    }
+
+    fn take_error(&mut self) -> Result<(), SolverError> {
+        match self.error.take() {
+            Some(e) => Err(backend(e)),
+            None => Ok(()),
+        }
+    }
+
+    /// The GLSL the driver compiles: naga's, with what naga leaves out for GL.
+    fn patch(&self, text: &str) -> String {
+        let l = self.gl.limits();
+        let mut out = String::with_capacity(text.len() + 128);
+        for (i, line) in text.lines().enumerate() {
+            // naga declares every subgroup extension for a module that uses any (the
+            // statistics' shared code); a driver without them compiles a kernel that calls
+            // none once the lines are gone (one that calls them fails, and is refused
+            // before that by the caps).
+            if line.starts_with("#extension GL_KHR_shader_subgroup") && l.subgroup_features == 0 {
+                continue;
+            }
+            out.push_str(line);
+            out.push('\n');
+            // Float atomicAdd on storage buffers is GL_NV_shader_atomic_float's; naga
+            // writes the call but not the extension line.
+            if i == 0 && self.info.float_atomics {
+                out.push_str("#extension GL_NV_shader_atomic_float : enable\n");
+            }
+        }
+        out
+    }
+}
+
+impl Engine for GlEngine {
+    type Buffer = GlBuffer;
+
+    fn info(&self) -> &EngineInfo {
+        &self.info
+    }
+
+    fn create_buffer(
+        &mut self,
+        _buf: Buf,
+        _label: &str,
+        contents: &[u8],
+        _vertex: bool,
+    ) -> Result<BufferId, SolverError> {
+        let index = self.gl.create_buffer(contents).map_err(backend)?;
+        let size = self.gl.buffer_size(index).map_err(backend)?;
+        self.buffers.push(GlBuffer { index, size });
+        Ok(BufferId(self.buffers.len() as u32 - 1))
+    }
+
+    fn buffer(&self, id: BufferId) -> &GlBuffer {
+        &self.buffers[id.0 as usize]
+    }
+
+    /// The table as an RGBA32UI texture read with `texelFetch` (the thesis's texture
+    /// memory), rewritten in place when the constants change.
+    fn set_table_image(&mut self, texels: &[[u32; 4]], height: u32) -> Result<(), SolverError> {
+        let max = self.gl.limits().texture_size;
+        if height > max {
+            return Err(SolverError::Unsupported(format!(
+                "table=image: this grid's spring table needs a {TABLE_WIDTH}×{height} image, taller than the {max} texels {} allows; use table=storage or table=uniform",
+                self.info.adapter
+            )));
+        }
+        if self.table.is_none_or(|(_, h)| h != height) {
+            if self.bound {
+                return Err(SolverError::Invalid("the spring-table image cannot change size once bound".into()));
+            }
+            let t = self.gl.create_texture_rgba32ui(TABLE_WIDTH, height).map_err(backend)?;
+            self.table = Some((t, height));
+        }
+        let (t, _) = self.table.expect("made above");
+        let mut all = texels.to_vec();
+        all.resize((TABLE_WIDTH * height) as usize, [0; 4]);
+        self.gl.write_texture(t, &all).map_err(backend)?;
+        self.gl.check("uploading the spring-table image").map_err(backend)
+    }
+
+    fn bind(&mut self, sets: [Vec<(Buf, BufferId)>; 2]) -> Result<(), SolverError> {
+        for set in &sets {
+            for &(_, id) in set {
+                self.buf(id)?;
+            }
+        }
+        self.sets = sets;
+        self.bound = true;
+        Ok(())
+    }
+
+    fn build(&mut self, k: KernelRef, immediates: u32) -> Result<(), SolverError> {
+        if self.programs.contains_key(&k) {
+            return Ok(());
+        }
+        let name = k.shader_name();
+        let refuse = |reason: String| SolverError::Shader { kernel: name.clone(), reason };
+        if !matches!(k.def.source, kernels::Source::Builtin) && !self.gl.robust() {
+            return Err(refuse(format!(
+                "{} gives no robust buffer access: kernels from outside are refused on it",
+                self.info.adapter
+            )));
+        }
+        let glsl = k.glsl()?;
+        let mut blocks = Vec::new();
+        let mut texture = None;
+        let mut storage = 0;
+        for &(binding, point) in &glsl.points {
+            let buf = Buf::from_binding(binding).ok_or_else(|| refuse(format!("binding {binding} is no buffer")))?;
+            match buf.kind() {
+                BindKind::Image => {
+                    if self.table.is_none() {
+                        return Err(refuse("built without the table image".into()));
+                    }
+                    texture = Some(point as u32);
+                }
+                kind => {
+                    storage += usize::from(kind == BindKind::Storage);
+                    blocks.push((point as u32, buf, kind));
+                }
+            }
+        }
+        let most = self.gl.limits().storage_blocks as usize;
+        if storage > most {
+            return Err(refuse(format!(
+                "{storage} shader storage blocks, more than the {most} {} allows a compute shader",
+                self.info.adapter
+            )));
+        }
+        let covered: u32 = glsl.uniforms.iter().map(|u| u.1 + 4 * u.3 as u32).max().unwrap_or(0);
+        if immediates > covered {
+            return Err(refuse(format!("{immediates} bytes of immediates, but its GLSL sets only {covered}")));
+        }
+        let names: Vec<&str> = glsl.uniforms.iter().map(|u| u.0.as_str()).collect();
+        let text = self.patch(&glsl.text);
+        let index = self.gl.program(&text, &names).map_err(|log| refuse(format!("the GL driver: {log}")))?;
+        let uniforms = glsl.uniforms.iter().map(|u| (u.1, u.2, u.3)).collect();
+        self.programs.insert(k, Program { index, blocks, texture, uniforms });
+        self.gl.check("building a kernel").map_err(backend)
+    }
+
+    fn kernels(&self) -> Vec<KernelRef> {
+        self.programs.keys().copied().collect()
+    }
+
+    fn write(&mut self, id: BufferId, bytes: &[u8]) -> Result<(), SolverError> {
+        let b = self.buf(id)?;
+        self.settle().map_err(backend)?;
+        self.gl.write(b.index, 0, bytes).map_err(backend)
+    }
+
+    fn read(&mut self, id: BufferId) -> Result<Vec<u8>, SolverError> {
+        let b = self.buf(id)?;
+        self.settle().map_err(backend)?;
+        self.gl.read(b.index, 0, b.size).map_err(backend)
+    }
+
+    fn begin(&mut self, _index: usize, _queries: u32) -> Result<(), SolverError> {
+        Ok(())
+    }
+
+    /// glBufferSubData: GL orders it after what was issued before.
+    fn record_write(&mut self, id: BufferId, bytes: &[u8]) -> Result<(), SolverError> {
+        self.write(id, bytes)
+    }
+
+    fn clear(&mut self, id: BufferId) {
+        let r = self.buf(id).map_err(|_| GlError::Invalid("clearing no buffer")).and_then(|b| {
+            self.settle()?;
+            self.gl.clear(b.index)
+        });
+        self.note(r);
+    }
+
+    fn copy(&mut self, src: BufferId, dst: BufferId, size: u64) {
+        let r = match (self.buf(src), self.buf(dst)) {
+            (Ok(a), Ok(b)) => {
+                self.settle().and_then(|_| self.gl.copy(a.index, 0, b.index, 0, size.min(a.size).min(b.size)))
+            }
+            _ => Err(GlError::Invalid("copying no buffer")),
+        };
+        self.note(r);
+    }
+
+    /// glMemoryBarrier for storage-block reads after storage-block writes; GL orders its
+    /// own commands after the draws before them, so `after_all` needs nothing more.
+    fn barrier(&mut self, _after_all: bool) {
+        let r = self.gl.memory_barrier(DISPATCH_BARRIER);
+        self.note(r);
+    }
+
+    fn dispatch(&mut self, d: &Dispatch<'_>) {
+        let Some(p) = self.programs.get(&d.kernel) else {
+            self.note(Err(GlError::Invalid("a dispatch of a kernel never built")));
+            return;
+        };
+        let set = &self.sets[d.parity & 1];
+        let find = |buf: Buf| set.iter().find(|(b, _)| *b == buf).map(|&(_, id)| self.buffers[id.0 as usize].index);
+        let mut storage = Vec::new();
+        let mut uniform = Vec::new();
+        for &(point, buf, kind) in &p.blocks {
+            let Some(index) = find(buf) else {
+                self.error.get_or_insert(GlError::Invalid("a kernel reads a buffer the solver did not bind"));
+                return;
+            };
+            if kind == BindKind::Uniform { uniform.push((point, index)) } else { storage.push((point, index)) }
+        }
+        let textures: Vec<(u32, usize)> = p.texture.into_iter().zip(self.table.map(|t| t.0)).collect();
+        let values: Vec<(usize, Value)> = p
+            .uniforms
+            .iter()
+            .enumerate()
+            .filter_map(|(i, &(offset, kind, n))| {
+                let at = offset as usize;
+                let words: Vec<[u8; 4]> = (0..n as usize)
+                    .map(|c| d.immediates.get(at + 4 * c..at + 4 * c + 4).and_then(|w| w.try_into().ok()))
+                    .collect::<Option<_>>()?;
+                let mut u = [0u32; 4];
+                for (c, w) in words.iter().enumerate() {
+                    u[c] = u32::from_le_bytes(*w);
+                }
+                Some((
+                    i,
+                    match kind {
+                        'u' => Value::U(n, u),
+                        'i' => Value::I(n, u.map(|x| x as i32)),
+                        _ => Value::F(n, u.map(f32::from_bits)),
+                    },
+                ))
+            })
+            .collect();
+        let desc = DispatchDesc {
+            program: p.index,
+            storage: &storage,
+            uniform: &uniform,
+            textures: &textures,
+            values: &values,
+            groups: d.groups,
+        };
+        let r = (|| {
+            if let Some(q) = d.timestamps {
+                self.gl.timestamp(q)?;
+            }
+            self.gl.dispatch(&desc)?;
+            if let Some(q) = d.timestamps {
+                self.gl.timestamp(q + 1)?;
+            }
+            Ok(())
+        })();
+        self.dirty = true;
+        self.note(r);
+    }
+
+    /// A copy into the staging buffer now, read at the wait (the GPU need not stop here).
+    fn readback(&mut self, id: BufferId, size: u64) -> Result<(), SolverError> {
+        let b = self.buf(id)?;
+        let size = size.min(b.size);
+        let at = self.cursor.next_multiple_of(256);
+        let need = at + size;
+        if self.staging.is_none_or(|s| s.size < need) {
+            if !self.readbacks.is_empty() {
+                return Err(SolverError::Driver("a frame's readbacks outgrew the staging buffer".into()));
+            }
+            let index = self.gl.create_buffer(&vec![0u8; need.max(64 * 1024) as usize]).map_err(backend)?;
+            let size = self.gl.buffer_size(index).map_err(backend)?;
+            self.staging = Some(GlBuffer { index, size });
+        }
+        let s = self.staging.expect("made above");
+        self.settle().map_err(backend)?;
+        self.gl.copy(b.index, 0, s.index, at, size).map_err(backend)?;
+        self.cursor = need;
+        self.readbacks.push((at, size));
+        Ok(())
+    }
+
+    /// glFlush: the commands issued so far start.
+    fn submit(&mut self, _last: bool) -> Result<(), SolverError> {
+        self.take_error()?;
+        self.gl.flush().map_err(backend)
+    }
+
+    fn wait(&mut self, queries: u32) -> Result<Finished, SolverError> {
+        self.take_error()?;
+        let mut done = Finished::default();
+        if queries > 0 {
+            done.ticks = self.gl.timestamps(queries).map_err(backend)?;
+        }
+        if !self.readbacks.is_empty() {
+            let s = self.staging.expect("readbacks copy into staging");
+            for (at, size) in std::mem::take(&mut self.readbacks) {
+                done.readbacks.push(self.gl.read(s.index, at, size).map_err(backend)?);
+            }
+        }
+        self.cursor = 0;
+        Ok(done)
+    }
+
+    fn finish(&mut self) -> Result<(), SolverError> {
+        self.gl.finish().map_err(backend)
+    }
+
+    fn check(&mut self, what: &'static str) -> Result<(), SolverError> {
+        self.take_error()?;
+        self.gl.check(what).map_err(backend)
+    }
+}
+
+/// The OpenGL solver of `variant` on a new headless context.
+pub fn gl_solver(
+    variant: impl Into<VariantSpec>,
+    scene: clothlab_core::Scene,
+    params: clothlab_core::SimParams,
+    options: SolverOptions,
+) -> Result<GlSolver, SolverError> {
+    GpuSolver::new(GlEngine::new()?, variant, scene, params, options)
+}
