@@ -190,7 +190,7 @@ mod tests {
         let mut targets = vec![Backend::CpuPar];
         // GPU solvers where an adapter must be (lavapipe in CI).
         if std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() == Ok("1") {
-            targets.extend([Backend::Wgpu, Backend::Vulkan, Backend::Cpu]);
+            targets.extend([Backend::Wgpu, Backend::Vulkan, Backend::Gl, Backend::Cpu]);
         }
         for b in targets {
             sim.switch(b, &Shared::None).unwrap();

@@ -57,8 +57,16 @@ pub enum Drag {
     End,
 }
 
-const BACKENDS: [Backend; 6] =
-    [Backend::Cpu, Backend::CpuPar, Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan];
+const BACKENDS: [Backend; 8] = [
+    Backend::Cpu,
+    Backend::CpuPar,
+    Backend::WgpuNaive,
+    Backend::Wgpu,
+    Backend::VulkanNaive,
+    Backend::Vulkan,
+    Backend::GlNaive,
+    Backend::Gl,
+];
 
 fn shown(ui: &UiState, p: Panel) -> bool {
     ui.panels.contains(&p)
