@@ -81,6 +81,40 @@ pub fn backends(scene: &Scene, params: &SimParams, keep: impl Fn(&str) -> bool) 
     out
 }
 
+/// Steps `v` three frames and checks its last substep's GPU statistics against the CPU
+/// twin's: the largest strain within 1e-6 (a max of the same f32 values: a length and a
+/// division, within 4 ulps of ~1.1) and the kinetic energy within `energy_bound` relative
+/// (a sum in another order than the twin's f64 sum; the callers give the bound's reason).
+pub fn assert_stats_match_twin<E: clothlab_engine::Engine>(v: &mut clothlab_engine::GpuSolver<E>, energy_bound: f32) {
+    for _ in 0..3 {
+        v.step_frame().unwrap();
+    }
+    let stats_gpu = v.substep_stats();
+    let substeps = v.params().substeps as usize;
+    assert_eq!(stats_gpu.len(), substeps, "one entry per substep");
+    // Every substep wrote its own entry (zeroed at the frame's start): the cloth is
+    // falling, so each has energy.
+    assert!(stats_gpu.iter().all(|s| s.kinetic_energy > 0.0 && s.max_strain.is_finite()), "{stats_gpu:?}");
+    let state = v.state().unwrap();
+    let (_, topo) = clothlab_core::build(v.scene(), v.params()).unwrap();
+    let sp = clothlab_core::grid::StepParams::new(v.params(), v.scene(), None);
+    let want = clothlab_core::cpu::substep_stats(&sp, &topo.slots, &state.pos, &state.vel);
+    let got = stats_gpu[substeps - 1];
+    let strain_err = (got.max_strain - want.max_strain).abs();
+    let energy_err = ((got.kinetic_energy - want.kinetic_energy) / want.kinetic_energy).abs();
+    println!(
+        "{}: strain {} vs {} ({strain_err:.1e}), energy {} vs {} ({energy_err:.1e} rel)",
+        v.name(),
+        got.max_strain,
+        want.max_strain,
+        got.kinetic_energy,
+        want.kinetic_energy
+    );
+    assert!(want.kinetic_energy > 0.0 && want.max_strain > 0.0, "{want:?}");
+    assert!(strain_err <= 1e-6, "max strain {got:?} vs {want:?}");
+    assert!(energy_err <= energy_bound, "kinetic energy {got:?} vs {want:?}");
+}
+
 /// Prints every check and fails on the first one over its bound.
 pub fn assert_checks(label: &str, checks: &[Check]) {
     for c in checks {

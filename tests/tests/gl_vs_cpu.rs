@@ -3,8 +3,6 @@
 //! error or debug message of medium or high severity fails the test that caused it
 //! (`Engine::check`).
 
-use clothlab_core::cpu::substep_stats;
-use clothlab_core::grid::StepParams;
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Scene, SimParams, Solver, SolverError};
 use clothlab_engine::kernels::Check;
@@ -12,7 +10,7 @@ use clothlab_engine::recipe::StatsMode;
 use clothlab_engine::validate::{COMPARED_BUFFERS, KernelRunner, flavors, validate_kernels};
 use clothlab_engine::{SolverOptions, Variant, VariantSpec};
 use clothlab_gl::{GlSolver, gl_solver};
-use clothlab_tests::{assert_checks, or_skip};
+use clothlab_tests::{assert_checks, assert_stats_match_twin, or_skip};
 
 fn gl(variant: impl Into<VariantSpec>, n: u32) -> Option<GlSolver> {
     or_skip(gl_solver(variant, Scene::with_n(n), SimParams::default(), SolverOptions::default()), "gl solver")
@@ -112,23 +110,7 @@ fn gl_statistics_match_the_cpu_twin() {
             Err(e) => or_skip(Err(e), "gl solver"),
         };
         let Some(mut v) = v else { continue };
-        for _ in 0..3 {
-            v.step_frame().unwrap();
-        }
-        let stats_gpu = v.substep_stats();
-        let substeps = v.params().substeps as usize;
-        assert_eq!(stats_gpu.len(), substeps, "one entry per substep");
-        assert!(stats_gpu.iter().all(|s| s.kinetic_energy > 0.0 && s.max_strain.is_finite()), "{stats_gpu:?}");
-        let state = v.state().unwrap();
-        let (_, topo) = clothlab_core::build(v.scene(), v.params()).unwrap();
-        let sp = StepParams::new(v.params(), v.scene(), None);
-        let want = substep_stats(&sp, &topo.slots, &state.pos, &state.vel);
-        let got = stats_gpu[substeps - 1];
-        let strain_err = (got.max_strain - want.max_strain).abs();
-        let energy_err = ((got.kinetic_energy - want.kinetic_energy) / want.kinetic_energy).abs();
-        println!("{} {stats:?}: strain {strain_err:.1e}, energy {energy_err:.1e} rel", v.name());
-        assert!(strain_err <= 1e-6, "max strain {got:?} vs {want:?}");
-        assert!(energy_err <= energy_bound, "kinetic energy {got:?} vs {want:?}");
+        assert_stats_match_twin(&mut v, energy_bound);
         no_gl_errors(&mut v);
     }
 }

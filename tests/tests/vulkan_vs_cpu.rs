@@ -1,14 +1,12 @@
 //! The Vulkan backend against the CPU twins, with the Khronos validation layer on: any
 //! message it reports fails the test that caused it.
 
-use clothlab_core::cpu::substep_stats;
-use clothlab_core::grid::StepParams;
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Scene, SimParams, Solver};
 use clothlab_engine::kernels::Check;
 use clothlab_engine::validate::{COMPARED_BUFFERS, KernelRunner, flavors, validate_kernels};
 use clothlab_engine::{Variant, VariantSpec};
-use clothlab_tests::{assert_checks, or_skip};
+use clothlab_tests::{assert_checks, assert_stats_match_twin, or_skip};
 use clothlab_vulkan::{SolverOptions, StatsMode, VulkanSolver, vulkan_solver};
 
 fn vulkan(variant: Variant, n: u32) -> Option<VulkanSolver> {
@@ -135,33 +133,7 @@ fn gpu_statistics_match_the_cpu_twin_by_subgroups_and_by_atomics() {
             Err(e) => or_skip(Err(e), "vulkan solver"),
         };
         let Some(mut v) = v else { continue };
-        for _ in 0..3 {
-            v.step_frame().unwrap();
-        }
-        let stats_gpu = v.substep_stats();
-        let substeps = v.params().substeps as usize;
-        assert_eq!(stats_gpu.len(), substeps, "one entry per substep");
-        // Every substep wrote its own entry (zeroed at the frame's start): the cloth is
-        // falling, so each has energy.
-        assert!(stats_gpu.iter().all(|s| s.kinetic_energy > 0.0 && s.max_strain.is_finite()), "{stats_gpu:?}");
-        let state = v.state().unwrap();
-        let (_, topo) = clothlab_core::build(v.scene(), v.params()).unwrap();
-        let sp = StepParams::new(v.params(), v.scene(), None);
-        let want = substep_stats(&sp, &topo.slots, &state.pos, &state.vel);
-        let got = stats_gpu[substeps - 1];
-        let strain_err = (got.max_strain - want.max_strain).abs();
-        let energy_err = ((got.kinetic_energy - want.kinetic_energy) / want.kinetic_energy).abs();
-        println!(
-            "{} {stats:?}: strain {} vs {} ({strain_err:.1e}), energy {} vs {} ({energy_err:.1e} rel)",
-            v.name(),
-            got.max_strain,
-            want.max_strain,
-            got.kinetic_energy,
-            want.kinetic_energy
-        );
-        assert!(want.kinetic_energy > 0.0 && want.max_strain > 0.0, "{want:?}");
-        assert!(strain_err <= 1e-6, "max strain {got:?} vs {want:?}");
-        assert!(energy_err <= energy_bound, "kinetic energy {got:?} vs {want:?}");
+        assert_stats_match_twin(&mut v, energy_bound);
         no_validation_messages(&v);
     }
 }
