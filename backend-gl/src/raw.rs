@@ -480,30 +480,27 @@ impl Gl {
     /// Binds what `d` names and dispatches it. Bad indices are refused before any call.
     pub fn dispatch(&self, d: &DispatchDesc<'_>) -> Result<(), GlError> {
         let p = self.programs.get(d.program).ok_or(GlError::Invalid("no such GL program"))?;
-        let name = |i: usize| self.buffers.get(i).map(|b| b.name).ok_or(GlError::Invalid("no such GL buffer"));
-        let storage: Vec<(u32, glow::NativeBuffer)> =
-            d.storage.iter().map(|&(pt, i)| Ok((pt, name(i)?))).collect::<Result<_, GlError>>()?;
-        let uniform: Vec<(u32, glow::NativeBuffer)> =
-            d.uniform.iter().map(|&(pt, i)| Ok((pt, name(i)?))).collect::<Result<_, GlError>>()?;
-        let textures: Vec<(u32, glow::NativeTexture)> = d
-            .textures
-            .iter()
-            .map(|&(u, i)| self.textures.get(i).map(|t| (u, t.0)).ok_or(GlError::Invalid("no such GL texture")))
-            .collect::<Result<_, GlError>>()?;
+        // Every index checked first (no allocation: this runs for every dispatch).
+        if d.storage.iter().chain(d.uniform).any(|&(_, i)| i >= self.buffers.len()) {
+            return Err(GlError::Invalid("no such GL buffer"));
+        }
+        if d.textures.iter().any(|&(_, i)| i >= self.textures.len()) {
+            return Err(GlError::Invalid("no such GL texture"));
+        }
         let gl = self.cur()?;
         // SAFETY: the context is current; every name is an object of this context; a
         // uniform location is the program's own (or None, which GL ignores).
         unsafe {
             gl.use_program(Some(p.program));
-            for (pt, b) in storage {
-                gl.bind_buffer_base(glow::SHADER_STORAGE_BUFFER, pt, Some(b));
+            for &(pt, i) in d.storage {
+                gl.bind_buffer_base(glow::SHADER_STORAGE_BUFFER, pt, Some(self.buffers[i].name));
             }
-            for (pt, b) in uniform {
-                gl.bind_buffer_base(glow::UNIFORM_BUFFER, pt, Some(b));
+            for &(pt, i) in d.uniform {
+                gl.bind_buffer_base(glow::UNIFORM_BUFFER, pt, Some(self.buffers[i].name));
             }
-            for (unit, t) in textures {
+            for &(unit, i) in d.textures {
                 gl.active_texture(glow::TEXTURE0 + unit);
-                gl.bind_texture(glow::TEXTURE_2D, Some(t));
+                gl.bind_texture(glow::TEXTURE_2D, Some(self.textures[i].0));
             }
             for &(i, v) in d.values {
                 let loc = p.locations.get(i).and_then(|l| l.as_ref());

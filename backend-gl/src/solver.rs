@@ -51,12 +51,16 @@ pub struct GlBuffer {
 }
 
 /// A built kernel: its program and what it binds where.
+/// What it binds is resolved once, when it is built (the buffers are bound before any
+/// kernel is built and never change), so a dispatch only walks these lists.
 struct Program {
     index: usize,
-    /// `(GL binding point, buffer, kind)` of its storage and uniform blocks.
-    blocks: Vec<(u32, Buf, BindKind)>,
-    /// The texture unit of the table image, if it reads it.
-    texture: Option<u32>,
+    /// `(GL binding point, raw buffer)` of its storage blocks, per position parity.
+    storage: [Vec<(u32, usize)>; 2],
+    /// The same for its uniform blocks.
+    uniform: [Vec<(u32, usize)>; 2],
+    /// `(texture unit, raw texture)` of the table image, if it reads it.
+    texture: Vec<(u32, usize)>,
     /// Its immediates as uniforms: `(byte offset, kind, components)`, by location index.
     uniforms: Vec<(u32, char, u8)>,
 }
@@ -258,29 +262,35 @@ impl Engine for GlEngine {
                 self.info.adapter
             )));
         }
+        if !self.bound {
+            return Err(SolverError::Invalid("kernels are built after the buffers are bound".into()));
+        }
         let glsl = k.glsl()?;
-        let mut blocks = Vec::new();
-        let mut texture = None;
-        let mut storage = 0;
+        let mut storage: [Vec<(u32, usize)>; 2] = Default::default();
+        let mut uniform: [Vec<(u32, usize)>; 2] = Default::default();
+        let mut texture = Vec::new();
         for &(binding, point) in &glsl.points {
+            let point = u32::from(point);
             let buf = Buf::from_binding(binding).ok_or_else(|| refuse(format!("binding {binding} is no buffer")))?;
-            match buf.kind() {
-                BindKind::Image => {
-                    if self.table.is_none() {
-                        return Err(refuse("built without the table image".into()));
-                    }
-                    texture = Some(point as u32);
-                }
-                kind => {
-                    storage += usize::from(kind == BindKind::Storage);
-                    blocks.push((point as u32, buf, kind));
-                }
+            if buf.kind() == BindKind::Image {
+                let (t, _) = self.table.ok_or_else(|| refuse("built without the table image".into()))?;
+                texture.push((point, t));
+                continue;
+            }
+            for parity in 0..2 {
+                let id = self.sets[parity].iter().find(|(b, _)| *b == buf).map(|&(_, id)| id).ok_or_else(|| {
+                    refuse(format!("it reads binding {binding} ({buf:?}), which the solver did not bind"))
+                })?;
+                let raw = self.buf(id)?.index;
+                let list = if buf.kind() == BindKind::Uniform { &mut uniform } else { &mut storage };
+                list[parity].push((point, raw));
             }
         }
+        let storage_blocks = storage[0].len();
         let most = self.gl.limits().storage_blocks as usize;
-        if storage > most {
+        if storage_blocks > most {
             return Err(refuse(format!(
-                "{storage} shader storage blocks, more than the {most} {} allows a compute shader",
+                "{storage_blocks} shader storage blocks, more than the {most} {} allows a compute shader",
                 self.info.adapter
             )));
         }
@@ -292,7 +302,7 @@ impl Engine for GlEngine {
         let text = self.patch(&glsl.text);
         let index = self.gl.program(&text, &names).map_err(|log| refuse(format!("the GL driver: {log}")))?;
         let uniforms = glsl.uniforms.iter().map(|u| (u.1, u.2, u.3)).collect();
-        self.programs.insert(k, Program { index, blocks, texture, uniforms });
+        self.programs.insert(k, Program { index, storage, uniform, texture, uniforms });
         self.gl.check("building a kernel").map_err(backend)
     }
 
@@ -351,30 +361,16 @@ impl Engine for GlEngine {
             self.note(Err(GlError::Invalid("a dispatch of a kernel never built")));
             return;
         };
-        let set = &self.sets[d.parity & 1];
-        let find = |buf: Buf| set.iter().find(|(b, _)| *b == buf).map(|&(_, id)| self.buffers[id.0 as usize].index);
-        let mut storage = Vec::new();
-        let mut uniform = Vec::new();
-        for &(point, buf, kind) in &p.blocks {
-            let Some(index) = find(buf) else {
-                self.error.get_or_insert(GlError::Invalid("a kernel reads a buffer the solver did not bind"));
-                return;
-            };
-            if kind == BindKind::Uniform { uniform.push((point, index)) } else { storage.push((point, index)) }
-        }
-        let textures: Vec<(u32, usize)> = p.texture.into_iter().zip(self.table.map(|t| t.0)).collect();
+        // The immediates as uniform values (only the statistics kernels have any).
+        let word = |at: usize| d.immediates.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]));
         let values: Vec<(usize, Value)> = p
             .uniforms
             .iter()
             .enumerate()
             .filter_map(|(i, &(offset, kind, n))| {
-                let at = offset as usize;
-                let words: Vec<[u8; 4]> = (0..n as usize)
-                    .map(|c| d.immediates.get(at + 4 * c..at + 4 * c + 4).and_then(|w| w.try_into().ok()))
-                    .collect::<Option<_>>()?;
                 let mut u = [0u32; 4];
-                for (c, w) in words.iter().enumerate() {
-                    u[c] = u32::from_le_bytes(*w);
+                for (c, x) in u.iter_mut().enumerate().take(n as usize) {
+                    *x = word(offset as usize + 4 * c)?;
                 }
                 Some((
                     i,
@@ -386,11 +382,12 @@ impl Engine for GlEngine {
                 ))
             })
             .collect();
+        let parity = d.parity & 1;
         let desc = DispatchDesc {
             program: p.index,
-            storage: &storage,
-            uniform: &uniform,
-            textures: &textures,
+            storage: &p.storage[parity],
+            uniform: &p.uniform[parity],
+            textures: &p.texture,
             values: &values,
             groups: d.groups,
         };
