@@ -14,6 +14,7 @@
 use clothlab_core::validate::Check;
 use clothlab_core::{CpuSolver, Exec, OrbitCamera, RenderMode, Scene, SimParams, Solver, View};
 use clothlab_engine::Variant;
+use clothlab_gl::gl_solver;
 use clothlab_vulkan::vulkan_solver;
 use clothlab_wgpu::{SolverOptions, wgpu_solver};
 
@@ -44,7 +45,7 @@ pub fn or_skip<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> Option<T
     }
 }
 
-/// Every backend on `scene`: the two CPU solvers, then wgpu and Vulkan, naive and
+/// Every backend on `scene`: the two CPU solvers, then wgpu, Vulkan and OpenGL, naive and
 /// optimized (Vulkan under the validation layer); the GPU ones only where an adapter is
 /// (see [`or_skip`]).
 pub fn every_backend(scene: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>)> {
@@ -52,7 +53,8 @@ pub fn every_backend(scene: &Scene, params: &SimParams) -> Vec<(String, Box<dyn 
 }
 
 /// The backends of [`every_backend`] whose names `keep` accepts (`cpu`, `cpu-par`,
-/// `wgpu naive`, `vulkan naive`, `wgpu optimized`, `vulkan optimized`); the others are
+/// `wgpu naive`, `vulkan naive`, `gl naive`, `wgpu optimized`, `vulkan optimized`,
+/// `gl optimized`); the others are
 /// not built.
 pub fn backends(scene: &Scene, params: &SimParams, keep: impl Fn(&str) -> bool) -> Vec<(String, Box<dyn Solver>)> {
     let mut out: Vec<(String, Box<dyn Solver>)> = Vec::new();
@@ -74,6 +76,12 @@ pub fn backends(scene: &Scene, params: &SimParams, keep: impl Fn(&str) -> bool) 
         if keep(&name)
             && let Some(s) =
                 or_skip(vulkan_solver(v, scene.clone(), params.clone(), true, SolverOptions::default()), "vulkan")
+        {
+            out.push((name, Box::new(s)));
+        }
+        let name = format!("gl {}", v.label());
+        if keep(&name)
+            && let Some(s) = or_skip(gl_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "gl")
         {
             out.push((name, Box::new(s)));
         }
@@ -113,6 +121,28 @@ pub fn assert_stats_match_twin<E: clothlab_engine::Engine>(v: &mut clothlab_engi
     assert!(want.kinetic_energy > 0.0 && want.max_strain > 0.0, "{want:?}");
     assert!(strain_err <= 1e-6, "max strain {got:?} vs {want:?}");
     assert!(energy_err <= energy_bound, "kinetic energy {got:?} vs {want:?}");
+}
+
+/// Runs each of `kernels` on `runner` against its CPU twin (a disturbed cloth of n × n,
+/// see `clothlab_engine::validate::validate_kernels`) and fails on the first buffer over
+/// its kernel's bound; checks that every kernel with a bound was compared (one check per
+/// compared buffer) and that at least `min_bounded` were — so that a recipe or flavor
+/// list that lost kernels fails here instead of passing on fewer.
+pub fn assert_kernels_match_twins(
+    runner: &mut dyn clothlab_engine::KernelRunner,
+    kernels: &[clothlab_engine::KernelRef],
+    n: u32,
+    seed: u64,
+    min_bounded: usize,
+    label: &str,
+) {
+    use clothlab_engine::kernels::Check as KernelCheck;
+    let checks = clothlab_engine::validate::validate_kernels(runner, kernels, n, seed).unwrap();
+    let bounded = kernels.iter().filter(|k| matches!(k.def.check, KernelCheck::Bound { .. })).count();
+    let names: Vec<String> = kernels.iter().map(|k| k.shader_name()).collect();
+    assert!(bounded >= min_bounded, "{label}: only {bounded} kernels with a bound: {names:?}");
+    assert_eq!(checks.len(), clothlab_engine::validate::COMPARED_BUFFERS * bounded, "{label}");
+    assert_checks(label, &checks);
 }
 
 /// Prints every check and fails on the first one over its bound.

@@ -5,6 +5,7 @@
 
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
 use clothlab_engine::{RecipeSolver, SolverOptions, Variant};
+use clothlab_gl::gl_solver;
 use clothlab_tests::or_skip;
 use clothlab_vulkan::vulkan_solver;
 use clothlab_wgpu::wgpu_solver;
@@ -38,7 +39,12 @@ fn a_new_time_step_keeps_the_velocity_on_every_backend() {
     {
         check(&mut g);
     }
-    if let Some(mut v) = or_skip(vulkan_solver(Variant::NAIVE, scene, p, true, SolverOptions::default()), "vulkan") {
+    if let Some(mut v) =
+        or_skip(vulkan_solver(Variant::NAIVE, scene.clone(), p.clone(), true, SolverOptions::default()), "vulkan")
+    {
         check(&mut v);
+    }
+    if let Some(mut g) = or_skip(gl_solver(Variant::OPTIMIZED, scene, p, SolverOptions::default()), "gl") {
+        check(&mut g);
     }
 }

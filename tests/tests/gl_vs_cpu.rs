@@ -5,12 +5,11 @@
 
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Scene, SimParams, Solver, SolverError};
-use clothlab_engine::kernels::Check;
 use clothlab_engine::recipe::StatsMode;
-use clothlab_engine::validate::{COMPARED_BUFFERS, KernelRunner, flavors, validate_kernels};
+use clothlab_engine::validate::{KernelRunner, flavors, validate_kernels};
 use clothlab_engine::{SolverOptions, Variant, VariantSpec};
 use clothlab_gl::{GlSolver, gl_solver};
-use clothlab_tests::{assert_checks, assert_stats_match_twin, or_skip};
+use clothlab_tests::{assert_checks, assert_kernels_match_twins, assert_stats_match_twin, or_skip};
 
 fn gl(variant: impl Into<VariantSpec>, n: u32) -> Option<GlSolver> {
     or_skip(gl_solver(variant, Scene::with_n(n), SimParams::default(), SolverOptions::default()), "gl solver")
@@ -37,11 +36,7 @@ fn every_gl_kernel_matches_its_cpu_twin() {
                 assert!(has("springs_scatter_f32") && has("tri_normals_scatter_f32_sto"), "{names:?}");
             }
         }
-        let checks = validate_kernels(&mut v, &kernels, n, 0x5eed + n as u64).unwrap();
-        let bounded = kernels.iter().filter(|k| matches!(k.def.check, Check::Bound { .. })).count();
-        assert!(bounded >= 13, "{names:?}");
-        assert_eq!(checks.len(), COMPARED_BUFFERS * bounded);
-        assert_checks(&format!("gl n={n}"), &checks);
+        assert_kernels_match_twins(&mut v, &kernels, n, 0x5eed + n as u64, 13, &format!("gl n={n}"));
         no_gl_errors(&mut v);
     }
 }

@@ -3,10 +3,9 @@
 
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Scene, SimParams, Solver};
-use clothlab_engine::kernels::Check;
-use clothlab_engine::validate::{COMPARED_BUFFERS, KernelRunner, flavors, validate_kernels};
+use clothlab_engine::validate::{KernelRunner, flavors, validate_kernels};
 use clothlab_engine::{Variant, VariantSpec};
-use clothlab_tests::{assert_checks, assert_stats_match_twin, or_skip};
+use clothlab_tests::{assert_checks, assert_kernels_match_twins, assert_stats_match_twin, or_skip};
 use clothlab_vulkan::{SolverOptions, StatsMode, VulkanSolver, vulkan_solver};
 
 fn vulkan(variant: Variant, n: u32) -> Option<VulkanSolver> {
@@ -38,11 +37,7 @@ fn every_vulkan_kernel_matches_its_cpu_twin() {
                 assert!(has("springs_scatter_f32") && has("tri_normals_scatter_f32_sto"), "{names:?}");
             }
         }
-        let checks = validate_kernels(&mut v, &kernels, n, 0x5eed + n as u64).unwrap();
-        let bounded = kernels.iter().filter(|k| matches!(k.def.check, Check::Bound { .. })).count();
-        assert!(bounded >= 13, "{names:?}");
-        assert_eq!(checks.len(), COMPARED_BUFFERS * bounded);
-        assert_checks(&format!("vk n={n}"), &checks);
+        assert_kernels_match_twins(&mut v, &kernels, n, 0x5eed + n as u64, 13, &format!("vk n={n}"));
         no_validation_messages(&v);
     }
 }
