@@ -96,7 +96,7 @@ pub struct RenderArgs {
 #[derive(clap::Args)]
 pub struct ValidateArgs {
     /// GPU backends to check (comma-separated).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan, Backend::GlNaive, Backend::Gl])]
     pub backends: Vec<Backend>,
     /// Particles per side for the kernel checks and the rollout (2 ..= 1024; default 64,
     /// or the scene file's).
@@ -336,7 +336,7 @@ impl GpuArgs {
 pub struct BenchArgs {
     /// Backends to measure (comma-separated). GPU backends without an adapter are skipped
     /// with a note.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::CpuPar, Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::CpuPar, Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan, Backend::GlNaive, Backend::Gl])]
     pub backends: Vec<Backend>,
     /// Grid sizes, particles per side (comma-separated, 2 ..= 4096). Sizes a backend would
     /// take longer than `--cell-budget` for are skipped for that backend.

@@ -87,6 +87,9 @@ fn our_own_errors_are_one_line() {
 
 #[test]
 fn validate_checks_the_gpu_backends_or_says_why_not() {
+    // What GL lacks is refused in one line, before any work.
+    refused(&["sim", "--backend", "gl", "--set-variant", "constants=push", "--steps", "16"], "immediates");
+    refused(&["render", "--backend", "gl", "--api", "gl", "--out", "/tmp/never.png"], "--api gl");
     refused(&["validate", "--n", "1"], "invalid --n 1");
     refused(&["validate", "--backends", "cpu"], "reference itself");
     let out = clothlab(&["validate", "--n", "20", "--steps", "32"]);
@@ -96,8 +99,9 @@ fn validate_checks_the_gpu_backends_or_says_why_not() {
         return;
     }
     assert!(out.status.success(), "validate failed: {text}\n{err}");
-    // On each API: seven naive kernels, five optimized, a rollout per variant; all ok.
-    assert_eq!(text.lines().filter(|l| l.ends_with(" ok")).count(), 2 * (7 + 5 + 2), "{text}");
+    // On each of the three APIs: seven naive kernels, five optimized, a rollout per
+    // variant; all ok.
+    assert_eq!(text.lines().filter(|l| l.ends_with(" ok")).count(), 3 * (7 + 5 + 2), "{text}");
     assert!(!text.contains("FAILED"));
 }
 
