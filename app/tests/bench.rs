@@ -65,8 +65,6 @@ fn a_small_run_writes_every_file_with_positive_finite_numbers() {
     assert!(!err.contains("panicked"), "{err}");
     let gpu = !err.contains("no wgpu adapter");
     assert!(gpu || !gpu_required(), "CI has lavapipe, but: {err}");
-    let backends: &[&str] =
-        if gpu { &["cpu", "cpu-par", "wgpu-naive", "wgpu", "vulkan-naive", "vulkan"] } else { &["cpu", "cpu-par"] };
 
     // CSV: the header, 11 fields a row, numbers positive and finite, min ≤ median ≤ max.
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
@@ -74,6 +72,16 @@ fn a_small_run_writes_every_file_with_positive_finite_numbers() {
     let header = split_csv(lines.next().unwrap());
     assert_eq!(header.join(","), "section,backend,size,label,clock,samples,median_ns,min_ns,max_ns,adapter,machine");
     let rows: Vec<Vec<String>> = lines.map(split_csv).collect();
+    // The gl backend's cells carry the name of the variant it runs: `optimized` fitted to
+    // the context (on llvmpipe `gl-optimized+constants=uniform+neighbours=load`: no push
+    // constants, no subgroups), so its name is taken from the rows.
+    let gl = rows.iter().map(|r| r[1].as_str()).find(|b| *b == "gl" || b.starts_with("gl-optimized"));
+    let backends: Vec<&str> = if gpu {
+        let gl = gl.expect("a gl cell");
+        vec!["cpu", "cpu-par", "wgpu-naive", "wgpu", "vulkan-naive", "vulkan", "gl-naive", gl]
+    } else {
+        vec!["cpu", "cpu-par"]
+    };
     for r in &rows {
         assert_eq!(r.len(), 11, "{r:?}");
         let samples: usize = r[5].parse().unwrap();
@@ -88,7 +96,7 @@ fn a_small_run_writes_every_file_with_positive_finite_numbers() {
     let find = |section: &str, backend: &str, size: &str, label: &str| {
         rows.iter().find(|r| r[0] == section && r[1] == backend && r[2] == size && r[3] == label)
     };
-    for b in backends {
+    for &b in &backends {
         for n in ["16", "32"] {
             // --iters 5 rounds up to one frame of 16 substeps: 16 samples per kernel.
             let sub = find("kernel", b, n, "substep").unwrap_or_else(|| panic!("no substep row for {b} n={n}"));
@@ -98,7 +106,7 @@ fn a_small_run_writes_every_file_with_positive_finite_numbers() {
         }
     }
     if gpu {
-        for api in ["wgpu", "vulkan"] {
+        for api in ["wgpu", "vulkan", "gl"] {
             for k in ["1", "64"] {
                 assert!(rows.iter().any(|r| r[0] == "overhead"
                     && r[1] == api
@@ -129,7 +137,7 @@ fn a_small_run_writes_every_file_with_positive_finite_numbers() {
     for key in ["## Per-kernel time at 32×32", "## Time per frame", "## Targets", "## Same workload", "kernels.png"] {
         assert!(report.contains(key), "report.md lacks `{key}`");
     }
-    for b in backends {
+    for b in &backends {
         assert!(report.contains(&format!("| {b} ")), "report.md lacks {b}");
     }
     let mut plots = vec!["kernels", "frame_time", "fps"];
