@@ -217,6 +217,23 @@ fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
         (String::new(), Vec::new(), Vec::new())
     };
     fs::write(out.join(format!("{name}.glsl")), glsl).expect("write GLSL");
+    // The render shader's entry points as GLSL too, for the OpenGL renderer: one text per
+    // entry point (GL links a vertex and a fragment shader into a program).
+    if name == "render" {
+        let mut stages = String::from(
+            "/// The render shader's entry points as GLSL 4.50 core for the OpenGL renderer: `(entry point, text)`.\npub const RENDER_GLSL: &[(&str, &str)] = &[\n",
+        );
+        for e in &module.entry_points {
+            let text =
+                glsl_450_stage(&module, &info, e.stage, &e.name).unwrap_or_else(|e| fail(format!("render: {e}")));
+            let file = format!("render_{}.glsl", e.name);
+            fs::write(out.join(&file), text).expect("write GLSL");
+            writeln!(stages, "    ({:?}, include_str!(concat!(env!(\"OUT_DIR\"), \"/{file}\"))),", e.name)
+                .expect("write to string");
+        }
+        stages.push_str("];\n");
+        fs::write(out.join("render_glsl.rs"), stages).expect("write render_glsl.rs");
+    }
     writeln!(
         list,
         "    Kernel {{ name: {name:?}, wgsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.wgsl\")), \

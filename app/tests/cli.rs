@@ -89,7 +89,7 @@ fn our_own_errors_are_one_line() {
 fn validate_checks_the_gpu_backends_or_says_why_not() {
     // What GL lacks is refused in one line, before any work.
     refused(&["sim", "--backend", "gl", "--set-variant", "constants=push", "--steps", "16"], "immediates");
-    refused(&["render", "--backend", "gl", "--api", "gl", "--out", "/tmp/never.png"], "--api gl");
+    refused(&["render", "--backend", "gl", "--api", "wgpu", "--out", "/tmp/never.png"], "draws through its own API");
     refused(&["validate", "--n", "1"], "invalid --n 1");
     refused(&["validate", "--backends", "cpu"], "reference itself");
     let out = clothlab(&["validate", "--n", "20", "--steps", "32"]);
@@ -206,13 +206,22 @@ fn no_adapter_is_one_clear_line() {
 }
 
 #[test]
-fn render_draws_through_vulkan_and_refuses_mixed_apis() {
+fn render_draws_through_vulkan_and_gl_and_refuses_mixed_apis() {
     refused(&["render", "--backend", "vulkan", "--api", "wgpu", "--out", "/tmp/x.png"], "draws through its own API");
     refused(&["render", "--backend", "wgpu", "--api", "vulkan", "--out", "/tmp/x.png"], "draws through its own API");
-    for extra in
-        [&["--backend", "vulkan"][..], &["--backend", "vulkan-naive"], &["--backend", "cpu", "--api", "vulkan"]]
+    refused(&["render", "--backend", "gl", "--api", "vulkan", "--out", "/tmp/x.png"], "draws through its own API");
+    for (i, (extra, api)) in [
+        (&["--backend", "vulkan"][..], "(Vulkan)"),
+        (&["--backend", "vulkan-naive"], "(Vulkan)"),
+        (&["--backend", "cpu", "--api", "vulkan"], "(Vulkan)"),
+        (&["--backend", "gl"], "(OpenGL"),
+        (&["--backend", "gl-naive"], "(OpenGL"),
+        (&["--backend", "cpu", "--api", "gl"], "(OpenGL"),
+    ]
+    .into_iter()
+    .enumerate()
     {
-        let out_path = std::env::temp_dir().join(format!("clothlab-vk-{}-{}.png", std::process::id(), extra.len()));
+        let out_path = std::env::temp_dir().join(format!("clothlab-api-{}-{i}.png", std::process::id()));
         let mut args = vec!["render", "--n", "12", "--frames", "5", "--width", "64", "--height", "48"];
         args.extend_from_slice(extra);
         args.extend_from_slice(&["--out", out_path.to_str().unwrap()]);
@@ -222,7 +231,7 @@ fn render_draws_through_vulkan_and_refuses_mixed_apis() {
             return;
         }
         assert!(out.status.success(), "{args:?}: {err}");
-        assert!(String::from_utf8_lossy(&out.stdout).contains("(Vulkan)"), "{args:?} did not draw through Vulkan");
+        assert!(String::from_utf8_lossy(&out.stdout).contains(api), "{args:?} did not draw through {api}");
         let bytes = std::fs::read(&out_path).unwrap();
         assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
         assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 64);

@@ -17,10 +17,12 @@
 
 pub mod overhead;
 mod raw;
+mod render;
 mod solver;
 
 use thiserror::Error;
 
+pub use render::{GlCloth, GlRenderer};
 pub use solver::{GlBuffer, GlEngine, GlSolver, gl_solver};
 
 /// Why OpenGL could not be used.

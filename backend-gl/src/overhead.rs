@@ -95,7 +95,7 @@ impl OverheadTarget for Target {
 /// Runs every micro-benchmark of `plan` on a new headless GL context (see
 /// clothlab_core::timing::overhead::measure).
 pub fn measure(plan: &OverheadPlan) -> Result<Vec<OverheadRow>, GlError> {
-    let mut gl = Gl::headless()?;
+    let gl = Gl::headless()?;
     let glsl = clothlab_shaders::kernel("chain").ok_or(GlError::Invalid("no chain kernel"))?.glsl;
     let program = gl.program(glsl, &[]).map_err(|reason| GlError::Gl { what: "building the chain kernel", reason })?;
     let data = gl.create_buffer(&[0u8; CHAIN_ELEMENTS * 4])?;

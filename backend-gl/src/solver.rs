@@ -16,7 +16,7 @@ use clothlab_engine::kernels::{self, KernelRef};
 use clothlab_engine::{GpuSolver, SolverOptions, VariantSpec};
 
 use crate::GlError;
-use crate::raw::{DispatchDesc, Gl, Value};
+use crate::raw::{DispatchDesc, Gl, TexFormat, Value};
 
 /// The cloth solver on raw OpenGL.
 pub type GlSolver = GpuSolver<GlEngine>;
@@ -45,7 +45,9 @@ fn backend(e: GlError) -> SolverError {
 /// A buffer of the GL engine (what the GL renderer draws from).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct GlBuffer {
-    index: usize,
+    pub(crate) index: usize,
+    /// The context it lives in ([`crate::raw::Gl::id`]).
+    pub(crate) context: u64,
     /// Its size, bytes.
     pub size: u64,
 }
@@ -122,6 +124,11 @@ impl GlEngine {
             dirty: false,
             error: None,
         })
+    }
+
+    /// The context (for the renderer, which draws in it).
+    pub(crate) fn gl(&self) -> &Gl {
+        &self.gl
     }
 
     /// The driver's limits and extensions, in lines (for `clothlab info`-like reports).
@@ -207,7 +214,7 @@ impl Engine for GlEngine {
     ) -> Result<BufferId, SolverError> {
         let index = self.gl.create_buffer(contents).map_err(backend)?;
         let size = self.gl.buffer_size(index).map_err(backend)?;
-        self.buffers.push(GlBuffer { index, size });
+        self.buffers.push(GlBuffer { index, size, context: self.gl.id() });
         Ok(BufferId(self.buffers.len() as u32 - 1))
     }
 
@@ -229,13 +236,13 @@ impl Engine for GlEngine {
             if self.bound {
                 return Err(SolverError::Invalid("the spring-table image cannot change size once bound".into()));
             }
-            let t = self.gl.create_texture_rgba32ui(TABLE_WIDTH, height).map_err(backend)?;
+            let t = self.gl.create_texture(TexFormat::Rgba32ui, TABLE_WIDTH, height, 1).map_err(backend)?;
             self.table = Some((t, height));
         }
         let (t, _) = self.table.expect("made above");
         let mut all = texels.to_vec();
         all.resize((TABLE_WIDTH * height) as usize, [0; 4]);
-        self.gl.write_texture(t, &all).map_err(backend)?;
+        self.gl.write_texture(t, bytemuck::cast_slice(&all)).map_err(backend)?;
         self.gl.check("uploading the spring-table image").map_err(backend)
     }
 
@@ -417,7 +424,7 @@ impl Engine for GlEngine {
             }
             let index = self.gl.create_buffer(&vec![0u8; need.max(64 * 1024) as usize]).map_err(backend)?;
             let size = self.gl.buffer_size(index).map_err(backend)?;
-            self.staging = Some(GlBuffer { index, size });
+            self.staging = Some(GlBuffer { index, size, context: self.gl.id() });
         }
         let s = self.staging.expect("made above");
         self.settle().map_err(backend)?;

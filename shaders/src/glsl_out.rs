@@ -76,3 +76,52 @@ pub fn glsl_450(module: &naga::Module, info: &naga::valid::ModuleInfo) -> Result
     }
     Ok((text, points, uniforms))
 }
+
+/// The GLSL 4.50 core of one vertex or fragment entry point of a render module (the
+/// renderer's `render.wgsl`), for the OpenGL renderer. Its resources go to binding points
+/// numbered per kind from 0 in `(group, binding)` order: uniform blocks, then textures
+/// (texture units; naga combines each texture with the sampler it is sampled with, so a
+/// sampler has no point of its own — the renderer binds a sampler object to the texture's
+/// unit). Written as wgpu's clip space is (y up, depth 0 to 1): the renderer sets
+/// `glClipControl(GL_UPPER_LEFT, GL_ZERO_TO_ONE)`, which makes GL's window and depth
+/// conventions those of wgpu and Vulkan, so the shaders need no change.
+pub fn glsl_450_stage(
+    module: &naga::Module,
+    info: &naga::valid::ModuleInfo,
+    stage: naga::ShaderStage,
+    entry: &str,
+) -> Result<String, String> {
+    let mut bound: Vec<(naga::ResourceBinding, &naga::GlobalVariable)> =
+        module.global_variables.iter().filter_map(|(_, g)| g.binding.map(|b| (b, g))).collect();
+    bound.sort_by_key(|(b, _)| (b.group, b.binding));
+    let mut binding_map = naga::back::glsl::BindingMap::default();
+    let (mut uniform, mut texture) = (0u8, 0u8);
+    for (b, g) in bound {
+        let counter = match (&g.space, &module.types[g.ty].inner) {
+            (naga::AddressSpace::Uniform, _) => &mut uniform,
+            (_, naga::TypeInner::Image { .. }) => &mut texture,
+            _ => continue,
+        };
+        binding_map.insert(b, *counter);
+        *counter += 1;
+    }
+    let options = naga::back::glsl::Options {
+        version: naga::back::glsl::Version::Desktop(450),
+        writer_flags: naga::back::glsl::WriterFlags::empty(),
+        binding_map,
+        zero_initialize_workgroup_memory: false,
+    };
+    let pipeline = naga::back::glsl::PipelineOptions { shader_stage: stage, entry_point: entry.into(), multiview: None };
+    let mut text = String::new();
+    let mut writer = naga::back::glsl::Writer::new(
+        &mut text,
+        module,
+        info,
+        &options,
+        &pipeline,
+        naga::proc::BoundsCheckPolicies::default(),
+    )
+    .map_err(|e| format!("GLSL output of {entry}: {e}"))?;
+    writer.write().map_err(|e| format!("GLSL output of {entry}: {e}"))?;
+    Ok(text)
+}

@@ -40,6 +40,8 @@ pub struct Kernel {
 
 include!(concat!(env!("OUT_DIR"), "/kernels.rs"));
 
+include!(concat!(env!("OUT_DIR"), "/render_glsl.rs"));
+
 include!("glsl_out.rs");
 
 /// What every kernel starts with: the constants generated from `clothlab_core::layout`,

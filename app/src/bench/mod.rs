@@ -21,6 +21,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clothlab_core::timing::{OverheadPlan, OverheadRow};
 use clothlab_core::{ClothState, Scene, SimParams};
+use clothlab_gl::{GlCloth, GlRenderer};
 use clothlab_vulkan::{Device, VkCloth, VulkanRenderer};
 use clothlab_wgpu::{ClothSource, GpuContext, WgpuRenderer};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -55,6 +56,7 @@ const CHECK_LATTICE: u32 = 5;
 enum Painter {
     Wgpu(Box<(GpuContext, WgpuRenderer)>),
     Vulkan(Box<VulkanRenderer>),
+    Gl(Box<GlRenderer>),
     None,
 }
 
@@ -572,8 +574,9 @@ fn run_cell(
         AnySolver::Vulkan(s, _) => {
             Painter::Vulkan(Box::new(VulkanRenderer::new(&s.engine().device(), &scene, &topo, width, height)?))
         }
-        // The CPU solvers, and GL's until it has a renderer, drawn from a state read back.
-        AnySolver::Cpu(_) | AnySolver::Gl(_) => match (&devices.wgpu, &devices.vulkan) {
+        AnySolver::Gl(s) => Painter::Gl(Box::new(GlRenderer::new(s.engine(), &scene, &topo, width, height)?)),
+        // The CPU solvers, drawn from their state uploaded.
+        AnySolver::Cpu(_) => match (&devices.wgpu, &devices.vulkan) {
             (Some(ctx), _) => {
                 Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, &topo, width, height)?)))
             }
@@ -649,15 +652,11 @@ fn draw(sim: &mut AnySolver, painter: &mut Painter, view: &clothlab_core::View) 
             ctx.wait_idle()?;
         }
         (Painter::Vulkan(r), AnySolver::Cpu(s)) => r.render(view, VkCloth::Cpu(s.state_ref()))?,
-        (Painter::Wgpu(p), AnySolver::Gl(s)) => {
-            let (ctx, r) = &mut **p;
-            let state = clothlab_core::Solver::state(s.as_mut())?;
-            r.render(ctx, view, ClothSource::Cpu(&state))?;
-            ctx.wait_idle()?;
-        }
-        (Painter::Vulkan(r), AnySolver::Gl(s)) => {
-            let state = clothlab_core::Solver::state(s.as_mut())?;
-            r.render(view, VkCloth::Cpu(&state))?;
+        (Painter::Gl(r), AnySolver::Gl(s)) => {
+            let (&pos, &normal) = s.vertex_buffers();
+            r.render(s.engine(), view, GlCloth::Gpu { pos, normal })?;
+            // The picture finished, as the other APIs wait for theirs.
+            s.finish()?;
         }
         (Painter::Vulkan(r), AnySolver::Vulkan(s, _)) => {
             let (pos, normal) = s.vertex_buffers();

@@ -181,7 +181,7 @@ pub fn report(r: &Results) -> String {
     let st = &r.settings;
     let _ = writeln!(
         s,
-        "| workload | default scene, {} substeps per frame; per cell {} warm-up frames, then {} frames timed per kernel ({} substeps), then {} frames simulated + rendered offscreen at {}×{} (wgpu and Vulkan backends drawn from their buffers by their own API; CPU backends, and GL ones until GL has a renderer, read back and uploaded to the wgpu renderer) |",
+        "| workload | default scene, {} substeps per frame; per cell {} warm-up frames, then {} frames timed per kernel ({} substeps), then {} frames simulated + rendered offscreen at {}×{} (GPU backends drawn from their buffers by their own API; CPU backends' state uploaded to the wgpu renderer) |",
         st.substeps,
         st.warmup_frames,
         st.frames,

@@ -3,8 +3,9 @@
 use std::process::ExitCode;
 
 use anyhow::{Result, bail};
-use clap::ValueEnum;
 use clothlab_core::{CpuSolver, Exec, Solver};
+use clothlab_engine::gpu::Engine;
+use clothlab_gl::{GlCloth, GlEngine, GlRenderer};
 use clothlab_vulkan::{VkCloth, VulkanRenderer};
 use clothlab_wgpu::{ClothSource, WgpuRenderer};
 
@@ -30,39 +31,44 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
         view.light = l;
     }
     let setup = GpuSetup { variant: args.variant.spec(args.backend)?, ..GpuSetup::default() };
-    let is_vulkan = matches!(args.backend, Backend::VulkanNaive | Backend::Vulkan);
-    let api = args.api.unwrap_or(if is_vulkan { Api::Vulkan } else { Api::Wgpu });
-    api.check_renderer()?;
-    if api == Api::Wgpu && is_vulkan || api == Api::Vulkan && matches!(args.backend, Backend::WgpuNaive | Backend::Wgpu)
+    let api = args.api.or(args.backend.api()).unwrap_or(Api::Wgpu);
+    if let Some(own) = args.backend.api()
+        && own != api
     {
         bail!(
             "--backend {} draws through its own API: a GPU solver's buffers are drawn without a copy, so pick --api {} (or a CPU backend)",
-            args.backend.to_possible_value().map(|v| v.get_name().to_owned()).unwrap_or_default(),
-            if is_vulkan { "vulkan" } else { "wgpu" }
+            args.backend.name(),
+            own.name()
         );
     }
     let (pixels, adapter) = match args.backend {
-        Backend::Cpu | Backend::CpuPar if api == Api::Vulkan => {
-            let exec = if args.backend == Backend::Cpu { Exec::Serial } else { Exec::Parallel };
-            let mut solver = CpuSolver::new(exec, scene.clone(), params)?;
-            for _ in 0..args.frames {
-                solver.step_frame()?;
-            }
-            let dev = clothlab_vulkan::Device::new(vulkan_validation())?;
-            let mut r = VulkanRenderer::new(&dev, &scene, solver.topology(), args.width, args.height)?;
-            r.render(&view, VkCloth::Cpu(solver.state_ref()))?;
-            (r.read_image()?, format!("{} (Vulkan)", dev.name()))
-        }
         Backend::Cpu | Backend::CpuPar => {
             let exec = if args.backend == Backend::Cpu { Exec::Serial } else { Exec::Parallel };
             let mut solver = CpuSolver::new(exec, scene.clone(), params)?;
             for _ in 0..args.frames {
                 solver.step_frame()?;
             }
-            let ctx = clothlab_wgpu::GpuContext::new()?;
-            let mut r = WgpuRenderer::new(&ctx, &scene, solver.topology(), args.width, args.height)?;
-            r.render(&ctx, &view, ClothSource::Cpu(solver.state_ref()))?;
-            (r.read_image(&ctx)?, ctx.describe())
+            let (topo, state) = (solver.topology(), solver.state_ref());
+            match api {
+                Api::Vulkan => {
+                    let dev = clothlab_vulkan::Device::new(vulkan_validation())?;
+                    let mut r = VulkanRenderer::new(&dev, &scene, topo, args.width, args.height)?;
+                    r.render(&view, VkCloth::Cpu(state))?;
+                    (r.read_image()?, format!("{} (Vulkan)", dev.name()))
+                }
+                Api::Gl => {
+                    let engine = GlEngine::new()?;
+                    let mut r = GlRenderer::new(&engine, &scene, topo, args.width, args.height)?;
+                    r.render(&engine, &view, GlCloth::Cpu(state))?;
+                    (r.read_image(&engine)?, engine.info().adapter.clone())
+                }
+                Api::Wgpu => {
+                    let ctx = clothlab_wgpu::GpuContext::new()?;
+                    let mut r = WgpuRenderer::new(&ctx, &scene, topo, args.width, args.height)?;
+                    r.render(&ctx, &view, ClothSource::Cpu(state))?;
+                    (r.read_image(&ctx)?, ctx.describe())
+                }
+            }
         }
         _ => {
             let mut any = make(args.backend, scene.clone(), params.clone(), &setup, &Shared::None)?;
@@ -86,19 +92,11 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
                     (r.read_image(ctx)?, adapter)
                 }
                 AnySolver::Gl(solver) => {
-                    // No GL renderer yet: the state read back, drawn by the API asked for.
-                    let state = solver.state()?;
-                    if api == Api::Vulkan {
-                        let dev = clothlab_vulkan::Device::new(vulkan_validation())?;
-                        let mut r = VulkanRenderer::new(&dev, &scene, &topo, args.width, args.height)?;
-                        r.render(&view, VkCloth::Cpu(&state))?;
-                        (r.read_image()?, format!("{adapter}; drawn by {} (Vulkan)", dev.name()))
-                    } else {
-                        let ctx = clothlab_wgpu::GpuContext::new()?;
-                        let mut r = WgpuRenderer::new(&ctx, &scene, &topo, args.width, args.height)?;
-                        r.render(&ctx, &view, ClothSource::Cpu(&state))?;
-                        (r.read_image(&ctx)?, format!("{adapter}; drawn by {}", ctx.describe()))
-                    }
+                    let engine = solver.engine();
+                    let mut r = GlRenderer::new(engine, &scene, &topo, args.width, args.height)?;
+                    let (&pos, &normal) = solver.vertex_buffers();
+                    r.render(engine, &view, GlCloth::Gpu { pos, normal })?;
+                    (r.read_image(engine)?, adapter)
                 }
                 AnySolver::Cpu(_) => bail!("a CPU solver is drawn above"),
             }

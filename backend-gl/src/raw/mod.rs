@@ -16,6 +16,7 @@
 //! * objects live as long as the context: all are freed when [`Gl`] drops and destroys it.
 #![allow(unsafe_code)]
 
+use std::cell::RefCell;
 use std::marker::PhantomData;
 use std::sync::{Arc, Mutex};
 
@@ -63,9 +64,34 @@ impl Limits {
     }
 }
 
+mod draw;
+
+pub use draw::{Clear, DrawDesc, Prim, TexFormat, VertexAttr, VertexLayout};
+
+#[derive(Clone, Copy)]
 struct BufferObj {
     name: glow::NativeBuffer,
     size: u64,
+}
+
+#[derive(Clone, Copy)]
+struct TextureObj {
+    name: glow::NativeTexture,
+    width: u32,
+    height: u32,
+    format: TexFormat,
+    samples: u32,
+}
+
+/// Every object made in the context, named by its index here. Interior mutability (the
+/// context is one thread's) lets a renderer and a solver share one context by reference.
+#[derive(Default)]
+struct Objects {
+    buffers: Vec<BufferObj>,
+    /// `None` once deleted (indices are never reused).
+    textures: Vec<Option<TextureObj>>,
+    programs: Vec<Program>,
+    draw: draw::DrawObjects,
 }
 
 struct Program {
@@ -111,9 +137,11 @@ pub struct Gl {
     limits: Limits,
     robust: bool,
     messages: Arc<Mutex<Vec<String>>>,
-    buffers: Vec<BufferObj>,
-    textures: Vec<(glow::NativeTexture, u32, u32)>,
-    programs: Vec<Program>,
+    objs: RefCell<Objects>,
+    /// Unique in the process: tells a context's buffers from another's.
+    id: u64,
+    clip_control: Option<draw::ClipControl>,
+    provoking_vertex: Option<draw::ProvokingVertex>,
     queries: Vec<glow::NativeQuery>,
     _not_send: PhantomData<*const ()>,
 }
@@ -206,6 +234,16 @@ impl Gl {
             // `void (GLuint, GLenum, GLenum, GLenum, const void *)`, which this type spells.
             unsafe { std::mem::transmute::<extern "system" fn(), ClearNamedBufferData>(f) }
         });
+        let clip_control = instance.get_proc_address("glClipControl").map(|f| {
+            // SAFETY: glClipControl's signature in the GL 4.5 core specification is
+            // `void (GLenum origin, GLenum depth)`, which this type spells.
+            unsafe { std::mem::transmute::<extern "system" fn(), draw::ClipControl>(f) }
+        });
+        let provoking_vertex = instance.get_proc_address("glProvokingVertex").map(|f| {
+            // SAFETY: glProvokingVertex's signature in the GL 3.2+ core specification is
+            // `void (GLenum provokeMode)`, which this type spells.
+            unsafe { std::mem::transmute::<extern "system" fn(), draw::ProvokingVertex>(f) }
+        });
         let messages = Arc::new(Mutex::new(Vec::new()));
         let sink = Arc::clone(&messages);
         // SAFETY: the context is current; the callback only pushes the message into a
@@ -247,7 +285,7 @@ impl Gl {
         let queries: Vec<glow::NativeQuery> =
             unsafe { (0..clothlab_engine::solver::MAX_QUERIES).map(|_| gl.create_query()).collect::<Result<_, _>>() }
                 .map_err(|e| GlError::Gl { what: "creating timestamp queries", reason: e })?;
-        let mut me = Gl {
+        let me = Gl {
             egl: instance,
             display,
             context,
@@ -257,9 +295,13 @@ impl Gl {
             limits,
             robust,
             messages,
-            buffers: Vec::new(),
-            textures: Vec::new(),
-            programs: Vec::new(),
+            objs: RefCell::new(Objects::default()),
+            id: {
+                static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+                NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+            },
+            clip_control,
+            provoking_vertex,
             queries,
             _not_send: PhantomData,
         };
@@ -270,6 +312,11 @@ impl Gl {
     /// What the context offers.
     pub fn limits(&self) -> &Limits {
         &self.limits
+    }
+
+    /// This context's number, unique in the process.
+    pub fn id(&self) -> u64 {
+        self.id
     }
 
     /// Whether out-of-bounds shader accesses are contained (a robust-access context).
@@ -287,12 +334,16 @@ impl Gl {
         Ok(&self.gl)
     }
 
-    fn buf(&self, i: usize) -> Result<&BufferObj, GlError> {
-        self.buffers.get(i).ok_or(GlError::Invalid("no such GL buffer"))
+    fn buf(&self, i: usize) -> Result<BufferObj, GlError> {
+        self.objs.borrow().buffers.get(i).copied().ok_or(GlError::Invalid("no such GL buffer"))
+    }
+
+    fn tex(&self, i: usize) -> Result<TextureObj, GlError> {
+        self.objs.borrow().textures.get(i).copied().flatten().ok_or(GlError::Invalid("no such GL texture"))
     }
 
     /// A buffer of `bytes.len()` bytes (at least 4) holding `bytes`, dynamic storage.
-    pub fn create_buffer(&mut self, bytes: &[u8]) -> Result<usize, GlError> {
+    pub fn create_buffer(&self, bytes: &[u8]) -> Result<usize, GlError> {
         let mut data = bytes.to_vec();
         data.resize(data.len().max(4).next_multiple_of(4), 0);
         let size = i32::try_from(data.len()).map_err(|_| GlError::Invalid("a GL buffer over 2 GiB"))?;
@@ -306,9 +357,12 @@ impl Gl {
             gl.bind_buffer(glow::COPY_WRITE_BUFFER, None);
             name
         };
-        self.buffers.push(BufferObj { name, size: data.len() as u64 });
+        let mut o = self.objs.borrow_mut();
+        o.buffers.push(BufferObj { name, size: data.len() as u64 });
+        let i = o.buffers.len() - 1;
+        drop(o);
         self.check("creating a buffer")?;
-        Ok(self.buffers.len() - 1)
+        Ok(i)
     }
 
     /// The size of buffer `i`, bytes.
@@ -395,50 +449,88 @@ impl Gl {
         Ok(())
     }
 
-    /// A `width`×`height` RGBA32UI texture (no mipmaps); returns its index.
-    pub fn create_texture_rgba32ui(&mut self, width: u32, height: u32) -> Result<usize, GlError> {
+    /// A `width`×`height` texture of `format` with one level, multisampled when
+    /// `samples` > 1 (an attachment only); returns its index. Its sampling state comes
+    /// from the sampler bound with it; a texture of integers (read by `texelFetch` in
+    /// kernels, no sampler) gets NEAREST filters, without which it is incomplete.
+    pub fn create_texture(&self, format: TexFormat, width: u32, height: u32, samples: u32) -> Result<usize, GlError> {
         if width == 0 || height == 0 || width > self.limits.texture_size || height > self.limits.texture_size {
-            return Err(GlError::Invalid("a texture larger than GL_MAX_TEXTURE_SIZE"));
+            return Err(GlError::Invalid("a texture side of 0 or over GL_MAX_TEXTURE_SIZE"));
+        }
+        if !(1..=4).contains(&samples) {
+            return Err(GlError::Invalid("a texture of other than 1 to 4 samples"));
         }
         let gl = self.cur()?;
-        // SAFETY: the context is current; immutable storage of the checked size.
+        let target = if samples > 1 { glow::TEXTURE_2D_MULTISAMPLE } else { glow::TEXTURE_2D };
+        // SAFETY: the context is current; immutable storage of the checked size, format
+        // and sample count.
         let t = unsafe {
             let t = gl.create_texture().map_err(|e| GlError::Gl { what: "creating a texture", reason: e })?;
-            gl.bind_texture(glow::TEXTURE_2D, Some(t));
-            gl.tex_storage_2d(glow::TEXTURE_2D, 1, glow::RGBA32UI, width as i32, height as i32);
-            // An integer texture is complete only with NEAREST filters (else texelFetch
-            // reads zeros).
-            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MIN_FILTER, glow::NEAREST as i32);
-            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MAG_FILTER, glow::NEAREST as i32);
-            gl.bind_texture(glow::TEXTURE_2D, None);
+            gl.bind_texture(target, Some(t));
+            if samples > 1 {
+                gl.tex_storage_2d_multisample(
+                    target,
+                    samples as i32,
+                    format.internal(),
+                    width as i32,
+                    height as i32,
+                    true,
+                );
+            } else {
+                gl.tex_storage_2d(target, 1, format.internal(), width as i32, height as i32);
+                let filter = if format.integer() { glow::NEAREST } else { glow::LINEAR };
+                gl.tex_parameter_i32(target, glow::TEXTURE_MIN_FILTER, filter as i32);
+                gl.tex_parameter_i32(target, glow::TEXTURE_MAG_FILTER, filter as i32);
+            }
+            gl.bind_texture(target, None);
             t
         };
-        self.textures.push((t, width, height));
+        let mut o = self.objs.borrow_mut();
+        o.textures.push(Some(TextureObj { name: t, width, height, format, samples }));
+        let i = o.textures.len() - 1;
+        drop(o);
         self.check("creating a texture")?;
-        Ok(self.textures.len() - 1)
+        Ok(i)
     }
 
-    /// Writes the whole of texture `i` from `texels` (row by row).
-    pub fn write_texture(&self, i: usize, texels: &[[u32; 4]]) -> Result<(), GlError> {
-        let &(t, w, h) = self.textures.get(i).ok_or(GlError::Invalid("no such GL texture"))?;
-        if texels.len() != (w * h) as usize {
+    /// Deletes texture `i` (its index is not reused; a later use is refused).
+    pub fn delete_texture(&self, i: usize) -> Result<(), GlError> {
+        let t = self.tex(i)?;
+        let gl = self.cur()?;
+        // SAFETY: the context is current; the name is this context's and is forgotten here.
+        unsafe { gl.delete_texture(t.name) };
+        self.objs.borrow_mut().textures[i] = None;
+        Ok(())
+    }
+
+    /// Writes the whole of single-sampled texture `i` from `bytes`, rows from the first
+    /// (RGBA32UI: 16 bytes a texel; sRGB RGBA8: 4).
+    pub fn write_texture(&self, i: usize, bytes: &[u8]) -> Result<(), GlError> {
+        let t = self.tex(i)?;
+        let (format, kind, size) = match t.format {
+            TexFormat::Rgba32ui => (glow::RGBA_INTEGER, glow::UNSIGNED_INT, 16),
+            TexFormat::Srgba8 => (glow::RGBA, glow::UNSIGNED_BYTE, 4),
+            _ => return Err(GlError::Invalid("writing a depth or R32UI texture")),
+        };
+        if t.samples != 1 || bytes.len() != (t.width * t.height) as usize * size {
             return Err(GlError::Invalid("texels that do not fill the texture"));
         }
         let gl = self.cur()?;
-        // SAFETY: the context is current; `texels` holds exactly w×h RGBA32UI texels,
-        // read with the default unpack state (alignment 4 divides 16-byte texels).
+        // SAFETY: the context is current; `bytes` holds exactly width×height texels of
+        // the texture's format, read with the default unpack state (alignment 4 divides
+        // both texel sizes).
         unsafe {
-            gl.bind_texture(glow::TEXTURE_2D, Some(t));
+            gl.bind_texture(glow::TEXTURE_2D, Some(t.name));
             gl.tex_sub_image_2d(
                 glow::TEXTURE_2D,
                 0,
                 0,
                 0,
-                w as i32,
-                h as i32,
-                glow::RGBA_INTEGER,
-                glow::UNSIGNED_INT,
-                glow::PixelUnpackData::Slice(Some(bytemuck::cast_slice(texels))),
+                t.width as i32,
+                t.height as i32,
+                format,
+                kind,
+                glow::PixelUnpackData::Slice(Some(bytes)),
             );
             gl.bind_texture(glow::TEXTURE_2D, None);
         }
@@ -447,24 +539,37 @@ impl Gl {
 
     /// Compiles and links a compute program from `glsl`; `uniforms` are the names whose
     /// locations [`DispatchDesc::values`] refers to by index. The error is the driver's log.
-    pub fn program(&mut self, glsl: &str, uniforms: &[&str]) -> Result<usize, String> {
+    pub fn program(&self, glsl: &str, uniforms: &[&str]) -> Result<usize, String> {
+        self.link(&[(glow::COMPUTE_SHADER, glsl)], uniforms)
+    }
+
+    /// Compiles `stages` (`(shader type, text)`), links them into a program and lists the
+    /// locations of `uniforms`; the error is the driver's log.
+    fn link(&self, stages: &[(u32, &str)], uniforms: &[&str]) -> Result<usize, String> {
         let gl = self.cur().map_err(|e| e.to_string())?;
-        // SAFETY: the context is current; the shader and program are made, used and
-        // (the shader) deleted here; strings are passed as slices glow sizes itself.
+        // SAFETY: the context is current; the shaders and program are made, used and
+        // (the shaders) deleted here; strings are passed as slices glow sizes itself.
         let (program, locations) = unsafe {
-            let shader = gl.create_shader(glow::COMPUTE_SHADER)?;
-            gl.shader_source(shader, glsl);
-            gl.compile_shader(shader);
-            if !gl.get_shader_compile_status(shader) {
-                let log = gl.get_shader_info_log(shader);
-                gl.delete_shader(shader);
-                return Err(log.trim().to_string());
-            }
             let program = gl.create_program()?;
-            gl.attach_shader(program, shader);
+            let mut made = Vec::new();
+            for &(kind, text) in stages {
+                let shader = gl.create_shader(kind)?;
+                made.push(shader);
+                gl.shader_source(shader, text);
+                gl.compile_shader(shader);
+                if !gl.get_shader_compile_status(shader) {
+                    let log = gl.get_shader_info_log(shader);
+                    made.into_iter().for_each(|s| gl.delete_shader(s));
+                    gl.delete_program(program);
+                    return Err(log.trim().to_string());
+                }
+                gl.attach_shader(program, shader);
+            }
             gl.link_program(program);
-            gl.detach_shader(program, shader);
-            gl.delete_shader(shader);
+            for shader in made {
+                gl.detach_shader(program, shader);
+                gl.delete_shader(shader);
+            }
             if !gl.get_program_link_status(program) {
                 let log = gl.get_program_info_log(program);
                 gl.delete_program(program);
@@ -473,18 +578,20 @@ impl Gl {
             let locations = uniforms.iter().map(|n| gl.get_uniform_location(program, n)).collect();
             (program, locations)
         };
-        self.programs.push(Program { program, locations });
-        Ok(self.programs.len() - 1)
+        let mut o = self.objs.borrow_mut();
+        o.programs.push(Program { program, locations });
+        Ok(o.programs.len() - 1)
     }
 
     /// Binds what `d` names and dispatches it. Bad indices are refused before any call.
     pub fn dispatch(&self, d: &DispatchDesc<'_>) -> Result<(), GlError> {
-        let p = self.programs.get(d.program).ok_or(GlError::Invalid("no such GL program"))?;
+        let o = self.objs.borrow();
+        let p = o.programs.get(d.program).ok_or(GlError::Invalid("no such GL program"))?;
         // Every index checked first (no allocation: this runs for every dispatch).
-        if d.storage.iter().chain(d.uniform).any(|&(_, i)| i >= self.buffers.len()) {
+        if d.storage.iter().chain(d.uniform).any(|&(_, i)| i >= o.buffers.len()) {
             return Err(GlError::Invalid("no such GL buffer"));
         }
-        if d.textures.iter().any(|&(_, i)| i >= self.textures.len()) {
+        if d.textures.iter().any(|&(_, i)| o.textures.get(i).is_none_or(|t| t.is_none_or(|t| t.samples != 1))) {
             return Err(GlError::Invalid("no such GL texture"));
         }
         let gl = self.cur()?;
@@ -493,14 +600,17 @@ impl Gl {
         unsafe {
             gl.use_program(Some(p.program));
             for &(pt, i) in d.storage {
-                gl.bind_buffer_base(glow::SHADER_STORAGE_BUFFER, pt, Some(self.buffers[i].name));
+                gl.bind_buffer_base(glow::SHADER_STORAGE_BUFFER, pt, Some(o.buffers[i].name));
             }
             for &(pt, i) in d.uniform {
-                gl.bind_buffer_base(glow::UNIFORM_BUFFER, pt, Some(self.buffers[i].name));
+                gl.bind_buffer_base(glow::UNIFORM_BUFFER, pt, Some(o.buffers[i].name));
             }
             for &(unit, i) in d.textures {
                 gl.active_texture(glow::TEXTURE0 + unit);
-                gl.bind_texture(glow::TEXTURE_2D, Some(self.textures[i].0));
+                gl.bind_texture(glow::TEXTURE_2D, o.textures[i].map(|t| t.name));
+                // A sampler object the renderer left on this unit would override the
+                // texture's NEAREST filters (and make an integer texture incomplete).
+                gl.bind_sampler(unit, None);
             }
             for &(i, v) in d.values {
                 let loc = p.locations.get(i).and_then(|l| l.as_ref());
@@ -562,7 +672,7 @@ impl Gl {
     }
 
     /// Fails with the GL errors and the debug messages since the last call.
-    pub fn check(&mut self, what: &'static str) -> Result<(), GlError> {
+    pub fn check(&self, what: &'static str) -> Result<(), GlError> {
         let gl = self.cur()?;
         let mut found = Vec::new();
         for _ in 0..16 {
@@ -661,7 +771,7 @@ mod tests {
 
     #[test]
     fn two_contexts_on_one_thread_keep_their_own_buffers_and_bad_ranges_are_refused() {
-        let (Some(mut a), Some(mut b)) = (headless(), headless()) else { return };
+        let (Some(a), Some(b)) = (headless(), headless()) else { return };
         // Buffer 0 of each context: same index, different objects and contents.
         let ba = a.create_buffer(&[1u8; 16]).unwrap();
         let bb = b.create_buffer(&[2u8; 32]).unwrap();
@@ -676,7 +786,7 @@ mod tests {
         assert!(a.write(ba, 12, &[0u8; 8]).is_err());
         assert!(a.read(ba, 8, 16).is_err());
         assert!(a.copy(ba, 0, 5, 0, 4).is_err());
-        assert!(a.write_texture(0, &[[0; 4]]).is_err());
+        assert!(a.write_texture(0, &[0; 16]).is_err());
         a.clear(ba).unwrap();
         assert_eq!(a.read(ba, 0, 16).unwrap(), [0u8; 16]);
         a.check("the test").unwrap();
@@ -688,7 +798,7 @@ mod tests {
 
     #[test]
     fn a_shader_the_driver_refuses_comes_back_with_its_log() {
-        let Some(mut gl) = headless() else { return };
+        let Some(gl) = headless() else { return };
         let e =
             gl.program("#version 450 core\nlayout(local_size_x = 1) in;\nvoid main() { undefined_thing = 1; }\n", &[]);
         let log = e.unwrap_err();
