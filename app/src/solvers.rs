@@ -12,7 +12,7 @@ use clothlab_engine::gpu::Engine as _;
 use clothlab_engine::recipe::Command as StepCommand;
 use clothlab_engine::validate::KernelRunner;
 use clothlab_engine::{Caps, GpuSolver, KernelRef, SolverOptions, Variant, VariantSpec};
-use clothlab_gl::{GlEngine, GlSolver};
+use clothlab_gl::{GlCloth, GlContext, GlEngine, GlSolver};
 use clothlab_vulkan::{Device, VkCloth, VulkanEngine, VulkanSolver};
 use clothlab_wgpu::{ClothSource, GpuContext, WgpuEngine, WgpuSolver};
 
@@ -111,17 +111,23 @@ impl Api {
         }
     }
 
-    /// Refuses drawing through this API where no renderer exists for it yet, in one line.
-    pub fn check_renderer(self) -> Result<()> {
-        if self == Api::Gl { Err(no_gl_renderer()) } else { Ok(()) }
+    /// The optimized backend of this API.
+    pub fn optimized(self) -> Backend {
+        match self {
+            Api::Wgpu => Backend::Wgpu,
+            Api::Vulkan => Backend::Vulkan,
+            Api::Gl => Backend::Gl,
+        }
     }
-}
 
-/// Why `--api gl` cannot draw yet.
-pub fn no_gl_renderer() -> anyhow::Error {
-    anyhow::anyhow!(
-        "--api gl: the OpenGL renderer is not built yet; the gl backends run under --api wgpu or --api vulkan (their cloth drawn from a copy)"
-    )
+    /// The API after this one (the window's API shortcut cycles through them).
+    pub fn next(self) -> Api {
+        match self {
+            Api::Wgpu => Api::Vulkan,
+            Api::Vulkan => Api::Gl,
+            Api::Gl => Api::Wgpu,
+        }
+    }
 }
 
 /// Whether the Vulkan backends run with the Khronos validation layer: in debug builds,
@@ -136,6 +142,8 @@ pub enum Shared<'a> {
     Wgpu(&'a GpuContext),
     /// Draw through raw Vulkan on this device.
     Vulkan(&'a Device),
+    /// Draw through raw OpenGL in this context.
+    Gl(&'a GlContext),
     /// Every GPU solver opens its own device.
     None,
 }
@@ -159,7 +167,7 @@ pub enum AnySolver {
     Wgpu(Box<WgpuSolver>, bool),
     /// Raw Vulkan; `true` when on the shared device.
     Vulkan(Box<VulkanSolver>, bool),
-    /// Raw OpenGL, on a headless context of its own.
+    /// Raw OpenGL, in the window's context or a headless one of its own.
     Gl(Box<GlSolver>),
 }
 
@@ -195,6 +203,9 @@ pub fn make(
         (Backend::VulkanNaive | Backend::Vulkan, _) => {
             let engine = VulkanEngine::new(vulkan_validation())?;
             AnySolver::Vulkan(Box::new(GpuSolver::new(engine, v, scene, params, options)?), false)
+        }
+        (Backend::GlNaive | Backend::Gl, Shared::Gl(ctx)) => {
+            AnySolver::Gl(Box::new(GpuSolver::new(GlEngine::with_context(ctx)?, v, scene, params, options)?))
         }
         (Backend::GlNaive | Backend::Gl, _) => {
             AnySolver::Gl(Box::new(GpuSolver::new(GlEngine::new()?, v, scene, params, options)?))
@@ -304,6 +315,22 @@ pub fn wgpu_cloth<'a>(solver: &'a mut AnySolver, copy: &'a mut Option<ClothState
         }
         AnySolver::Cpu(s) => ClothSource::Cpu(s.state_ref()),
         other => ClothSource::Cpu(copy.insert(other.get().state()?)),
+    })
+}
+
+/// The cloth as the GL renderer in `ctx` takes it (see [`wgpu_cloth`]).
+pub fn gl_cloth<'a>(
+    solver: &'a mut AnySolver,
+    copy: &'a mut Option<ClothState>,
+    ctx: &GlContext,
+) -> Result<GlCloth<'a>> {
+    Ok(match solver {
+        AnySolver::Gl(s) if s.engine().context().same(ctx) => {
+            let (&pos, &normal) = s.vertex_buffers();
+            GlCloth::Gpu { pos, normal }
+        }
+        AnySolver::Cpu(s) => GlCloth::Cpu(s.state_ref()),
+        other => GlCloth::Cpu(copy.insert(other.get().state()?)),
     })
 }
 

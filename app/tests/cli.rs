@@ -370,7 +370,7 @@ fn the_substep_time_the_app_shows_agrees_with_the_wall_clock() {
     if !display() {
         return;
     }
-    for api in ["vulkan", "wgpu"] {
+    for api in ["vulkan", "wgpu", "gl"] {
         let args = [
             "run",
             "--api",
@@ -458,10 +458,12 @@ fn the_app_refuses_bad_input_and_a_missing_display_in_one_line() {
     assert!(!err.contains("panicked"), "{err}");
     // A display but no GPU adapter: the same one line as the headless commands.
     if display() {
-        for api in ["wgpu", "vulkan"] {
+        for api in ["wgpu", "vulkan", "gl"] {
+            // No Vulkan driver listed, no EGL vendor library (glvnd): no adapter on any API.
             let out = Command::new(env!("CARGO_BIN_EXE_clothlab"))
                 .args(["run", "--api", api, "--frames", "3"])
                 .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+                .env("__EGL_VENDOR_LIBRARY_FILENAMES", "/nonexistent/vendor.json")
                 .output()
                 .unwrap();
             let err = String::from_utf8_lossy(&out.stderr);
@@ -476,7 +478,8 @@ fn the_app_opens_on_each_api_draws_the_cloth_and_the_panels_and_exits() {
     if !display() {
         return;
     }
-    for api in ["wgpu", "vulkan"] {
+    let mut shots = Vec::new();
+    for api in ["wgpu", "vulkan", "gl"] {
         let (_, px) = run_app(api, "30", &[]);
         // At n = 32 after half a second the cloth covers a few per cent of the window.
         let cloth = cloth_pixels(&px);
@@ -485,7 +488,20 @@ fn the_app_opens_on_each_api_draws_the_cloth_and_the_panels_and_exits() {
         let menu_row = &px[(8 * 640)..(9 * 640)];
         let dark = menu_row.iter().filter(|p| p[0] < 40 && p[0].abs_diff(p[1]) < 4 && p[1].abs_diff(p[2]) < 4).count();
         assert!(dark > 400, "{api}: the menu bar is not there ({dark} dark pixels in row 8)");
+        shots.push(px);
     }
+    // GL's window looks like Vulkan's: the scene left of the side panel, below the tool
+    // bar and above the status bars (rows 60..330, columns 0..260 of 640×400: the side
+    // panel is as wide as its longest line, the variant's name, and starts at 275 on GL), from the
+    // same recipe 30 frames in (states within 1e-5 m), drawn by the same passes. The
+    // threshold of the renderer tests (mean ≤ 2/255) allows edge pixels only; a flipped
+    // or darkened scene, or panels drawn under it, is far past it.
+    let region = |px: &[[u8; 4]]| -> Vec<u8> {
+        (60..330).flat_map(|y| px[y * 640..y * 640 + 260].iter().flat_map(|p| [p[0], p[1], p[2], 255])).collect()
+    };
+    let (vk, gl) = (region(&shots[1]), region(&shots[2]));
+    let mean = vk.iter().zip(&gl).map(|(a, b)| a.abs_diff(*b) as f64).sum::<f64>() / (vk.len() as f64 * 0.75);
+    assert!(mean <= 2.0, "the GL window's scene differs from Vulkan's by {mean:.2}/255 on average");
 }
 
 #[test]
@@ -493,7 +509,7 @@ fn dragging_with_the_cursor_tool_lifts_the_grabbed_particle() {
     if !display() {
         return;
     }
-    for api in ["wgpu", "vulkan"] {
+    for api in ["wgpu", "vulkan", "gl"] {
         let out = clothlab(&[
             "run",
             "--api",
@@ -527,9 +543,10 @@ fn switching_the_api_while_running_keeps_drawing_the_cloth_and_the_panels() {
     if !display() {
         return;
     }
-    for api in ["wgpu", "vulkan"] {
+    // The switch goes to the next API (wgpu → Vulkan → GL → wgpu), so every API is both
+    // left and entered once.
+    for (api, other) in [("wgpu", "Vulkan"), ("vulkan", "Gl"), ("gl", "Wgpu")] {
         let (text, px) = run_app(api, "30", &["--switch-api"]);
-        let other = if api == "wgpu" { "Vulkan" } else { "Wgpu" };
         assert!(text.contains(&format!("switched to {other}")), "{api}: {text}");
         let cloth = cloth_pixels(&px);
         assert!(cloth > 2000, "{api} → {other}: only {cloth} cloth pixels");
@@ -594,7 +611,7 @@ fn a_scene_file_dropped_on_the_window_opens_and_a_bad_one_changes_nothing() {
     }
     let bad = std::env::temp_dir().join(format!("clothlab-drop-{}.toml", std::process::id()));
     std::fs::write(&bad, "[cloth]\nn = 32\npinning = \"corners\"\n").unwrap();
-    for api in ["wgpu", "vulkan"] {
+    for api in ["wgpu", "vulkan", "gl"] {
         let (text, px) = run_app(api, "24", &["--drop-file", &scene_path("tablecloth.toml")]);
         assert!(text.contains("dropped: opened A tablecloth falling on a box"), "{api}: {text}");
         let cloth = cloth_pixels(&px);

@@ -15,6 +15,7 @@
 //! subgroup operations where `GL_KHR_shader_subgroup` is missing.
 #![deny(unsafe_code)]
 
+mod context;
 pub mod overhead;
 mod raw;
 mod render;
@@ -22,6 +23,8 @@ mod solver;
 
 use thiserror::Error;
 
+pub use context::{GlContext, GlOverlay};
+pub use raw::WindowHandles;
 pub use render::{GlCloth, GlRenderer};
 pub use solver::{GlBuffer, GlEngine, GlSolver, gl_solver};
 

@@ -11,7 +11,7 @@ use clothlab_core::scene::Scene;
 use clothlab_core::solver::{RenderError, RenderMode, View};
 
 use crate::raw::{Clear, DrawDesc, Gl, Prim, TexFormat, VertexAttr, VertexLayout};
-use crate::{GlBuffer, GlEngine, GlError};
+use crate::{GlBuffer, GlContext, GlError};
 
 /// Where the cloth's positions and normals come from.
 #[derive(Clone, Copy)]
@@ -132,8 +132,8 @@ fn layouts(gl: &Gl) -> Result<Layouts, GlError> {
     })
 }
 
-/// Offscreen renderer of one scene and its cloth on raw OpenGL, in the context of a
-/// [`GlEngine`] (the solver's, so that its buffers are drawn as they are).
+/// Offscreen renderer of one scene and its cloth on raw OpenGL, in a [`GlContext`] (the
+/// solver's, so that its buffers are drawn as they are); its objects are deleted with it.
 pub struct GlRenderer {
     width: u32,
     height: u32,
@@ -154,7 +154,7 @@ pub struct GlRenderer {
     cpu_pos: usize,
     cpu_normal: usize,
     num_particles: u32,
-    context: u64,
+    ctx: GlContext,
 }
 
 fn check_size(gl: &Gl, width: u32, height: u32) -> Result<(), RenderError> {
@@ -166,29 +166,29 @@ fn check_size(gl: &Gl, width: u32, height: u32) -> Result<(), RenderError> {
 }
 
 impl GlRenderer {
-    /// A renderer of `scene` with its cloth `topo` in `engine`'s context, drawing
-    /// `width × height`.
+    /// A renderer of `scene` with its cloth `topo` in `ctx`, drawing `width × height`.
     pub fn new(
-        engine: &GlEngine,
+        ctx: &GlContext,
         scene: &Scene,
         topo: &ClothTopology,
         width: u32,
         height: u32,
     ) -> Result<Self, RenderError> {
-        let gl = engine.gl();
+        let gl = ctx.gl();
         check_size(gl, width, height)?;
         let programs = programs(gl)?;
-        Self::build(gl, programs, scene, topo, width, height).map_err(rerr)
+        Self::build(ctx, programs, scene, topo, width, height).map_err(rerr)
     }
 
     fn build(
-        gl: &Gl,
+        ctx: &GlContext,
         programs: Programs,
         scene: &Scene,
         topo: &ClothTopology,
         width: u32,
         height: u32,
     ) -> Result<Self, GlError> {
+        let gl = ctx.gl();
         let shadow = gl.create_texture(TexFormat::Depth32f, SHADOW_SIZE, SHADOW_SIZE, 1)?;
         let fabric = gl.create_texture(TexFormat::Srgba8, 64, 64, 1)?;
         gl.write_texture(fabric, &fabric_texture())?;
@@ -216,7 +216,7 @@ impl GlRenderer {
             cpu_pos: gl.create_buffer(&zeros)?,
             cpu_normal: gl.create_buffer(&zeros)?,
             num_particles: np,
-            context: gl.id(),
+            ctx: ctx.clone(),
         };
         gl.check("making the GL renderer")?;
         Ok(r)
@@ -228,8 +228,8 @@ impl GlRenderer {
     }
 
     /// Changes the target size; a zero or too large side is refused and nothing changes.
-    pub fn resize(&mut self, engine: &GlEngine, width: u32, height: u32) -> Result<(), RenderError> {
-        let gl = self.gl(engine)?;
+    pub fn resize(&mut self, ctx: &GlContext, width: u32, height: u32) -> Result<(), RenderError> {
+        let gl = self.gl(ctx)?;
         check_size(gl, width, height)?;
         let targets = Targets::new(gl, width, height).map_err(rerr)?;
         self.targets.delete(gl).map_err(rerr)?;
@@ -239,13 +239,12 @@ impl GlRenderer {
         Ok(())
     }
 
-    /// `engine`'s context, if it is the one this renderer was made in.
-    fn gl<'a>(&self, engine: &'a GlEngine) -> Result<&'a Gl, RenderError> {
-        let gl = engine.gl();
-        if gl.id() != self.context {
+    /// `ctx`, if it is the context this renderer was made in.
+    fn gl<'a>(&self, ctx: &'a GlContext) -> Result<&'a Gl, RenderError> {
+        if !ctx.same(&self.ctx) {
             return Err(RenderError::Backend("a GL renderer used with another context than its own".into()));
         }
-        Ok(gl)
+        Ok(ctx.gl())
     }
 
     /// Writes the frame's constants and a CPU state; the buffers the cloth is drawn from.
@@ -255,7 +254,7 @@ impl GlRenderer {
         let need = self.num_particles as u64 * 16;
         match cloth {
             GlCloth::Gpu { pos, normal } => {
-                if pos.context != self.context || normal.context != self.context {
+                if pos.context != gl.id() || normal.context != gl.id() {
                     return Err(RenderError::Backend("cloth buffers of another GL context".into()));
                 }
                 if pos.size < need || normal.size < need {
@@ -307,8 +306,8 @@ impl GlRenderer {
 
     /// Draws one frame of the scene with the cloth from `cloth` (read back by
     /// [`GlRenderer::read_image`]).
-    pub fn render(&mut self, engine: &GlEngine, view: &View, cloth: GlCloth<'_>) -> Result<(), RenderError> {
-        let gl = self.gl(engine)?;
+    pub fn render(&mut self, ctx: &GlContext, view: &View, cloth: GlCloth<'_>) -> Result<(), RenderError> {
+        let gl = self.gl(ctx)?;
         let (pos, normal) = self.prepare(gl, view, &cloth)?;
         self.draw(gl, view, pos, normal).map_err(rerr)?;
         gl.check("drawing a frame").map_err(rerr)
@@ -352,7 +351,7 @@ impl GlRenderer {
     /// pixel (the particle or a direct neighbour), as on wgpu and Vulkan.
     pub fn pick(
         &mut self,
-        engine: &GlEngine,
+        ctx: &GlContext,
         view: &View,
         cloth: GlCloth<'_>,
         x: u32,
@@ -361,7 +360,7 @@ impl GlRenderer {
         if x >= self.width || y >= self.height {
             return Ok(None);
         }
-        let gl = self.gl(engine)?;
+        let gl = self.gl(ctx)?;
         let (pos, _) = self.prepare(gl, view, &cloth)?;
         let pick = self.targets.pick;
         let p = &self.programs;
@@ -376,36 +375,74 @@ impl GlRenderer {
     }
 
     /// The last frame as tightly packed sRGB RGBA8 rows, the first at the top.
-    pub fn read_image(&self, engine: &GlEngine) -> Result<Vec<u8>, RenderError> {
-        let gl = self.gl(engine)?;
+    pub fn read_image(&self, ctx: &GlContext) -> Result<Vec<u8>, RenderError> {
+        let gl = self.gl(ctx)?;
         gl.read_pixels(self.targets.resolve, 0, 0, self.width, self.height).map_err(rerr)
     }
 }
 
+impl GlRenderer {
+    /// Copies the last frame into `ctx`'s window (scaled to `width × height`, its drawable
+    /// size), under whatever is drawn next (the panels).
+    pub fn present(&self, ctx: &GlContext, width: u32, height: u32) -> Result<(), RenderError> {
+        let gl = self.gl(ctx)?;
+        gl.blit_to_window(self.targets.resolve, width, height).map_err(rerr)
+    }
+}
+
+impl Drop for GlRenderer {
+    fn drop(&mut self) {
+        let gl = self.ctx.gl();
+        let p = &self.programs;
+        let l = &self.layouts;
+        let results = [
+            self.targets.delete(gl),
+            gl.delete_framebuffer(self.shadow_fb),
+            gl.delete_texture(self.shadow),
+            gl.delete_texture(self.fabric),
+            gl.delete_draw_objects(
+                &[self.static_ib, self.tri_ib, self.line_ib],
+                &[self.shadow_sampler, self.fabric_sampler],
+                &[l.static_all, l.static_pos, l.cloth_all, l.cloth_pos],
+            ),
+        ]
+        .into_iter()
+        .chain([self.frame, self.static_vb, self.uv, self.cpu_pos, self.cpu_normal].map(|b| gl.delete_buffer(b)))
+        .chain(
+            [p.lit_static, p.lit_cloth, p.flat_cloth, p.shadow_static, p.shadow_cloth, p.pick_static, p.pick_cloth]
+                .map(|x| gl.delete_program(x)),
+        );
+        let errors: Vec<GlError> = results.filter_map(Result::err).collect();
+        if let Some(e) = errors.first() {
+            log::warn!("deleting the GL renderer's objects: {e}");
+        }
+    }
+}
+
 impl clothlab_core::Renderer for GlRenderer {
-    type Context = GlEngine;
+    type Context = GlContext;
     type Cloth<'a> = GlCloth<'a>;
 
-    fn resize(&mut self, engine: &GlEngine, width: u32, height: u32) -> Result<(), RenderError> {
-        GlRenderer::resize(self, engine, width, height)
+    fn resize(&mut self, ctx: &GlContext, width: u32, height: u32) -> Result<(), RenderError> {
+        GlRenderer::resize(self, ctx, width, height)
     }
 
-    fn render(&mut self, engine: &GlEngine, view: &View, cloth: GlCloth<'_>) -> Result<(), RenderError> {
-        GlRenderer::render(self, engine, view, cloth)
+    fn render(&mut self, ctx: &GlContext, view: &View, cloth: GlCloth<'_>) -> Result<(), RenderError> {
+        GlRenderer::render(self, ctx, view, cloth)
     }
 
     fn pick(
         &mut self,
-        engine: &GlEngine,
+        ctx: &GlContext,
         view: &View,
         cloth: GlCloth<'_>,
         x: u32,
         y: u32,
     ) -> Result<Option<u32>, RenderError> {
-        GlRenderer::pick(self, engine, view, cloth, x, y)
+        GlRenderer::pick(self, ctx, view, cloth, x, y)
     }
 
-    fn read_image(&self, engine: &GlEngine) -> Result<Vec<u8>, RenderError> {
-        GlRenderer::read_image(self, engine)
+    fn read_image(&self, ctx: &GlContext) -> Result<Vec<u8>, RenderError> {
+        GlRenderer::read_image(self, ctx)
     }
 }

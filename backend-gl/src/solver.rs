@@ -15,8 +15,9 @@ use clothlab_engine::gpu::{BufferId, Dispatch, Engine, EngineInfo, Finished};
 use clothlab_engine::kernels::{self, KernelRef};
 use clothlab_engine::{GpuSolver, SolverOptions, VariantSpec};
 
+use crate::GlContext;
 use crate::GlError;
-use crate::raw::{DispatchDesc, Gl, TexFormat, Value};
+use crate::raw::{DispatchDesc, TexFormat, Value};
 
 /// The cloth solver on raw OpenGL.
 pub type GlSolver = GpuSolver<GlEngine>;
@@ -69,7 +70,7 @@ struct Program {
 
 /// The API's part of the OpenGL solver.
 pub struct GlEngine {
-    gl: Gl,
+    gl: GlContext,
     info: EngineInfo,
     buffers: Vec<GlBuffer>,
     sets: [Vec<(Buf, BufferId)>; 2],
@@ -90,15 +91,18 @@ pub struct GlEngine {
 impl GlEngine {
     /// An engine on a new headless OpenGL 4.5 core context.
     pub fn new() -> Result<Self, SolverError> {
-        Self::on(Gl::headless().map_err(backend)?)
+        Self::with_context(&GlContext::headless().map_err(backend)?)
     }
 
-    fn on(gl: Gl) -> Result<Self, SolverError> {
-        let l = gl.limits();
+    /// An engine in `ctx` (a window's context: its buffers are drawn by the renderer made
+    /// in the same context, with no copy).
+    pub fn with_context(ctx: &GlContext) -> Result<Self, SolverError> {
+        let gl = ctx.clone();
+        let l = gl.gl().limits();
         let subgroups = l.subgroup_features;
         let info = EngineInfo {
             api: "gl",
-            adapter: format!("{} (OpenGL {})", l.renderer, l.version.split(' ').next().unwrap_or("?")),
+            adapter: ctx.adapter(),
             float_atomics: l.has("GL_NV_shader_atomic_float"),
             // GL has no push constants (naga would write them as plain uniforms).
             immediates: false,
@@ -126,14 +130,14 @@ impl GlEngine {
         })
     }
 
-    /// The context (for the renderer, which draws in it).
-    pub(crate) fn gl(&self) -> &Gl {
+    /// The context it computes in (a renderer made in it draws its buffers).
+    pub fn context(&self) -> &GlContext {
         &self.gl
     }
 
     /// The driver's limits and extensions, in lines (for `clothlab info`-like reports).
     pub fn describe(&self) -> String {
-        let l = self.gl.limits();
+        let l = self.gl.gl().limits();
         format!(
             "{}; {} storage blocks per compute shader, {} MiB per block, {} KiB per uniform block; float atomics: {}; subgroups: {}; robust access: {}",
             self.info.adapter,
@@ -142,7 +146,7 @@ impl GlEngine {
             l.uniform_block_size >> 10,
             if self.info.float_atomics { "GL_NV_shader_atomic_float" } else { "no" },
             if l.subgroup_size > 0 { format!("{} lanes", l.subgroup_size) } else { "no".into() },
-            if self.gl.robust() { "yes" } else { "no" },
+            if self.gl.gl().robust() { "yes" } else { "no" },
         )
     }
 
@@ -154,7 +158,7 @@ impl GlEngine {
     /// dispatches).
     fn settle(&mut self) -> Result<(), GlError> {
         if self.dirty {
-            self.gl.memory_barrier(TRANSFER_BARRIER)?;
+            self.gl.gl().memory_barrier(TRANSFER_BARRIER)?;
             self.dirty = false;
         }
         Ok(())
@@ -176,7 +180,7 @@ impl GlEngine {
 
     /// The GLSL the driver compiles: naga's, with what naga leaves out for GL.
     fn patch(&self, text: &str) -> String {
-        let l = self.gl.limits();
+        let l = self.gl.gl().limits();
         let mut out = String::with_capacity(text.len() + 128);
         for (i, line) in text.lines().enumerate() {
             // naga declares every subgroup extension for a module that uses any (the
@@ -212,9 +216,9 @@ impl Engine for GlEngine {
         contents: &[u8],
         _vertex: bool,
     ) -> Result<BufferId, SolverError> {
-        let index = self.gl.create_buffer(contents).map_err(backend)?;
-        let size = self.gl.buffer_size(index).map_err(backend)?;
-        self.buffers.push(GlBuffer { index, size, context: self.gl.id() });
+        let index = self.gl.gl().create_buffer(contents).map_err(backend)?;
+        let size = self.gl.gl().buffer_size(index).map_err(backend)?;
+        self.buffers.push(GlBuffer { index, size, context: self.gl.gl().id() });
         Ok(BufferId(self.buffers.len() as u32 - 1))
     }
 
@@ -225,7 +229,7 @@ impl Engine for GlEngine {
     /// The table as an RGBA32UI texture read with `texelFetch` (the thesis's texture
     /// memory), rewritten in place when the constants change.
     fn set_table_image(&mut self, texels: &[[u32; 4]], height: u32) -> Result<(), SolverError> {
-        let max = self.gl.limits().texture_size;
+        let max = self.gl.gl().limits().texture_size;
         if height > max {
             return Err(SolverError::Unsupported(format!(
                 "table=image: this grid's spring table needs a {TABLE_WIDTH}×{height} image, taller than the {max} texels {} allows; use table=storage or table=uniform",
@@ -236,14 +240,14 @@ impl Engine for GlEngine {
             if self.bound {
                 return Err(SolverError::Invalid("the spring-table image cannot change size once bound".into()));
             }
-            let t = self.gl.create_texture(TexFormat::Rgba32ui, TABLE_WIDTH, height, 1).map_err(backend)?;
+            let t = self.gl.gl().create_texture(TexFormat::Rgba32ui, TABLE_WIDTH, height, 1).map_err(backend)?;
             self.table = Some((t, height));
         }
         let (t, _) = self.table.expect("made above");
         let mut all = texels.to_vec();
         all.resize((TABLE_WIDTH * height) as usize, [0; 4]);
-        self.gl.write_texture(t, bytemuck::cast_slice(&all)).map_err(backend)?;
-        self.gl.check("uploading the spring-table image").map_err(backend)
+        self.gl.gl().write_texture(t, bytemuck::cast_slice(&all)).map_err(backend)?;
+        self.gl.gl().check("uploading the spring-table image").map_err(backend)
     }
 
     fn bind(&mut self, sets: [Vec<(Buf, BufferId)>; 2]) -> Result<(), SolverError> {
@@ -263,7 +267,7 @@ impl Engine for GlEngine {
         }
         let name = k.shader_name();
         let refuse = |reason: String| SolverError::Shader { kernel: name.clone(), reason };
-        if !matches!(k.def.source, kernels::Source::Builtin) && !self.gl.robust() {
+        if !matches!(k.def.source, kernels::Source::Builtin) && !self.gl.gl().robust() {
             return Err(refuse(format!(
                 "{} gives no robust buffer access: kernels from outside are refused on it",
                 self.info.adapter
@@ -294,7 +298,7 @@ impl Engine for GlEngine {
             }
         }
         let storage_blocks = storage[0].len();
-        let most = self.gl.limits().storage_blocks as usize;
+        let most = self.gl.gl().limits().storage_blocks as usize;
         if storage_blocks > most {
             return Err(refuse(format!(
                 "{storage_blocks} shader storage blocks, more than the {most} {} allows a compute shader",
@@ -307,10 +311,10 @@ impl Engine for GlEngine {
         }
         let names: Vec<&str> = glsl.uniforms.iter().map(|u| u.0.as_str()).collect();
         let text = self.patch(&glsl.text);
-        let index = self.gl.program(&text, &names).map_err(|log| refuse(format!("the GL driver: {log}")))?;
+        let index = self.gl.gl().program(&text, &names).map_err(|log| refuse(format!("the GL driver: {log}")))?;
         let uniforms = glsl.uniforms.iter().map(|u| (u.1, u.2, u.3)).collect();
         self.programs.insert(k, Program { index, storage, uniform, texture, uniforms });
-        self.gl.check("building a kernel").map_err(backend)
+        self.gl.gl().check("building a kernel").map_err(backend)
     }
 
     fn kernels(&self) -> Vec<KernelRef> {
@@ -320,13 +324,13 @@ impl Engine for GlEngine {
     fn write(&mut self, id: BufferId, bytes: &[u8]) -> Result<(), SolverError> {
         let b = self.buf(id)?;
         self.settle().map_err(backend)?;
-        self.gl.write(b.index, 0, bytes).map_err(backend)
+        self.gl.gl().write(b.index, 0, bytes).map_err(backend)
     }
 
     fn read(&mut self, id: BufferId) -> Result<Vec<u8>, SolverError> {
         let b = self.buf(id)?;
         self.settle().map_err(backend)?;
-        self.gl.read(b.index, 0, b.size).map_err(backend)
+        self.gl.gl().read(b.index, 0, b.size).map_err(backend)
     }
 
     fn begin(&mut self, _index: usize, _queries: u32) -> Result<(), SolverError> {
@@ -341,7 +345,7 @@ impl Engine for GlEngine {
     fn clear(&mut self, id: BufferId) {
         let r = self.buf(id).map_err(|_| GlError::Invalid("clearing no buffer")).and_then(|b| {
             self.settle()?;
-            self.gl.clear(b.index)
+            self.gl.gl().clear(b.index)
         });
         self.note(r);
     }
@@ -349,7 +353,7 @@ impl Engine for GlEngine {
     fn copy(&mut self, src: BufferId, dst: BufferId, size: u64) {
         let r = match (self.buf(src), self.buf(dst)) {
             (Ok(a), Ok(b)) => {
-                self.settle().and_then(|_| self.gl.copy(a.index, 0, b.index, 0, size.min(a.size).min(b.size)))
+                self.settle().and_then(|_| self.gl.gl().copy(a.index, 0, b.index, 0, size.min(a.size).min(b.size)))
             }
             _ => Err(GlError::Invalid("copying no buffer")),
         };
@@ -359,7 +363,7 @@ impl Engine for GlEngine {
     /// glMemoryBarrier for storage-block reads after storage-block writes; GL orders its
     /// own commands after the draws before them, so `after_all` needs nothing more.
     fn barrier(&mut self, _after_all: bool) {
-        let r = self.gl.memory_barrier(DISPATCH_BARRIER);
+        let r = self.gl.gl().memory_barrier(DISPATCH_BARRIER);
         self.note(r);
     }
 
@@ -400,11 +404,11 @@ impl Engine for GlEngine {
         };
         let r = (|| {
             if let Some(q) = d.timestamps {
-                self.gl.timestamp(q)?;
+                self.gl.gl().timestamp(q)?;
             }
-            self.gl.dispatch(&desc)?;
+            self.gl.gl().dispatch(&desc)?;
             if let Some(q) = d.timestamps {
-                self.gl.timestamp(q + 1)?;
+                self.gl.gl().timestamp(q + 1)?;
             }
             Ok(())
         })();
@@ -422,13 +426,13 @@ impl Engine for GlEngine {
             if !self.readbacks.is_empty() {
                 return Err(SolverError::Driver("a frame's readbacks outgrew the staging buffer".into()));
             }
-            let index = self.gl.create_buffer(&vec![0u8; need.max(64 * 1024) as usize]).map_err(backend)?;
-            let size = self.gl.buffer_size(index).map_err(backend)?;
-            self.staging = Some(GlBuffer { index, size, context: self.gl.id() });
+            let index = self.gl.gl().create_buffer(&vec![0u8; need.max(64 * 1024) as usize]).map_err(backend)?;
+            let size = self.gl.gl().buffer_size(index).map_err(backend)?;
+            self.staging = Some(GlBuffer { index, size, context: self.gl.gl().id() });
         }
         let s = self.staging.expect("made above");
         self.settle().map_err(backend)?;
-        self.gl.copy(b.index, 0, s.index, at, size).map_err(backend)?;
+        self.gl.gl().copy(b.index, 0, s.index, at, size).map_err(backend)?;
         self.cursor = need;
         self.readbacks.push((at, size));
         Ok(())
@@ -437,19 +441,19 @@ impl Engine for GlEngine {
     /// glFlush: the commands issued so far start.
     fn submit(&mut self, _last: bool) -> Result<(), SolverError> {
         self.take_error()?;
-        self.gl.flush().map_err(backend)
+        self.gl.gl().flush().map_err(backend)
     }
 
     fn wait(&mut self, queries: u32) -> Result<Finished, SolverError> {
         self.take_error()?;
         let mut done = Finished::default();
         if queries > 0 {
-            done.ticks = self.gl.timestamps(queries).map_err(backend)?;
+            done.ticks = self.gl.gl().timestamps(queries).map_err(backend)?;
         }
         if !self.readbacks.is_empty() {
             let s = self.staging.expect("readbacks copy into staging");
             for (at, size) in std::mem::take(&mut self.readbacks) {
-                done.readbacks.push(self.gl.read(s.index, at, size).map_err(backend)?);
+                done.readbacks.push(self.gl.gl().read(s.index, at, size).map_err(backend)?);
             }
         }
         self.cursor = 0;
@@ -457,12 +461,30 @@ impl Engine for GlEngine {
     }
 
     fn finish(&mut self) -> Result<(), SolverError> {
-        self.gl.finish().map_err(backend)
+        self.gl.gl().finish().map_err(backend)
     }
 
     fn check(&mut self, what: &'static str) -> Result<(), SolverError> {
         self.take_error()?;
-        self.gl.check(what).map_err(backend)
+        self.gl.gl().check(what).map_err(backend)
+    }
+}
+
+impl Drop for GlEngine {
+    /// In a context others use (a window's), the engine's objects are deleted with it;
+    /// a context of its own frees them all when it goes.
+    fn drop(&mut self) {
+        if !self.gl.shared() {
+            return;
+        }
+        let gl = self.gl.gl();
+        let buffers = self.buffers.iter().chain(self.staging.as_ref()).map(|b| gl.delete_buffer(b.index));
+        let programs = self.programs.values().map(|p| gl.delete_program(p.index));
+        let table = self.table.map(|(t, _)| gl.delete_texture(t));
+        let errors: Vec<GlError> = buffers.chain(programs).chain(table).filter_map(Result::err).collect();
+        if let Some(e) = errors.first() {
+            log::warn!("deleting a GL solver's objects: {e}");
+        }
     }
 }
 

@@ -35,7 +35,7 @@ fn simulated() -> Option<GlSolver> {
 
 fn gl_renderer(s: &GlSolver) -> GlRenderer {
     let (_, topo) = clothlab_core::build(s.scene(), s.params()).unwrap();
-    GlRenderer::new(s.engine(), s.scene(), &topo, W, H).unwrap()
+    GlRenderer::new(s.engine().context(), s.scene(), &topo, W, H).unwrap()
 }
 
 fn gpu(s: &GlSolver) -> GlCloth<'static> {
@@ -62,8 +62,8 @@ fn gl_pictures_match_the_vulkan_renderer_in_every_mode() {
     let state = s.state().unwrap();
     let mut r = gl_renderer(&s);
     for mode in [RenderMode::Triangles, RenderMode::Lines, RenderMode::Points] {
-        r.render(s.engine(), &view(mode), gpu(&s)).unwrap();
-        let gl_img = r.read_image(s.engine()).unwrap();
+        r.render(s.engine().context(), &view(mode), gpu(&s)).unwrap();
+        let gl_img = r.read_image(s.engine().context()).unwrap();
         let vk_img = vulkan_picture(&mut vk, &state, mode);
         let (mean, bad) = image_diff(&gl_img, &vk_img);
         println!("{mode:?}: mean {mean:.3}/255, {:.3} % of pixels off by > 48", bad * 100.0);
@@ -93,10 +93,10 @@ fn the_gl_renderer_draws_a_cpu_state_like_the_solver_buffers() {
     let Some(mut s) = simulated() else { return };
     let state = s.state().unwrap();
     let mut r = gl_renderer(&s);
-    r.render(s.engine(), &view(RenderMode::Triangles), gpu(&s)).unwrap();
-    let from_ssbo = r.read_image(s.engine()).unwrap();
-    r.render(s.engine(), &view(RenderMode::Triangles), GlCloth::Cpu(&state)).unwrap();
-    let uploaded = r.read_image(s.engine()).unwrap();
+    r.render(s.engine().context(), &view(RenderMode::Triangles), gpu(&s)).unwrap();
+    let from_ssbo = r.read_image(s.engine().context()).unwrap();
+    r.render(s.engine().context(), &view(RenderMode::Triangles), GlCloth::Cpu(&state)).unwrap();
+    let uploaded = r.read_image(s.engine().context()).unwrap();
     assert_eq!(image_diff(&from_ssbo, &uploaded), (0.0, 0.0));
     // The drawing changed nothing the solver reads: it steps on as before.
     s.step_frame().unwrap();
@@ -112,33 +112,33 @@ fn gl_picking_finds_the_same_particle_as_vulkan() {
     let v = view(RenderMode::Triangles);
     let mut hits = 0;
     for (x, y) in [(160, 80), (150, 100), (170, 110), (140, 60), (5, 230), (300, 10)] {
-        let a = r.pick(s.engine(), &v, gpu(&s), x, y).unwrap();
+        let a = r.pick(s.engine().context(), &v, gpu(&s), x, y).unwrap();
         let b = vk.pick(&v, VkCloth::Cpu(&state), x, y).unwrap();
         assert_eq!(a, b, "pixel ({x}, {y})");
         hits += a.is_some() as u32;
     }
     assert!(hits >= 2, "the probes should hit the cloth at least twice, hit {hits}");
-    assert_eq!(r.pick(s.engine(), &v, gpu(&s), W, 0).unwrap(), None, "outside the target");
+    assert_eq!(r.pick(s.engine().context(), &v, gpu(&s), W, 0).unwrap(), None, "outside the target");
 }
 
 #[test]
 fn gl_resizing_refuses_bad_sizes_and_another_context_is_refused() {
     let Some(mut s) = simulated() else { return };
     let mut r = gl_renderer(&s);
-    assert!(r.resize(s.engine(), 0, 10).is_err(), "zero width refused");
-    assert!(r.resize(s.engine(), 10, 1 << 20).is_err(), "oversized height refused");
+    assert!(r.resize(s.engine().context(), 0, 10).is_err(), "zero width refused");
+    assert!(r.resize(s.engine().context(), 10, 1 << 20).is_err(), "oversized height refused");
     assert_eq!(r.size(), (W, H), "a refused size changes nothing");
-    r.resize(s.engine(), 1, 1).unwrap();
-    r.render(s.engine(), &view(RenderMode::Points), gpu(&s)).unwrap();
-    assert_eq!(r.read_image(s.engine()).unwrap().len(), 4);
-    r.resize(s.engine(), W, H).unwrap();
-    r.render(s.engine(), &view(RenderMode::Triangles), gpu(&s)).unwrap();
-    assert_eq!(r.read_image(s.engine()).unwrap().len(), (W * H * 4) as usize);
+    r.resize(s.engine().context(), 1, 1).unwrap();
+    r.render(s.engine().context(), &view(RenderMode::Points), gpu(&s)).unwrap();
+    assert_eq!(r.read_image(s.engine().context()).unwrap().len(), 4);
+    r.resize(s.engine().context(), W, H).unwrap();
+    r.render(s.engine().context(), &view(RenderMode::Triangles), gpu(&s)).unwrap();
+    assert_eq!(r.read_image(s.engine().context()).unwrap().len(), (W * H * 4) as usize);
     // Another context's engine and buffers are refused, not drawn.
     let other = simulated().unwrap();
-    let e = r.render(other.engine(), &view(RenderMode::Triangles), gpu(&other)).unwrap_err();
+    let e = r.render(other.engine().context(), &view(RenderMode::Triangles), gpu(&other)).unwrap_err();
     assert!(e.to_string().contains("another context"), "{e}");
-    let e = r.render(s.engine(), &view(RenderMode::Triangles), gpu(&other)).unwrap_err();
+    let e = r.render(s.engine().context(), &view(RenderMode::Triangles), gpu(&other)).unwrap_err();
     assert!(e.to_string().contains("another GL context"), "{e}");
     s.step_frame().unwrap();
 }

@@ -574,7 +574,7 @@ fn run_cell(
         AnySolver::Vulkan(s, _) => {
             Painter::Vulkan(Box::new(VulkanRenderer::new(&s.engine().device(), &scene, &topo, width, height)?))
         }
-        AnySolver::Gl(s) => Painter::Gl(Box::new(GlRenderer::new(s.engine(), &scene, &topo, width, height)?)),
+        AnySolver::Gl(s) => Painter::Gl(Box::new(GlRenderer::new(s.engine().context(), &scene, &topo, width, height)?)),
         // The CPU solvers, drawn from their state uploaded.
         AnySolver::Cpu(_) => match (&devices.wgpu, &devices.vulkan) {
             (Some(ctx), _) => {
@@ -654,7 +654,7 @@ fn draw(sim: &mut AnySolver, painter: &mut Painter, view: &clothlab_core::View) 
         (Painter::Vulkan(r), AnySolver::Cpu(s)) => r.render(view, VkCloth::Cpu(s.state_ref()))?,
         (Painter::Gl(r), AnySolver::Gl(s)) => {
             let (&pos, &normal) = s.vertex_buffers();
-            r.render(s.engine(), view, GlCloth::Gpu { pos, normal })?;
+            r.render(s.engine().context(), view, GlCloth::Gpu { pos, normal })?;
             // The picture finished, as the other APIs wait for theirs.
             s.finish()?;
         }

@@ -4,8 +4,7 @@ use std::process::ExitCode;
 
 use anyhow::{Result, bail};
 use clothlab_core::{CpuSolver, Exec, Solver};
-use clothlab_engine::gpu::Engine;
-use clothlab_gl::{GlCloth, GlEngine, GlRenderer};
+use clothlab_gl::{GlCloth, GlContext, GlRenderer};
 use clothlab_vulkan::{VkCloth, VulkanRenderer};
 use clothlab_wgpu::{ClothSource, WgpuRenderer};
 
@@ -57,10 +56,10 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
                     (r.read_image()?, format!("{} (Vulkan)", dev.name()))
                 }
                 Api::Gl => {
-                    let engine = GlEngine::new()?;
-                    let mut r = GlRenderer::new(&engine, &scene, topo, args.width, args.height)?;
-                    r.render(&engine, &view, GlCloth::Cpu(state))?;
-                    (r.read_image(&engine)?, engine.info().adapter.clone())
+                    let ctx = GlContext::headless()?;
+                    let mut r = GlRenderer::new(&ctx, &scene, topo, args.width, args.height)?;
+                    r.render(&ctx, &view, GlCloth::Cpu(state))?;
+                    (r.read_image(&ctx)?, ctx.adapter())
                 }
                 Api::Wgpu => {
                     let ctx = clothlab_wgpu::GpuContext::new()?;
@@ -92,11 +91,11 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
                     (r.read_image(ctx)?, adapter)
                 }
                 AnySolver::Gl(solver) => {
-                    let engine = solver.engine();
-                    let mut r = GlRenderer::new(engine, &scene, &topo, args.width, args.height)?;
+                    let ctx = solver.engine().context();
+                    let mut r = GlRenderer::new(ctx, &scene, &topo, args.width, args.height)?;
                     let (&pos, &normal) = solver.vertex_buffers();
-                    r.render(engine, &view, GlCloth::Gpu { pos, normal })?;
-                    (r.read_image(engine)?, adapter)
+                    r.render(ctx, &view, GlCloth::Gpu { pos, normal })?;
+                    (r.read_image(ctx)?, adapter)
                 }
                 AnySolver::Cpu(_) => bail!("a CPU solver is drawn above"),
             }

@@ -5,7 +5,6 @@ use std::process::ExitCode;
 use anyhow::{Result, bail};
 
 use crate::cli::RunArgs;
-use crate::solvers::{Api, Backend};
 
 /// Opens the app.
 pub fn run_app(args: RunArgs) -> Result<ExitCode> {
@@ -14,11 +13,7 @@ pub fn run_app(args: RunArgs) -> Result<ExitCode> {
     if !(10..=1024).contains(&n) {
         bail!("invalid --n {n}: the app takes 10 ..= 1024 particles per side");
     }
-    args.api.check_renderer()?;
-    let backend = args.backend.unwrap_or(match args.api {
-        Api::Wgpu => Backend::Wgpu,
-        Api::Vulkan | Api::Gl => Backend::Vulkan,
-    });
+    let backend = args.backend.unwrap_or(args.api.optimized());
     crate::gui::run(crate::gui::RunOptions {
         api: args.api,
         backend,

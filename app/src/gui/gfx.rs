@@ -5,13 +5,14 @@ use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
 use clothlab_core::{Scene, View};
+use clothlab_gl::{GlContext, GlOverlay, GlRenderer};
 use clothlab_vulkan::Device;
 use clothlab_vulkan::{Overlay, Presenter, VulkanRenderer};
 use clothlab_wgpu::{GpuContext, WgpuRenderer};
 use winit::window::Window;
 
 use crate::solvers::Api;
-use crate::solvers::{AnySolver, Shared, vulkan_cloth, wgpu_cloth};
+use crate::solvers::{AnySolver, Shared, gl_cloth, vulkan_cloth, wgpu_cloth};
 
 /// A picture of the whole window (scene and panels), sRGB RGBA8.
 pub struct Shot {
@@ -51,12 +52,24 @@ pub struct VulkanGfx {
     dev: Device,
 }
 
+/// Raw OpenGL: the window's context (GL solvers compute in it too), the scene renderer
+/// (its picture blitted into the window) and egui over it.
+pub struct GlGfx {
+    renderer: GlRenderer,
+    overlay: GlOverlay,
+    ctx: GlContext,
+    /// The window's drawable size.
+    size: (u32, u32),
+}
+
 /// The window's graphics.
 pub enum Gfx {
     /// Through wgpu.
     Wgpu(Box<WgpuGfx>),
     /// Through raw Vulkan.
     Vulkan(Box<VulkanGfx>),
+    /// Through raw OpenGL.
+    Gl(Box<GlGfx>),
     /// Nothing, for the moment of an API switch.
     None,
 }
@@ -74,7 +87,12 @@ impl Gfx {
         let (w, h) = (size.width.max(1), size.height.max(1));
         let (_, topo) = clothlab_core::build(scene, params)?;
         Ok(match api {
-            Api::Gl => return Err(crate::solvers::no_gl_renderer()),
+            Api::Gl => {
+                let ctx = GlContext::for_window(window.clone())?;
+                let renderer = GlRenderer::new(&ctx, scene, &topo, w, h)?;
+                let overlay = GlOverlay::new(&ctx)?;
+                Gfx::Gl(Box::new(GlGfx { renderer, overlay, ctx, size: (w, h) }))
+            }
             Api::Wgpu => {
                 let (ctx, surface) = GpuContext::for_window(window.clone())?;
                 let caps = surface.get_capabilities(&ctx.adapter);
@@ -120,6 +138,7 @@ impl Gfx {
         match self {
             Gfx::Wgpu(g) => Shared::Wgpu(&g.ctx),
             Gfx::Vulkan(g) => Shared::Vulkan(&g.dev),
+            Gfx::Gl(g) => Shared::Gl(&g.ctx),
             Gfx::None => Shared::None,
         }
     }
@@ -128,6 +147,7 @@ impl Gfx {
     pub fn api(&self) -> Api {
         match self {
             Gfx::Wgpu(_) => Api::Wgpu,
+            Gfx::Gl(_) => Api::Gl,
             Gfx::Vulkan(_) | Gfx::None => Api::Vulkan,
         }
     }
@@ -137,6 +157,7 @@ impl Gfx {
         match self {
             Gfx::Wgpu(g) => g.ctx.describe(),
             Gfx::Vulkan(g) => format!("{} (raw Vulkan)", g.dev.name()),
+            Gfx::Gl(g) => format!("{} (raw OpenGL)", g.ctx.adapter()),
             Gfx::None => String::new(),
         }
     }
@@ -146,7 +167,7 @@ impl Gfx {
     pub fn scene_texture(&self) -> Option<egui::TextureId> {
         match self {
             Gfx::Wgpu(g) => Some(g.scene_tex),
-            Gfx::Vulkan(_) | Gfx::None => None,
+            Gfx::Vulkan(_) | Gfx::Gl(_) | Gfx::None => None,
         }
     }
 
@@ -168,6 +189,10 @@ impl Gfx {
                 let (w, h) = g.renderer.size();
                 g.dev.wait_idle()?;
                 g.renderer = VulkanRenderer::new(&g.dev, scene, &topo, w, h)?;
+            }
+            Gfx::Gl(g) => {
+                let (w, h) = g.renderer.size();
+                g.renderer = GlRenderer::new(&g.ctx, scene, &topo, w, h)?;
             }
             Gfx::None => {}
         }
@@ -193,6 +218,12 @@ impl Gfx {
                 );
             }
             Gfx::Vulkan(g) => g.presenter.resize(width, height),
+            Gfx::Gl(g) => {
+                g.size = (width, height);
+                if width > 0 && height > 0 {
+                    g.renderer.resize(&g.ctx, width, height)?;
+                }
+            }
             Gfx::None => {}
         }
         Ok(())
@@ -203,6 +234,7 @@ impl Gfx {
         match self {
             Gfx::Wgpu(g) => g.renderer.size(),
             Gfx::Vulkan(g) => g.renderer.size(),
+            Gfx::Gl(g) => g.renderer.size(),
             Gfx::None => (1, 1),
         }
     }
@@ -219,6 +251,10 @@ impl Gfx {
                 g.dev.wait_idle()?;
                 let cloth = vulkan_cloth(solver, &mut copy)?;
                 g.renderer.pick(view, cloth, x, y)?
+            }
+            Gfx::Gl(g) => {
+                let cloth = gl_cloth(solver, &mut copy, &g.ctx)?;
+                g.renderer.pick(&g.ctx, view, cloth, x, y)?
             }
             Gfx::None => None,
         })
@@ -239,6 +275,11 @@ impl Gfx {
                 let cloth = vulkan_cloth(solver, &mut copy)?;
                 g.renderer.render(view, cloth)?;
                 g.renderer.read_image()?
+            }
+            Gfx::Gl(g) => {
+                let cloth = gl_cloth(solver, &mut copy, &g.ctx)?;
+                g.renderer.render(&g.ctx, view, cloth)?;
+                g.renderer.read_image(&g.ctx)?
             }
             Gfx::None => bail!("no graphics"),
         };
@@ -279,6 +320,21 @@ impl Gfx {
                     return Ok(None);
                 }
                 Ok(g.presenter.take_screenshot()?.map(|s| Shot { width: s.width, height: s.height, rgba: s.rgba }))
+            }
+            Gfx::Gl(g) => {
+                let (w, h) = g.size;
+                if w == 0 || h == 0 {
+                    return Ok(None);
+                }
+                let cloth = gl_cloth(solver, &mut copy, &g.ctx)?;
+                g.renderer.render(&g.ctx, view, cloth)?;
+                // The scene under the panels, as on Vulkan: blitted into the window.
+                g.renderer.present(&g.ctx, w, h)?;
+                g.overlay.paint([w, h], egui.pixels_per_point, egui.primitives, egui.textures)?;
+                let shot =
+                    if capture { Some(Shot { width: w, height: h, rgba: g.ctx.read_window(w, h)? }) } else { None };
+                g.ctx.swap_buffers()?;
+                Ok(shot)
             }
             Gfx::None => Ok(None),
         }

@@ -289,7 +289,7 @@ impl ApplicationHandler for App {
                     println!("dropped: {}", r.ui.message);
                 }
                 if self.opts.switch_api && limit.is_some_and(|l| r.drawn == l / 2) {
-                    let other = if r.gfx.api() == Api::Wgpu { Api::Vulkan } else { Api::Wgpu };
+                    let other = r.gfx.api().next();
                     if let Err(e) = r.command(Command::Api(other)) {
                         self.fail(event_loop, e);
                         return;
@@ -514,12 +514,12 @@ impl Running {
         let placeholder = Gfx::new_placeholder();
         drop(std::mem::replace(&mut self.gfx, placeholder));
         self.gfx = Gfx::new(api, &self.window, &scene, &params)?;
-        let target = match (backend, api) {
-            (Backend::WgpuNaive, Api::Vulkan) => Backend::VulkanNaive,
-            (Backend::Wgpu, Api::Vulkan) => Backend::Vulkan,
-            (Backend::VulkanNaive, Api::Wgpu) => Backend::WgpuNaive,
-            (Backend::Vulkan, Api::Wgpu) => Backend::Wgpu,
-            (b, _) => b,
+        // A GPU backend moves to the same recipe on the new API (its buffers drawn with
+        // no copy); a CPU backend stays.
+        let target = match backend.preset() {
+            Some("naive") => api.naive(),
+            Some(_) => api.optimized(),
+            None => backend,
         };
         self.sim.switch(target, &self.gfx.shared())?;
         // The same variant on the other API, where it has every switch of it.

@@ -119,7 +119,7 @@ pub fn draw(root: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
                 }
                 ui.horizontal(|ui| {
                     ui.label("API");
-                    for api in [Api::Wgpu, Api::Vulkan] {
+                    for api in [Api::Wgpu, Api::Vulkan, Api::Gl] {
                         if ui.selectable_label(info.api == api, format!("{api:?}")).clicked() && info.api != api {
                             out.push(Command::Api(api));
                         }

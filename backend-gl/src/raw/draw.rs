@@ -139,10 +139,11 @@ struct VertexArrayObj {
 /// The renderer's objects of a context.
 #[derive(Default)]
 pub(super) struct DrawObjects {
-    indices: Vec<IndexObj>,
-    samplers: Vec<glow::NativeSampler>,
+    // Each `None` once deleted (indices are never reused).
+    indices: Vec<Option<IndexObj>>,
+    samplers: Vec<Option<glow::NativeSampler>>,
     framebuffers: Vec<Option<FramebufferObj>>,
-    vertex_arrays: Vec<VertexArrayObj>,
+    vertex_arrays: Vec<Option<VertexArrayObj>>,
 }
 
 fn gl_err(what: &'static str) -> impl Fn(String) -> GlError {
@@ -173,7 +174,7 @@ impl Gl {
         };
         let max = indices.iter().copied().max().unwrap_or(0);
         let mut o = self.objs.borrow_mut();
-        o.draw.indices.push(IndexObj { name, count: indices.len() as u32, max });
+        o.draw.indices.push(Some(IndexObj { name, count: indices.len() as u32, max }));
         Ok(o.draw.indices.len() - 1)
     }
 
@@ -197,7 +198,7 @@ impl Gl {
             s
         };
         let mut o = self.objs.borrow_mut();
-        o.draw.samplers.push(s);
+        o.draw.samplers.push(Some(s));
         Ok(o.draw.samplers.len() - 1)
     }
 
@@ -259,6 +260,106 @@ impl Gl {
         Ok(())
     }
 
+    /// Deletes index buffers, samplers and vertex arrays (their indices are not reused;
+    /// unknown ones are skipped).
+    pub fn delete_draw_objects(
+        &self,
+        indices: &[usize],
+        samplers: &[usize],
+        vertex_arrays: &[usize],
+    ) -> Result<(), GlError> {
+        let gl = self.cur()?;
+        let mut o = self.objs.borrow_mut();
+        let d = &mut o.draw;
+        // SAFETY: the context is current; each name is this context's and is forgotten
+        // here (taken out of its table).
+        unsafe {
+            for &i in indices {
+                if let Some(x) = d.indices.get_mut(i).and_then(Option::take) {
+                    gl.delete_buffer(x.name);
+                }
+            }
+            for &i in samplers {
+                if let Some(x) = d.samplers.get_mut(i).and_then(Option::take) {
+                    gl.delete_sampler(x);
+                }
+            }
+            for &i in vertex_arrays {
+                if let Some(x) = d.vertex_arrays.get_mut(i).and_then(Option::take) {
+                    gl.delete_vertex_array(x.name);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Copies the colour of single-sampled framebuffer `fb` into the window's default
+    /// framebuffer of `width × height`, scaled to fit and turned right side up (GL's
+    /// window rows go bottom up), bytes as they are (the window's framebuffer is not
+    /// sRGB: the sRGB bytes are what it should show).
+    pub fn blit_to_window(&self, fb: usize, width: u32, height: u32) -> Result<(), GlError> {
+        let f = self.fb(fb)?;
+        if !self.has_window() || f.samples != 1 || f.color.is_none() {
+            return Err(GlError::Invalid("a blit to the window from no colour or with no window"));
+        }
+        let gl = self.cur()?;
+        // SAFETY: the context is current; the framebuffer is this context's; the window's
+        // default framebuffer (0) exists (the context draws into a window surface).
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(f.name));
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, None);
+            gl.disable(glow::FRAMEBUFFER_SRGB);
+            gl.disable(glow::SCISSOR_TEST);
+            let (w, h) = (width as i32, height as i32);
+            gl.blit_framebuffer(
+                0,
+                0,
+                f.width as i32,
+                f.height as i32,
+                0,
+                h,
+                w,
+                0,
+                glow::COLOR_BUFFER_BIT,
+                glow::LINEAR,
+            );
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+            gl.viewport(0, 0, w, h);
+        }
+        Ok(())
+    }
+
+    /// The window's default framebuffer's `width × height` pixels, RGBA8, first row at the
+    /// top (a screenshot of what is about to be shown).
+    pub fn read_window(&self, width: u32, height: u32) -> Result<Vec<u8>, GlError> {
+        if !self.has_window() {
+            return Err(GlError::Invalid("reading the window of a context with no window"));
+        }
+        let row = width as usize * 4;
+        let mut out = vec![0u8; row * height as usize];
+        let gl = self.cur()?;
+        // SAFETY: the context is current and draws into a window; GL writes
+        // width×height RGBA8 pixels in rows of width×4 bytes (alignment 4), exactly
+        // `out`'s length; pixels outside the window read as undefined values, not memory.
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+            gl.read_buffer(glow::BACK);
+            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 4);
+            gl.read_pixels(
+                0,
+                0,
+                width as i32,
+                height as i32,
+                glow::RGBA,
+                glow::UNSIGNED_BYTE,
+                glow::PixelPackData::Slice(Some(&mut out)),
+            );
+        }
+        // Bottom-up rows to top-down.
+        let flipped = out.chunks_exact(row).rev().flatten().copied().collect();
+        Ok(flipped)
+    }
+
     /// A vertex array of `layouts` (binding `i` is `layouts[i]`); an attribute reaching
     /// past its stride is refused.
     pub fn create_vertex_array(&self, layouts: &[VertexLayout<'_>]) -> Result<usize, GlError> {
@@ -289,7 +390,7 @@ impl Gl {
             v
         };
         let mut o = self.objs.borrow_mut();
-        o.draw.vertex_arrays.push(VertexArrayObj { name, strides: layouts.iter().map(|l| l.stride).collect() });
+        o.draw.vertex_arrays.push(Some(VertexArrayObj { name, strides: layouts.iter().map(|l| l.stride).collect() }));
         Ok(o.draw.vertex_arrays.len() - 1)
     }
 
@@ -336,10 +437,13 @@ impl Gl {
         };
         let f = self.fb(d.framebuffer)?;
         let o = self.objs.borrow();
-        let program = o.programs.get(d.program).ok_or(GlError::Invalid("no such GL program"))?.program;
-        let vao = o.draw.vertex_arrays.get(d.vertex_array).ok_or(GlError::Invalid("no such vertex array"))?;
-        let index =
-            d.indices.map(|i| o.draw.indices.get(i).ok_or(GlError::Invalid("no such index buffer"))).transpose()?;
+        let program = o.program(d.program).ok_or(GlError::Invalid("no such GL program"))?.program;
+        let vao = o.draw.vertex_arrays.get(d.vertex_array).and_then(Option::as_ref);
+        let vao = vao.ok_or(GlError::Invalid("no such vertex array"))?;
+        let index = d
+            .indices
+            .map(|i| o.draw.indices.get(i).and_then(Option::as_ref).ok_or(GlError::Invalid("no such index buffer")))
+            .transpose()?;
         // Every vertex the draw can fetch must lie in every bound buffer.
         let fetched = match index {
             Some(ix) if ix.count > 0 => ix.max as u64 + 1,
@@ -350,19 +454,19 @@ impl Gl {
             return Err(GlError::Invalid("a draw with another number of vertex buffers than its vertex array"));
         }
         for (&b, &stride) in d.vertices.iter().zip(&vao.strides) {
-            let buf = o.buffers.get(b).ok_or(GlError::Invalid("no such GL buffer"))?;
+            let buf = o.buffer(b).ok_or(GlError::Invalid("no such GL buffer"))?;
             if fetched * stride as u64 > buf.size {
                 return Err(GlError::Invalid("a draw fetching vertices past a buffer's end"));
             }
         }
-        if d.uniform.iter().any(|&(_, b)| b >= o.buffers.len()) {
+        if d.uniform.iter().any(|&(_, b)| o.buffer(b).is_none()) {
             return Err(GlError::Invalid("no such GL buffer"));
         }
         let mut textures = Vec::with_capacity(d.textures.len());
         for &(unit, t, s) in d.textures {
             let t = o.textures.get(t).copied().flatten().filter(|t| t.samples == 1);
             let t = t.ok_or(GlError::Invalid("no such single-sampled texture"))?;
-            let s = *o.draw.samplers.get(s).ok_or(GlError::Invalid("no such sampler"))?;
+            let s = o.draw.samplers.get(s).copied().flatten().ok_or(GlError::Invalid("no such sampler"))?;
             textures.push((unit, t.name, s));
         }
         let mode = match d.prim {
@@ -398,10 +502,10 @@ impl Gl {
             gl.use_program(Some(program));
             gl.bind_vertex_array(Some(vao.name));
             for (b, (&buf, &stride)) in d.vertices.iter().zip(&vao.strides).enumerate() {
-                gl.bind_vertex_buffer(b as u32, Some(o.buffers[buf].name), 0, stride as i32);
+                gl.bind_vertex_buffer(b as u32, o.buffer(buf).map(|x| x.name), 0, stride as i32);
             }
             for &(pt, b) in d.uniform {
-                gl.bind_buffer_base(glow::UNIFORM_BUFFER, pt, Some(o.buffers[b].name));
+                gl.bind_buffer_base(glow::UNIFORM_BUFFER, pt, o.buffer(b).map(|x| x.name));
             }
             for &(unit, t, s) in &textures {
                 gl.active_texture(glow::TEXTURE0 + unit);

@@ -25,6 +25,8 @@ use khronos_egl as egl;
 
 use crate::GlError;
 
+/// `EGL_PLATFORM_X11_KHR`: a display of an Xlib `Display*`.
+const PLATFORM_X11_KHR: egl::Enum = 0x31D5;
 /// `EGL_PLATFORM_SURFACELESS_MESA`: a display with no window system (headless).
 const PLATFORM_SURFACELESS_MESA: egl::Enum = 0x31DD;
 /// `GL_SUBGROUP_SUPPORTED_FEATURES_KHR` (GL_KHR_shader_subgroup; not in glow).
@@ -33,6 +35,29 @@ const SUBGROUP_SUPPORTED_FEATURES: u32 = 0x9534;
 const SUBGROUP_SIZE: u32 = 0x9532;
 /// glClearNamedBufferData (GL 4.5): `(buffer, internalformat, format, type, data)`.
 type ClearNamedBufferData = unsafe extern "system" fn(u32, u32, u32, u32, *const std::ffi::c_void);
+
+/// A window GL can draw into: what winit's windows are.
+pub trait WindowHandles: raw_window_handle::HasDisplayHandle + raw_window_handle::HasWindowHandle {}
+impl<T: raw_window_handle::HasDisplayHandle + raw_window_handle::HasWindowHandle> WindowHandles for T {}
+
+/// The Xlib display, window XID and visual of `w`; another window system is refused in
+/// one line (the GL window needs X11; Wayland runs it through XWayland).
+fn x11_handles(
+    w: &dyn WindowHandles,
+) -> Result<(*mut std::ffi::c_void, std::ffi::c_ulong, std::ffi::c_ulong), GlError> {
+    use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
+    let d = w.display_handle().map_err(|e| GlError::NoGl(format!("the window has no display handle ({e})")))?;
+    let h = w.window_handle().map_err(|e| GlError::NoGl(format!("the window has no handle ({e})")))?;
+    match (d.as_raw(), h.as_raw()) {
+        (RawDisplayHandle::Xlib(d), RawWindowHandle::Xlib(h)) => {
+            let display = d.display.ok_or_else(|| GlError::NoGl("the X11 window has no Xlib display".into()))?;
+            Ok((display.as_ptr(), h.window, h.visual_id))
+        }
+        (d, _) => Err(GlError::NoGl(format!(
+            "--api gl draws into X11 windows only, this one is {d:?}; run with WAYLAND_DISPLAY unset (XWayland) or use --api wgpu or vulkan"
+        ))),
+    }
+}
 
 /// What the context offers, read once when it is made.
 #[derive(Debug, Clone)]
@@ -65,8 +90,10 @@ impl Limits {
 }
 
 mod draw;
+mod overlay;
 
 pub use draw::{Clear, DrawDesc, Prim, TexFormat, VertexAttr, VertexLayout};
+pub use overlay::EguiPainter;
 
 #[derive(Clone, Copy)]
 struct BufferObj {
@@ -87,11 +114,21 @@ struct TextureObj {
 /// context is one thread's) lets a renderer and a solver share one context by reference.
 #[derive(Default)]
 struct Objects {
-    buffers: Vec<BufferObj>,
-    /// `None` once deleted (indices are never reused).
+    /// Each table's entries are `None` once deleted (indices are never reused).
+    buffers: Vec<Option<BufferObj>>,
     textures: Vec<Option<TextureObj>>,
-    programs: Vec<Program>,
+    programs: Vec<Option<Program>>,
     draw: draw::DrawObjects,
+}
+
+impl Objects {
+    fn buffer(&self, i: usize) -> Option<&BufferObj> {
+        self.buffers.get(i).and_then(Option::as_ref)
+    }
+
+    fn program(&self, i: usize) -> Option<&Program> {
+        self.programs.get(i).and_then(Option::as_ref)
+    }
 }
 
 struct Program {
@@ -142,6 +179,8 @@ pub struct Gl {
     id: u64,
     clip_control: Option<draw::ClipControl>,
     provoking_vertex: Option<draw::ProvokingVertex>,
+    /// The window drawn into (kept open while its surface exists; dropped after it).
+    window: Option<Arc<dyn WindowHandles>>,
     queries: Vec<glow::NativeQuery>,
     _not_send: PhantomData<*const ()>,
 }
@@ -155,36 +194,95 @@ impl Gl {
     /// one, else the default display with a 1×1 pbuffer. A debug context, its messages of
     /// medium and high severity collected for [`Gl::messages`].
     pub fn headless() -> Result<Gl, GlError> {
+        Self::open(None)
+    }
+
+    /// An OpenGL 4.5 core context drawing into `window` (X11 through EGL's X11 platform),
+    /// made current with the window's surface; [`Gl::swap_buffers`] shows what was drawn.
+    /// The context keeps `window` alive as long as it draws into it.
+    pub fn for_window(window: Arc<dyn WindowHandles>) -> Result<Gl, GlError> {
+        Self::open(Some(window))
+    }
+
+    fn open(window: Option<Arc<dyn WindowHandles>>) -> Result<Gl, GlError> {
         // SAFETY: loads the system's libEGL (libEGL.so.1), whose exported functions have
         // the EGL 1.5 signatures khronos-egl declares; nothing is called before the
         // version check `load_required` does.
         let instance = unsafe { egl::DynamicInstance::<egl::EGL1_5>::load_required() }
             .map_err(|e| GlError::NoGl(format!("no EGL 1.5 library ({e})")))?;
-        // SAFETY: the surfaceless platform takes EGL_DEFAULT_DISPLAY (no native display
-        // pointer is dereferenced) and an empty attribute list.
-        let surfaceless = unsafe {
-            instance.get_platform_display(PLATFORM_SURFACELESS_MESA, egl::DEFAULT_DISPLAY, &[egl::ATTRIB_NONE])
-        }
-        .ok()
-        .filter(|d| instance.initialize(*d).is_ok());
-        let display = match surfaceless {
-            Some(d) => d,
-            None => {
-                // SAFETY: EGL_DEFAULT_DISPLAY is the null native display EGL defines.
-                let d = unsafe { instance.get_display(egl::DEFAULT_DISPLAY) }
-                    .ok_or_else(|| GlError::NoGl("EGL has no display".into()))?;
+        let native = match &window {
+            Some(w) => Some(x11_handles(w.as_ref())?),
+            None => None,
+        };
+        let display = match native {
+            Some((xdisplay, _, _)) => {
+                // SAFETY: `xdisplay` is the live Xlib display of a window that `window`
+                // (kept in the returned Gl) keeps open; the attribute list is empty.
+                let d = unsafe { instance.get_platform_display(PLATFORM_X11_KHR, xdisplay, &[egl::ATTRIB_NONE]) }
+                    .map_err(|e| GlError::NoGl(format!("EGL has no X11 display ({e})")))?;
                 instance.initialize(d).map_err(|e| GlError::NoGl(format!("eglInitialize failed: {e}")))?;
                 d
             }
+            None => {
+                // SAFETY: the surfaceless platform takes EGL_DEFAULT_DISPLAY (no native
+                // display pointer is dereferenced) and an empty attribute list.
+                let surfaceless = unsafe {
+                    instance.get_platform_display(PLATFORM_SURFACELESS_MESA, egl::DEFAULT_DISPLAY, &[egl::ATTRIB_NONE])
+                }
+                .ok()
+                .filter(|d| instance.initialize(*d).is_ok());
+                match surfaceless {
+                    Some(d) => d,
+                    None => {
+                        // SAFETY: EGL_DEFAULT_DISPLAY is the null native display EGL defines.
+                        let d = unsafe { instance.get_display(egl::DEFAULT_DISPLAY) }
+                            .ok_or_else(|| GlError::NoGl("EGL has no display".into()))?;
+                        instance.initialize(d).map_err(|e| GlError::NoGl(format!("eglInitialize failed: {e}")))?;
+                        d
+                    }
+                }
+            }
         };
         instance.bind_api(egl::OPENGL_API).map_err(|e| GlError::NoGl(format!("EGL offers no OpenGL ({e})")))?;
-        let config = instance
-            .choose_first_config(
-                display,
-                &[egl::RENDERABLE_TYPE, egl::OPENGL_BIT, egl::SURFACE_TYPE, egl::PBUFFER_BIT, egl::NONE],
-            )
-            .map_err(egl_err("choosing a config"))?
-            .ok_or_else(|| GlError::NoGl("EGL has no OpenGL config".into()))?;
+        let config = match native {
+            // A window's config: 8-bit RGB, and the window's own visual where it names one
+            // (EGL refuses a surface of another visual).
+            Some((_, _, visual)) => {
+                let mut configs = Vec::with_capacity(64);
+                instance
+                    .choose_config(
+                        display,
+                        &[
+                            egl::RENDERABLE_TYPE,
+                            egl::OPENGL_BIT,
+                            egl::SURFACE_TYPE,
+                            egl::WINDOW_BIT,
+                            egl::RED_SIZE,
+                            8,
+                            egl::GREEN_SIZE,
+                            8,
+                            egl::BLUE_SIZE,
+                            8,
+                            egl::NONE,
+                        ],
+                        &mut configs,
+                    )
+                    .map_err(egl_err("choosing a config"))?;
+                let own = configs.iter().copied().find(|&c| {
+                    visual != 0
+                        && instance.get_config_attrib(display, c, egl::NATIVE_VISUAL_ID).ok() == Some(visual as i32)
+                });
+                own.or(configs.first().copied())
+                    .ok_or_else(|| GlError::NoGl("EGL has no OpenGL config for a window".into()))?
+            }
+            None => instance
+                .choose_first_config(
+                    display,
+                    &[egl::RENDERABLE_TYPE, egl::OPENGL_BIT, egl::SURFACE_TYPE, egl::PBUFFER_BIT, egl::NONE],
+                )
+                .map_err(egl_err("choosing a config"))?
+                .ok_or_else(|| GlError::NoGl("EGL has no OpenGL config".into()))?,
+        };
         let attribs = |robust: bool| {
             let mut a = vec![
                 egl::CONTEXT_MAJOR_VERSION,
@@ -211,15 +309,30 @@ impl Gl {
                 false,
             ),
         };
-        // Surfaceless where EGL_KHR_surfaceless_context allows it, else a 1×1 pbuffer.
-        let surface = match instance.make_current(display, None, None, Some(context)) {
-            Ok(()) => None,
-            Err(_) => {
-                let s = instance
-                    .create_pbuffer_surface(display, config, &[egl::WIDTH, 1, egl::HEIGHT, 1, egl::NONE])
-                    .map_err(egl_err("creating a pbuffer"))?;
-                instance.make_current(display, Some(s), Some(s), Some(context)).map_err(egl_err("making current"))?;
-                Some(s)
+        // The window's surface; headless: surfaceless where EGL_KHR_surfaceless_context
+        // allows it, else a 1×1 pbuffer.
+        let surface = if let Some((_, xwindow, _)) = native {
+            // SAFETY: `xwindow` is the XID of a live window of the display above (kept
+            // open by `window`, held by the returned Gl, which destroys the surface
+            // first); for X11, EGLNativeWindowType is the XID itself.
+            let s = unsafe { instance.create_window_surface(display, config, xwindow as egl::NativeWindowType, None) }
+                .map_err(egl_err("creating the window surface"))?;
+            instance.make_current(display, Some(s), Some(s), Some(context)).map_err(egl_err("making current"))?;
+            // Vsync where offered (a failure only means frames are not paced).
+            let _ = instance.swap_interval(display, 1);
+            Some(s)
+        } else {
+            match instance.make_current(display, None, None, Some(context)) {
+                Ok(()) => None,
+                Err(_) => {
+                    let s = instance
+                        .create_pbuffer_surface(display, config, &[egl::WIDTH, 1, egl::HEIGHT, 1, egl::NONE])
+                        .map_err(egl_err("creating a pbuffer"))?;
+                    instance
+                        .make_current(display, Some(s), Some(s), Some(context))
+                        .map_err(egl_err("making current"))?;
+                    Some(s)
+                }
             }
         };
         // SAFETY: the context is current on this thread; EGL returns GL entry points for
@@ -302,6 +415,7 @@ impl Gl {
             },
             clip_control,
             provoking_vertex,
+            window,
             queries,
             _not_send: PhantomData,
         };
@@ -335,7 +449,7 @@ impl Gl {
     }
 
     fn buf(&self, i: usize) -> Result<BufferObj, GlError> {
-        self.objs.borrow().buffers.get(i).copied().ok_or(GlError::Invalid("no such GL buffer"))
+        self.objs.borrow().buffer(i).copied().ok_or(GlError::Invalid("no such GL buffer"))
     }
 
     fn tex(&self, i: usize) -> Result<TextureObj, GlError> {
@@ -358,7 +472,7 @@ impl Gl {
             name
         };
         let mut o = self.objs.borrow_mut();
-        o.buffers.push(BufferObj { name, size: data.len() as u64 });
+        o.buffers.push(Some(BufferObj { name, size: data.len() as u64 }));
         let i = o.buffers.len() - 1;
         drop(o);
         self.check("creating a buffer")?;
@@ -503,6 +617,26 @@ impl Gl {
         Ok(())
     }
 
+    /// Deletes buffer `i` (its index is not reused; a later use is refused).
+    pub fn delete_buffer(&self, i: usize) -> Result<(), GlError> {
+        let b = self.buf(i)?;
+        let gl = self.cur()?;
+        // SAFETY: the context is current; the name is this context's and forgotten here.
+        unsafe { gl.delete_buffer(b.name) };
+        self.objs.borrow_mut().buffers[i] = None;
+        Ok(())
+    }
+
+    /// Deletes program `i` (its index is not reused; a later use is refused).
+    pub fn delete_program(&self, i: usize) -> Result<(), GlError> {
+        let p = self.objs.borrow_mut().programs.get_mut(i).and_then(Option::take);
+        let p = p.ok_or(GlError::Invalid("no such GL program"))?;
+        let gl = self.cur()?;
+        // SAFETY: the context is current; the name is this context's, forgotten above.
+        unsafe { gl.delete_program(p.program) };
+        Ok(())
+    }
+
     /// Writes the whole of single-sampled texture `i` from `bytes`, rows from the first
     /// (RGBA32UI: 16 bytes a texel; sRGB RGBA8: 4).
     pub fn write_texture(&self, i: usize, bytes: &[u8]) -> Result<(), GlError> {
@@ -579,16 +713,18 @@ impl Gl {
             (program, locations)
         };
         let mut o = self.objs.borrow_mut();
-        o.programs.push(Program { program, locations });
+        o.programs.push(Some(Program { program, locations }));
         Ok(o.programs.len() - 1)
     }
 
     /// Binds what `d` names and dispatches it. Bad indices are refused before any call.
     pub fn dispatch(&self, d: &DispatchDesc<'_>) -> Result<(), GlError> {
         let o = self.objs.borrow();
-        let p = o.programs.get(d.program).ok_or(GlError::Invalid("no such GL program"))?;
+        let p = o.program(d.program).ok_or(GlError::Invalid("no such GL program"))?;
         // Every index checked first (no allocation: this runs for every dispatch).
-        if d.storage.iter().chain(d.uniform).any(|&(_, i)| i >= o.buffers.len()) {
+        // (Each binding's buffer is looked up again below, with no allocation: this runs
+        // for every dispatch.)
+        if d.storage.iter().chain(d.uniform).any(|&(_, i)| o.buffer(i).is_none()) {
             return Err(GlError::Invalid("no such GL buffer"));
         }
         if d.textures.iter().any(|&(_, i)| o.textures.get(i).is_none_or(|t| t.is_none_or(|t| t.samples != 1))) {
@@ -600,10 +736,10 @@ impl Gl {
         unsafe {
             gl.use_program(Some(p.program));
             for &(pt, i) in d.storage {
-                gl.bind_buffer_base(glow::SHADER_STORAGE_BUFFER, pt, Some(o.buffers[i].name));
+                gl.bind_buffer_base(glow::SHADER_STORAGE_BUFFER, pt, o.buffer(i).map(|b| b.name));
             }
             for &(pt, i) in d.uniform {
-                gl.bind_buffer_base(glow::UNIFORM_BUFFER, pt, Some(o.buffers[i].name));
+                gl.bind_buffer_base(glow::UNIFORM_BUFFER, pt, o.buffer(i).map(|b| b.name));
             }
             for &(unit, i) in d.textures {
                 gl.active_texture(glow::TEXTURE0 + unit);
@@ -669,6 +805,21 @@ impl Gl {
         // SAFETY: the context is current.
         unsafe { gl.finish() };
         Ok(())
+    }
+
+    /// Shows what was drawn into the window's default framebuffer (eglSwapBuffers); a
+    /// headless context has nothing to show.
+    pub fn swap_buffers(&self) -> Result<(), GlError> {
+        let Some(surface) = self.surface.filter(|_| self.window.is_some()) else {
+            return Err(GlError::Invalid("swapping buffers of a context with no window"));
+        };
+        self.cur()?;
+        self.egl.swap_buffers(self.display, surface).map_err(egl_err("swapping buffers"))
+    }
+
+    /// Whether the context draws into a window.
+    pub fn has_window(&self) -> bool {
+        self.window.is_some()
     }
 
     /// Fails with the GL errors and the debug messages since the last call.
