@@ -195,6 +195,7 @@ fn colliders_uniform(storage: &str) -> String {
 fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
     let (module, info) = parse_and_validate(&format!("{name}.wgsl"), source);
     let (reads, writes) = bindings(name, &module, &info);
+    let uses = used_bindings(&module, &info).unwrap_or_else(|e| fail(format!("{name}: {e}")));
     // The render shader gets what wgpu does to WGSL for Vulkan: y flipped into Vulkan's
     // clip space, and a point size of 1 written (Vulkan leaves it undefined otherwise).
     let flags = if name == "render" {
@@ -239,7 +240,7 @@ fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
         "    Kernel {{ name: {name:?}, wgsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.wgsl\")), \
          spirv: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")), \
          glsl: include_str!(concat!(env!(\"OUT_DIR\"), \"/{name}.glsl\")), gl_points: &{points:?}, gl_uniforms: &{uniforms:?}, \
-         reads: &{reads:?}, writes: &{writes:?} }},"
+         reads: &{reads:?}, writes: &{writes:?}, uses: &{uses:?} }},"
     )
     .expect("write to string");
 }

@@ -1,5 +1,7 @@
-//! The wgpu engine: buffers, one bind group layout for the step's bindings and two bind
-//! groups (one per position parity), a compute pipeline per kernel, one compute pass per
+//! The wgpu engine: buffers; per set of bindings the kernels use, a bind group layout and
+//! two bind groups (one per position parity) — one layout for all the step's bindings
+//! would hold 25 storage buffers, past the 16 a stage may have on wgpu's GL backend —;
+//! a compute pipeline per kernel, one compute pass per
 //! dispatch (timestamps through the pass), writes through the queue. wgpu places its own
 //! barriers, so [`Engine::barrier`] records nothing. The solver itself is
 //! [`clothlab_engine::GpuSolver`]: [`WgpuSolver`] is it on this engine.
@@ -26,6 +28,14 @@ fn backend(e: GpuError) -> SolverError {
     }
 }
 
+/// One set of bindings: its layout, its bind group per parity, its pipeline layouts by
+/// immediate size.
+struct Layout {
+    layout: wgpu::BindGroupLayout,
+    groups: [wgpu::BindGroup; 2],
+    pipeline_layouts: HashMap<u32, wgpu::PipelineLayout>,
+}
+
 struct Timestamps {
     set: wgpu::QuerySet,
     resolve: wgpu::Buffer,
@@ -36,11 +46,13 @@ pub struct WgpuEngine {
     ctx: GpuContext,
     info: EngineInfo,
     buffers: Vec<wgpu::Buffer>,
-    layout: Option<wgpu::BindGroupLayout>,
-    bind_groups: Vec<wgpu::BindGroup>,
-    /// Pipeline layouts by immediate size.
-    pipeline_layouts: HashMap<u32, wgpu::PipelineLayout>,
-    pipelines: HashMap<KernelRef, wgpu::ComputePipeline>,
+    /// What the solver bound (per parity) and the table image's view.
+    sets: Option<([Vec<(Buf, BufferId)>; 2], Option<wgpu::TextureView>)>,
+    /// The layouts and groups made so far, by the bindings they hold.
+    layouts: Vec<Layout>,
+    layout_of: HashMap<Vec<u32>, usize>,
+    /// Each kernel's pipeline and its layout (an index into `layouts`).
+    pipelines: HashMap<KernelRef, (wgpu::ComputePipeline, usize)>,
     timestamps: Option<Timestamps>,
     encoder: Option<wgpu::CommandEncoder>,
     readbacks: Vec<(BufferId, u64)>,
@@ -86,9 +98,9 @@ impl WgpuEngine {
             ctx,
             info,
             buffers: Vec::new(),
-            layout: None,
-            bind_groups: Vec::new(),
-            pipeline_layouts: HashMap::new(),
+            sets: None,
+            layouts: Vec::new(),
+            layout_of: HashMap::new(),
             pipelines: HashMap::new(),
             timestamps,
             encoder: None,
@@ -110,6 +122,71 @@ impl WgpuEngine {
         let dev = &self.ctx.device;
         self.encoder
             .get_or_insert_with(|| dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") }))
+    }
+}
+
+impl WgpuEngine {
+    /// The layout of the bindings `uses` and its bind group for each parity.
+    fn make_layout(&self, uses: &[u32]) -> Result<Layout, String> {
+        let (sets, view) = self.sets.as_ref().ok_or("kernels are built after the buffers are bound")?;
+        let mut entries = Vec::new();
+        for &b in uses {
+            let buf = Buf::from_binding(b).ok_or_else(|| format!("binding {b} is no buffer of the step"))?;
+            let ty = match buf.kind() {
+                BindKind::Image => {
+                    view.as_ref().ok_or("it reads the table image, which the solver did not make")?;
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    }
+                }
+                BindKind::Uniform => wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                BindKind::Storage => wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: !written(buf) },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+            };
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: b,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty,
+                count: None,
+            });
+        }
+        let dev = &self.ctx.device;
+        let layout =
+            dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("cloth"), entries: &entries });
+        let group = |parity: usize| -> Result<wgpu::BindGroup, String> {
+            let mut entries = Vec::new();
+            for &b in uses {
+                let resource = match Buf::from_binding(b) {
+                    Some(Buf::Table) if view.is_some() => {
+                        wgpu::BindingResource::TextureView(view.as_ref().expect("checked"))
+                    }
+                    buf => {
+                        let id =
+                            sets[parity].iter().find(|(x, _)| Some(*x) == buf).map(|&(_, id)| id).ok_or_else(|| {
+                                format!("it uses binding {b} ({buf:?}), which the solver did not bind")
+                            })?;
+                        self.buffers[id.0 as usize].as_entire_binding()
+                    }
+                };
+                entries.push(wgpu::BindGroupEntry { binding: b, resource });
+            }
+            Ok(dev.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(if parity == 0 { "cloth (pos0)" } else { "cloth (pos1)" }),
+                layout: &layout,
+                entries: &entries,
+            }))
+        };
+        let groups = [group(0)?, group(1)?];
+        Ok(Layout { layout, groups, pipeline_layouts: HashMap::new() })
     }
 }
 
@@ -162,7 +239,7 @@ impl Engine for WgpuEngine {
             )));
         }
         if self.table.as_ref().is_none_or(|(_, h)| *h != height) {
-            if self.layout.is_some() {
+            if self.sets.is_some() {
                 return Err(SolverError::Invalid("the spring-table image cannot change size once bound".into()));
             }
             let texture = self.ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -194,82 +271,49 @@ impl Engine for WgpuEngine {
     }
 
     fn bind(&mut self, sets: [Vec<(Buf, BufferId)>; 2]) -> Result<(), SolverError> {
-        let dev = &self.ctx.device;
+        for &(_, id) in sets.iter().flatten() {
+            self.buf(id)?;
+        }
         let view = self.table.as_ref().map(|(t, _)| t.create_view(&wgpu::TextureViewDescriptor::default()));
-        let image_entry = view.as_ref().map(|_| wgpu::BindGroupLayoutEntry {
-            binding: Buf::Table.binding(),
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Uint,
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        });
-        let entries: Vec<wgpu::BindGroupLayoutEntry> = sets[0]
-            .iter()
-            .map(|&(b, _)| wgpu::BindGroupLayoutEntry {
-                binding: b.binding(),
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: match b.kind() {
-                        BindKind::Uniform => wgpu::BufferBindingType::Uniform,
-                        _ => wgpu::BufferBindingType::Storage { read_only: !written(b) },
-                    },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            })
-            .chain(image_entry)
-            .collect();
-        let layout =
-            dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("cloth"), entries: &entries });
-        self.bind_groups = sets
-            .iter()
-            .enumerate()
-            .map(|(k, set)| {
-                let entries: Vec<wgpu::BindGroupEntry> = set
-                    .iter()
-                    .map(|&(b, id)| wgpu::BindGroupEntry {
-                        binding: b.binding(),
-                        resource: self.buffers[id.0 as usize].as_entire_binding(),
-                    })
-                    .chain(view.as_ref().map(|v| wgpu::BindGroupEntry {
-                        binding: Buf::Table.binding(),
-                        resource: wgpu::BindingResource::TextureView(v),
-                    }))
-                    .collect();
-                dev.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(if k == 0 { "cloth (pos0)" } else { "cloth (pos1)" }),
-                    layout: &layout,
-                    entries: &entries,
-                })
-            })
-            .collect();
-        self.layout = Some(layout);
-        self.ctx.check("binding the buffers").map_err(backend)
+        self.sets = Some((sets, view));
+        Ok(())
     }
 
     fn build(&mut self, k: KernelRef, immediates: u32) -> Result<(), SolverError> {
         if self.pipelines.contains_key(&k) {
             return Ok(());
         }
-        let Some(layout) = &self.layout else {
+        if self.sets.is_none() {
             return Err(SolverError::Invalid("kernels are built after the buffers are bound".into()));
-        };
+        }
         let name = k.shader_name();
         let wgsl = k.wgsl()?;
-        if !matches!(k.def.source, kernels::Source::Builtin) {
+        let builtin = matches!(k.def.source, kernels::Source::Builtin);
+        let refuse = |reason: String| SolverError::Shader { kernel: name.clone(), reason };
+        if !builtin {
             // naga's message, with the line, before wgpu sees it.
-            clothlab_shaders::compile_spirv(&name, &wgsl)
-                .map_err(|reason| SolverError::Shader { kernel: name.clone(), reason })?;
+            clothlab_shaders::compile_spirv(&name, &wgsl).map_err(refuse)?;
         }
+        let uses = match clothlab_shaders::kernel(&name).filter(|_| builtin) {
+            Some(kernel) => kernel.uses.to_vec(),
+            None => clothlab_shaders::uses(&name, &wgsl).map_err(refuse)?,
+        };
+        let index = match self.layout_of.get(&uses) {
+            Some(&i) => i,
+            None => {
+                let layout = self.make_layout(&uses).map_err(refuse)?;
+                self.layouts.push(layout);
+                self.layout_of.insert(uses, self.layouts.len() - 1);
+                self.layouts.len() - 1
+            }
+        };
         let dev = &self.ctx.device;
-        let pipeline_layout = self.pipeline_layouts.entry(immediates).or_insert_with(|| {
+        let set = &mut self.layouts[index];
+        let bind_group_layout = &set.layout;
+        let pipeline_layout = set.pipeline_layouts.entry(immediates).or_insert_with(|| {
             dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("cloth"),
-                bind_group_layouts: &[Some(layout)],
+                bind_group_layouts: &[Some(bind_group_layout)],
                 immediate_size: immediates,
             })
         });
@@ -285,7 +329,7 @@ impl Engine for WgpuEngine {
             compilation_options: Default::default(),
             cache: None,
         });
-        self.pipelines.insert(k, pipeline);
+        self.pipelines.insert(k, (pipeline, index));
         Ok(())
     }
 
@@ -333,10 +377,9 @@ impl Engine for WgpuEngine {
     fn barrier(&mut self, _after_all: bool) {}
 
     fn dispatch(&mut self, d: &Dispatch<'_>) {
-        let Self { ctx, pipelines, bind_groups, timestamps, encoder, .. } = self;
-        let (Some(pipeline), Some(group)) = (pipelines.get(&d.kernel), bind_groups.get(d.parity & 1)) else {
-            return;
-        };
+        let Self { ctx, pipelines, layouts, timestamps, encoder, .. } = self;
+        let Some((pipeline, index)) = pipelines.get(&d.kernel) else { return };
+        let group = &layouts[*index].groups[d.parity & 1];
         let timestamp_writes = match (timestamps.as_ref(), d.timestamps) {
             (Some(ts), Some(q)) if q + 2 <= MAX_QUERIES => Some(wgpu::ComputePassTimestampWrites {
                 query_set: &ts.set,

@@ -125,3 +125,21 @@ pub fn glsl_450_stage(
     writer.write().map_err(|e| format!("GLSL output of {entry}: {e}"))?;
     Ok(text)
 }
+
+/// The `@binding`s (group 0) the compute entry point `main` of `module` uses in any way,
+/// ascending (none for a module without one).
+pub fn used_bindings(module: &naga::Module, info: &naga::valid::ModuleInfo) -> Result<Vec<u32>, String> {
+    let Some(index) = module.entry_points.iter().position(|e| e.stage == naga::ShaderStage::Compute && e.name == "main")
+    else {
+        return Ok(Vec::new());
+    };
+    let uses = info.get_entry_point(index);
+    let mut out: Vec<u32> = module
+        .global_variables
+        .iter()
+        .filter(|(h, _)| !uses[*h].is_empty())
+        .filter_map(|(_, g)| g.binding.filter(|b| b.group == 0).map(|b| b.binding))
+        .collect();
+    out.sort_unstable();
+    Ok(out)
+}

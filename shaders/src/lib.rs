@@ -36,6 +36,10 @@ pub struct Kernel {
     pub reads: &'static [u32],
     /// The `@binding` numbers it writes.
     pub writes: &'static [u32],
+    /// Every `@binding` (group 0) its compute entry point uses in any way (reads, writes,
+    /// atomics, `arrayLength`): what a pipeline layout of its own must hold (wgpu on GL,
+    /// whose 16 storage blocks per stage cannot hold every binding of the step at once).
+    pub uses: &'static [u32],
 }
 
 include!(concat!(env!("OUT_DIR"), "/kernels.rs"));
@@ -87,6 +91,17 @@ pub fn compile_glsl(name: &str, wgsl: &str) -> Result<GlslOut, String> {
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());
     let info = validator.validate(&module).map_err(|e| e.emit_to_string_with_path(wgsl, &path))?;
     glsl_450(&module, &info)
+}
+
+/// The `@binding`s (group 0) the compute entry point `main` of `wgsl` uses, as
+/// [`Kernel::uses`] lists them for the built-in kernels (for kernels given at run time).
+pub fn uses(name: &str, wgsl: &str) -> Result<Vec<u32>, String> {
+    let path = format!("{name}.wgsl");
+    let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| e.emit_to_string_with_path(wgsl, &path))?;
+    let mut validator =
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());
+    let info = validator.validate(&module).map_err(|e| e.emit_to_string_with_path(wgsl, &path))?;
+    used_bindings(&module, &info)
 }
 
 /// The kernel called `name`.
