@@ -28,6 +28,9 @@ fn backend(e: GpuError) -> SolverError {
     }
 }
 
+/// The buffers bound at each binding, per position parity.
+type Sets = [Vec<(Buf, BufferId)>; 2];
+
 /// One set of bindings: its layout, its bind group per parity, its pipeline layouts by
 /// immediate size.
 struct Layout {
@@ -47,7 +50,7 @@ pub struct WgpuEngine {
     info: EngineInfo,
     buffers: Vec<wgpu::Buffer>,
     /// What the solver bound (per parity) and the table image's view.
-    sets: Option<([Vec<(Buf, BufferId)>; 2], Option<wgpu::TextureView>)>,
+    sets: Option<(Sets, Option<wgpu::TextureView>)>,
     /// The layouts and groups made so far, by the bindings they hold.
     layouts: Vec<Layout>,
     layout_of: HashMap<Vec<u32>, usize>,
