@@ -15,6 +15,20 @@ pub struct Cli {
     /// What to do; without one, the interactive app opens (`run`).
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// Which backend wgpu itself runs on (the wgpu backends, the wgpu renderer and wgpu's
+    /// overhead benchmarks): `vulkan`, or `gl` (wgpu on OpenGL ES through EGL, beside raw
+    /// GL as wgpu-on-Vulkan stands beside raw Vulkan). Default: the adapter wgpu prefers.
+    #[arg(long, global = true, value_enum)]
+    pub wgpu_backend: Option<WgpuBackend>,
+}
+
+/// wgpu's own backends clothlab builds with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum WgpuBackend {
+    /// Vulkan.
+    Vulkan,
+    /// OpenGL (ES 3.1+ with compute) through EGL.
+    Gl,
 }
 
 #[derive(Subcommand)]

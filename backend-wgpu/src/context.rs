@@ -1,5 +1,6 @@
 //! Adapter and device: found once, shared by solvers (and later renderers).
 
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 
 use thiserror::Error;
@@ -33,6 +34,29 @@ pub enum GpuError {
     Readback(String),
 }
 
+/// The backends chosen by [`choose_backends`] (0: none chosen).
+static CHOSEN: AtomicU32 = AtomicU32::new(0);
+
+/// Which of wgpu's own backends every context made from now on may use — the app's
+/// `--wgpu-backend vulkan|gl`, so that wgpu-on-GL can stand beside raw GL as
+/// wgpu-on-Vulkan stands beside raw Vulkan. Without a call: what wgpu prefers (the
+/// `WGPU_BACKEND` environment variable, else every backend, Vulkan first).
+pub fn choose_backends(backends: wgpu::Backends) {
+    CHOSEN.store(backends.bits(), Ordering::Relaxed);
+}
+
+/// The backends chosen, if any.
+pub fn chosen_backends() -> Option<wgpu::Backends> {
+    Some(wgpu::Backends::from_bits_truncate(CHOSEN.load(Ordering::Relaxed))).filter(|b| !b.is_empty())
+}
+
+fn with_chosen(mut d: wgpu::InstanceDescriptor) -> wgpu::InstanceDescriptor {
+    if let Some(b) = chosen_backends() {
+        d.backends = b;
+    }
+    d
+}
+
 /// An adapter, its device and queue, and what they can do. Clones share the device.
 #[derive(Clone)]
 pub struct GpuContext {
@@ -60,7 +84,8 @@ impl GpuContext {
     /// Opens the first adapter wgpu finds (high performance preferred), with every limit
     /// the adapter has and timestamp queries if it supports them.
     pub fn new() -> Result<Self, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance =
+            wgpu::Instance::new(with_chosen(wgpu::InstanceDescriptor::new_without_display_handle_from_env()));
         Self::open(&instance, None)
     }
 
@@ -75,8 +100,9 @@ impl GpuContext {
             + Sync
             + 'static,
     {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(window.clone())));
+        let instance = wgpu::Instance::new(with_chosen(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+            Box::new(window.clone()),
+        )));
         let surface = match instance.create_surface(window) {
             Ok(s) => s,
             // No backend could make a surface: most likely there is no adapter at all.

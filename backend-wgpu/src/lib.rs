@@ -19,6 +19,6 @@ mod solver;
 
 pub use clothlab_engine::recipe::Variant;
 pub use clothlab_engine::{GpuSolver, SolverOptions, VariantSpec};
-pub use context::{GpuContext, GpuError};
+pub use context::{GpuContext, GpuError, choose_backends, chosen_backends};
 pub use render::{ClothSource, WgpuRenderer};
 pub use solver::{WgpuEngine, WgpuSolver, wgpu_solver};

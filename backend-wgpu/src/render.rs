@@ -32,6 +32,10 @@ struct Targets {
     resolve_view: wgpu::TextureView,
     /// The same image viewed as plain RGBA8 (its sRGB bytes, undecoded).
     resolve_bytes_view: wgpu::TextureView,
+    /// Where the adapter cannot view a texture in another format (wgpu on GL: no
+    /// `DownlevelFlags::VIEW_FORMATS`), a plain RGBA8 texture the resolved image is
+    /// copied into after each frame, which `resolve_bytes_view` views instead.
+    bytes_copy: Option<wgpu::Texture>,
     depth: wgpu::TextureView,
     /// Particle ids (R32Uint) and their depth, one sample per pixel.
     pick: wgpu::Texture,
@@ -79,6 +83,7 @@ fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), RenderErr
 }
 
 fn make_targets(ctx: &GpuContext, width: u32, height: u32) -> Targets {
+    let view_formats = ctx.adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::VIEW_FORMATS);
     let tex = |label, format, samples, usage| {
         ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
@@ -90,7 +95,11 @@ fn make_targets(ctx: &GpuContext, width: u32, height: u32) -> Targets {
             usage,
             // The resolved image is also viewed as plain RGBA8: egui samples its textures
             // as gamma-encoded bytes.
-            view_formats: if format == COLOR_FORMAT && samples == 1 { &[wgpu::TextureFormat::Rgba8Unorm] } else { &[] },
+            view_formats: if view_formats && format == COLOR_FORMAT && samples == 1 {
+                &[wgpu::TextureFormat::Rgba8Unorm]
+            } else {
+                &[]
+            },
         })
     };
     let msaa = tex("color (msaa)", COLOR_FORMAT, SAMPLES, wgpu::TextureUsages::RENDER_ATTACHMENT);
@@ -109,13 +118,21 @@ fn make_targets(ctx: &GpuContext, width: u32, height: u32) -> Targets {
         wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
     );
     let pick_depth = tex("pick depth", DEPTH_FORMAT, 1, wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let bytes_copy = (!view_formats).then(|| {
+        tex(
+            "color bytes",
+            wgpu::TextureFormat::Rgba8Unorm,
+            1,
+            wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING,
+        )
+    });
+    let bytes_view =
+        wgpu::TextureViewDescriptor { format: Some(wgpu::TextureFormat::Rgba8Unorm), ..Default::default() };
     Targets {
         msaa: msaa.create_view(&Default::default()),
         resolve_view: resolve.create_view(&Default::default()),
-        resolve_bytes_view: resolve.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(wgpu::TextureFormat::Rgba8Unorm),
-            ..Default::default()
-        }),
+        resolve_bytes_view: bytes_copy.as_ref().unwrap_or(&resolve).create_view(&bytes_view),
+        bytes_copy,
         resolve,
         depth: depth.create_view(&Default::default()),
         pick_view: pick.create_view(&Default::default()),
@@ -578,6 +595,14 @@ impl WgpuRenderer {
                     pass.draw(0..self.num_particles, 0..1);
                 }
             }
+        }
+        if let Some(bytes) = &self.targets.bytes_copy {
+            // Same bytes, the sRGB-ness aside (a copy wgpu allows between the two).
+            enc.copy_texture_to_texture(
+                self.targets.resolve.as_image_copy(),
+                bytes.as_image_copy(),
+                wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
+            );
         }
         ctx.queue.submit([enc.finish()]);
         ctx.check("rendering").map_err(|e| RenderError::Backend(e.to_string()))

@@ -23,6 +23,12 @@ pub fn run() -> Result<ExitCode> {
             return Ok(code);
         }
     };
+    if let Some(b) = cli.wgpu_backend {
+        clothlab_wgpu::choose_backends(match b {
+            crate::cli::WgpuBackend::Vulkan => wgpu::Backends::VULKAN,
+            crate::cli::WgpuBackend::Gl => wgpu::Backends::GL,
+        });
+    }
     match cli.command.unwrap_or(Command::Run(RunArgs::default())) {
         Command::Run(args) => run::run_app(args),
         Command::Sim(args) => sim::sim(args),

@@ -367,11 +367,27 @@ impl WgpuGfx {
         };
         let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("egui") });
         let extra = self.egui.update_buffers(dev, &self.ctx.queue, &mut enc, e.primitives, &screen);
-        {
+        let (w, h) = (self.config.width, self.config.height);
+        // A surface that cannot be copied (wgpu on GL): the screenshot frame is drawn a
+        // second time into a texture of the surface's format that can be.
+        let offscreen = (capture && !self.capturable).then(|| {
+            dev.create_texture(&wgpu::TextureDescriptor {
+                label: Some("screenshot target"),
+                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: self.config.format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        });
+        let offscreen_view = offscreen.as_ref().map(|t| t.create_view(&Default::default()));
+        for target in std::iter::once(&view).chain(offscreen_view.as_ref()) {
             let pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("egui"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
+                    view: target,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
@@ -387,9 +403,8 @@ impl WgpuGfx {
             let mut pass = pass.forget_lifetime();
             self.egui.render(&mut pass, e.primitives, &screen);
         }
-        let (w, h) = (self.config.width, self.config.height);
         let row = (w as u64 * 4).div_ceil(256) * 256;
-        let readback = (capture && self.capturable).then(|| {
+        let readback = capture.then(|| {
             let buf = dev.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("screenshot"),
                 size: row * h as u64,
@@ -397,7 +412,7 @@ impl WgpuGfx {
                 mapped_at_creation: false,
             });
             enc.copy_texture_to_buffer(
-                frame.texture.as_image_copy(),
+                offscreen.as_ref().unwrap_or(&frame.texture).as_image_copy(),
                 wgpu::TexelCopyBufferInfo {
                     buffer: &buf,
                     layout: wgpu::TexelCopyBufferLayout {
@@ -416,12 +431,7 @@ impl WgpuGfx {
             self.egui.free_texture(id);
         }
         self.ctx.check("drawing the window")?;
-        let Some(buf) = readback else {
-            if capture {
-                bail!("this surface cannot be copied (no COPY_SRC): no screenshot");
-            }
-            return Ok(None);
-        };
+        let Some(buf) = readback else { return Ok(None) };
         let raw = self.ctx.read_buffer(&buf, 0, buf.size())?;
         let mut rgba: Vec<u8> = raw.chunks(row as usize).flat_map(|r| r[..w as usize * 4].iter().copied()).collect();
         if matches!(self.config.format, wgpu::TextureFormat::Bgra8UnormSrgb | wgpu::TextureFormat::Bgra8Unorm) {

@@ -1,0 +1,71 @@
+//! wgpu on its GL backend (`--wgpu-backend gl`): the fourth stack, beside raw GL as
+//! wgpu-on-Vulkan stands beside raw Vulkan. Its own test binary, because the backend
+//! choice is process-wide. Every flavor the adapter offers against its CPU twin (the
+//! rows' bounds), rollouts of both recipes, and the wgpu renderer's picture on GL against
+//! the same state drawn by wgpu on Vulkan.
+
+use clothlab_core::validate::validate_rollout;
+use clothlab_core::{RenderMode, Scene, SimParams, Solver};
+use clothlab_engine::validate::flavors;
+use clothlab_tests::{assert_checks, assert_kernels_match_twins, image_diff, or_skip, test_view};
+use clothlab_wgpu::{ClothSource, GpuContext, SolverOptions, Variant, WgpuRenderer, WgpuSolver, wgpu_solver};
+
+/// A wgpu solver on GL, or `None` where no adapter exists and none is required.
+fn on_gl(variant: Variant, n: u32) -> Option<WgpuSolver> {
+    clothlab_wgpu::choose_backends(wgpu::Backends::GL);
+    let s =
+        or_skip(wgpu_solver(variant, Scene::with_n(n), SimParams::default(), SolverOptions::default()), "wgpu on GL")?;
+    // The choice reached wgpu: the adapter is a GL one.
+    assert_eq!(s.engine().context().info.backend, wgpu::Backend::Gl, "{}", s.engine().context().describe());
+    Some(s)
+}
+
+#[test]
+fn every_kernel_wgpu_runs_on_gl_matches_its_cpu_twin() {
+    let Some(mut g) = on_gl(Variant::OPTIMIZED, 64) else { return };
+    // wgpu's GL backend offers no float atomics and no subgroups: the flavors that remain
+    // (compare-exchange, uniform/storage/immediate constants, colliders in uniforms; the
+    // table image needs a solver made with table=image, tested on wgpu-on-Vulkan).
+    let caps = g.caps();
+    assert!(!caps.float_atomics, "wgpu on GL has no float atomics (its GLSL has no atomicAdd on floats)");
+    let kernels: Vec<_> =
+        flavors(&caps, false).into_iter().filter(|k| !k.shader_name().starts_with("hash_scatter")).collect();
+    assert_kernels_match_twins(&mut g, &kernels, 64, 0x91, 30, "wgpu on GL");
+}
+
+#[test]
+fn rollouts_on_wgpu_gl_stay_close_to_the_cpu() {
+    for variant in [Variant::NAIVE, Variant::OPTIMIZED] {
+        let Some(mut g) = on_gl(variant, 64) else { return };
+        // 208 substeps; ROLLOUT_BOUND_PER_SUBSTEP × substeps, as every other backend.
+        let c = validate_rollout(&mut g, 13).unwrap();
+        assert_checks(&format!("{} on GL", g.name()), &[c]);
+    }
+}
+
+#[test]
+fn the_wgpu_renderer_on_gl_draws_the_picture_it_draws_on_vulkan() {
+    let Some(mut g) = on_gl(Variant::OPTIMIZED, 32) else { return };
+    for _ in 0..60 {
+        g.step_frame().unwrap();
+    }
+    let state = g.state().unwrap();
+    let (_, topo) = clothlab_core::build(g.scene(), g.params()).unwrap();
+    let ctx = g.engine().context();
+    let (w, h) = (320, 240);
+    let mut r = WgpuRenderer::new(ctx, g.scene(), &topo, w, h).unwrap();
+    let (pos, normal) = g.vertex_buffers();
+    r.render(ctx, &test_view(RenderMode::Triangles), ClothSource::Gpu { pos, normal }).unwrap();
+    let on_gl = r.read_image(ctx).unwrap();
+    clothlab_wgpu::choose_backends(wgpu::Backends::VULKAN);
+    let Some(vk) = or_skip(GpuContext::new(), "wgpu on Vulkan") else { return };
+    assert_eq!(vk.info.backend, wgpu::Backend::Vulkan);
+    let mut rv = WgpuRenderer::new(&vk, g.scene(), &topo, w, h).unwrap();
+    rv.render(&vk, &test_view(RenderMode::Triangles), ClothSource::Cpu(&state)).unwrap();
+    let on_vk = rv.read_image(&vk).unwrap();
+    clothlab_wgpu::choose_backends(wgpu::Backends::GL);
+    let (mean, bad) = image_diff(&on_gl, &on_vk);
+    println!("wgpu GL vs Vulkan: mean {mean:.3}/255, {:.3} % of pixels off by > 48", bad * 100.0);
+    // The golden-image threshold of the renderer tests.
+    assert!(mean <= 2.0 && bad <= 0.02, "wgpu's picture on GL differs from Vulkan's ({mean}, {bad})");
+}
