@@ -106,7 +106,9 @@ fn a_small_run_writes_every_file_with_positive_finite_numbers() {
         }
     }
     if gpu {
-        for api in ["wgpu", "vulkan", "gl"] {
+        // Four stacks: wgpu on its preferred backend (Vulkan on lavapipe), wgpu on GL,
+        // raw Vulkan, raw GL.
+        for api in ["wgpu", "wgpu-gl", "vulkan", "gl"] {
             for k in ["1", "64"] {
                 assert!(rows.iter().any(|r| r[0] == "overhead"
                     && r[1] == api

@@ -89,6 +89,14 @@ impl GpuContext {
         Self::open(&instance, None)
     }
 
+    /// Like [`GpuContext::new`], on one of `backends` only, whatever was chosen (the
+    /// bench measures wgpu on GL beside wgpu on Vulkan in one run).
+    pub fn with_backends(backends: wgpu::Backends) -> Result<Self, GpuError> {
+        let mut d = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        d.backends = backends;
+        Self::open(&wgpu::Instance::new(d), None)
+    }
+
     /// Like [`GpuContext::new`], with an adapter that can present to `window`, and the
     /// window's surface (not configured yet).
     pub fn for_window<W>(window: std::sync::Arc<W>) -> Result<(Self, wgpu::Surface<'static>), GpuError>

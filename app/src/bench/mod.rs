@@ -68,6 +68,9 @@ struct Devices {
     vulkan: Option<Device>,
     /// The OpenGL context's description (a probe's; every GL cell opens its own).
     gl: Option<String>,
+    /// wgpu on its GL backend, when wgpu's backend was not chosen and the default is
+    /// another: its overhead benchmarks run as a fourth stack, `wgpu-gl`.
+    wgpu_gl: Option<String>,
     wgpu_error: Option<String>,
     vulkan_error: Option<String>,
     gl_error: Option<String>,
@@ -99,7 +102,12 @@ impl Devices {
         } else {
             (None, None)
         };
-        Self { wgpu, vulkan, gl, wgpu_error, vulkan_error, gl_error }
+        let wgpu_gl = wgpu
+            .as_ref()
+            .filter(|c| clothlab_wgpu::chosen_backends().is_none() && c.info.backend != wgpu::Backend::Gl)
+            .and_then(|_| GpuContext::with_backends(wgpu::Backends::GL).ok())
+            .map(|c| c.describe());
+        Self { wgpu, vulkan, gl, wgpu_gl, wgpu_error, vulkan_error, gl_error }
     }
 }
 
@@ -273,6 +281,7 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     }
 
     let overhead_apis = usize::from(!args.no_overhead && devices.wgpu.is_some())
+        + usize::from(!args.no_overhead && devices.wgpu_gl.is_some())
         + usize::from(!args.no_overhead && devices.vulkan.is_some())
         + usize::from(!args.no_overhead && devices.gl.is_some());
     let bar = ProgressBar::new((sizes.len() * jobs.len() * args.repeat as usize + overhead_apis) as u64);
@@ -405,9 +414,10 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     // Fresh devices, never drawn on (lavapipe's timestamps, see run_cell).
     let mut overhead: Vec<(String, String, Vec<OverheadRow>)> = Vec::new();
     if !args.no_overhead && !interrupted {
-        for api in ["wgpu", "vulkan", "gl"] {
+        for api in ["wgpu", "wgpu-gl", "vulkan", "gl"] {
             let present = match api {
                 "wgpu" => devices.wgpu.is_some(),
+                "wgpu-gl" => devices.wgpu_gl.is_some(),
                 "vulkan" => devices.vulkan.is_some(),
                 _ => devices.gl.is_some(),
             };
@@ -425,6 +435,12 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
                     let ctx = GpuContext::new()?;
                     let rows =
                         clothlab_wgpu::overhead::measure(&ctx, &overhead_plan).context("wgpu overhead benchmarks")?;
+                    (ctx.describe(), rows)
+                }
+                None if api == "wgpu-gl" => {
+                    let ctx = GpuContext::with_backends(wgpu::Backends::GL)?;
+                    let rows = clothlab_wgpu::overhead::measure(&ctx, &overhead_plan)
+                        .context("wgpu-on-GL overhead benchmarks")?;
                     (ctx.describe(), rows)
                 }
                 None if api == "gl" => {
@@ -446,8 +462,10 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     bar.finish_and_clear();
     // A stop during the overhead benchmarks leaves every cell measured, not every API's
     // overhead (a stop during the last cell, with nothing after it, interrupts nothing).
-    let apis =
-        usize::from(devices.wgpu.is_some()) + usize::from(devices.vulkan.is_some()) + usize::from(devices.gl.is_some());
+    let apis = usize::from(devices.wgpu.is_some())
+        + usize::from(devices.wgpu_gl.is_some())
+        + usize::from(devices.vulkan.is_some())
+        + usize::from(devices.gl.is_some());
     let overhead_missing = !args.no_overhead && overhead.len() < apis;
     let interrupted = (interrupted || journal::stopping() && overhead_missing).then(|| {
         if done_cells == total_cells {

@@ -32,6 +32,8 @@ fn colour(name: &str) -> RGBColor {
         "wgpu" => RGBColor(20, 90, 200),
         "vulkan-naive" => RGBColor(240, 150, 110),
         "vulkan" => RGBColor(200, 40, 30),
+        "gl-naive" => RGBColor(130, 200, 140),
+        "wgpu-gl" => RGBColor(130, 60, 170),
         _ => RGBColor(30, 150, 60),
     }
 }
@@ -430,8 +432,7 @@ impl Figure for Overhead<'_> {
         DB::ErrorType: 'static,
     {
         root.fill(&WHITE).map_err(err)?;
-        let root =
-            root.titled(&format!("API overhead, wgpu vs Vulkan — {}", self.r.machine), (FONT, 20)).map_err(err)?;
+        let root = root.titled(&format!("API overhead per stack — {}", self.r.machine), (FONT, 20)).map_err(err)?;
         let halves = root.split_evenly((1, 2));
         let rows = |api: &str, label: &str, clock: &str| -> Vec<(f64, f64)> {
             self.r
@@ -445,7 +446,13 @@ impl Figure for Overhead<'_> {
                 })
                 .collect()
         };
-        let apis = ["wgpu", "vulkan"];
+        // Every stack measured, in the order measured (wgpu, wgpu-gl, vulkan, gl).
+        let mut apis: Vec<&str> = Vec::new();
+        for x in self.r.rows.iter().filter(|x| x.section == "overhead") {
+            if !apis.contains(&x.backend.as_str()) {
+                apis.push(&x.backend);
+            }
+        }
         // (caption, x axis, [(benchmark, clock)]) per panel.
         type Panel<'s> = (&'s str, &'s str, Vec<(&'s str, &'s str)>);
         let panels: [Panel; 2] = [
@@ -466,7 +473,7 @@ impl Figure for Overhead<'_> {
         ];
         for ((caption, xdesc, what), area) in panels.iter().zip(halves.iter()) {
             let mut series = Vec::new();
-            for api in apis {
+            for &api in &apis {
                 for (i, (label, clock)) in what.iter().enumerate() {
                     let pts = rows(api, label, clock);
                     if !pts.is_empty() {

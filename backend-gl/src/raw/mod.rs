@@ -1,5 +1,6 @@
-//! The only unsafe code of clothlab-gl: an OpenGL 4.5 core context through EGL and the few
-//! GL calls the engine makes, behind a safe surface.
+//! The only unsafe code of clothlab-gl: an OpenGL 4.5 core context through EGL (headless or
+//! on an X11 window) and the GL calls the engine (here), the renderer (`draw`) and egui
+//! (`overlay`) make, behind a safe surface.
 //!
 //! Soundness of the safe surface (no safe function relies on its caller):
 //! * [`Gl`] is neither `Send` nor `Sync`: its context is used on the thread that made it;
@@ -13,7 +14,9 @@
 //! * the context is created with robust buffer access where the driver offers it (out-of-
 //!   bounds shader accesses cannot touch other memory); without it, the engine refuses
 //!   kernels from outside (`Gl::robust`);
-//! * objects live as long as the context: all are freed when [`Gl`] drops and destroys it.
+//! * an object lives until it is deleted (its table entry then says so, and its index is
+//!   never reused) or the context goes: all are freed when [`Gl`] drops and destroys it;
+//! * a window context holds the window (an `Arc`) until its surface is destroyed.
 #![allow(unsafe_code)]
 
 use std::cell::RefCell;
