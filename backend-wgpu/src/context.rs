@@ -10,7 +10,7 @@ use thiserror::Error;
 pub enum GpuError {
     /// No adapter at all.
     #[error(
-        "no GPU adapter found (wgpu, Vulkan); on Linux, `apt-get install mesa-vulkan-drivers` gives a software one (lavapipe)"
+        "no GPU adapter found (wgpu: Vulkan, or GL with --wgpu-backend gl); on Linux, `apt-get install mesa-vulkan-drivers` gives a software one (lavapipe)"
     )]
     NoAdapter,
     /// The adapter refused the device we asked for.
@@ -40,7 +40,7 @@ static CHOSEN: AtomicU32 = AtomicU32::new(0);
 /// Which of wgpu's own backends every context made from now on may use — the app's
 /// `--wgpu-backend vulkan|gl`, so that wgpu-on-GL can stand beside raw GL as
 /// wgpu-on-Vulkan stands beside raw Vulkan. Without a call: what wgpu prefers (the
-/// `WGPU_BACKEND` environment variable, else every backend, Vulkan first).
+/// `WGPU_BACKEND` environment variable, else every backend but GL: Vulkan, Metal, DX12).
 pub fn choose_backends(backends: wgpu::Backends) {
     CHOSEN.store(backends.bits(), Ordering::Relaxed);
 }
@@ -51,9 +51,16 @@ pub fn chosen_backends() -> Option<wgpu::Backends> {
 }
 
 fn with_chosen(mut d: wgpu::InstanceDescriptor) -> wgpu::InstanceDescriptor {
-    if let Some(b) = chosen_backends() {
-        d.backends = b;
-    }
+    // Unchosen: wgpu's primary backends (Vulkan here), as before clothlab built wgpu's GL
+    // backend too. wgpu's GL instance terminates the EGL display it shares with raw GL
+    // contexts when it drops (wgpu-hal counts only its own users), so it is made only when
+    // asked for; clothlab-gl opens its displays through EGL_EXT_platform_device where it
+    // can, apart from wgpu's.
+    d.backends = match chosen_backends() {
+        Some(b) => b,
+        None if std::env::var_os("WGPU_BACKEND").is_some() => d.backends,
+        None => d.backends & !wgpu::Backends::GL,
+    };
     d
 }
 

@@ -69,3 +69,38 @@ fn the_wgpu_renderer_on_gl_draws_the_picture_it_draws_on_vulkan() {
     // The golden-image threshold of the renderer tests.
     assert!(mean <= 2.0 && bad <= 0.02, "wgpu's picture on GL differs from Vulkan's ({mean}, {bad})");
 }
+
+#[test]
+fn a_raw_gl_solver_outlives_wgpu_gl_instances_made_and_dropped_beside_it() {
+    // wgpu's GL backend terminates its EGL display when its last instance drops; raw GL's
+    // contexts must not be on that display (clothlab-gl opens its own through
+    // EGL_EXT_platform_device), or the raw solver's next call fails ("not a valid EGL
+    // display"). Found by the free-fall test once wgpu was built with GL.
+    let Some(mut raw) = or_skip(
+        clothlab_gl::gl_solver(Variant::OPTIMIZED, Scene::with_n(24), SimParams::default(), SolverOptions::default()),
+        "raw GL",
+    ) else {
+        return;
+    };
+    // The raw solver stays in step with the CPU while wgpu GL instances come and go
+    // (validate_rollout steps both from the start, frame by frame).
+    let mut frames = 0;
+    for _ in 0..2 {
+        let Some(mut w) = on_gl(Variant::NAIVE, 16) else { return };
+        w.step_frame().unwrap();
+        drop(w);
+        raw.step_frame().unwrap();
+        frames += 1;
+    }
+    let mut cpu =
+        clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, raw.scene().clone(), raw.params().clone()).unwrap();
+    for _ in 0..frames {
+        cpu.step_frame().unwrap();
+    }
+    let mut c =
+        clothlab_core::validate::compare("", "pos", &raw.state().unwrap().pos, &cpu.state_ref().pos, false, 0.0);
+    // The rollout bound of every backend (1e-6 m per substep), over the 32 substeps.
+    c.bound = clothlab_core::validate::ROLLOUT_BOUND_PER_SUBSTEP * 32.0;
+    c.error = c.max_abs;
+    assert_checks("raw GL after wgpu GL instances", &[c]);
+}

@@ -62,6 +62,40 @@ fn x11_handles(
     }
 }
 
+/// `EGL_PLATFORM_DEVICE_EXT`: a display of an `EGLDeviceEXT`.
+const PLATFORM_DEVICE_EXT: egl::Enum = 0x313F;
+/// eglQueryDevicesEXT (EGL_EXT_device_enumeration): `(max, devices, count) -> EGLBoolean`.
+type QueryDevices = unsafe extern "system" fn(i32, *mut *mut std::ffi::c_void, *mut i32) -> u32;
+
+/// A headless display of its own: the first EGL device (EGL_EXT_platform_device) that
+/// initialises and has an OpenGL pbuffer config. Not Mesa's surfaceless display: wgpu's
+/// GL backend opens that one too and terminates it when its last instance drops
+/// (wgpu-hal counts only its own users), which would end every context of ours on it.
+/// EGL hands out one display per (platform, native display), so another platform is
+/// another display.
+fn device_display(instance: &egl::DynamicInstance<egl::EGL1_5>) -> Option<egl::Display> {
+    let f = instance.get_proc_address("eglQueryDevicesEXT")?;
+    // SAFETY: eglQueryDevicesEXT's signature in EGL_EXT_device_enumeration is
+    // `EGLBoolean (EGLint max_devices, EGLDeviceEXT *devices, EGLint *num_devices)`.
+    let query = unsafe { std::mem::transmute::<extern "system" fn(), QueryDevices>(f) };
+    let mut devices = [std::ptr::null_mut(); 16];
+    let mut count = 0i32;
+    // SAFETY: `devices` has room for the 16 handles asked for at most; `count` is written.
+    if unsafe { query(devices.len() as i32, devices.as_mut_ptr(), &mut count) } != egl::TRUE as u32 {
+        return None;
+    }
+    let found = &devices[..count.clamp(0, devices.len() as i32) as usize];
+    found.iter().find_map(|&device| {
+        // SAFETY: `device` is an EGLDeviceEXT EGL just listed (it lives as long as the
+        // library); the attribute list is empty.
+        let d = unsafe { instance.get_platform_display(PLATFORM_DEVICE_EXT, device, &[egl::ATTRIB_NONE]) }.ok()?;
+        instance.initialize(d).ok()?;
+        instance.bind_api(egl::OPENGL_API).ok()?;
+        let attribs = [egl::RENDERABLE_TYPE, egl::OPENGL_BIT, egl::SURFACE_TYPE, egl::PBUFFER_BIT, egl::NONE];
+        instance.choose_first_config(d, &attribs).ok().flatten().map(|_| d)
+    })
+}
+
 /// What the context offers, read once when it is made.
 #[derive(Debug, Clone)]
 pub struct Limits {
@@ -226,6 +260,7 @@ impl Gl {
                 instance.initialize(d).map_err(|e| GlError::NoGl(format!("eglInitialize failed: {e}")))?;
                 d
             }
+            None if let Some(d) = device_display(&instance) => d,
             None => {
                 // SAFETY: the surfaceless platform takes EGL_DEFAULT_DISPLAY (no native
                 // display pointer is dereferenced) and an empty attribute list.
