@@ -81,7 +81,7 @@ fn device_display(instance: &egl::DynamicInstance<egl::EGL1_5>) -> Option<egl::D
     let mut devices = [std::ptr::null_mut(); 16];
     let mut count = 0i32;
     // SAFETY: `devices` has room for the 16 handles asked for at most; `count` is written.
-    if unsafe { query(devices.len() as i32, devices.as_mut_ptr(), &mut count) } != egl::TRUE as u32 {
+    if unsafe { query(devices.len() as i32, devices.as_mut_ptr(), &mut count) } != egl::TRUE {
         return None;
     }
     let found = &devices[..count.clamp(0, devices.len() as i32) as usize];
