@@ -40,11 +40,6 @@ impl GlContext {
         self.0.swap_buffers()
     }
 
-    /// Waits until everything issued in the context is done (glFinish).
-    pub fn finish(&self) -> Result<(), GlError> {
-        self.0.finish()
-    }
-
     pub(crate) fn gl(&self) -> &Gl {
         &self.0
     }

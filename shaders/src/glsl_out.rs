@@ -34,28 +34,7 @@ pub fn glsl_450(module: &naga::Module, info: &naga::valid::ModuleInfo) -> Result
         }
         points.push((b, point));
     }
-    let options = naga::back::glsl::Options {
-        version: naga::back::glsl::Version::Desktop(450),
-        writer_flags: naga::back::glsl::WriterFlags::empty(),
-        binding_map,
-        zero_initialize_workgroup_memory: true,
-    };
-    let pipeline = naga::back::glsl::PipelineOptions {
-        shader_stage: naga::ShaderStage::Compute,
-        entry_point: "main".into(),
-        multiview: None,
-    };
-    let mut text = String::new();
-    let mut writer = naga::back::glsl::Writer::new(
-        &mut text,
-        module,
-        info,
-        &options,
-        &pipeline,
-        naga::proc::BoundsCheckPolicies::default(),
-    )
-    .map_err(|e| format!("GLSL output: {e}"))?;
-    let reflection = writer.write().map_err(|e| format!("GLSL output: {e}"))?;
+    let (text, reflection) = write_450(module, info, naga::ShaderStage::Compute, "main", binding_map)?;
     let mut uniforms = Vec::new();
     for item in reflection.immediates_items {
         use naga::back::glsl::{GlslScalarKind as K, GlslUniformType as T};
@@ -105,11 +84,23 @@ pub fn glsl_450_stage(
         binding_map.insert(b, *counter);
         *counter += 1;
     }
+    Ok(write_450(module, info, stage, entry, binding_map)?.0)
+}
+
+/// naga's GLSL 4.50 core of entry point `entry` (of `stage`) with `binding_map`, and its
+/// reflection; workgroup memory zeroed as WGSL requires (compute only).
+fn write_450(
+    module: &naga::Module,
+    info: &naga::valid::ModuleInfo,
+    stage: naga::ShaderStage,
+    entry: &str,
+    binding_map: naga::back::glsl::BindingMap,
+) -> Result<(String, naga::back::glsl::ReflectionInfo), String> {
     let options = naga::back::glsl::Options {
         version: naga::back::glsl::Version::Desktop(450),
         writer_flags: naga::back::glsl::WriterFlags::empty(),
         binding_map,
-        zero_initialize_workgroup_memory: false,
+        zero_initialize_workgroup_memory: stage == naga::ShaderStage::Compute,
     };
     let pipeline = naga::back::glsl::PipelineOptions { shader_stage: stage, entry_point: entry.into(), multiview: None };
     let mut text = String::new();
@@ -122,8 +113,8 @@ pub fn glsl_450_stage(
         naga::proc::BoundsCheckPolicies::default(),
     )
     .map_err(|e| format!("GLSL output of {entry}: {e}"))?;
-    writer.write().map_err(|e| format!("GLSL output of {entry}: {e}"))?;
-    Ok(text)
+    let reflection = writer.write().map_err(|e| format!("GLSL output of {entry}: {e}"))?;
+    Ok((text, reflection))
 }
 
 /// The `@binding`s (group 0) the compute entry point `main` of `module` uses in any way,

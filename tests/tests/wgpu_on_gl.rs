@@ -30,7 +30,10 @@ fn every_kernel_wgpu_runs_on_gl_matches_its_cpu_twin() {
     assert!(!caps.float_atomics, "wgpu on GL has no float atomics (its GLSL has no atomicAdd on floats)");
     let kernels: Vec<_> =
         flavors(&caps, false).into_iter().filter(|k| !k.shader_name().starts_with("hash_scatter")).collect();
-    assert_kernels_match_twins(&mut g, &kernels, 64, 0x91, 30, "wgpu on GL");
+    // 147 flavors with a bound on llvmpipe (2026-11-25): no `_f32`, `_sh` or `_tex`, every
+    // other switch. At least 140, so that a whole family lost (every `_sto`, `_imm` or
+    // `_cu` flavor: 20 or more each) fails here instead of passing on fewer.
+    assert_kernels_match_twins(&mut g, &kernels, 64, 0x91, 140, "wgpu on GL");
 }
 
 #[test]
