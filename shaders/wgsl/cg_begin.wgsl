@@ -24,7 +24,7 @@ fn main(
         aux0[i] = vec4<f32>(0.0);
         aux1[i] = r4;
         aux2[i] = vec4<f32>(z, 0.0);
-        term = dot(r, z);
+        term = dot3(r, z);
     }
     store_partial(workgroup_sum(term, li), li, wg, groups);
 }

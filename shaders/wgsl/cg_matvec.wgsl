@@ -18,7 +18,7 @@ fn main(
             q = apply_at(i, true).v;
         }
         aux3[i] = vec4<f32>(q, 0.0);
-        term = dot(aux2[i].xyz, q);
+        term = dot3(aux2[i].xyz, q);
     }
     store_partial(workgroup_sum(term, li), li, wg, groups);
 }

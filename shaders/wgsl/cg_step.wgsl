@@ -18,7 +18,7 @@ fn main(
         let r4 = vec4<f32>(aux1[i].xyz - aux3[i].xyz * alpha, aux1[i].w);
         aux0[i] = vec4<f32>(x, 0.0);
         aux1[i] = r4;
-        term = dot(r4.xyz, precondition(r4));
+        term = dot3(r4.xyz, precondition(r4));
     }
     store_partial(workgroup_sum(term, li), li, wg, groups);
 }

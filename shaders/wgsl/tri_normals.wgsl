@@ -25,6 +25,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     let x11 = pos[p00 + p.n + 1u].xyz;
     let n0 = cross(x01 - x00, x11 - x00);
     let n1 = cross(x11 - x00, x10 - x00);
-    faces[2u * q] = vec4<f32>(n0, length(n0));
-    faces[2u * q + 1u] = vec4<f32>(n1, length(n1));
+    faces[2u * q] = vec4<f32>(n0, len3(n0));
+    faces[2u * q + 1u] = vec4<f32>(n1, len3(n1));
 }

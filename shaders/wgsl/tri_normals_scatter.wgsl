@@ -21,7 +21,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     let ic = triangles[3u * t + 2u];
     let xa = pos[ia].xyz;
     let nrm = cross(pos[ib].xyz - xa, pos[ic].xyz - xa);
-    faces[t] = vec4<f32>(nrm, length(nrm));
+    faces[t] = vec4<f32>(nrm, len3(nrm));
     for (var c = 0u; c < 3u; c++) {
         atomic_add_f32(4u * ia + c, nrm[c]);
         atomic_add_f32(4u * ib + c, nrm[c]);

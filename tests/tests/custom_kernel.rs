@@ -1,6 +1,6 @@
 //! A kernel added from outside — a WGSL string and its CPU twin — and a recipe that uses
-//! it, run on the CPU engine, wgpu and Vulkan without editing any backend; and the
-//! bisection of rollouts on both GPU APIs.
+//! it, run on the CPU engine, wgpu, Vulkan and GL without editing any backend; and the
+//! bisection of rollouts on every GPU API.
 
 use clothlab_core::layout::Buf;
 use clothlab_core::{Exec, Scene, SimParams, SolverError};
@@ -9,6 +9,7 @@ use clothlab_engine::kernels::{Check, Count, HostBuffers, Immediates, KernelDef,
 use clothlab_engine::recipe::{Command, run};
 use clothlab_engine::validate::{COMPARED_BUFFERS, KernelInput, KernelRunner, bisect, validate_kernels};
 use clothlab_engine::{CpuEngine, Variant};
+use clothlab_gl::gl_solver;
 use clothlab_tests::{assert_checks, or_skip};
 use clothlab_vulkan::vulkan_solver;
 use clothlab_wgpu::wgpu_solver;
@@ -69,20 +70,30 @@ static BROKEN: KernelDef = KernelDef {
     ..HALVE_FORCE
 };
 
-fn runners(n: u32) -> Vec<Box<dyn KernelRunner>> {
+/// The runners with the variant each resolved `Variant::OPTIMIZED` to (GL has no push
+/// constants: its optimized recipe keeps the constants in a uniform block).
+fn runners(n: u32) -> Vec<(Box<dyn KernelRunner>, Variant)> {
     let scene = Scene::with_n(n);
     let params = SimParams::default();
-    let mut v: Vec<Box<dyn KernelRunner>> = Vec::new();
+    let mut v: Vec<(Box<dyn KernelRunner>, Variant)> = Vec::new();
     let (_, topo) = clothlab_core::build(&scene, &params).unwrap();
-    v.push(Box::new(CpuEngine::new(Exec::Serial, scene.clone(), topo)));
+    v.push((Box::new(CpuEngine::new(Exec::Serial, scene.clone(), topo)), Variant::OPTIMIZED));
     if let Some(g) =
         or_skip(wgpu_solver(Variant::OPTIMIZED, scene.clone(), params.clone(), SolverOptions::default()), "wgpu")
     {
-        v.push(Box::new(g));
+        let spec = g.variant();
+        v.push((Box::new(g), spec));
     }
     let options = SolverOptions::default();
-    if let Some(k) = or_skip(vulkan_solver(Variant::OPTIMIZED, scene, params, true, options), "vulkan") {
-        v.push(Box::new(k));
+    if let Some(k) = or_skip(vulkan_solver(Variant::OPTIMIZED, scene.clone(), params.clone(), true, options), "vulkan")
+    {
+        let spec = k.variant();
+        v.push((Box::new(k), spec));
+    }
+    // GL: naga's GLSL of the composed WGSL, compiled by the driver when added.
+    if let Some(g) = or_skip(gl_solver(Variant::OPTIMIZED, scene, params, SolverOptions::default()), "gl") {
+        let spec = g.variant();
+        v.push((Box::new(g), spec));
     }
     v
 }
@@ -90,7 +101,7 @@ fn runners(n: u32) -> Vec<Box<dyn KernelRunner>> {
 #[test]
 fn a_kernel_defined_outside_runs_validated_on_every_engine_and_in_a_recipe() {
     let n = 33;
-    for mut r in runners(n) {
+    for (mut r, variant) in runners(n) {
         let name = r.adapter();
         if !name.contains("CPU engine") {
             // Not built in: the backend compiles it when asked (naga to SPIR-V on Vulkan).
@@ -104,8 +115,7 @@ fn a_kernel_defined_outside_runs_validated_on_every_engine_and_in_a_recipe() {
         // integration, three substeps from the disturbed cloth, against the CPU engine.
         // Bit for bit: the optimized kernels are (checked elsewhere) and so is this one.
         let input = KernelInput::new(n, 11).unwrap();
-        let mut commands =
-            clothlab_engine::recipe::recipe(&Variant::OPTIMIZED, 1, clothlab_engine::recipe::Integration::VERLET);
+        let mut commands = clothlab_engine::recipe::recipe(&variant, 1, clothlab_engine::recipe::Integration::VERLET);
         commands.splice(1..1, run(HALVE_FORCE.plain()));
         let (mut want, mut got) = (input.bufs.clone(), input.bufs.clone());
         for _ in 0..3 {
@@ -119,7 +129,7 @@ fn a_kernel_defined_outside_runs_validated_on_every_engine_and_in_a_recipe() {
 
 #[test]
 fn a_kernel_that_does_not_compile_is_refused_with_the_compilers_message() {
-    for mut r in runners(8).into_iter().skip(1) {
+    for (mut r, _) in runners(8).into_iter().skip(1) {
         let name = r.adapter();
         match r.add_kernel(BROKEN.plain()) {
             Err(SolverError::Shader { kernel, reason }) => {
@@ -136,7 +146,7 @@ fn a_kernel_that_does_not_compile_is_refused_with_the_compilers_message() {
 }
 
 #[test]
-fn bisection_on_both_gpu_apis_finds_no_kernel_out_of_bounds() {
+fn bisection_on_every_gpu_api_finds_no_kernel_out_of_bounds() {
     // On a driver that computes the twins' results (lavapipe: the optimized kernels are
     // bit-exact, the naive scatters within 1e-6 m per substep), every split stays within
     // the rollout bound and no culprit is named.
@@ -153,6 +163,10 @@ fn bisection_on_both_gpu_apis_finds_no_kernel_out_of_bounds() {
         if let Some(v) = or_skip(vulkan_solver(variant, scene.clone(), params.clone(), true, options), "vulkan") {
             let c = v.commands();
             gpu.push((Box::new(v), c));
+        }
+        if let Some(g) = or_skip(gl_solver(variant, scene.clone(), params.clone(), SolverOptions::default()), "gl") {
+            let c = g.commands().to_vec();
+            gpu.push((Box::new(g), c));
         }
         for (mut r, commands) in gpu {
             let b = bisect(r.as_mut(), &commands, &scene, &params, 48).unwrap();

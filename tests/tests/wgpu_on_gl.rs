@@ -42,7 +42,12 @@ fn rollouts_on_wgpu_gl_stay_close_to_the_cpu() {
         let Some(mut g) = on_gl(variant, 64) else { return };
         // 208 substeps; ROLLOUT_BOUND_PER_SUBSTEP × substeps, as every other backend.
         let c = validate_rollout(&mut g, 13).unwrap();
-        assert_checks(&format!("{} on GL", g.name()), &[c]);
+        assert_checks(&format!("{} on GL", g.name()), std::slice::from_ref(&c));
+        // The optimized recipe is exact on llvmpipe, as on every other API there
+        // (bit_identity.rs: dot3/len3 keep Mesa's GLSL path from fusing).
+        if variant == Variant::OPTIMIZED && g.adapter().contains("llvmpipe") {
+            assert_eq!(c.max_abs, 0.0, "{} on GL: the optimized rollout left the CPU's bits", g.name());
+        }
     }
 }
 

@@ -18,13 +18,13 @@ fn y_at(k: u32, from_p: bool) -> vec3<f32> {
 // third of the trace of dt² Kₛ + dt Dₛ.
 fn spring_block(s: SpringSlot, xa: vec3<f32>, xb: vec3<f32>, y: vec3<f32>, with_damping: bool) -> Applied {
     let d = xa - xb;
-    let len = length(d);
+    let len = len3(d);
     if len <= 1.17549435e-38 {
         return Applied(vec3<f32>(0.0), 0.0);
     }
     let n = d * (1.0 / len);
     let soft = max(1.0 - s.rest / len, 0.0);
-    let ny = dot(n, y);
+    let ny = dot3(n, y);
     let k2 = s.ks * p.dt * p.dt;
     var c = 0.0;
     if with_damping {

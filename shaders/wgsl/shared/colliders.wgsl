@@ -14,7 +14,7 @@ fn collided(m: Moved) -> Moved {
         let s = spheres[k];
         let r = s.radius + p.margin;
         let d = x - s.center;
-        let dist2 = dot(d, d);
+        let dist2 = dot3(d, d);
         if dist2 < r * r {
             let dist = sqrt(dist2);
             var nrm = vec3<f32>(0.0, 1.0, 0.0);

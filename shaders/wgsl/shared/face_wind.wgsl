@@ -9,7 +9,7 @@
 // Face normal and |N| of triangle (a, b, c), as tri_normals computes it.
 fn face_of(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec4<f32> {
     let nrm = cross(b - a, c - a);
-    return vec4<f32>(nrm, length(nrm));
+    return vec4<f32>(nrm, len3(nrm));
 }
 
 // The wind of a quad's two triangles, t0 = (x00, x01, x11) and t1 = (x00, x11, x10)

@@ -7,9 +7,9 @@ fn particle_stats(i: u32) -> vec2<f32> {
     for (var s = 1u; s <= 3u; s += 2u) {
         let slot = slot_at(i, s);
         if slot.neighbor >= 0 {
-            strain = max(strain, length(pos[u32(slot.neighbor)].xyz - x) / slot.rest - 1.0);
+            strain = max(strain, len3(pos[u32(slot.neighbor)].xyz - x) / slot.rest - 1.0);
         }
     }
     let v = vel[i].xyz;
-    return vec2<f32>(strain, 0.5 * p.particle_mass * dot(v, v));
+    return vec2<f32>(strain, 0.5 * p.particle_mass * dot3(v, v));
 }

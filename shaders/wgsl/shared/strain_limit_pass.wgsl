@@ -31,7 +31,7 @@ fn limit_spring(c: ptr<function, Correction>, b: u32, xb4: vec4<f32>, rest: f32,
     let stretch = 1.0 + p.strain_limit;
     let aim = 1.0 + STRAIN_AIM * p.strain_limit;
     let d = xb4.xyz - xi;
-    let len = length(d);
+    let len = len3(d);
     if len > stretch * rest {
         let wb = mobility(b, xb4.w);
         (*c).sum += d * (wi * (len - aim * rest) / ((wi + wb) * len));
@@ -72,7 +72,7 @@ fn finish(i: u32, x4: vec4<f32>, wi: f32, c: Correction) -> vec4<f32> {
         let tether = tethers[i * TETHER_SLOTS + t];
         let pin = pos[u32(max(tether.pin, 0))].xyz;
         let d = x - pin;
-        let len = length(d);
+        let len = len3(d);
         let max_len = stretch * tether.rest;
         if tether.pin >= 0 && len > max_len {
             x = pin + d * (max_len / len);

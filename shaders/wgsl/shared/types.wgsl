@@ -74,21 +74,36 @@ fn block_origin(b: u32, n: u32) -> vec2<u32> {
     return vec2<u32>(row, (b - row * per_row) * BLOCK);
 }
 
+// The dot product and length of core's Vec3, spelled out: x·x' + y·y' + z·z', added left
+// to right, each product rounded. WGSL's dot() and length() leave the order and the fusing
+// to the driver: Mesa's GLSL path (raw GL and wgpu-on-GL) lowers the built-ins otherwise
+// than its SPIR-V path and than core (1 ulp off in about a third of the lanes of a probe
+// kernel; forces_springs_wind 5.35e-8 relative off before these), while plain products
+// and sums compile as written on both. Kernels use these, so every API computes the
+// twins' bits (tests/tests/bit_identity.rs); render.wgsl keeps the built-ins.
+fn dot3(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+fn len3(v: vec3<f32>) -> f32 {
+    return sqrt(dot3(v, v));
+}
+
 // Force on end a of a spring with l = x_a - x_b and dv = v_a - v_b
 // (core::cpu::springs::spring_force).
 fn spring_force(l: vec3<f32>, dv: vec3<f32>, s: SpringSlot) -> vec3<f32> {
-    let len = length(l);
+    let len = len3(l);
     if len <= 1.17549435e-38 {
         return vec3<f32>(0.0);
     }
     let dir = l * (1.0 / len);
-    return -(s.ks * (len - s.rest) + s.kd * dot(dv, dir)) * dir;
+    return -(s.ks * (len - s.rest) + s.kd * dot3(dv, dir)) * dir;
 }
 
 // The velocity after a contact with a surface of unit normal nrm: into the surface
 // removed, tangential reduced by the friction (core::cpu::integrate::contact_vel).
 fn contact_vel(v: vec3<f32>, nrm: vec3<f32>, friction: f32) -> vec3<f32> {
-    let vn = dot(v, nrm);
+    let vn = dot3(v, nrm);
     let vt = v - vn * nrm;
     return vt * (1.0 - friction) + max(vn, 0.0) * nrm;
 }
@@ -101,7 +116,7 @@ fn flat_id(id: vec3<u32>, groups: vec3<u32>) -> u32 {
 
 // core's Vec3::normalize_or_zero.
 fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
-    let rcp = 1.0 / length(v);
+    let rcp = 1.0 / len3(v);
     if rcp > 0.0 && rcp <= 3.40282347e38 {
         return v * rcp;
     }

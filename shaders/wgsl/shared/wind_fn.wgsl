@@ -13,7 +13,7 @@ fn windy() -> bool {
 fn face_wind(f4: vec4<f32>) -> vec3<f32> {
     let c = p.wind.w / 6.0;
     if f4.w > 0.0 {
-        return f4.xyz * (c * dot(f4.xyz, p.wind.xyz) / f4.w);
+        return f4.xyz * (c * dot3(f4.xyz, p.wind.xyz) / f4.w);
     }
     return vec3<f32>(0.0);
 }

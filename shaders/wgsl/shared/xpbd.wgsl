@@ -53,7 +53,7 @@ fn xpbd_pass(a: u32, s: u32, di: i32, dj: i32, colour: u32, buf: u32, c: u32) {
         return;
     }
     let d = xa4.xyz - xb4.xyz;
-    let len = length(d);
+    let len = len3(d);
     if len <= 1.17549435e-38 {
         return;
     }
@@ -62,7 +62,7 @@ fn xpbd_pass(a: u32, s: u32, di: i32, dj: i32, colour: u32, buf: u32, c: u32) {
     let gamma = slot.kd / (slot.ks * p.dt);
     let va = vel[a].xyz;
     let vb = vel[b].xyz;
-    let rel = dot(n, va - vb) * p.dt;
+    let rel = dot3(n, va - vb) * p.dt;
     let l = lambda_at(a, buf, c);
     let dl = -((len - slot.rest) + alpha * l + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
     let da = n * (dl * wa);
