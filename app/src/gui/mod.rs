@@ -352,6 +352,7 @@ impl Running {
                 variant: self.sim.solver.variant(),
                 api: self.gfx.api(),
                 adapter: self.gfx.adapter(),
+                solver_adapter: (self.sim.backend.api() != Some(self.gfx.api())).then(|| self.sim.solver.adapter()),
                 substep: self.sim.substep_time(),
                 history: &self.sim.history,
                 frames: self.sim.frames,

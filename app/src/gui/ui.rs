@@ -22,8 +22,11 @@ pub struct Info<'a> {
     pub variant: Option<clothlab_engine::Variant>,
     /// Drawing API.
     pub api: Api,
-    /// Adapter in one line.
+    /// The window's adapter in one line.
     pub adapter: String,
+    /// Where the solver runs when that is not the window's API (the CPU, or a GPU solver
+    /// of another API whose state is copied to the window each frame), in one line.
+    pub solver_adapter: Option<String>,
     /// Last substep time.
     pub substep: Option<super::sim::SubstepTime>,
     /// Per-frame kernel timings.
@@ -285,10 +288,22 @@ fn status_bar(ui: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
             out.push(Command::Grid(s.grid_n));
         }
         ui.separator();
-        ui.label(format!("{} · {:?} · {}", info.backend.name(), info.api, info.adapter));
+        ui.label(status_line(info)).on_hover_text(format!("window: {}", info.adapter));
         ui.separator();
         ui.label(&s.message);
     });
+}
+
+/// The status bar's backend and adapter: the solver's adapter when it is not the window's
+/// (its state is then copied to the window each frame; the window's adapter is in the
+/// label's tooltip, the line would not fit the bar).
+pub fn status_line(info: &Info<'_>) -> String {
+    match &info.solver_adapter {
+        None => format!("{} · {:?} · {}", info.backend.name(), info.api, info.adapter),
+        Some(solver) => {
+            format!("{} on {solver} · drawn by {:?}", info.backend.name(), info.api)
+        }
+    }
 }
 
 /// The status bar's substep time, saying which clock measured it.
@@ -647,5 +662,26 @@ mod tests {
             assert!(BACKENDS.contains(b), "{b:?} missing from the backend picker");
         }
         assert_eq!(BACKENDS.len(), Backend::value_variants().len());
+    }
+
+    #[test]
+    fn the_status_line_names_the_solvers_adapter_when_it_is_not_the_windows() {
+        let history = VecDeque::new();
+        let mut info = Info {
+            backend: Backend::Vulkan,
+            variant: None,
+            api: Api::Gl,
+            adapter: "llvmpipe (raw OpenGL)".into(),
+            solver_adapter: Some("llvmpipe (Vulkan)".into()),
+            substep: None,
+            history: &history,
+            frames: 0,
+            scene_tex: None,
+            scene_size: (1, 1),
+        };
+        assert_eq!(status_line(&info), "vulkan on llvmpipe (Vulkan) · drawn by Gl");
+        info.solver_adapter = None;
+        info.backend = Backend::Gl;
+        assert_eq!(status_line(&info), "gl · Gl · llvmpipe (raw OpenGL)");
     }
 }
