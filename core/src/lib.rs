@@ -20,6 +20,7 @@ pub mod error;
 pub mod grid;
 pub mod input;
 pub mod layout;
+pub mod mesh;
 pub mod params;
 pub mod render;
 pub mod scene;

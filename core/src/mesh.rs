@@ -1,0 +1,597 @@
+//! Cloth from a triangle mesh: reading an OBJ file, refusing meshes a cloth cannot be,
+//! and the mesh's springs (issue 34, first step: the model; the solvers follow).
+//!
+//! The reader keeps the file's vertex numbering (`v` lines in order, from 0), so a list of
+//! pinned vertices taken from a modelling tool means what it says, and a vertex no face
+//! uses is found and refused. tobj, the usual crate, renumbers vertices by first use and
+//! drops unused ones, so both would be lost; the part of OBJ a cloth needs (`v`, `vt`,
+//! `f` with `v`, `v/vt`, `v//vn`, `v/vt/vn` and negative indices, polygons as fans) is
+//! read here, everything else (`vn`, `o`, `g`, `s`, `usemtl`, `mtllib`, …) skipped.
+//!
+//! A mesh is checked before anything is built from it ([`TriMesh::check`]): every index
+//! in range, coordinates finite, no degenerate or repeated triangle, no vertex outside
+//! every triangle, every edge in at most two triangles (a manifold, with boundary) whose
+//! windings agree, and no vertex with more springs or triangles than the solvers' tables
+//! hold. Each refusal is one line naming the vertex, edge or triangle.
+//!
+//! The springs ([`MeshSprings`]): structural along every edge, bending across every
+//! interior edge (between the two vertices opposite it), rest lengths from the mesh. In a
+//! vertex's table the edges come first (the strain-limited slots `0 .. STRAIN_SLOTS`), the
+//! bending springs after them.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use thiserror::Error;
+
+use crate::grid::{FACE_SLOTS, SLOTS, STRAIN_SLOTS};
+
+/// The largest OBJ file read, bytes.
+pub const MAX_MESH_BYTES: u64 = 256 << 20;
+
+/// The most vertices a cloth mesh may have (as many particles as a 2048 × 2048 grid).
+pub const MAX_MESH_VERTICES: usize = 2048 * 2048;
+
+/// A triangle mesh as read: positions, optional texture coordinates per vertex, and
+/// counter-clockwise triangles (their normals point to the side seen counter-clockwise).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TriMesh {
+    /// Vertex positions, m (before placement).
+    pub positions: Vec<[f32; 3]>,
+    /// A texture coordinate per vertex, when the file gives every face-vertex one (at a
+    /// seam, a vertex keeps the first it is given).
+    pub uvs: Option<Vec<[f32; 2]>>,
+    /// Triangles, indices into `positions`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// Why a mesh cannot be a cloth: one line.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum MeshError {
+    /// The file could not be read.
+    #[error("cannot read it: {0}")]
+    Read(String),
+    /// The file is larger than [`MAX_MESH_BYTES`].
+    #[error("{size} bytes, more than the {max} a mesh file may have")]
+    TooBig {
+        /// Its size.
+        size: u64,
+        /// The limit.
+        max: u64,
+    },
+    /// A line the reader does not understand.
+    #[error("line {line}: {what}")]
+    Syntax {
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        what: String,
+    },
+    /// No triangles.
+    #[error("no triangles: a cloth mesh needs faces (`f` lines)")]
+    Empty,
+    /// Too many vertices.
+    #[error("{count} vertices, more than the {max} a cloth may have")]
+    TooManyVertices {
+        /// Vertices in the file.
+        count: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// A face names a vertex that does not exist.
+    #[error("triangle {tri} names vertex {index}, but there are {count} vertices")]
+    BadIndex {
+        /// The triangle.
+        tri: usize,
+        /// The index it names (0-based).
+        index: u32,
+        /// Vertices in the mesh.
+        count: usize,
+    },
+    /// A coordinate is NaN or infinite.
+    #[error("vertex {vertex} has a coordinate that is not a finite number ({value})")]
+    NotFinite {
+        /// The vertex.
+        vertex: usize,
+        /// The coordinate.
+        value: f32,
+    },
+    /// A triangle with a repeated vertex or no area.
+    #[error("triangle {tri} ({a}, {b}, {c}) is degenerate: {why}")]
+    Degenerate {
+        /// The triangle.
+        tri: usize,
+        /// Its vertices.
+        a: u32,
+        /// Its vertices.
+        b: u32,
+        /// Its vertices.
+        c: u32,
+        /// A repeated vertex or zero area.
+        why: &'static str,
+    },
+    /// The same three vertices twice.
+    #[error("triangles {first} and {second} have the same three vertices")]
+    Duplicate {
+        /// The first.
+        first: usize,
+        /// The repeat.
+        second: usize,
+    },
+    /// A vertex in no triangle.
+    #[error("vertex {0} is in no triangle (a particle with no springs would fall alone)")]
+    Unreferenced(usize),
+    /// An edge in more than two triangles.
+    #[error("edge ({a}, {b}) is in {count} triangles: a cloth must be a manifold (each edge in one or two)")]
+    NonManifold {
+        /// One end.
+        a: u32,
+        /// The other.
+        b: u32,
+        /// Triangles sharing it.
+        count: usize,
+    },
+    /// Two triangles on an edge wound the same way: their normals disagree.
+    #[error(
+        "triangles {t0} and {t1} both run edge ({a}, {b}) the same way: their windings disagree (normals flip between them)"
+    )]
+    Winding {
+        /// One end.
+        a: u32,
+        /// The other.
+        b: u32,
+        /// A triangle.
+        t0: usize,
+        /// The other.
+        t1: usize,
+    },
+    /// A vertex with more springs or triangles than the solvers' tables hold.
+    #[error("vertex {vertex} has {count} {what}; the solvers' table holds {max}")]
+    TooManyNeighbours {
+        /// The vertex.
+        vertex: usize,
+        /// How many it has.
+        count: usize,
+        /// Of what.
+        what: &'static str,
+        /// The table's room.
+        max: usize,
+    },
+}
+
+/// A mesh file's error with the file's name: `skirt.obj: line 3: …`.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("{path}: {error}")]
+pub struct MeshFileError {
+    /// The file as given.
+    pub path: String,
+    /// What is wrong.
+    pub error: MeshError,
+}
+
+/// Reads and checks the OBJ file at `path`.
+pub fn load_obj(path: &Path) -> Result<TriMesh, MeshFileError> {
+    let err = |error| MeshFileError { path: path.display().to_string(), error };
+    let size = std::fs::metadata(path).map_err(|e| err(MeshError::Read(e.to_string())))?.len();
+    if size > MAX_MESH_BYTES {
+        return Err(err(MeshError::TooBig { size, max: MAX_MESH_BYTES }));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| err(MeshError::Read(e.to_string())))?;
+    let mesh = parse_obj(&text).map_err(err)?;
+    mesh.check().map_err(err)?;
+    Ok(mesh)
+}
+
+/// Parses OBJ text (not checked: see [`TriMesh::check`]).
+pub fn parse_obj(text: &str) -> Result<TriMesh, MeshError> {
+    let mut positions: Vec<[f32; 3]> = Vec::new();
+    let mut texcoords: Vec<[f32; 2]> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    // Per triangle corner, its texture coordinate index, when every corner has one.
+    let mut corner_uv: Vec<Option<usize>> = Vec::new();
+    for (k, raw) in text.lines().enumerate() {
+        let line = k + 1;
+        let syntax = |what: String| MeshError::Syntax { line, what };
+        let content = raw.split('#').next().unwrap_or("").trim();
+        let mut words = content.split_whitespace();
+        let Some(tag) = words.next() else { continue };
+        let numbers = |words: std::str::SplitWhitespace<'_>, want: usize, what: &str| -> Result<Vec<f32>, MeshError> {
+            let v: Vec<f32> = words
+                .map(|w| w.parse::<f32>().map_err(|_| syntax(format!("`{w}` is not a number in a `{what}` line"))))
+                .collect::<Result<_, _>>()?;
+            if v.len() < want {
+                return Err(syntax(format!("a `{what}` line needs {want} numbers, it has {}", v.len())));
+            }
+            Ok(v)
+        };
+        match tag {
+            "v" => {
+                let v = numbers(words, 3, "v")?;
+                positions.push([v[0], v[1], v[2]]);
+                if positions.len() > MAX_MESH_VERTICES {
+                    return Err(MeshError::TooManyVertices { count: positions.len(), max: MAX_MESH_VERTICES });
+                }
+            }
+            "vt" => {
+                let v = numbers(words, 2, "vt")?;
+                texcoords.push([v[0], v[1]]);
+            }
+            "f" => {
+                let mut corners: Vec<(u32, Option<usize>)> = Vec::new();
+                for w in words {
+                    let mut parts = w.split('/');
+                    let resolve = |s: &str, count: usize, what: &str| -> Result<usize, MeshError> {
+                        let i: i64 = s.parse().map_err(|_| syntax(format!("`{w}` is not a face corner")))?;
+                        let idx = if i > 0 { i - 1 } else { count as i64 + i };
+                        if i == 0 || idx < 0 || idx >= count as i64 {
+                            return Err(syntax(format!("{what} index {i} in `{w}`: there are {count} so far")));
+                        }
+                        Ok(idx as usize)
+                    };
+                    let v = resolve(parts.next().unwrap_or(""), positions.len(), "vertex")?;
+                    let vt = match parts.next() {
+                        Some(s) if !s.is_empty() => Some(resolve(s, texcoords.len(), "texture coordinate")?),
+                        _ => None,
+                    };
+                    corners.push((v as u32, vt));
+                }
+                if corners.len() < 3 {
+                    return Err(syntax(format!("a face needs 3 corners, it has {}", corners.len())));
+                }
+                for c in 1..corners.len() - 1 {
+                    let tri = [corners[0], corners[c], corners[c + 1]];
+                    triangles.push(tri.map(|t| t.0));
+                    corner_uv.extend(tri.map(|t| t.1));
+                }
+            }
+            _ => {}
+        }
+    }
+    let uvs = if !triangles.is_empty() && corner_uv.iter().all(Option::is_some) {
+        let mut uv: Vec<Option<[f32; 2]>> = vec![None; positions.len()];
+        for (t, c) in triangles.iter().flatten().zip(&corner_uv) {
+            let slot = &mut uv[*t as usize];
+            if slot.is_none() {
+                *slot = c.map(|i| texcoords[i]);
+            }
+        }
+        // Unreferenced vertices are refused by `check`; until then they get (0, 0).
+        Some(uv.into_iter().map(|u| u.unwrap_or([0.0, 0.0])).collect())
+    } else {
+        None
+    };
+    Ok(TriMesh { positions, uvs, triangles })
+}
+
+impl TriMesh {
+    /// Refuses a mesh a cloth cannot be (see the module's text), with the first problem.
+    pub fn check(&self) -> Result<(), MeshError> {
+        let count = self.positions.len();
+        if self.triangles.is_empty() {
+            return Err(MeshError::Empty);
+        }
+        if count > MAX_MESH_VERTICES {
+            return Err(MeshError::TooManyVertices { count, max: MAX_MESH_VERTICES });
+        }
+        for (vertex, p) in self.positions.iter().enumerate() {
+            if let Some(&value) = p.iter().find(|c| !c.is_finite()) {
+                return Err(MeshError::NotFinite { vertex, value });
+            }
+        }
+        if let Some(uv) = &self.uvs {
+            for (vertex, t) in uv.iter().enumerate() {
+                if let Some(&value) = t.iter().find(|c| !c.is_finite()) {
+                    return Err(MeshError::NotFinite { vertex, value });
+                }
+            }
+        }
+        let mut seen: HashMap<[u32; 3], usize> = HashMap::with_capacity(self.triangles.len());
+        let mut used = vec![false; count];
+        for (tri, &[a, b, c]) in self.triangles.iter().enumerate() {
+            for index in [a, b, c] {
+                if index as usize >= count {
+                    return Err(MeshError::BadIndex { tri, index, count });
+                }
+                used[index as usize] = true;
+            }
+            if a == b || b == c || a == c {
+                return Err(MeshError::Degenerate { tri, a, b, c, why: "a vertex repeated" });
+            }
+            if self.area2(tri) <= 0.0 {
+                return Err(MeshError::Degenerate { tri, a, b, c, why: "no area (its corners are on a line)" });
+            }
+            let mut key = [a, b, c];
+            key.sort_unstable();
+            if let Some(&first) = seen.get(&key) {
+                return Err(MeshError::Duplicate { first, second: tri });
+            }
+            seen.insert(key, tri);
+        }
+        if let Some(v) = used.iter().position(|u| !u) {
+            return Err(MeshError::Unreferenced(v));
+        }
+        // Every directed edge once; an undirected edge in at most two triangles.
+        let mut directed: HashMap<(u32, u32), usize> = HashMap::with_capacity(3 * self.triangles.len());
+        let mut undirected: HashMap<(u32, u32), usize> = HashMap::with_capacity(3 * self.triangles.len());
+        for (tri, t) in self.triangles.iter().enumerate() {
+            for e in 0..3 {
+                let (a, b) = (t[e], t[(e + 1) % 3]);
+                let n = undirected.entry((a.min(b), a.max(b))).or_insert(0);
+                *n += 1;
+                if *n > 2 {
+                    return Err(MeshError::NonManifold { a: a.min(b), b: a.max(b), count: *n });
+                }
+                if let Some(&t0) = directed.get(&(a, b)) {
+                    return Err(MeshError::Winding { a, b, t0, t1: tri });
+                }
+                directed.insert((a, b), tri);
+            }
+        }
+        let mut faces = vec![0usize; count];
+        for t in &self.triangles {
+            for &v in t {
+                faces[v as usize] += 1;
+            }
+        }
+        if let Some((vertex, &n)) = faces.iter().enumerate().find(|(_, n)| **n > FACE_SLOTS) {
+            return Err(MeshError::TooManyNeighbours { vertex, count: n, what: "triangles", max: FACE_SLOTS });
+        }
+        MeshSprings::build(self).map(|_| ())
+    }
+
+    /// Twice the area of triangle `t`, m².
+    pub fn area2(&self, t: usize) -> f32 {
+        let [a, b, c] = self.triangles[t].map(|i| glam::Vec3::from(self.positions[i as usize]));
+        (b - a).cross(c - a).length()
+    }
+
+    /// Each vertex's share of the cloth's area: a third of each of its triangles', m².
+    pub fn vertex_areas(&self) -> Vec<f32> {
+        let mut area = vec![0.0f32; self.positions.len()];
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let third = self.area2(t) / 6.0;
+            for &v in tri {
+                area[v as usize] += third;
+            }
+        }
+        area
+    }
+
+    /// The cloth's area, m².
+    pub fn area(&self) -> f32 {
+        (0..self.triangles.len()).map(|t| self.area2(t)).sum::<f32>() / 2.0
+    }
+}
+
+/// The springs a mesh gives, with each vertex's slots.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshSprings {
+    /// Structural springs: every edge once, `(a, b)` with `a < b`.
+    pub edges: Vec<[u32; 2]>,
+    /// Bending springs: across every interior edge, between the two vertices opposite it,
+    /// `(a, b)` with `a < b`, each pair once and none that is also an edge.
+    pub bends: Vec<[u32; 2]>,
+    /// Per vertex, its springs in slot order: indices into `edges` then into `bends`
+    /// (as `edges.len() + k`); edges first, at most [`STRAIN_SLOTS`] of them, at most
+    /// [`SLOTS`] in all.
+    pub slots: Vec<Vec<u32>>,
+}
+
+impl MeshSprings {
+    /// The springs of `mesh` (whose indices are in range), or the vertex with more edges
+    /// than the strain-limited slots or more springs than the table holds.
+    pub fn build(mesh: &TriMesh) -> Result<Self, MeshError> {
+        let count = mesh.positions.len();
+        // Each undirected edge with the vertices opposite it (one or two).
+        let mut opposite: HashMap<(u32, u32), Vec<u32>> = HashMap::with_capacity(3 * mesh.triangles.len());
+        for t in &mesh.triangles {
+            for e in 0..3 {
+                let (a, b, o) = (t[e], t[(e + 1) % 3], t[(e + 2) % 3]);
+                opposite.entry((a.min(b), a.max(b))).or_default().push(o);
+            }
+        }
+        let mut edges: Vec<[u32; 2]> = opposite.keys().map(|&(a, b)| [a, b]).collect();
+        edges.sort_unstable();
+        let edge_set: std::collections::HashSet<[u32; 2]> = edges.iter().copied().collect();
+        let mut bends: Vec<[u32; 2]> = opposite
+            .values()
+            .filter(|o| o.len() == 2 && o[0] != o[1])
+            .map(|o| [o[0].min(o[1]), o[0].max(o[1])])
+            .filter(|b| !edge_set.contains(b))
+            .collect();
+        bends.sort_unstable();
+        bends.dedup();
+        let mut slots: Vec<Vec<u32>> = vec![Vec::new(); count];
+        for (k, &[a, b]) in edges.iter().enumerate() {
+            slots[a as usize].push(k as u32);
+            slots[b as usize].push(k as u32);
+        }
+        for (vertex, s) in slots.iter().enumerate() {
+            if s.len() > STRAIN_SLOTS {
+                return Err(MeshError::TooManyNeighbours { vertex, count: s.len(), what: "edges", max: STRAIN_SLOTS });
+            }
+        }
+        let base = edges.len() as u32;
+        for (k, &[a, b]) in bends.iter().enumerate() {
+            slots[a as usize].push(base + k as u32);
+            slots[b as usize].push(base + k as u32);
+        }
+        for (vertex, s) in slots.iter().enumerate() {
+            if s.len() > SLOTS {
+                return Err(MeshError::TooManyNeighbours {
+                    vertex,
+                    count: s.len(),
+                    what: "springs (edges and bending springs)",
+                    max: SLOTS,
+                });
+            }
+        }
+        Ok(Self { edges, bends, slots })
+    }
+
+    /// The other end of spring `k` (as in `slots`) seen from vertex `v`.
+    pub fn other(&self, k: u32, v: u32) -> u32 {
+        let [a, b] = self.spring(k);
+        if a == v { b } else { a }
+    }
+
+    /// Spring `k` (as in `slots`): an edge or a bending spring.
+    pub fn spring(&self, k: u32) -> [u32; 2] {
+        let k = k as usize;
+        if k < self.edges.len() { self.edges[k] } else { self.bends[k - self.edges.len()] }
+    }
+
+    /// Whether spring `k` (as in `slots`) is an edge.
+    pub fn is_edge(&self, k: u32) -> bool {
+        (k as usize) < self.edges.len()
+    }
+}
+
+/// An `n × n` grid of `size` m in the xz-plane as a mesh, triangulated as `grid::build`
+/// triangulates the cloth (each quad split along its p00–p11 diagonal), with uvs: the
+/// test of the mesh path against the grid, and what `scenes/make_meshes.py` writes.
+pub fn grid_mesh(n: u32, size: f32) -> TriMesh {
+    let h = size / (n - 1) as f32;
+    let mut positions = Vec::new();
+    let mut uvs = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            positions.push([i as f32 * h - 0.5 * size, 0.0, j as f32 * h]);
+            uvs.push([i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32]);
+        }
+    }
+    let mut triangles = Vec::new();
+    for qj in 0..n - 1 {
+        for qi in 0..n - 1 {
+            let p00 = qj * n + qi;
+            let (p10, p01, p11) = (p00 + 1, p00 + n, p00 + n + 1);
+            triangles.push([p00, p01, p11]);
+            triangles.push([p00, p11, p10]);
+        }
+    }
+    TriMesh { positions, uvs: Some(uvs), triangles }
+}
+
+/// The mesh as OBJ text (positions, uvs when there are, faces 1-based): what a scene's
+/// mesh file holds; `parse_obj` reads it back to the same mesh (positions and uvs as
+/// `f32`'s shortest round-trip decimals).
+pub fn to_obj(mesh: &TriMesh) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::from("# written by clothlab\n");
+    for p in &mesh.positions {
+        let _ = writeln!(s, "v {} {} {}", p[0], p[1], p[2]);
+    }
+    if let Some(uv) = &mesh.uvs {
+        for t in uv {
+            let _ = writeln!(s, "vt {} {}", t[0], t[1]);
+        }
+    }
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| i + 1);
+        if mesh.uvs.is_some() {
+            let _ = writeln!(s, "f {a}/{a} {b}/{b} {c}/{c}");
+        } else {
+            let _ = writeln!(s, "f {a} {b} {c}");
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SQUARE: &str = "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 4 3 2\n";
+
+    fn refused(text: &str) -> MeshError {
+        let m = parse_obj(text).unwrap();
+        m.check().expect_err("refused")
+    }
+
+    #[test]
+    fn the_file_order_of_vertices_is_kept_and_polygons_become_fans() {
+        let m = parse_obj("# a quad\nv 0 0 0\nv 1 0 0 # x\nv 1 0 1\nv 0 0 1\nvn 0 1 0\ng a\nf 1//1 4//1 3//1 2//1\n")
+            .unwrap();
+        assert_eq!(m.positions[1], [1.0, 0.0, 0.0]);
+        assert_eq!(m.triangles, vec![[0, 3, 2], [0, 2, 1]]);
+        assert_eq!(m.uvs, None);
+        m.check().unwrap();
+        // Negative indices count back from the last vertex read.
+        let m = parse_obj("v 0 0 0\nv 1 0 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\nf -3/-3 -1/-1 -2/-2\n").unwrap();
+        assert_eq!(m.triangles, vec![[0, 2, 1]]);
+        assert_eq!(m.uvs, Some(vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]));
+    }
+
+    #[test]
+    fn a_grid_mesh_round_trips_through_obj_and_has_the_grids_springs() {
+        let m = grid_mesh(5, 2.0);
+        assert_eq!(parse_obj(&to_obj(&m)).unwrap(), m);
+        m.check().unwrap();
+        let s = MeshSprings::build(&m).unwrap();
+        // 5×5: 40 structural + 16 diagonals = 56 edges; interior edges 56 − 16 = 40, each
+        // with one bending spring (none repeats, none is an edge).
+        assert_eq!(s.edges.len(), 56);
+        assert_eq!(s.bends.len(), 40);
+        // An interior vertex: 6 edges and 6 bending springs, the table full.
+        assert_eq!(s.slots[12].len(), 12);
+        assert!(s.slots[12][..6].iter().all(|&k| s.is_edge(k)) && s.slots[12][6..].iter().all(|&k| !s.is_edge(k)));
+        // Areas: 4 m² in all; an interior vertex holds a sixth of a 0.5 m quad's six triangles.
+        assert!((m.area() - 4.0).abs() < 1e-5, "{}", m.area());
+        let a = m.vertex_areas();
+        assert!((a.iter().sum::<f32>() - 4.0).abs() < 1e-5);
+        assert!((a[12] - 0.25).abs() < 1e-6, "{}", a[12]);
+    }
+
+    #[test]
+    fn every_bad_mesh_is_refused_in_one_line() {
+        let cases: Vec<(String, &str)> = vec![
+            ("v 0 0 0\n".into(), "no triangles"),
+            ("v 0 0 0\nv 1 0 0\nv nan 0 1\nf 1 2 3\n".into(), "vertex 2 has a coordinate that is not a finite"),
+            ("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n".into(), "triangle 0 (0, 1, 2) is degenerate: no area"),
+            ("v 0 0 0\nv 1 0 0\nv 2 0 1\nf 1 2 2\n".into(), "degenerate: a vertex repeated"),
+            (format!("{SQUARE}f 1 3 2\n"), "triangles 1 and 2 have the same three vertices"),
+            (format!("{SQUARE}v 5 5 5\n"), "vertex 4 is in no triangle"),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 0 1\nv 0 1 0\nv 0 -1 0\nf 1 2 3\nf 2 1 4\nf 1 2 5\n".into(),
+                "edge (0, 1) is in 3 triangles",
+            ),
+            ("v 0 0 0\nv 1 0 0\nv 0 0 1\nv 1 0 1\nf 1 2 3\nf 1 2 4\n".into(), "both run edge (0, 1) the same way"),
+            ("v 0 0 0\nf 1 2 3\n".into(), "line 2: vertex index 2 in `2`: there are 1 so far"),
+            ("v 0 0\n".into(), "line 1: a `v` line needs 3 numbers, it has 2"),
+            ("v 0 zero 0\n".into(), "line 1: `zero` is not a number"),
+            ("v 0 0 0\nv 1 0 0\nf 1 2\n".into(), "line 3: a face needs 3 corners, it has 2"),
+        ];
+        for (text, want) in cases {
+            let e = match parse_obj(&text) {
+                Err(e) => e,
+                Ok(m) => m.check().expect_err(&text),
+            };
+            let line = e.to_string();
+            assert!(line.contains(want), "{text:?}: {line}");
+            assert!(!line.contains('\n'), "{line}");
+        }
+        // A fan of 8 triangles around vertex 0: more than FACE_SLOTS = 6.
+        let mut fan = String::from("v 0 0 0\n");
+        for k in 0..8 {
+            let a = k as f32 * std::f32::consts::TAU / 8.0;
+            fan += &format!("v {} 0 {}\n", a.cos(), a.sin());
+        }
+        for k in 0..8 {
+            fan += &format!("f 1 {} {}\n", 2 + (k + 1) % 8, 2 + k);
+        }
+        let e = refused(&fan).to_string();
+        assert!(e.contains("vertex 0 has 8"), "{e}");
+    }
+
+    #[test]
+    fn a_file_too_big_or_missing_is_refused_naming_it() {
+        let e = load_obj(Path::new("/nonexistent/skirt.obj")).unwrap_err().to_string();
+        assert!(e.starts_with("/nonexistent/skirt.obj: cannot read it"), "{e}");
+        // A sparse file one byte over the limit: refused by its size, before it is read.
+        let path = std::env::temp_dir().join(format!("clothlab-big-{}.obj", std::process::id()));
+        std::fs::File::create(&path).unwrap().set_len(MAX_MESH_BYTES + 1).unwrap();
+        let e = load_obj(&path).unwrap_err();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(e.error, MeshError::TooBig { size: MAX_MESH_BYTES + 1, max: MAX_MESH_BYTES });
+    }
+}
