@@ -145,6 +145,14 @@ pub enum MeshError {
         /// The other.
         t1: usize,
     },
+    /// A pinned vertex that does not exist.
+    #[error("pinned vertex {vertex} does not exist: the mesh has {count} vertices (0 ..= {})", count.saturating_sub(1))]
+    NoSuchPin {
+        /// The vertex listed.
+        vertex: u32,
+        /// Vertices in the mesh.
+        count: usize,
+    },
     /// A vertex with more springs or triangles than the solvers' tables hold.
     #[error("vertex {vertex} has {count} {what}; the solvers' table holds {max}")]
     TooManyNeighbours {
@@ -360,6 +368,109 @@ impl TriMesh {
     /// The cloth's area, m².
     pub fn area(&self) -> f32 {
         (0..self.triangles.len()).map(|t| self.area2(t)).sum::<f32>() / 2.0
+    }
+}
+
+/// Where a mesh goes in the scene: scaled about the origin, rotated (about x, then y, then
+/// z), then moved.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Placement {
+    /// Scale per axis. Default 1.
+    pub scale: [f32; 3],
+    /// Rotation about x, y and z, degrees, applied in that order. Default 0.
+    pub rotate_deg: [f32; 3],
+    /// Translation, m. Default 0.
+    pub translate: [f32; 3],
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Self { scale: [1.0; 3], rotate_deg: [0.0; 3], translate: [0.0; 3] }
+    }
+}
+
+impl Placement {
+    /// The placement as one affine transform.
+    pub fn matrix(&self) -> glam::Affine3A {
+        let [rx, ry, rz] = self.rotate_deg.map(f32::to_radians);
+        let rot = glam::Quat::from_euler(glam::EulerRot::ZYX, rz, ry, rx);
+        glam::Affine3A::from_scale_rotation_translation(self.scale.into(), rot, self.translate.into())
+    }
+}
+
+/// Which vertices of a mesh are held (after placement).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum MeshPinning {
+    /// None: the cloth falls freely.
+    #[default]
+    None,
+    /// These vertices (0-based, in the file's order).
+    Vertices(Vec<u32>),
+    /// Every vertex with y below this height, m (placed).
+    BelowY(f32),
+    /// Every vertex with y above this height, m (placed): a skirt's waist.
+    AboveY(f32),
+}
+
+impl TriMesh {
+    /// The mesh moved by `placement` (triangles and uvs unchanged; a mirroring scale,
+    /// an odd number of negative factors, flips the windings back so normals keep their
+    /// side).
+    pub fn placed(&self, placement: &Placement) -> TriMesh {
+        let m = placement.matrix();
+        let positions = self.positions.iter().map(|&p| m.transform_point3(p.into()).into()).collect();
+        let mirrored = placement.scale.iter().filter(|s| **s < 0.0).count() % 2 == 1;
+        let triangles =
+            if mirrored { self.triangles.iter().map(|&[a, b, c]| [a, c, b]).collect() } else { self.triangles.clone() };
+        TriMesh { positions, uvs: self.uvs.clone(), triangles }
+    }
+
+    /// Per vertex, whether `pinning` holds it; a listed vertex that does not exist is
+    /// refused.
+    pub fn pinned(&self, pinning: &MeshPinning) -> Result<Vec<bool>, MeshError> {
+        let count = self.positions.len();
+        let mut held = vec![false; count];
+        match pinning {
+            MeshPinning::None => {}
+            MeshPinning::Vertices(list) => {
+                for &v in list {
+                    *held.get_mut(v as usize).ok_or(MeshError::NoSuchPin { vertex: v, count })? = true;
+                }
+            }
+            MeshPinning::BelowY(y) => held.iter_mut().zip(&self.positions).for_each(|(h, p)| *h = p[1] < *y),
+            MeshPinning::AboveY(y) => held.iter_mut().zip(&self.positions).for_each(|(h, p)| *h = p[1] > *y),
+        }
+        Ok(held)
+    }
+
+    /// Each vertex's mass for a cloth of `total` kg: its share of the area
+    /// ([`TriMesh::vertex_areas`]), so a uniform fabric has the same density everywhere.
+    pub fn vertex_masses(&self, total: f32) -> Vec<f32> {
+        let areas = self.vertex_areas();
+        let sum: f32 = areas.iter().sum();
+        areas.iter().map(|a| total * a / sum).collect()
+    }
+
+    /// Per vertex, tethers to the (up to) two nearest held vertices, as (pin, rest
+    /// distance): what `grid::build` gives a grid pinned by a list of points. Held vertices
+    /// get none. Brute force over the pins, so a mesh with more than 2.5e8 vertex–pin pairs
+    /// gets none (as the grid).
+    pub fn tethers(&self, held: &[bool]) -> Vec<Vec<(u32, f32)>> {
+        let pins: Vec<u32> = (0..held.len() as u32).filter(|&v| held[v as usize]).collect();
+        let dist = |a: usize, b: usize| glam::Vec3::from(self.positions[a]).distance(self.positions[b].into());
+        if pins.len() * held.len() > 250_000_000 {
+            return vec![Vec::new(); held.len()];
+        }
+        (0..held.len())
+            .map(|v| {
+                if held[v] {
+                    return Vec::new();
+                }
+                let mut near: Vec<(f32, u32)> = pins.iter().map(|&p| (dist(v, p as usize), p)).collect();
+                near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                near.into_iter().take(crate::grid::TETHER_SLOTS).map(|(d, p)| (p, d)).collect()
+            })
+            .collect()
     }
 }
 
@@ -581,6 +692,50 @@ mod tests {
         }
         let e = refused(&fan).to_string();
         assert!(e.contains("vertex 0 has 8"), "{e}");
+    }
+
+    #[test]
+    fn placement_pinning_masses_and_tethers() {
+        // The 3×3 grid mesh of 2 m: x in [-1, 1], z in [0, 2], y = 0.
+        let m = grid_mesh(3, 2.0);
+        // Rotated −90° about x (right-handed: +z turns to +y), the sheet stands up: z = 2
+        // goes to y = 2 after the scale of 0.5 and a lift of 1 m.
+        let p = Placement { scale: [0.5; 3], rotate_deg: [-90.0, 0.0, 0.0], translate: [0.0, 1.0, 0.0] };
+        let placed = m.placed(&p);
+        let far = placed.positions[8]; // (1, 0, 2) → (0.5, 0, 1) → (0.5, 1, 0) + (0, 1, 0)
+        for (got, want) in far.iter().zip([0.5, 2.0, 0.0]) {
+            assert!((got - want).abs() < 1e-6, "{far:?}");
+        }
+        // Rotation keeps the windings: the first triangle's normal is the rotated normal.
+        let [a, b, c] = placed.triangles[0].map(|i| glam::Vec3::from(placed.positions[i as usize]));
+        let nrm = (b - a).cross(c - a).normalize();
+        let [a0, b0, c0] = m.triangles[0].map(|i| glam::Vec3::from(m.positions[i as usize]));
+        let n0 = (b0 - a0).cross(c0 - a0).normalize();
+        assert!((p.matrix().transform_vector3(n0).normalize() - nrm).length() < 1e-6);
+        // A mirror flips the windings back: the normal is the mirrored one, not its reverse.
+        let mirror = Placement { scale: [-1.0, 1.0, 1.0], ..Placement::default() };
+        let mm = m.placed(&mirror);
+        let [a, b, c] = mm.triangles[0].map(|i| glam::Vec3::from(mm.positions[i as usize]));
+        assert!(((b - a).cross(c - a).normalize() - n0).length() < 1e-6);
+        // Pinning by rule and by list, after placement: the top row (y = 2) above 1.9 m.
+        let held = placed.pinned(&MeshPinning::AboveY(1.9)).unwrap();
+        assert_eq!(held.iter().filter(|h| **h).count(), 3);
+        assert!(held[6] && held[7] && held[8]);
+        assert_eq!(placed.pinned(&MeshPinning::BelowY(0.5)).unwrap(), vec![false; 9]);
+        let e = placed.pinned(&MeshPinning::Vertices(vec![0, 9])).unwrap_err().to_string();
+        assert_eq!(e, "pinned vertex 9 does not exist: the mesh has 9 vertices (0 ..= 8)");
+        // Masses follow the areas: 1 kg over 4 m² (unplaced); the centre vertex has six
+        // triangles of 0.5 m² each → 1 m² / 4 m² = 0.25 kg, a corner with one 0.5 m²
+        // triangle 1/24 kg, and the masses sum to the total.
+        let mass = m.vertex_masses(1.0);
+        assert!((mass.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+        assert!((mass[4] - 0.25).abs() < 1e-6, "{}", mass[4]);
+        assert!((mass[2] - 1.0 / 24.0).abs() < 1e-6, "{}", mass[2]);
+        // Tethers: the two nearest pins, nearest first, with their distances; none on pins.
+        let t = placed.tethers(&held);
+        assert!(t[7].is_empty());
+        assert_eq!(t[1].iter().map(|x| x.0).collect::<Vec<_>>(), vec![7, 6]);
+        assert!((t[1][0].1 - 1.0).abs() < 1e-6 && (t[1][1].1 - 0.5f32.hypot(1.0)).abs() < 1e-6, "{:?}", t[1]);
     }
 
     #[test]
