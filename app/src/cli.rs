@@ -211,6 +211,14 @@ pub struct SimArgs {
     /// Write the final state: `.obj` (mesh with normals and uvs) or `.json` (full state).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Record the run as binary glTF (`.glb`): the cloth with a morph target per recorded
+    /// frame and an animation playing them at their times, the colliders as static meshes
+    /// (Blender imports it as shape keys).
+    #[arg(long, value_name = "FILE.glb")]
+    pub record: Option<PathBuf>,
+    /// With `--record`: keep every K-th frame (and the first).
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub record_every: u32,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }

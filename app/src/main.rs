@@ -13,6 +13,7 @@ mod commands;
 mod files;
 mod gui;
 mod overrides;
+mod record;
 mod solvers;
 
 use std::process::ExitCode;

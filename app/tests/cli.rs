@@ -51,6 +51,62 @@ fn sim_runs_and_reports() {
 }
 
 #[test]
+fn sim_records_a_glb_whose_last_key_is_the_final_state() {
+    let dir = std::env::temp_dir().join(format!("clothlab-record-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let glb = dir.join("run.glb");
+    let json = dir.join("state.json");
+    // 8 frames of 8 substeps, every 2nd kept: frames 0, 2, 4, 6, 8.
+    let o = clothlab(&[
+        "sim",
+        "--backend",
+        "cpu",
+        "--n",
+        "8",
+        "--set",
+        "substeps=8",
+        "--steps",
+        "64",
+        "--record",
+        glb.to_str().unwrap(),
+        "--record-every",
+        "2",
+        "--out",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("(5 frames,"), "{}", String::from_utf8_lossy(&o.stdout));
+    let (doc, buffers, _) = gltf::import(&glb).unwrap();
+    let get = |b: gltf::Buffer<'_>| Some(&buffers[b.index()][..]);
+    let cloth = doc.meshes().find(|m| m.name() == Some("cloth")).unwrap();
+    let primitive = cloth.primitives().next().unwrap();
+    let reader = primitive.reader(get);
+    let base: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+    let last: Vec<[f32; 3]> = reader.read_morph_targets().last().unwrap().0.unwrap().collect();
+    let channel = doc.animations().next().unwrap().channels().next().unwrap();
+    let times: Vec<f32> = channel.reader(get).read_inputs().unwrap().collect();
+    assert_eq!(times.len(), 5);
+    // The default frame is 1/60 s: the last key is at 8/60 s.
+    assert!((times[4] - 8.0 / 60.0).abs() < 1e-6, "{times:?}");
+    let state: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let pos = state["pos"].as_array().unwrap();
+    assert_eq!(base.len(), pos.len());
+    // Base plus the last target is the state `--out` wrote, within 2 ulps of 2 m (one
+    // subtraction and one addition in f32; the JSON holds the f32 values exactly).
+    let mut moved = 0.0f32;
+    for ((b, d), p) in base.iter().zip(&last).zip(pos) {
+        for c in 0..3 {
+            let want = p[c].as_f64().unwrap() as f32;
+            assert!((b[c] + d[c] - want).abs() <= 5e-7, "{} vs {want}", b[c] + d[c]);
+            moved = moved.max(d[c].abs());
+        }
+    }
+    // And the cloth did move (it falls under gravity for 0.13 s: centimetres).
+    assert!(moved > 0.01, "largest displacement {moved} m");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn bad_input_is_refused_with_one_clear_message() {
     refused(&["sim", "--n", "1"], "grid side must be in 2 ..= 4096");
     refused(&["sim", "--n", "100000"], "grid side must be in 2 ..= 4096");
@@ -66,6 +122,10 @@ fn bad_input_is_refused_with_one_clear_message() {
     refused(&["sim", "--set", "no_such_thing=1"], "unknown parameter `no_such_thing`");
     refused(&["sim", "--set", "damping"], "NAME=VALUE");
     refused(&["sim", "--n", "4", "--out", "/tmp/state.txt"], "unknown format");
+    refused(&["sim", "--n", "4", "--record", "/tmp/run.gltf"], "give a .glb file name");
+    refused(&["sim", "--n", "4", "--record", "/nonexistent-dir/run.glb"], "cannot write /nonexistent-dir/run.glb");
+    refused(&["sim", "--n", "4", "--record-every", "0"], "--record-every");
+    refused(&["sim", "--n", "1024", "--steps", "1000000", "--record", "/tmp/big.glb"], "raise --record-every");
     refused(
         &["sim", "--n", "4", "--steps", "16", "--out", "/nonexistent-dir/x.obj"],
         "cannot write /nonexistent-dir/x.obj",

@@ -9,6 +9,7 @@ use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 
 use crate::cli::{SimArgs, StatsArg};
+use crate::record::{MAX_GLB_BYTES, Recording, glb};
 use crate::solvers::{Shared, make};
 
 /// Most substeps one `sim` run may ask for.
@@ -33,6 +34,25 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     };
     let frames = args.steps.div_ceil(params.substeps as u64);
     let substeps = frames * params.substeps as u64;
+    let record = match &args.record {
+        Some(path) => {
+            if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
+                bail!("--record {}: a recording is binary glTF, give a .glb file name", path.display());
+            }
+            crate::files::check_writable(path)?;
+            let kept = 1 + frames / args.record_every as u64;
+            let np = scene.num_particles() as u64;
+            let bytes = Recording::predicted_bytes(kept, np, 2 * np);
+            if bytes > MAX_GLB_BYTES {
+                bail!(
+                    "--record: {kept} frames of {np} particles would be {bytes} bytes, more than the {MAX_GLB_BYTES} a .glb may hold; raise --record-every"
+                );
+            }
+            Some(path)
+        }
+        None => None,
+    };
+    let mut recording = Recording::default();
     let setup = args.gpu.setup(args.backend)?;
     let mut any = make(args.backend, scene.clone(), params, &setup, &Shared::None)?;
     let cpu_path = match &any {
@@ -40,11 +60,20 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         _ => None,
     };
     let solver = any.get();
-    let t0 = Instant::now();
-    for _ in 0..frames {
-        solver.step_frame()?;
+    let frame_dt = solver.params().frame_dt;
+    let mut wall = std::time::Duration::ZERO;
+    if record.is_some() {
+        recording.push(0.0, &solver.state()?);
     }
-    let wall = t0.elapsed();
+    for f in 1..=frames {
+        let t0 = Instant::now();
+        solver.step_frame()?;
+        wall += t0.elapsed();
+        // Read back outside the timed part (a GPU solver waits for its frame here).
+        if record.is_some() && f % args.record_every as u64 == 0 {
+            recording.push(f as f32 * frame_dt, &solver.state()?);
+        }
+    }
     let state = solver.state()?;
     let (_, topo) = clothlab_core::build(&scene, solver.params())?;
     let summary = summarize(&state, &topo);
@@ -100,6 +129,11 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
             OutFormat::Json => write_json(w, &state),
         })?;
         println!("state written  {}", path.display());
+    }
+    if let Some(path) = record {
+        let bytes = glb(&recording, &topo, &scene)?;
+        crate::files::write_atomic(path, |w| std::io::Write::write_all(w, &bytes))?;
+        println!("recorded       {} ({} frames, {} bytes)", path.display(), recording.frames.len(), bytes.len());
     }
     Ok(if summary.nan_count == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }

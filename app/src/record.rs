@@ -1,0 +1,410 @@
+//! `sim --record out.glb`: the run as binary glTF 2.0, built with gltf-json and written as
+//! a `gltf::binary::Glb`.
+//!
+//! The cloth is one mesh (triangles, uvs, the first frame's positions and normals) with a
+//! morph target per recorded frame (its positions less the first frame's), and an
+//! animation of the mesh's weights with STEP interpolation: at frame k's time target k
+//! has weight 1 and every other 0. Blender imports this as shape keys driven by the
+//! animation; three.js and glTF viewers play it as is. The colliders are static meshes:
+//! each sphere (a UV sphere of 24 × 12), each box, and the floor as a square of 10 m.
+
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+
+use anyhow::{Result, bail};
+use clothlab_core::{ClothState, ClothTopology, Scene};
+use gltf::json;
+use json::validation::Checked::Valid;
+use json::validation::USize64;
+
+/// The most bytes a `.glb` may hold (its length field is a u32; kept well below).
+pub const MAX_GLB_BYTES: u64 = 2 << 30;
+
+/// The recorded frames of one run.
+#[derive(Debug, Clone, Default)]
+pub struct Recording {
+    /// Time of each recorded frame, s.
+    pub times: Vec<f32>,
+    /// Positions of each recorded frame.
+    pub frames: Vec<Vec<[f32; 3]>>,
+    /// Normals of the first frame.
+    pub normals: Vec<[f32; 3]>,
+}
+
+impl Recording {
+    /// Bytes a recording of `frames` frames of `particles` particles and `triangles`
+    /// triangles will take (morph targets dominate), for refusing a run before it starts.
+    pub fn predicted_bytes(frames: u64, particles: u64, triangles: u64) -> u64 {
+        frames * particles * 12 + particles * (12 + 12 + 8) + triangles * 12 + frames * frames * 4 + (1 << 20)
+    }
+
+    /// Adds the state at time `t`.
+    pub fn push(&mut self, t: f32, state: &ClothState) {
+        if self.frames.is_empty() {
+            self.normals = state.normal.iter().map(|n| [n[0], n[1], n[2]]).collect();
+        }
+        self.times.push(t);
+        self.frames.push(state.pos.iter().map(|p| [p[0], p[1], p[2]]).collect());
+    }
+}
+
+/// Appends `data` to the binary chunk (4-byte aligned) and returns its view.
+fn view(
+    root: &mut json::Root,
+    bin: &mut Vec<u8>,
+    data: &[u8],
+    target: Option<json::buffer::Target>,
+) -> json::Index<json::buffer::View> {
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let offset = bin.len();
+    bin.extend_from_slice(data);
+    root.push(json::buffer::View {
+        buffer: json::Index::new(0),
+        byte_length: USize64::from(data.len()),
+        byte_offset: Some(USize64::from(offset)),
+        byte_stride: None,
+        extensions: Default::default(),
+        extras: Default::default(),
+        name: None,
+        target: target.map(Valid),
+    })
+}
+
+/// An accessor over a whole view.
+fn accessor(
+    root: &mut json::Root,
+    view: json::Index<json::buffer::View>,
+    count: usize,
+    component: json::accessor::ComponentType,
+    type_: json::accessor::Type,
+    bounds: Option<([f32; 3], [f32; 3])>,
+) -> json::Index<json::Accessor> {
+    root.push(json::Accessor {
+        buffer_view: Some(view),
+        byte_offset: Some(USize64(0)),
+        count: USize64::from(count),
+        component_type: Valid(json::accessor::GenericComponentType(component)),
+        extensions: Default::default(),
+        extras: Default::default(),
+        type_: Valid(type_),
+        min: bounds.map(|b| json::Value::from(b.0.to_vec())),
+        max: bounds.map(|b| json::Value::from(b.1.to_vec())),
+        name: None,
+        normalized: false,
+        sparse: None,
+    })
+}
+
+fn bounds(points: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
+    let mut lo = [f32::MAX; 3];
+    let mut hi = [f32::MIN; 3];
+    for p in points {
+        for c in 0..3 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    (lo, hi)
+}
+
+/// A static mesh node: positions and triangles.
+fn static_mesh(
+    root: &mut json::Root,
+    bin: &mut Vec<u8>,
+    name: &str,
+    pos: &[[f32; 3]],
+    tris: &[[u32; 3]],
+) -> json::Index<json::Node> {
+    let pv = view(root, bin, bytemuck::cast_slice(pos), Some(json::buffer::Target::ArrayBuffer));
+    let pa = accessor(
+        root,
+        pv,
+        pos.len(),
+        json::accessor::ComponentType::F32,
+        json::accessor::Type::Vec3,
+        Some(bounds(pos)),
+    );
+    let iv = view(root, bin, bytemuck::cast_slice(tris), Some(json::buffer::Target::ElementArrayBuffer));
+    let ia = accessor(root, iv, 3 * tris.len(), json::accessor::ComponentType::U32, json::accessor::Type::Scalar, None);
+    let primitive = json::mesh::Primitive {
+        attributes: BTreeMap::from([(Valid(json::mesh::Semantic::Positions), pa)]),
+        extensions: Default::default(),
+        extras: Default::default(),
+        indices: Some(ia),
+        material: None,
+        mode: Valid(json::mesh::Mode::Triangles),
+        targets: None,
+    };
+    let mesh = root.push(json::Mesh {
+        extensions: Default::default(),
+        extras: Default::default(),
+        name: Some(name.into()),
+        primitives: vec![primitive],
+        weights: None,
+    });
+    root.push(json::Node { mesh: Some(mesh), name: Some(name.into()), ..Default::default() })
+}
+
+/// A UV sphere around `c` of radius `r`, counter-clockwise seen from outside.
+fn sphere_mesh(c: [f32; 3], r: f32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+    let (around, rings) = (24u32, 12u32);
+    let mut pos = Vec::new();
+    for j in 0..=rings {
+        let th = std::f32::consts::PI * j as f32 / rings as f32;
+        for i in 0..around {
+            let ph = std::f32::consts::TAU * i as f32 / around as f32;
+            pos.push([c[0] + r * th.sin() * ph.cos(), c[1] + r * th.cos(), c[2] + r * th.sin() * ph.sin()]);
+        }
+    }
+    let mut tris = Vec::new();
+    for j in 0..rings {
+        for i in 0..around {
+            let a = j * around + i;
+            let b = j * around + (i + 1) % around;
+            let (a2, b2) = (a + around, b + around);
+            tris.push([a, b, b2]);
+            tris.push([a, b2, a2]);
+        }
+    }
+    (pos, tris)
+}
+
+/// An axis-aligned box's 8 corners and 12 triangles, counter-clockwise from outside.
+fn box_mesh(lo: [f32; 3], hi: [f32; 3]) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+    let pos: Vec<[f32; 3]> = (0..8)
+        .map(|k| {
+            [
+                if k & 1 == 0 { lo[0] } else { hi[0] },
+                if k & 2 == 0 { lo[1] } else { hi[1] },
+                if k & 4 == 0 { lo[2] } else { hi[2] },
+            ]
+        })
+        .collect();
+    // Faces as quads (a, b, c, d) counter-clockwise from outside.
+    let quads = [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]];
+    let tris = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+    (pos, tris)
+}
+
+/// The recording as `.glb` bytes.
+pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u8>> {
+    let Some(base) = rec.frames.first() else { bail!("--record: no frame was recorded") };
+    let predicted = Recording::predicted_bytes(rec.frames.len() as u64, base.len() as u64, topo.triangles.len() as u64);
+    if predicted > MAX_GLB_BYTES {
+        bail!(
+            "--record: {predicted} bytes, more than the {MAX_GLB_BYTES} a .glb may hold; record fewer frames (--record-every)"
+        );
+    }
+    let mut root = json::Root::default();
+    let mut bin: Vec<u8> = Vec::new();
+    use json::accessor::{ComponentType as C, Type as T};
+    let t = json::buffer::Target::ArrayBuffer;
+
+    // The cloth: base positions, normals, uvs, triangles, a target per frame.
+    let pv = view(&mut root, &mut bin, bytemuck::cast_slice(base), Some(t));
+    let positions = accessor(&mut root, pv, base.len(), C::F32, T::Vec3, Some(bounds(base)));
+    let nv = view(&mut root, &mut bin, bytemuck::cast_slice(&rec.normals), Some(t));
+    let normals = accessor(&mut root, nv, rec.normals.len(), C::F32, T::Vec3, None);
+    let uv = view(&mut root, &mut bin, bytemuck::cast_slice(&topo.uv), Some(t));
+    let uvs = accessor(&mut root, uv, topo.uv.len(), C::F32, T::Vec2, None);
+    let iv = view(
+        &mut root,
+        &mut bin,
+        bytemuck::cast_slice(&topo.triangles),
+        Some(json::buffer::Target::ElementArrayBuffer),
+    );
+    let indices = accessor(&mut root, iv, 3 * topo.triangles.len(), C::U32, T::Scalar, None);
+    let mut targets = Vec::with_capacity(rec.frames.len());
+    for frame in &rec.frames {
+        let d: Vec<[f32; 3]> = frame.iter().zip(base).map(|(p, b)| [p[0] - b[0], p[1] - b[1], p[2] - b[2]]).collect();
+        let dv = view(&mut root, &mut bin, bytemuck::cast_slice(&d), Some(t));
+        let da = accessor(&mut root, dv, d.len(), C::F32, T::Vec3, Some(bounds(&d)));
+        targets.push(json::mesh::MorphTarget { positions: Some(da), normals: None, tangents: None });
+    }
+    let primitive = json::mesh::Primitive {
+        attributes: BTreeMap::from([
+            (Valid(json::mesh::Semantic::Positions), positions),
+            (Valid(json::mesh::Semantic::Normals), normals),
+            (Valid(json::mesh::Semantic::TexCoords(0)), uvs),
+        ]),
+        extensions: Default::default(),
+        extras: Default::default(),
+        indices: Some(indices),
+        material: None,
+        mode: Valid(json::mesh::Mode::Triangles),
+        targets: Some(targets),
+    };
+    let frames = rec.frames.len();
+    let mut weights0 = vec![0.0f32; frames];
+    weights0[0] = 1.0;
+    let mesh = root.push(json::Mesh {
+        extensions: Default::default(),
+        extras: Default::default(),
+        name: Some("cloth".into()),
+        primitives: vec![primitive],
+        weights: Some(weights0),
+    });
+    let cloth = root.push(json::Node { mesh: Some(mesh), name: Some("cloth".into()), ..Default::default() });
+
+    // The animation: at frame k's time, target k alone (STEP).
+    let tv = view(&mut root, &mut bin, bytemuck::cast_slice(&rec.times), None);
+    let t_last = *rec.times.last().unwrap_or(&0.0);
+    let input = root.push(json::Accessor {
+        min: Some(json::Value::from(vec![rec.times[0]])),
+        max: Some(json::Value::from(vec![t_last])),
+        ..json_accessor(tv, frames, T::Scalar)
+    });
+    let mut w = vec![0.0f32; frames * frames];
+    for k in 0..frames {
+        w[k * frames + k] = 1.0;
+    }
+    let wv = view(&mut root, &mut bin, bytemuck::cast_slice(&w), None);
+    let output = root.push(json_accessor(wv, frames * frames, T::Scalar));
+    let sampler = json::animation::Sampler {
+        extensions: Default::default(),
+        extras: Default::default(),
+        input,
+        interpolation: Valid(json::animation::Interpolation::Step),
+        output,
+    };
+    root.push(json::Animation {
+        extensions: Default::default(),
+        extras: Default::default(),
+        channels: vec![json::animation::Channel {
+            sampler: json::Index::new(0),
+            target: json::animation::Target {
+                extensions: Default::default(),
+                extras: Default::default(),
+                node: cloth,
+                path: Valid(json::animation::Property::MorphTargetWeights),
+            },
+            extensions: Default::default(),
+            extras: Default::default(),
+        }],
+        name: Some("simulation".into()),
+        samplers: vec![sampler],
+    });
+
+    // The colliders.
+    let mut nodes = vec![cloth];
+    for (k, s) in scene.spheres.iter().enumerate() {
+        let (p, t) = sphere_mesh(s.center, s.radius);
+        nodes.push(static_mesh(&mut root, &mut bin, &format!("sphere {k}"), &p, &t));
+    }
+    for (k, b) in scene.boxes.iter().enumerate() {
+        let lo = [b.min[0], b.min[1], b.min[2]];
+        let hi = [b.max[0], b.max[1], b.max[2]];
+        let (p, t) = box_mesh(lo, hi);
+        nodes.push(static_mesh(&mut root, &mut bin, &format!("box {k}"), &p, &t));
+    }
+    if let Some(y) = scene.floor_y {
+        let p = [[-5.0, y, -5.0], [5.0, y, -5.0], [5.0, y, 5.0], [-5.0, y, 5.0]];
+        nodes.push(static_mesh(&mut root, &mut bin, "floor", &p, &[[0, 2, 1], [0, 3, 2]]));
+    }
+    root.push(json::Scene { extensions: Default::default(), extras: Default::default(), name: None, nodes });
+    root.scene = Some(json::Index::new(0));
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    root.push(json::Buffer {
+        byte_length: USize64::from(bin.len()),
+        extensions: Default::default(),
+        extras: Default::default(),
+        name: None,
+        uri: None,
+    });
+    let mut text = json::serialize::to_vec(&root)?;
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let length = 12 + 8 + text.len() + 8 + bin.len();
+    let glb = gltf::binary::Glb {
+        header: gltf::binary::Header { magic: *b"glTF", version: 2, length: u32::try_from(length)? },
+        json: Cow::Owned(text),
+        bin: Some(Cow::Owned(bin)),
+    };
+    Ok(glb.to_vec()?)
+}
+
+/// A float accessor over a whole view, without bounds.
+fn json_accessor(view: json::Index<json::buffer::View>, count: usize, type_: json::accessor::Type) -> json::Accessor {
+    json::Accessor {
+        buffer_view: Some(view),
+        byte_offset: Some(USize64(0)),
+        count: USize64::from(count),
+        component_type: Valid(json::accessor::GenericComponentType(json::accessor::ComponentType::F32)),
+        extensions: Default::default(),
+        extras: Default::default(),
+        type_: Valid(type_),
+        min: None,
+        max: None,
+        name: None,
+        normalized: false,
+        sparse: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_recording_reads_back_with_its_positions_animation_and_colliders() {
+        let scene = Scene::with_n(6);
+        let params = clothlab_core::SimParams::default();
+        let (mut state, topo) = clothlab_core::build(&scene, &params).unwrap();
+        let mut rec = Recording::default();
+        for k in 0..4 {
+            // Three frames after the first, each moved down by 0.1 m and sideways by k mm.
+            rec.push(k as f32 / 60.0, &state);
+            for p in &mut state.pos {
+                p[1] -= 0.1;
+                p[0] += 0.001 * k as f32;
+            }
+        }
+        let bytes = glb(&rec, &topo, &scene).unwrap();
+        let (doc, buffers, _) = gltf::import_slice(&bytes).unwrap();
+        let get = |b: gltf::Buffer<'_>| Some(&buffers[b.index()][..]);
+        let mut names: Vec<String> = doc.nodes().filter_map(|n| n.name().map(String::from)).collect();
+        names.sort();
+        assert_eq!(names, ["cloth", "floor", "sphere 0", "sphere 1", "sphere 2"]);
+        let cloth = doc.meshes().find(|m| m.name() == Some("cloth")).unwrap();
+        let prim = cloth.primitives().next().unwrap();
+        let r = prim.reader(get);
+        let base: Vec<[f32; 3]> = r.read_positions().unwrap().collect();
+        assert_eq!(base.len(), 36);
+        assert_eq!(r.read_indices().unwrap().into_u32().count(), 3 * topo.triangles.len());
+        assert_eq!(r.read_tex_coords(0).unwrap().into_f32().count(), 36);
+        // Base plus target k is frame k, to the float (a subtraction and an addition of
+        // values near 2 m: within 2 ulps, 5e-7 m).
+        for (k, (tp, _, _)) in r.read_morph_targets().enumerate() {
+            let d: Vec<[f32; 3]> = tp.unwrap().collect();
+            for ((b, d), want) in base.iter().zip(&d).zip(&rec.frames[k]) {
+                for c in 0..3 {
+                    assert!((b[c] + d[c] - want[c]).abs() <= 5e-7, "frame {k}: {} vs {}", b[c] + d[c], want[c]);
+                }
+            }
+        }
+        // One animation of the weights, STEP, a key per frame at its time.
+        let anim = doc.animations().next().unwrap();
+        let ch = anim.channels().next().unwrap();
+        assert_eq!(ch.target().property(), gltf::animation::Property::MorphTargetWeights);
+        assert_eq!(ch.sampler().interpolation(), gltf::animation::Interpolation::Step);
+        let cr = ch.reader(get);
+        let times: Vec<f32> = cr.read_inputs().unwrap().collect();
+        assert_eq!(times, rec.times);
+        let gltf::animation::util::ReadOutputs::MorphTargetWeights(w) = cr.read_outputs().unwrap() else { panic!() };
+        let w: Vec<f32> = w.into_f32().collect();
+        assert_eq!(w.len(), 16);
+        assert!(w.iter().enumerate().all(|(i, v)| *v == if i % 5 == 0 { 1.0 } else { 0.0 }));
+    }
+
+    #[test]
+    fn a_recording_too_big_for_a_glb_is_refused() {
+        // 4000 frames of a 512² cloth: 12.6 GB of targets.
+        assert!(Recording::predicted_bytes(4000, 512 * 512, 2 * 511 * 511) > MAX_GLB_BYTES);
+        assert!(Recording::predicted_bytes(100, 100 * 100, 2 * 99 * 99) < MAX_GLB_BYTES);
+    }
+}
