@@ -50,7 +50,7 @@ fn expected_layouts() -> Vec<Layout> {
                 self_thickness,
                 spacing,
                 inv_cell,
-                _pad0
+                num_particles
             ]
         ),
         layout!(SpringSlot, "SpringSlot", [neighbor, rest, ks, kd]),

@@ -44,6 +44,9 @@ impl PhysicsArgs {
             None => Setup::default_with_n(default_n),
         };
         if let Some(n) = n {
+            if setup.scene.cloth.is_mesh() {
+                bail!("--n {n} sets a grid's side, and this scene's cloth is a mesh");
+            }
             setup.scene.cloth.n = n;
         }
         if let Err(e) = setup.scene.validate() {

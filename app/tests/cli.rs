@@ -107,6 +107,47 @@ fn sim_records_a_glb_whose_last_key_is_the_final_state() {
 }
 
 #[test]
+fn a_mesh_scene_runs_on_the_cpu_solvers_records_and_is_refused_elsewhere_in_one_line() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/mesh-skirt.toml");
+    let dir = std::env::temp_dir().join(format!("clothlab-mesh-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let glb = dir.join("skirt.glb");
+    let o = clothlab(&[
+        "sim",
+        "--backend",
+        "cpu-par",
+        "--scene",
+        scene,
+        "--steps",
+        "64",
+        "--record",
+        glb.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for key in ["meshes/skirt.obj (1536 particles, 2944 triangles,", "NaN            none", "a mesh runs its kernels"] {
+        assert!(text.contains(key), "no `{key}` in:\n{text}");
+    }
+    // The recording holds the mesh: its 1536 vertices and triangles, five keys.
+    let (doc, _, _) = gltf::import(&glb).unwrap();
+    let cloth = doc.meshes().find(|m| m.name() == Some("cloth")).unwrap();
+    let prim = cloth.primitives().next().unwrap();
+    assert_eq!(prim.get(&gltf::Semantic::Positions).unwrap().count(), 1536);
+    assert_eq!(prim.indices().unwrap().count(), 3 * 2944);
+    std::fs::remove_dir_all(&dir).ok();
+    refused(
+        &["sim", "--backend", "wgpu", "--scene", scene],
+        "a mesh cloth runs on the cpu and cpu-par backends for now",
+    );
+    refused(
+        &["sim", "--backend", "vulkan-naive", "--scene", scene],
+        "a mesh cloth runs on the cpu and cpu-par backends",
+    );
+    refused(&["sim", "--backend", "cpu", "--scene", scene, "--n", "32"], "--n 32 sets a grid's side");
+    refused(&["sim", "--backend", "cpu", "--scene", scene, "--integrator", "xpbd"], "XPBD colours springs");
+}
+
+#[test]
 fn bad_input_is_refused_with_one_clear_message() {
     refused(&["sim", "--n", "1"], "grid side must be in 2 ..= 4096");
     refused(&["sim", "--n", "100000"], "grid side must be in 2 ..= 4096");

@@ -138,9 +138,11 @@ pub struct Spring {
 /// The mutable state of the cloth: what a solver advances and a renderer draws.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ClothState {
-    /// Particles per side.
+    /// Particles per side; 0 for a mesh.
     pub n: u32,
-    /// Positions, m; w = mobility (1 free, 0 pinned).
+    /// Positions, m; w = relative inverse mass: the reference mass
+    /// ([`StepParams::particle_mass`]) over the particle's (1 on a grid; a mesh's vertices
+    /// carry their share of the area), 0 pinned.
     pub pos: Vec<V4>,
     /// Velocities, m/s; w unused (0).
     pub vel: Vec<V4>,
@@ -152,13 +154,20 @@ pub struct ClothState {
 }
 
 impl ClothState {
-    /// Checks that this is a finite state of an `n × n` grid (what `Solver::set_state`
-    /// accepts).
-    pub fn check(&self, n: u32) -> Result<(), crate::error::SolverError> {
-        let np = n as usize * n as usize;
+    /// Checks that this is a finite state of the cloth `topo` describes, an `n × n` grid
+    /// or a mesh (what `Solver::set_state` accepts).
+    pub fn check(&self, topo: &ClothTopology) -> Result<(), crate::error::SolverError> {
+        let (n, np) = (topo.n, topo.num_particles());
         let bufs = [&self.pos, &self.vel, &self.force, &self.normal];
         if self.n != n || bufs.iter().any(|v| v.len() != np) {
-            return Err(crate::error::SolverError::GridMismatch { want: n, got: self.n });
+            return Err(if topo.mesh.is_some() || self.n == 0 {
+                crate::error::SolverError::Invalid(format!(
+                    "the state has {} particles, the solver's cloth {np}",
+                    self.pos.len()
+                ))
+            } else {
+                crate::error::SolverError::GridMismatch { want: n, got: self.n }
+            });
         }
         if !bufs.iter().all(|v| v.iter().flatten().all(|x| x.is_finite())) {
             return Err(crate::error::SolverError::Invalid("state holds non-finite values".into()));
@@ -170,7 +179,7 @@ impl ClothState {
 /// What does not change while simulating: connectivity and spring constants.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClothTopology {
-    /// Particles per side.
+    /// Particles per side; 0 for a mesh.
     pub n: u32,
     /// Texture coordinates per particle, in [0, 1]².
     pub uv: Vec<[f32; 2]>,
@@ -184,8 +193,23 @@ pub struct ClothTopology {
     pub face_slots: Vec<[i32; FACE_SLOTS]>,
     /// Per particle, the tethers to the nearest pins.
     pub tethers: Vec<[Tether; TETHER_SLOTS]>,
-    /// Distance between neighbouring particles at rest, m.
+    /// Distance between neighbouring particles at rest, m (a mesh: the mean edge length).
     pub spacing: f32,
+    /// What only a mesh has; `None` for a grid.
+    pub mesh: Option<std::sync::Arc<MeshTables>>,
+}
+
+/// The tables of a cloth made from a mesh that a grid computes from its place: the kind of
+/// each spring slot and each particle's mass (for the spring constants).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshTables {
+    /// [`SpringKind`] of each slot of the gather table (`SLOTS` per particle): edges are
+    /// structural, the springs across an edge bending.
+    pub slot_kind: Vec<SpringKind>,
+    /// Each particle's mass, kg (its share of the cloth's area).
+    pub mass: Vec<f32>,
+    /// The lightest free particle's mass, kg (what the integrators' stability needs).
+    pub min_mass: f32,
 }
 
 impl ClothTopology {
@@ -199,7 +223,7 @@ impl ClothTopology {
     /// [`build`] makes). Solvers then read them once instead of per particle.
     pub fn uniform_interior_slots(&self) -> Option<[SpringSlot; SLOTS]> {
         let n = self.n as usize;
-        if n <= 4 {
+        if n <= 4 || self.mesh.is_some() {
             return None;
         }
         let first = 2 * n + 2;
@@ -230,6 +254,9 @@ impl ClothTopology {
     /// everywhere, border included, and never read the table. A slot no particle has
     /// (n ≤ 2) is [`SpringSlot::EMPTY`].
     pub fn grid_slots(&self) -> Option<[SpringSlot; SLOTS]> {
+        if self.mesh.is_some() || self.n == 0 {
+            return None;
+        }
         let n = self.n as i64;
         let mut uni = [None::<SpringSlot>; SLOTS];
         for j in 0..n {
@@ -259,8 +286,35 @@ impl ClothTopology {
         Some(uni.map(|u| u.unwrap_or(SpringSlot::EMPTY)))
     }
 
+    /// Whether `params` can simulate this cloth ([`SimParams::validate_for`]; a mesh is
+    /// checked at its lightest particle's mass).
+    pub fn validate_params(&self, params: &SimParams) -> Result<(), ParamError> {
+        match &self.mesh {
+            None => params.validate_for(self.n, self.spacing),
+            Some(m) => {
+                crate::mesh::check_params(params)?;
+                params.validate_for_mass(m.min_mass, self.spacing, "for this mesh")
+            }
+        }
+    }
+
     /// Rebuilds the spring constants for new parameters (rest lengths stay).
     pub fn set_spring_constants(&mut self, params: &SimParams) {
+        if let Some(mesh) = self.mesh.clone() {
+            let consts = |a: usize, b: usize, kind: SpringKind| {
+                params.spring_constants_for_mass(mesh.mass[a].min(mesh.mass[b]), self.spacing)[kind as usize]
+            };
+            for (k, slot) in self.slots.iter_mut().enumerate() {
+                if slot.neighbor >= 0 {
+                    (slot.ks, slot.kd) = consts(k / SLOTS, slot.neighbor as usize, mesh.slot_kind[k]);
+                }
+            }
+            for s in &mut self.springs {
+                let kind = if s.kind == SpringKind::Bend as u32 { SpringKind::Bend } else { SpringKind::Structural };
+                (s.ks, s.kd) = consts(s.a as usize, s.b as usize, kind);
+            }
+            return;
+        }
         let consts = params.spring_constants(self.n, self.spacing);
         for (k, slot) in self.slots.iter_mut().enumerate() {
             if slot.neighbor >= 0 {
@@ -292,6 +346,9 @@ fn tri_index(n: u32, qi: u32, qj: u32, t: u32) -> i32 {
 pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopology), ParamError> {
     scene.validate()?;
     params.validate()?;
+    if let Some(mesh) = &scene.cloth.mesh_data {
+        return crate::mesh::build_cloth(&scene.cloth, mesh, params);
+    }
     let n = scene.cloth.n;
     let nu = n as usize;
     let np = nu * nu;
@@ -400,7 +457,8 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
             let pins: &[u32] = match scene.cloth.pinning {
                 Pinning::TopCorners => &[0, n - 1],
                 Pinning::TopEdge => &[i],
-                Pinning::None => &[],
+                // A mesh's rules (refused for a grid by `Scene::validate`).
+                Pinning::None | Pinning::Vertices(_) | Pinning::BelowY(_) | Pinning::AboveY(_) => &[],
                 Pinning::Points(_) => {
                     for &pin in &listed {
                         let d = (dist(pos[me], pos[pin as usize]), pin);
@@ -427,7 +485,7 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
     let v0 = scene.cloth.velocity;
     let vel = pos.iter().map(|x| if x[3] == 0.0 { [0.0; 4] } else { [v0[0], v0[1], v0[2], 0.0] }).collect();
     let state = ClothState { n, vel, pos, force: zero.clone(), normal: zero };
-    let topo = ClothTopology { n, uv, triangles, slots, springs, face_slots, tethers, spacing };
+    let topo = ClothTopology { n, uv, triangles, slots, springs, face_slots, tethers, spacing, mesh: None };
     Ok((state, topo))
 }
 
@@ -475,7 +533,7 @@ pub struct StepParams {
     pub friction: f32,
     /// Strain limit τ.
     pub strain_limit: f32,
-    /// Particles per side.
+    /// Particles per side; 0 for a mesh.
     pub n: u32,
     /// Number of spheres in use.
     pub num_spheres: u32,
@@ -490,8 +548,8 @@ pub struct StepParams {
     /// `1 / self_thickness` (the hash's cells are cubes of side the thickness), computed
     /// here so that every backend multiplies by the same number; 0 when off.
     pub inv_cell: f32,
-    /// Padding to 16 bytes.
-    pub _pad0: u32,
+    /// Number of particles (`n²` on a grid).
+    pub num_particles: u32,
 }
 
 impl StepParams {
@@ -512,19 +570,19 @@ impl StepParams {
             dt: params.dt(),
             damping: params.damping,
             air_drag: params.air_drag,
-            particle_mass: params.particle_mass(scene.cloth.n),
+            particle_mass: params.cloth_mass / scene.num_particles() as f32,
             floor_y: scene.floor_height(),
             margin: params.collision_margin,
             friction: params.friction,
             strain_limit: params.strain_limit,
-            n: scene.cloth.n,
+            n: if scene.cloth.mesh_data.is_some() { 0 } else { scene.cloth.n },
             num_spheres: scene.spheres.len() as u32,
             num_boxes: scene.boxes.len() as u32,
             grab_index,
             self_thickness: if params.self_collision { params.self_thickness } else { 0.0 },
-            spacing: scene.cloth.size / (scene.cloth.n - 1) as f32,
+            spacing: scene.spacing(),
             inv_cell: if params.self_collision { 1.0 / params.self_thickness } else { 0.0 },
-            _pad0: 0,
+            num_particles: scene.num_particles() as u32,
         }
     }
 }

@@ -309,14 +309,20 @@ impl SimParams {
     /// (k N/m, c N·s/m) of the structural, shear and bend springs of an `n × n` cloth with
     /// grid spacing `spacing` m, in either unit system.
     pub fn spring_constants(&self, n: u32, spacing: f32) -> [(f32, f32); 3] {
+        self.spring_constants_for_mass(self.particle_mass(n), spacing)
+    }
+
+    /// [`SimParams::spring_constants`] for springs between particles of mass `m` kg (a
+    /// mesh's spring takes its lighter end's mass) at mean spacing `spacing` m.
+    pub fn spring_constants_for_mass(&self, m: f32, spacing: f32) -> [(f32, f32); 3] {
         let families = [
             (self.structural_stiffness, self.structural_damping, self.stretch_modulus),
             (self.shear_stiffness, self.shear_damping, self.shear_modulus),
             (self.bend_stiffness, self.bend_damping, self.bend_modulus / (spacing * spacing).max(1e-12)),
         ];
-        let m = self.particle_mass(n);
+        let dt = self.dt();
         families.map(|(kappa, zeta, k_physical)| match self.stiffness_units {
-            StiffnessUnits::Fraction => (self.stiffness_n_per_m(kappa, n), self.damping_ns_per_m(zeta, n)),
+            StiffnessUnits::Fraction => (kappa * m / (dt * dt), zeta * m / dt),
             StiffnessUnits::Physical => (k_physical, zeta * 2.0 * (k_physical * m).sqrt()),
         })
     }
@@ -329,14 +335,19 @@ impl SimParams {
     /// μ ∈ (0, 1], must have an amplification of at most 1. `implicit` and `xpbd` are
     /// stable at any dt. A refusal names the substeps that would do.
     pub fn validate_for(&self, n: u32, spacing: f32) -> Result<(), ParamError> {
+        self.validate_for_mass(self.particle_mass(n), spacing, &format!("at n = {n}"))
+    }
+
+    /// [`SimParams::validate_for`] for particles of mass `m` (a mesh: its lightest
+    /// particle) at spacing `spacing`; `what` names the cloth in a refusal ("at n = 64").
+    pub fn validate_for_mass(&self, m: f32, spacing: f32, what: &str) -> Result<(), ParamError> {
         self.validate()?;
         let explicit = self.integrator.explicit();
         let classical = matches!(self.integrator, Integrator::Verlet | Integrator::SymplecticEuler);
         if !explicit || (classical && self.stiffness_units == StiffnessUnits::Fraction) {
             return Ok(());
         }
-        let m = self.particle_mass(n);
-        let consts = self.spring_constants(n, spacing);
+        let consts = self.spring_constants_for_mass(m, spacing);
         let k: f32 = consts.iter().map(|c| c.0).sum();
         let c: f32 = consts.iter().map(|c| c.1).sum();
         let dt = self.dt();
@@ -389,7 +400,7 @@ impl SimParams {
                 "substeps",
                 self.substeps,
                 format!(
-                    "stiffness_units = {units} at n = {n}: particles of {m:.3e} kg held by springs of Σk = {k:.1} N/m are stable with {name} only for dt < {dt_max:.3e} s; this dt is {dt:.3e} s — {fix}"
+                    "stiffness_units = {units} {what}: particles of {m:.3e} kg held by springs of Σk = {k:.1} N/m are stable with {name} only for dt < {dt_max:.3e} s; this dt is {dt:.3e} s — {fix}"
                 ),
             ));
         }

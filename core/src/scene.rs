@@ -51,7 +51,7 @@ impl Aabb {
 ///
 /// In a scene file: `"top-corners"`, `"top-edge"`, `"none"`, or a list of grid
 /// coordinates `[[i, j], …]` (column `i`, row `j`, both `0 … n-1`).
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Pinning {
     /// The two corners of the top edge (`j = 0`): the thesis's scene.
     TopCorners,
@@ -61,6 +61,12 @@ pub enum Pinning {
     None,
     /// These particles, as `[i, j]` grid coordinates.
     Points(Vec<[u32; 2]>),
+    /// A mesh's vertices, 0-based in the file's order (`{ vertices = [0, 17] }`).
+    Vertices(Vec<u32>),
+    /// A mesh's vertices below this height once placed, m (`{ below_y = 0.1 }`).
+    BelowY(f32),
+    /// A mesh's vertices above this height once placed, m (`{ above_y = 1.2 }`).
+    AboveY(f32),
 }
 
 impl Pinning {
@@ -74,6 +80,7 @@ impl Pinning {
             Pinning::TopEdge => j == 0,
             Pinning::None => false,
             Pinning::Points(p) => p.contains(&[i, j]),
+            Pinning::Vertices(_) | Pinning::BelowY(_) | Pinning::AboveY(_) => false,
         }
     }
 
@@ -84,6 +91,9 @@ impl Pinning {
             Pinning::TopEdge => "top edge".into(),
             Pinning::None => "none".into(),
             Pinning::Points(p) => format!("{} points", p.len()),
+            Pinning::Vertices(v) => format!("{} vertices", v.len()),
+            Pinning::BelowY(y) => format!("below y = {y}"),
+            Pinning::AboveY(y) => format!("above y = {y}"),
         }
     }
 }
@@ -95,6 +105,9 @@ impl Serialize for Pinning {
             Pinning::TopEdge => s.serialize_str("top-edge"),
             Pinning::None => s.serialize_str("none"),
             Pinning::Points(p) => p.serialize(s),
+            Pinning::Vertices(v) => std::collections::BTreeMap::from([("vertices", v)]).serialize(s),
+            Pinning::BelowY(y) => std::collections::BTreeMap::from([("below_y", y)]).serialize(s),
+            Pinning::AboveY(y) => std::collections::BTreeMap::from([("above_y", y)]).serialize(s),
         }
     }
 }
@@ -105,7 +118,10 @@ impl<'de> Deserialize<'de> for Pinning {
         impl<'de> serde::de::Visitor<'de> for V {
             type Value = Pinning;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                write!(f, "\"top-corners\", \"top-edge\", \"none\" or a list of [i, j] grid points")
+                write!(
+                    f,
+                    "\"top-corners\", \"top-edge\", \"none\", a list of [i, j] grid points, or for a mesh {{ vertices = [..] }}, {{ below_y = .. }} or {{ above_y = .. }}"
+                )
             }
             fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Pinning, E> {
                 match v {
@@ -122,12 +138,28 @@ impl<'de> Deserialize<'de> for Pinning {
                 }
                 Ok(Pinning::Points(points))
             }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Pinning, A::Error> {
+                use serde::de::Error;
+                let Some(key) = map.next_key::<String>()? else {
+                    return Err(A::Error::custom("an empty table: give one of vertices, below_y, above_y"));
+                };
+                let pinning = match key.as_str() {
+                    "vertices" => Pinning::Vertices(map.next_value()?),
+                    "below_y" => Pinning::BelowY(map.next_value()?),
+                    "above_y" => Pinning::AboveY(map.next_value()?),
+                    _ => return Err(A::Error::unknown_field(&key, &["vertices", "below_y", "above_y"])),
+                };
+                if map.next_key::<String>()?.is_some() {
+                    return Err(A::Error::custom("one rule per cloth: vertices, below_y or above_y"));
+                }
+                Ok(pinning)
+            }
         }
         d.deserialize_any(V)
     }
 }
 
-/// The cloth: an `n × n` grid of particles.
+/// The cloth: an `n × n` grid of particles, or a triangle mesh (`mesh`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ClothSpec {
@@ -146,6 +178,18 @@ pub struct ClothSpec {
     pub pinning: Pinning,
     /// Initial velocity of every free particle, m/s (a thrown cloth). Default 0.
     pub velocity: [f32; 3],
+    /// A triangle mesh (OBJ) instead of the grid; a scene file's path is relative to the
+    /// file. With a mesh, `n`, `size`, `top_center`, `across` and `down` do not apply.
+    pub mesh: Option<std::path::PathBuf>,
+    /// The mesh's scale per axis (about the origin, first). Default 1.
+    pub scale: [f32; 3],
+    /// The mesh's rotation about x, then y, then z, degrees. Default 0.
+    pub rotate_deg: [f32; 3],
+    /// The mesh's translation, m (last). Default 0.
+    pub translate: [f32; 3],
+    /// The mesh as read, placed and checked (`SceneFile::load` makes it).
+    #[serde(skip)]
+    pub mesh_data: Option<std::sync::Arc<crate::mesh::PlacedMesh>>,
 }
 
 impl Default for ClothSpec {
@@ -158,11 +202,26 @@ impl Default for ClothSpec {
             down: [0.0, 0.0, 1.0],
             pinning: Pinning::TopCorners,
             velocity: [0.0; 3],
+            mesh: None,
+            scale: [1.0; 3],
+            rotate_deg: [0.0; 3],
+            translate: [0.0; 3],
+            mesh_data: None,
         }
     }
 }
 
 impl ClothSpec {
+    /// The mesh's placement.
+    pub fn placement(&self) -> crate::mesh::Placement {
+        crate::mesh::Placement { scale: self.scale, rotate_deg: self.rotate_deg, translate: self.translate }
+    }
+
+    /// Whether the cloth is a mesh.
+    pub fn is_mesh(&self) -> bool {
+        self.mesh_data.is_some()
+    }
+
     /// Rest position of particle `(i, j)`: `top_center + (i·h − size/2)·across + j·h·down`
     /// with `h = size / (n − 1)`.
     pub fn rest_position(&self, i: u32, j: u32) -> [f32; 3] {
@@ -210,7 +269,19 @@ impl Scene {
 
     /// Number of particles, `n²`.
     pub fn num_particles(&self) -> usize {
-        self.cloth.n as usize * self.cloth.n as usize
+        match &self.cloth.mesh_data {
+            Some(m) => m.mesh.positions.len(),
+            None => self.cloth.n as usize * self.cloth.n as usize,
+        }
+    }
+
+    /// The rest distance between neighbouring particles, m: the grid's spacing, or a
+    /// mesh's mean edge length (placed).
+    pub fn spacing(&self) -> f32 {
+        match &self.cloth.mesh_data {
+            Some(m) => m.spacing,
+            None => self.cloth.size / (self.cloth.n - 1) as f32,
+        }
     }
 
     /// The floor height the kernels test against: far below anything when there is no floor.
@@ -266,6 +337,47 @@ impl Scene {
                     format!("cloth.pinning[{k}]"),
                     format!("{:?}", p[k]),
                     format!("a grid point [i, j] needs i, j < n = {n}"),
+                ));
+            }
+        }
+        let mesh_rule = matches!(c.pinning, Pinning::Vertices(_) | Pinning::BelowY(_) | Pinning::AboveY(_));
+        match (c.mesh.is_some() || c.mesh_data.is_some(), mesh_rule) {
+            (false, true) => {
+                return Err(ParamError::new(
+                    "cloth.pinning",
+                    c.pinning.label(),
+                    "pins a mesh's vertices; a grid takes \"top-corners\", \"top-edge\", \"none\" or [[i, j], …]",
+                ));
+            }
+            (true, false) if c.pinning != Pinning::None => {
+                return Err(ParamError::new(
+                    "cloth.pinning",
+                    c.pinning.label(),
+                    "names grid points; a mesh takes \"none\", { vertices = [..] }, { below_y = .. } or { above_y = .. }",
+                ));
+            }
+            _ => {}
+        }
+        if let Pinning::BelowY(y) | Pinning::AboveY(y) = c.pinning {
+            finite_in("cloth.pinning", y, -1e4, 1e4)?;
+        }
+        if c.mesh.is_some() || c.mesh_data.is_some() {
+            for v in c.scale {
+                if !(v.is_finite() && (1e-4..=1e4).contains(&v.abs())) {
+                    return Err(ParamError::new("cloth.scale", v, "each factor's size must be in 1e-4 ..= 1e4"));
+                }
+            }
+            for v in c.rotate_deg {
+                finite_in("cloth.rotate_deg", v, -3600.0, 3600.0)?;
+            }
+            for v in c.translate {
+                finite_in("cloth.translate", v, -1e4, 1e4)?;
+            }
+            if c.mesh_data.is_none() {
+                return Err(ParamError::new(
+                    "cloth.mesh",
+                    c.mesh.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
+                    "the mesh was not read (a scene file reads it; in code, `PlacedMesh::load`)",
                 ));
             }
         }

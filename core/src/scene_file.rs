@@ -164,8 +164,30 @@ impl SceneFile {
             let at = locate(text, &path).map(|s| line_col(text, s));
             err(at, format!("`{path}` = {}: {}", e.value, e.reason))
         };
+        let mut cloth = repr.cloth;
+        if let Some(mesh) = cloth.mesh.clone() {
+            let keys: Vec<String> = toml::from_str::<toml::Table>(text)
+                .ok()
+                .and_then(|t| t.get("cloth").and_then(|c| c.as_table()).map(|c| c.keys().cloned().collect()))
+                .unwrap_or_default();
+            if let Some(k) = keys.iter().find(|k| ["n", "size", "top_center", "across", "down"].contains(&k.as_str())) {
+                let at = locate(text, &format!("cloth.{k}")).map(|s| line_col(text, s));
+                return Err(err(
+                    at,
+                    format!("`cloth.{k}` is the grid's; a mesh cloth is placed by scale, rotate_deg and translate"),
+                ));
+            }
+            if !keys.iter().any(|k| k == "pinning") {
+                cloth.pinning = crate::scene::Pinning::None;
+            }
+            // Relative to the scene file's folder.
+            let path = Path::new(file).parent().map(|d| d.join(&mesh)).unwrap_or(mesh);
+            let placed = crate::mesh::PlacedMesh::load(&path, &cloth.placement());
+            let at = locate(text, "cloth.mesh").map(|s| line_col(text, s));
+            cloth.mesh_data = Some(std::sync::Arc::new(placed.map_err(|e| err(at, format!("`cloth.mesh`: {e}")))?));
+        }
         let scene = Scene {
-            cloth: repr.cloth,
+            cloth,
             floor_y: repr.floor.enabled.then_some(repr.floor.y),
             spheres: repr.spheres,
             boxes: repr.boxes.iter().map(|b| Aabb::new(b.min, b.max)).collect(),

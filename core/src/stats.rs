@@ -54,7 +54,10 @@ pub fn summarize(state: &ClothState, topo: &ClothTopology) -> StateSummary {
 /// Writes the cloth as a Wavefront OBJ mesh: `v x y z` per particle (index `j·n + i + 1`),
 /// `vt u v`, `vn x y z`, and `f a/a/a b/b/b c/c/c` per triangle. Any 3-D tool opens it.
 pub fn write_obj(w: &mut impl Write, state: &ClothState, topo: &ClothTopology) -> std::io::Result<()> {
-    writeln!(w, "# clothlab cloth state, {n}x{n} particles", n = state.n)?;
+    match state.n {
+        0 => writeln!(w, "# clothlab cloth state, a mesh of {} particles", state.pos.len())?,
+        n => writeln!(w, "# clothlab cloth state, {n}x{n} particles")?,
+    }
     for p in &state.pos {
         writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
     }

@@ -28,7 +28,7 @@ fn bare_params(n: u32, dt: f32, mass: f32) -> StepParams {
         self_thickness: 0.0,
         spacing: 1.0,
         inv_cell: 0.0,
-        _pad0: 0,
+        num_particles: n * n,
     }
 }
 
@@ -86,7 +86,7 @@ fn spring_mass_period_is_two_pi_sqrt_m_over_k() {
     let mut last = pos[1][0] - rest;
     for step in 1..=4000 {
         force.iter_mut().for_each(|f| *f = [0.0; 4]);
-        cpu::forces(Exec::Serial, &p, &vel, &mut force);
+        cpu::forces(Exec::Serial, &p, &pos, &vel, &mut force);
         cpu::springs(Exec::Serial, &slots, &pos, &vel, &mut force);
         cpu::integrate(Exec::Serial, &p, &force, &mut pos, &mut vel);
         let x = pos[1][0] - rest;
@@ -377,7 +377,7 @@ fn row_fast_path_matches_the_twin_bit_for_bit() {
         // And with `forces` fused in front.
         let p0 = StepParams::new(&params, s.scene(), None);
         let mut twin_fused = st.force.clone();
-        cpu::forces(Exec::Serial, &p0, &st.vel, &mut twin_fused);
+        cpu::forces(Exec::Serial, &p0, &st.pos, &st.vel, &mut twin_fused);
         cpu::springs(Exec::Serial, &topo.slots, &st.pos, &st.vel, &mut twin_fused);
         for exec in [Exec::Serial, Exec::Parallel] {
             for (fused, want) in [(None, &twin), (Some(&p0), &twin_fused)] {
@@ -451,7 +451,7 @@ fn a_solver_substep_is_the_twin_kernels_in_order() {
         let mut st = s.state().unwrap();
         let topo = s.topology().clone();
         let p = StepParams::new(&params, &scene, Some(grab));
-        cpu::forces(Exec::Serial, &p, &st.vel, &mut st.force);
+        cpu::forces(Exec::Serial, &p, &st.pos, &st.vel, &mut st.force);
         cpu::springs(Exec::Serial, &topo.slots, &st.pos, &st.vel, &mut st.force);
         cpu::integrate(Exec::Serial, &p, &st.force, &mut st.pos, &mut st.vel);
         cpu::collide(Exec::Serial, &p, &scene.spheres, &scene.boxes, &mut st.pos, &mut st.vel);

@@ -128,6 +128,9 @@ impl RecipeSolver {
     /// colliders live and which atomics add change only which GPU shader runs, not the
     /// twin).
     pub fn new(exec: Exec, variant: Variant, scene: Scene, params: SimParams) -> Result<Self, SolverError> {
+        if scene.cloth.is_mesh() {
+            return Err(SolverError::Unsupported(clothlab_core::solver::MESH_ENGINE_PENDING.into()));
+        }
         let (state, topo) = build(&scene, &params)?;
         let engine = CpuEngine::new(exec, scene, topo);
         let sp = StepParams::new(&params, &engine.scene, None);
@@ -178,7 +181,7 @@ impl Solver for RecipeSolver {
     }
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
-        params.validate_for(self.engine.topo.n, self.engine.topo.spacing)?;
+        self.engine.topo.validate_params(&params)?;
         self.engine.set_spring_constants(&params);
         self.commands = recipe(&self.variant, params.strain_iterations, Integration::of(&params));
         self.end = frame_end(&self.variant, Integration::of(&params));
@@ -217,7 +220,7 @@ impl Solver for RecipeSolver {
     }
 
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
-        state.check(self.engine.topo.n)?;
+        state.check(&self.engine.topo)?;
         let faces = std::mem::take(&mut self.bufs.faces);
         self.bufs = HostBuffers::new(state, faces);
         Ok(())

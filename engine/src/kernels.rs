@@ -534,7 +534,7 @@ pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool)
 // ---- the twins ---------------------------------------------------------------------
 
 fn forces(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::forces(a.exec, a.p, &b.vel, &mut b.force);
+    cpu::forces(a.exec, a.p, &b.pos, &b.vel, &mut b.force);
 }
 
 fn springs(a: &TwinArgs, b: &mut HostBuffers) {

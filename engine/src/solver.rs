@@ -96,6 +96,9 @@ impl<E: Engine> GpuSolver<E> {
         params: SimParams,
         options: SolverOptions,
     ) -> Result<Self, SolverError> {
+        if scene.cloth.is_mesh() {
+            return Err(SolverError::Unsupported(clothlab_core::solver::MESH_ENGINE_PENDING.into()));
+        }
         if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
             return Err(SolverError::Invalid(format!("at most {MAX_COLLIDERS} spheres and boxes")));
         }
@@ -520,7 +523,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
     }
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
-        params.validate_for(self.topo.n, self.topo.spacing)?;
+        self.topo.validate_params(&params)?;
         // A new dt keeps the velocity as it is: the state holds it, not Verlet's history.
         if spring_constants(&params, &self.topo) != spring_constants(&self.params, &self.topo) {
             // The spring constants depend on dt and the stiffness fractions: rewrite the
@@ -664,7 +667,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
     }
 
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
-        state.check(self.topo.n)?;
+        state.check(&self.topo)?;
         self.write(Buf::Pos, bytemuck::cast_slice(&state.pos))?;
         self.write(Buf::Vel, bytemuck::cast_slice(&state.vel))?;
         self.write(Buf::Force, bytemuck::cast_slice(&state.force))?;

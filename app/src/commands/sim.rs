@@ -88,7 +88,15 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     if let Some(path) = &args.physics.scene {
         println!("scene          {} ({})", loaded.title.as_deref().unwrap_or("untitled"), path.display());
     }
-    println!("grid           {n}x{n} ({np} particles)", n = scene.cloth.n);
+    match &scene.cloth.mesh {
+        Some(mesh) if scene.cloth.is_mesh() => println!(
+            "mesh           {} ({np} particles, {} triangles, {} springs)",
+            mesh.display(),
+            topo.triangles.len(),
+            topo.springs.len()
+        ),
+        _ => println!("grid           {n}x{n} ({np} particles)", n = scene.cloth.n),
+    }
     println!("substeps       {substeps} ({frames} frames of {})", solver.params().substeps);
     println!("wall time      {:.3} s", wall.as_secs_f64());
     println!("time/substep   {:.1} us median ({:.2} ns per particle-substep)", per_substep / 1e3, per_substep / np);

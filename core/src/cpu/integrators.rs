@@ -100,10 +100,11 @@ pub(crate) fn finish_at(i: usize, p: &StepParams, x4: V4, x1: Vec3, v1: Vec3) ->
     (v4(xn, x4[3]), v4(vn, 0.0))
 }
 
-/// `f·dt/m`: a force as the velocity it adds in one substep.
+/// `f·dt/m`: a force as the velocity it adds in one substep to a particle whose position
+/// has w = `w` (see [`super::mass`]).
 #[inline(always)]
-fn accel_dt(p: &StepParams, f: V4) -> Vec3 {
-    v3(f) * (p.dt / p.particle_mass)
+fn accel_dt(p: &StepParams, f: V4, w: f32) -> Vec3 {
+    v3(f) * (p.dt / super::mass(p, w))
 }
 
 /// Explicit Euler: `x' = x + v·dt`, `v' = v + f·dt/m`, with `v` damped by
@@ -115,7 +116,7 @@ pub fn euler(exec: Exec, p: &StepParams, force: &[V4], pos: &mut [V4], vel: &mut
     let out = per_particle(exec, pos.len(), |i| {
         let x = v3(pos[i]);
         let v0 = v3(vel[i]) * (1.0 - p.damping);
-        let v1 = v0 + accel_dt(p, force[i]);
+        let v1 = v0 + accel_dt(p, force[i], pos[i][3]);
         finish_at(i, p, pos[i], x + v0 * p.dt, v1)
     });
     for (i, (x, xp)) in out.into_iter().enumerate() {
@@ -152,7 +153,7 @@ pub fn rk_stage(
     let out = per_particle(exec, pos.len(), |i| {
         let x4 = pos[i];
         let vs = v3(vel[i]);
-        let gs = accel_dt(p, force[i]);
+        let gs = accel_dt(p, force[i], x4[3]);
         let (sx, su) =
             if st.first { (vs * st.b, gs * st.b) } else { (v3(aux[2][i]) + vs * st.b, v3(aux[3][i]) + gs * st.b) };
         let (x0, v0) = (v3(aux[0][i]), v3(aux[1][i]));
@@ -400,7 +401,7 @@ fn apply_at(
 ) -> (Vec3, f32) {
     let xa = v3(pos[i]);
     let ya = y(i);
-    let m = p.particle_mass * (1.0 + p.dt * p.air_drag);
+    let m = super::mass(p, pos[i][3]) * (1.0 + p.dt * p.air_drag);
     let (mut acc, mut diag) = if full { (ya * m, m) } else { (Vec3::ZERO, m) };
     for s in &slots[i * SLOTS..(i + 1) * SLOTS] {
         if s.neighbor < 0 {

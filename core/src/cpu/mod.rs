@@ -136,6 +136,15 @@ impl<F: Fn(usize) -> V4> Fetch for F {
     }
 }
 
+/// The mass of a particle whose position has w = `w` (its relative inverse mass): the
+/// reference mass over w, or the reference for a held particle (w = 0). On a grid w is 1
+/// or 0, so this is exactly `p.particle_mass` (`m / 1.0` is `m`): the grid's bits do not
+/// change.
+#[inline(always)]
+pub(crate) fn mass(p: &crate::grid::StepParams, w: f32) -> f32 {
+    if w > 0.0 { p.particle_mass / w } else { p.particle_mass }
+}
+
 #[inline(always)]
 pub(crate) fn v3(a: V4) -> Vec3 {
     Vec3::new(a[0], a[1], a[2])

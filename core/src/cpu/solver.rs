@@ -7,8 +7,8 @@ use super::simd::Simd;
 use super::{
     AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_ORDER, build_hash, cg_alpha, cg_begin, cg_beta,
     cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, hash_buffers, implicit_finish, integrate,
-    integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit_rows, strain_vel,
-    tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_pass, xpbd_pass_rows,
+    integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit, strain_limit_rows,
+    strain_vel, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_pass, xpbd_pass_rows,
 };
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
 use crate::params::{Integrator, SimParams};
@@ -151,6 +151,8 @@ impl CpuSolver {
             format!("the fused sweep runs Verlet only, not {:?}", self.params.integrator)
         } else if self.params.self_collision {
             "the fused sweep has no self-collision".to_owned()
+        } else if self.topo.mesh.is_some() {
+            "the fused sweep is the grid's; a mesh runs its kernels over the tables".to_owned()
         } else if self.grid.is_none() || self.topo.n < 8 {
             "the grid is too small or not uniform for the fused sweep".to_owned()
         } else {
@@ -260,13 +262,16 @@ impl CpuSolver {
         } = self;
         let n = topo.n as usize;
         let fast = uniform.is_some();
+        let mesh = topo.mesh.is_some();
+        // The gather's rows: the grid's, or for a mesh chunks of particles (no row fast path).
+        let rows = if mesh { 1024 } else { n };
         let ClothState { pos, vel, force, normal, .. } = state;
         // The force of the current (pos, vel): forces fused into the spring gather.
         let eval = |lanes: &mut Lanes, pos: &[V4], vel: &[V4], force: &mut [V4]| {
             if fast {
                 lanes.fill(e, n, pos, Some(vel));
             }
-            springs_rows(e, n, &topo.slots, uniform.as_ref(), Some(&p), lanes, pos, vel, force)
+            springs_rows(e, rows, &topo.slots, uniform.as_ref(), Some(&p), lanes, pos, vel, force)
         };
         let (spheres, boxes) = (&scene.spheres, &scene.boxes);
         let needs_aux =
@@ -319,7 +324,7 @@ impl CpuSolver {
             }
             Integrator::Xpbd => {
                 Self::timed(timer, on, INTEGRATE_COLLIDE, || {
-                    forces(e, &p, vel, force);
+                    forces(e, &p, pos, vel, force);
                     integrate(e, &p, force, pos, vel);
                     // λ per spring, from zero every substep (the recipe's clears).
                     aux[..2].iter_mut().flatten().for_each(|v| *v = [0.0; 4]);
@@ -341,7 +346,11 @@ impl CpuSolver {
                 if fast {
                     lanes.fill(e, n, pos, None);
                 }
-                strain_limit_rows(e, &p, &topo.slots, uniform.as_ref(), &topo.tethers, lanes, pos, scratch);
+                if mesh {
+                    strain_limit(e, &p, &topo.slots, &topo.tethers, pos, scratch);
+                } else {
+                    strain_limit_rows(e, &p, &topo.slots, uniform.as_ref(), &topo.tethers, lanes, pos, scratch);
+                }
                 strain_vel(e, &p, pos, scratch, vel);
                 std::mem::swap(pos, scratch);
             }
@@ -389,7 +398,7 @@ impl Solver for CpuSolver {
     }
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
-        params.validate_for(self.topo.n, self.topo.spacing)?;
+        self.topo.validate_params(&params)?;
         self.sync();
         self.soa_valid = false;
         self.params = params;
@@ -420,7 +429,7 @@ impl Solver for CpuSolver {
     }
 
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
-        state.check(self.state.n)?;
+        state.check(&self.topo)?;
         self.state = state.clone();
         (self.soa_valid, self.aos_stale) = (false, false);
         Ok(())

@@ -4,7 +4,7 @@
 use glam::Vec3;
 use wide::f32x8;
 
-use super::forces::{forces_at, forces_consts};
+use super::forces::{forces_at, forces_consts, forces_consts_w};
 use super::{Exec, Fetch, LANES, Lanes, for_each, load3, store3, v3, v4};
 use crate::grid::{SLOT_OFFSETS, SLOTS, Spring, SpringSlot, StepParams, V4};
 
@@ -96,9 +96,13 @@ pub fn springs_rows(
     // With `forces`, each particle first gets `forces` (gravity and drag), then its springs:
     // the two kernels fused into one sweep, bit-identical to running them in turn.
     let ext = forces.map(forces_consts);
+    // Particle by particle, each with its own mass (a mesh's; a grid's are the reference).
     let gather = |i: usize, f: V4| {
-        let f = match ext {
-            Some((g, drag)) => forces_at(f, vel[i], g, drag),
+        let f = match forces {
+            Some(p) => {
+                let (g, drag) = forces_consts_w(p, pos[i][3]);
+                forces_at(f, vel[i], g, drag)
+            }
             None => f,
         };
         gather_at(i, slots, |k| pos[k], |k| vel[k], f)

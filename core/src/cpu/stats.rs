@@ -19,7 +19,7 @@ pub fn particle_stats(i: usize, p: &StepParams, slots: &[SpringSlot], pos: &[V4]
         }
     }
     let v = v3(vel[i]);
-    [strain, 0.5 * p.particle_mass * v.dot(v)]
+    [strain, 0.5 * super::mass(p, pos[i][3]) * v.dot(v)]
 }
 
 /// The statistics of the whole state: the maximum of the strains, and the energies summed

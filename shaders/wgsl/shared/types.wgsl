@@ -20,7 +20,7 @@ struct StepParams {
     self_thickness: f32,
     spacing: f32,
     inv_cell: f32,
-    _pad0: u32,
+    num_particles: u32,
 }
 
 struct SpringSlot {
