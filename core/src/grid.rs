@@ -13,12 +13,7 @@ use crate::scene::{Pinning, Scene};
 /// A 16-byte particle attribute: xyz plus one spare or flag component.
 pub type V4 = [f32; 4];
 
-/// Spring slots per particle in the gather table.
-pub const SLOTS: usize = 12;
-/// Slots `0 .. STRAIN_SLOTS` (structural and shear) are held by the strain limit.
-pub const STRAIN_SLOTS: usize = 8;
-/// Face slots per particle: a regular grid vertex touches at most six triangles.
-pub const FACE_SLOTS: usize = 6;
+pub use crate::tables::{FACE_SLOTS, SLOTS, STRAIN_SLOTS, TETHER_SLOTS};
 
 /// The three spring families.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -46,9 +41,6 @@ pub fn slot_kind(s: usize) -> SpringKind {
         _ => SpringKind::Bend,
     }
 }
-
-/// Tether slots per particle (long-range attachments to pins).
-pub const TETHER_SLOTS: usize = 2;
 
 /// A long-range attachment (Kim, Chentanez & Müller 2012): the particle may be at most
 /// `(1 + τ) · rest` from the pinned particle `pin` (`#[repr(C)]`, mirrored in the shaders).
@@ -292,7 +284,7 @@ impl ClothTopology {
         match &self.mesh {
             None => params.validate_for(self.n, self.spacing),
             Some(m) => {
-                crate::mesh::check_params(params)?;
+                params.check_mesh()?;
                 params.validate_for_mass(m.min_mass, self.spacing, "for this mesh")
             }
         }
@@ -343,12 +335,9 @@ fn tri_index(n: u32, qi: u32, qj: u32, t: u32) -> i32 {
 }
 
 /// Builds the initial state and the topology for a validated scene and parameters.
-pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopology), ParamError> {
+pub fn build_grid(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopology), ParamError> {
     scene.validate()?;
     params.validate()?;
-    if let Some(mesh) = &scene.cloth.mesh_data {
-        return crate::mesh::build_cloth(&scene.cloth, mesh, params);
-    }
     let n = scene.cloth.n;
     let nu = n as usize;
     let np = nu * nu;
@@ -595,7 +584,7 @@ mod tests {
     fn the_scenes_velocity_starts_every_free_particle_and_no_pinned_one() {
         let mut scene = Scene::with_n(6);
         scene.cloth.velocity = [0.5, -1.0, 2.0];
-        let (state, _) = build(&scene, &SimParams::default()).unwrap();
+        let (state, _) = build_grid(&scene, &SimParams::default()).unwrap();
         let pinned = state.pos.iter().filter(|p| p[3] == 0.0).count();
         assert_eq!(pinned, 2, "the default pins two corners");
         for (p, v) in state.pos.iter().zip(&state.vel) {
@@ -607,7 +596,7 @@ mod tests {
     #[test]
     fn counts_match_the_grid() {
         let n = 7u32;
-        let (state, topo) = build(&Scene::with_n(n), &SimParams::default()).unwrap();
+        let (state, topo) = build_grid(&Scene::with_n(n), &SimParams::default()).unwrap();
         let nu = n as usize;
         assert_eq!(state.pos.len(), nu * nu);
         assert_eq!(topo.triangles.len(), 2 * (nu - 1) * (nu - 1));
@@ -637,7 +626,7 @@ mod tests {
     #[test]
     fn grids_are_regular() {
         for n in [2u32, 3, 5, 8] {
-            let (_, mut topo) = build(&Scene::with_n(n), &SimParams::default()).unwrap();
+            let (_, mut topo) = build_grid(&Scene::with_n(n), &SimParams::default()).unwrap();
             let g = topo.grid_slots().expect("build makes a regular table");
             assert_eq!(g[0].rest, topo.slots[SLOTS].rest, "n = {n}: slot 0 from particle 1");
             for (t, tri) in topo.triangles.iter().enumerate() {

@@ -15,6 +15,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod cloth;
 pub mod cpu;
 pub mod error;
 pub mod grid;
@@ -27,12 +28,14 @@ pub mod scene;
 pub mod scene_file;
 pub mod solver;
 pub mod stats;
+pub mod tables;
 pub mod timing;
 pub mod validate;
 
 pub use camera::OrbitCamera;
+pub use cloth::build;
 pub use cpu::{CpuSolver, Exec, SIMD_ENV, Simd};
-pub use grid::{ClothState, ClothTopology, Grab, Spring, SpringKind, SpringSlot, StepParams, build};
+pub use grid::{ClothState, ClothTopology, Grab, Spring, SpringKind, SpringSlot, StepParams};
 pub use params::{Integrator, ParamError, SimParams, StiffnessUnits};
 pub use scene::{Aabb, ClothSpec, Pinning, Scene, Sphere};
 pub use scene_file::{SceneFile, SceneFileError};

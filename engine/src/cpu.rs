@@ -5,8 +5,9 @@
 
 use std::time::Instant;
 
+use clothlab_core::build;
 use clothlab_core::cpu::{self as twins, Exec};
-use clothlab_core::grid::{ClothState, ClothTopology, Grab, StepParams, V4, build};
+use clothlab_core::grid::{ClothState, ClothTopology, Grab, StepParams, V4};
 use clothlab_core::layout::Buf;
 use clothlab_core::scene::Scene;
 use clothlab_core::timing::{FRAME, KernelTimings, SUBSTEP, TimingRecorder};

@@ -6,9 +6,10 @@
 
 use std::time::Instant;
 
+use clothlab_core::build;
 use clothlab_core::cpu::{self as twins, SubstepStats};
 use clothlab_core::grid::{
-    ClothState, ClothTopology, Grab, InteriorSlots, STRAIN_SLOTS, SpringSlot, StepParams, V4, build, spring_constants,
+    ClothState, ClothTopology, Grab, InteriorSlots, STRAIN_SLOTS, SpringSlot, StepParams, V4, spring_constants,
 };
 use clothlab_core::layout::Buf;
 use clothlab_core::params::MAX_SUBSTEPS;

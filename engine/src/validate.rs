@@ -2,8 +2,9 @@
 //! ([`validate_kernels`]), and the bisection of a rollout between the CPU engine and a
 //! GPU backend ([`bisect`]). Used by the cross-backend tests and by `clothlab validate`.
 
+use clothlab_core::build;
 use clothlab_core::cpu::Exec;
-use clothlab_core::grid::{Grab, StepParams, build};
+use clothlab_core::grid::{Grab, StepParams};
 use clothlab_core::validate::{Check, ROLLOUT_BOUND_PER_SUBSTEP, compare, disturbed_state};
 use clothlab_core::{Scene, SimParams, SolverError};
 

@@ -533,7 +533,7 @@ pub fn implicit_finish(exec: Exec, p: &StepParams, pos: &mut [V4], vel: &mut [V4
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grid::build;
+    use crate::cloth::build;
     use crate::{Scene, SimParams};
 
     #[test]

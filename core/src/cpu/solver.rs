@@ -10,7 +10,8 @@ use super::{
     integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit, strain_limit_rows,
     strain_vel, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_pass, xpbd_pass_rows,
 };
-use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4, build};
+use crate::cloth::build;
+use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4};
 use crate::params::{Integrator, SimParams};
 use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};

@@ -1,0 +1,121 @@
+//! Building a cloth: the grid (`grid::build_grid`) or a mesh (`build_mesh`), whichever
+//! the scene holds.
+
+use crate::grid::{
+    ClothState, ClothTopology, FACE_SLOTS, MeshTables, SLOTS, Spring, SpringKind, SpringSlot, TETHER_SLOTS, Tether,
+};
+use crate::mesh::{MeshError, MeshPinning, PlacedMesh, planar_uvs};
+use crate::params::{ParamError, SimParams};
+use crate::scene::{ClothSpec, Pinning, Scene};
+
+/// Builds the initial state and the topology for a validated scene and parameters: the
+/// grid, or the scene's mesh.
+pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopology), ParamError> {
+    match &scene.cloth.mesh_data {
+        Some(mesh) => {
+            scene.validate()?;
+            params.validate()?;
+            build_mesh(&scene.cloth, mesh, params)
+        }
+        None => crate::grid::build_grid(scene, params),
+    }
+}
+
+/// Builds the state and topology of a cloth made from `placed` (the scene's mesh):
+/// particles at its vertices with masses from their areas (`pos.w` the reference mass
+/// `cloth_mass / count` over the vertex's, 0 pinned), the springs in the gather table
+/// (edges first, bending springs after) and the flat list (edges then bending springs),
+/// each with the constants of its family for its lighter end, face slots in triangle
+/// order, tethers to the two nearest pins.
+pub fn build_mesh(
+    spec: &ClothSpec,
+    placed: &PlacedMesh,
+    params: &SimParams,
+) -> Result<(ClothState, ClothTopology), ParamError> {
+    let file = spec.mesh.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "(mesh)".into());
+    let err = |e: MeshError| ParamError::new("cloth.mesh", &file, e.to_string());
+    let mesh = &placed.mesh;
+    let np = mesh.positions.len();
+    let rule = match &spec.pinning {
+        Pinning::Vertices(v) => MeshPinning::Vertices(v.clone()),
+        Pinning::BelowY(y) => MeshPinning::BelowY(*y),
+        Pinning::AboveY(y) => MeshPinning::AboveY(*y),
+        _ => MeshPinning::None,
+    };
+    params.check_mesh()?;
+    let held = mesh.pinned(&rule).map_err(err)?;
+    let mass = mesh.vertex_masses(params.cloth_mass);
+    let reference = params.cloth_mass / np as f32;
+    let free = mass.iter().zip(&held).filter(|(_, h)| !**h).map(|(m, _)| *m);
+    let min_mass = free.fold(f32::INFINITY, f32::min);
+    let min_mass = if min_mass.is_finite() { min_mass } else { reference };
+    params.validate_for_mass(min_mass, placed.spacing, "for this mesh")?;
+
+    let v0 = spec.velocity;
+    let mut pos = Vec::with_capacity(np);
+    let mut vel = Vec::with_capacity(np);
+    for (k, p) in mesh.positions.iter().enumerate() {
+        let w = if held[k] { 0.0 } else { reference / mass[k] };
+        pos.push([p[0], p[1], p[2], w]);
+        vel.push(if held[k] { [0.0; 4] } else { [v0[0], v0[1], v0[2], 0.0] });
+    }
+    let uv = mesh.uvs.clone().unwrap_or_else(|| planar_uvs(mesh));
+
+    let mut face_slots = vec![[-1i32; FACE_SLOTS]; np];
+    let mut faces = vec![0usize; np];
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for &v in tri {
+            let v = v as usize;
+            // `TriMesh::check` refused a vertex in more than FACE_SLOTS triangles.
+            face_slots[v][faces[v]] = t as i32;
+            faces[v] += 1;
+        }
+    }
+
+    let ms = &placed.springs;
+    let dist =
+        |a: u32, b: u32| glam::Vec3::from(mesh.positions[a as usize]).distance(mesh.positions[b as usize].into());
+    let kind_of = |k: u32| if ms.is_edge(k) { SpringKind::Structural } else { SpringKind::Bend };
+    let mut slots = vec![SpringSlot::EMPTY; np * SLOTS];
+    let mut slot_kind = vec![SpringKind::Structural; np * SLOTS];
+    for (v, list) in ms.slots.iter().enumerate() {
+        for (s, &k) in list.iter().enumerate() {
+            let other = ms.other(k, v as u32);
+            slots[v * SLOTS + s] = SpringSlot { neighbor: other as i32, rest: dist(v as u32, other), ks: 0.0, kd: 0.0 };
+            slot_kind[v * SLOTS + s] = kind_of(k);
+        }
+    }
+    let springs: Vec<Spring> = (0..(ms.edges.len() + ms.bends.len()) as u32)
+        .map(|k| {
+            let [a, b] = ms.spring(k);
+            Spring { a, b, rest: dist(a, b), ks: 0.0, kd: 0.0, kind: kind_of(k) as u32 }
+        })
+        .collect();
+    let tethers = mesh
+        .tethers(&held)
+        .into_iter()
+        .map(|list| {
+            let mut t = [Tether::EMPTY; TETHER_SLOTS];
+            for (slot, (pin, rest)) in t.iter_mut().zip(list) {
+                *slot = Tether { pin: pin as i32, rest };
+            }
+            t
+        })
+        .collect();
+    let zero = vec![[0.0f32; 4]; np];
+    let state = ClothState { n: 0, pos, vel, force: zero.clone(), normal: zero };
+    let tables = MeshTables { slot_kind, mass, min_mass };
+    let mut topo = ClothTopology {
+        n: 0,
+        uv,
+        triangles: mesh.triangles.clone(),
+        slots,
+        springs,
+        face_slots,
+        tethers,
+        spacing: placed.spacing,
+        mesh: Some(std::sync::Arc::new(tables)),
+    };
+    topo.set_spring_constants(params);
+    Ok((state, topo))
+}
