@@ -212,7 +212,7 @@ impl ClothTopology {
 
     /// The 12 slots every particle at least two away from the border has, if all such
     /// particles' slots agree in rest length and constants (true for every grid that
-    /// [`build`] makes). Solvers then read them once instead of per particle.
+    /// [`build_grid`] makes). Solvers then read them once instead of per particle.
     pub fn uniform_interior_slots(&self) -> Option<[SpringSlot; SLOTS]> {
         let n = self.n as usize;
         if n <= 4 || self.mesh.is_some() {
@@ -241,7 +241,7 @@ impl ClothTopology {
 
     /// The 12 slots of the regular grid, if the whole table is one: slot `s` of every
     /// particle is filled exactly when the neighbour at [`SLOT_OFFSETS`]`[s]` exists, points
-    /// at it, and has these rest length and constants (true for every grid that [`build`]
+    /// at it, and has these rest length and constants (true for every grid that [`build_grid`]
     /// makes). GPU kernels then compute neighbours and read constants from a uniform block
     /// everywhere, border included, and never read the table. A slot no particle has
     /// (n ≤ 2) is [`SpringSlot::EMPTY`].

@@ -6,7 +6,7 @@ use glam::Vec3;
 use super::{Exec, for_each, mass, v3, v4};
 use crate::grid::{StepParams, V4};
 
-/// `force[i] += mᵢ g - air_drag · mᵢ · v` (mᵢ from `pos[i].w`, see [`mass`]).
+/// `force[i] += mᵢ g - air_drag · mᵢ · v` (mᵢ from `pos[i].w`, see `cpu::mass`).
 pub fn forces(exec: Exec, p: &StepParams, pos: &[V4], vel: &[V4], force: &mut [V4]) {
     for_each(exec, force, |i, f| {
         let (g, drag) = forces_consts_w(p, pos[i][3]);
