@@ -6,6 +6,13 @@ fn clothlab(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_clothlab")).args(args).env("RUST_BACKTRACE", "1").output().expect("run clothlab")
 }
 
+/// A fresh folder for one test's files (removed by the test when it passes).
+fn scratch(tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("clothlab-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 /// Bad input: non-zero exit, the expected words on stderr, no panic or backtrace.
 /// Whether `stderr` says there is no adapter and CI does not require one (the test skips).
 fn no_gpu(stderr: &str) -> bool {
@@ -27,8 +34,7 @@ fn refused(args: &[&str], expect: &str) {
 
 #[test]
 fn sim_runs_and_reports() {
-    let dir = std::env::temp_dir().join(format!("clothlab-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("cli");
     let obj = dir.join("state.obj");
     let json = dir.join("state.json");
     for (backend, out) in [("cpu", &obj), ("cpu-par", &json)] {
@@ -52,8 +58,7 @@ fn sim_runs_and_reports() {
 
 #[test]
 fn sim_records_a_glb_whose_last_key_is_the_final_state() {
-    let dir = std::env::temp_dir().join(format!("clothlab-record-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("record");
     let glb = dir.join("run.glb");
     let json = dir.join("state.json");
     // 8 frames of 8 substeps, every 2nd kept: frames 0, 2, 4, 6, 8.
@@ -109,8 +114,7 @@ fn sim_records_a_glb_whose_last_key_is_the_final_state() {
 #[test]
 fn a_mesh_scene_runs_on_the_cpu_solvers_records_and_is_refused_elsewhere_in_one_line() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/mesh-skirt.toml");
-    let dir = std::env::temp_dir().join(format!("clothlab-mesh-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("mesh-cli");
     let glb = dir.join("skirt.glb");
     let o = clothlab(&[
         "sim",
@@ -686,8 +690,7 @@ fn scene_files_reach_every_command_and_bad_ones_are_refused_in_one_line() {
         assert!(String::from_utf8_lossy(&o.stdout).contains("--scene <FILE>"), "{cmd} --help");
     }
     // Bad files: the file, line and column, and what is expected; nothing runs.
-    let dir = std::env::temp_dir().join(format!("clothlab-scenes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("scenes");
     let bad = |name: &str, text: &str| {
         let p = dir.join(name);
         std::fs::write(&p, text).unwrap();

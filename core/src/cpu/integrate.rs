@@ -10,7 +10,7 @@
 
 use glam::Vec3;
 
-use super::{Exec, for_each2, mass, v3, v4};
+use super::{Exec, dt_over_mass, for_each2, v3, v4};
 use crate::grid::{StepParams, V4};
 
 /// Resolves a contact with a surface of unit normal `nrm` for a particle moving at `v`:
@@ -48,7 +48,7 @@ pub(crate) fn integrate_at(i: usize, p: &StepParams, force: V4, x4: &mut V4, vel
         *vel4 = [0.0; 4];
         return;
     }
-    let v = v3(*vel4) * (1.0 - p.damping) + v3(force) * (p.dt / mass(p, w));
+    let v = v3(*vel4) * (1.0 - p.damping) + v3(force) * dt_over_mass(p, w);
     let (xn, vn) = floor_clamp(p, x + v * p.dt, v);
     *vel4 = v4(vn, 0.0);
     *x4 = v4(xn, w);

@@ -101,10 +101,10 @@ pub(crate) fn finish_at(i: usize, p: &StepParams, x4: V4, x1: Vec3, v1: Vec3) ->
 }
 
 /// `f·dt/m`: a force as the velocity it adds in one substep to a particle whose position
-/// has w = `w` (see [`super::mass`]).
+/// has w = `w` (see `cpu::dt_over_mass`).
 #[inline(always)]
 fn accel_dt(p: &StepParams, f: V4, w: f32) -> Vec3 {
-    v3(f) * (p.dt / super::mass(p, w))
+    v3(f) * super::dt_over_mass(p, w)
 }
 
 /// Explicit Euler: `x' = x + v·dt`, `v' = v + f·dt/m`, with `v` damped by

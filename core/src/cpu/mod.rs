@@ -145,6 +145,15 @@ pub(crate) fn mass(p: &crate::grid::StepParams, w: f32) -> f32 {
     if w > 0.0 { p.particle_mass / w } else { p.particle_mass }
 }
 
+/// `dt / m` of a particle whose position has w = `w`: `(dt / m̄)·w`, a multiplication
+/// where `dt / mass(p, w)` would take a second division per particle and substep; the
+/// reference's `dt / m̄` for a held particle (w = 0). `×1.0` on a grid: the grid's bits.
+#[inline(always)]
+pub(crate) fn dt_over_mass(p: &crate::grid::StepParams, w: f32) -> f32 {
+    let k = p.dt / p.particle_mass;
+    if w > 0.0 { k * w } else { k }
+}
+
 #[inline(always)]
 pub(crate) fn v3(a: V4) -> Vec3 {
     Vec3::new(a[0], a[1], a[2])
