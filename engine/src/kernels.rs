@@ -880,7 +880,7 @@ const IMM_CU: Variants = Variants { immediates: true, colliders_uniform: true, .
 const BLOCKED: Variants = Variants { shuffle: true, ..IMM_TEX };
 
 /// Gravity and drag into the force buffer (added to the wind force already there).
-pub static FORCES: KernelDef = def("forces", forces, Count::Particles, &[Params, Vel, Force], &[Force]);
+pub static FORCES: KernelDef = def("forces", forces, Count::Particles, &[Params, Pos, Vel, Force], &[Force]);
 /// The spring gather per particle over its 12-slot table.
 pub static SPRINGS: KernelDef =
     KernelDef { check: GATHER, variants: IMM_TEX, ..def("springs", springs, Count::Particles, TABLE, &[Force]) };

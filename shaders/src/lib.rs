@@ -136,7 +136,7 @@ mod tests {
             assert_eq!(k.spirv.len() % 4, 0);
         }
         let forces = kernel("forces").expect("forces");
-        assert_eq!((forces.reads, forces.writes), (&[0, 2, 3][..], &[3][..]));
+        assert_eq!((forces.reads, forces.writes), (&[0, 1, 2, 3][..], &[3][..]));
         let imm = kernel("forces_springs_imm").expect("immediates twin");
         assert!(
             imm.wgsl.contains("var<immediate> step_params: StepParams;")

@@ -10,7 +10,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     let x4 = pos[i];
     let v0 = vel[i].xyz * (1.0 - p.damping);
-    let v1 = v0 + accel_dt(force[i].xyz);
+    let v1 = v0 + accel_dt(force[i].xyz, x4.w);
     let m = finish_at(i, x4, x4.xyz + v0 * p.dt, v1);
     vel[i] = vec4<f32>(m.v, 0.0);
     pos[i] = vec4<f32>(m.x, x4.w);

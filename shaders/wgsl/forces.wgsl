@@ -7,5 +7,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    force[i] = forces_at(force[i], vel[i].xyz);
+    force[i] = forces_at(force[i], vel[i].xyz, pos[i].w);
 }

@@ -14,7 +14,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     let x4 = pos[i];
     let v = vel[i].xyz;
-    let f = forces_at(force[i], v).xyz;
+    let f = forces_at(force[i], v, x4.w).xyz;
     var m = integrated_with(i, x4, v, f);
     if is_free(i, x4.w) {
         m = collided(m);

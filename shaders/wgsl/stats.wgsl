@@ -19,7 +19,7 @@ fn main(
     let i = flat_id(id, groups);
     // No early return: every invocation takes part in the reductions.
     var v = vec2<f32>(0.0);
-    if i < p.n * p.n {
+    if i < p.num_particles {
         v = particle_stats(i);
     }
     let total = fold_workgroup(v, sg, num_sg, lane, sg_size);

@@ -16,7 +16,7 @@ fn main(
     @builtin(subgroup_size) sg_size: u32,
 ) {
     p = step_params;
-    let count = (p.n * p.n + WORKGROUP - 1u) / WORKGROUP;
+    let count = (p.num_particles + WORKGROUP - 1u) / WORKGROUP;
     var acc = vec2<f32>(0.0);
     for (var k = li; k < count; k += WORKGROUP) {
         acc = vec2<f32>(max(acc.x, partials[k].x), acc.y + partials[k].y);

@@ -5,7 +5,7 @@
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     let i = flat_id(id, groups);
-    if i >= p.n * p.n {
+    if i >= p.num_particles {
         return;
     }
     normal[i] = vec4<f32>(normalize_or_zero(normal[i].xyz), 0.0);

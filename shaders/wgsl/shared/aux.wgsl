@@ -36,7 +36,7 @@ fn store_partial(total: f32, li: u32, wg: vec3<u32>, groups: vec3<u32>) {
 // The fold of every workgroup's partial sum (one workgroup runs it): strided sums per
 // invocation, then the tree.
 fn fold_partials(li: u32) -> f32 {
-    let count = (p.n * p.n + WORKGROUP - 1u) / WORKGROUP;
+    let count = (p.num_particles + WORKGROUP - 1u) / WORKGROUP;
     var acc = 0.0;
     for (var k = li; k < count; k += WORKGROUP) {
         acc += aux4[k].x;

@@ -36,9 +36,10 @@ fn spring_block(s: SpringSlot, xa: vec3<f32>, xb: vec3<f32>, y: vec3<f32>, with_
 
 // (A y)ᵢ with y = p (full), or dt² (K v)ᵢ (not full); and the diagonal of A.
 fn apply_at(i: u32, full: bool) -> Applied {
-    let xa = pos[i].xyz;
+    let xa4 = pos[i];
+    let xa = xa4.xyz;
     let ya = y_at(i, full);
-    let m = p.particle_mass * (1.0 + p.dt * p.air_drag);
+    let m = mass_of(xa4.w) * (1.0 + p.dt * p.air_drag);
     var acc = vec3<f32>(0.0);
     if full {
         acc = ya * m;

@@ -19,7 +19,7 @@ fn cell_of(x: vec3<f32>) -> vec3<i32> {
 
 // TABLE_FACTOR times the largest power of two not above n².
 fn table_size() -> u32 {
-    return TABLE_FACTOR << firstLeadingBit(max(p.n * p.n, 1u));
+    return TABLE_FACTOR << firstLeadingBit(max(p.num_particles, 1u));
 }
 
 // core::cpu::self_collide::row_start: 4 ((y mod 4) + 4 (z mod 4)) + 64 hash(y, z), so

@@ -2,7 +2,8 @@
 
 // core::cpu::stats::particle_stats: (max strain of the springs starting at i, energy of i).
 fn particle_stats(i: u32) -> vec2<f32> {
-    let x = pos[i].xyz;
+    let x4 = pos[i];
+    let x = x4.xyz;
     var strain = 0.0;
     for (var s = 1u; s <= 3u; s += 2u) {
         let slot = slot_at(i, s);
@@ -11,5 +12,5 @@ fn particle_stats(i: u32) -> vec2<f32> {
         }
     }
     let v = vel[i].xyz;
-    return vec2<f32>(strain, 0.5 * p.particle_mass * dot3(v, v));
+    return vec2<f32>(strain, 0.5 * mass_with(p.particle_mass, x4.w) * dot3(v, v));
 }

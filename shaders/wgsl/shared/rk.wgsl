@@ -6,7 +6,7 @@
 fn rk_stage(i: u32, c_next: f32, b: f32, first: bool, last: bool) {
     let x4 = pos[i];
     let us = vel[i].xyz;
-    let gs = accel_dt(force[i].xyz);
+    let gs = accel_dt(force[i].xyz, x4.w);
     var sx = us * b;
     var su = gs * b;
     if !first {

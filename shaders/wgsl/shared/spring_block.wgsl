@@ -28,7 +28,7 @@ fn block_particle(
     s6: Nb, s7: Nb, s8: Nb, s9: Nb, s10: Nb, s11: Nb,
 ) {
     let i = row * p.n + col;
-    let f = forces_at(vec4<f32>(base, 0.0), a.pt.v).xyz;
+    let f = forces_at_mean(vec4<f32>(base, 0.0), a.pt.v).xyz;
     let acc = grid_springs(f, a.pt, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11);
     if a.inside && interior.enabled != 0u {
         force[i] = vec4<f32>(acc, 0.0);
@@ -128,7 +128,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         let i = row * n + c0 + k;
         if row < n && c0 + k < n {
             let a = point(i);
-            force[i] = vec4<f32>(table_springs(i, a, forces_at(vec4<f32>(particle_base(i), 0.0), a.v).xyz), 0.0);
+            force[i] = vec4<f32>(table_springs(i, a, forces_at_mean(vec4<f32>(particle_base(i), 0.0), a.v).xyz), 0.0);
         }
     }
 }

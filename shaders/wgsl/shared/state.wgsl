@@ -11,12 +11,35 @@ var<private> p: StepParams;
 @group(0) @binding(3) var<storage, read_write> force: array<vec4<f32>>;
 
 fn num_particles() -> u32 {
-    return p.n * p.n;
+    return p.num_particles;
 }
 
-// core::cpu::forces::forces_at: f + m g - drag v, with v the particle's velocity
-// (passed in, so that a kernel that needs it again loads it once).
-fn forces_at(f: vec4<f32>, v: vec3<f32>) -> vec4<f32> {
+// core::cpu::mass: the mass of a particle whose pos.w is w (its relative inverse mass):
+// the reference mass over w, the reference for a held particle (w = 0). On a grid w is 1
+// or 0, so this is exactly p.particle_mass.
+fn mass_of(w: f32) -> f32 {
+    return mass_with(p.particle_mass, w);
+}
+
+// core::cpu::dt_over_mass: dt/m of a particle whose pos.w is w, (dt/m̄)·w (×1 on a grid).
+fn dt_over_mass(w: f32) -> f32 {
+    let k = p.dt / p.particle_mass;
+    return select(k, k * w, w > 0.0);
+}
+
+// core::cpu::forces::forces_at with forces_consts_w: f + m g - drag m v for a particle of
+// pos.w = w, with v its velocity (passed in, so that a kernel that needs it again loads it
+// once).
+fn forces_at(f: vec4<f32>, v: vec3<f32>, w: f32) -> vec4<f32> {
+    let m = mass_of(w);
+    let g = p.gravity.xyz * m;
+    let drag = p.air_drag * m;
+    return vec4<f32>(f.xyz + g - v * drag, 0.0);
+}
+
+// forces_at for a particle of the reference mass (forces_consts): the grid's blocked
+// gathers, whose every particle has w = 1 or 0 (held: the reference too).
+fn forces_at_mean(f: vec4<f32>, v: vec3<f32>) -> vec4<f32> {
     let g = p.gravity.xyz * p.particle_mass;
     let drag = p.air_drag * p.particle_mass;
     return vec4<f32>(f.xyz + g - v * drag, 0.0);
@@ -50,7 +73,7 @@ fn integrated_with(i: u32, x4: vec4<f32>, v: vec3<f32>, f: vec3<f32>) -> Moved {
     if x4.w == 0.0 {
         return Moved(x, vec3<f32>(0.0));
     }
-    let vn = v * (1.0 - p.damping) + f * (p.dt / p.particle_mass);
+    let vn = v * (1.0 - p.damping) + f * dt_over_mass(x4.w);
     return floor_clamp(x + vn * p.dt, vn);
 }
 
@@ -77,9 +100,10 @@ fn held(i: u32, w: f32) -> bool {
     return !is_free(i, w);
 }
 
-// core::cpu::integrators::accel_dt: a force as the velocity it adds in one substep.
-fn accel_dt(f: vec3<f32>) -> vec3<f32> {
-    return f * (p.dt / p.particle_mass);
+// core::cpu::integrators::accel_dt: a force as the velocity it adds in one substep to a
+// particle of pos.w = w.
+fn accel_dt(f: vec3<f32>, w: f32) -> vec3<f32> {
+    return f * dt_over_mass(w);
 }
 
 // core::cpu::integrators::finish_at: the end of a substep for particle i at x4 that

@@ -122,3 +122,10 @@ fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
     }
     return vec3<f32>(0.0);
 }
+
+// core::cpu::mass: the mass of a particle of relative inverse mass w (its pos.w) in a cloth
+// whose reference mass is `reference`: reference / w, the reference for a held particle
+// (w = 0). Exactly the reference on a grid (w is 1 or 0).
+fn mass_with(reference: f32, w: f32) -> f32 {
+    return select(reference, reference / w, w > 0.0);
+}
