@@ -394,6 +394,14 @@ pub struct BenchArgs {
     /// given). Writes integrators.{md,csv} and a plot per size.
     #[arg(long, conflicts_with = "ladder")]
     pub integrators: bool,
+    /// Measure what the grid's regularity buys instead: the scene's n × n cloth as the
+    /// grid and loaded as a mesh (the same vertices, triangles and pins), on each backend
+    /// at --sizes (64 and 128 unless given; cpu and cpu-par unless given), --repeat rounds
+    /// interleaved; the CPU backends also run the grid kernel by kernel. A backend that
+    /// cannot run a mesh yet is named in the report with its reason. Writes
+    /// mesh-vs-grid.{md,csv,svg,png}.
+    #[arg(long, conflicts_with_all = ["ladder", "integrators"])]
+    pub mesh_vs_grid: bool,
     #[command(flatten)]
     pub physics: PhysicsArgs,
     #[command(flatten)]
@@ -412,7 +420,7 @@ pub struct BenchArgs {
     /// (DIR/cells.jsonl), check that the plan is the same (options, machine, adapters,
     /// build; refused in one line if not) and measure only what is missing. Give the
     /// stopped run's options again.
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["replot", "integrators"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["replot", "integrators", "mesh_vs_grid"])]
     pub resume: Option<PathBuf>,
 }
 

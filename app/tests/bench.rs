@@ -275,6 +275,22 @@ fn bad_bench_input_is_refused_in_one_line() {
         (&["bench", "--backends", "cpu", "--sizes", "8", "--resume", "/nonexistent-dir"], "no cells.jsonl there"),
         (&["bench", "--resume", "/tmp/a", "--out", "/tmp/b"], "--resume /tmp/a writes there: leave out --out /tmp/b"),
         (&["bench", "--integrators", "--resume", "/tmp/a"], "cannot be used with"),
+        (&["bench", "--mesh-vs-grid", "--ladder"], "cannot be used with"),
+        (
+            &[
+                "bench",
+                "--mesh-vs-grid",
+                "--backends",
+                "cpu",
+                "--sizes",
+                "8",
+                "--scene",
+                "../scenes/mesh-flag.toml",
+                "--out",
+                "/tmp/clothlab-mesh-vs-grid-refused",
+            ],
+            "the scene's cloth is a mesh already",
+        ),
         (
             &["bench", "--backends", "vulkan", "--variant", "turbo", "--sizes", "8"],
             "the presets are naive, optimized, thesis",
@@ -409,5 +425,36 @@ fn an_interrupted_sim_leaves_the_old_output_as_it_was() {
     assert_eq!(std::fs::read_to_string(&path).unwrap(), "the old results");
     let names: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(names.len(), 1, "nothing else left beside it: {names:?}");
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// `--mesh-vs-grid`: the grid, the grid kernel by kernel and the grid as a mesh on a CPU
+/// backend, the grid alone on a GPU backend with the mesh's refusal in the report; every
+/// time positive and finite; the files written.
+#[test]
+fn mesh_vs_grid_measures_the_grid_and_the_same_grid_as_a_mesh() {
+    let out = tmp("mesh-vs-grid");
+    let args = ["bench", "--mesh-vs-grid", "--sizes", "12", "--iters", "16", "--backends", "cpu,wgpu-naive", "--out"];
+    let o = clothlab(&[&args[..], &[out.to_str().unwrap()]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "bench failed: {err}");
+    let csv = std::fs::read_to_string(out.join("mesh-vs-grid.csv")).unwrap();
+    let rows: Vec<Vec<String>> = csv.lines().skip(1).map(split_csv).collect();
+    let cloths: Vec<(&str, &str)> = rows.iter().map(|r| (r[1].as_str(), r[2].as_str())).collect();
+    for want in [("cpu", "grid"), ("cpu", "grid, kernel by kernel"), ("cpu", "grid as mesh")] {
+        assert!(cloths.contains(&want), "no {want:?} in {cloths:?}");
+    }
+    for r in &rows {
+        let ns: f64 = r[3].parse().unwrap();
+        assert!(ns.is_finite() && ns > 0.0, "{r:?}");
+    }
+    let md = std::fs::read_to_string(out.join("mesh-vs-grid.md")).unwrap();
+    if cloths.contains(&("wgpu-naive", "grid")) {
+        assert!(!cloths.contains(&("wgpu-naive", "grid as mesh")), "{cloths:?}");
+        assert!(md.contains("grid as mesh on wgpu-naive: a mesh cloth runs on the cpu and cpu-par backends"), "{md}");
+    } else {
+        assert!(!gpu_required(), "CI has lavapipe, but: {err}");
+    }
+    assert!(std::fs::metadata(out.join("mesh-vs-grid.png")).unwrap().len() > 1000);
     std::fs::remove_dir_all(&out).ok();
 }

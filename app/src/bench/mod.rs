@@ -11,6 +11,7 @@
 mod integrators;
 mod journal;
 mod ladder;
+mod mesh_grid;
 mod output;
 mod plot;
 mod results;
@@ -33,18 +34,45 @@ use clothlab_engine::recipe::{dispatches, recipe};
 use clothlab_engine::variant::{Table, Variant, ladder as ladder_rungs};
 use results::{Cell, LadderCell};
 
+/// Whether `backends` is every backend (`--backends` left at its default).
+fn all_backends(backends: &[Backend]) -> bool {
+    backends.len() == <Backend as clap::ValueEnum>::value_variants().len()
+}
+
 /// `bench --integrators`: see `integrators.rs`. The default size list (for the kernel
-/// tables) becomes 64 and 128, and the backends, if left at all six, the fast three.
+/// tables) becomes 64 and 128, and the backends, if left at all of them, the fast three.
 fn integrators_bench(args: &BenchArgs, params: &SimParams, backends: &[Backend], sizes: &[u32]) -> Result<ExitCode> {
     let defaults = BenchArgs::default_sizes();
     let sizes: Vec<u32> = if sizes == defaults.as_slice() { vec![64, 128] } else { sizes.to_vec() };
     let backends: Vec<Backend> =
-        if backends.len() == 6 { vec![Backend::CpuPar, Backend::Wgpu, Backend::Vulkan] } else { backends.to_vec() };
+        if all_backends(backends) { vec![Backend::CpuPar, Backend::Wgpu, Backend::Vulkan] } else { backends.to_vec() };
     let (runs, notes) = integrators::measure(params, &backends, &sizes, args.cell_budget)?;
     let machine = args.machine.clone().unwrap_or_else(cpu_label);
     integrators::write(&args.out, &runs, &notes, &machine)?;
     println!("{}", integrators::report(&runs, &notes, &machine));
     println!("wrote {}/integrators.{{md,csv}} and the plots", args.out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `bench --mesh-vs-grid`: see `mesh_grid.rs`. The default size list becomes 64 and 128,
+/// and the backends, if left at all of them, the two CPU ones.
+fn mesh_grid_bench(
+    args: &BenchArgs,
+    base: &Scene,
+    params: &SimParams,
+    backends: &[Backend],
+    sizes: &[u32],
+) -> Result<ExitCode> {
+    let defaults = BenchArgs::default_sizes();
+    let sizes: Vec<u32> = if sizes == defaults.as_slice() { vec![64, 128] } else { sizes.to_vec() };
+    let backends: Vec<Backend> =
+        if all_backends(backends) { vec![Backend::Cpu, Backend::CpuPar] } else { backends.to_vec() };
+    let frames = args.iters.div_ceil(params.substeps).max(1);
+    let (rows, notes) = mesh_grid::measure(base, params, &backends, &sizes, frames, args.repeat)?;
+    let machine = args.machine.clone().unwrap_or_else(cpu_label);
+    mesh_grid::write(&args.out, &rows, &notes, &machine, args.repeat)?;
+    println!("{}", mesh_grid::report(&rows, &notes, &machine, args.repeat));
+    println!("wrote {}/mesh-vs-grid.{{md,csv,svg,png}}", args.out.display());
     Ok(ExitCode::SUCCESS)
 }
 
@@ -204,6 +232,9 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     };
     if args.integrators {
         return integrators_bench(&args, &params, &backends, &sizes);
+    }
+    if args.mesh_vs_grid {
+        return mesh_grid_bench(&args, &base, &params, &backends, &sizes);
     }
     let frames = args.iters.div_ceil(params.substeps);
     let overhead_plan = OverheadPlan {

@@ -1,0 +1,273 @@
+//! `clothlab bench --mesh-vs-grid`: what the grid's regularity buys.
+//!
+//! The scene's n × n cloth runs twice on each backend: as the grid, and loaded as a mesh
+//! (`core::mesh::grid_mesh`: the same vertices in the same order, the same triangles and
+//! the same two pins; its springs are the mesh's — edges and springs across edges — and its
+//! rim vertices lighter, so the work per particle is comparable, not equal: 12 slots each
+//! away from the border either way). On the CPU backends a third cloth isolates the fused
+//! sweep: the grid kernel by kernel (`CLOTHLAB_CPU_FUSED=off`'s path), which is what a mesh
+//! runs. A backend that cannot run a mesh yet gets a note with its one-line refusal. Every
+//! cell is rebuilt and timed each round, rounds interleaved; the report gives the median of
+//! the rounds' median frame times per particle-substep and the rounds' spread.
+
+use std::fmt::Write as _;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::Result;
+use clothlab_core::mesh::{PlacedMesh, Placement, grid_mesh};
+use clothlab_core::{CpuSolver, Exec, Pinning, Scene, SimParams, Solver};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::WARMUP_FRAMES;
+use super::plot::{FONT, Figure, both, err};
+use crate::solvers::{AnySolver, Backend, GpuSetup, Shared, make};
+
+/// The cloths a backend runs.
+pub const GRID: &str = "grid";
+/// The grid on the CPU's kernel-by-kernel path.
+pub const GRID_KERNELS: &str = "grid, kernel by kernel";
+/// The grid loaded as a mesh.
+pub const MESH: &str = "grid as mesh";
+
+/// One cell: a cloth on a backend at a size.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// Particles per side.
+    pub n: u32,
+    /// Backend name.
+    pub backend: String,
+    /// [`GRID`], [`GRID_KERNELS`] or [`MESH`].
+    pub cloth: &'static str,
+    /// Median over rounds of the median frame time per particle-substep, ns.
+    pub ns: f64,
+    /// (largest − smallest) / median of the rounds' values.
+    pub spread: f64,
+}
+
+/// The scene's grid at side `n` as a mesh: `grid_mesh` placed where the grid starts, held
+/// at its two top corners.
+pub fn as_mesh(grid: &Scene) -> Result<Scene> {
+    let c = &grid.cloth;
+    anyhow::ensure!(
+        !c.is_mesh(),
+        "--mesh-vs-grid compares a grid with itself as a mesh: the scene's cloth is a mesh already"
+    );
+    anyhow::ensure!(
+        c.across == [1.0, 0.0, 0.0] && c.down == [0.0, 0.0, 1.0] && c.pinning == Pinning::TopCorners,
+        "--mesh-vs-grid loads the grid as a mesh lying in the xz-plane held at its top corners: the scene's cloth has another orientation or pinning"
+    );
+    let placement = Placement { translate: c.top_center, ..Placement::default() };
+    let mut scene = grid.clone();
+    scene.cloth.mesh = Some(format!("grid_mesh({})", c.n).into());
+    scene.cloth.pinning = Pinning::Vertices(vec![0, c.n - 1]);
+    scene.cloth.translate = placement.translate;
+    scene.cloth.mesh_data = Some(Arc::new(PlacedMesh::new(&grid_mesh(c.n, c.size), &placement)?));
+    Ok(scene)
+}
+
+/// The median frame time of `frames` frames after the warm-up, ns.
+fn time(solver: &mut dyn Solver, frames: u32) -> Result<f64> {
+    solver.set_kernel_timing(false);
+    for _ in 0..WARMUP_FRAMES {
+        solver.step_frame()?;
+    }
+    let mut t = Vec::with_capacity(frames as usize);
+    for _ in 0..frames {
+        let t0 = Instant::now();
+        solver.step_frame()?;
+        t.push(t0.elapsed().as_nanos() as f64);
+    }
+    t.sort_by(f64::total_cmp);
+    Ok(t[t.len() / 2])
+}
+
+/// One cell's solver, or why the backend cannot run it.
+fn solver(backend: Backend, cloth: &str, grid: &Scene, mesh: &Scene, params: &SimParams) -> Result<AnySolver> {
+    let cpu = match backend {
+        Backend::Cpu => Some(Exec::Serial),
+        Backend::CpuPar => Some(Exec::Parallel),
+        _ => None,
+    };
+    let scene = if cloth == MESH { mesh } else { grid };
+    if let Some(exec) = cpu {
+        let mut s = CpuSolver::new(exec, scene.clone(), params.clone())?;
+        s.fused = cloth == GRID;
+        return Ok(AnySolver::Cpu(Box::new(s)));
+    }
+    make(backend, scene.clone(), params.clone(), &GpuSetup::default(), &Shared::None)
+}
+
+/// Measures every cell `repeat` times, interleaved; the rows and the notes (refusals).
+pub fn measure(
+    base: &Scene,
+    params: &SimParams,
+    backends: &[Backend],
+    sizes: &[u32],
+    frames: u32,
+    repeat: u32,
+) -> Result<(Vec<Row>, Vec<String>)> {
+    let mut rows = Vec::new();
+    let mut notes = Vec::new();
+    for &n in sizes {
+        let mut grid = base.clone();
+        grid.cloth.n = n;
+        let mesh = as_mesh(&grid)?;
+        let mut cells: Vec<(Backend, &'static str)> = Vec::new();
+        for &b in backends {
+            let cloths: &[&'static str] =
+                if matches!(b, Backend::Cpu | Backend::CpuPar) { &[GRID, GRID_KERNELS, MESH] } else { &[GRID, MESH] };
+            for &c in cloths {
+                match solver(b, c, &grid, &mesh, params) {
+                    Ok(_) => cells.push((b, c)),
+                    Err(e) => notes.push(format!("n = {n}: {c} on {}: {e:#}", b.name())),
+                }
+            }
+        }
+        let np = (n * n) as f64;
+        let mut values = vec![Vec::new(); cells.len()];
+        for round in 0..repeat {
+            for (k, &(b, c)) in cells.iter().enumerate() {
+                let mut s = solver(b, c, &grid, &mesh, params)?;
+                let ns = time(s.get(), frames)? / params.substeps as f64 / np;
+                eprintln!("n = {n} round {round}: {:8} {c:24} {ns:9.1} ns per particle-substep", b.name());
+                values[k].push(ns);
+            }
+        }
+        for ((b, c), mut v) in cells.into_iter().zip(values) {
+            v.sort_by(f64::total_cmp);
+            let median = v[v.len() / 2];
+            let spread = (v[v.len() - 1] - v[0]) / median;
+            rows.push(Row { n, backend: b.name().into(), cloth: c, ns: median, spread });
+        }
+    }
+    Ok((rows, notes))
+}
+
+/// The grid's time on the same backend and size as `r`.
+fn grid_of<'a>(rows: &'a [Row], r: &Row) -> Option<&'a Row> {
+    rows.iter().find(|g| g.n == r.n && g.backend == r.backend && g.cloth == GRID)
+}
+
+/// The report: a table per size, the ratios to the grid, the notes.
+pub fn report(rows: &[Row], notes: &[String], machine: &str, repeat: u32) -> String {
+    let mut s = String::from("# The grid against the same grid loaded as a mesh\n\n");
+    let _ = writeln!(
+        s,
+        "{machine}; {repeat} interleaved round(s) per cell, each the median frame time after {WARMUP_FRAMES} warm-up frames. \
+         ns per particle-substep (wall time, the GPU waited for); `× grid` is the cell over the grid on the same backend.\n"
+    );
+    let mut sizes: Vec<u32> = rows.iter().map(|r| r.n).collect();
+    sizes.dedup();
+    for n in sizes {
+        let _ = writeln!(s, "## n = {n} ({} particles)\n", n * n);
+        let _ = writeln!(s, "| backend | cloth | ns/particle-substep | × grid | spread |\n|---|---|---:|---:|---:|");
+        for r in rows.iter().filter(|r| r.n == n) {
+            let ratio = grid_of(rows, r).map(|g| format!("{:.2}", r.ns / g.ns)).unwrap_or_default();
+            let _ = writeln!(s, "| {} | {} | {:.1} | {ratio} | {:.0} % |", r.backend, r.cloth, r.ns, 100.0 * r.spread);
+        }
+        s.push('\n');
+    }
+    if !notes.is_empty() {
+        s.push_str("## Not measured\n\n");
+        for note in notes {
+            let _ = writeln!(s, "- {note}");
+        }
+        s.push('\n');
+    }
+    s.push_str("![ns per particle-substep](mesh-vs-grid.png)\n");
+    s
+}
+
+/// The rows as CSV.
+pub fn csv(rows: &[Row]) -> String {
+    let mut s = String::from("n,backend,cloth,ns_per_particle_substep,spread\n");
+    for r in rows {
+        // The cloth's name has a comma: quoted.
+        let _ = writeln!(s, "{},{},\"{}\",{:.3},{:.4}", r.n, r.backend, r.cloth, r.ns, r.spread);
+    }
+    s
+}
+
+/// Bars: ns per particle-substep per (size, backend), a bar per cloth.
+struct Bars<'a> {
+    rows: &'a [Row],
+    machine: &'a str,
+}
+
+impl Figure for Bars<'_> {
+    fn size(&self) -> (u32, u32) {
+        (1000, 600)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE).map_err(err)?;
+        let mut groups: Vec<(u32, &str)> = self.rows.iter().map(|r| (r.n, r.backend.as_str())).collect();
+        groups.dedup();
+        let cloths = [GRID, GRID_KERNELS, MESH];
+        let colours = [RGBColor(40, 90, 170), RGBColor(120, 160, 220), RGBColor(220, 120, 40)];
+        let top = self.rows.iter().map(|r| r.ns).fold(1.0, f64::max) * 1.15;
+        let mut chart = ChartBuilder::on(root)
+            .caption(format!("Grid against the grid as a mesh — {}", self.machine), (FONT, 20))
+            .margin(12)
+            .x_label_area_size(50)
+            .y_label_area_size(70)
+            // Room below zero for each group's name, centred under its bars.
+            .build_cartesian_2d(0.0..groups.len() as f64, -0.08 * top..top)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(0)
+            .y_desc("ns per particle-substep")
+            .label_style((FONT, 13))
+            .draw()
+            .map_err(err)?;
+        let style = TextStyle::from((FONT, 14).into_font()).pos(Pos::new(HPos::Center, VPos::Center));
+        let names = groups
+            .iter()
+            .enumerate()
+            .map(|(g, (n, b))| Text::new(format!("{b}, n = {n}"), (g as f64 + 0.5, -0.04 * top), style.clone()));
+        chart.draw_series(names).map_err(err)?;
+        for (c, (cloth, colour)) in cloths.iter().zip(colours).enumerate() {
+            let bars: Vec<Rectangle<(f64, f64)>> = groups
+                .iter()
+                .enumerate()
+                .filter_map(|(g, (n, b))| {
+                    let r = self.rows.iter().find(|r| r.n == *n && r.backend == *b && r.cloth == *cloth)?;
+                    let x0 = g as f64 + 0.1 + 0.27 * c as f64;
+                    Some(Rectangle::new([(x0, 0.0), (x0 + 0.25, r.ns)], colour.filled()))
+                })
+                .collect();
+            chart
+                .draw_series(bars)
+                .map_err(err)?
+                .label(*cloth)
+                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], colour.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .label_font((FONT, 14))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    }
+}
+
+/// Writes mesh-vs-grid.{md,csv,svg,png} into `out`.
+pub fn write(out: &std::path::Path, rows: &[Row], notes: &[String], machine: &str, repeat: u32) -> Result<()> {
+    crate::files::write_bytes(&out.join("mesh-vs-grid.csv"), csv(rows).as_bytes())?;
+    crate::files::write_bytes(&out.join("mesh-vs-grid.md"), report(rows, notes, machine, repeat).as_bytes())?;
+    let (svg, png) = both(&Bars { rows, machine })?;
+    crate::files::write_bytes(&out.join("mesh-vs-grid.svg"), svg.as_bytes())?;
+    crate::files::write_bytes(&out.join("mesh-vs-grid.png"), &png)?;
+    Ok(())
+}
