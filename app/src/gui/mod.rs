@@ -475,7 +475,7 @@ impl Running {
             }
         };
         let n = file.scene.cloth.n;
-        if !(10..=1024).contains(&n) {
+        if !file.scene.cloth.is_mesh() && !(10..=1024).contains(&n) {
             self.ui.message = format!("{}: the app takes 10 ..= 1024 particles per side, not {n}", path.display());
             return Ok(());
         }

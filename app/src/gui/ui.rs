@@ -156,7 +156,7 @@ pub fn draw(root: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
     }
     if s.about {
         egui::Window::new("About clothlab").collapsible(false).open(&mut s.about).show(&ctx, |ui| {
-            ui.label("clothlab — a mass-spring cloth on CPU, wgpu and raw Vulkan.");
+            ui.label("clothlab — a mass-spring cloth on CPU, wgpu, raw Vulkan and raw OpenGL.");
             ui.label(
                 "After the master's thesis \"Interactive Cloth Simulation Accelerated by GPU\" (Melichar, Brno, 2016).",
             );
@@ -283,9 +283,14 @@ fn status_bar(ui: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
             None => ui.label("— ms per substep"),
         };
         ui.separator();
-        let r = ui.add(egui::Slider::new(&mut s.grid_n, 10..=1024).logarithmic(true).text("grid"));
-        if r.drag_stopped() || (r.changed() && !r.dragged()) {
-            out.push(Command::Grid(s.grid_n));
+        if s.scene.cloth.is_mesh() {
+            // A mesh has no grid side to change: its size, not a slider that would do nothing.
+            ui.label(format!("mesh: {} particles", s.scene.num_particles()));
+        } else {
+            let r = ui.add(egui::Slider::new(&mut s.grid_n, 10..=1024).logarithmic(true).text("grid"));
+            if r.drag_stopped() || (r.changed() && !r.dragged()) {
+                out.push(Command::Grid(s.grid_n));
+            }
         }
         ui.separator();
         ui.label(status_line(info)).on_hover_text(format!("window: {}", info.adapter));
@@ -311,7 +316,9 @@ pub fn substep_label(t: &super::sim::SubstepTime) -> String {
     match t {
         super::sim::SubstepTime::Measured(ns) => format!("{:.2} ms per substep", ns / 1e6),
         super::sim::SubstepTime::Wall { wall, timestamps } => format!(
-            "{:.2} ms per substep (wall clock: the GPU timestamps say {:.2}, which cannot be true here)",
+            // "Kernel timings": GPU timestamps, or a CPU solver's own median per substep
+            // (which rayon's stalls behind a busy renderer can leave far below the mean).
+            "{:.2} ms per substep (wall clock: the kernel timings' {:.2} ms do not fit the frame's time)",
             wall / 1e6,
             timestamps / 1e6
         ),
@@ -414,7 +421,15 @@ fn open_dialog(ctx: &egui::Context, s: &mut UiState, out: &mut Vec<Command>) {
 fn scene_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     ui.label(RichText::new(format!("Scene — {}", s.scene_title)).strong());
     let c = &s.scene.cloth;
-    ui.label(format!("cloth {n}×{n}, {} m, pinned: {}", c.size, c.pinning.label(), n = c.n));
+    match &c.mesh {
+        Some(file) if c.is_mesh() => ui.label(format!(
+            "cloth: mesh {}, {} particles, pinned: {}",
+            file.display(),
+            s.scene.num_particles(),
+            c.pinning.label()
+        )),
+        _ => ui.label(format!("cloth {n}×{n}, {} m, pinned: {}", c.size, c.pinning.label(), n = c.n)),
+    };
     let sc = &mut s.scene;
     let mut floor = sc.floor_y.is_some();
     ui.horizontal(|ui| {
