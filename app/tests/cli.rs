@@ -148,7 +148,10 @@ fn a_mesh_scene_runs_on_the_cpu_solvers_records_and_is_refused_elsewhere_in_one_
         "a mesh cloth runs on the cpu and cpu-par backends",
     );
     refused(&["sim", "--backend", "cpu", "--scene", scene, "--n", "32"], "--n 32 sets a grid's side");
-    refused(&["sim", "--backend", "cpu", "--scene", scene, "--integrator", "xpbd"], "XPBD colours springs");
+    refused(
+        &["sim", "--backend", "cpu", "--scene", scene, "--set", "self_collision=true"],
+        "self-collision hashes grid",
+    );
 }
 
 #[test]

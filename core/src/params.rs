@@ -286,16 +286,9 @@ impl SimParams {
         }
     }
 
-    /// What a cloth made from a mesh cannot run yet: XPBD (its passes colour the springs
-    /// by grid offsets) and self-collision (its hash packs grid coordinates).
+    /// What a cloth made from a mesh cannot run yet: self-collision (its hash packs grid
+    /// coordinates).
     pub fn check_mesh(&self) -> Result<(), ParamError> {
-        if self.integrator == Integrator::Xpbd {
-            return Err(ParamError::new(
-                "integrator",
-                "xpbd",
-                "XPBD colours springs by their grid offsets and cannot run a mesh yet: use verlet, symplectic-euler, euler, rk2, rk4 or implicit",
-            ));
-        }
         if self.self_collision {
             return Err(ParamError::new(
                 "self_collision",

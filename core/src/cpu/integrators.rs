@@ -243,6 +243,61 @@ pub fn xpbd_pass(
     }
 }
 
+/// The XPBD passes of a mesh: its springs (`springs`, a mesh's list: edges, then bending
+/// springs) coloured greedily so that no two springs of a pass share a particle, the
+/// bending springs' passes first and the edges' last (the grid's order: an iteration ends
+/// with the springs the strain is measured on). A pass lists spring indices, ascending.
+pub fn xpbd_mesh_passes(springs: &[crate::grid::Spring], particles: usize) -> Vec<Vec<u32>> {
+    let mut passes = Vec::new();
+    for bend in [true, false] {
+        // Per particle, a bit per colour of this family already touching it.
+        let mut used = vec![0u64; particles];
+        let mut family: Vec<Vec<u32>> = Vec::new();
+        for (k, s) in springs.iter().enumerate() {
+            if (s.kind == crate::grid::SpringKind::Bend as u32) != bend {
+                continue;
+            }
+            let (a, b) = (s.a as usize, s.b as usize);
+            // The first colour neither end has (at most 2·SLOTS − 1 are ever needed).
+            let c = (!(used[a] | used[b])).trailing_zeros() as usize;
+            used[a] |= 1 << c;
+            used[b] |= 1 << c;
+            if family.len() <= c {
+                family.resize(c + 1, Vec::new());
+            }
+            family[c].push(k as u32);
+        }
+        passes.extend(family);
+    }
+    passes
+}
+
+/// One XPBD pass of a mesh (see [`xpbd_mesh_passes`]): each spring of `pass` solved as
+/// [`xpbd_pass`] solves a grid's, its λ in `lambda[k]` for spring `k`. The pass's springs
+/// share no particle, so their order changes no bit.
+pub fn xpbd_mesh_pass(
+    p: &StepParams,
+    springs: &[crate::grid::Spring],
+    pass: &[u32],
+    pos: &mut [V4],
+    vel: &mut [V4],
+    lambda: &mut [f32],
+) {
+    for &k in pass {
+        let s = &springs[k as usize];
+        if s.ks <= 0.0 {
+            continue;
+        }
+        let (a, b) = (s.a as usize, s.b as usize);
+        let slot = SpringSlot { neighbor: s.b as i32, rest: s.rest, ks: s.ks, kd: s.kd };
+        let l = lambda[k as usize];
+        if let Some(r) = xpbd_solve(p, &slot, a, b, pos[a], pos[b], vel[a], vel[b], l) {
+            (pos[a], pos[b], vel[a], vel[b]) = (r.xa, r.xb, r.va, r.vb);
+            lambda[k as usize] = l + r.dl;
+        }
+    }
+}
+
 /// The spring pass `pass` solves at particle `a` (its first end), if any: the slot and
 /// the other end.
 #[inline(always)]

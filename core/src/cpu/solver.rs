@@ -8,7 +8,8 @@ use super::{
     AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_ORDER, build_hash, cg_alpha, cg_begin, cg_beta,
     cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, hash_buffers, implicit_finish, integrate,
     integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit, strain_limit_rows,
-    strain_vel, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_pass, xpbd_pass_rows,
+    strain_vel, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_mesh_pass, xpbd_mesh_passes,
+    xpbd_pass, xpbd_pass_rows,
 };
 use crate::cloth::build;
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4};
@@ -65,6 +66,9 @@ pub struct CpuSolver {
     pins: Vec<usize>,
     /// The tethers as component arrays, for the fused sweep.
     tether_lanes: TetherLanes,
+    /// A mesh's XPBD passes (`xpbd_mesh_passes`; empty for a grid) and its springs' λ.
+    mesh_passes: Vec<Vec<u32>>,
+    mesh_lambda: Vec<f32>,
 }
 
 impl CpuSolver {
@@ -97,7 +101,13 @@ impl CpuSolver {
             aos_stale: false,
             pins: Vec::new(),
             tether_lanes: TetherLanes::default(),
+            mesh_passes: Vec::new(),
+            mesh_lambda: Vec::new(),
         };
+        if s.topo.mesh.is_some() {
+            s.mesh_passes = xpbd_mesh_passes(&s.topo.springs, np);
+            s.mesh_lambda = vec![0.0; s.topo.springs.len()];
+        }
         s.tether_lanes = TetherLanes::new(&s.topo.tethers);
         s.pins = s.topo.tethers.iter().flatten().filter(|t| t.pin >= 0).map(|t| t.pin as usize).collect();
         s.pins.sort_unstable();
@@ -259,7 +269,22 @@ impl CpuSolver {
         let on = self.time_kernels;
         let t0 = Instant::now();
         let Self {
-            state, topo, scratch, face, timer, scene, params, uniform, lanes, face_lanes, aux, cg, grid, ..
+            state,
+            topo,
+            scratch,
+            face,
+            timer,
+            scene,
+            params,
+            uniform,
+            lanes,
+            face_lanes,
+            aux,
+            cg,
+            grid,
+            mesh_passes,
+            mesh_lambda,
+            ..
         } = self;
         let n = topo.n as usize;
         let fast = uniform.is_some();
@@ -329,7 +354,14 @@ impl CpuSolver {
                     integrate(e, &p, force, pos, vel);
                     // λ per spring, from zero every substep (the recipe's clears).
                     aux[..2].iter_mut().flatten().for_each(|v| *v = [0.0; 4]);
+                    mesh_lambda.iter_mut().for_each(|l| *l = 0.0);
                     for _ in 0..params.xpbd_iterations {
+                        if mesh {
+                            for pass in mesh_passes.iter() {
+                                xpbd_mesh_pass(&p, &topo.springs, pass, pos, vel, mesh_lambda);
+                            }
+                            continue;
+                        }
                         for pass in XPBD_ORDER {
                             if grid.is_some() {
                                 xpbd_pass_rows(e, &p, &topo.slots, pass, pos, vel, aux);
