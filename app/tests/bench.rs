@@ -429,12 +429,12 @@ fn an_interrupted_sim_leaves_the_old_output_as_it_was() {
 }
 
 /// `--mesh-vs-grid`: the grid, the grid kernel by kernel and the grid as a mesh on a CPU
-/// backend, the grid alone on a GPU backend with the mesh's refusal in the report; every
-/// time positive and finite; the files written.
+/// backend; the grid, the grid without its grid-only switches and the grid as a mesh on an
+/// optimized GPU backend; every time positive and finite; the files written.
 #[test]
 fn mesh_vs_grid_measures_the_grid_and_the_same_grid_as_a_mesh() {
     let out = tmp("mesh-vs-grid");
-    let args = ["bench", "--mesh-vs-grid", "--sizes", "12", "--iters", "16", "--backends", "cpu,wgpu-naive", "--out"];
+    let args = ["bench", "--mesh-vs-grid", "--sizes", "12", "--iters", "16", "--backends", "cpu,wgpu", "--out"];
     let o = clothlab(&[&args[..], &[out.to_str().unwrap()]].concat());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "bench failed: {err}");
@@ -449,9 +449,11 @@ fn mesh_vs_grid_measures_the_grid_and_the_same_grid_as_a_mesh() {
         assert!(ns.is_finite() && ns > 0.0, "{r:?}");
     }
     let md = std::fs::read_to_string(out.join("mesh-vs-grid.md")).unwrap();
-    if cloths.contains(&("wgpu-naive", "grid")) {
-        assert!(!cloths.contains(&("wgpu-naive", "grid as mesh")), "{cloths:?}");
-        assert!(md.contains("grid as mesh on wgpu-naive: a mesh cloth runs on the cpu and cpu-par backends"), "{md}");
+    if cloths.contains(&("wgpu", "grid")) {
+        for want in [("wgpu", "grid, from the table"), ("wgpu", "grid as mesh")] {
+            assert!(cloths.contains(&want), "no {want:?} in {cloths:?}");
+        }
+        assert!(md.contains("| wgpu | grid as mesh |") && !md.contains("Not measured"), "{md}");
     } else {
         assert!(!gpu_required(), "CI has lavapipe, but: {err}");
     }

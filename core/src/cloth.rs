@@ -2,7 +2,8 @@
 //! the scene holds.
 
 use crate::grid::{
-    ClothState, ClothTopology, FACE_SLOTS, MeshTables, SLOTS, Spring, SpringKind, SpringSlot, TETHER_SLOTS, Tether,
+    ClothState, ClothTopology, FACE_SLOTS, MeshTables, SLOTS, STRAIN_SLOTS, Spring, SpringKind, SpringSlot,
+    TETHER_SLOTS, Tether,
 };
 use crate::mesh::{MeshError, MeshPinning, PlacedMesh, planar_uvs};
 use crate::params::{ParamError, SimParams};
@@ -24,7 +25,7 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
 /// Builds the state and topology of a cloth made from `placed` (the scene's mesh):
 /// particles at its vertices with masses from their areas (`pos.w` the reference mass
 /// `cloth_mass / count` over the vertex's, 0 pinned), the springs in the gather table
-/// (edges first, bending springs after) and the flat list (edges then bending springs),
+/// (edges first, bending springs after) and the flat list (sorted by XPBD pass: `MeshTables::xpbd_passes`),
 /// each with the constants of its family for its lighter end, face slots in triangle
 /// order, tethers to the two nearest pins.
 pub fn build_mesh(
@@ -81,7 +82,10 @@ pub fn build_mesh(
     for (v, list) in ms.slots.iter().enumerate() {
         for (s, &k) in list.iter().enumerate() {
             let other = ms.other(k, v as u32);
-            slots[v * SLOTS + s] = SpringSlot { neighbor: other as i32, rest: dist(v as u32, other), ks: 0.0, kd: 0.0 };
+            // A bending spring in a strain-limited slot (a vertex with fewer edges than
+            // those slots) is marked so that the strain limit skips it (`SpringSlot::other`).
+            let neighbor = if ms.is_edge(k) || s >= STRAIN_SLOTS { other as i32 } else { SpringSlot::unlimited(other) };
+            slots[v * SLOTS + s] = SpringSlot { neighbor, rest: dist(v as u32, other), ks: 0.0, kd: 0.0 };
             slot_kind[v * SLOTS + s] = kind_of(k);
         }
     }
@@ -89,6 +93,16 @@ pub fn build_mesh(
         .map(|k| {
             let [a, b] = ms.spring(k);
             Spring { a, b, rest: dist(a, b), ks: 0.0, kd: 0.0, kind: kind_of(k) as u32 }
+        })
+        .collect();
+    // The list sorted by XPBD pass, so that a pass is a range of it (one dispatch each).
+    let passes = xpbd_colouring(&springs, np);
+    let mut xpbd_passes = vec![0u32];
+    let springs: Vec<Spring> = passes
+        .iter()
+        .flat_map(|pass| {
+            xpbd_passes.push(xpbd_passes.last().copied().unwrap_or(0) + pass.len() as u32);
+            pass.iter().map(|&k| springs[k as usize])
         })
         .collect();
     let tethers = mesh
@@ -104,7 +118,7 @@ pub fn build_mesh(
         .collect();
     let zero = vec![[0.0f32; 4]; np];
     let state = ClothState { n: 0, pos, vel, force: zero.clone(), normal: zero };
-    let tables = MeshTables { slot_kind, mass, min_mass };
+    let tables = MeshTables { slot_kind, mass, min_mass, xpbd_passes };
     let mut topo = ClothTopology {
         n: 0,
         uv,
@@ -118,4 +132,33 @@ pub fn build_mesh(
     };
     topo.set_spring_constants(params);
     Ok((state, topo))
+}
+
+/// XPBD's passes over a mesh's springs (`springs`, edges then bending springs): coloured
+/// greedily so that no two springs of a pass share a particle, the bending springs'
+/// passes first and the edges' last (the grid's order: an iteration ends with the
+/// springs the strain is measured on). A pass lists spring indices, ascending.
+fn xpbd_colouring(springs: &[Spring], particles: usize) -> Vec<Vec<u32>> {
+    let mut passes = Vec::new();
+    for bend in [true, false] {
+        // Per particle, a bit per colour of this family already touching it.
+        let mut used = vec![0u64; particles];
+        let mut family: Vec<Vec<u32>> = Vec::new();
+        for (k, s) in springs.iter().enumerate() {
+            if (s.kind == SpringKind::Bend as u32) != bend {
+                continue;
+            }
+            let (a, b) = (s.a as usize, s.b as usize);
+            // The first colour neither end has (at most 2·SLOTS − 1 are ever needed).
+            let c = (!(used[a] | used[b])).trailing_zeros() as usize;
+            used[a] |= 1 << c;
+            used[b] |= 1 << c;
+            if family.len() <= c {
+                family.resize(c + 1, Vec::new());
+            }
+            family[c].push(k as u32);
+        }
+        passes.extend(family);
+    }
+    passes
 }

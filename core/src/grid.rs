@@ -94,7 +94,11 @@ impl InteriorSlots {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
 pub struct SpringSlot {
-    /// Index of the particle at the other end, or -1 for an empty slot.
+    /// Index of the particle at the other end; -1 for an empty slot; `-2 - other` for a
+    /// spring the strain limit does not hold although its slot is below
+    /// [`STRAIN_SLOTS`] (a mesh's bending spring at a vertex with fewer than
+    /// `STRAIN_SLOTS` edges: the table packs its springs, edges first). See
+    /// [`SpringSlot::other`].
     pub neighbor: i32,
     /// Rest length, m.
     pub rest: f32,
@@ -107,6 +111,21 @@ pub struct SpringSlot {
 impl SpringSlot {
     /// An empty slot.
     pub const EMPTY: Self = Self { neighbor: -1, rest: 0.0, ks: 0.0, kd: 0.0 };
+
+    /// The particle at the other end, if the slot holds a spring (strain-limited or not).
+    #[inline(always)]
+    pub fn other(&self) -> Option<usize> {
+        match self.neighbor {
+            -1 => None,
+            k if k >= 0 => Some(k as usize),
+            k => Some((-2 - k) as usize),
+        }
+    }
+
+    /// `neighbor` for a spring to `other` that the strain limit skips.
+    pub fn unlimited(other: u32) -> i32 {
+        -2 - other as i32
+    }
 }
 
 /// One spring of the flat list the scatter (naive) kernels walk (`#[repr(C)]`).
@@ -202,6 +221,11 @@ pub struct MeshTables {
     pub mass: Vec<f32>,
     /// The lightest free particle's mass, kg (what the integrators' stability needs).
     pub min_mass: f32,
+    /// XPBD's passes: pass `k` is springs `xpbd_passes[k] .. xpbd_passes[k + 1]` of the
+    /// spring list, which the build sorts by pass (see `cloth::build_mesh`): a greedy
+    /// colouring in which no two springs of a pass share a particle, the bending springs'
+    /// passes first and the edges' last.
+    pub xpbd_passes: Vec<u32>,
 }
 
 impl ClothTopology {
@@ -297,8 +321,8 @@ impl ClothTopology {
                 params.spring_constants_for_mass(mesh.mass[a].min(mesh.mass[b]), self.spacing)[kind as usize]
             };
             for (k, slot) in self.slots.iter_mut().enumerate() {
-                if slot.neighbor >= 0 {
-                    (slot.ks, slot.kd) = consts(k / SLOTS, slot.neighbor as usize, mesh.slot_kind[k]);
+                if let Some(b) = slot.other() {
+                    (slot.ks, slot.kd) = consts(k / SLOTS, b, mesh.slot_kind[k]);
                 }
             }
             for s in &mut self.springs {

@@ -10,10 +10,6 @@ use crate::scene::Scene;
 use crate::stats::SubstepStats;
 use crate::timing::KernelTimings;
 
-/// Why the engine's solvers (every GPU backend and the CPU twins' engine) refuse a mesh
-/// cloth for now: their kernels still index the grid (issue 34's next step).
-pub const MESH_ENGINE_PENDING: &str = "a mesh cloth runs on the cpu and cpu-par backends for now: the engine's kernels (GPU backends and their CPU twins) still take an n × n grid";
-
 /// A cloth simulation on some backend.
 pub trait Solver {
     /// Short name of the backend and variant, e.g. `cpu`, `cpu-par`.

@@ -71,7 +71,8 @@ pub fn disturbed_state(
         s.step_frame()?;
     }
     let mut st = s.state()?;
-    let spacing = scene.cloth.size / (scene.cloth.n - 1) as f32;
+    // The grid's spacing, or a mesh's mean edge length.
+    let spacing = s.topology().spacing;
     let mut rng = seed;
     let mut rand = move || {
         rng = rng.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);

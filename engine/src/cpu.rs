@@ -15,7 +15,7 @@ use clothlab_core::{SimParams, Solver, SolverError};
 
 use crate::kernels::{HostBuffers, KernelRef, TwinArgs};
 use crate::recipe::KernelRunner;
-use crate::recipe::{Command, Integration, Variant, frame_end, kernels_of, recipe};
+use crate::recipe::{Command, Integration, Variant, frame_end, kernels_of, recipe_for};
 
 /// Runs commands through the twins.
 #[derive(Debug, Clone)]
@@ -45,6 +45,10 @@ impl CpuEngine {
     pub fn command(&self, command: &Command, p: &StepParams, substep: u32, bufs: &mut HostBuffers) {
         match command {
             Command::Dispatch(k) => (k.def.twin)(&self.args(p, substep), bufs),
+            Command::Range { kernel, first, count } => {
+                let args = TwinArgs { range: (*first, *count), ..self.args(p, substep) };
+                (kernel.def.twin)(&args, bufs)
+            }
             Command::Clear(buf) => {
                 if let Some(v) = bufs.get_mut(*buf) {
                     v.iter_mut().for_each(|x| *x = [0.0; 4]);
@@ -72,6 +76,7 @@ impl CpuEngine {
             spheres: &self.scene.spheres,
             boxes: &self.scene.boxes,
             substep,
+            range: (0, 0),
         }
     }
 
@@ -129,14 +134,11 @@ impl RecipeSolver {
     /// colliders live and which atomics add change only which GPU shader runs, not the
     /// twin).
     pub fn new(exec: Exec, variant: Variant, scene: Scene, params: SimParams) -> Result<Self, SolverError> {
-        if scene.cloth.is_mesh() {
-            return Err(SolverError::Unsupported(clothlab_core::solver::MESH_ENGINE_PENDING.into()));
-        }
         let (state, topo) = build(&scene, &params)?;
         let engine = CpuEngine::new(exec, scene, topo);
         let sp = StepParams::new(&params, &engine.scene, None);
         let bufs = start_buffers(exec, &sp, &engine.topo, &state);
-        let commands = recipe(&variant, params.strain_iterations, Integration::of(&params));
+        let commands = recipe_for(&variant, params.strain_iterations, Integration::of(&params), &engine.topo);
         let end = frame_end(&variant, Integration::of(&params));
         let name = variant.solver_name("cpu-recipe");
         Ok(Self { engine, name, variant, params, grab: None, bufs, commands, end, timer: TimingRecorder::default() })
@@ -184,7 +186,8 @@ impl Solver for RecipeSolver {
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         self.engine.topo.validate_params(&params)?;
         self.engine.set_spring_constants(&params);
-        self.commands = recipe(&self.variant, params.strain_iterations, Integration::of(&params));
+        self.commands =
+            recipe_for(&self.variant, params.strain_iterations, Integration::of(&params), &self.engine.topo);
         self.end = frame_end(&self.variant, Integration::of(&params));
         self.params = params;
         Ok(())
@@ -202,7 +205,7 @@ impl Solver for RecipeSolver {
             for c in &self.commands {
                 let t = Instant::now();
                 self.engine.command(c, &p, s, &mut self.bufs);
-                if let Command::Dispatch(k) = c {
+                if let Some(k) = c.kernel() {
                     self.timer.record(k.def.label, t.elapsed().as_nanos() as f64);
                 }
             }

@@ -24,9 +24,11 @@ use crate::EngineError;
 pub enum Count {
     /// One invocation per particle.
     Particles,
-    /// One per [`BLOCK`] consecutive particles of a row (`n · ⌈n / BLOCK⌉`).
+    /// One per [`BLOCK`] consecutive particles of a row: `n · ⌈n / BLOCK⌉` on a grid, a
+    /// mesh's particles as one row (`⌈particles / BLOCK⌉`).
     Blocks,
-    /// One per quad of the grid (two triangles).
+    /// One per quad of the grid (two triangles); on a mesh, one per two triangles of the
+    /// list.
     Quads,
     /// One per spring of the flat list.
     Springs,
@@ -38,6 +40,9 @@ pub enum Count {
     HashBlocks,
     /// One per pair of neighbours in a row (`n · ⌈n / 2⌉`: `self_collide`).
     Pairs,
+    /// As many as the dispatch's range says ([`crate::recipe::Command::Range`]: a mesh's
+    /// XPBD pass); of the topology, the whole spring list.
+    Range,
 }
 
 impl Count {
@@ -45,13 +50,15 @@ impl Count {
     pub fn of(self, topo: &ClothTopology) -> u32 {
         match self {
             Count::Particles => topo.num_particles() as u32,
+            Count::Blocks if topo.n == 0 => (topo.num_particles() as u32).div_ceil(BLOCK),
             Count::Blocks => topo.n * topo.n.div_ceil(BLOCK),
-            Count::Quads => (topo.triangles.len() / 2) as u32,
+            Count::Quads => topo.triangles.len().div_ceil(2) as u32,
             Count::Springs => topo.springs.len() as u32,
             Count::Triangles => topo.triangles.len() as u32,
             Count::Workgroup => WORKGROUP,
             Count::HashBlocks => cpu::self_collide::hash_blocks(topo.num_particles()),
             Count::Pairs => topo.n * topo.n.div_ceil(2),
+            Count::Range => topo.springs.len() as u32,
         }
     }
 }
@@ -150,6 +157,31 @@ pub enum Immediates {
     None,
     /// The substep's index in the frame, a `u32` (the statistics kernels).
     Substep,
+    /// The dispatch's range, `first` and `count` as two `u32`
+    /// ([`crate::recipe::Command::Range`]).
+    Range,
+}
+
+/// Which cloths a kernel runs on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cloths {
+    /// Grids and meshes.
+    Any,
+    /// Only an n × n grid (it computes neighbours or colours from grid coordinates).
+    Grid,
+    /// Only a mesh.
+    Mesh,
+}
+
+impl Cloths {
+    /// Whether a kernel of this kind runs on `topo`.
+    pub fn run_on(self, topo: &ClothTopology) -> bool {
+        match self {
+            Cloths::Any => true,
+            Cloths::Grid => topo.mesh.is_none(),
+            Cloths::Mesh => topo.mesh.is_some(),
+        }
+    }
 }
 
 /// How a kernel is checked against its twin.
@@ -181,6 +213,8 @@ pub struct TwinArgs<'a> {
     pub boxes: &'a [Aabb],
     /// The substep's index in the frame.
     pub substep: u32,
+    /// The dispatch's range (`first`, `count`) for a kernel of [`Count::Range`].
+    pub range: (u32, u32),
 }
 
 /// The buffers the step writes, on the host: what the CPU engine runs on and what a GPU
@@ -321,6 +355,8 @@ pub struct KernelDef {
     /// Sets up a kernel test's input beyond the disturbed state (the naive normals kernel
     /// starts from the scatter's sums).
     pub test_input: Option<Twin>,
+    /// Which cloths it runs on.
+    pub cloths: Cloths,
 }
 
 impl PartialEq for KernelDef {
@@ -695,6 +731,20 @@ xpbd_twins!(
     xpbd_11 = 11
 );
 
+/// A mesh's XPBD pass over springs `first .. first + count`, λ of spring k in word k of
+/// aux0 then aux1 (as the kernel keeps them).
+fn xpbd_mesh(a: &TwinArgs, b: &mut HostBuffers) {
+    let np = b.pos.len();
+    let mut lambda: Vec<f32> = b.aux[0].iter().chain(&b.aux[1]).flatten().copied().collect();
+    let (first, count) = (a.range.0 as usize, a.range.1 as usize);
+    let end = (first + count).min(a.topo.springs.len());
+    cpu::xpbd_mesh_pass(a.p, &a.topo.springs, first.min(end)..end, &mut b.pos, &mut b.vel, &mut lambda);
+    for (k, l) in lambda.chunks_exact(4).enumerate() {
+        let v = [l[0], l[1], l[2], l[3]];
+        if k < np { b.aux[0][k] = v } else { b.aux[1][k - np] = v }
+    }
+}
+
 /// Leaves the per-workgroup sums of `terms` in `aux[4]` (the GPU kernels' partials).
 fn store_partials(b: &mut HostBuffers, terms: &[f32]) {
     for (g, s) in cpu::partial_sums(terms).into_iter().enumerate() {
@@ -868,6 +918,7 @@ const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf]
         variants: Variants { immediates: true, ..PLAIN },
         immediates: Immediates::None,
         test_input: None,
+        cloths: Cloths::Any,
     }
 }
 
@@ -978,8 +1029,9 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
     )
 };
 /// Face normals per quad of the grid.
+/// A mesh's, per two triangles of the list.
 pub static TRI_NORMALS: KernelDef =
-    KernelDef { pure: &[Faces], ..def("tri_normals", tri_normals, Count::Quads, &[Params, Pos], &[Faces]) };
+    KernelDef { pure: &[Faces], ..def("tri_normals", tri_normals, Count::Quads, &[Params, Pos, Triangles], &[Faces]) };
 /// The naive face normals: per triangle, also added to the corners' normals with atomics.
 pub static TRI_NORMALS_SCATTER: KernelDef = KernelDef {
     check: SCATTER,
@@ -1104,6 +1156,7 @@ const fn xpbd(name: &'static str, twin: Twin) -> KernelDef {
         check: GATHER,
         label: timing::XPBD,
         variants: IMM_TEX,
+        cloths: Cloths::Grid,
         ..def(
             name,
             twin,
@@ -1128,6 +1181,22 @@ pub static XPBD: [KernelDef; 12] = [
     xpbd("xpbd_10", xpbd_10),
     xpbd("xpbd_11", xpbd_11),
 ];
+/// One XPBD pass of a mesh: a range of its spring list sorted by pass
+/// (`MeshTables::xpbd_passes`), λ per spring in aux0 and aux1.
+pub static XPBD_MESH: KernelDef = KernelDef {
+    check: GATHER,
+    label: timing::XPBD,
+    variants: PLAIN,
+    immediates: Immediates::Range,
+    cloths: Cloths::Mesh,
+    ..def(
+        "xpbd_mesh",
+        xpbd_mesh,
+        Count::Range,
+        &[Params, Pos, Vel, Springs, SpringsB, Aux0, Aux1],
+        &[Pos, Vel, Aux0, Aux1],
+    )
+};
 /// Implicit: r = dt f − dt² K v, p = z, Δv = 0, and the partials of r·z.
 pub static CG_BEGIN: KernelDef = KernelDef {
     check: GATHER,
@@ -1189,7 +1258,7 @@ const fn hash(
     reads: &'static [Buf],
     writes: &'static [Buf],
 ) -> KernelDef {
-    KernelDef { check: EXACT, label: timing::SELF_HASH, ..def(name, twin, count, reads, writes) }
+    KernelDef { check: EXACT, label: timing::SELF_HASH, cloths: Cloths::Grid, ..def(name, twin, count, reads, writes) }
 }
 /// Each particle's bucket, and the buckets' and their blocks' counts (atomics).
 pub static HASH_COUNT: KernelDef = KernelDef {
@@ -1225,6 +1294,7 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     pure: &[PosOut],
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
+    cloths: Cloths::Grid,
     ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, Aux2, Aux4], &[PosOut, Vel])
 };
 /// Self-collision's kernels, in recipe order.
@@ -1232,7 +1302,7 @@ pub static SELF_COLLISION: [&KernelDef; 5] =
     [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 50] = [
+pub static ALL: [&KernelDef; 51] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -1270,6 +1340,7 @@ pub static ALL: [&KernelDef; 50] = [
     &XPBD[9],
     &XPBD[10],
     &XPBD[11],
+    &XPBD_MESH,
     &CG_BEGIN,
     &CG_MATVEC,
     &CG_REDUCE_PQ,

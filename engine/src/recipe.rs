@@ -18,6 +18,17 @@ pub use crate::variant::{Caps, Variant};
 pub enum Command {
     /// Run a kernel over its [`k::Count`].
     Dispatch(KernelRef),
+    /// Run a kernel of [`k::Count::Range`] over `count` invocations, `first` and `count`
+    /// in its immediates ([`k::Immediates::Range`]): one XPBD pass of a mesh, springs
+    /// `first .. first + count` of the list.
+    Range {
+        /// The kernel.
+        kernel: KernelRef,
+        /// The first element of the range.
+        first: u32,
+        /// Its length.
+        count: u32,
+    },
     /// Zero a buffer (before a kernel that accumulates into it).
     Clear(Buf),
     /// Swap the position pair: [`Buf::PosOut`] becomes [`Buf::Pos`] (after a kernel that
@@ -29,7 +40,7 @@ impl Command {
     /// The kernel it dispatches, if it is a dispatch.
     pub fn kernel(&self) -> Option<KernelRef> {
         match self {
-            Command::Dispatch(k) => Some(*k),
+            Command::Dispatch(k) | Command::Range { kernel: k, .. } => Some(*k),
             _ => None,
         }
     }
@@ -172,9 +183,37 @@ fn normals_kernels(variant: &Variant) -> [&'static KernelDef; 2] {
     }
 }
 
+/// [`recipe`] for the cloth `topo`: on a mesh, each XPBD iteration runs the mesh's passes
+/// (`MeshTables::xpbd_passes`, one [`Command::Range`] of `xpbd_mesh` each) where a grid
+/// runs its 12.
+pub fn recipe_for(
+    variant: &Variant,
+    strain_passes: u32,
+    how: Integration,
+    topo: &clothlab_core::ClothTopology,
+) -> Vec<Command> {
+    let commands = recipe(variant, strain_passes, how);
+    let Some(mesh) = &topo.mesh else { return commands };
+    let first = &k::XPBD[cpu::XPBD_ORDER[0]];
+    let mut v = Vec::with_capacity(commands.len());
+    for c in commands {
+        match c.kernel() {
+            Some(kr) if kr.def == first => v.extend(mesh.xpbd_passes.windows(2).map(|w| Command::Range {
+                kernel: k::XPBD_MESH.plain(),
+                first: w[0],
+                count: w[1] - w[0],
+            })),
+            Some(kr) if k::XPBD.iter().any(|d| d == kr.def) => {}
+            _ => v.push(c),
+        }
+    }
+    v
+}
+
 /// The commands of one substep for `variant` with `strain_passes` strain passes,
 /// integrated by `how`, each kernel in the flavor the variant's switches pick (see
-/// [`Variant::flavor`]). What runs once after a frame's last substep is [`frame_end`].
+/// [`Variant::flavor`]), on a grid ([`recipe_for`] any cloth). What runs once after a
+/// frame's last substep is [`frame_end`].
 pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Command> {
     let step = integration(variant, how);
     let normals: &[&'static KernelDef] =
@@ -362,7 +401,7 @@ impl Hazards {
     /// come before it.
     pub fn command(&mut self, command: &Command, cur: &mut usize) -> bool {
         let (r, w) = match command {
-            Command::Dispatch(k) => access(k.def, *cur),
+            Command::Dispatch(k) | Command::Range { kernel: k, .. } => access(k.def, *cur),
             Command::Clear(b) => (0, bits(*b, *cur)),
             Command::Swap => {
                 *cur ^= 1;
@@ -398,7 +437,8 @@ mod tests {
         v
     }
 
-    const CAPS: Caps = Caps { float_atomics: false, immediates: true, table_image: false, subgroups: false };
+    const CAPS: Caps =
+        Caps { float_atomics: false, immediates: true, table_image: false, subgroups: false, grid: true };
 
     fn barriers_per_substep(r: &[Command]) -> usize {
         // Two substeps, counted in the second (the first also pays for the frame start).
@@ -441,6 +481,43 @@ mod tests {
         assert_eq!(count(&thesis), 6);
         assert_eq!(barriers_per_substep(&thesis), count(&thesis));
         assert_eq!(barriers_per_substep(&two_passes), count(&two_passes));
+    }
+
+    #[test]
+    fn a_mesh_runs_its_xpbd_passes_as_ranges_where_a_grid_runs_its_twelve() {
+        use clothlab_core::mesh::{PlacedMesh, Placement, grid_mesh};
+        let mut scene = clothlab_core::Scene::with_n(8);
+        scene.cloth.mesh = Some("grid.obj".into());
+        scene.cloth.pinning = clothlab_core::Pinning::Vertices(vec![0, 7]);
+        let placed = PlacedMesh::new(&grid_mesh(8, 1.0), &Placement::default()).unwrap();
+        scene.cloth.mesh_data = Some(std::sync::Arc::new(placed));
+        let params = clothlab_core::SimParams::default();
+        let (_, topo) = clothlab_core::build(&scene, &params).unwrap();
+        let passes = topo.mesh.as_ref().unwrap().xpbd_passes.clone();
+        let how = Integration { integrator: Integrator::Xpbd, xpbd_iterations: 2, ..Integration::VERLET };
+        let r = recipe_for(&Variant::NAIVE, 1, how, &topo);
+        let ranges: Vec<(u32, u32)> = r
+            .iter()
+            .filter_map(|c| match c {
+                Command::Range { kernel, first, count } if kernel.def == &k::XPBD_MESH => Some((*first, *count)),
+                _ => None,
+            })
+            .collect();
+        // Two iterations of every pass, in order, covering the spring list once each.
+        let one: Vec<(u32, u32)> = passes.windows(2).map(|w| (w[0], w[1] - w[0])).collect();
+        assert_eq!(ranges, [one.clone(), one].concat());
+        assert_eq!(passes.last().copied(), Some(topo.springs.len() as u32));
+        assert!(!dispatches(&r).any(|k| k::XPBD.iter().any(|d| d == k.def)), "no grid pass on a mesh");
+        // λ cleared once, before the first pass; every pass waits for the one before.
+        let first = r.iter().position(|c| matches!(c, Command::Range { .. })).unwrap();
+        assert_eq!(r[first - 2..first], [Command::Clear(Buf::Aux0), Command::Clear(Buf::Aux1)]);
+        let mut h = Hazards::default();
+        let mut cur = 0;
+        let waits = r.iter().filter(|c| h.command(c, &mut cur) && matches!(c, Command::Range { .. })).count();
+        assert_eq!(waits, ranges.len());
+        // A grid keeps its 12 passes.
+        let grid = clothlab_core::build(&clothlab_core::Scene::with_n(8), &params).unwrap().1;
+        assert_eq!(recipe_for(&Variant::NAIVE, 1, how, &grid), recipe(&Variant::NAIVE, 1, how));
     }
 
     #[test]

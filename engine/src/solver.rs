@@ -22,8 +22,8 @@ use crate::gpu::{BufferId, Dispatch, Engine};
 use crate::kernels::{HostBuffers, Immediates, KernelRef, groups};
 use crate::recipe::KernelRunner;
 use crate::recipe::{
-    Caps, Command, Hazards, Integration, StatsMode, bits, dispatches, frame_end, kernels_for, kernels_of, recipe, res,
-    stats_commands,
+    Caps, Command, Hazards, Integration, StatsMode, bits, dispatches, frame_end, kernels_for, kernels_of, recipe_for,
+    res, stats_commands,
 };
 use crate::tables::{record_times, split_slots, spring_halves, table_texels};
 use crate::variant::{Constants, Draw, Submit, Table, Variant, VariantSpec};
@@ -45,7 +45,7 @@ pub struct SolverOptions {
 fn host_buffers(commands: &[Command]) -> Vec<Buf> {
     let scratch = |b: &Buf| Buf::AUX.contains(b) || *b == Buf::Scalars;
     let touched = commands.iter().any(|c| match c {
-        Command::Dispatch(k) => k.def.reads.iter().chain(k.def.writes).any(scratch),
+        Command::Dispatch(k) | Command::Range { kernel: k, .. } => k.def.reads.iter().chain(k.def.writes).any(scratch),
         Command::Clear(b) => scratch(b),
         Command::Swap => false,
     });
@@ -97,9 +97,6 @@ impl<E: Engine> GpuSolver<E> {
         params: SimParams,
         options: SolverOptions,
     ) -> Result<Self, SolverError> {
-        if scene.cloth.is_mesh() {
-            return Err(SolverError::Unsupported(clothlab_core::solver::MESH_ENGINE_PENDING.into()));
-        }
         if scene.spheres.len() > MAX_COLLIDERS || scene.boxes.len() > MAX_COLLIDERS {
             return Err(SolverError::Invalid(format!("at most {MAX_COLLIDERS} spheres and boxes")));
         }
@@ -112,6 +109,7 @@ impl<E: Engine> GpuSolver<E> {
             immediates: info.immediates,
             table_image: info.table_image,
             subgroups: info.subgroup_shuffle,
+            grid: !scene.cloth.is_mesh(),
         };
         let variant = variant.into().resolve(&caps, info.api).map_err(|e| SolverError::Unsupported(e.0))?;
         if options.stats == StatsMode::Subgroups && !info.subgroup_arithmetic {
@@ -124,6 +122,15 @@ impl<E: Engine> GpuSolver<E> {
         // (the largest buffer is the structural and shear half of the spring table).
         let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
         SolverError::check_table(scene.cloth.n, per_particle, info.max_binding, &info.adapter)?;
+        let np = scene.num_particles() as u64;
+        if np * per_particle > info.max_binding {
+            return Err(SolverError::Unsupported(format!(
+                "a mesh of {np} particles needs a {} MiB spring table; {} binds at most {} MiB",
+                (np * per_particle) >> 20,
+                info.adapter,
+                info.max_binding >> 20
+            )));
+        }
         let (state, topo) = build(&scene, &params)?;
         // Initial normals and wind, as every solver starts.
         let sp = StepParams::new(&params, &scene, None);
@@ -213,7 +220,7 @@ impl<E: Engine> GpuSolver<E> {
                 .collect()
         };
         engine.bind([set(0), set(1)])?;
-        let step = recipe(&variant, params.strain_iterations, Integration::of(&params));
+        let step = recipe_for(&variant, params.strain_iterations, Integration::of(&params), &topo);
         let end = frame_end(&variant, Integration::of(&params));
         let mut build_list: Vec<KernelRef> = kernels_for(&variant);
         build_list.extend(kernels_of(&step));
@@ -262,6 +269,8 @@ impl<E: Engine> GpuSolver<E> {
             std::mem::size_of::<StepParams>() as u32
         } else if k.def.immediates == Immediates::Substep {
             4
+        } else if k.def.immediates == Immediates::Range {
+            8
         } else {
             0
         };
@@ -404,12 +413,17 @@ impl<E: Engine> GpuSolver<E> {
                     continue;
                 }
                 Command::Swap => continue,
-                Command::Dispatch(k) => *k,
+                Command::Dispatch(k) => (*k, k.def.count.of(&self.topo), [0; 2]),
+                Command::Range { kernel, first, count } => (*kernel, *count, [*first, *count]),
             };
+            let (k, count, range) = k;
+            let range_bytes: &[u8] = bytemuck::cast_slice(&range);
             let immediates: &[u8] = if k.step_immediates() {
                 bytemuck::bytes_of(&self.sp)
             } else if k.def.immediates == Immediates::Substep {
                 &substep_bytes
+            } else if k.def.immediates == Immediates::Range {
+                range_bytes
             } else {
                 &[]
             };
@@ -417,7 +431,7 @@ impl<E: Engine> GpuSolver<E> {
             self.engine.dispatch(&Dispatch {
                 kernel: k,
                 parity: self.cur,
-                groups: groups(k.def.count.of(&self.topo)),
+                groups: groups(count),
                 immediates,
                 timestamps: timed.then_some(*q),
             });
@@ -545,7 +559,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
             self.write(Buf::SpringsB, bytemuck::cast_slice(&b))?;
             self.write(Buf::Interior, bytemuck::bytes_of(&interior))?;
         }
-        let step = recipe(&self.variant, params.strain_iterations, Integration::of(&params));
+        let step = recipe_for(&self.variant, params.strain_iterations, Integration::of(&params), &self.topo);
         let end = frame_end(&self.variant, Integration::of(&params));
         for k in kernels_of(&step).into_iter().chain(kernels_of(&end)) {
             self.build(k)?;

@@ -23,6 +23,10 @@ pub struct Caps {
     pub table_image: bool,
     /// Subgroup arithmetic and relative shuffles in compute shaders (`neighbours=shuffle`).
     pub subgroups: bool,
+    /// The cloth is an n × n grid (not the adapter's: the cloth's). A mesh has no
+    /// neighbours by offset and no constants shared by every particle (`table=uniform`)
+    /// and no rows whose blocks lanes could pass each other (`neighbours=shuffle`).
+    pub grid: bool,
 }
 
 /// How the forces of springs reach the particles.
@@ -383,6 +387,16 @@ impl Variant {
                 "switch table=image: the {api} engine has no spring-table image; use table=storage or table=uniform"
             )));
         }
+        if self.table == Table::Uniform && !caps.grid {
+            return Err(VariantError(
+                "switch table=uniform: a mesh has no neighbours by offset nor spring constants shared by every particle; use table=storage or table=image".into(),
+            ));
+        }
+        if self.neighbours == Neighbours::Shuffle && !caps.grid {
+            return Err(VariantError(
+                "switch neighbours=shuffle: a mesh has no grid rows whose blocks lanes could pass each other; use neighbours=load".into(),
+            ));
+        }
         if self.neighbours == Neighbours::Shuffle && !caps.subgroups {
             return Err(VariantError(format!(
                 "switch neighbours=shuffle: this adapter has no subgroup shuffles in compute shaders on {api}; use neighbours=load"
@@ -413,8 +427,11 @@ impl Variant {
         if !caps.table_image && self.table == Table::Image {
             self.table = Table::Storage;
         }
-        if !caps.subgroups {
+        if !caps.subgroups || !caps.grid {
             self.neighbours = Neighbours::Load;
+        }
+        if !caps.grid && self.table == Table::Uniform {
+            self.table = Table::Storage;
         }
         self
     }
@@ -578,7 +595,8 @@ impl VariantSpec {
 mod tests {
     use super::*;
 
-    const ALL_CAPS: Caps = Caps { float_atomics: true, immediates: true, table_image: true, subgroups: true };
+    const ALL_CAPS: Caps =
+        Caps { float_atomics: true, immediates: true, table_image: true, subgroups: true, grid: true };
 
     #[test]
     fn every_switch_value_round_trips_and_bad_ones_name_the_switch() {
@@ -597,7 +615,7 @@ mod tests {
 
     #[test]
     fn presets_fit_the_adapter_and_explicit_switches_are_refused_where_it_lacks_them() {
-        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false };
+        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true };
         let opt = VariantSpec::from(Variant::OPTIMIZED).resolve(&bare, "wgpu").unwrap();
         assert_eq!((opt.constants, opt.atomics, opt.neighbours), (Constants::Uniform, Atomics::Cas, Neighbours::Load));
         let thesis = VariantSpec::from(Variant::THESIS).resolve(&bare, "wgpu").unwrap();
@@ -626,7 +644,7 @@ mod tests {
         // measured fastest (issue 32), so a new rung must update both.
         assert_eq!(rungs.last().unwrap().variant, Variant::OPTIMIZED);
         assert!(rungs.iter().all(|r| r.skipped.is_none()));
-        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false };
+        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true };
         let rungs = ladder(&bare, "wgpu");
         let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
         assert_eq!(skipped, ["+constants=push", "+table=image", "+neighbours=shuffle"]);
@@ -638,6 +656,23 @@ mod tests {
                 assert!(cover.iter().any(|x| x.get(s.key) == Some(*v)), "{}={v} not covered", s.key);
             }
         }
+    }
+
+    #[test]
+    fn a_mesh_refuses_the_grid_only_switches_and_presets_fall_back_to_the_table() {
+        let mesh = Caps { grid: false, ..ALL_CAPS };
+        let opt = VariantSpec::from(Variant::OPTIMIZED).resolve(&mesh, "vulkan").unwrap();
+        assert_eq!((opt.table, opt.neighbours), (Table::Storage, Neighbours::Load));
+        for (set, want) in [("table=uniform", "table=uniform"), ("neighbours=shuffle", "neighbours=shuffle")] {
+            let e = VariantSpec::parse("optimized", &[set.into()]).unwrap().resolve(&mesh, "vulkan").unwrap_err().0;
+            assert!(e.contains(want) && e.contains("mesh"), "{e}");
+        }
+        // The ladder on a mesh skips the two rungs, naming the mesh.
+        let rungs = ladder(&mesh, "vulkan");
+        let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
+        assert_eq!(skipped, ["+table=uniform", "+neighbours=shuffle"]);
+        assert!(rungs.iter().flat_map(|r| &r.skipped).all(|e| e.contains("mesh")));
+        assert!(covering(&mesh, "vulkan").iter().all(|v| v.check(&mesh, "vulkan").is_ok()));
     }
 
     #[test]

@@ -22,16 +22,17 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     p = step_params;
     let i = flat_id(id, groups);
     let n = p.n;
-    if i >= n * n {
+    if i >= p.num_particles {
         return;
     }
     let wind = windy();
     var g = Gathered(vec3<f32>(0.0), vec3<f32>(0.0));
     // Away from the border all six faces exist, numbered as core::grid::build numbers them
     // (triangles 2q and 2q + 1 of quad q = qj (n - 1) + qi): no face-slot reads. The border
-    // walks its slots in a loop interior particles do not enter.
-    let col = i % n;
-    let row = i / n;
+    // walks its slots in a loop interior particles do not enter, as does every vertex of a
+    // mesh (n = 0).
+    let col = i % max(n, 1u);
+    let row = i / max(n, 1u);
     let inner = col >= 1u && col + 1u < n && row >= 1u && row + 1u < n;
     if inner {
         let up = 2u * ((row - 1u) * (n - 1u) + col - 1u);

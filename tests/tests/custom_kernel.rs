@@ -5,7 +5,7 @@
 use clothlab_core::layout::Buf;
 use clothlab_core::{Exec, Scene, SimParams, SolverError};
 use clothlab_engine::SolverOptions;
-use clothlab_engine::kernels::{Check, Count, HostBuffers, Immediates, KernelDef, Source, TwinArgs, Variants};
+use clothlab_engine::kernels::{Check, Cloths, Count, HostBuffers, Immediates, KernelDef, Source, TwinArgs, Variants};
 use clothlab_engine::recipe::{Command, run};
 use clothlab_engine::validate::{COMPARED_BUFFERS, KernelInput, KernelRunner, bisect, validate_kernels};
 use clothlab_engine::{CpuEngine, Variant};
@@ -58,6 +58,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     },
     immediates: Immediates::None,
     test_input: None,
+    cloths: Cloths::Any,
 };
 
 /// The same with a type error on its line 3.

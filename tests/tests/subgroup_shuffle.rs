@@ -7,7 +7,7 @@
 use clothlab_core::grid::StepParams;
 use clothlab_core::layout::Buf;
 use clothlab_core::{Scene, SimParams};
-use clothlab_engine::kernels::{Check, Count, HostBuffers, Immediates, KernelDef, Source, TwinArgs, Variants};
+use clothlab_engine::kernels::{Check, Cloths, Count, HostBuffers, Immediates, KernelDef, Source, TwinArgs, Variants};
 use clothlab_engine::recipe::run;
 use clothlab_engine::validate::KernelRunner;
 use clothlab_engine::{SolverOptions, Variant};
@@ -56,6 +56,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     },
     immediates: Immediates::None,
     test_input: None,
+    cloths: Cloths::Any,
 };
 
 #[test]

@@ -112,3 +112,28 @@ fn a_raw_gl_solver_outlives_wgpu_gl_instances_made_and_dropped_beside_it() {
     c.error = c.max_abs;
     assert_checks("raw GL after wgpu GL instances", &[c]);
 }
+
+/// A mesh (the flag: wind, pins, a hole) on wgpu's GL backend: every flavor that runs on
+/// a mesh within its bound, and the optimized recipe's 8-frame rollout exactly the CPU
+/// solver's on llvmpipe (tests/tests/mesh_gpu.rs does the other three stacks).
+#[test]
+fn a_mesh_on_wgpu_gl_matches_its_twins_and_the_cpu_bit_for_bit() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let file = clothlab_core::SceneFile::load(&dir.join("mesh-flag.toml")).unwrap();
+    clothlab_wgpu::choose_backends(wgpu::Backends::GL);
+    let make = || wgpu_solver(Variant::OPTIMIZED, file.scene.clone(), file.params.clone(), SolverOptions::default());
+    let Some(mut g) = or_skip(make(), "wgpu on GL") else { return };
+    let kernels: Vec<_> = flavors(&g.caps(), false).into_iter().collect();
+    let checks =
+        clothlab_engine::validate::validate_kernels_with(&mut g, &kernels, &file.scene, 0x3e5, &file.params).unwrap();
+    assert!(checks.iter().any(|c| c.what == "xpbd_mesh"), "the mesh's XPBD pass was not compared");
+    assert_checks("wgpu on GL, mesh", &checks);
+    let mut fresh = make().unwrap();
+    let c = validate_rollout(&mut fresh, 8).unwrap();
+    println!("wgpu on GL, mesh: rollout {} max {:e}", c.what, c.max_abs);
+    if fresh.adapter().contains("llvmpipe") {
+        assert_eq!(c.max_abs, 0.0, "the optimized recipe on a mesh differs from the CPU solver");
+    } else {
+        assert_checks("wgpu on GL, mesh", &[c]);
+    }
+}

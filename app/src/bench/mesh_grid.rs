@@ -6,7 +6,11 @@
 //! rim vertices lighter, so the work per particle is comparable, not equal: 12 slots each
 //! away from the border either way). On the CPU backends a third cloth isolates the fused
 //! sweep: the grid kernel by kernel (`CLOTHLAB_CPU_FUSED=off`'s path), which is what a mesh
-//! runs. A backend that cannot run a mesh yet gets a note with its one-line refusal. Every
+//! runs. On an optimized GPU backend a third cloth does the same for the GPU's grid-only
+//! switches: the grid with `table=storage,neighbours=load` (what a mesh falls back to: no
+//! neighbours by offset, no constants in a uniform block, no shuffles), so that the mesh's
+//! cost splits into what those switches buy and what the mesh's own springs and tables
+//! cost. A backend that cannot run a cloth gets a note with its one-line refusal. Every
 //! cell is rebuilt and timed each round, rounds interleaved; the report gives the median of
 //! the rounds' median frame times per particle-substep and the rounds' spread.
 
@@ -24,11 +28,16 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use super::WARMUP_FRAMES;
 use super::plot::{FONT, Figure, both, err};
 use crate::solvers::{AnySolver, Backend, GpuSetup, Shared, make};
+use clothlab_engine::VariantSpec;
+use clothlab_engine::variant::{Neighbours, Table};
 
 /// The cloths a backend runs.
 pub const GRID: &str = "grid";
 /// The grid on the CPU's kernel-by-kernel path.
 pub const GRID_KERNELS: &str = "grid, kernel by kernel";
+/// The grid on a GPU without its grid-only switches (the table from storage, neighbours
+/// loaded).
+pub const GRID_TABLE: &str = "grid, from the table";
 /// The grid loaded as a mesh.
 pub const MESH: &str = "grid as mesh";
 
@@ -39,7 +48,7 @@ pub struct Row {
     pub n: u32,
     /// Backend name.
     pub backend: String,
-    /// [`GRID`], [`GRID_KERNELS`] or [`MESH`].
+    /// [`GRID`], [`GRID_KERNELS`], [`GRID_TABLE`] or [`MESH`].
     pub cloth: &'static str,
     /// Median over rounds of the median frame time per particle-substep, ns.
     pub ns: f64,
@@ -97,7 +106,25 @@ fn solver(backend: Backend, cloth: &str, grid: &Scene, mesh: &Scene, params: &Si
         s.fused = cloth == GRID;
         return Ok(AnySolver::Cpu(Box::new(s)));
     }
-    make(backend, scene.clone(), params.clone(), &GpuSetup::default(), &Shared::None)
+    let mut setup = GpuSetup::default();
+    if cloth == GRID_TABLE {
+        let preset = backend.preset().unwrap_or("optimized");
+        let set = ["table=storage".to_string(), "neighbours=load".to_string()];
+        setup.variant = Some(VariantSpec::parse(preset, &set)?);
+    }
+    make(backend, scene.clone(), params.clone(), &setup, &Shared::None)
+}
+
+/// The cloths `backend` runs: on the CPU the grid kernel by kernel too, on a GPU backend
+/// whose preset uses a grid-only switch the grid without them too.
+fn cloths_of(backend: Backend) -> &'static [&'static str] {
+    match backend {
+        Backend::Cpu | Backend::CpuPar => &[GRID, GRID_KERNELS, MESH],
+        b if b.variant().table == Table::Uniform || b.variant().neighbours == Neighbours::Shuffle => {
+            &[GRID, GRID_TABLE, MESH]
+        }
+        _ => &[GRID, MESH],
+    }
 }
 
 /// Measures every cell `repeat` times, interleaved; the rows and the notes (refusals).
@@ -117,9 +144,7 @@ pub fn measure(
         let mesh = as_mesh(&grid)?;
         let mut cells: Vec<(Backend, &'static str)> = Vec::new();
         for &b in backends {
-            let cloths: &[&'static str] =
-                if matches!(b, Backend::Cpu | Backend::CpuPar) { &[GRID, GRID_KERNELS, MESH] } else { &[GRID, MESH] };
-            for &c in cloths {
+            for &c in cloths_of(b) {
                 match solver(b, c, &grid, &mesh, params) {
                     Ok(_) => cells.push((b, c)),
                     Err(e) => notes.push(format!("n = {n}: {c} on {}: {e:#}", b.name())),
@@ -209,8 +234,9 @@ impl Figure for Bars<'_> {
         root.fill(&WHITE).map_err(err)?;
         let mut groups: Vec<(u32, &str)> = self.rows.iter().map(|r| (r.n, r.backend.as_str())).collect();
         groups.dedup();
-        let cloths = [GRID, GRID_KERNELS, MESH];
-        let colours = [RGBColor(40, 90, 170), RGBColor(120, 160, 220), RGBColor(220, 120, 40)];
+        // The middle bar: the grid without the fused sweep (CPU) or the grid-only switches (GPU).
+        let cloths = [GRID, GRID_KERNELS, GRID_TABLE, MESH];
+        let colours = [RGBColor(40, 90, 170), RGBColor(120, 160, 220), RGBColor(120, 160, 220), RGBColor(220, 120, 40)];
         let top = self.rows.iter().map(|r| r.ns).fold(1.0, f64::max) * 1.15;
         let mut chart = ChartBuilder::on(root)
             .caption(format!("Grid against the grid as a mesh — {}", self.machine), (FONT, 20))
@@ -240,10 +266,14 @@ impl Figure for Bars<'_> {
                 .enumerate()
                 .filter_map(|(g, (n, b))| {
                     let r = self.rows.iter().find(|r| r.n == *n && r.backend == *b && r.cloth == *cloth)?;
-                    let x0 = g as f64 + 0.1 + 0.27 * c as f64;
+                    // Three places a group: the two middle cloths share the middle one.
+                    let x0 = g as f64 + 0.1 + 0.27 * [0.0, 1.0, 1.0, 2.0][c];
                     Some(Rectangle::new([(x0, 0.0), (x0 + 0.25, r.ns)], colour.filled()))
                 })
                 .collect();
+            if bars.is_empty() {
+                continue;
+            }
             chart
                 .draw_series(bars)
                 .map_err(err)?

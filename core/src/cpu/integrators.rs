@@ -243,57 +243,29 @@ pub fn xpbd_pass(
     }
 }
 
-/// The XPBD passes of a mesh: its springs (`springs`, a mesh's list: edges, then bending
-/// springs) coloured greedily so that no two springs of a pass share a particle, the
-/// bending springs' passes first and the edges' last (the grid's order: an iteration ends
-/// with the springs the strain is measured on). A pass lists spring indices, ascending.
-pub fn xpbd_mesh_passes(springs: &[crate::grid::Spring], particles: usize) -> Vec<Vec<u32>> {
-    let mut passes = Vec::new();
-    for bend in [true, false] {
-        // Per particle, a bit per colour of this family already touching it.
-        let mut used = vec![0u64; particles];
-        let mut family: Vec<Vec<u32>> = Vec::new();
-        for (k, s) in springs.iter().enumerate() {
-            if (s.kind == crate::grid::SpringKind::Bend as u32) != bend {
-                continue;
-            }
-            let (a, b) = (s.a as usize, s.b as usize);
-            // The first colour neither end has (at most 2·SLOTS − 1 are ever needed).
-            let c = (!(used[a] | used[b])).trailing_zeros() as usize;
-            used[a] |= 1 << c;
-            used[b] |= 1 << c;
-            if family.len() <= c {
-                family.resize(c + 1, Vec::new());
-            }
-            family[c].push(k as u32);
-        }
-        passes.extend(family);
-    }
-    passes
-}
-
-/// One XPBD pass of a mesh (see [`xpbd_mesh_passes`]): each spring of `pass` solved as
-/// [`xpbd_pass`] solves a grid's, its λ in `lambda[k]` for spring `k`. The pass's springs
-/// share no particle, so their order changes no bit.
+/// One XPBD pass of a mesh: springs `pass` of the list (a range of
+/// [`crate::grid::MeshTables::xpbd_passes`], no two of which share a particle), each
+/// solved as [`xpbd_pass`] solves a grid's, its λ in `lambda[k]` for spring `k`. The
+/// pass's springs share no particle, so their order changes no bit.
 pub fn xpbd_mesh_pass(
     p: &StepParams,
     springs: &[crate::grid::Spring],
-    pass: &[u32],
+    pass: std::ops::Range<usize>,
     pos: &mut [V4],
     vel: &mut [V4],
     lambda: &mut [f32],
 ) {
-    for &k in pass {
-        let s = &springs[k as usize];
+    for k in pass {
+        let s = &springs[k];
         if s.ks <= 0.0 {
             continue;
         }
         let (a, b) = (s.a as usize, s.b as usize);
         let slot = SpringSlot { neighbor: s.b as i32, rest: s.rest, ks: s.ks, kd: s.kd };
-        let l = lambda[k as usize];
+        let l = lambda[k];
         if let Some(r) = xpbd_solve(p, &slot, a, b, pos[a], pos[b], vel[a], vel[b], l) {
             (pos[a], pos[b], vel[a], vel[b]) = (r.xa, r.xb, r.va, r.vb);
-            lambda[k as usize] = l + r.dl;
+            lambda[k] = l + r.dl;
         }
     }
 }
@@ -389,8 +361,9 @@ fn xpbd_solve(
     vb4: V4,
     l: f32,
 ) -> Option<Solved> {
-    let inv_m = 1.0 / p.particle_mass;
-    let (wa, wb) = (mobility(a, p, xa4) * inv_m, mobility(b, p, xb4) * inv_m);
+    // w / m̄, one division: `w · (1 / m̄)` rounds twice, and a GPU compiler allowed to use
+    // reciprocals turns it into the division (1 ulp apart where w ≠ 1, a mesh's masses).
+    let (wa, wb) = (mobility(a, p, xa4) / p.particle_mass, mobility(b, p, xb4) / p.particle_mass);
     if wa + wb == 0.0 {
         return None;
     }
@@ -459,10 +432,7 @@ fn apply_at(
     let m = super::mass(p, pos[i][3]) * (1.0 + p.dt * p.air_drag);
     let (mut acc, mut diag) = if full { (ya * m, m) } else { (Vec3::ZERO, m) };
     for s in &slots[i * SLOTS..(i + 1) * SLOTS] {
-        if s.neighbor < 0 {
-            continue;
-        }
-        let b = s.neighbor as usize;
+        let Some(b) = s.other() else { continue };
         let (v, tr) = spring_block(p, s, xa, v3(pos[b]), ya - y(b), full);
         acc += v;
         diag += tr;

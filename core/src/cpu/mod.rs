@@ -25,8 +25,8 @@ pub use forces::forces;
 pub use integrate::integrate;
 pub use integrators::{
     AUX, CgScalars, RK2, RK4, RkStage, XPBD_ORDER, XPBD_PASSES, cg_alpha, cg_begin, cg_beta, cg_direction, cg_matvec,
-    cg_step, euler, fold, implicit_finish, partial_sums, rk_begin, rk_stage, xpbd_colour, xpbd_mesh_pass,
-    xpbd_mesh_passes, xpbd_pass, xpbd_pass_rows,
+    cg_step, euler, fold, implicit_finish, partial_sums, rk_begin, rk_stage, xpbd_colour, xpbd_mesh_pass, xpbd_pass,
+    xpbd_pass_rows,
 };
 pub use lanes::Lanes;
 pub use normals::{FaceLanes, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows};

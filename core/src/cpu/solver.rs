@@ -8,8 +8,8 @@ use super::{
     AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_ORDER, build_hash, cg_alpha, cg_begin, cg_beta,
     cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, hash_buffers, implicit_finish, integrate,
     integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit, strain_limit_rows,
-    strain_vel, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_mesh_pass, xpbd_mesh_passes,
-    xpbd_pass, xpbd_pass_rows,
+    strain_vel, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_mesh_pass, xpbd_pass,
+    xpbd_pass_rows,
 };
 use crate::cloth::build;
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4};
@@ -66,8 +66,7 @@ pub struct CpuSolver {
     pins: Vec<usize>,
     /// The tethers as component arrays, for the fused sweep.
     tether_lanes: TetherLanes,
-    /// A mesh's XPBD passes (`xpbd_mesh_passes`; empty for a grid) and its springs' λ.
-    mesh_passes: Vec<Vec<u32>>,
+    /// A mesh's springs' λ (XPBD; empty for a grid).
     mesh_lambda: Vec<f32>,
 }
 
@@ -101,11 +100,9 @@ impl CpuSolver {
             aos_stale: false,
             pins: Vec::new(),
             tether_lanes: TetherLanes::default(),
-            mesh_passes: Vec::new(),
             mesh_lambda: Vec::new(),
         };
         if s.topo.mesh.is_some() {
-            s.mesh_passes = xpbd_mesh_passes(&s.topo.springs, np);
             s.mesh_lambda = vec![0.0; s.topo.springs.len()];
         }
         s.tether_lanes = TetherLanes::new(&s.topo.tethers);
@@ -282,7 +279,6 @@ impl CpuSolver {
             aux,
             cg,
             grid,
-            mesh_passes,
             mesh_lambda,
             ..
         } = self;
@@ -356,9 +352,10 @@ impl CpuSolver {
                     aux[..2].iter_mut().flatten().for_each(|v| *v = [0.0; 4]);
                     mesh_lambda.iter_mut().for_each(|l| *l = 0.0);
                     for _ in 0..params.xpbd_iterations {
-                        if mesh {
-                            for pass in mesh_passes.iter() {
-                                xpbd_mesh_pass(&p, &topo.springs, pass, pos, vel, mesh_lambda);
+                        if let Some(m) = &topo.mesh {
+                            for pass in m.xpbd_passes.windows(2) {
+                                let range = pass[0] as usize..pass[1] as usize;
+                                xpbd_mesh_pass(&p, &topo.springs, range, pos, vel, mesh_lambda);
                             }
                             continue;
                         }

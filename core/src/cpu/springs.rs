@@ -67,10 +67,7 @@ pub(crate) fn gather_at(i: usize, slots: &(impl SlotSource + ?Sized), pos: impl 
     let mut acc = v3(f);
     for s in 0..SLOTS {
         let s = &slots.slot(i, s);
-        if s.neighbor < 0 {
-            continue;
-        }
-        let b = s.neighbor as usize;
+        let Some(b) = s.other() else { continue };
         let xb = v3(pos.at(b));
         let vb = v3(vel.at(b));
         acc += spring_force(xa - xb, va - vb, s);

@@ -2,17 +2,21 @@
 //! solver can report every substep without reading the state back.
 
 use super::v3;
-use crate::grid::{SLOTS, SpringSlot, StepParams, V4};
+use crate::grid::{SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, V4};
 pub use crate::stats::SubstepStats;
 
 /// Particle `i`'s share: the largest strain of the structural springs that start at it
-/// (slots 1 and 3, to its +i and +j neighbours, so that every structural spring is counted
-/// once) and its kinetic energy. `slots` is the full table, [`SLOTS`] per particle.
+/// (on a grid slots 1 and 3, to its +i and +j neighbours, so that every structural spring
+/// is counted once; on a mesh (n = 0) every edge at it, slots `0 .. STRAIN_SLOTS` that the
+/// strain limit holds) and its kinetic energy. `slots` is the full table, [`SLOTS`] per
+/// particle.
 #[inline]
 pub fn particle_stats(i: usize, p: &StepParams, slots: &[SpringSlot], pos: &[V4], vel: &[V4]) -> [f32; 2] {
     let x = v3(pos[i]);
     let mut strain = 0.0f32;
-    for s in [1, 3] {
+    let mesh = [0, 1, 2, 3, 4, 5, 6, 7];
+    let which: &[usize] = if p.n == 0 { &mesh[..STRAIN_SLOTS] } else { &[1, 3] };
+    for &s in which {
         let slot = slots[i * SLOTS + s];
         if slot.neighbor >= 0 {
             strain = strain.max((v3(pos[slot.neighbor as usize]) - x).length() / slot.rest - 1.0);

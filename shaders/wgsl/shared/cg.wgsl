@@ -47,10 +47,11 @@ fn apply_at(i: u32, full: bool) -> Applied {
     var diag = m;
     for (var s = 0u; s < SLOTS; s++) {
         let slot = slot_at(i, s);
-        if slot.neighbor < 0 {
+        let other = slot_other(slot);
+        if other < 0 {
             continue;
         }
-        let b = u32(slot.neighbor);
+        let b = u32(other);
         let blk = spring_block(slot, xa, pos[b].xyz, ya - y_at(b, full), full);
         acc += blk.v;
         diag += blk.diag;

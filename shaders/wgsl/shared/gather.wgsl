@@ -72,10 +72,11 @@ fn table_springs(i: u32, a: Pt, f: vec3<f32>) -> vec3<f32> {
     var acc = f;
     for (var s = 0u; s < SLOTS; s++) {
         let slot = slot_at(i, s);
-        if slot.neighbor < 0 {
+        let other = slot_other(slot);
+        if other < 0 {
             continue;
         }
-        let b = point(u32(slot.neighbor));
+        let b = point(u32(other));
         acc += spring_force(a.x - b.x, a.v - b.v, slot);
     }
     return acc;

@@ -114,21 +114,24 @@ fn grid_block(b: u32, row: u32, c0: u32) {
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     interior = interior_slots;
-    let n = p.n;
     let b = flat_id(id, groups);
-    let origin = block_origin(b, n);
+    let rows = block_rows_of(p);
+    let width = block_width_of(p);
+    let origin = block_origin(b, width);
     let row = origin.x;
     let c0 = origin.y;
     if interior.enabled != 0u {
         grid_block(b, row, c0);
         return;
     }
-    // The table: storage buffers or the image (an irregular table, or table=storage|image).
+    // The table: storage buffers or the image (an irregular table, or table=storage|image),
+    // each particle's own mass (a mesh's vary; ×1 on a grid).
     for (var k = 0u; k < BLOCK; k++) {
-        let i = row * n + c0 + k;
-        if row < n && c0 + k < n {
+        let i = row * width + c0 + k;
+        if row < rows && c0 + k < width {
             let a = point(i);
-            force[i] = vec4<f32>(table_springs(i, a, forces_at_mean(vec4<f32>(particle_base(i), 0.0), a.v).xyz), 0.0);
+            let f = forces_at(vec4<f32>(particle_base(i), 0.0), a.v, pos[i].w);
+            force[i] = vec4<f32>(table_springs(i, a, f.xyz), 0.0);
         }
     }
 }

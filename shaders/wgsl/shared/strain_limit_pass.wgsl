@@ -185,9 +185,10 @@ fn grid_block(b: u32, row: u32, c0: u32) {
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     interior = interior_slots;
-    let n = p.n;
     let b = flat_id(id, groups);
-    let origin = block_origin(b, n);
+    let rows = block_rows_of(p);
+    let width = block_width_of(p);
+    let origin = block_origin(b, width);
     let row = origin.x;
     let c0 = origin.y;
     // A uniform branch: each table mode does only its own loads.
@@ -197,8 +198,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     // The table: storage buffers or the image (an irregular table, or table=storage|image).
     for (var k = 0u; k < BLOCK; k++) {
-        if row < n && c0 + k < n {
-            table_particle(row * n + c0 + k);
+        if row < rows && c0 + k < width {
+            table_particle(row * width + c0 + k);
         }
     }
 }

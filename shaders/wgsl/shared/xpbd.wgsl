@@ -1,7 +1,6 @@
-// One XPBD pass (core::cpu::integrators::xpbd_pass): the springs in slot s of the
-// particles of one colour — no two share a particle — each a distance constraint of
-// compliance 1/(ks dt²) and damping kd/(ks dt), its λ kept in component c of aux0 (buf 0)
-// or aux1 (buf 1) at its first end, solved for both ends by their mobilities, in place;
+// XPBD's distance constraint (core::cpu::integrators::xpbd_solve), for a grid's passes
+// (shared/xpbd_grid.wgsl) and a mesh's (xpbd_mesh.wgsl): a spring of compliance
+// 1/(ks dt²) and damping kd/(ks dt) solved for both ends by their mobilities, in place;
 // each end's velocity gains its correction over dt (so that v·dt stays its displacement
 // since the substep began, which the damping term reads).
 
@@ -12,50 +11,29 @@ fn mobility(k: u32, w: f32) -> f32 {
     return w;
 }
 
-// core::cpu::integrators::xpbd_colour.
-fn xpbd_colour(di: i32, dj: i32, i: u32, j: u32) -> u32 {
-    if di != 0 {
-        return (i / u32(abs(di))) % 2u;
-    }
-    return (j / u32(abs(dj))) % 2u;
+// What xpbd_solve did: whether it moved the ends, and λ's increment.
+struct Solved {
+    moved: bool,
+    dl: f32,
 }
 
-fn lambda_at(a: u32, buf: u32, c: u32) -> f32 {
-    if buf == 0u {
-        return aux0[a][c];
-    }
-    return aux1[a][c];
-}
-
-fn set_lambda(a: u32, buf: u32, c: u32, l: f32) {
-    if buf == 0u {
-        aux0[a][c] = l;
-    } else {
-        aux1[a][c] = l;
-    }
-}
-
-fn xpbd_pass(a: u32, s: u32, di: i32, dj: i32, colour: u32, buf: u32, c: u32) {
-    if xpbd_colour(di, dj, a % p.n, a / p.n) != colour {
-        return;
-    }
-    let slot = slot_at(a, s);
-    if slot.neighbor < 0 || slot.ks <= 0.0 {
-        return;
-    }
-    let b = u32(slot.neighbor);
+// core::cpu::integrators::xpbd_solve: the constraint of `slot` between a and b with
+// multiplier l, both ends (and their velocities) moved in place; nothing when neither
+// moves.
+fn xpbd_solve(a: u32, b: u32, slot: SpringSlot, l: f32) -> Solved {
     let xa4 = pos[a];
     let xb4 = pos[b];
-    let inv_m = 1.0 / p.particle_mass;
-    let wa = mobility(a, xa4.w) * inv_m;
-    let wb = mobility(b, xb4.w) * inv_m;
+    // w / m̄ as one division, as the twin computes it (w · (1 / m̄) rounds twice, and a
+    // compiler allowed reciprocals may rewrite one into the other).
+    let wa = mobility(a, xa4.w) / p.particle_mass;
+    let wb = mobility(b, xb4.w) / p.particle_mass;
     if wa + wb == 0.0 {
-        return;
+        return Solved(false, 0.0);
     }
     let d = xa4.xyz - xb4.xyz;
     let len = len3(d);
     if len <= 1.17549435e-38 {
-        return;
+        return Solved(false, 0.0);
     }
     let n = d * (1.0 / len);
     let alpha = 1.0 / (slot.ks * p.dt * p.dt);
@@ -63,7 +41,6 @@ fn xpbd_pass(a: u32, s: u32, di: i32, dj: i32, colour: u32, buf: u32, c: u32) {
     let va = vel[a].xyz;
     let vb = vel[b].xyz;
     let rel = dot3(n, va - vb) * p.dt;
-    let l = lambda_at(a, buf, c);
     let dl = -((len - slot.rest) + alpha * l + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
     let da = n * (dl * wa);
     let db = n * (dl * wb);
@@ -72,5 +49,5 @@ fn xpbd_pass(a: u32, s: u32, di: i32, dj: i32, colour: u32, buf: u32, c: u32) {
     pos[b] = vec4<f32>(xb4.xyz - db, xb4.w);
     vel[a] = vec4<f32>(va + da * inv_dt, 0.0);
     vel[b] = vec4<f32>(vb - db * inv_dt, 0.0);
-    set_lambda(a, buf, c, l + dl);
+    return Solved(true, dl);
 }
