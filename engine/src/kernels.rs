@@ -738,7 +738,7 @@ fn xpbd_mesh(a: &TwinArgs, b: &mut HostBuffers) {
     let mut lambda: Vec<f32> = b.aux[0].iter().chain(&b.aux[1]).flatten().copied().collect();
     let (first, count) = (a.range.0 as usize, a.range.1 as usize);
     let end = (first + count).min(a.topo.springs.len());
-    cpu::xpbd_mesh_pass(a.p, &a.topo.springs, first.min(end)..end, &mut b.pos, &mut b.vel, &mut lambda);
+    cpu::xpbd_mesh_pass(a.exec, a.p, &a.topo.springs, first.min(end)..end, &mut b.pos, &mut b.vel, &mut lambda);
     for (k, l) in lambda.chunks_exact(4).enumerate() {
         let v = [l[0], l[1], l[2], l[3]];
         if k < np { b.aux[0][k] = v } else { b.aux[1][k - np] = v }

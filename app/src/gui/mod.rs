@@ -349,7 +349,7 @@ impl Running {
         let out = self.egui_ctx.run_ui(raw, |root| {
             let info = ui::Info {
                 backend: self.sim.backend,
-                variant: self.sim.solver.variant(),
+                variant: self.sim.solver.variant().zip(self.sim.solver.caps().map(|(c, _)| c)),
                 api: self.gfx.api(),
                 adapter: self.gfx.adapter(),
                 solver_adapter: (self.sim.backend.api() != Some(self.gfx.api())).then(|| self.sim.solver.adapter()),
@@ -591,8 +591,11 @@ impl Running {
         let (w, h) = self.gfx.scene_size();
         if self.drawn == 5 {
             self.ui.tool = Tool::Cursor;
-            let n = self.sim.solver.get_ref().scene().cloth.n as usize;
-            let p = self.sim.solver.get().state()?.pos[(n / 3) * n + n / 2];
+            // A grid's particle a third down its middle column; a mesh's a third down its list.
+            let cloth = &self.sim.solver.get_ref().scene().cloth;
+            let (n, mesh) = (cloth.n as usize, cloth.is_mesh());
+            let pos = self.sim.solver.get().state()?.pos;
+            let p = pos[if mesh { pos.len() / 3 } else { (n / 3) * n + n / 2 }];
             let [x, y] =
                 self.ui.camera.project(glam::Vec3::new(p[0], p[1], p[2]), w, h).context("cloth behind the camera")?;
             self.drag(ui::Drag::Start { x, y })?;

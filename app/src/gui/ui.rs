@@ -18,8 +18,8 @@ use crate::solvers::{Api, Backend};
 pub struct Info<'a> {
     /// Running solver.
     pub backend: Backend,
-    /// Its variant (GPU solvers).
-    pub variant: Option<clothlab_engine::Variant>,
+    /// Its variant and what its adapter and cloth offer (GPU solvers).
+    pub variant: Option<(clothlab_engine::Variant, clothlab_engine::Caps)>,
     /// Drawing API.
     pub api: Api,
     /// The window's adapter in one line.
@@ -117,8 +117,8 @@ pub fn draw(root: &mut egui::Ui, s: &mut UiState, info: &Info<'_>, out: &mut Vec
             egui::ScrollArea::vertical().show(ui, |ui| {
                 ui.label(RichText::new("Backend").strong());
                 backend_picker(ui, info, out);
-                if let Some(v) = info.variant {
-                    variant_panel(ui, v, out);
+                if let Some((v, caps)) = info.variant {
+                    variant_panel(ui, v, caps, out);
                 }
                 ui.horizontal(|ui| {
                     ui.label("API");
@@ -335,16 +335,24 @@ fn backend_picker(ui: &mut egui::Ui, info: &Info<'_>, out: &mut Vec<Command>) {
     });
 }
 
-/// The GPU solver's variant: the presets, and one picker per switch (see
-/// `clothlab_engine::variant::SWITCHES`); a pick the adapter lacks is refused with the
-/// reason in the status bar.
-fn variant_panel(ui: &mut egui::Ui, v: clothlab_engine::Variant, out: &mut Vec<Command>) {
+/// The GPU solver's variant: the presets (as they fit the adapter and the cloth: a mesh
+/// has no table=uniform or shuffles, an adapter may lack push constants or subgroups),
+/// and one picker per switch (see `clothlab_engine::variant::SWITCHES`); a pick the
+/// adapter or cloth lacks is refused with the reason in the status bar.
+fn variant_panel(ui: &mut egui::Ui, v: clothlab_engine::Variant, caps: clothlab_engine::Caps, out: &mut Vec<Command>) {
     use clothlab_engine::variant::{PRESETS, SWITCHES};
-    egui::CollapsingHeader::new(format!("Variant: {}", v.label())).id_salt("variant").show(ui, |ui| {
+    let preset = PRESETS.iter().find(|(_, p)| p.fit(&caps) == v);
+    let title = match preset {
+        Some((name, p)) if *p != v => format!("Variant: {name} (fitted)"),
+        Some((name, _)) => format!("Variant: {name}"),
+        None => format!("Variant: {}", v.label()),
+    };
+    let header = egui::CollapsingHeader::new(title).id_salt("variant").show(ui, |ui| {
         ui.horizontal(|ui| {
             for (name, preset) in PRESETS {
-                if ui.selectable_label(v == preset, name).clicked() && v != preset {
-                    out.push(Command::Variant(preset));
+                let fitted = preset.fit(&caps);
+                if ui.selectable_label(v == fitted, name).clicked() && v != fitted {
+                    out.push(Command::Variant(fitted));
                 }
             }
         });
@@ -366,6 +374,7 @@ fn variant_panel(ui: &mut egui::Ui, v: clothlab_engine::Variant, out: &mut Vec<C
             }
         });
     });
+    header.header_response.on_hover_text(format!("{}: {}", v.label(), v.switches().replace(',', ", ")));
 }
 
 fn wind_panel(ui: &mut egui::Ui, s: &mut UiState) {
@@ -504,6 +513,9 @@ fn light_panel(ui: &mut egui::Ui, s: &mut UiState) {
 
 fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     ui.label(RichText::new("Parameters").strong());
+    // A mesh's springs are its edges and the springs across them: no shear family, and
+    // no self-collision yet (its hash words hold grid coordinates).
+    let mesh = s.scene.cloth.is_mesh();
     let p = &mut s.params;
     // Stiffness as fractions of the explicit limit, or a material in physical units (a
     // substep count Verlet cannot integrate is refused, naming the one it needs).
@@ -553,17 +565,26 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     f(ui, &mut p.damping, 0.0..=0.1, "damping", false);
     if physical {
         f(ui, &mut p.stretch_modulus, 1.0..=5000.0, "stretch modulus N/m", true);
-        f(ui, &mut p.shear_modulus, 0.1..=5000.0, "shear modulus N/m", true);
+        if !mesh {
+            f(ui, &mut p.shear_modulus, 0.1..=5000.0, "shear modulus N/m", true);
+        }
         f(ui, &mut p.bend_modulus, 1e-6..=1.0, "bend modulus N·m", true);
     } else {
         f(ui, &mut p.structural_stiffness, 0.001..=1.0, "structural κ", true);
-        f(ui, &mut p.shear_stiffness, 0.001..=1.0, "shear κ", true);
+        if !mesh {
+            f(ui, &mut p.shear_stiffness, 0.001..=1.0, "shear κ", true);
+        }
         f(ui, &mut p.bend_stiffness, 0.0001..=1.0, "bend κ", true);
     }
     let damping = if physical { "damping ratio" } else { "damping" };
     f(ui, &mut p.structural_damping, 0.0..=1.0, &format!("structural {damping}"), false);
-    f(ui, &mut p.shear_damping, 0.0..=1.0, &format!("shear {damping}"), false);
+    if !mesh {
+        f(ui, &mut p.shear_damping, 0.0..=1.0, &format!("shear {damping}"), false);
+    }
     f(ui, &mut p.bend_damping, 0.0..=1.0, &format!("bend {damping}"), false);
+    if mesh {
+        ui.label(RichText::new("a mesh: edges (structural) and springs across them (bend); no shear family").weak());
+    }
     f(ui, &mut p.strain_limit, 0.01..=1.0, "strain limit τ", false);
     f(ui, &mut p.friction, 0.0..=1.0, "friction", false);
     f(ui, &mut p.collision_margin, 0.0..=0.05, "collision margin m", false);
@@ -572,13 +593,18 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
         .add(egui::Slider::new(&mut p.strain_iterations, 0..=MAX_STRAIN_ITERATIONS.min(16)).text("strain passes"))
         .changed();
     // Self-collision (off by default): a spatial hash every substep, then the response.
-    ui.horizontal(|ui| {
-        changed |= ui.checkbox(&mut p.self_collision, "self-collision").changed();
-        if p.self_collision {
+    ui.add_enabled_ui(!mesh, |ui| {
+        ui.horizontal(|ui| {
             changed |= ui
-                .add(egui::Slider::new(&mut p.self_thickness, 0.002..=0.1).logarithmic(true).text("thickness m"))
+                .checkbox(&mut p.self_collision, "self-collision")
+                .on_disabled_hover_text("not for a mesh yet: the hash excludes neighbours by grid coordinates")
                 .changed();
-        }
+            if p.self_collision {
+                changed |= ui
+                    .add(egui::Slider::new(&mut p.self_thickness, 0.002..=0.1).logarithmic(true).text("thickness m"))
+                    .changed();
+            }
+        })
     });
     if changed {
         match p.validate() {

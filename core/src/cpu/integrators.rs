@@ -246,8 +246,11 @@ pub fn xpbd_pass(
 /// One XPBD pass of a mesh: springs `pass` of the list (a range of
 /// [`crate::grid::MeshTables::xpbd_passes`], no two of which share a particle), each
 /// solved as [`xpbd_pass`] solves a grid's, its λ in `lambda[k]` for spring `k`. The
-/// pass's springs share no particle, so their order changes no bit.
+/// pass's springs share no particle, so each is solved from the positions the pass
+/// started with, in any order and on any thread (rayon with [`Exec::Parallel`]), and the
+/// results are stored after: the same bits either way.
 pub fn xpbd_mesh_pass(
+    exec: Exec,
     p: &StepParams,
     springs: &[crate::grid::Spring],
     pass: std::ops::Range<usize>,
@@ -255,18 +258,26 @@ pub fn xpbd_mesh_pass(
     vel: &mut [V4],
     lambda: &mut [f32],
 ) {
-    for k in pass {
-        let s = &springs[k];
-        if s.ks <= 0.0 {
-            continue;
-        }
+    let first = pass.start;
+    let solved = {
+        let (pos, vel, lambda) = (&*pos, &*vel, &*lambda);
+        per_particle(exec, pass.len(), |i| {
+            let k = first + i;
+            let s = &springs[k];
+            if s.ks <= 0.0 {
+                return None;
+            }
+            let (a, b) = (s.a as usize, s.b as usize);
+            let slot = SpringSlot { neighbor: s.b as i32, rest: s.rest, ks: s.ks, kd: s.kd };
+            xpbd_solve(p, &slot, a, b, pos[a], pos[b], vel[a], vel[b], lambda[k])
+        })
+    };
+    for (i, r) in solved.into_iter().enumerate() {
+        let Some(r) = r else { continue };
+        let (k, s) = (first + i, &springs[first + i]);
         let (a, b) = (s.a as usize, s.b as usize);
-        let slot = SpringSlot { neighbor: s.b as i32, rest: s.rest, ks: s.ks, kd: s.kd };
-        let l = lambda[k];
-        if let Some(r) = xpbd_solve(p, &slot, a, b, pos[a], pos[b], vel[a], vel[b], l) {
-            (pos[a], pos[b], vel[a], vel[b]) = (r.xa, r.xb, r.va, r.vb);
-            lambda[k] = l + r.dl;
-        }
+        (pos[a], pos[b], vel[a], vel[b]) = (r.xa, r.xb, r.va, r.vb);
+        lambda[k] += r.dl;
     }
 }
 

@@ -355,7 +355,7 @@ impl CpuSolver {
                         if let Some(m) = &topo.mesh {
                             for pass in m.xpbd_passes.windows(2) {
                                 let range = pass[0] as usize..pass[1] as usize;
-                                xpbd_mesh_pass(&p, &topo.springs, range, pos, vel, mesh_lambda);
+                                xpbd_mesh_pass(e, &p, &topo.springs, range, pos, vel, mesh_lambda);
                             }
                             continue;
                         }
