@@ -158,8 +158,8 @@ fn a_mesh_scene_runs_on_every_backend_records_and_refuses_grid_only_input_in_one
     }
     refused(&["sim", "--backend", "cpu", "--scene", scene, "--n", "32"], "--n 32 sets a grid's side");
     refused(
-        &["sim", "--backend", "cpu", "--scene", scene, "--set", "self_collision=true"],
-        "self-collision hashes grid",
+        &["sim", "--backend", "cpu", "--scene", scene, "--set", "self_collision=true", "--set", "self_thickness=0.03"],
+        "use less than 0.0275 m",
     );
 }
 

@@ -43,7 +43,6 @@ pub fn build_mesh(
         Pinning::AboveY(y) => MeshPinning::AboveY(*y),
         _ => MeshPinning::None,
     };
-    params.check_mesh()?;
     let held = mesh.pinned(&rule).map_err(err)?;
     let mass = mesh.vertex_masses(params.cloth_mass);
     let reference = params.cloth_mass / np as f32;
@@ -118,7 +117,9 @@ pub fn build_mesh(
         .collect();
     let zero = vec![[0.0f32; 4]; np];
     let state = ClothState { n: 0, pos, vel, force: zero.clone(), normal: zero };
-    let tables = MeshTables { slot_kind, mass, min_mass, xpbd_passes };
+    let closest_unsprung = closest_unsprung(&slots, &mesh.positions);
+    params.check_mesh(np, closest_unsprung)?;
+    let tables = MeshTables { slot_kind, mass, min_mass, xpbd_passes, closest_unsprung };
     let mut topo = ClothTopology {
         n: 0,
         uv,
@@ -161,4 +162,24 @@ fn xpbd_colouring(springs: &[Spring], particles: usize) -> Vec<Vec<u32>> {
         passes.extend(family);
     }
     passes
+}
+
+/// The smallest rest distance between a particle and one two springs away that shares no
+/// spring with it (`slots`: the gather table; `positions`: the rest positions), m;
+/// infinite for a mesh with no such pair. Farther pairs are farther apart on any mesh
+/// whose triangles are not folded onto each other.
+fn closest_unsprung(slots: &[SpringSlot], positions: &[[f32; 3]]) -> f32 {
+    let others = |v: usize| slots[v * SLOTS..(v + 1) * SLOTS].iter().filter_map(SpringSlot::other);
+    let mut closest = f32::INFINITY;
+    for v in 0..positions.len() {
+        let x = glam::Vec3::from(positions[v]);
+        for u in others(v) {
+            for w in others(u) {
+                if w != v && !others(v).any(|o| o == w) {
+                    closest = closest.min(x.distance(positions[w].into()));
+                }
+            }
+        }
+    }
+    closest
 }

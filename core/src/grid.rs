@@ -226,6 +226,9 @@ pub struct MeshTables {
     /// colouring in which no two springs of a pass share a particle, the bending springs'
     /// passes first and the edges' last.
     pub xpbd_passes: Vec<u32>,
+    /// The smallest rest distance between two particles that share no spring but a
+    /// neighbour, m: self-collision's thickness must stay below half of it.
+    pub closest_unsprung: f32,
 }
 
 impl ClothTopology {
@@ -308,7 +311,7 @@ impl ClothTopology {
         match &self.mesh {
             None => params.validate_for(self.n, self.spacing),
             Some(m) => {
-                params.check_mesh()?;
+                params.check_mesh(self.num_particles(), m.closest_unsprung)?;
                 params.validate_for_mass(m.min_mass, self.spacing, "for this mesh")
             }
         }

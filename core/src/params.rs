@@ -286,14 +286,35 @@ impl SimParams {
         }
     }
 
-    /// What a cloth made from a mesh cannot run yet: self-collision (its hash packs grid
-    /// coordinates).
-    pub fn check_mesh(&self) -> Result<(), ParamError> {
-        if self.self_collision {
+    /// Self-collision on a mesh of `particles` whose closest two particles that share no
+    /// spring lie `closest_unsprung` apart at rest: at most what the hash's words hold, and
+    /// a thickness below half that distance (a pair closer than twice the thickness at
+    /// rest would push apart while the cloth lies still).
+    pub fn check_mesh(&self, particles: usize, closest_unsprung: f32) -> Result<(), ParamError> {
+        if !self.self_collision {
+            return Ok(());
+        }
+        let max = crate::tables::SELF_COLLISION_MAX_PARTICLES;
+        if particles > max {
             return Err(ParamError::new(
                 "self_collision",
                 true,
-                "self-collision hashes grid coordinates and cannot run a mesh yet",
+                format!(
+                    "a mesh of {particles} particles is too large for self-collision (its hash holds {max} at most)"
+                ),
+            ));
+        }
+        // A grid leaves out the pairs within twice the thickness at rest; a mesh's
+        // neighbours are its springs, so two particles that share none must start apart.
+        if 2.0 * self.self_thickness >= closest_unsprung {
+            return Err(ParamError::new(
+                "self_thickness",
+                self.self_thickness,
+                format!(
+                    "two particles of this mesh that share no spring lie {closest_unsprung:.4} m apart at rest, within twice the thickness: \
+                     they would push each other apart; use less than {:.4} m",
+                    0.5 * closest_unsprung
+                ),
             ));
         }
         Ok(())

@@ -225,7 +225,10 @@ fn bad_mesh_scenes_are_refused_in_one_line() {
         ),
         ("[cloth]\nmesh = \"meshes/skirt.obj\"\npinning = { sideways = 1 }\n", "unknown field `sideways`"),
         ("[cloth]\nmesh = \"meshes/skirt.obj\"\nscale = [1.0, 0.0, 1.0]\n", "`cloth.scale`"),
-        ("[cloth]\nmesh = \"meshes/skirt.obj\"\n[params]\nself_collision = true\n", "self-collision hashes grid"),
+        (
+            "[cloth]\nmesh = \"meshes/skirt.obj\"\n[params]\nself_collision = true\nself_thickness = 0.03\n",
+            "share no spring lie 0.0550 m apart at rest",
+        ),
     ];
     for (text, want) in cases {
         // A refusal at load or, for what depends on the parameters, at build.

@@ -38,7 +38,8 @@ pub enum Count {
     Workgroup,
     /// One per [`WORKGROUP`] buckets of the self-collision hash (`hash_scan_blocks`).
     HashBlocks,
-    /// One per pair of neighbours in a row (`n · ⌈n / 2⌉`: `self_collide`).
+    /// One per pair of neighbours in a row (`n · ⌈n / 2⌉`: `self_collide`); on a mesh, of
+    /// consecutive particles (`⌈particles / 2⌉`).
     Pairs,
     /// As many as the dispatch's range says ([`crate::recipe::Command::Range`]: a mesh's
     /// XPBD pass); of the topology, the whole spring list.
@@ -57,6 +58,7 @@ impl Count {
             Count::Triangles => topo.triangles.len() as u32,
             Count::Workgroup => WORKGROUP,
             Count::HashBlocks => cpu::self_collide::hash_blocks(topo.num_particles()),
+            Count::Pairs if topo.n == 0 => (topo.num_particles() as u32).div_ceil(2),
             Count::Pairs => topo.n * topo.n.div_ceil(2),
             Count::Range => topo.springs.len() as u32,
         }
@@ -544,6 +546,9 @@ pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool)
     let springs = topo.springs.len() as u64;
     let table = |b: Buf| match b {
         Buf::Slots | Buf::BendSlots if k.flavor.table_image || table_uniform => 0,
+        // A mesh's self-collision response reads the table only for the few particles in
+        // contact.
+        Buf::Slots | Buf::BendSlots if k.def.name == "self_collide_mesh" => 0,
         Buf::Table if !k.flavor.table_image => 0,
         Buf::Slots => np * STRAIN_SLOTS as u64 * 16,
         Buf::BendSlots => np * (SLOTS - STRAIN_SLOTS) as u64 * 16,
@@ -822,7 +827,7 @@ fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
 
 fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {
     let [.., cells, _, slots] = &b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
-    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.vel, cells, slots, &mut b.pos_out);
+    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.vel, cells, slots, &a.topo.slots, &mut b.pos_out);
 }
 
 /// Kernel-test inputs: the hash built by the twins up to the kernel under test (the
@@ -1258,7 +1263,7 @@ const fn hash(
     reads: &'static [Buf],
     writes: &'static [Buf],
 ) -> KernelDef {
-    KernelDef { check: EXACT, label: timing::SELF_HASH, cloths: Cloths::Grid, ..def(name, twin, count, reads, writes) }
+    KernelDef { check: EXACT, label: timing::SELF_HASH, ..def(name, twin, count, reads, writes) }
 }
 /// Each particle's bucket, and the buckets' and their blocks' counts (atomics).
 pub static HASH_COUNT: KernelDef = KernelDef {
@@ -1283,26 +1288,44 @@ pub static HASH_SCATTER: KernelDef = KernelDef {
     check: Check::Own("the_gpu_hash_lists_what_the_cpu_lists_after_its_scatter"),
     ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Pos, Aux2], &[Aux2, Aux4])
 };
+/// The response's check: a gather over the contacts, in fixed point.
+const RESPONSE: Check = Check::Bound {
+    relative: 2e-5,
+    reason: "a gather over the contacts with divisions and square roots, truncated to fixed point \
+             (a last-bit difference moves a push by t / 65536 at most; exact on lavapipe)",
+};
 /// The response: every particle pushed out of its close candidates, into the other
 /// position buffer.
 pub static SELF_COLLIDE: KernelDef = KernelDef {
-    check: Check::Bound {
-        relative: 2e-5,
-        reason: "a gather over the contacts with divisions and square roots, truncated to fixed point \
-                 (a last-bit difference moves a push by t / 65536 at most; exact on lavapipe)",
-    },
+    check: RESPONSE,
     pure: &[PosOut],
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
     cloths: Cloths::Grid,
     ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, Aux2, Aux4], &[PosOut, Vel])
 };
+/// [`SELF_COLLIDE`] on a mesh: pairs of consecutive particles, a particle's neighbours
+/// its springs (from the table, for the entries within the thickness).
+pub static SELF_COLLIDE_MESH: KernelDef = KernelDef {
+    check: RESPONSE,
+    pure: &[PosOut],
+    label: timing::SELF_COLLIDE,
+    test_input: Some(built_hash),
+    cloths: Cloths::Mesh,
+    ..def(
+        "self_collide_mesh",
+        self_collide,
+        Count::Pairs,
+        &[Params, Pos, Vel, Slots, BendSlots, Aux2, Aux4],
+        &[PosOut, Vel],
+    )
+};
 /// Self-collision's kernels, in recipe order.
 pub static SELF_COLLISION: [&KernelDef; 5] =
     [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 51] = [
+pub static ALL: [&KernelDef; 52] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -1354,6 +1377,7 @@ pub static ALL: [&KernelDef; 51] = [
     &HASH_SCAN_BLOCKS,
     &HASH_SCATTER,
     &SELF_COLLIDE,
+    &SELF_COLLIDE_MESH,
 ];
 
 #[cfg(test)]

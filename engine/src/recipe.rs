@@ -185,7 +185,7 @@ fn normals_kernels(variant: &Variant) -> [&'static KernelDef; 2] {
 
 /// [`recipe`] for the cloth `topo`: on a mesh, each XPBD iteration runs the mesh's passes
 /// (`MeshTables::xpbd_passes`, one [`Command::Range`] of `xpbd_mesh` each) where a grid
-/// runs its 12.
+/// runs its 12, and self-collision's response is `self_collide_mesh`.
 pub fn recipe_for(
     variant: &Variant,
     strain_passes: u32,
@@ -194,8 +194,15 @@ pub fn recipe_for(
 ) -> Vec<Command> {
     let commands = recipe(variant, strain_passes, how);
     let Some(mesh) = &topo.mesh else { return commands };
+    // A mesh's self-collision response: its own kernel (neighbours from the table).
+    let commands = commands.into_iter().map(|c| match c {
+        Command::Dispatch(kr) if kr.def == &k::SELF_COLLIDE => {
+            Command::Dispatch(k::SELF_COLLIDE_MESH.flavor(kr.flavor))
+        }
+        c => c,
+    });
     let first = &k::XPBD[cpu::XPBD_ORDER[0]];
-    let mut v = Vec::with_capacity(commands.len());
+    let mut v = Vec::new();
     for c in commands {
         match c.kernel() {
             Some(kr) if kr.def == first => v.extend(mesh.xpbd_passes.windows(2).map(|w| Command::Range {

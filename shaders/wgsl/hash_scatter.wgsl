@@ -16,7 +16,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     let slot = atomicSub(&cells[bucket(c, table_size())], 1u) - 1u;
     if slot < np {
         let pinned = select(0u, PINNED, x.w == 0.0);
-        let word = (i % p.n) | ((i / p.n) << COORD_BITS) | (row_tag(c.y, c.z) << (2u * COORD_BITS)) | pinned;
+        let word = slot_id(i) | (row_tag(c.y, c.z) << (2u * COORD_BITS)) | pinned;
         slot_pos[slot] = vec4<f32>(x.xyz, bitcast<f32>(word));
     }
 }

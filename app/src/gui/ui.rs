@@ -513,8 +513,7 @@ fn light_panel(ui: &mut egui::Ui, s: &mut UiState) {
 
 fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     ui.label(RichText::new("Parameters").strong());
-    // A mesh's springs are its edges and the springs across them: no shear family, and
-    // no self-collision yet (its hash words hold grid coordinates).
+    // A mesh's springs are its edges and the springs across them: no shear family.
     let mesh = s.scene.cloth.is_mesh();
     let p = &mut s.params;
     // Stiffness as fractions of the explicit limit, or a material in physical units (a
@@ -593,18 +592,13 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
         .add(egui::Slider::new(&mut p.strain_iterations, 0..=MAX_STRAIN_ITERATIONS.min(16)).text("strain passes"))
         .changed();
     // Self-collision (off by default): a spatial hash every substep, then the response.
-    ui.add_enabled_ui(!mesh, |ui| {
-        ui.horizontal(|ui| {
+    ui.horizontal(|ui| {
+        changed |= ui.checkbox(&mut p.self_collision, "self-collision").changed();
+        if p.self_collision {
             changed |= ui
-                .checkbox(&mut p.self_collision, "self-collision")
-                .on_disabled_hover_text("not for a mesh yet: the hash excludes neighbours by grid coordinates")
+                .add(egui::Slider::new(&mut p.self_thickness, 0.002..=0.1).logarithmic(true).text("thickness m"))
                 .changed();
-            if p.self_collision {
-                changed |= ui
-                    .add(egui::Slider::new(&mut p.self_thickness, 0.002..=0.1).logarithmic(true).text("thickness m"))
-                    .changed();
-            }
-        })
+        }
     });
     if changed {
         match p.validate() {

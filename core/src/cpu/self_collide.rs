@@ -47,7 +47,7 @@
 //! the particle there and its slot word (grid coordinates, row tag, pinned) as the bits
 //! of `.w`: the response reads one element per entry, in order.
 
-use crate::grid::{StepParams, V4};
+use crate::grid::{SLOTS, SpringSlot, StepParams, V4};
 use crate::layout::WORKGROUP;
 
 use super::{Exec, for_each2};
@@ -155,10 +155,33 @@ const PINNED: u32 = 1 << 31;
 /// What a slot holds for particle `i` of an `n`-wide grid in cell `c` (besides its
 /// position): its grid coordinates, its row's tag and whether it is pinned (`pinned`),
 /// `i | j << 12 | tag << 24 | pinned << 31` — enough to refuse a grid neighbour or a
-/// foreign row by the word alone.
+/// foreign row by the word alone. A mesh (`n = 0`) has no coordinates: its particle's
+/// index in their 24 bits (`tables::SELF_COLLISION_MAX_PARTICLES`), its neighbours refused from the
+/// spring table.
 #[inline]
 pub fn slot_word(i: u32, n: u32, c: [i32; 3], pinned: bool) -> u32 {
-    (i % n) | (i / n) << COORD_BITS | row_tag(c[1], c[2]) << (2 * COORD_BITS) | if pinned { PINNED } else { 0 }
+    let id = if n == 0 { i & INDEX_MASK } else { (i % n) | (i / n) << COORD_BITS };
+    id | row_tag(c[1], c[2]) << (2 * COORD_BITS) | if pinned { PINNED } else { 0 }
+}
+
+/// A mesh's particle index in a slot's word: its low 24 bits.
+const INDEX_MASK: u32 = (1 << (2 * COORD_BITS)) - 1;
+
+const _: () = assert!(crate::tables::SELF_COLLISION_MAX_PARTICLES == 1 << (2 * COORD_BITS));
+
+/// A mesh's particle index in a slot's word.
+#[inline]
+pub fn slot_index(w: u32) -> u32 {
+    w & INDEX_MASK
+}
+
+/// Whether particles `a` and `b` of a mesh may collide: `b` is not among `a`'s springs
+/// (its edges and the springs across them, in `table`, the gather table). The rest
+/// distance is checked once for the whole mesh instead (`MeshTables::closest_unsprung`
+/// against twice the thickness, when the parameters are checked).
+#[inline]
+pub fn mesh_candidates(table: &[SpringSlot], a: usize, b: usize) -> bool {
+    a != b && !table[a * SLOTS..(a + 1) * SLOTS].iter().any(|s| s.other() == Some(b))
 }
 
 /// The grid coordinates `(i, j)` of a slot's word.
@@ -373,8 +396,17 @@ pub fn rows_around(x: &V4, inv: f32, size: u32, rows: &mut [Row; 9]) -> usize {
 }
 
 /// Particle `i`'s new position and velocity: pushed out of every candidate
-/// closer than the thickness, its velocity into the contact removed.
-pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], vel: V4, cells: &[V4], slots: &[V4]) -> (V4, V4) {
+/// closer than the thickness, its velocity into the contact removed. `table` (the gather
+/// table) refuses a mesh's neighbours; a grid's are refused by their coordinates.
+pub fn self_collide_at(
+    p: &StepParams,
+    i: usize,
+    pos: &[V4],
+    vel: V4,
+    cells: &[V4],
+    slots: &[V4],
+    table: &[SpringSlot],
+) -> (V4, V4) {
     let x4 = pos[i];
     if x4[3] == 0.0 || i as i32 == p.grab_index {
         return (x4, vel);
@@ -384,7 +416,9 @@ pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], vel: V4, cells: &[V
     let size = table_size(pos.len());
     let cells = words(cells);
     let inv = inv_cell(p);
-    let me = ((i as u32 % p.n) as i32, (i as u32 / p.n) as i32);
+    let mesh = p.n == 0;
+    let n = p.n.max(1);
+    let me = ((i as u32 % n) as i32, (i as u32 / n) as i32);
     let mut rows = [Row::default(); 9];
     let count = rows_around(&x4, inv, size, &mut rows);
     // Fixed point: UNITS per thickness (scale = UNITS / t, a product by a power of two).
@@ -401,12 +435,16 @@ pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], vel: V4, cells: &[V
                     continue;
                 }
                 let (qi, qj) = slot_coords(w);
-                if !candidate_coords(p, me, (qi as i32, qj as i32)) {
+                if !mesh && !candidate_coords(p, me, (qi as i32, qj as i32)) {
                     continue;
                 }
                 let e = [x4[0] - y4[0], x4[1] - y4[1], x4[2] - y4[2]];
                 let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
                 if d2 >= t * t || d2 < 1e-12 {
+                    continue;
+                }
+                // A mesh's neighbours from the table, only for what is close (rare).
+                if mesh && !mesh_candidates(table, i, slot_index(w) as usize) {
                     continue;
                 }
                 contacts += 1;
@@ -444,6 +482,7 @@ pub fn self_collide_at(p: &StepParams, i: usize, pos: &[V4], vel: V4, cells: &[V
 /// Step 4: every particle pushed out of its close candidates (from `slots`) into
 /// `pos_out`, its `vel` updated in place (each element read and written only by its own
 /// particle).
+#[allow(clippy::too_many_arguments)] // the twin of one kernel: its buffers, one each
 pub fn self_collide(
     exec: Exec,
     p: &StepParams,
@@ -451,10 +490,11 @@ pub fn self_collide(
     vel: &mut [V4],
     cells: &[V4],
     slots: &[V4],
+    table: &[SpringSlot],
     pos_out: &mut [V4],
 ) {
     for_each2(exec, pos_out, vel, |i, o, q| {
-        let (x, xp) = self_collide_at(p, i, pos, *q, cells, slots);
+        let (x, xp) = self_collide_at(p, i, pos, *q, cells, slots, table);
         *o = x;
         *q = xp;
     });
@@ -568,7 +608,7 @@ mod tests {
             build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
             let mut pushed = 0;
             for i in 0..np {
-                let (x, _) = self_collide_at(&p, i, &pos, pos[i], &cells, &slots);
+                let (x, _) = self_collide_at(&p, i, &pos, pos[i], &cells, &slots, &[]);
                 if pos[i][3] == 0.0 {
                     assert_eq!(x, pos[i], "a pinned particle stays");
                     continue;
@@ -602,7 +642,7 @@ mod tests {
         let (mut cells, mut totals, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
         build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
         let mut out = pos.clone();
-        self_collide(Exec::Serial, &p, &pos, &mut vel, &cells, &slots, &mut out);
+        self_collide(Exec::Serial, &p, &pos, &mut vel, &cells, &slots, &[], &mut out);
         let gap = out[b][0] - out[a][0];
         assert!((gap - t).abs() < 2.0 * unit, "gap {gap}, thickness {t}");
         assert!((out[a][0] - (0.3 - 0.2 * t)).abs() < 2.0 * unit);

@@ -36,11 +36,19 @@ fn bucket(c: vec3<i32>, size: u32) -> u32 {
 }
 
 // What a slot holds for particle i in cell c besides its position: its grid coordinates,
-// its row's tag and whether it is pinned, i | j << 12 | tag << 24 | pinned << 31
-// (core::cpu::self_collide::slot_word, row_tag).
+// its row's tag and whether it is pinned, i | j << 12 | tag << 24 | pinned << 31; on a
+// mesh (n = 0) the particle's index in the low 24 bits (core::cpu::self_collide::slot_word,
+// row_tag).
 const COORD_BITS: u32 = 12u;
 const COORD_MASK: u32 = 4095u;
+const INDEX_MASK: u32 = 0xffffffu;
 const PINNED: u32 = 0x80000000u;
+
+// The low 24 bits of particle i's slot word: a grid's coordinates, a mesh's index.
+fn slot_id(i: u32) -> u32 {
+    let n = max(p.n, 1u);
+    return select((i % n) | ((i / n) << COORD_BITS), i & INDEX_MASK, p.n == 0u);
+}
 
 fn row_tag(y: i32, z: i32) -> u32 {
     return bitcast<u32>((y & 7) | ((z & 15) << 3u));
