@@ -396,10 +396,11 @@ pub struct BenchArgs {
     pub integrators: bool,
     /// Measure what the grid's regularity buys instead: the scene's n × n cloth as the
     /// grid and loaded as a mesh (the same vertices, triangles and pins), on each backend
-    /// at --sizes (64 and 128 unless given; cpu and cpu-par unless given), --repeat rounds
-    /// interleaved; the CPU backends also run the grid kernel by kernel. A backend that
-    /// cannot run a mesh yet is named in the report with its reason. Writes
-    /// mesh-vs-grid.{md,csv,svg,png}.
+    /// at --sizes (64 and 128 unless given; cpu, cpu-par, wgpu, vulkan and gl unless
+    /// given), --repeat rounds interleaved; between them the grid without what only a grid
+    /// allows (CPU: kernel by kernel; an optimized GPU backend: table=storage,
+    /// neighbours=load). A backend that cannot run a cloth is named in the report with its
+    /// reason. Writes mesh-vs-grid.{md,csv,svg,png}.
     #[arg(long, conflicts_with_all = ["ladder", "integrators"])]
     pub mesh_vs_grid: bool,
     #[command(flatten)]

@@ -5,7 +5,7 @@ use crate::grid::{
     ClothState, ClothTopology, FACE_SLOTS, MeshTables, SLOTS, STRAIN_SLOTS, Spring, SpringKind, SpringSlot,
     TETHER_SLOTS, Tether,
 };
-use crate::mesh::{MeshError, MeshPinning, PlacedMesh, planar_uvs};
+use crate::mesh::{MeshError, MeshPinning, PlacedMesh, Placement, grid_mesh, planar_uvs};
 use crate::params::{ParamError, SimParams};
 use crate::scene::{ClothSpec, Pinning, Scene};
 
@@ -182,4 +182,38 @@ fn closest_unsprung(slots: &[SpringSlot], positions: &[[f32; 3]]) -> f32 {
         }
     }
     closest
+}
+
+/// The grid of `grid` (an n × n cloth lying in the xz-plane, held at its top corners: the
+/// default scene's) as a mesh: `grid_mesh` placed where the grid starts, the same
+/// vertices in the same order, the same triangles, held at the same two corners; the
+/// colliders and floor kept. What `bench --mesh-vs-grid` and the grid-against-mesh tests
+/// compare. Another orientation or pinning, or a mesh already, is refused.
+pub fn grid_as_mesh(grid: &Scene) -> Result<Scene, ParamError> {
+    let c = &grid.cloth;
+    if c.is_mesh() {
+        return Err(ParamError::new("cloth.mesh", "a mesh", "the grid loaded as a mesh needs a grid"));
+    }
+    if c.across != [1.0, 0.0, 0.0] || c.down != [0.0, 0.0, 1.0] || c.pinning != Pinning::TopCorners {
+        return Err(ParamError::new(
+            "cloth",
+            "another orientation or pinning",
+            "the grid is loaded as a mesh lying in the xz-plane held at its top corners",
+        ));
+    }
+    let placement = Placement { translate: c.top_center, ..Placement::default() };
+    let mut scene = grid.clone();
+    scene.cloth.mesh = Some(format!("grid_mesh({})", c.n).into());
+    scene.cloth.pinning = Pinning::Vertices(vec![0, c.n - 1]);
+    scene.cloth.translate = placement.translate;
+    let placed = PlacedMesh::new(&grid_mesh(c.n, c.size), &placement)
+        .map_err(|e| ParamError::new("cloth.mesh", "grid_mesh", e.to_string()))?;
+    scene.cloth.mesh_data = Some(std::sync::Arc::new(placed));
+    Ok(scene)
+}
+
+/// The mean and largest distance between the particles of two states of one cloth, m.
+pub fn mean_and_max_distance(a: &[crate::grid::V4], b: &[crate::grid::V4]) -> (f32, f32) {
+    let d: Vec<f32> = a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f32>().sqrt()).collect();
+    (d.iter().sum::<f32>() / d.len().max(1) as f32, d.iter().copied().fold(0.0, f32::max))
 }

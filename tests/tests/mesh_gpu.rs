@@ -5,11 +5,9 @@
 //! grid-only switches refused in one line.
 
 use std::path::PathBuf;
-use std::sync::Arc;
 
-use clothlab_core::mesh::{PlacedMesh, Placement, grid_mesh};
 use clothlab_core::validate::validate_rollout;
-use clothlab_core::{Integrator, Pinning, Scene, SceneFile, SimParams, Solver, SolverError};
+use clothlab_core::{Integrator, Scene, SceneFile, SimParams, Solver, SolverError};
 use clothlab_engine::validate::{KernelRunner, flavors, validate_kernels_with};
 use clothlab_engine::{Engine, GpuSolver, KernelRef, SolverOptions, Variant, VariantSpec};
 use clothlab_tests::{assert_checks, or_skip};
@@ -139,14 +137,8 @@ fn a_grid_loaded_as_a_mesh_drapes_where_the_grid_does_on_every_api() {
     // As core/tests/mesh_cloth.rs checks it on the CPU (the bound's reasons there): the
     // default scene's n = 32 grid and the same grid as a mesh, 3 s, each GPU API's
     // optimized recipe for both.
-    let n = 32;
-    let grid_scene = Scene::with_n(n);
-    let mut scene = Scene { floor_y: grid_scene.floor_y, spheres: grid_scene.spheres.clone(), ..Scene::default() };
-    let placement = Placement { translate: grid_scene.cloth.top_center, ..Placement::default() };
-    scene.cloth.mesh = Some("grid.obj".into());
-    scene.cloth.pinning = Pinning::Vertices(vec![0, n - 1]);
-    scene.cloth.translate = placement.translate;
-    scene.cloth.mesh_data = Some(Arc::new(PlacedMesh::new(&grid_mesh(n, grid_scene.cloth.size), &placement).unwrap()));
+    let grid_scene = Scene::with_n(32);
+    let scene = clothlab_core::cloth::grid_as_mesh(&grid_scene).unwrap();
     let params = SimParams::default();
     let grids = solvers(&grid_scene, &params, Variant::OPTIMIZED);
     for ((api, mut mesh), (_, mut grid)) in solvers(&scene, &params, Variant::OPTIMIZED).into_iter().zip(grids) {
@@ -155,10 +147,7 @@ fn a_grid_loaded_as_a_mesh_drapes_where_the_grid_does_on_every_api() {
             mesh.step_frame().unwrap();
         }
         let (a, b) = (grid.state().unwrap(), mesh.state().unwrap());
-        let d: Vec<f32> =
-            a.pos.iter().zip(&b.pos).map(|(p, q)| (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f32>().sqrt()).collect();
-        let mean = d.iter().sum::<f32>() / d.len() as f32;
-        let max = d.iter().copied().fold(0.0, f32::max);
+        let (mean, max) = clothlab_core::cloth::mean_and_max_distance(&a.pos, &b.pos);
         println!("{api}: grid vs mesh after 3 s: mean {mean:.4} m, max {max:.4} m");
         assert!(mean < 0.05 && max < 0.2, "{api}: mean {mean} m, max {max} m");
     }

@@ -15,12 +15,10 @@
 //! the rounds' median frame times per particle-substep and the rounds' spread.
 
 use std::fmt::Write as _;
-use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Result;
-use clothlab_core::mesh::{PlacedMesh, Placement, grid_mesh};
-use clothlab_core::{CpuSolver, Exec, Pinning, Scene, SimParams, Solver};
+use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -30,6 +28,10 @@ use super::plot::{FONT, Figure, both, err};
 use crate::solvers::{AnySolver, Backend, GpuSetup, Shared, make};
 use clothlab_engine::VariantSpec;
 use clothlab_engine::variant::{Neighbours, Table};
+
+/// The backends measured unless `--backends` says otherwise: the CPU ones and each GPU
+/// API's optimized one (the naive recipes have no grid-only switch to compare).
+pub const DEFAULT_BACKENDS: [Backend; 5] = [Backend::Cpu, Backend::CpuPar, Backend::Wgpu, Backend::Vulkan, Backend::Gl];
 
 /// The cloths a backend runs.
 pub const GRID: &str = "grid";
@@ -56,25 +58,10 @@ pub struct Row {
     pub spread: f64,
 }
 
-/// The scene's grid at side `n` as a mesh: `grid_mesh` placed where the grid starts, held
-/// at its two top corners.
+/// The scene's grid at side `n` as a mesh (`core::cloth::grid_as_mesh`).
 pub fn as_mesh(grid: &Scene) -> Result<Scene> {
-    let c = &grid.cloth;
-    anyhow::ensure!(
-        !c.is_mesh(),
-        "--mesh-vs-grid compares a grid with itself as a mesh: the scene's cloth is a mesh already"
-    );
-    anyhow::ensure!(
-        c.across == [1.0, 0.0, 0.0] && c.down == [0.0, 0.0, 1.0] && c.pinning == Pinning::TopCorners,
-        "--mesh-vs-grid loads the grid as a mesh lying in the xz-plane held at its top corners: the scene's cloth has another orientation or pinning"
-    );
-    let placement = Placement { translate: c.top_center, ..Placement::default() };
-    let mut scene = grid.clone();
-    scene.cloth.mesh = Some(format!("grid_mesh({})", c.n).into());
-    scene.cloth.pinning = Pinning::Vertices(vec![0, c.n - 1]);
-    scene.cloth.translate = placement.translate;
-    scene.cloth.mesh_data = Some(Arc::new(PlacedMesh::new(&grid_mesh(c.n, c.size), &placement)?));
-    Ok(scene)
+    clothlab_core::cloth::grid_as_mesh(grid)
+        .map_err(|e| anyhow::anyhow!("--mesh-vs-grid compares the scene's grid with itself as a mesh: {e}"))
 }
 
 /// The median frame time of `frames` frames after the warm-up, ns.

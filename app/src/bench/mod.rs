@@ -55,7 +55,7 @@ fn integrators_bench(args: &BenchArgs, params: &SimParams, backends: &[Backend],
 }
 
 /// `bench --mesh-vs-grid`: see `mesh_grid.rs`. The default size list becomes 64 and 128,
-/// and the backends, if left at all of them, the two CPU ones.
+/// and the backends, if left at all of them, the CPU ones and each API's optimized one.
 fn mesh_grid_bench(
     args: &BenchArgs,
     base: &Scene,
@@ -66,7 +66,7 @@ fn mesh_grid_bench(
     let defaults = BenchArgs::default_sizes();
     let sizes: Vec<u32> = if sizes == defaults.as_slice() { vec![64, 128] } else { sizes.to_vec() };
     let backends: Vec<Backend> =
-        if all_backends(backends) { vec![Backend::Cpu, Backend::CpuPar] } else { backends.to_vec() };
+        if all_backends(backends) { mesh_grid::DEFAULT_BACKENDS.to_vec() } else { backends.to_vec() };
     let frames = args.iters.div_ceil(params.substeps).max(1);
     let (rows, notes) = mesh_grid::measure(base, params, &backends, &sizes, frames, args.repeat)?;
     let machine = args.machine.clone().unwrap_or_else(cpu_label);
