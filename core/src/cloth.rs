@@ -192,7 +192,11 @@ fn closest_unsprung(slots: &[SpringSlot], positions: &[[f32; 3]]) -> f32 {
 pub fn grid_as_mesh(grid: &Scene) -> Result<Scene, ParamError> {
     let c = &grid.cloth;
     if c.is_mesh() {
-        return Err(ParamError::new("cloth.mesh", "a mesh", "the grid loaded as a mesh needs a grid"));
+        return Err(ParamError::new(
+            "cloth.mesh",
+            "a mesh",
+            "the scene's cloth is a mesh already (this loads a grid as a mesh)",
+        ));
     }
     if c.across != [1.0, 0.0, 0.0] || c.down != [0.0, 0.0, 1.0] || c.pinning != Pinning::TopCorners {
         return Err(ParamError::new(

@@ -10,10 +10,13 @@ use serde::{Deserialize, Serialize};
 /// Bound on a sampled particle's distance from the reference backend's after the run,
 /// per simulated substep, m. Float summation order makes backends drift apart slowly (core::
 /// validate bounds a 200-substep rollout by 1e-6 m per substep); contacts and strain
-/// limiting let that drift grow over thousands of substeps, so the check allows 10× that
-/// rate, still far below what a skipped substep or kernel moves a falling cloth (about a
+/// limiting let that drift grow over thousands of substeps: on an H100 (NVIDIA 580, which
+/// rounds and fuses otherwise than the CPU) every GPU backend ended 2.4–7.1 cm from the
+/// CPU's after the default scene's 2142 substeps at n = 128–2048, where lavapipe matches
+/// the CPU bit for bit. So the check allows 50× that rate (10.7 cm over such a run),
+/// still below what a skipped substep or kernel moves a falling cloth (about a
 /// millimetre per substep at the speeds of the default scene).
-pub const CHECK_BOUND_PER_SUBSTEP: f64 = 1e-5;
+pub const CHECK_BOUND_PER_SUBSTEP: f64 = 5e-5;
 
 /// One backend × size measurement.
 #[derive(Debug, Clone, Serialize, Deserialize)]

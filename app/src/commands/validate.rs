@@ -184,8 +184,8 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
     }
     if header && !args.bisect {
         println!(
-            "rounding alone moves this scene {spread:.2e} m in {} substeps (the CPU engine's naive recipe against the CPU solver); \
-             a rollout's bound is the larger of {:.0e} m per substep and {SPREAD_FACTOR}× that",
+            "rounding alone moves this scene {spread:.2e} m in {} substeps (the CPU solver against its naive recipe and against itself \
+             started one ulp off); a rollout's bound is the larger of {:.0e} m per substep and {SPREAD_FACTOR}× that",
             frames * params.substeps,
             clothlab_core::validate::ROLLOUT_BOUND_PER_SUBSTEP
         );

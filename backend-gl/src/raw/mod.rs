@@ -402,14 +402,22 @@ impl Gl {
         let limits = unsafe {
             gl.enable(glow::DEBUG_OUTPUT);
             gl.debug_message_callback(move |_source, kind, _id, severity, msg| {
-                let serious = severity == glow::DEBUG_SEVERITY_HIGH
-                    || severity == glow::DEBUG_SEVERITY_MEDIUM
-                    || kind == glow::DEBUG_TYPE_ERROR;
-                if let Ok(mut m) = sink.lock()
-                    && serious
-                    && m.len() < 64
-                {
-                    m.push(msg.to_string());
+                // Failures are errors and undefined behaviour, whatever their severity.
+                // Drivers also report advice at medium severity — NVIDIA's "Buffer
+                // performance warning: … copied/moved from VIDEO memory to HOST memory"
+                // for every read-back, "… being recompiled based on GL state" — which is
+                // logged, not failed on (it failed every command on an H100, 2026-11-25).
+                let failure = kind == glow::DEBUG_TYPE_ERROR || kind == glow::DEBUG_TYPE_UNDEFINED_BEHAVIOR;
+                if failure {
+                    if let Ok(mut m) = sink.lock()
+                        && m.len() < 64
+                    {
+                        m.push(msg.to_string());
+                    }
+                } else if severity == glow::DEBUG_SEVERITY_HIGH {
+                    log::warn!("GL: {msg}");
+                } else {
+                    log::debug!("GL: {msg}");
                 }
             });
             let count = gl.get_parameter_i32(glow::NUM_EXTENSIONS).max(0) as u32;
