@@ -36,13 +36,6 @@ pub trait Solver {
     /// around every dispatch and read them back each frame while it is on; `clothlab bench`
     /// turns it off to time whole frames without that cost. CPU solvers ignore it.
     fn set_kernel_timing(&mut self, _on: bool) {}
-    /// Blocks until everything the solver has submitted is done. A GPU solver's
-    /// `step_frame` returns once its frame is submitted where nothing must come back (no
-    /// timestamps, no statistics: an API such as GL may still be running it); wall-clock
-    /// measurements call this after each frame. The CPU solvers are done on return.
-    fn finish(&mut self) -> Result<(), SolverError> {
-        Ok(())
-    }
     /// Statistics of every substep of the last frame, where the solver computes them on
     /// the way (the Vulkan solver with statistics on); empty otherwise.
     fn substep_stats(&self) -> Vec<SubstepStats> {

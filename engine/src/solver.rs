@@ -706,11 +706,6 @@ impl<E: Engine> Solver for GpuSolver<E> {
         self.time_kernels = on;
     }
 
-    fn finish(&mut self) -> Result<(), SolverError> {
-        self.engine.finish()?;
-        self.engine.check("finishing the frame")
-    }
-
     fn substep_stats(&self) -> Vec<SubstepStats> {
         self.stats.clone()
     }

@@ -228,7 +228,7 @@ pub fn flavors(caps: &Caps, table_image: bool) -> Vec<KernelRef> {
 /// How many times [`rounding_spread`] a rollout may differ: a GPU's atomics add in any
 /// order, the CPU engine's naive recipe in list order, so on a scene that amplifies
 /// rounding the two spreads are draws of one size, not equal (measured on lavapipe, the
-/// skirt over 208 substeps: CPU 6.2e-2 m, the GPUs' naive recipes 5.6–5.8e-2 m).
+/// skirt over 208 substeps: CPU 6.3e-2 m, the GPUs' naive recipes 5.4–6.1e-2 m).
 pub const SPREAD_FACTOR: f32 = 4.0;
 
 /// How far rounding alone carries `scene` in `frames` frames: the largest position

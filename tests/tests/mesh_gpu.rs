@@ -71,8 +71,10 @@ fn every_kernel_flavor_on_a_mesh_matches_its_twin_on_every_api() {
         let kernels = s.every_flavor();
         let checks = validate_kernels_with(&mut *s, &kernels, &file.scene, 0x3e5, &file.params).unwrap();
         let compared = checks.len() / clothlab_engine::validate::COMPARED_BUFFERS;
-        // Fewer than this and a filter lost kernels (Vulkan compares 90 flavors here).
-        assert!(compared >= 40, "{api}: only {compared} kernel flavors compared");
+        println!("{api}: {compared} kernel flavors compared on the mesh");
+        // Measured on lavapipe: 130 flavors on wgpu and Vulkan, 79 on GL (no immediates,
+        // no shuffles). Fewer than 70 and a filter lost a family of flavors.
+        assert!(compared >= 70, "{api}: only {compared} kernel flavors compared");
         assert!(checks.iter().any(|c| c.what == "xpbd_mesh"), "{api}: the mesh's XPBD pass was not compared");
         assert!(!checks.iter().any(|c| c.what.starts_with("xpbd_0")), "{api}: a grid-only kernel ran on a mesh");
         assert_checks(&format!("{api} mesh"), &checks);

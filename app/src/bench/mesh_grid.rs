@@ -18,7 +18,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::Result;
-use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_core::{CpuSolver, Exec, Scene, SimParams};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -65,18 +65,19 @@ pub fn as_mesh(grid: &Scene) -> Result<Scene> {
 }
 
 /// The median frame time of `frames` frames after the warm-up, ns: each frame waited for
-/// (`Solver::finish`: with kernel timing off, GL returns from a frame before the GPU has
-/// run it — on an H100 the GL cells measured submission alone, 2026-11-25).
-fn time(solver: &mut dyn Solver, frames: u32) -> Result<f64> {
-    solver.set_kernel_timing(false);
+/// (`AnySolver::finish`, as the main bench's frame table waits: with kernel timing off, GL
+/// returns from a frame before the GPU has run it — on an H100 the GL cells measured
+/// submission alone, 2026-11-25).
+fn time(solver: &mut AnySolver, frames: u32) -> Result<f64> {
+    solver.get().set_kernel_timing(false);
     for _ in 0..WARMUP_FRAMES {
-        solver.step_frame()?;
+        solver.get().step_frame()?;
         solver.finish()?;
     }
     let mut t = Vec::with_capacity(frames as usize);
     for _ in 0..frames {
         let t0 = Instant::now();
-        solver.step_frame()?;
+        solver.get().step_frame()?;
         solver.finish()?;
         t.push(t0.elapsed().as_nanos() as f64);
     }
@@ -147,7 +148,7 @@ pub fn measure(
         for round in 0..repeat {
             for (k, &(b, c)) in cells.iter().enumerate() {
                 let mut s = solver(b, c, &grid, &mesh, params)?;
-                let ns = time(s.get(), frames)? / params.substeps as f64 / np;
+                let ns = time(&mut s, frames)? / params.substeps as f64 / np;
                 eprintln!("n = {n} round {round}: {:8} {c:24} {ns:9.1} ns per particle-substep", b.name());
                 values[k].push(ns);
             }
