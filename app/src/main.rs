@@ -12,6 +12,7 @@ mod cli;
 mod commands;
 mod files;
 mod gui;
+mod out;
 mod overrides;
 mod record;
 mod solvers;
@@ -61,6 +62,10 @@ fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     match commands::run() {
         Ok(code) => code,
+        // The reader went away (`| head`): end as a writer killed by SIGPIPE would, quietly.
+        Err(e) if e.downcast_ref::<out::OutputError>().is_some_and(out::OutputError::is_closed_pipe) => {
+            ExitCode::from(out::CLOSED_PIPE_STATUS)
+        }
         Err(e) => {
             // One line: the error and its causes, no backtrace.
             let msg: Vec<String> = e.chain().map(|c| c.to_string()).collect();

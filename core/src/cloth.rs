@@ -22,6 +22,20 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
     }
 }
 
+/// What [`build`] would refuse of `params` for `scene`'s cloth (the stability of the
+/// springs at its particles' masses, the self-collision thickness), without building a
+/// grid's tables: a scene file checks its `[params]` against its cloth with it, so that a
+/// refusal can name the file's line.
+pub fn check_params(scene: &Scene, params: &SimParams) -> Result<(), ParamError> {
+    match &scene.cloth.mesh_data {
+        Some(_) => build(scene, params).map(|_| ()),
+        None => {
+            let c = &scene.cloth;
+            params.validate_for(c.n, c.size / (c.n - 1) as f32)
+        }
+    }
+}
+
 /// Builds the state and topology of a cloth made from `placed` (the scene's mesh):
 /// particles at its vertices with masses from their areas (`pos.w` the reference mass
 /// `cloth_mass / count` over the vertex's, 0 pinned), the springs in the gather table

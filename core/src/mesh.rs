@@ -32,6 +32,15 @@ pub const MAX_MESH_BYTES: u64 = 256 << 20;
 /// The most vertices a cloth mesh may have (as many particles as a 2048 × 2048 grid).
 pub const MAX_MESH_VERTICES: usize = 2048 * 2048;
 
+/// The farthest a mesh's vertex may lie from the origin once placed, m (as a grid's top
+/// centre): squared distances stay far from f32's overflow, and a position there still
+/// resolves 1 mm.
+pub const MAX_COORDINATE: f32 = 1e4;
+
+/// The shortest edge, in spacings of f32 values at the mesh's largest coordinate: a
+/// spring's length is then known to 0.1 %, so its force is not rounding noise.
+pub const SPRING_ULPS: f32 = 1024.0;
+
 /// A triangle mesh as read: positions, optional texture coordinates per vertex, and
 /// counter-clockwise triangles (their normals point to the side seen counter-clockwise).
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -152,6 +161,36 @@ pub enum MeshError {
         vertex: u32,
         /// Vertices in the mesh.
         count: usize,
+    },
+    /// A vertex farther from the origin than positions in f32 can be simulated.
+    #[error(
+        "vertex {vertex} lies at {value:e} m, beyond the ±{max} m a cloth is simulated in (f32 positions: squared lengths overflow, and springs shorter than the positions resolve): scale the mesh down or move it nearer the origin"
+    )]
+    TooFar {
+        /// The vertex.
+        vertex: usize,
+        /// Its coordinate farthest from the origin, m.
+        value: f32,
+        /// The limit, m ([`MAX_COORDINATE`]).
+        max: f32,
+    },
+    /// An edge too short for the positions' resolution where the mesh lies.
+    #[error(
+        "edge ({a}, {b}) is {len:.3e} m long, but f32 positions {far} m from the origin are {ulp:.1e} m apart: a spring needs at least {need:.1e} m ({SPRING_ULPS} times that) to have a length: scale the mesh up or move it nearer the origin"
+    )]
+    TooShort {
+        /// One end.
+        a: u32,
+        /// The other.
+        b: u32,
+        /// Its length, m.
+        len: f32,
+        /// The largest coordinate of the mesh, m.
+        far: f32,
+        /// The spacing of f32 values there, m.
+        ulp: f32,
+        /// The shortest edge allowed, m.
+        need: f32,
     },
     /// A vertex with more springs or triangles than the solvers' tables hold.
     #[error("vertex {vertex} has {count} {what}; the solvers' table holds {max}")]
@@ -284,6 +323,26 @@ impl TriMesh {
         for (vertex, p) in self.positions.iter().enumerate() {
             if let Some(&value) = p.iter().find(|c| !c.is_finite()) {
                 return Err(MeshError::NotFinite { vertex, value });
+            }
+            if let Some(&value) = p.iter().find(|c| c.abs() > MAX_COORDINATE) {
+                return Err(MeshError::TooFar { vertex, value, max: MAX_COORDINATE });
+            }
+        }
+        // The spacing of f32 values at the largest coordinate (its ulp), and the shortest
+        // edge that resolves to a length there.
+        let far = self.positions.iter().flatten().fold(0.0f32, |m, c| m.max(c.abs()));
+        let ulp = f32::from_bits(far.max(f32::MIN_POSITIVE).to_bits() + 1) - far.max(f32::MIN_POSITIVE);
+        let need = SPRING_ULPS * ulp;
+        for tri in &self.triangles {
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                let (Some(pa), Some(pb)) = (self.positions.get(a as usize), self.positions.get(b as usize)) else {
+                    continue; // BadIndex, below
+                };
+                let len = glam::Vec3::from(*pa).distance(glam::Vec3::from(*pb));
+                if len > 0.0 && len < need {
+                    return Err(MeshError::TooShort { a, b, len, far, ulp, need });
+                }
             }
         }
         if let Some(uv) = &self.uvs {
@@ -723,6 +782,14 @@ mod tests {
             ("v 0 0\n".into(), "line 1: a `v` line needs 3 numbers, it has 2"),
             ("v 0 zero 0\n".into(), "line 1: `zero` is not a number"),
             ("v 0 0 0\nv 1 0 0\nf 1 2\n".into(), "line 3: a face needs 3 corners, it has 2"),
+            // What f32 cannot simulate: a square scaled to 1e20 m (its squared lengths
+            // overflow), and a 0.1 mm triangle 1 km from the origin (positions there are
+            // 6.1e-5 m apart: its springs would be a couple of steps of rounding long).
+            ("v 0 0 0\nv 1e20 0 0\nv 1e20 0 1e20\nf 1 2 3\n".into(), "vertex 1 lies at 1e20 m, beyond the ±10000 m"),
+            (
+                "v 1000 0 0\nv 1000.0001 0 0\nv 1000 0 0.0001\nf 1 2 3\n".into(),
+                "is 1.221e-4 m long, but f32 positions 1000.0001 m from the origin are 6.1e-5 m apart",
+            ),
         ];
         for (text, want) in cases {
             let e = match parse_obj(&text) {

@@ -112,6 +112,21 @@ impl Serialize for Pinning {
     }
 }
 
+/// A pinned grid point `[i, j]`: exactly two numbers (an array deserialised as
+/// `[u32; 2]` takes the first two of a longer one and drops the rest unread).
+struct GridPoint([u32; 2]);
+
+impl<'de> Deserialize<'de> for GridPoint {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let v = Vec::<u32>::deserialize(d)?;
+        match v[..] {
+            [i, j] => Ok(GridPoint([i, j])),
+            _ => Err(D::Error::custom(format!("a pinned grid point is [i, j]: two numbers, got {}", v.len()))),
+        }
+    }
+}
+
 impl<'de> Deserialize<'de> for Pinning {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         struct V;
@@ -133,7 +148,7 @@ impl<'de> Deserialize<'de> for Pinning {
             }
             fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Pinning, A::Error> {
                 let mut points = Vec::new();
-                while let Some(p) = seq.next_element::<[u32; 2]>()? {
+                while let Some(GridPoint(p)) = seq.next_element()? {
                     points.push(p);
                 }
                 Ok(Pinning::Points(points))

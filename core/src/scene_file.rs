@@ -196,10 +196,14 @@ impl SceneFile {
             let path = e.field.clone();
             refused(e, path)
         })?;
-        repr.params.validate().map_err(|e| {
-            let path = format!("params.{}", e.field);
+        // The parameters alone, then against the cloth (stability at its particles'
+        // masses, the self-collision thickness at its spacing).
+        let at_params = |e: ParamError| {
+            let path = if e.field.starts_with("cloth.") { e.field.clone() } else { format!("params.{}", e.field) };
             refused(e, path)
-        })?;
+        };
+        repr.params.validate().map_err(at_params)?;
+        crate::cloth::check_params(&scene, &repr.params).map_err(at_params)?;
         let camera = match repr.camera {
             None => None,
             Some(c) => {
@@ -358,7 +362,7 @@ position = [1.0, 4.0, 2.0]
     #[test]
     fn a_bad_file_gets_one_line_with_its_line_column_and_what_is_expected() {
         type Case<'a> = (&'a str, Option<(usize, usize)>, &'a [&'a str]);
-        let cases: [Case; 10] = [
+        let cases: [Case; 13] = [
             // Syntax.
             ("[cloth]\nn = = 3\n", Some((2, 5)), &["b.toml:2:5"]),
             // A misspelt field.
@@ -378,6 +382,20 @@ position = [1.0, 4.0, 2.0]
             ("[params]\nsubsteps = 0\n", Some((2, 12)), &["`params.substeps` = 0"]),
             ("[cloth]\nvelocity = [0, 2000, 0]\n", Some((2, 12)), &["`cloth.velocity` = 2000"]),
             ("[cloth]\nn = 8\npinning = [[0, 0], [8, 0]]\n", Some((3, 20)), &["`cloth.pinning[1]`", "i, j < n = 8"]),
+            // A pin with three coordinates.
+            ("[cloth]\nn = 8\npinning = [[0, 0], [1, 2, 3]]\n", Some((3, 11)), &["[i, j]", "got 3"]),
+            // Parameters refused for this cloth (not for every cloth) are the file's too.
+            (
+                // `substeps` is not in the file: the table that sets the rest.
+                "[cloth]\nn = 512\n[params]\nstiffness_units = \"physical\"\n",
+                Some((3, 1)),
+                &["`params.substeps` = 16", "at n = 512"],
+            ),
+            (
+                "[cloth]\nn = 512\n[params]\nself_collision = true\nself_thickness = 0.5\n",
+                Some((5, 18)),
+                &["`params.self_thickness` = 0.5", "at most 0.0059 m"],
+            ),
         ];
         for (text, at, words) in cases {
             let e = SceneFile::parse(text, "b.toml").expect_err(text);

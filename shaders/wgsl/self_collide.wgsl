@@ -1,6 +1,6 @@
 //! include: state, hash, hash_fn, self_collide_walk
 // self_collide — per pair of grid neighbours (i, i + 1) of a row: each pushed out of every
-// candidate closer than the thickness, its velocity into the contact removed; into
+// candidate closer than the thickness, the push added to its velocity (Δx/dt); into
 // pos_out, vel in place (core::cpu::self_collide::self_collide_at, per particle there).
 // The two share one walk over the rows of cells that either's sphere reaches, when their
 // cells are neighbours (almost always: grid neighbours lie about a spacing apart): half the

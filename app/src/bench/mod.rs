@@ -28,6 +28,7 @@ use clothlab_wgpu::{ClothSource, GpuContext, WgpuRenderer};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::cli::{BenchArgs, Mode};
+use crate::out::outln;
 use crate::solvers::{AnySolver, Api, Backend, GpuSetup, Shared, make, vulkan_validation};
 use clothlab_engine::kernels::compulsory_bytes;
 use clothlab_engine::recipe::{dispatches, recipe};
@@ -39,6 +40,12 @@ fn all_backends(backends: &[Backend]) -> bool {
     backends.len() == <Backend as clap::ValueEnum>::value_variants().len()
 }
 
+/// Makes the output folder: only once every argument has been checked, so that a refused
+/// run leaves nothing behind.
+fn make_out_dir(dir: &std::path::Path) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))
+}
+
 /// `bench --integrators`: see `integrators.rs`. The default size list (for the kernel
 /// tables) becomes 64 and 128, and the backends, if left at all of them, the fast three.
 fn integrators_bench(args: &BenchArgs, params: &SimParams, backends: &[Backend], sizes: &[u32]) -> Result<ExitCode> {
@@ -46,11 +53,12 @@ fn integrators_bench(args: &BenchArgs, params: &SimParams, backends: &[Backend],
     let sizes: Vec<u32> = if sizes == defaults.as_slice() { vec![64, 128] } else { sizes.to_vec() };
     let backends: Vec<Backend> =
         if all_backends(backends) { vec![Backend::CpuPar, Backend::Wgpu, Backend::Vulkan] } else { backends.to_vec() };
+    make_out_dir(&args.out)?;
     let (runs, notes) = integrators::measure(params, &backends, &sizes, args.cell_budget)?;
     let machine = args.machine.clone().unwrap_or_else(cpu_label);
     integrators::write(&args.out, &runs, &notes, &machine)?;
-    println!("{}", integrators::report(&runs, &notes, &machine));
-    println!("wrote {}/integrators.{{md,csv}} and the plots", args.out.display());
+    outln!("{}", integrators::report(&runs, &notes, &machine))?;
+    outln!("wrote {}/integrators.{{md,csv}} and the plots", args.out.display())?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -68,11 +76,12 @@ fn mesh_grid_bench(
     let backends: Vec<Backend> =
         if all_backends(backends) { mesh_grid::DEFAULT_BACKENDS.to_vec() } else { backends.to_vec() };
     let frames = args.iters.div_ceil(params.substeps).max(1);
+    make_out_dir(&args.out)?;
     let (rows, notes) = mesh_grid::measure(base, params, &backends, &sizes, frames, args.repeat)?;
     let machine = args.machine.clone().unwrap_or_else(cpu_label);
     mesh_grid::write(&args.out, &rows, &notes, &machine, args.repeat)?;
-    println!("{}", mesh_grid::report(&rows, &notes, &machine, args.repeat));
-    println!("wrote {}/mesh-vs-grid.{{md,csv,svg,png}}", args.out.display());
+    outln!("{}", mesh_grid::report(&rows, &notes, &machine, args.repeat))?;
+    outln!("wrote {}/mesh-vs-grid.{{md,csv,svg,png}}", args.out.display())?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -179,7 +188,7 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     }
     if args.replot && args.integrators {
         for f in integrators::replot(&args.out)? {
-            println!("wrote {}", f.display());
+            outln!("wrote {}", f.display())?;
         }
         return Ok(ExitCode::SUCCESS);
     }
@@ -189,7 +198,7 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
         let results: results::Results = serde_json::from_str(&text)
             .with_context(|| format!("{} is not a clothlab bench result", path.display()))?;
         for f in output::write_report(&results, &args.out)? {
-            println!("wrote {}", f.display());
+            outln!("wrote {}", f.display())?;
         }
         return Ok(ExitCode::SUCCESS);
     }
@@ -220,9 +229,8 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     if backends.is_empty() {
         bail!("--backends is empty: name at least one backend");
     }
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
-
-    // The scene of --scene (or the default one), at every size of --sizes.
+    // The scene of --scene (or the default one), at every size of --sizes: everything is
+    // checked before the output folder is made.
     let loaded = args.physics.setup(None, sizes[0])?;
     let (base, params) = (loaded.scene, loaded.params);
     let sized = |n: u32| {
@@ -230,6 +238,14 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
         s.cloth.n = n;
         s
     };
+    if base.cloth.is_mesh() {
+        clothlab_core::cloth::check_params(&base, &params)?;
+    } else if !args.integrators {
+        for &n in &sizes {
+            clothlab_core::cloth::check_params(&sized(n), &params)
+                .with_context(|| format!("the scene's parameters at size {n} of --sizes"))?;
+        }
+    }
     if args.integrators {
         return integrators_bench(&args, &params, &backends, &sizes);
     }
@@ -342,7 +358,10 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     };
     let mut journal = match &args.resume {
         Some(dir) => journal::Journal::resume(dir, &plan)?,
-        None => journal::Journal::create(&args.out, &plan)?,
+        None => {
+            make_out_dir(&args.out)?;
+            journal::Journal::create(&args.out, &plan)?
+        }
     };
     if args.resume.is_some() {
         eprintln!("resuming: {} cells measured before", journal.resumed_cells());
@@ -529,7 +548,7 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     let files = output::write_all(&results, &args.out)?;
     journal.finish(results.interrupted.is_none())?;
     for f in &files {
-        println!("wrote {}", f.display());
+        outln!("wrote {}", f.display())?;
     }
     let failed: Vec<&results::Check> = results.checks.iter().filter(|c| !c.ok).collect();
     for c in &failed {

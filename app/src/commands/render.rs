@@ -9,6 +9,7 @@ use clothlab_vulkan::{VkCloth, VulkanRenderer};
 use clothlab_wgpu::{ClothSource, WgpuRenderer};
 
 use crate::cli::RenderArgs;
+use crate::out::outln;
 use crate::solvers::{AnySolver, Api, Backend, GpuSetup, Shared, make, vulkan_validation};
 
 /// Runs `render`.
@@ -102,13 +103,13 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
         }
     };
     crate::files::write_png(&args.out, &pixels, args.width, args.height)?;
-    println!(
+    outln!(
         "wrote {} ({}x{}, {} frames, {:?}, adapter {adapter})",
         args.out.display(),
         args.width,
         args.height,
         args.frames,
         args.mode
-    );
+    )?;
     Ok(ExitCode::SUCCESS)
 }

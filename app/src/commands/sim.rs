@@ -9,6 +9,7 @@ use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 
 use crate::cli::{SimArgs, StatsArg};
+use crate::out::outln;
 use crate::record::{MAX_GLB_BYTES, Recording, glb};
 use crate::solvers::{Shared, make};
 
@@ -81,54 +82,54 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     let per_substep =
         solver.timings().get(SUBSTEP).map(|r| r.median_ns).unwrap_or(wall.as_nanos() as f64 / substeps as f64);
 
-    println!("backend        {}", solver.name());
+    outln!("backend        {}", solver.name())?;
     if let Some(path) = &cpu_path {
-        println!("cpu path       {path}");
+        outln!("cpu path       {path}")?;
     }
     if let Some(path) = &args.physics.scene {
-        println!("scene          {} ({})", loaded.title.as_deref().unwrap_or("untitled"), path.display());
+        outln!("scene          {} ({})", loaded.title.as_deref().unwrap_or("untitled"), path.display())?;
     }
     match &scene.cloth.mesh {
-        Some(mesh) if scene.cloth.is_mesh() => println!(
+        Some(mesh) if scene.cloth.is_mesh() => outln!(
             "mesh           {} ({np} particles, {} triangles, {} springs)",
             mesh.display(),
             topo.triangles.len(),
             topo.springs.len()
-        ),
-        _ => println!("grid           {n}x{n} ({np} particles)", n = scene.cloth.n),
+        )?,
+        _ => outln!("grid           {n}x{n} ({np} particles)", n = scene.cloth.n)?,
     }
-    println!("substeps       {substeps} ({frames} frames of {})", solver.params().substeps);
-    println!("wall time      {:.3} s", wall.as_secs_f64());
-    println!("time/substep   {:.1} us median ({:.2} ns per particle-substep)", per_substep / 1e3, per_substep / np);
-    println!("max strain     {:.4} (structural springs, |L|/rest - 1)", summary.max_strain);
+    outln!("substeps       {substeps} ({frames} frames of {})", solver.params().substeps)?;
+    outln!("wall time      {:.3} s", wall.as_secs_f64())?;
+    outln!("time/substep   {:.1} us median ({:.2} ns per particle-substep)", per_substep / 1e3, per_substep / np)?;
+    outln!("max strain     {:.4} (structural springs, |L|/rest - 1)", summary.max_strain)?;
     match scene.floor_y {
-        Some(y) => println!("lowest point   {:.4} m (floor at {y} m)", summary.lowest_y),
-        None => println!("lowest point   {:.4} m (no floor)", summary.lowest_y),
+        Some(y) => outln!("lowest point   {:.4} m (floor at {y} m)", summary.lowest_y)?,
+        None => outln!("lowest point   {:.4} m (no floor)", summary.lowest_y)?,
     }
-    println!(
+    outln!(
         "NaN            {}",
         if summary.nan_count == 0 { "none".to_string() } else { format!("{} components", summary.nan_count) }
-    );
+    )?;
 
     if let Some(last) = solver.substep_stats().last() {
-        println!(
+        outln!(
             "GPU statistics max strain {:.4}, kinetic energy {:.4e} J (last substep, reduced by {})",
             last.max_strain,
             last.kinetic_energy,
             if args.gpu.stats == StatsArg::Atomics { "atomics" } else { "subgroups" }
-        );
+        )?;
     }
 
-    println!("kernel              median us    min us    max us  samples");
+    outln!("kernel              median us    min us    max us  samples")?;
     for r in solver.timings().rows {
-        println!(
+        outln!(
             "  {:<16} {:>10.1} {:>9.1} {:>9.1} {:>8}",
             r.label,
             r.median_ns / 1e3,
             r.min_ns / 1e3,
             r.max_ns / 1e3,
             r.samples
-        );
+        )?;
     }
 
     if let Some((path, format)) = out {
@@ -136,12 +137,12 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
             OutFormat::Obj => write_obj(w, &state, &topo),
             OutFormat::Json => write_json(w, &state),
         })?;
-        println!("state written  {}", path.display());
+        outln!("state written  {}", path.display())?;
     }
     if let Some(path) = record {
         let bytes = glb(&recording, &topo, &scene)?;
         crate::files::write_atomic(path, |w| std::io::Write::write_all(w, &bytes))?;
-        println!("recorded       {} ({} frames, {} bytes)", path.display(), recording.frames.len(), bytes.len());
+        outln!("recorded       {} ({} frames, {} bytes)", path.display(), recording.frames.len(), bytes.len())?;
     }
     Ok(if summary.nan_count == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }

@@ -12,6 +12,7 @@ use clothlab_engine::variant::covering;
 use clothlab_engine::{KernelRef, VariantSpec};
 
 use crate::cli::ValidateArgs;
+use crate::out::outln;
 use crate::solvers::{Backend, GpuSetup, Shared, make};
 
 /// The buffer a kernel exists to write (shown when every buffer matches exactly): the
@@ -24,8 +25,8 @@ fn primary_output(kernel: KernelRef) -> &'static str {
 }
 
 /// One row of `validate`'s table; `width` for the check column.
-fn print_check(backend: &str, c: &Check, width: usize) {
-    println!(
+fn print_check(backend: &str, c: &Check, width: usize) -> Result<(), crate::out::OutputError> {
+    outln!(
         "{backend:<13} {:<width$} {:<7} {:>10.2e} {:>10.2e} {:>10.2e} {:>8.0e}  {}",
         c.what,
         c.buffer,
@@ -34,7 +35,7 @@ fn print_check(backend: &str, c: &Check, width: usize) {
         c.error,
         c.bound,
         if c.passed() { "ok" } else { "FAILED" }
-    );
+    )
 }
 
 /// The one row per kernel of `checks`: its worst buffer relative to the bound.
@@ -111,27 +112,33 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
         let (caps, api) = any.caps().context("validate checks GPU backends")?;
         let solver = any.runner().context("validate checks GPU backends")?;
         if !std::mem::replace(&mut header, true) {
-            println!(
+            outln!(
                 "{:<13} {:<width$} {:<7} {:>10} {:>10} {:>10} {:>8}  result",
-                "backend", "check", "buffer", "max abs", "rms", "error", "bound"
-            );
+                "backend",
+                "check",
+                "buffer",
+                "max abs",
+                "rms",
+                "error",
+                "bound"
+            )?;
         }
         if args.bisect {
             let b = bisect(solver, &commands, &scene, &params, args.steps)?;
             let name = backend.name();
             for split in &b.splits {
-                print_check(name, &split.check, width);
+                print_check(name, &split.check, width)?;
             }
             match &b.culprit {
                 Some(k) => {
                     failed += 1;
-                    println!(
+                    outln!(
                         "{name:<13} leaves the bound first after kernel {k} (on the GPU; the CPU engine's twin runs before it)"
-                    );
+                    )?;
                 }
-                None => println!("{name:<13} no kernel leaves the bound: every split within it"),
+                None => outln!("{name:<13} no kernel leaves the bound: every split within it")?,
             }
-            println!("{:<13} adapter: {}", name, solver.adapter());
+            outln!("{:<13} adapter: {}", name, solver.adapter())?;
             continue;
         }
         let adapter = solver.adapter();
@@ -178,19 +185,19 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
         let name = if args.every_switch { api.to_string() } else { any.get_ref().name().to_owned() };
         for c in rows {
             failed += usize::from(!c.passed());
-            print_check(&name, &c, width);
+            print_check(&name, &c, width)?;
         }
-        println!("{:<13} adapter: {}", name, adapter);
+        outln!("{:<13} adapter: {}", name, adapter)?;
     }
     if header && !args.bisect {
-        println!(
+        outln!(
             "rounding alone moves this scene {spread:.2e} m in {} substeps (the CPU solver against its naive recipe and against itself \
              started one ulp off); a rollout's bound is the larger of {:.0e} m per substep and {SPREAD_FACTOR}× that",
             frames * params.substeps,
             clothlab_core::validate::ROLLOUT_BOUND_PER_SUBSTEP
-        );
+        )?;
     }
-    println!("kernel errors are relative to the largest value in the buffer; rollout errors are in metres");
+    outln!("kernel errors are relative to the largest value in the buffer; rollout errors are in metres")?;
     if failed > 0 {
         eprintln!("error: {failed} check(s) over their bound: do not trust this backend's numbers on this adapter");
         return Ok(ExitCode::FAILURE);

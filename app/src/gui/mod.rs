@@ -19,6 +19,7 @@ use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::window::{Window, WindowId};
 
+use crate::out::outln;
 use crate::solvers::{Api, Backend};
 use gfx::{EguiFrame, Gfx, Shot};
 use input::{Action, Panel, Tool};
@@ -286,7 +287,7 @@ impl ApplicationHandler for App {
                         self.fail(event_loop, e);
                         return;
                     }
-                    println!("dropped: {}", r.ui.message);
+                    outln!("dropped: {}", r.ui.message).ok();
                 }
                 if self.opts.switch_api && limit.is_some_and(|l| r.drawn == l / 2) {
                     let other = r.gfx.api().next();
@@ -294,13 +295,13 @@ impl ApplicationHandler for App {
                         self.fail(event_loop, e);
                         return;
                     }
-                    println!("switched to {other:?}, solver {}", r.sim.backend.name());
+                    outln!("switched to {other:?}, solver {}", r.sim.backend.name()).ok();
                 }
                 match r.frame(limit, shot_path.as_deref()) {
                     Ok(true) => {
                         // What the status bar showed last, and the wall clock beside it.
                         if let (Some(t), Some(wall)) = (r.sim.substep_time(), r.sim.wall_substep_ns) {
-                            println!("status: {} | wall {:.3} ms per substep", ui::substep_label(&t), wall / 1e6);
+                            outln!("status: {} | wall {:.3} ms per substep", ui::substep_label(&t), wall / 1e6).ok();
                         }
                         event_loop.exit();
                         Ok(())
@@ -600,7 +601,7 @@ impl Running {
                 self.ui.camera.project(glam::Vec3::new(p[0], p[1], p[2]), w, h).context("cloth behind the camera")?;
             self.drag(ui::Drag::Start { x, y })?;
             let (id, at) = self.dragging.context("drag test: nothing grabbed under the cloth's middle")?;
-            println!("drag: grabbed particle {id} at y={:.4} (pixel {x:.0}, {y:.0})", at.y);
+            outln!("drag: grabbed particle {id} at y={:.4} (pixel {x:.0}, {y:.0})", at.y).ok();
             self.script_at = Some([x, y]);
         } else if let Some([x, y]) = self.script_at {
             let k = self.drawn.saturating_sub(5) as f32;
@@ -610,7 +611,7 @@ impl Running {
             {
                 let now = self.sim.solver.get().state()?.pos[id as usize];
                 let target = self.sim.grab.map(|g| g.target[1]).unwrap_or(f32::NAN);
-                println!("drag: particle {id} now at y={:.4} (target y={target:.4})", now[1]);
+                outln!("drag: particle {id} now at y={:.4} (target y={target:.4})", now[1]).ok();
             }
         }
         Ok(())

@@ -31,8 +31,15 @@
 //! A pair is a candidate when its grid offset is outside the 5 × 5 stencil of the springs
 //! and its rest distance exceeds twice the thickness (closer ones would be pushed apart by
 //! the flat cloth itself). Each particle of a pair closer than `t` moves half of `t − d`
-//! away along the line between them (all of it when the other is pinned); its velocity
-//! loses its component into the contact. This keeps particles apart, not triangles: two
+//! away along the line between them (all of it when the other is pinned), and the move
+//! is added to its velocity (`Δx/dt`, as the strain limit and XPBD do): the two pushes of
+//! a pair are equal and opposite (the fixed-point sum truncates both alike), so the
+//! response is internal and keeps the cloth's momentum. (Dropping each particle's own
+//! velocity into its contact, as the response did before, is not symmetric: one of two
+//! particles meeting loses its approach, the other keeps its own, and a heap on a
+//! frictionless floor walked sideways at 0.2 m/s.) Pushes out of an overlap that the
+//! substep's own motion made cancel that motion; an older overlap leaves at up to
+//! `(t − d)/(2 dt)`. This keeps particles apart, not triangles: two
 //! sheets whose particles are farther apart than the thickness can pass between each
 //! other's particles, and an edge can cross an edge, when the cloth is coarse next to its
 //! thickness (spacing > t·√2) or moves more than the thickness in one substep.
@@ -396,7 +403,7 @@ pub fn rows_around(x: &V4, inv: f32, size: u32, rows: &mut [Row; 9]) -> usize {
 }
 
 /// Particle `i`'s new position and velocity: pushed out of every candidate
-/// closer than the thickness, its velocity into the contact removed. `table` (the gather
+/// closer than the thickness, the push added to its velocity as motion (`Δx/dt`). `table` (the gather
 /// table) refuses a mesh's neighbours; a grid's are refused by their coordinates.
 pub fn self_collide_at(
     p: &StepParams,
@@ -467,15 +474,12 @@ pub fn self_collide_at(
         return (x4, vel);
     }
     let x = [x4[0] + delta[0], x4[1] + delta[1], x4[2] + delta[2]];
-    let mut u = [vel[0], vel[1], vel[2]];
-    let len = dd.sqrt();
-    let nrm = [delta[0] / len, delta[1] / len, delta[2] / len];
-    let un = u[0] * nrm[0] + u[1] * nrm[1] + u[2] * nrm[2];
-    if un < 0.0 {
-        for a in 0..3 {
-            u[a] -= un * nrm[a];
-        }
-    }
+    // The push is motion (as the strain limit's is): v += Δx / dt, from the push itself
+    // (a pair's two are one fixed-point value with two signs, so are their velocity
+    // changes; and a shader compiler may fold `(x + Δx) − x` to Δx, so that is what both
+    // compute).
+    let inv_dt = 1.0 / p.dt;
+    let u: [f32; 3] = std::array::from_fn(|a| vel[a] + delta[a] * inv_dt);
     ([x[0], x[1], x[2], x4[3]], [u[0], u[1], u[2], vel[3]])
 }
 
@@ -626,8 +630,9 @@ mod tests {
     #[test]
     fn two_particles_closer_than_the_thickness_end_the_thickness_apart() {
         // Two far-apart particles of the grid (not neighbours) 0.6 t apart: each moves
-        // 0.2 t away; the one moving towards the other loses that velocity. Within two
-        // fixed-point units (t / 65536 each: a push is truncated to them).
+        // 0.2 t away, and that move is added to its velocity (Δx/dt), so the pair's
+        // momentum stays. Within two fixed-point units (t / 65536 each: a push is
+        // truncated to them).
         let n = 16;
         let t = 0.02;
         let unit = t / UNITS;
@@ -646,9 +651,15 @@ mod tests {
         let gap = out[b][0] - out[a][0];
         assert!((gap - t).abs() < 2.0 * unit, "gap {gap}, thickness {t}");
         assert!((out[a][0] - (0.3 - 0.2 * t)).abs() < 2.0 * unit);
-        // a's velocity into the contact (+x) is gone; b was at rest.
-        assert!(vel[a][0].abs() < 1e-9, "a still moves at {} m/s", vel[a][0]);
-        assert_eq!(vel[b], [0.0; 4]);
+        // Each gained its push over dt (0.2 t / dt = 0.384 m/s apart), within two units
+        // over dt (2.3e-4 m/s); the pair's momentum is a's 0.06 m/s to rounding (the two
+        // pushes are one truncated value with two signs; each lands on a position rounded
+        // to half an ulp of 0.3 m: 3e-8 m, 2.9e-5 m/s).
+        let push = 0.2 * t / p.dt;
+        assert!((vel[b][0] - push).abs() < 2.0 * unit / p.dt, "b moves at {} m/s, want {push}", vel[b][0]);
+        assert!((vel[a][0] - (0.06 - push)).abs() < 2.0 * unit / p.dt, "a moves at {} m/s", vel[a][0]);
+        assert!((vel[a][0] + vel[b][0] - 0.06).abs() < 6e-5, "momentum {} m/s", vel[a][0] + vel[b][0]);
+        assert_eq!([vel[a][1], vel[a][2], vel[b][1], vel[b][2]], [0.0; 4]);
         // Everyone else is untouched.
         assert_eq!(out[1], pos[1]);
     }

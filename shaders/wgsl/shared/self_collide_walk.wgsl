@@ -194,7 +194,7 @@ fn mover(i: u32, col: u32, j: u32, valid: bool) -> Mover {
     return m;
 }
 
-// The push summed into m's position and its velocity into the contact removed.
+// The push summed into m's position, and into its velocity as motion.
 fn finish(m: Mover) {
     let x4 = m.x4;
     let i = m.i;
@@ -206,13 +206,10 @@ fn finish(m: Mover) {
     // load and store site in the code, taken or not.
     let x = select(x4.xyz, x4.xyz + delta, pushed);
     pos_out[i] = vec4<f32>(x, x4.w);
+    // The push as motion: v += Δx / dt (core::cpu::self_collide::self_collide_at).
     if pushed {
         let v4 = vel[i];
-        let u0 = v4.xyz;
-        let nrm = delta / sqrt(dd);
-        let un = u0.x * nrm.x + u0.y * nrm.y + u0.z * nrm.z;
-        let u = select(u0, u0 - un * nrm, un < 0.0);
-        vel[i] = vec4<f32>(u, v4.w);
+        vel[i] = vec4<f32>(v4.xyz + delta * (1.0 / p.dt), v4.w);
     }
 }
 

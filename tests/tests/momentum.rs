@@ -1,0 +1,141 @@
+//! Momentum with only internal corrections, on every backend: a cloth thrown sideways and
+//! dropped onto a frictionless floor so that it folds onto itself. Nothing outside the
+//! cloth pushes it sideways (no drag, no damping, no wind, no friction; the floor pushes
+//! along its normal only), so the horizontal velocity of its centre of mass must stay the
+//! throw's, whatever the strain limit, self-collision or XPBD's constraints do inside it.
+//! Before the corrections were made to conserve it (issue 43), the strain limit (each
+//! particle averaging its pulls over its own count of stretched springs) and
+//! self-collision (each particle dropping its own velocity into a contact) moved the
+//! centre sideways by millimetres to centimetres; see docs/testing.md.
+
+use clothlab_core::scene::Pinning;
+use clothlab_core::{ClothState, Integrator, Scene, SimParams};
+use clothlab_tests::every_backend;
+
+/// The throw: every particle starts at this horizontal velocity, m/s.
+const THROW: [f32; 2] = [0.3, -0.2];
+/// Frames of 16 substeps: the cloth lands after about 20 and folds onto itself.
+const FRAMES: u32 = 40;
+
+/// A 32 × 32 cloth of 1 m, nearly upright, its lower edge 0.27 m above the floor, thrown
+/// sideways (the heap scene, scenes/heap.toml, at n = 32): it lands edge first and folds.
+fn scene() -> Scene {
+    let mut s = Scene::with_n(32);
+    s.cloth.size = 1.0;
+    s.cloth.top_center = [0.0, 1.25, 0.0];
+    s.cloth.down = [0.0, -0.9798, 0.2];
+    s.cloth.pinning = Pinning::None;
+    s.cloth.velocity = [THROW[0], 0.0, THROW[1]];
+    s.spheres.clear();
+    s.boxes.clear();
+    s.floor_y = Some(0.0);
+    s
+}
+
+/// Nothing but the cloth and the floor's normal acts sideways.
+fn frictionless() -> SimParams {
+    SimParams {
+        friction: 0.0,
+        damping: 0.0,
+        air_drag: 0.0,
+        wind: [0.0; 3],
+        strain_iterations: 0,
+        ..SimParams::default()
+    }
+}
+
+/// The centre of mass's horizontal velocity (x, z), m/s: Σ mᵢ vᵢ / Σ mᵢ with mᵢ ∝ 1/wᵢ
+/// (every particle of a grid weighs the same).
+fn horizontal_velocity(st: &ClothState) -> [f64; 2] {
+    let (mut m, mut vx, mut vz) = (0.0f64, 0.0f64, 0.0f64);
+    for (x, v) in st.pos.iter().zip(&st.vel) {
+        let mass = 1.0 / x[3] as f64;
+        m += mass;
+        vx += mass * v[0] as f64;
+        vz += mass * v[2] as f64;
+    }
+    [vx / m, vz / m]
+}
+
+/// Runs `params` on every backend for [`FRAMES`] frames; per backend the largest change of
+/// the centre's horizontal velocity over the frames, m/s, and the cloth's lowest point.
+fn drifts(params: &SimParams) -> Vec<(String, f64, f32)> {
+    let mut out = Vec::new();
+    for (name, mut s) in every_backend(&scene(), params) {
+        let v0 = horizontal_velocity(&s.state().unwrap());
+        assert!((v0[0] - THROW[0] as f64).abs() < 1e-6 && (v0[1] - THROW[1] as f64).abs() < 1e-6, "{name}: {v0:?}");
+        let mut worst = 0.0f64;
+        for _ in 0..FRAMES {
+            s.step_frame().unwrap();
+            let v = horizontal_velocity(&s.state().unwrap());
+            worst = worst.max((v[0] - v0[0]).abs()).max((v[1] - v0[1]).abs());
+        }
+        let low = s.state().unwrap().pos.iter().map(|x| x[1]).fold(f32::INFINITY, f32::min);
+        out.push((name, worst, low));
+    }
+    out
+}
+
+/// The bound on the drift, m/s: rounding only. A correction moves a pair of particles by
+/// equal and opposite amounts and their velocities by those over dt; the points they land
+/// on are rounded to the coordinates' ulps (2⁻²³ m at 1 m), and those roundings, of both
+/// signs, mostly cancel. The bound is four such ulps per dt left over among the N
+/// particles (4 · 2⁻²³ m · 960/s / 1024 = 4.5e-7 m/s), the whole run's rounding: measured
+/// ≤ 1.0e-7 m/s on every backend and case. The drifts it was made to catch were
+/// 2.2e-3 m/s (the strain limit's averaging) to 0.26 m/s (self-collision with XPBD).
+fn bound(p: &SimParams) -> f64 {
+    4.0 * 2f64.powi(-23) / p.dt() as f64 / 1024.0
+}
+
+#[test]
+fn on_a_frictionless_floor_internal_corrections_keep_the_horizontal_momentum() {
+    let base = frictionless();
+    let cases = [
+        ("strain limit", SimParams { strain_iterations: 2, ..base.clone() }),
+        ("self-collision", SimParams { self_collision: true, self_thickness: 0.02, ..base.clone() }),
+        ("xpbd", SimParams { integrator: Integrator::Xpbd, ..base.clone() }),
+        (
+            "all",
+            SimParams {
+                integrator: Integrator::Xpbd,
+                strain_iterations: 2,
+                self_collision: true,
+                self_thickness: 0.02,
+                ..base.clone()
+            },
+        ),
+    ];
+    let mut failed = Vec::new();
+    for (what, p) in cases {
+        let tol = bound(&p);
+        for (name, drift, low) in drifts(&p) {
+            println!(
+                "{what:15} {name:16} horizontal velocity drift {drift:.2e} m/s (bound {tol:.1e}), lowest {low:.4} m"
+            );
+            // It did land: the floor (and the folds) acted.
+            assert!(low < 0.02, "{what} on {name}: the cloth never reached the floor (lowest {low} m)");
+            if drift > tol {
+                failed.push(format!("{what} on {name}: {drift:.2e} m/s"));
+            }
+        }
+    }
+    assert!(
+        failed.is_empty(),
+        "the centre of mass drifted sideways (bound {:.1e}): {failed:?}",
+        bound(&frictionless())
+    );
+}
+
+#[test]
+fn with_friction_the_floor_slows_the_throw() {
+    // The same landing with friction 0.6: the floor takes horizontal momentum, so the
+    // check above can tell a floor that pushes sideways from one that does not. Measured on
+    // every backend: the centre's horizontal velocity (0.3, −0.2) m/s changes by
+    // 0.42–0.43 m/s in a component (the floor holds each landed particle back while the
+    // rest swing over it).
+    let p = SimParams { friction: 0.6, strain_iterations: 1, self_collision: true, ..frictionless() };
+    for (name, drift, _) in drifts(&p) {
+        println!("friction 0.6    {name:16} horizontal velocity change {drift:.2e} m/s");
+        assert!(drift > 0.1, "{name}: friction changed the throw's 0.36 m/s by only {drift:.2e} m/s");
+    }
+}
