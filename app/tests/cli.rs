@@ -748,3 +748,107 @@ fn a_scene_file_dropped_on_the_window_opens_and_a_bad_one_changes_nothing() {
     }
     std::fs::remove_file(&bad).ok();
 }
+
+/// Runs clothlab with its standard output given to `stdout`, for at most `limit`: the
+/// output, or a failure naming the run when it is still going then (it is killed).
+fn clothlab_with_stdout(args: &[&str], stdout: std::process::Stdio, limit: std::time::Duration) -> Output {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_clothlab"))
+        .args(args)
+        .stdout(stdout)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run clothlab");
+    let start = std::time::Instant::now();
+    while child.try_wait().expect("wait for clothlab").is_none() {
+        if start.elapsed() > limit {
+            child.kill().ok();
+            panic!("{args:?} still ran after {limit:?}");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().expect("clothlab's output")
+}
+
+#[test]
+fn a_closed_or_full_standard_output_ends_the_run_in_one_line_or_none() {
+    use std::process::Stdio;
+    let limit = std::time::Duration::from_secs(120);
+    // `clothlab sim … | head -0`: the reader is gone before the first line. The program
+    // ends as a writer killed by SIGPIPE would be reported (141), saying nothing.
+    for args in [
+        &["sim", "--backend", "cpu", "--n", "8", "--steps", "16"][..],
+        &["validate", "--backends", "vulkan", "--n", "8", "--steps", "16"][..],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_clothlab"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run clothlab");
+        drop(child.stdout.take());
+        let start = std::time::Instant::now();
+        while child.try_wait().unwrap().is_none() {
+            assert!(start.elapsed() < limit, "{args:?} still ran after {limit:?}");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        if no_gpu(&err) {
+            continue;
+        }
+        assert_eq!(out.status.code(), Some(141), "{args:?} into a closed pipe: {:?}, stderr: {err}", out.status);
+        assert!(err.trim().is_empty(), "{args:?} into a closed pipe said: {err}");
+    }
+    // `clothlab sim … > /dev/full`: one line saying why, a failure status.
+    #[cfg(unix)]
+    {
+        let full = std::fs::OpenOptions::new().write(true).open("/dev/full").expect("/dev/full");
+        let out = clothlab_with_stdout(&["sim", "--backend", "cpu", "--n", "8", "--steps", "16"], full.into(), limit);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "into /dev/full: {:?}, stderr: {err}", out.status);
+        assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+        assert!(err.contains("cannot write to standard output") && err.contains("No space left"), "{err}");
+    }
+}
+
+#[test]
+fn a_thickness_that_would_make_the_pair_search_quadratic_is_refused_at_once() {
+    // n = 512 with a 0.5 m thickness put every particle in a few hash cells: 5 substeps
+    // took over 100 s. The grid's bound is 1.5 spacings (0.0059 m here); refused in one
+    // line before anything runs (a few seconds at most; 60 s is the limit here).
+    let args = ["sim", "--backend", "cpu", "--n", "512", "--steps", "5", "--set", "self_collision=true"];
+    let mut thick = args.to_vec();
+    thick.extend(["--set", "self_thickness=0.5"]);
+    let out = clothlab_with_stdout(&thick, std::process::Stdio::piped(), std::time::Duration::from_secs(60));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("`self_thickness` = 0.5") && err.contains("at most 0.0059 m"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    // At the bound it runs (5 substeps of the flat cloth: seconds).
+    let mut ok = args.to_vec();
+    ok.extend(["--set", "self_thickness=0.0058"]);
+    let out = clothlab_with_stdout(&ok, std::process::Stdio::piped(), std::time::Duration::from_secs(120));
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
+fn bench_checks_its_scene_before_it_makes_its_folder() {
+    let dir = scratch("bench-bad-scene");
+    let scene = dir.join("bad.toml");
+    // A thickness the scene's own grid cannot take: refused by the scene file, naming
+    // its line, and the output folder is never made.
+    std::fs::write(&scene, "[cloth]\nn = 64\n[params]\nself_collision = true\nself_thickness = 0.4\n").unwrap();
+    let out = dir.join("never");
+    refused(&["bench", "--scene", scene.to_str().unwrap(), "--out", out.to_str().unwrap()], "bad.toml:5:18:");
+    assert!(!out.exists(), "bench made {} for a refused scene", out.display());
+    // Sizes the scene's parameters cannot run at are refused before it too.
+    let physical = dir.join("physical.toml");
+    std::fs::write(&physical, "[cloth]\nn = 16\n[params]\nstiffness_units = \"physical\"\n").unwrap();
+    refused(
+        &["bench", "--scene", physical.to_str().unwrap(), "--sizes", "16,512", "--out", out.to_str().unwrap()],
+        "at size 512 of --sizes",
+    );
+    assert!(!out.exists(), "bench made {} for a refused size", out.display());
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -22,21 +22,6 @@ pub const TABLE_WIDTH: u32 = 4096;
 /// at rest 0.09 m/s vs 1.1 m/s at 0.9).
 pub const STRAIN_AIM: f32 = 0.95;
 
-/// What a particle's strain-limit corrections are divided by: the most strain-limited
-/// springs one particle has (the grid's structural and shear springs, a mesh's edges: its
-/// [`STRAIN_SLOTS`]), the same at both ends of every spring. Each spring's two shares are
-/// equal and opposite (mass-weighted), so dividing both by the same number keeps Σ m Δx = 0:
-/// the correction is internal and the cloth's momentum stays. Averaging over each
-/// particle's own count of stretched springs (Macklin et al. 2014, §4.2), as the pass did
-/// before, divides the two ends of one spring by different counts wherever the cloth is
-/// not symmetric: a cloth folding on a frictionless floor moved sideways at 2.2e-3 m/s
-/// (issue 43). Where every spring of a particle is stretched (a hanging cloth's interior)
-/// the two agree; elsewhere a pass now moves less. A power of two: the division is exact
-/// on every device.
-pub const STRAIN_DIVISOR: f32 = STRAIN_SLOTS as f32;
-
-const _: () = assert!(STRAIN_SLOTS.is_power_of_two());
-
 /// What kind of binding a [`Buf`] is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BindKind {
@@ -243,7 +228,6 @@ pub fn wgsl_constants() -> String {
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
     s += &u("MAX_COLLIDERS", crate::scene::MAX_COLLIDERS as u32);
     s += &format!("const STRAIN_AIM: f32 = {STRAIN_AIM:?};\n");
-    s += &format!("const STRAIN_DIVISOR: f32 = {STRAIN_DIVISOR:?};\n");
     s
 }
 

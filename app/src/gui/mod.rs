@@ -428,6 +428,9 @@ impl Running {
                     return Ok(());
                 }
                 let scene = self.sim.solver.get_ref().scene().clone();
+                // The parameters as the new grid took them (a thickness brought within
+                // its bound).
+                self.ui.params = self.sim.solver.get_ref().params().clone();
                 self.gfx.rebuild(&scene, &self.ui.params)?;
                 // The Scene panel edits colliders under this cloth from now on.
                 self.ui.scene = scene;

@@ -322,6 +322,9 @@ pub fn substep_label(t: &super::sim::SubstepTime) -> String {
             wall / 1e6,
             timestamps / 1e6
         ),
+        super::sim::SubstepTime::NoTimestamps { wall } => {
+            format!("{:.2} ms per substep (wall clock: this adapter gives no kernel timings)", wall / 1e6)
+        }
     }
 }
 
@@ -511,6 +514,9 @@ fn light_panel(ui: &mut egui::Ui, s: &mut UiState) {
     }
 }
 
+/// The thinnest self-collision thickness a parameter accepts, m (`SimParams::validate`).
+const MIN_THICKNESS: f32 = 1e-3;
+
 fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     ui.label(RichText::new("Parameters").strong());
     // A mesh's springs are its edges and the springs across them: no shear family.
@@ -591,12 +597,26 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     changed |= ui
         .add(egui::Slider::new(&mut p.strain_iterations, 0..=MAX_STRAIN_ITERATIONS.min(16)).text("strain passes"))
         .changed();
-    // Self-collision (off by default): a spatial hash every substep, then the response.
+    // Self-collision (off by default): a spatial hash every substep, then the response. A
+    // grid's thickness is bounded by its spacing (SimParams::max_grid_thickness): the
+    // slider ends there (a mesh's bound, from its closest unsprung pair, is refused in the
+    // status bar).
+    let max_thickness = if mesh {
+        0.1
+    } else {
+        let c = &s.scene.cloth;
+        clothlab_core::SimParams::max_grid_thickness(c.size / (c.n - 1) as f32).min(0.1)
+    };
     ui.horizontal(|ui| {
         changed |= ui.checkbox(&mut p.self_collision, "self-collision").changed();
         if p.self_collision {
+            let lo = MIN_THICKNESS.min(max_thickness);
+            if p.self_thickness > max_thickness {
+                p.self_thickness = max_thickness.max(MIN_THICKNESS);
+                changed = true;
+            }
             changed |= ui
-                .add(egui::Slider::new(&mut p.self_thickness, 0.002..=0.1).logarithmic(true).text("thickness m"))
+                .add(egui::Slider::new(&mut p.self_thickness, lo..=max_thickness).logarithmic(true).text("thickness m"))
                 .changed();
         }
     });
@@ -614,11 +634,20 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
 
 fn timing_chart(ui: &mut egui::Ui, info: &Info<'_>) {
     ui.label(RichText::new("Kernel timings (ms, median per frame)").strong());
-    if matches!(info.substep, Some(super::sim::SubstepTime::Wall { .. })) {
-        ui.colored_label(
-            Color32::from_rgb(200, 120, 0),
-            "GPU timestamps disagree with the wall clock on this adapter once it has drawn: the per-kernel figures below are not true (clothlab sim / bench measure on an undrawn device)",
-        );
+    match info.substep {
+        Some(super::sim::SubstepTime::Wall { .. }) => {
+            ui.colored_label(
+                Color32::from_rgb(200, 120, 0),
+                "GPU timestamps disagree with the wall clock on this adapter once it has drawn: the per-kernel figures below are not true (clothlab sim / bench measure on an undrawn device)",
+            );
+        }
+        Some(super::sim::SubstepTime::NoTimestamps { .. }) => {
+            ui.colored_label(
+                Color32::from_rgb(200, 120, 0),
+                "this adapter gives no kernel timings here (its timestamps read zero in the window's context): only the wall clock's substep is true",
+            );
+        }
+        _ => {}
     }
     let mut labels: Vec<&str> = Vec::new();
     for row in info.history {

@@ -39,7 +39,7 @@ use super::{Exec, Fetch, v3};
 use crate::grid::{
     ClothState, FACE_SLOTS, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4,
 };
-use crate::layout::{STRAIN_AIM, STRAIN_DIVISOR};
+use crate::layout::STRAIN_AIM;
 use crate::scene::{Aabb, Sphere};
 use pulp::Simd as Isa;
 
@@ -714,11 +714,10 @@ fn stage_strain<S: Isa>(
             count += F::select(live, one, zero);
         }
         let has = count.gt(zero);
-        let divisor = F::splat(sd, STRAIN_DIVISOR);
         let mut x = [
-            F::select(has, xi[0] + corr[0] / divisor, xi[0]),
-            F::select(has, xi[1] + corr[1] / divisor, xi[1]),
-            F::select(has, xi[2] + corr[2] / divisor, xi[2]),
+            F::select(has, xi[0] + corr[0] / count, xi[0]),
+            F::select(has, xi[1] + corr[1] / count, xi[1]),
+            F::select(has, xi[2] + corr[2] / count, xi[2]),
         ];
         for t in 0..TETHER_SLOTS {
             let pins = &s.tether_lanes.pin[t][base + i0..base + i0 + lanes];

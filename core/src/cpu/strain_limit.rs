@@ -4,15 +4,10 @@
 //! Each particle gathers the corrections of its over-stretched springs (slots
 //! `0 .. STRAIN_SLOTS`), shared by mobility: a spring to a pinned or grabbed particle moves
 //! only the free end, by the whole excess; a spring between two free particles moves each
-//! end by half of it. The corrections are summed and divided by
-//! [`STRAIN_DIVISOR`] (the most strain-limited springs a particle has), which keeps a
-//! particle pulled by all its springs from overshooting and, being the same number at
-//! both ends of every spring, keeps the pass internal: Σ m Δx = 0, the cloth's momentum
-//! stays (averaging over each particle's own count of stretched springs, Macklin et al.
-//! 2014 §4.2, did not: a cloth folding on a frictionless floor walked sideways). A lone
-//! over-stretched spring loses an eighth of its excess per pass; a hanging cloth, whose
-//! particles have all their springs stretched, corrects as much per pass as the average
-//! did. Over-relaxing the average (×1.5) converged faster in the tests but made the
+//! end by half of it. The corrections are averaged over the violated springs (Macklin et
+//! al. 2014, "Unified particle physics", §4.2), which keeps a particle pulled by several
+//! springs from overshooting. A lone over-stretched spring ends within its bound after
+//! one pass. Over-relaxing the average (×1.5) converged faster in the tests but made the
 //! particles next to the pins jitter at 1 m/s in a hanging cloth, so there is none.
 //!
 //! After the springs, the pass applies the particle's tethers (long-range attachments,
@@ -27,7 +22,7 @@ use wide::f32x8;
 use super::springs::SlotSource;
 use super::{Exec, Fetch, LANES, Lanes, for_each, v3, v4};
 use crate::grid::{SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
-pub use crate::layout::{STRAIN_AIM, STRAIN_DIVISOR};
+pub use crate::layout::STRAIN_AIM;
 
 /// One pass: reads `pos`, writes the corrected positions to `out` (same length). The
 /// kernel also updates the velocities ([`strain_vel`]).
@@ -90,7 +85,7 @@ pub(crate) fn limit_at(
             count += 1.0;
         }
     }
-    let mut x = if count > 0.0 { xi + corr / STRAIN_DIVISOR } else { xi };
+    let mut x = if count > 0.0 { xi + corr / count } else { xi };
     for t in &tethers[i] {
         if t.pin < 0 {
             continue;
@@ -194,8 +189,7 @@ fn limit_lanes(
         count += live.bitselect(f32x8::ONE, zero);
     }
     let has = count.simd_gt(zero);
-    let divisor = f32x8::splat(STRAIN_DIVISOR);
-    let mut x: [f32x8; 3] = std::array::from_fn(|c| has.bitselect(xi[c] + corr[c] / divisor, xi[c]));
+    let mut x: [f32x8; 3] = std::array::from_fn(|c| has.bitselect(xi[c] + corr[c] / count, xi[c]));
     let tg: &[[Tether; TETHER_SLOTS]; LANES] = tethers[a0..a0 + LANES].try_into().expect("LANES elements");
     for t in 0..TETHER_SLOTS {
         if tg.iter().all(|tk| tk[t].pin < 0) {

@@ -64,10 +64,8 @@ fn limit_grid(c: ptr<function, Correction>, b: Gp, s: u32, xi: vec3<f32>, wi: f3
 // by its tethers; x4 itself when it does not move (wi = 0).
 fn finish(i: u32, x4: vec4<f32>, wi: f32, c: Correction) -> vec4<f32> {
     var x = x4.xyz;
-    // Divided by the same number at both ends of every spring: momentum is kept
-    // (core::layout::STRAIN_DIVISOR).
     if c.count > 0.0 {
-        x = x4.xyz + c.sum / STRAIN_DIVISOR;
+        x = x4.xyz + c.sum / c.count;
     }
     let stretch = 1.0 + p.strain_limit;
     for (var t = 0u; t < TETHER_SLOTS; t++) {
