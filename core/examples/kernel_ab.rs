@@ -48,9 +48,23 @@ fn main() {
         );
         println!("{exec:?} springs       twin {:7.1} ns/particle   rows {:7.1}", a * 1e3 / np, b * 1e3 / np);
         let mut o = st.pos.clone();
-        let a = median_us(|| cpu::strain_limit(exec, &p, &topo.slots, &topo.tethers, &st.pos, &mut o), reps);
+        let mut counts = vec![0.0; st.pos.len()];
+        cpu::strain_count(exec, &p, &topo.slots, &st.pos, &mut counts);
+        let a = median_us(|| cpu::strain_limit(exec, &p, &topo.slots, &topo.tethers, &st.pos, &counts, &mut o), reps);
         let b = median_us(
-            || cpu::strain_limit_rows(exec, &p, &topo.slots, uni.as_ref(), &topo.tethers, &lanes_p, &st.pos, &mut o),
+            || {
+                cpu::strain_limit_rows(
+                    exec,
+                    &p,
+                    &topo.slots,
+                    uni.as_ref(),
+                    &topo.tethers,
+                    &lanes_p,
+                    &st.pos,
+                    &counts,
+                    &mut o,
+                )
+            },
             reps,
         );
         println!("{exec:?} strain_limit  twin {:7.1} ns/particle   rows {:7.1}", a * 1e3 / np, b * 1e3 / np);

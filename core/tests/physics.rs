@@ -130,6 +130,13 @@ fn pins_hold_and_nothing_ends_below_the_floor_or_inside_a_sphere() {
     }
 }
 
+/// Every particle's count of over-stretched springs, as the pass that follows reads them.
+fn strain_counts(p: &StepParams, slots: &[SpringSlot], pos: &[V4]) -> Vec<f32> {
+    let mut c = vec![0.0; pos.len()];
+    cpu::strain_count(Exec::Serial, p, slots, pos, &mut c);
+    c
+}
+
 #[test]
 fn a_lone_overstretched_spring_is_within_the_limit_after_one_pass() {
     let mut p = bare_params(2, 1e-3, 1.0);
@@ -141,7 +148,8 @@ fn a_lone_overstretched_spring_is_within_the_limit_after_one_pass() {
     let tethers = vec![[Tether::EMPTY; TETHER_SLOTS]; 2];
     let pos: Vec<V4> = vec![[0.0, 0.0, 0.0, 1.0], [0.3, 0.9, 0.2, 1.0]];
     let mut out = pos.clone();
-    cpu::strain_limit(Exec::Serial, &p, &slots, &tethers, &pos, &mut out);
+    let counts = strain_counts(&p, &slots, &pos);
+    cpu::strain_limit(Exec::Serial, &p, &slots, &tethers, &pos, &counts, &mut out);
     let len =
         ((out[1][0] - out[0][0]).powi(2) + (out[1][1] - out[0][1]).powi(2) + (out[1][2] - out[0][2]).powi(2)).sqrt();
     // One f32 length computation and two corrections: 1e-6 m covers the rounding.
@@ -168,7 +176,8 @@ fn strain_passes_until_within(
     };
     let mut passes = 0;
     while passes < max_passes && !within(st) {
-        cpu::strain_limit(Exec::Serial, p, &topo.slots, &topo.tethers, &st.pos, &mut scratch);
+        let counts = strain_counts(p, &topo.slots, &st.pos);
+        cpu::strain_limit(Exec::Serial, p, &topo.slots, &topo.tethers, &st.pos, &counts, &mut scratch);
         std::mem::swap(&mut st.pos, &mut scratch);
         passes += 1;
     }
@@ -200,7 +209,9 @@ fn strain_passes_hold_every_structural_spring_of_a_stretched_sheet() {
         }
     }
     let p = StepParams::new(&params, &scene, None);
-    let (passes, before, after) = strain_passes_until_within(&mut st, &topo, &p, 400);
+    // Measured: 358 passes (262 when each particle divided by its own count alone, which
+    // did not keep the momentum).
+    let (passes, before, after) = strain_passes_until_within(&mut st, &topo, &p, 600);
     println!("free sheet: strain {before:.4} -> {after:.4} in {passes} passes");
     assert!(before > 0.3, "the test sheet should start stretched ({before})");
 }
@@ -225,7 +236,11 @@ fn strain_passes_hold_a_sheet_stretched_away_from_its_pins() {
         }
     }
     let p = StepParams::new(&params, &scene, None);
-    let (passes, before, after) = strain_passes_until_within(&mut st, &topo, &p, 400);
+    // Measured: 628 passes (217 dividing by each particle's own count alone: a spring
+    // between a particle with few stretched springs and one with many now moves as much as
+    // the busier end allows; a solver runs a few passes per substep, and the tethers hold
+    // the pins).
+    let (passes, before, after) = strain_passes_until_within(&mut st, &topo, &p, 1000);
     println!("pinned sheet: strain {before:.4} -> {after:.4} in {passes} passes");
     assert!(before > 0.4, "the test sheet should start stretched ({before})");
 }
@@ -402,11 +417,22 @@ fn row_fast_path_matches_the_twin_bit_for_bit() {
         let mut lanes_p = cpu::Lanes::default();
         lanes_p.fill(Exec::Parallel, n as usize, &st.pos, None);
         let mut twin = st.pos.clone();
-        cpu::strain_limit(Exec::Serial, &p, &topo.slots, &topo.tethers, &st.pos, &mut twin);
+        let counts = strain_counts(&p, &topo.slots, &st.pos);
+        cpu::strain_limit(Exec::Serial, &p, &topo.slots, &topo.tethers, &st.pos, &counts, &mut twin);
         assert_ne!(twin, st.pos, "the pass should change something");
         for exec in [Exec::Serial, Exec::Parallel] {
             let mut rows = st.pos.clone();
-            cpu::strain_limit_rows(exec, &p, &topo.slots, uni.as_ref(), &topo.tethers, &lanes_p, &st.pos, &mut rows);
+            cpu::strain_limit_rows(
+                exec,
+                &p,
+                &topo.slots,
+                uni.as_ref(),
+                &topo.tethers,
+                &lanes_p,
+                &st.pos,
+                &counts,
+                &mut rows,
+            );
             let bits = |v: &Vec<V4>| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&twin), bits(&rows), "strain_limit, n = {n}, {exec:?}");
         }
@@ -457,7 +483,8 @@ fn a_solver_substep_is_the_twin_kernels_in_order() {
         cpu::collide(Exec::Serial, &p, &scene.spheres, &scene.boxes, &mut st.pos, &mut st.vel);
         let mut scratch = st.pos.clone();
         for _ in 0..params.strain_iterations {
-            cpu::strain_limit(Exec::Serial, &p, &topo.slots, &topo.tethers, &st.pos, &mut scratch);
+            let counts = strain_counts(&p, &topo.slots, &st.pos);
+            cpu::strain_limit(Exec::Serial, &p, &topo.slots, &topo.tethers, &st.pos, &counts, &mut scratch);
             cpu::strain_vel(Exec::Serial, &p, &st.pos, &scratch, &mut st.vel);
             std::mem::swap(&mut st.pos, &mut scratch);
         }

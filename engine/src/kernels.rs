@@ -625,8 +625,13 @@ fn forces_integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
     b.force = springs;
 }
 
+fn strain_count(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::strain_count_v4(a.exec, a.p, &a.topo.slots, &b.pos, &mut b.aux[0]);
+}
+
 fn strain_limit(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::strain_limit(a.exec, a.p, &a.topo.slots, &a.topo.tethers, &b.pos, &mut b.pos_out);
+    let counts: Vec<f32> = b.aux[0].iter().map(|c| c[0]).collect();
+    cpu::strain_limit(a.exec, a.p, &a.topo.slots, &a.topo.tethers, &b.pos, &counts, &mut b.pos_out);
     cpu::strain_vel(a.exec, a.p, &b.pos, &b.pos_out, &mut b.vel);
 }
 
@@ -1000,6 +1005,17 @@ pub static FORCES_INTEGRATE_COLLIDE: KernelDef = KernelDef {
         &[Pos, Vel],
     )
 };
+/// Every particle's count of over-stretched strain-limited springs, into aux0 (dead
+/// after the integrator's kernels): what the pass after it divides each spring by the
+/// larger of its ends' counts of (the same at both ends: the pass keeps the momentum).
+/// Timed as part of the strain limit.
+pub static STRAIN_COUNT: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[Aux0],
+    variants: BLOCKED,
+    label: timing::STRAIN_LIMIT,
+    ..def("strain_count", strain_count, Count::Blocks, &[Params, Pos, Slots, BendSlots, Interior, Table], &[Aux0])
+};
 /// One Provot pass plus the tethers, into the other buffer of the pair; the velocities
 /// gain the move over dt.
 pub static STRAIN_LIMIT: KernelDef = KernelDef {
@@ -1010,7 +1026,7 @@ pub static STRAIN_LIMIT: KernelDef = KernelDef {
         "strain_limit",
         strain_limit,
         Count::Blocks,
-        &[Params, Pos, Vel, Slots, BendSlots, Interior, Table, Tethers],
+        &[Params, Pos, Vel, Slots, BendSlots, Interior, Table, Tethers, Aux0],
         &[PosOut, Vel],
     )
 };
@@ -1029,7 +1045,7 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
         "strain_limit_count",
         strain_limit_count,
         Count::Blocks,
-        &[Params, Pos, Vel, Slots, BendSlots, Interior, Table, Tethers, Aux2, Aux3],
+        &[Params, Pos, Vel, Slots, BendSlots, Interior, Table, Tethers, Aux0, Aux2, Aux3],
         &[PosOut, Vel, Aux2, Aux3],
     )
 };
@@ -1325,7 +1341,7 @@ pub static SELF_COLLISION: [&KernelDef; 5] =
     [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 52] = [
+pub static ALL: [&KernelDef; 53] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -1335,6 +1351,7 @@ pub static ALL: [&KernelDef; 52] = [
     &COLLIDE,
     &INTEGRATE_COLLIDE,
     &FORCES_INTEGRATE_COLLIDE,
+    &STRAIN_COUNT,
     &STRAIN_LIMIT,
     &TRI_NORMALS,
     &TRI_NORMALS_SCATTER,

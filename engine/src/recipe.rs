@@ -234,7 +234,8 @@ pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Co
     };
     let mut commands: Vec<Command> = step
         .into_iter()
-        .chain((0..strain_passes).map(strain))
+        // Each pass after the counts it divides by (core::cpu::strain_limit).
+        .chain((0..strain_passes).flat_map(|pass| [&k::STRAIN_COUNT, strain(pass)]))
         .chain(
             k::SELF_COLLISION.iter().copied().filter(|&d| how.self_collision && !(fused_count && d == &k::HASH_COUNT)),
         )
@@ -460,9 +461,10 @@ mod tests {
     #[test]
     fn every_dependent_dispatch_gets_a_barrier_and_no_other() {
         let count = |r: &[Command]| dispatches(r).count();
-        // Optimized: each of its five kernels reads what the one before wrote.
+        // Optimized: each of its six kernels reads what the one before wrote (the strain
+        // pass the counts before it).
         let opt = recipe(&gathered(), 1, Integration::VERLET);
-        assert_eq!(count(&opt), 5);
+        assert_eq!(count(&opt), 6);
         assert_eq!(barriers_per_substep(&opt), count(&opt));
         // Statistics read only the positions: they need no barrier after the normals,
         // and the reduction's barrier also covers the next substep's force write, so
@@ -483,9 +485,10 @@ mod tests {
         // Two strain passes: the second reads the first's output.
         let two_passes = recipe(&gathered(), 2, Integration::VERLET);
         assert_eq!(barriers_per_substep(&two_passes), count(&two_passes));
-        // The thesis's: the springs scatter, then the fused Verlet kernel.
+        // The thesis's: the springs scatter, then the fused Verlet kernel; two strain
+        // passes of two dispatches each (counts, pass).
         let thesis = recipe(&Variant::THESIS, 2, Integration::VERLET);
-        assert_eq!(count(&thesis), 6);
+        assert_eq!(count(&thesis), 8);
         assert_eq!(barriers_per_substep(&thesis), count(&thesis));
         assert_eq!(barriers_per_substep(&two_passes), count(&two_passes));
     }
@@ -554,8 +557,11 @@ mod tests {
             [
                 "forces_springs_tex_imm",
                 "integrate_collide_imm",
+                "strain_count_tex_imm",
                 "strain_limit_tex_imm",
+                "strain_count_tex_imm",
                 "strain_limit_tex_imm",
+                "strain_count_tex_imm",
                 "strain_limit_tex_imm",
                 "tri_normals_imm",
                 "vertex_normals_imm"
@@ -570,6 +576,7 @@ mod tests {
                 "springs_scatter_f32_sto",
                 "integrate_sto",
                 "collide_sto",
+                "strain_count_sto",
                 "strain_limit_sto",
                 "tri_normals_scatter_f32_sto",
                 "vertex_normals_naive_sto"
@@ -577,7 +584,14 @@ mod tests {
         );
         assert_eq!(
             names(&Variant::THESIS),
-            ["springs_scatter_f32", "forces_integrate_collide_cu", "strain_limit_tex", "tri_normals", "vertex_normals"]
+            [
+                "springs_scatter_f32",
+                "forces_integrate_collide_cu",
+                "strain_count_tex",
+                "strain_limit_tex",
+                "tri_normals",
+                "vertex_normals"
+            ]
         );
     }
 
@@ -593,7 +607,7 @@ mod tests {
             v.extend(head.iter().chain(&hash).chain(&["tri_normals", "vertex_normals"]).map(|s| s.to_string()));
             v
         };
-        assert_eq!(names(2), with(&["strain_limit", "strain_limit_count"]));
+        assert_eq!(names(2), with(&["strain_count", "strain_limit", "strain_count", "strain_limit_count"]));
         assert_eq!(names(0), with(&["hash_count"]));
         // The fused pass clears the counts before it, as hash_count's recipe does.
         let r = recipe(&gathered(), 1, sc);
@@ -609,10 +623,13 @@ mod tests {
         v.set("normals", "frame").unwrap();
         let names = |c: &[Command]| dispatches(c).map(|k| k.shader_name()).collect::<Vec<_>>();
         let r = recipe(&v, 1, Integration::VERLET);
-        assert_eq!(names(&r), ["forces_springs_wind_imm", "integrate_collide_imm", "strain_limit_imm"]);
+        assert_eq!(
+            names(&r),
+            ["forces_springs_wind_imm", "integrate_collide_imm", "strain_count_imm", "strain_limit_imm"]
+        );
         assert_eq!(names(&frame_end(&v, Integration::VERLET)), ["tri_normals_imm", "vertex_normals_imm"]);
-        // Three dependent kernels, three barriers; the frame's end reads the last pass.
-        assert_eq!(barriers_per_substep(&r), 3);
+        // Four dependent kernels, four barriers; the frame's end reads the last pass.
+        assert_eq!(barriers_per_substep(&r), 4);
         // RK4's stages read the wind the normals kernels leave: normals every substep.
         let rk4 = Integration { integrator: Integrator::Rk4, ..Integration::VERLET };
         assert!(frame_end(&v, rk4).is_empty());

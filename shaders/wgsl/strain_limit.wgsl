@@ -1,4 +1,4 @@
-//! include: table, window, strain_limit_pass
+//! include: table, window, strain_window, strain_limit_pass
 // strain_limit — one Jacobi pass of Provot's strain limit plus the tethers
 // (core::cpu::strain_limit::limit_at). Reads pos, writes pos_out. Four consecutive
 // particles of a row (BLOCK) per invocation share one window of 18 points (rows j - 1 …

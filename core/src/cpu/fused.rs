@@ -9,9 +9,13 @@
 //! | stage | row | reads |
 //! |---|---|---|
 //! | `forces` + `springs` + `integrate` + `collide` (A) | `j` | old rows `j−2 ..= j+2` |
-//! | strain-limit pass `k` (1 ..= L) | `j − k` | pass `k−1`'s rows `j−k−1 ..= j−k+1` |
+//! | `strain_count` before pass `k` (1 ..= l) | `j − 2k + 1` | pass `k−1`'s rows `j−2k ..= j−2k+2` |
+//! | strain-limit pass `k` | `j − 2k` | pass `k−1`'s and count `k`'s rows `j−2k−1 ..= j−2k+1` |
 //! | `tri_normals` | quad row `j − L − 1` | final rows `j−L−1`, `j−L` |
 //! | `vertex_normals` | `j − L − 1` | quad rows `j−L−2`, `j−L−1` |
+//!
+//! (`L = 2l`: a pass divides each spring by the larger of its ends' counts, so it needs
+//! the counts of the rows beside its own, one row behind them.)
 //!
 //! Each stage keeps its last four rows in a ring, so what a substep moves to and from
 //! memory is the old state once and the new state once. The kernels are the same
@@ -21,8 +25,9 @@
 //! so the result is the twins' bit for bit; the tests check it at every vector width.
 //!
 //! In parallel the rows are cut into bands, one task each; a band recomputes the `L + 1`
-//! rows of stage A (and `L` of the strain passes) beyond each of its edges that its
-//! neighbour owns, instead of waiting for them, and writes only its own rows. The new
+//! rows of stage A (and `1 + 2(l − k)` of strain pass `k`, one more of its counts) beyond
+//! each of its edges that its neighbour owns, instead of waiting for them, and writes only
+//! its own rows. The new
 //! state goes to other buffers (the old one is read by the bands' edges throughout).
 
 use glam::Vec3;
@@ -34,7 +39,7 @@ use super::integrate::integrate_at;
 use super::normals::{cross_len, quad_normals, vnormal_at, vnormal_lanes};
 use super::simd::{F, Lanewise, M, Simd, dispatch, groups, leftover};
 use super::springs::{GridSlots, gather_at};
-use super::strain_limit::{limit_at, moved_vel};
+use super::strain_limit::{count_at, limit_at, moved_vel};
 use super::{Exec, Fetch, v3};
 use crate::grid::{
     ClothState, FACE_SLOTS, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4,
@@ -144,6 +149,8 @@ pub(crate) struct Band {
     /// Stage A's positions and velocities (x, y, z, w, vx, vy, vz), then each strain
     /// pass's.
     stages: Vec<Ring>,
+    /// Each strain pass's counts of over-stretched springs (one component).
+    counts: Vec<Ring>,
     /// The face normals of a quad row: triangle 0's x, y, z, |N|, then triangle 1's.
     faces: Ring,
 }
@@ -357,19 +364,26 @@ impl Lanewise for BandJob<'_, '_> {
 fn run_band<S: Isa>(sd: S, s: &Step<'_>, band: &mut Band, r0: usize, r1: usize, mut out: Next<'_>) {
     let n = s.p.n as usize;
     let l = s.iters;
+    // The rows between stage A and the final positions: two per pass (its counts, then it).
+    let lag = 2 * l;
     band.input.reset(10, n, 8);
     band.stages.resize_with(l + 1, Ring::default);
     for r in &mut band.stages {
         r.reset(7, n, 4);
     }
+    band.counts.resize_with(l, Ring::default);
+    for r in &mut band.counts {
+        r.reset(1, n, 4);
+    }
     band.faces.reset(8, n - 1, 4);
-    // Stage k (0: A, k: strain pass k) computes rows lo(k) .. hi(k); quad rows
-    // r0 − 1 .. r1 are needed for the normals of r0 .. r1.
-    let lo = |k: usize| r0.saturating_sub(1 + l - k);
-    let hi = |k: usize| (r1 + 1 + l - k).min(n);
+    // Stage k (0: A, k: strain pass k) computes rows lo(k) .. hi(k), pass k's counts one
+    // more on each side (lo(k) − 1 .. hi(k) + 1); quad rows r0 − 1 .. r1 are needed for the
+    // normals of r0 .. r1.
+    let lo = |k: usize| r0.saturating_sub(1 + 2 * (l - k));
+    let hi = |k: usize| (r1 + 1 + 2 * (l - k)).min(n);
     let (q_lo, q_hi) = (r0.saturating_sub(1), r1.min(n - 1));
     let mut loaded = lo(0).saturating_sub(2);
-    for j in lo(0)..=r1 + l {
+    for j in lo(0)..=r1 + lag {
         if j < hi(0) {
             while loaded < (j + 3).min(n) {
                 load_row(sd, s, &mut band.input, loaded);
@@ -379,15 +393,22 @@ fn run_band<S: Isa>(sd: S, s: &Step<'_>, band: &mut Band, r0: usize, r1: usize, 
             stage_a(sd, s, &band.input, &mut band.stages[0], j, own, &mut out);
         }
         for k in 1..=l {
-            let Some(r) = j.checked_sub(k) else { continue };
+            // Pass k's counts of row j − 2k + 1, from pass k − 1's rows around it.
+            if let Some(rc) = (j + 1).checked_sub(2 * k)
+                && rc + 1 >= lo(k)
+                && rc < (hi(k) + 1).min(n)
+            {
+                stage_count(sd, s, &band.stages[k - 1], &mut band.counts[k - 1], rc);
+            }
+            let Some(r) = j.checked_sub(2 * k) else { continue };
             if r < lo(k) || r >= hi(k) {
                 continue;
             }
             let (done, rest) = band.stages.split_at_mut(k);
             let own = ((r0..r1).contains(&r) && k == l).then(|| (r - r0) * n);
-            stage_strain(sd, s, &done[k - 1], &mut rest[0], r, own, &mut out);
+            stage_strain(sd, s, &done[k - 1], &band.counts[k - 1], &mut rest[0], r, own, &mut out);
         }
-        let Some(q) = j.checked_sub(l + 1) else { continue };
+        let Some(q) = j.checked_sub(lag + 1) else { continue };
         if (q_lo..q_hi).contains(&q) {
             stage_tri(sd, n, &band.stages[l], &mut band.faces, q);
         }
@@ -647,20 +668,60 @@ fn mobility<S: Isa>(sd: S, src: &Ring, n: usize, grab: i32, row: usize, col: isi
 }
 
 /// The strain pass's scalar path for particle `(i, j)`: the twin, reading the previous
-/// stage `src` (neighbours are within a row; a tether's pin anywhere is fixed: `pin_at`).
+/// stage `src` and the pass's counts `cnt` (neighbours are within a row; a tether's pin
+/// anywhere is fixed: `pin_at`).
 #[inline(always)]
-fn strain_scalar(s: &Step<'_>, src: &Ring, j: usize, i: usize) -> V4 {
+fn strain_scalar(s: &Step<'_>, src: &Ring, cnt: &Ring, j: usize, i: usize) -> V4 {
     let n = s.p.n as usize;
-    limit_at(j * n + i, s.p, &GridSlots { n, uni: s.uni }, s.tethers, RingFetch { s, src, j })
+    limit_at(j * n + i, s.p, &GridSlots { n, uni: s.uni }, s.tethers, RingFetch { s, src, j }, |k| {
+        cnt.get(k / n, 0, k % n)
+    })
+}
+
+/// The counts of over-stretched springs of row `j` (`strain_count`) from the previous
+/// stage `src` into `dst`.
+#[inline(always)]
+fn stage_count<S: Isa>(sd: S, s: &Step<'_>, src: &Ring, dst: &mut Ring, j: usize) {
+    let p = s.p;
+    let n = p.n as usize;
+    let stretch = 1.0 + p.strain_limit;
+    let zero = F::splat(sd, 0.0);
+    let one = F::splat(sd, 1.0);
+    let lanes = S::F32_LANES;
+    for i0 in groups(0, n, lanes) {
+        let edge = i0 < 2 || i0 + lanes + 2 > n;
+        let xi = src.lanes3(sd, j, 0, i0);
+        let mut count = zero;
+        for (sl, slot) in s.uni[..STRAIN_SLOTS].iter().enumerate() {
+            let (di, dj) = SLOT_OFFSETS[sl];
+            let Some(row) = j.checked_add_signed(dj as isize).filter(|&r| r < n) else { continue };
+            let col = i0 as isize + di as isize;
+            let xb = src.lanes3_at(sd, row, 0, col);
+            let d = [xb[0] - xi[0], xb[1] - xi[1], xb[2] - xi[2]];
+            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let mut live = len.gt(F::splat(sd, stretch * slot.rest));
+            if edge {
+                live = live & in_grid(sd, col, n);
+            }
+            count += F::select(live, one, zero);
+        }
+        dst.store(j, 0, i0, count);
+    }
+    for i in leftover(0, n, lanes) {
+        let c = count_at(j * n + i, p, &GridSlots { n, uni: s.uni }, RingFetch { s, src, j });
+        dst.set(j, 0, i, c);
+    }
 }
 
 /// One strain-limit pass for row `j`, from the previous stage `src` into `dst` (and,
 /// for the band's own rows after the last pass, `out`).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn stage_strain<S: Isa>(
     sd: S,
     s: &Step<'_>,
     src: &Ring,
+    cnt: &Ring,
     dst: &mut Ring,
     j: usize,
     own: Option<usize>,
@@ -693,6 +754,7 @@ fn stage_strain<S: Isa>(
         let edge = i0 < 2 || i0 + lanes + 2 > n;
         let xi = src.lanes3(sd, j, 0, i0);
         let wi = mobility(sd, src, n, p.grab_index, j, i0 as isize);
+        let ci = cnt.lanes(sd, j, 0, i0);
         let mut corr = [zero; 3];
         let mut count = zero;
         for (sl, slot) in s.uni[..STRAIN_SLOTS].iter().enumerate() {
@@ -707,7 +769,8 @@ fn stage_strain<S: Isa>(
                 live = live & in_grid(sd, col, n);
             }
             let wb = mobility(sd, src, n, p.grab_index, row, col);
-            let f = wi * (len - F::splat(sd, aim * slot.rest)) / ((wi + wb) * len);
+            let m = ci.max(cnt.lanes_at(sd, row, 0, col));
+            let f = wi * (len - F::splat(sd, aim * slot.rest)) / ((wi + wb) * len * m);
             for c in 0..3 {
                 corr[c] += F::select(live, d[c] * f, zero);
             }
@@ -715,9 +778,9 @@ fn stage_strain<S: Isa>(
         }
         let has = count.gt(zero);
         let mut x = [
-            F::select(has, xi[0] + corr[0] / count, xi[0]),
-            F::select(has, xi[1] + corr[1] / count, xi[1]),
-            F::select(has, xi[2] + corr[2] / count, xi[2]),
+            F::select(has, xi[0] + corr[0], xi[0]),
+            F::select(has, xi[1] + corr[1], xi[1]),
+            F::select(has, xi[2] + corr[2], xi[2]),
         ];
         for t in 0..TETHER_SLOTS {
             let pins = &s.tether_lanes.pin[t][base + i0..base + i0 + lanes];
@@ -770,7 +833,7 @@ fn stage_strain<S: Isa>(
         }
     }
     for i in leftover(0, n, lanes) {
-        put(dst, out, i, strain_scalar(s, src, j, i));
+        put(dst, out, i, strain_scalar(s, src, cnt, j, i));
     }
 }
 

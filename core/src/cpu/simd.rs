@@ -78,6 +78,12 @@ impl<S: Isa> F<S> {
         Self(self.1.sqrt_f32s(self.0), self.1)
     }
 
+    /// Lane-wise maximum (of values that are not NaN).
+    #[inline(always)]
+    pub fn max(self, o: Self) -> Self {
+        Self(self.1.max_f32s(self.0, o.0), self.1)
+    }
+
     /// `self > o`.
     #[inline(always)]
     pub fn gt(self, o: Self) -> M<S> {

@@ -7,9 +7,9 @@ use super::simd::Simd;
 use super::{
     AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_ORDER, build_hash, cg_alpha, cg_begin, cg_beta,
     cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, hash_buffers, implicit_finish, integrate,
-    integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_limit, strain_limit_rows,
-    strain_vel, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_mesh_pass, xpbd_pass,
-    xpbd_pass_rows,
+    integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_count, strain_limit,
+    strain_limit_rows, strain_vel, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_mesh_pass,
+    xpbd_pass, xpbd_pass_rows,
 };
 use crate::cloth::build;
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4};
@@ -32,6 +32,9 @@ pub struct CpuSolver {
     topo: ClothTopology,
     /// Strain-limit ping-pong target.
     scratch: Vec<V4>,
+    /// Each particle's count of over-stretched springs before a strain pass
+    /// (`strain_count`; the kernels keep it in aux0).
+    strain_counts: Vec<f32>,
     /// Face normals, one per triangle.
     face: Vec<V4>,
     /// Structure-of-arrays copy of the state for the SIMD paths.
@@ -81,6 +84,7 @@ impl CpuSolver {
             params,
             grab: None,
             scratch: vec![[0.0; 4]; np],
+            strain_counts: vec![0.0; np],
             face: vec![[0.0; 4]; topo.triangles.len()],
             uniform: topo.uniform_interior_slots(),
             grid: topo.grid_slots(),
@@ -269,6 +273,7 @@ impl CpuSolver {
             state,
             topo,
             scratch,
+            strain_counts,
             face,
             timer,
             scene,
@@ -376,10 +381,21 @@ impl CpuSolver {
                 if fast {
                     lanes.fill(e, n, pos, None);
                 }
+                strain_count(e, &p, &topo.slots, pos, strain_counts);
                 if mesh {
-                    strain_limit(e, &p, &topo.slots, &topo.tethers, pos, scratch);
+                    strain_limit(e, &p, &topo.slots, &topo.tethers, pos, strain_counts, scratch);
                 } else {
-                    strain_limit_rows(e, &p, &topo.slots, uniform.as_ref(), &topo.tethers, lanes, pos, scratch);
+                    strain_limit_rows(
+                        e,
+                        &p,
+                        &topo.slots,
+                        uniform.as_ref(),
+                        &topo.tethers,
+                        lanes,
+                        pos,
+                        strain_counts,
+                        scratch,
+                    );
                 }
                 strain_vel(e, &p, pos, scratch, vel);
                 std::mem::swap(pos, scratch);
