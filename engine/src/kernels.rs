@@ -1022,6 +1022,8 @@ pub static STRAIN_LIMIT: KernelDef = KernelDef {
     check: GATHER,
     pure: &[PosOut],
     variants: BLOCKED,
+    // The counts it divides by, of the disturbed positions (as the recipe runs it).
+    test_input: Some(strain_count),
     ..def(
         "strain_limit",
         strain_limit,
@@ -1040,6 +1042,7 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
     pure: &[PosOut],
     accumulates: &[Aux2, Aux3],
     variants: BLOCKED,
+    test_input: Some(strain_count),
     label: timing::STRAIN_LIMIT_COUNT,
     ..def(
         "strain_limit_count",

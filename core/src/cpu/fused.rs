@@ -769,7 +769,7 @@ fn stage_strain<S: Isa>(
                 live = live & in_grid(sd, col, n);
             }
             let wb = mobility(sd, src, n, p.grab_index, row, col);
-            let m = ci.max(cnt.lanes_at(sd, row, 0, col));
+            let m = ci.max(cnt.lanes_at(sd, row, 0, col)).max(one);
             let f = wi * (len - F::splat(sd, aim * slot.rest)) / ((wi + wb) * len * m);
             for c in 0..3 {
                 corr[c] += F::select(live, d[c] * f, zero);

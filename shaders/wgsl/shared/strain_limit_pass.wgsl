@@ -40,7 +40,8 @@ fn limit_spring(
     let len = len3(d);
     if len > stretch * rest {
         let wb = mobility(b, xb4.w);
-        (*c).sum += d * (wi * (len - aim * rest) / ((wi + wb) * len * max(ci, cb)));
+        // max(…, 1): ci ≥ 1 when the counts are this pass's; never a division by 0.
+        (*c).sum += d * (wi * (len - aim * rest) / ((wi + wb) * len * max(max(ci, cb), 1.0)));
         (*c).count += 1.0;
     }
 }
