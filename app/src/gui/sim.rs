@@ -46,7 +46,8 @@ pub enum SubstepTime {
         timestamps: f64,
     },
     /// Fence to fence over the frame, ns, because the adapter's timestamps came back as
-    /// zero (llvmpipe's OpenGL in a window's context): it gives no kernel timings.
+    /// (next to) zero (llvmpipe's OpenGL in a window's context: under 5 µs of a 0.84 ms
+    /// substep at n = 64): it gives no kernel timings.
     NoTimestamps {
         /// Wall time per substep.
         wall: f64,
@@ -62,8 +63,10 @@ pub enum SubstepTime {
 /// confirms on an undrawn device). Below 0.125 ms per substep (2 ms a frame of 16) the
 /// wall is mostly the submission's fixed cost, and the timestamps are believed.
 pub fn substep_time(gpu: f64, wall: f64) -> SubstepTime {
-    // Every query read zero: no timings at all, not wrong ones.
-    if gpu <= 0.0 && wall > 0.0 {
+    // The queries read (next to) zero — under 1 % of the wall, where a real GPU's
+    // timestamps of a substep are tens of per cent of it even when launches dominate:
+    // no timings at all, not wrong ones.
+    if gpu < 0.01 * wall {
         return SubstepTime::NoTimestamps { wall };
     }
     let plausible = gpu <= 1.05 * wall && (gpu >= 0.6 * wall || wall < 125_000.0);
@@ -191,8 +194,10 @@ mod tests {
         assert!(matches!(substep_time(4e6, 3e6), SubstepTime::Wall { .. }));
         // Short substeps: the wall is the submission's fixed cost, the timestamps stand.
         assert_eq!(substep_time(5e3, 100e3), SubstepTime::Measured(5e3));
-        // llvmpipe's GL in the app's window: every timestamp zero. No timings, said so.
+        // llvmpipe's GL in the app's window: the timestamps read (next to) zero. No
+        // timings, said so.
         assert_eq!(substep_time(0.0, 3e6), SubstepTime::NoTimestamps { wall: 3e6 });
+        assert_eq!(substep_time(4e3, 0.84e6), SubstepTime::NoTimestamps { wall: 0.84e6 });
     }
 
     use super::*;
