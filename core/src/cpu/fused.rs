@@ -678,6 +678,45 @@ fn strain_scalar(s: &Step<'_>, src: &Ring, cnt: &Ring, j: usize, i: usize) -> V4
     })
 }
 
+/// Slot `sl`'s spring of the lanes from `(j, i0)` at `xi`: where its other ends are, the
+/// vector to them, its length, and the lanes where it is over the limit (`stretch`; lanes
+/// beyond the grid's edge masked out where `edge`); `None` where its row is outside the
+/// grid. The count stage and the pass decide alike through it.
+struct StrainSpring<S: Isa> {
+    row: usize,
+    col: isize,
+    d: [F<S>; 3],
+    len: F<S>,
+    live: M<S>,
+}
+
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn strain_spring<S: Isa>(
+    sd: S,
+    src: &Ring,
+    j: usize,
+    i0: usize,
+    xi: &[F<S>; 3],
+    sl: usize,
+    slot: &SpringSlot,
+    stretch: f32,
+    edge: bool,
+) -> Option<StrainSpring<S>> {
+    let n = src.width - 2 * PAD;
+    let (di, dj) = SLOT_OFFSETS[sl];
+    let row = j.checked_add_signed(dj as isize).filter(|&r| r < n)?;
+    let col = i0 as isize + di as isize;
+    let xb = src.lanes3_at(sd, row, 0, col);
+    let d = [xb[0] - xi[0], xb[1] - xi[1], xb[2] - xi[2]];
+    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let mut live = len.gt(F::splat(sd, stretch * slot.rest));
+    if edge {
+        live = live & in_grid(sd, col, n);
+    }
+    Some(StrainSpring { row, col, d, len, live })
+}
+
 /// The counts of over-stretched springs of row `j` (`strain_count`) from the previous
 /// stage `src` into `dst`.
 #[inline(always)]
@@ -693,17 +732,9 @@ fn stage_count<S: Isa>(sd: S, s: &Step<'_>, src: &Ring, dst: &mut Ring, j: usize
         let xi = src.lanes3(sd, j, 0, i0);
         let mut count = zero;
         for (sl, slot) in s.uni[..STRAIN_SLOTS].iter().enumerate() {
-            let (di, dj) = SLOT_OFFSETS[sl];
-            let Some(row) = j.checked_add_signed(dj as isize).filter(|&r| r < n) else { continue };
-            let col = i0 as isize + di as isize;
-            let xb = src.lanes3_at(sd, row, 0, col);
-            let d = [xb[0] - xi[0], xb[1] - xi[1], xb[2] - xi[2]];
-            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            let mut live = len.gt(F::splat(sd, stretch * slot.rest));
-            if edge {
-                live = live & in_grid(sd, col, n);
+            if let Some(sp) = strain_spring(sd, src, j, i0, &xi, sl, slot, stretch, edge) {
+                count += F::select(sp.live, one, zero);
             }
-            count += F::select(live, one, zero);
         }
         dst.store(j, 0, i0, count);
     }
@@ -758,16 +789,11 @@ fn stage_strain<S: Isa>(
         let mut corr = [zero; 3];
         let mut count = zero;
         for (sl, slot) in s.uni[..STRAIN_SLOTS].iter().enumerate() {
-            let (di, dj) = SLOT_OFFSETS[sl];
-            let Some(row) = j.checked_add_signed(dj as isize).filter(|&r| r < n) else { continue };
-            let col = i0 as isize + di as isize;
-            let xb = src.lanes3_at(sd, row, 0, col);
-            let d = [xb[0] - xi[0], xb[1] - xi[1], xb[2] - xi[2]];
-            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            let mut live = len.gt(F::splat(sd, stretch * slot.rest));
-            if edge {
-                live = live & in_grid(sd, col, n);
-            }
+            let Some(StrainSpring { row, col, d, len, live }) =
+                strain_spring(sd, src, j, i0, &xi, sl, slot, stretch, edge)
+            else {
+                continue;
+            };
             let wb = mobility(sd, src, n, p.grab_index, row, col);
             let m = ci.max(cnt.lanes_at(sd, row, 0, col)).max(one);
             let f = wi * (len - F::splat(sd, aim * slot.rest)) / ((wi + wb) * len * m);
