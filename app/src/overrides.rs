@@ -43,6 +43,17 @@ impl PhysicsArgs {
             Some(path) => Setup::from_file(SceneFile::load(path)?),
             None => Setup::default_with_n(default_n),
         };
+        // A mesh's vertices in no triangle are dropped: said once, on stderr.
+        if let (Some(m), Some(file)) = (&setup.scene.cloth.mesh_data, &setup.scene.cloth.mesh)
+            && m.dropped() > 0
+        {
+            eprintln!(
+                "note: {}: {} of its {} vertices are in no triangle and were dropped (pins keep the file's numbering)",
+                file.display(),
+                m.dropped(),
+                m.file_vertices
+            );
+        }
         if let Some(n) = n {
             if setup.scene.cloth.is_mesh() {
                 bail!("--n {n} sets a grid's side, and this scene's cloth is a mesh");

@@ -853,3 +853,28 @@ fn bench_checks_its_scene_before_it_makes_its_folder() {
     assert!(!out.exists(), "bench made {} for a refused size", out.display());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_mesh_with_stray_vertices_runs_without_them_and_says_so_in_one_line() {
+    // A square (two triangles from one quad) and a stray point, as modelling tools leave
+    // them: the point is dropped, said once on stderr; pins keep the file's numbering, and
+    // a pin on the dropped point is refused.
+    let dir = scratch("stray");
+    std::fs::write(
+        dir.join("sq.obj"),
+        "v -0.5 1 0\r\nv 0.5 1 0\r\nv 0.5 1 1\r\nv -0.5 1 1\r\nv 3 3 3\r\nf 1 4 3 2\r\n",
+    )
+    .unwrap();
+    let scene = dir.join("s.toml");
+    std::fs::write(&scene, "[cloth]\nmesh = \"sq.obj\"\npinning = { vertices = [0, 1] }\n").unwrap();
+    let o = clothlab(&["sim", "--backend", "cpu", "--scene", scene.to_str().unwrap(), "--steps", "16"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(err.contains("1 of its 5 vertices are in no triangle and were dropped"), "{err}");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("4 particles"), "{}", String::from_utf8_lossy(&o.stdout));
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "[cloth]\nmesh = \"sq.obj\"\npinning = { vertices = [0, 4] }\n").unwrap();
+    refused(&["sim", "--backend", "cpu", "--scene", bad.to_str().unwrap()], "pinned vertex 4 is in no triangle");
+    std::fs::remove_dir_all(&dir).ok();
+}

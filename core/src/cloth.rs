@@ -57,7 +57,7 @@ pub fn build_mesh(
         Pinning::AboveY(y) => MeshPinning::AboveY(*y),
         _ => MeshPinning::None,
     };
-    let held = mesh.pinned(&rule).map_err(err)?;
+    let held = placed.pinned(&rule).map_err(err)?;
     let mass = mesh.vertex_masses(params.cloth_mass);
     let reference = params.cloth_mass / np as f32;
     let free = mass.iter().zip(&held).filter(|(_, h)| !**h).map(|(m, _)| *m);

@@ -154,6 +154,11 @@ pub enum MeshError {
         /// The other.
         t1: usize,
     },
+    /// A pinned vertex (in the file's numbering) that is in no triangle: dropped.
+    #[error(
+        "pinned vertex {0} is in no triangle: such vertices are dropped (a particle with no springs would fall alone)"
+    )]
+    DroppedPin(u32),
     /// A pinned vertex that does not exist.
     #[error("pinned vertex {vertex} does not exist: the mesh has {count} vertices (0 ..= {})", count.saturating_sub(1))]
     NoSuchPin {
@@ -225,7 +230,9 @@ pub fn load_obj(path: &Path) -> Result<TriMesh, MeshFileError> {
     }
     let text = std::fs::read_to_string(path).map_err(|e| err(MeshError::Read(e.to_string())))?;
     let mesh = parse_obj(&text).map_err(err)?;
-    mesh.check().map_err(err)?;
+    // Checked as the cloth it makes: without its vertices in no triangle, which
+    // `PlacedMesh` drops (the mesh returned keeps the file's numbering, for pins).
+    mesh.without_unreferenced().0.check().map_err(err)?;
     Ok(mesh)
 }
 
@@ -285,6 +292,14 @@ pub fn parse_obj(text: &str) -> Result<TriMesh, MeshError> {
                 if corners.len() < 3 {
                     return Err(syntax(format!("a face needs 3 corners, it has {}", corners.len())));
                 }
+                if let Some(c) = fan_fold(&positions, &corners.iter().map(|c| c.0).collect::<Vec<_>>()) {
+                    return Err(syntax(format!(
+                        "a face of {} corners is not convex enough to fan from its first corner: its triangle {c} (corners 1, {}, {}) would fold over the others; split it into triangles or convex polygons",
+                        corners.len(),
+                        c + 2,
+                        c + 3
+                    )));
+                }
                 for c in 1..corners.len() - 1 {
                     let tri = [corners[0], corners[c], corners[c + 1]];
                     triangles.push(tri.map(|t| t.0));
@@ -308,6 +323,23 @@ pub fn parse_obj(text: &str) -> Result<TriMesh, MeshError> {
         None
     };
     Ok(TriMesh { positions, uvs, triangles })
+}
+
+/// The first triangle of the fan from corner 0 of the polygon `corners` (indices into
+/// `positions`) that faces against the polygon's normal (Newell's, which holds for
+/// non-planar polygons too), if any: such a fan folds over itself. A triangle or a convex
+/// polygon, planar or not, has none.
+fn fan_fold(positions: &[[f32; 3]], corners: &[u32]) -> Option<usize> {
+    if corners.len() <= 3 {
+        return None;
+    }
+    let p = |k: usize| glam::Vec3::from(positions[corners[k] as usize]);
+    let mut normal = glam::Vec3::ZERO;
+    for k in 0..corners.len() {
+        let (a, b) = (p(k), p((k + 1) % corners.len()));
+        normal += glam::Vec3::new((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
+    }
+    (1..corners.len() - 1).find(|&c| (p(c) - p(0)).cross(p(c + 1) - p(0)).dot(normal) < 0.0).map(|c| c - 1)
 }
 
 impl TriMesh {
@@ -482,6 +514,36 @@ impl TriMesh {
         let triangles =
             if mirrored { self.triangles.iter().map(|&[a, b, c]| [a, c, b]).collect() } else { self.triangles.clone() };
         TriMesh { positions, uvs: self.uvs.clone(), triangles }
+    }
+
+    /// The mesh without its vertices in no triangle (a modelling tool's stray points, the
+    /// centre an n-gon fill leaves), and per vertex kept its index here (the file's
+    /// numbering). A mesh whose triangles name a vertex that does not exist is returned
+    /// whole, for [`TriMesh::check`] to refuse.
+    pub fn without_unreferenced(&self) -> (TriMesh, Vec<u32>) {
+        let count = self.positions.len();
+        let identity = || (self.clone(), (0..count as u32).collect());
+        let mut used = vec![false; count];
+        for &v in self.triangles.iter().flatten() {
+            match used.get_mut(v as usize) {
+                Some(u) => *u = true,
+                None => return identity(),
+            }
+        }
+        if used.iter().all(|u| *u) {
+            return identity();
+        }
+        let file_of: Vec<u32> = (0..count as u32).filter(|&v| used[v as usize]).collect();
+        let mut new_of = vec![0u32; count];
+        for (k, &v) in file_of.iter().enumerate() {
+            new_of[v as usize] = k as u32;
+        }
+        let mesh = TriMesh {
+            positions: file_of.iter().map(|&v| self.positions[v as usize]).collect(),
+            uvs: self.uvs.as_ref().map(|uv| file_of.iter().map(|&v| uv[v as usize]).collect()),
+            triangles: self.triangles.iter().map(|t| t.map(|v| new_of[v as usize])).collect(),
+        };
+        (mesh, file_of)
     }
 
     /// Per vertex, whether `pinning` holds it; a listed vertex that does not exist is
@@ -678,19 +740,50 @@ pub struct PlacedMesh {
     /// The mean edge length, m (the grid's spacing for a mesh: bending moduli and
     /// self-collision read it).
     pub spacing: f32,
+    /// Per vertex, its index in the file (vertices in no triangle are dropped; pins are
+    /// given in the file's numbering).
+    pub file_of: Vec<u32>,
+    /// The file's vertex count.
+    pub file_vertices: usize,
 }
 
 impl PlacedMesh {
     /// `mesh` (checked) moved by `placement`.
+    /// Vertices in no triangle are dropped ([`PlacedMesh::dropped`] says how many).
     pub fn new(mesh: &TriMesh, placement: &Placement) -> Result<Self, MeshError> {
-        let mesh = mesh.placed(placement);
+        let file_vertices = mesh.positions.len();
+        let (mesh, file_of) = mesh.placed(placement).without_unreferenced();
         mesh.check()?;
         let springs = MeshSprings::build(&mesh)?;
         let len =
             |[a, b]: [u32; 2]| glam::Vec3::from(mesh.positions[a as usize]).distance(mesh.positions[b as usize].into());
         let total: f64 = springs.edges.iter().map(|&e| len(e) as f64).sum();
         let spacing = (total / springs.edges.len().max(1) as f64) as f32;
-        Ok(Self { mesh, springs, spacing })
+        Ok(Self { mesh, springs, spacing, file_of, file_vertices })
+    }
+
+    /// How many of the file's vertices were in no triangle and dropped.
+    pub fn dropped(&self) -> usize {
+        self.file_vertices - self.mesh.positions.len()
+    }
+
+    /// Per vertex, whether `pinning` holds it, a list of vertices given in the file's
+    /// numbering: one that does not exist, or was dropped, is refused.
+    pub fn pinned(&self, pinning: &MeshPinning) -> Result<Vec<bool>, MeshError> {
+        let MeshPinning::Vertices(list) = pinning else { return self.mesh.pinned(pinning) };
+        let mut new_of = vec![None; self.file_vertices];
+        for (k, &v) in self.file_of.iter().enumerate() {
+            new_of[v as usize] = Some(k as u32);
+        }
+        let mapped = list
+            .iter()
+            .map(|&v| match new_of.get(v as usize) {
+                None => Err(MeshError::NoSuchPin { vertex: v, count: self.file_vertices }),
+                Some(None) => Err(MeshError::DroppedPin(v)),
+                Some(Some(k)) => Ok(*k),
+            })
+            .collect::<Result<Vec<u32>, MeshError>>()?;
+        self.mesh.pinned(&MeshPinning::Vertices(mapped))
     }
 
     /// Reads the OBJ file at `path` and places it.
@@ -782,6 +875,12 @@ mod tests {
             ("v 0 0\n".into(), "line 1: a `v` line needs 3 numbers, it has 2"),
             ("v 0 zero 0\n".into(), "line 1: `zero` is not a number"),
             ("v 0 0 0\nv 1 0 0\nf 1 2\n".into(), "line 3: a face needs 3 corners, it has 2"),
+            // A dart (A, B, C reflex, D) fanned from B: its first triangle folds over the
+            // second. (From its tip A the same dart fans well: below.)
+            (
+                "v 0 0 0\nv 1 0 1\nv 0 0 0.3\nv -1 0 1\nf 2 3 4 1\n".into(),
+                "line 5: a face of 4 corners is not convex enough to fan from its first corner: its triangle 0",
+            ),
             // What f32 cannot simulate: a square scaled to 1e20 m (its squared lengths
             // overflow), and a 0.1 mm triangle 1 km from the origin (positions there are
             // 6.1e-5 m apart: its springs would be a couple of steps of rounding long).
@@ -811,6 +910,40 @@ mod tests {
         }
         let e = refused(&fan).to_string();
         assert!(e.contains("vertex 0 has 8"), "{e}");
+    }
+
+    #[test]
+    fn obj_files_as_modelling_tools_write_them_are_read() {
+        // CRLF line ends, objects, groups, smoothing groups, materials, normals, parameter
+        // space vertices, negative (relative) indices, a pentagon and a dart fanned from its
+        // convex tip, and a stray vertex (Blender leaves them; an n-gon fill's centre).
+        let text = "mtllib cloth.mtl\r\no Cloth\r\nv 0 0 0\r\nv 1 0 0\r\nv 1.5 0 0.8\r\nv 0.5 0 1.4\r\n\
+                    v -0.5 0 0.8\r\nv 9 9 9\r\nvn 0 1 0\r\nvp 0.5\r\ng skirt\r\nusemtl linen\r\ns 1\r\n\
+                    f -6//1 -5//1 -4//1 -3//1 -2//1\r\nv 0 0 -1\r\nv 1 0 -1\r\nv 0.5 0 -0.7\r\n\
+                    f 7 8 9 2 1\r\n";
+        let m = parse_obj(text).unwrap();
+        assert_eq!(m.positions.len(), 9);
+        // The pentagon's fan (3 triangles) from vertex 0, then the second face's (3).
+        assert_eq!(m.triangles[..3], [[0, 1, 2], [0, 2, 3], [0, 3, 4]]);
+        assert_eq!(m.triangles.len(), 6);
+        // Placed, the stray vertex (file index 5) is dropped and the rest keep their order;
+        // pins name the file's vertices.
+        let placed = PlacedMesh::new(&m, &Placement::default()).unwrap();
+        assert_eq!(placed.dropped(), 1);
+        assert_eq!(placed.mesh.positions.len(), 8);
+        assert_eq!(placed.file_of, [0, 1, 2, 3, 4, 6, 7, 8]);
+        assert_eq!(placed.mesh.positions[5], [0.0, 0.0, -1.0], "file vertex 6 is mesh vertex 5");
+        let held = placed.pinned(&MeshPinning::Vertices(vec![6, 8])).unwrap();
+        assert_eq!(held.iter().filter(|h| **h).count(), 2);
+        assert!(held[5] && held[7]);
+        let e = placed.pinned(&MeshPinning::Vertices(vec![5])).unwrap_err().to_string();
+        assert!(e.starts_with("pinned vertex 5 is in no triangle"), "{e}");
+        let e = placed.pinned(&MeshPinning::Vertices(vec![9])).unwrap_err().to_string();
+        assert_eq!(e, "pinned vertex 9 does not exist: the mesh has 9 vertices (0 ..= 8)");
+        // The dart of the refusals above, fanned from its tip: two triangles, one winding.
+        let dart = parse_obj("v 0 0 0\nv 1 0 1\nv 0 0 0.3\nv -1 0 1\nf 1 2 3 4\n").unwrap();
+        assert_eq!(dart.triangles, [[0, 1, 2], [0, 2, 3]]);
+        dart.check().unwrap();
     }
 
     #[test]
