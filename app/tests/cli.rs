@@ -878,3 +878,49 @@ fn a_mesh_with_stray_vertices_runs_without_them_and_says_so_in_one_line() {
     refused(&["sim", "--backend", "cpu", "--scene", bad.to_str().unwrap()], "pinned vertex 4 is in no triangle");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_recorded_glb_reads_back_as_a_mesh_whose_rest_shape_is_its_first_frame() {
+    // The flag recorded by `sim --record`, loaded again as the cloth of the same scene (the
+    // recording's base positions are the placed mesh, so no placement): the same particles,
+    // masses, springs and pins, and so, serially on the CPU, the same run bit for bit.
+    let dir = scratch("glb-in");
+    let flag = scene_path("mesh-flag.toml");
+    let (glb, a, b) = (dir.join("flag.glb"), dir.join("a.json"), dir.join("b.json"));
+    let run = |scene: &str, out: &std::path::Path, record: Option<&std::path::Path>| {
+        let mut args =
+            vec!["sim", "--backend", "cpu", "--scene", scene, "--steps", "32", "--out", out.to_str().unwrap()];
+        if let Some(r) = record {
+            args.extend(["--record", r.to_str().unwrap()]);
+        }
+        let o = clothlab(&args);
+        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    };
+    run(&flag, &a, Some(&glb));
+    let text = std::fs::read_to_string(&flag).unwrap();
+    let again = text
+        .replace(
+            "mesh = \"meshes/flag_hole.obj\"",
+            &format!("mesh = {:?}\nmesh_name = \"cloth\"", glb.to_str().unwrap()),
+        )
+        .replace("translate = [-0.6, 1.0, 0.0]\n", "");
+    assert_ne!(again, text);
+    let scene = dir.join("again.toml");
+    std::fs::write(&scene, &again).unwrap();
+    run(scene.to_str().unwrap(), &b, None);
+    let pos = |p: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(p).unwrap()).unwrap()["pos"].clone()
+    };
+    assert_eq!(pos(&a).as_array().unwrap().len(), 2364);
+    assert_eq!(pos(&a), pos(&b), "the flag from its recording ran otherwise");
+    // A mesh the file does not have is refused naming those it has; an OBJ has no names.
+    std::fs::write(&scene, again.replace("mesh_name = \"cloth\"", "mesh_name = \"cape\"")).unwrap();
+    refused(&["sim", "--scene", scene.to_str().unwrap()], "no mesh named `cape` (it has `cloth`");
+    std::fs::write(
+        &scene,
+        text.replace("mesh = \"meshes/flag_hole.obj\"", "mesh = \"meshes/flag_hole.obj\"\nmesh_name = \"x\""),
+    )
+    .unwrap();
+    refused(&["sim", "--scene", scene.to_str().unwrap()], "`mesh_name` picks a mesh of a glTF file");
+    std::fs::remove_dir_all(&dir).ok();
+}

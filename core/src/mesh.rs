@@ -221,6 +221,73 @@ pub struct MeshFileError {
     pub error: MeshError,
 }
 
+/// Reads and checks the mesh file at `path` by its extension: OBJ ([`load_obj`]) or glTF
+/// (`.glb`, `.gltf`: [`load_gltf`], the mesh named `name` if given).
+pub fn load_mesh(path: &Path, name: Option<&str>) -> Result<TriMesh, MeshFileError> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let err = |error| MeshFileError { path: path.display().to_string(), error };
+    match ext.as_deref() {
+        Some("glb" | "gltf") => load_gltf(path, name),
+        Some("obj") if name.is_some() => {
+            Err(err(MeshError::Read("`mesh_name` picks a mesh of a glTF file; an OBJ file holds one".into())))
+        }
+        Some("obj") => load_obj(path),
+        _ => Err(err(MeshError::Read("not a mesh file clothlab reads: give an .obj, .glb or .gltf file".into()))),
+    }
+}
+
+/// Reads and checks the first triangle primitive of the glTF file at `path` (`.glb`, or
+/// `.gltf` with its buffers beside it) — of the mesh named `name`, if given — with the
+/// gltf crate: positions, the first texture coordinates if it has them, and triangles, in
+/// the mesh's own space (a scene places it; node transforms are not applied). What
+/// `sim --record` writes reads back as its first frame.
+pub fn load_gltf(path: &Path, name: Option<&str>) -> Result<TriMesh, MeshFileError> {
+    let err = |error| MeshFileError { path: path.display().to_string(), error };
+    let size = std::fs::metadata(path).map_err(|e| err(MeshError::Read(e.to_string())))?.len();
+    if size > MAX_MESH_BYTES {
+        return Err(err(MeshError::TooBig { size, max: MAX_MESH_BYTES }));
+    }
+    let (doc, buffers, _) =
+        gltf::import(path).map_err(|e| err(MeshError::Read(format!("not a glTF file clothlab can read: {e}"))))?;
+    fn triangles<'a>(m: &gltf::Mesh<'a>) -> Option<gltf::Primitive<'a>> {
+        m.primitives().find(|p| p.mode() == gltf::mesh::Mode::Triangles)
+    }
+    let chosen = match name {
+        Some(want) => {
+            let Some(m) = doc.meshes().find(|m| m.name() == Some(want)) else {
+                let names: Vec<String> =
+                    doc.meshes().map(|m| format!("`{}`", m.name().unwrap_or("(unnamed)"))).collect();
+                return Err(err(MeshError::Read(format!("no mesh named `{want}` (it has {})", names.join(", ")))));
+            };
+            triangles(&m).ok_or_else(|| err(MeshError::Read(format!("mesh `{want}` has no triangle primitive"))))?
+        }
+        None => doc.meshes().find_map(|m| triangles(&m)).ok_or_else(|| err(MeshError::Empty))?,
+    };
+    let reader = chosen.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let positions: Vec<[f32; 3]> = reader
+        .read_positions()
+        .ok_or_else(|| err(MeshError::Read("its triangle primitive has no positions".into())))?
+        .collect();
+    if positions.len() > MAX_MESH_VERTICES {
+        return Err(err(MeshError::TooManyVertices { count: positions.len(), max: MAX_MESH_VERTICES }));
+    }
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(i) => i.into_u32().collect(),
+        None => (0..positions.len() as u32).collect(),
+    };
+    if !indices.len().is_multiple_of(3) {
+        return Err(err(MeshError::Read(format!("{} indices: not whole triangles", indices.len()))));
+    }
+    let triangles = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+    let uvs = reader
+        .read_tex_coords(0)
+        .map(|t| t.into_f32().collect::<Vec<[f32; 2]>>())
+        .filter(|uv| uv.len() == positions.len());
+    let mesh = TriMesh { positions, uvs, triangles };
+    mesh.without_unreferenced().0.check().map_err(err)?;
+    Ok(mesh)
+}
+
 /// Reads and checks the OBJ file at `path`.
 pub fn load_obj(path: &Path) -> Result<TriMesh, MeshFileError> {
     let err = |error| MeshFileError { path: path.display().to_string(), error };
@@ -786,9 +853,10 @@ impl PlacedMesh {
         self.mesh.pinned(&MeshPinning::Vertices(mapped))
     }
 
-    /// Reads the OBJ file at `path` and places it.
-    pub fn load(path: &Path, placement: &Placement) -> Result<Self, MeshFileError> {
-        let raw = load_obj(path)?;
+    /// Reads the mesh file at `path` ([`load_mesh`]: OBJ or glTF, the mesh named `name` of
+    /// a glTF file) and places it.
+    pub fn load(path: &Path, name: Option<&str>, placement: &Placement) -> Result<Self, MeshFileError> {
+        let raw = load_mesh(path, name)?;
         Self::new(&raw, placement).map_err(|error| MeshFileError { path: path.display().to_string(), error })
     }
 }

@@ -193,9 +193,12 @@ pub struct ClothSpec {
     pub pinning: Pinning,
     /// Initial velocity of every free particle, m/s (a thrown cloth). Default 0.
     pub velocity: [f32; 3],
-    /// A triangle mesh (OBJ) instead of the grid; a scene file's path is relative to the
+    /// A triangle mesh (OBJ, or glTF: `.glb`, `.gltf`) instead of the grid; a scene file's path is relative to the
     /// file. With a mesh, `n`, `size`, `top_center`, `across` and `down` do not apply.
     pub mesh: Option<std::path::PathBuf>,
+    /// With a glTF `mesh`: the name of the mesh to read (default: the file's first
+    /// with triangles).
+    pub mesh_name: Option<String>,
     /// The mesh's scale per axis (about the origin, first). Default 1.
     pub scale: [f32; 3],
     /// The mesh's rotation about x, then y, then z, degrees. Default 0.
@@ -218,6 +221,7 @@ impl Default for ClothSpec {
             pinning: Pinning::TopCorners,
             velocity: [0.0; 3],
             mesh: None,
+            mesh_name: None,
             scale: [1.0; 3],
             rotate_deg: [0.0; 3],
             translate: [0.0; 3],

@@ -182,7 +182,7 @@ impl SceneFile {
             }
             // Relative to the scene file's folder.
             let path = Path::new(file).parent().map(|d| d.join(&mesh)).unwrap_or(mesh);
-            let placed = crate::mesh::PlacedMesh::load(&path, &cloth.placement());
+            let placed = crate::mesh::PlacedMesh::load(&path, cloth.mesh_name.as_deref(), &cloth.placement());
             let at = locate(text, "cloth.mesh").map(|s| line_col(text, s));
             cloth.mesh_data = Some(std::sync::Arc::new(placed.map_err(|e| err(at, format!("`cloth.mesh`: {e}")))?));
         }
