@@ -625,8 +625,11 @@ fn forces_integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
     b.force = springs;
 }
 
+/// The counts as the kernel leaves them in aux0: `(count, 0, 0, 0)` per particle.
 fn strain_count(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::strain_count_v4(a.exec, a.p, &a.topo.slots, &b.pos, &mut b.aux[0]);
+    let mut counts = vec![0.0; b.pos.len()];
+    cpu::strain_count(a.exec, a.p, &a.topo.slots, &b.pos, &mut counts);
+    b.aux[0] = counts.into_iter().map(|c| [c, 0.0, 0.0, 0.0]).collect();
 }
 
 fn strain_limit(a: &TwinArgs, b: &mut HostBuffers) {

@@ -86,7 +86,7 @@ type RowMut<'a> =
     (((&'a mut [f32], &'a mut [f32]), (&'a mut [f32], &'a mut [f32])), ((&'a mut [f32], &'a mut [f32]), &'a mut [f32]));
 
 #[inline(always)]
-fn lane(v: &[f32], start: usize) -> f32x8 {
+pub(crate) fn lane(v: &[f32], start: usize) -> f32x8 {
     let a: [f32; LANES] = v[start..start + LANES].try_into().expect("LANES elements");
     f32x8::from(a)
 }

@@ -37,7 +37,7 @@ pub use simd::{FUSED_ENV, SIMD_ENV, Simd, fused_from_env};
 pub use solver::CpuSolver;
 pub use springs::{springs, springs_rows, springs_scatter};
 pub use stats::{SubstepStats, particle_stats, substep_stats};
-pub use strain_limit::{STRAIN_AIM, strain_count, strain_count_v4, strain_limit, strain_limit_rows, strain_vel};
+pub use strain_limit::{STRAIN_AIM, strain_count, strain_limit, strain_limit_rows, strain_vel};
 
 use glam::Vec3;
 use rayon::prelude::*;

@@ -29,6 +29,7 @@
 
 use wide::f32x8;
 
+use super::lanes::lane;
 use super::springs::SlotSource;
 use super::{Exec, Fetch, LANES, Lanes, for_each, v3, v4};
 use crate::grid::{SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
@@ -39,11 +40,6 @@ pub use crate::layout::STRAIN_AIM;
 /// of its ends' counts of.
 pub fn strain_count(exec: Exec, p: &StepParams, slots: &[SpringSlot], pos: &[V4], counts: &mut [f32]) {
     for_each(exec, counts, |i, c| *c = count_at(i, p, slots, |k| pos[k]));
-}
-
-/// [`strain_count`] as the kernel writes it: `(count, 0, 0, 0)` per particle (aux0).
-pub fn strain_count_v4(exec: Exec, p: &StepParams, slots: &[SpringSlot], pos: &[V4], counts: &mut [V4]) {
-    for_each(exec, counts, |i, c| *c = [count_at(i, p, slots, |k| pos[k]), 0.0, 0.0, 0.0]);
 }
 
 /// The count of particle `i`: its strain-limited springs longer than `(1 + τ)·rest`,
@@ -193,13 +189,6 @@ pub fn strain_limit_rows(
     });
 }
 
-/// The counts of particles `start .. start + LANES`.
-#[inline(always)]
-fn count_lanes(counts: &[f32], start: usize) -> f32x8 {
-    let a: [f32; LANES] = counts[start..start + LANES].try_into().expect("LANES elements");
-    f32x8::from(a)
-}
-
 /// Mobility of particles `start .. start + LANES`, with the grabbed particle's lane at 0.
 #[inline(always)]
 fn mobility_lanes(lanes: &Lanes, start: usize, grab: i32) -> f32x8 {
@@ -231,7 +220,7 @@ fn limit_lanes(
     let zero = f32x8::ZERO;
     let xi = lanes.pos3(a0);
     let wi = mobility_lanes(lanes, a0, p.grab_index);
-    let ci = count_lanes(counts, a0);
+    let ci = lane(counts, a0);
     let mut corr = [zero; 3];
     let mut count = zero;
     for (s, slot) in uni[..STRAIN_SLOTS].iter().enumerate() {
@@ -242,7 +231,7 @@ fn limit_lanes(
         let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         let live = len.simd_gt(f32x8::splat(stretch * slot.rest));
         let wb = mobility_lanes(lanes, b0, p.grab_index);
-        let m = ci.max(count_lanes(counts, b0)).max(f32x8::ONE);
+        let m = ci.max(lane(counts, b0)).max(f32x8::ONE);
         let f = wi * (len - f32x8::splat(aim * slot.rest)) / ((wi + wb) * len * m);
         for c in 0..3 {
             corr[c] += live.bitselect(d[c] * f, zero);
