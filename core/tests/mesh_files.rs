@@ -1,6 +1,6 @@
 //! The mesh scenes' OBJ files (scenes/meshes, written by make_meshes.py) load, pass every
 //! check, and hold what their script says: areas against the shapes they approximate,
-//! the skirt's ring closed at its seam.
+//! the skirt's ring closed at its seam; and glTF files another tool wrote (tests/data).
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -65,4 +65,40 @@ fn the_flag_has_its_hole() {
     assert!(boundary_edges(&m) > outline + 20, "{}", boundary_edges(&m));
     // No vertex inside the hole but those on its quads' corners.
     assert!(m.positions.iter().all(|p| (p[0] - 0.9).hypot(p[1] - 0.5) > 0.18 - 0.025 * 1.5));
+}
+
+/// A file of core/tests/data (written by another tool: make_foreign.py, trimesh 4).
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
+}
+
+#[test]
+fn gltf_files_another_tool_wrote_load_and_bad_ones_are_refused_in_one_line() {
+    use clothlab_core::mesh::{PlacedMesh, Placement, load_gltf};
+    // trimesh's .glb and its .gltf with an embedded buffer: the same 9 × 9 sheet of
+    // 0.8 m (81 vertices, 128 triangles, u32 indices, no uvs) in trimesh's vertex order.
+    let glb = load_gltf(&data("trimesh_sheet.glb"), None).unwrap_or_else(|e| panic!("{e}"));
+    let gltf = load_gltf(&data("trimesh_sheet.gltf"), Some("sheet")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(glb, gltf, "the two encodings of one mesh");
+    assert_eq!((glb.positions.len(), glb.triangles.len(), glb.uvs.is_some()), (81, 128, false));
+    // 0.64 m² to f32 rounding of 128 triangle areas (relative 1e-5 covers it).
+    assert!((glb.area() - 0.64).abs() < 0.64e-5, "area {}", glb.area());
+    assert_eq!(glb.positions[10], [-0.3, 0.0, 0.1], "vertex (1, 1) where the script put it");
+    // It is a cloth: placed and built, every vertex kept, its normals up (the winding
+    // trimesh kept is the script's counter-clockwise one, seen from +y).
+    let placed = PlacedMesh::new(&glb, &Placement::default()).unwrap();
+    assert_eq!(placed.dropped(), 0);
+    let [a, b, c] = glb.triangles[0].map(|v| glam::Vec3::from(glb.positions[v as usize]));
+    assert!((b - a).cross(c - a).y > 0.0);
+    // A .glb cut in half, a name the file does not have, and a union jack (8 triangles at
+    // every other interior vertex: more than today's fixed table holds) — one line each.
+    for (file, name, want) in [
+        ("truncated.glb", None, "not a glTF file clothlab can read"),
+        ("trimesh_sheet.glb", Some("cape"), "no mesh named `cape` (it has `sheet`)"),
+        ("trimesh_unionjack.glb", None, "has 8 triangles; the solvers' table holds 6"),
+    ] {
+        let e = load_gltf(&data(file), name).unwrap_err().to_string();
+        assert!(e.contains(file) && e.contains(want), "{file}: {e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
 }
