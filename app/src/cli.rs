@@ -403,6 +403,13 @@ pub struct BenchArgs {
     /// reason. Writes mesh-vs-grid.{md,csv,svg,png}.
     #[arg(long, conflicts_with_all = ["ladder", "integrators"])]
     pub mesh_vs_grid: bool,
+    /// With --mesh-vs-grid: also a mesh of the modelling tools' kind (an OBJ or glTF file,
+    /// e.g. the Delaunay disc `scenes/meshes/make_irregular.py --big N FILE` writes), laid
+    /// where the grid hangs, unpinned, at every size: give --sizes near the square root
+    /// of its vertex count to compare it with the grid of the same count (ns per
+    /// particle-substep either way).
+    #[arg(long, value_name = "FILE", requires = "mesh_vs_grid")]
+    pub irregular: Option<PathBuf>,
     #[command(flatten)]
     pub physics: PhysicsArgs,
     #[command(flatten)]

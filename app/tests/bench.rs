@@ -276,6 +276,11 @@ fn bad_bench_input_is_refused_in_one_line() {
         (&["bench", "--resume", "/tmp/a", "--out", "/tmp/b"], "--resume /tmp/a writes there: leave out --out /tmp/b"),
         (&["bench", "--integrators", "--resume", "/tmp/a"], "cannot be used with"),
         (&["bench", "--mesh-vs-grid", "--ladder"], "cannot be used with"),
+        (&["bench", "--irregular", "../scenes/meshes/fan.obj"], "--mesh-vs-grid"),
+        (
+            &["bench", "--mesh-vs-grid", "--backends", "cpu", "--sizes", "8", "--irregular", "../scenes/mesh-fan.toml"],
+            "--irregular: ../scenes/mesh-fan.toml",
+        ),
         (
             &[
                 "bench",
@@ -430,27 +435,43 @@ fn an_interrupted_sim_leaves_the_old_output_as_it_was() {
 
 /// `--mesh-vs-grid`: the grid, the grid kernel by kernel and the grid as a mesh on a CPU
 /// backend; the grid, the grid without its grid-only switches and the grid as a mesh on an
-/// optimized GPU backend; every time positive and finite; the files written.
+/// optimized GPU backend; an irregular mesh (the fan, 513 particles) on both; every time
+/// positive and finite; the files written.
 #[test]
 fn mesh_vs_grid_measures_the_grid_and_the_same_grid_as_a_mesh() {
     let out = tmp("mesh-vs-grid");
-    let args = ["bench", "--mesh-vs-grid", "--sizes", "12", "--iters", "16", "--backends", "cpu,wgpu", "--out"];
+    let args = [
+        "bench",
+        "--mesh-vs-grid",
+        "--sizes",
+        "12",
+        "--iters",
+        "16",
+        "--backends",
+        "cpu,wgpu",
+        "--irregular",
+        "../scenes/meshes/fan.obj",
+        "--out",
+    ];
     let o = clothlab(&[&args[..], &[out.to_str().unwrap()]].concat());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "bench failed: {err}");
     let csv = std::fs::read_to_string(out.join("mesh-vs-grid.csv")).unwrap();
     let rows: Vec<Vec<String>> = csv.lines().skip(1).map(split_csv).collect();
     let cloths: Vec<(&str, &str)> = rows.iter().map(|r| (r[1].as_str(), r[2].as_str())).collect();
-    for want in [("cpu", "grid"), ("cpu", "grid, kernel by kernel"), ("cpu", "grid as mesh")] {
+    for want in [("cpu", "grid"), ("cpu", "grid, kernel by kernel"), ("cpu", "grid as mesh"), ("cpu", "irregular mesh")]
+    {
         assert!(cloths.contains(&want), "no {want:?} in {cloths:?}");
     }
     for r in &rows {
-        let ns: f64 = r[3].parse().unwrap();
+        let particles: usize = r[3].parse().unwrap();
+        assert_eq!(particles, if r[2] == "irregular mesh" { 513 } else { 144 }, "{r:?}");
+        let ns: f64 = r[4].parse().unwrap();
         assert!(ns.is_finite() && ns > 0.0, "{r:?}");
     }
     let md = std::fs::read_to_string(out.join("mesh-vs-grid.md")).unwrap();
     if cloths.contains(&("wgpu", "grid")) {
-        for want in [("wgpu", "grid, from the table"), ("wgpu", "grid as mesh")] {
+        for want in [("wgpu", "grid, from the table"), ("wgpu", "grid as mesh"), ("wgpu", "irregular mesh")] {
             assert!(cloths.contains(&want), "no {want:?} in {cloths:?}");
         }
         assert!(md.contains("| wgpu | grid as mesh |") && !md.contains("Not measured"), "{md}");

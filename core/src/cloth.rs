@@ -1,10 +1,7 @@
 //! Building a cloth: the grid (`grid::build_grid`) or a mesh (`build_mesh`), whichever
 //! the scene holds.
 
-use crate::grid::{
-    ClothState, ClothTopology, FACE_SLOTS, MeshTables, SLOTS, STRAIN_SLOTS, Spring, SpringKind, SpringSlot,
-    TETHER_SLOTS, Tether,
-};
+use crate::grid::{ClothState, ClothTopology, MeshTables, Rows, Spring, SpringKind, SpringSlot, TETHER_SLOTS, Tether};
 use crate::mesh::{MeshError, MeshPinning, PlacedMesh, Placement, grid_mesh, planar_uvs};
 use crate::params::{ParamError, SimParams};
 use crate::scene::{ClothSpec, Pinning, Scene};
@@ -75,33 +72,36 @@ pub fn build_mesh(
     }
     let uv = mesh.uvs.clone().unwrap_or_else(|| planar_uvs(mesh));
 
-    let mut face_slots = vec![[-1i32; FACE_SLOTS]; np];
-    let mut faces = vec![0usize; np];
+    // Each vertex's triangles in triangle order, as many as it has.
+    let mut faces: Vec<Vec<i32>> = vec![Vec::new(); np];
     for (t, tri) in mesh.triangles.iter().enumerate() {
         for &v in tri {
-            let v = v as usize;
-            // `TriMesh::check` refused a vertex in more than FACE_SLOTS triangles.
-            face_slots[v][faces[v]] = t as i32;
-            faces[v] += 1;
+            faces[v as usize].push(t as i32);
         }
     }
+    let face_slots = Rows::compressed(&faces, None);
 
     let ms = &placed.springs;
     let dist =
         |a: u32, b: u32| glam::Vec3::from(mesh.positions[a as usize]).distance(mesh.positions[b as usize].into());
     let kind_of = |k: u32| if ms.is_edge(k) { SpringKind::Structural } else { SpringKind::Bend };
-    let mut slots = vec![SpringSlot::EMPTY; np * SLOTS];
-    let mut slot_kind = vec![SpringKind::Structural; np * SLOTS];
-    for (v, list) in ms.slots.iter().enumerate() {
-        for (s, &k) in list.iter().enumerate() {
-            let other = ms.other(k, v as u32);
-            // A bending spring in a strain-limited slot (a vertex with fewer edges than
-            // those slots) is marked so that the strain limit skips it (`SpringSlot::other`).
-            let neighbor = if ms.is_edge(k) || s >= STRAIN_SLOTS { other as i32 } else { SpringSlot::unlimited(other) };
-            slots[v * SLOTS + s] = SpringSlot { neighbor, rest: dist(v as u32, other), ks: 0.0, kd: 0.0 };
-            slot_kind[v * SLOTS + s] = kind_of(k);
-        }
-    }
+    // Each vertex's row: its edges (the head, which the strain limit holds), then its
+    // bending springs, in the order `MeshSprings` lists them.
+    let rows: Vec<Vec<SpringSlot>> = ms
+        .slots
+        .iter()
+        .enumerate()
+        .map(|(v, list)| {
+            let slot = |&k: &u32| {
+                let other = ms.other(k, v as u32);
+                SpringSlot { neighbor: other as i32, rest: dist(v as u32, other), ks: 0.0, kd: 0.0 }
+            };
+            list.iter().map(slot).collect()
+        })
+        .collect();
+    let heads: Vec<usize> = ms.slots.iter().map(|list| list.iter().filter(|&&k| ms.is_edge(k)).count()).collect();
+    let slots = Rows::compressed(&rows, Some(&heads));
+    let slot_kind = ms.slots.iter().flatten().map(|&k| kind_of(k)).collect();
     let springs: Vec<Spring> = (0..(ms.edges.len() + ms.bends.len()) as u32)
         .map(|k| {
             let [a, b] = ms.spring(k);
@@ -156,18 +156,19 @@ pub fn build_mesh(
 fn xpbd_colouring(springs: &[Spring], particles: usize) -> Vec<Vec<u32>> {
     let mut passes = Vec::new();
     for bend in [true, false] {
-        // Per particle, a bit per colour of this family already touching it.
-        let mut used = vec![0u64; particles];
+        // Per particle, the colours of this family already touching it (a vertex of
+        // valence d needs up to 2d − 1 of them: more than a word's bits on a fan).
+        let mut used: Vec<Vec<usize>> = vec![Vec::new(); particles];
         let mut family: Vec<Vec<u32>> = Vec::new();
         for (k, s) in springs.iter().enumerate() {
             if (s.kind == SpringKind::Bend as u32) != bend {
                 continue;
             }
             let (a, b) = (s.a as usize, s.b as usize);
-            // The first colour neither end has (at most 2·SLOTS − 1 are ever needed).
-            let c = (!(used[a] | used[b])).trailing_zeros() as usize;
-            used[a] |= 1 << c;
-            used[b] |= 1 << c;
+            // The first colour neither end has.
+            let c = (0..).find(|c| !used[a].contains(c) && !used[b].contains(c)).unwrap_or(0);
+            used[a].push(c);
+            used[b].push(c);
             if family.len() <= c {
                 family.resize(c + 1, Vec::new());
             }
@@ -182,8 +183,8 @@ fn xpbd_colouring(springs: &[Spring], particles: usize) -> Vec<Vec<u32>> {
 /// spring with it (`slots`: the gather table; `positions`: the rest positions), m;
 /// infinite for a mesh with no such pair. Farther pairs are farther apart on any mesh
 /// whose triangles are not folded onto each other.
-fn closest_unsprung(slots: &[SpringSlot], positions: &[[f32; 3]]) -> f32 {
-    let others = |v: usize| slots[v * SLOTS..(v + 1) * SLOTS].iter().filter_map(SpringSlot::other);
+fn closest_unsprung(slots: &Rows<SpringSlot>, positions: &[[f32; 3]]) -> f32 {
+    let others = |v: usize| slots.row(v).iter().filter_map(SpringSlot::other);
     let mut closest = f32::INFINITY;
     for v in 0..positions.len() {
         let x = glam::Vec3::from(positions[v]);

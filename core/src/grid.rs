@@ -13,7 +13,7 @@ use crate::scene::{Pinning, Scene};
 /// A 16-byte particle attribute: xyz plus one spare or flag component.
 pub type V4 = [f32; 4];
 
-pub use crate::tables::{FACE_SLOTS, SLOTS, STRAIN_SLOTS, TETHER_SLOTS};
+pub use crate::tables::{FACE_SLOTS, Rows, SLOTS, STRAIN_SLOTS, TETHER_SLOTS};
 
 /// The three spring families.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -196,12 +196,15 @@ pub struct ClothTopology {
     pub uv: Vec<[f32; 2]>,
     /// Triangles, counter-clockwise seen from +y when the cloth lies flat.
     pub triangles: Vec<[u32; 3]>,
-    /// The gather table: `SLOTS` slots per particle, particle-major.
-    pub slots: Vec<SpringSlot>,
+    /// The gather table, a row per particle: a grid's `SLOTS` slots (empty ones where a
+    /// neighbour is missing), a mesh's springs of any number (compressed rows: its edges,
+    /// the row's head, then its bending springs).
+    pub slots: Rows<SpringSlot>,
     /// Every spring once, for scatter kernels.
     pub springs: Vec<Spring>,
-    /// Per particle, the up-to-six adjacent triangles (or -1), in a fixed order.
-    pub face_slots: Vec<[i32; FACE_SLOTS]>,
+    /// Per particle, its adjacent triangles: a grid's up-to-six (or -1) in a fixed order
+    /// (`FACE_SLOTS` a row), a mesh's in triangle order (compressed rows, any number).
+    pub face_slots: Rows<i32>,
     /// Per particle, the tethers to the nearest pins.
     pub tethers: Vec<[Tether; TETHER_SLOTS]>,
     /// Distance between neighbouring particles at rest, m (a mesh: the mean edge length).
@@ -214,7 +217,7 @@ pub struct ClothTopology {
 /// each spring slot and each particle's mass (for the spring constants).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshTables {
-    /// [`SpringKind`] of each slot of the gather table (`SLOTS` per particle): edges are
+    /// [`SpringKind`] of each entry of the gather table (as [`Rows::entries`]): edges are
     /// structural, the springs across an edge bending.
     pub slot_kind: Vec<SpringKind>,
     /// Each particle's mass, kg (its share of the cloth's area).
@@ -247,7 +250,7 @@ impl ClothTopology {
         }
         let first = 2 * n + 2;
         let mut uni = [SpringSlot::EMPTY; SLOTS];
-        uni.copy_from_slice(&self.slots[first * SLOTS..(first + 1) * SLOTS]);
+        uni.copy_from_slice(self.slots.row(first));
         for u in &mut uni {
             u.neighbor = 0;
         }
@@ -255,7 +258,7 @@ impl ClothTopology {
             for i in 2..n - 2 {
                 let p = j * n + i;
                 for (s, u) in uni.iter().enumerate() {
-                    let t = &self.slots[p * SLOTS + s];
+                    let t = &self.slots.row(p)[s];
                     let off = SLOT_OFFSETS[s].0 as isize + SLOT_OFFSETS[s].1 as isize * n as isize;
                     if t.neighbor as isize != p as isize + off || t.rest != u.rest || t.ks != u.ks || t.kd != u.kd {
                         return None;
@@ -282,7 +285,7 @@ impl ClothTopology {
             for i in 0..n {
                 let p = (j * n + i) as usize;
                 for (s, u) in uni.iter_mut().enumerate() {
-                    let t = self.slots[p * SLOTS + s];
+                    let t = self.slots.row(p)[s];
                     let (ni, nj) = (i + SLOT_OFFSETS[s].0 as i64, j + SLOT_OFFSETS[s].1 as i64);
                     if ni < 0 || nj < 0 || ni >= n || nj >= n {
                         if t.neighbor >= 0 {
@@ -323,9 +326,12 @@ impl ClothTopology {
             let consts = |a: usize, b: usize, kind: SpringKind| {
                 params.spring_constants_for_mass(mesh.mass[a].min(mesh.mass[b]), self.spacing)[kind as usize]
             };
-            for (k, slot) in self.slots.iter_mut().enumerate() {
-                if let Some(b) = slot.other() {
-                    (slot.ks, slot.kd) = consts(k / SLOTS, b, mesh.slot_kind[k]);
+            for a in 0..self.slots.rows() {
+                let first = self.slots.range(a).start;
+                for (s, slot) in self.slots.row_mut(a).iter_mut().enumerate() {
+                    if let Some(b) = slot.other() {
+                        (slot.ks, slot.kd) = consts(a, b, mesh.slot_kind[first + s]);
+                    }
                 }
             }
             for s in &mut self.springs {
@@ -335,7 +341,7 @@ impl ClothTopology {
             return;
         }
         let consts = params.spring_constants(self.n, self.spacing);
-        for (k, slot) in self.slots.iter_mut().enumerate() {
+        for (k, slot) in self.slots.entries_mut().iter_mut().enumerate() {
             if slot.neighbor >= 0 {
                 let (ks, kd) = consts[slot_kind(k % SLOTS) as usize];
                 slot.ks = ks;
@@ -501,6 +507,8 @@ pub fn build_grid(scene: &Scene, params: &SimParams) -> Result<(ClothState, Clot
     let v0 = scene.cloth.velocity;
     let vel = pos.iter().map(|x| if x[3] == 0.0 { [0.0; 4] } else { [v0[0], v0[1], v0[2], 0.0] }).collect();
     let state = ClothState { n, vel, pos, force: zero.clone(), normal: zero };
+    let slots = Rows::fixed(slots, SLOTS, STRAIN_SLOTS);
+    let face_slots = Rows::fixed(face_slots.concat(), FACE_SLOTS, FACE_SLOTS);
     let topo = ClothTopology { n, uv, triangles, slots, springs, face_slots, tethers, spacing, mesh: None };
     Ok((state, topo))
 }
@@ -630,16 +638,16 @@ mod tests {
         // structural 2n(n-1), shear 2(n-1)², bend 2n(n-2)
         let expect = 2 * nu * (nu - 1) + 2 * (nu - 1) * (nu - 1) + 2 * nu * (nu - 2);
         assert_eq!(topo.springs.len(), expect);
-        let filled = topo.slots.iter().filter(|s| s.neighbor >= 0).count();
+        let filled = topo.slots.entries().iter().filter(|s| s.neighbor >= 0).count();
         assert_eq!(filled, 2 * expect, "every spring appears in both ends' slots");
         // Each triangle appears in exactly three face slots.
         let mut seen = vec![0; topo.triangles.len()];
-        for f in topo.face_slots.iter().flatten().filter(|&&f| f >= 0) {
+        for f in topo.face_slots.entries().iter().filter(|&&f| f >= 0) {
             seen[*f as usize] += 1;
         }
         assert!(seen.iter().all(|&c| c == 3));
-        for (p, f) in topo.face_slots.iter().enumerate() {
-            for &t in f.iter().filter(|&&t| t >= 0) {
+        for p in 0..topo.face_slots.rows() {
+            for &t in topo.face_slots.row(p).iter().filter(|&&t| t >= 0) {
                 assert!(topo.triangles[t as usize].contains(&(p as u32)));
             }
         }
@@ -655,7 +663,7 @@ mod tests {
         for n in [2u32, 3, 5, 8] {
             let (_, mut topo) = build_grid(&Scene::with_n(n), &SimParams::default()).unwrap();
             let g = topo.grid_slots().expect("build makes a regular table");
-            assert_eq!(g[0].rest, topo.slots[SLOTS].rest, "n = {n}: slot 0 from particle 1");
+            assert_eq!(g[0].rest, topo.slots.row(1)[0].rest, "n = {n}: slot 0 from particle 1");
             for (t, tri) in topo.triangles.iter().enumerate() {
                 let q = t as u32 / 2;
                 let p00 = q / (n - 1) * n + q % (n - 1);
@@ -663,11 +671,11 @@ mod tests {
                 assert_eq!(*tri, want, "n = {n}, triangle {t}");
             }
             // A changed constant, or a neighbour moved, makes the table irregular.
-            topo.slots[SLOTS].ks *= 2.0;
+            topo.slots.row_mut(1)[0].ks *= 2.0;
             assert!(topo.grid_slots().is_none(), "n = {n}");
-            topo.slots[SLOTS].ks /= 2.0;
+            topo.slots.row_mut(1)[0].ks /= 2.0;
             assert!(topo.grid_slots().is_some());
-            topo.slots[SLOTS].neighbor = -1;
+            topo.slots.row_mut(1)[0].neighbor = -1;
             assert!(topo.grid_slots().is_none(), "n = {n}");
         }
     }

@@ -49,7 +49,8 @@ pub enum Buf {
     Normal = 4,
     /// The other buffer of the position pair (the strain limit's output).
     PosOut = 5,
-    /// Spring slots 0..8 of every particle (structural, shear).
+    /// A grid's spring slots 0..8 of every particle (structural, shear); a mesh's whole
+    /// table, its rows one after another (see [`Buf::Adjacency`]).
     Slots = 6,
     /// The flat spring list, first half.
     Springs = 7,
@@ -57,7 +58,7 @@ pub enum Buf {
     Tethers = 8,
     /// Triangle corners.
     Triangles = 9,
-    /// Per-vertex adjacent faces.
+    /// Per-vertex adjacent faces: a grid's six a particle, a mesh's compressed rows.
     FaceSlots = 10,
     /// Face normals, |N| in w.
     Faces = 11,
@@ -65,7 +66,7 @@ pub enum Buf {
     Spheres = 12,
     /// Box colliders.
     Boxes = 13,
-    /// Spring slots 8..12 of every particle (bend).
+    /// A grid's spring slots 8..12 of every particle (bend); unused on a mesh.
     BendSlots = 14,
     /// The flat spring list, second half.
     SpringsB = 15,
@@ -97,11 +98,16 @@ pub enum Buf {
     Aux4 = 28,
     /// The conjugate-gradient scalars `r·z`, `p·q`, `α`, `β` (one `vec4<f32>`).
     Scalars = 29,
+    /// A mesh's compressed rows (`tables::Rows`): per particle, and one past the last,
+    /// `(first slot, end of the row's head, first face slot, 0)` into the spring table
+    /// (binding 6 holds a mesh's whole table) and the face slots. A grid's table is of
+    /// fixed rows and its kernels never read this (one unused element).
+    Adjacency = 30,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 30] = [
+    pub const ALL: [Buf; 31] = [
         Buf::Params,
         Buf::Pos,
         Buf::Vel,
@@ -132,6 +138,7 @@ impl Buf {
         Buf::Aux3,
         Buf::Aux4,
         Buf::Scalars,
+        Buf::Adjacency,
     ];
 
     /// The integrators' scratch particle buffers, in order.
@@ -189,6 +196,7 @@ impl Buf {
             Buf::Aux3 => "aux3",
             Buf::Aux4 => "aux4",
             Buf::Scalars => "scalars",
+            Buf::Adjacency => "adjacency",
         }
     }
 

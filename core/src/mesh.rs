@@ -11,12 +11,13 @@
 //! A mesh is checked before anything is built from it ([`TriMesh::check`]): every index
 //! in range, coordinates finite, no degenerate or repeated triangle, no vertex outside
 //! every triangle, every edge in at most two triangles (a manifold, with boundary) whose
-//! windings agree, and no vertex with more springs or triangles than the solvers' tables
-//! hold. Each refusal is one line naming the vertex, edge or triangle.
+//! windings agree. A vertex may have any number of triangles (the solvers' tables of a
+//! mesh are compressed rows, `tables::Rows`). Each refusal is one line naming the vertex,
+//! edge or triangle.
 //!
 //! The springs ([`MeshSprings`]): structural along every edge, bending across every
 //! interior edge (between the two vertices opposite it), rest lengths from the mesh. In a
-//! vertex's table the edges come first (the strain-limited slots `0 .. STRAIN_SLOTS`), the
+//! vertex's row the edges come first (the row's head, which the strain limit holds), the
 //! bending springs after them.
 
 use std::collections::HashMap;
@@ -24,7 +25,7 @@ use std::path::Path;
 
 use thiserror::Error;
 
-use crate::tables::{FACE_SLOTS, SLOTS, STRAIN_SLOTS, TETHER_SLOTS};
+use crate::tables::TETHER_SLOTS;
 
 /// The largest OBJ file read, bytes.
 pub const MAX_MESH_BYTES: u64 = 256 << 20;
@@ -40,6 +41,12 @@ pub const MAX_COORDINATE: f32 = 1e4;
 /// The shortest edge, in spacings of f32 values at the mesh's largest coordinate: a
 /// spring's length is then known to 0.1 %, so its force is not rounding noise.
 pub const SPRING_ULPS: f32 = 1024.0;
+
+/// The most springs (edges and bending springs) a mesh may have per vertex, on average:
+/// XPBD keeps a mesh's λ, a word per spring, in two of the particles' four-word scratch
+/// buffers. A sheet has fewer than 6 (Euler: E ≤ 3V edges, a bending spring per interior
+/// edge), whatever its valences; only a surface of many handles has more.
+pub const MAX_SPRINGS_PER_VERTEX: usize = 8;
 
 /// A triangle mesh as read: positions, optional texture coordinates per vertex, and
 /// counter-clockwise triangles (their normals point to the side seen counter-clockwise).
@@ -197,17 +204,17 @@ pub enum MeshError {
         /// The shortest edge allowed, m.
         need: f32,
     },
-    /// A vertex with more springs or triangles than the solvers' tables hold.
-    #[error("vertex {vertex} has {count} {what}; the solvers' table holds {max}")]
-    TooManyNeighbours {
-        /// The vertex.
-        vertex: usize,
-        /// How many it has.
-        count: usize,
-        /// Of what.
-        what: &'static str,
-        /// The table's room.
-        max: usize,
+    /// More springs than [`MAX_SPRINGS_PER_VERTEX`] per vertex (XPBD keeps each spring's
+    /// λ in the particles' scratch buffers): a mesh of many handles, not a cloth.
+    #[error(
+        "the mesh has {springs} springs for {vertices} vertices; the solvers hold at most {} per vertex (a cloth of one sheet has at most 6)",
+        MAX_SPRINGS_PER_VERTEX
+    )]
+    TooManySprings {
+        /// Its springs (edges and bending springs).
+        springs: usize,
+        /// Its vertices.
+        vertices: usize,
     },
 }
 
@@ -493,15 +500,6 @@ impl TriMesh {
                 directed.insert((a, b), tri);
             }
         }
-        let mut faces = vec![0usize; count];
-        for t in &self.triangles {
-            for &v in t {
-                faces[v as usize] += 1;
-            }
-        }
-        if let Some((vertex, &n)) = faces.iter().enumerate().find(|(_, n)| **n > FACE_SLOTS) {
-            return Err(MeshError::TooManyNeighbours { vertex, count: n, what: "triangles", max: FACE_SLOTS });
-        }
         MeshSprings::build(self).map(|_| ())
     }
 
@@ -671,14 +669,13 @@ pub struct MeshSprings {
     /// `(a, b)` with `a < b`, each pair once and none that is also an edge.
     pub bends: Vec<[u32; 2]>,
     /// Per vertex, its springs in slot order: indices into `edges` then into `bends`
-    /// (as `edges.len() + k`); edges first, at most [`STRAIN_SLOTS`] of them, at most
-    /// [`SLOTS`] in all.
+    /// (as `edges.len() + k`); edges first, as many as the vertex has.
     pub slots: Vec<Vec<u32>>,
 }
 
 impl MeshSprings {
-    /// The springs of `mesh` (whose indices are in range), or the vertex with more edges
-    /// than the strain-limited slots or more springs than the table holds.
+    /// The springs of `mesh` (whose indices are in range), of any valence; refused only
+    /// past [`MAX_SPRINGS_PER_VERTEX`] springs per vertex in all.
     pub fn build(mesh: &TriMesh) -> Result<Self, MeshError> {
         let count = mesh.positions.len();
         // Each undirected edge with the vertices opposite it (one or two).
@@ -705,25 +702,14 @@ impl MeshSprings {
             slots[a as usize].push(k as u32);
             slots[b as usize].push(k as u32);
         }
-        for (vertex, s) in slots.iter().enumerate() {
-            if s.len() > STRAIN_SLOTS {
-                return Err(MeshError::TooManyNeighbours { vertex, count: s.len(), what: "edges", max: STRAIN_SLOTS });
-            }
-        }
         let base = edges.len() as u32;
         for (k, &[a, b]) in bends.iter().enumerate() {
             slots[a as usize].push(base + k as u32);
             slots[b as usize].push(base + k as u32);
         }
-        for (vertex, s) in slots.iter().enumerate() {
-            if s.len() > SLOTS {
-                return Err(MeshError::TooManyNeighbours {
-                    vertex,
-                    count: s.len(),
-                    what: "springs (edges and bending springs)",
-                    max: SLOTS,
-                });
-            }
+        let springs = edges.len() + bends.len();
+        if springs > MAX_SPRINGS_PER_VERTEX * count {
+            return Err(MeshError::TooManySprings { springs, vertices: count });
         }
         Ok(Self { edges, bends, slots })
     }
@@ -886,11 +872,6 @@ mod tests {
 
     const SQUARE: &str = "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 4 3 2\n";
 
-    fn refused(text: &str) -> MeshError {
-        let m = parse_obj(text).unwrap();
-        m.check().expect_err("refused")
-    }
-
     #[test]
     fn the_file_order_of_vertices_is_kept_and_polygons_become_fans() {
         let m = parse_obj("# a quad\nv 0 0 0\nv 1 0 0 # x\nv 1 0 1\nv 0 0 1\nvn 0 1 0\ng a\nf 1//1 4//1 3//1 2//1\n")
@@ -915,7 +896,7 @@ mod tests {
         // with one bending spring (none repeats, none is an edge).
         assert_eq!(s.edges.len(), 56);
         assert_eq!(s.bends.len(), 40);
-        // An interior vertex: 6 edges and 6 bending springs, the table full.
+        // An interior vertex: 6 edges and 6 bending springs, edges first.
         assert_eq!(s.slots[12].len(), 12);
         assert!(s.slots[12][..6].iter().all(|&k| s.is_edge(k)) && s.slots[12][6..].iter().all(|&k| !s.is_edge(k)));
         // Areas: 4 m² in all; an interior vertex holds a sixth of a 0.5 m quad's six triangles.
@@ -967,17 +948,6 @@ mod tests {
             assert!(line.contains(want), "{text:?}: {line}");
             assert!(!line.contains('\n'), "{line}");
         }
-        // A fan of 8 triangles around vertex 0: more than FACE_SLOTS = 6.
-        let mut fan = String::from("v 0 0 0\n");
-        for k in 0..8 {
-            let a = k as f32 * std::f32::consts::TAU / 8.0;
-            fan += &format!("v {} 0 {}\n", a.cos(), a.sin());
-        }
-        for k in 0..8 {
-            fan += &format!("f 1 {} {}\n", 2 + (k + 1) % 8, 2 + k);
-        }
-        let e = refused(&fan).to_string();
-        assert!(e.contains("vertex 0 has 8"), "{e}");
     }
 
     #[test]

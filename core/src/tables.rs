@@ -1,16 +1,134 @@
-//! The sizes of the per-particle tables every solver reads: a module of its own, without
-//! dependencies, so that the grid builder and the mesh reader share them without
-//! depending on each other.
+//! The per-particle tables every solver reads, and the grid's sizes of them: a module of
+//! its own, without dependencies, so that the grid builder and the mesh reader share them
+//! without depending on each other.
 
-/// Spring slots per particle in the gather table.
+/// Spring slots per particle in the grid's gather table (a mesh's rows have any length).
 pub const SLOTS: usize = 12;
-/// Slots `0 .. STRAIN_SLOTS` (a grid's structural and shear springs, a mesh's edges) are
-/// held by the strain limit.
+/// Slots `0 .. STRAIN_SLOTS` of a grid's row (its structural and shear springs) are held
+/// by the strain limit (a mesh's: the edges at the head of its row).
 pub const STRAIN_SLOTS: usize = 8;
-/// Face slots per particle: a regular grid vertex touches at most six triangles.
+/// Face slots per particle of a grid: a regular grid vertex touches at most six triangles.
 pub const FACE_SLOTS: usize = 6;
 /// Tether slots per particle (long-range attachments to pins).
 pub const TETHER_SLOTS: usize = 2;
 /// The most particles a mesh may have for self-collision: a hash slot's word holds the
 /// particle's index in 24 bits (`cpu::self_collide::slot_word`).
 pub const SELF_COLLISION_MAX_PARTICLES: usize = 1 << 24;
+
+/// Per-particle lists (spring slots, faces around a vertex): rows of one fixed width (the
+/// grid's table, where empty entries pad a row) or ranges into one flat list (a mesh's
+/// compressed rows, CSR: row `i` is `start[i] .. start[i + 1]`, of any length). A row's
+/// head (`head(i)`) is its strain-limited part: the first [`STRAIN_SLOTS`] of a fixed
+/// row, the edges of a mesh vertex (which its row lists before its bending springs).
+/// The GPU kernels read a mesh's rows through one buffer of `(start, head end, face start,
+/// 0)` per particle and one past the last (`clothlab_engine::tables::adjacency`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rows<T> {
+    entries: Vec<T>,
+    bounds: Bounds,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Bounds {
+    /// Rows of `width` entries, the first `head` of them the head.
+    Fixed { width: usize, head: usize },
+    /// Row `i` is `start[i] .. start[i + 1]`, its head `start[i] .. head_end[i]`.
+    Csr { start: Vec<u32>, head_end: Vec<u32> },
+}
+
+impl<T: Copy> Rows<T> {
+    /// Rows of `width` entries each (`entries.len()` a multiple of it), the first `head`
+    /// of each the head.
+    pub fn fixed(entries: Vec<T>, width: usize, head: usize) -> Self {
+        assert!(width > 0 && head <= width && entries.len().is_multiple_of(width), "fixed rows of {width}");
+        Self { entries, bounds: Bounds::Fixed { width, head } }
+    }
+
+    /// Compressed rows: row `i` is `lists[i]`, its head the first `heads[i]` entries (all
+    /// of the row where `heads` is `None`).
+    pub fn compressed(lists: &[Vec<T>], heads: Option<&[usize]>) -> Self {
+        let total: usize = lists.iter().map(Vec::len).sum();
+        let mut entries = Vec::with_capacity(total);
+        let mut start = Vec::with_capacity(lists.len() + 1);
+        let mut head_end = Vec::with_capacity(lists.len());
+        for (i, list) in lists.iter().enumerate() {
+            let s = entries.len();
+            start.push(s as u32);
+            let h = heads.map_or(list.len(), |h| h[i].min(list.len()));
+            head_end.push((s + h) as u32);
+            entries.extend_from_slice(list);
+        }
+        start.push(entries.len() as u32);
+        Self { entries, bounds: Bounds::Csr { start, head_end } }
+    }
+
+    /// How many rows.
+    pub fn rows(&self) -> usize {
+        match &self.bounds {
+            Bounds::Fixed { width, .. } => self.entries.len() / width,
+            Bounds::Csr { head_end, .. } => head_end.len(),
+        }
+    }
+
+    /// The range of row `i` in [`Self::entries`].
+    #[inline(always)]
+    pub fn range(&self, i: usize) -> std::ops::Range<usize> {
+        match &self.bounds {
+            Bounds::Fixed { width, .. } => i * width..(i + 1) * width,
+            Bounds::Csr { start, .. } => start[i] as usize..start[i + 1] as usize,
+        }
+    }
+
+    /// Row `i`.
+    #[inline(always)]
+    pub fn row(&self, i: usize) -> &[T] {
+        &self.entries[self.range(i)]
+    }
+
+    /// Row `i`'s head (its strain-limited entries).
+    #[inline(always)]
+    pub fn head(&self, i: usize) -> &[T] {
+        match &self.bounds {
+            Bounds::Fixed { width, head } => &self.entries[i * width..i * width + head],
+            Bounds::Csr { start, head_end } => &self.entries[start[i] as usize..head_end[i] as usize],
+        }
+    }
+
+    /// Row `i`, to change in place.
+    pub fn row_mut(&mut self, i: usize) -> &mut [T] {
+        let r = self.range(i);
+        &mut self.entries[r]
+    }
+
+    /// Every row's entries, row after row.
+    pub fn entries(&self) -> &[T] {
+        &self.entries
+    }
+
+    /// Every row's entries, to change in place (the rows stay as they are).
+    pub fn entries_mut(&mut self) -> &mut [T] {
+        &mut self.entries
+    }
+
+    /// The fixed width, or `None` for compressed rows.
+    pub fn width(&self) -> Option<usize> {
+        match self.bounds {
+            Bounds::Fixed { width, .. } => Some(width),
+            Bounds::Csr { .. } => None,
+        }
+    }
+
+    /// Compressed rows' `(start, head end)` of row `i`, for `i` up to [`Self::rows`]
+    /// (the last row's end); `None` for fixed rows.
+    pub fn csr_bounds(&self, i: usize) -> Option<(u32, u32)> {
+        match &self.bounds {
+            Bounds::Fixed { .. } => None,
+            Bounds::Csr { start, head_end } => Some((start[i], head_end.get(i).copied().unwrap_or(start[i]))),
+        }
+    }
+
+    /// The longest row's length.
+    pub fn max_row(&self) -> usize {
+        (0..self.rows()).map(|i| self.range(i).len()).max().unwrap_or(0)
+    }
+}

@@ -279,36 +279,31 @@ fn xpbd_holds_a_hanging_mesh_together() {
     assert!(median.abs() < 0.01, "median edge strain {median}");
 }
 
-/// The strain limit holds a mesh's edges and only those: the gather table packs a
-/// vertex's springs (edges first), so at a vertex with fewer edges than the strain-limited
-/// slots bending springs sit in them, marked for the strain limit to skip
-/// (`SpringSlot::other`). Every spring of the list is in both its ends' slots, found by
-/// `other` whichever the mark; every slot the strain limit reads (neighbor ≥ 0 below
-/// STRAIN_SLOTS) is an edge.
+/// The strain limit holds a mesh's edges and only those: a vertex's row lists its edges
+/// first (the row's head, which the strain limit and its counts walk) and its bending
+/// springs after. Every spring of the list is in both its ends' rows; every head entry is
+/// an edge and every entry past the head a bending spring.
 #[test]
 fn the_strain_limit_reads_the_edges_and_the_gather_every_spring() {
-    use clothlab_core::grid::{SLOTS, STRAIN_SLOTS, SpringKind};
+    use clothlab_core::grid::SpringKind;
     for name in ["mesh-skirt.toml", "mesh-flag.toml", "mesh-tablecloth.toml"] {
         let file = SceneFile::load(&scenes().join(name)).unwrap();
         let (_, topo) = clothlab_core::build(&file.scene, &file.params).unwrap();
         let mesh = topo.mesh.as_ref().unwrap();
-        let (mut limited, mut marked, mut found) = (0, 0, 0);
-        for (k, slot) in topo.slots.iter().enumerate() {
-            let edge = mesh.slot_kind[k] == SpringKind::Structural;
-            if k % SLOTS < STRAIN_SLOTS && slot.neighbor >= 0 {
-                assert!(edge, "{name}: slot {k} is strain-limited but not an edge");
-                limited += 1;
+        let (mut limited, mut found) = (0, 0);
+        for v in 0..topo.num_particles() {
+            let range = topo.slots.range(v);
+            let head = topo.slots.head(v).len();
+            for (s, slot) in topo.slots.row(v).iter().enumerate() {
+                let edge = mesh.slot_kind[range.start + s] == SpringKind::Structural;
+                assert_eq!(edge, s < head, "{name}: vertex {v} entry {s}: the head is its edges");
+                assert!(slot.neighbor >= 0, "{name}: vertex {v} entry {s} empty or marked");
+                limited += usize::from(s < head);
+                found += usize::from(slot.other().is_some());
             }
-            if slot.neighbor < -1 {
-                assert!(!edge && k % SLOTS < STRAIN_SLOTS, "{name}: slot {k} marked but an edge or a bend slot");
-                marked += 1;
-            }
-            found += usize::from(slot.other().is_some());
         }
         let edges = topo.springs.iter().filter(|s| s.kind == SpringKind::Structural as u32).count();
         assert_eq!(limited, 2 * edges, "{name}: every edge limited from both ends");
         assert_eq!(found, 2 * topo.springs.len(), "{name}: every spring gathered at both ends");
-        // Vertices of valence < 8 hold bending springs in their strain slots (valence 6: two).
-        assert!(marked > 0, "{name}: no bending spring below STRAIN_SLOTS: the mark is not exercised");
     }
 }

@@ -2,7 +2,7 @@
 //! what it is.
 
 use clothlab_core::cpu::{self, Exec};
-use clothlab_core::grid::{SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
+use clothlab_core::grid::{Rows, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
 use clothlab_core::stats::{max_strain, summarize};
 use clothlab_core::{CpuSolver, Pinning, Scene, SimParams, Solver, SpringKind, build};
 
@@ -75,9 +75,14 @@ fn spring_mass_period_is_two_pi_sqrt_m_over_k() {
     let dt = period / 400.0; // ω dt = 0.0157: Verlet's frequency error ω²dt²/24 ≈ 1e-5
     let p = bare_params(2, dt, m);
     let rest = 1.0;
-    let mut slots = vec![SpringSlot::EMPTY; 2 * SLOTS];
-    slots[0] = SpringSlot { neighbor: 1, rest, ks: k, kd: 0.0 };
-    slots[SLOTS] = SpringSlot { neighbor: 0, rest, ks: k, kd: 0.0 };
+    // One spring: a row of one entry at each end (compressed rows, as a mesh's).
+    let slots = Rows::compressed(
+        &[
+            vec![SpringSlot { neighbor: 1, rest, ks: k, kd: 0.0 }],
+            vec![SpringSlot { neighbor: 0, rest, ks: k, kd: 0.0 }],
+        ],
+        None,
+    );
     let mut pos: Vec<V4> = vec![[0.0, 0.0, 0.0, 0.0], [rest + 0.1, 0.0, 0.0, 1.0]];
     let mut vel = vec![[0.0f32; 4]; 2];
     let mut force = vec![[0.0f32; 4]; 2];
@@ -131,7 +136,7 @@ fn pins_hold_and_nothing_ends_below_the_floor_or_inside_a_sphere() {
 }
 
 /// Every particle's count of over-stretched springs, as the pass that follows reads them.
-fn strain_counts(p: &StepParams, slots: &[SpringSlot], pos: &[V4]) -> Vec<f32> {
+fn strain_counts(p: &StepParams, slots: &Rows<SpringSlot>, pos: &[V4]) -> Vec<f32> {
     let mut c = vec![0.0; pos.len()];
     cpu::strain_count(Exec::Serial, p, slots, pos, &mut c);
     c
@@ -142,9 +147,11 @@ fn a_lone_overstretched_spring_is_within_the_limit_after_one_pass() {
     let mut p = bare_params(2, 1e-3, 1.0);
     p.strain_limit = 0.1;
     let rest = 0.5;
+    // Fixed rows, as a grid's: the spring in the first slot of each end's row.
     let mut slots = vec![SpringSlot::EMPTY; 2 * SLOTS];
     slots[0] = SpringSlot { neighbor: 1, rest, ks: 1.0, kd: 0.0 };
     slots[SLOTS] = SpringSlot { neighbor: 0, rest, ks: 1.0, kd: 0.0 };
+    let slots = Rows::fixed(slots, SLOTS, STRAIN_SLOTS);
     let tethers = vec![[Tether::EMPTY; TETHER_SLOTS]; 2];
     let pos: Vec<V4> = vec![[0.0, 0.0, 0.0, 1.0], [0.3, 0.9, 0.2, 1.0]];
     let mut out = pos.clone();

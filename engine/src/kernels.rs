@@ -540,19 +540,23 @@ pub struct Glsl {
 /// loads that a cache serves are not counted: what `clothlab bench --ladder` divides by
 /// a kernel's time to say how close it runs to the memory's bandwidth.
 pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool) -> u64 {
-    use clothlab_core::grid::{FACE_SLOTS, SLOTS, STRAIN_SLOTS, TETHER_SLOTS};
+    use clothlab_core::grid::{SLOTS, STRAIN_SLOTS, TETHER_SLOTS};
     let np = topo.num_particles() as u64;
     let tris = topo.triangles.len() as u64;
     let springs = topo.springs.len() as u64;
+    let entries = topo.slots.entries().len() as u64;
     let table = |b: Buf| match b {
         Buf::Slots | Buf::BendSlots if k.flavor.table_image || table_uniform => 0,
         // A mesh's self-collision response reads the table only for the few particles in
         // contact.
         Buf::Slots | Buf::BendSlots if k.def.name == "self_collide_mesh" => 0,
         Buf::Table if !k.flavor.table_image => 0,
+        // A mesh's whole table is in the first binding.
+        Buf::Slots if topo.mesh.is_some() => entries * 16,
+        Buf::BendSlots if topo.mesh.is_some() => 0,
         Buf::Slots => np * STRAIN_SLOTS as u64 * 16,
         Buf::BendSlots => np * (SLOTS - STRAIN_SLOTS) as u64 * 16,
-        Buf::Table => np * SLOTS as u64 * 16,
+        Buf::Table => entries * 16,
         _ => 0,
     };
     let size = |b: Buf| -> u64 {
@@ -562,7 +566,9 @@ pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool)
             Buf::Scalars => 16,
             Buf::Faces => tris * 16,
             Buf::Triangles => tris * 12,
-            Buf::FaceSlots => np * FACE_SLOTS as u64 * 4,
+            Buf::FaceSlots => topo.face_slots.entries().len() as u64 * 4,
+            // A grid's kernels never read it; a mesh's read their particle's and the next.
+            Buf::Adjacency if topo.mesh.is_some() => (np + 1) * 16,
             Buf::Tethers => np * TETHER_SLOTS as u64 * 8,
             Buf::Springs | Buf::SpringsB => springs / 2 * 24,
             Buf::Slots | Buf::BendSlots | Buf::Table => table(b),
@@ -654,8 +660,8 @@ fn tri_normals(a: &TwinArgs, b: &mut HostBuffers) {
 /// Adds every vertex's adjacent face normals into its normal (what the naive scatter
 /// accumulates; the recipe clears the normals first).
 fn add_face_sums(a: &TwinArgs, b: &mut HostBuffers) {
-    for (n, slots) in b.normal.iter_mut().zip(&a.topo.face_slots) {
-        for &t in slots.iter().filter(|&&t| t >= 0) {
+    for (i, n) in b.normal.iter_mut().enumerate() {
+        for &t in a.topo.face_slots.row(i).iter().filter(|&&t| t >= 0) {
             let f = b.faces[t as usize];
             n.iter_mut().zip(f).take(3).for_each(|(x, y)| *x += y);
         }
@@ -835,7 +841,7 @@ fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
 
 fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {
     let [.., cells, _, slots] = &b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
-    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.vel, cells, slots, &a.topo.slots, &mut b.pos_out);
+    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.vel, cells, slots, Some(&a.topo.slots), &mut b.pos_out);
 }
 
 /// Kernel-test inputs: the hash built by the twins up to the kernel under test (the
@@ -912,7 +918,7 @@ const STATS_TEST: Check = Check::Own("gpu_statistics_match_the_cpu_twin_by_subgr
 const STATE: &[Buf] = &[Params, Pos, Vel, Force];
 /// The gathers' reads: the state and the spring table (storage buffers, or the image in
 /// the `_tex` twins, or the uniform block for the regular grid).
-const TABLE: &[Buf] = &[Params, Pos, Vel, Force, Slots, BendSlots, Interior, Table];
+const TABLE: &[Buf] = &[Params, Pos, Vel, Force, Slots, BendSlots, Adjacency, Interior, Table];
 const COLLIDERS: &[Buf] = &[Params, Pos, Vel, Spheres, Boxes];
 const NONE: &[Buf] = &[];
 
@@ -973,7 +979,7 @@ pub static FORCES_SPRINGS_WIND: KernelDef = KernelDef {
         "forces_springs_wind",
         forces_springs_wind,
         Count::Blocks,
-        &[Params, Pos, Vel, Slots, BendSlots, Interior, Table, Triangles, FaceSlots],
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Triangles, FaceSlots],
         &[Force],
     )
 };
@@ -1017,7 +1023,13 @@ pub static STRAIN_COUNT: KernelDef = KernelDef {
     pure: &[Aux0],
     variants: BLOCKED,
     label: timing::STRAIN_LIMIT,
-    ..def("strain_count", strain_count, Count::Blocks, &[Params, Pos, Slots, BendSlots, Interior, Table], &[Aux0])
+    ..def(
+        "strain_count",
+        strain_count,
+        Count::Blocks,
+        &[Params, Pos, Slots, BendSlots, Adjacency, Interior, Table],
+        &[Aux0],
+    )
 };
 /// One Provot pass plus the tethers, into the other buffer of the pair; the velocities
 /// gain the move over dt.
@@ -1031,7 +1043,7 @@ pub static STRAIN_LIMIT: KernelDef = KernelDef {
         "strain_limit",
         strain_limit,
         Count::Blocks,
-        &[Params, Pos, Vel, Slots, BendSlots, Interior, Table, Tethers, Aux0],
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers, Aux0],
         &[PosOut, Vel],
     )
 };
@@ -1051,7 +1063,7 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
         "strain_limit_count",
         strain_limit_count,
         Count::Blocks,
-        &[Params, Pos, Vel, Slots, BendSlots, Interior, Table, Tethers, Aux0, Aux2, Aux3],
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers, Aux0, Aux2, Aux3],
         &[PosOut, Vel, Aux2, Aux3],
     )
 };
@@ -1082,7 +1094,7 @@ pub static VERTEX_NORMALS: KernelDef = KernelDef {
         "vertex_normals",
         vertex_normals,
         Count::Particles,
-        &[Params, Pos, Vel, Faces, FaceSlots, Normal, Force],
+        &[Params, Pos, Vel, Faces, FaceSlots, Adjacency, Normal, Force],
         &[Normal, Force],
     )
 };
@@ -1096,7 +1108,7 @@ pub static VERTEX_NORMALS_NAIVE: KernelDef = KernelDef {
         "vertex_normals_naive",
         vertex_normals,
         Count::Particles,
-        &[Params, Pos, Vel, Faces, FaceSlots, Normal, Force],
+        &[Params, Pos, Vel, Faces, FaceSlots, Adjacency, Normal, Force],
         &[Normal, Force],
     )
 };
@@ -1106,7 +1118,7 @@ pub static STATS: KernelDef = KernelDef {
     label: timing::STATS,
     variants: Variants { table_image: true, ..PLAIN },
     immediates: Immediates::Substep,
-    ..def("stats", stats, Count::Particles, &[Params, Pos, Vel, Slots, BendSlots, Table], &[Partials])
+    ..def("stats", stats, Count::Particles, &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Table], &[Partials])
 };
 /// Statistics by atomics from every invocation.
 pub static STATS_ATOMIC: KernelDef = KernelDef {
@@ -1118,7 +1130,7 @@ pub static STATS_ATOMIC: KernelDef = KernelDef {
         "stats_atomic",
         stats,
         Count::Particles,
-        &[Params, Pos, Vel, Slots, BendSlots, Table, StatsMax, StatsEnergy],
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Table, StatsMax, StatsEnergy],
         &[StatsMax, StatsEnergy],
     )
 };
@@ -1188,7 +1200,7 @@ const fn xpbd(name: &'static str, twin: Twin) -> KernelDef {
             name,
             twin,
             Count::Particles,
-            &[Params, Pos, Vel, Slots, BendSlots, Table, Aux0, Aux1],
+            &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Table, Aux0, Aux1],
             &[Pos, Vel, Aux0, Aux1],
         )
     }
@@ -1233,7 +1245,7 @@ pub static CG_BEGIN: KernelDef = KernelDef {
         "cg_begin",
         cg_begin,
         Count::Particles,
-        &[Params, Pos, Vel, Force, Slots, BendSlots, Table, Aux2],
+        &[Params, Pos, Vel, Force, Slots, BendSlots, Adjacency, Table, Aux2],
         &[Aux0, Aux1, Aux2, Aux4],
     )
 };
@@ -1242,7 +1254,13 @@ pub static CG_MATVEC: KernelDef = KernelDef {
     check: GATHER,
     label: timing::CG,
     variants: IMM_TEX,
-    ..def("cg_matvec", cg_matvec, Count::Particles, &[Params, Pos, Vel, Slots, BendSlots, Table, Aux2], &[Aux3, Aux4])
+    ..def(
+        "cg_matvec",
+        cg_matvec,
+        Count::Particles,
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Table, Aux2],
+        &[Aux3, Aux4],
+    )
 };
 /// Implicit: p·q folded, α = r·z / p·q.
 pub static CG_REDUCE_PQ: KernelDef = KernelDef {
@@ -1338,7 +1356,7 @@ pub static SELF_COLLIDE_MESH: KernelDef = KernelDef {
         "self_collide_mesh",
         self_collide,
         Count::Pairs,
-        &[Params, Pos, Vel, Slots, BendSlots, Aux2, Aux4],
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Aux2, Aux4],
         &[PosOut, Vel],
     )
 };

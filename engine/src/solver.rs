@@ -25,7 +25,7 @@ use crate::recipe::{
     Caps, Command, Hazards, Integration, StatsMode, bits, dispatches, frame_end, kernels_for, kernels_of, recipe_for,
     res, stats_commands,
 };
-use crate::tables::{record_times, split_slots, spring_halves, table_texels};
+use crate::tables::{adjacency, face_flat, record_times, split_slots, spring_halves, table_texels};
 use crate::variant::{Constants, Draw, Submit, Table, Variant, VariantSpec};
 
 /// Timestamp queries per frame.
@@ -122,16 +122,18 @@ impl<E: Engine> GpuSolver<E> {
         // (the largest buffer is the structural and shear half of the spring table).
         let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
         SolverError::check_table(scene.cloth.n, per_particle, info.max_binding, &info.adapter)?;
-        let np = scene.num_particles() as u64;
-        if np * per_particle > info.max_binding {
+        let (state, topo) = build(&scene, &params)?;
+        // A mesh's whole table is one binding (its rows one after another).
+        let table_bytes = std::mem::size_of_val(topo.slots.entries()) as u64;
+        if topo.mesh.is_some() && table_bytes > info.max_binding {
             return Err(SolverError::Unsupported(format!(
-                "a mesh of {np} particles needs a {} MiB spring table; {} binds at most {} MiB",
-                (np * per_particle) >> 20,
+                "a mesh of {} particles needs a {} MiB spring table; {} binds at most {} MiB",
+                topo.num_particles(),
+                table_bytes >> 20,
                 info.adapter,
                 info.max_binding >> 20
             )));
         }
-        let (state, topo) = build(&scene, &params)?;
         // Initial normals and wind, as every solver starts.
         let sp = StepParams::new(&params, &scene, None);
         let state = start_buffers(twins::Exec::Serial, &sp, &topo, &state);
@@ -142,7 +144,8 @@ impl<E: Engine> GpuSolver<E> {
         let mut boxes = [Aabb::new([0.0; 3], [0.0; 3]); MAX_COLLIDERS];
         boxes[..scene.boxes.len()].copy_from_slice(&scene.boxes);
         let tri_flat: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
-        let face_flat: Vec<i32> = topo.face_slots.iter().flatten().copied().collect();
+        let face_flat = face_flat(&topo);
+        let adjacency = adjacency(&topo);
         let (strain, bend) = split_slots(&topo);
         let (springs_a, springs_b) = spring_halves(&topo.springs);
         let interior = interior_block(&topo, variant.table);
@@ -152,7 +155,7 @@ impl<E: Engine> GpuSolver<E> {
         let pos_bytes: &[u8] = bytemuck::cast_slice(&state.pos);
         let aux_zero = vec![0u8; 16 * topo.num_particles()];
         // Positions and normals are the renderer's vertex buffers too (no copy).
-        let contents: [(Buf, &[u8]); 29] = [
+        let contents: [(Buf, &[u8]); 30] = [
             (Buf::Params, bytemuck::bytes_of(&sp)),
             (Buf::ParamsStorage, bytemuck::bytes_of(&sp)),
             (Buf::SpheresUniform, bytemuck::cast_slice(&spheres)),
@@ -166,7 +169,8 @@ impl<E: Engine> GpuSolver<E> {
             (Buf::Springs, bytemuck::cast_slice(springs_a)),
             (Buf::Tethers, bytemuck::cast_slice(&topo.tethers)),
             (Buf::Triangles, bytemuck::cast_slice(&tri_flat)),
-            (Buf::FaceSlots, bytemuck::cast_slice(&face_flat)),
+            (Buf::FaceSlots, bytemuck::cast_slice(face_flat)),
+            (Buf::Adjacency, bytemuck::cast_slice(&adjacency)),
             (Buf::Faces, bytemuck::cast_slice(face)),
             (Buf::Spheres, bytemuck::cast_slice(&spheres)),
             (Buf::Boxes, bytemuck::cast_slice(&boxes)),

@@ -5,30 +5,59 @@ use clothlab_core::grid::{SLOTS, STRAIN_SLOTS};
 use clothlab_core::layout::TABLE_WIDTH;
 use clothlab_core::{ClothTopology, Spring, SpringSlot};
 
-/// The spring table as one image of rgba32uint texels (`shared/table_tex.wgsl`): slot s of
-/// particle i at texel 12 i + s, [`TABLE_WIDTH`] texels a row. Returns the texels (4 words
-/// each, row-major, the last row padded with empty slots) and the image's height.
+/// The spring table as one image of rgba32uint texels (`shared/table_tex.wgsl`): entry k
+/// of the table ([`clothlab_core::grid::Rows::entries`]: slot s of a grid's particle i at
+/// k = 12 i + s, a mesh's rows one after another) at texel k, [`TABLE_WIDTH`] texels a
+/// row. Returns the texels (4 words each, row-major, the last row padded with empty
+/// slots) and the image's height.
 pub fn table_texels(topo: &ClothTopology) -> (Vec<[u32; 4]>, u32) {
-    let count = topo.slots.len();
-    let height = count.div_ceil(TABLE_WIDTH as usize).max(1);
+    let entries = topo.slots.entries();
+    let height = entries.len().div_ceil(TABLE_WIDTH as usize).max(1);
     let mut texels = vec![[u32::MAX, 0, 0, 0]; height * TABLE_WIDTH as usize];
-    for (t, s) in texels.iter_mut().zip(&topo.slots) {
+    for (t, s) in texels.iter_mut().zip(entries) {
         *t = [s.neighbor as u32, s.rest.to_bits(), s.ks.to_bits(), s.kd.to_bits()];
     }
     (texels, height as u32)
 }
 
-/// The spring table as the shaders read it: slots `0..STRAIN_SLOTS` of every particle,
-/// then the remaining (bend) slots of every particle, so that each part stays within
-/// the 128 MiB a storage binding may span on many adapters up to n = 1024.
+/// The spring table as the shaders read it. A grid's: slots `0..STRAIN_SLOTS` of every
+/// particle, then the remaining (bend) slots of every particle, so that each part stays
+/// within the 128 MiB a storage binding may span on many adapters up to n = 1024. A mesh's:
+/// its rows one after another in the first, one empty slot in the second.
 pub fn split_slots(topo: &ClothTopology) -> (Vec<SpringSlot>, Vec<SpringSlot>) {
+    if topo.slots.width().is_none() {
+        return (topo.slots.entries().to_vec(), vec![SpringSlot::EMPTY]);
+    }
     let mut strain = Vec::with_capacity(topo.num_particles() * STRAIN_SLOTS);
     let mut bend = Vec::with_capacity(topo.num_particles() * (SLOTS - STRAIN_SLOTS));
-    for p in topo.slots.chunks_exact(SLOTS) {
+    for p in topo.slots.entries().chunks_exact(SLOTS) {
         strain.extend_from_slice(&p[..STRAIN_SLOTS]);
         bend.extend_from_slice(&p[STRAIN_SLOTS..]);
     }
     (strain, bend)
+}
+
+/// The face slots as the shaders read them: a grid's six a particle, a mesh's rows one
+/// after another.
+pub fn face_flat(topo: &ClothTopology) -> &[i32] {
+    topo.face_slots.entries()
+}
+
+/// The compressed rows' bounds ([`clothlab_core::layout::Buf::Adjacency`]): per particle,
+/// and one past the last, `(first slot, end of the head, first face slot, 0)`; for a
+/// grid (fixed rows, which its kernels compute) one zero element.
+pub fn adjacency(topo: &ClothTopology) -> Vec<[u32; 4]> {
+    let np = topo.num_particles();
+    match (topo.slots.csr_bounds(0), topo.face_slots.csr_bounds(0)) {
+        (Some(_), Some(_)) => (0..=np)
+            .map(|i| {
+                let (first, head) = topo.slots.csr_bounds(i).unwrap_or_default();
+                let (face, _) = topo.face_slots.csr_bounds(i).unwrap_or_default();
+                [first, head, face, 0]
+            })
+            .collect(),
+        _ => vec![[0; 4]],
+    }
 }
 
 /// The flat spring list in two halves (bindings 7 and 15), for the same reason.

@@ -7,7 +7,7 @@
 use std::f32::consts::TAU;
 
 use clothlab_core::build;
-use clothlab_core::grid::{SLOTS, SpringSlot, StepParams};
+use clothlab_core::grid::{SpringSlot, StepParams};
 use clothlab_core::{CpuSolver, Exec, Integrator, Scene, SimParams, Solver, StiffnessUnits};
 use clothlab_engine::cpu::start_buffers;
 use clothlab_engine::recipe::{Command, Integration, recipe};
@@ -48,9 +48,9 @@ impl Oscillator {
         let (mut state, mut topo) = build(&scene, &params).unwrap();
         let m = params.particle_mass(2);
         let k = m * TAU * TAU;
-        topo.slots.fill(SpringSlot::EMPTY);
+        topo.slots.entries_mut().fill(SpringSlot::EMPTY);
         if spring {
-            topo.slots[SLOTS] = SpringSlot { neighbor: 0, rest: 1.0, ks: k, kd: 0.0 };
+            topo.slots.row_mut(1)[0] = SpringSlot { neighbor: 0, rest: 1.0, ks: k, kd: 0.0 };
         }
         state.pos = vec![[-1.0, 0.0, 0.0, 0.0], [A, 0.0, 0.0, 1.0], [5.0, 5.0, 5.0, 0.0], [6.0, 5.0, 5.0, 0.0]];
         let mut p = StepParams::new(&params, &scene, None);

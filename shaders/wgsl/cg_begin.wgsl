@@ -1,4 +1,4 @@
-//! include: state, table, aux, cg
+//! include: state, table, aux, cg, adjacency
 // cg_begin — implicit Euler's solve starts (core::cpu::integrators::cg_begin): Δv = 0,
 // r = dt f − dt² K v (w: the diagonal of A), p = z = r/diag; the partial sums of r·z.
 @compute @workgroup_size(WORKGROUP)

@@ -1,4 +1,4 @@
-//! include: state, table, aux, cg
+//! include: state, table, aux, cg, adjacency
 // cg_matvec — q = S A p, zero for held particles (core::cpu::integrators::cg_matvec); the
 // partial sums of p·q.
 @compute @workgroup_size(WORKGROUP)

@@ -1,4 +1,4 @@
-//! include: state, hash, hash_fn, self_collide_walk
+//! include: state, hash, hash_fn, self_collide_walk, adjacency
 // self_collide_mesh — self_collide on a mesh (shared/self_collide_walk.wgsl): pairs of
 // consecutive particles of the list, and a particle's neighbours are its springs, read
 // from the table for the few entries within the thickness (core::cpu::self_collide::
@@ -6,21 +6,29 @@
 // on lavapipe a branch costs its body whether a lane takes it or not (2.4x the grid's
 // response with the loop behind an `if`).
 
-// The spring table (shared/table.wgsl's bindings, read directly).
+// The spring table (shared/table.wgsl's first binding, read directly: a mesh's rows lie
+// one after another in it).
 @group(0) @binding(6) var<storage, read> strain_table: array<SpringSlot>;
-@group(0) @binding(14) var<storage, read> bend_table: array<SpringSlot>;
 
 // Whether b is not among a's springs (the rest distance is checked for the whole mesh
 // when the parameters are).
 fn mesh_candidates(a: u32, b: u32) -> bool {
     var spring = a == b;
-    for (var s = 0u; s < STRAIN_SLOTS; s++) {
-        spring = spring || slot_other(strain_table[a * STRAIN_SLOTS + s]) == i32(b);
-    }
-    for (var s = 0u; s < SLOTS - STRAIN_SLOTS; s++) {
-        spring = spring || slot_other(bend_table[a * (SLOTS - STRAIN_SLOTS) + s]) == i32(b);
+    let r = slot_row(a);
+    for (var s = 0u; s < r.count; s++) {
+        spring = spring || slot_other(strain_table[r.first + s]) == i32(b);
     }
     return !spring;
+}
+
+// The pos.w of the particle whose slot word is w: 0 pinned, else its own (a mesh's masses
+// differ), read for a contact only.
+fn other_mobility(w: u32, hit: bool) -> f32 {
+    var wj = 0.0;
+    if hit && (w & PINNED) == 0u {
+        wj = pos[w & INDEX_MASK].w;
+    }
+    return wj;
 }
 
 // A mesh's contact: close, and not one of m's springs.

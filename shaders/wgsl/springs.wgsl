@@ -1,4 +1,4 @@
-//! include: state, table, gather
+//! include: state, table, gather, adjacency
 // springs — per particle: gather the 12 slots of the spring table.
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

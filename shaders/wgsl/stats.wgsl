@@ -1,4 +1,4 @@
-//! include: table, stats, particle_stats
+//! include: table, stats, particle_stats, adjacency
 // stats — per particle, reduced without atomics: a subgroup reduction (subgroupMax,
 // subgroupAdd), then the workgroup's subgroups through workgroup memory; one partial per
 // workgroup, which stats_reduce folds into the substep's entry.

@@ -1,4 +1,4 @@
-//! include: table, stats, particle_stats, atomic_cas
+//! include: table, stats, particle_stats, atomic_cas, adjacency
 // stats_atomic — per particle, reduced with atomics (the naive way): atomicMax on the
 // strain's bits (a non-negative float orders like its bits) and a float atomic add of the
 // energy into the substep's entry.

@@ -1,4 +1,4 @@
-//! include: table, window, strain_window
+//! include: table, window, strain_window, adjacency
 // strain_count — every particle's count of strain-limited springs over (1 + τ)·rest
 // (core::cpu::strain_limit::count_at), into aux0.x: what the pass after it divides each
 // spring by the larger of its two ends' counts of. The same blocks, window and table
@@ -36,8 +36,9 @@ fn block_particle(row: u32, col: u32, a: Gp, s0: Gp, s1: Gp, s2: Gp, s3: Gp, s4:
 fn table_particle(i: u32) {
     let xi = pos[i].xyz;
     var c = 0.0;
-    for (var s = 0u; s < STRAIN_SLOTS; s++) {
-        let slot = slot_at(i, s);
+    let r = slot_row(i);
+    for (var s = 0u; s < r.head; s++) {
+        let slot = row_slot(i, r, s);
         if slot.neighbor >= 0 {
             c += over(xi, pos[u32(slot.neighbor)], slot.rest);
         }

@@ -1,4 +1,4 @@
-//! include: wind, wind_fn
+//! include: wind, wind_fn, adjacency
 // vertex_normals — per particle: sum of the adjacent face normals (gathered in slot order),
 // normalised, and the wind force into the force buffer (optimized variant): each face is
 // read once for both.
@@ -44,9 +44,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         add_face(&g, down + 2u, wind);
         add_face(&g, down + 3u, wind);
     }
-    let slots = select(FACE_SLOTS, 0u, inner);
+    let r = face_row(i);
+    let slots = select(r.count, 0u, inner);
     for (var s = 0u; s < slots; s++) {
-        let t = face_slots[i * FACE_SLOTS + s];
+        let t = face_slots[r.first + s];
         if t >= 0 {
             add_face(&g, u32(t), wind);
         }

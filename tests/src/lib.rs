@@ -177,3 +177,18 @@ pub fn image_diff(a: &[u8], b: &[u8]) -> (f64, f64) {
         a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.abs_diff(*y) > 48)).count();
     (sum as f64 / a.len() as f64, bad as f64 / px as f64)
 }
+
+/// A scene of nothing but the mesh `scenes/meshes/NAME` placed by `placement`: no pins,
+/// no floor, no colliders (add them as a test needs).
+pub fn free_mesh_scene(name: &str, placement: clothlab_core::mesh::Placement) -> Scene {
+    use clothlab_core::mesh::{PlacedMesh, load_obj};
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/meshes").join(name);
+    let mesh = load_obj(&file).unwrap_or_else(|e| panic!("{e}"));
+    let mut s = Scene { floor_y: None, spheres: Vec::new(), boxes: Vec::new(), ..Scene::default() };
+    s.cloth.mesh = Some(name.into());
+    s.cloth.pinning = clothlab_core::Pinning::None;
+    (s.cloth.scale, s.cloth.rotate_deg, s.cloth.translate) =
+        (placement.scale, placement.rotate_deg, placement.translate);
+    s.cloth.mesh_data = Some(std::sync::Arc::new(PlacedMesh::new(&mesh, &placement).unwrap_or_else(|e| panic!("{e}"))));
+    s
+}

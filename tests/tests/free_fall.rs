@@ -14,12 +14,10 @@
 //! implicit, XPBD); their kernels compute the CPU twins' bits (optimized) or follow them
 //! within the rollout bound (naive), which the kernel tests check at every substep count.
 
-use std::sync::Arc;
-
-use clothlab_core::mesh::{PlacedMesh, Placement, load_obj};
+use clothlab_core::mesh::Placement;
 use clothlab_core::scene::Pinning;
 use clothlab_core::{Integrator, Scene, SimParams};
-use clothlab_tests::{backends, every_backend};
+use clothlab_tests::{backends, every_backend, free_mesh_scene};
 
 /// A free 12 × 12 cloth of 0.5 m, tilted 37° about x, its top edge at `height` m: no pins,
 /// no floor, no colliders.
@@ -35,21 +33,15 @@ fn scene(height: f32) -> Scene {
     s
 }
 
-/// The round tablecloth mesh (2813 vertices whose masses, their shares of the area, run
-/// from 0.2 to 1.1 of the mean: its rim is a staircase), tilted 37° about x, centred at
-/// `height` m: no pins, no floor, no colliders. A vertex whose force and mass disagreed
-/// (a kernel taking the mean mass, or the wrong one) falls at another rate: the shape
-/// check sees it.
-fn mesh_scene(height: f32) -> Scene {
-    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/meshes/tablecloth.obj");
-    let mesh = load_obj(&file).unwrap_or_else(|e| panic!("{e}"));
+/// A free mesh of scenes/meshes, tilted 37° about x, centred at `height` m: no pins, no
+/// floor, no colliders. The round tablecloth (2813 vertices whose masses, their shares of
+/// the area, run from 0.2 to 1.1 of the mean: its rim is a staircase) and the fan (a
+/// centre of 64 triangles, rows of 6 to 128 springs, masses 0.03 to 2.3 of the mean). A
+/// vertex whose force and mass disagreed (a kernel taking the mean mass, or the wrong
+/// one, or a row read short) falls at another rate: the shape check sees it.
+fn mesh_scene(name: &str, height: f32) -> Scene {
     let placement = Placement { rotate_deg: [37.0, 0.0, 0.0], translate: [0.1, height, -0.2], ..Placement::default() };
-    let mut s = Scene { floor_y: None, spheres: Vec::new(), boxes: Vec::new(), ..Scene::default() };
-    s.cloth.mesh = Some("tablecloth.obj".into());
-    s.cloth.pinning = Pinning::None;
-    (s.cloth.rotate_deg, s.cloth.translate) = (placement.rotate_deg, placement.translate);
-    s.cloth.mesh_data = Some(Arc::new(PlacedMesh::new(&mesh, &placement).unwrap()));
-    s
+    free_mesh_scene(name, placement)
 }
 
 /// Soft springs with heavy damping (Σζ > Σκ), so that explicit Euler and the midpoint
@@ -183,9 +175,11 @@ fn on_the_gpu_a_free_mesh_falls_by_each_integrators_recurrence() {
     // 50 m at 8 substeps (XPBD by the mesh's passes, implicit's CG over its table).
     // Measured on lavapipe: drop within 2.3e-6 of the recurrence, nothing sideways, on all
     // six GPU backends and seven integrators.
-    let mesh = mesh_scene(50.0);
-    for integrator in Integrator::ALL {
-        fall_within(&mesh, 50.0, integrator, 8, 30, |name| !CPU(name), 1e-4);
+    for name in ["tablecloth.obj", "fan.obj"] {
+        let mesh = mesh_scene(name, 50.0);
+        for integrator in Integrator::ALL {
+            fall_within(&mesh, 50.0, integrator, 8, 30, |name| !CPU(name), 1e-4);
+        }
     }
 }
 

@@ -63,23 +63,31 @@ fn no_messages(api: &str, s: &dyn Gpu) {
 
 #[test]
 fn every_kernel_flavor_on_a_mesh_matches_its_twin_on_every_api() {
-    // The flag: wind, pins, a hole (border vertices of every valence). Every flavor of
-    // every kernel that runs on a mesh (the XPBD mesh passes included; the grid's XPBD
-    // passes and self-collision are grid-only), within its bound.
-    let file = scene_file("mesh-flag.toml");
-    for (api, mut s) in solvers(&file.scene, &file.params, Variant::OPTIMIZED) {
-        let kernels = s.every_flavor();
-        let checks = validate_kernels_with(&mut *s, &kernels, &file.scene, 0x3e5, &file.params).unwrap();
-        let compared = checks.len() / clothlab_engine::validate::COMPARED_BUFFERS;
-        println!("{api}: {compared} kernel flavors compared on the mesh");
-        // Measured on lavapipe: 130 flavors on wgpu and Vulkan, 79 on GL (no immediates,
-        // no shuffles). Fewer than 70 and a filter lost a family of flavors.
-        assert!(compared >= 70, "{api}: only {compared} kernel flavors compared");
-        assert!(checks.iter().any(|c| c.what == "xpbd_mesh"), "{api}: the mesh's XPBD pass was not compared");
-        assert!(!checks.iter().any(|c| c.what.starts_with("xpbd_0")), "{api}: a grid-only kernel ran on a mesh");
-        assert_checks(&format!("{api} mesh"), &checks);
-        no_messages(api, &*s);
+    // The flag: wind, pins, a hole (border vertices of every valence); the fan: vertices
+    // of 3 to 64 triangles (rows of 6 to 128 springs). Every flavor of every kernel that
+    // runs on a mesh (the XPBD mesh passes included; the grid's XPBD passes and
+    // self-collision are grid-only), within its bound.
+    for name in ["mesh-flag.toml", "mesh-fan.toml"] {
+        let file = scene_file(name);
+        for (api, s) in solvers(&file.scene, &file.params, Variant::OPTIMIZED) {
+            every_flavor_matches(&format!("{api} {name}"), s, &file);
+        }
     }
+}
+
+/// Every flavor `s` has on `file`'s mesh against its twin, within its bound.
+fn every_flavor_matches(api: &str, mut s: Box<dyn Gpu>, file: &SceneFile) {
+    let kernels = s.every_flavor();
+    let checks = validate_kernels_with(&mut *s, &kernels, &file.scene, 0x3e5, &file.params).unwrap();
+    let compared = checks.len() / clothlab_engine::validate::COMPARED_BUFFERS;
+    println!("{api}: {compared} kernel flavors compared on the mesh");
+    // Measured on lavapipe: 130 flavors on wgpu and Vulkan, 79 on GL (no immediates,
+    // no shuffles). Fewer than 70 and a filter lost a family of flavors.
+    assert!(compared >= 70, "{api}: only {compared} kernel flavors compared");
+    assert!(checks.iter().any(|c| c.what == "xpbd_mesh"), "{api}: the mesh's XPBD pass was not compared");
+    assert!(!checks.iter().any(|c| c.what.starts_with("xpbd_0")), "{api}: a grid-only kernel ran on a mesh");
+    assert_checks(&format!("{api} mesh"), &checks);
+    no_messages(api, &*s);
 }
 
 #[test]
@@ -88,7 +96,13 @@ fn the_optimized_recipes_on_a_mesh_compute_the_cpu_solvers_bits_on_llvmpipe() {
     // strain limit, normals over the triangle list) and XPBD on the skirt (the mesh's
     // passes): each kernel of the recipe and an 8-frame rollout exactly the CPU's on
     // llvmpipe (other drivers may round otherwise: held to the bounds there).
-    for (name, integrator) in [("mesh-flag.toml", Integrator::Verlet), ("mesh-skirt.toml", Integrator::Xpbd)] {
+    // The Delaunay cape (irregular valences, wind onto a sphere) under both.
+    for (name, integrator) in [
+        ("mesh-flag.toml", Integrator::Verlet),
+        ("mesh-skirt.toml", Integrator::Xpbd),
+        ("mesh-cape.toml", Integrator::Verlet),
+        ("mesh-cape.toml", Integrator::Xpbd),
+    ] {
         let file = scene_file(name);
         let params = SimParams { integrator, ..file.params.clone() };
         let fresh = solvers(&file.scene, &params, Variant::OPTIMIZED);

@@ -162,7 +162,7 @@ fn every_self_collision_kernel_matches_its_twin_and_a_rollout_through_the_contac
 
 /// The smallest distance between two particles of a mesh that may collide (sharing no
 /// spring), by brute force.
-fn closest_mesh_candidates(pos: &[[f32; 4]], table: &[clothlab_core::SpringSlot]) -> f32 {
+fn closest_mesh_candidates(pos: &[[f32; 4]], table: &clothlab_core::grid::Rows<clothlab_core::SpringSlot>) -> f32 {
     let mut best = f32::INFINITY;
     for a in 0..pos.len() {
         for b in a + 1..pos.len() {

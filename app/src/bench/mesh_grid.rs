@@ -42,6 +42,8 @@ pub const GRID_KERNELS: &str = "grid, kernel by kernel";
 pub const GRID_TABLE: &str = "grid, from the table";
 /// The grid loaded as a mesh.
 pub const MESH: &str = "grid as mesh";
+/// A mesh of another triangulation (`--irregular FILE`).
+pub const IRREGULAR: &str = "irregular mesh";
 
 /// One cell: a cloth on a backend at a size.
 #[derive(Debug, Clone)]
@@ -52,10 +54,27 @@ pub struct Row {
     pub backend: String,
     /// [`GRID`], [`GRID_KERNELS`], [`GRID_TABLE`] or [`MESH`].
     pub cloth: &'static str,
+    /// Its particles (n² but for an irregular mesh).
+    pub particles: usize,
     /// Median over rounds of the median frame time per particle-substep, ns.
     pub ns: f64,
     /// (largest − smallest) / median of the rounds' values.
     pub spread: f64,
+}
+
+/// The scene with its cloth the mesh of `file` (`--irregular`), its centre where the grid's
+/// top edge is, unpinned; refused in one line if the file cannot be a cloth or the
+/// scene's parameters cannot simulate it.
+pub fn irregular(base: &Scene, file: &std::path::Path) -> Result<Scene> {
+    use clothlab_core::mesh::{PlacedMesh, Placement};
+    let placement = Placement { translate: base.cloth.top_center, ..Placement::default() };
+    let placed = PlacedMesh::load(file, None, &placement).map_err(|e| anyhow::anyhow!("--irregular: {e}"))?;
+    let mut scene = base.clone();
+    scene.cloth.mesh = Some(file.to_path_buf());
+    scene.cloth.pinning = clothlab_core::Pinning::None;
+    scene.cloth.translate = placement.translate;
+    scene.cloth.mesh_data = Some(std::sync::Arc::new(placed));
+    Ok(scene)
 }
 
 /// The scene's grid at side `n` as a mesh (`core::cloth::grid_as_mesh`).
@@ -86,13 +105,24 @@ fn time(solver: &mut AnySolver, frames: u32) -> Result<f64> {
 }
 
 /// One cell's solver, or why the backend cannot run it.
-fn solver(backend: Backend, cloth: &str, grid: &Scene, mesh: &Scene, params: &SimParams) -> Result<AnySolver> {
+fn solver(
+    backend: Backend,
+    cloth: &str,
+    grid: &Scene,
+    mesh: &Scene,
+    irregular: Option<&Scene>,
+    params: &SimParams,
+) -> Result<AnySolver> {
     let cpu = match backend {
         Backend::Cpu => Some(Exec::Serial),
         Backend::CpuPar => Some(Exec::Parallel),
         _ => None,
     };
-    let scene = if cloth == MESH { mesh } else { grid };
+    let scene = match (cloth, irregular) {
+        (MESH, _) => mesh,
+        (IRREGULAR, Some(s)) => s,
+        _ => grid,
+    };
     if let Some(exec) = cpu {
         let mut s = CpuSolver::new(exec, scene.clone(), params.clone())?;
         s.fused = cloth == GRID;
@@ -123,6 +153,7 @@ fn cloths_of(backend: Backend) -> &'static [&'static str] {
 pub fn measure(
     base: &Scene,
     params: &SimParams,
+    irregular: Option<&Scene>,
     backends: &[Backend],
     sizes: &[u32],
     frames: u32,
@@ -136,28 +167,30 @@ pub fn measure(
         let mesh = as_mesh(&grid)?;
         let mut cells: Vec<(Backend, &'static str)> = Vec::new();
         for &b in backends {
-            for &c in cloths_of(b) {
-                match solver(b, c, &grid, &mesh, params) {
+            for &c in cloths_of(b).iter().chain(irregular.map(|_| &IRREGULAR)) {
+                match solver(b, c, &grid, &mesh, irregular, params) {
                     Ok(_) => cells.push((b, c)),
                     Err(e) => notes.push(format!("n = {n}: {c} on {}: {e:#}", b.name())),
                 }
             }
         }
-        let np = (n * n) as f64;
         let mut values = vec![Vec::new(); cells.len()];
+        let mut particles = vec![0; cells.len()];
         for round in 0..repeat {
             for (k, &(b, c)) in cells.iter().enumerate() {
-                let mut s = solver(b, c, &grid, &mesh, params)?;
+                let mut s = solver(b, c, &grid, &mesh, irregular, params)?;
+                particles[k] = s.get().state()?.pos.len();
+                let np = particles[k] as f64;
                 let ns = time(&mut s, frames)? / params.substeps as f64 / np;
                 eprintln!("n = {n} round {round}: {:8} {c:24} {ns:9.1} ns per particle-substep", b.name());
                 values[k].push(ns);
             }
         }
-        for ((b, c), mut v) in cells.into_iter().zip(values) {
+        for (((b, c), mut v), particles) in cells.into_iter().zip(values).zip(particles) {
             v.sort_by(f64::total_cmp);
             let median = v[v.len() / 2];
             let spread = (v[v.len() - 1] - v[0]) / median;
-            rows.push(Row { n, backend: b.name().into(), cloth: c, ns: median, spread });
+            rows.push(Row { n, backend: b.name().into(), cloth: c, particles, ns: median, spread });
         }
     }
     Ok((rows, notes))
@@ -185,7 +218,9 @@ pub fn report(rows: &[Row], notes: &[String], machine: &str, repeat: u32) -> Str
             let ratio = grid_of(rows, r).map(|g| format!("{:.2}", r.ns / g.ns)).unwrap_or_default();
             // Three significant digits: a real GPU's cells are fractions of a nanosecond.
             let ns = if r.ns < 10.0 { format!("{:.3}", r.ns) } else { format!("{:.1}", r.ns) };
-            let _ = writeln!(s, "| {} | {} | {ns} | {ratio} | {:.0} % |", r.backend, r.cloth, 100.0 * r.spread);
+            let cloth =
+                if r.cloth == IRREGULAR { format!("{} ({} particles)", r.cloth, r.particles) } else { r.cloth.into() };
+            let _ = writeln!(s, "| {} | {cloth} | {ns} | {ratio} | {:.0} % |", r.backend, 100.0 * r.spread);
         }
         s.push('\n');
     }
@@ -202,10 +237,10 @@ pub fn report(rows: &[Row], notes: &[String], machine: &str, repeat: u32) -> Str
 
 /// The rows as CSV.
 pub fn csv(rows: &[Row]) -> String {
-    let mut s = String::from("n,backend,cloth,ns_per_particle_substep,spread\n");
+    let mut s = String::from("n,backend,cloth,particles,ns_per_particle_substep,spread\n");
     for r in rows {
         // The cloth's name has a comma: quoted.
-        let _ = writeln!(s, "{},{},\"{}\",{:.3},{:.4}", r.n, r.backend, r.cloth, r.ns, r.spread);
+        let _ = writeln!(s, "{},{},\"{}\",{},{:.3},{:.4}", r.n, r.backend, r.cloth, r.particles, r.ns, r.spread);
     }
     s
 }
@@ -229,8 +264,17 @@ impl Figure for Bars<'_> {
         let mut groups: Vec<(u32, &str)> = self.rows.iter().map(|r| (r.n, r.backend.as_str())).collect();
         groups.dedup();
         // The middle bar: the grid without the fused sweep (CPU) or the grid-only switches (GPU).
-        let cloths = [GRID, GRID_KERNELS, GRID_TABLE, MESH];
-        let colours = [RGBColor(40, 90, 170), RGBColor(120, 160, 220), RGBColor(120, 160, 220), RGBColor(220, 120, 40)];
+        let cloths = [GRID, GRID_KERNELS, GRID_TABLE, MESH, IRREGULAR];
+        let colours = [
+            RGBColor(40, 90, 170),
+            RGBColor(120, 160, 220),
+            RGBColor(120, 160, 220),
+            RGBColor(220, 120, 40),
+            RGBColor(90, 160, 80),
+        ];
+        // Bars a group: three, or four with an irregular mesh.
+        let places = if self.rows.iter().any(|r| r.cloth == IRREGULAR) { 4.0 } else { 3.0 };
+        let width = 0.8 / places;
         let top = self.rows.iter().map(|r| r.ns).fold(1.0, f64::max) * 1.15;
         let mut chart = ChartBuilder::on(root)
             .caption(format!("Grid against the grid as a mesh — {}", self.machine), (FONT, 20))
@@ -260,9 +304,9 @@ impl Figure for Bars<'_> {
                 .enumerate()
                 .filter_map(|(g, (n, b))| {
                     let r = self.rows.iter().find(|r| r.n == *n && r.backend == *b && r.cloth == *cloth)?;
-                    // Three places a group: the two middle cloths share the middle one.
-                    let x0 = g as f64 + 0.1 + 0.27 * [0.0, 1.0, 1.0, 2.0][c];
-                    Some(Rectangle::new([(x0, 0.0), (x0 + 0.25, r.ns)], colour.filled()))
+                    // The two middle cloths share the middle place.
+                    let x0 = g as f64 + 0.1 + width * [0.0, 1.0, 1.0, 2.0, 3.0][c];
+                    Some(Rectangle::new([(x0, 0.0), (x0 + 0.93 * width, r.ns)], colour.filled()))
                 })
                 .collect();
             if bars.is_empty() {

@@ -77,7 +77,8 @@ fn mesh_grid_bench(
         if all_backends(backends) { mesh_grid::DEFAULT_BACKENDS.to_vec() } else { backends.to_vec() };
     let frames = args.iters.div_ceil(params.substeps).max(1);
     make_out_dir(&args.out)?;
-    let (rows, notes) = mesh_grid::measure(base, params, &backends, &sizes, frames, args.repeat)?;
+    let irregular = args.irregular.as_deref().map(|f| mesh_grid::irregular(base, f)).transpose()?;
+    let (rows, notes) = mesh_grid::measure(base, params, irregular.as_ref(), &backends, &sizes, frames, args.repeat)?;
     let machine = args.machine.clone().unwrap_or_else(cpu_label);
     mesh_grid::write(&args.out, &rows, &notes, &machine, args.repeat)?;
     outln!("{}", mesh_grid::report(&rows, &notes, &machine, args.repeat))?;

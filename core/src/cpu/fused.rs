@@ -41,9 +41,7 @@ use super::simd::{F, Lanewise, M, Simd, dispatch, groups, leftover};
 use super::springs::{GridSlots, gather_at};
 use super::strain_limit::{count_at, limit_at, moved_vel};
 use super::{Exec, Fetch, v3};
-use crate::grid::{
-    ClothState, FACE_SLOTS, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4,
-};
+use crate::grid::{ClothState, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
 use crate::layout::STRAIN_AIM;
 use crate::scene::{Aabb, Sphere};
 use pulp::Simd as Isa;
@@ -266,7 +264,7 @@ pub(crate) struct Step<'a> {
     pub uni: &'a [SpringSlot; SLOTS],
     pub tethers: &'a [[Tether; TETHER_SLOTS]],
     pub tether_lanes: &'a TetherLanes,
-    pub face_slots: &'a [[i32; FACE_SLOTS]],
+    pub face_slots: &'a crate::grid::Rows<i32>,
     pub spheres: &'a [Sphere],
     pub boxes: &'a [Aabb],
     pub old: &'a Soa,
@@ -904,7 +902,7 @@ fn stage_vert<S: Isa>(sd: S, s: &Step<'_>, faces: &Ring, r: usize, o: usize, out
         i: usize,
     ) {
         let n = s.p.n as usize;
-        let (nrm, wind) = vnormal_at(&s.face_slots[r * n + i], face, w, c);
+        let (nrm, wind) = vnormal_at(s.face_slots.row(r * n + i), face, w, c);
         out.put(NORMAL, 3, o + i, nrm);
         out.put(FORCE, 3, o + i, wind);
     }

@@ -31,7 +31,7 @@ use rayon::prelude::*;
 
 use super::integrate::{floor_clamp, grab_vel};
 use super::{Exec, v3, v4};
-use crate::grid::{SLOTS, SpringSlot, StepParams, V4};
+use crate::grid::{Rows, SpringSlot, StepParams, V4};
 
 /// Scratch particle buffers the integrators use.
 pub const AUX: usize = 5;
@@ -226,7 +226,7 @@ pub fn xpbd_lambda_home(pass: usize) -> (usize, usize) {
 /// displacement since the substep began, which the damping term reads).
 pub fn xpbd_pass(
     p: &StepParams,
-    slots: &[SpringSlot],
+    slots: &Rows<SpringSlot>,
     pass: usize,
     pos: &mut [V4],
     vel: &mut [V4],
@@ -284,13 +284,13 @@ pub fn xpbd_mesh_pass(
 /// The spring pass `pass` solves at particle `a` (its first end), if any: the slot and
 /// the other end.
 #[inline(always)]
-fn pass_spring(p: &StepParams, slots: &[SpringSlot], pass: usize, a: usize) -> Option<(SpringSlot, usize)> {
+fn pass_spring(p: &StepParams, slots: &Rows<SpringSlot>, pass: usize, a: usize) -> Option<(SpringSlot, usize)> {
     let (s, colour) = XPBD_PASSES[pass];
     let n = p.n as usize;
     if xpbd_colour(s, (a % n) as u32, (a / n) as u32) != colour {
         return None;
     }
-    let slot = slots[a * SLOTS + s];
+    let slot = slots.row(a)[s];
     (slot.neighbor >= 0 && slot.ks > 0.0).then_some((slot, slot.neighbor as usize))
 }
 
@@ -303,7 +303,7 @@ fn pass_spring(p: &StepParams, slots: &[SpringSlot], pass: usize, a: usize) -> O
 pub fn xpbd_pass_rows(
     exec: Exec,
     p: &StepParams,
-    slots: &[SpringSlot],
+    slots: &Rows<SpringSlot>,
     pass: usize,
     pos: &mut [V4],
     vel: &mut [V4],
@@ -315,7 +315,7 @@ pub fn xpbd_pass_rows(
     let (block, firsts, phases) = if dj == 0 { (1, 1, 1) } else { (2 * dj, dj, 2) };
     for phase in 0..phases {
         let skip = phase * dj * n;
-        let solve = |(k, ((xs, vs), ls)): Rows<'_>| {
+        let solve = |(k, ((xs, vs), ls)): RowBlock<'_>| {
             let start = skip + k * block * n;
             for r in 0..firsts.min(xs.len() / n) {
                 for a in start + r * n..start + (r + 1) * n {
@@ -355,7 +355,7 @@ struct Solved {
 }
 
 /// A block of rows of [`xpbd_pass_rows`]: its index, positions, velocities and λ.
-type Rows<'a> = (usize, ((&'a mut [V4], &'a mut [V4]), &'a mut [V4]));
+type RowBlock<'a> = (usize, ((&'a mut [V4], &'a mut [V4]), &'a mut [V4]));
 
 /// The constraint of `slot` between `a` (at `xa4`, moving at `va4`) and `b` with
 /// multiplier `l`, or `None` when neither moves.
@@ -433,7 +433,7 @@ fn spring_block(p: &StepParams, s: &SpringSlot, xa: Vec3, xb: Vec3, y: Vec3, wit
 fn apply_at(
     i: usize,
     p: &StepParams,
-    slots: &[SpringSlot],
+    slots: &Rows<SpringSlot>,
     pos: &[V4],
     y: &dyn Fn(usize) -> Vec3,
     full: bool,
@@ -442,7 +442,7 @@ fn apply_at(
     let ya = y(i);
     let m = super::mass(p, pos[i][3]) * (1.0 + p.dt * p.air_drag);
     let (mut acc, mut diag) = if full { (ya * m, m) } else { (Vec3::ZERO, m) };
-    for s in &slots[i * SLOTS..(i + 1) * SLOTS] {
+    for s in slots.row(i) {
         let Some(b) = s.other() else { continue };
         let (v, tr) = spring_block(p, s, xa, v3(pos[b]), ya - y(b), full);
         acc += v;
@@ -473,7 +473,7 @@ pub fn fold(partials: &[f32]) -> f32 {
 pub fn cg_begin(
     exec: Exec,
     p: &StepParams,
-    slots: &[SpringSlot],
+    slots: &Rows<SpringSlot>,
     force: &[V4],
     pos: &[V4],
     vel: &[V4],
@@ -498,7 +498,7 @@ pub fn cg_begin(
 }
 
 /// `q = S A p` (zero for held particles); returns the terms of `p·q`.
-pub fn cg_matvec(exec: Exec, p: &StepParams, slots: &[SpringSlot], pos: &[V4], aux: &mut [Vec<V4>]) -> Vec<f32> {
+pub fn cg_matvec(exec: Exec, p: &StepParams, slots: &Rows<SpringSlot>, pos: &[V4], aux: &mut [Vec<V4>]) -> Vec<f32> {
     let dir = &aux[2];
     let y = |k: usize| v3(dir[k]);
     let out = per_particle(exec, pos.len(), |i| {
@@ -581,7 +581,7 @@ mod tests {
             for &(s, colour) in &XPBD_PASSES {
                 let mut touched = vec![false; topo.num_particles()];
                 for a in 0..topo.num_particles() {
-                    let slot = topo.slots[a * SLOTS + s];
+                    let slot = topo.slots.row(a)[s];
                     if slot.neighbor < 0 || xpbd_colour(s, a as u32 % n, a as u32 / n) != colour {
                         continue;
                     }

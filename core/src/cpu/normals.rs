@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use super::simd::{F, Lanewise, Simd, dispatch, groups, leftover};
 use super::{Exec, Fetch, Lanes, for_each, for_each2, v3, v4};
-use crate::grid::{FACE_SLOTS, StepParams, V4};
+use crate::grid::{Rows, StepParams, V4};
 use pulp::Simd as Isa;
 
 /// Face normals `N` with `|N| = 2 · area(t)`; w holds `|N|`.
@@ -25,19 +25,19 @@ pub fn tri_normals(exec: Exec, triangles: &[[u32; 3]], pos: &[V4], face: &mut [V
 pub fn vertex_normals(
     exec: Exec,
     p: &StepParams,
-    face_slots: &[[i32; FACE_SLOTS]],
+    face_slots: &Rows<i32>,
     face: &[V4],
     normal: &mut [V4],
     force: &mut [V4],
 ) {
     let w = v3(p.wind);
     let c = p.wind[3] / 6.0;
-    for_each2(exec, normal, force, |i, nrm, f| (*nrm, *f) = vnormal_at(&face_slots[i], |t| face[t], w, c));
+    for_each2(exec, normal, force, |i, nrm, f| (*nrm, *f) = vnormal_at(face_slots.row(i), |t| face[t], w, c));
 }
 
 /// Normal and wind force of a particle whose faces are `slots`, read through `fetch`.
 #[inline(always)]
-pub(crate) fn vnormal_at(slots: &[i32; FACE_SLOTS], fetch: impl Fetch, w: Vec3, c: f32) -> (V4, V4) {
+pub(crate) fn vnormal_at(slots: &[i32], fetch: impl Fetch, w: Vec3, c: f32) -> (V4, V4) {
     let mut sum = Vec3::ZERO;
     let mut wind = Vec3::ZERO;
     for &t in slots {
@@ -194,7 +194,7 @@ struct VertexRow<'a> {
     j: usize,
     n: usize,
     faces: &'a FaceLanes,
-    face_slots: &'a [[i32; FACE_SLOTS]],
+    face_slots: &'a Rows<i32>,
     wind: (Vec3, f32),
     nrow: &'a mut [V4],
     frow: &'a mut [V4],
@@ -225,7 +225,7 @@ impl Lanewise for VertexRow<'_> {
         }
         let edges = if interior { vec![0, n - 1] } else { (0..n).collect() };
         for i in leftover(lo, hi, lanes).chain(edges) {
-            (nrow[i], frow[i]) = vnormal_at(&face_slots[j * n + i], |t| faces.get(t), w, c);
+            (nrow[i], frow[i]) = vnormal_at(face_slots.row(j * n + i), |t| faces.get(t), w, c);
         }
     }
 }
@@ -235,7 +235,7 @@ impl Lanewise for VertexRow<'_> {
 pub fn vertex_normals_rows(
     exec: Exec,
     p: &StepParams,
-    face_slots: &[[i32; FACE_SLOTS]],
+    face_slots: &Rows<i32>,
     faces: &FaceLanes,
     normal: &mut [V4],
     force: &mut [V4],

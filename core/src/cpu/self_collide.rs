@@ -54,7 +54,7 @@
 //! the particle there and its slot word (grid coordinates, row tag, pinned) as the bits
 //! of `.w`: the response reads one element per entry, in order.
 
-use crate::grid::{SLOTS, SpringSlot, StepParams, V4};
+use crate::grid::{Rows, SpringSlot, StepParams, V4};
 use crate::layout::WORKGROUP;
 
 use super::{Exec, for_each2};
@@ -171,6 +171,30 @@ pub fn slot_word(i: u32, n: u32, c: [i32; 3], pinned: bool) -> u32 {
     id | row_tag(c[1], c[2]) << (2 * COORD_BITS) | if pinned { PINNED } else { 0 }
 }
 
+/// The mobility (`pos.w`, the relative inverse mass) of the particle whose slot's word is
+/// `w`: 0 pinned; a grid's free particles 1 (read from the word alone), a mesh's its own
+/// (read from `pos` for a contact only).
+#[inline]
+pub fn other_mobility(w: u32, mesh: bool, pos: &[V4]) -> f32 {
+    if w & PINNED != 0 {
+        0.0
+    } else if mesh {
+        pos[slot_index(w) as usize][3]
+    } else {
+        1.0
+    }
+}
+
+/// A contact's share of its push, the same number at both ends: `1 / (wᵢ + wⱼ)` (at most 1,
+/// so that a push stays within the fixed point's room), each end then moved by its own
+/// mobility times it — by inverse mass, so that the pair's momentum stays whatever the
+/// two particles weigh (a mesh's vary). On a grid 0.5 between free particles and 1 against
+/// a pinned one, the shares it always had.
+#[inline]
+pub fn pair_share(wi: f32, wj: f32) -> f32 {
+    (1.0 / (wi + wj)).min(1.0)
+}
+
 /// A mesh's particle index in a slot's word: its low 24 bits.
 const INDEX_MASK: u32 = (1 << (2 * COORD_BITS)) - 1;
 
@@ -187,8 +211,8 @@ pub fn slot_index(w: u32) -> u32 {
 /// distance is checked once for the whole mesh instead (`MeshTables::closest_unsprung`
 /// against twice the thickness, when the parameters are checked).
 #[inline]
-pub fn mesh_candidates(table: &[SpringSlot], a: usize, b: usize) -> bool {
-    a != b && !table[a * SLOTS..(a + 1) * SLOTS].iter().any(|s| s.other() == Some(b))
+pub fn mesh_candidates(table: &Rows<SpringSlot>, a: usize, b: usize) -> bool {
+    a != b && !table.row(a).iter().any(|s| s.other() == Some(b))
 }
 
 /// The grid coordinates `(i, j)` of a slot's word.
@@ -404,7 +428,8 @@ pub fn rows_around(x: &V4, inv: f32, size: u32, rows: &mut [Row; 9]) -> usize {
 
 /// Particle `i`'s new position and velocity: pushed out of every candidate
 /// closer than the thickness, the push added to its velocity as motion (`Δx/dt`). `table` (the gather
-/// table) refuses a mesh's neighbours; a grid's are refused by their coordinates.
+/// table, `None` for a grid) refuses a mesh's neighbours; a grid's are refused by their
+/// coordinates.
 pub fn self_collide_at(
     p: &StepParams,
     i: usize,
@@ -412,7 +437,7 @@ pub fn self_collide_at(
     vel: V4,
     cells: &[V4],
     slots: &[V4],
-    table: &[SpringSlot],
+    table: Option<&Rows<SpringSlot>>,
 ) -> (V4, V4) {
     let x4 = pos[i];
     if x4[3] == 0.0 || i as i32 == p.grab_index {
@@ -451,12 +476,14 @@ pub fn self_collide_at(
                     continue;
                 }
                 // A mesh's neighbours from the table, only for what is close (rare).
-                if mesh && !mesh_candidates(table, i, slot_index(w) as usize) {
+                if let Some(table) = table.filter(|_| mesh)
+                    && !mesh_candidates(table, i, slot_index(w) as usize)
+                {
                     continue;
                 }
                 contacts += 1;
                 let d = d2.sqrt();
-                let share = if w & PINNED != 0 { 1.0 } else { 0.5 };
+                let share = pair_share(x4[3], other_mobility(w, mesh, pos));
                 let push = (t - d) / d * share * scale;
                 for a in 0..3 {
                     sum[a] = sum[a].wrapping_add((e[a] * push) as i32);
@@ -467,8 +494,10 @@ pub fn self_collide_at(
     if contacts > MAX_CONTACTS {
         return (x4, vel);
     }
+    // The pair's share times this particle's mobility: its part of the push by inverse
+    // mass (×1 on a grid).
     let unit = t * (1.0 / UNITS);
-    let delta = sum.map(|v| v as f32 * unit);
+    let delta = sum.map(|v| v as f32 * unit * x4[3]);
     let dd = delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2];
     if dd == 0.0 {
         return (x4, vel);
@@ -494,7 +523,7 @@ pub fn self_collide(
     vel: &mut [V4],
     cells: &[V4],
     slots: &[V4],
-    table: &[SpringSlot],
+    table: Option<&Rows<SpringSlot>>,
     pos_out: &mut [V4],
 ) {
     for_each2(exec, pos_out, vel, |i, o, q| {
@@ -612,7 +641,7 @@ mod tests {
             build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
             let mut pushed = 0;
             for i in 0..np {
-                let (x, _) = self_collide_at(&p, i, &pos, pos[i], &cells, &slots, &[]);
+                let (x, _) = self_collide_at(&p, i, &pos, pos[i], &cells, &slots, None);
                 if pos[i][3] == 0.0 {
                     assert_eq!(x, pos[i], "a pinned particle stays");
                     continue;
@@ -647,7 +676,7 @@ mod tests {
         let (mut cells, mut totals, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
         build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
         let mut out = pos.clone();
-        self_collide(Exec::Serial, &p, &pos, &mut vel, &cells, &slots, &[], &mut out);
+        self_collide(Exec::Serial, &p, &pos, &mut vel, &cells, &slots, None, &mut out);
         let gap = out[b][0] - out[a][0];
         assert!((gap - t).abs() < 2.0 * unit, "gap {gap}, thickness {t}");
         assert!((out[a][0] - (0.3 - 0.2 * t)).abs() < 2.0 * unit);

@@ -406,7 +406,9 @@ impl CpuSolver {
         if params.self_collision {
             let (cells, totals, slots) = hash_buffers(aux);
             Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, cells, totals, slots));
-            Self::timed(timer, on, SELF_COLLIDE, || self_collide(e, &p, pos, vel, cells, slots, &topo.slots, scratch));
+            Self::timed(timer, on, SELF_COLLIDE, || {
+                self_collide(e, &p, pos, vel, cells, slots, Some(&topo.slots), scratch)
+            });
             std::mem::swap(pos, scratch);
         }
         if fast {

@@ -6,19 +6,31 @@ use wide::f32x8;
 
 use super::forces::{forces_at, forces_consts, forces_consts_w};
 use super::{Exec, Fetch, LANES, Lanes, for_each, load3, store3, v3, v4};
-use crate::grid::{SLOT_OFFSETS, SLOTS, Spring, SpringSlot, StepParams, V4};
+use crate::grid::{Rows, SLOT_OFFSETS, SLOTS, Spring, SpringSlot, StepParams, V4};
 
 /// Where a particle's spring slots come from: the table, or (for the fused sweep) the
 /// regular grid's, computed from the particle's place.
 pub(crate) trait SlotSource {
+    /// How many slots particle `i` has.
+    fn count(&self, i: usize) -> usize;
+    /// How many of them the strain limit holds (its first ones: the row's head).
+    fn head(&self, i: usize) -> usize;
     /// Slot `s` of particle `i`.
     fn slot(&self, i: usize, s: usize) -> SpringSlot;
 }
 
-impl SlotSource for [SpringSlot] {
+impl SlotSource for Rows<SpringSlot> {
+    #[inline(always)]
+    fn count(&self, i: usize) -> usize {
+        self.range(i).len()
+    }
+    #[inline(always)]
+    fn head(&self, i: usize) -> usize {
+        Rows::head(self, i).len()
+    }
     #[inline(always)]
     fn slot(&self, i: usize, s: usize) -> SpringSlot {
-        self[i * SLOTS + s]
+        self.row(i)[s]
     }
 }
 
@@ -30,6 +42,14 @@ pub(crate) struct GridSlots<'a> {
 }
 
 impl SlotSource for GridSlots<'_> {
+    #[inline(always)]
+    fn count(&self, _: usize) -> usize {
+        SLOTS
+    }
+    #[inline(always)]
+    fn head(&self, _: usize) -> usize {
+        crate::grid::STRAIN_SLOTS
+    }
     #[inline(always)]
     fn slot(&self, i: usize, s: usize) -> SpringSlot {
         let n = self.n as isize;
@@ -55,7 +75,7 @@ pub(crate) fn spring_force(l: Vec3, dv: Vec3, s: &SpringSlot) -> Vec3 {
 }
 
 /// Gather (optimized kernels, CPU solvers): each particle adds its 12 slots in slot order.
-pub fn springs(exec: Exec, slots: &[SpringSlot], pos: &[V4], vel: &[V4], force: &mut [V4]) {
+pub fn springs(exec: Exec, slots: &Rows<SpringSlot>, pos: &[V4], vel: &[V4], force: &mut [V4]) {
     for_each(exec, force, |i, f| *f = gather_at(i, slots, |k| pos[k], |k| vel[k], *f));
 }
 
@@ -65,7 +85,7 @@ pub(crate) fn gather_at(i: usize, slots: &(impl SlotSource + ?Sized), pos: impl 
     let xa = v3(pos.at(i));
     let va = v3(vel.at(i));
     let mut acc = v3(f);
-    for s in 0..SLOTS {
+    for s in 0..slots.count(i) {
         let s = &slots.slot(i, s);
         let Some(b) = s.other() else { continue };
         let xb = v3(pos.at(b));
@@ -82,7 +102,7 @@ pub(crate) fn gather_at(i: usize, slots: &(impl SlotSource + ?Sized), pos: impl 
 pub fn springs_rows(
     exec: Exec,
     n: usize,
-    slots: &[SpringSlot],
+    slots: &Rows<SpringSlot>,
     uni: Option<&[SpringSlot; SLOTS]>,
     forces: Option<&StepParams>,
     lanes: &Lanes,

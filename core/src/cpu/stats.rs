@@ -2,22 +2,21 @@
 //! solver can report every substep without reading the state back.
 
 use super::v3;
-use crate::grid::{SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, V4};
+use crate::grid::{Rows, SpringSlot, StepParams, V4};
 pub use crate::stats::SubstepStats;
 
 /// Particle `i`'s share: the largest strain of the structural springs that start at it
 /// (on a grid slots 1 and 3, to its +i and +j neighbours, so that every structural spring
-/// is counted once; on a mesh (n = 0) every edge at it, slots `0 .. STRAIN_SLOTS` that the
-/// strain limit holds) and its kinetic energy. `slots` is the full table, [`SLOTS`] per
-/// particle.
+/// is counted once; on a mesh (n = 0) every edge at it, its row's head, which the strain
+/// limit holds) and its kinetic energy. `slots` is the whole table.
 #[inline]
-pub fn particle_stats(i: usize, p: &StepParams, slots: &[SpringSlot], pos: &[V4], vel: &[V4]) -> [f32; 2] {
+pub fn particle_stats(i: usize, p: &StepParams, slots: &Rows<SpringSlot>, pos: &[V4], vel: &[V4]) -> [f32; 2] {
     let x = v3(pos[i]);
     let mut strain = 0.0f32;
-    let mesh = [0, 1, 2, 3, 4, 5, 6, 7];
-    let which: &[usize] = if p.n == 0 { &mesh[..STRAIN_SLOTS] } else { &[1, 3] };
-    for &s in which {
-        let slot = slots[i * SLOTS + s];
+    let row = slots.row(i);
+    let grid = [row[1], row[3]];
+    let which: &[SpringSlot] = if p.n == 0 { slots.head(i) } else { &grid };
+    for slot in which {
         if slot.neighbor >= 0 {
             strain = strain.max((v3(pos[slot.neighbor as usize]) - x).length() / slot.rest - 1.0);
         }
@@ -28,7 +27,7 @@ pub fn particle_stats(i: usize, p: &StepParams, slots: &[SpringSlot], pos: &[V4]
 
 /// The statistics of the whole state: the maximum of the strains, and the energies summed
 /// in f64 (the reference the GPU reductions are checked against).
-pub fn substep_stats(p: &StepParams, slots: &[SpringSlot], pos: &[V4], vel: &[V4]) -> SubstepStats {
+pub fn substep_stats(p: &StepParams, slots: &Rows<SpringSlot>, pos: &[V4], vel: &[V4]) -> SubstepStats {
     let (mut max_strain, mut energy) = (0.0f32, 0.0f64);
     for i in 0..pos.len() {
         let [s, e] = particle_stats(i, p, slots, pos, vel);

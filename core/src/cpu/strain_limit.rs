@@ -32,13 +32,13 @@ use wide::f32x8;
 use super::lanes::lane;
 use super::springs::SlotSource;
 use super::{Exec, Fetch, LANES, Lanes, for_each, v3, v4};
-use crate::grid::{SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
+use crate::grid::{Rows, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
 pub use crate::layout::STRAIN_AIM;
 
 /// Every particle's count of over-stretched strain-limited springs at `pos`, into
 /// `counts` (same length): what the pass that follows divides each spring by the larger
 /// of its ends' counts of.
-pub fn strain_count(exec: Exec, p: &StepParams, slots: &[SpringSlot], pos: &[V4], counts: &mut [f32]) {
+pub fn strain_count(exec: Exec, p: &StepParams, slots: &Rows<SpringSlot>, pos: &[V4], counts: &mut [f32]) {
     for_each(exec, counts, |i, c| *c = count_at(i, p, slots, |k| pos[k]));
 }
 
@@ -49,7 +49,7 @@ pub(crate) fn count_at(i: usize, p: &StepParams, slots: &(impl SlotSource + ?Siz
     let stretch = 1.0 + p.strain_limit;
     let xi = v3(pos.at(i));
     let mut count = 0.0f32;
-    for s in 0..STRAIN_SLOTS {
+    for s in 0..slots.head(i) {
         let s = &slots.slot(i, s);
         if s.neighbor < 0 {
             continue;
@@ -67,7 +67,7 @@ pub(crate) fn count_at(i: usize, p: &StepParams, slots: &(impl SlotSource + ?Siz
 pub fn strain_limit(
     exec: Exec,
     p: &StepParams,
-    slots: &[SpringSlot],
+    slots: &Rows<SpringSlot>,
     tethers: &[[Tether; TETHER_SLOTS]],
     pos: &[V4],
     counts: &[f32],
@@ -111,7 +111,7 @@ pub(crate) fn limit_at(
     let ci = counts(i);
     let mut corr = glam::Vec3::ZERO;
     let mut count = 0.0f32;
-    for s in 0..STRAIN_SLOTS {
+    for s in 0..slots.head(i) {
         let s = &slots.slot(i, s);
         if s.neighbor < 0 {
             continue;
@@ -153,7 +153,7 @@ pub(crate) fn limit_at(
 pub fn strain_limit_rows(
     exec: Exec,
     p: &StepParams,
-    slots: &[SpringSlot],
+    slots: &Rows<SpringSlot>,
     uni: Option<&[SpringSlot; SLOTS]>,
     tethers: &[[Tether; TETHER_SLOTS]],
     lanes: &Lanes,

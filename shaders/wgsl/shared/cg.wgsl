@@ -45,8 +45,9 @@ fn apply_at(i: u32, full: bool) -> Applied {
         acc = ya * m;
     }
     var diag = m;
-    for (var s = 0u; s < SLOTS; s++) {
-        let slot = slot_at(i, s);
+    let r = slot_row(i);
+    for (var s = 0u; s < r.count; s++) {
+        let slot = row_slot(i, r, s);
         let other = slot_other(slot);
         if other < 0 {
             continue;

@@ -70,8 +70,9 @@ fn grid_springs(
 // point), in slot order.
 fn table_springs(i: u32, a: Pt, f: vec3<f32>) -> vec3<f32> {
     var acc = f;
-    for (var s = 0u; s < SLOTS; s++) {
-        let slot = slot_at(i, s);
+    let r = slot_row(i);
+    for (var s = 0u; s < r.count; s++) {
+        let slot = row_slot(i, r, s);
         let other = slot_other(slot);
         if other < 0 {
             continue;

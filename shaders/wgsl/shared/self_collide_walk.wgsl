@@ -1,6 +1,7 @@
 // The self-collision response (self_collide.wgsl on a grid, self_collide_mesh.wgsl on a
 // mesh): everything but `contact(m, w, close)`, which each kernel defines — whether the
-// particle whose slot word is w, `close` to m (within the thickness), may push it.
+// particle whose slot word is w, `close` to m (within the thickness), may push it — and
+// `other_mobility(w, hit)`, that particle's pos.w.
 @group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
 // core::cpu::self_collide::{REACH, UNITS, MAX_CONTACTS}.
 const REACH: f32 = 1.001;
@@ -64,7 +65,9 @@ fn push(m: ptr<function, Mover>, y4: vec4<f32>, w: u32) {
     let hit = contact(*m, w, close);
     (*m).contacts += select(0u, 1u, hit);
     let d = sqrt(d2);
-    let share = select(0.5, 1.0, (w & PINNED) != 0u);
+    // The pair's share, the same at both ends (core::cpu::self_collide::pair_share); the
+    // including kernel's other_mobility gives the slot's particle's pos.w.
+    let share = min(1.0 / ((*m).x4.w + other_mobility(w, hit)), 1.0);
     // A miss adds 0 (its k may be infinite or NaN: not used).
     let k = select(0.0, (t - d) / d * share * (UNITS * p.inv_cell), hit);
     (*m).sum += vec3<i32>(e * k);
@@ -199,7 +202,8 @@ fn finish(m: Mover) {
     let x4 = m.x4;
     let i = m.i;
     let t = p.self_thickness;
-    let delta = vec3<f32>(m.sum) * (t * (1.0 / UNITS));
+    // Each end moves by its own mobility times the pair's share: by inverse mass.
+    let delta = vec3<f32>(m.sum) * (t * (1.0 / UNITS)) * x4.w;
     let dd = delta.x * delta.x + delta.y * delta.y + delta.z * delta.z;
     let pushed = m.moving && m.contacts <= MAX_CONTACTS && dd != 0.0;
     // One site per buffer, values chosen by select: lavapipe walks the lanes of every

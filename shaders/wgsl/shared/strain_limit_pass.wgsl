@@ -108,8 +108,9 @@ fn table_particle(i: u32) {
     let wi = mobility(i, x4.w);
     let ci = strain_counts[i].x;
     var c = Correction(vec3<f32>(0.0), 0.0);
-    for (var s = 0u; s < STRAIN_SLOTS; s++) {
-        let slot = slot_at(i, s);
+    let r = slot_row(i);
+    for (var s = 0u; s < r.head; s++) {
+        let slot = row_slot(i, r, s);
         if slot.neighbor >= 0 {
             let b = u32(slot.neighbor);
             limit_spring(&c, b, pos[b], slot.rest, x4.xyz, wi, ci, strain_counts[b].x);

@@ -7,6 +7,15 @@
 @group(0) @binding(6) var<storage, read> slots: array<SpringSlot>;
 @group(0) @binding(14) var<storage, read> bend_slots: array<SpringSlot>;
 
+// Slot s of particle i's row r (shared/adjacency.wgsl's slot_row(i)): a mesh's rows lie
+// one after another in the first binding.
+fn row_slot(i: u32, r: Row, s: u32) -> SpringSlot {
+    if p.n == 0u {
+        return slots[r.first + s];
+    }
+    return slot_at(i, s);
+}
+
 fn slot_at(i: u32, s: u32) -> SpringSlot {
     if s < STRAIN_SLOTS {
         return slots[i * STRAIN_SLOTS + s];

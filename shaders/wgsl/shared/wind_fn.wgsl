@@ -25,8 +25,9 @@ fn wind_at(i: u32) -> vec3<f32> {
     if !windy() {
         return wind;
     }
-    for (var s = 0u; s < FACE_SLOTS; s++) {
-        let t = face_slots[i * FACE_SLOTS + s];
+    let r = face_row(i);
+    for (var s = 0u; s < r.count; s++) {
+        let t = face_slots[r.first + s];
         if t >= 0 {
             wind += face_wind(face_at(u32(t)));
         }
