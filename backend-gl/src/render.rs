@@ -210,7 +210,7 @@ impl GlRenderer {
             frame: gl.create_buffer(&[0u8; std::mem::size_of::<Frame>()])?,
             static_vb: gl.create_buffer(bytemuck::cast_slice(&sv))?,
             static_ib: gl.create_index_buffer(&si)?,
-            uv: gl.create_buffer(bytemuck::cast_slice(&topo.uv))?,
+            uv: gl.create_buffer(bytemuck::cast_slice(&topo.render_uvs()))?,
             tri_ib: gl.create_index_buffer(&tri)?,
             line_ib: gl.create_index_buffer(&cloth_lines(topo))?,
             cpu_pos: gl.create_buffer(&zeros)?,

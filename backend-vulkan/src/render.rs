@@ -286,10 +286,11 @@ impl VulkanRenderer {
         let tri: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
         let lines = cloth_lines(topo);
         let texels = fabric_texture();
+        let uv = topo.render_uvs();
         let contents: [(&str, &[u8], B); 5] = [
             ("static vertices", bytemuck::cast_slice(&sv), B::VERTEX_BUFFER),
             ("static indices", bytemuck::cast_slice(&si), B::INDEX_BUFFER),
-            ("cloth uv", bytemuck::cast_slice(&topo.uv), B::VERTEX_BUFFER),
+            ("cloth uv", bytemuck::cast_slice(&uv), B::VERTEX_BUFFER),
             ("cloth triangles", bytemuck::cast_slice(&tri), B::INDEX_BUFFER),
             ("cloth lines", bytemuck::cast_slice(&lines), B::INDEX_BUFFER),
         ];

@@ -446,7 +446,7 @@ impl WgpuRenderer {
             static_vb: init("static vertices", bytemuck::cast_slice(&sv), U::VERTEX),
             static_ib: init("static indices", bytemuck::cast_slice(&si), U::INDEX),
             static_count: si.len() as u32,
-            uv: init("cloth uv", bytemuck::cast_slice(&topo.uv), U::VERTEX),
+            uv: init("cloth uv", bytemuck::cast_slice(&topo.render_uvs()), U::VERTEX),
             tri_ib: init("cloth triangles", bytemuck::cast_slice(&tri), U::INDEX),
             tri_count: tri.len() as u32,
             line_ib: init("cloth lines", bytemuck::cast_slice(&lines), U::INDEX),

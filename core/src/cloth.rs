@@ -55,19 +55,49 @@ pub fn build_mesh(
         _ => MeshPinning::None,
     };
     let held = placed.pinned(&rule).map_err(err)?;
-    let mass = mesh.vertex_masses(params.cloth_mass);
+    // Each cloth of several weighs its own mass (or the parameters' cloth_mass), shared
+    // by area among its vertices; one cloth weighs cloth_mass.
+    let mass = match placed.parts.as_slice() {
+        [] => mesh.vertex_masses(params.cloth_mass),
+        parts => {
+            let areas = mesh.vertex_areas();
+            let mut mass = vec![0.0f32; np];
+            for part in parts {
+                let r = part.range();
+                let total: f32 = areas[r.clone()].iter().sum();
+                let m = part.mass.unwrap_or(params.cloth_mass);
+                for k in r {
+                    mass[k] = m * areas[k] / total;
+                }
+            }
+            mass
+        }
+    };
+    // pos.w is this over the vertex's mass: the kernels' mean mass (StepParams::
+    // particle_mass) for every cloth, whatever each weighs.
     let reference = params.cloth_mass / np as f32;
+    let part_of: Option<Vec<u32>> = (!placed.parts.is_empty()).then(|| {
+        let mut of = vec![0u32; np];
+        for (k, part) in placed.parts.iter().enumerate() {
+            of[part.range()].iter_mut().for_each(|p| *p = k as u32);
+        }
+        of
+    });
+    let velocity_of = |k: usize| match &part_of {
+        Some(of) => placed.parts[of[k] as usize].velocity,
+        None => spec.velocity,
+    };
     let free = mass.iter().zip(&held).filter(|(_, h)| !**h).map(|(m, _)| *m);
     let min_mass = free.fold(f32::INFINITY, f32::min);
     let min_mass = if min_mass.is_finite() { min_mass } else { reference };
     params.validate_for_mass(min_mass, placed.spacing, "for this mesh")?;
 
-    let v0 = spec.velocity;
     let mut pos = Vec::with_capacity(np);
     let mut vel = Vec::with_capacity(np);
     for (k, p) in mesh.positions.iter().enumerate() {
         let w = if held[k] { 0.0 } else { reference / mass[k] };
         pos.push([p[0], p[1], p[2], w]);
+        let v0 = velocity_of(k);
         vel.push(if held[k] { [0.0; 4] } else { [v0[0], v0[1], v0[2], 0.0] });
     }
     let uv = mesh.uvs.clone().unwrap_or_else(|| planar_uvs(mesh));
@@ -119,7 +149,7 @@ pub fn build_mesh(
         })
         .collect();
     let tethers = mesh
-        .tethers(&held)
+        .tethers(&held, part_of.as_deref())
         .into_iter()
         .map(|list| {
             let mut t = [Tether::EMPTY; TETHER_SLOTS];
@@ -133,7 +163,8 @@ pub fn build_mesh(
     let state = ClothState { n: 0, pos, vel, force: zero.clone(), normal: zero };
     let closest_unsprung = closest_unsprung(&slots, &mesh.positions);
     params.check_mesh(np, closest_unsprung)?;
-    let tables = MeshTables { slot_kind, mass, min_mass, xpbd_passes, closest_unsprung };
+    let parts = placed.parts.clone();
+    let tables = MeshTables { slot_kind, mass, min_mass, xpbd_passes, closest_unsprung, parts };
     let mut topo = ClothTopology {
         n: 0,
         uv,
@@ -197,6 +228,80 @@ fn closest_unsprung(slots: &Rows<SpringSlot>, positions: &[[f32; 3]]) -> f32 {
         }
     }
     closest
+}
+
+/// The most cloths a scene may hold (`[[cloth]]`).
+pub const MAX_CLOTHS: usize = 64;
+
+/// The cloths of a scene of several (`[[cloth]]`, each checked as a scene's one cloth is,
+/// meshes already read and placed) as the one cloth the solvers run: one particle array
+/// and one triangle list, the cloths' ranges in [`crate::mesh::ClothPart`]s. A grid is
+/// its triangulation (`grid_mesh`'s, at its place: the same particles and triangles; its
+/// springs a mesh's — along and across the edges — not the grid's 12-slot stencil), so
+/// every cloth runs on the mesh kernels; pins, velocities and masses stay each cloth's.
+/// A refusal names the cloth (`cloth[1].pinning`).
+pub fn combine(cloths: &[ClothSpec]) -> Result<ClothSpec, ParamError> {
+    use crate::mesh::{ClothPart, TriMesh};
+    if cloths.len() > MAX_CLOTHS {
+        return Err(ParamError::new("cloth", cloths.len(), format!("a scene holds at most {MAX_CLOTHS} cloths")));
+    }
+    let at = |k: usize, e: ParamError| ParamError { field: e.field.replacen("cloth", &format!("cloth[{k}]"), 1), ..e };
+    let mut all = TriMesh { positions: Vec::new(), uvs: Some(Vec::new()), triangles: Vec::new() };
+    let mut held = Vec::new();
+    let mut parts = Vec::new();
+    for (k, c) in cloths.iter().enumerate() {
+        let one = Scene { cloth: c.clone(), floor_y: None, spheres: Vec::new(), boxes: Vec::new() };
+        one.validate().map_err(|e| at(k, e))?;
+        let (mesh, pins, label) = match &c.mesh_data {
+            Some(placed) => {
+                let rule = match &c.pinning {
+                    Pinning::Vertices(v) => MeshPinning::Vertices(v.clone()),
+                    Pinning::BelowY(y) => MeshPinning::BelowY(*y),
+                    Pinning::AboveY(y) => MeshPinning::AboveY(*y),
+                    _ => MeshPinning::None,
+                };
+                let pins = placed
+                    .pinned(&rule)
+                    .map_err(|e| ParamError::new(format!("cloth[{k}].pinning"), c.pinning.label(), e.to_string()))?;
+                let name = c.mesh.as_ref().map(|m| m.display().to_string()).unwrap_or_default();
+                let mut mesh = placed.mesh.clone();
+                mesh.uvs = Some(mesh.uvs.clone().unwrap_or_else(|| planar_uvs(&mesh)));
+                (mesh, pins, format!("cloth[{k}] ({name})"))
+            }
+            None => {
+                let n = c.n;
+                let mut mesh = grid_mesh(n, c.size);
+                mesh.positions = (0..n * n).map(|p| c.rest_position(p % n, p / n)).collect();
+                let pins = (0..n * n).map(|p| c.pinning.holds(n, p % n, p / n)).collect();
+                (mesh, pins, format!("cloth[{k}] (grid {n} × {n})"))
+            }
+        };
+        let first = all.positions.len() as u32;
+        parts.push(ClothPart {
+            label,
+            first,
+            count: mesh.positions.len() as u32,
+            first_triangle: all.triangles.len() as u32,
+            triangles: mesh.triangles.len() as u32,
+            mass: c.mass,
+            velocity: c.velocity,
+            grid: c.mesh_data.is_none(),
+        });
+        all.positions.extend_from_slice(&mesh.positions);
+        all.uvs.as_mut().map(|u| u.extend(mesh.uvs.iter().flatten()));
+        all.triangles.extend(mesh.triangles.iter().map(|t| t.map(|v| v + first)));
+        held.extend(pins);
+    }
+    let mut placed = PlacedMesh::new(&all, &Placement::default())
+        .map_err(|e| ParamError::new("cloth", format!("{} cloths", cloths.len()), e.to_string()))?;
+    placed.parts = parts;
+    let pinned = (0..held.len() as u32).filter(|&v| held[v as usize]).collect();
+    Ok(ClothSpec {
+        mesh: Some(format!("{} cloths", cloths.len()).into()),
+        pinning: Pinning::Vertices(pinned),
+        mesh_data: Some(std::sync::Arc::new(placed)),
+        ..ClothSpec::default()
+    })
 }
 
 /// The grid of `grid` (an n × n cloth lying in the xz-plane, held at its top corners: the

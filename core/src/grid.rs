@@ -232,12 +232,35 @@ pub struct MeshTables {
     /// The smallest rest distance between two particles that share no spring but a
     /// neighbour, m: self-collision's thickness must stay below half of it.
     pub closest_unsprung: f32,
+    /// The cloths of a scene of several, their ranges of the particles and triangles
+    /// (empty for one cloth).
+    pub parts: Vec<crate::mesh::ClothPart>,
 }
 
 impl ClothTopology {
     /// Number of particles.
     pub fn num_particles(&self) -> usize {
         self.uv.len()
+    }
+
+    /// The cloths of a scene of several (empty for one).
+    pub fn parts(&self) -> &[crate::mesh::ClothPart] {
+        self.mesh.as_ref().map_or(&[], |m| m.parts.as_slice())
+    }
+
+    /// The texture coordinates the renderers draw with: [`Self::uv`], cloth `k` of several
+    /// moved by `RENDER_UV_STEP · k` along u. The fabric repeats, so it looks the same;
+    /// `render.wgsl` reads the cloth's index back (`round(u / RENDER_UV_STEP)`) and tints
+    /// each cloth of a scene of several its own colour. (Texture coordinates within
+    /// ±`RENDER_UV_STEP / 2` of their cloth's are read back right.)
+    pub fn render_uvs(&self) -> Vec<[f32; 2]> {
+        let mut uv = self.uv.clone();
+        for (k, part) in self.parts().iter().enumerate() {
+            for t in &mut uv[part.range()] {
+                t[0] += RENDER_UV_STEP * k as f32;
+            }
+        }
+        uv
     }
 
     /// The 12 slots every particle at least two away from the border has, if all such
@@ -529,6 +552,10 @@ impl Grab {
         grab.filter(|g| (g.particle as usize) < particles && g.target.iter().all(|v| v.is_finite()))
     }
 }
+
+/// How far along u each cloth of several is moved for the renderers
+/// ([`ClothTopology::render_uvs`]): `render.wgsl`'s `CLOTH_UV_STEP`.
+pub const RENDER_UV_STEP: f32 = 64.0;
 
 /// Per-step constants every kernel reads, derived from [`SimParams`] and [`Scene`]
 /// (`#[repr(C)]`: the GPU backends upload exactly these bytes).

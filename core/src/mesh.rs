@@ -641,8 +641,11 @@ impl TriMesh {
     /// distance): what `grid::build_grid` gives a grid pinned by a list of points. Held vertices
     /// get none. Brute force over the pins, so a mesh with more than 2.5e8 vertex–pin pairs
     /// gets none (as the grid).
-    pub fn tethers(&self, held: &[bool]) -> Vec<Vec<(u32, f32)>> {
+    /// With `part_of` (each vertex's cloth, in a scene of several), only to pins of the
+    /// vertex's own cloth.
+    pub fn tethers(&self, held: &[bool], part_of: Option<&[u32]>) -> Vec<Vec<(u32, f32)>> {
         let pins: Vec<u32> = (0..held.len() as u32).filter(|&v| held[v as usize]).collect();
+        let same = |a: usize, b: u32| part_of.is_none_or(|p| p[a] == p[b as usize]);
         let dist = |a: usize, b: usize| glam::Vec3::from(self.positions[a]).distance(self.positions[b].into());
         if pins.len() * held.len() > 250_000_000 {
             return vec![Vec::new(); held.len()];
@@ -652,7 +655,8 @@ impl TriMesh {
                 if held[v] {
                     return Vec::new();
                 }
-                let mut near: Vec<(f32, u32)> = pins.iter().map(|&p| (dist(v, p as usize), p)).collect();
+                let mut near: Vec<(f32, u32)> =
+                    pins.iter().filter(|&&p| same(v, p)).map(|&p| (dist(v, p as usize), p)).collect();
                 near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 near.into_iter().take(TETHER_SLOTS).map(|(d, p)| (p, d)).collect()
             })
@@ -798,6 +802,43 @@ pub struct PlacedMesh {
     pub file_of: Vec<u32>,
     /// The file's vertex count.
     pub file_vertices: usize,
+    /// The cloths it is made of, in a scene of several (`[[cloth]]`: one particle array,
+    /// a range per cloth); empty for one cloth.
+    pub parts: Vec<ClothPart>,
+}
+
+/// One cloth of a scene of several: its range of the one particle (and triangle) array
+/// and what it brings of its own.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClothPart {
+    /// What the scene file calls it: `cloth[k]` and, for a mesh, its file's name.
+    pub label: String,
+    /// Its particles: `first .. first + count` of the array.
+    pub first: u32,
+    /// How many particles.
+    pub count: u32,
+    /// Its triangles: `first_triangle .. first_triangle + triangles` of the list.
+    pub first_triangle: u32,
+    /// How many triangles.
+    pub triangles: u32,
+    /// Its mass, kg, if it names one (else the parameters' `cloth_mass`).
+    pub mass: Option<f32>,
+    /// Its free particles' initial velocity, m/s.
+    pub velocity: [f32; 3],
+    /// Whether it was a grid (simulated as its triangulation in a scene of several).
+    pub grid: bool,
+}
+
+impl ClothPart {
+    /// Its particles' range.
+    pub fn range(&self) -> std::ops::Range<usize> {
+        self.first as usize..(self.first + self.count) as usize
+    }
+
+    /// Its triangles' range.
+    pub fn triangle_range(&self) -> std::ops::Range<usize> {
+        self.first_triangle as usize..(self.first_triangle + self.triangles) as usize
+    }
 }
 
 impl PlacedMesh {
@@ -812,7 +853,7 @@ impl PlacedMesh {
             |[a, b]: [u32; 2]| glam::Vec3::from(mesh.positions[a as usize]).distance(mesh.positions[b as usize].into());
         let total: f64 = springs.edges.iter().map(|&e| len(e) as f64).sum();
         let spacing = (total / springs.edges.len().max(1) as f64) as f32;
-        Ok(Self { mesh, springs, spacing, file_of, file_vertices })
+        Ok(Self { mesh, springs, spacing, file_of, file_vertices, parts: Vec::new() })
     }
 
     /// How many of the file's vertices were in no triangle and dropped.
@@ -1022,7 +1063,7 @@ mod tests {
         assert!((mass[4] - 0.25).abs() < 1e-6, "{}", mass[4]);
         assert!((mass[2] - 1.0 / 24.0).abs() < 1e-6, "{}", mass[2]);
         // Tethers: the two nearest pins, nearest first, with their distances; none on pins.
-        let t = placed.tethers(&held);
+        let t = placed.tethers(&held, None);
         assert!(t[7].is_empty());
         assert_eq!(t[1].iter().map(|x| x.0).collect::<Vec<_>>(), vec![7, 6]);
         assert!((t[1][0].1 - 1.0).abs() < 1e-6 && (t[1][1].1 - 0.5f32.hypot(1.0)).abs() < 1e-6, "{:?}", t[1]);

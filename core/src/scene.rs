@@ -205,6 +205,9 @@ pub struct ClothSpec {
     pub rotate_deg: [f32; 3],
     /// The mesh's translation, m (last). Default 0.
     pub translate: [f32; 3],
+    /// In a scene of several cloths (`[[cloth]]`), this cloth's mass, kg. Default: the
+    /// parameters' `cloth_mass` (which is the mass of a scene's one cloth).
+    pub mass: Option<f32>,
     /// The mesh as read, placed and checked (`SceneFile::load` makes it).
     #[serde(skip)]
     pub mesh_data: Option<std::sync::Arc<crate::mesh::PlacedMesh>>,
@@ -225,6 +228,7 @@ impl Default for ClothSpec {
             scale: [1.0; 3],
             rotate_deg: [0.0; 3],
             translate: [0.0; 3],
+            mass: None,
             mesh_data: None,
         }
     }
@@ -322,6 +326,9 @@ impl Scene {
         }
         for v in c.velocity {
             finite_in("cloth.velocity", v, -1e3, 1e3)?;
+        }
+        if let Some(m) = c.mass {
+            finite_in("cloth.mass", m, 1e-6, 1e6)?;
         }
         let unit = |name: &str, a: [f32; 3]| -> Result<f32, ParamError> {
             for v in a {

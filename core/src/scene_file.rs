@@ -76,16 +76,17 @@ pub struct SceneFileError {
     pub message: String,
 }
 
+/// The file: `C` is a `[cloth]` table (`ClothSpec`) or `[[cloth]]` tables (`Vec<ClothSpec>`).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct Repr {
+struct Repr<C> {
     #[serde(default)]
     title: Option<String>,
     #[serde(default)]
     #[allow(dead_code)]
     description: Option<String>,
     #[serde(default)]
-    cloth: ClothSpec,
+    cloth: C,
     #[serde(default)]
     floor: FloorRepr,
     #[serde(default)]
@@ -154,38 +155,82 @@ impl SceneFile {
     /// is checked before anything is returned: a caller applies all of it or none.
     pub fn parse(text: &str, file: &str) -> Result<Self, SceneFileError> {
         let err = |at: Option<(usize, usize)>, message: String| SceneFileError { file: file.to_owned(), at, message };
-        let repr: Repr = toml::from_str(text).map_err(|e| {
+        let syntax = |e: toml::de::Error| {
             // The message may run over several lines (a syntax error lists what was
             // expected): one line.
             let msg = e.message().lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
             err(e.span().map(|s| line_col(text, s.start)), msg)
-        })?;
+        };
         let refused = |e: ParamError, path: String| {
             let at = locate(text, &path).map(|s| line_col(text, s));
             err(at, format!("`{path}` = {}: {}", e.value, e.reason))
         };
-        let mut cloth = repr.cloth;
-        if let Some(mesh) = cloth.mesh.clone() {
-            let keys: Vec<String> = toml::from_str::<toml::Table>(text)
-                .ok()
-                .and_then(|t| t.get("cloth").and_then(|c| c.as_table()).map(|c| c.keys().cloned().collect()))
+        // `[cloth]`, or `[[cloth]]` tables: several cloths.
+        let table = toml::from_str::<toml::Table>(text).ok();
+        let many = table.as_ref().and_then(|t| t.get("cloth")).is_some_and(|c| c.is_array());
+        let (repr, cloths): (Repr<()>, Vec<ClothSpec>) = if many {
+            let r: Repr<Vec<ClothSpec>> = toml::from_str(text).map_err(syntax)?;
+            let Repr { title, description, cloth, floor, spheres, boxes, params, camera, light } = r;
+            (Repr { title, description, cloth: (), floor, spheres, boxes, params, camera, light }, cloth)
+        } else {
+            let r: Repr<ClothSpec> = toml::from_str(text).map_err(syntax)?;
+            let Repr { title, description, cloth, floor, spheres, boxes, params, camera, light } = r;
+            (Repr { title, description, cloth: (), floor, spheres, boxes, params, camera, light }, vec![cloth])
+        };
+        if cloths.is_empty() {
+            return Err(err(locate(text, "cloth").map(|s| line_col(text, s)), "`cloth`: no cloth in the list".into()));
+        }
+        let mut loaded = Vec::with_capacity(cloths.len());
+        for (k, mut cloth) in cloths.into_iter().enumerate() {
+            // Where this cloth's keys are: `cloth.x`, or `cloth[k].x` of several.
+            let at_key = if many { format!("cloth[{k}]") } else { "cloth".to_owned() };
+            let keys: Vec<String> = table
+                .as_ref()
+                .and_then(|t| t.get("cloth"))
+                .and_then(|c| if many { c.as_array().and_then(|a| a.get(k)) } else { Some(c) })
+                .and_then(|c| c.as_table())
+                .map(|c| c.keys().cloned().collect())
                 .unwrap_or_default();
-            if let Some(k) = keys.iter().find(|k| ["n", "size", "top_center", "across", "down"].contains(&k.as_str())) {
-                let at = locate(text, &format!("cloth.{k}")).map(|s| line_col(text, s));
+            if cloth.mass.is_some() && !many {
+                let at = locate(text, &format!("{at_key}.mass")).map(|s| line_col(text, s));
                 return Err(err(
                     at,
-                    format!("`cloth.{k}` is the grid's; a mesh cloth is placed by scale, rotate_deg and translate"),
+                    "`cloth.mass`: a scene's one cloth weighs `[params] cloth_mass`; `mass` is for each of several `[[cloth]]`"
+                        .into(),
                 ));
             }
-            if !keys.iter().any(|k| k == "pinning") {
-                cloth.pinning = crate::scene::Pinning::None;
+            if let Some(mesh) = cloth.mesh.clone() {
+                if let Some(key) =
+                    keys.iter().find(|key| ["n", "size", "top_center", "across", "down"].contains(&key.as_str()))
+                {
+                    let at = locate(text, &format!("{at_key}.{key}")).map(|s| line_col(text, s));
+                    return Err(err(
+                        at,
+                        format!(
+                            "`{at_key}.{key}` is the grid's; a mesh cloth is placed by scale, rotate_deg and translate"
+                        ),
+                    ));
+                }
+                if !keys.iter().any(|key| key == "pinning") {
+                    cloth.pinning = crate::scene::Pinning::None;
+                }
+                // Relative to the scene file's folder.
+                let path = Path::new(file).parent().map(|d| d.join(&mesh)).unwrap_or(mesh);
+                let placed = crate::mesh::PlacedMesh::load(&path, cloth.mesh_name.as_deref(), &cloth.placement());
+                let at = locate(text, &format!("{at_key}.mesh")).map(|s| line_col(text, s));
+                cloth.mesh_data =
+                    Some(std::sync::Arc::new(placed.map_err(|e| err(at, format!("`{at_key}.mesh`: {e}")))?));
             }
-            // Relative to the scene file's folder.
-            let path = Path::new(file).parent().map(|d| d.join(&mesh)).unwrap_or(mesh);
-            let placed = crate::mesh::PlacedMesh::load(&path, cloth.mesh_name.as_deref(), &cloth.placement());
-            let at = locate(text, "cloth.mesh").map(|s| line_col(text, s));
-            cloth.mesh_data = Some(std::sync::Arc::new(placed.map_err(|e| err(at, format!("`cloth.mesh`: {e}")))?));
+            loaded.push(cloth);
         }
+        let cloth = if many {
+            crate::cloth::combine(&loaded).map_err(|e| {
+                let path = e.field.clone();
+                refused(e, path)
+            })?
+        } else {
+            loaded.remove(0)
+        };
         let scene = Scene {
             cloth,
             floor_y: repr.floor.enabled.then_some(repr.floor.y),

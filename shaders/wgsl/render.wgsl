@@ -95,10 +95,29 @@ fn base_color(material: u32, world: vec3<f32>, uv: vec2<f32>) -> vec3<f32> {
             return vec3<f32>(0.25, 0.45, 0.7);
         }
         default: {
-            return textureSample(fabric, fabric_sampler, uv * 8.0).rgb;
+            let fabric = textureSample(fabric, fabric_sampler, uv * 8.0).rgb;
+            // Cloth k of several: its u moved by CLOTH_UV_STEP · k (clothlab_core's
+            // ClothTopology::render_uvs; the fabric repeats), tinted its own colour. One
+            // cloth, or the first, keeps the fabric's.
+            let k = i32(round(uv.x / CLOTH_UV_STEP));
+            if k <= 0 {
+                return fabric;
+            }
+            let tints = array<vec3<f32>, 5>(
+                vec3<f32>(0.95, 0.5, 0.2),
+                vec3<f32>(0.35, 0.75, 0.35),
+                vec3<f32>(0.9, 0.8, 0.3),
+                vec3<f32>(0.65, 0.4, 0.85),
+                vec3<f32>(0.85, 0.3, 0.45),
+            );
+            let grey = dot(fabric, vec3<f32>(0.3, 0.59, 0.11));
+            return min(grey * 2.2 * tints[(k - 1) % 5], vec3<f32>(1.0));
         }
     }
 }
+
+// clothlab_core::grid::RENDER_UV_STEP.
+const CLOTH_UV_STEP: f32 = 64.0;
 
 // Blinn-Phong with one point light, shadowed, plus ambient; the cloth is lit on both sides.
 @fragment
