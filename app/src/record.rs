@@ -1,8 +1,9 @@
 //! `sim --record out.glb`: the run as binary glTF 2.0, built with gltf-json and written as
 //! a `gltf::binary::Glb`.
 //!
-//! The cloth is one mesh (triangles, uvs, the first frame's positions and normals) with a
-//! morph target per recorded frame (its positions less the first frame's), and an
+//! The cloth is one mesh (triangles, uvs, the first frame's positions and normals; in a
+//! scene of several cloths a node and mesh each, `cloth[k]`) with a morph target per
+//! recorded frame (its positions less the first frame's), and an
 //! animation of the mesh's weights with STEP interpolation: at frame k's time target k
 //! has weight 1 and every other 0. Blender imports this as shape keys driven by the
 //! animation; three.js and glTF viewers play it as is. The colliders are static meshes:
@@ -202,51 +203,62 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
     use json::accessor::{ComponentType as C, Type as T};
     let t = json::buffer::Target::ArrayBuffer;
 
-    // The cloth: base positions, normals, uvs, triangles, a target per frame.
-    let pv = view(&mut root, &mut bin, bytemuck::cast_slice(base), Some(t));
-    let positions = accessor(&mut root, pv, base.len(), C::F32, T::Vec3, Some(bounds(base)));
-    let nv = view(&mut root, &mut bin, bytemuck::cast_slice(&rec.normals), Some(t));
-    let normals = accessor(&mut root, nv, rec.normals.len(), C::F32, T::Vec3, None);
-    let uv = view(&mut root, &mut bin, bytemuck::cast_slice(&topo.uv), Some(t));
-    let uvs = accessor(&mut root, uv, topo.uv.len(), C::F32, T::Vec2, None);
-    let iv = view(
-        &mut root,
-        &mut bin,
-        bytemuck::cast_slice(&topo.triangles),
-        Some(json::buffer::Target::ElementArrayBuffer),
-    );
-    let indices = accessor(&mut root, iv, 3 * topo.triangles.len(), C::U32, T::Scalar, None);
-    let mut targets = Vec::with_capacity(rec.frames.len());
-    for frame in &rec.frames {
-        let d: Vec<[f32; 3]> = frame.iter().zip(base).map(|(p, b)| [p[0] - b[0], p[1] - b[1], p[2] - b[2]]).collect();
-        let dv = view(&mut root, &mut bin, bytemuck::cast_slice(&d), Some(t));
-        let da = accessor(&mut root, dv, d.len(), C::F32, T::Vec3, Some(bounds(&d)));
-        targets.push(json::mesh::MorphTarget { positions: Some(da), normals: None, tangents: None });
-    }
-    let primitive = json::mesh::Primitive {
-        attributes: BTreeMap::from([
-            (Valid(json::mesh::Semantic::Positions), positions),
-            (Valid(json::mesh::Semantic::Normals), normals),
-            (Valid(json::mesh::Semantic::TexCoords(0)), uvs),
-        ]),
-        extensions: Default::default(),
-        extras: Default::default(),
-        indices: Some(indices),
-        material: None,
-        mode: Valid(json::mesh::Mode::Triangles),
-        targets: Some(targets),
-    };
+    // The cloths: a node each (one for a scene's one cloth; `cloth[k]` of several), with
+    // its base positions, normals, uvs, triangles and a target per frame.
     let frames = rec.frames.len();
-    let mut weights0 = vec![0.0f32; frames];
-    weights0[0] = 1.0;
-    let mesh = root.push(json::Mesh {
-        extensions: Default::default(),
-        extras: Default::default(),
-        name: Some("cloth".into()),
-        primitives: vec![primitive],
-        weights: Some(weights0),
-    });
-    let cloth = root.push(json::Node { mesh: Some(mesh), name: Some("cloth".into()), ..Default::default() });
+    let whole = [(String::from("cloth"), 0..base.len(), 0..topo.triangles.len())];
+    let parts: Vec<(String, std::ops::Range<usize>, std::ops::Range<usize>)> = match topo.parts() {
+        [] => whole.to_vec(),
+        parts => {
+            parts.iter().enumerate().map(|(k, p)| (format!("cloth[{k}]"), p.range(), p.triangle_range())).collect()
+        }
+    };
+    let mut cloths = Vec::with_capacity(parts.len());
+    for (name, range, tris) in parts {
+        let base = &base[range.clone()];
+        let pv = view(&mut root, &mut bin, bytemuck::cast_slice(base), Some(t));
+        let positions = accessor(&mut root, pv, base.len(), C::F32, T::Vec3, Some(bounds(base)));
+        let nv = view(&mut root, &mut bin, bytemuck::cast_slice(&rec.normals[range.clone()]), Some(t));
+        let normals = accessor(&mut root, nv, range.len(), C::F32, T::Vec3, None);
+        let uv = view(&mut root, &mut bin, bytemuck::cast_slice(&topo.uv[range.clone()]), Some(t));
+        let uvs = accessor(&mut root, uv, range.len(), C::F32, T::Vec2, None);
+        let first = range.start as u32;
+        let local: Vec<[u32; 3]> = topo.triangles[tris].iter().map(|t| t.map(|v| v - first)).collect();
+        let iv =
+            view(&mut root, &mut bin, bytemuck::cast_slice(&local), Some(json::buffer::Target::ElementArrayBuffer));
+        let indices = accessor(&mut root, iv, 3 * local.len(), C::U32, T::Scalar, None);
+        let mut targets = Vec::with_capacity(frames);
+        for frame in &rec.frames {
+            let d: Vec<[f32; 3]> =
+                frame[range.clone()].iter().zip(base).map(|(p, b)| [p[0] - b[0], p[1] - b[1], p[2] - b[2]]).collect();
+            let dv = view(&mut root, &mut bin, bytemuck::cast_slice(&d), Some(t));
+            let da = accessor(&mut root, dv, d.len(), C::F32, T::Vec3, Some(bounds(&d)));
+            targets.push(json::mesh::MorphTarget { positions: Some(da), normals: None, tangents: None });
+        }
+        let primitive = json::mesh::Primitive {
+            attributes: BTreeMap::from([
+                (Valid(json::mesh::Semantic::Positions), positions),
+                (Valid(json::mesh::Semantic::Normals), normals),
+                (Valid(json::mesh::Semantic::TexCoords(0)), uvs),
+            ]),
+            extensions: Default::default(),
+            extras: Default::default(),
+            indices: Some(indices),
+            material: None,
+            mode: Valid(json::mesh::Mode::Triangles),
+            targets: Some(targets),
+        };
+        let mut weights0 = vec![0.0f32; frames];
+        weights0[0] = 1.0;
+        let mesh = root.push(json::Mesh {
+            extensions: Default::default(),
+            extras: Default::default(),
+            name: Some(name.clone()),
+            primitives: vec![primitive],
+            weights: Some(weights0),
+        });
+        cloths.push(root.push(json::Node { mesh: Some(mesh), name: Some(name), ..Default::default() }));
+    }
 
     // The animation: at frame k's time, target k alone (STEP).
     let tv = view(&mut root, &mut bin, bytemuck::cast_slice(&rec.times), None);
@@ -272,23 +284,27 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
     root.push(json::Animation {
         extensions: Default::default(),
         extras: Default::default(),
-        channels: vec![json::animation::Channel {
-            sampler: json::Index::new(0),
-            target: json::animation::Target {
+        // Every cloth's weights from the one sampler.
+        channels: cloths
+            .iter()
+            .map(|&node| json::animation::Channel {
+                sampler: json::Index::new(0),
+                target: json::animation::Target {
+                    extensions: Default::default(),
+                    extras: Default::default(),
+                    node,
+                    path: Valid(json::animation::Property::MorphTargetWeights),
+                },
                 extensions: Default::default(),
                 extras: Default::default(),
-                node: cloth,
-                path: Valid(json::animation::Property::MorphTargetWeights),
-            },
-            extensions: Default::default(),
-            extras: Default::default(),
-        }],
+            })
+            .collect(),
         name: Some("simulation".into()),
         samplers: vec![sampler],
     });
 
     // The colliders.
-    let mut nodes = vec![cloth];
+    let mut nodes = cloths;
     for (k, s) in scene.spheres.iter().enumerate() {
         let (p, t) = sphere_mesh(s.center, s.radius);
         nodes.push(static_mesh(&mut root, &mut bin, &format!("sphere {k}"), &p, &t));

@@ -288,7 +288,9 @@ pub fn combine(cloths: &[ClothSpec]) -> Result<ClothSpec, ParamError> {
             grid: c.mesh_data.is_none(),
         });
         all.positions.extend_from_slice(&mesh.positions);
-        all.uvs.as_mut().map(|u| u.extend(mesh.uvs.iter().flatten()));
+        if let Some(u) = all.uvs.as_mut() {
+            u.extend(mesh.uvs.iter().flatten());
+        }
         all.triangles.extend(mesh.triangles.iter().map(|t| t.map(|v| v + first)));
         held.extend(pins);
     }

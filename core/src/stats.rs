@@ -52,7 +52,8 @@ pub fn summarize(state: &ClothState, topo: &ClothTopology) -> StateSummary {
 }
 
 /// Writes the cloth as a Wavefront OBJ mesh: `v x y z` per particle (index `j·n + i + 1`),
-/// `vt u v`, `vn x y z`, and `f a/a/a b/b/b c/c/c` per triangle. Any 3-D tool opens it.
+/// `vt u v`, `vn x y z`, and `f a/a/a b/b/b c/c/c` per triangle (in a scene of several
+/// cloths, each cloth's faces an object, `o cloth[k]`). Any 3-D tool opens it.
 pub fn write_obj(w: &mut impl Write, state: &ClothState, topo: &ClothTopology) -> std::io::Result<()> {
     match state.n {
         0 => writeln!(w, "# clothlab cloth state, a mesh of {} particles", state.pos.len())?,
@@ -67,9 +68,19 @@ pub fn write_obj(w: &mut impl Write, state: &ClothState, topo: &ClothTopology) -
     for q in &state.normal {
         writeln!(w, "vn {} {} {}", q[0], q[1], q[2])?;
     }
-    for [a, b, c] in &topo.triangles {
-        let (a, b, c) = (a + 1, b + 1, c + 1);
-        writeln!(w, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}")?;
+    // A scene of several cloths: an object (`o cloth[k]`) each, its faces.
+    let parts: Vec<std::ops::Range<usize>> = match topo.parts() {
+        [] => std::iter::once(0..topo.triangles.len()).collect(),
+        parts => parts.iter().map(|p| p.triangle_range()).collect(),
+    };
+    for (k, tris) in parts.into_iter().enumerate() {
+        if !topo.parts().is_empty() {
+            writeln!(w, "o cloth[{k}]")?;
+        }
+        for [a, b, c] in &topo.triangles[tris] {
+            let (a, b, c) = (a + 1, b + 1, c + 1);
+            writeln!(w, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}")?;
+        }
     }
     Ok(())
 }

@@ -307,3 +307,39 @@ fn the_strain_limit_reads_the_edges_and_the_gather_every_spring() {
         assert_eq!(found, 2 * topo.springs.len(), "{name}: every spring gathered at both ends");
     }
 }
+
+/// The strain limit holds an irregular mesh: the Delaunay cape (vertices of 1 to 8
+/// triangles, rows of 3 to 16 springs), hung by its shoulders with no wind and no sphere,
+/// its edges stretched by its weight. Measured (τ = 0.1): its longest edge at 0.216 with
+/// the limit off and 0.1000 with 8 passes a substep (the passes aim at 0.95 τ, the springs
+/// of the next substep pull back towards the limit). Bounds: past 1.8 τ without, within
+/// 1.05 τ with.
+#[test]
+fn the_strain_limit_holds_a_hanging_irregular_mesh() {
+    let file = SceneFile::load(&scenes().join("mesh-cape.toml")).unwrap();
+    let mut scene = file.scene;
+    scene.spheres.clear();
+    let base = SimParams { wind: [0.0; 3], ..file.params };
+    let max_edge_strain = |params: SimParams| {
+        let mut solver = CpuSolver::new(Exec::Parallel, scene.clone(), params).unwrap();
+        for _ in 0..60 {
+            solver.step_frame().unwrap();
+        }
+        let end = solver.state().unwrap();
+        let topo = solver.topology();
+        let p = |k: u32| glam::Vec3::from_slice(&end.pos[k as usize][..3]);
+        topo.springs
+            .iter()
+            .filter(|s| s.kind == clothlab_core::SpringKind::Structural as u32)
+            .map(|s| p(s.a).distance(p(s.b)) / s.rest - 1.0)
+            .fold(0.0f32, f32::max)
+    };
+    let tau = base.strain_limit;
+    let free = max_edge_strain(SimParams { strain_iterations: 0, ..base.clone() });
+    let held = max_edge_strain(SimParams { strain_iterations: 8, ..base.clone() });
+    eprintln!(
+        "cape hung by its shoulders: max edge strain {free:.4} without the limit, {held:.4} with 8 passes (τ {tau})"
+    );
+    assert!(free > 1.8 * tau, "without the limit the cape should stretch past 1.8τ: {free}");
+    assert!(held < 1.05 * tau, "with 8 passes the cape's edges should stay within 1.05τ: {held}");
+}

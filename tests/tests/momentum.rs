@@ -116,8 +116,13 @@ fn on_a_frictionless_floor_internal_corrections_keep_the_horizontal_momentum() {
             },
         ),
     ];
-    // The irregular mesh with all three (its rows of 3 to 8 edges walked by the counts and
-    // the pass alike; self-collision within half its closest spring-free pair).
+    // The irregular mesh under Verlet and under XPBD, with the strain limit and
+    // self-collision (its rows of 3 to 8 edges walked by the counts and the pass alike;
+    // self-collision within half its closest spring-free pair).
+    let verlet = (
+        "verlet, cape mesh",
+        SimParams { strain_iterations: 2, self_collision: true, self_thickness: 0.01, ..base.clone() },
+    );
     let mesh = (
         "all, cape mesh",
         SimParams {
@@ -130,7 +135,7 @@ fn on_a_frictionless_floor_internal_corrections_keep_the_horizontal_momentum() {
     );
     let mut failed = Vec::new();
     let (grid, cape) = (scene(), mesh_scene());
-    for (what, p) in cases.into_iter().chain([mesh]) {
+    for (what, p) in cases.into_iter().chain([verlet, mesh]) {
         let tol = bound(&p);
         let scene = if what.contains("mesh") { &cape } else { &grid };
         for (name, drift, low) in drifts(scene, &p) {

@@ -2,7 +2,7 @@
 //! lies on the floor ends on it, no closer than the self-collision thickness, whichever
 //! backend runs the one particle array the two make.
 
-use clothlab_core::{SceneFile, Solver};
+use clothlab_core::SceneFile;
 use clothlab_tests::every_backend;
 
 /// Two 20 × 20 grids of 0.5 m (spacing 2.63 cm) lying flat, the upper 15 cm above the

@@ -98,6 +98,10 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         )?,
         _ => outln!("grid           {n}x{n} ({np} particles)", n = scene.cloth.n)?,
     }
+    // A scene of several cloths: each one's particles in the state (`--out`'s arrays).
+    for (k, part) in topo.parts().iter().enumerate() {
+        outln!("  cloth[{k}]     particles {}..{}: {}", part.first, part.first + part.count, part.label)?;
+    }
     outln!("substeps       {substeps} ({frames} frames of {})", solver.params().substeps)?;
     outln!("wall time      {:.3} s", wall.as_secs_f64())?;
     outln!("time/substep   {:.1} us median ({:.2} ns per particle-substep)", per_substep / 1e3, per_substep / np)?;

@@ -442,6 +442,12 @@ fn scene_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
         )),
         _ => ui.label(format!("cloth {n}×{n}, {} m, pinned: {}", c.size, c.pinning.label(), n = c.n)),
     };
+    // A scene of several cloths: each one, with its particles and mass.
+    let parts = c.mesh_data.as_ref().map_or(&[][..], |m| m.parts.as_slice());
+    for (k, part) in parts.iter().enumerate() {
+        let mass = part.mass.map_or("cloth_mass".to_owned(), |m| format!("{m} kg"));
+        ui.label(format!("  cloth[{k}]: {}, {} particles, {mass}", part.label, part.count));
+    }
     let sc = &mut s.scene;
     let mut floor = sc.floor_y.is_some();
     ui.horizontal(|ui| {

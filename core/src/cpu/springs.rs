@@ -11,26 +11,17 @@ use crate::grid::{Rows, SLOT_OFFSETS, SLOTS, Spring, SpringSlot, StepParams, V4}
 /// Where a particle's spring slots come from: the table, or (for the fused sweep) the
 /// regular grid's, computed from the particle's place.
 pub(crate) trait SlotSource {
-    /// How many slots particle `i` has.
-    fn count(&self, i: usize) -> usize;
-    /// How many of them the strain limit holds (its first ones: the row's head).
-    fn head(&self, i: usize) -> usize;
-    /// Slot `s` of particle `i`.
-    fn slot(&self, i: usize, s: usize) -> SpringSlot;
+    /// `f` on each slot of particle `i` in order: all of them, or (`head`) those the strain
+    /// limit holds (the first ones: the row's head). One call per particle, so that a
+    /// table's row is found once, not per slot.
+    fn each(&self, i: usize, head: bool, f: impl FnMut(&SpringSlot));
 }
 
 impl SlotSource for Rows<SpringSlot> {
     #[inline(always)]
-    fn count(&self, i: usize) -> usize {
-        self.range(i).len()
-    }
-    #[inline(always)]
-    fn head(&self, i: usize) -> usize {
-        Rows::head(self, i).len()
-    }
-    #[inline(always)]
-    fn slot(&self, i: usize, s: usize) -> SpringSlot {
-        self.row(i)[s]
+    fn each(&self, i: usize, head: bool, f: impl FnMut(&SpringSlot)) {
+        let row = if head { self.head(i) } else { self.row(i) };
+        row.iter().for_each(f);
     }
 }
 
@@ -43,13 +34,16 @@ pub(crate) struct GridSlots<'a> {
 
 impl SlotSource for GridSlots<'_> {
     #[inline(always)]
-    fn count(&self, _: usize) -> usize {
-        SLOTS
+    fn each(&self, i: usize, head: bool, mut f: impl FnMut(&SpringSlot)) {
+        let count = if head { crate::grid::STRAIN_SLOTS } else { SLOTS };
+        for s in 0..count {
+            f(&self.slot(i, s));
+        }
     }
-    #[inline(always)]
-    fn head(&self, _: usize) -> usize {
-        crate::grid::STRAIN_SLOTS
-    }
+}
+
+impl GridSlots<'_> {
+    /// Slot `s` of particle `i`.
     #[inline(always)]
     fn slot(&self, i: usize, s: usize) -> SpringSlot {
         let n = self.n as isize;
@@ -85,13 +79,12 @@ pub(crate) fn gather_at(i: usize, slots: &(impl SlotSource + ?Sized), pos: impl 
     let xa = v3(pos.at(i));
     let va = v3(vel.at(i));
     let mut acc = v3(f);
-    for s in 0..slots.count(i) {
-        let s = &slots.slot(i, s);
-        let Some(b) = s.other() else { continue };
+    slots.each(i, false, |s| {
+        let Some(b) = s.other() else { return };
         let xb = v3(pos.at(b));
         let vb = v3(vel.at(b));
         acc += spring_force(xa - xb, va - vb, s);
-    }
+    });
     v4(acc, 0.0)
 }
 

@@ -49,16 +49,15 @@ pub(crate) fn count_at(i: usize, p: &StepParams, slots: &(impl SlotSource + ?Siz
     let stretch = 1.0 + p.strain_limit;
     let xi = v3(pos.at(i));
     let mut count = 0.0f32;
-    for s in 0..slots.head(i) {
-        let s = &slots.slot(i, s);
+    slots.each(i, true, |s| {
         if s.neighbor < 0 {
-            continue;
+            return;
         }
         let len = (v3(pos.at(s.neighbor as usize)) - xi).length();
         if len > stretch * s.rest {
             count += 1.0;
         }
-    }
+    });
     count
 }
 
@@ -111,10 +110,9 @@ pub(crate) fn limit_at(
     let ci = counts(i);
     let mut corr = glam::Vec3::ZERO;
     let mut count = 0.0f32;
-    for s in 0..slots.head(i) {
-        let s = &slots.slot(i, s);
+    slots.each(i, true, |s| {
         if s.neighbor < 0 {
-            continue;
+            return;
         }
         let b = s.neighbor as usize;
         let d = v3(pos.at(b)) - xi;
@@ -129,7 +127,7 @@ pub(crate) fn limit_at(
             corr += d * (wi * (len - aim * s.rest) / ((wi + wb) * len * ci.max(counts(b)).max(1.0)));
             count += 1.0;
         }
-    }
+    });
     let mut x = if count > 0.0 { xi + corr } else { xi };
     for t in &tethers[i] {
         if t.pin < 0 {
