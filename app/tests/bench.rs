@@ -481,3 +481,19 @@ fn mesh_vs_grid_measures_the_grid_and_the_same_grid_as_a_mesh() {
     assert!(std::fs::metadata(out.join("mesh-vs-grid.png")).unwrap().len() > 1000);
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// The main bench on a scene of several cloths (one mesh to the solvers, `n = 0`): it runs
+/// on a CPU and a GPU backend and checks they simulated the same workload (its probe of a
+/// mesh's particles read index `n - 1` of a grid before, and panicked on a mesh).
+#[test]
+fn bench_runs_a_scene_of_several_cloths() {
+    let out = tmp("bench-two-cloths");
+    let args = ["bench", "--scene", "../scenes/two-cloths.toml", "--sizes", "8", "--iters", "16", "--no-overhead"];
+    let o = clothlab(&[&args[..], &["--backends", "cpu-par,wgpu", "--out", out.to_str().unwrap()]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "bench failed: {err}");
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert!(csv.lines().any(|l| l.contains("cpu-par")), "{csv}");
+    assert!(!err.contains("panicked"), "{err}");
+    std::fs::remove_dir_all(&out).ok();
+}

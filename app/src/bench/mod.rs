@@ -736,10 +736,15 @@ fn draw(sim: &mut AnySolver, painter: &mut Painter, view: &clothlab_core::View) 
     Ok(true)
 }
 
-/// Positions of a `CHECK_LATTICE`² lattice of particles, corners included.
+/// Positions of a `CHECK_LATTICE`² lattice of particles, corners included; of a mesh
+/// (`n = 0`), as many spread evenly over its particles, the first and last included.
 fn probe(state: &ClothState) -> Vec<[f32; 3]> {
     let n = state.n as usize;
     let m = CHECK_LATTICE as usize;
+    if n == 0 {
+        let (count, last) = (m * m, state.pos.len().saturating_sub(1));
+        return (0..count).map(|k| state.pos[k * last / (count - 1)]).map(|p| [p[0], p[1], p[2]]).collect();
+    }
     let at = |k: usize| if n == 1 { 0 } else { k * (n - 1) / (m - 1) };
     let mut v = Vec::with_capacity(m * m);
     for j in 0..m {
