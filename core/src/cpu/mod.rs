@@ -19,6 +19,7 @@ mod solver;
 mod springs;
 mod stats;
 mod strain_limit;
+pub mod vbd;
 
 pub use collide::{collide, integrate_collide};
 pub use forces::forces;

@@ -1,0 +1,188 @@
+//! Vertex Block Descent's CPU reference (`cpu::vbd`, issue 46's first step) against
+//! analytic cases: its colourings valid on grids and irregular meshes, free fall exactly
+//! implicit Euler's recurrence, a spring's oscillation decaying no faster than implicit
+//! Euler's, momentum with only internal forces.
+
+use clothlab_core::cpu::vbd::{colouring, colouring_is_valid, vbd_substep};
+use clothlab_core::grid::{SpringSlot, StepParams, V4};
+use clothlab_core::{Pinning, Scene, SceneFile, SimParams, build};
+
+fn scene_file(name: &str) -> SceneFile {
+    SceneFile::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(name)).unwrap()
+}
+
+#[test]
+fn the_colourings_are_valid_on_grids_and_irregular_meshes() {
+    for n in [3u32, 7, 10] {
+        let (_, topo) = build(&Scene::with_n(n), &SimParams::default()).unwrap();
+        let c = colouring(&topo);
+        assert_eq!(c.len(), 9, "n = {n}: (i mod 3, j mod 3)");
+        assert!(colouring_is_valid(&topo, &c), "n = {n}");
+    }
+    // The fan (a centre of 64 edges and 64 bending springs), the Delaunay cape, two cloths.
+    for (name, most) in [("mesh-fan.toml", 140), ("mesh-cape.toml", 24), ("two-cloths.toml", 24)] {
+        let file = scene_file(name);
+        let (_, topo) = build(&file.scene, &file.params).unwrap();
+        let c = colouring(&topo);
+        println!("{name}: {} colours", c.len());
+        assert!(colouring_is_valid(&topo, &c), "{name}");
+        // Greedy needs at most one more colour than the largest row.
+        let largest = (0..topo.num_particles()).map(|i| topo.slots.row(i).len()).max().unwrap();
+        assert!(c.len() <= largest + 1 && c.len() <= most, "{name}: {} colours, rows up to {largest}", c.len());
+    }
+    // Two neighbours in one colour are caught, as is a particle left out or listed twice.
+    let (_, topo) = build(&Scene::with_n(4), &SimParams::default()).unwrap();
+    let mut c = colouring(&topo);
+    let moved = c[1].pop().unwrap();
+    c[0].push(moved);
+    assert!(!colouring_is_valid(&topo, &c), "a colour with two neighbours");
+    let mut c = colouring(&topo);
+    c[0].pop();
+    assert!(!colouring_is_valid(&topo, &c), "a particle left out");
+}
+
+/// A free 10 × 10 cloth, no drag, no damping: with no spring stretched VBD's minimiser is
+/// the inertial prediction, so every particle follows implicit Euler's recurrence
+/// `vₖ = v₀ + k h g`, `xₖ = x₀ + Σ h vₖ`, at 3.7 m and at 50 m (where an f32 position
+/// resolves 3.8 µm: the displacement is summed apart from x).
+#[test]
+fn a_free_cloth_falls_by_implicit_eulers_recurrence() {
+    for height in [3.7f32, 50.0] {
+        let mut scene = Scene::with_n(10);
+        scene.cloth.pinning = Pinning::None;
+        scene.cloth.top_center = [0.0, height, 0.0];
+        scene.cloth.velocity = [0.3, 0.5, 0.0];
+        (scene.floor_y, scene.spheres) = (None, Vec::new());
+        let params = SimParams { air_drag: 0.0, damping: 0.0, ..SimParams::default() };
+        let (state, topo) = build(&scene, &params).unwrap();
+        let p = StepParams::new(&params, &scene, None);
+        let colours = colouring(&topo);
+        let (mut pos, mut vel) = (state.pos.clone(), state.vel.clone());
+        let steps = 64;
+        for _ in 0..steps {
+            vbd_substep(&p, &topo, &colours, 4, &mut pos, &mut vel);
+        }
+        let (h, g, k) = (p.dt as f64, p.gravity[1] as f64, steps as f64);
+        let want_dy = h * k * 0.5 + h * h * g * k * (k + 1.0) / 2.0;
+        let want_vy = 0.5 + k * h * g;
+        let mut worst = 0.0f64;
+        for (a, b) in state.pos.iter().zip(&pos) {
+            worst = worst.max(((b[1] - a[1]) as f64 - want_dy).abs());
+        }
+        let vy = vel.iter().map(|v| v[1] as f64).fold(0.0, |a: f64, v| a.max((v - want_vy).abs()));
+        println!("height {height}: drop {want_dy:.5} m, worst error {worst:.2e} m, velocity error {vy:.2e} m/s");
+        // What is left is the rounding of the final position, x⁰ + D, to f32 (its ulp:
+        // 2.4e-7 m at 3.7 m, 3.8e-6 m at 50 m; measured 1.5e-7 and 3.9e-7 m): two ulps.
+        // The velocity never touches x: measured 1.6e-7 m/s of −0.15 m/s; bound 1e-6.
+        let ulp = f32::from_bits(height.to_bits() + 1) - height;
+        assert!(worst < 2.0 * ulp as f64, "height {height}: {worst} m");
+        assert!(vy < 1e-6, "height {height}: {vy}");
+    }
+}
+
+/// One spring, one end pinned: `x'' = −ω² x`. Implicit Euler damps the amplitude by
+/// `(1 + h²ω²)^(−1/2)` a step; VBD converged is implicit Euler, and fewer iterations stop
+/// short of its minimiser, never past it, so it damps no faster. Here 40 steps a period,
+/// over two periods (amplitude 0.1 → 0.0603 m): one free vertex's block is the whole
+/// problem, so even one iteration lands on implicit Euler (measured equal to 1e-5 m at
+/// 1, 2 and 20 iterations).
+#[test]
+fn a_springs_oscillation_decays_no_faster_than_implicit_eulers() {
+    let params = SimParams {
+        air_drag: 0.0,
+        damping: 0.0,
+        gravity: [0.0; 3],
+        structural_damping: 0.0,
+        shear_damping: 0.0,
+        bend_damping: 0.0,
+        ..SimParams::default()
+    };
+    let mut scene = Scene::with_n(2);
+    (scene.floor_y, scene.spheres) = (None, Vec::new());
+    let (_, mut topo) = build(&scene, &params).unwrap();
+    let mut p = StepParams::new(&params, &scene, None);
+    let m = p.particle_mass as f64;
+    let omega = 2.0 * std::f64::consts::PI;
+    let k = (m * omega * omega) as f32;
+    topo.slots.entries_mut().fill(SpringSlot::EMPTY);
+    topo.slots.row_mut(1)[0] = SpringSlot { neighbor: 0, rest: 1.0, ks: k, kd: 0.0 };
+    let h = 1.0 / 40.0;
+    p.dt = h as f32;
+    let colours = colouring(&topo);
+    let amplitude = 0.1f64;
+    let run = |iterations: u32| {
+        let mut pos: Vec<V4> = vec![
+            [0.0, 0.0, 0.0, 0.0],
+            [1.0 + amplitude as f32, 0.0, 0.0, 1.0],
+            [5.0, 5.0, 5.0, 0.0],
+            [6.0, 5.0, 5.0, 0.0],
+        ];
+        let mut vel = vec![[0.0f32; 4]; 4];
+        let mut last = 0.0f64;
+        for step in 0..80 {
+            vbd_substep(&p, &topo, &colours, iterations, &mut pos, &mut vel);
+            if step >= 40 {
+                last = last.max((pos[1][0] as f64 - 1.0).abs());
+            }
+        }
+        last
+    };
+    // Implicit Euler on the same oscillator, in f64.
+    let (mut x, mut v, mut ie) = (amplitude, 0.0f64, 0.0f64);
+    for step in 0..80 {
+        let next = (x + h * v) / (1.0 + h * h * omega * omega);
+        v = (next - x) / h;
+        x = next;
+        if step >= 40 {
+            ie = ie.max(x.abs());
+        }
+    }
+    for iterations in [1u32, 2, 20] {
+        let a = run(iterations);
+        println!("{iterations:2} iterations: amplitude {a:.5} m after two periods, implicit Euler {ie:.5} m");
+        // f32 positions near 1 m: 1e-6 m of rounding over 80 steps.
+        assert!(a >= ie - 1e-5, "{iterations} iterations: {a} < implicit Euler's {ie}");
+        if iterations == 20 {
+            assert!((a - ie).abs() < 1e-3 * amplitude, "converged VBD is implicit Euler: {a} against {ie}");
+        }
+    }
+}
+
+/// A free cloth with no gravity, disturbed and moving: only the springs (and their damping)
+/// act. Each local step moves one particle, so momentum is kept only as far as the
+/// iterations converge and f32 lets them: measured 1.7e-4 of the momentum at 5 iterations
+/// and 8.4e-4 at 40 over 32 substeps (each local step rounds: more steps, more rounding);
+/// bound 2e-3. The paper's damping (on each vertex's own displacement) lost 0.97 of it.
+#[test]
+fn momentum_with_only_internal_forces_is_kept_to_what_the_iterations_leave() {
+    let mut scene = Scene::with_n(8);
+    scene.cloth.pinning = Pinning::None;
+    (scene.floor_y, scene.spheres) = (None, Vec::new());
+    let params = SimParams { air_drag: 0.0, damping: 0.0, gravity: [0.0; 3], ..SimParams::default() };
+    let (state, topo) = build(&scene, &params).unwrap();
+    let p = StepParams::new(&params, &scene, None);
+    let colours = colouring(&topo);
+    let jitter = |k: usize, c: usize| ((k * 7919 + c * 104729) % 1000) as f32 * 2e-5;
+    let pos0: Vec<V4> =
+        state.pos.iter().enumerate().map(|(k, x)| [x[0] + jitter(k, 0), x[1] + jitter(k, 1), x[2], x[3]]).collect();
+    let vel0: Vec<V4> = (0..pos0.len()).map(|k| [0.4 + jitter(k, 2) * 50.0, 0.0, -0.2, 0.0]).collect();
+    let momentum = |vel: &[V4]| {
+        let mut s = [0.0f64; 3];
+        for v in vel {
+            (0..3).for_each(|c| s[c] += v[c] as f64);
+        }
+        s
+    };
+    let start = momentum(&vel0);
+    let size = start.iter().map(|c| c * c).sum::<f64>().sqrt();
+    for iterations in [5u32, 40] {
+        let (mut pos, mut vel) = (pos0.clone(), vel0.clone());
+        for _ in 0..32 {
+            vbd_substep(&p, &topo, &colours, iterations, &mut pos, &mut vel);
+        }
+        let end = momentum(&vel);
+        let drift = (0..3).map(|c| (end[c] - start[c]).powi(2)).sum::<f64>().sqrt() / size;
+        println!("{iterations} iterations: momentum changed by {drift:.2e} of itself over 32 substeps");
+        assert!(drift < 2e-3, "{iterations} iterations: {drift}");
+    }
+}
