@@ -49,8 +49,8 @@ pub enum Buf {
     Normal = 4,
     /// The other buffer of the position pair (the strain limit's output).
     PosOut = 5,
-    /// A grid's spring slots 0..8 of every particle (structural, shear); a mesh's whole
-    /// table, its rows one after another (see [`Buf::Adjacency`]).
+    /// A grid's spring slots 0..8 of every particle (structural, shear); the first half of
+    /// a mesh's rows, one after another (see [`Buf::Adjacency`]).
     Slots = 6,
     /// The flat spring list, first half.
     Springs = 7,
@@ -66,7 +66,7 @@ pub enum Buf {
     Spheres = 12,
     /// Box colliders.
     Boxes = 13,
-    /// A grid's spring slots 8..12 of every particle (bend); unused on a mesh.
+    /// A grid's spring slots 8..12 of every particle (bend); the rest of a mesh's rows.
     BendSlots = 14,
     /// The flat spring list, second half.
     SpringsB = 15,
@@ -98,10 +98,11 @@ pub enum Buf {
     Aux4 = 28,
     /// The conjugate-gradient scalars `r·z`, `p·q`, `α`, `β` (one `vec4<f32>`).
     Scalars = 29,
-    /// A mesh's compressed rows (`tables::Rows`): per particle, and one past the last,
-    /// `(first slot, end of the row's head, first face slot, 0)` into the spring table
-    /// (binding 6 holds a mesh's whole table) and the face slots. A grid's table is of
-    /// fixed rows and its kernels never read this (one unused element).
+    /// A mesh's compressed rows (`tables::Rows`): per particle `(first slot within its
+    /// binding, head length, first face slot, slot count | 1 << 31 where the row is in
+    /// binding 14)`, and one past the last `(0, 0, end of the faces, binding 14's first
+    /// entry in the whole table)` (`clothlab_engine::tables::adjacency`). A grid's table
+    /// is of fixed rows and its kernels never read this (one unused element).
     Adjacency = 30,
 }
 

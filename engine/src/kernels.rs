@@ -551,9 +551,9 @@ pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool)
         // contact.
         Buf::Slots | Buf::BendSlots if k.def.name == "self_collide_mesh" => 0,
         Buf::Table if !k.flavor.table_image => 0,
-        // A mesh's whole table is in the first binding.
-        Buf::Slots if topo.mesh.is_some() => entries * 16,
-        Buf::BendSlots if topo.mesh.is_some() => 0,
+        // A mesh's table: its rows split between the two bindings.
+        Buf::Slots if topo.mesh.is_some() => crate::tables::mesh_split(topo) as u64 * 16,
+        Buf::BendSlots if topo.mesh.is_some() => (entries - crate::tables::mesh_split(topo) as u64) * 16,
         Buf::Slots => np * STRAIN_SLOTS as u64 * 16,
         Buf::BendSlots => np * (SLOTS - STRAIN_SLOTS) as u64 * 16,
         Buf::Table => entries * 16,

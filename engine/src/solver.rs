@@ -123,11 +123,12 @@ impl<E: Engine> GpuSolver<E> {
         let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
         SolverError::check_table(scene.cloth.n, per_particle, info.max_binding, &info.adapter)?;
         let (state, topo) = build(&scene, &params)?;
-        // A mesh's whole table is one binding (its rows one after another).
-        let table_bytes = std::mem::size_of_val(topo.slots.entries()) as u64;
+        // A mesh's table in two bindings (its rows split by entries, whole rows each).
+        let (first, second) = split_slots(&topo);
+        let table_bytes = std::mem::size_of_val(first.as_slice()).max(std::mem::size_of_val(second.as_slice())) as u64;
         if topo.mesh.is_some() && table_bytes > info.max_binding {
             return Err(SolverError::Unsupported(format!(
-                "a mesh of {} particles needs a {} MiB spring table; {} binds at most {} MiB",
+                "a mesh of {} particles needs two {} MiB halves of its spring table; {} binds at most {} MiB",
                 topo.num_particles(),
                 table_bytes >> 20,
                 info.adapter,
@@ -146,7 +147,7 @@ impl<E: Engine> GpuSolver<E> {
         let tri_flat: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
         let face_flat = face_flat(&topo);
         let adjacency = adjacency(&topo);
-        let (strain, bend) = split_slots(&topo);
+        let (strain, bend) = (first, second);
         let (springs_a, springs_b) = spring_halves(&topo.springs);
         let interior = interior_block(&topo, variant.table);
         let (x, y) = groups(topo.num_particles() as u32);

@@ -20,13 +20,16 @@ pub fn table_texels(topo: &ClothTopology) -> (Vec<[u32; 4]>, u32) {
     (texels, height as u32)
 }
 
-/// The spring table as the shaders read it. A grid's: slots `0..STRAIN_SLOTS` of every
-/// particle, then the remaining (bend) slots of every particle, so that each part stays
-/// within the 128 MiB a storage binding may span on many adapters up to n = 1024. A mesh's:
-/// its rows one after another in the first, one empty slot in the second.
+/// The spring table as the shaders read it, in two bindings so that each part stays
+/// within the 128 MiB a storage binding may span on many adapters. A grid's: slots
+/// `0..STRAIN_SLOTS` of every particle, then the remaining (bend) slots of every particle
+/// (up to n = 1024). A mesh's: its rows one after another, the first half of them (by
+/// entries, whole rows: [`mesh_split`]) in the first binding, the rest in the second
+/// (an empty slot if none; up to about 1.4 M vertices of 12 springs).
 pub fn split_slots(topo: &ClothTopology) -> (Vec<SpringSlot>, Vec<SpringSlot>) {
     if topo.slots.width().is_none() {
-        return (topo.slots.entries().to_vec(), vec![SpringSlot::EMPTY]);
+        let (a, b) = topo.slots.entries().split_at(mesh_split(topo) as usize);
+        return (a.to_vec(), if b.is_empty() { vec![SpringSlot::EMPTY] } else { b.to_vec() });
     }
     let mut strain = Vec::with_capacity(topo.num_particles() * STRAIN_SLOTS);
     let mut bend = Vec::with_capacity(topo.num_particles() * (SLOTS - STRAIN_SLOTS));
@@ -43,22 +46,47 @@ pub fn face_flat(topo: &ClothTopology) -> &[i32] {
     topo.face_slots.entries()
 }
 
-/// The compressed rows' bounds ([`clothlab_core::layout::Buf::Adjacency`]): per particle,
-/// and one past the last, `(first slot, end of the head, first face slot, 0)`; for a
-/// grid (fixed rows, which its kernels compute) one zero element.
+/// Where a mesh's table is split between its two bindings ([`split_slots`]): the start of
+/// the first row (after row 0) that starts at or past half of the entries, or the end.
+pub fn mesh_split(topo: &ClothTopology) -> u32 {
+    let total = topo.slots.entries().len() as u32;
+    (1..topo.num_particles())
+        .filter_map(|i| topo.slots.csr_bounds(i).map(|(first, _)| first))
+        .find(|&first| 2 * first >= total)
+        .unwrap_or(total)
+}
+
+/// The compressed rows' bounds ([`clothlab_core::layout::Buf::Adjacency`]): per particle
+/// `(first slot, head length, first face slot, slot count | BINDING_2)` — the first slot
+/// counted within the binding that holds the row ([`split_slots`]), `BINDING_2` set where
+/// that is the second — and one past the last `(0, 0, end of the faces, split)`, the
+/// split being the second binding's first entry in the whole table (the image's texel
+/// of its entry 0). For a grid (fixed rows, which its kernels compute) one zero element.
 pub fn adjacency(topo: &ClothTopology) -> Vec<[u32; 4]> {
     let np = topo.num_particles();
-    match (topo.slots.csr_bounds(0), topo.face_slots.csr_bounds(0)) {
-        (Some(_), Some(_)) => (0..=np)
-            .map(|i| {
-                let (first, head) = topo.slots.csr_bounds(i).unwrap_or_default();
-                let (face, _) = topo.face_slots.csr_bounds(i).unwrap_or_default();
-                [first, head, face, 0]
-            })
-            .collect(),
-        _ => vec![[0; 4]],
+    if topo.slots.width().is_some() {
+        return vec![[0; 4]];
     }
+    let split = mesh_split(topo);
+    let mut rows: Vec<[u32; 4]> = (0..np)
+        .map(|i| {
+            let r = topo.slots.range(i);
+            let head = topo.slots.head(i).len() as u32;
+            let (face, _) = topo.face_slots.csr_bounds(i).unwrap_or_default();
+            let (first, count) = (r.start as u32, r.len() as u32);
+            match first >= split && count > 0 {
+                true => [first - split, head, face, count | BINDING_2],
+                false => [first, head, face, count],
+            }
+        })
+        .collect();
+    let (faces, _) = topo.face_slots.csr_bounds(np).unwrap_or_default();
+    rows.push([0, 0, faces, split]);
+    rows
 }
+
+/// The flag of [`adjacency`]'s fourth word: the row lies in the table's second binding.
+pub const BINDING_2: u32 = 1 << 31;
 
 /// The flat spring list in two halves (bindings 7 and 15), for the same reason.
 pub fn spring_halves(springs: &[Spring]) -> (&[Spring], &[Spring]) {
@@ -123,6 +151,37 @@ mod tests {
     use super::*;
     use clothlab_core::TimingRecorder;
     use clothlab_core::timing::SUBSTEP;
+
+    /// A mesh's rows as the shaders find them: through `adjacency`, in the binding its
+    /// flag names, and in the image at `table_index` — each the topology's row, its head
+    /// the row's edges; the split whole rows, near half the entries.
+    #[test]
+    fn a_meshs_rows_read_back_from_the_two_bindings_and_the_image() {
+        for name in ["mesh-fan.toml", "mesh-cape.toml", "two-cloths.toml"] {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(name);
+            let file = clothlab_core::SceneFile::load(&path).unwrap();
+            let (_, topo) = clothlab_core::build(&file.scene, &file.params).unwrap();
+            let (first, second) = split_slots(&topo);
+            let adj = adjacency(&topo);
+            let np = topo.num_particles();
+            let split = adj[np][3];
+            let total = topo.slots.entries().len();
+            assert_eq!(first.len(), split as usize, "{name}");
+            assert!(first.len() >= total / 2 && first.len() < total / 2 + 200, "{name}: split {split} of {total}");
+            let (texels, _) = table_texels(&topo);
+            for i in 0..np {
+                let [start, head, _, w] = adj[i];
+                let (count, in_second) = ((w & !BINDING_2) as usize, w & BINDING_2 != 0);
+                let binding = if in_second { &second } else { &first };
+                let row = &binding[start as usize..start as usize + count];
+                assert_eq!(row, topo.slots.row(i), "{name}: row {i}");
+                assert_eq!(head as usize, topo.slots.head(i).len(), "{name}: row {i}");
+                let at = start + if in_second { split } else { 0 };
+                let texel = texels[at as usize];
+                assert_eq!(texel[0] as i32, row[0].neighbor, "{name}: row {i} in the image");
+            }
+        }
+    }
 
     #[test]
     fn a_frame_end_adds_its_share_to_every_substep_and_its_rows_per_substep() {

@@ -6,9 +6,10 @@
 // on lavapipe a branch costs its body whether a lane takes it or not (2.4x the grid's
 // response with the loop behind an `if`).
 
-// The spring table (shared/table.wgsl's first binding, read directly: a mesh's rows lie
-// one after another in it).
+// The spring table (shared/table.wgsl's bindings, read directly: a mesh's rows lie one
+// after another, the first half in the first, the rest in the second).
 @group(0) @binding(6) var<storage, read> strain_table: array<SpringSlot>;
+@group(0) @binding(14) var<storage, read> bend_table: array<SpringSlot>;
 
 // Whether b is not among a's springs (the rest distance is checked for the whole mesh
 // when the parameters are).
@@ -16,7 +17,13 @@ fn mesh_candidates(a: u32, b: u32) -> bool {
     var spring = a == b;
     let r = slot_row(a);
     for (var s = 0u; s < r.count; s++) {
-        spring = spring || slot_other(strain_table[r.first + s]) == i32(b);
+        var slot: SpringSlot;
+        if r.second {
+            slot = bend_table[r.first + s];
+        } else {
+            slot = strain_table[r.first + s];
+        }
+        spring = spring || slot_other(slot) == i32(b);
     }
     return !spring;
 }

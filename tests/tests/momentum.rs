@@ -136,8 +136,12 @@ fn on_a_frictionless_floor_internal_corrections_keep_the_horizontal_momentum() {
     let mut failed = Vec::new();
     let (grid, cape) = (scene(), mesh_scene());
     for (what, p) in cases.into_iter().chain([verlet, mesh]) {
-        let tol = bound(&p);
-        let scene = if what.contains("mesh") { &cape } else { &grid };
+        // A mesh's particles weigh differently: a correction is shared by the mass ratio,
+        // computed at each end (`wᵢ/(wᵢ + wⱼ)`, not one value with two signs), so its
+        // roundings do not cancel. Measured 1.7e-7 m/s under XPBD and 6.0–9.6e-7 under
+        // Verlet (two strain passes a substep): four times the grid's bound, 1.8e-6 —
+        // still four orders below the 1.79e-2 m/s that equal shares cost the cape.
+        let (scene, tol) = if what.contains("mesh") { (&cape, 4.0 * bound(&p)) } else { (&grid, bound(&p)) };
         for (name, drift, low) in drifts(scene, &p) {
             println!(
                 "{what:15} {name:16} horizontal velocity drift {drift:.2e} m/s (bound {tol:.1e}), lowest {low:.4} m"
@@ -149,11 +153,7 @@ fn on_a_frictionless_floor_internal_corrections_keep_the_horizontal_momentum() {
             }
         }
     }
-    assert!(
-        failed.is_empty(),
-        "the centre of mass drifted sideways (bound {:.1e}): {failed:?}",
-        bound(&frictionless())
-    );
+    assert!(failed.is_empty(), "the centre of mass drifted sideways: {failed:?}");
 }
 
 #[test]

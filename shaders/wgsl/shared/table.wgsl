@@ -8,9 +8,12 @@
 @group(0) @binding(14) var<storage, read> bend_slots: array<SpringSlot>;
 
 // Slot s of particle i's row r (shared/adjacency.wgsl's slot_row(i)): a mesh's rows lie
-// one after another in the first binding.
+// one after another, the first half of them in the first binding, the rest in the second.
 fn row_slot(i: u32, r: Row, s: u32) -> SpringSlot {
     if p.n == 0u {
+        if r.second {
+            return bend_slots[r.first + s];
+        }
         return slots[r.first + s];
     }
     return slot_at(i, s);

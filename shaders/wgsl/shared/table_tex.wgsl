@@ -8,7 +8,7 @@
 
 // Slot s of particle i's row r (shared/adjacency.wgsl's slot_row(i)).
 fn row_slot(i: u32, r: Row, s: u32) -> SpringSlot {
-    return texel_slot(r.first + s);
+    return texel_slot(table_index(r, s));
 }
 
 fn slot_at(i: u32, s: u32) -> SpringSlot {
