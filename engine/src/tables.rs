@@ -169,8 +169,7 @@ mod tests {
             assert_eq!(first.len(), split as usize, "{name}");
             assert!(first.len() >= total / 2 && first.len() < total / 2 + 200, "{name}: split {split} of {total}");
             let (texels, _) = table_texels(&topo);
-            for i in 0..np {
-                let [start, head, _, w] = adj[i];
+            for (i, &[start, head, _, w]) in adj[..np].iter().enumerate() {
                 let (count, in_second) = ((w & !BINDING_2) as usize, w & BINDING_2 != 0);
                 let binding = if in_second { &second } else { &first };
                 let row = &binding[start as usize..start as usize + count];
