@@ -175,7 +175,9 @@ pub fn build_mesh(
         tethers,
         spacing: placed.spacing,
         mesh: Some(std::sync::Arc::new(tables)),
+        colours: Default::default(),
     };
+    topo.colours = std::sync::Arc::new(crate::tables::Colours::from_lists(&crate::cpu::vbd::colouring(&topo)));
     topo.set_spring_constants(params);
     Ok((state, topo))
 }

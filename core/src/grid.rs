@@ -13,7 +13,7 @@ use crate::scene::{Pinning, Scene};
 /// A 16-byte particle attribute: xyz plus one spare or flag component.
 pub type V4 = [f32; 4];
 
-pub use crate::tables::{FACE_SLOTS, Rows, SLOTS, STRAIN_SLOTS, TETHER_SLOTS};
+pub use crate::tables::{Colours, FACE_SLOTS, Rows, SLOTS, STRAIN_SLOTS, TETHER_SLOTS};
 
 /// The three spring families.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -211,6 +211,9 @@ pub struct ClothTopology {
     pub spacing: f32,
     /// What only a mesh has; `None` for a grid.
     pub mesh: Option<std::sync::Arc<MeshTables>>,
+    /// Vertex Block Descent's colouring (`cpu::vbd::colouring`: a grid's 9 classes, a
+    /// mesh's greedy colours), computed with the table.
+    pub colours: std::sync::Arc<Colours>,
 }
 
 /// The tables of a cloth made from a mesh that a grid computes from its place: the kind of
@@ -532,7 +535,19 @@ pub fn build_grid(scene: &Scene, params: &SimParams) -> Result<(ClothState, Clot
     let state = ClothState { n, vel, pos, force: zero.clone(), normal: zero };
     let slots = Rows::fixed(slots, SLOTS, STRAIN_SLOTS);
     let face_slots = Rows::fixed(face_slots.concat(), FACE_SLOTS, FACE_SLOTS);
-    let topo = ClothTopology { n, uv, triangles, slots, springs, face_slots, tethers, spacing, mesh: None };
+    let mut topo = ClothTopology {
+        n,
+        uv,
+        triangles,
+        slots,
+        springs,
+        face_slots,
+        tethers,
+        spacing,
+        mesh: None,
+        colours: Default::default(),
+    };
+    topo.colours = std::sync::Arc::new(Colours::from_lists(&crate::cpu::vbd::colouring(&topo)));
     Ok((state, topo))
 }
 

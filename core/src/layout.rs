@@ -104,11 +104,14 @@ pub enum Buf {
     /// entry in the whole table)` (`clothlab_engine::tables::adjacency`). A grid's table
     /// is of fixed rows and its kernels never read this (one unused element).
     Adjacency = 30,
+    /// Vertex Block Descent's colouring (`tables::Colours::order`): every particle once,
+    /// colour by colour, `u32` each; a colour's dispatch sweeps its range.
+    Colours = 31,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 31] = [
+    pub const ALL: [Buf; 32] = [
         Buf::Params,
         Buf::Pos,
         Buf::Vel,
@@ -140,6 +143,7 @@ impl Buf {
         Buf::Aux4,
         Buf::Scalars,
         Buf::Adjacency,
+        Buf::Colours,
     ];
 
     /// The integrators' scratch particle buffers, in order.
@@ -198,6 +202,7 @@ impl Buf {
             Buf::Aux4 => "aux4",
             Buf::Scalars => "scalars",
             Buf::Adjacency => "adjacency",
+            Buf::Colours => "colours",
         }
     }
 

@@ -87,11 +87,15 @@ pub enum Integrator {
     /// the grid's springs (12 passes), `xpbd_iterations` times per substep with each
     /// spring's λ kept. Stable at any dt.
     Xpbd,
+    /// Vertex Block Descent (Chen, Liu, Yang & Yuksel 2024): implicit Euler's energy
+    /// minimised by sweeping vertex colours (`vbd_iterations` times per substep), each
+    /// vertex a Newton step on its 3 × 3 block (core::cpu::vbd). Stable at any dt.
+    Vbd,
 }
 
 impl Integrator {
     /// Every integrator, in the order the app lists them.
-    pub const ALL: [Integrator; 7] = [
+    pub const ALL: [Integrator; 8] = [
         Integrator::Verlet,
         Integrator::Euler,
         Integrator::SymplecticEuler,
@@ -99,6 +103,7 @@ impl Integrator {
         Integrator::Rk4,
         Integrator::Implicit,
         Integrator::Xpbd,
+        Integrator::Vbd,
     ];
 
     /// The name on the command line.
@@ -111,6 +116,7 @@ impl Integrator {
             Integrator::Rk4 => "rk4",
             Integrator::Implicit => "implicit",
             Integrator::Xpbd => "xpbd",
+            Integrator::Vbd => "vbd",
         }
     }
 
@@ -121,7 +127,7 @@ impl Integrator {
 
     /// Whether it is explicit (bounded by a stability limit on dt).
     pub fn explicit(self) -> bool {
-        !matches!(self, Integrator::Implicit | Integrator::Xpbd)
+        !matches!(self, Integrator::Implicit | Integrator::Xpbd | Integrator::Vbd)
     }
 
     /// Whether `|amplification| ≤ 1` for the mode `s` (an eigenvalue of the linearised
@@ -219,6 +225,8 @@ pub struct SimParams {
     /// `integrator = xpbd`: Gauss–Seidel iterations (of 12 passes each) per substep, with
     /// each spring's λ kept across them, 1 ..= 64. Default 1.
     pub xpbd_iterations: u32,
+    /// `integrator = vbd`: sweeps over the vertex colours per substep, 1 ..= 64. Default 8.
+    pub vbd_iterations: u32,
     /// Self-collision: particles that are not neighbours in the grid keep
     /// `self_thickness` apart (found through a spatial hash rebuilt every substep; see
     /// `core::cpu::self_collide`). Default off.
@@ -255,6 +263,7 @@ impl Default for SimParams {
             integrator: Integrator::Verlet,
             cg_iterations: 16,
             xpbd_iterations: 1,
+            vbd_iterations: 8,
             self_collision: false,
             self_thickness: 0.02,
         }
@@ -551,6 +560,9 @@ impl SimParams {
         finite_in("bend_modulus", self.bend_modulus, 0.0, 1e6)?;
         if self.xpbd_iterations == 0 || self.xpbd_iterations > 64 {
             return Err(ParamError::new("xpbd_iterations", self.xpbd_iterations, "must be in 1 ..= 64"));
+        }
+        if self.vbd_iterations == 0 || self.vbd_iterations > 64 {
+            return Err(ParamError::new("vbd_iterations", self.vbd_iterations, "must be in 1 ..= 64"));
         }
         finite_in("self_thickness", self.self_thickness, 1e-3, 0.5)?;
         if self.cg_iterations == 0 || self.cg_iterations > MAX_CG_ITERATIONS {

@@ -132,3 +132,54 @@ impl<T: Copy> Rows<T> {
         (0..self.rows()).map(|i| self.range(i).len()).max().unwrap_or(0)
     }
 }
+
+/// A colouring of the particles (Vertex Block Descent's, `cpu::vbd::colouring`): the
+/// particles listed colour by colour, colour `k` being `order[bounds[k] .. bounds[k + 1]]`,
+/// no two particles of one colour joined by a spring. The GPU reads `order` as
+/// `clothlab_core::layout::Buf::Colours` and sweeps a colour as one dispatch over its
+/// range.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Colours {
+    /// Every particle once, colour by colour.
+    pub order: Vec<u32>,
+    /// Where each colour starts in `order`, and one past the last colour's end.
+    pub bounds: Vec<u32>,
+}
+
+impl Colours {
+    /// The colouring whose colour `k` is `lists[k]`.
+    pub fn from_lists(lists: &[Vec<u32>]) -> Self {
+        let mut bounds = vec![0u32];
+        let mut order = Vec::with_capacity(lists.iter().map(Vec::len).sum());
+        for l in lists {
+            order.extend_from_slice(l);
+            bounds.push(order.len() as u32);
+        }
+        Self { order, bounds }
+    }
+
+    /// How many colours.
+    pub fn len(&self) -> usize {
+        self.bounds.len().saturating_sub(1)
+    }
+
+    /// Whether there is no colour (no particle).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The colours, each as `(first, count)` in `order`.
+    pub fn ranges(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.bounds.windows(2).map(|w| (w[0], w[1] - w[0]))
+    }
+
+    /// The particles of colour `k`.
+    pub fn colour(&self, k: usize) -> &[u32] {
+        &self.order[self.bounds[k] as usize..self.bounds[k + 1] as usize]
+    }
+
+    /// The colours as lists.
+    pub fn lists(&self) -> Vec<Vec<u32>> {
+        (0..self.len()).map(|k| self.colour(k).to_vec()).collect()
+    }
+}

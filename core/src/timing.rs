@@ -25,6 +25,9 @@ pub const TRI_NORMALS: &str = "tri_normals";
 pub const VERTEX_NORMALS: &str = "vertex_normals";
 /// Label of XPBD's constraint passes.
 pub const XPBD: &str = "xpbd";
+/// Label of Vertex Block Descent's colour sweeps (its prediction and finish are
+/// [`INTEGRATE`]).
+pub const VBD: &str = "vbd";
 /// Label of implicit Euler's conjugate gradients (every CG kernel and reduction).
 pub const CG: &str = "cg";
 /// Label of the GPU statistics (`--stats`: the reductions and their fold).
@@ -50,7 +53,7 @@ pub const STRAIN_LIMIT_COUNT: &str = "strain_limit+hash_count";
 /// Self-collision's response.
 pub const SELF_COLLIDE: &str = "self_collide";
 /// Every label a kernel (a registry row or a CPU sweep) is timed under, in step order.
-pub const KERNEL_LABELS: [&str; 18] = [
+pub const KERNEL_LABELS: [&str; 19] = [
     FORCES,
     SPRINGS,
     FORCES_SPRINGS,
@@ -59,6 +62,7 @@ pub const KERNEL_LABELS: [&str; 18] = [
     INTEGRATE,
     CG,
     XPBD,
+    VBD,
     COLLIDE,
     INTEGRATE_COLLIDE,
     STRAIN_LIMIT,

@@ -569,6 +569,7 @@ pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool)
             Buf::FaceSlots => topo.face_slots.entries().len() as u64 * 4,
             // A grid's kernels never read it; a mesh's read their particle's and the next.
             Buf::Adjacency if topo.mesh.is_some() => (np + 1) * 16,
+            Buf::Colours => np * 4,
             Buf::Tethers => np * TETHER_SLOTS as u64 * 8,
             Buf::Springs | Buf::SpringsB => springs / 2 * 24,
             Buf::Slots | Buf::BendSlots | Buf::Table => table(b),
@@ -762,6 +763,23 @@ fn xpbd_mesh(a: &TwinArgs, b: &mut HostBuffers) {
         let v = [l[0], l[1], l[2], l[3]];
         if k < np { b.aux[0][k] = v } else { b.aux[1][k - np] = v }
     }
+}
+
+fn vbd_begin(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::vbd::vbd_begin(a.exec, a.p, &b.force, &mut b.pos, &b.vel, &mut b.aux);
+}
+
+/// One colour of VBD's sweep: particles `first .. first + count` of the colouring's list
+/// (`topo.colours.order`, binding [`Buf::Colours`]).
+fn vbd_colour(a: &TwinArgs, b: &mut HostBuffers) {
+    let order = &a.topo.colours.order;
+    let end = (a.range.0 as usize + a.range.1 as usize).min(order.len());
+    let list = &order[(a.range.0 as usize).min(end)..end];
+    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, list, &mut b.pos, &mut b.aux);
+}
+
+fn vbd_finish(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::vbd::vbd_finish(a.exec, a.p, &mut b.pos, &mut b.vel, &b.aux);
 }
 
 /// Leaves the per-workgroup sums of `terms` in `aux[4]` (the GPU kernels' partials).
@@ -1236,6 +1254,36 @@ pub static XPBD_MESH: KernelDef = KernelDef {
         &[Pos, Vel, Aux0, Aux1],
     )
 };
+/// VBD: the inertial prediction y (aux0), the substep's start x⁰ (aux1) and the
+/// displacement D (aux2); the positions moved to y (core::cpu::vbd::vbd_begin).
+pub static VBD_BEGIN: KernelDef = KernelDef {
+    label: timing::INTEGRATE,
+    pure: &[Aux0, Aux1, Aux2],
+    ..def("vbd_begin", vbd_begin, Count::Particles, STATE, &[Pos, Aux0, Aux1, Aux2])
+};
+/// VBD: one colour's Newton steps, each particle of the range of the colouring's list
+/// ([`Buf::Colours`]) on its 3 × 3 block over its row of the table.
+pub static VBD_COLOUR: KernelDef = KernelDef {
+    check: Check::Bound {
+        relative: 2e-5,
+        reason: "a gather over the row's springs into a 3 × 3 block, solved by cofactors (one division)",
+    },
+    label: timing::VBD,
+    variants: Variants { table_image: true, ..PLAIN },
+    immediates: Immediates::Range,
+    ..def(
+        "vbd_colour",
+        vbd_colour,
+        Count::Range,
+        &[Params, Pos, Colours, Slots, BendSlots, Adjacency, Table, Aux0, Aux1, Aux2],
+        &[Pos, Aux2],
+    )
+};
+/// VBD: x = x⁰ + D, v = D/h, with pins, grab and floor (core::cpu::vbd::vbd_finish).
+pub static VBD_FINISH: KernelDef = KernelDef {
+    label: timing::INTEGRATE,
+    ..def("vbd_finish", vbd_finish, Count::Particles, &[Params, Aux1, Aux2], &[Pos, Vel])
+};
 /// Implicit: r = dt f − dt² K v, p = z, Δv = 0, and the partials of r·z.
 pub static CG_BEGIN: KernelDef = KernelDef {
     check: GATHER,
@@ -1365,7 +1413,7 @@ pub static SELF_COLLISION: [&KernelDef; 5] =
     [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 53] = [
+pub static ALL: [&KernelDef; 56] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -1405,6 +1453,9 @@ pub static ALL: [&KernelDef; 53] = [
     &XPBD[10],
     &XPBD[11],
     &XPBD_MESH,
+    &VBD_BEGIN,
+    &VBD_COLOUR,
+    &VBD_FINISH,
     &CG_BEGIN,
     &CG_MATVEC,
     &CG_REDUCE_PQ,

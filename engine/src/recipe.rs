@@ -88,6 +88,8 @@ pub struct Integration {
     pub cg_iterations: u32,
     /// Gauss–Seidel iterations (`xpbd` only).
     pub xpbd_iterations: u32,
+    /// Sweeps over the vertex colours (`vbd` only).
+    pub vbd_iterations: u32,
     /// Self-collision after the strain limit (core::cpu::self_collide).
     pub self_collision: bool,
 }
@@ -95,7 +97,13 @@ pub struct Integration {
 impl Integration {
     /// Verlet, the thesis's.
     pub const VERLET: Integration =
-        Integration { integrator: Integrator::Verlet, cg_iterations: 0, xpbd_iterations: 0, self_collision: false };
+        Integration {
+        integrator: Integrator::Verlet,
+        cg_iterations: 0,
+        xpbd_iterations: 0,
+        vbd_iterations: 0,
+        self_collision: false,
+    };
 
     /// What `params` ask for.
     pub fn of(params: &clothlab_core::SimParams) -> Self {
@@ -103,6 +111,7 @@ impl Integration {
             integrator: params.integrator,
             cg_iterations: params.cg_iterations,
             xpbd_iterations: params.xpbd_iterations,
+            vbd_iterations: params.vbd_iterations,
             self_collision: params.self_collision,
         }
     }
@@ -162,6 +171,13 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
             }
             then(v, &[&k::COLLIDE])
         }
+        // One `vbd_colour` per iteration here; `recipe_for` makes each a dispatch per
+        // colour of the cloth's colouring (core::cpu::vbd).
+        Integrator::Vbd => {
+            let mut v: Vec<&'static KernelDef> = vec![&k::FORCES, &k::VBD_BEGIN];
+            v.extend((0..how.vbd_iterations).map(|_| &k::VBD_COLOUR));
+            then(v, &[&k::VBD_FINISH, &k::COLLIDE])
+        }
     }
 }
 
@@ -192,7 +208,14 @@ pub fn recipe_for(
     how: Integration,
     topo: &clothlab_core::ClothTopology,
 ) -> Vec<Command> {
-    let commands = recipe(variant, strain_passes, how);
+    // VBD's sweeps: each `vbd_colour` a range per colour of the cloth's colouring.
+    let commands: Vec<Command> = recipe(variant, strain_passes, how)
+        .into_iter()
+        .flat_map(|c| match c {
+            Command::Dispatch(kr) if kr.def == &k::VBD_COLOUR => vbd_sweep(kr, topo),
+            c => vec![c],
+        })
+        .collect();
     let Some(mesh) = &topo.mesh else { return commands };
     // A mesh's self-collision response: its own kernel (neighbours from the table).
     let commands = commands.into_iter().map(|c| match c {
@@ -217,9 +240,16 @@ pub fn recipe_for(
     v
 }
 
+/// One VBD sweep of `topo`'s colours: `kernel` (`vbd_colour` in some flavor) over each
+/// colour's range of the colouring's list, in colour order.
+pub fn vbd_sweep(kernel: KernelRef, topo: &clothlab_core::ClothTopology) -> Vec<Command> {
+    topo.colours.ranges().map(|(first, count)| Command::Range { kernel, first, count }).collect()
+}
+
 /// The commands of one substep for `variant` with `strain_passes` strain passes,
 /// integrated by `how`, each kernel in the flavor the variant's switches pick (see
-/// [`Variant::flavor`]), on a grid ([`recipe_for`] any cloth). What runs once after a
+/// [`Variant::flavor`]), on a grid ([`recipe_for`] any cloth, and VBD's sweeps, which
+/// stand here as one `vbd_colour` dispatch per iteration). What runs once after a
 /// frame's last substep is [`frame_end`].
 pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Command> {
     let step = integration(variant, how);

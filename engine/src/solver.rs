@@ -156,7 +156,7 @@ impl<E: Engine> GpuSolver<E> {
         let pos_bytes: &[u8] = bytemuck::cast_slice(&state.pos);
         let aux_zero = vec![0u8; 16 * topo.num_particles()];
         // Positions and normals are the renderer's vertex buffers too (no copy).
-        let contents: [(Buf, &[u8]); 30] = [
+        let contents: [(Buf, &[u8]); 31] = [
             (Buf::Params, bytemuck::bytes_of(&sp)),
             (Buf::ParamsStorage, bytemuck::bytes_of(&sp)),
             (Buf::SpheresUniform, bytemuck::cast_slice(&spheres)),
@@ -172,6 +172,7 @@ impl<E: Engine> GpuSolver<E> {
             (Buf::Triangles, bytemuck::cast_slice(&tri_flat)),
             (Buf::FaceSlots, bytemuck::cast_slice(face_flat)),
             (Buf::Adjacency, bytemuck::cast_slice(&adjacency)),
+            (Buf::Colours, bytemuck::cast_slice(&topo.colours.order)),
             (Buf::Faces, bytemuck::cast_slice(face)),
             (Buf::Spheres, bytemuck::cast_slice(&spheres)),
             (Buf::Boxes, bytemuck::cast_slice(&boxes)),

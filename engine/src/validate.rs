@@ -151,6 +151,8 @@ pub fn validate_kernels_with(
             continue;
         }
         let commands = match (&topo.mesh, k.def.immediates) {
+            // VBD's colour kernel: one sweep, every colour's range (grids and meshes).
+            (_, kernels::Immediates::Range) if k.def == &kernels::VBD_COLOUR => crate::recipe::vbd_sweep(k, topo),
             // A range kernel (a mesh's XPBD pass): every range of an iteration, in order.
             (Some(mesh), kernels::Immediates::Range) => {
                 let mut v = vec![

@@ -31,7 +31,7 @@ use crate::cli::{BenchArgs, Mode};
 use crate::out::outln;
 use crate::solvers::{AnySolver, Api, Backend, GpuSetup, Shared, make, vulkan_validation};
 use clothlab_engine::kernels::compulsory_bytes;
-use clothlab_engine::recipe::{dispatches, recipe};
+use clothlab_engine::recipe::dispatches;
 use clothlab_engine::variant::{Table, Variant, ladder as ladder_rungs};
 use results::{Cell, LadderCell};
 
@@ -598,7 +598,7 @@ impl Job {
         let v = self.variant.context("a ladder job has a variant")?;
         let (_, topo) = clothlab_core::build(&Scene::with_n(n), params)?;
         let how = clothlab_engine::recipe::Integration::of(params);
-        let commands = recipe(&v, params.strain_iterations, how);
+        let commands = clothlab_engine::recipe::recipe_for(&v, params.strain_iterations, how, &topo);
         // What runs once per frame (normals=frame) counts its share per substep in the
         // bytes; its dispatches (two per frame) are left out of the per-substep count.
         let end = clothlab_engine::recipe::frame_end(&v, how);

@@ -375,6 +375,25 @@ impl CpuSolver {
                     collide(e, &p, spheres, boxes, pos, vel)
                 });
             }
+            // The kernels of the engine's recipe (cpu::vbd): forces, the prediction, the
+            // colours' sweeps, the finish, the colliders.
+            Integrator::Vbd => {
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
+                    forces(e, &p, pos, vel, force);
+                    super::vbd::vbd_begin(e, &p, force, pos, vel, aux)
+                });
+                Self::timed(timer, on, crate::timing::VBD, || {
+                    for _ in 0..params.vbd_iterations {
+                        for k in 0..topo.colours.len() {
+                            super::vbd::vbd_colour(e, &p, &topo.slots, topo.colours.colour(k), pos, aux);
+                        }
+                    }
+                });
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
+                    super::vbd::vbd_finish(e, &p, pos, vel, aux);
+                    collide(e, &p, spheres, boxes, pos, vel)
+                });
+            }
         }
         Self::timed(timer, on, STRAIN_LIMIT, || {
             for _ in 0..params.strain_iterations {

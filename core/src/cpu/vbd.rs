@@ -1,7 +1,7 @@
 //! Vertex Block Descent (Chen, Liu, Yang & Yuksel, "Vertex Block Descent", ACM TOG 43(4),
-//! 2024) for the mass-spring cloth: the CPU reference of issue 46's integrator, not yet an
-//! [`crate::Integrator`] (no backend runs it; the GPU kernels and the solvers' wiring come
-//! next, with contacts as penalty energies and the accelerated variant).
+//! 2024) for the mass-spring cloth: [`crate::Integrator::Vbd`]'s kernels, as the CPU
+//! solvers run them and as the GPU kernels `vbd_begin`, `vbd_colour` and `vbd_finish`
+//! compute them (their twins).
 //!
 //! A substep minimises implicit Euler's energy
 //! `G(x) = Σᵢ mᵢ/(2h²) |xᵢ − yᵢ|² + Σ springs ½ k (|xᵢ − xⱼ| − r)²`, `yᵢ = xᵢ + h vᵢ + h² g`,
@@ -19,17 +19,26 @@
 //! it here; on the relative displacement a moving cloth keeps its momentum to what the
 //! iterations leave (tests/vbd.rs).
 //!
+//! A substep: `forces` (gravity, drag and the wind, explicit, as for every integrator),
+//! [`vbd_begin`] (the inertial prediction `y = x + h v'` with `v' = (1 − damping) v + h f/m`,
+//! the integrate kernel's velocity), `iterations` × the colours' [`vbd_colour`] sweeps,
+//! [`vbd_finish`] (`x = x⁰ + D`, `v = D/h`, the floor), then `collide`: contacts are
+//! resolved after the solve as XPBD's and implicit Euler's are (not yet as penalty
+//! energies inside it, as the paper does).
+//!
 //! The new velocity is the substep's displacement over h, `v = D/h`. D is kept as a sum of
-//! small terms (`h v + h² g` and each step) instead of being taken back as `x − x⁰`: in f32
+//! small terms (`h v'` and each step) instead of being taken back as `x − x⁰`: in f32
 //! that difference rounds `h² g` to a few ulps of x and biased every integrator of this
 //! crate by up to 7.5 % in free fall before the state kept velocities (see
 //! `integrators.rs`); with no spring stretched VBD is then exactly implicit Euler's
 //! recurrence.
 
-use glam::{Mat3, Vec3};
+use glam::Vec3;
+use rayon::prelude::*;
 
-use super::{mass, v3, v4};
-use crate::grid::{ClothTopology, StepParams, V4};
+use super::integrators::finish_at;
+use super::{Exec, dt_over_mass, mass, v3, v4};
+use crate::grid::{ClothTopology, Rows, SpringSlot, StepParams, V4};
 
 /// The vertex colours of `topo`: lists of particles, no two of one list joined by a spring.
 /// A grid: the 9 classes of `(i mod 3, j mod 3)` (its 12-slot stencil reaches 2 away, so
@@ -79,9 +88,81 @@ pub fn colouring_is_valid(topo: &ClothTopology, colours: &[Vec<u32>]) -> bool {
         && (0..np).all(|i| topo.slots.row(i).iter().filter_map(|s| s.other()).all(|j| colour_of[j] != colour_of[i]))
 }
 
+/// The scratch buffers a VBD substep keeps (`aux[0]`, `aux[1]`, `aux[2]`, as the GPU keeps
+/// them in aux0 … aux2): the inertial prediction y, the substep's start x⁰, and the
+/// displacement D so far (w: 0).
+pub const VBD_AUX: usize = 3;
+
+/// The start of a VBD substep, per particle: the prediction `y = x + D` with
+/// `D = h v'`, `v' = (1 − damping) v + f h/m` (`f` the force buffer after `forces`); `pos`
+/// moves to y. A pinned particle predicts its place (D = 0), the grabbed one the grab's
+/// target. `aux[0]` = y, `aux[1]` = x⁰, `aux[2]` = D.
+pub fn vbd_begin(exec: Exec, p: &StepParams, force: &[V4], pos: &mut [V4], vel: &[V4], aux: &mut [Vec<V4>]) {
+    let out = per_particle(exec, pos.len(), |i| begin_at(i, p, force[i], pos[i], vel[i]));
+    for (i, (y, d)) in out.into_iter().enumerate() {
+        aux[0][i] = v4(y, pos[i][3]);
+        aux[1][i] = pos[i];
+        aux[2][i] = v4(d, 0.0);
+        pos[i] = v4(y, pos[i][3]);
+    }
+}
+
+/// Particle `i`'s prediction and displacement (see [`vbd_begin`]).
+#[inline(always)]
+fn begin_at(i: usize, p: &StepParams, force: V4, x4: V4, vel: V4) -> (Vec3, Vec3) {
+    let x = v3(x4);
+    let d = if i as i32 == p.grab_index {
+        v3(p.grab_target) - x
+    } else if x4[3] == 0.0 {
+        Vec3::ZERO
+    } else {
+        let v = v3(vel) * (1.0 - p.damping) + v3(force) * dt_over_mass(p, x4[3]);
+        v * p.dt
+    };
+    (x + d, d)
+}
+
+/// One colour's sweep: every particle of `colour` (no two of which share a spring) takes
+/// its Newton step on its own block against its neighbours' positions in `pos`, which it
+/// moves; its displacement `aux[2]` with it. Pinned and grabbed particles stay.
+pub fn vbd_colour(exec: Exec, p: &StepParams, slots: &Rows<SpringSlot>, colour: &[u32], pos: &mut [V4], aux: &mut [Vec<V4>]) {
+    let (y, start) = (&aux[0], &aux[1]);
+    let pos_r: &[V4] = pos;
+    let step = |&i: &u32| block_step(p, slots, i as usize, pos_r, y, start);
+    let steps: Vec<Vec3> = match exec {
+        Exec::Serial => colour.iter().map(step).collect(),
+        Exec::Parallel => colour.par_iter().with_min_len(1024).map(step).collect(),
+    };
+    for (&i, s) in colour.iter().zip(steps) {
+        let i = i as usize;
+        pos[i] = v4(v3(pos[i]) + s, pos[i][3]);
+        aux[2][i] = v4(v3(aux[2][i]) + s, 0.0);
+    }
+}
+
+/// The end of a VBD substep: `x = x⁰ + D`, `v = D/h`, the floor's contact, pins and the
+/// grab as every integrator ends (`integrators::finish_at`).
+pub fn vbd_finish(exec: Exec, p: &StepParams, pos: &mut [V4], vel: &mut [V4], aux: &[Vec<V4>]) {
+    let out = per_particle(exec, pos.len(), |i| {
+        let d = v3(aux[2][i]);
+        finish_at(i, p, aux[1][i], v3(aux[1][i]) + d, d * (1.0 / p.dt))
+    });
+    for (i, (x, v)) in out.into_iter().enumerate() {
+        pos[i] = x;
+        vel[i] = v;
+    }
+}
+
+fn per_particle<T: Send>(exec: Exec, count: usize, f: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
+    match exec {
+        Exec::Serial => (0..count).map(f).collect(),
+        Exec::Parallel => (0..count).into_par_iter().with_min_len(1024).map(f).collect(),
+    }
+}
+
 /// One VBD substep of `iterations` sweeps over `colours` ([`colouring`]), `pos` and `vel`
-/// in place. Gravity only as the external force (no drag, wind or contacts yet); pinned
-/// particles (`w = 0`) and the grabbed one stay where they are, at rest.
+/// in place, with gravity and drag as the only external forces (no wind) and no
+/// colliders: what the solvers run between `forces` and `collide`, for the tests.
 pub fn vbd_substep(
     p: &StepParams,
     topo: &ClothTopology,
@@ -90,70 +171,94 @@ pub fn vbd_substep(
     pos: &mut [V4],
     vel: &mut [V4],
 ) {
-    let h = p.dt;
-    let g = v3(p.gravity);
-    let start: Vec<Vec3> = pos.iter().map(|&x| v3(x)).collect();
-    let still: Vec<bool> = (0..pos.len()).map(|i| pos[i][3] == 0.0 || i as i32 == p.grab_index).collect();
-    let held = |i: usize| still[i];
-    // The displacement over the substep, started at the inertial prediction y − x⁰.
-    let mut disp: Vec<Vec3> =
-        (0..pos.len()).map(|i| if held(i) { Vec3::ZERO } else { h * v3(vel[i]) + (h * h) * g }).collect();
-    let y: Vec<Vec3> = start.iter().zip(&disp).map(|(x, d)| *x + *d).collect();
-    let m: Vec<f32> = pos.iter().map(|x| mass(p, x[3])).collect();
-    let mut x = y.clone();
+    let e = Exec::Serial;
+    let mut force = vec![[0.0; 4]; pos.len()];
+    super::forces(e, p, pos, vel, &mut force);
+    let mut aux = vec![vec![[0.0; 4]; pos.len()]; VBD_AUX];
+    vbd_begin(e, p, &force, pos, vel, &mut aux);
     for _ in 0..iterations {
         for colour in colours {
-            for &i in colour {
-                let i = i as usize;
-                if held(i) {
-                    continue;
-                }
-                let step = block_step(topo, i, m[i] / (h * h), &x, &y, &start, h);
-                x[i] += step;
-                disp[i] += step;
-            }
+            vbd_colour(e, p, &topo.slots, colour, pos, &mut aux);
         }
     }
-    for (i, (p4, v4_)) in pos.iter_mut().zip(vel.iter_mut()).enumerate() {
-        if held(i) {
-            *v4_ = [0.0, 0.0, 0.0, v4_[3]];
-            continue;
-        }
-        *p4 = v4(start[i] + disp[i], p4[3]);
-        *v4_ = v4(disp[i] * (1.0 / h), v4_[3]);
-    }
+    vbd_finish(e, p, pos, vel, &aux);
 }
 
-/// Vertex `i`'s Newton step on its block (`inertia` = mᵢ/h²): `Hᵢ⁻¹ fᵢ` at `x` (the
-/// others' newest positions), zero where the block cannot be solved (not positive definite
-/// in f32).
-fn block_step(topo: &ClothTopology, i: usize, inertia: f32, x: &[Vec3], y: &[Vec3], start: &[Vec3], h: f32) -> Vec3 {
-    let mut f = -inertia * (x[i] - y[i]);
-    let mut hess = Mat3::from_diagonal(Vec3::splat(inertia));
-    for s in topo.slots.row(i) {
-        let Some(j) = s.other() else { continue };
-        let d = x[i] - x[j];
-        let l = d.length();
-        if l <= f32::MIN_POSITIVE || s.ks <= 0.0 {
-            continue;
-        }
-        let n = d * (1.0 / l);
-        let nn = Mat3::from_cols(n * n.x, n * n.y, n * n.z);
-        let tangent = (1.0 - s.rest / l).max(0.0);
-        let hs = s.ks * nn + (s.ks * tangent) * (Mat3::IDENTITY - nn);
-        f -= s.ks * (l - s.rest) * n;
-        if s.kd > 0.0 {
-            // Rayleigh damping of the spring (D = kd/ks · its Hessian) on the two ends'
-            // relative displacement this substep, the other end held.
-            let c = s.kd / (s.ks * h);
-            f -= c * (hs * ((x[i] - start[i]) - (x[j] - start[j])));
-            hess += c * hs;
-        }
-        hess += hs;
-    }
-    let det = hess.determinant();
-    if !(det.is_finite() && det > 0.0) {
+/// Particle `i`'s Newton step on its block: `Hᵢ⁻¹ fᵢ` at `pos` (the others' newest
+/// positions), `y` the prediction, `start` x⁰; zero for a held particle and where the
+/// block cannot be solved (its determinant not positive and finite in f32). Written
+/// scalar by scalar in the order `vbd_colour.wgsl` computes it: the block's six entries
+/// summed slot by slot, solved by cofactors.
+pub fn block_step(p: &StepParams, slots: &Rows<SpringSlot>, i: usize, pos: &[V4], y: &[V4], start: &[V4]) -> Vec3 {
+    let x4 = pos[i];
+    if i as i32 == p.grab_index || x4[3] == 0.0 {
         return Vec3::ZERO;
     }
-    hess.inverse() * f
+    let h = p.dt;
+    let xi = v3(x4);
+    let inertia = mass(p, x4[3]) / (h * h);
+    let moved = xi - v3(start[i]);
+    let mut f = (v3(y[i]) - xi) * inertia;
+    // The block's upper triangle: h00 h01 h02 / h11 h12 / h22.
+    let (mut d0, mut d1, mut d2) = (inertia, inertia, inertia);
+    let (mut o01, mut o02, mut o12) = (0.0f32, 0.0f32, 0.0f32);
+    for s in slots.row(i) {
+        let Some(j) = s.other() else { continue };
+        if s.ks <= 0.0 {
+            continue;
+        }
+        let xj = v3(pos[j]);
+        let dx = xi - xj;
+        let l = dx.dot(dx).sqrt();
+        if l <= f32::MIN_POSITIVE {
+            continue;
+        }
+        let n = dx * (1.0 / l);
+        // Hₛ = a I + b n̂n̂ᵀ: ks along the spring, ks·max(0, 1 − r/l) across it (zero
+        // where it is compressed: positive semi-definite).
+        let a = s.ks * (1.0 - s.rest / l).max(0.0);
+        let b = s.ks - a;
+        f -= n * (s.ks * (l - s.rest));
+        let mut scale = 1.0;
+        if s.kd > 0.0 {
+            // Rayleigh damping D = (kd/ks) Hₛ on the ends' relative displacement over h.
+            let c = s.kd / (s.ks * h);
+            let u = moved - (xj - v3(start[j]));
+            let hu = u * a + n * (b * n.dot(u));
+            f -= hu * c;
+            scale = 1.0 + c;
+        }
+        let (sa, sb) = (a * scale, b * scale);
+        d0 += sa + sb * n.x * n.x;
+        d1 += sa + sb * n.y * n.y;
+        d2 += sa + sb * n.z * n.z;
+        o01 += sb * n.x * n.y;
+        o02 += sb * n.x * n.z;
+        o12 += sb * n.y * n.z;
+    }
+    solve_sym3([d0, d1, d2, o01, o02, o12], f)
+}
+
+/// `H⁻¹ f` for the symmetric `H` given as `[h00, h11, h22, h01, h02, h12]`, by cofactors;
+/// zero unless the determinant is positive and finite.
+#[inline(always)]
+fn solve_sym3(h: [f32; 6], f: Vec3) -> Vec3 {
+    let [a, d, e, b, c, g] = h;
+    // H = [a b c; b d g; c g e]
+    let c00 = d * e - g * g;
+    let c01 = c * g - b * e;
+    let c02 = b * g - c * d;
+    let det = a * c00 + b * c01 + c * c02;
+    if !(det > 0.0 && det <= f32::MAX) {
+        return Vec3::ZERO;
+    }
+    let c11 = a * e - c * c;
+    let c12 = b * c - a * g;
+    let c22 = a * d - b * b;
+    let r = 1.0 / det;
+    Vec3::new(
+        (c00 * f.x + c01 * f.y + c02 * f.z) * r,
+        (c01 * f.x + c11 * f.y + c12 * f.z) * r,
+        (c02 * f.x + c12 * f.y + c22 * f.z) * r,
+    )
 }
