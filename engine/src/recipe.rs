@@ -96,8 +96,7 @@ pub struct Integration {
 
 impl Integration {
     /// Verlet, the thesis's.
-    pub const VERLET: Integration =
-        Integration {
+    pub const VERLET: Integration = Integration {
         integrator: Integrator::Verlet,
         cg_iterations: 0,
         xpbd_iterations: 0,

@@ -10,7 +10,7 @@ use clothlab_core::build;
 use clothlab_core::grid::{SpringSlot, StepParams};
 use clothlab_core::{CpuSolver, Exec, Integrator, Scene, SimParams, Solver, StiffnessUnits};
 use clothlab_engine::cpu::start_buffers;
-use clothlab_engine::recipe::{Command, Integration, recipe};
+use clothlab_engine::recipe::{Command, Integration, recipe_for};
 use clothlab_engine::{CpuEngine, HostBuffers, RecipeSolver, Variant};
 
 /// Amplitude of the oscillator, m (it oscillates about the origin, where f32 is finest).
@@ -69,9 +69,11 @@ impl Oscillator {
             }
         }
         let bufs = start_buffers(Exec::Serial, &p, &topo, &state);
+        let how =
+            Integration { integrator, cg_iterations: 16, xpbd_iterations: 1, vbd_iterations: 8, self_collision: false };
+        let commands = recipe_for(&Variant::OPTIMIZED, 0, how, &topo);
         let engine = CpuEngine::new(Exec::Serial, scene, topo);
-        let how = Integration { integrator, cg_iterations: 16, xpbd_iterations: 1, self_collision: false };
-        Self { engine, bufs, p, commands: recipe(&Variant::OPTIMIZED, 0, how), k }
+        Self { engine, bufs, p, commands, k }
     }
 
     fn step(&mut self) {
@@ -116,6 +118,10 @@ fn every_integrator_converges_at_its_order_on_a_spring_mass_oscillator() {
         (Integrator::Verlet, 2.0, 64),
         (Integrator::Rk4, 4.0, 16),
         (Integrator::Implicit, 1.0, 512),
+        // One vertex on one spring along x: its block is the whole system and its energy
+        // quadratic along the spring, so each Newton step solves it: implicit Euler's
+        // order.
+        (Integrator::Vbd, 1.0, 512),
     ];
     for (integrator, want, n) in cases {
         let (coarse, fine) = (error(integrator, n), error(integrator, 2 * n));
@@ -206,21 +212,24 @@ fn free_fall_is_exact_to_rounding_for_verlet_and_symplectic_eulers_velocity() {
 }
 
 #[test]
-fn implicit_euler_never_gains_energy_at_any_step_and_explicit_euler_does() {
-    for per_period in [64u32, 6, 1] {
+fn implicit_euler_and_vbd_never_gain_energy_at_any_step_and_explicit_euler_does() {
+    for (integrator, per_period) in
+        [64u32, 6, 1].into_iter().flat_map(|n| [(Integrator::Implicit, n), (Integrator::Vbd, n)])
+    {
         // ω dt = 0.1, 1 and 6.3: explicit methods are unstable beyond 2.
-        let mut o = Oscillator::new(Integrator::Implicit, per_period, [0.0; 3], true);
+        let mut o = Oscillator::new(integrator, per_period, [0.0; 3], true);
         let e0 = o.energy();
         let mut e = e0;
         for s in 0..200 {
             o.step();
             let next = o.energy();
             // Rounding only: 1e-9 of the initial energy (f32 positions near the origin).
-            assert!(next <= e + 1e-9 * e0, "implicit, {per_period}/period, substep {s}: energy {e} → {next}");
+            let name = integrator.name();
+            assert!(next <= e + 1e-9 * e0, "{name}, {per_period}/period, substep {s}: energy {e} → {next}");
             e = next;
         }
-        println!("implicit {per_period:3}/period: energy {e0:.3e} → {e:.3e} J after 200 substeps");
-        assert!(e < e0, "implicit Euler damps");
+        println!("{:8} {per_period:3}/period: energy {e0:.3e} → {e:.3e} J after 200 substeps", integrator.name());
+        assert!(e < e0, "{} damps", integrator.name());
     }
     let mut o = Oscillator::new(Integrator::Euler, 64, [0.0; 3], true);
     let e0 = o.energy();
@@ -248,7 +257,7 @@ fn explicit_integrators_refuse_what_they_cannot_integrate_and_name_the_substeps(
     }
     // Physical mode at n = 128: Verlet, RK4 and Euler need more substeps than 16 (each
     // names how many, and that many pass: the state in (x, v) integrates any count up to
-    // 1024). Implicit and XPBD take any dt.
+    // 1024). Implicit, XPBD and VBD take any dt.
     for i in [Integrator::Verlet, Integrator::Rk4, Integrator::Euler] {
         let p = with(i, StiffnessUnits::Physical);
         let e = p.validate_for(128, h(128)).unwrap_err();
@@ -256,7 +265,7 @@ fn explicit_integrators_refuse_what_they_cannot_integrate_and_name_the_substeps(
         println!("{:8} at n = 128 needs {need} substeps per 1/60 s frame", i.name());
         assert_eq!(SimParams { substeps: need, ..p.clone() }.validate_for(128, h(128)), Ok(()), "{}", i.name());
     }
-    for i in [Integrator::Implicit, Integrator::Xpbd] {
+    for i in [Integrator::Implicit, Integrator::Xpbd, Integrator::Vbd] {
         assert_eq!(with(i, StiffnessUnits::Physical).validate_for(512, h(512)), Ok(()), "{}", i.name());
     }
 }

@@ -125,7 +125,14 @@ fn begin_at(i: usize, p: &StepParams, force: V4, x4: V4, vel: V4) -> (Vec3, Vec3
 /// One colour's sweep: every particle of `colour` (no two of which share a spring) takes
 /// its Newton step on its own block against its neighbours' positions in `pos`, which it
 /// moves; its displacement `aux[2]` with it. Pinned and grabbed particles stay.
-pub fn vbd_colour(exec: Exec, p: &StepParams, slots: &Rows<SpringSlot>, colour: &[u32], pos: &mut [V4], aux: &mut [Vec<V4>]) {
+pub fn vbd_colour(
+    exec: Exec,
+    p: &StepParams,
+    slots: &Rows<SpringSlot>,
+    colour: &[u32],
+    pos: &mut [V4],
+    aux: &mut [Vec<V4>],
+) {
     let (y, start) = (&aux[0], &aux[1]);
     let pos_r: &[V4] = pos;
     let step = |&i: &u32| block_step(p, slots, i as usize, pos_r, y, start);
