@@ -1254,8 +1254,9 @@ pub static XPBD_MESH: KernelDef = KernelDef {
         &[Pos, Vel, Aux0, Aux1],
     )
 };
-/// VBD: the inertial prediction y (aux0), the substep's start x⁰ (aux1) and the
-/// displacement D (aux2); the positions moved to y (core::cpu::vbd::vbd_begin).
+/// VBD: the predicted velocity v' (aux0; the prediction y = x⁰ + h v'), the substep's
+/// start x⁰ (aux1) and the displacement D = h v' (aux2); the positions moved to y
+/// (core::cpu::vbd::vbd_begin).
 pub static VBD_BEGIN: KernelDef = KernelDef {
     label: timing::INTEGRATE,
     pure: &[Aux0, Aux1, Aux2],
@@ -1279,10 +1280,11 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
         &[Pos, Aux2],
     )
 };
-/// VBD: x = x⁰ + D, v = D/h, with pins, grab and floor (core::cpu::vbd::vbd_finish).
+/// VBD: x = x⁰ + D, v = v' + (D − h v')/h, with pins, grab and floor
+/// (core::cpu::vbd::vbd_finish).
 pub static VBD_FINISH: KernelDef = KernelDef {
     label: timing::INTEGRATE,
-    ..def("vbd_finish", vbd_finish, Count::Particles, &[Params, Aux1, Aux2], &[Pos, Vel])
+    ..def("vbd_finish", vbd_finish, Count::Particles, &[Params, Aux0, Aux1, Aux2], &[Pos, Vel])
 };
 /// Implicit: r = dt f − dt² K v, p = z, Δv = 0, and the partials of r·z.
 pub static CG_BEGIN: KernelDef = KernelDef {

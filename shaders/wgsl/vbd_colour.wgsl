@@ -6,7 +6,9 @@
 // implicit Euler's energy at its particle — inertia m/h² (y − x), every spring of its row
 // with its Hessian made positive semi-definite, Rayleigh damping on the ends' relative
 // displacement — and steps by the block's solve (cofactors; no step where the
-// determinant is not positive and finite). y in aux0, x⁰ in aux1, D in aux2.
+// determinant is not positive and finite). v' in aux0 (y − x⁰ = h v'), x⁰ in aux1, D in
+// aux2: the
+// step is added to D and the particle moved to x⁰ + D (one rounding, not one per step).
 
 @group(0) @binding(31) var<storage, read> colours: array<u32>;
 
@@ -52,8 +54,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     let h = p.dt;
     let xi = x4.xyz;
     let inertia = mass_of(x4.w) / (h * h);
-    let moved = xi - aux1[i].xyz;
-    var f = (aux0[i].xyz - xi) * inertia;
+    let moved = aux2[i].xyz;
+    var f = (aux0[i].xyz * h - moved) * inertia;
     var d0 = inertia;
     var d1 = inertia;
     var d2 = inertia;
@@ -81,7 +83,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         var scale = 1.0;
         if slot.kd > 0.0 {
             let c = slot.kd / (slot.ks * h);
-            let u = moved - (xj - aux1[j].xyz);
+            let u = moved - aux2[j].xyz;
             let hu = u * a + n * (b * dot3(n, u));
             f -= hu * c;
             scale = 1.0 + c;
@@ -96,6 +98,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         o12 += sb * n.y * n.z;
     }
     let step = solve_sym3(d0, d1, d2, o01, o02, o12, f);
-    pos[i] = vec4<f32>(xi + step, x4.w);
-    aux2[i] = vec4<f32>(aux2[i].xyz + step, 0.0);
+    let d = moved + step;
+    aux2[i] = vec4<f32>(d, 0.0);
+    pos[i] = vec4<f32>(aux1[i].xyz + d, x4.w);
 }

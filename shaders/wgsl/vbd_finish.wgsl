@@ -1,6 +1,7 @@
 //! include: state, aux
 // vbd_finish — the end of a VBD substep (core::cpu::vbd::vbd_finish): x = x⁰ + D (x⁰ in
-// aux1, D in aux2), v = D/h, with pins, grab and floor as every integrator ends.
+// aux1, D in aux2), v = v' + (D − h v')/h (v' in aux0), with pins, grab and floor as
+// every integrator ends.
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
@@ -10,7 +11,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     let x4 = aux1[i];
     let d = aux2[i].xyz;
-    let m = finish_at(i, x4, x4.xyz + d, d * (1.0 / p.dt));
+    let v = aux0[i].xyz;
+    let m = finish_at(i, x4, x4.xyz + d, v + (d - v * p.dt) * (1.0 / p.dt));
     vel[i] = vec4<f32>(m.v, 0.0);
     pos[i] = vec4<f32>(m.x, x4.w);
 }
