@@ -766,7 +766,7 @@ fn xpbd_mesh(a: &TwinArgs, b: &mut HostBuffers) {
 }
 
 fn vbd_begin(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::vbd::vbd_begin(a.exec, a.p, &b.force, &mut b.pos, &b.vel, &mut b.aux);
+    cpu::vbd::vbd_begin(a.exec, a.p, &b.force, &b.pos, &b.vel, &mut b.aux);
 }
 
 /// One colour of VBD's sweep: particles `first .. first + count` of the colouring's list
@@ -775,7 +775,7 @@ fn vbd_colour(a: &TwinArgs, b: &mut HostBuffers) {
     let order = &a.topo.colours.order;
     let end = (a.range.0 as usize + a.range.1 as usize).min(order.len());
     let list = &order[(a.range.0 as usize).min(end)..end];
-    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, list, &mut b.pos, &mut b.aux);
+    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, list, &mut b.aux);
 }
 
 fn vbd_finish(a: &TwinArgs, b: &mut HostBuffers) {
@@ -1255,15 +1255,15 @@ pub static XPBD_MESH: KernelDef = KernelDef {
     )
 };
 /// VBD: the predicted velocity v' (aux0; the prediction y = x⁰ + h v'), the substep's
-/// start x⁰ (aux1) and the displacement D = h v' (aux2); the positions moved to y
-/// (core::cpu::vbd::vbd_begin).
+/// start x⁰ (aux1) and the displacement D = h v' (aux2) (core::cpu::vbd::vbd_begin).
 pub static VBD_BEGIN: KernelDef = KernelDef {
     label: timing::INTEGRATE,
     pure: &[Aux0, Aux1, Aux2],
-    ..def("vbd_begin", vbd_begin, Count::Particles, STATE, &[Pos, Aux0, Aux1, Aux2])
+    ..def("vbd_begin", vbd_begin, Count::Particles, STATE, &[Aux0, Aux1, Aux2])
 };
 /// VBD: one colour's Newton steps, each particle of the range of the colouring's list
-/// ([`Buf::Colours`]) on its 3 × 3 block over its row of the table.
+/// ([`Buf::Colours`]) on its 3 × 3 block over its row of the table, into its
+/// displacement (aux2).
 pub static VBD_COLOUR: KernelDef = KernelDef {
     check: Check::Bound {
         relative: 2e-5,
@@ -1276,8 +1276,8 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
         "vbd_colour",
         vbd_colour,
         Count::Range,
-        &[Params, Pos, Colours, Slots, BendSlots, Adjacency, Table, Aux0, Aux1, Aux2],
-        &[Pos, Aux2],
+        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Aux0, Aux1, Aux2],
+        &[Aux2],
     )
 };
 /// VBD: x = x⁰ + D, v = v' + (D − h v')/h, with pins, grab and floor

@@ -1,8 +1,8 @@
 //! include: state, aux
 // vbd_begin — Vertex Block Descent's prediction (core::cpu::vbd::vbd_begin): D = h v' with
-// v' = (1 − damping) v + f h/m (the force buffer after `forces`), y = x + D; a pinned
-// particle D = 0, the grabbed one D = target − x. aux0 = v' (0 where held), aux1 = x⁰,
-// aux2 = D; pos = y.
+// v' = (1 − damping) v + f h/m (the force buffer after `forces`); a pinned particle
+// D = 0, the grabbed one D = target − x. aux0 = v' (0 where held), aux1 = x⁰, aux2 = D;
+// the positions stay x⁰ until vbd_finish.
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
@@ -11,18 +11,15 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let x4 = pos[i];
-    let x = x4.xyz;
     var d = vec3<f32>(0.0);
     var v = vec3<f32>(0.0);
     if i32(i) == p.grab_index {
-        d = p.grab_target.xyz - x;
+        d = p.grab_target.xyz - x4.xyz;
     } else if x4.w != 0.0 {
         v = vel[i].xyz * (1.0 - p.damping) + force[i].xyz * dt_over_mass(x4.w);
         d = v * p.dt;
     }
-    let y = vec4<f32>(x + d, x4.w);
     aux0[i] = vec4<f32>(v, 0.0);
     aux1[i] = x4;
     aux2[i] = vec4<f32>(d, 0.0);
-    pos[i] = y;
 }

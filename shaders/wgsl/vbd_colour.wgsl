@@ -2,13 +2,14 @@
 // vbd_colour — one colour of Vertex Block Descent's sweep (core::cpu::vbd::vbd_colour and
 // block_step): particles first … first + count − 1 of the colouring's list (binding 31,
 // clothlab_core::tables::Colours; no two of a colour share a spring, so each reads only
-// positions no other invocation writes). Each gathers the force and the 3 × 3 Hessian of
+// displacements no other invocation writes). Each gathers the force and the 3 × 3 Hessian of
 // implicit Euler's energy at its particle — inertia m/h² (y − x), every spring of its row
 // with its Hessian made positive semi-definite, Rayleigh damping on the ends' relative
 // displacement — and steps by the block's solve (cofactors; no step where the
 // determinant is not positive and finite). v' in aux0 (y − x⁰ = h v'), x⁰ in aux1, D in
-// aux2: the
-// step is added to D and the particle moved to x⁰ + D (one rounding, not one per step).
+// aux2: the step is added to D. Positions are x⁰ + D: a spring's ends are
+// (x⁰ᵢ − x⁰ⱼ) + (Dᵢ − Dⱼ) apart, a few ulps of its length (core::cpu::vbd::VBD_AUX says
+// why), and pos is written once, by vbd_finish.
 
 @group(0) @binding(31) var<storage, read> colours: array<u32>;
 
@@ -47,12 +48,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let i = colours[range.first + k];
-    let x4 = pos[i];
+    let x4 = aux1[i];
     if held(i, x4.w) {
         return;
     }
     let h = p.dt;
-    let xi = x4.xyz;
+    let x0 = x4.xyz;
     let inertia = mass_of(x4.w) / (h * h);
     let moved = aux2[i].xyz;
     var f = (aux0[i].xyz * h - moved) * inertia;
@@ -70,8 +71,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             continue;
         }
         let j = u32(other);
-        let xj = pos[j].xyz;
-        let dx = xi - xj;
+        let u = moved - aux2[j].xyz;
+        let dx = (x0 - aux1[j].xyz) + u;
         let l = len3(dx);
         if l <= 1.17549435e-38 {
             continue;
@@ -83,7 +84,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         var scale = 1.0;
         if slot.kd > 0.0 {
             let c = slot.kd / (slot.ks * h);
-            let u = moved - aux2[j].xyz;
             let hu = u * a + n * (b * dot3(n, u));
             f -= hu * c;
             scale = 1.0 + c;
@@ -98,7 +98,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         o12 += sb * n.y * n.z;
     }
     let step = solve_sym3(d0, d1, d2, o01, o02, o12, f);
-    let d = moved + step;
-    aux2[i] = vec4<f32>(d, 0.0);
-    pos[i] = vec4<f32>(aux1[i].xyz + d, x4.w);
+    aux2[i] = vec4<f32>(moved + step, 0.0);
 }

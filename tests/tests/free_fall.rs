@@ -123,7 +123,12 @@ fn fall_within(
         // Gravity is along y: the centre moves sideways only by the rounding of internal
         // forces that cancel (measured ≤ 6e-7 m, 2e-6 of a 0.3–1.2 m fall); a force
         // that does not cancel (one end of a spring) moves it by millimetres.
-        assert!(sideways < 1e-5 * want, "{at}: the centre moved {sideways} m sideways");
+        // VBD moves one vertex at a time and keeps momentum only as far as its sweeps
+        // converge (core/tests/vbd.rs), and the springs' answer to the rounding of x⁰ does
+        // not cancel exactly: measured ≤ 3.4e-5 of the drop (1e-4 bound) at 512 substeps,
+        // ≤ 1.5e-7 at 8 and 64; a force on one end of a spring would be millimetres.
+        let side_bound = if integrator == Integrator::Vbd { 1e-4 } else { 1e-5 };
+        assert!(sideways < side_bound * want, "{at}: the centre moved {sideways} m sideways");
         // The cloth keeps its shape: a uniform fall stretches no spring, so what moves a
         // particle within the cloth is the rounding of its position (½ ulp per substep)
         // turned into spring forces and back: measured ≤ 96 ulps of the height (2.3e-5 m

@@ -91,10 +91,14 @@ pub fn colouring_is_valid(topo: &ClothTopology, colours: &[Vec<u32>]) -> bool {
 /// The scratch buffers a VBD substep keeps (`aux[0]`, `aux[1]`, `aux[2]`, as the GPU keeps
 /// them in aux0 … aux2): the predicted velocity v' (w: 0; the prediction `y = x⁰ + h v'`),
 /// the substep's start x⁰, and the displacement D so far (w: 0). The solve works on
-/// displacements — the inertia's `y − x` as `(y − x⁰) − D`, the damping's relative motion
-/// as `Dᵢ − Dⱼ` — and keeps each position `x⁰ + D` rounded once: stepping the positions
-/// themselves rounded every step into them, and over 40 iterations those roundings
-/// (of ulp(x), in a velocity D/h) lost 3.7e-3 of a free cloth's momentum in 32 substeps.
+/// displacements only — the inertia's `y − x` as `h v' − D`, a spring's `xᵢ − xⱼ` as
+/// `(x⁰ᵢ − x⁰ⱼ) + (Dᵢ − Dⱼ)`, the damping's relative motion as `Dᵢ − Dⱼ` — and the
+/// positions are `x⁰ + D` once, at the finish. A spring then sees its ends to a few ulps
+/// of its length, not of the positions: where the solve read positions `x⁰ + D` rounded
+/// (ulp 2.4e-7 m at 3.7 m) it answered that rounding with steps of its size, which over h
+/// are velocities (7 mm/s at 512 substeps), and a free cloth fell 2e-4 too far in 0.25 s;
+/// where it stepped the positions themselves, over 40 iterations, it lost 3.7e-3 of a
+/// free cloth's momentum in 32 substeps.
 /// The new velocity is `v' + (D − h v')/h`: what the solve changed, over h, added to the
 /// prediction's velocity (as `D/h` it rounded `h v'` and `1/h` into every velocity, and a
 /// free cloth's mean velocity lost 2.7e-6 of itself in 240 substeps whatever the
@@ -102,57 +106,45 @@ pub fn colouring_is_valid(topo: &ClothTopology, colours: &[Vec<u32>]) -> bool {
 pub const VBD_AUX: usize = 3;
 
 /// The start of a VBD substep, per particle: the prediction `y = x + D` with
-/// `D = h v'`, `v' = (1 − damping) v + f h/m` (`f` the force buffer after `forces`); `pos`
-/// moves to y. A pinned particle predicts its place (D = 0), the grabbed one the grab's
-/// target. `aux[0]` = v' (zero for a held particle), `aux[1]` = x⁰, `aux[2]` = D = y − x⁰.
-pub fn vbd_begin(exec: Exec, p: &StepParams, force: &[V4], pos: &mut [V4], vel: &[V4], aux: &mut [Vec<V4>]) {
+/// `D = h v'`, `v' = (1 − damping) v + f h/m` (`f` the force buffer after `forces`). A
+/// pinned particle predicts its place (D = 0), the grabbed one the grab's target.
+/// `aux[0]` = v' (zero for a held particle), `aux[1]` = x⁰, `aux[2]` = D = y − x⁰; the
+/// positions stay x⁰ until [`vbd_finish`].
+pub fn vbd_begin(exec: Exec, p: &StepParams, force: &[V4], pos: &[V4], vel: &[V4], aux: &mut [Vec<V4>]) {
     let out = per_particle(exec, pos.len(), |i| begin_at(i, p, force[i], pos[i], vel[i]));
-    for (i, (y, d, v)) in out.into_iter().enumerate() {
+    for (i, (d, v)) in out.into_iter().enumerate() {
         aux[0][i] = v4(v, 0.0);
         aux[1][i] = pos[i];
         aux[2][i] = v4(d, 0.0);
-        pos[i] = v4(y, pos[i][3]);
     }
 }
 
-/// Particle `i`'s prediction, displacement and predicted velocity (see [`vbd_begin`]).
+/// Particle `i`'s displacement and predicted velocity (see [`vbd_begin`]).
 #[inline(always)]
-fn begin_at(i: usize, p: &StepParams, force: V4, x4: V4, vel: V4) -> (Vec3, Vec3, Vec3) {
-    let x = v3(x4);
-    let (d, v) = if i as i32 == p.grab_index {
-        (v3(p.grab_target) - x, Vec3::ZERO)
+fn begin_at(i: usize, p: &StepParams, force: V4, x4: V4, vel: V4) -> (Vec3, Vec3) {
+    if i as i32 == p.grab_index {
+        (v3(p.grab_target) - v3(x4), Vec3::ZERO)
     } else if x4[3] == 0.0 {
         (Vec3::ZERO, Vec3::ZERO)
     } else {
         let v = v3(vel) * (1.0 - p.damping) + v3(force) * dt_over_mass(p, x4[3]);
         (v * p.dt, v)
-    };
-    (x + d, d, v)
+    }
 }
 
 /// One colour's sweep: every particle of `colour` (no two of which share a spring) takes
-/// its Newton step on its own block against its neighbours' positions in `pos`, adds it
-/// to its displacement `aux[2]` and moves to `x⁰ + D`. Pinned and grabbed particles stay.
-pub fn vbd_colour(
-    exec: Exec,
-    p: &StepParams,
-    slots: &Rows<SpringSlot>,
-    colour: &[u32],
-    pos: &mut [V4],
-    aux: &mut [Vec<V4>],
-) {
-    let (pred, disp) = (&aux[0], &aux[2]);
-    let pos_r: &[V4] = pos;
-    let step = |&i: &u32| block_step(p, slots, i as usize, pos_r, pred, disp);
+/// its Newton step on its own block against its neighbours' newest displacements and adds
+/// it to its displacement `aux[2]`. Pinned and grabbed particles stay.
+pub fn vbd_colour(exec: Exec, p: &StepParams, slots: &Rows<SpringSlot>, colour: &[u32], aux: &mut [Vec<V4>]) {
+    let (pred, start, disp) = (&aux[0], &aux[1], &aux[2]);
+    let step = |&i: &u32| block_step(p, slots, i as usize, pred, start, disp);
     let steps: Vec<Vec3> = match exec {
         Exec::Serial => colour.iter().map(step).collect(),
         Exec::Parallel => colour.par_iter().with_min_len(1024).map(step).collect(),
     };
     for (&i, s) in colour.iter().zip(steps) {
         let i = i as usize;
-        let d = v3(aux[2][i]) + s;
-        aux[2][i] = v4(d, 0.0);
-        pos[i] = v4(v3(aux[1][i]) + d, pos[i][3]);
+        aux[2][i] = v4(v3(aux[2][i]) + s, 0.0);
     }
 }
 
@@ -194,26 +186,26 @@ pub fn vbd_substep(
     vbd_begin(e, p, &force, pos, vel, &mut aux);
     for _ in 0..iterations {
         for colour in colours {
-            vbd_colour(e, p, &topo.slots, colour, pos, &mut aux);
+            vbd_colour(e, p, &topo.slots, colour, &mut aux);
         }
     }
     vbd_finish(e, p, pos, vel, &aux);
 }
 
-/// Particle `i`'s Newton step on its block: `Hᵢ⁻¹ fᵢ` at `pos` (the others' newest
-/// positions), `pred` the predicted velocities v' (`y − x⁰ = h v'`), `disp` the
-/// displacements D; zero for a
+/// Particle `i`'s Newton step on its block: `Hᵢ⁻¹ fᵢ` at `x⁰ + D` (the others' newest
+/// displacements), `pred` the predicted velocities v' (`y − x⁰ = h v'`), `start` x⁰,
+/// `disp` the displacements D; zero for a
 /// held particle and where the
 /// block cannot be solved (its determinant not positive and finite in f32). Written
 /// scalar by scalar in the order `vbd_colour.wgsl` computes it: the block's six entries
 /// summed slot by slot, solved by cofactors.
-pub fn block_step(p: &StepParams, slots: &Rows<SpringSlot>, i: usize, pos: &[V4], pred: &[V4], disp: &[V4]) -> Vec3 {
-    let x4 = pos[i];
+pub fn block_step(p: &StepParams, slots: &Rows<SpringSlot>, i: usize, pred: &[V4], start: &[V4], disp: &[V4]) -> Vec3 {
+    let x4 = start[i];
     if i as i32 == p.grab_index || x4[3] == 0.0 {
         return Vec3::ZERO;
     }
     let h = p.dt;
-    let xi = v3(x4);
+    let x0 = v3(x4);
     let inertia = mass(p, x4[3]) / (h * h);
     let moved = v3(disp[i]);
     let mut f = (v3(pred[i]) * h - moved) * inertia;
@@ -225,8 +217,10 @@ pub fn block_step(p: &StepParams, slots: &Rows<SpringSlot>, i: usize, pos: &[V4]
         if s.ks <= 0.0 {
             continue;
         }
-        let xj = v3(pos[j]);
-        let dx = xi - xj;
+        // Both ends relative to where they started (an exact difference for neighbours
+        // in one binade), plus their displacements.
+        let u = moved - v3(disp[j]);
+        let dx = (x0 - v3(start[j])) + u;
         let l = dx.dot(dx).sqrt();
         if l <= f32::MIN_POSITIVE {
             continue;
@@ -241,7 +235,6 @@ pub fn block_step(p: &StepParams, slots: &Rows<SpringSlot>, i: usize, pos: &[V4]
         if s.kd > 0.0 {
             // Rayleigh damping D = (kd/ks) Hₛ on the ends' relative displacement over h.
             let c = s.kd / (s.ks * h);
-            let u = moved - v3(disp[j]);
             let hu = u * a + n * (b * n.dot(u));
             f -= hu * c;
             scale = 1.0 + c;
