@@ -564,6 +564,9 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     if p.integrator == clothlab_core::Integrator::Xpbd {
         units_changed |= ui.add(egui::Slider::new(&mut p.xpbd_iterations, 1..=16).text("XPBD iterations")).changed();
     }
+    if p.integrator == clothlab_core::Integrator::Vbd {
+        units_changed |= ui.add(egui::Slider::new(&mut p.vbd_iterations, 1..=64).text("VBD iterations")).changed();
+    }
     let physical = p.stiffness_units == StiffnessUnits::Physical;
     let mut changed = units_changed;
     let mut f = |ui: &mut egui::Ui, v: &mut f32, r: std::ops::RangeInclusive<f32>, label: &str, log: bool| {
