@@ -781,13 +781,17 @@ fn a_closed_or_full_standard_output_ends_the_run_in_one_line_or_none() {
         &["sim", "--backend", "cpu", "--n", "8", "--steps", "16"][..],
         &["validate", "--backends", "vulkan", "--n", "8", "--steps", "16"][..],
     ] {
+        // The read end closed before the child starts: with `Stdio::piped()` closed after
+        // the spawn, a child quick enough (a loaded machine descheduling this thread)
+        // wrote its few lines into the pipe's buffer first and ended with 0.
+        let (reader, writer) = std::io::pipe().expect("a pipe");
+        drop(reader);
         let mut child = Command::new(env!("CARGO_BIN_EXE_clothlab"))
             .args(args)
-            .stdout(Stdio::piped())
+            .stdout(writer)
             .stderr(Stdio::piped())
             .spawn()
             .expect("run clothlab");
-        drop(child.stdout.take());
         let start = std::time::Instant::now();
         while child.try_wait().unwrap().is_none() {
             assert!(start.elapsed() < limit, "{args:?} still ran after {limit:?}");
