@@ -25,7 +25,7 @@ pub type VulkanSolver = GpuSolver<VulkanEngine>;
 
 /// Sets the descriptor pool holds: two per kernel, for the built-in kernels in every
 /// flavor and the kernels added from outside.
-const MAX_KERNELS: u32 = 256;
+const MAX_KERNELS: u32 = 384;
 /// Alignment of the pieces of a frame in the staging buffer (constants, readbacks).
 const STAGING_ALIGN: u64 = 256;
 /// The staging room a frame's recorded writes and readbacks may use.

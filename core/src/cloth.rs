@@ -177,7 +177,10 @@ pub fn build_mesh(
         mesh: Some(std::sync::Arc::new(tables)),
         colours: Default::default(),
     };
-    topo.colours = std::sync::Arc::new(crate::tables::Colours::from_lists(&crate::cpu::vbd::colouring(&topo)));
+    // VBD's colouring (cpu::vbd::colouring computes the same).
+    let greedy =
+        crate::tables::Colours::greedy(np, |i| topo.slots.row(i).iter().filter_map(|s| s.other()).collect::<Vec<_>>());
+    topo.colours = std::sync::Arc::new(crate::tables::Colours::from_lists(&greedy));
     topo.set_spring_constants(params);
     Ok((state, topo))
 }

@@ -182,4 +182,35 @@ impl Colours {
     pub fn lists(&self) -> Vec<Vec<u32>> {
         (0..self.len()).map(|k| self.colour(k).to_vec()).collect()
     }
+
+    /// The colouring of an n × n grid whose springs reach 2 particles along a row or a
+    /// column (the 12-slot stencil): the 9 classes `(i mod 3, j mod 3)`, two particles of
+    /// one class being 3 apart or more. Each class in particle order.
+    pub fn grid(n: usize) -> Vec<Vec<u32>> {
+        let mut lists = vec![Vec::new(); 9];
+        for k in 0..n * n {
+            lists[(k % n) % 3 + 3 * ((k / n) % 3)].push(k as u32);
+        }
+        lists.retain(|c| !c.is_empty());
+        lists
+    }
+
+    /// A greedy colouring of `count` particles, particle `i`'s neighbours (the other ends
+    /// of its springs) `neighbours(i)`: in particle order, each the smallest colour none of
+    /// its neighbours has yet.
+    pub fn greedy<I: IntoIterator<Item = usize>>(count: usize, neighbours: impl Fn(usize) -> I) -> Vec<Vec<u32>> {
+        let mut colour_of = vec![u32::MAX; count];
+        let mut used = Vec::new();
+        for i in 0..count {
+            used.clear();
+            used.extend(neighbours(i).into_iter().map(|j| colour_of[j]));
+            colour_of[i] = (0..).find(|c| !used.contains(c)).unwrap_or(0);
+        }
+        let colours = colour_of.iter().copied().max().map_or(0, |c| c as usize + 1);
+        let mut lists = vec![Vec::new(); colours];
+        for (k, &c) in colour_of.iter().enumerate() {
+            lists[c as usize].push(k as u32);
+        }
+        lists
+    }
 }

@@ -18,6 +18,7 @@ fn the_colourings_are_valid_on_grids_and_irregular_meshes() {
         let c = colouring(&topo);
         assert_eq!(c.len(), 9, "n = {n}: (i mod 3, j mod 3)");
         assert!(colouring_is_valid(&topo, &c), "n = {n}");
+        assert_eq!(topo.colours.lists(), c, "n = {n}: the topology's colouring (what the GPU sweeps)");
     }
     // The fan (a centre of 64 edges and 64 bending springs), the Delaunay cape, two cloths.
     for (name, most) in [("mesh-fan.toml", 140), ("mesh-cape.toml", 24), ("two-cloths.toml", 24)] {
@@ -26,6 +27,7 @@ fn the_colourings_are_valid_on_grids_and_irregular_meshes() {
         let c = colouring(&topo);
         println!("{name}: {} colours", c.len());
         assert!(colouring_is_valid(&topo, &c), "{name}");
+        assert_eq!(topo.colours.lists(), c, "{name}: the topology's colouring");
         // Greedy needs at most one more colour than the largest row.
         let largest = (0..topo.num_particles()).map(|i| topo.slots.row(i).len()).max().unwrap();
         assert!(c.len() <= largest + 1 && c.len() <= most, "{name}: {} colours, rows up to {largest}", c.len());
@@ -211,15 +213,15 @@ fn hung_strain(scene: &Scene, params: SimParams, frames: u32) -> f32 {
 /// A hanging cloth with the strain limit off: VBD minimises implicit Euler's energy, so
 /// once its sweeps converge it hangs about as implicit Euler does (clothlab's implicit is
 /// one Newton step solved by CG, 64 iterations here: the linearisation, not the
-/// minimiser, so they differ by a few per cent). Measured on the 32 × 32 grid after 1 s:
-/// VBD 1 iteration 0.128, 8 iterations 0.0788; implicit 0.0766 (after 2 s: XPBD with one
-/// iteration 0.117, Verlet 0.103, VBD 0.0914). At 8 iterations within 5 % of implicit
-/// Euler's; one
-/// iteration stretches it > 30 % further (so the check can fail). The Delaunay cape (a
-/// vertex of 1 to 8 triangles): 0.1948 against 0.1949, within 5 % too.
+/// minimiser, so they differ by a few per cent). Measured on the 32 × 32 grid hanging
+/// from its corners with no colliders after 1 s: VBD 1 iteration 0.254, 8 iterations
+/// 0.156; implicit 0.159. At 8 iterations within 5 % of implicit Euler's; one iteration
+/// stretches it > 30 % further (so the check can fail). The Delaunay cape (a vertex of 1
+/// to 8 triangles): 0.1948 against 0.1949, within 5 % too.
 #[test]
 fn a_hanging_cloth_at_8_iterations_stretches_as_implicit_euler_does() {
-    let scene = Scene::with_n(32);
+    let mut scene = Scene::with_n(32);
+    (scene.spheres, scene.boxes) = (Vec::new(), Vec::new());
     let base = SimParams { strain_iterations: 0, cg_iterations: 64, ..SimParams::default() };
     let with = |integrator, vbd_iterations| SimParams { integrator, vbd_iterations, ..base.clone() };
     let implicit = hung_strain(&scene, with(clothlab_core::Integrator::Implicit, 8), 60);
@@ -237,4 +239,54 @@ fn a_hanging_cloth_at_8_iterations_stretches_as_implicit_euler_does() {
     let vbd = hung_strain(&cape, with(clothlab_core::Integrator::Vbd), 60);
     println!("cape: max edge strain implicit {implicit:.4}, vbd×8 {vbd:.4}");
     assert!((vbd - implicit).abs() < 0.05 * implicit, "cape: vbd×8 {vbd} against implicit {implicit}");
+}
+
+/// A cloth lying flat on the floor, thrown sideways at 1 m/s: the contact is a penalty
+/// energy in VBD's local solve and its friction the paper's smoothed Coulomb friction
+/// (μ = `friction`), so the cloth slides `v²/(2μg)` (0.127 m at μ = 0.4) and stops after
+/// `v/(μg)` (0.255 s); with μ = 0 it slides on at 1 m/s. It rests on the penalty, within
+/// its reach beyond the margin (`CONTACT_REACH`): above `floor + margin`, where `collide`'s
+/// projection (kept as the fallback) would act, and below `floor + 1.1 margin`.
+/// Measured: 0.12694 m (0.4 % short) and 0.50000 m, resting at 1.1 margins (bounds: the
+/// slide within 2 % — implicit Euler's first-order error over 0.255 s at 960 substeps
+/// per second and the smoothing below 0.01 m/s — and the free slide within 0.1 %). With
+/// the normal force taken at the iterate (not the block's step) it slid 0.1126 m.
+#[test]
+fn a_cloth_thrown_along_the_floor_slides_as_coulomb_friction_says() {
+    let mut scene = Scene::with_n(8);
+    scene.cloth.pinning = Pinning::None;
+    scene.cloth.size = 0.3;
+    scene.cloth.down = [0.0, 0.0, 1.0];
+    scene.cloth.velocity = [1.0, 0.0, 0.0];
+    scene.spheres.clear();
+    scene.boxes.clear();
+    scene.floor_y = Some(0.0);
+    let base = SimParams {
+        integrator: clothlab_core::Integrator::Vbd,
+        air_drag: 0.0,
+        damping: 0.0,
+        collision_margin: 0.01,
+        ..SimParams::default()
+    };
+    scene.cloth.top_center = [0.0, base.collision_margin * 1.1 + 1e-5, 0.0];
+    let g = -base.gravity[1] as f64;
+    for mu in [0.4f32, 0.0] {
+        let params = SimParams { friction: mu, ..base.clone() };
+        let mut solver = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, scene.clone(), params).unwrap();
+        let x0 = clothlab_core::Solver::state(&mut solver).unwrap().pos;
+        let frames = 30;
+        for _ in 0..frames {
+            clothlab_core::Solver::step_frame(&mut solver).unwrap();
+        }
+        let end = clothlab_core::Solver::state(&mut solver).unwrap();
+        let slide = end.pos.iter().zip(&x0).map(|(a, b)| (a[0] - b[0]) as f64).sum::<f64>() / x0.len() as f64;
+        let (lo, hi) = end.pos.iter().fold((f32::MAX, f32::MIN), |(lo, hi), x| (lo.min(x[1]), hi.max(x[1])));
+        let t = frames as f64 * base.frame_dt as f64;
+        let want = if mu > 0.0 { 1.0 / (2.0 * mu as f64 * g) } else { t };
+        println!("μ = {mu}: slid {slide:.5} m (Coulomb {want:.5} m), heights {lo:.6} … {hi:.6} m");
+        let bound = if mu > 0.0 { 0.02 } else { 1e-3 };
+        assert!((slide - want).abs() < bound * want, "μ = {mu}: slid {slide} m, want {want} m");
+        let margin = base.collision_margin;
+        assert!(lo > margin && hi < margin * 1.1, "μ = {mu}: heights {lo} … {hi} m");
+    }
 }

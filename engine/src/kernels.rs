@@ -775,7 +775,7 @@ fn vbd_colour(a: &TwinArgs, b: &mut HostBuffers) {
     let order = &a.topo.colours.order;
     let end = (a.range.0 as usize + a.range.1 as usize).min(order.len());
     let list = &order[(a.range.0 as usize).min(end)..end];
-    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, list, &mut b.aux);
+    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, (a.spheres, a.boxes), list, &mut b.aux);
 }
 
 fn vbd_finish(a: &TwinArgs, b: &mut HostBuffers) {
@@ -1270,13 +1270,13 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
         reason: "a gather over the row's springs into a 3 × 3 block, solved by cofactors (one division)",
     },
     label: timing::VBD,
-    variants: Variants { table_image: true, ..PLAIN },
+    variants: Variants { table_image: true, colliders_uniform: true, ..PLAIN },
     immediates: Immediates::Range,
     ..def(
         "vbd_colour",
         vbd_colour,
         Count::Range,
-        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Aux0, Aux1, Aux2],
+        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Spheres, Boxes, Aux0, Aux1, Aux2],
         &[Aux2],
     )
 };

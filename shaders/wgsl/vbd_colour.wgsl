@@ -1,4 +1,4 @@
-//! include: state, table, aux, adjacency
+//! include: state, table, aux, adjacency, colliders
 // vbd_colour — one colour of Vertex Block Descent's sweep (core::cpu::vbd::vbd_colour and
 // block_step): particles first … first + count − 1 of the colouring's list (binding 31,
 // clothlab_core::tables::Colours; no two of a colour share a spring, so each reads only
@@ -18,6 +18,106 @@ struct PassRange {
     count: u32,
 }
 var<immediate> pass_range: PassRange;
+
+// core::cpu::vbd's contact constants.
+const CONTACT_STIFFNESS: f32 = 1000.0;
+const CONTACT_REACH: f32 = 0.1;
+const FRICTION_EPS_V: f32 = 0.01;
+
+// The block [h00, h11, h22, h01, h02, h12] and the force being gathered.
+var<private> hess: array<f32, 6>;
+var<private> force_acc: vec3<f32>;
+
+// Adds a I + b n̂n̂ᵀ to the block (core::cpu::vbd::add_block).
+fn add_block(a: f32, b: f32, n: vec3<f32>) {
+    hess[0] += a + b * n.x * n.x;
+    hess[1] += a + b * n.y * n.y;
+    hess[2] += a + b * n.z * n.z;
+    hess[3] += b * n.x * n.y;
+    hess[4] += b * n.x * n.z;
+    hess[5] += b * n.y * n.z;
+}
+
+// The block and force after the penalties (the friction pass's λ reads them).
+var<private> hess_n: array<f32, 6>;
+var<private> force_n: vec3<f32>;
+
+// A contact of penetration pen along n̂ for a vertex that moved d (core::cpu::vbd::contacts):
+// the penalty's force and Hessian (first pass), or the smoothed Coulomb friction's with
+// λ = k max(0, pen − n̂·f / n̂ᵀHn̂) from the block after the penalties (second pass).
+fn touch(stiffness: f32, pen: f32, n: vec3<f32>, d: vec3<f32>, friction_pass: bool) {
+    if !friction_pass {
+        force_acc += n * (stiffness * pen);
+        add_block(0.0, stiffness, n);
+        return;
+    }
+    let ha = hess_n;
+    let hn = n.x * (ha[0] * n.x + ha[3] * n.y + ha[4] * n.z)
+        + n.y * (ha[3] * n.x + ha[1] * n.y + ha[5] * n.z)
+        + n.z * (ha[4] * n.x + ha[5] * n.y + ha[2] * n.z);
+    let lambda = stiffness * max(pen - dot3(n, force_n) / hn, 0.0);
+    let eps = FRICTION_EPS_V * p.dt;
+    let u = d - n * dot3(n, d);
+    let y = sqrt(dot3(u, u));
+    var c = 1.0 / y;
+    if y < eps {
+        c = 2.0 / eps - y / (eps * eps);
+    }
+    let w = p.friction * lambda * c;
+    force_acc -= u * w;
+    add_block(w, -w, n);
+}
+
+// The floor, the spheres and the boxes within the margin and its reach of x, in that
+// order (core::cpu::vbd::each_contact).
+fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool) {
+    let reach = p.margin + p.margin * CONTACT_REACH;
+    let floor = p.floor_y + reach;
+    if x.y < floor {
+        touch(stiffness, floor - x.y, vec3<f32>(0.0, 1.0, 0.0), d, friction_pass);
+    }
+    for (var k = 0u; k < p.num_spheres; k++) {
+        let s = spheres[k];
+        let r = s.radius + reach;
+        let dc = x - s.center;
+        let dist2 = dot3(dc, dc);
+        if dist2 < r * r {
+            let dist = sqrt(dist2);
+            var n = vec3<f32>(0.0, 1.0, 0.0);
+            if dist > 1e-12 {
+                n = dc * (1.0 / dist);
+            }
+            touch(stiffness, r - dist, n, d, friction_pass);
+        }
+    }
+    for (var k = 0u; k < p.num_boxes; k++) {
+        let lo = boxes[k].min.xyz - vec3<f32>(reach);
+        let hi = boxes[k].max.xyz + vec3<f32>(reach);
+        if all(x > lo) && all(x < hi) {
+            let below = x - lo;
+            let above = hi - x;
+            var best = below.x;
+            var n = vec3<f32>(-1.0, 0.0, 0.0);
+            if above.x < best { best = above.x; n = vec3<f32>(1.0, 0.0, 0.0); }
+            if below.y < best { best = below.y; n = vec3<f32>(0.0, -1.0, 0.0); }
+            if above.y < best { best = above.y; n = vec3<f32>(0.0, 1.0, 0.0); }
+            if below.z < best { best = below.z; n = vec3<f32>(0.0, 0.0, -1.0); }
+            if above.z < best { best = above.z; n = vec3<f32>(0.0, 0.0, 1.0); }
+            touch(stiffness, best, n, d, friction_pass);
+        }
+    }
+}
+
+// The contacts' penalties, then their friction (core::cpu::vbd::contacts).
+fn contacts(stiffness: f32, x: vec3<f32>, d: vec3<f32>) {
+    each_contact(stiffness, x, d, false);
+    if p.friction <= 0.0 {
+        return;
+    }
+    hess_n = hess;
+    force_n = force_acc;
+    each_contact(stiffness, x, d, true);
+}
 
 // H⁻¹ f for the symmetric H = [a b c; b d g; c g e] (core::cpu::vbd::solve_sym3).
 fn solve_sym3(a: f32, d: f32, e: f32, b: f32, c: f32, g: f32, f: vec3<f32>) -> vec3<f32> {
@@ -57,12 +157,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     let inertia = mass_of(x4.w) / (h * h);
     let moved = aux2[i].xyz;
     var f = (aux0[i].xyz * h - moved) * inertia;
-    var d0 = inertia;
-    var d1 = inertia;
-    var d2 = inertia;
-    var o01 = 0.0;
-    var o02 = 0.0;
-    var o12 = 0.0;
+    hess = array<f32, 6>(inertia, inertia, inertia, 0.0, 0.0, 0.0);
     let r = slot_row(i);
     for (var s = 0u; s < r.count; s++) {
         let slot = row_slot(i, r, s);
@@ -88,15 +183,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             f -= hu * c;
             scale = 1.0 + c;
         }
-        let sa = a * scale;
-        let sb = b * scale;
-        d0 += sa + sb * n.x * n.x;
-        d1 += sa + sb * n.y * n.y;
-        d2 += sa + sb * n.z * n.z;
-        o01 += sb * n.x * n.y;
-        o02 += sb * n.x * n.z;
-        o12 += sb * n.y * n.z;
+        add_block(a * scale, b * scale, n);
     }
-    let step = solve_sym3(d0, d1, d2, o01, o02, o12, f);
+    force_acc = f;
+    contacts(inertia * CONTACT_STIFFNESS, x0 + moved, moved);
+    let step = solve_sym3(hess[0], hess[1], hess[2], hess[3], hess[4], hess[5], force_acc);
     aux2[i] = vec4<f32>(moved + step, 0.0);
 }

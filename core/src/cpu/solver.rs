@@ -385,7 +385,7 @@ impl CpuSolver {
                 Self::timed(timer, on, crate::timing::VBD, || {
                     for _ in 0..params.vbd_iterations {
                         for k in 0..topo.colours.len() {
-                            super::vbd::vbd_colour(e, &p, &topo.slots, topo.colours.colour(k), aux);
+                            super::vbd::vbd_colour(e, &p, &topo.slots, (spheres, boxes), topo.colours.colour(k), aux);
                         }
                     }
                 });

@@ -38,7 +38,21 @@ use rayon::prelude::*;
 
 use super::integrators::finish_at;
 use super::{Exec, dt_over_mass, mass, v3, v4};
-use crate::grid::{ClothTopology, Rows, SpringSlot, StepParams, V4};
+use crate::grid::{ClothTopology, Colours, Rows, SpringSlot, StepParams, V4};
+use crate::scene::{Aabb, Sphere};
+
+/// A contact's penalty stiffness as a multiple of the vertex's inertia `m/h²` (so the
+/// same at every n and dt): a cloth resting on a surface sinks `g h² / 1000` into the
+/// penalty's reach (1e-9 m at 960 substeps per second).
+pub const CONTACT_STIFFNESS: f32 = 1000.0;
+/// How far beyond the collision margin a contact's penalty starts, as a fraction of the
+/// margin: the cloth rests that far out, so that `collide`'s projection after the solve
+/// (kept as the fallback for what the sweeps leave inside the margin) does not act on a
+/// resting contact and its velocity friction is not applied twice.
+pub const CONTACT_REACH: f32 = 0.1;
+/// The friction's smoothing speed (the paper's and IPC's ε_v), m/s: below it the friction
+/// force grows linearly with the sliding speed, so that its Hessian stays bounded.
+pub const FRICTION_EPS_V: f32 = 0.01;
 
 /// The vertex colours of `topo`: lists of particles, no two of one list joined by a spring.
 /// A grid: the 9 classes of `(i mod 3, j mod 3)` (its 12-slot stencil reaches 2 away, so
@@ -47,28 +61,10 @@ use crate::grid::{ClothTopology, Rows, SpringSlot, StepParams, V4};
 /// has), as many colours as that takes (a fan's centre of valence 64 apart, a few more
 /// than the largest row of a mesh's lattice).
 pub fn colouring(topo: &ClothTopology) -> Vec<Vec<u32>> {
-    let np = topo.num_particles();
-    let mut colour_of = vec![u32::MAX; np];
-    if topo.mesh.is_none() && topo.n >= 3 {
-        let n = topo.n as usize;
-        for (k, c) in colour_of.iter_mut().enumerate() {
-            *c = ((k % n) % 3 + 3 * ((k / n) % 3)) as u32;
-        }
-    } else {
-        let mut used = Vec::new();
-        for i in 0..np {
-            used.clear();
-            used.extend(topo.slots.row(i).iter().filter_map(|s| s.other()).map(|j| colour_of[j]));
-            colour_of[i] = (0..).find(|c| !used.contains(c)).unwrap_or(0);
-        }
+    if topo.mesh.is_none() {
+        return Colours::grid(topo.n as usize);
     }
-    let count = colour_of.iter().copied().max().map_or(0, |c| c as usize + 1);
-    let mut colours = vec![Vec::new(); count];
-    for (k, &c) in colour_of.iter().enumerate() {
-        colours[c as usize].push(k as u32);
-    }
-    colours.retain(|c| !c.is_empty());
-    colours
+    Colours::greedy(topo.num_particles(), |i| topo.slots.row(i).iter().filter_map(|s| s.other()).collect::<Vec<_>>())
 }
 
 /// Whether `colours` holds every particle of `topo` once and no colour two particles
@@ -135,9 +131,19 @@ fn begin_at(i: usize, p: &StepParams, force: V4, x4: V4, vel: V4) -> (Vec3, Vec3
 /// One colour's sweep: every particle of `colour` (no two of which share a spring) takes
 /// its Newton step on its own block against its neighbours' newest displacements and adds
 /// it to its displacement `aux[2]`. Pinned and grabbed particles stay.
-pub fn vbd_colour(exec: Exec, p: &StepParams, slots: &Rows<SpringSlot>, colour: &[u32], aux: &mut [Vec<V4>]) {
+pub fn vbd_colour(
+    exec: Exec,
+    p: &StepParams,
+    slots: &Rows<SpringSlot>,
+    colliders: (&[Sphere], &[Aabb]),
+    colour: &[u32],
+    aux: &mut [Vec<V4>],
+) {
     let (pred, start, disp) = (&aux[0], &aux[1], &aux[2]);
-    let step = |&i: &u32| block_step(p, slots, i as usize, pred, start, disp);
+    let (spheres, boxes) = colliders;
+    let colliders =
+        (&spheres[..(p.num_spheres as usize).min(spheres.len())], &boxes[..(p.num_boxes as usize).min(boxes.len())]);
+    let step = |&i: &u32| block_step(p, slots, colliders, i as usize, pred, start, disp);
     let steps: Vec<Vec3> = match exec {
         Exec::Serial => colour.iter().map(step).collect(),
         Exec::Parallel => colour.par_iter().with_min_len(1024).map(step).collect(),
@@ -169,8 +175,9 @@ fn per_particle<T: Send>(exec: Exec, count: usize, f: impl Fn(usize) -> T + Sync
 }
 
 /// One VBD substep of `iterations` sweeps over `colours` ([`colouring`]), `pos` and `vel`
-/// in place, with gravity and drag as the only external forces (no wind) and no
-/// colliders: what the solvers run between `forces` and `collide`, for the tests.
+/// in place, with gravity and drag as the only external forces (no wind) and the floor of
+/// `p` the only collider: what the solvers run between `forces` and `collide`, for the
+/// tests.
 pub fn vbd_substep(
     p: &StepParams,
     topo: &ClothTopology,
@@ -186,7 +193,7 @@ pub fn vbd_substep(
     vbd_begin(e, p, &force, pos, vel, &mut aux);
     for _ in 0..iterations {
         for colour in colours {
-            vbd_colour(e, p, &topo.slots, colour, &mut aux);
+            vbd_colour(e, p, &topo.slots, (&[], &[]), colour, &mut aux);
         }
     }
     vbd_finish(e, p, pos, vel, &aux);
@@ -198,8 +205,16 @@ pub fn vbd_substep(
 /// held particle and where the
 /// block cannot be solved (its determinant not positive and finite in f32). Written
 /// scalar by scalar in the order `vbd_colour.wgsl` computes it: the block's six entries
-/// summed slot by slot, solved by cofactors.
-pub fn block_step(p: &StepParams, slots: &Rows<SpringSlot>, i: usize, pred: &[V4], start: &[V4], disp: &[V4]) -> Vec3 {
+/// summed slot by slot, then the contacts ([`contacts`]), solved by cofactors.
+pub fn block_step(
+    p: &StepParams,
+    slots: &Rows<SpringSlot>,
+    colliders: (&[Sphere], &[Aabb]),
+    i: usize,
+    pred: &[V4],
+    start: &[V4],
+    disp: &[V4],
+) -> Vec3 {
     let x4 = start[i];
     if i as i32 == p.grab_index || x4[3] == 0.0 {
         return Vec3::ZERO;
@@ -209,9 +224,8 @@ pub fn block_step(p: &StepParams, slots: &Rows<SpringSlot>, i: usize, pred: &[V4
     let inertia = mass(p, x4[3]) / (h * h);
     let moved = v3(disp[i]);
     let mut f = (v3(pred[i]) * h - moved) * inertia;
-    // The block's upper triangle: h00 h01 h02 / h11 h12 / h22.
-    let (mut d0, mut d1, mut d2) = (inertia, inertia, inertia);
-    let (mut o01, mut o02, mut o12) = (0.0f32, 0.0f32, 0.0f32);
+    // The block's six entries: h00 h11 h22 h01 h02 h12.
+    let mut hess = [inertia, inertia, inertia, 0.0, 0.0, 0.0];
     for s in slots.row(i) {
         let Some(j) = s.other() else { continue };
         if s.ks <= 0.0 {
@@ -239,15 +253,110 @@ pub fn block_step(p: &StepParams, slots: &Rows<SpringSlot>, i: usize, pred: &[V4
             f -= hu * c;
             scale = 1.0 + c;
         }
-        let (sa, sb) = (a * scale, b * scale);
-        d0 += sa + sb * n.x * n.x;
-        d1 += sa + sb * n.y * n.y;
-        d2 += sa + sb * n.z * n.z;
-        o01 += sb * n.x * n.y;
-        o02 += sb * n.x * n.z;
-        o12 += sb * n.y * n.z;
+        add_block(&mut hess, a * scale, b * scale, n);
     }
-    solve_sym3([d0, d1, d2, o01, o02, o12], f)
+    contacts(p, colliders, inertia * CONTACT_STIFFNESS, x0 + moved, moved, &mut f, &mut hess);
+    solve_sym3(hess, f)
+}
+
+/// Adds `a I + b n̂n̂ᵀ` to the block `[h00, h11, h22, h01, h02, h12]`.
+#[inline(always)]
+fn add_block(h: &mut [f32; 6], a: f32, b: f32, n: Vec3) {
+    h[0] += a + b * n.x * n.x;
+    h[1] += a + b * n.y * n.y;
+    h[2] += a + b * n.z * n.z;
+    h[3] += b * n.x * n.y;
+    h[4] += b * n.x * n.z;
+    h[5] += b * n.y * n.z;
+}
+
+/// The contacts of a vertex at `x` that moved `d` this substep, as penalty energies in its
+/// block (the paper's §3.5): within the collision margin plus [`CONTACT_REACH`] of it of
+/// the floor, a sphere or a box (the box's nearest face), penetration `δ` along the
+/// surface's normal n̂, the energy `½ k δ²` (`k` = `stiffness`) adds `k δ n̂` to the force
+/// and `k n̂n̂ᵀ` to the block. Friction is the paper's (IPC's smoothed Coulomb friction,
+/// μ = `friction`, on the tangential displacement `u` over the substep of a still
+/// collider): `−μ λ f₁(|u|)/|u| u` with `f₁(y)/y = 2/ε − y/ε²` below
+/// `ε = FRICTION_EPS_V · h` and `1/y` above, its Hessian `μ λ f₁(|u|)/|u| (I − n̂n̂ᵀ)`.
+/// The normal force λ is lagged as the paper lags it, but to the block's own Newton step
+/// rather than the last iteration: `λ = k max(0, δ − n̂·f / n̂ᵀHn̂)` with f and H after the
+/// penalties, the contact's force once this step is taken. With `λ = k δ` at the
+/// iterate, the first sweep of a substep saw the prediction's whole depth (λ a thousand
+/// times the weight), cut the sliding nearly to nothing, and 8 sweeps did not win it
+/// back: a cloth sliding on the floor slowed 10 % faster than Coulomb's μg.
+#[inline(always)]
+fn contacts(
+    p: &StepParams,
+    colliders: (&[Sphere], &[Aabb]),
+    stiffness: f32,
+    x: Vec3,
+    d: Vec3,
+    f: &mut Vec3,
+    h: &mut [f32; 6],
+) {
+    each_contact(p, colliders, x, |pen, n| {
+        *f += n * (stiffness * pen);
+        add_block(h, 0.0, stiffness, n);
+    });
+    if p.friction <= 0.0 {
+        return;
+    }
+    let (fa, ha) = (*f, *h);
+    let eps = FRICTION_EPS_V * p.dt;
+    each_contact(p, colliders, x, |pen, n| {
+        // n̂ᵀHn̂ of the block so far (positive: the inertia alone is).
+        let hn = n.x * (ha[0] * n.x + ha[3] * n.y + ha[4] * n.z)
+            + n.y * (ha[3] * n.x + ha[1] * n.y + ha[5] * n.z)
+            + n.z * (ha[4] * n.x + ha[5] * n.y + ha[2] * n.z);
+        let lambda = stiffness * (pen - n.dot(fa) / hn).max(0.0);
+        let u = d - n * n.dot(d);
+        let y = u.dot(u).sqrt();
+        let c = if y < eps { 2.0 / eps - y / (eps * eps) } else { 1.0 / y };
+        let w = p.friction * lambda * c;
+        *f -= u * w;
+        add_block(h, w, -w, n);
+    });
+}
+
+/// Calls `touch(δ, n̂)` for every contact of a vertex at `x` (see [`contacts`]): the floor,
+/// the spheres, the boxes, in that order.
+#[inline(always)]
+fn each_contact(p: &StepParams, colliders: (&[Sphere], &[Aabb]), x: Vec3, mut touch: impl FnMut(f32, Vec3)) {
+    let reach = p.margin + p.margin * CONTACT_REACH;
+    let floor = p.floor_y + reach;
+    if x.y < floor {
+        touch(floor - x.y, Vec3::Y);
+    }
+    for s in colliders.0 {
+        let c = Vec3::from(s.center);
+        let r = s.radius + reach;
+        let dc = x - c;
+        let dist2 = dc.dot(dc);
+        if dist2 < r * r {
+            let dist = dist2.sqrt();
+            let n = if dist > 1e-12 { dc * (1.0 / dist) } else { Vec3::Y };
+            touch(r - dist, n);
+        }
+    }
+    for b in colliders.1 {
+        let lo = v3(b.min) - Vec3::splat(reach);
+        let hi = v3(b.max) + Vec3::splat(reach);
+        if x.cmpgt(lo).all() && x.cmplt(hi).all() {
+            // The nearest face, as `collide` leaves through it.
+            let (below, above) = (x - lo, hi - x);
+            let mut best = below.x;
+            let mut n = -Vec3::X;
+            for (pen, nn) in
+                [(above.x, Vec3::X), (below.y, -Vec3::Y), (above.y, Vec3::Y), (below.z, -Vec3::Z), (above.z, Vec3::Z)]
+            {
+                if pen < best {
+                    best = pen;
+                    n = nn;
+                }
+            }
+            touch(best, n);
+        }
+    }
 }
 
 /// `H⁻¹ f` for the symmetric `H` given as `[h00, h11, h22, h01, h02, h12]`, by cofactors;
