@@ -7,8 +7,9 @@
 //! one Newton step of it), relative to its norm at the inertial prediction y, and the
 //! time of the substep on the CPU (one thread).
 //!
-//! `cargo run --release -p clothlab-core --example vbd_convergence [n] [units] [substeps]`
-//! (n = 32, units `physical` or `fraction`, the substep 1/60 s over `substeps`, 16).
+//! `cargo run --release -p clothlab-core --example vbd_convergence [n] [units] [substeps]
+//! [rho]` (n = 32, units `physical` or `fraction`, the substep 1/60 s over `substeps`, 16;
+//! VBD's Chebyshev ρ, 0).
 
 use std::time::Instant;
 
@@ -34,9 +35,12 @@ fn main() {
         ..SimParams::default()
     };
     // A cloth in motion: half a second of hanging, by VBD with 32 sweeps.
-    let mut warm =
-        CpuSolver::new(Exec::Parallel, scene.clone(), SimParams { integrator: Integrator::Vbd, vbd_iterations: 32, ..base.clone() })
-            .unwrap();
+    let mut warm = CpuSolver::new(
+        Exec::Parallel,
+        scene.clone(),
+        SimParams { integrator: Integrator::Vbd, vbd_iterations: 32, ..base.clone() },
+    )
+    .unwrap();
     for _ in 0..30 {
         warm.step_frame().unwrap();
     }
@@ -44,6 +48,8 @@ fn main() {
     // The measured substep: `frame_dt / substeps` (third argument, default 16).
     let substeps: u32 = std::env::args().nth(3).and_then(|s| s.parse().ok()).unwrap_or(16);
     let h = base.frame_dt / substeps as f32;
+    // VBD's Chebyshev ρ (fourth argument, default 0: off).
+    let rho: f32 = std::env::args().nth(4).and_then(|s| s.parse().ok()).unwrap_or(0.0);
     // One substep of h per "frame".
     let one = SimParams { frame_dt: h, substeps: 1, ..base.clone() };
     let topo = warm.topology().clone();
@@ -81,13 +87,20 @@ fn main() {
         (sum / count.max(1) as f64).sqrt()
     };
     let at_y = gradient(&y);
-    println!("n = {n}, {units:?} stiffness, h = {:.3e} s: ‖∇G‖ at the prediction {at_y:.3e} N", h);
+    println!("n = {n}, {units:?} stiffness, h = {h:.3e} s, VBD's ρ {rho}: ‖∇G‖ at the prediction {at_y:.3e} N");
     println!("| iterations | VBD ‖∇G‖/‖∇G(y)‖ | ms | XPBD | ms | implicit (CG) | ms |");
     println!("|---:|---:|---:|---:|---:|---:|---:|");
     for k in [1u32, 2, 4, 8, 16, 32, 64] {
         let mut row = format!("| {k} |");
         for integrator in [Integrator::Vbd, Integrator::Xpbd, Integrator::Implicit] {
-            let p = SimParams { integrator, vbd_iterations: k, xpbd_iterations: k, cg_iterations: k, ..one.clone() };
+            let p = SimParams {
+                integrator,
+                vbd_iterations: k,
+                vbd_rho: rho,
+                xpbd_iterations: k,
+                cg_iterations: k,
+                ..one.clone()
+            };
             let mut s = CpuSolver::new(Exec::Serial, scene.clone(), p).unwrap();
             let mut best = f64::MAX;
             let mut x = Vec::new();

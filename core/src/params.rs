@@ -227,6 +227,11 @@ pub struct SimParams {
     pub xpbd_iterations: u32,
     /// `integrator = vbd`: sweeps over the vertex colours per substep, 1 ..= 64. Default 8.
     pub vbd_iterations: u32,
+    /// `integrator = vbd`: the spectral radius estimate ρ of the paper's Chebyshev
+    /// acceleration, in [0, 1): after sweep k every displacement is over-relaxed,
+    /// `D ← ω_k (D − D⁽ᵏ⁻²⁾) + D⁽ᵏ⁻²⁾` with `ω₁ = 1`, `ω₂ = 2/(2 − ρ²)`,
+    /// `ω_k = 4/(4 − ρ² ω_{k−1})`. 0 switches it off. Default 0.
+    pub vbd_rho: f32,
     /// Self-collision: particles that are not neighbours in the grid keep
     /// `self_thickness` apart (found through a spatial hash rebuilt every substep; see
     /// `core::cpu::self_collide`). Default off.
@@ -264,6 +269,7 @@ impl Default for SimParams {
             cg_iterations: 16,
             xpbd_iterations: 1,
             vbd_iterations: 8,
+            vbd_rho: 0.0,
             self_collision: false,
             self_thickness: 0.02,
         }
@@ -563,6 +569,9 @@ impl SimParams {
         }
         if self.vbd_iterations == 0 || self.vbd_iterations > 64 {
             return Err(ParamError::new("vbd_iterations", self.vbd_iterations, "must be in 1 ..= 64"));
+        }
+        if !(self.vbd_rho.is_finite() && (0.0..1.0).contains(&self.vbd_rho)) {
+            return Err(ParamError::new("vbd_rho", self.vbd_rho, "must be in 0 ..< 1 (0: no acceleration)"));
         }
         finite_in("self_thickness", self.self_thickness, 1e-3, 0.5)?;
         if self.cg_iterations == 0 || self.cg_iterations > MAX_CG_ITERATIONS {

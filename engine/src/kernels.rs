@@ -778,6 +778,11 @@ fn vbd_colour(a: &TwinArgs, b: &mut HostBuffers) {
     cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, (a.spheres, a.boxes), list, &mut b.aux);
 }
 
+/// The Chebyshev step after a sweep, ω the bits of the range's `first`.
+fn vbd_accelerate(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::vbd::vbd_accelerate(a.exec, a.p, f32::from_bits(a.range.0), &mut b.aux);
+}
+
 fn vbd_finish(a: &TwinArgs, b: &mut HostBuffers) {
     cpu::vbd::vbd_finish(a.exec, a.p, &mut b.pos, &mut b.vel, &b.aux);
 }
@@ -1280,6 +1285,14 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
         &[Aux2],
     )
 };
+/// VBD: the Chebyshev acceleration after a sweep (`vbd_rho` > 0), ω in the immediates as
+/// the bits of the range's `first`, `count` the particles (core::cpu::vbd::vbd_accelerate).
+pub static VBD_ACCELERATE: KernelDef = KernelDef {
+    label: timing::VBD,
+    variants: PLAIN,
+    immediates: Immediates::Range,
+    ..def("vbd_accelerate", vbd_accelerate, Count::Range, &[Params, Aux0, Aux1, Aux2, Aux3, Aux4], &[Aux2, Aux3, Aux4])
+};
 /// VBD: x = x⁰ + D, v = v' + (D − h v')/h, with pins, grab and floor
 /// (core::cpu::vbd::vbd_finish).
 pub static VBD_FINISH: KernelDef = KernelDef {
@@ -1415,7 +1428,7 @@ pub static SELF_COLLISION: [&KernelDef; 5] =
     [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 56] = [
+pub static ALL: [&KernelDef; 57] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -1457,6 +1470,7 @@ pub static ALL: [&KernelDef; 56] = [
     &XPBD_MESH,
     &VBD_BEGIN,
     &VBD_COLOUR,
+    &VBD_ACCELERATE,
     &VBD_FINISH,
     &CG_BEGIN,
     &CG_MATVEC,

@@ -90,6 +90,8 @@ pub struct Integration {
     pub xpbd_iterations: u32,
     /// Sweeps over the vertex colours (`vbd` only).
     pub vbd_iterations: u32,
+    /// The Chebyshev ρ of `vbd` as f32 bits (0: no acceleration).
+    pub vbd_rho_bits: u32,
     /// Self-collision after the strain limit (core::cpu::self_collide).
     pub self_collision: bool,
 }
@@ -101,6 +103,7 @@ impl Integration {
         cg_iterations: 0,
         xpbd_iterations: 0,
         vbd_iterations: 0,
+        vbd_rho_bits: 0,
         self_collision: false,
     };
 
@@ -111,6 +114,7 @@ impl Integration {
             cg_iterations: params.cg_iterations,
             xpbd_iterations: params.xpbd_iterations,
             vbd_iterations: params.vbd_iterations,
+            vbd_rho_bits: params.vbd_rho.to_bits(),
             self_collision: params.self_collision,
         }
     }
@@ -174,7 +178,13 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
         // colour of the cloth's colouring (core::cpu::vbd).
         Integrator::Vbd => {
             let mut v: Vec<&'static KernelDef> = vec![&k::FORCES, &k::VBD_BEGIN];
-            v.extend((0..how.vbd_iterations).map(|_| &k::VBD_COLOUR));
+            let accelerate = f32::from_bits(how.vbd_rho_bits) > 0.0;
+            for _ in 0..how.vbd_iterations {
+                v.push(&k::VBD_COLOUR);
+                if accelerate {
+                    v.push(&k::VBD_ACCELERATE);
+                }
+            }
             then(v, &[&k::VBD_FINISH, &k::COLLIDE])
         }
     }
@@ -207,11 +217,18 @@ pub fn recipe_for(
     how: Integration,
     topo: &clothlab_core::ClothTopology,
 ) -> Vec<Command> {
-    // VBD's sweeps: each `vbd_colour` a range per colour of the cloth's colouring.
+    // VBD's sweeps: each `vbd_colour` a range per colour of the cloth's colouring, each
+    // `vbd_accelerate` one over every particle with its sweep's ω.
+    let rho = f32::from_bits(how.vbd_rho_bits);
+    let mut sweep = 0;
     let commands: Vec<Command> = recipe(variant, strain_passes, how)
         .into_iter()
         .flat_map(|c| match c {
-            Command::Dispatch(kr) if kr.def == &k::VBD_COLOUR => vbd_sweep(kr, topo),
+            Command::Dispatch(kr) if kr.def == &k::VBD_COLOUR => {
+                sweep += 1;
+                vbd_sweep(kr, topo)
+            }
+            Command::Dispatch(kr) if kr.def == &k::VBD_ACCELERATE => vec![vbd_acceleration(kr, topo, sweep, rho)],
             c => vec![c],
         })
         .collect();
@@ -243,6 +260,13 @@ pub fn recipe_for(
 /// colour's range of the colouring's list, in colour order.
 pub fn vbd_sweep(kernel: KernelRef, topo: &clothlab_core::ClothTopology) -> Vec<Command> {
     topo.colours.ranges().map(|(first, count)| Command::Range { kernel, first, count }).collect()
+}
+
+/// VBD's Chebyshev step after sweep `k` (from 1) with ρ `rho`: `kernel`
+/// (`vbd_accelerate`) over every particle, ω's bits as the range's `first`.
+pub fn vbd_acceleration(kernel: KernelRef, topo: &clothlab_core::ClothTopology, k: u32, rho: f32) -> Command {
+    let omega = cpu::vbd::chebyshev_omega(k, rho);
+    Command::Range { kernel, first: omega.to_bits(), count: topo.num_particles() as u32 }
 }
 
 /// The commands of one substep for `variant` with `strain_passes` strain passes,

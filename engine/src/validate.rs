@@ -153,6 +153,10 @@ pub fn validate_kernels_with(
         let commands = match (&topo.mesh, k.def.immediates) {
             // VBD's colour kernel: one sweep, every colour's range (grids and meshes).
             (_, kernels::Immediates::Range) if k.def == &kernels::VBD_COLOUR => crate::recipe::vbd_sweep(k, topo),
+            // The acceleration's first sweep (ω = 1: the set-up) and a second (ω > 1).
+            (_, kernels::Immediates::Range) if k.def == &kernels::VBD_ACCELERATE => {
+                (1..=2).map(|sweep| crate::recipe::vbd_acceleration(k, topo, sweep, 0.9)).collect()
+            }
             // A range kernel (a mesh's XPBD pass): every range of an iteration, in order.
             (Some(mesh), kernels::Immediates::Range) => {
                 let mut v = vec![

@@ -70,7 +70,7 @@ impl Oscillator {
         }
         let bufs = start_buffers(Exec::Serial, &p, &topo, &state);
         let how =
-            Integration { integrator, cg_iterations: 16, xpbd_iterations: 1, vbd_iterations: 8, self_collision: false };
+            Integration { integrator, cg_iterations: 16, xpbd_iterations: 1, vbd_iterations: 8, ..Integration::VERLET };
         let commands = recipe_for(&Variant::OPTIMIZED, 0, how, &topo);
         let engine = CpuEngine::new(Exec::Serial, scene, topo);
         Self { engine, bufs, p, commands, k }

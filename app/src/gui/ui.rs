@@ -566,6 +566,7 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     }
     if p.integrator == clothlab_core::Integrator::Vbd {
         units_changed |= ui.add(egui::Slider::new(&mut p.vbd_iterations, 1..=64).text("VBD iterations")).changed();
+        units_changed |= ui.add(egui::Slider::new(&mut p.vbd_rho, 0.0..=0.99).text("VBD Chebyshev ρ")).changed();
     }
     let physical = p.stiffness_units == StiffnessUnits::Physical;
     let mut changed = units_changed;

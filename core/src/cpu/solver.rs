@@ -383,9 +383,13 @@ impl CpuSolver {
                     super::vbd::vbd_begin(e, &p, force, pos, vel, aux)
                 });
                 Self::timed(timer, on, crate::timing::VBD, || {
-                    for _ in 0..params.vbd_iterations {
+                    for it in 1..=params.vbd_iterations {
                         for k in 0..topo.colours.len() {
                             super::vbd::vbd_colour(e, &p, &topo.slots, (spheres, boxes), topo.colours.colour(k), aux);
+                        }
+                        if params.vbd_rho > 0.0 {
+                            let omega = super::vbd::chebyshev_omega(it, params.vbd_rho);
+                            super::vbd::vbd_accelerate(e, &p, omega, aux);
                         }
                     }
                 });

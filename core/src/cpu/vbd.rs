@@ -167,6 +167,42 @@ pub fn vbd_finish(exec: Exec, p: &StepParams, pos: &mut [V4], vel: &mut [V4], au
     }
 }
 
+/// The paper's Chebyshev weight after sweep `k` (from 1) for the spectral radius `rho`:
+/// `ω₁ = 1`, `ω₂ = 2/(2 − ρ²)`, `ω_k = 4/(4 − ρ² ω_{k−1})`.
+pub fn chebyshev_omega(k: u32, rho: f32) -> f32 {
+    let mut omega = 1.0f32;
+    for j in 2..=k {
+        omega = if j == 2 { 2.0 / (2.0 - rho * rho) } else { 4.0 / (4.0 - rho * rho * omega) };
+    }
+    omega
+}
+
+/// The paper's Chebyshev acceleration after a sweep with weight `omega`
+/// ([`chebyshev_omega`]), per free particle: `D ← ω (D − D⁽ᵏ⁻²⁾) + D⁽ᵏ⁻²⁾`, the sweeps'
+/// last two results kept in `aux[3]` (the last) and `aux[4]` (the one before). After the
+/// first sweep (`omega` = 1) D is kept as it is and the two are set up: the one before is
+/// the prediction's `h v'`. Pinned and grabbed particles keep their D.
+pub fn vbd_accelerate(exec: Exec, p: &StepParams, omega: f32, aux: &mut [Vec<V4>]) {
+    let out = per_particle(exec, aux[2].len(), |i| {
+        let d = v3(aux[2][i]);
+        let x4 = aux[1][i];
+        if i as i32 == p.grab_index || x4[3] == 0.0 {
+            return (d, d, d);
+        }
+        if omega == 1.0 {
+            return (d, d, v3(aux[0][i]) * p.dt);
+        }
+        let (last, before) = (v3(aux[3][i]), v3(aux[4][i]));
+        let acc = (d - before) * omega + before;
+        (acc, acc, last)
+    });
+    for (i, (d, last, before)) in out.into_iter().enumerate() {
+        aux[2][i] = v4(d, 0.0);
+        aux[3][i] = v4(last, 0.0);
+        aux[4][i] = v4(before, 0.0);
+    }
+}
+
 fn per_particle<T: Send>(exec: Exec, count: usize, f: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
     match exec {
         Exec::Serial => (0..count).map(f).collect(),
