@@ -241,7 +241,7 @@ pub fn vbd_substep(
 /// held particle and where the
 /// block cannot be solved (its determinant not positive and finite in f32). Written
 /// scalar by scalar in the order `vbd_colour.wgsl` computes it: the block's six entries
-/// summed slot by slot, then the contacts ([`contacts`]), solved by cofactors.
+/// summed slot by slot, then the contacts (penalties and friction, `contacts`), solved by cofactors.
 pub fn block_step(
     p: &StepParams,
     slots: &Rows<SpringSlot>,
