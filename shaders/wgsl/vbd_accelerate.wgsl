@@ -1,16 +1,10 @@
-//! include: state, aux
+//! include: state, aux, range
 // vbd_accelerate — the paper's Chebyshev acceleration after a VBD sweep
 // (core::cpu::vbd::vbd_accelerate): D ← ω (D − D⁽ᵏ⁻²⁾) + D⁽ᵏ⁻²⁾ per free particle, the sweeps'
 // last two results in aux3 (the last) and aux4 (the one before); after the first sweep
 // (ω = 1) D is kept and the two set up, the one before being the prediction's h v'
 // (aux0). ω comes in the immediates as the bits of `first` (one dispatch per sweep, over
 // `count` = every particle).
-
-struct PassRange {
-    first: u32,
-    count: u32,
-}
-var<immediate> pass_range: PassRange;
 
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

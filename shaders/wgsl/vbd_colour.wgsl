@@ -1,4 +1,4 @@
-//! include: state, table, aux, adjacency, colliders
+//! include: state, table, aux, adjacency, colliders, range
 // vbd_colour — one colour of Vertex Block Descent's sweep (core::cpu::vbd::vbd_colour and
 // block_step): particles first … first + count − 1 of the colouring's list (binding 31,
 // clothlab_core::tables::Colours; no two of a colour share a spring, so each reads only
@@ -12,12 +12,6 @@
 // why), and pos is written once, by vbd_finish.
 
 @group(0) @binding(31) var<storage, read> colours: array<u32>;
-
-struct PassRange {
-    first: u32,
-    count: u32,
-}
-var<immediate> pass_range: PassRange;
 
 // core::cpu::vbd's contact constants.
 const CONTACT_STIFFNESS: f32 = 1000.0;

@@ -1,4 +1,4 @@
-//! include: state, aux, xpbd
+//! include: state, aux, xpbd, range
 // xpbd_mesh — one XPBD pass of a mesh (core::cpu::integrators::xpbd_mesh_pass): springs
 // first … first + count − 1 of the spring list, one colour of its greedy colouring (the
 // list is sorted by pass when the mesh is built: clothlab_core::grid::MeshTables), so no
@@ -9,12 +9,6 @@
 // The spring list in two halves, as springs_scatter reads it.
 @group(0) @binding(7) var<storage, read> springs: array<Spring>;
 @group(0) @binding(15) var<storage, read> springs_b: array<Spring>;
-
-struct PassRange {
-    first: u32,
-    count: u32,
-}
-var<immediate> pass_range: PassRange;
 
 fn spring_at(k: u32) -> Spring {
     let half = arrayLength(&springs);
