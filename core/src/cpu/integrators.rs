@@ -71,7 +71,7 @@ pub const RK4: [RkStage; 4] = [
 
 /// `f(i)` for every particle, in parallel or not (each result depends on `i` only, so
 /// both give the same bits).
-fn per_particle<T: Send>(exec: Exec, count: usize, f: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
+pub(crate) fn per_particle<T: Send>(exec: Exec, count: usize, f: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
     match exec {
         Exec::Serial => (0..count).map(f).collect(),
         Exec::Parallel => (0..count).into_par_iter().with_min_len(1024).map(f).collect(),

@@ -36,7 +36,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::integrators::finish_at;
+use super::integrators::{finish_at, per_particle};
 use super::{Exec, dt_over_mass, mass, v3, v4};
 use crate::grid::{ClothTopology, Colours, Rows, SpringSlot, StepParams, V4};
 use crate::scene::{Aabb, Sphere};
@@ -200,13 +200,6 @@ pub fn vbd_accelerate(exec: Exec, p: &StepParams, omega: f32, aux: &mut [Vec<V4>
         aux[2][i] = v4(d, 0.0);
         aux[3][i] = v4(last, 0.0);
         aux[4][i] = v4(before, 0.0);
-    }
-}
-
-fn per_particle<T: Send>(exec: Exec, count: usize, f: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
-    match exec {
-        Exec::Serial => (0..count).map(f).collect(),
-        Exec::Parallel => (0..count).into_par_iter().with_min_len(1024).map(f).collect(),
     }
 }
 
