@@ -50,7 +50,11 @@ fn expected_layouts() -> Vec<Layout> {
                 self_thickness,
                 spacing,
                 inv_cell,
-                num_particles
+                num_particles,
+                strain_passes,
+                tile_substeps,
+                _pad0,
+                _pad1
             ]
         ),
         layout!(SpringSlot, "SpringSlot", [neighbor, rest, ks, kd]),

@@ -80,6 +80,7 @@ impl VulkanEngine {
             subgroup_arithmetic: dev.subgroup_arithmetic,
             subgroup_shuffle: dev.subgroup_shuffle,
             table_image: true,
+            workgroup_memory: dev.max_shared_memory,
         };
         let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
         let staging = Buffer::new(&dev, "staging", FRAME_STAGING, usage, MemoryLocation::CpuToGpu).map_err(backend)?;

@@ -83,6 +83,7 @@ impl WgpuEngine {
             subgroup_arithmetic: ctx.subgroups,
             subgroup_shuffle: ctx.subgroups,
             table_image: true,
+            workgroup_memory: limits.max_compute_workgroup_storage_size,
         };
         let timestamps = ctx.timestamps.then(|| Timestamps {
             set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {

@@ -617,6 +617,16 @@ pub struct StepParams {
     pub inv_cell: f32,
     /// Number of particles (`n²` on a grid).
     pub num_particles: u32,
+    /// Strain-limit passes per substep (`SimParams::strain_iterations`): what the tiled
+    /// substep (`fusion=tile`) runs inside its one dispatch, and its halo's depth.
+    pub strain_passes: u32,
+    /// Substeps the tiled substep advances per dispatch (temporal blocking); 1 otherwise.
+    pub tile_substeps: u32,
+    /// Padding to 128 bytes (a uniform block's size is a multiple of 16; immediates
+    /// must match the shader's struct).
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
 }
 
 impl StepParams {
@@ -650,6 +660,10 @@ impl StepParams {
             spacing: scene.spacing(),
             inv_cell: if params.self_collision { 1.0 / params.self_thickness } else { 0.0 },
             num_particles: scene.num_particles() as u32,
+            strain_passes: params.strain_iterations,
+            tile_substeps: 1,
+            _pad0: 0,
+            _pad1: 0,
         }
     }
 }

@@ -43,6 +43,9 @@ pub const INTEGRATE_COLLIDE: &str = "integrate+collide";
 pub const FORCES_INTEGRATE_COLLIDE: &str = "forces+integrate+collide";
 /// Label of the CPU solvers' fused sweep: every kernel of a Verlet substep, row by row.
 pub const FUSED_STEP: &str = "fused substep";
+/// Label of the tiled substep (`fusion=tile`): a Verlet substep in one dispatch over
+/// workgroup-memory tiles, and its velocities put into place after it.
+pub const SUBSTEP_TILE: &str = "substep tile";
 /// Label of the whole-substep row.
 pub const SUBSTEP: &str = "substep";
 /// Self-collision's hash build (count, prefix sum, scatter; without the count where it
@@ -53,7 +56,7 @@ pub const STRAIN_LIMIT_COUNT: &str = "strain_limit+hash_count";
 /// Self-collision's response.
 pub const SELF_COLLIDE: &str = "self_collide";
 /// Every label a kernel (a registry row or a CPU sweep) is timed under, in step order.
-pub const KERNEL_LABELS: [&str; 19] = [
+pub const KERNEL_LABELS: [&str; 20] = [
     FORCES,
     SPRINGS,
     FORCES_SPRINGS,
@@ -73,6 +76,7 @@ pub const KERNEL_LABELS: [&str; 19] = [
     VERTEX_NORMALS,
     STATS,
     FUSED_STEP,
+    SUBSTEP_TILE,
 ];
 /// Label of the whole-frame row (all substeps of a frame).
 pub const FRAME: &str = "frame";

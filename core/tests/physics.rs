@@ -29,6 +29,10 @@ fn bare_params(n: u32, dt: f32, mass: f32) -> StepParams {
         spacing: 1.0,
         inv_cell: 0.0,
         num_particles: n * n,
+        strain_passes: 1,
+        tile_substeps: 1,
+        _pad0: 0,
+        _pad1: 0,
     }
 }
 

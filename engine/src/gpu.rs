@@ -44,6 +44,8 @@ pub struct EngineInfo {
     pub subgroup_shuffle: bool,
     /// The spring table can be read from a sampled image ([`Engine::set_table_image`]).
     pub table_image: bool,
+    /// Workgroup (shared) memory a compute shader may declare, bytes (`fusion=tile`).
+    pub workgroup_memory: u32,
 }
 
 /// One dispatch to record.

@@ -632,6 +632,34 @@ fn forces_integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
     b.force = springs;
 }
 
+/// The tiled substep (`fusion=tile`): what forces_springs_wind, integrate_collide and
+/// `strain_passes` × (strain_count, strain_limit) leave, `tile_substeps` times — the new
+/// positions in the other buffer of the pair, the new velocities in aux0; the positions,
+/// velocities and forces it read untouched (it keeps the forces and counts in
+/// workgroup memory).
+fn substep_tile(a: &TwinArgs, b: &mut HostBuffers) {
+    let (pos, vel, force, aux0) = (b.pos.clone(), b.vel.clone(), b.force.clone(), b.aux[0].clone());
+    for _ in 0..a.p.tile_substeps.max(1) {
+        forces_springs_wind(a, b);
+        integrate_collide(a, b);
+        for _ in 0..a.p.strain_passes {
+            strain_count(a, b);
+            strain_limit(a, b);
+            std::mem::swap(&mut b.pos, &mut b.pos_out);
+        }
+    }
+    b.aux[0] = b.vel.iter().map(|v| [v[0], v[1], v[2], 0.0]).collect();
+    b.pos_out = std::mem::replace(&mut b.pos, pos);
+    b.vel = vel;
+    b.force = force;
+    let _ = aux0;
+}
+
+/// The tiled substep's velocities (aux0) into place.
+fn tile_vel(_: &TwinArgs, b: &mut HostBuffers) {
+    b.vel = b.aux[0].clone();
+}
+
 /// The counts as the kernel leaves them in aux0: `(count, 0, 0, 0)` per particle.
 fn strain_count(a: &TwinArgs, b: &mut HostBuffers) {
     let mut counts = vec![0.0; b.pos.len()];
@@ -1090,6 +1118,36 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
         &[PosOut, Vel, Aux2, Aux3],
     )
 };
+/// The Verlet substep of a regular grid in one dispatch over workgroup-memory tiles
+/// (`fusion=tile`): a workgroup per tile of `32 − 2·halo` points a side, the halo 2 + 2
+/// per strain pass deep (times `tile_substeps`). Dispatched as a range of
+/// [`crate::recipe::tile_command`] (its count of tiles depends on the pass count).
+pub static SUBSTEP_TILE: KernelDef = KernelDef {
+    check: WIND_GATHER,
+    pure: &[PosOut, Aux0],
+    label: timing::SUBSTEP_TILE,
+    variants: IMM_CU,
+    cloths: Cloths::Grid,
+    ..def(
+        "substep_tile",
+        substep_tile,
+        Count::Particles,
+        &[Params, Pos, Vel, Interior, Spheres, Boxes, Tethers],
+        &[PosOut, Aux0],
+    )
+};
+/// The tiled substep's new velocities (aux0) into place, after the swap.
+pub static TILE_VEL: KernelDef = KernelDef {
+    pure: &[Vel],
+    label: timing::SUBSTEP_TILE,
+    ..def("tile_vel", tile_vel, Count::Particles, &[Params, Aux0], &[Vel])
+};
+/// Workgroup memory the tiled substep needs (its 32 × 32 region of positions,
+/// velocities and strain counts).
+pub const TILE_WORKGROUP_BYTES: u32 = 32 * 32 * 32;
+/// The side of the tiled substep's region (tile and halo), points.
+pub const TILE_REGION: u32 = 32;
+
 /// Face normals per quad of the grid.
 /// A mesh's, per two triangles of the list.
 pub static TRI_NORMALS: KernelDef =
@@ -1428,7 +1486,7 @@ pub static SELF_COLLISION: [&KernelDef; 5] =
     [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 57] = [
+pub static ALL: [&KernelDef; 59] = [
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,
@@ -1486,6 +1544,8 @@ pub static ALL: [&KernelDef; 57] = [
     &HASH_SCATTER,
     &SELF_COLLIDE,
     &SELF_COLLIDE_MESH,
+    &SUBSTEP_TILE,
+    &TILE_VEL,
 ];
 
 #[cfg(test)]

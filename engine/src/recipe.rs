@@ -124,13 +124,13 @@ impl Integration {
 /// evaluations in the variant's form (fused with `fusion=clothlab`, the springs scattered
 /// with `springs=scatter`; the thesis's fusion is Verlet's own) and the integrator's
 /// kernels (core::cpu::integrators).
-fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
+fn integration(variant: &Variant, how: Integration, strain_passes: u32) -> Vec<&'static KernelDef> {
     let springs = match variant.springs {
         Accumulate::Scatter => &k::SPRINGS_SCATTER,
         Accumulate::Gather => &k::SPRINGS,
     };
     let eval: Vec<&'static KernelDef> = match variant.fusion {
-        Fusion::Clothlab => vec![&k::FORCES_SPRINGS],
+        Fusion::Clothlab | Fusion::Tile => vec![&k::FORCES_SPRINGS],
         _ => vec![&k::FORCES, springs],
     };
     let stages = |kernels: &[&'static KernelDef]| -> Vec<&'static KernelDef> {
@@ -152,10 +152,12 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
         Integrator::Verlet | Integrator::SymplecticEuler => match variant.fusion {
             Fusion::None => vec![&k::FORCES, springs, &k::INTEGRATE, &k::COLLIDE],
             Fusion::Thesis => vec![springs, &k::FORCES_INTEGRATE_COLLIDE],
-            Fusion::Clothlab if normals_at_frame_end(variant, how) => {
+            // The tiles (the strain passes inside them) where `tiled` says so.
+            Fusion::Tile if tiled(variant, how, strain_passes) => vec![&k::SUBSTEP_TILE, &k::TILE_VEL],
+            Fusion::Clothlab | Fusion::Tile if normals_at_frame_end(variant, how) => {
                 vec![&k::FORCES_SPRINGS_WIND, &k::INTEGRATE_COLLIDE]
             }
-            Fusion::Clothlab => vec![&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE],
+            Fusion::Clothlab | Fusion::Tile => vec![&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE],
         },
         Integrator::Euler => then(eval, &[&k::EULER, &k::COLLIDE]),
         Integrator::Rk2 => stages(&[&k::RK2_1, &k::RK2_2]),
@@ -196,8 +198,38 @@ fn integration(variant: &Variant, how: Integration) -> Vec<&'static KernelDef> {
 /// wind that the normals kernels leave in the force buffer every substep).
 fn normals_at_frame_end(variant: &Variant, how: Integration) -> bool {
     variant.normals == Normals::Frame
-        && variant.fusion == Fusion::Clothlab
+        && matches!(variant.fusion, Fusion::Clothlab | Fusion::Tile)
         && matches!(how.integrator, Integrator::Verlet | Integrator::SymplecticEuler)
+}
+
+/// The most strain passes the tiled substep takes: each deepens its halo by 2, and at 4
+/// passes a 32 × 32 region's tile is 12 × 12 (14 % of the points it loads and computes);
+/// with more, `fusion=tile` runs clothlab's fusion.
+pub const TILE_MAX_PASSES: u32 = 4;
+
+/// Whether `variant` integrated by `how` with `strain_passes` runs the tiled substep
+/// (`fusion=tile`: Verlet or symplectic Euler, at most [`TILE_MAX_PASSES`]; the variant's
+/// check has made sure of the grid, the gathers, the wind and the adapter).
+pub fn tiled(variant: &Variant, how: Integration, strain_passes: u32) -> bool {
+    variant.fusion == Fusion::Tile
+        && normals_at_frame_end(variant, how)
+        && strain_passes <= TILE_MAX_PASSES
+}
+
+/// The side of the tiled substep's tiles with `strain_passes` passes and `substeps`
+/// substeps per dispatch: the region less the halo on both sides (2 + 2 per pass, per
+/// substep); 0 where no tile is left.
+pub fn tile_side(strain_passes: u32, substeps: u32) -> u32 {
+    let halo = (2 + 2 * strain_passes) * substeps.max(1);
+    k::TILE_REGION.saturating_sub(2 * halo)
+}
+
+/// The dispatch of `kernel` (`substep_tile`) over `topo`'s tiles: a workgroup per tile
+/// (a range of that many workgroups' invocations; the kernel reads no range).
+pub fn tile_command(kernel: KernelRef, topo: &clothlab_core::ClothTopology, strain_passes: u32, substeps: u32) -> Command {
+    let side = tile_side(strain_passes, substeps).max(1);
+    let per_row = topo.n.div_ceil(side);
+    Command::Range { kernel, first: 0, count: per_row * per_row * clothlab_core::layout::WORKGROUP }
 }
 
 /// The normals kernels of `variant`: scattered, or gathered.
@@ -229,6 +261,7 @@ pub fn recipe_for(
                 vbd_sweep(kr, topo)
             }
             Command::Dispatch(kr) if kr.def == &k::VBD_ACCELERATE => vec![vbd_acceleration(kr, topo, sweep, rho)],
+            Command::Dispatch(kr) if kr.def == &k::SUBSTEP_TILE => vec![tile_command(kr, topo, strain_passes, 1)],
             c => vec![c],
         })
         .collect();
@@ -275,13 +308,16 @@ pub fn vbd_acceleration(kernel: KernelRef, topo: &clothlab_core::ClothTopology, 
 /// stand here as one `vbd_colour` dispatch per iteration). What runs once after a
 /// frame's last substep is [`frame_end`].
 pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Command> {
-    let step = integration(variant, how);
+    let step = integration(variant, how, strain_passes);
+    let tile = tiled(variant, how, strain_passes);
     let normals: &[&'static KernelDef] =
         if normals_at_frame_end(variant, how) { &[] } else { &normals_kernels(variant) };
     let flavor = variant.flavor();
     // Self-collision after a strain limit: its count fused into the last pass (one
     // dispatch and one read of the positions fewer).
-    let fused_count = how.self_collision && strain_passes > 0;
+    let fused_count = how.self_collision && strain_passes > 0 && !tile;
+    // The tiles run the strain passes themselves.
+    let strain_passes = if tile { 0 } else { strain_passes };
     let strain = |pass: u32| {
         if fused_count && pass + 1 == strain_passes { &k::STRAIN_LIMIT_COUNT } else { &k::STRAIN_LIMIT }
     };
@@ -499,7 +535,7 @@ mod tests {
     }
 
     const CAPS: Caps =
-        Caps { float_atomics: false, immediates: true, table_image: false, subgroups: false, grid: true };
+        Caps { float_atomics: false, immediates: true, table_image: false, subgroups: false, grid: true, tile: true };
 
     fn barriers_per_substep(r: &[Command]) -> usize {
         // Two substeps, counted in the second (the first also pays for the frame start).

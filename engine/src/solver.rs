@@ -110,6 +110,7 @@ impl<E: Engine> GpuSolver<E> {
             table_image: info.table_image,
             subgroups: info.subgroup_shuffle,
             grid: !scene.cloth.is_mesh(),
+            tile: info.workgroup_memory >= crate::kernels::TILE_WORKGROUP_BYTES,
         };
         let variant = variant.into().resolve(&caps, info.api).map_err(|e| SolverError::Unsupported(e.0))?;
         if options.stats == StatsMode::Subgroups && !info.subgroup_arithmetic {

@@ -157,6 +157,12 @@ pub fn validate_kernels_with(
             (_, kernels::Immediates::Range) if k.def == &kernels::VBD_ACCELERATE => {
                 (1..=2).map(|sweep| crate::recipe::vbd_acceleration(k, topo, sweep, 0.9)).collect()
             }
+            // The tiled substep: a workgroup per tile (the step constants' passes and
+            // substeps per dispatch), then the swap.
+            _ if k.def == &kernels::SUBSTEP_TILE => vec![
+                crate::recipe::tile_command(k, topo, input.p.strain_passes, input.p.tile_substeps),
+                Command::Swap,
+            ],
             // A range kernel (a mesh's XPBD pass): every range of an iteration, in order.
             (Some(mesh), kernels::Immediates::Range) => {
                 let mut v = vec![
@@ -254,6 +260,7 @@ pub fn rounding_spread(scene: &Scene, params: &SimParams, frames: u32) -> Result
         table_image: true,
         subgroups: true,
         grid: !scene.cloth.is_mesh(),
+        tile: true,
     };
     let naive = crate::variant::Variant::NAIVE.fit(&caps);
     let mut a = crate::cpu::RecipeSolver::new(Exec::Parallel, naive, scene.clone(), params.clone())?;

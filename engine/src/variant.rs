@@ -27,6 +27,9 @@ pub struct Caps {
     /// neighbours by offset and no constants shared by every particle (`table=uniform`)
     /// and no rows whose blocks lanes could pass each other (`neighbours=shuffle`).
     pub grid: bool,
+    /// Workgroup memory for the tiled substep's region
+    /// ([`crate::kernels::TILE_WORKGROUP_BYTES`], `fusion=tile`).
+    pub tile: bool,
 }
 
 /// How the forces of springs reach the particles.
@@ -71,6 +74,11 @@ pub enum Fusion {
     /// clothlab's: forces + springs gathered (four particles of a row per invocation),
     /// then integrate + collide.
     Clothlab,
+    /// The whole Verlet substep in one dispatch over tiles of the grid held in workgroup
+    /// memory with a halo as deep as the stages reach (`substep_tile`), its velocities put
+    /// into place by a copy (`tile_vel`). Other integrators, meshes and more strain passes
+    /// than [`crate::recipe::TILE_MAX_PASSES`] run clothlab's fusion.
+    Tile,
 }
 
 /// How often the step is submitted to the queue.
@@ -192,8 +200,8 @@ pub const SWITCHES: [Switch; 10] = [
     },
     Switch {
         key: "fusion",
-        values: &["none", "thesis", "clothlab"],
-        help: "none; the thesis's forces+Verlet+collisions; clothlab's forces+springs and integrate+collide",
+        values: &["none", "thesis", "clothlab", "tile"],
+        help: "none; the thesis's forces+Verlet+collisions; clothlab's forces+springs and integrate+collide; the whole substep in one dispatch over workgroup-memory tiles",
     },
     Switch { key: "submit", values: &["substep", "frame"], help: "one queue submission per substep, or per frame" },
     Switch {
@@ -251,7 +259,7 @@ impl Variant {
         springs: Accumulate::Gather,
         normals: Normals::Frame,
         atomics: Atomics::Float,
-        fusion: Fusion::Clothlab,
+        fusion: Fusion::Tile,
         submit: Submit::Frame,
         constants: Constants::Push,
         table: Table::Uniform,
@@ -317,7 +325,7 @@ impl Variant {
             "springs" => self.springs = acc[i],
             "normals" => self.normals = [Normals::Scatter, Normals::Gather, Normals::Frame][i],
             "atomics" => self.atomics = [Atomics::Float, Atomics::Cas][i],
-            "fusion" => self.fusion = [Fusion::None, Fusion::Thesis, Fusion::Clothlab][i],
+            "fusion" => self.fusion = [Fusion::None, Fusion::Thesis, Fusion::Clothlab, Fusion::Tile][i],
             "submit" => self.submit = [Submit::Substep, Submit::Frame][i],
             "constants" => self.constants = [Constants::Storage, Constants::Uniform, Constants::Push][i],
             "table" => self.table = [Table::Storage, Table::Image, Table::Uniform][i],
@@ -402,10 +410,28 @@ impl Variant {
                 "switch neighbours=shuffle: this adapter has no subgroup shuffles in compute shaders on {api}; use neighbours=load"
             )));
         }
-        if self.normals == Normals::Frame && self.fusion != Fusion::Clothlab {
+        if self.normals == Normals::Frame && !matches!(self.fusion, Fusion::Clothlab | Fusion::Tile) {
             return Err(VariantError(
-                "switch normals=frame needs fusion=clothlab: the wind is computed inside clothlab's forces+springs gather".into(),
+                "switch normals=frame needs fusion=clothlab or fusion=tile: the wind is computed inside clothlab's forces+springs gather".into(),
             ));
+        }
+        if self.fusion == Fusion::Tile {
+            if !caps.grid {
+                return Err(VariantError(
+                    "switch fusion=tile: a mesh has no grid to cut into tiles; use fusion=clothlab".into(),
+                ));
+            }
+            if !caps.tile {
+                return Err(VariantError(format!(
+                    "switch fusion=tile: this adapter has less than the {} KiB of workgroup memory a tile needs on {api}; use fusion=clothlab",
+                    crate::kernels::TILE_WORKGROUP_BYTES / 1024
+                )));
+            }
+            if self.springs == Accumulate::Scatter || self.normals != Normals::Frame || self.table != Table::Uniform {
+                return Err(VariantError(
+                    "switch fusion=tile needs springs=gather, normals=frame and table=uniform: the tile computes the grid's springs and wind from the points it holds".into(),
+                ));
+            }
         }
         if self.fusion == Fusion::Clothlab && self.springs == Accumulate::Scatter {
             return Err(VariantError(
@@ -433,6 +459,9 @@ impl Variant {
         if !caps.grid && self.table == Table::Uniform {
             self.table = Table::Storage;
         }
+        if self.fusion == Fusion::Tile && (!caps.grid || !caps.tile || self.table != Table::Uniform) {
+            self.fusion = Fusion::Clothlab;
+        }
         self
     }
 
@@ -454,7 +483,7 @@ impl Variant {
 
 /// The optimisation ladder: from `naive`, one switch at a time, in this order (each rung
 /// keeps the switches of the rungs before it).
-pub const LADDER: [(&str, &str); 13] = [
+pub const LADDER: [(&str, &str); 14] = [
     ("submit", "frame"),
     ("draw", "shared"),
     ("constants", "uniform"),
@@ -468,6 +497,7 @@ pub const LADDER: [(&str, &str); 13] = [
     ("table", "uniform"),
     ("neighbours", "shuffle"),
     ("normals", "frame"),
+    ("fusion", "tile"),
 ];
 
 /// One rung of the ladder.
@@ -586,6 +616,13 @@ impl VariantSpec {
         for (k, val) in &self.set {
             v.set(k, val)?;
         }
+        // A preset's tiles give way to clothlab's fusion where a switch set on top takes
+        // away what they need (`optimized` with normals=gather); fusion=tile named
+        // explicitly is refused instead.
+        let tile_needs = v.springs == Accumulate::Gather && v.normals == Normals::Frame && v.table == Table::Uniform;
+        if v.fusion == Fusion::Tile && !tile_needs && !self.set.iter().any(|(k, _)| k == "fusion") {
+            v.fusion = Fusion::Clothlab;
+        }
         v.check(caps, api)?;
         Ok(v)
     }
@@ -596,7 +633,7 @@ mod tests {
     use super::*;
 
     const ALL_CAPS: Caps =
-        Caps { float_atomics: true, immediates: true, table_image: true, subgroups: true, grid: true };
+        Caps { float_atomics: true, immediates: true, table_image: true, subgroups: true, grid: true, tile: true };
 
     #[test]
     fn every_switch_value_round_trips_and_bad_ones_name_the_switch() {
@@ -615,7 +652,7 @@ mod tests {
 
     #[test]
     fn presets_fit_the_adapter_and_explicit_switches_are_refused_where_it_lacks_them() {
-        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true };
+        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true, tile: true };
         let opt = VariantSpec::from(Variant::OPTIMIZED).resolve(&bare, "wgpu").unwrap();
         assert_eq!((opt.constants, opt.atomics, opt.neighbours), (Constants::Uniform, Atomics::Cas, Neighbours::Load));
         let thesis = VariantSpec::from(Variant::THESIS).resolve(&bare, "wgpu").unwrap();
@@ -644,7 +681,7 @@ mod tests {
         // measured fastest (issue 32), so a new rung must update both.
         assert_eq!(rungs.last().unwrap().variant, Variant::OPTIMIZED);
         assert!(rungs.iter().all(|r| r.skipped.is_none()));
-        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true };
+        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true, tile: true };
         let rungs = ladder(&bare, "wgpu");
         let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
         assert_eq!(skipped, ["+constants=push", "+table=image", "+neighbours=shuffle"]);

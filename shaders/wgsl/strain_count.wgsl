@@ -1,16 +1,9 @@
-//! include: table, window, strain_window, adjacency
+//! include: table, window, strain_window, adjacency, strain_fn
 // strain_count — every particle's count of strain-limited springs over (1 + τ)·rest
 // (core::cpu::strain_limit::count_at), into aux0.x: what the pass after it divides each
 // spring by the larger of its two ends' counts of. The same blocks, window and table
 // modes as strain_limit (shared/strain_window.wgsl); a spring is over the limit exactly
 // when the pass finds it so (the same length, the same comparison).
-
-// 1 where the spring from xi to xb4 (rest length `rest`) is over the limit, else 0.
-fn over(xi: vec3<f32>, xb4: vec4<f32>, rest: f32) -> f32 {
-    let d = xb4.xyz - xi;
-    let len = len3(d);
-    return select(0.0, 1.0, len > (1.0 + p.strain_limit) * rest);
-}
 
 fn over_grid(b: Gp, s: u32, xi: vec3<f32>) -> f32 {
     return select(0.0, over(xi, b.x4, interior.slots[s].rest), b.inside);

@@ -113,6 +113,8 @@ pub struct Limits {
     pub uniform_block_size: u64,
     /// GL_MAX_TEXTURE_SIZE.
     pub texture_size: u32,
+    /// GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, bytes.
+    pub shared_memory: u32,
     /// GL_SUBGROUP_SUPPORTED_FEATURES_KHR (0 without GL_KHR_shader_subgroup).
     pub subgroup_features: u32,
     /// GL_SUBGROUP_SIZE_KHR (0 without it).
@@ -431,6 +433,7 @@ impl Gl {
                 storage_block_size: gl.get_parameter_i64(glow::MAX_SHADER_STORAGE_BLOCK_SIZE).max(0) as u64,
                 uniform_block_size: gl.get_parameter_i64(glow::MAX_UNIFORM_BLOCK_SIZE).max(0) as u64,
                 texture_size: gl.get_parameter_i32(glow::MAX_TEXTURE_SIZE).max(0) as u32,
+                shared_memory: gl.get_parameter_i32(glow::MAX_COMPUTE_SHARED_MEMORY_SIZE).max(0) as u32,
                 subgroup_features: if has_subgroups {
                     gl.get_parameter_i32(SUBGROUP_SUPPORTED_FEATURES) as u32
                 } else {

@@ -72,6 +72,8 @@ pub struct Device {
     pub timestamps: bool,
     /// Largest push-constant block, bytes.
     pub max_push_constants: u32,
+    /// Largest workgroup (shared) memory of a compute shader, bytes.
+    pub max_shared_memory: u32,
     /// `atomicAdd` on `f32` in storage buffers (VK_EXT_shader_atomic_float), enabled.
     pub float_atomics: bool,
     /// Largest storage-buffer binding, bytes.
@@ -370,6 +372,7 @@ impl Device {
             timestamp_period: props.limits.timestamp_period,
             timestamps: timestamps && props.limits.timestamp_compute_and_graphics == vk::TRUE,
             max_push_constants: props.limits.max_push_constants_size,
+            max_shared_memory: props.limits.max_compute_shared_memory_size,
             float_atomics,
             max_storage_range: props.limits.max_storage_buffer_range as u64,
             subgroup_size: subgroup.subgroup_size,

@@ -13,6 +13,12 @@ var<private> p: StepParams;
 var<private> interior: InteriorSlots;
 @group(0) @binding(24) var<storage, read_write> strain_counts: array<vec4<f32>>;
 
+// The pins' positions for the tethers (shared/strain_fn.wgsl's `finish`): this pass's
+// input positions.
+fn pin_point(pin: u32) -> vec3<f32> {
+    return pos[pin].xyz;
+}
+
 // Grid point (c, r): its particle (particle 0 when outside the grid, so that every lane
 // loads something), that particle's pos, and whether it is inside.
 struct Gp {

@@ -21,6 +21,10 @@ struct StepParams {
     spacing: f32,
     inv_cell: f32,
     num_particles: u32,
+    strain_passes: u32,
+    tile_substeps: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 struct SpringSlot {
