@@ -321,7 +321,14 @@ fn main() {
             ("colliders", "colliders_uni", "_cu"),
             ("window", "window_sh", "_sh"),
         ];
-        let applicable: Vec<_> = subs.iter().filter(|(from, ..)| includes.iter().any(|i| i == from)).collect();
+        // `//! no table image` on the second line: a kernel that includes the table only
+        // for shared functions it does not call (the tiled substep reads the grid's
+        // constants from the uniform block) gets no `_tex` twin.
+        let no_tex = body.lines().nth(1).is_some_and(|l| l.trim() == "//! no table image");
+        let applicable: Vec<_> = subs
+            .iter()
+            .filter(|(from, ..)| includes.iter().any(|i| i == from) && !(no_tex && *from == "table"))
+            .collect();
         let mut variants = Vec::new();
         for mask in 0..1u32 << applicable.len() {
             let mut vname = name.clone();

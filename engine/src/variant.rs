@@ -247,7 +247,9 @@ impl Variant {
         neighbours: Neighbours::Load,
         draw: Draw::Copy,
     };
-    /// clothlab's optimized step, the top of the [`LADDER`] (every rung's switch set):
+    /// clothlab's optimized step, the [`LADDER`]'s rung before the tiles (every earlier
+    /// rung's switch set; `fusion=tile` is left out: on lavapipe it runs 15–20× slower and
+    /// its shader takes minutes to compile, docs/variants.md):
     /// gathers, its fusion with the wind computed in the forces gather and the normals once
     /// per frame, one submission per frame, push constants, the table as uniform constants
     /// with neighbours by offset, colliders in a uniform block, neighbours' columns by
@@ -259,7 +261,7 @@ impl Variant {
         springs: Accumulate::Gather,
         normals: Normals::Frame,
         atomics: Atomics::Float,
-        fusion: Fusion::Tile,
+        fusion: Fusion::Clothlab,
         submit: Submit::Frame,
         constants: Constants::Push,
         table: Table::Uniform,
@@ -677,10 +679,29 @@ mod tests {
         let rungs = ladder(&ALL_CAPS, "vulkan");
         assert_eq!(rungs.len(), LADDER.len() + 1);
         assert_eq!(rungs[0].variant, Variant::NAIVE);
-        // The top of the ladder is the optimized preset: the preset is what the ladder
-        // measured fastest (issue 32), so a new rung must update both.
-        assert_eq!(rungs.last().unwrap().variant, Variant::OPTIMIZED);
         assert!(rungs.iter().all(|r| r.skipped.is_none()));
+        // The rung before the tiles is the optimized preset: the preset is what the ladder
+        // measured fastest on lavapipe (issue 32; the tiles lost there, issue 47), so a new
+        // rung must update both.
+        assert_eq!(rungs[rungs.len() - 2].variant, Variant::OPTIMIZED);
+        let mut top = Variant::OPTIMIZED;
+        top.set("fusion", "tile").unwrap();
+        assert_eq!(rungs.last().unwrap().variant, top);
+        // An adapter without the tile's workgroup memory: the rung refused in one line, the
+        // preset asking for it explicitly refused, the preset's own fitted back.
+        let small = Caps { tile: false, ..ALL_CAPS };
+        let rungs = ladder(&small, "vulkan");
+        let e = rungs.last().unwrap().skipped.clone().unwrap();
+        assert!(e.contains("fusion=tile") && e.contains("32 KiB"), "{e}");
+        let e = VariantSpec::parse("optimized", &["fusion=tile".into()]).unwrap().resolve(&small, "vulkan").unwrap_err();
+        assert!(e.0.contains("workgroup memory"), "{e}");
+        assert_eq!(top.fit(&small).fusion, Fusion::Clothlab);
+        // A switch that takes away what the tiles need: refused when fusion=tile is named.
+        let e = VariantSpec::parse("optimized", &["fusion=tile".into(), "normals=gather".into()])
+            .unwrap()
+            .resolve(&ALL_CAPS, "vulkan")
+            .unwrap_err();
+        assert!(e.0.contains("fusion=tile") && e.0.contains("normals=frame"), "{e}");
         let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true, tile: true };
         let rungs = ladder(&bare, "wgpu");
         let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
@@ -707,7 +728,7 @@ mod tests {
         // The ladder on a mesh skips the two rungs, naming the mesh.
         let rungs = ladder(&mesh, "vulkan");
         let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
-        assert_eq!(skipped, ["+table=uniform", "+neighbours=shuffle"]);
+        assert_eq!(skipped, ["+table=uniform", "+neighbours=shuffle", "+fusion=tile"]);
         assert!(rungs.iter().flat_map(|r| &r.skipped).all(|e| e.contains("mesh")));
         assert!(covering(&mesh, "vulkan").iter().all(|v| v.check(&mesh, "vulkan").is_ok()));
     }

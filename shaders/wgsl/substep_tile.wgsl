@@ -1,4 +1,5 @@
 //! include: state, table, gather, wind_fn, face_wind, adjacency, colliders, strain_fn
+//! no table image
 // substep_tile — the whole Verlet substep of a regular grid in one dispatch
 // (`fusion=tile`): forces + springs with the wind of the faces around each particle,
 // integrate + collide, then `strain_passes` passes of the strain limit with the tethers,
@@ -186,8 +187,8 @@ fn limit_at(c: i32, r: i32) -> Moved {
 
 // Writes back this invocation's results of a stage over the points `m` inside the border.
 fn store_stage(tid: u32, m: i32) {
-    for (var j = 0u; j < PER_THREAD; j++) {
-        let k = tid + j * TILE_THREADS;
+    var j = 0u;
+    for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
         let cr = region_cr(k);
         if in_stage(cr.x, cr.y, m) {
             tx[k] = rx[j];
@@ -195,6 +196,7 @@ fn store_stage(tid: u32, m: i32) {
             tvy[k] = rv[j].y;
             tvz[k] = rv[j].z;
         }
+        j++;
     }
 }
 
@@ -215,8 +217,7 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
     let t = i32(wg.x + wg.y * groups.x);
     origin = vec2<i32>((t % per_row) * side - halo, (t / per_row) * side - halo);
     // Load the region (zeros off the grid: never used, every use checks `inside`).
-    for (var j = 0u; j < PER_THREAD; j++) {
-        let k = tid + j * TILE_THREADS;
+    for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
         let cr = region_cr(k);
         var x4 = vec4<f32>(0.0);
         var v = vec4<f32>(0.0);
@@ -234,13 +235,15 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
     for (var sub = 0u; sub < substeps; sub++) {
         // Forces, springs, wind, integrate, collide: every point 2 inside what is valid.
         let m0 = i32(sub) * reach + 2;
-        for (var j = 0u; j < PER_THREAD; j++) {
-            let cr = region_cr(tid + j * TILE_THREADS);
+        var j = 0u;
+        for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
+            let cr = region_cr(k);
             if in_stage(cr.x, cr.y, m0) {
                 let moved = force_and_move(cr.x, cr.y);
-                rx[j] = vec4<f32>(moved.x, tx[region_index(cr.x, cr.y)].w);
+                rx[j] = vec4<f32>(moved.x, tx[k].w);
                 rv[j] = moved.v;
             }
+            j++;
         }
         workgroupBarrier();
         store_stage(tid, m0);
@@ -248,21 +251,22 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
         for (var s = 0u; s < passes; s++) {
             // The counts one inside what is valid, the pass two inside.
             let mc = m0 + 2 * i32(s) + 1;
-            for (var j = 0u; j < PER_THREAD; j++) {
-                let k = tid + j * TILE_THREADS;
+            for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
                 let cr = region_cr(k);
                 if in_stage(cr.x, cr.y, mc) {
                     tcount[k] = count_at(cr.x, cr.y);
                 }
             }
             workgroupBarrier();
-            for (var j = 0u; j < PER_THREAD; j++) {
-                let cr = region_cr(tid + j * TILE_THREADS);
+            j = 0u;
+            for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
+                let cr = region_cr(k);
                 if in_stage(cr.x, cr.y, mc + 1) {
                     let moved = limit_at(cr.x, cr.y);
-                    rx[j] = vec4<f32>(moved.x, tx[region_index(cr.x, cr.y)].w);
+                    rx[j] = vec4<f32>(moved.x, tx[k].w);
                     rv[j] = moved.v;
                 }
+                j++;
             }
             workgroupBarrier();
             store_stage(tid, mc + 1);
@@ -270,8 +274,7 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
         }
     }
     // The tile's own points.
-    for (var j = 0u; j < PER_THREAD; j++) {
-        let k = tid + j * TILE_THREADS;
+    for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
         let cr = region_cr(k);
         if in_stage(cr.x, cr.y, halo) {
             let i = region_particle(cr.x, cr.y);
