@@ -256,10 +256,13 @@ The switches (values in ladder order, the naive one first):
   springs=scatter|gather          spring forces per spring with atomics, or per particle
   normals=scatter|gather|frame    vertex normals per triangle with atomics, or per vertex,
                                   every substep; or once per frame, the wind in the
-                                  forces gather (needs fusion=clothlab)
+                                  forces gather (needs fusion=clothlab or tile)
   atomics=float|cas               the scatters' atomics: float add, or compare-exchange
-  fusion=none|thesis|clothlab     no fusion; the thesis's forces+Verlet+collisions;
-                                  clothlab's forces+springs and integrate+collide
+  fusion=none|thesis|clothlab|tile
+                                  no fusion; the thesis's forces+Verlet+collisions;
+                                  clothlab's forces+springs and integrate+collide; or
+                                  the whole Verlet substep of a grid in one dispatch
+                                  over workgroup-memory tiles (needs 32 KiB of it)
   submit=substep|frame            one queue submission per substep, or per frame
   constants=storage|uniform|push  the step constants: storage, uniform, push constants
   table=storage|image|uniform     the spring table: storage buffers, a sampled image,
