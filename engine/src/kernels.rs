@@ -958,6 +958,16 @@ const WIND_GATHER: Check = Check::Bound {
     relative: 2e-5,
     reason: "a gather over up to 12 springs plus six faces' wind computed in it (lavapipe: exact)",
 };
+/// The tiled substep: six stages from a disturbed state, where most springs are over the
+/// strain limit: a spring a last bit over its limit on one side and under on the other is
+/// corrected by its whole excess in one of them, and the second pass divides by counts
+/// that moved (the H100, 2026-11-26: 1.0e-7 with no pass, 1.5e-7 with one, 2.2e-4 with
+/// two; a rollout from the scene stays within 2.4e-7 m). Exact on lavapipe
+/// (tests/tests/tile.rs).
+const TILE_CHECK: Check = Check::Bound {
+    relative: 1e-3,
+    reason: "forces, integrate and strain passes fused from a disturbed state: a spring's limit decided otherwise in a last bit moves a whole correction (H100, two passes: 2.2e-4; one: 1.5e-7; lavapipe: exact)",
+};
 /// Atomic scatters: any summation order, and spring forces cancel, so rounding is
 /// amplified (measured on lavapipe: ≤ 1.4e-7).
 const SCATTER: Check = Check::Bound {
@@ -1123,7 +1133,7 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
 /// per strain pass deep (times `tile_substeps`). Dispatched as a range of
 /// [`crate::recipe::tile_command`] (its count of tiles depends on the pass count).
 pub static SUBSTEP_TILE: KernelDef = KernelDef {
-    check: WIND_GATHER,
+    check: TILE_CHECK,
     pure: &[PosOut, Aux0],
     label: timing::SUBSTEP_TILE,
     variants: IMM_CU,
