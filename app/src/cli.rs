@@ -420,6 +420,12 @@ pub struct BenchArgs {
     /// Skip the API-overhead micro-benchmarks.
     #[arg(long)]
     pub no_overhead: bool,
+    /// The GPU memory's peak bandwidth, GB/s: the ladder's report says how far each rung
+    /// is from the state's 64 bytes per particle-substep at it, and the plots draw that
+    /// bound (default: the data sheet's for a known card, e.g. the H100 80GB HBM3's 3350;
+    /// none otherwise). Also with --replot.
+    #[arg(long, value_name = "GB/S", value_parser = parse_peak)]
+    pub peak_gbps: Option<f64>,
     /// Label of the machine in the report (default: CPU model and core count).
     #[arg(long)]
     pub machine: Option<String>,
@@ -452,9 +458,26 @@ fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// `--peak-gbps`: a bandwidth in GB/s, finite and in 1 ..= 100000.
+fn parse_peak(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|_| format!("`{s}`: expected a bandwidth in GB/s, e.g. 3350"))?;
+    if !(1.0..=1e5).contains(&v) {
+        return Err(format!("`{s}`: a memory bandwidth in GB/s must be in 1 ..= 100000"));
+    }
+    Ok(v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_peak_bandwidth_is_a_number_of_gb_per_second_in_range() {
+        assert_eq!(parse_peak("3350"), Ok(3350.0));
+        for bad in ["fast", "0", "-5", "NaN", "inf", "1e9"] {
+            assert!(parse_peak(bad).unwrap_err().contains(bad), "{bad}");
+        }
+    }
 
     #[test]
     fn the_set_variant_help_lists_every_switch_and_value() {

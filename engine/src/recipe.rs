@@ -211,9 +211,7 @@ pub const TILE_MAX_PASSES: u32 = 4;
 /// (`fusion=tile`: Verlet or symplectic Euler, at most [`TILE_MAX_PASSES`]; the variant's
 /// check has made sure of the grid, the gathers, the wind and the adapter).
 pub fn tiled(variant: &Variant, how: Integration, strain_passes: u32) -> bool {
-    variant.fusion == Fusion::Tile
-        && normals_at_frame_end(variant, how)
-        && strain_passes <= TILE_MAX_PASSES
+    variant.fusion == Fusion::Tile && normals_at_frame_end(variant, how) && strain_passes <= TILE_MAX_PASSES
 }
 
 /// The side of the tiled substep's tiles with `strain_passes` passes and `substeps`
@@ -224,9 +222,53 @@ pub fn tile_side(strain_passes: u32, substeps: u32) -> u32 {
     k::TILE_REGION.saturating_sub(2 * halo)
 }
 
+/// The points the tiled substep's workgroups load on `topo` (every tile's region on the
+/// grid, halos counted again by each tile that loads them): what its reads of the
+/// positions and velocities move, against `n²` for a kernel without a halo.
+pub fn tile_loaded_points(topo: &clothlab_core::ClothTopology, strain_passes: u32, substeps: u32) -> u64 {
+    let side = tile_side(strain_passes, substeps).max(1) as i64;
+    let halo = (k::TILE_REGION as i64 - side) / 2;
+    let n = topo.n as i64;
+    // Separable: the region's columns on the grid, summed over the tiles of a row.
+    let per_axis: i64 = (0..(n + side - 1) / side)
+        .map(|t| {
+            let lo = (t * side - halo).max(0);
+            let hi = (t * side - halo + k::TILE_REGION as i64).min(n);
+            (hi - lo).max(0)
+        })
+        .sum();
+    (per_axis * per_axis) as u64
+}
+
+/// The bytes `kernel` moves at least per dispatch on `topo` ([`k::compulsory_bytes`]),
+/// the tiled substep's halo counted: its positions and velocities are read once per tile
+/// that loads them ([`tile_loaded_points`]).
+pub fn bytes_moved(
+    kernel: KernelRef,
+    topo: &clothlab_core::ClothTopology,
+    table_uniform: bool,
+    strain_passes: u32,
+) -> u64 {
+    let bytes = k::compulsory_bytes(kernel, topo, table_uniform);
+    if kernel.def != &k::SUBSTEP_TILE {
+        return bytes;
+    }
+    let extra = tile_loaded_points(topo, strain_passes, 1).saturating_sub(topo.num_particles() as u64);
+    bytes + extra * 32
+}
+
+/// Bytes of state a substep must read and write at least: positions and velocities,
+/// 16 bytes each, read once and written once per particle.
+pub const STATE_BYTES: u64 = 64;
+
 /// The dispatch of `kernel` (`substep_tile`) over `topo`'s tiles: a workgroup per tile
 /// (a range of that many workgroups' invocations; the kernel reads no range).
-pub fn tile_command(kernel: KernelRef, topo: &clothlab_core::ClothTopology, strain_passes: u32, substeps: u32) -> Command {
+pub fn tile_command(
+    kernel: KernelRef,
+    topo: &clothlab_core::ClothTopology,
+    strain_passes: u32,
+    substeps: u32,
+) -> Command {
     let side = tile_side(strain_passes, substeps).max(1);
     let per_row = topo.n.div_ceil(side);
     Command::Range { kernel, first: 0, count: per_row * per_row * clothlab_core::layout::WORKGROUP }

@@ -159,10 +159,9 @@ pub fn validate_kernels_with(
             }
             // The tiled substep: a workgroup per tile (the step constants' passes and
             // substeps per dispatch), then the swap.
-            _ if k.def == &kernels::SUBSTEP_TILE => vec![
-                crate::recipe::tile_command(k, topo, input.p.strain_passes, input.p.tile_substeps),
-                Command::Swap,
-            ],
+            _ if k.def == &kernels::SUBSTEP_TILE => {
+                vec![crate::recipe::tile_command(k, topo, input.p.strain_passes, input.p.tile_substeps), Command::Swap]
+            }
             // A range kernel (a mesh's XPBD pass): every range of an iteration, in order.
             (Some(mesh), kernels::Immediates::Range) => {
                 let mut v = vec![

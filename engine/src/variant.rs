@@ -654,7 +654,14 @@ mod tests {
 
     #[test]
     fn presets_fit_the_adapter_and_explicit_switches_are_refused_where_it_lacks_them() {
-        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true, tile: true };
+        let bare = Caps {
+            float_atomics: false,
+            immediates: false,
+            table_image: false,
+            subgroups: false,
+            grid: true,
+            tile: true,
+        };
         let opt = VariantSpec::from(Variant::OPTIMIZED).resolve(&bare, "wgpu").unwrap();
         assert_eq!((opt.constants, opt.atomics, opt.neighbours), (Constants::Uniform, Atomics::Cas, Neighbours::Load));
         let thesis = VariantSpec::from(Variant::THESIS).resolve(&bare, "wgpu").unwrap();
@@ -693,7 +700,8 @@ mod tests {
         let rungs = ladder(&small, "vulkan");
         let e = rungs.last().unwrap().skipped.clone().unwrap();
         assert!(e.contains("fusion=tile") && e.contains("32 KiB"), "{e}");
-        let e = VariantSpec::parse("optimized", &["fusion=tile".into()]).unwrap().resolve(&small, "vulkan").unwrap_err();
+        let e =
+            VariantSpec::parse("optimized", &["fusion=tile".into()]).unwrap().resolve(&small, "vulkan").unwrap_err();
         assert!(e.0.contains("workgroup memory"), "{e}");
         assert_eq!(top.fit(&small).fusion, Fusion::Clothlab);
         // A switch that takes away what the tiles need: refused when fusion=tile is named.
@@ -702,7 +710,14 @@ mod tests {
             .resolve(&ALL_CAPS, "vulkan")
             .unwrap_err();
         assert!(e.0.contains("fusion=tile") && e.0.contains("normals=frame"), "{e}");
-        let bare = Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true, tile: true };
+        let bare = Caps {
+            float_atomics: false,
+            immediates: false,
+            table_image: false,
+            subgroups: false,
+            grid: true,
+            tile: true,
+        };
         let rungs = ladder(&bare, "wgpu");
         let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
         assert_eq!(skipped, ["+constants=push", "+table=image", "+neighbours=shuffle"]);

@@ -48,7 +48,14 @@ fn exact<E: Engine>(s: Option<GpuSolver<E>>, label: &str) {
     if !adapter.contains("llvmpipe") {
         println!("{label}: {adapter} is not llvmpipe: exactness not required");
         for c in &checks {
-            assert!(c.error <= c.bound, "{label} on {adapter}: {} {} {:.2e} over {:.0e}", c.what, c.buffer, c.error, c.bound);
+            assert!(
+                c.error <= c.bound,
+                "{label} on {adapter}: {} {} {:.2e} over {:.0e}",
+                c.what,
+                c.buffer,
+                c.error,
+                c.bound
+            );
         }
         return;
     }

@@ -8,7 +8,8 @@ use std::fmt::Write as _;
 
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, SUBSTEP};
 
-use super::results::{LadderCell, Results, chain_slope};
+use super::results::{LadderCell, Results, chain_slope, known_peak};
+use clothlab_engine::recipe::STATE_BYTES;
 
 /// The thesis's own figure for its optimized CUDA port against the direct one
 /// (ch. 7: "about 4 frames per second more").
@@ -109,18 +110,36 @@ pub fn report(r: &Results) -> String {
             .fold(0.0, f64::max);
         let _ = writeln!(s, "### {api}, n = {n}\n");
         let _ = writeln!(s, "![what each optimisation buys, {api}, n = {n}](ladder_{api}_{n}.png)\n");
+        let peak = known_peak(r);
+        // The state's compulsory traffic at the card's peak: no substep can be faster.
+        let floor_ns = peak.map(|gbps| STATE_BYTES as f64 * (n as f64).powi(2) / gbps);
+        match (peak, floor_ns) {
+            (Some(gbps), Some(ns)) => {
+                let _ = writeln!(
+                    s,
+                    "Bytes: each rung's compulsory bytes per particle-substep (every buffer its kernels' rows name, once; the tiles' halos read again), against the state's {STATE_BYTES} B (positions and velocities read and written once): at the memory's {gbps:.0} GB/s peak no substep of n = {n} takes less than {:.4} ms.\n",
+                    ns / 1e6
+                );
+            }
+            _ => {
+                let _ = writeln!(
+                    s,
+                    "Bytes: each rung's compulsory bytes per particle-substep (every buffer its kernels' rows name, once; the tiles' halos read again), against the state's {STATE_BYTES} B (positions and velocities read and written once); no peak bandwidth known for this adapter (`--peak-gbps`).\n"
+                );
+            }
+        }
         let _ = writeln!(
             s,
-            "| rung | substep ms | vs previous | vs naive | ns / particle | frame ms (fps) | cpu record µs | cpu submit µs | dispatches | kernels (µs) | bound |"
+            "| rung | substep ms | vs previous | vs naive | ns / particle | B / particle | × the bound | frame ms (fps) | cpu record µs | cpu submit µs | dispatches | kernels (µs) | bound |"
         );
-        let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|");
+        let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|");
         let naive = cells.iter().find(|c| c.index == 0).and_then(|c| measured(r, c));
         let mut prev: Option<f64> = None;
         let mut prev_backend: Option<String> = None;
         let np = (n as f64).powi(2);
         for c in &cells {
             if let Some(why) = &c.skipped {
-                let _ = writeln!(s, "| {} | – | – | – | – | – | – | – | – | skipped: {why} | – |", c.rung);
+                let _ = writeln!(s, "| {} | – | – | – | – | – | – | – | – | – | – | skipped: {why} | – |", c.rung);
                 continue;
             }
             let Some(m) = measured(r, c) else { continue };
@@ -150,12 +169,14 @@ pub fn report(r: &Results) -> String {
             let vs_naive = naive.as_ref().map(|a| format!("{:.2}×", a.substep_ns / m.substep_ns)).unwrap_or_default();
             let frame = m.frame_ns.map(|f| format!("{:.1} ({:.1})", f / 1e6, 1e9 / f)).unwrap_or_else(|| "–".into());
             let us = |v: Option<f64>| v.map(|v| format!("{:.0}", v / 1e3)).unwrap_or_else(|| "–".into());
+            let times = floor_ns.map(|f| format!("{:.1}×", m.substep_ns / f)).unwrap_or_else(|| "–".into());
             let _ = writeln!(
                 s,
-                "| {} | {:.3} | {vs_prev} | {vs_naive} | {:.1} | {frame} | {} | {} | {} | {} | {} |",
+                "| {} | {:.3} | {vs_prev} | {vs_naive} | {:.1} | {:.0} | {times} | {frame} | {} | {} | {} | {} | {} |",
                 if thesis { format!("**{}**", c.rung) } else { c.rung.clone() },
                 m.substep_ns / 1e6,
                 m.substep_ns / np,
+                c.bytes as f64 / np,
                 us(m.record_ns),
                 us(m.submit_ns),
                 c.dispatches,

@@ -30,7 +30,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::cli::{BenchArgs, Mode};
 use crate::out::outln;
 use crate::solvers::{AnySolver, Api, Backend, GpuSetup, Shared, make, vulkan_validation};
-use clothlab_engine::kernels::compulsory_bytes;
+use clothlab_engine::recipe::bytes_moved;
 use clothlab_engine::recipe::dispatches;
 use clothlab_engine::variant::{Table, Variant, ladder as ladder_rungs};
 use results::{Cell, LadderCell};
@@ -196,8 +196,11 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     if args.replot {
         let path = args.out.join("results.json");
         let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
-        let results: results::Results = serde_json::from_str(&text)
+        let mut results: results::Results = serde_json::from_str(&text)
             .with_context(|| format!("{} is not a clothlab bench result", path.display()))?;
+        if args.peak_gbps.is_some() {
+            results.peak_gbps = args.peak_gbps;
+        }
         for f in output::write_report(&results, &args.out)? {
             outln!("wrote {}", f.display())?;
         }
@@ -526,7 +529,7 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
         }
     });
 
-    let results = results::Results::new(results::Inputs {
+    let mut results = results::Results::new(results::Inputs {
         machine,
         wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
         vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name().to_owned()),
@@ -546,6 +549,7 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
         ladder,
         interrupted,
     });
+    results.peak_gbps = args.peak_gbps;
     let files = output::write_all(&results, &args.out)?;
     journal.finish(results.interrupted.is_none())?;
     for f in &files {
@@ -604,7 +608,7 @@ impl Job {
         let end = clothlab_engine::recipe::frame_end(&v, how);
         let uniform = v.table == Table::Uniform;
         let bytes_of = |c: &[clothlab_engine::recipe::Command]| -> u64 {
-            dispatches(c).map(|k| compulsory_bytes(k, &topo, uniform)).sum()
+            dispatches(c).map(|k| bytes_moved(k, &topo, uniform, params.strain_iterations)).sum()
         };
         Ok(LadderCell {
             api: self.backend.api().map_or("cpu", Api::name).into(),

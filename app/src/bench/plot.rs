@@ -324,7 +324,10 @@ impl Figure for Waterfall<'_> {
                 prev = Some(ms);
             }
         }
-        let top = bars.iter().map(|b| b.1.max(b.2)).fold(0.0, f64::max).max(1e-6) * 1.25;
+        // The state's 64 bytes per particle-substep at the memory's peak, where known.
+        let floor_ms = super::results::known_peak(self.r)
+            .map(|gbps| clothlab_engine::recipe::STATE_BYTES as f64 * (self.n as f64).powi(2) / gbps / 1e6);
+        let top = bars.iter().map(|b| b.1.max(b.2)).chain(floor_ms).fold(0.0, f64::max).max(1e-6) * 1.25;
         let k = bars.len().max(1) as i32;
         let mut chart = ChartBuilder::on(root)
             .caption(
@@ -372,6 +375,28 @@ impl Figure for Waterfall<'_> {
                 )
             }))
             .map_err(err)?;
+        if let Some(f) = floor_ms {
+            let style = ShapeStyle::from(&RGBColor(200, 40, 30)).stroke_width(2);
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(f, SegmentValue::Exact(0)), (f, SegmentValue::Exact(k))],
+                    style,
+                )))
+                .map_err(err)?
+                .label(format!(
+                    "bound: {} B per particle-substep at the memory's peak",
+                    clothlab_engine::recipe::STATE_BYTES
+                ))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font((FONT, 13))
+                .draw()
+                .map_err(err)?;
+        }
         Ok(())
     }
 }

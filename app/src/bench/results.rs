@@ -208,6 +208,26 @@ pub struct Results {
     /// Set when the run was stopped before its end: `after k of N cells`.
     #[serde(default)]
     pub interrupted: Option<String>,
+    /// The GPU memory's peak bandwidth, GB/s (`--peak-gbps`; else [`known_peak`] of the
+    /// adapters' names when the report is written).
+    #[serde(default)]
+    pub peak_gbps: Option<f64>,
+}
+
+/// Peak memory bandwidth of cards the reports have met, GB/s (the makers' data sheets),
+/// by a substring of the adapter's name.
+pub const KNOWN_PEAKS: [(&str, f64); 3] = [("H100 80GB HBM3", 3350.0), ("H100 PCIe", 2000.0), ("H200", 4800.0)];
+
+/// The peak bandwidth of `r`'s GPU: `--peak-gbps`, else that of a known card its adapters
+/// name.
+pub fn known_peak(r: &Results) -> Option<f64> {
+    r.peak_gbps.or_else(|| {
+        let names = [&r.vulkan_adapter, &r.wgpu_adapter, &r.gl_adapter];
+        KNOWN_PEAKS
+            .iter()
+            .find(|(card, _)| names.iter().any(|a| a.as_deref().is_some_and(|a| a.contains(card))))
+            .map(|&(_, gbps)| gbps)
+    })
 }
 
 /// The rounds of one cell (`--repeat`).
@@ -326,6 +346,7 @@ impl Results {
             seconds: i.seconds,
             ladder: i.ladder,
             interrupted: i.interrupted,
+            peak_gbps: None,
             rounds: i
                 .cells
                 .iter()
