@@ -399,9 +399,7 @@ pub fn kernels_for(variant: &Variant) -> Vec<KernelRef> {
     let mut commands = recipe(variant, 1, Integration::VERLET);
     commands.extend(frame_end(variant, Integration::VERLET));
     let mut v = kernels_of(&commands);
-    // Not the tiled substep unless the recipe runs it: on llvmpipe its shader takes
-    // minutes to compile at its first dispatch (validated with `--every-switch`).
-    for def in k::ALL.iter().filter(|d| d.immediates == k::Immediates::None && d.name != k::SUBSTEP_TILE.name) {
+    for def in k::ALL.iter().filter(|d| d.immediates == k::Immediates::None) {
         if !v.contains(&def.plain()) {
             v.push(def.plain());
         }

@@ -220,14 +220,11 @@ pub fn validate_kernels_with(
 /// Every flavor of every built-in kernel of the step (the statistics kernels have their
 /// own test) that a solver with `caps` runs: immediates and float atomics where it has
 /// them, the table image only with `table_image` (a solver uploads the image only for
-/// `table=image`). What `clothlab validate` checks, so that every switch is covered. The
-/// tiled substep is left out: on llvmpipe each of its flavors takes minutes to compile at
-/// its first dispatch; it is checked where a solver runs it (`validate --set-variant
-/// fusion=tile`, the tile rung's rollout of `--every-switch`, tests/tests/tile.rs).
+/// `table=image`). What `clothlab validate` checks, so that every switch is covered.
 pub fn flavors(caps: &Caps, table_image: bool) -> Vec<KernelRef> {
     kernels::ALL
         .iter()
-        .filter(|d| matches!(d.check, kernels::Check::Bound { .. }) && d.name != kernels::SUBSTEP_TILE.name)
+        .filter(|d| matches!(d.check, kernels::Check::Bound { .. }))
         .flat_map(|d| d.flavors())
         .filter(|k| {
             let f = k.flavor;

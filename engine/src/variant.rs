@@ -248,8 +248,8 @@ impl Variant {
         draw: Draw::Copy,
     };
     /// clothlab's optimized step, the [`LADDER`]'s rung before the tiles (every earlier
-    /// rung's switch set; `fusion=tile` is left out: on lavapipe it runs 15–20× slower and
-    /// its shader takes minutes to compile, docs/variants.md):
+    /// rung's switch set; `fusion=tile` is left out: slower on lavapipe and on the H100,
+    /// docs/variants.md):
     /// gathers, its fusion with the wind computed in the forces gather and the normals once
     /// per frame, one submission per frame, push constants, the table as uniform constants
     /// with neighbours by offset, colliders in a uniform block, neighbours' columns by

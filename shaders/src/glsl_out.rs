@@ -14,7 +14,7 @@ pub type GlslOut = (String, Vec<(u32, u8)>, Vec<(String, u32, char, u8)>);
 /// GL has no push constants: naga writes a module's immediates as plain uniforms, one per
 /// scalar or vector, set with `glUniform*` before each dispatch. The third part lists them:
 /// `(uniform name, byte offset in the immediates, kind 'u' | 'i' | 'f', components)`.
-pub fn glsl_450(module: &naga::Module, info: &naga::valid::ModuleInfo) -> Result<GlslOut, String> {
+pub fn glsl_450(module: &naga::Module, info: &naga::valid::ModuleInfo, zero_workgroup: bool) -> Result<GlslOut, String> {
     let mut points = Vec::new();
     let (mut storage, mut uniform, mut texture) = (0u8, 0u8, 0u8);
     let mut bound: Vec<(u32, &naga::GlobalVariable)> =
@@ -34,7 +34,7 @@ pub fn glsl_450(module: &naga::Module, info: &naga::valid::ModuleInfo) -> Result
         }
         points.push((b, point));
     }
-    let (text, reflection) = write_450(module, info, naga::ShaderStage::Compute, "main", binding_map)?;
+    let (text, reflection) = write_450(module, info, naga::ShaderStage::Compute, "main", binding_map, zero_workgroup)?;
     let mut uniforms = Vec::new();
     for item in reflection.immediates_items {
         use naga::back::glsl::{GlslScalarKind as K, GlslUniformType as T};
@@ -84,23 +84,25 @@ pub fn glsl_450_stage(
         binding_map.insert(b, *counter);
         *counter += 1;
     }
-    Ok(write_450(module, info, stage, entry, binding_map)?.0)
+    Ok(write_450(module, info, stage, entry, binding_map, false)?.0)
 }
 
 /// naga's GLSL 4.50 core of entry point `entry` (of `stage`) with `binding_map`, and its
-/// reflection; workgroup memory zeroed as WGSL requires (compute only).
+/// reflection; workgroup memory zeroed as WGSL requires where `zero_workgroup` (a compute
+/// kernel that writes all it reads first may go without: shaders/build.rs).
 fn write_450(
     module: &naga::Module,
     info: &naga::valid::ModuleInfo,
     stage: naga::ShaderStage,
     entry: &str,
     binding_map: naga::back::glsl::BindingMap,
+    zero_workgroup: bool,
 ) -> Result<(String, naga::back::glsl::ReflectionInfo), String> {
     let options = naga::back::glsl::Options {
         version: naga::back::glsl::Version::Desktop(450),
         writer_flags: naga::back::glsl::WriterFlags::empty(),
         binding_map,
-        zero_initialize_workgroup_memory: stage == naga::ShaderStage::Compute,
+        zero_initialize_workgroup_memory: zero_workgroup && stage == naga::ShaderStage::Compute,
     };
     let pipeline = naga::back::glsl::PipelineOptions { shader_stage: stage, entry_point: entry.into(), multiview: None };
     let mut text = String::new();

@@ -90,7 +90,7 @@ pub fn compile_glsl(name: &str, wgsl: &str) -> Result<GlslOut, String> {
     let mut validator =
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());
     let info = validator.validate(&module).map_err(|e| e.emit_to_string_with_path(wgsl, &path))?;
-    glsl_450(&module, &info)
+    glsl_450(&module, &info, true)
 }
 
 /// The `@binding`s (group 0) the compute entry point `main` of `wgsl` uses, as

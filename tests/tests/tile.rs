@@ -5,15 +5,14 @@
 //! halo), wind (the faces' wind computed in the tile) and two strain passes (a halo of 6).
 //! On llvmpipe every stage is its unfused kernel's arithmetic in the same order, so the
 //! bound is exactly 0, as tests/tests/bit_identity.rs holds the other recipes; elsewhere
-//! only reported. One solver per API: llvmpipe compiles the tile's shader at its first
-//! dispatch, for about two minutes.
+//! only reported.
 
 use clothlab_core::scene::Aabb;
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Scene, SimParams, Solver};
 use clothlab_engine::kernels::{SUBSTEP_TILE, TILE_VEL};
-use clothlab_engine::recipe::tile_side;
-use clothlab_engine::validate::validate_kernels_with;
+use clothlab_engine::recipe::{Command, KernelRunner, tile_command, tile_side};
+use clothlab_engine::validate::{KernelInput, validate_kernels_with};
 use clothlab_engine::{Engine, GpuSolver, SolverOptions, VariantSpec};
 use clothlab_tests::or_skip;
 
@@ -40,6 +39,38 @@ fn exact<E: Engine>(s: Option<GpuSolver<E>>, label: &str) {
     let start = s.state().unwrap();
     let sc = s.scene().clone();
     let mut checks = validate_kernels_with(&mut s, &kernels, &sc, 0x711e, &params()).unwrap();
+    // The temporal loop: two substeps per dispatch, a halo of 12, tiles of 8 (37 = 4 × 8 + 5),
+    // the disturbed cloth with its grab, against the twin's two substeps.
+    let input = KernelInput::for_scene(&sc, 0x7e3, &params()).unwrap();
+    let mut p = input.p;
+    p.tile_substeps = 2;
+    assert_eq!(tile_side(p.strain_passes, 2), 8);
+    let tile = kernels[0];
+    let commands = [tile_command(tile, input.engine.topology(), p.strain_passes, 2), Command::Swap];
+    let mut want = input.for_kernel(tile);
+    let mut got = want.clone();
+    for v in [&mut got.pos_out, &mut got.aux[0]] {
+        v.iter_mut().for_each(|x| *x = [f32::NAN; 4]);
+    }
+    input.engine.run(&commands, &p, 0, &mut want);
+    s.run_commands(&commands, &p, &mut got).unwrap();
+    let diff = |a: &[[f32; 4]], b: &[[f32; 4]]| {
+        a.iter()
+            .flatten()
+            .zip(b.iter().flatten())
+            .map(|(x, y)| if x == y { 0.0 } else { (x - y).abs() })
+            .fold(0.0, f32::max)
+    };
+    let scale = want.pos.iter().flatten().fold(0.0f32, |m, x| m.max(x.abs()));
+    let (dx, dv) = (diff(&got.pos, &want.pos), diff(&got.aux[0], &want.aux[0]));
+    println!("{label:8} two substeps per dispatch: pos max {dx:.2e}, vel max {dv:.2e}");
+    assert!(dx.is_finite() && dv.is_finite(), "{label}: the temporal loop left a point unwritten");
+    if adapter.contains("llvmpipe") {
+        assert_eq!((dx, dv), (0.0, 0.0), "{label} on {adapter}: the temporal loop differs from two twin substeps");
+    } else {
+        // The kernel's own bound (a disturbed cloth through twelve stages: see SUBSTEP_TILE).
+        assert!(dx <= 1e-3 * scale, "{label} on {adapter}: two substeps per dispatch {dx:.2e} off");
+    }
     s.set_state(&start).unwrap();
     checks.push(validate_rollout(&mut s, 4).unwrap());
     for c in &checks {
