@@ -28,19 +28,20 @@ struct Base4 {
 }
 
 // The region's side (tile + halo on both sides), its points, the invocations and how many
-// region points each takes in a stage. 32 × 32 points of 32 bytes: 32 KiB of workgroup
-// memory (engine::kernels::TILE_WORKGROUP_BYTES; the solver refuses the rung where the
+// region points each takes in a stage. 32 × 32 points of 32 bytes (two `vec4`): 32 KiB of
+// workgroup memory (engine::kernels::TILE_WORKGROUP_BYTES; the solver refuses the rung where the
 // adapter has less).
 const REGION: i32 = 32;
 const REGION_POINTS: u32 = 1024u;
 const TILE_THREADS: u32 = 256u;
 const PER_THREAD: u32 = 4u;
 
+// Positions (w: the inverse-mass flag) and velocities (w: the strain pass's count of
+// over-stretched springs, which the velocity does not need): one `vec4` load each per
+// point, the form in which drivers that emulate these loads lane by lane (llvmpipe) pay
+// least.
 var<workgroup> tx: array<vec4<f32>, REGION_POINTS>;
-var<workgroup> tvx: array<f32, REGION_POINTS>;
-var<workgroup> tvy: array<f32, REGION_POINTS>;
-var<workgroup> tvz: array<f32, REGION_POINTS>;
-var<workgroup> tcount: array<f32, REGION_POINTS>;
+var<workgroup> tv: array<vec4<f32>, REGION_POINTS>;
 
 // The grid column and row of region point (0, 0).
 var<private> origin: vec2<i32>;
@@ -87,7 +88,7 @@ fn region_x(c: i32, r: i32) -> vec3<f32> {
 }
 
 fn region_v(k: u32) -> vec3<f32> {
-    return vec3<f32>(tvx[k], tvy[k], tvz[k]);
+    return tv[k].xyz;
 }
 
 // Region point (c, r) as the gather's neighbour.
@@ -110,29 +111,39 @@ fn force_and_move(c: i32, r: i32) -> Moved {
     let a = region_nb(c, r);
     let col = origin.x + c;
     let row = origin.y + r;
-    // The wind of its six faces (face_wind.wgsl's block_base for one particle: quads
-    // up-left, up-right, down-left, down-right).
+    // Its 12 spring neighbours in slot order, each loaded once: (-1,0) (1,0) (0,-1) (0,1)
+    // (-1,-1) (1,-1) (-1,1) (1,1) (-2,0) (2,0) (0,-2) (0,2).
+    let s0 = region_nb(c - 1, r);
+    let s1 = region_nb(c + 1, r);
+    let s2 = region_nb(c, r - 1);
+    let s3 = region_nb(c, r + 1);
+    let s4 = region_nb(c - 1, r - 1);
+    let s5 = region_nb(c + 1, r - 1);
+    let s6 = region_nb(c - 1, r + 1);
+    let s7 = region_nb(c + 1, r + 1);
+    // The wind of its six faces from the same points (face_wind.wgsl's block_base for one
+    // particle: quads up-left, up-right, down-left, down-right; a corner off the grid holds
+    // zeros, and its quad's wind is zero).
     var base = vec3<f32>(0.0);
     if windy() {
-        let ul = quad_wind(region_x(c - 1, r - 1), region_x(c, r - 1), region_x(c - 1, r), region_x(c, r), col - 1, row - 1);
-        let ur = quad_wind(region_x(c, r - 1), region_x(c + 1, r - 1), region_x(c, r), region_x(c + 1, r), col, row - 1);
-        let dl = quad_wind(region_x(c - 1, r), region_x(c, r), region_x(c - 1, r + 1), region_x(c, r + 1), col - 1, row);
-        let dr = quad_wind(region_x(c, r), region_x(c + 1, r), region_x(c, r + 1), region_x(c + 1, r + 1), col, row);
+        let ul = quad_wind(s4.pt.x, s2.pt.x, s0.pt.x, a.pt.x, col - 1, row - 1);
+        let ur = quad_wind(s2.pt.x, s5.pt.x, a.pt.x, s1.pt.x, col, row - 1);
+        let dl = quad_wind(s0.pt.x, a.pt.x, s6.pt.x, s3.pt.x, col - 1, row);
+        let dr = quad_wind(a.pt.x, s1.pt.x, s3.pt.x, s7.pt.x, col, row);
         base = vertex_wind(ul, ur, dl, dr);
     }
     let f = forces_at_mean(vec4<f32>(base, 0.0), a.pt.v).xyz;
-    // Slots (-1,0) (1,0) (0,-1) (0,1) (-1,-1) (1,-1) (-1,1) (1,1) (-2,0) (2,0) (0,-2) (0,2).
     let acc = grid_springs(
         f,
         a.pt,
-        region_nb(c - 1, r),
-        region_nb(c + 1, r),
-        region_nb(c, r - 1),
-        region_nb(c, r + 1),
-        region_nb(c - 1, r - 1),
-        region_nb(c + 1, r - 1),
-        region_nb(c - 1, r + 1),
-        region_nb(c + 1, r + 1),
+        s0,
+        s1,
+        s2,
+        s3,
+        s4,
+        s5,
+        s6,
+        s7,
         region_nb(c - 2, r),
         region_nb(c + 2, r),
         region_nb(c, r - 2),
@@ -171,14 +182,14 @@ fn limit_at(c: i32, r: i32) -> Moved {
     let i = region_particle(c, r);
     let xi = x4.xyz;
     let wi = mobility(i, x4.w);
-    let ci = tcount[k];
+    let ci = tv[k].w;
     var corr = Correction(vec3<f32>(0.0), 0.0);
     for (var s = 0u; s < STRAIN_SLOTS; s++) {
         let bc = c + STRAIN_DC[s];
         let br = r + STRAIN_DR[s];
         if region_inside(bc, br) {
             let kb = region_index(bc, br);
-            limit_spring(&corr, region_particle(bc, br), tx[kb], interior.slots[s].rest, xi, wi, ci, tcount[kb]);
+            limit_spring(&corr, region_particle(bc, br), tx[kb], interior.slots[s].rest, xi, wi, ci, tv[kb].w);
         }
     }
     let out = finish(i, x4, wi, corr);
@@ -192,9 +203,7 @@ fn store_stage(tid: u32, m: i32) {
         let cr = region_cr(k);
         if in_stage(cr.x, cr.y, m) {
             tx[k] = rx[j];
-            tvx[k] = rv[j].x;
-            tvy[k] = rv[j].y;
-            tvz[k] = rv[j].z;
+            tv[k] = vec4<f32>(rv[j], 0.0);
         }
         j++;
     }
@@ -227,9 +236,7 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
             v = vel[i];
         }
         tx[k] = x4;
-        tvx[k] = v.x;
-        tvy[k] = v.y;
-        tvz[k] = v.z;
+        tv[k] = vec4<f32>(v.xyz, 0.0);
     }
     workgroupBarrier();
     for (var sub = 0u; sub < substeps; sub++) {
@@ -254,7 +261,7 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
             for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
                 let cr = region_cr(k);
                 if in_stage(cr.x, cr.y, mc) {
-                    tcount[k] = count_at(cr.x, cr.y);
+                    tv[k].w = count_at(cr.x, cr.y);
                 }
             }
             workgroupBarrier();
