@@ -634,6 +634,10 @@ impl VariantSpec {
 mod tests {
     use super::*;
 
+    /// An adapter with nothing optional but the tile's workgroup memory, running a grid.
+    const BARE_CAPS: Caps =
+        Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true, tile: true };
+
     const ALL_CAPS: Caps =
         Caps { float_atomics: true, immediates: true, table_image: true, subgroups: true, grid: true, tile: true };
 
@@ -654,14 +658,7 @@ mod tests {
 
     #[test]
     fn presets_fit_the_adapter_and_explicit_switches_are_refused_where_it_lacks_them() {
-        let bare = Caps {
-            float_atomics: false,
-            immediates: false,
-            table_image: false,
-            subgroups: false,
-            grid: true,
-            tile: true,
-        };
+        let bare = BARE_CAPS;
         let opt = VariantSpec::from(Variant::OPTIMIZED).resolve(&bare, "wgpu").unwrap();
         assert_eq!((opt.constants, opt.atomics, opt.neighbours), (Constants::Uniform, Atomics::Cas, Neighbours::Load));
         let thesis = VariantSpec::from(Variant::THESIS).resolve(&bare, "wgpu").unwrap();
@@ -710,14 +707,7 @@ mod tests {
             .resolve(&ALL_CAPS, "vulkan")
             .unwrap_err();
         assert!(e.0.contains("fusion=tile") && e.0.contains("normals=frame"), "{e}");
-        let bare = Caps {
-            float_atomics: false,
-            immediates: false,
-            table_image: false,
-            subgroups: false,
-            grid: true,
-            tile: true,
-        };
+        let bare = BARE_CAPS;
         let rungs = ladder(&bare, "wgpu");
         let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
         assert_eq!(skipped, ["+constants=push", "+table=image", "+neighbours=shuffle"]);

@@ -6,11 +6,8 @@
 #    particle-substep from GPU timestamps (sim's median). Results under /tmp/r, packed into
 #    $OUT/results.tgz after every step.
 set -u
-for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-export __EGL_VENDOR_LIBRARY_FILENAMES=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
-export NODEVICE_SELECT=1
-B=$PWD/.dev/clothlab
+# shellcheck source=../device-env.sh
+. docs/bench/device-env.sh
 R=/tmp/r; mkdir -p $R
 pack() { tar czf $OUT/results.tgz -C /tmp r; }
 nvidia-smi > $R/nvidia-smi.txt 2>&1

@@ -3,11 +3,8 @@
 # strain passes (the first call's 2 passes missed the kernel bound: compounding or a bug?),
 # then GL (the first call's GL runs never finished within 40 s).
 set -u
-for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-export __EGL_VENDOR_LIBRARY_FILENAMES=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
-export NODEVICE_SELECT=1
-B=$PWD/.dev/clothlab
+# shellcheck source=../device-env.sh
+. docs/bench/device-env.sh
 for s in 0 1; do
   ( time timeout 45 $B validate --backends vulkan --set-variant fusion=tile --n 37 --steps 16 \
     --set strain_iterations=$s ) > $OUT/validate-tile-vulkan-s$s.txt 2>&1
