@@ -272,6 +272,9 @@ The switches (values in ladder order, the naive one first):
                                   passed between lanes by subgroup shuffles
   draw=copy|shared                the renderer draws from copies made every frame, or
                                   from the simulation's own buffers
+  temporal=off|on                 the tiles advance one substep per dispatch, or several
+                                  with a deeper halo (a whole frame where the cloth fits
+                                  one tile; needs fusion=tile)
 A switch the adapter lacks, or two that exclude each other, is refused in one line.";
 
 /// The variant of the GPU backends: a preset and changes of single switches.

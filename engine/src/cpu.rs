@@ -15,7 +15,7 @@ use clothlab_core::{SimParams, Solver, SolverError};
 
 use crate::kernels::{HostBuffers, KernelRef, TwinArgs};
 use crate::recipe::KernelRunner;
-use crate::recipe::{Command, Integration, Variant, frame_end, kernels_of, recipe_for};
+use crate::recipe::{Command, Integration, Variant, dispatch_substeps, frame_end, kernels_of, recipe_for};
 
 /// Runs commands through the twins.
 #[derive(Debug, Clone)]
@@ -127,6 +127,8 @@ pub struct RecipeSolver {
     /// What runs once after a frame's last substep.
     end: Vec<Command>,
     timer: TimingRecorder,
+    /// Substeps one run of `commands` advances (`temporal=on`; 1 otherwise).
+    group: u32,
 }
 
 impl RecipeSolver {
@@ -141,7 +143,19 @@ impl RecipeSolver {
         let commands = recipe_for(&variant, params.strain_iterations, Integration::of(&params), &engine.topo);
         let end = frame_end(&variant, Integration::of(&params));
         let name = variant.solver_name("cpu-recipe");
-        Ok(Self { engine, name, variant, params, grab: None, bufs, commands, end, timer: TimingRecorder::default() })
+        let group = dispatch_substeps(&variant, Integration::of(&params), params.strain_iterations, &engine.topo);
+        Ok(Self {
+            engine,
+            name,
+            variant,
+            params,
+            grab: None,
+            bufs,
+            commands,
+            end,
+            timer: TimingRecorder::default(),
+            group,
+        })
     }
 
     /// The commands of one substep.
@@ -189,6 +203,8 @@ impl Solver for RecipeSolver {
         self.commands =
             recipe_for(&self.variant, params.strain_iterations, Integration::of(&params), &self.engine.topo);
         self.end = frame_end(&self.variant, Integration::of(&params));
+        self.group =
+            dispatch_substeps(&self.variant, Integration::of(&params), params.strain_iterations, &self.engine.topo);
         self.params = params;
         Ok(())
     }
@@ -199,17 +215,19 @@ impl Solver for RecipeSolver {
 
     fn step_frame(&mut self) -> Result<(), SolverError> {
         let t_frame = Instant::now();
-        let p = StepParams::new(&self.params, &self.engine.scene, self.grab);
-        for s in 0..self.params.substeps {
+        let mut p = StepParams::new(&self.params, &self.engine.scene, self.grab);
+        p.tile_substeps = self.group;
+        // With temporal blocking one run of the commands advances `group` substeps.
+        for s in (0..self.params.substeps).filter(|s| s.is_multiple_of(self.group)) {
             let t_substep = Instant::now();
             for c in &self.commands {
                 let t = Instant::now();
                 self.engine.command(c, &p, s, &mut self.bufs);
                 if let Some(k) = c.kernel() {
-                    self.timer.record(k.def.label, t.elapsed().as_nanos() as f64);
+                    self.timer.record(k.def.label, t.elapsed().as_nanos() as f64 / f64::from(self.group));
                 }
             }
-            self.timer.record(SUBSTEP, t_substep.elapsed().as_nanos() as f64);
+            self.timer.record(SUBSTEP, t_substep.elapsed().as_nanos() as f64 / f64::from(self.group));
         }
         let last = self.params.substeps.saturating_sub(1);
         for c in &self.end {

@@ -10,7 +10,7 @@ use clothlab_core::{Integrator, SolverError, cpu};
 
 use crate::kernels::{self as k, Flavor, HostBuffers, KernelDef, KernelRef};
 
-use crate::variant::{Accumulate, Fusion, Normals};
+use crate::variant::{Accumulate, Fusion, Normals, Temporal};
 pub use crate::variant::{Caps, Variant};
 
 /// One command of a recipe.
@@ -94,6 +94,8 @@ pub struct Integration {
     pub vbd_rho_bits: u32,
     /// Self-collision after the strain limit (core::cpu::self_collide).
     pub self_collision: bool,
+    /// Substeps per frame (what temporal blocking may fold into one dispatch).
+    pub substeps: u32,
 }
 
 impl Integration {
@@ -105,6 +107,7 @@ impl Integration {
         vbd_iterations: 0,
         vbd_rho_bits: 0,
         self_collision: false,
+        substeps: 1,
     };
 
     /// What `params` ask for.
@@ -116,6 +119,7 @@ impl Integration {
             vbd_iterations: params.vbd_iterations,
             vbd_rho_bits: params.vbd_rho.to_bits(),
             self_collision: params.self_collision,
+            substeps: params.substeps,
         }
     }
 }
@@ -222,12 +226,48 @@ pub fn tile_side(strain_passes: u32, substeps: u32) -> u32 {
     k::TILE_REGION.saturating_sub(2 * halo)
 }
 
+/// The tiles of an `n × n` grid: their side and halo. A grid that fits one region is one
+/// tile without a halo (nothing lies outside it), whatever the substeps per dispatch.
+pub fn tile_geometry(n: u32, strain_passes: u32, substeps: u32) -> (u32, u32) {
+    if n <= k::TILE_REGION {
+        return (k::TILE_REGION, 0);
+    }
+    let side = tile_side(strain_passes, substeps);
+    (side, (k::TILE_REGION - side) / 2)
+}
+
+/// The smallest tile side temporal blocking accepts: below it a tile computes more than
+/// 16 region points per point it keeps.
+pub const TILE_MIN_SIDE: u32 = 8;
+
+/// Substeps per dispatch of `variant` (`temporal=on` with the tiles running: the most
+/// that divide the frame's substeps and leave tiles of at least [`TILE_MIN_SIDE`]; a
+/// whole frame where the cloth fits one region), 1 otherwise.
+pub fn dispatch_substeps(
+    variant: &Variant,
+    how: Integration,
+    strain_passes: u32,
+    topo: &clothlab_core::ClothTopology,
+) -> u32 {
+    if variant.temporal != Temporal::On || topo.mesh.is_some() || !tiled(variant, how, strain_passes) {
+        return 1;
+    }
+    let substeps = how.substeps.max(1);
+    if topo.n <= k::TILE_REGION {
+        return substeps;
+    }
+    (1..=substeps)
+        .rev()
+        .find(|&g| substeps.is_multiple_of(g) && tile_side(strain_passes, g) >= TILE_MIN_SIDE)
+        .unwrap_or(1)
+}
+
 /// The points the tiled substep's workgroups load on `topo` (every tile's region on the
 /// grid, halos counted again by each tile that loads them): what its reads of the
 /// positions and velocities move, against `n²` for a kernel without a halo.
 pub fn tile_loaded_points(topo: &clothlab_core::ClothTopology, strain_passes: u32, substeps: u32) -> u64 {
-    let side = tile_side(strain_passes, substeps).max(1) as i64;
-    let halo = (k::TILE_REGION as i64 - side) / 2;
+    let (side, halo) = tile_geometry(topo.n, strain_passes, substeps);
+    let (side, halo) = (side.max(1) as i64, halo as i64);
     let n = topo.n as i64;
     // Separable: the region's columns on the grid, summed over the tiles of a row.
     let per_axis: i64 = (0..(n + side - 1) / side)
@@ -248,12 +288,13 @@ pub fn bytes_moved(
     topo: &clothlab_core::ClothTopology,
     table_uniform: bool,
     strain_passes: u32,
+    substeps: u32,
 ) -> u64 {
     let bytes = k::compulsory_bytes(kernel, topo, table_uniform);
     if kernel.def != &k::SUBSTEP_TILE {
         return bytes;
     }
-    let extra = tile_loaded_points(topo, strain_passes, 1).saturating_sub(topo.num_particles() as u64);
+    let extra = tile_loaded_points(topo, strain_passes, substeps).saturating_sub(topo.num_particles() as u64);
     bytes + extra * 32
 }
 
@@ -269,7 +310,7 @@ pub fn tile_command(
     strain_passes: u32,
     substeps: u32,
 ) -> Command {
-    let side = tile_side(strain_passes, substeps).max(1);
+    let side = tile_geometry(topo.n, strain_passes, substeps).0.max(1);
     let per_row = topo.n.div_ceil(side);
     Command::Range { kernel, first: 0, count: per_row * per_row * clothlab_core::layout::WORKGROUP }
 }
@@ -303,7 +344,9 @@ pub fn recipe_for(
                 vbd_sweep(kr, topo)
             }
             Command::Dispatch(kr) if kr.def == &k::VBD_ACCELERATE => vec![vbd_acceleration(kr, topo, sweep, rho)],
-            Command::Dispatch(kr) if kr.def == &k::SUBSTEP_TILE => vec![tile_command(kr, topo, strain_passes, 1)],
+            Command::Dispatch(kr) if kr.def == &k::SUBSTEP_TILE => {
+                vec![tile_command(kr, topo, strain_passes, dispatch_substeps(variant, how, strain_passes, topo))]
+            }
             c => vec![c],
         })
         .collect();

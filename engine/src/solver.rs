@@ -85,6 +85,26 @@ pub struct GpuSolver<E: Engine> {
     stats: Vec<SubstepStats>,
     timer: TimingRecorder,
     time_kernels: bool,
+    /// Substeps one recording of the recipe advances (`temporal=on`: the tiles' several
+    /// per dispatch; 1 otherwise).
+    group: u32,
+}
+
+/// Substeps per recording of `variant`'s recipe on `topo` with `params`, refused with
+/// per-substep statistics (a dispatch of several substeps has no statistics between them).
+fn recipe_group(
+    variant: &Variant,
+    params: &SimParams,
+    topo: &ClothTopology,
+    options: SolverOptions,
+) -> Result<u32, SolverError> {
+    let group = crate::recipe::dispatch_substeps(variant, Integration::of(params), params.strain_iterations, topo);
+    if group > 1 && options.stats != StatsMode::Off {
+        return Err(SolverError::Unsupported(format!(
+            "temporal=on advances {group} substeps per dispatch: per-substep statistics need temporal=off"
+        )));
+    }
+    Ok(group)
 }
 
 impl<E: Engine> GpuSolver<E> {
@@ -228,6 +248,7 @@ impl<E: Engine> GpuSolver<E> {
         };
         engine.bind([set(0), set(1)])?;
         let step = recipe_for(&variant, params.strain_iterations, Integration::of(&params), &topo);
+        let group = recipe_group(&variant, &params, &topo, options)?;
         let end = frame_end(&variant, Integration::of(&params));
         let mut build_list: Vec<KernelRef> = kernels_for(&variant);
         build_list.extend(kernels_of(&step));
@@ -256,6 +277,7 @@ impl<E: Engine> GpuSolver<E> {
             stats: Vec::new(),
             timer: TimingRecorder::default(),
             time_kernels: true,
+            group,
         };
         for k in build_list {
             solver.build(k)?;
@@ -567,6 +589,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
             self.write(Buf::Interior, bytemuck::bytes_of(&interior))?;
         }
         let step = recipe_for(&self.variant, params.strain_iterations, Integration::of(&params), &self.topo);
+        let group = recipe_group(&self.variant, &params, &self.topo, self.options)?;
         let end = frame_end(&self.variant, Integration::of(&params));
         for k in kernels_of(&step).into_iter().chain(kernels_of(&end)) {
             self.build(k)?;
@@ -574,6 +597,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
         self.engine.check("building the integrator's kernels")?;
         self.recipe = step;
         self.end = end;
+        self.group = group;
         self.params = params;
         Ok(())
     }
@@ -585,6 +609,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
     fn step_frame(&mut self) -> Result<(), SolverError> {
         let t0 = Instant::now();
         self.sp = StepParams::new(&self.params, &self.scene, self.grab);
+        self.sp.tile_substeps = self.group;
         let commands = self.commands();
         let stats = self.options.stats != StatsMode::Off;
         let substeps = self.params.substeps;
@@ -634,8 +659,10 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 self.hazards.add(0, written);
                 self.barrier(true);
             }
-            for s in 0..per_submission {
-                self.record(&commands, k * per_submission + s, &mut q, &mut labels);
+            // With temporal blocking one recording advances `group` substeps.
+            let group = self.group;
+            for s in (0..per_submission).map(|s| k * per_submission + s).filter(|s| s.is_multiple_of(group)) {
+                self.record(&commands, s, &mut q, &mut labels);
             }
             let last = k + 1 == submissions;
             if last {
@@ -668,7 +695,15 @@ impl<E: Engine> Solver for GpuSolver<E> {
             self.timer.record(CPU_SUBMIT, submit_ns);
             let frame = if q > 0 {
                 let period = self.engine.info().timestamp_period_ns;
-                record_times(&mut self.timer, &labels, &finished.ticks, period, per_substep, per_end, substeps)
+                record_times(
+                    &mut self.timer,
+                    &labels,
+                    &finished.ticks,
+                    period,
+                    per_substep,
+                    per_end,
+                    (substeps, self.group),
+                )
             } else {
                 self.engine.finish()?;
                 t0.elapsed().as_nanos() as f64

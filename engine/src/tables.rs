@@ -99,8 +99,9 @@ pub fn spring_halves(springs: &[Spring]) -> (&[Spring], &[Spring]) {
 /// `substeps` substeps run once per frame (recipe::frame_end): each is recorded as its
 /// time per substep (divided by `substeps`), and their sum divided alike is added to every
 /// substep sample, so that a substep row is what the frame costs per substep. An end that
-/// was not timed in full (the query limit) is left out. Returns the span in ns (first
-/// begin to last end).
+/// was not timed in full (the query limit) is left out. With temporal blocking the recipe
+/// ran once per `group` substeps: each recording's times are shared by its `group`
+/// substeps (1 otherwise). Returns the span in ns (first begin to last end).
 pub fn record_times(
     timer: &mut clothlab_core::TimingRecorder,
     labels: &[&'static str],
@@ -108,12 +109,16 @@ pub fn record_times(
     period_ns: f64,
     per_substep: usize,
     per_end: usize,
-    substeps: u32,
+    (substeps, group): (u32, u32),
 ) -> f64 {
-    let ns_of = |k: usize| ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * period_ns;
-    let in_substeps = labels.len().min(substeps as usize * per_substep);
+    // With temporal blocking the recipe ran once per `group` substeps: each recording's
+    // times are shared by its substeps.
+    let group = group.max(1);
+    let recordings = substeps.div_ceil(group);
+    let ns_of = |k: usize| ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * period_ns / f64::from(group);
+    let in_substeps = labels.len().min(recordings as usize * per_substep);
     let end = &labels[in_substeps..];
-    let per = f64::from(substeps.max(1));
+    let per = f64::from(recordings.max(1));
     let timed_end = per_end > 0 && end.len() == per_end;
     let share = if timed_end { (in_substeps..labels.len()).map(ns_of).sum::<f64>() / per } else { 0.0 };
     let mut substep_ns = share;
@@ -195,7 +200,7 @@ mod tests {
             t += d + 5;
         }
         let mut timer = TimingRecorder::default();
-        let span = record_times(&mut timer, &labels, &ticks, 1.0, 2, 2, 2);
+        let span = record_times(&mut timer, &labels, &ticks, 1.0, 2, 2, (2, 1));
         let table = timer.table();
         let median = |l: &str| table.get(l).map(|r| r.median_ns).unwrap();
         assert_eq!(median(SUBSTEP), 80.0);
@@ -203,7 +208,7 @@ mod tests {
         assert_eq!(span, (t - 5 - 1000) as f64);
         // An end cut short by the query limit is left out, not counted as a substep.
         let mut timer = TimingRecorder::default();
-        record_times(&mut timer, &labels[..5], &ticks[..10], 1.0, 2, 2, 2);
+        record_times(&mut timer, &labels[..5], &ticks[..10], 1.0, 2, 2, (2, 1));
         let table = timer.table();
         assert_eq!(table.get(SUBSTEP).map(|r| (r.median_ns, r.samples)), Some((30.0, 2)));
         assert!(table.get("c").is_none());

@@ -81,6 +81,17 @@ pub enum Fusion {
     Tile,
 }
 
+/// How many substeps one dispatch of the tiled substep advances (temporal blocking).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Temporal {
+    /// One.
+    Off,
+    /// As many as divide the frame's substeps and leave tiles of at least
+    /// [`crate::recipe::TILE_MIN_SIDE`] (the halo grows with each); a whole frame where the
+    /// cloth fits one region (`recipe::dispatch_substeps`). Needs `fusion=tile`.
+    On,
+}
+
 /// How often the step is submitted to the queue.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Submit {
@@ -167,6 +178,8 @@ pub struct Variant {
     pub neighbours: Neighbours,
     /// What the renderer draws from.
     pub draw: Draw,
+    /// Substeps per dispatch of the tiled substep.
+    pub temporal: Temporal,
 }
 
 /// One switch: its key, its values (in ladder order: the naive one first) and what it
@@ -182,7 +195,7 @@ pub struct Switch {
 }
 
 /// Every switch.
-pub const SWITCHES: [Switch; 10] = [
+pub const SWITCHES: [Switch; 11] = [
     Switch {
         key: "springs",
         values: &["scatter", "gather"],
@@ -225,6 +238,11 @@ pub const SWITCHES: [Switch; 10] = [
         values: &["copy", "shared"],
         help: "the renderer draws from copies made every frame, or from the simulation's own buffers",
     },
+    Switch {
+        key: "temporal",
+        values: &["off", "on"],
+        help: "the tiled substep advances one substep per dispatch, or several with a deeper halo (a whole frame where the cloth fits one tile); needs fusion=tile",
+    },
 ];
 
 /// The presets, by name.
@@ -246,6 +264,7 @@ impl Variant {
         colliders: Colliders::Storage,
         neighbours: Neighbours::Load,
         draw: Draw::Copy,
+        temporal: Temporal::Off,
     };
     /// clothlab's optimized step, the [`LADDER`]'s rung before the tiles (every earlier
     /// rung's switch set; `fusion=tile` is left out: slower on lavapipe and on the H100,
@@ -268,6 +287,7 @@ impl Variant {
         colliders: Colliders::Uniform,
         neighbours: Neighbours::Shuffle,
         draw: Draw::Shared,
+        temporal: Temporal::Off,
     };
     /// The thesis's optimized CUDA program (ch. 6.3.1): springs scattered with atomics,
     /// forces + Verlet + collisions fused, normals gathered from stored face normals, the
@@ -283,6 +303,7 @@ impl Variant {
         colliders: Colliders::Uniform,
         neighbours: Neighbours::Load,
         draw: Draw::Shared,
+        temporal: Temporal::Off,
     };
 
     /// Which value of switch `key` it has: the position in the switch's
@@ -300,6 +321,7 @@ impl Variant {
             "colliders" => self.colliders as usize,
             "neighbours" => self.neighbours as usize,
             "draw" => self.draw as usize,
+            "temporal" => self.temporal as usize,
             _ => return None,
         })
     }
@@ -333,7 +355,8 @@ impl Variant {
             "table" => self.table = [Table::Storage, Table::Image, Table::Uniform][i],
             "colliders" => self.colliders = [Colliders::Storage, Colliders::Uniform][i],
             "neighbours" => self.neighbours = [Neighbours::Load, Neighbours::Shuffle][i],
-            _ => self.draw = [Draw::Copy, Draw::Shared][i],
+            "draw" => self.draw = [Draw::Copy, Draw::Shared][i],
+            _ => self.temporal = [Temporal::Off, Temporal::On][i],
         }
         Ok(())
     }
@@ -435,6 +458,16 @@ impl Variant {
                 ));
             }
         }
+        if self.temporal == Temporal::On && !caps.grid {
+            return Err(VariantError(
+                "switch temporal=on: a mesh has no grid to cut into tiles; use temporal=off".into(),
+            ));
+        }
+        if self.temporal == Temporal::On && self.fusion != Fusion::Tile {
+            return Err(VariantError(
+                "switch temporal=on needs fusion=tile: several substeps per dispatch are the tiles' deeper halo".into(),
+            ));
+        }
         if self.fusion == Fusion::Clothlab && self.springs == Accumulate::Scatter {
             return Err(VariantError(
                 "switches fusion=clothlab and springs=scatter exclude each other: clothlab's fusion puts forces into the spring gather (use springs=gather, or fusion=none|thesis)".into(),
@@ -464,6 +497,9 @@ impl Variant {
         if self.fusion == Fusion::Tile && (!caps.grid || !caps.tile || self.table != Table::Uniform) {
             self.fusion = Fusion::Clothlab;
         }
+        if self.fusion != Fusion::Tile {
+            self.temporal = Temporal::Off;
+        }
         self
     }
 
@@ -485,7 +521,7 @@ impl Variant {
 
 /// The optimisation ladder: from `naive`, one switch at a time, in this order (each rung
 /// keeps the switches of the rungs before it).
-pub const LADDER: [(&str, &str); 14] = [
+pub const LADDER: [(&str, &str); 15] = [
     ("submit", "frame"),
     ("draw", "shared"),
     ("constants", "uniform"),
@@ -500,6 +536,7 @@ pub const LADDER: [(&str, &str); 14] = [
     ("neighbours", "shuffle"),
     ("normals", "frame"),
     ("fusion", "tile"),
+    ("temporal", "on"),
 ];
 
 /// One rung of the ladder.
@@ -624,6 +661,9 @@ impl VariantSpec {
         let tile_needs = v.springs == Accumulate::Gather && v.normals == Normals::Frame && v.table == Table::Uniform;
         if v.fusion == Fusion::Tile && !tile_needs && !self.set.iter().any(|(k, _)| k == "fusion") {
             v.fusion = Fusion::Clothlab;
+            if !self.set.iter().any(|(k, _)| k == "temporal") {
+                v.temporal = Temporal::Off;
+            }
         }
         v.check(caps, api)?;
         Ok(v)
@@ -687,20 +727,28 @@ mod tests {
         // The rung before the tiles is the optimized preset: the preset is what the ladder
         // measured fastest on lavapipe (issue 32; the tiles lost there, issue 47), so a new
         // rung must update both.
-        assert_eq!(rungs[rungs.len() - 2].variant, Variant::OPTIMIZED);
+        assert_eq!(rungs[rungs.len() - 3].variant, Variant::OPTIMIZED);
         let mut top = Variant::OPTIMIZED;
         top.set("fusion", "tile").unwrap();
+        assert_eq!(rungs[rungs.len() - 2].variant, top);
+        top.set("temporal", "on").unwrap();
         assert_eq!(rungs.last().unwrap().variant, top);
+        // Temporal blocking without the tiles: refused, and a preset's dropped.
+        let e = VariantSpec::parse("optimized", &["temporal=on".into(), "fusion=clothlab".into()])
+            .unwrap()
+            .resolve(&ALL_CAPS, "vulkan")
+            .unwrap_err();
+        assert!(e.0.contains("temporal=on") && e.0.contains("fusion=tile"), "{e}");
         // An adapter without the tile's workgroup memory: the rung refused in one line, the
         // preset asking for it explicitly refused, the preset's own fitted back.
         let small = Caps { tile: false, ..ALL_CAPS };
         let rungs = ladder(&small, "vulkan");
-        let e = rungs.last().unwrap().skipped.clone().unwrap();
+        let e = rungs[rungs.len() - 2].skipped.clone().unwrap();
         assert!(e.contains("fusion=tile") && e.contains("32 KiB"), "{e}");
         let e =
             VariantSpec::parse("optimized", &["fusion=tile".into()]).unwrap().resolve(&small, "vulkan").unwrap_err();
         assert!(e.0.contains("workgroup memory"), "{e}");
-        assert_eq!(top.fit(&small).fusion, Fusion::Clothlab);
+        assert_eq!((top.fit(&small).fusion, top.fit(&small).temporal), (Fusion::Clothlab, Temporal::Off));
         // A switch that takes away what the tiles need: refused when fusion=tile is named.
         let e = VariantSpec::parse("optimized", &["fusion=tile".into(), "normals=gather".into()])
             .unwrap()
@@ -733,7 +781,7 @@ mod tests {
         // The ladder on a mesh skips the two rungs, naming the mesh.
         let rungs = ladder(&mesh, "vulkan");
         let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
-        assert_eq!(skipped, ["+table=uniform", "+neighbours=shuffle", "+fusion=tile"]);
+        assert_eq!(skipped, ["+table=uniform", "+neighbours=shuffle", "+fusion=tile", "+temporal=on"]);
         assert!(rungs.iter().flat_map(|r| &r.skipped).all(|e| e.contains("mesh")));
         assert!(covering(&mesh, "vulkan").iter().all(|v| v.check(&mesh, "vulkan").is_ok()));
     }

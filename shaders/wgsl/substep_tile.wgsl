@@ -218,10 +218,14 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
     // known to be uniform.
     let passes = step_params.strain_passes;
     let substeps = max(step_params.tile_substeps, 1u);
-    let reach = substep_reach(passes);
+    let n = i32(p.n);
+    // A cloth that fits one region has no neighbours outside it: no halo, every stage on
+    // every point, as many substeps as asked (a whole frame in one dispatch). `unit`
+    // scales every margin: 1 with tiles, 0 then.
+    let unit = select(1, 0, n <= REGION);
+    let reach = substep_reach(passes) * unit;
     let halo = reach * i32(substeps);
     let side = tile_side(halo);
-    let n = i32(p.n);
     let per_row = (n + side - 1) / side;
     let t = i32(wg.x + wg.y * groups.x);
     origin = vec2<i32>((t % per_row) * side - halo, (t / per_row) * side - halo);
@@ -241,7 +245,7 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
     workgroupBarrier();
     for (var sub = 0u; sub < substeps; sub++) {
         // Forces, springs, wind, integrate, collide: every point 2 inside what is valid.
-        let m0 = i32(sub) * reach + 2;
+        let m0 = i32(sub) * reach + 2 * unit;
         var j = 0u;
         for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
             let cr = region_cr(k);
@@ -257,7 +261,8 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
         workgroupBarrier();
         for (var s = 0u; s < passes; s++) {
             // The counts one inside what is valid, the pass two inside.
-            let mc = m0 + 2 * i32(s) + 1;
+            let mc = m0 + (2 * i32(s) + 1) * unit;
+            let ml = mc + unit;
             for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
                 let cr = region_cr(k);
                 if in_stage(cr.x, cr.y, mc) {
@@ -268,7 +273,7 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
             j = 0u;
             for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
                 let cr = region_cr(k);
-                if in_stage(cr.x, cr.y, mc + 1) {
+                if in_stage(cr.x, cr.y, ml) {
                     let moved = limit_at(cr.x, cr.y);
                     rx[j] = vec4<f32>(moved.x, tx[k].w);
                     rv[j] = moved.v;
@@ -276,7 +281,7 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
                 j++;
             }
             workgroupBarrier();
-            store_stage(tid, mc + 1);
+            store_stage(tid, ml);
             workgroupBarrier();
         }
     }

@@ -104,3 +104,71 @@ fn the_tiled_substep_is_bit_identical_to_its_twins_on_every_api() {
     exact(or_skip(clothlab_wgpu::wgpu_solver(tile_spec(), scene(), params(), o()), "wgpu"), "wgpu");
     exact(or_skip(clothlab_gl::gl_solver(tile_spec(), scene(), params(), o()), "gl"), "gl");
 }
+
+fn temporal_spec() -> VariantSpec {
+    VariantSpec::parse("optimized", &["fusion=tile".into(), "temporal=on".into()]).unwrap()
+}
+
+/// A rollout of `s` (temporal blocking) against the CPU solver: exact on llvmpipe, within
+/// the rollout's bound elsewhere.
+fn rollout_exact(mut s: Box<dyn Solver>, label: &str, adapter: &str) {
+    let c = validate_rollout(&mut *s, 4).unwrap();
+    println!("{label:24} {} {:.2e}", c.what, c.max_abs);
+    if adapter.contains("llvmpipe") || adapter.is_empty() {
+        assert_eq!(c.max_abs, 0.0, "{label} on {adapter}: temporal blocking differs from the CPU");
+    } else {
+        assert!(c.error <= c.bound, "{label} on {adapter}: {:.2e} over {:.0e}", c.error, c.bound);
+    }
+}
+
+#[test]
+fn temporal_blocking_folds_substeps_into_one_dispatch_and_keeps_the_bits() {
+    use clothlab_engine::recipe::{Integration, dispatch_substeps, recipe_for};
+    use clothlab_engine::{RecipeSolver, StatsMode};
+    // n = 37, two passes: two substeps per dispatch (tiles of 8: four would leave none);
+    // n = 24 fits one region: the whole frame of 16 substeps in one dispatch.
+    for (n, group) in [(37, 2), (24, 16)] {
+        let mut sc = scene();
+        sc.cloth.n = n;
+        let p = params();
+        let v = temporal_spec()
+            .resolve(
+                &clothlab_engine::recipe::Caps {
+                    float_atomics: true,
+                    immediates: true,
+                    table_image: true,
+                    subgroups: true,
+                    grid: true,
+                    tile: true,
+                },
+                "vulkan",
+            )
+            .unwrap();
+        let (_, topo) = clothlab_core::build(&sc, &p).unwrap();
+        assert_eq!(dispatch_substeps(&v, Integration::of(&p), p.strain_iterations, &topo), group, "n = {n}");
+        // Two dispatches per recording (the tiles, the velocities' copy), whatever the group.
+        let cmds = recipe_for(&v, p.strain_iterations, Integration::of(&p), &topo);
+        assert_eq!(cmds.iter().filter(|c| c.kernel().is_some()).count(), 2, "n = {n}: {cmds:?}");
+        let cpu = RecipeSolver::new(clothlab_core::cpu::Exec::Serial, v, sc.clone(), p.clone()).unwrap();
+        rollout_exact(Box::new(cpu), &format!("cpu engine n={n}"), "");
+        let o = SolverOptions::default;
+        if let Some(s) =
+            or_skip(clothlab_vulkan::vulkan_solver(temporal_spec(), sc.clone(), p.clone(), true, o()), "vulkan")
+        {
+            let a = s.adapter();
+            rollout_exact(Box::new(s), &format!("vulkan n={n}"), &a);
+            // Per-substep statistics cannot be had between the substeps of one dispatch.
+            let stats = SolverOptions { stats: StatsMode::Atomics };
+            let e = clothlab_vulkan::vulkan_solver(temporal_spec(), sc.clone(), p.clone(), true, stats).err().unwrap();
+            assert!(e.to_string().contains("temporal=off"), "{e}");
+        }
+        if let Some(s) = or_skip(clothlab_wgpu::wgpu_solver(temporal_spec(), sc.clone(), p.clone(), o()), "wgpu") {
+            let a = s.adapter();
+            rollout_exact(Box::new(s), &format!("wgpu n={n}"), &a);
+        }
+        if let Some(s) = or_skip(clothlab_gl::gl_solver(temporal_spec(), sc.clone(), p.clone(), o()), "gl") {
+            let a = s.adapter();
+            rollout_exact(Box::new(s), &format!("gl n={n}"), &a);
+        }
+    }
+}

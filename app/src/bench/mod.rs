@@ -607,8 +607,10 @@ impl Job {
         // bytes; its dispatches (two per frame) are left out of the per-substep count.
         let end = clothlab_engine::recipe::frame_end(&v, how);
         let uniform = v.table == Table::Uniform;
+        // With temporal blocking a recording of the commands advances `group` substeps.
+        let group = clothlab_engine::recipe::dispatch_substeps(&v, how, params.strain_iterations, &topo);
         let bytes_of = |c: &[clothlab_engine::recipe::Command]| -> u64 {
-            dispatches(c).map(|k| bytes_moved(k, &topo, uniform, params.strain_iterations)).sum()
+            dispatches(c).map(|k| bytes_moved(k, &topo, uniform, params.strain_iterations, group)).sum()
         };
         Ok(LadderCell {
             api: self.backend.api().map_or("cpu", Api::name).into(),
@@ -618,8 +620,8 @@ impl Job {
             backend: backend.to_string(),
             switches: v.switches(),
             skipped,
-            dispatches: dispatches(&commands).count(),
-            bytes: bytes_of(&commands) + bytes_of(&end) / u64::from(params.substeps.max(1)),
+            dispatches: dispatches(&commands).count().div_ceil(group as usize),
+            bytes: bytes_of(&commands) / u64::from(group) + bytes_of(&end) / u64::from(params.substeps.max(1)),
         })
     }
 }
