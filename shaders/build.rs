@@ -195,16 +195,6 @@ fn colliders_uniform(storage: &str) -> String {
     s
 }
 
-/// Whether kernel `name`'s workgroup memory is zeroed before it runs (WGSL's rule, which
-/// naga writes as a store of the whole variable by one invocation). The tiled substep
-/// writes every element it reads first (its load stage the whole region; the counts
-/// before the pass that reads them), and its 32 KiB zeroed that way cost on llvmpipe two
-/// minutes of compiling and 6× its running time (measured: 10 100 against 1 630 ns per
-/// particle-substep at n = 64, what wgpu's driver-side zeroing ran at).
-fn zero_workgroup_memory(name: &str) -> bool {
-    !name.starts_with("substep_tile")
-}
-
 /// Validates `source`, writes it and its SPIR-V to `out`, and lists it in `list`.
 fn emit(out: &Path, list: &mut String, name: &str, source: &str) {
     let (module, info) = parse_and_validate(&format!("{name}.wgsl"), source);

@@ -330,7 +330,10 @@ impl Engine for WgpuEngine {
             layout: Some(pipeline_layout),
             module: &module,
             entry_point: Some("main"),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                zero_initialize_workgroup_memory: clothlab_shaders::zero_workgroup_memory(k.def.name),
+                ..Default::default()
+            },
             cache: None,
         });
         self.pipelines.insert(k, (pipeline, index));
