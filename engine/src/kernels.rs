@@ -638,7 +638,7 @@ fn forces_integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
 /// velocities and forces it read untouched (it keeps the forces and counts in
 /// workgroup memory).
 fn substep_tile(a: &TwinArgs, b: &mut HostBuffers) {
-    let (pos, vel, force, aux0) = (b.pos.clone(), b.vel.clone(), b.force.clone(), b.aux[0].clone());
+    let (pos, vel, force) = (b.pos.clone(), b.vel.clone(), b.force.clone());
     for _ in 0..a.p.tile_substeps.max(1) {
         forces_springs_wind(a, b);
         integrate_collide(a, b);
@@ -652,7 +652,6 @@ fn substep_tile(a: &TwinArgs, b: &mut HostBuffers) {
     b.pos_out = std::mem::replace(&mut b.pos, pos);
     b.vel = vel;
     b.force = force;
-    let _ = aux0;
 }
 
 /// The tiled substep's velocities (aux0) into place.
