@@ -3,7 +3,7 @@
 use std::ffi::{CStr, c_void};
 use std::mem::ManuallyDrop;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -99,6 +99,26 @@ pub struct Device {
     pub swapchain_loader: Option<ash::khr::swapchain::Device>,
 }
 
+/// The system's Vulkan loader, loaded once per process and never unloaded.
+///
+/// Each `Device` used to load (`dlopen`) its own: when the last one of a process was
+/// dropped, the loader was unloaded and with it the driver (lavapipe and LLVM) and the
+/// validation layer, all loaded again by the next `Device`. Test binaries, whose tests
+/// make and drop devices from two threads, did that dozens of times a run, and twice in
+/// ~60 CI runs one died with SIGSEGV while doing it (docs/testing.md, "The crash that was
+/// seen once"). One loader for the process is also what an application does.
+fn loader() -> Result<ash::Entry, VkError> {
+    static LOADER: OnceLock<Result<ash::Entry, String>> = OnceLock::new();
+    LOADER
+        .get_or_init(|| {
+            // SAFETY: loading the system's Vulkan loader; it is kept in this static for the
+            // rest of the process (never unloaded), and every Device holds a clone of it.
+            unsafe { ash::Entry::load() }.map_err(|e| e.to_string())
+        })
+        .clone()
+        .map_err(VkError::NoVulkan)
+}
+
 impl Device {
     /// Loads Vulkan, opens the first device with a compute queue, with the Khronos
     /// validation layer when `validation` is set and the layer is installed.
@@ -124,9 +144,7 @@ impl Device {
         validation: bool,
         window: Option<(raw_window_handle::RawDisplayHandle, raw_window_handle::RawWindowHandle)>,
     ) -> Result<(Arc<Self>, ()), VkError> {
-        // SAFETY: loading the system's Vulkan loader; its functions are used through ash's
-        // tables only while `_entry` lives (it is a field of the returned Device).
-        let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::NoVulkan(e.to_string()))?;
+        let entry = loader()?;
         // SAFETY: plain enumeration call with a valid entry.
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.map_err(vk_err("listing layers"))?;
         let has_layer = layers.iter().any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION));
