@@ -61,8 +61,8 @@ fn expected_layouts() -> Vec<Layout> {
         layout!(Spring, "Spring", [a, b, rest, ks, kd, kind]),
         layout!(Tether, "Tether", [pin, rest]),
         layout!(InteriorSlots, "InteriorSlots", [slots, enabled, _pad0, _pad1, _pad2]),
-        layout!(Sphere, "Sphere", [center, radius]),
-        layout!(Aabb, "Aabb", [min, max]),
+        layout!(Sphere, "Sphere", [center, radius, velocity, spin]),
+        layout!(Aabb, "Aabb", [min, max, velocity]),
     ]
 }
 

@@ -6,14 +6,16 @@
 //! recorded frame (its positions less the first frame's), and an
 //! animation of the mesh's weights with STEP interpolation: at frame k's time target k
 //! has weight 1 and every other 0. Blender imports this as shape keys driven by the
-//! animation; three.js and glTF viewers play it as is. The colliders are static meshes:
-//! each sphere (a UV sphere of 24 × 12), each box, and the floor as a square of 10 m.
+//! animation; three.js and glTF viewers play it as is. The colliders are meshes: each
+//! sphere (a UV sphere of 24 × 12), each box, and the floor as a square of 10 m; a moving
+//! collider's node is animated (translation, and a spinning sphere's rotation about its
+//! centre, LINEAR, sampled at the recorded frames' times: `core::motion`).
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 use anyhow::{Result, bail};
-use clothlab_core::{ClothState, ClothTopology, Scene};
+use clothlab_core::{ClothState, ClothTopology, ColliderId, Scene};
 use gltf::json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
@@ -281,10 +283,75 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         interpolation: Valid(json::animation::Interpolation::Step),
         output,
     };
+    // Moving colliders: their nodes' translation (and a spinning sphere's rotation about
+    // its centre) at every recorded frame's time, LINEAR.
+    let mut samplers = vec![sampler];
+    let mut moving = Vec::new();
+    for (id, m) in &scene.motions {
+        let (name, place, mesh) = match *id {
+            ColliderId::Sphere(k) => {
+                let Some(s) = scene.spheres.get(k) else { continue };
+                // The mesh around the node's origin, so that a rotation turns it in place.
+                (format!("sphere {k}"), s.center, sphere_mesh([0.0; 3], s.radius))
+            }
+            ColliderId::Box(k) => {
+                let Some(b) = scene.boxes.get(k) else { continue };
+                let (lo, hi) = ([b.min[0], b.min[1], b.min[2]], [b.max[0], b.max[1], b.max[2]]);
+                (format!("box {k}"), [0.0; 3], box_mesh(lo, hi))
+            }
+        };
+        let node = static_mesh(&mut root, &mut bin, &name, &mesh.0, &mesh.1);
+        let poses: Vec<_> = rec.times.iter().map(|&t| m.at(t as f64)).collect();
+        let at =
+            |p: &clothlab_core::motion::Pose| [place[0] + p.offset[0], place[1] + p.offset[1], place[2] + p.offset[2]];
+        root.nodes[node.value()].translation = Some(at(&poses[0]));
+        let tr: Vec<[f32; 3]> = poses.iter().map(at).collect();
+        let tv = view(&mut root, &mut bin, bytemuck::cast_slice(&tr), None);
+        let output = root.push(json_accessor(tv, tr.len(), T::Vec3));
+        let linear = |output| json::animation::Sampler {
+            extensions: Default::default(),
+            extras: Default::default(),
+            input,
+            interpolation: Valid(json::animation::Interpolation::Linear),
+            output,
+        };
+        samplers.push(linear(output));
+        let mut channels = vec![(node, samplers.len() - 1, json::animation::Property::Translation)];
+        if m.spin != [0.0; 3] {
+            // A constant spin ω: the rotation by |ω| t about ω / |ω|, as a quaternion.
+            let w = glam::Vec3::from(m.spin);
+            let q: Vec<[f32; 4]> = rec
+                .times
+                .iter()
+                .map(|&t| glam::Quat::from_axis_angle(w.normalize(), w.length() * t).to_array())
+                .collect();
+            let qv = view(&mut root, &mut bin, bytemuck::cast_slice(&q), None);
+            let output = root.push(json_accessor(qv, q.len(), T::Vec4));
+            samplers.push(linear(output));
+            channels.push((node, samplers.len() - 1, json::animation::Property::Rotation));
+        }
+        moving.push((*id, node, channels));
+    }
+    let mut collider_channels = Vec::new();
+    for (_, _, channels) in &moving {
+        for &(node, sampler, property) in channels {
+            collider_channels.push(json::animation::Channel {
+                sampler: json::Index::new(sampler as u32),
+                target: json::animation::Target {
+                    extensions: Default::default(),
+                    extras: Default::default(),
+                    node,
+                    path: Valid(property),
+                },
+                extensions: Default::default(),
+                extras: Default::default(),
+            });
+        }
+    }
     root.push(json::Animation {
         extensions: Default::default(),
         extras: Default::default(),
-        // Every cloth's weights from the one sampler.
+        // Every cloth's weights from the one sampler, then the colliders' motions.
         channels: cloths
             .iter()
             .map(|&node| json::animation::Channel {
@@ -298,18 +365,28 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
                 extensions: Default::default(),
                 extras: Default::default(),
             })
+            .chain(collider_channels)
             .collect(),
         name: Some("simulation".into()),
-        samplers: vec![sampler],
+        samplers,
     });
 
-    // The colliders.
+    // The colliders (the moving ones made above).
     let mut nodes = cloths;
+    let moved = |id: ColliderId| moving.iter().find(|m| m.0 == id).map(|m| m.1);
     for (k, s) in scene.spheres.iter().enumerate() {
+        if let Some(node) = moved(ColliderId::Sphere(k)) {
+            nodes.push(node);
+            continue;
+        }
         let (p, t) = sphere_mesh(s.center, s.radius);
         nodes.push(static_mesh(&mut root, &mut bin, &format!("sphere {k}"), &p, &t));
     }
     for (k, b) in scene.boxes.iter().enumerate() {
+        if let Some(node) = moved(ColliderId::Box(k)) {
+            nodes.push(node);
+            continue;
+        }
         let lo = [b.min[0], b.min[1], b.min[2]];
         let hi = [b.max[0], b.max[1], b.max[2]];
         let (p, t) = box_mesh(lo, hi);
@@ -415,6 +492,60 @@ mod tests {
         let w: Vec<f32> = w.into_f32().collect();
         assert_eq!(w.len(), 16);
         assert!(w.iter().enumerate().all(|(i, v)| *v == if i % 5 == 0 { 1.0 } else { 0.0 }));
+    }
+
+    #[test]
+    fn moving_colliders_are_recorded_as_node_animations() {
+        // Sphere 1 slides at 0.6 m/s along x and spins at 3 rad/s about y; box 0 is keyed
+        // up by 0.2 m over 0.05 s. Four frames 1/60 s apart: the node's translation at frame
+        // k is its placed centre plus the motion's offset (to the float: 1e-6 m), its
+        // rotation a turn of 3·t about y (1e-6).
+        use clothlab_core::{Aabb, Key, Motion};
+        let mut scene = Scene::with_n(6);
+        scene.boxes.push(Aabb::new([1.0, 0.0, 0.0], [1.5, 0.5, 0.5]));
+        let keys = vec![Key { t: 0.0, offset: [0.0; 3] }, Key { t: 0.05, offset: [0.0, 0.2, 0.0] }];
+        scene.motions = vec![
+            (ColliderId::Sphere(1), Motion { velocity: [0.6, 0.0, 0.0], spin: [0.0, 3.0, 0.0], ..Motion::default() }),
+            (ColliderId::Box(0), Motion { keys, ..Motion::default() }),
+        ];
+        let params = clothlab_core::SimParams::default();
+        let (state, topo) = clothlab_core::build(&scene, &params).unwrap();
+        let mut rec = Recording::default();
+        for k in 0..4 {
+            rec.push(k as f32 / 60.0, &state);
+        }
+        let bytes = glb(&rec, &topo, &scene).unwrap();
+        let (doc, buffers, _) = gltf::import_slice(&bytes).unwrap();
+        let get = |b: gltf::Buffer<'_>| Some(&buffers[b.index()][..]);
+        let anim = doc.animations().next().unwrap();
+        let channel = |node: &str, prop: gltf::animation::Property| {
+            anim.channels().find(|c| c.target().node().name() == Some(node) && c.target().property() == prop)
+        };
+        let c = scene.spheres[1].center;
+        let ch = channel("sphere 1", gltf::animation::Property::Translation).expect("the sphere's translation");
+        let gltf::animation::util::ReadOutputs::Translations(tr) = ch.reader(get).read_outputs().unwrap() else {
+            panic!()
+        };
+        for (k, p) in tr.enumerate() {
+            let want = [c[0] + 0.6 * rec.times[k], c[1], c[2]];
+            assert!((0..3).all(|i| (p[i] - want[i]).abs() < 1e-6), "frame {k}: {p:?} vs {want:?}");
+        }
+        let ch = channel("sphere 1", gltf::animation::Property::Rotation).expect("the sphere's spin");
+        let gltf::animation::util::ReadOutputs::Rotations(q) = ch.reader(get).read_outputs().unwrap() else { panic!() };
+        for (k, q) in q.into_f32().enumerate() {
+            let half = 1.5 * rec.times[k];
+            let want = [0.0, half.sin(), 0.0, half.cos()];
+            assert!((0..4).all(|i| (q[i] - want[i]).abs() < 1e-6), "frame {k}: {q:?} vs {want:?}");
+        }
+        let ch = channel("box 0", gltf::animation::Property::Translation).expect("the box's keys");
+        let gltf::animation::util::ReadOutputs::Translations(tr) = ch.reader(get).read_outputs().unwrap() else {
+            panic!()
+        };
+        let ys: Vec<f32> = tr.map(|p| p[1]).collect();
+        let want = [0.0, 0.2 / 3.0, 0.4 / 3.0, 0.2];
+        assert!(ys.iter().zip(want).all(|(y, w)| (y - w).abs() < 1e-6), "{ys:?}");
+        // Still colliders stay unanimated.
+        assert!(channel("sphere 0", gltf::animation::Property::Translation).is_none());
     }
 
     #[test]

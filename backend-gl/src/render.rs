@@ -147,6 +147,8 @@ pub struct GlRenderer {
     fabric_sampler: usize,
     frame: usize,
     static_vb: usize,
+    /// Vertices in `static_vb`.
+    static_vertices: usize,
     static_ib: usize,
     uv: usize,
     tri_ib: usize,
@@ -209,6 +211,7 @@ impl GlRenderer {
             fabric_sampler: gl.create_sampler(false)?,
             frame: gl.create_buffer(&[0u8; std::mem::size_of::<Frame>()])?,
             static_vb: gl.create_buffer(bytemuck::cast_slice(&sv))?,
+            static_vertices: sv.len(),
             static_ib: gl.create_index_buffer(&si)?,
             uv: gl.create_buffer(bytemuck::cast_slice(&topo.render_uvs()))?,
             tri_ib: gl.create_index_buffer(&tri)?,
@@ -225,6 +228,17 @@ impl GlRenderer {
     /// Target size.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
+    }
+
+    /// Draws the colliders of `scene` from now on (moving colliders: `Scene::moved_to`);
+    /// the same shapes as the renderer was made with, else refused.
+    pub fn set_colliders(&mut self, ctx: &GlContext, scene: &Scene) -> Result<(), RenderError> {
+        let gl = self.gl(ctx)?;
+        let (sv, _) = static_mesh(scene);
+        if sv.len() != self.static_vertices {
+            return Err(RenderError::Backend("set_colliders: the scene's colliders are not the renderer's".into()));
+        }
+        gl.write(self.static_vb, 0, bytemuck::cast_slice(&sv)).map_err(rerr)
     }
 
     /// Changes the target size; a zero or too large side is refused and nothing changes.

@@ -87,6 +87,9 @@ struct Slot {
     frame_set: Set,
     cpu_pos: Buffer,
     cpu_normal: Buffer,
+    /// The floor and colliders where they are in this slot's frame, host visible (drawn
+    /// once `set_colliders` moved them; the device-local `static_vb` until then).
+    statics: Buffer,
 }
 
 struct Pipelines {
@@ -176,6 +179,9 @@ pub struct VulkanRenderer {
     static_vb: Buffer,
     static_ib: Buffer,
     static_count: u32,
+    /// The colliders `set_colliders` moved to, written into each slot's `statics` by
+    /// `prepare`.
+    moved: Option<Vec<StaticVertex>>,
     uv: Buffer,
     tri_ib: Buffer,
     tri_count: u32,
@@ -258,8 +264,16 @@ impl VulkanRenderer {
         let sets = Sets::new(dev, 1 + FRAMES_IN_FLIGHT as u32)?;
         let np = topo.num_particles() as u64;
         let host_vertices = |name| Buffer::new(dev, name, np * 16, B::VERTEX_BUFFER, MemoryLocation::CpuToGpu);
+        let (sv, si) = static_mesh(scene);
+        let sv_bytes: &[u8] = bytemuck::cast_slice(&sv);
         let mut slots = Vec::new();
         for _ in 0..FRAMES_IN_FLIGHT {
+            let mut statics =
+                Buffer::new(dev, "moved statics", sv_bytes.len() as u64, B::VERTEX_BUFFER, MemoryLocation::CpuToGpu)?;
+            statics
+                .mapped()
+                .ok_or(VkError::Vulkan { what: "mapping the statics", reason: "not host visible".into() })?
+                .copy_from_slice(sv_bytes);
             let size = std::mem::size_of::<Frame>() as u64;
             let frame = Buffer::new(dev, "frame", size, B::UNIFORM_BUFFER, MemoryLocation::CpuToGpu)?;
             let frame_set =
@@ -269,6 +283,7 @@ impl VulkanRenderer {
                 frame_set,
                 cpu_pos: host_vertices("cpu positions")?,
                 cpu_normal: host_vertices("cpu normals")?,
+                statics,
             });
         }
         let texture_set = sets.allocate_with(
@@ -282,7 +297,6 @@ impl VulkanRenderer {
         )?;
 
         // Static data, device-local through one staging buffer.
-        let (sv, si) = static_mesh(scene);
         let tri: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
         let lines = cloth_lines(topo);
         let texels = fabric_texture();
@@ -335,6 +349,7 @@ impl VulkanRenderer {
             static_vb: next(),
             static_ib: next(),
             static_count: si.len() as u32,
+            moved: None,
             uv: next(),
             tri_ib: next(),
             tri_count: tri.len() as u32,
@@ -386,6 +401,12 @@ impl VulkanRenderer {
             .mapped()
             .ok_or_else(|| RenderError::Backend("frame buffer not host visible".into()))?
             .copy_from_slice(bytemuck::bytes_of(&f));
+        if let Some(sv) = &self.moved {
+            s.statics
+                .mapped()
+                .ok_or_else(|| RenderError::Backend("statics not host visible".into()))?
+                .copy_from_slice(bytemuck::cast_slice(sv));
+        }
         match cloth {
             VkCloth::Gpu { pos, normal } => {
                 if pos.size < need || normal.size < need {
@@ -405,6 +426,23 @@ impl VulkanRenderer {
             }
         }
         Ok(())
+    }
+
+    /// Draws the colliders of `scene` from the next [`VulkanRenderer::prepare`] on (moving
+    /// colliders: `Scene::moved_to`); the same shapes as the renderer was made with, else
+    /// refused.
+    pub fn set_colliders(&mut self, scene: &Scene) -> Result<(), RenderError> {
+        let (sv, _) = static_mesh(scene);
+        if std::mem::size_of_val(sv.as_slice()) as u64 != self.slots[0].statics.size {
+            return Err(RenderError::Backend("set_colliders: the scene's colliders are not the renderer's".into()));
+        }
+        self.moved = Some(sv);
+        Ok(())
+    }
+
+    /// The floor and colliders' vertices drawn in slot `slot`.
+    fn statics(&self, slot: usize) -> &Buffer {
+        if self.moved.is_some() { &self.slots[slot % FRAMES_IN_FLIGHT].statics } else { &self.static_vb }
     }
 
     /// The position and normal buffers `cloth` is drawn from in slot `slot`.
@@ -448,7 +486,7 @@ impl VulkanRenderer {
     ) {
         let frame_set = &self.slots[slot % FRAMES_IN_FLIGHT].frame_set;
         c.bind_graphics(stat, &[frame_set]);
-        c.bind_vertices(&[&self.static_vb], Some(&self.static_ib));
+        c.bind_vertices(&[self.statics(slot)], Some(&self.static_ib));
         c.draw(self.static_count, true);
         c.bind_graphics(cloth, &[frame_set]);
         c.bind_vertices(&[pos], Some(&self.tri_ib));
@@ -527,7 +565,7 @@ impl VulkanRenderer {
         c.begin_rendering(Some((&t.msaa, Some(&t.resolve), vk::ClearColorValue { float32: SKY })), &t.depth);
         let p = &self.pipelines;
         c.bind_graphics(&p.lit_static, &[frame_set, &self.texture_set]);
-        c.bind_vertices(&[&self.static_vb], Some(&self.static_ib));
+        c.bind_vertices(&[self.statics(slot)], Some(&self.static_ib));
         c.draw(self.static_count, true);
         match view.mode {
             RenderMode::Triangles => {

@@ -443,7 +443,7 @@ impl WgpuRenderer {
             shadow_cloth,
             pick_static,
             pick_cloth,
-            static_vb: init("static vertices", bytemuck::cast_slice(&sv), U::VERTEX),
+            static_vb: init("static vertices", bytemuck::cast_slice(&sv), U::VERTEX | U::COPY_DST),
             static_ib: init("static indices", bytemuck::cast_slice(&si), U::INDEX),
             static_count: si.len() as u32,
             uv: init("cloth uv", bytemuck::cast_slice(&topo.render_uvs()), U::VERTEX),
@@ -471,6 +471,18 @@ impl WgpuRenderer {
     }
 
     /// Changes the target size; a zero or too large side is refused and nothing changes.
+    /// Draws the colliders of `scene` from now on (moving colliders: `Scene::moved_to`);
+    /// the same shapes as the renderer was made with, else refused.
+    pub fn set_colliders(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), RenderError> {
+        let (sv, _) = static_mesh(scene);
+        let bytes: &[u8] = bytemuck::cast_slice(&sv);
+        if bytes.len() as u64 != self.static_vb.size() {
+            return Err(RenderError::Backend("set_colliders: the scene's colliders are not the renderer's".into()));
+        }
+        ctx.queue.write_buffer(&self.static_vb, 0, bytes);
+        Ok(())
+    }
+
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) -> Result<(), RenderError> {
         check_size(ctx, width, height)?;
         self.targets = make_targets(ctx, width, height);

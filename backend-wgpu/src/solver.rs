@@ -58,6 +58,9 @@ pub struct WgpuEngine {
     pipelines: HashMap<KernelRef, (wgpu::ComputePipeline, usize)>,
     timestamps: Option<Timestamps>,
     encoder: Option<wgpu::CommandEncoder>,
+    /// Something was recorded into `encoder` since `begin`: a queue write would land
+    /// before it, so later writes are staged and copied in order.
+    recorded: bool,
     readbacks: Vec<(BufferId, u64)>,
     /// The spring table as a texture (`table=image`), and its height.
     table: Option<(wgpu::Texture, u32)>,
@@ -108,6 +111,7 @@ impl WgpuEngine {
             pipelines: HashMap::new(),
             timestamps,
             encoder: None,
+            recorded: false,
             readbacks: Vec::new(),
             table: None,
         }
@@ -357,17 +361,31 @@ impl Engine for WgpuEngine {
 
     fn begin(&mut self, _index: usize, _queries: u32) -> Result<(), SolverError> {
         self.encoder = None;
+        self.recorded = false;
         self.encoder();
         Ok(())
     }
 
-    /// A queue write: it lands before the submission being recorded runs.
+    /// A queue write (it lands before the submission being recorded runs) while nothing
+    /// is recorded yet; after that a staging buffer copied in order (moving colliders
+    /// write theirs before every substep of one submission).
     fn record_write(&mut self, id: BufferId, bytes: &[u8]) -> Result<(), SolverError> {
-        self.write(id, bytes)
+        if !self.recorded {
+            return self.write(id, bytes);
+        }
+        let dst = self.buf(id)?.clone();
+        let staged = self.ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("staged write"),
+            contents: bytes,
+            usage: wgpu::BufferUsages::COPY_SRC,
+        });
+        self.encoder().copy_buffer_to_buffer(&staged, 0, &dst, 0, bytes.len() as u64);
+        Ok(())
     }
 
     fn clear(&mut self, id: BufferId) {
         let Some(b) = self.buffers.get(id.0 as usize).cloned() else { return };
+        self.recorded = true;
         self.encoder().clear_buffer(&b, 0, None);
     }
 
@@ -377,6 +395,7 @@ impl Engine for WgpuEngine {
             return;
         };
         let size = size.min(a.size()).min(b.size());
+        self.recorded = true;
         self.encoder().copy_buffer_to_buffer(&a, 0, &b, 0, size);
     }
 
@@ -384,6 +403,7 @@ impl Engine for WgpuEngine {
     fn barrier(&mut self, _after_all: bool) {}
 
     fn dispatch(&mut self, d: &Dispatch<'_>) {
+        self.recorded = true;
         let Self { ctx, pipelines, layouts, timestamps, encoder, .. } = self;
         let Some((pipeline, index)) = pipelines.get(&d.kernel) else { return };
         let group = &layouts[*index].groups[d.parity & 1];

@@ -9,6 +9,7 @@ use crate::scene::{ClothSpec, Pinning, Scene};
 /// Builds the initial state and the topology for a validated scene and parameters: the
 /// grid, or the scene's mesh.
 pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopology), ParamError> {
+    scene.check_motion_speed(params.dt())?;
     match &scene.cloth.mesh_data {
         Some(mesh) => {
             scene.validate()?;
@@ -24,6 +25,7 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
 /// grid's tables: a scene file checks its `[params]` against its cloth with it, so that a
 /// refusal can name the file's line.
 pub fn check_params(scene: &Scene, params: &SimParams) -> Result<(), ParamError> {
+    scene.check_motion_speed(params.dt())?;
     match &scene.cloth.mesh_data {
         Some(_) => build(scene, params).map(|_| ()),
         None => {
@@ -255,7 +257,8 @@ pub fn combine(cloths: &[ClothSpec]) -> Result<ClothSpec, ParamError> {
     let mut held = Vec::new();
     let mut parts = Vec::new();
     for (k, c) in cloths.iter().enumerate() {
-        let one = Scene { cloth: c.clone(), floor_y: None, spheres: Vec::new(), boxes: Vec::new() };
+        let one =
+            Scene { cloth: c.clone(), floor_y: None, spheres: Vec::new(), boxes: Vec::new(), motions: Vec::new() };
         one.validate().map_err(|e| at(k, e))?;
         let (mesh, pins, label) = match &c.mesh_data {
             Some(placed) => {

@@ -7,6 +7,7 @@
 use bytemuck::{Pod, Zeroable};
 use serde::{Deserialize, Serialize};
 
+use crate::motion::Motion;
 use crate::params::{ParamError, finite_in};
 
 /// Smallest cloth side, particles.
@@ -28,6 +29,21 @@ pub struct Sphere {
     pub center: [f32; 3],
     /// Radius, m.
     pub radius: f32,
+    /// Velocity of the centre at this substep, m/s (w 0): set by [`Scene::colliders_at`]
+    /// from the sphere's motion, zero for a still one.
+    #[serde(skip)]
+    pub velocity: [f32; 4],
+    /// Angular velocity about the centre, rad/s (w 0): the surface at `x` moves at
+    /// `velocity + spin × (x − center)`.
+    #[serde(skip)]
+    pub spin: [f32; 4],
+}
+
+impl Sphere {
+    /// A still sphere.
+    pub const fn new(center: [f32; 3], radius: f32) -> Self {
+        Self { center, radius, velocity: [0.0; 4], spin: [0.0; 4] }
+    }
 }
 
 /// An axis-aligned box collider. `#[repr(C)]`, mirrored in the shaders (w unused).
@@ -38,12 +54,34 @@ pub struct Aabb {
     pub min: [f32; 4],
     /// Upper corner, m (w unused, 0).
     pub max: [f32; 4],
+    /// Velocity at this substep, m/s (w 0): set by [`Scene::colliders_at`].
+    #[serde(skip)]
+    pub velocity: [f32; 4],
 }
 
 impl Aabb {
-    /// A box from its lower and upper corners.
+    /// A still box from its lower and upper corners.
     pub fn new(min: [f32; 3], max: [f32; 3]) -> Self {
-        Self { min: [min[0], min[1], min[2], 0.0], max: [max[0], max[1], max[2], 0.0] }
+        Self { min: [min[0], min[1], min[2], 0.0], max: [max[0], max[1], max[2], 0.0], velocity: [0.0; 4] }
+    }
+}
+
+/// Which collider a [`Motion`] moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ColliderId {
+    /// `Scene::spheres[i]`.
+    Sphere(usize),
+    /// `Scene::boxes[i]`.
+    Box(usize),
+}
+
+impl ColliderId {
+    /// Its name in a scene file (`spheres[0]`).
+    pub fn field(self) -> String {
+        match self {
+            ColliderId::Sphere(i) => format!("spheres[{i}]"),
+            ColliderId::Box(i) => format!("boxes[{i}]"),
+        }
     }
 }
 
@@ -265,6 +303,9 @@ pub struct Scene {
     pub spheres: Vec<Sphere>,
     /// Axis-aligned box colliders. Default: none.
     pub boxes: Vec<Aabb>,
+    /// How colliders move (at most one motion each; none: all still). See [`crate::motion`].
+    #[serde(default)]
+    pub motions: Vec<(ColliderId, Motion)>,
 }
 
 impl Default for Scene {
@@ -273,11 +314,12 @@ impl Default for Scene {
             cloth: ClothSpec::default(),
             floor_y: Some(0.0),
             spheres: vec![
-                Sphere { center: [-0.55, 0.35, -0.35], radius: 0.35 },
-                Sphere { center: [0.45, 0.45, -0.1], radius: 0.45 },
-                Sphere { center: [-0.05, 0.25, 0.55], radius: 0.25 },
+                Sphere::new([-0.55, 0.35, -0.35], 0.35),
+                Sphere::new([0.45, 0.45, -0.1], 0.45),
+                Sphere::new([-0.05, 0.25, 0.55], 0.25),
             ],
             boxes: Vec::new(),
+            motions: Vec::new(),
         }
     }
 }
@@ -431,6 +473,101 @@ impl Scene {
                 }
             }
         }
+        for (k, (id, m)) in self.motions.iter().enumerate() {
+            let exists = match *id {
+                ColliderId::Sphere(i) => i < self.spheres.len(),
+                ColliderId::Box(i) => i < self.boxes.len(),
+            };
+            if !exists {
+                return Err(ParamError::new(id.field(), "motion", "moves a collider the scene does not have"));
+            }
+            if self.motions[..k].iter().any(|(other, _)| other == id) {
+                return Err(ParamError::new(id.field(), "motion", "has two motions"));
+            }
+            m.check(&id.field(), matches!(id, ColliderId::Sphere(_)))?;
+        }
         Ok(())
+    }
+
+    /// Removes a sphere or a box, and its motion; the motions of the colliders after it
+    /// follow them to their new indices. Out of range: nothing changes.
+    pub fn remove_collider(&mut self, id: ColliderId) {
+        match id {
+            ColliderId::Sphere(i) if i < self.spheres.len() => {
+                self.spheres.remove(i);
+            }
+            ColliderId::Box(i) if i < self.boxes.len() => {
+                self.boxes.remove(i);
+            }
+            _ => return,
+        }
+        self.motions.retain(|(m, _)| *m != id);
+        for (m, _) in &mut self.motions {
+            match (m, id) {
+                (ColliderId::Sphere(k), ColliderId::Sphere(i)) | (ColliderId::Box(k), ColliderId::Box(i)) if *k > i => {
+                    *k -= 1
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Whether any collider moves.
+    pub fn moves(&self) -> bool {
+        self.motions.iter().any(|(_, m)| !m.is_still())
+    }
+
+    /// Refuses motions faster than a substep of `dt` s resolves ([`Motion::check_speed`]).
+    pub fn check_motion_speed(&self, dt: f32) -> Result<(), ParamError> {
+        for (id, m) in &self.motions {
+            let size = match *id {
+                ColliderId::Sphere(i) => self.spheres.get(i).map_or(0.0, |s| s.radius),
+                ColliderId::Box(i) => self
+                    .boxes
+                    .get(i)
+                    .map_or(0.0, |b| (0..3).map(|k| 0.5 * (b.max[k] - b.min[k])).fold(f32::INFINITY, f32::min)),
+            };
+            m.check_speed(&id.field(), size, dt)?;
+        }
+        Ok(())
+    }
+
+    /// This scene with its colliders where their motions have them at time `t`, s (what
+    /// the renderers draw: `set_colliders`).
+    pub fn moved_to(&self, t: f64) -> Scene {
+        let mut s = self.clone();
+        self.colliders_at(t, &mut s.spheres, &mut s.boxes);
+        s
+    }
+
+    /// The spheres and boxes at simulated time `t`, s: moved by their motions, with the
+    /// velocities their contacts use. Still colliders come back as placed (velocity 0).
+    pub fn colliders_at(&self, t: f64, spheres: &mut Vec<Sphere>, boxes: &mut Vec<Aabb>) {
+        spheres.clone_from(&self.spheres);
+        boxes.clone_from(&self.boxes);
+        for (id, m) in &self.motions {
+            let pose = m.at(t);
+            let v = [pose.velocity[0], pose.velocity[1], pose.velocity[2], 0.0];
+            match *id {
+                ColliderId::Sphere(i) => {
+                    if let Some(s) = spheres.get_mut(i) {
+                        for k in 0..3 {
+                            s.center[k] += pose.offset[k];
+                        }
+                        s.velocity = v;
+                        s.spin = [pose.spin[0], pose.spin[1], pose.spin[2], 0.0];
+                    }
+                }
+                ColliderId::Box(i) => {
+                    if let Some(b) = boxes.get_mut(i) {
+                        for k in 0..3 {
+                            b.min[k] += pose.offset[k];
+                            b.max[k] += pose.offset[k];
+                        }
+                        b.velocity = v;
+                    }
+                }
+            }
+        }
     }
 }

@@ -45,8 +45,9 @@ use serde::Deserialize;
 use thiserror::Error;
 
 use crate::camera::OrbitCamera;
+use crate::motion::Motion;
 use crate::params::{ParamError, SimParams};
-use crate::scene::{Aabb, ClothSpec, Scene, Sphere};
+use crate::scene::{Aabb, ClothSpec, ColliderId, Scene, Sphere};
 
 /// A scene file, read and checked.
 #[derive(Debug, Clone, PartialEq)]
@@ -90,7 +91,7 @@ struct Repr<C> {
     #[serde(default)]
     floor: FloorRepr,
     #[serde(default)]
-    spheres: Vec<Sphere>,
+    spheres: Vec<SphereRepr>,
     #[serde(default)]
     boxes: Vec<BoxRepr>,
     #[serde(default)]
@@ -116,9 +117,20 @@ impl Default for FloorRepr {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+struct SphereRepr {
+    center: [f32; 3],
+    radius: f32,
+    #[serde(default)]
+    motion: Option<Motion>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct BoxRepr {
     min: [f32; 3],
     max: [f32; 3],
+    #[serde(default)]
+    motion: Option<Motion>,
 }
 
 #[derive(Deserialize)]
@@ -234,8 +246,12 @@ impl SceneFile {
         let scene = Scene {
             cloth,
             floor_y: repr.floor.enabled.then_some(repr.floor.y),
-            spheres: repr.spheres,
+            spheres: repr.spheres.iter().map(|s| Sphere::new(s.center, s.radius)).collect(),
             boxes: repr.boxes.iter().map(|b| Aabb::new(b.min, b.max)).collect(),
+            motions: (repr.spheres.iter().enumerate())
+                .filter_map(|(i, s)| Some((ColliderId::Sphere(i), s.motion.clone()?)))
+                .chain(repr.boxes.iter().enumerate().filter_map(|(i, b)| Some((ColliderId::Box(i), b.motion.clone()?))))
+                .collect(),
         };
         scene.validate().map_err(|e| {
             let path = e.field.clone();
@@ -244,7 +260,9 @@ impl SceneFile {
         // The parameters alone, then against the cloth (stability at its particles'
         // masses, the self-collision thickness at its spacing).
         let at_params = |e: ParamError| {
-            let path = if e.field.starts_with("cloth.") { e.field.clone() } else { format!("params.{}", e.field) };
+            // A collider's motion too fast for the substeps is the collider's field.
+            let own = ["cloth.", "spheres[", "boxes["].iter().any(|p| e.field.starts_with(p));
+            let path = if own { e.field.clone() } else { format!("params.{}", e.field) };
             refused(e, path)
         };
         repr.params.validate().map_err(at_params)?;
@@ -407,7 +425,7 @@ position = [1.0, 4.0, 2.0]
     #[test]
     fn a_bad_file_gets_one_line_with_its_line_column_and_what_is_expected() {
         type Case<'a> = (&'a str, Option<(usize, usize)>, &'a [&'a str]);
-        let cases: [Case; 13] = [
+        let cases: [Case; 17] = [
             // Syntax.
             ("[cloth]\nn = = 3\n", Some((2, 5)), &["b.toml:2:5"]),
             // A misspelt field.
@@ -427,6 +445,28 @@ position = [1.0, 4.0, 2.0]
             ("[params]\nsubsteps = 0\n", Some((2, 12)), &["`params.substeps` = 0"]),
             ("[cloth]\nvelocity = [0, 2000, 0]\n", Some((2, 12)), &["`cloth.velocity` = 2000"]),
             ("[cloth]\nn = 8\npinning = [[0, 0], [8, 0]]\n", Some((3, 20)), &["`cloth.pinning[1]`", "i, j < n = 8"]),
+            // Motions: keys out of order, a box that spins, a key that is no number, a
+            // sphere faster than a substep resolves.
+            (
+                "[[spheres]]\ncenter = [0, 1, 0]\nradius = 0.5\nmotion = { keys = [{ t = 1, offset = [0, 0, 0] }, { t = 0.5, offset = [1, 0, 0] }] }\n",
+                Some((4, 57)),
+                &["`spheres[0].motion.keys[1].t` = 0.5", "strictly increasing"],
+            ),
+            (
+                "[[boxes]]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nmotion = { spin = [0, 1, 0] }\n",
+                Some((4, 19)),
+                &["`boxes[0].motion.spin`", "not turn"],
+            ),
+            (
+                "[[spheres]]\ncenter = [0, 1, 0]\nradius = 0.5\nmotion = { keys = [{ t = 0, offset = [nan, 0, 0] }] }\n",
+                Some((4, 38)),
+                &["`spheres[0].motion.keys[0].offset` = NaN"],
+            ),
+            (
+                "[[spheres]]\ncenter = [0, 1, 0]\nradius = 0.05\nmotion = { velocity = [30, 0, 0] }\n",
+                Some((4, 10)),
+                &["`spheres[0].motion`", "per substep", "params.substeps"],
+            ),
             // A pin with three coordinates.
             ("[cloth]\nn = 8\npinning = [[0, 0], [1, 2, 3]]\n", Some((3, 11)), &["[i, j]", "got 3"]),
             // Parameters refused for this cloth (not for every cloth) are the file's too.

@@ -10,6 +10,15 @@ use crate::scene::Scene;
 use crate::stats::SubstepStats;
 use crate::timing::KernelTimings;
 
+/// `t` as a simulated time: finite and ≥ 0 (see [`Solver::set_time`]).
+pub fn checked_time(t: f64) -> Result<f64, SolverError> {
+    if t.is_finite() && t >= 0.0 {
+        Ok(t)
+    } else {
+        Err(SolverError::Invalid(format!("a simulated time is finite and ≥ 0 s, not {t}")))
+    }
+}
+
 /// A cloth simulation on some backend.
 pub trait Solver {
     /// Short name of the backend and variant, e.g. `cpu`, `cpu-par`.
@@ -28,6 +37,12 @@ pub trait Solver {
     fn state(&mut self) -> Result<ClothState, SolverError>;
     /// Replaces the current state, e.g. when switching backends mid-run.
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError>;
+    /// Simulated time, s: the sum of the substeps run (moving colliders are where their
+    /// motion puts them at this time; `crate::motion`).
+    fn time(&self) -> f64;
+    /// Sets the simulated time (switching backends mid-run carries it over; a finite
+    /// time ≥ 0, else refused).
+    fn set_time(&mut self, t: f64) -> Result<(), SolverError>;
     /// Per-kernel timings since the last reset.
     fn timings(&self) -> KernelTimings;
     /// Forgets the recorded timings.

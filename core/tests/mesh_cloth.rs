@@ -18,7 +18,8 @@ fn obj(name: &str) -> TriMesh {
 
 /// A scene whose cloth is `mesh` placed by `placement`, with no colliders and no floor.
 fn mesh_scene(mesh: &TriMesh, placement: Placement, pinning: Pinning) -> Scene {
-    let mut scene = Scene { floor_y: None, spheres: Vec::new(), boxes: Vec::new(), ..Scene::default() };
+    let mut scene =
+        Scene { floor_y: None, spheres: Vec::new(), boxes: Vec::new(), motions: Vec::new(), ..Scene::default() };
     scene.cloth.mesh = Some("test.obj".into());
     scene.cloth.pinning = pinning;
     (scene.cloth.scale, scene.cloth.rotate_deg, scene.cloth.translate) =
@@ -156,7 +157,7 @@ fn a_grid_loaded_as_a_mesh_drapes_where_the_grid_does() {
 #[test]
 fn a_mesh_drape_stays_outside_its_sphere() {
     let mut scene = mesh_scene(&obj("tablecloth.obj"), up(1.2), Pinning::None);
-    let sphere = Sphere { center: [0.0, 0.6, 0.0], radius: 0.45 };
+    let sphere = Sphere::new([0.0, 0.6, 0.0], 0.45);
     (scene.spheres, scene.floor_y) = (vec![sphere], Some(0.0));
     let params = SimParams::default();
     let margin = params.collision_margin;

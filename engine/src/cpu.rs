@@ -9,7 +9,7 @@ use clothlab_core::build;
 use clothlab_core::cpu::{self as twins, Exec};
 use clothlab_core::grid::{ClothState, ClothTopology, Grab, StepParams, V4};
 use clothlab_core::layout::Buf;
-use clothlab_core::scene::Scene;
+use clothlab_core::scene::{Aabb, Scene, Sphere};
 use clothlab_core::timing::{FRAME, KernelTimings, SUBSTEP, TimingRecorder};
 use clothlab_core::{SimParams, Solver, SolverError};
 
@@ -23,12 +23,23 @@ pub struct CpuEngine {
     exec: Exec,
     scene: Scene,
     topo: ClothTopology,
+    /// The colliders the twins see: the scene's at the time of [`CpuEngine::move_colliders`].
+    colliders: (Vec<Sphere>, Vec<Aabb>),
 }
 
 impl CpuEngine {
     /// An engine for the cloth of `scene` with connectivity `topo`.
     pub fn new(exec: Exec, scene: Scene, topo: ClothTopology) -> Self {
-        Self { exec, scene, topo }
+        let mut colliders = (Vec::new(), Vec::new());
+        scene.colliders_at(0.0, &mut colliders.0, &mut colliders.1);
+        Self { exec, scene, topo, colliders }
+    }
+
+    /// Puts the colliders where their motions have them at time `t`, s (what a GPU solver
+    /// writes before each substep).
+    pub fn move_colliders(&mut self, t: f64) {
+        let (spheres, boxes) = &mut self.colliders;
+        self.scene.colliders_at(t, spheres, boxes);
     }
 
     /// The connectivity and spring tables.
@@ -73,8 +84,8 @@ impl CpuEngine {
             exec: self.exec,
             p,
             topo: &self.topo,
-            spheres: &self.scene.spheres,
-            boxes: &self.scene.boxes,
+            spheres: &self.colliders.0,
+            boxes: &self.colliders.1,
             substep,
             range: (0, 0),
         }
@@ -129,6 +140,8 @@ pub struct RecipeSolver {
     timer: TimingRecorder,
     /// Substeps one run of `commands` advances (`temporal=on`; 1 otherwise).
     group: u32,
+    /// Simulated time, s.
+    time: f64,
 }
 
 impl RecipeSolver {
@@ -144,6 +157,11 @@ impl RecipeSolver {
         let end = frame_end(&variant, Integration::of(&params));
         let name = variant.solver_name("cpu-recipe");
         let group = dispatch_substeps(&variant, Integration::of(&params), params.strain_iterations, &engine.topo);
+        if group > 1 && engine.scene.moves() {
+            return Err(SolverError::Unsupported(
+                "temporal=on advances several substeps with one pose of the colliders: moving colliders need temporal=off".into(),
+            ));
+        }
         Ok(Self {
             engine,
             name,
@@ -155,6 +173,7 @@ impl RecipeSolver {
             end,
             timer: TimingRecorder::default(),
             group,
+            time: 0.0,
         })
     }
 
@@ -199,6 +218,7 @@ impl Solver for RecipeSolver {
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         self.engine.topo.validate_params(&params)?;
+        self.engine.scene.check_motion_speed(params.dt())?;
         self.engine.set_spring_constants(&params);
         self.commands =
             recipe_for(&self.variant, params.strain_iterations, Integration::of(&params), &self.engine.topo);
@@ -220,6 +240,10 @@ impl Solver for RecipeSolver {
         // With temporal blocking one run of the commands advances `group` substeps.
         for s in (0..self.params.substeps).filter(|s| s.is_multiple_of(self.group)) {
             let t_substep = Instant::now();
+            if self.engine.scene.moves() {
+                self.engine.move_colliders(self.time);
+            }
+            self.time += self.params.dt() as f64 * f64::from(self.group);
             for c in &self.commands {
                 let t = Instant::now();
                 self.engine.command(c, &p, s, &mut self.bufs);
@@ -239,6 +263,15 @@ impl Solver for RecipeSolver {
 
     fn state(&mut self) -> Result<ClothState, SolverError> {
         Ok(self.bufs.state(self.engine.topo.n))
+    }
+
+    fn time(&self) -> f64 {
+        self.time
+    }
+
+    fn set_time(&mut self, t: f64) -> Result<(), SolverError> {
+        self.time = clothlab_core::solver::checked_time(t)?;
+        Ok(())
     }
 
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {

@@ -26,7 +26,7 @@ use crate::recipe::{
     res, stats_commands,
 };
 use crate::tables::{adjacency, face_flat, record_times, split_slots, spring_halves, table_texels};
-use crate::variant::{Constants, Draw, Submit, Table, Variant, VariantSpec};
+use crate::variant::{Colliders, Constants, Draw, Submit, Table, Variant, VariantSpec};
 
 /// Timestamp queries per frame.
 pub const MAX_QUERIES: u32 = 4096;
@@ -88,6 +88,8 @@ pub struct GpuSolver<E: Engine> {
     /// Substeps one recording of the recipe advances (`temporal=on`: the tiles' several
     /// per dispatch; 1 otherwise).
     group: u32,
+    /// Simulated time, s (moving colliders are written at every substep's).
+    time: f64,
 }
 
 /// Substeps per recording of `variant`'s recipe on `topo` with `params`, refused with
@@ -97,11 +99,17 @@ fn recipe_group(
     params: &SimParams,
     topo: &ClothTopology,
     options: SolverOptions,
+    scene: &Scene,
 ) -> Result<u32, SolverError> {
     let group = crate::recipe::dispatch_substeps(variant, Integration::of(params), params.strain_iterations, topo);
     if group > 1 && options.stats != StatsMode::Off {
         return Err(SolverError::Unsupported(format!(
             "temporal=on advances {group} substeps per dispatch: per-substep statistics need temporal=off"
+        )));
+    }
+    if group > 1 && scene.moves() {
+        return Err(SolverError::Unsupported(format!(
+            "temporal=on advances {group} substeps per dispatch with one pose of the colliders: moving colliders need temporal=off"
         )));
     }
     Ok(group)
@@ -161,7 +169,7 @@ impl<E: Engine> GpuSolver<E> {
         let state = start_buffers(twins::Exec::Serial, &sp, &topo, &state);
         let face = &state.faces;
 
-        let mut spheres = [Sphere { center: [0.0; 3], radius: 0.0 }; MAX_COLLIDERS];
+        let mut spheres = [Sphere::new([0.0; 3], 0.0); MAX_COLLIDERS];
         spheres[..scene.spheres.len()].copy_from_slice(&scene.spheres);
         let mut boxes = [Aabb::new([0.0; 3], [0.0; 3]); MAX_COLLIDERS];
         boxes[..scene.boxes.len()].copy_from_slice(&scene.boxes);
@@ -248,7 +256,7 @@ impl<E: Engine> GpuSolver<E> {
         };
         engine.bind([set(0), set(1)])?;
         let step = recipe_for(&variant, params.strain_iterations, Integration::of(&params), &topo);
-        let group = recipe_group(&variant, &params, &topo, options)?;
+        let group = recipe_group(&variant, &params, &topo, options, &scene)?;
         let end = frame_end(&variant, Integration::of(&params));
         let mut build_list: Vec<KernelRef> = kernels_for(&variant);
         build_list.extend(kernels_of(&step));
@@ -278,6 +286,7 @@ impl<E: Engine> GpuSolver<E> {
             timer: TimingRecorder::default(),
             time_kernels: true,
             group,
+            time: 0.0,
         };
         for k in build_list {
             solver.build(k)?;
@@ -412,6 +421,33 @@ impl<E: Engine> GpuSolver<E> {
     /// Pipeline barriers recorded in the last frame (none on an API that places its own).
     pub fn barriers_last_frame(&self) -> usize {
         self.barriers
+    }
+
+    /// Records the colliders at the current time (`Scene::colliders_at`) into the buffers
+    /// the recipe reads them from, between barriers: after the last substep's reads,
+    /// before the next one's (moving colliders only; still ones stay as uploaded).
+    fn record_colliders(&mut self) -> Result<(), SolverError> {
+        let (mut spheres, mut boxes) = (Vec::new(), Vec::new());
+        self.scene.colliders_at(self.time, &mut spheres, &mut boxes);
+        // Both homes: with colliders=uniform the kernels without a `_cu` flavor (the
+        // strain passes' collide, VBD's contacts) still read the storage buffers.
+        let mut homes = vec![(Buf::Spheres, Buf::Boxes)];
+        if self.variant.colliders == Colliders::Uniform {
+            homes.push((Buf::SpheresUniform, Buf::BoxesUniform));
+        }
+        self.barrier(false);
+        for (sb, bb) in homes {
+            if !spheres.is_empty() {
+                let id = self.must(sb)?;
+                self.engine.record_write(id, bytemuck::cast_slice(&spheres))?;
+            }
+            if !boxes.is_empty() {
+                let id = self.must(bb)?;
+                self.engine.record_write(id, bytemuck::cast_slice(&boxes))?;
+            }
+        }
+        self.barrier(false);
+        Ok(())
     }
 
     /// Records a barrier and notes it.
@@ -568,6 +604,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         self.topo.validate_params(&params)?;
+        self.scene.check_motion_speed(params.dt())?;
         // A new dt keeps the velocity as it is: the state holds it, not Verlet's history.
         if spring_constants(&params, &self.topo) != spring_constants(&self.params, &self.topo) {
             // The spring constants depend on dt and the stiffness fractions: rewrite the
@@ -589,7 +626,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
             self.write(Buf::Interior, bytemuck::bytes_of(&interior))?;
         }
         let step = recipe_for(&self.variant, params.strain_iterations, Integration::of(&params), &self.topo);
-        let group = recipe_group(&self.variant, &params, &self.topo, self.options)?;
+        let group = recipe_group(&self.variant, &params, &self.topo, self.options, &self.scene)?;
         let end = frame_end(&self.variant, Integration::of(&params));
         for k in kernels_of(&step).into_iter().chain(kernels_of(&end)) {
             self.build(k)?;
@@ -662,6 +699,10 @@ impl<E: Engine> Solver for GpuSolver<E> {
             // With temporal blocking one recording advances `group` substeps.
             let group = self.group;
             for s in (0..per_submission).map(|s| k * per_submission + s).filter(|s| s.is_multiple_of(group)) {
+                if self.scene.moves() {
+                    self.record_colliders()?;
+                }
+                self.time += self.params.dt() as f64 * group as f64;
                 self.record(&commands, s, &mut q, &mut labels);
             }
             let last = k + 1 == submissions;
@@ -721,6 +762,15 @@ impl<E: Engine> Solver for GpuSolver<E> {
             force: self.read(Buf::Force)?,
             normal: self.read(Buf::Normal)?,
         })
+    }
+
+    fn time(&self) -> f64 {
+        self.time
+    }
+
+    fn set_time(&mut self, t: f64) -> Result<(), SolverError> {
+        self.time = clothlab_core::solver::checked_time(t)?;
+        Ok(())
     }
 
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {

@@ -39,7 +39,7 @@ var<private> force_n: vec3<f32>;
 // A contact of penetration pen along n̂ for a vertex that moved d (core::cpu::vbd::contacts):
 // the penalty's force and Hessian (first pass), or the smoothed Coulomb friction's with
 // λ = k max(0, pen − n̂·f / n̂ᵀHn̂) from the block after the penalties (second pass).
-fn touch(stiffness: f32, pen: f32, n: vec3<f32>, d: vec3<f32>, friction_pass: bool) {
+fn touch(stiffness: f32, pen: f32, n: vec3<f32>, d: vec3<f32>, vs: vec3<f32>, friction_pass: bool) {
     if !friction_pass {
         force_acc += n * (stiffness * pen);
         add_block(0.0, stiffness, n);
@@ -51,7 +51,9 @@ fn touch(stiffness: f32, pen: f32, n: vec3<f32>, d: vec3<f32>, friction_pass: bo
         + n.z * (ha[4] * n.x + ha[5] * n.y + ha[2] * n.z);
     let lambda = stiffness * max(pen - dot3(n, force_n) / hn, 0.0);
     let eps = FRICTION_EPS_V * p.dt;
-    let u = d - n * dot3(n, d);
+    // The displacement relative to the surface (a moving collider's moved vs·h).
+    let dr = d - vs * p.dt;
+    let u = dr - n * dot3(n, dr);
     let y = sqrt(dot3(u, u));
     var c = 1.0 / y;
     if y < eps {
@@ -68,7 +70,7 @@ fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool)
     let reach = p.margin + p.margin * CONTACT_REACH;
     let floor = p.floor_y + reach;
     if x.y < floor {
-        touch(stiffness, floor - x.y, vec3<f32>(0.0, 1.0, 0.0), d, friction_pass);
+        touch(stiffness, floor - x.y, vec3<f32>(0.0, 1.0, 0.0), d, vec3<f32>(0.0), friction_pass);
     }
     for (var k = 0u; k < p.num_spheres; k++) {
         let s = spheres[k];
@@ -81,7 +83,7 @@ fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool)
             if dist > 1e-12 {
                 n = dc * (1.0 / dist);
             }
-            touch(stiffness, r - dist, n, d, friction_pass);
+            touch(stiffness, r - dist, n, d, surface_vel(s.velocity.xyz, s.spin.xyz, dc), friction_pass);
         }
     }
     for (var k = 0u; k < p.num_boxes; k++) {
@@ -97,7 +99,7 @@ fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool)
             if above.y < best { best = above.y; n = vec3<f32>(0.0, 1.0, 0.0); }
             if below.z < best { best = below.z; n = vec3<f32>(0.0, 0.0, -1.0); }
             if above.z < best { best = above.z; n = vec3<f32>(0.0, 0.0, 1.0); }
-            touch(stiffness, best, n, d, friction_pass);
+            touch(stiffness, best, n, d, boxes[k].velocity.xyz, friction_pass);
         }
     }
 }

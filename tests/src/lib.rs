@@ -184,7 +184,8 @@ pub fn free_mesh_scene(name: &str, placement: clothlab_core::mesh::Placement) ->
     use clothlab_core::mesh::{PlacedMesh, load_obj};
     let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/meshes").join(name);
     let mesh = load_obj(&file).unwrap_or_else(|e| panic!("{e}"));
-    let mut s = Scene { floor_y: None, spheres: Vec::new(), boxes: Vec::new(), ..Scene::default() };
+    let mut s =
+        Scene { floor_y: None, spheres: Vec::new(), boxes: Vec::new(), motions: Vec::new(), ..Scene::default() };
     s.cloth.mesh = Some(name.into());
     s.cloth.pinning = clothlab_core::Pinning::None;
     (s.cloth.scale, s.cloth.rotate_deg, s.cloth.translate) =

@@ -176,7 +176,7 @@ fn the_kernel_checks_input_puts_particles_inside_every_collider_and_collide_take
     // the spheres, and under the floor) before, none in a collider after the CPU's collide.
     let mut scene = load("tablecloth.toml").scene;
     scene.cloth.n = 33;
-    scene.spheres.push(clothlab_core::Sphere { center: [1.5, 0.3, 0.0], radius: 0.3 });
+    scene.spheres.push(clothlab_core::Sphere::new([1.5, 0.3, 0.0], 0.3));
     let input = clothlab_engine::validate::KernelInput::for_scene(&scene, 5, &SimParams::default()).unwrap();
     let inside_sphere = |pos: &[[f32; 4]]| {
         let s = scene.spheres[0];

@@ -48,6 +48,8 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
             for _ in 0..args.frames {
                 solver.step_frame()?;
             }
+            // Moving colliders drawn where the last frame has them.
+            let scene = scene.moved_to(solver.time());
             let (topo, state) = (solver.topology(), solver.state_ref());
             match api {
                 Api::Vulkan => {
@@ -76,6 +78,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
                 any.get().step_frame()?;
             }
             let (_, topo) = clothlab_core::build(&scene, &params)?;
+            let scene = scene.moved_to(any.get_ref().time());
             let adapter = any.adapter();
             match &mut any {
                 AnySolver::Vulkan(solver, _) => {

@@ -239,8 +239,26 @@ impl Gfx {
         }
     }
 
+    /// Moves the drawn colliders to where the solver's have them now (moving colliders
+    /// only; still ones stay as the renderer was made with them).
+    fn follow_colliders(&mut self, solver: &AnySolver) -> Result<()> {
+        let s = solver.get_ref();
+        if !s.scene().moves() {
+            return Ok(());
+        }
+        let now = s.scene().moved_to(s.time());
+        match self {
+            Gfx::Wgpu(g) => g.renderer.set_colliders(&g.ctx, &now)?,
+            Gfx::Vulkan(g) => g.renderer.set_colliders(&now)?,
+            Gfx::Gl(g) => g.renderer.set_colliders(&g.ctx, &now)?,
+            Gfx::None => {}
+        }
+        Ok(())
+    }
+
     /// The particle under pixel `(x, y)` of the scene, if any.
     pub fn pick(&mut self, solver: &mut AnySolver, view: &View, x: u32, y: u32) -> Result<Option<u32>> {
+        self.follow_colliders(solver)?;
         let mut copy = None;
         Ok(match self {
             Gfx::Wgpu(g) => {
@@ -262,6 +280,7 @@ impl Gfx {
 
     /// The 3-D view alone (File → Save image), as rendered last.
     pub fn scene_image(&mut self, solver: &mut AnySolver, view: &View) -> Result<Shot> {
+        self.follow_colliders(solver)?;
         let mut copy = None;
         let (width, height) = self.scene_size();
         let rgba = match self {
@@ -295,6 +314,7 @@ impl Gfx {
         egui: EguiFrame<'_>,
         capture: bool,
     ) -> Result<Option<Shot>> {
+        self.follow_colliders(solver)?;
         let mut copy = None;
         match self {
             Gfx::Wgpu(g) => {

@@ -156,8 +156,10 @@ impl Sim {
     fn rebuild_with(&mut self, backend: Backend, scene: Scene, setup: &GpuSetup, shared: &Shared<'_>) -> Result<()> {
         let old = self.solver.get();
         let state: ClothState = old.state()?;
+        let time = old.time();
         let mut solver = make(backend, scene, old.params().clone(), setup, shared)?;
         solver.get().set_state(&state)?;
+        solver.get().set_time(time)?;
         self.solver = solver;
         self.backend = backend;
         self.history.clear();

@@ -476,7 +476,7 @@ fn scene_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
         });
     }
     if let Some(i) = remove.take() {
-        sc.spheres.remove(i);
+        sc.remove_collider(clothlab_core::ColliderId::Sphere(i));
     }
     for (i, b) in sc.boxes.iter_mut().enumerate() {
         ui.horizontal(|ui| {
@@ -496,12 +496,12 @@ fn scene_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
         }
     }
     if let Some(i) = remove {
-        sc.boxes.remove(i);
+        sc.remove_collider(clothlab_core::ColliderId::Box(i));
     }
     ui.horizontal(|ui| {
         let room = clothlab_core::scene::MAX_COLLIDERS;
         if ui.add_enabled(sc.spheres.len() < room, egui::Button::new("+ sphere")).clicked() {
-            sc.spheres.push(clothlab_core::Sphere { center: [0.0, 0.4, 0.0], radius: 0.4 });
+            sc.spheres.push(clothlab_core::Sphere::new([0.0, 0.4, 0.0], 0.4));
         }
         if ui.add_enabled(sc.boxes.len() < room, egui::Button::new("+ box")).clicked() {
             sc.boxes.push(clothlab_core::Aabb::new([-0.4, 0.0, -0.4], [0.4, 0.6, 0.4]));

@@ -1,10 +1,11 @@
 //! `collide` — per particle: push particles out of spheres and boxes (inflated by the
 //! collision margin) to the nearest surface point; the velocity into the surface is
-//! removed and the tangential velocity reduced by friction.
+//! removed and the tangential velocity reduced by friction, both relative to the
+//! collider's surface where it moves (`crate::motion`).
 
 use glam::Vec3;
 
-use super::integrate::{contact_vel, integrate_at};
+use super::integrate::{contact_vel_moving, integrate_at, surface_vel};
 use super::{Exec, for_each2, v3, v4};
 use crate::grid::{StepParams, V4};
 use crate::scene::{Aabb, Sphere};
@@ -53,8 +54,11 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[
             let dist = dist2.sqrt();
             // A particle exactly at the centre is pushed up.
             let nrm = if dist > 1e-12 { d / dist } else { Vec3::Y };
-            x = c + nrm * r;
-            v = contact_vel(v, nrm, p.friction);
+            let arm = nrm * r;
+            x = c + arm;
+            // The surface's velocity at the contact: the centre's and the spin's.
+            let vs = surface_vel(v3(s.velocity), v3(s.spin), arm);
+            v = contact_vel_moving(v, vs, nrm, p.friction);
         }
     }
     for b in boxes {
@@ -83,7 +87,7 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[
             }
             let axis = nrm.abs();
             x = x * (Vec3::ONE - axis) + axis * face;
-            v = contact_vel(v, nrm, p.friction);
+            v = contact_vel_moving(v, v3(b.velocity), nrm, p.friction);
         }
     }
     *x4 = v4(x, x4[3]);

@@ -23,6 +23,32 @@ pub(crate) fn contact_vel(v: Vec3, nrm: Vec3, friction: f32) -> Vec3 {
     vt * (1.0 - friction) + vn.max(0.0) * nrm
 }
 
+/// [`contact_vel`] against a surface moving at `vs`: the particle's velocity relative to
+/// the surface loses its part into it and friction's share of its tangential part (a
+/// still surface, `vs` = 0, gives `contact_vel`'s values).
+#[inline(always)]
+pub(crate) fn contact_vel_moving(v: Vec3, vs: Vec3, nrm: Vec3, friction: f32) -> Vec3 {
+    let w = v - vs;
+    let vn = w.dot(nrm);
+    let vt = w - vn * nrm;
+    // (vs + tangential) + normal, added in this order: written vs + (tangential + normal),
+    // Mesa reassociates it into this on the GPU (1 ulp off in a third of the contacts).
+    vs + vt * (1.0 - friction) + vn.max(0.0) * nrm
+}
+
+/// The velocity `v + ω × arm` of a surface point at `arm` from the centre of a body
+/// moving at `v` and spinning at `ω`, added left to right as the shaders' `surface_vel`:
+/// `(v.x + ω.y·arm.z) − ω.z·arm.y`, … (Mesa reassociates `v + (p − q)` into that order on
+/// the GPU, so it is written so).
+#[inline(always)]
+pub(crate) fn surface_vel(v: Vec3, spin: Vec3, arm: Vec3) -> Vec3 {
+    Vec3::new(
+        v.x + spin.y * arm.z - spin.z * arm.y,
+        v.y + spin.z * arm.x - spin.x * arm.z,
+        v.z + spin.x * arm.y - spin.y * arm.x,
+    )
+}
+
 /// The velocity that takes a particle from `x` to `target` in one substep of `dt`.
 #[inline(always)]
 pub(crate) fn grab_vel(x: Vec3, target: Vec3, dt: f32) -> Vec3 {

@@ -14,7 +14,7 @@ use super::{
 use crate::cloth::build;
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4};
 use crate::params::{Integrator, SimParams};
-use crate::scene::Scene;
+use crate::scene::{Aabb, Scene, Sphere};
 use crate::solver::{Solver, SolverError};
 use crate::timing::{
     FORCES_SPRINGS, FRAME, FUSED_STEP, INTEGRATE_COLLIDE, KernelTimings, SELF_COLLIDE, SELF_HASH, STRAIN_LIMIT,
@@ -26,6 +26,10 @@ use crate::timing::{
 pub struct CpuSolver {
     exec: Exec,
     scene: Scene,
+    /// The colliders at the current substep (the scene's, moved: `Scene::colliders_at`).
+    colliders: (Vec<Sphere>, Vec<Aabb>),
+    /// Simulated time, s.
+    time: f64,
     params: SimParams,
     grab: Option<Grab>,
     state: ClothState,
@@ -78,9 +82,13 @@ impl CpuSolver {
     pub fn new(exec: Exec, scene: Scene, params: SimParams) -> Result<Self, SolverError> {
         let (state, topo) = build(&scene, &params)?;
         let np = state.pos.len();
+        let mut colliders = (Vec::new(), Vec::new());
+        scene.colliders_at(0.0, &mut colliders.0, &mut colliders.1);
         let mut s = Self {
             exec,
             scene,
+            colliders,
+            time: 0.0,
             params,
             grab: None,
             scratch: vec![[0.0; 4]; np],
@@ -183,7 +191,7 @@ impl CpuSolver {
             self.soa_valid = true;
         }
         self.soa[1].resize(self.state.pos.len());
-        let Self { topo, timer, scene, params, grid, bands, soa, exec, simd, tether_lanes, .. } = self;
+        let Self { topo, timer, colliders, params, grid, bands, soa, exec, simd, tether_lanes, .. } = self;
         let Some(uni) = grid.as_ref() else { return };
         let [old, next] = soa;
         let step = fused::Step {
@@ -193,8 +201,8 @@ impl CpuSolver {
             tethers: &topo.tethers,
             tether_lanes,
             face_slots: &topo.face_slots,
-            spheres: &scene.spheres,
-            boxes: &scene.boxes,
+            spheres: &colliders.0,
+            boxes: &colliders.1,
             old,
         };
         fused::substep(*exec, *simd, &step, bands, next);
@@ -217,6 +225,11 @@ impl CpuSolver {
 
     /// One substep, fused or kernel by kernel, leaving `state` behind after a fused one.
     fn substep_inner(&mut self) {
+        if self.scene.moves() {
+            let (spheres, boxes) = &mut self.colliders;
+            self.scene.colliders_at(self.time, spheres, boxes);
+        }
+        self.time += self.params.dt() as f64;
         if self.runs_fused() {
             self.substep_fused();
         } else {
@@ -276,7 +289,7 @@ impl CpuSolver {
             strain_counts,
             face,
             timer,
-            scene,
+            colliders,
             params,
             uniform,
             lanes,
@@ -300,7 +313,7 @@ impl CpuSolver {
             }
             springs_rows(e, rows, &topo.slots, uniform.as_ref(), Some(&p), lanes, pos, vel, force)
         };
-        let (spheres, boxes) = (&scene.spheres, &scene.boxes);
+        let (spheres, boxes) = (&colliders.0, &colliders.1);
         let needs_aux =
             params.self_collision || !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler);
         if needs_aux && aux.len() != AUX {
@@ -470,6 +483,7 @@ impl Solver for CpuSolver {
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
         self.topo.validate_params(&params)?;
+        self.scene.check_motion_speed(params.dt())?;
         self.sync();
         self.soa_valid = false;
         self.params = params;
@@ -503,6 +517,15 @@ impl Solver for CpuSolver {
         state.check(&self.topo)?;
         self.state = state.clone();
         (self.soa_valid, self.aos_stale) = (false, false);
+        Ok(())
+    }
+
+    fn time(&self) -> f64 {
+        self.time
+    }
+
+    fn set_time(&mut self, t: f64) -> Result<(), SolverError> {
+        self.time = crate::solver::checked_time(t)?;
         Ok(())
     }
 

@@ -36,6 +36,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::integrate::surface_vel;
 use super::integrators::{finish_at, per_particle};
 use super::{Exec, dt_over_mass, mass, v3, v4};
 use crate::grid::{ClothTopology, Colours, Rows, SpringSlot, StepParams, V4};
@@ -323,7 +324,7 @@ fn contacts(
     f: &mut Vec3,
     h: &mut [f32; 6],
 ) {
-    each_contact(p, colliders, x, |pen, n| {
+    each_contact(p, colliders, x, |pen, n, _| {
         *f += n * (stiffness * pen);
         add_block(h, 0.0, stiffness, n);
     });
@@ -332,13 +333,15 @@ fn contacts(
     }
     let (fa, ha) = (*f, *h);
     let eps = FRICTION_EPS_V * p.dt;
-    each_contact(p, colliders, x, |pen, n| {
+    each_contact(p, colliders, x, |pen, n, vs| {
         // n̂ᵀHn̂ of the block so far (positive: the inertia alone is).
         let hn = n.x * (ha[0] * n.x + ha[3] * n.y + ha[4] * n.z)
             + n.y * (ha[3] * n.x + ha[1] * n.y + ha[5] * n.z)
             + n.z * (ha[4] * n.x + ha[5] * n.y + ha[2] * n.z);
         let lambda = stiffness * (pen - n.dot(fa) / hn).max(0.0);
-        let u = d - n * n.dot(d);
+        // The displacement relative to the surface (a moving collider's moved vs·h).
+        let dr = d - vs * p.dt;
+        let u = dr - n * n.dot(dr);
         let y = u.dot(u).sqrt();
         let c = if y < eps { 2.0 / eps - y / (eps * eps) } else { 1.0 / y };
         let w = p.friction * lambda * c;
@@ -347,14 +350,15 @@ fn contacts(
     });
 }
 
-/// Calls `touch(δ, n̂)` for every contact of a vertex at `x` (see [`contacts`]): the floor,
-/// the spheres, the boxes, in that order.
+/// Calls `touch(δ, n̂, v_s)` for every contact of a vertex at `x` (see [`contacts`]): the
+/// floor, the spheres, the boxes, in that order; `v_s` the surface's velocity there
+/// (`crate::motion`; zero for a still collider).
 #[inline(always)]
-fn each_contact(p: &StepParams, colliders: (&[Sphere], &[Aabb]), x: Vec3, mut touch: impl FnMut(f32, Vec3)) {
+fn each_contact(p: &StepParams, colliders: (&[Sphere], &[Aabb]), x: Vec3, mut touch: impl FnMut(f32, Vec3, Vec3)) {
     let reach = p.margin + p.margin * CONTACT_REACH;
     let floor = p.floor_y + reach;
     if x.y < floor {
-        touch(floor - x.y, Vec3::Y);
+        touch(floor - x.y, Vec3::Y, Vec3::ZERO);
     }
     for s in colliders.0 {
         let c = Vec3::from(s.center);
@@ -364,7 +368,7 @@ fn each_contact(p: &StepParams, colliders: (&[Sphere], &[Aabb]), x: Vec3, mut to
         if dist2 < r * r {
             let dist = dist2.sqrt();
             let n = if dist > 1e-12 { dc * (1.0 / dist) } else { Vec3::Y };
-            touch(r - dist, n);
+            touch(r - dist, n, surface_vel(v3(s.velocity), v3(s.spin), dc));
         }
     }
     for b in colliders.1 {
@@ -383,7 +387,7 @@ fn each_contact(p: &StepParams, colliders: (&[Sphere], &[Aabb]), x: Vec3, mut to
                     n = nn;
                 }
             }
-            touch(best, n);
+            touch(best, n, v3(b.velocity));
         }
     }
 }

@@ -6,7 +6,7 @@
 @group(0) @binding(13) var<storage, read> boxes: array<Aabb>;
 
 // core::cpu::collide::collide_at for a free particle (is_free): m pushed out of the
-// spheres and boxes.
+// spheres and boxes, its velocity relative to their surfaces where they move.
 fn collided(m: Moved) -> Moved {
     var x = m.x;
     var v = m.v;
@@ -21,8 +21,10 @@ fn collided(m: Moved) -> Moved {
             if dist > 1e-12 {
                 nrm = d / dist;
             }
-            x = s.center + nrm * r;
-            v = contact_vel(v, nrm, p.friction);
+            let arm = nrm * r;
+            x = s.center + arm;
+            let vs = surface_vel(s.velocity.xyz, s.spin.xyz, arm);
+            v = contact_vel_moving(v, vs, nrm, p.friction);
         }
     }
     for (var k = 0u; k < p.num_boxes; k++) {
@@ -41,7 +43,7 @@ fn collided(m: Moved) -> Moved {
             if above.z < best { best = above.z; nrm = vec3<f32>(0.0, 0.0, 1.0); face = hi.z; }
             let axis = abs(nrm);
             x = x * (vec3<f32>(1.0) - axis) + axis * face;
-            v = contact_vel(v, nrm, p.friction);
+            v = contact_vel_moving(v, boxes[k].velocity.xyz, nrm, p.friction);
         }
     }
     return Moved(x, v);

@@ -62,14 +62,19 @@ struct InteriorSlots {
     _pad2: u32,
 }
 
+// velocity (and a sphere's spin): the collider's at this substep (core::motion), zero
+// for a still one.
 struct Sphere {
     center: vec3<f32>,
     radius: f32,
+    velocity: vec4<f32>,
+    spin: vec4<f32>,
 }
 
 struct Aabb {
     min: vec4<f32>,
     max: vec4<f32>,
+    velocity: vec4<f32>,
 }
 
 // WORKGROUP, SLOTS, STRAIN_SLOTS, FACE_SLOTS, TETHER_SLOTS, BLOCK (particles per
@@ -128,6 +133,25 @@ fn contact_vel(v: vec3<f32>, nrm: vec3<f32>, friction: f32) -> vec3<f32> {
     let vn = dot3(v, nrm);
     let vt = v - vn * nrm;
     return vt * (1.0 - friction) + max(vn, 0.0) * nrm;
+}
+
+// core::cpu::integrate::contact_vel_moving: contact_vel relative to a surface moving at vs.
+// (vs + tangential) + normal in this order: Mesa reassociates vs + (tangential + normal).
+fn contact_vel_moving(v: vec3<f32>, vs: vec3<f32>, nrm: vec3<f32>, friction: f32) -> vec3<f32> {
+    let w = v - vs;
+    let vn = dot3(w, nrm);
+    let vt = w - vn * nrm;
+    return vs + vt * (1.0 - friction) + max(vn, 0.0) * nrm;
+}
+
+// v + ω × arm added left to right (core::cpu::integrate::surface_vel: Mesa reassociates
+// v + (p − q) into (v + p) − q, so it is written so; not the built-in cross, see dot3).
+fn surface_vel(v: vec3<f32>, spin: vec3<f32>, arm: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(
+        v.x + spin.y * arm.z - spin.z * arm.y,
+        v.y + spin.z * arm.x - spin.x * arm.z,
+        v.z + spin.x * arm.y - spin.y * arm.x,
+    );
 }
 
 // Invocation index of a 1-D job dispatched as a 2-D grid of workgroups (one dimension
