@@ -169,10 +169,14 @@ impl<E: Engine> GpuSolver<E> {
         let state = start_buffers(twins::Exec::Serial, &sp, &topo, &state);
         let face = &state.faces;
 
+        // The colliders at time 0, with their velocities (what the CPU engine's twins see:
+        // the kernel checks run on these; a moving scene rewrites them every substep).
+        let (mut at0, mut boxes0) = (Vec::new(), Vec::new());
+        scene.colliders_at(0.0, &mut at0, &mut boxes0);
         let mut spheres = [Sphere::new([0.0; 3], 0.0); MAX_COLLIDERS];
-        spheres[..scene.spheres.len()].copy_from_slice(&scene.spheres);
+        spheres[..at0.len()].copy_from_slice(&at0);
         let mut boxes = [Aabb::new([0.0; 3], [0.0; 3]); MAX_COLLIDERS];
-        boxes[..scene.boxes.len()].copy_from_slice(&scene.boxes);
+        boxes[..boxes0.len()].copy_from_slice(&boxes0);
         let tri_flat: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
         let face_flat = face_flat(&topo);
         let adjacency = adjacency(&topo);

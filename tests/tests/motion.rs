@@ -5,8 +5,9 @@
 use clothlab_core::scene::{Aabb, ColliderId, Pinning};
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{ClothState, Ease, Integrator, Key, Motion, Repeat, Scene, SimParams, Solver, Sphere};
+use clothlab_engine::validate::validate_kernels_with;
 use clothlab_engine::{RecipeSolver, Variant};
-use clothlab_tests::{every_backend, or_skip};
+use clothlab_tests::{assert_checks, every_backend, or_skip};
 
 /// Sphere radius, m, and its spin about z, rad/s.
 const R: f32 = 0.5;
@@ -288,4 +289,28 @@ fn motions_a_substep_cannot_resolve_and_temporal_blocking_with_motion_are_refuse
             }
         }
     }
+}
+
+#[test]
+fn the_kernel_checks_of_a_moving_scene_give_the_kernels_its_colliders_velocities() {
+    // `validate --scene` with motion: the kernels run on the colliders at t = 0 with their
+    // velocity and spin, as the CPU engine's twins see them (before the fix the GPU's were
+    // uploaded still: integrate_collide 0.58 relative off on the spinning sphere). Every
+    // kernel of each API's optimized recipe within its bound.
+    let (sc, params) = busy();
+    let (v, o) = (Variant::OPTIMIZED, clothlab_engine::SolverOptions::default);
+    let mut checks = Vec::new();
+    if let Some(mut s) = or_skip(clothlab_wgpu::wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
+        let k = s.recipe_kernels();
+        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x5c3, &params).unwrap());
+    }
+    if let Some(mut s) = or_skip(clothlab_vulkan::vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
+        let k = s.recipe_kernels();
+        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x5c3, &params).unwrap());
+    }
+    if let Some(mut s) = or_skip(clothlab_gl::gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
+        let k = s.recipe_kernels();
+        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x5c3, &params).unwrap());
+    }
+    assert_checks("moving colliders", &checks);
 }
