@@ -45,6 +45,17 @@ pub fn or_skip<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> Option<T
     }
 }
 
+/// An adapter and a grid with everything (`Caps` all true): to resolve a variant spec
+/// without a device.
+pub const EVERY_CAP: clothlab_engine::recipe::Caps = clothlab_engine::recipe::Caps {
+    float_atomics: true,
+    immediates: true,
+    table_image: true,
+    subgroups: true,
+    grid: true,
+    tile: true,
+};
+
 /// Every backend on `scene`: the two CPU solvers, then wgpu, Vulkan and OpenGL, naive and
 /// optimized (Vulkan under the validation layer); the GPU ones only where an adapter is
 /// (see [`or_skip`]).

@@ -265,19 +265,7 @@ fn motions_a_substep_cannot_resolve_and_temporal_blocking_with_motion_are_refuse
     let (busy_scene, _) = busy();
     let spec = clothlab_engine::VariantSpec::parse("optimized", &["fusion=tile".into(), "temporal=on".into()]).unwrap();
     let o = clothlab_engine::SolverOptions::default();
-    let v = spec
-        .resolve(
-            &clothlab_engine::recipe::Caps {
-                float_atomics: true,
-                immediates: true,
-                table_image: true,
-                subgroups: true,
-                grid: true,
-                tile: true,
-            },
-            "vulkan",
-        )
-        .unwrap();
+    let v = spec.resolve(&clothlab_tests::EVERY_CAP, "vulkan").unwrap();
     let e = RecipeSolver::new(clothlab_core::Exec::Serial, v, busy_scene.clone(), SimParams::default()).err().unwrap();
     assert!(e.to_string().contains("moving colliders need temporal=off"), "{e}");
     match clothlab_vulkan::vulkan_solver(spec, busy_scene, SimParams::default(), true, o) {

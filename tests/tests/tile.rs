@@ -131,19 +131,7 @@ fn temporal_blocking_folds_substeps_into_one_dispatch_and_keeps_the_bits() {
         let mut sc = scene();
         sc.cloth.n = n;
         let p = params();
-        let v = temporal_spec()
-            .resolve(
-                &clothlab_engine::recipe::Caps {
-                    float_atomics: true,
-                    immediates: true,
-                    table_image: true,
-                    subgroups: true,
-                    grid: true,
-                    tile: true,
-                },
-                "vulkan",
-            )
-            .unwrap();
+        let v = temporal_spec().resolve(&clothlab_tests::EVERY_CAP, "vulkan").unwrap();
         let (_, topo) = clothlab_core::build(&sc, &p).unwrap();
         assert_eq!(dispatch_substeps(&v, Integration::of(&p), p.strain_iterations, &topo), group, "n = {n}");
         // Two dispatches per recording (the tiles, the velocities' copy), whatever the group.
