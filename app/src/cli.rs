@@ -212,8 +212,8 @@ pub struct SimArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Record the run as binary glTF (`.glb`): the cloth with a morph target per recorded
-    /// frame and an animation playing them at their times, the colliders as static meshes
-    /// (Blender imports it as shape keys).
+    /// frame and an animation playing them at their times, the colliders as meshes (moving
+    /// ones as animated nodes; Blender imports it as shape keys).
     #[arg(long, value_name = "FILE.glb")]
     pub record: Option<PathBuf>,
     /// With `--record`: keep every K-th frame (and the first).

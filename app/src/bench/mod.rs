@@ -236,6 +236,11 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     // The scene of --scene (or the default one), at every size of --sizes: everything is
     // checked before the output folder is made.
     let loaded = args.physics.setup(None, sizes[0])?;
+    let scene_label = match (&loaded.title, &args.physics.scene) {
+        (Some(t), Some(f)) => format!("{t} ({})", f.display()),
+        (None, Some(f)) => f.display().to_string(),
+        _ => "default scene".to_owned(),
+    };
     let (base, params) = (loaded.scene, loaded.params);
     let sized = |n: u32| {
         let mut s = base.clone();
@@ -536,6 +541,7 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
         gl_adapter: devices.gl.clone(),
         cpu_simd: clothlab_core::cpu::fused_path_label(),
         params: params.clone(),
+        scene: scene_label.clone(),
         frames,
         warmup_frames: WARMUP_FRAMES,
         resolution: args.resolution,

@@ -181,7 +181,8 @@ pub fn report(r: &Results) -> String {
     let st = &r.settings;
     let _ = writeln!(
         s,
-        "| workload | default scene, {} substeps per frame; per cell {} warm-up frames, then {} frames timed per kernel ({} substeps), then {} frames simulated + rendered offscreen at {}×{} (GPU backends drawn from their buffers by their own API; CPU backends' state uploaded to the wgpu renderer) |",
+        "| workload | {}, {} substeps per frame; per cell {} warm-up frames, then {} frames timed per kernel ({} substeps), then {} frames simulated + rendered offscreen at {}×{} (GPU backends drawn from their buffers by their own API; CPU backends' state uploaded to the wgpu renderer) |",
+        st.scene,
         st.substeps,
         st.warmup_frames,
         st.frames,
@@ -514,6 +515,20 @@ mod tests {
         bad.probe[3][1] = f32::NAN;
         let r = results(vec![cell("cpu", 64, 1e5, 0.0), bad], vec![]);
         assert!(!r.checks[0].ok);
+    }
+
+    #[test]
+    fn the_report_names_the_scene_it_measured() {
+        // It said "default scene" whatever --scene gave; results.json of earlier runs (no
+        // field) read back as the default scene they measured.
+        let mut r = results(vec![cell("cpu", 64, 1e5, 0.0)], vec![]);
+        assert!(report(&r).contains("| workload | default scene, 16 substeps"));
+        r.settings.scene = "A cloth on a spinning sphere (scenes/spinning-sphere.toml)".into();
+        assert!(report(&r).contains("| workload | A cloth on a spinning sphere (scenes/spinning-sphere.toml), 16"));
+        let mut json = serde_json::to_value(&r).unwrap();
+        json["settings"].as_object_mut().unwrap().remove("scene");
+        let old: Results = serde_json::from_value(json).unwrap();
+        assert_eq!(old.settings.scene, "default scene");
     }
 
     #[test]

@@ -157,10 +157,18 @@ pub struct Settings {
     pub warmup_frames: u32,
     /// Offscreen render target of the frame table.
     pub resolution: (u32, u32),
-    /// The simulation parameters (the default scene of each size).
+    /// The simulation parameters (the scene's at each size).
     pub params: SimParams,
     /// The overhead micro-benchmarks.
     pub overhead: OverheadPlan,
+    /// The scene measured: its title and file, or "default scene" (reports written before
+    /// it was recorded: that is what they measured).
+    #[serde(default = "default_scene_label")]
+    pub scene: String,
+}
+
+fn default_scene_label() -> String {
+    "default scene".into()
 }
 
 /// Everything a run measured, as written to results.json.
@@ -258,6 +266,7 @@ pub struct Inputs {
     pub gl_adapter: Option<String>,
     pub cpu_simd: String,
     pub params: SimParams,
+    pub scene: String,
     pub frames: u32,
     pub warmup_frames: u32,
     pub resolution: (u32, u32),
@@ -338,6 +347,7 @@ impl Results {
                 resolution: i.resolution,
                 params: i.params,
                 overhead: i.plan,
+                scene: i.scene,
             },
             rows,
             checks,
@@ -452,6 +462,7 @@ pub(crate) fn test_results(
         gl_adapter: None,
         cpu_simd: "fused sweep on AVX2, 8 lanes".into(),
         params: SimParams::default(),
+        scene: default_scene_label(),
         frames: 10,
         warmup_frames: 3,
         resolution: (64, 64),
