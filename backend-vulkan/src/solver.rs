@@ -51,6 +51,12 @@ pub struct VulkanEngine {
     staging: Buffer,
     /// Where the next recorded write or readback goes in `staging` (reset by every wait).
     cursor: u64,
+    /// Recorded writes past `staging`'s frame room (a moving scene writes its colliders
+    /// before every substep: four arrays a substep, 64 KiB at 64 substeps): chunks kept
+    /// and reused, filled from the start after every wait.
+    chunks: Vec<Buffer>,
+    /// The chunk being filled and where in it (reset by every wait).
+    chunk_at: (usize, u64),
     /// Readbacks recorded since the last wait: (offset in staging, size).
     readbacks: Vec<(u64, u64)>,
     table: Option<Image>,
@@ -94,6 +100,8 @@ impl VulkanEngine {
             cmds: Commands::new(&dev, MAX_QUERIES).map_err(backend)?,
             staging,
             cursor: 0,
+            chunks: Vec::new(),
+            chunk_at: (0, 0),
             readbacks: Vec::new(),
             table: None,
             buffers: Vec::new(),
@@ -281,11 +289,38 @@ impl Engine for VulkanEngine {
     }
 
     fn record_write(&mut self, id: BufferId, bytes: &[u8]) -> Result<(), SolverError> {
-        let at = self.frame_room(bytes.len() as u64)?;
-        let map = self.staging.mapped().ok_or_else(|| SolverError::Driver("staging not host visible".into()))?;
-        map[at as usize..at as usize + bytes.len()].copy_from_slice(bytes);
-        let dst = self.buf(id)?;
-        self.cmds.copy_range(&self.staging, at, dst, 0, bytes.len() as u64);
+        let len = bytes.len() as u64;
+        let not_mapped = || SolverError::Driver("staging not host visible".into());
+        if let Ok(at) = self.frame_room(len) {
+            let map = self.staging.mapped().ok_or_else(not_mapped)?;
+            map[at as usize..at as usize + bytes.len()].copy_from_slice(bytes);
+            let dst = self.buf(id)?;
+            self.cmds.copy_range(&self.staging, at, dst, 0, len);
+            return Ok(());
+        }
+        // The frame's room is used up: the current chunk, the next one, or a new one.
+        let (mut k, mut at) = self.chunk_at;
+        at = at.next_multiple_of(STAGING_ALIGN);
+        loop {
+            if k == self.chunks.len() {
+                let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+                let size = len.max(FRAME_STAGING);
+                let chunk = Buffer::new(&self.dev, "staging chunk", size, usage, MemoryLocation::CpuToGpu);
+                self.chunks.push(chunk.map_err(backend)?);
+            }
+            if at + len <= self.chunks[k].size {
+                break;
+            }
+            (k, at) = (k + 1, 0);
+        }
+        self.chunk_at = (k, at + len);
+        let map = self.chunks[k].mapped().ok_or_else(not_mapped)?;
+        map[at as usize..(at + len) as usize].copy_from_slice(bytes);
+        let dst = self
+            .buffers
+            .get(id.0 as usize)
+            .ok_or_else(|| SolverError::Invalid(format!("no Vulkan buffer {}", id.0)))?;
+        self.cmds.copy_range(&self.chunks[k], at, dst, 0, len);
         Ok(())
     }
 
@@ -327,6 +362,7 @@ impl Engine for VulkanEngine {
     fn wait(&mut self, queries: u32) -> Result<Finished, SolverError> {
         let ticks = self.cmds.wait(queries).map_err(backend)?;
         self.cursor = 0;
+        self.chunk_at = (0, 0);
         let map = self.staging.bytes().ok_or_else(|| SolverError::Driver("staging not host visible".into()))?;
         let readbacks =
             self.readbacks.drain(..).map(|(at, size)| map[at as usize..(at + size) as usize].to_vec()).collect();
