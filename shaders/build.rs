@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 
 use clothlab_core::grid::{InteriorSlots, Spring, SpringSlot, StepParams, Tether};
 use clothlab_core::layout::{BindKind, Buf, wgsl_constants};
+use clothlab_core::pins::{PinPose, PinSlot};
 use clothlab_core::scene::{Aabb, Sphere};
 
 /// A struct as core lays it out: name, size, and (field, offset) pairs.
@@ -63,6 +64,8 @@ fn expected_layouts() -> Vec<Layout> {
         layout!(InteriorSlots, "InteriorSlots", [slots, enabled, _pad0, _pad1, _pad2]),
         layout!(Sphere, "Sphere", [center, radius, velocity, spin]),
         layout!(Aabb, "Aabb", [min, max, velocity]),
+        layout!(PinSlot, "PinSlot", [rest, index, group, pad]),
+        layout!(PinPose, "PinPose", [cols, translation, velocity, spin]),
     ]
 }
 

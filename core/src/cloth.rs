@@ -14,7 +14,7 @@ pub fn build(scene: &Scene, params: &SimParams) -> Result<(ClothState, ClothTopo
         Some(mesh) => {
             scene.validate()?;
             params.validate()?;
-            build_mesh(&scene.cloth, mesh, params)
+            build_mesh(&scene.cloth, &scene.pins, mesh, params)
         }
         None => crate::grid::build_grid(scene, params),
     }
@@ -30,6 +30,17 @@ pub fn check_params(scene: &Scene, params: &SimParams) -> Result<(), ParamError>
         Some(_) => build(scene, params).map(|_| ()),
         None => {
             let c = &scene.cloth;
+            if !scene.pins.is_empty() {
+                // A group that holds no particle is refused here, as at build.
+                let rest: Vec<[f32; 4]> = (0..c.n)
+                    .flat_map(|j| (0..c.n).map(move |i| (i, j)))
+                    .map(|(i, j)| {
+                        let [x, y, z] = c.rest_position(i, j);
+                        [x, y, z, 1.0]
+                    })
+                    .collect();
+                crate::pins::select(&scene.pins, &rest)?;
+            }
             params.validate_for(c.n, c.size / (c.n - 1) as f32)
         }
     }
@@ -43,6 +54,7 @@ pub fn check_params(scene: &Scene, params: &SimParams) -> Result<(), ParamError>
 /// order, tethers to the two nearest pins.
 pub fn build_mesh(
     spec: &ClothSpec,
+    groups: &[crate::pins::PinGroup],
     placed: &PlacedMesh,
     params: &SimParams,
 ) -> Result<(ClothState, ClothTopology), ParamError> {
@@ -56,7 +68,14 @@ pub fn build_mesh(
         Pinning::AboveY(y) => MeshPinning::AboveY(*y),
         _ => MeshPinning::None,
     };
-    let held = placed.pinned(&rule).map_err(err)?;
+    let mut held = placed.pinned(&rule).map_err(err)?;
+    // The `[[pins]]` groups hold the vertices in their boxes too.
+    let rest: Vec<[f32; 4]> = mesh.positions.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
+    let group_of = crate::pins::select(groups, &rest)?;
+    for (h, g) in held.iter_mut().zip(&group_of) {
+        *h |= g.is_some();
+    }
+    let moving_pins = crate::pins::moving(groups, &group_of, &rest);
     // Each cloth of several weighs its own mass (or the parameters' cloth_mass), shared
     // by area among its vertices; one cloth weighs cloth_mass.
     let mass = match placed.parts.as_slice() {
@@ -178,6 +197,7 @@ pub fn build_mesh(
         spacing: placed.spacing,
         mesh: Some(std::sync::Arc::new(tables)),
         colours: Default::default(),
+        pins: moving_pins,
     };
     // VBD's colouring (cpu::vbd::colouring computes the same).
     let greedy =
@@ -257,8 +277,14 @@ pub fn combine(cloths: &[ClothSpec]) -> Result<ClothSpec, ParamError> {
     let mut held = Vec::new();
     let mut parts = Vec::new();
     for (k, c) in cloths.iter().enumerate() {
-        let one =
-            Scene { cloth: c.clone(), floor_y: None, spheres: Vec::new(), boxes: Vec::new(), motions: Vec::new() };
+        let one = Scene {
+            cloth: c.clone(),
+            floor_y: None,
+            spheres: Vec::new(),
+            boxes: Vec::new(),
+            motions: Vec::new(),
+            pins: Vec::new(),
+        };
         one.validate().map_err(|e| at(k, e))?;
         let (mesh, pins, label) = match &c.mesh_data {
             Some(placed) => {

@@ -214,6 +214,8 @@ pub struct ClothTopology {
     /// Vertex Block Descent's colouring (`cpu::vbd::colouring`: a grid's 9 classes, a
     /// mesh's greedy colours), computed with the table.
     pub colours: std::sync::Arc<Colours>,
+    /// The pins the scene's `[[pins]]` groups move (`crate::pins`; empty: none move).
+    pub pins: crate::pins::MovingPins,
 }
 
 /// The tables of a cloth made from a mesh that a grid computes from its place: the kind of
@@ -412,6 +414,14 @@ pub fn build_grid(scene: &Scene, params: &SimParams) -> Result<(ClothState, Clot
             uv.push([i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32]);
         }
     }
+    // The `[[pins]]` groups hold the particles in their boxes too.
+    let group_of = crate::pins::select(&scene.pins, &pos)?;
+    for (p, g) in pos.iter_mut().zip(&group_of) {
+        if g.is_some() {
+            p[3] = 0.0;
+        }
+    }
+    let moving_pins = crate::pins::moving(&scene.pins, &group_of, &pos);
 
     // Triangles: quad (qi, qj) with corners p00 = (qi, qj), p10, p01, p11, split along the
     // p00–p11 diagonal. t0 = (p00, p01, p11), t1 = (p00, p11, p10): counter-clockwise seen
@@ -486,7 +496,13 @@ pub fn build_grid(scene: &Scene, params: &SimParams) -> Result<(ClothState, Clot
     // Tethers: to both corners for TopCorners, to the pin straight above for TopEdge, to
     // the two nearest (in the flat sheet) for a list of points. A list is searched by brute
     // force, so a very long list on a very large grid (over 2.5e8 pairs) gets no tethers.
+    // With `[[pins]]` groups, every held particle is a listed pin.
+    let held = pos.iter().filter(|p| p[3] == 0.0).count();
     let listed: Vec<u32> = match &scene.cloth.pinning {
+        _ if !scene.pins.is_empty() && held * np <= 250_000_000 => {
+            (0..np as u32).filter(|&k| pos[k as usize][3] == 0.0).collect()
+        }
+        _ if !scene.pins.is_empty() => Vec::new(),
         Pinning::Points(p) if p.len() * np <= 250_000_000 => {
             let mut v: Vec<u32> = p.iter().map(|q| q[1] * n + q[0]).collect();
             v.sort_unstable();
@@ -497,31 +513,34 @@ pub fn build_grid(scene: &Scene, params: &SimParams) -> Result<(ClothState, Clot
     };
     let dist = |a: V4, b: V4| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
     let mut tethers = Vec::with_capacity(np);
+    // The (up to) two pins of `listed` nearest particle `me` in the flat sheet.
+    let nearest_two = |listed: &[u32], me: usize, nearest: &mut [(f32, u32); TETHER_SLOTS]| -> Vec<u32> {
+        for &pin in listed {
+            let d = (dist(pos[me], pos[pin as usize]), pin);
+            if d < nearest[1] {
+                nearest[1] = d;
+                if nearest[1] < nearest[0] {
+                    nearest.swap(0, 1);
+                }
+            }
+        }
+        [nearest[0].1, nearest[1].1][..listed.len().min(TETHER_SLOTS)].to_vec()
+    };
     for j in 0..n {
         for i in 0..n {
             let me = (j * n + i) as usize;
             let mut t = [Tether::EMPTY; TETHER_SLOTS];
             let mut nearest = [(f32::INFINITY, 0u32); TETHER_SLOTS];
-            let pins: &[u32] = match scene.cloth.pinning {
-                Pinning::TopCorners => &[0, n - 1],
-                Pinning::TopEdge => &[i],
+            let pins: Vec<u32> = match scene.cloth.pinning {
+                _ if !scene.pins.is_empty() => nearest_two(&listed, me, &mut nearest),
+                Pinning::TopCorners => vec![0, n - 1],
+                Pinning::TopEdge => vec![i],
                 // A mesh's rules (refused for a grid by `Scene::validate`).
-                Pinning::None | Pinning::Vertices(_) | Pinning::BelowY(_) | Pinning::AboveY(_) => &[],
-                Pinning::Points(_) => {
-                    for &pin in &listed {
-                        let d = (dist(pos[me], pos[pin as usize]), pin);
-                        if d < nearest[1] {
-                            nearest[1] = d;
-                            if nearest[1] < nearest[0] {
-                                nearest.swap(0, 1);
-                            }
-                        }
-                    }
-                    &[nearest[0].1, nearest[1].1][..listed.len().min(TETHER_SLOTS)]
-                }
+                Pinning::None | Pinning::Vertices(_) | Pinning::BelowY(_) | Pinning::AboveY(_) => Vec::new(),
+                Pinning::Points(_) => nearest_two(&listed, me, &mut nearest),
             };
             if pos[me][3] != 0.0 {
-                for (slot, &pin) in t.iter_mut().zip(pins) {
+                for (slot, &pin) in t.iter_mut().zip(&pins) {
                     *slot = Tether { pin: pin as i32, rest: dist(pos[me], pos[pin as usize]) };
                 }
             }
@@ -546,6 +565,7 @@ pub fn build_grid(scene: &Scene, params: &SimParams) -> Result<(ClothState, Clot
         spacing,
         mesh: None,
         colours: Default::default(),
+        pins: moving_pins,
     };
     // VBD's colouring (cpu::vbd::colouring computes the same).
     topo.colours = std::sync::Arc::new(Colours::from_lists(&Colours::grid(n as usize)));

@@ -107,11 +107,15 @@ pub enum Buf {
     /// Vertex Block Descent's colouring (`tables::Colours::order`): every particle once,
     /// colour by colour, `u32` each; a colour's dispatch sweeps its range.
     Colours = 31,
+    /// The moving pins (`pins::PinSlot`; one unused element when none move).
+    Pins = 32,
+    /// The frame's pin poses (`pins::PinPose`), a block of `MAX_PIN_GROUPS` per substep.
+    PinPoses = 33,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 32] = [
+    pub const ALL: [Buf; 34] = [
         Buf::Params,
         Buf::Pos,
         Buf::Vel,
@@ -144,6 +148,8 @@ impl Buf {
         Buf::Scalars,
         Buf::Adjacency,
         Buf::Colours,
+        Buf::Pins,
+        Buf::PinPoses,
     ];
 
     /// The integrators' scratch particle buffers, in order.
@@ -203,6 +209,8 @@ impl Buf {
             Buf::Scalars => "scalars",
             Buf::Adjacency => "adjacency",
             Buf::Colours => "colours",
+            Buf::Pins => "pins",
+            Buf::PinPoses => "pin_poses",
         }
     }
 
@@ -241,6 +249,7 @@ pub fn wgsl_constants() -> String {
     s += &u("BLOCK", BLOCK);
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
     s += &u("MAX_COLLIDERS", crate::scene::MAX_COLLIDERS as u32);
+    s += &u("MAX_PIN_GROUPS", crate::pins::MAX_PIN_GROUPS as u32);
     s += &format!("const STRAIN_AIM: f32 = {STRAIN_AIM:?};\n");
     s
 }

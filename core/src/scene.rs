@@ -306,6 +306,9 @@ pub struct Scene {
     /// How colliders move (at most one motion each; none: all still). See [`crate::motion`].
     #[serde(default)]
     pub motions: Vec<(ColliderId, Motion)>,
+    /// Groups of pinned particles, held where they rest or moved (see [`crate::pins`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pins: Vec<crate::pins::PinGroup>,
 }
 
 impl Default for Scene {
@@ -320,6 +323,7 @@ impl Default for Scene {
             ],
             boxes: Vec::new(),
             motions: Vec::new(),
+            pins: Vec::new(),
         }
     }
 }
@@ -486,6 +490,12 @@ impl Scene {
             }
             m.check(&id.field(), matches!(id, ColliderId::Sphere(_)))?;
         }
+        if self.pins.len() > crate::pins::MAX_PIN_GROUPS {
+            return Err(ParamError::new("pins", self.pins.len(), format!("at most {}", crate::pins::MAX_PIN_GROUPS)));
+        }
+        for (i, g) in self.pins.iter().enumerate() {
+            g.check(i)?;
+        }
         Ok(())
     }
 
@@ -515,6 +525,17 @@ impl Scene {
     /// Whether any collider moves.
     pub fn moves(&self) -> bool {
         self.motions.iter().any(|(_, m)| !m.is_still())
+    }
+
+    /// Whether any `[[pins]]` group moves.
+    pub fn pins_move(&self) -> bool {
+        self.pins.iter().any(|g| !g.motion.is_still())
+    }
+
+    /// Whether anything in the scene moves by itself (colliders or pins): what a
+    /// recording of several substeps at once (`temporal=on`) cannot follow.
+    pub fn animated(&self) -> bool {
+        self.moves() || self.pins_move()
     }
 
     /// Refuses motions faster than a substep of `dt` s resolves ([`Motion::check_speed`]).

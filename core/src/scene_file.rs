@@ -24,6 +24,10 @@
 //! [[boxes]]
 //! min = [-0.5, 0.0, -0.5]
 //! max = [0.5, 0.8, 0.5]
+//! [[pins]]                     # holds the particles resting in the box; may move
+//! min = [-1.1, 2.1, -1.0]      # (see clothlab_core::pins)
+//! max = [1.1, 2.3, -0.8]
+//! motion = { spin = [0.0, 0.0, 1.0] }
 //! [params]                     # any SimParams field; the rest keep their defaults
 //! substeps = 16
 //! [camera]                     # optional
@@ -94,6 +98,8 @@ struct Repr<C> {
     spheres: Vec<SphereRepr>,
     #[serde(default)]
     boxes: Vec<BoxRepr>,
+    #[serde(default)]
+    pins: Vec<crate::pins::PinGroup>,
     #[serde(default)]
     params: SimParams,
     #[serde(default)]
@@ -182,12 +188,12 @@ impl SceneFile {
         let many = table.as_ref().and_then(|t| t.get("cloth")).is_some_and(|c| c.is_array());
         let (repr, cloths): (Repr<()>, Vec<ClothSpec>) = if many {
             let r: Repr<Vec<ClothSpec>> = toml::from_str(text).map_err(syntax)?;
-            let Repr { title, description, cloth, floor, spheres, boxes, params, camera, light } = r;
-            (Repr { title, description, cloth: (), floor, spheres, boxes, params, camera, light }, cloth)
+            let Repr { title, description, cloth, floor, spheres, boxes, pins, params, camera, light } = r;
+            (Repr { title, description, cloth: (), floor, spheres, boxes, pins, params, camera, light }, cloth)
         } else {
             let r: Repr<ClothSpec> = toml::from_str(text).map_err(syntax)?;
-            let Repr { title, description, cloth, floor, spheres, boxes, params, camera, light } = r;
-            (Repr { title, description, cloth: (), floor, spheres, boxes, params, camera, light }, vec![cloth])
+            let Repr { title, description, cloth, floor, spheres, boxes, pins, params, camera, light } = r;
+            (Repr { title, description, cloth: (), floor, spheres, boxes, pins, params, camera, light }, vec![cloth])
         };
         if cloths.is_empty() {
             return Err(err(locate(text, "cloth").map(|s| line_col(text, s)), "`cloth`: no cloth in the list".into()));
@@ -252,6 +258,7 @@ impl SceneFile {
                 .filter_map(|(i, s)| Some((ColliderId::Sphere(i), s.motion.clone()?)))
                 .chain(repr.boxes.iter().enumerate().filter_map(|(i, b)| Some((ColliderId::Box(i), b.motion.clone()?))))
                 .collect(),
+            pins: repr.pins,
         };
         scene.validate().map_err(|e| {
             let path = e.field.clone();
@@ -261,7 +268,7 @@ impl SceneFile {
         // masses, the self-collision thickness at its spacing).
         let at_params = |e: ParamError| {
             // A collider's motion too fast for the substeps is the collider's field.
-            let own = ["cloth.", "spheres[", "boxes["].iter().any(|p| e.field.starts_with(p));
+            let own = ["cloth.", "spheres[", "boxes[", "pins["].iter().any(|p| e.field.starts_with(p));
             let path = if own { e.field.clone() } else { format!("params.{}", e.field) };
             refused(e, path)
         };

@@ -9,6 +9,8 @@ use serde::{Deserialize, Serialize};
 // time their sweeps with them, and the timing tables group rows by them; a test there checks
 // that every row's label is one of [`KERNEL_LABELS`].
 
+/// Label of the moving pins put at their poses (`pins`).
+pub const PINS: &str = "pins";
 /// Label of gravity, drag and the wind's force (`forces`).
 pub const FORCES: &str = "forces";
 /// Label of the spring forces (`springs`: gathered, or scattered with atomics).
@@ -56,7 +58,8 @@ pub const STRAIN_LIMIT_COUNT: &str = "strain_limit+hash_count";
 /// Self-collision's response.
 pub const SELF_COLLIDE: &str = "self_collide";
 /// Every label a kernel (a registry row or a CPU sweep) is timed under, in step order.
-pub const KERNEL_LABELS: [&str; 20] = [
+pub const KERNEL_LABELS: [&str; 21] = [
+    PINS,
     FORCES,
     SPRINGS,
     FORCES_SPRINGS,

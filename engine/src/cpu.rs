@@ -157,9 +157,9 @@ impl RecipeSolver {
         let end = frame_end(&variant, Integration::of(&params));
         let name = variant.solver_name("cpu-recipe");
         let group = dispatch_substeps(&variant, Integration::of(&params), params.strain_iterations, &engine.topo);
-        if group > 1 && engine.scene.moves() {
+        if group > 1 && engine.scene.animated() {
             return Err(SolverError::Unsupported(
-                "temporal=on advances several substeps with one pose of the colliders: moving colliders need temporal=off".into(),
+                "temporal=on advances several substeps with one pose of the colliders and pins: moving colliders or pins need temporal=off".into(),
             ));
         }
         Ok(Self {
@@ -237,6 +237,18 @@ impl Solver for RecipeSolver {
         let t_frame = Instant::now();
         let mut p = StepParams::new(&self.params, &self.engine.scene, self.grab);
         p.tile_substeps = self.group;
+        if !self.engine.topo.pins.slots.is_empty() {
+            let scene = &self.engine.scene;
+            let poses = clothlab_core::pins::frame_poses(
+                &scene.pins,
+                &self.engine.topo.pins.pivots,
+                self.params.integrator,
+                self.time,
+                self.params.dt() as f64,
+                self.params.substeps,
+            );
+            self.bufs.pin_poses = bytemuck::cast_slice(&poses).to_vec();
+        }
         // With temporal blocking one run of the commands advances `group` substeps.
         for s in (0..self.params.substeps).filter(|s| s.is_multiple_of(self.group)) {
             let t_substep = Instant::now();

@@ -14,6 +14,8 @@ use std::hash::{Hash, Hasher};
 use clothlab_core::cpu::{self, Exec, SubstepStats};
 use clothlab_core::grid::{ClothTopology, StepParams, V4};
 use clothlab_core::layout::{BLOCK, Buf, WORKGROUP};
+use clothlab_core::params::MAX_SUBSTEPS;
+use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose};
 use clothlab_core::scene::{Aabb, Sphere};
 use clothlab_core::timing;
 
@@ -41,6 +43,8 @@ pub enum Count {
     /// One per pair of neighbours in a row (`n · ⌈n / 2⌉`: `self_collide`); on a mesh, of
     /// consecutive particles (`⌈particles / 2⌉`).
     Pairs,
+    /// One per moving pin (`topo.pins.slots`).
+    Pins,
     /// As many as the dispatch's range says ([`crate::recipe::Command::Range`]: a mesh's
     /// XPBD pass); of the topology, the whole spring list.
     Range,
@@ -61,6 +65,7 @@ impl Count {
             Count::Pairs if topo.n == 0 => (topo.num_particles() as u32).div_ceil(2),
             Count::Pairs => topo.n * topo.n.div_ceil(2),
             Count::Range => topo.springs.len() as u32,
+            Count::Pins => topo.pins.slots.len() as u32,
         }
     }
 }
@@ -241,6 +246,9 @@ pub struct HostBuffers {
     pub aux: Vec<Vec<V4>>,
     /// The conjugate-gradient scalars ([`Buf::Scalars`]): one element.
     pub scalars: Vec<V4>,
+    /// The frame's pin poses ([`Buf::PinPoses`]): `clothlab_core::pins::frame_poses` as
+    /// [`V4`]s, a block of `MAX_PIN_GROUPS` poses per substep (identities to start).
+    pub pin_poses: Vec<V4>,
 }
 
 impl HostBuffers {
@@ -256,6 +264,15 @@ impl HostBuffers {
             stats: Vec::new(),
             aux: vec![vec![[0.0; 4]; state.pos.len()]; Buf::AUX.len()],
             scalars: vec![[0.0; 4]],
+            pin_poses: bytemuck::cast_slice(&clothlab_core::pins::frame_poses(
+                &[],
+                &[],
+                Default::default(),
+                0.0,
+                0.0,
+                1,
+            ))
+            .to_vec(),
         }
     }
 
@@ -269,6 +286,7 @@ impl HostBuffers {
             Buf::Normal => &self.normal,
             Buf::Faces => &self.faces,
             Buf::Scalars => &self.scalars,
+            Buf::PinPoses => &self.pin_poses,
             b => return Buf::AUX.iter().position(|a| *a == b).map(|k| &self.aux[k]),
         })
     }
@@ -283,6 +301,7 @@ impl HostBuffers {
             Buf::Normal => &mut self.normal,
             Buf::Faces => &mut self.faces,
             Buf::Scalars => &mut self.scalars,
+            Buf::PinPoses => &mut self.pin_poses,
             b => return Buf::AUX.iter().position(|a| *a == b).map(|k| &mut self.aux[k]),
         })
     }
@@ -302,6 +321,9 @@ impl HostBuffers {
             || particles.into_iter().chain(&self.aux).any(|v| v.len() != np)
             || self.aux.len() != Buf::AUX.len()
             || self.scalars.len() != 1
+            || self.pin_poses.is_empty()
+            || !self.pin_poses.len().is_multiple_of(PinPose::V4S * MAX_PIN_GROUPS)
+            || self.pin_poses.len() > PinPose::V4S * MAX_PIN_GROUPS * MAX_SUBSTEPS as usize
         {
             return Err(clothlab_core::SolverError::GridMismatch {
                 want: topo.n,
@@ -570,6 +592,8 @@ pub fn compulsory_bytes(k: KernelRef, topo: &ClothTopology, table_uniform: bool)
             // A grid's kernels never read it; a mesh's read their particle's and the next.
             Buf::Adjacency if topo.mesh.is_some() => (np + 1) * 16,
             Buf::Colours => np * 4,
+            Buf::Pins => topo.pins.slots.len() as u64 * 32,
+            Buf::PinPoses => MAX_PIN_GROUPS as u64 * 96,
             Buf::Tethers => np * TETHER_SLOTS as u64 * 8,
             Buf::Springs | Buf::SpringsB => springs / 2 * 24,
             Buf::Slots | Buf::BendSlots | Buf::Table => table(b),
@@ -612,6 +636,11 @@ fn springs_scatter(a: &TwinArgs, b: &mut HostBuffers) {
 
 fn integrate(a: &TwinArgs, b: &mut HostBuffers) {
     cpu::integrate(a.exec, a.p, &b.force, &mut b.pos, &mut b.vel);
+}
+
+fn pins(a: &TwinArgs, b: &mut HostBuffers) {
+    let poses: &[PinPose] = bytemuck::cast_slice(&b.pin_poses);
+    clothlab_core::pins::drive(&a.topo.pins.slots, poses, a.substep, &mut b.pos, &mut b.vel);
 }
 
 fn collide(a: &TwinArgs, b: &mut HostBuffers) {
@@ -1045,6 +1074,13 @@ pub static FORCES_SPRINGS_WIND: KernelDef = KernelDef {
 };
 /// Verlet, pins, the grab and the floor.
 pub static INTEGRATE: KernelDef = def("integrate", integrate, Count::Particles, STATE, &[Pos, Vel]);
+/// Moving pins to their poses at the substep's end (`clothlab_core::pins`).
+pub static PINS: KernelDef = KernelDef {
+    variants: PLAIN,
+    immediates: Immediates::Substep,
+    label: timing::PINS,
+    ..def("pins", pins, Count::Pins, &[Pos, Vel, Pins, PinPoses], &[Pos, Vel])
+};
 /// Spheres and boxes.
 pub static COLLIDE: KernelDef =
     KernelDef { variants: IMM_CU, ..def("collide", collide, Count::Particles, COLLIDERS, &[Pos, Vel]) };
@@ -1495,7 +1531,8 @@ pub static SELF_COLLISION: [&KernelDef; 5] =
     [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 59] = [
+pub static ALL: [&KernelDef; 60] = [
+    &PINS,
     &FORCES,
     &SPRINGS,
     &SPRINGS_SCATTER,

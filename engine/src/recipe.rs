@@ -336,8 +336,11 @@ pub fn recipe_for(
     // `vbd_accelerate` one over every particle with its sweep's ω.
     let rho = f32::from_bits(how.vbd_rho_bits);
     let mut sweep = 0;
-    let commands: Vec<Command> = recipe(variant, strain_passes, how)
+    // Moving pins first: every kernel of the substep sees them at their poses.
+    let pins = (!topo.pins.slots.is_empty()).then(|| Command::Dispatch(k::PINS.plain()));
+    let commands: Vec<Command> = pins
         .into_iter()
+        .chain(recipe(variant, strain_passes, how))
         .flat_map(|c| match c {
             Command::Dispatch(kr) if kr.def == &k::VBD_COLOUR => {
                 sweep += 1;

@@ -13,6 +13,7 @@ use clothlab_core::grid::{
 };
 use clothlab_core::layout::Buf;
 use clothlab_core::params::MAX_SUBSTEPS;
+use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose, PinSlot};
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, TimingRecorder};
 use clothlab_core::{SimParams, Solver, SolverError};
@@ -107,9 +108,9 @@ fn recipe_group(
             "temporal=on advances {group} substeps per dispatch: per-substep statistics need temporal=off"
         )));
     }
-    if group > 1 && scene.moves() {
+    if group > 1 && scene.animated() {
         return Err(SolverError::Unsupported(format!(
-            "temporal=on advances {group} substeps per dispatch with one pose of the colliders: moving colliders need temporal=off"
+            "temporal=on advances {group} substeps per dispatch with one pose of the colliders and pins: moving colliders or pins need temporal=off"
         )));
     }
     Ok(group)
@@ -188,8 +189,14 @@ impl<E: Engine> GpuSolver<E> {
         let partials_zero = vec![0u8; 8 * (x * y) as usize];
         let pos_bytes: &[u8] = bytemuck::cast_slice(&state.pos);
         let aux_zero = vec![0u8; 16 * topo.num_particles()];
+        // Moving pins: their table, and room for a frame's poses at the most substeps (a
+        // block of MAX_PIN_GROUPS a substep); none: one unused element each.
+        let no_pin = [PinSlot { rest: [0.0; 3], index: 0, group: 0, pad: [0; 3] }];
+        let pin_slots: &[PinSlot] = if topo.pins.slots.is_empty() { &no_pin } else { &topo.pins.slots };
+        let pose_blocks = if topo.pins.slots.is_empty() { 1 } else { MAX_SUBSTEPS as usize };
+        let pin_poses = vec![0u8; pose_blocks * MAX_PIN_GROUPS * std::mem::size_of::<PinPose>()];
         // Positions and normals are the renderer's vertex buffers too (no copy).
-        let contents: [(Buf, &[u8]); 31] = [
+        let contents: [(Buf, &[u8]); 33] = [
             (Buf::Params, bytemuck::bytes_of(&sp)),
             (Buf::ParamsStorage, bytemuck::bytes_of(&sp)),
             (Buf::SpheresUniform, bytemuck::cast_slice(&spheres)),
@@ -221,6 +228,8 @@ impl<E: Engine> GpuSolver<E> {
             (Buf::Aux3, &aux_zero),
             (Buf::Aux4, &aux_zero),
             (Buf::Scalars, &[0u8; 16]),
+            (Buf::Pins, bytemuck::cast_slice(pin_slots)),
+            (Buf::PinPoses, &pin_poses),
         ];
         let mut ids = Vec::with_capacity(contents.len());
         for (buf, bytes) in contents {
@@ -540,6 +549,13 @@ impl<E: Engine> GpuSolver<E> {
                 self.write(buf, bytemuck::cast_slice(v))?;
             }
         }
+        // The pin poses are an input only: uploaded, not read back; the commands run as
+        // substep 0, so its block is all they read.
+        let reads_poses = dispatches(commands).any(|k| k.def.reads.contains(&Buf::PinPoses));
+        if reads_poses {
+            let block = &bufs.pin_poses[..PinPose::V4S * MAX_PIN_GROUPS];
+            self.write(Buf::PinPoses, bytemuck::cast_slice(block))?;
+        }
         let was = std::mem::replace(&mut self.time_kernels, false);
         let recorded = self.engine.begin(0, 0).map(|_| self.record(commands, 0, &mut 0, &mut Vec::new()));
         self.time_kernels = was;
@@ -685,6 +701,19 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 // before the first dispatch; wgpu: a queue write), not a submission of
                 // their own.
                 self.engine.record_write(params, bytemuck::bytes_of(&self.sp))?;
+                // The frame's poses of the moving pins, every substep's block at once.
+                if !self.topo.pins.slots.is_empty() {
+                    let poses = clothlab_core::pins::frame_poses(
+                        &self.scene.pins,
+                        &self.topo.pins.pivots,
+                        self.params.integrator,
+                        self.time,
+                        self.params.dt() as f64,
+                        substeps,
+                    );
+                    let id = self.must(Buf::PinPoses)?;
+                    self.engine.record_write(id, bytemuck::cast_slice(&poses))?;
+                }
                 // The storage copy only for a recipe that reads it (kernel checks write both).
                 if self.variant.constants == Constants::Storage {
                     self.engine.record_write(params_storage, bytemuck::bytes_of(&self.sp))?;

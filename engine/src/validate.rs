@@ -67,6 +67,18 @@ impl KernelInput {
             bufs.aux[4][i] = [f[0], f[1], f[2], 0.0];
         }
         bufs.scalars[0] = [2e-6, 3e-6, 0.6, 0.25];
+        if !topo.pins.slots.is_empty() {
+            // The moving pins' poses at a time by which every group has turned and moved.
+            let poses = clothlab_core::pins::frame_poses(
+                &scene.pins,
+                &topo.pins.pivots,
+                params.integrator,
+                0.3,
+                params.dt() as f64,
+                1,
+            );
+            bufs.pin_poses = bytemuck::cast_slice(&poses).to_vec();
+        }
         Ok(Self { engine: CpuEngine::new(Exec::Serial, scene, topo), bufs, p })
     }
 

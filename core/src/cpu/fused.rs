@@ -248,6 +248,20 @@ impl Soa {
         }
     }
 
+    /// Puts the moving pins of `slots` at their poses (`poses`: one substep's block), as
+    /// [`crate::pins::drive`] does on `ClothState`.
+    pub(crate) fn drive(&mut self, slots: &[crate::pins::PinSlot], poses: &[crate::pins::PinPose]) {
+        for s in slots {
+            let Some(pose) = poses.get(s.group as usize) else { continue };
+            let (x, v) = pose.place(s.rest);
+            let i = s.index as usize;
+            for k in 0..3 {
+                self.c[POS + k][i] = x[k];
+                self.c[VEL + k][i] = v[k];
+            }
+        }
+    }
+
     /// Room for `np` particles.
     pub(crate) fn resize(&mut self, np: usize) {
         for v in &mut self.c {

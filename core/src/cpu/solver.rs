@@ -229,11 +229,33 @@ impl CpuSolver {
             let (spheres, boxes) = &mut self.colliders;
             self.scene.colliders_at(self.time, spheres, boxes);
         }
+        let t0 = self.time;
         self.time += self.params.dt() as f64;
+        // Moving pins go to where they are at the substep's end (crate::pins).
+        let poses = self.scene.pins_move().then(|| {
+            crate::pins::frame_poses(
+                &self.scene.pins,
+                &self.topo.pins.pivots,
+                self.params.integrator,
+                t0,
+                self.params.dt() as f64,
+                1,
+            )
+        });
         if self.runs_fused() {
+            if let Some(poses) = &poses {
+                if !self.soa_valid {
+                    self.soa[0].load(self.exec, &self.state);
+                    self.soa_valid = true;
+                }
+                self.soa[0].drive(&self.topo.pins.slots, poses);
+            }
             self.substep_fused();
         } else {
             self.sync();
+            if let Some(poses) = &poses {
+                crate::pins::drive(&self.topo.pins.slots, poses, 0, &mut self.state.pos, &mut self.state.vel);
+            }
             self.substep_kernels();
             self.soa_valid = false;
         }

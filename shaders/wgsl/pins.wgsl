@@ -1,0 +1,30 @@
+//! include:
+// pins — per moving pin (core::pins::drive): the particle put where its group's pose has
+// it at the end of this substep, with the pose's velocity there. The frame's poses are
+// written once per frame, a block of MAX_PIN_GROUPS per substep; the substep's index
+// comes in immediates.
+@group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> vel: array<vec4<f32>>;
+@group(0) @binding(32) var<storage, read> pin_slots: array<PinSlot>;
+@group(0) @binding(33) var<storage, read> pin_poses: array<PinPose>;
+
+struct PinsPush {
+    substep: u32,
+}
+var<immediate> pins_push: PinsPush;
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let k = flat_id(id, groups);
+    if k >= arrayLength(&pin_slots) {
+        return;
+    }
+    let s = pin_slots[k];
+    let pose = pin_poses[pins_push.substep * MAX_PIN_GROUPS + s.group];
+    // (c0·r.x + c1·r.y) + c2·r.z, then + translation: the twin's order (PinPose::place).
+    let arm = pose.cols[0].xyz * s.rest.x + pose.cols[1].xyz * s.rest.y + pose.cols[2].xyz * s.rest.z;
+    let x = arm + pose.translation.xyz;
+    let v = surface_vel(pose.velocity.xyz, pose.spin.xyz, arm);
+    pos[s.index] = vec4<f32>(x, pos[s.index].w);
+    vel[s.index] = vec4<f32>(v, 0.0);
+}
