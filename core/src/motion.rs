@@ -36,7 +36,8 @@
 //! ```
 //!
 //! Boxes are axis-aligned: they translate, they do not spin (refused). Keyframes hold
-//! offsets, not rotations; pinned cloth vertices do not move yet.
+//! offsets, not rotations. Pinned cloth vertices move by the same motions in `[[pins]]`
+//! groups (`crate::pins`), where a spin turns them about a pivot.
 
 use serde::{Deserialize, Serialize};
 

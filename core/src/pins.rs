@@ -22,13 +22,29 @@
 //! ```
 //!
 //! A particle in two boxes belongs to the first. The host evaluates every group's pose
-//! for every substep of a frame ([`frame_poses`]; the pose at the substep's end), a GPU
-//! solver writes them once per frame, and the `pins` kernel (twin [`drive`]) puts each
-//! moving pin at its pose before the substep's forces: the springs, the strain limit and
-//! the tethers see the pins where they will be when the substep ends, the damping and the
-//! contacts see their velocity. Every integrator keeps a pinned particle where it is (its
-//! `w` is 0), so all seven and VBD take moving pins without a change. Keyframes hold
-//! offsets, not rotations: a group turns at its constant `spin`.
+//! for every substep of a frame ([`frame_poses`]), a GPU solver writes them once per
+//! frame, and the `pins` kernel (twin [`drive`]) puts each moving pin at its pose, with
+//! the pose's velocity, before the substep's first kernel. Which pose: where the
+//! integrator evaluates the cloth ([`at_substep_end`]) — the substep's start for the
+//! force-based ones (Verlet, Euler, RK, implicit), its end for the position-based ones
+//! (XPBD, VBD), which solve for the state at the end. Every integrator keeps a pinned
+//! particle where it is (its `w` is 0), so all eight take moving pins without a change
+//! of their own; a frame's last state shows the pins at its last substep's pose (one
+//! substep behind the frame's end for the force-based ones).
+//!
+//! Measured with a curtain carried at constant velocity, which must be the still curtain
+//! moved (`tests/tests/pins.rs`): Verlet and implicit to rounding (≤ 9.3e-7 m after
+//! 0.5 s); XPBD 1.2e-4 m and VBD 1.7e-4 m (their damping takes a pin's displacement over
+//! the substep as 0: it is placed before the prediction); RK4 4.2e-3 m (its later stages
+//! see the pins at the substep's start). Moving the pins inside those integrators (a
+//! pinned particle advanced by its velocity) is what would remove the last three.
+//!
+//! Tethers hold each particle within `(1 + strain_limit)` of its nearest pins: a motion
+//! that pulls pins apart further than the cloth can stretch (two edges twisted in place)
+//! leaves the springs between the halves to take the rest, without bound
+//! (`scenes/cloth-twist.toml` says how its motion avoids it).
+//!
+//! Keyframes hold offsets, not rotations: a group turns at its constant `spin`.
 
 use serde::{Deserialize, Serialize};
 

@@ -1,6 +1,6 @@
 //! include:
 // pins — per moving pin (core::pins::drive): the particle put where its group's pose has
-// it at the end of this substep, with the pose's velocity there. The frame's poses are
+// it at this substep's start (or end: core::pins::at_substep_end), with the pose's velocity. The frame's poses are
 // written once per frame, a block of MAX_PIN_GROUPS per substep; the substep's index
 // comes in immediates.
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
