@@ -204,3 +204,18 @@ pub fn free_mesh_scene(name: &str, placement: clothlab_core::mesh::Placement) ->
     s.cloth.mesh_data = Some(std::sync::Arc::new(PlacedMesh::new(&mesh, &placement).unwrap_or_else(|e| panic!("{e}"))));
     s
 }
+
+/// Rolls each of `solvers` out `frames` frames against the CPU solver
+/// (`validate_rollout`) and asserts each within its bound, and exactly (0 m) where its
+/// flag says it computes the CPU's bits (the optimized recipes on llvmpipe).
+pub fn assert_rollouts(solvers: Vec<(String, Box<dyn Solver>, bool)>, frames: u32) {
+    let mut bad = Vec::new();
+    for (name, mut s, exact) in solvers {
+        let c = clothlab_core::validate::validate_rollout(&mut *s, frames).unwrap();
+        println!("{name:18} {} max {:.2e} (bound {:.0e})", c.what, c.max_abs, c.bound);
+        if (exact && c.max_abs != 0.0) || c.error > c.bound {
+            bad.push(format!("{name}: {:.2e} (exact: {exact})", c.max_abs));
+        }
+    }
+    assert!(bad.is_empty(), "{bad:?}");
+}

@@ -3,7 +3,6 @@
 //! and boxes moved and spun at every substep.
 
 use clothlab_core::scene::{Aabb, ColliderId, Pinning};
-use clothlab_core::validate::validate_rollout;
 use clothlab_core::{ClothState, Ease, Integrator, Key, Motion, Repeat, Scene, SimParams, Solver, Sphere};
 use clothlab_engine::validate::validate_kernels_with;
 use clothlab_engine::{RecipeSolver, Variant};
@@ -228,15 +227,7 @@ fn every_gpu_recipe_and_the_cpu_engine_follow_the_cpu_with_moving_colliders() {
         let exact = s.adapter().contains("llvmpipe");
         solvers.push(("gl".into(), Box::new(s), exact));
     }
-    let mut bad = Vec::new();
-    for (name, mut s, exact) in solvers {
-        let c = validate_rollout(&mut *s, 12).unwrap();
-        println!("{name:18} {} max {:.2e} (bound {:.0e})", c.what, c.max_abs, c.bound);
-        if (exact && c.max_abs != 0.0) || c.error > c.bound {
-            bad.push(format!("{name}: {:.2e} (exact: {exact})", c.max_abs));
-        }
-    }
-    assert!(bad.is_empty(), "{bad:?}");
+    clothlab_tests::assert_rollouts(solvers, 12);
 }
 
 #[test]
@@ -267,13 +258,13 @@ fn motions_a_substep_cannot_resolve_and_temporal_blocking_with_motion_are_refuse
     let o = clothlab_engine::SolverOptions::default();
     let v = spec.resolve(&clothlab_tests::EVERY_CAP, "vulkan").unwrap();
     let e = RecipeSolver::new(clothlab_core::Exec::Serial, v, busy_scene.clone(), SimParams::default()).err().unwrap();
-    assert!(e.to_string().contains("moving colliders need temporal=off"), "{e}");
+    assert!(e.to_string().contains("moving colliders or pins need temporal=off"), "{e}");
     match clothlab_vulkan::vulkan_solver(spec, busy_scene, SimParams::default(), true, o) {
         Ok(_) => panic!("temporal blocking accepted moving colliders"),
         Err(e) => {
             let e = e.to_string();
             if clothlab_tests::gpu_required() || !e.contains("no GPU adapter") {
-                assert!(e.contains("moving colliders need temporal=off"), "{e}");
+                assert!(e.contains("moving colliders or pins need temporal=off"), "{e}");
             }
         }
     }
@@ -323,7 +314,7 @@ fn a_moving_scene_at_many_substeps_steps_on_every_api() {
         solvers.push(("gl", Box::new(s)));
     }
     for (name, mut s) in solvers {
-        let c = validate_rollout(&mut *s, 2).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let c = clothlab_core::validate::validate_rollout(&mut *s, 2).unwrap_or_else(|e| panic!("{name}: {e}"));
         println!("{name:8} {} max {:.2e} (bound {:.0e})", c.what, c.max_abs, c.bound);
         assert!(c.error <= c.bound, "{name}: {:.2e} over {:.0e}", c.error, c.bound);
     }

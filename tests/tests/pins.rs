@@ -4,7 +4,6 @@
 
 use clothlab_core::pins::{PinGroup, PinPose};
 use clothlab_core::scene::Pinning;
-use clothlab_core::validate::validate_rollout;
 use clothlab_core::{ClothState, Integrator, Key, Motion, Scene, SceneFile, SimParams, Solver};
 use clothlab_engine::validate::validate_kernels_with;
 use clothlab_engine::{RecipeSolver, Variant};
@@ -186,15 +185,7 @@ fn every_gpu_recipe_and_the_cpu_engine_follow_the_cpu_with_moving_pins() {
     // The kernel checks ran the pins kernel (its twin exact: the same products and sums).
     assert!(checks.iter().any(|c| c.what.starts_with("pins")), "no check of the pins kernel");
     assert_checks("moving pins", &checks);
-    let mut bad = Vec::new();
-    for (name, mut s, exact) in solvers {
-        let c = validate_rollout(&mut *s, 12).unwrap();
-        println!("{name:18} {} max {:.2e} (bound {:.0e})", c.what, c.max_abs, c.bound);
-        if (exact && c.max_abs != 0.0) || c.error > c.bound {
-            bad.push(format!("{name}: {:.2e} (exact: {exact})", c.max_abs));
-        }
-    }
-    assert!(bad.is_empty(), "{bad:?}");
+    clothlab_tests::assert_rollouts(solvers, 12);
 }
 
 #[test]
