@@ -191,7 +191,9 @@ impl<E: Engine> GpuSolver<E> {
         let aux_zero = vec![0u8; 16 * topo.num_particles()];
         // Moving pins: their table, and room for a frame's poses at the most substeps (a
         // block of MAX_PIN_GROUPS a substep); none: one unused element each.
-        let no_pin = [PinSlot { rest: [0.0; 3], index: 0, group: 0, pad: [0; 3] }];
+        // The unused element names no particle (a dispatch of no pins still runs one
+        // workgroup, whose first invocation sees it and skips it).
+        let no_pin = [PinSlot { rest: [0.0; 3], index: u32::MAX, group: 0, pad: [0; 3] }];
         let pin_slots: &[PinSlot] = if topo.pins.slots.is_empty() { &no_pin } else { &topo.pins.slots };
         let pose_blocks = if topo.pins.slots.is_empty() { 1 } else { MAX_SUBSTEPS as usize };
         let pin_poses = vec![0u8; pose_blocks * MAX_PIN_GROUPS * std::mem::size_of::<PinPose>()];

@@ -20,7 +20,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let s = pin_slots[k];
-    let pose = pin_poses[pins_push.substep * MAX_PIN_GROUPS + s.group];
+    // The one unused element of a cloth without moving pins names no particle.
+    if s.index >= arrayLength(&pos) {
+        return;
+    }
+    let pose = pin_poses[pins_push.substep * MAX_PIN_GROUPS + min(s.group, MAX_PIN_GROUPS - 1u)];
     // (c0·r.x + c1·r.y) + c2·r.z, then + translation: the twin's order (PinPose::place).
     let arm = pose.cols[0].xyz * s.rest.x + pose.cols[1].xyz * s.rest.y + pose.cols[2].xyz * s.rest.z;
     let x = arm + pose.translation.xyz;
