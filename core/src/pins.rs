@@ -48,9 +48,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::grid::V4;
 use crate::motion::Motion;
 use crate::params::{Integrator, ParamError, finite_in};
+
+/// A particle's position or velocity as the buffers hold it (`crate::grid::V4`; not
+/// imported: grid builds on this module).
+type V4 = [f32; 4];
 
 /// At most this many `[[pins]]` groups in a scene (the poses of a substep are a fixed
 /// block of this many).
