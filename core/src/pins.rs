@@ -133,7 +133,7 @@ pub struct PinPose {
 }
 
 impl PinPose {
-    /// Elements of [`V4`] a pose takes.
+    /// Elements of `[f32; 4]` (the buffers' `V4`) a pose takes.
     pub const V4S: usize = 6;
 
     /// The pose of a group about `pivot` moved by `motion`, at time `t`, s.
