@@ -231,7 +231,8 @@ impl CpuSolver {
         }
         let t0 = self.time;
         self.time += self.params.dt() as f64;
-        // Moving pins go to where they are at the substep's end (crate::pins).
+        // Moving pins go to their pose at the substep's start or end, as the integrator
+        // takes them (crate::pins::at_substep_end).
         let poses = self.scene.pins_move().then(|| {
             crate::pins::frame_poses(
                 &self.scene.pins,
