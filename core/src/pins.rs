@@ -298,14 +298,24 @@ pub fn at_substep_end(integrator: Integrator) -> bool {
     matches!(integrator, Integrator::Xpbd | Integrator::Vbd)
 }
 
+/// Each moving pin of `slots` with where its pose for substep `substep` of `poses`
+/// ([`frame_poses`]) puts it: `(particle, x, v)`.
+pub fn placed<'a>(
+    slots: &'a [PinSlot],
+    poses: &'a [PinPose],
+    substep: u32,
+) -> impl Iterator<Item = (usize, [f32; 3], [f32; 3])> + 'a {
+    let base = substep as usize * MAX_PIN_GROUPS;
+    slots.iter().filter_map(move |s| {
+        let (x, v) = poses.get(base + s.group as usize)?.place(s.rest);
+        Some((s.index as usize, x, v))
+    })
+}
+
 /// Puts every moving pin at its pose for substep `substep` of `poses`
 /// ([`frame_poses`]): the `pins` kernel's twin.
 pub fn drive(slots: &[PinSlot], poses: &[PinPose], substep: u32, pos: &mut [V4], vel: &mut [V4]) {
-    let base = substep as usize * MAX_PIN_GROUPS;
-    for s in slots {
-        let Some(pose) = poses.get(base + s.group as usize) else { continue };
-        let (x, v) = pose.place(s.rest);
-        let i = s.index as usize;
+    for (i, x, v) in placed(slots, poses, substep) {
         if let (Some(p), Some(u)) = (pos.get_mut(i), vel.get_mut(i)) {
             *p = [x[0], x[1], x[2], p[3]];
             *u = [v[0], v[1], v[2], 0.0];

@@ -251,10 +251,7 @@ impl Soa {
     /// Puts the moving pins of `slots` at their poses (`poses`: one substep's block), as
     /// [`crate::pins::drive`] does on `ClothState`.
     pub(crate) fn drive(&mut self, slots: &[crate::pins::PinSlot], poses: &[crate::pins::PinPose]) {
-        for s in slots {
-            let Some(pose) = poses.get(s.group as usize) else { continue };
-            let (x, v) = pose.place(s.rest);
-            let i = s.index as usize;
+        for (i, x, v) in crate::pins::placed(slots, poses, 0) {
             for k in 0..3 {
                 self.c[POS + k][i] = x[k];
                 self.c[VEL + k][i] = v[k];
