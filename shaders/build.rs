@@ -54,7 +54,7 @@ fn expected_layouts() -> Vec<Layout> {
                 num_particles,
                 strain_passes,
                 tile_substeps,
-                _pad0,
+                num_bodies,
                 _pad1
             ]
         ),

@@ -284,6 +284,7 @@ pub fn combine(cloths: &[ClothSpec]) -> Result<ClothSpec, ParamError> {
             boxes: Vec::new(),
             motions: Vec::new(),
             pins: Vec::new(),
+            bodies: Vec::new(),
         };
         one.validate().map_err(|e| at(k, e))?;
         let (mesh, pins, label) = match &c.mesh_data {

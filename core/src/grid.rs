@@ -642,9 +642,10 @@ pub struct StepParams {
     pub strain_passes: u32,
     /// Substeps the tiled substep advances per dispatch (temporal blocking); 1 otherwise.
     pub tile_substeps: u32,
-    /// Padding to 128 bytes (a uniform block's size is a multiple of 16; immediates
-    /// must match the shader's struct).
-    pub _pad0: u32,
+    /// Number of bodies (mesh colliders, `crate::sdf`) in use. The last field pads the
+    /// struct to 128 bytes (a uniform block's size is a multiple of 16; immediates must
+    /// match the shader's struct).
+    pub num_bodies: u32,
     /// Padding.
     pub _pad1: u32,
 }
@@ -682,7 +683,7 @@ impl StepParams {
             num_particles: scene.num_particles() as u32,
             strain_passes: params.strain_iterations,
             tile_substeps: 1,
-            _pad0: 0,
+            num_bodies: scene.bodies.len() as u32,
             _pad1: 0,
         }
     }

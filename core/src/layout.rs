@@ -111,11 +111,14 @@ pub enum Buf {
     Pins = 32,
     /// The frame's pin poses (`pins::PinPose`), a block of `MAX_PIN_GROUPS` per substep.
     PinPoses = 33,
+    /// The bodies (mesh colliders, `crate::sdf`), `f32`s: `MAX_BODIES` heads of
+    /// `SdfHead::FLOATS` (the current substep's poses), then every body's distance values.
+    Sdf = 34,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 34] = [
+    pub const ALL: [Buf; 35] = [
         Buf::Params,
         Buf::Pos,
         Buf::Vel,
@@ -150,6 +153,7 @@ impl Buf {
         Buf::Colours,
         Buf::Pins,
         Buf::PinPoses,
+        Buf::Sdf,
     ];
 
     /// The integrators' scratch particle buffers, in order.
@@ -211,6 +215,7 @@ impl Buf {
             Buf::Colours => "colours",
             Buf::Pins => "pins",
             Buf::PinPoses => "pin_poses",
+            Buf::Sdf => "sdf",
         }
     }
 
@@ -249,6 +254,8 @@ pub fn wgsl_constants() -> String {
     s += &u("BLOCK", BLOCK);
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
     s += &u("MAX_COLLIDERS", crate::scene::MAX_COLLIDERS as u32);
+    s += &u("SDF_HEADS_FLOATS", crate::sdf::HEADS_FLOATS as u32);
+    s += &u("SDF_HEAD_FLOATS", crate::sdf::SdfHead::FLOATS as u32);
     s += &u("MAX_PIN_GROUPS", crate::pins::MAX_PIN_GROUPS as u32);
     s += &format!("const STRAIN_AIM: f32 = {STRAIN_AIM:?};\n");
     s

@@ -28,6 +28,7 @@ pub mod pins;
 pub mod render;
 pub mod scene;
 pub mod scene_file;
+pub mod sdf;
 pub mod solver;
 pub mod stats;
 pub mod tables;

@@ -81,7 +81,8 @@ pub fn cloth_lines(topo: &ClothTopology) -> Vec<u32> {
     edges.iter().flat_map(|&(a, b)| [a, b]).collect()
 }
 
-/// Floor, spheres and boxes as one triangle list (never empty).
+/// Floor, spheres, boxes and bodies as one triangle list (never empty). A body is drawn
+/// as its mesh with smooth normals (area-weighted), where [`Scene::moved_to`] put it.
 pub fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
     let mut v = Vec::new();
     let mut idx = Vec::new();
@@ -152,6 +153,23 @@ pub fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
                 idx.extend_from_slice(&[a, a + 1, b, a + 1, b + 1, b]);
             }
         }
+    }
+    for body in &scene.bodies {
+        let m = &body.mesh;
+        let base = v.len() as u32;
+        let mut normals = vec![glam::Vec3::ZERO; m.positions.len()];
+        for t in &m.triangles {
+            let [a, b, c] = t.map(|k| glam::Vec3::from(m.positions[k as usize]));
+            let n = (b - a).cross(c - a);
+            for &k in t {
+                normals[k as usize] += n;
+            }
+        }
+        for (p, n) in m.positions.iter().zip(&normals) {
+            let normal = n.normalize_or(glam::Vec3::Y).to_array();
+            v.push(StaticVertex { pos: *p, normal, uv: [0.0, 0.0], material: 1 });
+        }
+        idx.extend(m.triangles.iter().flatten().map(|&k| base + k));
     }
     if idx.is_empty() {
         // Nothing but the cloth (no floor, no colliders): one degenerate triangle, so that

@@ -309,6 +309,10 @@ pub struct Scene {
     /// Groups of pinned particles, held where they rest or moved (see [`crate::pins`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub pins: Vec<crate::pins::PinGroup>,
+    /// Bodies: colliders from triangle meshes, as distance fields (see [`crate::sdf`];
+    /// built when a scene file is read, not serialized).
+    #[serde(skip)]
+    pub bodies: Vec<crate::sdf::Body>,
 }
 
 impl Default for Scene {
@@ -324,6 +328,7 @@ impl Default for Scene {
             boxes: Vec::new(),
             motions: Vec::new(),
             pins: Vec::new(),
+            bodies: Vec::new(),
         }
     }
 }
@@ -496,6 +501,27 @@ impl Scene {
         for (i, g) in self.pins.iter().enumerate() {
             g.check(i)?;
         }
+        if self.bodies.len() > crate::sdf::MAX_BODIES {
+            return Err(ParamError::new(
+                "bodies",
+                self.bodies.len(),
+                format!("at most {} bodies", crate::sdf::MAX_BODIES),
+            ));
+        }
+        let points: usize = self.bodies.iter().map(|b| b.sdf.values.len()).sum();
+        if points > crate::sdf::MAX_POINTS {
+            return Err(ParamError::new(
+                "bodies",
+                points,
+                format!(
+                    "the bodies' fields hold more than {} points together: lower their resolution",
+                    crate::sdf::MAX_POINTS
+                ),
+            ));
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            b.motion.check(&format!("bodies[{i}]"), true)?;
+        }
         Ok(())
     }
 
@@ -524,7 +550,7 @@ impl Scene {
 
     /// Whether any collider moves.
     pub fn moves(&self) -> bool {
-        self.motions.iter().any(|(_, m)| !m.is_still())
+        self.motions.iter().any(|(_, m)| !m.is_still()) || self.bodies.iter().any(|b| !b.motion.is_still())
     }
 
     /// Whether any `[[pins]]` group moves.
@@ -550,7 +576,21 @@ impl Scene {
             };
             m.check_speed(&id.field(), size, dt)?;
         }
+        for (i, b) in self.bodies.iter().enumerate() {
+            b.check_speed(&format!("bodies[{i}]"), dt)?;
+        }
         Ok(())
+    }
+
+    /// The bodies' heads at simulated time `t`, s (their poses, velocities and where their
+    /// values start among [`crate::sdf::concat`]'s).
+    pub fn bodies_at(&self, t: f64, heads: &mut Vec<crate::sdf::SdfHead>) {
+        heads.clear();
+        let mut first = 0u32;
+        for b in &self.bodies {
+            heads.push(b.head_at(t, first));
+            first += b.sdf.values.len() as u32;
+        }
     }
 
     /// This scene with its colliders where their motions have them at time `t`, s (what
@@ -558,6 +598,13 @@ impl Scene {
     pub fn moved_to(&self, t: f64) -> Scene {
         let mut s = self.clone();
         self.colliders_at(t, &mut s.spheres, &mut s.boxes);
+        // A moving body's mesh, posed (its field is left as it was: this scene is drawn,
+        // not simulated).
+        for b in s.bodies.iter_mut().filter(|b| !b.motion.is_still()) {
+            let mut mesh = (*b.mesh).clone();
+            mesh.positions = b.posed_at(t);
+            b.mesh = std::sync::Arc::new(mesh);
+        }
         s
     }
 

@@ -101,6 +101,8 @@ struct Repr<C> {
     #[serde(default)]
     pins: Vec<crate::pins::PinGroup>,
     #[serde(default)]
+    bodies: Vec<crate::sdf::BodySpec>,
+    #[serde(default)]
     params: SimParams,
     #[serde(default)]
     camera: Option<CameraRepr>,
@@ -188,12 +190,15 @@ impl SceneFile {
         let many = table.as_ref().and_then(|t| t.get("cloth")).is_some_and(|c| c.is_array());
         let (repr, cloths): (Repr<()>, Vec<ClothSpec>) = if many {
             let r: Repr<Vec<ClothSpec>> = toml::from_str(text).map_err(syntax)?;
-            let Repr { title, description, cloth, floor, spheres, boxes, pins, params, camera, light } = r;
-            (Repr { title, description, cloth: (), floor, spheres, boxes, pins, params, camera, light }, cloth)
+            let Repr { title, description, cloth, floor, spheres, boxes, pins, bodies, params, camera, light } = r;
+            (Repr { title, description, cloth: (), floor, spheres, boxes, pins, bodies, params, camera, light }, cloth)
         } else {
             let r: Repr<ClothSpec> = toml::from_str(text).map_err(syntax)?;
-            let Repr { title, description, cloth, floor, spheres, boxes, pins, params, camera, light } = r;
-            (Repr { title, description, cloth: (), floor, spheres, boxes, pins, params, camera, light }, vec![cloth])
+            let Repr { title, description, cloth, floor, spheres, boxes, pins, bodies, params, camera, light } = r;
+            (
+                Repr { title, description, cloth: (), floor, spheres, boxes, pins, bodies, params, camera, light },
+                vec![cloth],
+            )
         };
         if cloths.is_empty() {
             return Err(err(locate(text, "cloth").map(|s| line_col(text, s)), "`cloth`: no cloth in the list".into()));
@@ -249,6 +254,30 @@ impl SceneFile {
         } else {
             loaded.remove(0)
         };
+        // Bodies: each mesh read, placed and turned into its field (refused in one line).
+        let mut bodies = Vec::with_capacity(repr.bodies.len());
+        for (i, spec) in repr.bodies.iter().enumerate() {
+            let field = format!("bodies[{i}]");
+            crate::sdf::check_spec(spec, &field).map_err(|e| {
+                let path = e.field.clone();
+                refused(e, path)
+            })?;
+            let at = locate(text, &format!("{field}.mesh")).map(|s| line_col(text, s));
+            let path = Path::new(file).parent().map(|d| d.join(&spec.mesh)).unwrap_or(spec.mesh.clone());
+            let mesh = crate::mesh::load_mesh(&path, spec.mesh_name.as_deref())
+                .map_err(|e| err(at, format!("`{field}.mesh`: {e}")))?;
+            let placed = mesh.placed(&spec.placement());
+            let resolution = spec.resolution.unwrap_or(crate::sdf::DEFAULT_RESOLUTION);
+            let body = crate::sdf::Body::new(
+                placed,
+                resolution,
+                spec.thickness,
+                spec.pivot,
+                spec.motion.clone().unwrap_or_default(),
+            )
+            .map_err(|e| err(at, format!("`{field}.mesh` ({}): {e}", spec.mesh.display())))?;
+            bodies.push(body);
+        }
         let scene = Scene {
             cloth,
             floor_y: repr.floor.enabled.then_some(repr.floor.y),
@@ -259,6 +288,7 @@ impl SceneFile {
                 .chain(repr.boxes.iter().enumerate().filter_map(|(i, b)| Some((ColliderId::Box(i), b.motion.clone()?))))
                 .collect(),
             pins: repr.pins,
+            bodies,
         };
         scene.validate().map_err(|e| {
             let path = e.field.clone();
@@ -268,7 +298,7 @@ impl SceneFile {
         // masses, the self-collision thickness at its spacing).
         let at_params = |e: ParamError| {
             // A collider's motion too fast for the substeps is the collider's field.
-            let own = ["cloth.", "spheres[", "boxes[", "pins["].iter().any(|p| e.field.starts_with(p));
+            let own = ["cloth.", "spheres[", "boxes[", "pins[", "bodies["].iter().any(|p| e.field.starts_with(p));
             let path = if own { e.field.clone() } else { format!("params.{}", e.field) };
             refused(e, path)
         };

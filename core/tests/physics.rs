@@ -31,7 +31,7 @@ fn bare_params(n: u32, dt: f32, mass: f32) -> StepParams {
         num_particles: n * n,
         strain_passes: 1,
         tile_substeps: 1,
-        _pad0: 0,
+        num_bodies: 0,
         _pad1: 0,
     }
 }
@@ -491,7 +491,7 @@ fn a_solver_substep_is_the_twin_kernels_in_order() {
         cpu::forces(Exec::Serial, &p, &st.pos, &st.vel, &mut st.force);
         cpu::springs(Exec::Serial, &topo.slots, &st.pos, &st.vel, &mut st.force);
         cpu::integrate(Exec::Serial, &p, &st.force, &mut st.pos, &mut st.vel);
-        cpu::collide(Exec::Serial, &p, &scene.spheres, &scene.boxes, &mut st.pos, &mut st.vel);
+        cpu::collide(Exec::Serial, &p, cpu::Colliders::new(&scene.spheres, &scene.boxes), &mut st.pos, &mut st.vel);
         let mut scratch = st.pos.clone();
         for _ in 0..params.strain_iterations {
             let counts = strain_counts(&p, &topo.slots, &st.pos);

@@ -6,10 +6,11 @@
 use std::time::Instant;
 
 use clothlab_core::build;
+use clothlab_core::cpu::ColliderSet;
 use clothlab_core::cpu::{self as twins, Exec};
 use clothlab_core::grid::{ClothState, ClothTopology, Grab, StepParams, V4};
 use clothlab_core::layout::Buf;
-use clothlab_core::scene::{Aabb, Scene, Sphere};
+use clothlab_core::scene::Scene;
 use clothlab_core::timing::{FRAME, KernelTimings, SUBSTEP, TimingRecorder};
 use clothlab_core::{SimParams, Solver, SolverError};
 
@@ -24,22 +25,20 @@ pub struct CpuEngine {
     scene: Scene,
     topo: ClothTopology,
     /// The colliders the twins see: the scene's at the time of [`CpuEngine::move_colliders`].
-    colliders: (Vec<Sphere>, Vec<Aabb>),
+    colliders: ColliderSet,
 }
 
 impl CpuEngine {
     /// An engine for the cloth of `scene` with connectivity `topo`.
     pub fn new(exec: Exec, scene: Scene, topo: ClothTopology) -> Self {
-        let mut colliders = (Vec::new(), Vec::new());
-        scene.colliders_at(0.0, &mut colliders.0, &mut colliders.1);
+        let colliders = ColliderSet::new(&scene);
         Self { exec, scene, topo, colliders }
     }
 
     /// Puts the colliders where their motions have them at time `t`, s (what a GPU solver
     /// writes before each substep).
     pub fn move_colliders(&mut self, t: f64) {
-        let (spheres, boxes) = &mut self.colliders;
-        self.scene.colliders_at(t, spheres, boxes);
+        self.colliders.move_to(&self.scene, t);
     }
 
     /// The connectivity and spring tables.
@@ -80,15 +79,7 @@ impl CpuEngine {
 
     /// What the twins see besides the buffers.
     pub fn args<'a>(&'a self, p: &'a StepParams, substep: u32) -> TwinArgs<'a> {
-        TwinArgs {
-            exec: self.exec,
-            p,
-            topo: &self.topo,
-            spheres: &self.colliders.0,
-            boxes: &self.colliders.1,
-            substep,
-            range: (0, 0),
-        }
+        TwinArgs { exec: self.exec, p, topo: &self.topo, colliders: self.colliders.view(), substep, range: (0, 0) }
     }
 
     /// The buffers of `state`, with its face normals computed.

@@ -16,7 +16,6 @@ use clothlab_core::grid::{ClothTopology, StepParams, V4};
 use clothlab_core::layout::{BLOCK, Buf, WORKGROUP};
 use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose};
-use clothlab_core::scene::{Aabb, Sphere};
 use clothlab_core::timing;
 
 use crate::EngineError;
@@ -214,10 +213,8 @@ pub struct TwinArgs<'a> {
     pub p: &'a StepParams,
     /// Connectivity and spring tables.
     pub topo: &'a ClothTopology,
-    /// The scene's spheres.
-    pub spheres: &'a [Sphere],
-    /// The scene's boxes.
-    pub boxes: &'a [Aabb],
+    /// The scene's spheres, boxes and bodies.
+    pub colliders: cpu::Colliders<'a>,
     /// The substep's index in the frame.
     pub substep: u32,
     /// The dispatch's range (`first`, `count`) for a kernel of [`Count::Range`].
@@ -644,7 +641,7 @@ fn pins(a: &TwinArgs, b: &mut HostBuffers) {
 }
 
 fn collide(a: &TwinArgs, b: &mut HostBuffers) {
-    cpu::collide(a.exec, a.p, a.spheres, a.boxes, &mut b.pos, &mut b.vel);
+    cpu::collide(a.exec, a.p, a.colliders, &mut b.pos, &mut b.vel);
 }
 
 fn integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
@@ -831,7 +828,7 @@ fn vbd_colour(a: &TwinArgs, b: &mut HostBuffers) {
     let order = &a.topo.colours.order;
     let end = (a.range.0 as usize + a.range.1 as usize).min(order.len());
     let list = &order[(a.range.0 as usize).min(end)..end];
-    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, (a.spheres, a.boxes), list, &mut b.aux);
+    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, a.colliders, list, &mut b.aux);
 }
 
 /// The Chebyshev step after a sweep, ω the bits of the range's `first`.
@@ -1008,7 +1005,7 @@ const STATE: &[Buf] = &[Params, Pos, Vel, Force];
 /// The gathers' reads: the state and the spring table (storage buffers, or the image in
 /// the `_tex` twins, or the uniform block for the regular grid).
 const TABLE: &[Buf] = &[Params, Pos, Vel, Force, Slots, BendSlots, Adjacency, Interior, Table];
-const COLLIDERS: &[Buf] = &[Params, Pos, Vel, Spheres, Boxes];
+const COLLIDERS: &[Buf] = &[Params, Pos, Vel, Spheres, Boxes, Sdf];
 const NONE: &[Buf] = &[];
 
 const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf], writes: &'static [Buf]) -> KernelDef {
@@ -1081,7 +1078,7 @@ pub static PINS: KernelDef = KernelDef {
     label: timing::PINS,
     ..def("pins", pins, Count::Pins, &[Pos, Vel, Pins, PinPoses], &[Pos, Vel])
 };
-/// Spheres and boxes.
+/// Spheres, boxes and bodies.
 pub static COLLIDE: KernelDef =
     KernelDef { variants: IMM_CU, ..def("collide", collide, Count::Particles, COLLIDERS, &[Pos, Vel]) };
 /// `integrate` and `collide` fused: each particle loaded and stored once.
@@ -1092,7 +1089,7 @@ pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
         "integrate_collide",
         integrate_collide,
         Count::Particles,
-        &[Params, Pos, Vel, Force, Spheres, Boxes],
+        &[Params, Pos, Vel, Force, Spheres, Boxes, Sdf],
         &[Pos, Vel],
     )
 };
@@ -1106,7 +1103,7 @@ pub static FORCES_INTEGRATE_COLLIDE: KernelDef = KernelDef {
         "forces_integrate_collide",
         forces_integrate_collide,
         Count::Particles,
-        &[Params, Pos, Vel, Force, Spheres, Boxes],
+        &[Params, Pos, Vel, Force, Spheres, Boxes, Sdf],
         &[Pos, Vel],
     )
 };
@@ -1177,7 +1174,7 @@ pub static SUBSTEP_TILE: KernelDef = KernelDef {
         "substep_tile",
         substep_tile,
         Count::Particles,
-        &[Params, Pos, Vel, Interior, Spheres, Boxes, Tethers],
+        &[Params, Pos, Vel, Interior, Spheres, Boxes, Sdf, Tethers],
         &[PosOut, Aux0],
     )
 };
@@ -1384,7 +1381,7 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
         "vbd_colour",
         vbd_colour,
         Count::Range,
-        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Spheres, Boxes, Aux0, Aux1, Aux2],
+        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Spheres, Boxes, Sdf, Aux0, Aux1, Aux2],
         &[Aux2],
     )
 };

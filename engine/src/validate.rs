@@ -94,10 +94,11 @@ impl KernelInput {
 
 /// Moves a few free particles of `pos` into each collider of `scene` (and under its floor):
 /// every 97th free particle, taking the colliders in turn, to a point just inside the
-/// surface below it (2 % of a sphere's radius deep, 1 cm into a box's top, 1 cm under the
-/// floor), its velocity kept. Returns whether any moved.
+/// surface below it (2 % of a sphere's radius deep, 1 cm into a box's top, half a cell
+/// behind a body's triangle, 1 cm under the floor), its velocity kept. Returns whether
+/// any moved.
 fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
-    let targets = scene.spheres.len() + scene.boxes.len() + usize::from(scene.floor_y.is_some());
+    let targets = scene.spheres.len() + scene.boxes.len() + scene.bodies.len() + usize::from(scene.floor_y.is_some());
     if targets == 0 {
         return false;
     }
@@ -120,6 +121,15 @@ fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
             let clamp = |v: f32, lo: f32, hi: f32| v.clamp(lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo));
             let depth = 0.01f32.min(0.25 * (b.max[1] - b.min[1]));
             *p = [clamp(p[0], b.min[0], b.max[0]), b.max[1] - depth, clamp(p[2], b.min[2], b.max[2]), p[3]];
+        } else if let Some(body) = scene.bodies.get(t - scene.spheres.len() - scene.boxes.len()) {
+            // A triangle (a different one each time), half a cell behind its centroid.
+            let m = &body.mesh;
+            let [a, b, c] = m.triangles[(i * 7919) % m.triangles.len()].map(|v| m.positions[v as usize]);
+            let (e, f) = ([0, 1, 2].map(|k| b[k] - a[k]), [0, 1, 2].map(|k| c[k] - a[k]));
+            let n = [e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]];
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt().max(1e-12);
+            let x = [0, 1, 2].map(|k| (a[k] + b[k] + c[k]) / 3.0 - n[k] / len * (0.5 * body.sdf.h));
+            *p = [x[0], x[1], x[2], p[3]];
         } else if let Some(y) = scene.floor_y {
             p[1] = y - 0.01;
         }

@@ -64,7 +64,7 @@ fn touch(stiffness: f32, pen: f32, n: vec3<f32>, d: vec3<f32>, vs: vec3<f32>, fr
     add_block(w, -w, n);
 }
 
-// The floor, the spheres and the boxes within the margin and its reach of x, in that
+// The floor, the spheres, the boxes and the bodies within the margin and its reach of x, in that
 // order (core::cpu::vbd::each_contact).
 fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool) {
     let reach = p.margin + p.margin * CONTACT_REACH;
@@ -100,6 +100,13 @@ fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool)
             if below.z < best { best = below.z; n = vec3<f32>(0.0, 0.0, -1.0); }
             if above.z < best { best = above.z; n = vec3<f32>(0.0, 0.0, 1.0); }
             touch(stiffness, best, n, d, boxes[k].velocity.xyz, friction_pass);
+        }
+    }
+    for (var k = 0u; k < p.num_bodies; k++) {
+        let s = body_sample(k, x);
+        if s.valid && s.phi < reach {
+            let vs = surface_vel(body_vec(k, 16u), body_vec(k, 20u), x - body_vec(k, 12u));
+            touch(stiffness, reach - s.phi, s.n, d, vs, friction_pass);
         }
     }
 }

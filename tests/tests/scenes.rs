@@ -191,7 +191,8 @@ fn the_kernel_checks_input_puts_particles_inside_every_collider_and_collide_take
         below_floor(&pos)
     );
     assert!(in_box >= 2 && inside_sphere(&pos) >= 2 && below_floor(&pos) >= 2);
-    clothlab_core::cpu::collide(Exec::Serial, &input.p, &scene.spheres, &scene.boxes, &mut pos, &mut vel);
+    let colliders = clothlab_core::cpu::Colliders::new(&scene.spheres, &scene.boxes);
+    clothlab_core::cpu::collide(Exec::Serial, &input.p, colliders, &mut pos, &mut vel);
     assert_eq!(deepest_in_a_box(&scene, &pos), 0.0);
     assert_eq!(inside_sphere(&pos), 0);
     // The floor is the integration's (integrate, forces_integrate_collide): collide leaves it.

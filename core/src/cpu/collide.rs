@@ -1,7 +1,8 @@
-//! `collide` — per particle: push particles out of spheres and boxes (inflated by the
-//! collision margin) to the nearest surface point; the velocity into the surface is
-//! removed and the tangential velocity reduced by friction, both relative to the
-//! collider's surface where it moves (`crate::motion`).
+//! `collide` — per particle: push particles out of spheres, boxes and bodies (inflated by
+//! the collision margin) to the nearest surface point (a body's: along its field's
+//! gradient, `crate::sdf`); the velocity into the surface is removed and the tangential
+//! velocity reduced by friction, both relative to the collider's surface where it moves
+//! (`crate::motion`).
 
 use glam::Vec3;
 
@@ -9,37 +10,96 @@ use super::integrate::{contact_vel_moving, integrate_at, surface_vel};
 use super::{Exec, for_each2, v3, v4};
 use crate::grid::{StepParams, V4};
 use crate::scene::{Aabb, Sphere};
+use crate::sdf::{Bodies, SdfHead, sample_grid};
+
+/// What the particles collide with (besides the floor): the spheres, boxes and bodies at
+/// the current substep.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Colliders<'a> {
+    /// Spheres.
+    pub spheres: &'a [Sphere],
+    /// Boxes.
+    pub boxes: &'a [Aabb],
+    /// Bodies (mesh colliders).
+    pub bodies: Bodies<'a>,
+}
+
+impl<'a> Colliders<'a> {
+    /// Spheres and boxes, no bodies.
+    pub fn new(spheres: &'a [Sphere], boxes: &'a [Aabb]) -> Self {
+        Self { spheres, boxes, bodies: Bodies::default() }
+    }
+
+    /// Cut to the counts in `p` (what the kernels loop over).
+    #[inline(always)]
+    pub fn cut(self, p: &StepParams) -> Self {
+        let heads = self.bodies.heads;
+        Self {
+            spheres: &self.spheres[..(p.num_spheres as usize).min(self.spheres.len())],
+            boxes: &self.boxes[..(p.num_boxes as usize).min(self.boxes.len())],
+            bodies: Bodies { heads: &heads[..(p.num_bodies as usize).min(heads.len())], values: self.bodies.values },
+        }
+    }
+}
+
+/// The colliders of a scene at one time, owned: what [`Colliders`] views.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ColliderSet {
+    /// Spheres, moved.
+    pub spheres: Vec<Sphere>,
+    /// Boxes, moved.
+    pub boxes: Vec<Aabb>,
+    /// The bodies' heads.
+    pub heads: Vec<SdfHead>,
+    /// The bodies' values (`crate::sdf::concat`; fixed).
+    pub values: Vec<f32>,
+}
+
+impl ColliderSet {
+    /// `scene`'s colliders at time 0.
+    pub fn new(scene: &crate::Scene) -> Self {
+        let mut s = Self { values: crate::sdf::concat(&scene.bodies).0, ..Self::default() };
+        s.move_to(scene, 0.0);
+        s
+    }
+
+    /// Puts them where `scene`'s motions have them at time `t`, s.
+    pub fn move_to(&mut self, scene: &crate::Scene, t: f64) {
+        scene.colliders_at(t, &mut self.spheres, &mut self.boxes);
+        scene.bodies_at(t, &mut self.heads);
+    }
+
+    /// A view of them.
+    pub fn view(&self) -> Colliders<'_> {
+        Colliders {
+            spheres: &self.spheres,
+            boxes: &self.boxes,
+            bodies: Bodies { heads: &self.heads, values: &self.values },
+        }
+    }
+}
 
 /// Resolves every particle against every collider, spheres first, in scene order.
-pub fn collide(exec: Exec, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], pos: &mut [V4], vel: &mut [V4]) {
-    let spheres = &spheres[..p.num_spheres as usize];
-    let boxes = &boxes[..p.num_boxes as usize];
-    for_each2(exec, pos, vel, |i, x4, v4_| collide_at(i, p, spheres, boxes, x4, v4_));
+pub fn collide(exec: Exec, p: &StepParams, c: Colliders<'_>, pos: &mut [V4], vel: &mut [V4]) {
+    let c = c.cut(p);
+    for_each2(exec, pos, vel, |i, x4, v4_| collide_at(i, p, c, x4, v4_));
 }
 
 /// `integrate` then `collide` for each particle in one sweep (both touch only their own
 /// particle, so this is exactly the two kernels run one after the other).
 #[allow(clippy::too_many_arguments)]
-pub fn integrate_collide(
-    exec: Exec,
-    p: &StepParams,
-    spheres: &[Sphere],
-    boxes: &[Aabb],
-    force: &[V4],
-    pos: &mut [V4],
-    vel: &mut [V4],
-) {
-    let spheres = &spheres[..p.num_spheres as usize];
-    let boxes = &boxes[..p.num_boxes as usize];
+pub fn integrate_collide(exec: Exec, p: &StepParams, c: Colliders<'_>, force: &[V4], pos: &mut [V4], vel: &mut [V4]) {
+    let c = c.cut(p);
     for_each2(exec, pos, vel, |i, x4, v4_| {
         integrate_at(i, p, force[i], x4, v4_);
-        collide_at(i, p, spheres, boxes, x4, v4_);
+        collide_at(i, p, c, x4, v4_);
     });
 }
 
-/// Particle `i` against `spheres` and `boxes` (already cut to their counts), in place.
+/// Particle `i` against the colliders `c` (already cut to their counts), in place.
 #[inline(always)]
-pub(crate) fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], x4: &mut V4, vel4: &mut V4) {
+pub(crate) fn collide_at(i: usize, p: &StepParams, c: Colliders<'_>, x4: &mut V4, vel4: &mut V4) {
+    let (spheres, boxes) = (c.spheres, c.boxes);
     if x4[3] == 0.0 || i as i32 == p.grab_index {
         return;
     }
@@ -90,6 +150,36 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, spheres: &[Sphere], boxes: &[
             v = contact_vel_moving(v, v3(b.velocity), nrm, p.friction);
         }
     }
+    for hd in c.bodies.heads {
+        if let Some((phi, nrm)) = body_sample(hd, c.bodies.values, x)
+            && phi < p.margin
+        {
+            x += nrm * (p.margin - phi);
+            let vs = surface_vel(v3(hd.velocity), v3(hd.spin), x - v3(hd.translation));
+            v = contact_vel_moving(v, vs, nrm, p.friction);
+        }
+    }
     *x4 = v4(x, x4[3]);
     *vel4 = v4(v, 0.0);
+}
+
+/// `a·b` summed left to right (the WGSL's `dot3`).
+#[inline(always)]
+fn dot3(a: Vec3, b: Vec3) -> f32 {
+    a.x * b.x + a.y * b.y + a.z * b.z
+}
+
+/// Body `hd`'s field at world `x`: `(φ, n̂)` with `n̂` the world direction of its gradient
+/// (up where it vanishes), or `None` outside its grid. The WGSL's `body_sample`.
+#[inline(always)]
+pub(crate) fn body_sample(hd: &SdfHead, values: &[f32], x: Vec3) -> Option<(f32, Vec3)> {
+    let (c0, c1, c2) = (v3(hd.cols[0]), v3(hd.cols[1]), v3(hd.cols[2]));
+    let d = x - v3(hd.translation);
+    let q = [dot3(c0, d), dot3(c1, d), dot3(c2, d)];
+    let [nx, ny, nz, first] = hd.dims;
+    let (phi, g) = sample_grid(&hd.lo, [nx, ny, nz], values.get(first as usize..)?, q)?;
+    let g = Vec3::from(g);
+    let gl = dot3(g, g).sqrt();
+    let nl = if gl > 1e-12 { g / gl } else { Vec3::Y };
+    Some((phi, c0 * nl.x + c1 * nl.y + c2 * nl.z))
 }

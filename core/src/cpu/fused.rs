@@ -43,7 +43,7 @@ use super::strain_limit::{count_at, limit_at, moved_vel};
 use super::{Exec, Fetch, v3};
 use crate::grid::{ClothState, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
 use crate::layout::STRAIN_AIM;
-use crate::scene::{Aabb, Sphere};
+
 use pulp::Simd as Isa;
 
 /// Columns of zeros on each side of a ring's rows: a lane group at a grid's edge reads
@@ -276,8 +276,7 @@ pub(crate) struct Step<'a> {
     pub tethers: &'a [[Tether; TETHER_SLOTS]],
     pub tether_lanes: &'a TetherLanes,
     pub face_slots: &'a crate::grid::Rows<i32>,
-    pub spheres: &'a [Sphere],
-    pub boxes: &'a [Aabb],
+    pub colliders: super::collide::Colliders<'a>,
     pub old: &'a Soa,
 }
 
@@ -518,7 +517,7 @@ fn a_scalar(s: &Step<'_>, k: usize) -> (V4, V4) {
 fn finish_at(s: &Step<'_>, k: usize, f: V4) -> (V4, V4) {
     let (mut x4, mut v4) = (s.pos(k), s.vel(k));
     integrate_at(k, s.p, f, &mut x4, &mut v4);
-    collide_at(k, s.p, s.spheres, s.boxes, &mut x4, &mut v4);
+    collide_at(k, s.p, s.colliders.cut(s.p), &mut x4, &mut v4);
     (x4, v4)
 }
 
@@ -594,7 +593,7 @@ fn stage_a<S: Isa>(
         let mut v = [va[0] * keep + acc[0] * kick, va[1] * keep + acc[1] * kick, va[2] * keep + acc[2] * kick];
         let mut x = [xa[0] + v[0] * dtl, xa[1] + v[1] * dtl, xa[2] + v[2] * dtl];
         let mut wo = w;
-        let special = w.eq(zero) | x[1].lt(floor) | inside(sd, p, s.spheres, s.boxes, &x);
+        let special = w.eq(zero) | x[1].lt(floor) | inside(sd, p, s.colliders, &x);
         let mut bits = if special.any() { special.bits() } else { 0 };
         let grab = p.grab_index as isize - (base + i0) as isize;
         if (0..lanes as isize).contains(&grab) {
@@ -632,17 +631,29 @@ fn in_grid<S: Isa>(sd: S, col: isize, n: usize) -> M<S> {
     c.gt(F::splat(sd, -1.0)) & c.lt(F::splat(sd, n as f32))
 }
 
-/// Lanes at `x` inside a sphere or a box (inflated by the margin), by `collide`'s tests.
+/// Lanes at `x` inside a sphere or a box (inflated by the margin), by `collide`'s tests,
+/// or within a body's grid (a sphere about its pivot holding the whole grid: the scalar
+/// `collide_at` samples the field).
 #[inline(always)]
-fn inside<S: Isa>(sd: S, p: &StepParams, spheres: &[Sphere], boxes: &[Aabb], x: &[F<S>; 3]) -> M<S> {
+fn inside<S: Isa>(sd: S, p: &StepParams, c: super::collide::Colliders<'_>, x: &[F<S>; 3]) -> M<S> {
+    let c = c.cut(p);
     let mut any = M::splat(sd, false);
-    for sp in &spheres[..p.num_spheres as usize] {
+    for hd in c.bodies.heads {
+        let t = hd.translation;
+        let h = hd.lo[3];
+        let far: [f32; 3] = std::array::from_fn(|k| hd.lo[k].abs().max((hd.lo[k] + h * (hd.dims[k] - 1) as f32).abs()));
+        // Generously: a lane let through here is only sampled by the scalar path.
+        let r = (far[0] * far[0] + far[1] * far[1] + far[2] * far[2]).sqrt() * 1.01 + p.margin + 1e-3;
+        let d = [x[0] - F::splat(sd, t[0]), x[1] - F::splat(sd, t[1]), x[2] - F::splat(sd, t[2])];
+        any = any | (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).lt(F::splat(sd, r * r));
+    }
+    for sp in c.spheres {
         let r = sp.radius + p.margin;
         let c = sp.center;
         let d = [x[0] - F::splat(sd, c[0]), x[1] - F::splat(sd, c[1]), x[2] - F::splat(sd, c[2])];
         any = any | (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).lt(F::splat(sd, r * r));
     }
-    for b in &boxes[..p.num_boxes as usize] {
+    for b in c.boxes {
         let mut all = M::splat(sd, true);
         for (c, xc) in x.iter().enumerate() {
             all = all & xc.gt(F::splat(sd, b.min[c] - p.margin)) & xc.lt(F::splat(sd, b.max[c] + p.margin));

@@ -21,7 +21,7 @@ mod stats;
 mod strain_limit;
 pub mod vbd;
 
-pub use collide::{collide, integrate_collide};
+pub use collide::{ColliderSet, Colliders, collide, integrate_collide};
 pub use forces::forces;
 pub use integrate::integrate;
 pub use integrators::{

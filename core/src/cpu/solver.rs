@@ -14,7 +14,7 @@ use super::{
 use crate::cloth::build;
 use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4};
 use crate::params::{Integrator, SimParams};
-use crate::scene::{Aabb, Scene, Sphere};
+use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};
 use crate::timing::{
     FORCES_SPRINGS, FRAME, FUSED_STEP, INTEGRATE_COLLIDE, KernelTimings, SELF_COLLIDE, SELF_HASH, STRAIN_LIMIT,
@@ -27,7 +27,7 @@ pub struct CpuSolver {
     exec: Exec,
     scene: Scene,
     /// The colliders at the current substep (the scene's, moved: `Scene::colliders_at`).
-    colliders: (Vec<Sphere>, Vec<Aabb>),
+    colliders: super::collide::ColliderSet,
     /// Simulated time, s.
     time: f64,
     params: SimParams,
@@ -82,8 +82,7 @@ impl CpuSolver {
     pub fn new(exec: Exec, scene: Scene, params: SimParams) -> Result<Self, SolverError> {
         let (state, topo) = build(&scene, &params)?;
         let np = state.pos.len();
-        let mut colliders = (Vec::new(), Vec::new());
-        scene.colliders_at(0.0, &mut colliders.0, &mut colliders.1);
+        let colliders = super::collide::ColliderSet::new(&scene);
         let mut s = Self {
             exec,
             scene,
@@ -201,8 +200,7 @@ impl CpuSolver {
             tethers: &topo.tethers,
             tether_lanes,
             face_slots: &topo.face_slots,
-            spheres: &colliders.0,
-            boxes: &colliders.1,
+            colliders: colliders.view(),
             old,
         };
         fused::substep(*exec, *simd, &step, bands, next);
@@ -226,8 +224,7 @@ impl CpuSolver {
     /// One substep, fused or kernel by kernel, leaving `state` behind after a fused one.
     fn substep_inner(&mut self) {
         if self.scene.moves() {
-            let (spheres, boxes) = &mut self.colliders;
-            self.scene.colliders_at(self.time, spheres, boxes);
+            self.colliders.move_to(&self.scene, self.time);
         }
         let t0 = self.time;
         self.time += self.params.dt() as f64;
@@ -336,7 +333,7 @@ impl CpuSolver {
             }
             springs_rows(e, rows, &topo.slots, uniform.as_ref(), Some(&p), lanes, pos, vel, force)
         };
-        let (spheres, boxes) = (&colliders.0, &colliders.1);
+        let c = colliders.view();
         let needs_aux =
             params.self_collision || !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler);
         if needs_aux && aux.len() != AUX {
@@ -348,13 +345,13 @@ impl CpuSolver {
             // Symplectic Euler is Verlet's recurrence in this state (see `euler`).
             Integrator::Verlet | Integrator::SymplecticEuler => {
                 Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || integrate_collide(e, &p, spheres, boxes, force, pos, vel));
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || integrate_collide(e, &p, c, force, pos, vel));
             }
             Integrator::Euler => {
                 Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
                 Self::timed(timer, on, INTEGRATE_COLLIDE, || {
                     euler(e, &p, force, pos, vel);
-                    collide(e, &p, spheres, boxes, pos, vel)
+                    collide(e, &p, c, pos, vel)
                 });
             }
             Integrator::Rk2 | Integrator::Rk4 => {
@@ -364,7 +361,7 @@ impl CpuSolver {
                     Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
                     Self::timed(timer, on, INTEGRATE_COLLIDE, || rk_stage(e, &p, st, force, pos, vel, aux));
                 }
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || collide(e, &p, spheres, boxes, pos, vel));
+                Self::timed(timer, on, INTEGRATE_COLLIDE, || collide(e, &p, c, pos, vel));
             }
             Integrator::Implicit => {
                 Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
@@ -382,7 +379,7 @@ impl CpuSolver {
                         cg_direction(e, cg, aux);
                     }
                     implicit_finish(e, &p, pos, vel, aux);
-                    collide(e, &p, spheres, boxes, pos, vel)
+                    collide(e, &p, c, pos, vel)
                 });
             }
             Integrator::Xpbd => {
@@ -408,7 +405,7 @@ impl CpuSolver {
                             }
                         }
                     }
-                    collide(e, &p, spheres, boxes, pos, vel)
+                    collide(e, &p, c, pos, vel)
                 });
             }
             // The kernels of the engine's recipe (cpu::vbd): forces, the prediction, the
@@ -421,7 +418,7 @@ impl CpuSolver {
                 Self::timed(timer, on, crate::timing::VBD, || {
                     for it in 1..=params.vbd_iterations {
                         for k in 0..topo.colours.len() {
-                            super::vbd::vbd_colour(e, &p, &topo.slots, (spheres, boxes), topo.colours.colour(k), aux);
+                            super::vbd::vbd_colour(e, &p, &topo.slots, c, topo.colours.colour(k), aux);
                         }
                         if params.vbd_rho > 0.0 {
                             let omega = super::vbd::chebyshev_omega(it, params.vbd_rho);
@@ -431,7 +428,7 @@ impl CpuSolver {
                 });
                 Self::timed(timer, on, INTEGRATE_COLLIDE, || {
                     super::vbd::vbd_finish(e, &p, pos, vel, aux);
-                    collide(e, &p, spheres, boxes, pos, vel)
+                    collide(e, &p, c, pos, vel)
                 });
             }
         }

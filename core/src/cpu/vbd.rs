@@ -36,11 +36,11 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::collide::{Colliders, body_sample};
 use super::integrate::surface_vel;
 use super::integrators::{finish_at, per_particle};
 use super::{Exec, dt_over_mass, mass, v3, v4};
 use crate::grid::{ClothTopology, Colours, Rows, SpringSlot, StepParams, V4};
-use crate::scene::{Aabb, Sphere};
 
 /// A contact's penalty stiffness as a multiple of the vertex's inertia `m/h²` (so the
 /// same at every n and dt): a cloth resting on a surface sinks `g h² / 1000` into the
@@ -136,14 +136,12 @@ pub fn vbd_colour(
     exec: Exec,
     p: &StepParams,
     slots: &Rows<SpringSlot>,
-    colliders: (&[Sphere], &[Aabb]),
+    colliders: Colliders<'_>,
     colour: &[u32],
     aux: &mut [Vec<V4>],
 ) {
     let (pred, start, disp) = (&aux[0], &aux[1], &aux[2]);
-    let (spheres, boxes) = colliders;
-    let colliders =
-        (&spheres[..(p.num_spheres as usize).min(spheres.len())], &boxes[..(p.num_boxes as usize).min(boxes.len())]);
+    let colliders = colliders.cut(p);
     let step = |&i: &u32| block_step(p, slots, colliders, i as usize, pred, start, disp);
     let steps: Vec<Vec3> = match exec {
         Exec::Serial => colour.iter().map(step).collect(),
@@ -223,7 +221,7 @@ pub fn vbd_substep(
     vbd_begin(e, p, &force, pos, vel, &mut aux);
     for _ in 0..iterations {
         for colour in colours {
-            vbd_colour(e, p, &topo.slots, (&[], &[]), colour, &mut aux);
+            vbd_colour(e, p, &topo.slots, Colliders::default(), colour, &mut aux);
         }
     }
     vbd_finish(e, p, pos, vel, &aux);
@@ -239,7 +237,7 @@ pub fn vbd_substep(
 pub fn block_step(
     p: &StepParams,
     slots: &Rows<SpringSlot>,
-    colliders: (&[Sphere], &[Aabb]),
+    colliders: Colliders<'_>,
     i: usize,
     pred: &[V4],
     start: &[V4],
@@ -317,7 +315,7 @@ fn add_block(h: &mut [f32; 6], a: f32, b: f32, n: Vec3) {
 #[inline(always)]
 fn contacts(
     p: &StepParams,
-    colliders: (&[Sphere], &[Aabb]),
+    colliders: Colliders<'_>,
     stiffness: f32,
     x: Vec3,
     d: Vec3,
@@ -351,16 +349,16 @@ fn contacts(
 }
 
 /// Calls `touch(δ, n̂, v_s)` for every contact of a vertex at `x` (see [`contacts`]): the
-/// floor, the spheres, the boxes, in that order; `v_s` the surface's velocity there
+/// floor, the spheres, the boxes, the bodies, in that order; `v_s` the surface's velocity there
 /// (`crate::motion`; zero for a still collider).
 #[inline(always)]
-fn each_contact(p: &StepParams, colliders: (&[Sphere], &[Aabb]), x: Vec3, mut touch: impl FnMut(f32, Vec3, Vec3)) {
+fn each_contact(p: &StepParams, colliders: Colliders<'_>, x: Vec3, mut touch: impl FnMut(f32, Vec3, Vec3)) {
     let reach = p.margin + p.margin * CONTACT_REACH;
     let floor = p.floor_y + reach;
     if x.y < floor {
         touch(floor - x.y, Vec3::Y, Vec3::ZERO);
     }
-    for s in colliders.0 {
+    for s in colliders.spheres {
         let c = Vec3::from(s.center);
         let r = s.radius + reach;
         let dc = x - c;
@@ -371,7 +369,7 @@ fn each_contact(p: &StepParams, colliders: (&[Sphere], &[Aabb]), x: Vec3, mut to
             touch(r - dist, n, surface_vel(v3(s.velocity), v3(s.spin), dc));
         }
     }
-    for b in colliders.1 {
+    for b in colliders.boxes {
         let lo = v3(b.min) - Vec3::splat(reach);
         let hi = v3(b.max) + Vec3::splat(reach);
         if x.cmpgt(lo).all() && x.cmplt(hi).all() {
@@ -388,6 +386,13 @@ fn each_contact(p: &StepParams, colliders: (&[Sphere], &[Aabb]), x: Vec3, mut to
                 }
             }
             touch(best, n, v3(b.velocity));
+        }
+    }
+    for hd in colliders.bodies.heads {
+        if let Some((phi, n)) = body_sample(hd, colliders.bodies.values, x)
+            && phi < reach
+        {
+            touch(reach - phi, n, surface_vel(v3(hd.velocity), v3(hd.spin), x - v3(hd.translation)));
         }
     }
 }

@@ -1,12 +1,85 @@
-// Sphere and box colliders (needs state.wgsl). The build also emits every kernel that
-// includes this file as `<kernel>_cu`, with these two declarations swapped for uniform
-// blocks of MAX_COLLIDERS entries (the thesis's constant memory: `colliders=uniform`).
+// Sphere, box and body colliders (needs state.wgsl). The build also emits every kernel
+// that includes this file as `<kernel>_cu`, with the first two declarations swapped for
+// uniform blocks of MAX_COLLIDERS entries (the thesis's constant memory:
+// `colliders=uniform`). The bodies' fields stay in storage.
 
 @group(0) @binding(12) var<storage, read> spheres: array<Sphere>;
 @group(0) @binding(13) var<storage, read> boxes: array<Aabb>;
+// The bodies (core::sdf): MAX_BODIES heads of SDF_HEAD_FLOATS floats (R's columns,
+// translation, velocity, spin, the grid's first point and spacing, its points per axis
+// and first value), then the values.
+@group(0) @binding(34) var<storage, read> sdf: array<f32>;
+
+// Floats j .. j+2 of body k's head.
+fn body_vec(k: u32, j: u32) -> vec3<f32> {
+    let b = k * SDF_HEAD_FLOATS + j;
+    return vec3<f32>(sdf[b], sdf[b + 1u], sdf[b + 2u]);
+}
+
+fn lerp1(a: f32, b: f32, t: f32) -> f32 {
+    return a + (b - a) * t;
+}
+
+// Body k's field at x (core::cpu::collide::body_sample): φ and the world direction of
+// its gradient; `valid` false outside its grid.
+struct BodySample {
+    phi: f32,
+    n: vec3<f32>,
+    valid: bool,
+}
+
+fn body_sample(k: u32, x: vec3<f32>) -> BodySample {
+    var out = BodySample(0.0, vec3<f32>(0.0, 1.0, 0.0), false);
+    let hb = k * SDF_HEAD_FLOATS;
+    let c0 = body_vec(k, 0u);
+    let c1 = body_vec(k, 4u);
+    let c2 = body_vec(k, 8u);
+    let d = x - body_vec(k, 12u);
+    let q = vec3<f32>(dot3(c0, d), dot3(c1, d), dot3(c2, d));
+    let lo = body_vec(k, 24u);
+    let h = sdf[hb + 27u];
+    let dims = vec3<u32>(bitcast<u32>(sdf[hb + 28u]), bitcast<u32>(sdf[hb + 29u]), bitcast<u32>(sdf[hb + 30u]));
+    let first = bitcast<u32>(sdf[hb + 31u]);
+    let g = vec3<f32>((q.x - lo.x) / h, (q.y - lo.y) / h, (q.z - lo.z) / h);
+    let top = vec3<f32>(f32(dims.x - 1u), f32(dims.y - 1u), f32(dims.z - 1u));
+    if !(g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0 && g.x <= top.x && g.y <= top.y && g.z <= top.z) {
+        return out;
+    }
+    let c = min(floor(g), top - vec3<f32>(1.0));
+    let f = g - c;
+    let sy = dims.x;
+    let sz = sy * dims.y;
+    let base = SDF_HEADS_FLOATS + first + u32(c.x) + sy * u32(c.y) + sz * u32(c.z);
+    let c000 = sdf[base];
+    let c100 = sdf[base + 1u];
+    let c010 = sdf[base + sy];
+    let c110 = sdf[base + 1u + sy];
+    let c001 = sdf[base + sz];
+    let c101 = sdf[base + 1u + sz];
+    let c011 = sdf[base + sy + sz];
+    let c111 = sdf[base + 1u + sy + sz];
+    out.phi = lerp1(
+        lerp1(lerp1(c000, c100, f.x), lerp1(c010, c110, f.x), f.y),
+        lerp1(lerp1(c001, c101, f.x), lerp1(c011, c111, f.x), f.y),
+        f.z,
+    );
+    let gr = vec3<f32>(
+        lerp1(lerp1(c100 - c000, c110 - c010, f.y), lerp1(c101 - c001, c111 - c011, f.y), f.z),
+        lerp1(lerp1(c010 - c000, c110 - c100, f.x), lerp1(c011 - c001, c111 - c101, f.x), f.z),
+        lerp1(lerp1(c001 - c000, c101 - c100, f.x), lerp1(c011 - c010, c111 - c110, f.x), f.y),
+    );
+    let gl = sqrt(dot3(gr, gr));
+    var nl = vec3<f32>(0.0, 1.0, 0.0);
+    if gl > 1e-12 {
+        nl = vec3<f32>(gr.x / gl, gr.y / gl, gr.z / gl);
+    }
+    out.n = c0 * nl.x + c1 * nl.y + c2 * nl.z;
+    out.valid = true;
+    return out;
+}
 
 // core::cpu::collide::collide_at for a free particle (is_free): m pushed out of the
-// spheres and boxes, its velocity relative to their surfaces where they move.
+// spheres, boxes and bodies, its velocity relative to their surfaces where they move.
 fn collided(m: Moved) -> Moved {
     var x = m.x;
     var v = m.v;
@@ -44,6 +117,14 @@ fn collided(m: Moved) -> Moved {
             let axis = abs(nrm);
             x = x * (vec3<f32>(1.0) - axis) + axis * face;
             v = contact_vel_moving(v, boxes[k].velocity.xyz, nrm, p.friction);
+        }
+    }
+    for (var k = 0u; k < p.num_bodies; k++) {
+        let s = body_sample(k, x);
+        if s.valid && s.phi < p.margin {
+            x = x + s.n * (p.margin - s.phi);
+            let vs = surface_vel(body_vec(k, 16u), body_vec(k, 20u), x - body_vec(k, 12u));
+            v = contact_vel_moving(v, vs, s.n, p.friction);
         }
     }
     return Moved(x, v);

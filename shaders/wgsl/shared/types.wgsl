@@ -23,7 +23,7 @@ struct StepParams {
     num_particles: u32,
     strain_passes: u32,
     tile_substeps: u32,
-    _pad0: u32,
+    num_bodies: u32,
     _pad1: u32,
 }
 
