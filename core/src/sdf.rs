@@ -160,6 +160,15 @@ impl Body {
         }
     }
 
+    /// The field at world point `x` at time `t`, s (`None` outside its grid): what the
+    /// contacts sample, for tests and tools.
+    pub fn distance(&self, x: [f32; 3], t: f64) -> Option<f32> {
+        let hd = self.head_at(t, 0);
+        let d = [0, 1, 2].map(|k| x[k] - hd.translation[k]);
+        let q = hd.cols.map(|c| c[0] * d[0] + c[1] * d[1] + c[2] * d[2]);
+        self.sdf.sample(q).map(|(phi, _)| phi)
+    }
+
     /// Its mesh's vertices at time `t`, s (`R·(x − pivot) + translation`).
     pub fn posed_at(&self, t: f64) -> Vec<[f32; 3]> {
         let pose = PinPose::at(&self.motion, self.pivot, t);
