@@ -283,28 +283,45 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         interpolation: Valid(json::animation::Interpolation::Step),
         output,
     };
-    // Moving colliders: their nodes' translation (and a spinning sphere's rotation about
-    // its centre) at every recorded frame's time, LINEAR.
+    // Moving colliders: their nodes' translation (and a spinning sphere's or body's
+    // rotation about its centre or pivot) at every recorded frame's time, LINEAR.
     let mut samplers = vec![sampler];
     let mut moving = Vec::new();
-    for (id, m) in &scene.motions {
-        let (name, place, mesh) = match *id {
+    // Spheres and boxes that move, then every body (a mesh about its pivot: its node
+    // placed there, and moved and turned where its motion says).
+    let still = clothlab_core::Motion::default();
+    let colliders = scene.motions.iter().filter_map(|(id, m)| {
+        Some(match *id {
             ColliderId::Sphere(k) => {
-                let Some(s) = scene.spheres.get(k) else { continue };
+                let s = scene.spheres.get(k)?;
                 // The mesh around the node's origin, so that a rotation turns it in place.
-                (format!("sphere {k}"), s.center, sphere_mesh([0.0; 3], s.radius))
+                (Some(*id), format!("sphere {k}"), s.center, sphere_mesh([0.0; 3], s.radius), m)
             }
             ColliderId::Box(k) => {
-                let Some(b) = scene.boxes.get(k) else { continue };
+                let b = scene.boxes.get(k)?;
                 let (lo, hi) = ([b.min[0], b.min[1], b.min[2]], [b.max[0], b.max[1], b.max[2]]);
-                (format!("box {k}"), [0.0; 3], box_mesh(lo, hi))
+                (Some(*id), format!("box {k}"), [0.0; 3], box_mesh(lo, hi), m)
             }
-        };
+        })
+    });
+    let bodies = scene.bodies.iter().enumerate().map(|(k, b)| {
+        let local = b.mesh.positions.iter().map(|p| [0, 1, 2].map(|c| p[c] - b.pivot[c])).collect();
+        let m = if b.motion.is_still() { &still } else { &b.motion };
+        (None, format!("body {k}"), b.pivot, (local, b.mesh.triangles.clone()), m)
+    });
+    let mut body_nodes = Vec::new();
+    for (id, name, place, mesh, m) in colliders.chain(bodies) {
         let node = static_mesh(&mut root, &mut bin, &name, &mesh.0, &mesh.1);
         let poses: Vec<_> = rec.times.iter().map(|&t| m.at(t as f64)).collect();
         let at =
             |p: &clothlab_core::motion::Pose| [place[0] + p.offset[0], place[1] + p.offset[1], place[2] + p.offset[2]];
         root.nodes[node.value()].translation = Some(at(&poses[0]));
+        if id.is_none() {
+            body_nodes.push(node);
+            if m.is_still() {
+                continue;
+            }
+        }
         let tr: Vec<[f32; 3]> = poses.iter().map(at).collect();
         let tv = view(&mut root, &mut bin, bytemuck::cast_slice(&tr), None);
         let output = root.push(json_accessor(tv, tr.len(), T::Vec3));
@@ -330,7 +347,7 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
             samplers.push(linear(output));
             channels.push((node, samplers.len() - 1, json::animation::Property::Rotation));
         }
-        moving.push((*id, node, channels));
+        moving.push((id, node, channels));
     }
     let mut collider_channels = Vec::new();
     for (_, _, channels) in &moving {
@@ -373,7 +390,7 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
 
     // The colliders (the moving ones made above).
     let mut nodes = cloths;
-    let moved = |id: ColliderId| moving.iter().find(|m| m.0 == id).map(|m| m.1);
+    let moved = |id: ColliderId| moving.iter().find(|m| m.0 == Some(id)).map(|m| m.1);
     for (k, s) in scene.spheres.iter().enumerate() {
         if let Some(node) = moved(ColliderId::Sphere(k)) {
             nodes.push(node);
@@ -392,6 +409,7 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         let (p, t) = box_mesh(lo, hi);
         nodes.push(static_mesh(&mut root, &mut bin, &format!("box {k}"), &p, &t));
     }
+    nodes.extend(body_nodes);
     if let Some(y) = scene.floor_y {
         let p = [[-5.0, y, -5.0], [5.0, y, -5.0], [5.0, y, 5.0], [-5.0, y, 5.0]];
         nodes.push(static_mesh(&mut root, &mut bin, "floor", &p, &[[0, 2, 1], [0, 3, 2]]));
@@ -546,6 +564,61 @@ mod tests {
         assert!(ys.iter().zip(want).all(|(y, w)| (y - w).abs() < 1e-6), "{ys:?}");
         // Still colliders stay unanimated.
         assert!(channel("sphere 0", gltf::animation::Property::Translation).is_none());
+    }
+
+    #[test]
+    fn bodies_are_recorded_as_meshes_about_their_pivots_turning_with_their_motion() {
+        // Two bodies of one tetrahedron: the first turning at 2 rad/s about y through its
+        // pivot, the second still. Each is a mesh whose vertices are the placed mesh's less
+        // the pivot, in a node at the pivot; the turning one's rotation at frame k is the
+        // turn 2·t about y (1e-6), so that node · mesh is the body where the solver has it.
+        use clothlab_core::Motion;
+        use clothlab_core::mesh::TriMesh;
+        use clothlab_core::sdf::Body;
+        let tet = TriMesh {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            uvs: None,
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        };
+        let mut scene = Scene::with_n(6);
+        let spin = Motion { spin: [0.0, 2.0, 0.0], ..Motion::default() };
+        scene.bodies = vec![
+            Body::new(tet.clone(), 8, None, Some([0.5, 0.0, 0.0]), spin).unwrap(),
+            Body::new(tet, 8, None, None, Motion::default()).unwrap(),
+        ];
+        let params = clothlab_core::SimParams::default();
+        let (state, topo) = clothlab_core::build(&scene, &params).unwrap();
+        let mut rec = Recording::default();
+        for k in 0..3 {
+            rec.push(k as f32 / 30.0, &state);
+        }
+        let bytes = glb(&rec, &topo, &scene).unwrap();
+        let (doc, buffers, _) = gltf::import_slice(&bytes).unwrap();
+        let get = |b: gltf::Buffer<'_>| Some(&buffers[b.index()][..]);
+        let node = |name: &str| doc.nodes().find(|n| n.name() == Some(name)).unwrap_or_else(|| panic!("{name}"));
+        let b0 = node("body 0");
+        assert_eq!(b0.transform().decomposed().0, [0.5, 0.0, 0.0]);
+        let prim = b0.mesh().unwrap().primitives().next().unwrap();
+        let first = prim.reader(get).read_positions().unwrap().next().unwrap();
+        assert_eq!(first, [-0.5, 0.0, 0.0], "vertex 0 less the pivot");
+        let anim = doc.animations().next().unwrap();
+        let ch = anim
+            .channels()
+            .find(|c| {
+                c.target().node().name() == Some("body 0")
+                    && c.target().property() == gltf::animation::Property::Rotation
+            })
+            .expect("the body's turn");
+        let gltf::animation::util::ReadOutputs::Rotations(q) = ch.reader(get).read_outputs().unwrap() else { panic!() };
+        for (k, q) in q.into_f32().enumerate() {
+            let half = rec.times[k];
+            let want = [0.0, half.sin(), 0.0, half.cos()];
+            assert!((0..4).all(|i| (q[i] - want[i]).abs() < 1e-6), "frame {k}: {q:?} vs {want:?}");
+        }
+        // The still body: placed, not animated.
+        let b1 = node("body 1");
+        assert!(anim.channels().all(|c| c.target().node().index() != b1.index()));
+        assert!(doc.scenes().next().unwrap().nodes().any(|n| n.index() == b1.index()));
     }
 
     #[test]
