@@ -480,15 +480,28 @@ impl SdfGrid {
     /// from the 8 points around it; `None` outside the grid. (The kernels' `body_contact`
     /// samples the same way; this is for tests and tools.)
     pub fn sample(&self, q: [f32; 3]) -> Option<(f32, [f32; 3])> {
-        sample_grid(&[self.lo[0], self.lo[1], self.lo[2], self.h], self.dims, &self.values, q)
+        sample_grid(&[self.lo[0], self.lo[1], self.lo[2], self.h], self.dims, &self.values, q, f32::INFINITY)
     }
 }
 
+/// How far below its cell's first value the field can be anywhere in the cell, in cells:
+/// the values are distances (1-Lipschitz), so the 8 corners lie within √3 h of the first
+/// and their trilinear blend too; 1.75 > √3 covers the values' rounding.
+pub const BAND_CELLS: f32 = 1.75;
+
 /// Trilinear sample of a grid `values` at `q` (frame of `lo`, w the spacing), with the
 /// gradient of the interpolant (not divided by h): the order of operations the WGSL's
-/// `sdf_sample` keeps.
+/// `body_sample` keeps. `None` outside the grid, and where the cell's first value shows
+/// the field is at least `reach` all over the cell (one load instead of eight for a
+/// particle away from the surface: [`BAND_CELLS`]).
 #[inline(always)]
-pub(crate) fn sample_grid(lo: &[f32; 4], dims: [u32; 3], values: &[f32], q: [f32; 3]) -> Option<(f32, [f32; 3])> {
+pub(crate) fn sample_grid(
+    lo: &[f32; 4],
+    dims: [u32; 3],
+    values: &[f32],
+    q: [f32; 3],
+    reach: f32,
+) -> Option<(f32, [f32; 3])> {
     let g = [(q[0] - lo[0]) / lo[3], (q[1] - lo[1]) / lo[3], (q[2] - lo[2]) / lo[3]];
     let top = [(dims[0] - 1) as f32, (dims[1] - 1) as f32, (dims[2] - 1) as f32];
     // `!(a && b)`: a NaN is outside.
@@ -501,7 +514,11 @@ pub(crate) fn sample_grid(lo: &[f32; 4], dims: [u32; 3], values: &[f32], q: [f32
     let sz = sy * dims[1] as usize;
     let base = c[0] as usize + sy * c[1] as usize + sz * c[2] as usize;
     let v = |o: usize| values.get(base + o).copied().unwrap_or(0.0);
-    let (c000, c100, c010, c110) = (v(0), v(sx), v(sy), v(sx + sy));
+    let c000 = v(0);
+    if c000 - BAND_CELLS * lo[3] >= reach {
+        return None;
+    }
+    let (c100, c010, c110) = (v(sx), v(sy), v(sx + sy));
     let (c001, c101, c011, c111) = (v(sz), v(sx + sz), v(sy + sz), v(sx + sy + sz));
     let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
     let phi = lerp(

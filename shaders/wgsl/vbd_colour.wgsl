@@ -103,7 +103,7 @@ fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool)
         }
     }
     for (var k = 0u; k < p.num_bodies; k++) {
-        let s = body_sample(k, x);
+        let s = body_sample(k, x, reach);
         if s.valid && s.phi < reach {
             let vs = surface_vel(body_vec(k, 16u), body_vec(k, 20u), x - body_vec(k, 12u));
             touch(stiffness, reach - s.phi, s.n, d, vs, friction_pass);

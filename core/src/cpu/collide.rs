@@ -151,7 +151,7 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, c: Colliders<'_>, x4: &mut V4
         }
     }
     for hd in c.bodies.heads {
-        if let Some((phi, nrm)) = body_sample(hd, c.bodies.values, x)
+        if let Some((phi, nrm)) = body_sample(hd, c.bodies.values, x, p.margin)
             && phi < p.margin
         {
             x += nrm * (p.margin - phi);
@@ -170,14 +170,15 @@ fn dot3(a: Vec3, b: Vec3) -> f32 {
 }
 
 /// Body `hd`'s field at world `x`: `(φ, n̂)` with `n̂` the world direction of its gradient
-/// (up where it vanishes), or `None` outside its grid. The WGSL's `body_sample`.
+/// (up where it vanishes), or `None` outside its grid or where φ is surely ≥ `reach`.
+/// The WGSL's `body_sample`.
 #[inline(always)]
-pub(crate) fn body_sample(hd: &SdfHead, values: &[f32], x: Vec3) -> Option<(f32, Vec3)> {
+pub(crate) fn body_sample(hd: &SdfHead, values: &[f32], x: Vec3, reach: f32) -> Option<(f32, Vec3)> {
     let (c0, c1, c2) = (v3(hd.cols[0]), v3(hd.cols[1]), v3(hd.cols[2]));
     let d = x - v3(hd.translation);
     let q = [dot3(c0, d), dot3(c1, d), dot3(c2, d)];
     let [nx, ny, nz, first] = hd.dims;
-    let (phi, g) = sample_grid(&hd.lo, [nx, ny, nz], values.get(first as usize..)?, q)?;
+    let (phi, g) = sample_grid(&hd.lo, [nx, ny, nz], values.get(first as usize..)?, q, reach)?;
     let g = Vec3::from(g);
     let gl = dot3(g, g).sqrt();
     let nl = if gl > 1e-12 { g / gl } else { Vec3::Y };

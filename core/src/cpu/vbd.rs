@@ -389,7 +389,7 @@ fn each_contact(p: &StepParams, colliders: Colliders<'_>, x: Vec3, mut touch: im
         }
     }
     for hd in colliders.bodies.heads {
-        if let Some((phi, n)) = body_sample(hd, colliders.bodies.values, x)
+        if let Some((phi, n)) = body_sample(hd, colliders.bodies.values, x, reach)
             && phi < reach
         {
             touch(reach - phi, n, surface_vel(v3(hd.velocity), v3(hd.spin), x - v3(hd.translation)));

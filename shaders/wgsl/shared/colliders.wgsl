@@ -21,14 +21,15 @@ fn lerp1(a: f32, b: f32, t: f32) -> f32 {
 }
 
 // Body k's field at x (core::cpu::collide::body_sample): φ and the world direction of
-// its gradient; `valid` false outside its grid.
+// its gradient; `valid` false outside its grid or where the cell's first value shows φ is
+// at least `reach` all over the cell (core::sdf::BAND_CELLS: one load, not eight).
 struct BodySample {
     phi: f32,
     n: vec3<f32>,
     valid: bool,
 }
 
-fn body_sample(k: u32, x: vec3<f32>) -> BodySample {
+fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
     var out = BodySample(0.0, vec3<f32>(0.0, 1.0, 0.0), false);
     let hb = k * SDF_HEAD_FLOATS;
     let c0 = body_vec(k, 0u);
@@ -51,6 +52,9 @@ fn body_sample(k: u32, x: vec3<f32>) -> BodySample {
     let sz = sy * dims.y;
     let base = SDF_HEADS_FLOATS + first + u32(c.x) + sy * u32(c.y) + sz * u32(c.z);
     let c000 = sdf[base];
+    if c000 - 1.75 * h >= reach {
+        return out;
+    }
     let c100 = sdf[base + 1u];
     let c010 = sdf[base + sy];
     let c110 = sdf[base + 1u + sy];
@@ -120,7 +124,7 @@ fn collided(m: Moved) -> Moved {
         }
     }
     for (var k = 0u; k < p.num_bodies; k++) {
-        let s = body_sample(k, x);
+        let s = body_sample(k, x, p.margin);
         if s.valid && s.phi < p.margin {
             x = x + s.n * (p.margin - s.phi);
             let vs = surface_vel(body_vec(k, 16u), body_vec(k, 20u), x - body_vec(k, 12u));
