@@ -289,7 +289,6 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
     let mut moving = Vec::new();
     // Spheres and boxes that move, then every body (a mesh about its pivot: its node
     // placed there, and moved and turned where its motion says).
-    let still = clothlab_core::Motion::default();
     let colliders = scene.motions.iter().filter_map(|(id, m)| {
         Some(match *id {
             ColliderId::Sphere(k) => {
@@ -306,8 +305,7 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
     });
     let bodies = scene.bodies.iter().enumerate().map(|(k, b)| {
         let local = b.mesh.positions.iter().map(|p| [0, 1, 2].map(|c| p[c] - b.pivot[c])).collect();
-        let m = if b.motion.is_still() { &still } else { &b.motion };
-        (None, format!("body {k}"), b.pivot, (local, b.mesh.triangles.clone()), m)
+        (None, format!("body {k}"), b.pivot, (local, b.mesh.triangles.clone()), &b.motion)
     });
     let mut body_nodes = Vec::new();
     for (id, name, place, mesh, m) in colliders.chain(bodies) {
@@ -318,6 +316,11 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         root.nodes[node.value()].translation = Some(at(&poses[0]));
         if id.is_none() {
             body_nodes.push(node);
+            // A still body may stand turned by its keys: placed so, not animated.
+            let turn = poses[0].rotation.as_quat();
+            if turn != glam::Quat::IDENTITY {
+                root.nodes[node.value()].rotation = Some(json::scene::UnitQuaternion(turn.to_array()));
+            }
             if m.is_still() {
                 continue;
             }
@@ -334,14 +337,10 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         };
         samplers.push(linear(output));
         let mut channels = vec![(node, samplers.len() - 1, json::animation::Property::Translation)];
-        if m.spin != [0.0; 3] {
-            // A constant spin ω: the rotation by |ω| t about ω / |ω|, as a quaternion.
-            let w = glam::Vec3::from(m.spin);
-            let q: Vec<[f32; 4]> = rec
-                .times
-                .iter()
-                .map(|&t| glam::Quat::from_axis_angle(w.normalize(), w.length() * t).to_array())
-                .collect();
+        if m.spin != [0.0; 3] || m.keys_turn() {
+            // Its turn at each frame (a spin's by ω t, or the keys'), as a quaternion.
+            let q: Vec<[f32; 4]> = poses.iter().map(|p| p.rotation.as_quat().to_array()).collect();
+            root.nodes[node.value()].rotation = Some(json::scene::UnitQuaternion(q[0]));
             let qv = view(&mut root, &mut bin, bytemuck::cast_slice(&q), None);
             let output = root.push(json_accessor(qv, q.len(), T::Vec4));
             samplers.push(linear(output));
@@ -521,7 +520,7 @@ mod tests {
         use clothlab_core::{Aabb, Key, Motion};
         let mut scene = Scene::with_n(6);
         scene.boxes.push(Aabb::new([1.0, 0.0, 0.0], [1.5, 0.5, 0.5]));
-        let keys = vec![Key { t: 0.0, offset: [0.0; 3] }, Key { t: 0.05, offset: [0.0, 0.2, 0.0] }];
+        let keys = vec![Key::new(0.0, [0.0; 3]), Key::new(0.05, [0.0, 0.2, 0.0])];
         scene.motions = vec![
             (ColliderId::Sphere(1), Motion { velocity: [0.6, 0.0, 0.0], spin: [0.0, 3.0, 0.0], ..Motion::default() }),
             (ColliderId::Box(0), Motion { keys, ..Motion::default() }),

@@ -35,9 +35,12 @@
 //! #            ease = "smooth", repeat = "loop" }
 //! ```
 //!
-//! Boxes are axis-aligned: they translate, they do not spin (refused). Keyframes hold
-//! offsets, not rotations. Pinned cloth vertices move by the same motions in `[[pins]]`
-//! groups (`crate::pins`), where a spin turns them about a pivot.
+//! Boxes are axis-aligned: they translate, they do not spin (refused). A key may also turn
+//! the collider (`rotate_deg`, degrees about x, then y, then z: interpolated along the
+//! shorter arc, eased as the offsets, its angular velocity given to the contacts) — a
+//! sphere's surface then moves as with a spin, a body (`crate::sdf`) turns about its
+//! pivot; a motion turns by a constant spin or by keys, not both. Pinned cloth vertices
+//! move by the same motions in `[[pins]]` groups (`crate::pins`), turned about a pivot.
 
 use serde::{Deserialize, Serialize};
 
@@ -67,14 +70,32 @@ pub enum Repeat {
     Loop,
 }
 
-/// A keyframe: the collider's offset from its placed position at time `t`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// A keyframe: the collider's offset from its placed position at time `t`, and its turn.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Key {
     /// Time, s (≥ 0; keys strictly increasing).
     pub t: f32,
     /// Offset, m.
     pub offset: [f32; 3],
+    /// Turn about the centre (a sphere's) or pivot (a body's, a pin group's), degrees about
+    /// x, then y, then z, as a placement's `rotate_deg`; default none. Between keys the
+    /// turn is interpolated along the shorter arc (slerp, eased as the offsets).
+    #[serde(default)]
+    pub rotate_deg: [f32; 3],
+}
+
+impl Key {
+    /// A key of an offset only.
+    pub const fn new(t: f32, offset: [f32; 3]) -> Self {
+        Self { t, offset, rotate_deg: [0.0; 3] }
+    }
+
+    /// Its turn as a quaternion (f64).
+    pub fn rotation(&self) -> glam::DQuat {
+        let [rx, ry, rz] = self.rotate_deg.map(|d| (d as f64).to_radians());
+        glam::DQuat::from_euler(glam::EulerRot::ZYX, rz, ry, rx)
+    }
 }
 
 /// A collider's motion (see the module's documentation).
@@ -100,8 +121,10 @@ pub struct Pose {
     pub offset: [f32; 3],
     /// Velocity of the collider's centre, m/s.
     pub velocity: [f32; 3],
-    /// Angular velocity about the centre, rad/s.
+    /// Angular velocity about the centre, rad/s (the constant spin's or the keys' turn's).
     pub spin: [f32; 3],
+    /// The turn at this time (the spin's by `spin·t`, or the keys'), a unit quaternion.
+    pub rotation: glam::DQuat,
 }
 
 fn norm(a: [f32; 3]) -> f32 {
@@ -111,12 +134,26 @@ fn norm(a: [f32; 3]) -> f32 {
 impl Motion {
     /// Whether it moves the collider's surface at all.
     pub fn is_still(&self) -> bool {
-        self.velocity == [0.0; 3] && self.spin == [0.0; 3] && self.keys.iter().all(|k| k.offset == self.keys[0].offset)
+        self.velocity == [0.0; 3]
+            && self.spin == [0.0; 3]
+            && self.keys.iter().all(|k| k.offset == self.keys[0].offset && k.rotate_deg == self.keys[0].rotate_deg)
+    }
+
+    /// Whether its keys turn (a rotation in any key).
+    pub fn keys_turn(&self) -> bool {
+        self.keys.iter().any(|k| k.rotate_deg != [0.0; 3])
     }
 
     /// The pose at time `t`, s.
     pub fn at(&self, t: f64) -> Pose {
         let (mut offset, mut vel) = ([0.0f64; 3], [0.0f64; 3]);
+        // The constant spin's turn, or the keys' (never both: `check`).
+        let w = glam::DVec3::from(self.spin.map(f64::from));
+        let (mut rotation, mut omega) = if w.length() > 0.0 {
+            (glam::DQuat::from_axis_angle(w.normalize(), w.length() * t), w)
+        } else {
+            (glam::DQuat::IDENTITY, glam::DVec3::ZERO)
+        };
         if let (Some(first), Some(last)) = (self.keys.first(), self.keys.last()) {
             let (t0, t1) = (first.t as f64, last.t as f64);
             let tau = match self.repeat {
@@ -144,14 +181,47 @@ impl Motion {
                 offset[k] = a.offset[k] as f64 + d * w;
                 vel[k] = d * dw;
             }
+            if self.keys_turn() {
+                // q(u) = q_a (q_a⁻¹ q_b)^u along the shorter arc; its angular velocity is
+                // R(q_a)·axis·θ·du/dt (the relative turn's axis is fixed by its own turn).
+                let (qa, qb) = (a.rotation(), b.rotation());
+                let mut rel = qa.inverse() * qb;
+                if rel.w < 0.0 {
+                    rel = -rel;
+                }
+                let (axis, angle) = rel.to_axis_angle();
+                rotation = (qa * glam::DQuat::from_axis_angle(axis, angle * w)).normalize();
+                omega = qa * (axis * (angle * dw));
+            }
         }
         let f = |k: usize| [offset[k] + self.velocity[k] as f64 * t, vel[k] + self.velocity[k] as f64];
         let (x, y, z) = (f(0), f(1), f(2));
         Pose {
             offset: [x[0] as f32, y[0] as f32, z[0] as f32],
             velocity: [x[1] as f32, y[1] as f32, z[1] as f32],
-            spin: self.spin,
+            spin: omega.as_vec3().to_array(),
+            rotation,
         }
+    }
+
+    /// The fastest it turns, rad/s (keyframes at their segments' peak rate).
+    pub fn max_turn_rate(&self) -> f32 {
+        let peak = match self.ease {
+            Ease::Linear => 1.0,
+            Ease::Smooth => 1.5,
+        };
+        let keys = self
+            .keys
+            .windows(2)
+            .map(|w| {
+                let mut rel = w[0].rotation().inverse() * w[1].rotation();
+                if rel.w < 0.0 {
+                    rel = -rel;
+                }
+                (rel.to_axis_angle().1 / (w[1].t - w[0].t) as f64) as f32 * peak
+            })
+            .fold(0.0f32, f32::max);
+        norm(self.spin) + keys
     }
 
     /// The fastest its centre moves, m/s (keyframes at their segments' peak speed).
@@ -188,6 +258,31 @@ impl Motion {
                 "a box is axis-aligned: it can move, not turn (spin is for spheres)",
             ));
         }
+        if let Some(i) = self.keys.iter().position(|k| k.rotate_deg != [0.0; 3]) {
+            let field = at(&format!("keys[{i}].rotate_deg"));
+            for v in self.keys[i].rotate_deg {
+                finite_in(field.clone(), v, -3600.0, 3600.0)?;
+            }
+            if !can_spin {
+                return Err(ParamError::new(
+                    field,
+                    format!("{:?}", self.keys[i].rotate_deg),
+                    "a box is axis-aligned: it can move, not turn",
+                ));
+            }
+            if self.spin != [0.0; 3] {
+                return Err(ParamError::new(
+                    field,
+                    format!("{:?}", self.keys[i].rotate_deg),
+                    "turn by a constant spin or by keys, not both",
+                ));
+            }
+        }
+        for (i, k) in self.keys.iter().enumerate() {
+            for v in k.rotate_deg {
+                finite_in(at(&format!("keys[{i}].rotate_deg")), v, -3600.0, 3600.0)?;
+            }
+        }
         for (i, k) in self.keys.iter().enumerate() {
             finite_in(at(&format!("keys[{i}].t")), k.t, 0.0, 1e6)?;
             for v in k.offset {
@@ -214,7 +309,7 @@ impl Motion {
     /// `size` m (a sphere's radius, a box's smallest half-extent): its surface may move
     /// at most half of `size` per substep (see the module's documentation).
     pub fn check_speed(&self, field: &str, size: f32, dt: f32) -> Result<(), ParamError> {
-        let speed = self.max_speed() + norm(self.spin) * size;
+        let speed = self.max_speed() + self.max_turn_rate() * size;
         let step = speed * dt;
         if step > 0.5 * size {
             return Err(ParamError::new(
@@ -236,7 +331,7 @@ mod tests {
 
     fn keys(ease: Ease, repeat: Repeat) -> Motion {
         Motion {
-            keys: vec![Key { t: 1.0, offset: [0.0; 3] }, Key { t: 3.0, offset: [2.0, 0.0, 0.0] }],
+            keys: vec![Key::new(1.0, [0.0; 3]), Key::new(3.0, [2.0, 0.0, 0.0])],
             ease,
             repeat,
             ..Motion::default()
@@ -283,16 +378,13 @@ mod tests {
         let cases: [(Motion, bool, &str); 4] = [
             (Motion { velocity: [f32::NAN, 0.0, 0.0], ..Motion::default() }, true, "s[0].motion.velocity"),
             (
-                Motion {
-                    keys: vec![Key { t: 1.0, offset: [0.0; 3] }, Key { t: 1.0, offset: [1.0; 3] }],
-                    ..Motion::default()
-                },
+                Motion { keys: vec![Key::new(1.0, [0.0; 3]), Key::new(1.0, [1.0; 3])], ..Motion::default() },
                 true,
                 "strictly increasing",
             ),
             (Motion { spin: [0.0, 1.0, 0.0], ..Motion::default() }, false, "not turn"),
             (
-                Motion { repeat: Repeat::Loop, keys: vec![Key { t: 0.0, offset: [0.0; 3] }], ..Motion::default() },
+                Motion { repeat: Repeat::Loop, keys: vec![Key::new(0.0, [0.0; 3])], ..Motion::default() },
                 true,
                 "two keys",
             ),
@@ -307,5 +399,70 @@ mod tests {
         let e = fast.check_speed("s[0]", 0.02, 1.0 / 960.0).unwrap_err().to_string();
         assert!(e.contains("per substep") && e.contains("s[0].motion"), "{e}");
         assert!(fast.check_speed("s[0]", 0.03, 1.0 / 960.0).is_ok());
+    }
+
+    fn turning(ease: Ease) -> Motion {
+        Motion {
+            keys: vec![Key::new(0.0, [0.0; 3]), Key { rotate_deg: [0.0, 90.0, 0.0], ..Key::new(1.0, [0.0; 3]) }],
+            ease,
+            ..Motion::default()
+        }
+    }
+
+    #[test]
+    fn keys_turn_along_the_shorter_arc_at_the_rate_of_their_angle() {
+        use std::f64::consts::FRAC_PI_2;
+        // 0 → 90° about y in 1 s, linear: half way at 0.5 s, at π/2 rad/s throughout
+        // (to the f64 quaternion's rounding: 1e-9), still before and after.
+        let m = turning(Ease::Linear);
+        assert!(!m.is_still() && m.keys_turn());
+        let p = m.at(0.5);
+        let (axis, angle) = p.rotation.to_axis_angle();
+        assert!((angle - FRAC_PI_2 / 2.0).abs() < 1e-9 && (axis.y - 1.0).abs() < 1e-9, "{axis} {angle}");
+        assert!((p.spin[1] as f64 - FRAC_PI_2).abs() < 1e-6 && p.spin[0] == 0.0 && p.spin[2] == 0.0, "{:?}", p.spin);
+        assert_eq!(m.at(2.0).spin, [0.0; 3]);
+        assert!((m.at(2.0).rotation.to_axis_angle().1 - FRAC_PI_2).abs() < 1e-9);
+        // Smooth: the rate peaks at 1.5× the mean mid-way, 0 at the keys.
+        let s = turning(Ease::Smooth);
+        assert!((s.at(0.5).spin[1] as f64 - 1.5 * FRAC_PI_2).abs() < 1e-6);
+        assert!(s.at(0.0).spin[1].abs() < 1e-9);
+        assert!((s.max_turn_rate() as f64 - 1.5 * FRAC_PI_2).abs() < 1e-6);
+        // A turn about all three axes: the angular velocity is the rotation's derivative,
+        // (q(t + ε) q(t)⁻¹ as axis·angle) / ε, to the difference's O(ε) (1e-5 rad/s).
+        let m = Motion {
+            keys: vec![
+                Key { rotate_deg: [10.0, -20.0, 5.0], ..Key::new(0.0, [0.0; 3]) },
+                Key { rotate_deg: [-40.0, 60.0, 30.0], ..Key::new(0.7, [0.0; 3]) },
+            ],
+            ease: Ease::Smooth,
+            ..Motion::default()
+        };
+        for t in [0.1, 0.35, 0.6] {
+            let eps = 1e-6;
+            let (q0, q1) = (m.at(t - eps).rotation, m.at(t + eps).rotation);
+            let (axis, angle) = (q1 * q0.inverse()).to_axis_angle();
+            let fd = axis * (angle / (2.0 * eps));
+            let w = glam::DVec3::from(m.at(t).spin.map(f64::from));
+            assert!((fd - w).length() < 1e-5, "t {t}: ω {w} vs the derivative {fd}");
+        }
+    }
+
+    #[test]
+    fn turning_keys_are_refused_on_boxes_with_a_spin_and_when_not_finite() {
+        let e = turning(Ease::Linear).check("boxes[0]", false).unwrap_err().to_string();
+        assert!(e.contains("boxes[0].motion.keys[1].rotate_deg") && e.contains("axis-aligned"), "{e}");
+        let both = Motion { spin: [0.0, 1.0, 0.0], ..turning(Ease::Linear) };
+        let e = both.check("bodies[0]", true).unwrap_err().to_string();
+        assert!(e.contains("not both"), "{e}");
+        let mut nan = turning(Ease::Linear);
+        nan.keys[1].rotate_deg[2] = f32::NAN;
+        let e = nan.check("spheres[0]", true).unwrap_err().to_string();
+        assert!(e.contains("rotate_deg") && e.contains("finite"), "{e}");
+        // A sphere of 0.1 m turned 90° in 1 ms: its surface moves 0.16 m per substep.
+        let fast = Motion {
+            keys: vec![Key::new(0.0, [0.0; 3]), Key { rotate_deg: [90.0, 0.0, 0.0], ..Key::new(0.001, [0.0; 3]) }],
+            ..Motion::default()
+        };
+        assert!(fast.check_speed("spheres[0]", 0.1, 1e-3).is_err());
     }
 }

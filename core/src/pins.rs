@@ -44,7 +44,8 @@
 //! leaves the springs between the halves to take the rest, without bound
 //! (`scenes/cloth-twist.toml` says how its motion avoids it).
 //!
-//! Keyframes hold offsets, not rotations: a group turns at its constant `spin`.
+//! Keyframes may turn a group too (`rotate_deg`, `crate::motion`): `R(t)` is then the keys'
+//! turn and `spin` their angular velocity.
 
 use serde::{Deserialize, Serialize};
 
@@ -139,28 +140,9 @@ impl PinPose {
     /// The pose of a group about `pivot` moved by `motion`, at time `t`, s.
     pub fn at(motion: &Motion, pivot: [f32; 3], t: f64) -> Self {
         let pose = motion.at(t);
-        // The rotation by spin·t (Rodrigues), in f64, rounded once.
-        let w = pose.spin.map(f64::from);
-        let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-        let mut r = [[0.0f64; 3]; 3]; // r[col][row]
-        let (angle, k) = if speed > 0.0 { (speed * t, w.map(|x| x / speed)) } else { (0.0, [0.0; 3]) };
-        let (s, c) = angle.sin_cos();
-        for (col, rc) in r.iter_mut().enumerate() {
-            for (row, x) in rc.iter_mut().enumerate() {
-                let id = if row == col { 1.0 } else { 0.0 };
-                // [k]× at (row, col): the cross-product matrix.
-                let cross = match (row, col) {
-                    (0, 1) => -k[2],
-                    (0, 2) => k[1],
-                    (1, 0) => k[2],
-                    (1, 2) => -k[0],
-                    (2, 0) => -k[1],
-                    (2, 1) => k[0],
-                    _ => 0.0,
-                };
-                *x = id * c + s * cross + (1.0 - c) * k[row] * k[col];
-            }
-        }
+        // The motion's turn (its spin's by spin·t, or its keys'), in f64, rounded once.
+        let m = glam::DMat3::from_quat(pose.rotation);
+        let r = [m.x_axis.to_array(), m.y_axis.to_array(), m.z_axis.to_array()]; // r[col][row]
         let col = |c: usize| [r[c][0] as f32, r[c][1] as f32, r[c][2] as f32, 0.0];
         let t3 = |k: usize| (pivot[k] as f64 + pose.offset[k] as f64) as f32;
         Self {
@@ -357,10 +339,8 @@ mod tests {
             pivot: None,
             motion: m,
         };
-        let moving_m = Motion {
-            keys: vec![Key { t: 0.0, offset: [0.0; 3] }, Key { t: 1.0, offset: [1.0, 0.0, 0.0] }],
-            ..Motion::default()
-        };
+        let moving_m =
+            Motion { keys: vec![Key::new(0.0, [0.0; 3]), Key::new(1.0, [1.0, 0.0, 0.0])], ..Motion::default() };
         let groups = [g(-0.5, 1.5, moving_m.clone()), g(1.0, 2.5, Motion::default())];
         let of = select(&groups, &pos).unwrap();
         assert_eq!(of, vec![Some(0), Some(0), Some(1), None]);

@@ -600,7 +600,7 @@ impl Scene {
         self.colliders_at(t, &mut s.spheres, &mut s.boxes);
         // A moving body's mesh, posed (its field is left as it was: this scene is drawn,
         // not simulated).
-        for b in s.bodies.iter_mut().filter(|b| !b.motion.is_still()) {
+        for b in s.bodies.iter_mut().filter(|b| b.motion != Motion::default()) {
             let mut mesh = (*b.mesh).clone();
             mesh.positions = b.posed_at(t);
             b.mesh = std::sync::Arc::new(mesh);

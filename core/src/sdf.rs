@@ -12,7 +12,8 @@
 //! resolution = 64                 # cells along the body's longest side (8 … 256)
 //! thickness = 0.01                # open meshes only: the shell's half-thickness, m
 //! pivot = [0, 1, 0]               # what `spin` turns it about (default: its box's centre)
-//! motion = { spin = [0, 1.2, 0] } # as the colliders' motions (`crate::motion`)
+//! motion = { spin = [0, 1.2, 0] } # as the colliders' motions (`crate::motion`): a spin or
+//!                                 # keys' `rotate_deg` turn it about the pivot
 //! ```
 //!
 //! **The field.** The grid covers the placed mesh's bounding box plus a border of
@@ -194,8 +195,7 @@ impl Body {
     /// Refuses a motion whose surface moves more than [`MAX_CELLS_PER_SUBSTEP`] cells in a
     /// substep of `dt` s.
     pub fn check_speed(&self, field: &str, dt: f32) -> Result<(), ParamError> {
-        let w = self.motion.spin;
-        let speed = self.motion.max_speed() + (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt() * self.reach();
+        let speed = self.motion.max_speed() + self.motion.max_turn_rate() * self.reach();
         let limit = MAX_CELLS_PER_SUBSTEP * self.sdf.h;
         if speed * dt > limit {
             return Err(ParamError::new(

@@ -83,6 +83,65 @@ fn a_patch_on_a_spinning_body_moves_with_its_surface_when_it_sticks_and_not_when
     }
 }
 
+/// A closed box mesh (12 triangles) from `lo` to `hi`.
+fn box_mesh(lo: [f32; 3], hi: [f32; 3]) -> clothlab_core::mesh::TriMesh {
+    let positions = (0..8).map(|k| [0, 1, 2].map(|a| if k >> a & 1 == 1 { hi[a] } else { lo[a] })).collect();
+    // Counter-clockwise seen from outside: -x, +x, -y, +y, -z, +z.
+    let triangles = vec![
+        [0, 4, 6],
+        [0, 6, 2],
+        [1, 3, 7],
+        [1, 7, 5],
+        [0, 1, 5],
+        [0, 5, 4],
+        [2, 6, 7],
+        [2, 7, 3],
+        [0, 2, 3],
+        [0, 3, 1],
+        [4, 5, 7],
+        [4, 7, 6],
+    ];
+    clothlab_core::mesh::TriMesh { positions, uvs: None, triangles }
+}
+
+#[test]
+fn a_patch_on_a_body_turned_by_keys_moves_at_the_keys_rate() {
+    use clothlab_core::Key;
+    // A 1 m × 0.2 m × 1 m box body turned by keys 0 → 90° about y in 1 s (linear: ω =
+    // π/2 rad/s about its centre); a 2 cm patch lies on its top 0.3 m from the axis. With
+    // friction 1 the contacts give it the surface's velocity ω × (x − pivot): speed
+    // ω·0.3 m at 0.25 s, within 0.5 % (the patch spans ±1 cm about 0.3 m, its mean
+    // distance from the axis 0.3002 m; measured 0.06 % over); with friction 0 it does not
+    // follow (under 5 %: nothing but the flat top's normal acts on it).
+    let margin = SimParams::default().collision_margin;
+    let turn = Motion {
+        keys: vec![Key::new(0.0, [0.0; 3]), Key { rotate_deg: [0.0, 90.0, 0.0], ..Key::new(1.0, [0.0; 3]) }],
+        ..Motion::default()
+    };
+    let mut sc = Scene::with_n(4);
+    sc.cloth.size = 0.02;
+    sc.cloth.pinning = Pinning::None;
+    sc.cloth.top_center = [0.3, 0.2 + margin + 1e-3, -0.01];
+    sc.floor_y = None;
+    sc.spheres.clear();
+    sc.bodies = vec![Body::new(box_mesh([-0.5, 0.0, -0.5], [0.5, 0.2, 0.5]), 32, None, None, turn).unwrap()];
+    let want = std::f64::consts::FRAC_PI_2 * 0.3;
+    for (friction, sticks) in [(1.0, true), (0.0, false)] {
+        for (name, mut s) in every_backend(&sc, &still_air(friction)) {
+            for _ in 0..15 {
+                s.step_frame().unwrap();
+            }
+            let v = mean_speed(&s.state().unwrap());
+            println!("{name:18} friction {friction}: mean speed {v:.4} m/s (the surface {want:.4})");
+            if sticks {
+                assert!((v - want).abs() <= 0.005 * want, "{name}: {v} m/s, the surface {want}");
+            } else {
+                assert!(v <= 0.05 * want, "{name}: a frictionless patch dragged to {v} m/s");
+            }
+        }
+    }
+}
+
 /// A 32 × 32 cloth dropped from 0.3 m onto a sphere of radius 0.45 on the floor, the
 /// sphere analytic or an icosphere body of `resolution` cells across.
 fn drape(body: Option<u32>) -> Scene {

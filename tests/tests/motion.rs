@@ -167,11 +167,7 @@ fn busy() -> (Scene, SimParams) {
     sc.cloth.pinning = Pinning::None;
     sc.spheres = vec![Sphere::new([0.0, 0.56, 0.0], 0.45)];
     sc.boxes = vec![Aabb::new([0.55, 0.0, -0.2], [0.85, 1.2, 0.2])];
-    let keys = vec![
-        Key { t: 0.0, offset: [0.0; 3] },
-        Key { t: 0.1, offset: [0.1, 0.05, 0.0] },
-        Key { t: 0.2, offset: [0.0; 3] },
-    ];
+    let keys = vec![Key::new(0.0, [0.0; 3]), Key::new(0.1, [0.1, 0.05, 0.0]), Key::new(0.2, [0.0; 3])];
     sc.motions = vec![
         (
             ColliderId::Sphere(0),

@@ -230,7 +230,7 @@ fn bad_pin_groups_are_refused_in_one_line() {
     assert!(e.contains("moving colliders or pins need temporal=off"), "{e}");
     // A still group only holds: no pins kernel in the recipe.
     let mut still = curtain([0.0; 3]);
-    still.pins[0].motion = Motion { keys: vec![Key { t: 0.0, offset: [0.0; 3] }], ..Motion::default() };
+    still.pins[0].motion = Motion { keys: vec![Key::new(0.0, [0.0; 3])], ..Motion::default() };
     let (_, topo) = clothlab_core::build(&still, &galilean()).unwrap();
     assert!(topo.pins.slots.is_empty());
 }
