@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use clothlab_core::grid::{InteriorSlots, Spring, SpringSlot, StepParams, Tether};
 use clothlab_core::layout::{BindKind, Buf, wgsl_constants};
 use clothlab_core::pins::{PinPose, PinSlot};
-use clothlab_core::scene::{Aabb, Sphere};
+use clothlab_core::scene::{Aabb, Capsule, Sphere};
 
 /// A struct as core lays it out: name, size, and (field, offset) pairs.
 type Layout = (&'static str, usize, Vec<(&'static str, usize)>);
@@ -55,7 +55,7 @@ fn expected_layouts() -> Vec<Layout> {
                 strain_passes,
                 tile_substeps,
                 num_bodies,
-                _pad1
+                num_capsules
             ]
         ),
         layout!(SpringSlot, "SpringSlot", [neighbor, rest, ks, kd]),
@@ -64,6 +64,7 @@ fn expected_layouts() -> Vec<Layout> {
         layout!(InteriorSlots, "InteriorSlots", [slots, enabled, _pad0, _pad1, _pad2]),
         layout!(Sphere, "Sphere", [center, radius, velocity, spin]),
         layout!(Aabb, "Aabb", [min, max, velocity]),
+        layout!(Capsule, "Capsule", [a, b, velocity, spin]),
         layout!(PinSlot, "PinSlot", [rest, index, group, pad]),
         layout!(PinPose, "PinPose", [cols, translation, velocity, spin]),
     ]

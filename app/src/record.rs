@@ -174,6 +174,14 @@ fn sphere_mesh(c: [f32; 3], r: f32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     (pos, tris)
 }
 
+/// Capsule `c` about its centre (`clothlab_core::render::capsule_mesh`).
+fn capsule_local(c: &clothlab_core::Capsule) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+    let m = c.center();
+    let at = |p: [f32; 4]| [p[0] - m[0], p[1] - m[1], p[2] - m[2]];
+    let (pos, _, tris) = clothlab_core::render::capsule_mesh(at(c.a), at(c.b), c.radius(), 6, 24);
+    (pos, tris)
+}
+
 /// An axis-aligned box's 8 corners and 12 triangles, counter-clockwise from outside.
 fn box_mesh(lo: [f32; 3], hi: [f32; 3]) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     let pos: Vec<[f32; 3]> = (0..8)
@@ -301,6 +309,11 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
                 let (lo, hi) = ([b.min[0], b.min[1], b.min[2]], [b.max[0], b.max[1], b.max[2]]);
                 (Some(*id), format!("box {k}"), [0.0; 3], box_mesh(lo, hi), m)
             }
+            ColliderId::Capsule(k) => {
+                let c = scene.capsules.get(k)?;
+                // About its centre, which the motion moves and turns it about.
+                (Some(*id), format!("capsule {k}"), c.center(), capsule_local(c), m)
+            }
         })
     });
     let bodies = scene.bodies.iter().enumerate().map(|(k, b)| {
@@ -407,6 +420,16 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         let hi = [b.max[0], b.max[1], b.max[2]];
         let (p, t) = box_mesh(lo, hi);
         nodes.push(static_mesh(&mut root, &mut bin, &format!("box {k}"), &p, &t));
+    }
+    for (k, c) in scene.capsules.iter().enumerate() {
+        if let Some(node) = moved(ColliderId::Capsule(k)) {
+            nodes.push(node);
+            continue;
+        }
+        let (p, t) = capsule_local(c);
+        let node = static_mesh(&mut root, &mut bin, &format!("capsule {k}"), &p, &t);
+        root.nodes[node.value()].translation = Some(c.center());
+        nodes.push(node);
     }
     nodes.extend(body_nodes);
     if let Some(y) = scene.floor_y {

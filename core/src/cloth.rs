@@ -282,6 +282,7 @@ pub fn combine(cloths: &[ClothSpec]) -> Result<ClothSpec, ParamError> {
             floor_y: None,
             spheres: Vec::new(),
             boxes: Vec::new(),
+            capsules: Vec::new(),
             motions: Vec::new(),
             pins: Vec::new(),
             bodies: Vec::new(),

@@ -642,12 +642,11 @@ pub struct StepParams {
     pub strain_passes: u32,
     /// Substeps the tiled substep advances per dispatch (temporal blocking); 1 otherwise.
     pub tile_substeps: u32,
-    /// Number of bodies (mesh colliders, `crate::sdf`) in use. The last field pads the
-    /// struct to 128 bytes (a uniform block's size is a multiple of 16; immediates must
-    /// match the shader's struct).
+    /// Number of bodies (mesh colliders, `crate::sdf`) in use.
     pub num_bodies: u32,
-    /// Padding.
-    pub _pad1: u32,
+    /// Number of capsules in use. The struct is 128 bytes (a uniform block's size is a
+    /// multiple of 16; immediates must match the shader's struct): full.
+    pub num_capsules: u32,
 }
 
 impl StepParams {
@@ -684,7 +683,7 @@ impl StepParams {
             strain_passes: params.strain_iterations,
             tile_substeps: 1,
             num_bodies: scene.bodies.len() as u32,
-            _pad1: 0,
+            num_capsules: scene.capsules.len() as u32,
         }
     }
 }

@@ -114,11 +114,13 @@ pub enum Buf {
     /// The bodies (mesh colliders, `crate::sdf`), `f32`s: `MAX_BODIES` heads of
     /// `SdfHead::FLOATS` (the current substep's poses), then every body's distance values.
     Sdf = 34,
+    /// Capsule colliders (`scene::Capsule`; `MAX_COLLIDERS` elements).
+    Capsules = 35,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 35] = [
+    pub const ALL: [Buf; 36] = [
         Buf::Params,
         Buf::Pos,
         Buf::Vel,
@@ -154,6 +156,7 @@ impl Buf {
         Buf::Pins,
         Buf::PinPoses,
         Buf::Sdf,
+        Buf::Capsules,
     ];
 
     /// The integrators' scratch particle buffers, in order.
@@ -216,6 +219,7 @@ impl Buf {
             Buf::Pins => "pins",
             Buf::PinPoses => "pin_poses",
             Buf::Sdf => "sdf",
+            Buf::Capsules => "capsules",
         }
     }
 

@@ -81,7 +81,47 @@ pub fn cloth_lines(topo: &ClothTopology) -> Vec<u32> {
     edges.iter().flat_map(|&(a, b)| [a, b]).collect()
 }
 
-/// Floor, spheres, boxes and bodies as one triangle list (never empty). A body is drawn
+/// A capsule about the segment `a`–`b` of radius `r`: positions, outward normals and
+/// triangles counter-clockwise from outside (a hemisphere at each end joined by a tube;
+/// `rings` latitude steps per hemisphere, `around` longitude steps).
+pub fn capsule_mesh(a: [f32; 3], b: [f32; 3], r: f32, rings: u32, around: u32) -> CapsuleMesh {
+    use glam::Vec3;
+    let (a, b) = (Vec3::from(a), Vec3::from(b));
+    let axis = (b - a).try_normalize().unwrap_or(Vec3::Y);
+    let e1 = axis.any_orthonormal_vector();
+    let e2 = axis.cross(e1);
+    let (mut pos, mut nrm) = (Vec::new(), Vec::new());
+    // Latitudes from a's pole (−axis) to b's (+axis): the first hemisphere about a, the
+    // second about b.
+    for j in 0..=2 * rings + 1 {
+        let (centre, th) = if j <= rings {
+            (a, std::f32::consts::FRAC_PI_2 * (j as f32 / rings as f32 - 1.0))
+        } else {
+            (b, std::f32::consts::FRAC_PI_2 * ((j - rings - 1) as f32 / rings as f32))
+        };
+        for i in 0..around {
+            let ph = std::f32::consts::TAU * i as f32 / around as f32;
+            let n = axis * th.sin() + (e1 * ph.cos() + e2 * ph.sin()) * th.cos();
+            pos.push((centre + n * r).to_array());
+            nrm.push(n.to_array());
+        }
+    }
+    let mut tris = Vec::new();
+    for j in 0..2 * rings + 1 {
+        for i in 0..around {
+            let p = j * around + i;
+            let q = j * around + (i + 1) % around;
+            tris.push([p, q + around, p + around]);
+            tris.push([p, q, q + around]);
+        }
+    }
+    (pos, nrm, tris)
+}
+
+/// [`capsule_mesh`]'s positions, normals and triangles.
+pub type CapsuleMesh = (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[u32; 3]>);
+
+/// Floor, spheres, boxes, capsules and bodies as one triangle list (never empty). A body is drawn
 /// as its mesh with smooth normals (area-weighted), where [`Scene::moved_to`] put it.
 pub fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
     let mut v = Vec::new();
@@ -154,6 +194,14 @@ pub fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
             }
         }
     }
+    for c in &scene.capsules {
+        let (p, n, t) = capsule_mesh([c.a[0], c.a[1], c.a[2]], [c.b[0], c.b[1], c.b[2]], c.radius(), 12, 48);
+        let base = v.len() as u32;
+        for (pos, normal) in p.into_iter().zip(n) {
+            v.push(StaticVertex { pos, normal, uv: [0.0, 0.0], material: 1 });
+        }
+        idx.extend(t.iter().flatten().map(|&k| base + k));
+    }
     for body in &scene.bodies {
         let m = &body.mesh;
         let base = v.len() as u32;
@@ -195,4 +243,41 @@ pub fn fabric_texture() -> Vec<u8> {
         }
     }
     px
+}
+
+#[cfg(test)]
+mod capsule_tests {
+    #[test]
+    fn a_capsule_mesh_lies_on_its_surface_and_faces_out() {
+        // Every vertex at the radius from the axis segment (to rounding, 1e-6 m), every
+        // triangle's normal outward (its centroid moved along it leaves the capsule), and
+        // it is closed (every edge in two triangles).
+        let (a, b, r) = ([0.1, 0.2, 0.3], [0.9, -0.4, 0.5], 0.15);
+        let (pos, nrm, tris) = super::capsule_mesh(a, b, r, 6, 16);
+        let (va, vb) = (glam::Vec3::from(a), glam::Vec3::from(b));
+        let dist = |p: glam::Vec3| {
+            let ab = vb - va;
+            let s = ((p - va).dot(ab) / ab.dot(ab)).clamp(0.0, 1.0);
+            (p - (va + ab * s)).length()
+        };
+        for (p, n) in pos.iter().zip(&nrm) {
+            assert!((dist(glam::Vec3::from(*p)) - r).abs() < 1e-6, "{p:?}");
+            assert!((glam::Vec3::from(*n).length() - 1.0).abs() < 1e-5);
+        }
+        let mut outward = 0;
+        for t in &tris {
+            let [p0, p1, p2] = t.map(|k| glam::Vec3::from(pos[k as usize]));
+            let n = (p1 - p0).cross(p2 - p0);
+            if n.length() < 1e-9 {
+                continue; // a pole's sliver
+            }
+            let c = (p0 + p1 + p2) / 3.0;
+            if dist(c + n.normalize() * 0.01) > dist(c) {
+                outward += 1;
+            } else {
+                panic!("triangle {t:?} faces in");
+            }
+        }
+        assert!(outward >= tris.len() - 2 * 16, "{outward} of {} outward", tris.len());
+    }
 }

@@ -66,6 +66,41 @@ impl Aabb {
     }
 }
 
+/// A capsule collider: the points within `radius` of the segment from `a` to `b` (a
+/// limb, a bar). `#[repr(C)]`, mirrored in the shaders.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
+pub struct Capsule {
+    /// One end of the axis, m; w the radius, m.
+    pub a: [f32; 4],
+    /// The other end, m (w 0).
+    pub b: [f32; 4],
+    /// Velocity of its centre (the axis' midpoint) at this substep, m/s (w 0).
+    #[serde(skip)]
+    pub velocity: [f32; 4],
+    /// Angular velocity about its centre, rad/s (w 0): the surface at `x` moves at
+    /// `velocity + spin × (x − (a + b)/2)`.
+    #[serde(skip)]
+    pub spin: [f32; 4],
+}
+
+impl Capsule {
+    /// A still capsule about the segment `a`–`b`.
+    pub fn new(a: [f32; 3], b: [f32; 3], radius: f32) -> Self {
+        Self { a: [a[0], a[1], a[2], radius], b: [b[0], b[1], b[2], 0.0], velocity: [0.0; 4], spin: [0.0; 4] }
+    }
+
+    /// Its radius, m.
+    pub fn radius(&self) -> f32 {
+        self.a[3]
+    }
+
+    /// The axis' midpoint, m, as the kernels compute it (`(a + b)·½`).
+    pub fn center(&self) -> [f32; 3] {
+        [(self.a[0] + self.b[0]) * 0.5, (self.a[1] + self.b[1]) * 0.5, (self.a[2] + self.b[2]) * 0.5]
+    }
+}
+
 /// Which collider a [`Motion`] moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ColliderId {
@@ -73,6 +108,8 @@ pub enum ColliderId {
     Sphere(usize),
     /// `Scene::boxes[i]`.
     Box(usize),
+    /// `Scene::capsules[i]`.
+    Capsule(usize),
 }
 
 impl ColliderId {
@@ -81,6 +118,7 @@ impl ColliderId {
         match self {
             ColliderId::Sphere(i) => format!("spheres[{i}]"),
             ColliderId::Box(i) => format!("boxes[{i}]"),
+            ColliderId::Capsule(i) => format!("capsules[{i}]"),
         }
     }
 }
@@ -303,6 +341,9 @@ pub struct Scene {
     pub spheres: Vec<Sphere>,
     /// Axis-aligned box colliders. Default: none.
     pub boxes: Vec<Aabb>,
+    /// Capsule colliders. Default: none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub capsules: Vec<Capsule>,
     /// How colliders move (at most one motion each; none: all still). See [`crate::motion`].
     #[serde(default)]
     pub motions: Vec<(ColliderId, Motion)>,
@@ -326,6 +367,7 @@ impl Default for Scene {
                 Sphere::new([-0.05, 0.25, 0.55], 0.25),
             ],
             boxes: Vec::new(),
+            capsules: Vec::new(),
             motions: Vec::new(),
             pins: Vec::new(),
             bodies: Vec::new(),
@@ -467,6 +509,16 @@ impl Scene {
         if self.boxes.len() > MAX_COLLIDERS {
             return Err(ParamError::new("boxes", self.boxes.len(), format!("at most {MAX_COLLIDERS}")));
         }
+        if self.capsules.len() > MAX_COLLIDERS {
+            return Err(ParamError::new("capsules", self.capsules.len(), format!("at most {MAX_COLLIDERS}")));
+        }
+        for (i, c) in self.capsules.iter().enumerate() {
+            for k in 0..3 {
+                finite_in(format!("capsules[{i}].a"), c.a[k], -1e4, 1e4)?;
+                finite_in(format!("capsules[{i}].b"), c.b[k], -1e4, 1e4)?;
+            }
+            finite_in(format!("capsules[{i}].radius"), c.radius(), 1e-4, 1e4)?;
+        }
         for (i, s) in self.spheres.iter().enumerate() {
             for v in s.center {
                 finite_in(format!("spheres[{i}].center"), v, -1e4, 1e4)?;
@@ -486,6 +538,7 @@ impl Scene {
             let exists = match *id {
                 ColliderId::Sphere(i) => i < self.spheres.len(),
                 ColliderId::Box(i) => i < self.boxes.len(),
+                ColliderId::Capsule(i) => i < self.capsules.len(),
             };
             if !exists {
                 return Err(ParamError::new(id.field(), "motion", "moves a collider the scene does not have"));
@@ -493,7 +546,7 @@ impl Scene {
             if self.motions[..k].iter().any(|(other, _)| other == id) {
                 return Err(ParamError::new(id.field(), "motion", "has two motions"));
             }
-            m.check(&id.field(), matches!(id, ColliderId::Sphere(_)))?;
+            m.check(&id.field(), !matches!(id, ColliderId::Box(_)))?;
         }
         if self.pins.len() > crate::pins::MAX_PIN_GROUPS {
             return Err(ParamError::new("pins", self.pins.len(), format!("at most {}", crate::pins::MAX_PIN_GROUPS)));
@@ -535,12 +588,19 @@ impl Scene {
             ColliderId::Box(i) if i < self.boxes.len() => {
                 self.boxes.remove(i);
             }
+            ColliderId::Capsule(i) if i < self.capsules.len() => {
+                self.capsules.remove(i);
+            }
             _ => return,
         }
         self.motions.retain(|(m, _)| *m != id);
         for (m, _) in &mut self.motions {
             match (m, id) {
-                (ColliderId::Sphere(k), ColliderId::Sphere(i)) | (ColliderId::Box(k), ColliderId::Box(i)) if *k > i => {
+                (ColliderId::Sphere(k), ColliderId::Sphere(i))
+                | (ColliderId::Box(k), ColliderId::Box(i))
+                | (ColliderId::Capsule(k), ColliderId::Capsule(i))
+                    if *k > i =>
+                {
                     *k -= 1
                 }
                 _ => {}
@@ -573,6 +633,7 @@ impl Scene {
                     .boxes
                     .get(i)
                     .map_or(0.0, |b| (0..3).map(|k| 0.5 * (b.max[k] - b.min[k])).fold(f32::INFINITY, f32::min)),
+                ColliderId::Capsule(i) => self.capsules.get(i).map_or(0.0, Capsule::radius),
             };
             m.check_speed(&id.field(), size, dt)?;
         }
@@ -580,6 +641,28 @@ impl Scene {
             b.check_speed(&format!("bodies[{i}]"), dt)?;
         }
         Ok(())
+    }
+
+    /// The capsules at simulated time `t`, s: moved and turned about their centres by their
+    /// motions (in f64, rounded once), with the velocities their contacts use.
+    pub fn capsules_at(&self, t: f64, capsules: &mut Vec<Capsule>) {
+        capsules.clone_from(&self.capsules);
+        for (id, m) in &self.motions {
+            let ColliderId::Capsule(i) = *id else { continue };
+            let Some(c) = capsules.get_mut(i) else { continue };
+            let pose = m.at(t);
+            let centre = glam::DVec3::from(c.center().map(f64::from));
+            let offset = glam::DVec3::from(pose.offset.map(f64::from));
+            let place = |p: [f32; 4]| {
+                let q = glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) - centre;
+                (centre + offset + pose.rotation * q).as_vec3()
+            };
+            let (a, b) = (place(c.a), place(c.b));
+            c.a = [a.x, a.y, a.z, c.a[3]];
+            c.b = [b.x, b.y, b.z, 0.0];
+            c.velocity = [pose.velocity[0], pose.velocity[1], pose.velocity[2], 0.0];
+            c.spin = [pose.spin[0], pose.spin[1], pose.spin[2], 0.0];
+        }
     }
 
     /// The bodies' heads at simulated time `t`, s (their poses, velocities and where their
@@ -598,6 +681,7 @@ impl Scene {
     pub fn moved_to(&self, t: f64) -> Scene {
         let mut s = self.clone();
         self.colliders_at(t, &mut s.spheres, &mut s.boxes);
+        self.capsules_at(t, &mut s.capsules);
         // A moving body's mesh, posed (its field is left as it was: this scene is drawn,
         // not simulated).
         for b in s.bodies.iter_mut().filter(|b| b.motion != Motion::default()) {
@@ -635,6 +719,8 @@ impl Scene {
                         b.velocity = v;
                     }
                 }
+                // Moved by `capsules_at`.
+                ColliderId::Capsule(_) => {}
             }
         }
     }

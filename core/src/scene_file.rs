@@ -24,6 +24,10 @@
 //! [[boxes]]
 //! min = [-0.5, 0.0, -0.5]
 //! max = [0.5, 0.8, 0.5]
+//! [[capsules]]                 # the points within `radius` of the segment a–b
+//! a = [-0.6, 0.3, 0.4]
+//! b = [0.6, 0.3, 0.4]
+//! radius = 0.08
 //! [[pins]]                     # holds the particles resting in the box; may move
 //! min = [-1.1, 2.1, -1.0]      # (see clothlab_core::pins)
 //! max = [1.1, 2.3, -0.8]
@@ -51,7 +55,7 @@ use thiserror::Error;
 use crate::camera::OrbitCamera;
 use crate::motion::Motion;
 use crate::params::{ParamError, SimParams};
-use crate::scene::{Aabb, ClothSpec, ColliderId, Scene, Sphere};
+use crate::scene::{Aabb, Capsule, ClothSpec, ColliderId, Scene, Sphere};
 
 /// A scene file, read and checked.
 #[derive(Debug, Clone, PartialEq)]
@@ -99,6 +103,8 @@ struct Repr<C> {
     #[serde(default)]
     boxes: Vec<BoxRepr>,
     #[serde(default)]
+    capsules: Vec<CapsuleRepr>,
+    #[serde(default)]
     pins: Vec<crate::pins::PinGroup>,
     #[serde(default)]
     bodies: Vec<crate::sdf::BodySpec>,
@@ -137,6 +143,16 @@ struct SphereRepr {
 struct BoxRepr {
     min: [f32; 3],
     max: [f32; 3],
+    #[serde(default)]
+    motion: Option<Motion>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CapsuleRepr {
+    a: [f32; 3],
+    b: [f32; 3],
+    radius: f32,
     #[serde(default)]
     motion: Option<Motion>,
 }
@@ -190,13 +206,68 @@ impl SceneFile {
         let many = table.as_ref().and_then(|t| t.get("cloth")).is_some_and(|c| c.is_array());
         let (repr, cloths): (Repr<()>, Vec<ClothSpec>) = if many {
             let r: Repr<Vec<ClothSpec>> = toml::from_str(text).map_err(syntax)?;
-            let Repr { title, description, cloth, floor, spheres, boxes, pins, bodies, params, camera, light } = r;
-            (Repr { title, description, cloth: (), floor, spheres, boxes, pins, bodies, params, camera, light }, cloth)
+            let Repr {
+                title,
+                description,
+                cloth,
+                floor,
+                spheres,
+                boxes,
+                capsules,
+                pins,
+                bodies,
+                params,
+                camera,
+                light,
+            } = r;
+            (
+                Repr {
+                    title,
+                    description,
+                    cloth: (),
+                    floor,
+                    spheres,
+                    boxes,
+                    capsules,
+                    pins,
+                    bodies,
+                    params,
+                    camera,
+                    light,
+                },
+                cloth,
+            )
         } else {
             let r: Repr<ClothSpec> = toml::from_str(text).map_err(syntax)?;
-            let Repr { title, description, cloth, floor, spheres, boxes, pins, bodies, params, camera, light } = r;
+            let Repr {
+                title,
+                description,
+                cloth,
+                floor,
+                spheres,
+                boxes,
+                capsules,
+                pins,
+                bodies,
+                params,
+                camera,
+                light,
+            } = r;
             (
-                Repr { title, description, cloth: (), floor, spheres, boxes, pins, bodies, params, camera, light },
+                Repr {
+                    title,
+                    description,
+                    cloth: (),
+                    floor,
+                    spheres,
+                    boxes,
+                    capsules,
+                    pins,
+                    bodies,
+                    params,
+                    camera,
+                    light,
+                },
                 vec![cloth],
             )
         };
@@ -283,9 +354,14 @@ impl SceneFile {
             floor_y: repr.floor.enabled.then_some(repr.floor.y),
             spheres: repr.spheres.iter().map(|s| Sphere::new(s.center, s.radius)).collect(),
             boxes: repr.boxes.iter().map(|b| Aabb::new(b.min, b.max)).collect(),
+            capsules: repr.capsules.iter().map(|c| Capsule::new(c.a, c.b, c.radius)).collect(),
             motions: (repr.spheres.iter().enumerate())
                 .filter_map(|(i, s)| Some((ColliderId::Sphere(i), s.motion.clone()?)))
                 .chain(repr.boxes.iter().enumerate().filter_map(|(i, b)| Some((ColliderId::Box(i), b.motion.clone()?))))
+                .chain(
+                    (repr.capsules.iter().enumerate())
+                        .filter_map(|(i, c)| Some((ColliderId::Capsule(i), c.motion.clone()?))),
+                )
                 .collect(),
             pins: repr.pins,
             bodies,
@@ -298,7 +374,9 @@ impl SceneFile {
         // masses, the self-collision thickness at its spacing).
         let at_params = |e: ParamError| {
             // A collider's motion too fast for the substeps is the collider's field.
-            let own = ["cloth.", "spheres[", "boxes[", "pins[", "bodies["].iter().any(|p| e.field.starts_with(p));
+            let own = ["cloth.", "spheres[", "boxes[", "capsules[", "pins[", "bodies["]
+                .iter()
+                .any(|p| e.field.starts_with(p));
             let path = if own { e.field.clone() } else { format!("params.{}", e.field) };
             refused(e, path)
         };

@@ -32,7 +32,7 @@ fn bare_params(n: u32, dt: f32, mass: f32) -> StepParams {
         strain_passes: 1,
         tile_substeps: 1,
         num_bodies: 0,
-        _pad1: 0,
+        num_capsules: 0,
     }
 }
 

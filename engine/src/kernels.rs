@@ -307,7 +307,11 @@ impl HostBuffers {
     /// a backend binds (what a GPU runner checks before uploading them).
     pub fn check(&self, topo: &ClothTopology, p: &StepParams) -> Result<(), clothlab_core::SolverError> {
         use clothlab_core::scene::MAX_COLLIDERS;
-        if p.n != topo.n || p.num_spheres as usize > MAX_COLLIDERS || p.num_boxes as usize > MAX_COLLIDERS {
+        if p.n != topo.n
+            || p.num_spheres as usize > MAX_COLLIDERS
+            || p.num_boxes as usize > MAX_COLLIDERS
+            || p.num_capsules as usize > MAX_COLLIDERS
+        {
             return Err(clothlab_core::SolverError::Invalid(
                 "step constants for another grid or too many colliders".into(),
             ));
@@ -1005,7 +1009,7 @@ const STATE: &[Buf] = &[Params, Pos, Vel, Force];
 /// The gathers' reads: the state and the spring table (storage buffers, or the image in
 /// the `_tex` twins, or the uniform block for the regular grid).
 const TABLE: &[Buf] = &[Params, Pos, Vel, Force, Slots, BendSlots, Adjacency, Interior, Table];
-const COLLIDERS: &[Buf] = &[Params, Pos, Vel, Spheres, Boxes, Sdf];
+const COLLIDERS: &[Buf] = &[Params, Pos, Vel, Spheres, Boxes, Capsules, Sdf];
 const NONE: &[Buf] = &[];
 
 const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf], writes: &'static [Buf]) -> KernelDef {
@@ -1089,7 +1093,7 @@ pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
         "integrate_collide",
         integrate_collide,
         Count::Particles,
-        &[Params, Pos, Vel, Force, Spheres, Boxes, Sdf],
+        &[Params, Pos, Vel, Force, Spheres, Boxes, Capsules, Sdf],
         &[Pos, Vel],
     )
 };
@@ -1103,7 +1107,7 @@ pub static FORCES_INTEGRATE_COLLIDE: KernelDef = KernelDef {
         "forces_integrate_collide",
         forces_integrate_collide,
         Count::Particles,
-        &[Params, Pos, Vel, Force, Spheres, Boxes, Sdf],
+        &[Params, Pos, Vel, Force, Spheres, Boxes, Capsules, Sdf],
         &[Pos, Vel],
     )
 };
@@ -1174,7 +1178,7 @@ pub static SUBSTEP_TILE: KernelDef = KernelDef {
         "substep_tile",
         substep_tile,
         Count::Particles,
-        &[Params, Pos, Vel, Interior, Spheres, Boxes, Sdf, Tethers],
+        &[Params, Pos, Vel, Interior, Spheres, Boxes, Capsules, Sdf, Tethers],
         &[PosOut, Aux0],
     )
 };
@@ -1381,7 +1385,7 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
         "vbd_colour",
         vbd_colour,
         Count::Range,
-        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Spheres, Boxes, Sdf, Aux0, Aux1, Aux2],
+        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Spheres, Boxes, Capsules, Sdf, Aux0, Aux1, Aux2],
         &[Aux2],
     )
 };

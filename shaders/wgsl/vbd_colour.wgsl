@@ -64,7 +64,7 @@ fn touch(stiffness: f32, pen: f32, n: vec3<f32>, d: vec3<f32>, vs: vec3<f32>, fr
     add_block(w, -w, n);
 }
 
-// The floor, the spheres, the boxes and the bodies within the margin and its reach of x, in that
+// The floor, the spheres, the boxes, the capsules and the bodies within the margin and its reach of x, in that
 // order (core::cpu::vbd::each_contact).
 fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool) {
     let reach = p.margin + p.margin * CONTACT_REACH;
@@ -100,6 +100,20 @@ fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool)
             if below.z < best { best = below.z; n = vec3<f32>(0.0, 0.0, -1.0); }
             if above.z < best { best = above.z; n = vec3<f32>(0.0, 0.0, 1.0); }
             touch(stiffness, best, n, d, boxes[k].velocity.xyz, friction_pass);
+        }
+    }
+    for (var k = 0u; k < p.num_capsules; k++) {
+        let c = capsules[k];
+        let r = c.a.w + reach;
+        let dc = x - capsule_axis_point(c, x);
+        let dist2 = dot3(dc, dc);
+        if dist2 < r * r {
+            let dist = sqrt(dist2);
+            var n = vec3<f32>(0.0, 1.0, 0.0);
+            if dist > 1e-12 {
+                n = dc * (1.0 / dist);
+            }
+            touch(stiffness, r - dist, n, d, surface_vel(c.velocity.xyz, c.spin.xyz, x - capsule_center(c)), friction_pass);
         }
     }
     for (var k = 0u; k < p.num_bodies; k++) {

@@ -104,7 +104,7 @@ pub enum Command {
     /// New parameters.
     Params(SimParams),
     /// New colliders and floor under the same cloth (the Scene panel's Apply).
-    Scene(clothlab_core::Scene),
+    Scene(Box<clothlab_core::Scene>),
     /// Open a scene file (File → Open scene, or a file dropped on the window).
     OpenScene(PathBuf),
     /// Draw through the other API (the solver follows where it is a GPU solver).
@@ -438,7 +438,7 @@ impl Running {
                 self.ui.message = format!("new cloth: {n}×{n}");
             }
             Command::Api(api) => self.switch_api(api)?,
-            Command::Scene(scene) => match self.sim.set_scene(scene, &self.gfx.shared()) {
+            Command::Scene(scene) => match self.sim.set_scene(*scene, &self.gfx.shared()) {
                 Ok(()) => {
                     let scene = self.sim.solver.get_ref().scene().clone();
                     self.gfx.rebuild(&scene, &self.ui.params)?;

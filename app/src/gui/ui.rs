@@ -507,7 +507,7 @@ fn scene_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
             sc.boxes.push(clothlab_core::Aabb::new([-0.4, 0.0, -0.4], [0.4, 0.6, 0.4]));
         }
         if ui.button("Apply").on_hover_text("the cloth stays where it is").clicked() {
-            out.push(Command::Scene(sc.clone()));
+            out.push(Command::Scene(Box::new(sc.clone())));
         }
     });
 }

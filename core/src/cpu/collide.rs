@@ -9,7 +9,7 @@ use glam::Vec3;
 use super::integrate::{contact_vel_moving, integrate_at, surface_vel};
 use super::{Exec, for_each2, v3, v4};
 use crate::grid::{StepParams, V4};
-use crate::scene::{Aabb, Sphere};
+use crate::scene::{Aabb, Capsule, Sphere};
 use crate::sdf::{Bodies, SdfHead, sample_grid};
 
 /// What the particles collide with (besides the floor): the spheres, boxes and bodies at
@@ -20,6 +20,8 @@ pub struct Colliders<'a> {
     pub spheres: &'a [Sphere],
     /// Boxes.
     pub boxes: &'a [Aabb],
+    /// Capsules.
+    pub capsules: &'a [Capsule],
     /// Bodies (mesh colliders).
     pub bodies: Bodies<'a>,
 }
@@ -27,7 +29,7 @@ pub struct Colliders<'a> {
 impl<'a> Colliders<'a> {
     /// Spheres and boxes, no bodies.
     pub fn new(spheres: &'a [Sphere], boxes: &'a [Aabb]) -> Self {
-        Self { spheres, boxes, bodies: Bodies::default() }
+        Self { spheres, boxes, capsules: &[], bodies: Bodies::default() }
     }
 
     /// Cut to the counts in `p` (what the kernels loop over).
@@ -37,6 +39,7 @@ impl<'a> Colliders<'a> {
         Self {
             spheres: &self.spheres[..(p.num_spheres as usize).min(self.spheres.len())],
             boxes: &self.boxes[..(p.num_boxes as usize).min(self.boxes.len())],
+            capsules: &self.capsules[..(p.num_capsules as usize).min(self.capsules.len())],
             bodies: Bodies { heads: &heads[..(p.num_bodies as usize).min(heads.len())], values: self.bodies.values },
         }
     }
@@ -49,6 +52,8 @@ pub struct ColliderSet {
     pub spheres: Vec<Sphere>,
     /// Boxes, moved.
     pub boxes: Vec<Aabb>,
+    /// Capsules, moved.
+    pub capsules: Vec<Capsule>,
     /// The bodies' heads.
     pub heads: Vec<SdfHead>,
     /// The bodies' values (`crate::sdf::concat`; fixed).
@@ -66,6 +71,7 @@ impl ColliderSet {
     /// Puts them where `scene`'s motions have them at time `t`, s.
     pub fn move_to(&mut self, scene: &crate::Scene, t: f64) {
         scene.colliders_at(t, &mut self.spheres, &mut self.boxes);
+        scene.capsules_at(t, &mut self.capsules);
         scene.bodies_at(t, &mut self.heads);
     }
 
@@ -74,6 +80,7 @@ impl ColliderSet {
         Colliders {
             spheres: &self.spheres,
             boxes: &self.boxes,
+            capsules: &self.capsules,
             bodies: Bodies { heads: &self.heads, values: &self.values },
         }
     }
@@ -150,6 +157,19 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, c: Colliders<'_>, x4: &mut V4
             v = contact_vel_moving(v, v3(b.velocity), nrm, p.friction);
         }
     }
+    for cap in c.capsules {
+        let r = cap.a[3] + p.margin;
+        let d = x - capsule_axis_point(cap, x);
+        let dist2 = dot3(d, d);
+        if dist2 < r * r {
+            let dist = dist2.sqrt();
+            // A particle on the axis is pushed up.
+            let nrm = if dist > 1e-12 { d / dist } else { Vec3::Y };
+            x = capsule_axis_point(cap, x) + nrm * r;
+            let vs = surface_vel(v3(cap.velocity), v3(cap.spin), x - capsule_center(cap));
+            v = contact_vel_moving(v, vs, nrm, p.friction);
+        }
+    }
     for hd in c.bodies.heads {
         if let Some((phi, nrm)) = body_sample(hd, c.bodies.values, x, p.margin)
             && phi < p.margin
@@ -183,4 +203,20 @@ pub(crate) fn body_sample(hd: &SdfHead, values: &[f32], x: Vec3, reach: f32) -> 
     let gl = dot3(g, g).sqrt();
     let nl = if gl > 1e-12 { g / gl } else { Vec3::Y };
     Some((phi, c0 * nl.x + c1 * nl.y + c2 * nl.z))
+}
+
+/// The point of capsule `c`'s axis nearest `x` (the WGSL's `capsule_axis_point`).
+#[inline(always)]
+pub(crate) fn capsule_axis_point(c: &Capsule, x: Vec3) -> Vec3 {
+    let (a, b) = (v3(c.a), v3(c.b));
+    let ab = b - a;
+    let len2 = dot3(ab, ab);
+    let s = if len2 > 1e-24 { (dot3(x - a, ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    a + ab * s
+}
+
+/// Capsule `c`'s centre, `(a + b)·½` (the WGSL's `capsule_center`).
+#[inline(always)]
+pub(crate) fn capsule_center(c: &Capsule) -> Vec3 {
+    (v3(c.a) + v3(c.b)) * 0.5
 }

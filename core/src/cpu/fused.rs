@@ -647,6 +647,14 @@ fn inside<S: Isa>(sd: S, p: &StepParams, c: super::collide::Colliders<'_>, x: &[
         let d = [x[0] - F::splat(sd, t[0]), x[1] - F::splat(sd, t[1]), x[2] - F::splat(sd, t[2])];
         any = any | (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).lt(F::splat(sd, r * r));
     }
+    // A capsule: within its radius (and the margin) of its axis' bounding sphere.
+    for cap in c.capsules {
+        let m = super::collide::capsule_center(cap);
+        let half = 0.5 * (v3(cap.b) - v3(cap.a)).length();
+        let r = half + cap.a[3] + p.margin + 1e-3;
+        let d = [x[0] - F::splat(sd, m.x), x[1] - F::splat(sd, m.y), x[2] - F::splat(sd, m.z)];
+        any = any | (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).lt(F::splat(sd, r * r));
+    }
     for sp in c.spheres {
         let r = sp.radius + p.margin;
         let c = sp.center;

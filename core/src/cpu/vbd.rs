@@ -36,7 +36,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::collide::{Colliders, body_sample};
+use super::collide::{Colliders, body_sample, capsule_axis_point, capsule_center};
 use super::integrate::surface_vel;
 use super::integrators::{finish_at, per_particle};
 use super::{Exec, dt_over_mass, mass, v3, v4};
@@ -349,7 +349,7 @@ fn contacts(
 }
 
 /// Calls `touch(δ, n̂, v_s)` for every contact of a vertex at `x` (see [`contacts`]): the
-/// floor, the spheres, the boxes, the bodies, in that order; `v_s` the surface's velocity there
+/// floor, the spheres, the boxes, the capsules, the bodies, in that order; `v_s` the surface's velocity there
 /// (`crate::motion`; zero for a still collider).
 #[inline(always)]
 fn each_contact(p: &StepParams, colliders: Colliders<'_>, x: Vec3, mut touch: impl FnMut(f32, Vec3, Vec3)) {
@@ -386,6 +386,16 @@ fn each_contact(p: &StepParams, colliders: Colliders<'_>, x: Vec3, mut touch: im
                 }
             }
             touch(best, n, v3(b.velocity));
+        }
+    }
+    for cap in colliders.capsules {
+        let r = cap.a[3] + reach;
+        let dc = x - capsule_axis_point(cap, x);
+        let dist2 = dc.dot(dc);
+        if dist2 < r * r {
+            let dist = dist2.sqrt();
+            let n = if dist > 1e-12 { dc * (1.0 / dist) } else { Vec3::Y };
+            touch(r - dist, n, surface_vel(v3(cap.velocity), v3(cap.spin), x - capsule_center(cap)));
         }
     }
     for hd in colliders.bodies.heads {

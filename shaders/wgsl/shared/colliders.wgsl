@@ -1,7 +1,7 @@
-// Sphere, box and body colliders (needs state.wgsl). The build also emits every kernel
+// Sphere, box, capsule and body colliders (needs state.wgsl). The build also emits every kernel
 // that includes this file as `<kernel>_cu`, with the first two declarations swapped for
 // uniform blocks of MAX_COLLIDERS entries (the thesis's constant memory:
-// `colliders=uniform`). The bodies' fields stay in storage.
+// `colliders=uniform`). The capsules and the bodies' fields stay in storage.
 
 @group(0) @binding(12) var<storage, read> spheres: array<Sphere>;
 @group(0) @binding(13) var<storage, read> boxes: array<Aabb>;
@@ -9,6 +9,24 @@
 // translation, velocity, spin, the grid's first point and spacing, its points per axis
 // and first value), then the values.
 @group(0) @binding(34) var<storage, read> sdf: array<f32>;
+@group(0) @binding(35) var<storage, read> capsules: array<Capsule>;
+
+// The point of capsule c's axis nearest x (core::cpu::collide::capsule_axis_point).
+fn capsule_axis_point(c: Capsule, x: vec3<f32>) -> vec3<f32> {
+    let a = c.a.xyz;
+    let ab = c.b.xyz - a;
+    let len2 = dot3(ab, ab);
+    var s = 0.0;
+    if len2 > 1e-24 {
+        s = clamp(dot3(x - a, ab) / len2, 0.0, 1.0);
+    }
+    return a + ab * s;
+}
+
+// Its centre, (a + b)·½ (core::cpu::collide::capsule_center).
+fn capsule_center(c: Capsule) -> vec3<f32> {
+    return (c.a.xyz + c.b.xyz) * 0.5;
+}
 
 // Floats j .. j+2 of body k's head.
 fn body_vec(k: u32, j: u32) -> vec3<f32> {
@@ -121,6 +139,22 @@ fn collided(m: Moved) -> Moved {
             let axis = abs(nrm);
             x = x * (vec3<f32>(1.0) - axis) + axis * face;
             v = contact_vel_moving(v, boxes[k].velocity.xyz, nrm, p.friction);
+        }
+    }
+    for (var k = 0u; k < p.num_capsules; k++) {
+        let c = capsules[k];
+        let r = c.a.w + p.margin;
+        let d = x - capsule_axis_point(c, x);
+        let dist2 = dot3(d, d);
+        if dist2 < r * r {
+            let dist = sqrt(dist2);
+            var nrm = vec3<f32>(0.0, 1.0, 0.0);
+            if dist > 1e-12 {
+                nrm = d / dist;
+            }
+            x = capsule_axis_point(c, x) + nrm * r;
+            let vs = surface_vel(c.velocity.xyz, c.spin.xyz, x - capsule_center(c));
+            v = contact_vel_moving(v, vs, nrm, p.friction);
         }
     }
     for (var k = 0u; k < p.num_bodies; k++) {

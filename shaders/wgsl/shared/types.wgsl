@@ -24,7 +24,7 @@ struct StepParams {
     strain_passes: u32,
     tile_substeps: u32,
     num_bodies: u32,
-    _pad1: u32,
+    num_capsules: u32,
 }
 
 struct SpringSlot {
@@ -75,6 +75,15 @@ struct Aabb {
     min: vec4<f32>,
     max: vec4<f32>,
     velocity: vec4<f32>,
+}
+
+// The points within a.w of the segment a–b (core::scene::Capsule); it turns about the
+// midpoint.
+struct Capsule {
+    a: vec4<f32>,
+    b: vec4<f32>,
+    velocity: vec4<f32>,
+    spin: vec4<f32>,
 }
 
 // A moving pin (core::pins::PinSlot): the particle, its group, its rest position from the
