@@ -111,16 +111,17 @@ pub enum Buf {
     Pins = 32,
     /// The frame's pin poses (`pins::PinPose`), a block of `MAX_PIN_GROUPS` per substep.
     PinPoses = 33,
-    /// The bodies (mesh colliders, `crate::sdf`), `f32`s: `MAX_BODIES` heads of
-    /// `SdfHead::FLOATS` (the current substep's poses), then every body's distance values.
-    Sdf = 34,
-    /// Capsule colliders (`scene::Capsule`; `MAX_COLLIDERS` elements).
-    Capsules = 35,
+    /// The capsules and the bodies (mesh colliders), `f32`s: `MAX_BODIES` heads of
+    /// `SdfHead::FLOATS` (the bodies' poses at the current substep), `MAX_COLLIDERS`
+    /// capsules of 16 floats (`scene::Capsule`, at the current substep), then every body's
+    /// distance values (`crate::sdf`: `CAPSULES_AT`, `VALUES_AT`). One binding for both: a
+    /// VBD sweep's kernel binds 16 storage blocks, llvmpipe's GL limit.
+    Shapes = 34,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 36] = [
+    pub const ALL: [Buf; 35] = [
         Buf::Params,
         Buf::Pos,
         Buf::Vel,
@@ -155,8 +156,7 @@ impl Buf {
         Buf::Colours,
         Buf::Pins,
         Buf::PinPoses,
-        Buf::Sdf,
-        Buf::Capsules,
+        Buf::Shapes,
     ];
 
     /// The integrators' scratch particle buffers, in order.
@@ -218,8 +218,7 @@ impl Buf {
             Buf::Colours => "colours",
             Buf::Pins => "pins",
             Buf::PinPoses => "pin_poses",
-            Buf::Sdf => "sdf",
-            Buf::Capsules => "capsules",
+            Buf::Shapes => "shapes",
         }
     }
 
@@ -258,8 +257,9 @@ pub fn wgsl_constants() -> String {
     s += &u("BLOCK", BLOCK);
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
     s += &u("MAX_COLLIDERS", crate::scene::MAX_COLLIDERS as u32);
-    s += &u("SDF_HEADS_FLOATS", crate::sdf::HEADS_FLOATS as u32);
     s += &u("SDF_HEAD_FLOATS", crate::sdf::SdfHead::FLOATS as u32);
+    s += &u("SHAPES_CAPSULES_AT", crate::sdf::CAPSULES_AT as u32);
+    s += &u("SHAPES_VALUES_AT", crate::sdf::VALUES_AT as u32);
     s += &u("MAX_PIN_GROUPS", crate::pins::MAX_PIN_GROUPS as u32);
     s += &format!("const STRAIN_AIM: f32 = {STRAIN_AIM:?};\n");
     s

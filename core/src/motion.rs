@@ -206,10 +206,7 @@ impl Motion {
 
     /// The fastest it turns, rad/s (keyframes at their segments' peak rate).
     pub fn max_turn_rate(&self) -> f32 {
-        let peak = match self.ease {
-            Ease::Linear => 1.0,
-            Ease::Smooth => 1.5,
-        };
+        let peak = self.peak();
         let keys = self
             .keys
             .windows(2)
@@ -224,12 +221,17 @@ impl Motion {
         norm(self.spin) + keys
     }
 
-    /// The fastest its centre moves, m/s (keyframes at their segments' peak speed).
-    pub fn max_speed(&self) -> f32 {
-        let peak = match self.ease {
+    /// A segment's peak rate over its mean: 1 linear, 1.5 smooth (smoothstep's slope).
+    fn peak(&self) -> f32 {
+        match self.ease {
             Ease::Linear => 1.0,
             Ease::Smooth => 1.5,
-        };
+        }
+    }
+
+    /// The fastest its centre moves, m/s (keyframes at their segments' peak speed).
+    pub fn max_speed(&self) -> f32 {
+        let peak = self.peak();
         let keys = self
             .keys
             .windows(2)

@@ -665,6 +665,23 @@ impl Scene {
         }
     }
 
+    /// The leading [`crate::sdf::VALUES_AT`] floats of the GPU's shapes buffer
+    /// (`Buf::Shapes`) at time `t`, s: the bodies' heads, then the capsules, each region
+    /// padded with zeros to its most.
+    pub fn shapes_at(&self, t: f64) -> Vec<f32> {
+        use crate::sdf::{CAPSULES_AT, MAX_BODIES, SdfHead, VALUES_AT};
+        let mut out = vec![0.0f32; VALUES_AT];
+        let mut heads = Vec::new();
+        self.bodies_at(t, &mut heads);
+        heads.truncate(MAX_BODIES);
+        out[..heads.len() * SdfHead::FLOATS].copy_from_slice(bytemuck::cast_slice(&heads));
+        let mut caps = Vec::new();
+        self.capsules_at(t, &mut caps);
+        caps.truncate(MAX_COLLIDERS);
+        out[CAPSULES_AT..CAPSULES_AT + caps.len() * 16].copy_from_slice(bytemuck::cast_slice(&caps));
+        out
+    }
+
     /// The bodies' heads at simulated time `t`, s (their poses, velocities and where their
     /// values start among [`crate::sdf::concat`]'s).
     pub fn bodies_at(&self, t: f64, heads: &mut Vec<crate::sdf::SdfHead>) {

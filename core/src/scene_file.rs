@@ -178,6 +178,29 @@ struct LightRepr {
     position: [f32; 3],
 }
 
+impl<C> Repr<C> {
+    /// The file without its cloth table(s), and the cloths (`list` makes them a list).
+    fn split(self, list: impl FnOnce(C) -> Vec<ClothSpec>) -> (Repr<()>, Vec<ClothSpec>) {
+        let Repr { title, description, cloth, floor, spheres, boxes, capsules, pins, bodies, params, camera, light } =
+            self;
+        let rest = Repr {
+            title,
+            description,
+            cloth: (),
+            floor,
+            spheres,
+            boxes,
+            capsules,
+            pins,
+            bodies,
+            params,
+            camera,
+            light,
+        };
+        (rest, list(cloth))
+    }
+}
+
 impl SceneFile {
     /// Reads and checks `path`.
     pub fn load(path: &Path) -> Result<Self, SceneFileError> {
@@ -205,71 +228,9 @@ impl SceneFile {
         let table = toml::from_str::<toml::Table>(text).ok();
         let many = table.as_ref().and_then(|t| t.get("cloth")).is_some_and(|c| c.is_array());
         let (repr, cloths): (Repr<()>, Vec<ClothSpec>) = if many {
-            let r: Repr<Vec<ClothSpec>> = toml::from_str(text).map_err(syntax)?;
-            let Repr {
-                title,
-                description,
-                cloth,
-                floor,
-                spheres,
-                boxes,
-                capsules,
-                pins,
-                bodies,
-                params,
-                camera,
-                light,
-            } = r;
-            (
-                Repr {
-                    title,
-                    description,
-                    cloth: (),
-                    floor,
-                    spheres,
-                    boxes,
-                    capsules,
-                    pins,
-                    bodies,
-                    params,
-                    camera,
-                    light,
-                },
-                cloth,
-            )
+            toml::from_str::<Repr<Vec<ClothSpec>>>(text).map_err(syntax)?.split(|c| c)
         } else {
-            let r: Repr<ClothSpec> = toml::from_str(text).map_err(syntax)?;
-            let Repr {
-                title,
-                description,
-                cloth,
-                floor,
-                spheres,
-                boxes,
-                capsules,
-                pins,
-                bodies,
-                params,
-                camera,
-                light,
-            } = r;
-            (
-                Repr {
-                    title,
-                    description,
-                    cloth: (),
-                    floor,
-                    spheres,
-                    boxes,
-                    capsules,
-                    pins,
-                    bodies,
-                    params,
-                    camera,
-                    light,
-                },
-                vec![cloth],
-            )
+            toml::from_str::<Repr<ClothSpec>>(text).map_err(syntax)?.split(|c| vec![c])
         };
         if cloths.is_empty() {
             return Err(err(locate(text, "cloth").map(|s| line_col(text, s)), "`cloth`: no cloth in the list".into()));

@@ -41,10 +41,11 @@
 //! fine as its grid: a sphere made of triangles collides like the sphere to within about a
 //! tenth of a cell plus the mesh's own faceting (measured in the tests).
 //!
-//! **On the GPU** the heads and the grids share one storage buffer of `f32`
-//! ([`crate::layout::Buf::Sdf`]): [`MAX_BODIES`] heads of [`SdfHead::FLOATS`] floats (the
-//! bodies' poses at the current substep, rewritten every substep when one moves), then
-//! every body's values. The CPU twins read the same numbers in the same order.
+//! **On the GPU** the heads and the grids share one storage buffer of `f32` with the
+//! capsules ([`crate::layout::Buf::Shapes`]): [`MAX_BODIES`] heads of [`SdfHead::FLOATS`]
+//! floats (the bodies' poses at the current substep, rewritten every substep when one
+//! moves), the capsules from [`CAPSULES_AT`], every body's values from [`VALUES_AT`]. The
+//! CPU twins read the same numbers in the same order.
 //!
 //! **Speed.** A body is not swept: a scene is refused where a body's surface moves more
 //! than [`MAX_CELLS_PER_SUBSTEP`] cells in one substep (its centre's speed plus its spin
@@ -72,8 +73,12 @@ pub const DEFAULT_RESOLUTION: u32 = 64;
 pub const MAX_POINTS: usize = 16 << 20;
 /// How far (in cells) a body's surface may move in one substep.
 pub const MAX_CELLS_PER_SUBSTEP: f32 = 2.0;
-/// Floats before the first grid value in the GPU buffer (the heads).
+/// Floats of the heads at the start of the GPU's shapes buffer (`Buf::Shapes`).
 pub const HEADS_FLOATS: usize = MAX_BODIES * SdfHead::FLOATS;
+/// Where the capsules start in the shapes buffer, floats (16 each, `MAX_COLLIDERS`).
+pub const CAPSULES_AT: usize = HEADS_FLOATS;
+/// Where the bodies' values start in the shapes buffer, floats.
+pub const VALUES_AT: usize = CAPSULES_AT + crate::scene::MAX_COLLIDERS * 16;
 
 /// A `[[bodies]]` entry of a scene file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -1009,7 +1009,7 @@ const STATE: &[Buf] = &[Params, Pos, Vel, Force];
 /// The gathers' reads: the state and the spring table (storage buffers, or the image in
 /// the `_tex` twins, or the uniform block for the regular grid).
 const TABLE: &[Buf] = &[Params, Pos, Vel, Force, Slots, BendSlots, Adjacency, Interior, Table];
-const COLLIDERS: &[Buf] = &[Params, Pos, Vel, Spheres, Boxes, Capsules, Sdf];
+const COLLIDERS: &[Buf] = &[Params, Pos, Vel, Spheres, Boxes, Shapes];
 const NONE: &[Buf] = &[];
 
 const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf], writes: &'static [Buf]) -> KernelDef {
@@ -1093,7 +1093,7 @@ pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
         "integrate_collide",
         integrate_collide,
         Count::Particles,
-        &[Params, Pos, Vel, Force, Spheres, Boxes, Capsules, Sdf],
+        &[Params, Pos, Vel, Force, Spheres, Boxes, Shapes],
         &[Pos, Vel],
     )
 };
@@ -1107,7 +1107,7 @@ pub static FORCES_INTEGRATE_COLLIDE: KernelDef = KernelDef {
         "forces_integrate_collide",
         forces_integrate_collide,
         Count::Particles,
-        &[Params, Pos, Vel, Force, Spheres, Boxes, Capsules, Sdf],
+        &[Params, Pos, Vel, Force, Spheres, Boxes, Shapes],
         &[Pos, Vel],
     )
 };
@@ -1178,7 +1178,7 @@ pub static SUBSTEP_TILE: KernelDef = KernelDef {
         "substep_tile",
         substep_tile,
         Count::Particles,
-        &[Params, Pos, Vel, Interior, Spheres, Boxes, Capsules, Sdf, Tethers],
+        &[Params, Pos, Vel, Interior, Spheres, Boxes, Shapes, Tethers],
         &[PosOut, Aux0],
     )
 };
@@ -1385,7 +1385,7 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
         "vbd_colour",
         vbd_colour,
         Count::Range,
-        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Spheres, Boxes, Capsules, Sdf, Aux0, Aux1, Aux2],
+        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Spheres, Boxes, Shapes, Aux0, Aux1, Aux2],
         &[Aux2],
     )
 };

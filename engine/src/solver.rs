@@ -14,8 +14,7 @@ use clothlab_core::grid::{
 use clothlab_core::layout::Buf;
 use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose, PinSlot};
-use clothlab_core::scene::{Aabb, Capsule, MAX_COLLIDERS, Scene, Sphere};
-use clothlab_core::sdf::SdfHead;
+use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, TimingRecorder};
 use clothlab_core::{SimParams, Solver, SolverError};
 
@@ -201,18 +200,11 @@ impl<E: Engine> GpuSolver<E> {
         let pin_slots: &[PinSlot] = if topo.pins.slots.is_empty() { &no_pin } else { &topo.pins.slots };
         let pose_blocks = if topo.pins.slots.is_empty() { 1 } else { MAX_SUBSTEPS as usize };
         let pin_poses = vec![0u8; pose_blocks * MAX_PIN_GROUPS * std::mem::size_of::<PinPose>()];
-        let mut capsules0 = Vec::new();
-        scene.capsules_at(0.0, &mut capsules0);
-        let mut capsules = [Capsule::new([0.0; 3], [0.0; 3], 0.0); MAX_COLLIDERS];
-        capsules[..capsules0.len()].copy_from_slice(&capsules0);
-        // The bodies: their heads at time 0, then their fields (a still body's heads stay).
-        let mut heads = Vec::new();
-        scene.bodies_at(0.0, &mut heads);
-        let mut sdf = vec![0.0f32; clothlab_core::sdf::HEADS_FLOATS];
-        sdf[..heads.len() * SdfHead::FLOATS].copy_from_slice(bytemuck::cast_slice(&heads));
-        sdf.extend(clothlab_core::sdf::concat(&scene.bodies).0);
+        // The capsules and bodies at time 0, then the bodies' fields (still ones stay).
+        let mut shapes = scene.shapes_at(0.0);
+        shapes.extend(clothlab_core::sdf::concat(&scene.bodies).0);
         // Positions and normals are the renderer's vertex buffers too (no copy).
-        let contents: [(Buf, &[u8]); 35] = [
+        let contents: [(Buf, &[u8]); 34] = [
             (Buf::Params, bytemuck::bytes_of(&sp)),
             (Buf::ParamsStorage, bytemuck::bytes_of(&sp)),
             (Buf::SpheresUniform, bytemuck::cast_slice(&spheres)),
@@ -246,8 +238,7 @@ impl<E: Engine> GpuSolver<E> {
             (Buf::Scalars, &[0u8; 16]),
             (Buf::Pins, bytemuck::cast_slice(pin_slots)),
             (Buf::PinPoses, &pin_poses),
-            (Buf::Sdf, bytemuck::cast_slice(&sdf)),
-            (Buf::Capsules, bytemuck::cast_slice(&capsules)),
+            (Buf::Shapes, bytemuck::cast_slice(&shapes)),
         ];
         let mut ids = Vec::with_capacity(contents.len());
         for (buf, bytes) in contents {
@@ -458,10 +449,8 @@ impl<E: Engine> GpuSolver<E> {
     /// the recipe reads them from, between barriers: after the last substep's reads,
     /// before the next one's (moving colliders only; still ones stay as uploaded).
     fn record_colliders(&mut self) -> Result<(), SolverError> {
-        let (mut spheres, mut boxes, mut heads, mut capsules) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut spheres, mut boxes) = (Vec::new(), Vec::new());
         self.scene.colliders_at(self.time, &mut spheres, &mut boxes);
-        self.scene.capsules_at(self.time, &mut capsules);
-        self.scene.bodies_at(self.time, &mut heads);
         // Both homes: with colliders=uniform the kernels without a `_cu` flavor (the
         // strain passes' collide, VBD's contacts) still read the storage buffers.
         let mut homes = vec![(Buf::Spheres, Buf::Boxes)];
@@ -479,14 +468,10 @@ impl<E: Engine> GpuSolver<E> {
                 self.engine.record_write(id, bytemuck::cast_slice(&boxes))?;
             }
         }
-        if !capsules.is_empty() {
-            let id = self.must(Buf::Capsules)?;
-            self.engine.record_write(id, bytemuck::cast_slice(&capsules))?;
-        }
-        // The heads lead the bodies' buffer.
-        if !heads.is_empty() {
-            let id = self.must(Buf::Sdf)?;
-            self.engine.record_write(id, bytemuck::cast_slice(&heads))?;
+        // The bodies' heads and the capsules lead the shapes buffer.
+        if !self.scene.bodies.is_empty() || !self.scene.capsules.is_empty() {
+            let id = self.must(Buf::Shapes)?;
+            self.engine.record_write(id, bytemuck::cast_slice(&self.scene.shapes_at(self.time)))?;
         }
         self.barrier(false);
         Ok(())

@@ -159,9 +159,12 @@ mod tests {
             assert_eq!(pts[0], 0, "{}", k.name);
             most = most.max(k.gl_points.len());
             // llvmpipe (Mesa 22.3.6) offers 16 storage blocks to a compute shader
-            // (GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS, glxinfo 2026-11-24); the most any
-            // flavor uses today is 10 (cg_begin_sto). GL 4.5 guarantees only 8: a GL engine
-            // must refuse the kernels above its limit in one line.
+            // (GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS, glxinfo 2026-11-24). The points are
+            // numbered over the storage bindings a kernel declares (its includes'), not only
+            // those it reads: vbd_colour declares 16, at the limit (the capsules share the
+            // bodies' `shapes` binding for that: a 17th made GL refuse the VBD sweep). GL
+            // 4.5 guarantees only 8: a GL engine must refuse the kernels above its limit in
+            // one line.
             let storage = k
                 .gl_points
                 .iter()

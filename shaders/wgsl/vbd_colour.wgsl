@@ -103,7 +103,7 @@ fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool)
         }
     }
     for (var k = 0u; k < p.num_capsules; k++) {
-        let c = capsules[k];
+        let c = capsule_at(k);
         let r = c.a.w + reach;
         let dc = x - capsule_axis_point(c, x);
         let dist2 = dot3(dc, dc);

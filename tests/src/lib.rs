@@ -219,3 +219,55 @@ pub fn assert_rollouts(solvers: Vec<(String, Box<dyn Solver>, bool)>, frames: u3
     }
     assert!(bad.is_empty(), "{bad:?}");
 }
+
+/// Every kernel of each API's optimized recipe (wgpu, Vulkan, GL: a solver each, built
+/// for `sc` and `params`) against its CPU twin on the disturbed input of `sc` with `seed`
+/// (`validate_kernels_with`); an API without an adapter is skipped as [`or_skip`] says.
+/// The solvers are not stepped after: a rollout needs fresh ones
+/// ([`optimized_rollout_solvers`]).
+pub fn optimized_kernel_checks(sc: &Scene, params: &SimParams, seed: u64) -> Vec<Check> {
+    use clothlab_engine::validate::validate_kernels_with;
+    let (v, o) = (Variant::OPTIMIZED, SolverOptions::default);
+    let mut checks = Vec::new();
+    if let Some(mut s) = or_skip(wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
+        let k = s.recipe_kernels();
+        checks.extend(validate_kernels_with(&mut s, &k, sc, seed, params).unwrap());
+    }
+    if let Some(mut s) = or_skip(vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
+        let k = s.recipe_kernels();
+        checks.extend(validate_kernels_with(&mut s, &k, sc, seed, params).unwrap());
+    }
+    if let Some(mut s) = or_skip(gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
+        let k = s.recipe_kernels();
+        checks.extend(validate_kernels_with(&mut s, &k, sc, seed, params).unwrap());
+    }
+    checks
+}
+
+/// The CPU engine's optimized recipe and each API's, fresh, for [`assert_rollouts`]: each
+/// flagged exact where it runs on llvmpipe (the optimized recipes compute the CPU
+/// solver's bits there: tests/tests/bit_identity.rs) and the CPU engine always.
+pub fn optimized_rollout_solvers(sc: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>, bool)> {
+    let cpu = clothlab_engine::RecipeSolver::new(Exec::Serial, Variant::OPTIMIZED, sc.clone(), params.clone()).unwrap();
+    let mut solvers: Vec<(String, Box<dyn Solver>, bool)> = vec![("cpu engine".into(), Box::new(cpu), true)];
+    let (v, o) = (Variant::OPTIMIZED, SolverOptions::default);
+    if let Some(s) = or_skip(wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
+        let exact = s.adapter().contains("llvmpipe");
+        solvers.push(("wgpu".into(), Box::new(s), exact));
+    }
+    if let Some(s) = or_skip(vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
+        let exact = s.adapter().contains("llvmpipe");
+        solvers.push(("vulkan".into(), Box::new(s), exact));
+    }
+    if let Some(s) = or_skip(gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
+        let exact = s.adapter().contains("llvmpipe");
+        solvers.push(("gl".into(), Box::new(s), exact));
+    }
+    solvers
+}
+
+/// Contacts alone act along a surface: no drag, wind or damping, no strain passes (they
+/// would move velocities after the contacts); `friction` as given.
+pub fn still_air(friction: f32) -> SimParams {
+    SimParams { friction, damping: 0.0, air_drag: 0.0, wind: [0.0; 3], strain_iterations: 0, ..SimParams::default() }
+}

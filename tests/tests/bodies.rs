@@ -9,9 +9,7 @@ use clothlab_core::mesh::{Placement, load_obj};
 use clothlab_core::scene::Pinning;
 use clothlab_core::sdf::Body;
 use clothlab_core::{ClothState, Motion, Scene, SceneFile, SimParams, Solver, Sphere};
-use clothlab_engine::validate::validate_kernels_with;
-use clothlab_engine::{RecipeSolver, Variant};
-use clothlab_tests::{assert_checks, every_backend, or_skip};
+use clothlab_tests::{assert_checks, every_backend, still_air};
 
 fn meshes() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/meshes")
@@ -41,10 +39,6 @@ fn spinning_body() -> Scene {
     s.spheres.clear();
     s.bodies = vec![icosphere([0.0, R, 0.0], R, 32, Motion { spin: [0.0, 0.0, OMEGA], ..Motion::default() })];
     s
-}
-
-fn still_air(friction: f32) -> SimParams {
-    SimParams { friction, damping: 0.0, air_drag: 0.0, wind: [0.0; 3], strain_iterations: 0, ..SimParams::default() }
 }
 
 fn mean_speed(st: &ClothState) -> f64 {
@@ -223,37 +217,10 @@ fn every_gpu_recipe_and_the_cpu_engine_follow_the_cpu_with_a_turning_body() {
     sc.bodies[0].motion = Motion { spin: [0.0, 2.0, 0.0], velocity: [0.1, 0.0, 0.0], ..Motion::default() };
     sc.cloth.top_center[1] = 0.95;
     let params = SimParams::default();
-    let cpu = RecipeSolver::new(clothlab_core::Exec::Serial, Variant::OPTIMIZED, sc.clone(), params.clone()).unwrap();
-    let mut solvers: Vec<(String, Box<dyn Solver>, bool)> = vec![("cpu engine".into(), Box::new(cpu), true)];
-    let (v, o) = (Variant::OPTIMIZED, clothlab_engine::SolverOptions::default);
-    let mut checks = Vec::new();
-    if let Some(mut s) = or_skip(clothlab_wgpu::wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x5d, &params).unwrap());
-    }
-    if let Some(s) = or_skip(clothlab_wgpu::wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("wgpu".into(), Box::new(s), exact));
-    }
-    if let Some(mut s) = or_skip(clothlab_vulkan::vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x5d, &params).unwrap());
-    }
-    if let Some(s) = or_skip(clothlab_vulkan::vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("vulkan".into(), Box::new(s), exact));
-    }
-    if let Some(mut s) = or_skip(clothlab_gl::gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x5d, &params).unwrap());
-    }
-    if let Some(s) = or_skip(clothlab_gl::gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("gl".into(), Box::new(s), exact));
-    }
+    let checks = clothlab_tests::optimized_kernel_checks(&sc, &params, 0x5d);
     assert!(checks.iter().any(|c| c.what.contains("collide")), "no check of a collide kernel");
     assert_checks("bodies", &checks);
-    clothlab_tests::assert_rollouts(solvers, 12);
+    clothlab_tests::assert_rollouts(clothlab_tests::optimized_rollout_solvers(&sc, &params), 12);
 }
 
 #[test]

@@ -3,10 +3,8 @@
 //! capsule against the sphere, the GPU recipes against the CPU twins, refusals.
 
 use clothlab_core::scene::{ColliderId, Pinning};
-use clothlab_core::{Capsule, ClothState, Motion, Scene, SceneFile, SimParams, Solver, Sphere};
-use clothlab_engine::validate::validate_kernels_with;
-use clothlab_engine::{RecipeSolver, Variant};
-use clothlab_tests::{assert_checks, every_backend, or_skip};
+use clothlab_core::{Capsule, ClothState, Motion, Scene, SceneFile, SimParams, Sphere};
+use clothlab_tests::{assert_checks, every_backend, still_air};
 
 /// Radius of the roller, m, and its spin about its own axis (x), rad/s.
 const R: f32 = 0.2;
@@ -25,10 +23,6 @@ fn roller(spin: f32) -> Scene {
     s.capsules = vec![Capsule::new([-0.5, 1.0, 0.0], [0.5, 1.0, 0.0], R)];
     s.motions = vec![(ColliderId::Capsule(0), Motion { spin: [spin, 0.0, 0.0], ..Motion::default() })];
     s
-}
-
-fn still_air(friction: f32) -> SimParams {
-    SimParams { friction, damping: 0.0, air_drag: 0.0, wind: [0.0; 3], strain_iterations: 0, ..SimParams::default() }
 }
 
 fn mean(st: &ClothState, f: impl Fn(usize) -> f64) -> f64 {
@@ -130,37 +124,10 @@ fn every_gpu_recipe_and_the_cpu_engine_follow_the_cpu_with_a_moving_capsule() {
     ];
     sc.motions = vec![(ColliderId::Capsule(0), Motion { keys, ..Motion::default() })];
     let params = SimParams::default();
-    let cpu = RecipeSolver::new(clothlab_core::Exec::Serial, Variant::OPTIMIZED, sc.clone(), params.clone()).unwrap();
-    let mut solvers: Vec<(String, Box<dyn Solver>, bool)> = vec![("cpu engine".into(), Box::new(cpu), true)];
-    let (v, o) = (Variant::OPTIMIZED, clothlab_engine::SolverOptions::default);
-    let mut checks = Vec::new();
-    if let Some(mut s) = or_skip(clothlab_wgpu::wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0xc4, &params).unwrap());
-    }
-    if let Some(s) = or_skip(clothlab_wgpu::wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("wgpu".into(), Box::new(s), exact));
-    }
-    if let Some(mut s) = or_skip(clothlab_vulkan::vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0xc4, &params).unwrap());
-    }
-    if let Some(s) = or_skip(clothlab_vulkan::vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("vulkan".into(), Box::new(s), exact));
-    }
-    if let Some(mut s) = or_skip(clothlab_gl::gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0xc4, &params).unwrap());
-    }
-    if let Some(s) = or_skip(clothlab_gl::gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("gl".into(), Box::new(s), exact));
-    }
+    let checks = clothlab_tests::optimized_kernel_checks(&sc, &params, 0xc4);
     assert!(checks.iter().any(|c| c.what.contains("collide")), "no check of a collide kernel");
     assert_checks("capsules", &checks);
-    clothlab_tests::assert_rollouts(solvers, 12);
+    clothlab_tests::assert_rollouts(clothlab_tests::optimized_rollout_solvers(&sc, &params), 12);
 }
 
 #[test]

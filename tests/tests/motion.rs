@@ -4,9 +4,8 @@
 
 use clothlab_core::scene::{Aabb, ColliderId, Pinning};
 use clothlab_core::{ClothState, Ease, Integrator, Key, Motion, Repeat, Scene, SimParams, Solver, Sphere};
-use clothlab_engine::validate::validate_kernels_with;
 use clothlab_engine::{RecipeSolver, Variant};
-use clothlab_tests::{assert_checks, every_backend, or_skip};
+use clothlab_tests::{assert_checks, every_backend, or_skip, still_air};
 
 /// Sphere radius, m, and its spin about z, rad/s.
 const R: f32 = 0.5;
@@ -27,12 +26,6 @@ fn spinning_sphere() -> Scene {
     s.boxes.clear();
     s.motions = vec![(ColliderId::Sphere(0), Motion { spin: [0.0, 0.0, OMEGA], ..Motion::default() })];
     s
-}
-
-/// Nothing but the contact acts along the surface: no drag, wind or damping, no strain
-/// passes (they would move velocities after the contacts).
-fn still_air(friction: f32) -> SimParams {
-    SimParams { friction, damping: 0.0, air_drag: 0.0, wind: [0.0; 3], strain_iterations: 0, ..SimParams::default() }
 }
 
 fn mean(st: &ClothState, f: impl Fn(usize) -> f64) -> f64 {
@@ -208,22 +201,7 @@ fn every_gpu_recipe_and_the_cpu_engine_follow_the_cpu_with_moving_colliders() {
     // every run: in this scene of sticking contacts that grows chaotically, 8e-5 to 5e-4 m
     // between runs; the analytic tests above run them with motion.)
     let (sc, params) = busy();
-    let cpu = RecipeSolver::new(clothlab_core::Exec::Serial, Variant::OPTIMIZED, sc.clone(), params.clone()).unwrap();
-    let mut solvers: Vec<(String, Box<dyn Solver>, bool)> = vec![("cpu engine".into(), Box::new(cpu), true)];
-    let (v, o) = (Variant::OPTIMIZED, clothlab_engine::SolverOptions::default);
-    if let Some(s) = or_skip(clothlab_wgpu::wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("wgpu".into(), Box::new(s), exact));
-    }
-    if let Some(s) = or_skip(clothlab_vulkan::vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("vulkan".into(), Box::new(s), exact));
-    }
-    if let Some(s) = or_skip(clothlab_gl::gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("gl".into(), Box::new(s), exact));
-    }
-    clothlab_tests::assert_rollouts(solvers, 12);
+    clothlab_tests::assert_rollouts(clothlab_tests::optimized_rollout_solvers(&sc, &params), 12);
 }
 
 #[test]
@@ -273,21 +251,7 @@ fn the_kernel_checks_of_a_moving_scene_give_the_kernels_its_colliders_velocities
     // uploaded still: integrate_collide 0.58 relative off on the spinning sphere). Every
     // kernel of each API's optimized recipe within its bound.
     let (sc, params) = busy();
-    let (v, o) = (Variant::OPTIMIZED, clothlab_engine::SolverOptions::default);
-    let mut checks = Vec::new();
-    if let Some(mut s) = or_skip(clothlab_wgpu::wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x5c3, &params).unwrap());
-    }
-    if let Some(mut s) = or_skip(clothlab_vulkan::vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x5c3, &params).unwrap());
-    }
-    if let Some(mut s) = or_skip(clothlab_gl::gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x5c3, &params).unwrap());
-    }
-    assert_checks("moving colliders", &checks);
+    assert_checks("moving colliders", &clothlab_tests::optimized_kernel_checks(&sc, &params, 0x5c3));
 }
 
 #[test]

@@ -5,9 +5,8 @@
 use clothlab_core::pins::{PinGroup, PinPose};
 use clothlab_core::scene::Pinning;
 use clothlab_core::{ClothState, Integrator, Key, Motion, Scene, SceneFile, SimParams, Solver};
-use clothlab_engine::validate::validate_kernels_with;
-use clothlab_engine::{RecipeSolver, Variant};
-use clothlab_tests::{assert_checks, or_skip};
+use clothlab_engine::RecipeSolver;
+use clothlab_tests::assert_checks;
 
 /// The carriers' velocity, m/s.
 const V: [f32; 3] = [0.5, 0.0, 0.2];
@@ -150,42 +149,12 @@ fn every_gpu_recipe_and_the_cpu_engine_follow_the_cpu_with_moving_pins() {
     // llvmpipe (tests/tests/bit_identity.rs), so with moving pins and self-collision too:
     // exactly 0 over 12 frames; elsewhere within the rollout's bound.
     let (sc, params) = twist();
-    let cpu = RecipeSolver::new(clothlab_core::Exec::Serial, Variant::OPTIMIZED, sc.clone(), params.clone()).unwrap();
-    let mut solvers: Vec<(String, Box<dyn Solver>, bool)> = vec![("cpu engine".into(), Box::new(cpu), true)];
-    let (v, o) = (Variant::OPTIMIZED, clothlab_engine::SolverOptions::default);
     // The kernel checks on solvers of their own (a rollout starts from a fresh solver).
-    let mut checks = Vec::new();
-    for _ in 0..2 {
-        if let Some(mut s) = or_skip(clothlab_wgpu::wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
-            if checks.is_empty() {
-                let k = s.recipe_kernels();
-                checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x91, &params).unwrap());
-                continue;
-            }
-            let exact = s.adapter().contains("llvmpipe");
-            solvers.push(("wgpu".into(), Box::new(s), exact));
-        }
-    }
-    if let Some(mut s) = or_skip(clothlab_vulkan::vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x91, &params).unwrap());
-    }
-    if let Some(s) = or_skip(clothlab_vulkan::vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("vulkan".into(), Box::new(s), exact));
-    }
-    if let Some(mut s) = or_skip(clothlab_gl::gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, &sc, 0x91, &params).unwrap());
-    }
-    if let Some(s) = or_skip(clothlab_gl::gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("gl".into(), Box::new(s), exact));
-    }
+    let checks = clothlab_tests::optimized_kernel_checks(&sc, &params, 0x91);
     // The kernel checks ran the pins kernel (its twin exact: the same products and sums).
     assert!(checks.iter().any(|c| c.what.starts_with("pins")), "no check of the pins kernel");
     assert_checks("moving pins", &checks);
-    clothlab_tests::assert_rollouts(solvers, 12);
+    clothlab_tests::assert_rollouts(clothlab_tests::optimized_rollout_solvers(&sc, &params), 12);
 }
 
 #[test]

@@ -5,11 +5,21 @@
 
 @group(0) @binding(12) var<storage, read> spheres: array<Sphere>;
 @group(0) @binding(13) var<storage, read> boxes: array<Aabb>;
-// The bodies (core::sdf): MAX_BODIES heads of SDF_HEAD_FLOATS floats (R's columns,
-// translation, velocity, spin, the grid's first point and spacing, its points per axis
-// and first value), then the values.
-@group(0) @binding(34) var<storage, read> sdf: array<f32>;
-@group(0) @binding(35) var<storage, read> capsules: array<Capsule>;
+// The capsules and bodies (core::sdf, layout::Buf::Shapes): MAX_BODIES heads of
+// SDF_HEAD_FLOATS floats (R's columns, translation, velocity, spin, the grid's first point
+// and spacing, its points per axis and first value), the capsules from
+// SHAPES_CAPSULES_AT (16 floats each), the bodies' values from SHAPES_VALUES_AT.
+@group(0) @binding(34) var<storage, read> shapes: array<f32>;
+
+fn shapes_vec4(i: u32) -> vec4<f32> {
+    return vec4<f32>(shapes[i], shapes[i + 1u], shapes[i + 2u], shapes[i + 3u]);
+}
+
+// Capsule k.
+fn capsule_at(k: u32) -> Capsule {
+    let b = SHAPES_CAPSULES_AT + 16u * k;
+    return Capsule(shapes_vec4(b), shapes_vec4(b + 4u), shapes_vec4(b + 8u), shapes_vec4(b + 12u));
+}
 
 // The point of capsule c's axis nearest x (core::cpu::collide::capsule_axis_point).
 fn capsule_axis_point(c: Capsule, x: vec3<f32>) -> vec3<f32> {
@@ -31,7 +41,7 @@ fn capsule_center(c: Capsule) -> vec3<f32> {
 // Floats j .. j+2 of body k's head.
 fn body_vec(k: u32, j: u32) -> vec3<f32> {
     let b = k * SDF_HEAD_FLOATS + j;
-    return vec3<f32>(sdf[b], sdf[b + 1u], sdf[b + 2u]);
+    return vec3<f32>(shapes[b], shapes[b + 1u], shapes[b + 2u]);
 }
 
 fn lerp1(a: f32, b: f32, t: f32) -> f32 {
@@ -56,9 +66,9 @@ fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
     let d = x - body_vec(k, 12u);
     let q = vec3<f32>(dot3(c0, d), dot3(c1, d), dot3(c2, d));
     let lo = body_vec(k, 24u);
-    let h = sdf[hb + 27u];
-    let dims = vec3<u32>(bitcast<u32>(sdf[hb + 28u]), bitcast<u32>(sdf[hb + 29u]), bitcast<u32>(sdf[hb + 30u]));
-    let first = bitcast<u32>(sdf[hb + 31u]);
+    let h = shapes[hb + 27u];
+    let dims = vec3<u32>(bitcast<u32>(shapes[hb + 28u]), bitcast<u32>(shapes[hb + 29u]), bitcast<u32>(shapes[hb + 30u]));
+    let first = bitcast<u32>(shapes[hb + 31u]);
     let g = vec3<f32>((q.x - lo.x) / h, (q.y - lo.y) / h, (q.z - lo.z) / h);
     let top = vec3<f32>(f32(dims.x - 1u), f32(dims.y - 1u), f32(dims.z - 1u));
     if !(g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0 && g.x <= top.x && g.y <= top.y && g.z <= top.z) {
@@ -68,18 +78,18 @@ fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
     let f = g - c;
     let sy = dims.x;
     let sz = sy * dims.y;
-    let base = SDF_HEADS_FLOATS + first + u32(c.x) + sy * u32(c.y) + sz * u32(c.z);
-    let c000 = sdf[base];
+    let base = SHAPES_VALUES_AT + first + u32(c.x) + sy * u32(c.y) + sz * u32(c.z);
+    let c000 = shapes[base];
     if c000 - 1.75 * h >= reach {
         return out;
     }
-    let c100 = sdf[base + 1u];
-    let c010 = sdf[base + sy];
-    let c110 = sdf[base + 1u + sy];
-    let c001 = sdf[base + sz];
-    let c101 = sdf[base + 1u + sz];
-    let c011 = sdf[base + sy + sz];
-    let c111 = sdf[base + 1u + sy + sz];
+    let c100 = shapes[base + 1u];
+    let c010 = shapes[base + sy];
+    let c110 = shapes[base + 1u + sy];
+    let c001 = shapes[base + sz];
+    let c101 = shapes[base + 1u + sz];
+    let c011 = shapes[base + sy + sz];
+    let c111 = shapes[base + 1u + sy + sz];
     out.phi = lerp1(
         lerp1(lerp1(c000, c100, f.x), lerp1(c010, c110, f.x), f.y),
         lerp1(lerp1(c001, c101, f.x), lerp1(c011, c111, f.x), f.y),
@@ -142,7 +152,7 @@ fn collided(m: Moved) -> Moved {
         }
     }
     for (var k = 0u; k < p.num_capsules; k++) {
-        let c = capsules[k];
+        let c = capsule_at(k);
         let r = c.a.w + p.margin;
         let d = x - capsule_axis_point(c, x);
         let dist2 = dot3(d, d);
