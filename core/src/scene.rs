@@ -509,8 +509,9 @@ impl Scene {
         if self.boxes.len() > MAX_COLLIDERS {
             return Err(ParamError::new("boxes", self.boxes.len(), format!("at most {MAX_COLLIDERS}")));
         }
-        if self.capsules.len() > MAX_COLLIDERS {
-            return Err(ParamError::new("capsules", self.capsules.len(), format!("at most {MAX_COLLIDERS}")));
+        if self.capsules.len() > crate::sdf::MAX_CAPSULES {
+            let most = crate::sdf::MAX_CAPSULES;
+            return Err(ParamError::new("capsules", self.capsules.len(), format!("at most {most}")));
         }
         for (i, c) in self.capsules.iter().enumerate() {
             for k in 0..3 {
@@ -677,7 +678,7 @@ impl Scene {
         out[..heads.len() * SdfHead::FLOATS].copy_from_slice(bytemuck::cast_slice(&heads));
         let mut caps = Vec::new();
         self.capsules_at(t, &mut caps);
-        caps.truncate(MAX_COLLIDERS);
+        caps.truncate(crate::sdf::MAX_CAPSULES);
         out[CAPSULES_AT..CAPSULES_AT + caps.len() * 16].copy_from_slice(bytemuck::cast_slice(&caps));
         out
     }

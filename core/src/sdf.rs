@@ -75,10 +75,13 @@ pub const MAX_POINTS: usize = 16 << 20;
 pub const MAX_CELLS_PER_SUBSTEP: f32 = 2.0;
 /// Floats of the heads at the start of the GPU's shapes buffer (`Buf::Shapes`).
 pub const HEADS_FLOATS: usize = MAX_BODIES * SdfHead::FLOATS;
-/// Where the capsules start in the shapes buffer, floats (16 each, `MAX_COLLIDERS`).
+/// Most capsules a scene may hold (`scene::Capsule`, 16 floats each in the shapes buffer;
+/// as many as spheres or boxes).
+pub const MAX_CAPSULES: usize = 16;
+/// Where the capsules start in the shapes buffer, floats.
 pub const CAPSULES_AT: usize = HEADS_FLOATS;
 /// Where the bodies' values start in the shapes buffer, floats.
-pub const VALUES_AT: usize = CAPSULES_AT + crate::scene::MAX_COLLIDERS * 16;
+pub const VALUES_AT: usize = CAPSULES_AT + MAX_CAPSULES * 16;
 
 /// A `[[bodies]]` entry of a scene file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -310,7 +310,7 @@ impl HostBuffers {
         if p.n != topo.n
             || p.num_spheres as usize > MAX_COLLIDERS
             || p.num_boxes as usize > MAX_COLLIDERS
-            || p.num_capsules as usize > MAX_COLLIDERS
+            || p.num_capsules as usize > clothlab_core::sdf::MAX_CAPSULES
         {
             return Err(clothlab_core::SolverError::Invalid(
                 "step constants for another grid or too many colliders".into(),

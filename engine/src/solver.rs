@@ -128,7 +128,7 @@ impl<E: Engine> GpuSolver<E> {
     ) -> Result<Self, SolverError> {
         if scene.spheres.len() > MAX_COLLIDERS
             || scene.boxes.len() > MAX_COLLIDERS
-            || scene.capsules.len() > MAX_COLLIDERS
+            || scene.capsules.len() > clothlab_core::sdf::MAX_CAPSULES
         {
             return Err(SolverError::Invalid(format!("at most {MAX_COLLIDERS} spheres, boxes and capsules")));
         }
