@@ -1,5 +1,6 @@
-//! Scene files: a whole scene — the cloth, the floor, spheres, boxes, the simulation
-//! parameters and optionally the camera and the light — in TOML.
+//! Scene files: a whole scene — the cloth, the floor, spheres, boxes, capsules, bodies
+//! (`crate::sdf`), pins (`crate::pins`), the simulation parameters and optionally the
+//! camera and the light — in TOML.
 //!
 //! TOML rather than RON: scene files are written by hand, and TOML is what Rust users
 //! already write (`Cargo.toml`): comments, `[tables]` and `[[arrays of tables]]` for the

@@ -37,9 +37,11 @@
 //! pushed along the field's gradient (the analytic gradient of the trilinear
 //! interpolation, normalised) by `margin − φ`, and its velocity relative to the body's
 //! surface there loses its normal part into the body and a friction share of the
-//! tangential, as for spheres. Outside the grid the body is not felt. The field is only as
-//! fine as its grid: a sphere made of triangles collides like the sphere to within about a
-//! tenth of a cell plus the mesh's own faceting (measured in the tests).
+//! tangential, as for spheres. Outside the grid the body is not felt; a cell whose first
+//! value already shows the surface farther than the margin is left after one load
+//! ([`BAND_CELLS`]). The field is only as fine as its grid: a cloth settled on a sphere
+//! made of triangles lies where it lies on the sphere to a quarter of a cell
+//! (`tests/tests/bodies.rs`).
 //!
 //! **On the GPU** the heads and the grids share one storage buffer of `f32` with the
 //! capsules ([`crate::layout::Buf::Shapes`]): [`MAX_BODIES`] heads of [`SdfHead::FLOATS`]
@@ -48,8 +50,8 @@
 //! CPU twins read the same numbers in the same order.
 //!
 //! **Speed.** A body is not swept: a scene is refused where a body's surface moves more
-//! than [`MAX_CELLS_PER_SUBSTEP`] cells in one substep (its centre's speed plus its spin
-//! times its farthest vertex from the pivot).
+//! than [`MAX_CELLS_PER_SUBSTEP`] cells in one substep (its centre's speed plus its
+//! fastest turn — a spin or its keys' — times its farthest vertex from the pivot).
 
 use std::path::PathBuf;
 use std::sync::Arc;

@@ -1,6 +1,6 @@
-//! `collide` — per particle: push particles out of spheres, boxes and bodies (inflated by
-//! the collision margin) to the nearest surface point (a body's: along its field's
-//! gradient, `crate::sdf`); the velocity into the surface is removed and the tangential
+//! `collide` — per particle: push particles out of spheres, boxes, capsules and bodies
+//! (inflated by the collision margin) to the nearest surface point (a body's: along its
+//! field's gradient, `crate::sdf`); the velocity into the surface is removed and the tangential
 //! velocity reduced by friction, both relative to the collider's surface where it moves
 //! (`crate::motion`).
 
@@ -12,8 +12,8 @@ use crate::grid::{StepParams, V4};
 use crate::scene::{Aabb, Capsule, Sphere};
 use crate::sdf::{Bodies, SdfHead, sample_grid};
 
-/// What the particles collide with (besides the floor): the spheres, boxes and bodies at
-/// the current substep.
+/// What the particles collide with (besides the floor): the spheres, boxes, capsules and
+/// bodies at the current substep.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Colliders<'a> {
     /// Spheres.
@@ -27,7 +27,7 @@ pub struct Colliders<'a> {
 }
 
 impl<'a> Colliders<'a> {
-    /// Spheres and boxes, no bodies.
+    /// Spheres and boxes, no capsules or bodies.
     pub fn new(spheres: &'a [Sphere], boxes: &'a [Aabb]) -> Self {
         Self { spheres, boxes, capsules: &[], bodies: Bodies::default() }
     }
@@ -94,7 +94,6 @@ pub fn collide(exec: Exec, p: &StepParams, c: Colliders<'_>, pos: &mut [V4], vel
 
 /// `integrate` then `collide` for each particle in one sweep (both touch only their own
 /// particle, so this is exactly the two kernels run one after the other).
-#[allow(clippy::too_many_arguments)]
 pub fn integrate_collide(exec: Exec, p: &StepParams, c: Colliders<'_>, force: &[V4], pos: &mut [V4], vel: &mut [V4]) {
     let c = c.cut(p);
     for_each2(exec, pos, vel, |i, x4, v4_| {
