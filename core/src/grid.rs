@@ -598,11 +598,13 @@ pub const RENDER_UV_STEP: f32 = 64.0;
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct StepParams {
-    /// Gravity, m/s²; w unused.
+    /// Gravity, m/s²; w = the Coulomb static friction coefficient μs
+    /// ([`StepParams::mu_static`]).
     pub gravity: [f32; 4],
     /// Wind velocity, m/s; w = wind coefficient, kg/(m²·s).
     pub wind: [f32; 4],
-    /// Grab target, m; w unused.
+    /// Grab target, m; w = the Coulomb kinetic friction coefficient μk
+    /// ([`StepParams::mu_kinetic`]).
     pub grab_target: [f32; 4],
     /// Substep, s.
     pub dt: f32,
@@ -616,7 +618,8 @@ pub struct StepParams {
     pub floor_y: f32,
     /// Collision margin, m.
     pub margin: f32,
-    /// Contact friction in [0, 1].
+    /// Contact friction in [0, 1]: the share of the tangential velocity a contact removes
+    /// (where [`StepParams::coulomb`] is false).
     pub friction: f32,
     /// Strain limit τ.
     pub strain_limit: f32,
@@ -650,18 +653,44 @@ pub struct StepParams {
 }
 
 impl StepParams {
+    /// The Coulomb static friction coefficient μs (in `gravity`'s w: the struct is full).
+    #[inline(always)]
+    pub fn mu_static(&self) -> f32 {
+        self.gravity[3]
+    }
+
+    /// The Coulomb kinetic friction coefficient μk (in `grab_target`'s w).
+    #[inline(always)]
+    pub fn mu_kinetic(&self) -> f32 {
+        self.grab_target[3]
+    }
+
+    /// Whether contacts take Coulomb friction (either coefficient above 0) instead of the
+    /// share `friction` (the shaders' `coulomb`).
+    #[inline(always)]
+    pub fn coulomb(&self) -> bool {
+        self.mu_static() > 0.0 || self.mu_kinetic() > 0.0
+    }
+
+    /// The friction coefficient of VBD's smoothed Coulomb contacts: μk where
+    /// [`StepParams::coulomb`], the share `friction` otherwise (the shaders' `vbd_mu`).
+    #[inline(always)]
+    pub fn vbd_mu(&self) -> f32 {
+        if self.coulomb() { self.mu_kinetic() } else { self.friction }
+    }
+
     /// The constants for `scene` and `params` with an optional grab.
     pub fn new(params: &SimParams, scene: &Scene, grab: Option<Grab>) -> Self {
         let [gx, gy, gz] = params.gravity;
         let [wx, wy, wz] = params.wind;
         let (grab_index, grab_target) = match grab {
             Some(g) if (g.particle as usize) < scene.num_particles() => {
-                (g.particle as i32, [g.target[0], g.target[1], g.target[2], 0.0])
+                (g.particle as i32, [g.target[0], g.target[1], g.target[2], params.kinetic_friction])
             }
-            _ => (-1, [0.0; 4]),
+            _ => (-1, [0.0, 0.0, 0.0, params.kinetic_friction]),
         };
         Self {
-            gravity: [gx, gy, gz, 0.0],
+            gravity: [gx, gy, gz, params.static_friction],
             wind: [wx, wy, wz, params.wind_coefficient],
             grab_target,
             dt: params.dt(),

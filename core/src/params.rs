@@ -198,6 +198,16 @@ pub struct SimParams {
     /// Tangential friction on the floor and on colliders, in [0, 1]: the fraction of the
     /// tangential motion removed at a contact. Default 0.4.
     pub friction: f32,
+    /// Coulomb static friction coefficient μs, in 0 ..= 10: a contact whose tangential
+    /// velocity relative to the surface is at most μs times the normal velocity it removes
+    /// sticks. Either Coulomb coefficient above 0 switches the contacts from the share
+    /// `friction` to Coulomb friction (`core::cpu::integrate::coulomb_contact`; VBD's
+    /// smoothed Coulomb friction then takes `kinetic_friction` as its μ). Default 0.
+    pub static_friction: f32,
+    /// Coulomb kinetic friction coefficient μk, in 0 ..= `static_friction`: a sliding
+    /// contact loses μk times the normal velocity it removes from its tangential velocity
+    /// (a cloth sliding on a floor slows at μk·g). Default 0.
+    pub kinetic_friction: f32,
     /// Distance kept between the cloth and every collider (its thickness), m. Default 0.01.
     pub collision_margin: f32,
     /// Wind velocity, m/s. Default (0, 0, 0): no wind.
@@ -258,6 +268,8 @@ impl Default for SimParams {
             strain_limit: 0.10,
             strain_iterations: 1,
             friction: 0.4,
+            static_friction: 0.0,
+            kinetic_friction: 0.0,
             collision_margin: 0.01,
             wind: [0.0; 3],
             wind_coefficient: 0.5,
@@ -556,6 +568,15 @@ impl SimParams {
             ));
         }
         finite_in("friction", self.friction, 0.0, 1.0)?;
+        finite_in("static_friction", self.static_friction, 0.0, 10.0)?;
+        finite_in("kinetic_friction", self.kinetic_friction, 0.0, 10.0)?;
+        if self.kinetic_friction > self.static_friction {
+            return Err(ParamError::new(
+                "kinetic_friction",
+                self.kinetic_friction,
+                format!("must be ≤ static_friction ({}): Coulomb's μk ≤ μs, give both", self.static_friction),
+            ));
+        }
         finite_in("collision_margin", self.collision_margin, 0.0, 1.0)?;
         for (i, w) in self.wind.iter().enumerate() {
             finite_in(["wind.x", "wind.y", "wind.z"][i], *w, -1000.0, 1000.0)?;

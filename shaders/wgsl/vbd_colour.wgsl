@@ -59,7 +59,7 @@ fn touch(stiffness: f32, pen: f32, n: vec3<f32>, d: vec3<f32>, vs: vec3<f32>, fr
     if y < eps {
         c = 2.0 / eps - y / (eps * eps);
     }
-    let w = p.friction * lambda * c;
+    let w = vbd_mu() * lambda * c;
     force_acc -= u * w;
     add_block(w, -w, n);
 }
@@ -128,7 +128,7 @@ fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool)
 // The contacts' penalties, then their friction (core::cpu::vbd::contacts).
 fn contacts(stiffness: f32, x: vec3<f32>, d: vec3<f32>) {
     each_contact(stiffness, x, d, false);
-    if p.friction <= 0.0 {
+    if vbd_mu() <= 0.0 {
         return;
     }
     hess_n = hess;

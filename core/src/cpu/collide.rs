@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 
-use super::integrate::{contact_vel_moving, integrate_at, surface_vel};
+use super::integrate::{contact, integrate_at, surface_vel};
 use super::{Exec, for_each2, v3, v4};
 use crate::grid::{StepParams, V4};
 use crate::scene::{Aabb, Capsule, Sphere};
@@ -124,7 +124,7 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, c: Colliders<'_>, x4: &mut V4
             x = c + arm;
             // The surface's velocity at the contact: the centre's and the spin's.
             let vs = surface_vel(v3(s.velocity), v3(s.spin), arm);
-            v = contact_vel_moving(v, vs, nrm, p.friction);
+            (x, v) = contact(p, x, v, vs, nrm);
         }
     }
     for b in boxes {
@@ -153,7 +153,7 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, c: Colliders<'_>, x4: &mut V4
             }
             let axis = nrm.abs();
             x = x * (Vec3::ONE - axis) + axis * face;
-            v = contact_vel_moving(v, v3(b.velocity), nrm, p.friction);
+            (x, v) = contact(p, x, v, v3(b.velocity), nrm);
         }
     }
     for cap in c.capsules {
@@ -166,7 +166,7 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, c: Colliders<'_>, x4: &mut V4
             let nrm = if dist > 1e-12 { d / dist } else { Vec3::Y };
             x = capsule_axis_point(cap, x) + nrm * r;
             let vs = surface_vel(v3(cap.velocity), v3(cap.spin), x - capsule_center(cap));
-            v = contact_vel_moving(v, vs, nrm, p.friction);
+            (x, v) = contact(p, x, v, vs, nrm);
         }
     }
     for hd in c.bodies.heads {
@@ -175,7 +175,7 @@ pub(crate) fn collide_at(i: usize, p: &StepParams, c: Colliders<'_>, x4: &mut V4
         {
             x += nrm * (p.margin - phi);
             let vs = surface_vel(v3(hd.velocity), v3(hd.spin), x - v3(hd.translation));
-            v = contact_vel_moving(v, vs, nrm, p.friction);
+            (x, v) = contact(p, x, v, vs, nrm);
         }
     }
     *x4 = v4(x, x4[3]);

@@ -49,6 +49,36 @@ pub(crate) fn surface_vel(v: Vec3, spin: Vec3, arm: Vec3) -> Vec3 {
     )
 }
 
+/// Coulomb friction at a contact (`SimParams::static_friction`, `kinetic_friction`; on
+/// when [`StepParams::coulomb`]) for a particle at `x` (already on the surface) moving at
+/// `v` against a surface of unit normal `nrm` moving at `vs`: the contact removes the
+/// relative velocity into the surface, `Δv_n = max(−v_n, 0)`, the impulse per unit mass
+/// that bounds friction's. The tangential relative velocity `v_t` is removed when
+/// `|v_t| ≤ μs·Δv_n` (sticking) and shortened by `μk·Δv_n` otherwise (sliding: a particle
+/// resting on a floor slows at μk·g). The friction acts over the substep as the normal
+/// force does, so the position moves back by the velocity it removed times `dt`: a
+/// particle held by static friction on a slope does not creep. The shaders'
+/// `coulomb_contact`, in the same order.
+#[inline(always)]
+pub(crate) fn coulomb_contact(p: &StepParams, x: Vec3, v: Vec3, vs: Vec3, nrm: Vec3) -> (Vec3, Vec3) {
+    let w = v - vs;
+    let vn = w.dot(nrm);
+    let vt = w - vn * nrm;
+    let dvn = (-vn).max(0.0);
+    let vtl = (vt.x * vt.x + vt.y * vt.y + vt.z * vt.z).sqrt();
+    let keep = if vtl > p.mu_static() * dvn { 1.0 - p.mu_kinetic() * dvn / vtl } else { 0.0 };
+    let vt2 = vt * keep;
+    (x + (vt2 - vt) * p.dt, vs + vt2 + vn.max(0.0) * nrm)
+}
+
+/// The contact with a surface of unit normal `nrm` moving at `vs` of a particle pushed to
+/// `x` and moving at `v`: [`contact_vel_moving`]'s share of friction, or Coulomb's
+/// ([`coulomb_contact`]) where the parameters ask for it. The new `(x, v)`.
+#[inline(always)]
+pub(crate) fn contact(p: &StepParams, x: Vec3, v: Vec3, vs: Vec3, nrm: Vec3) -> (Vec3, Vec3) {
+    if p.coulomb() { coulomb_contact(p, x, v, vs, nrm) } else { (x, contact_vel_moving(v, vs, nrm, p.friction)) }
+}
+
 /// The velocity that takes a particle from `x` to `target` in one substep of `dt`.
 #[inline(always)]
 pub(crate) fn grab_vel(x: Vec3, target: Vec3, dt: f32) -> Vec3 {
@@ -86,7 +116,11 @@ pub(crate) fn floor_clamp(p: &StepParams, mut x: Vec3, mut v: Vec3) -> (Vec3, Ve
     let floor = p.floor_y + p.margin;
     if x.y < floor {
         x.y = floor;
-        v = contact_vel(v, Vec3::Y, p.friction);
+        if p.coulomb() {
+            (x, v) = coulomb_contact(p, x, v, Vec3::ZERO, Vec3::Y);
+        } else {
+            v = contact_vel(v, Vec3::Y, p.friction);
+        }
     }
     (x, v)
 }

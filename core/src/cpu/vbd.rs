@@ -303,7 +303,7 @@ fn add_block(h: &mut [f32; 6], a: f32, b: f32, n: Vec3) {
 /// the floor, a sphere or a box (the box's nearest face), penetration `δ` along the
 /// surface's normal n̂, the energy `½ k δ²` (`k` = `stiffness`) adds `k δ n̂` to the force
 /// and `k n̂n̂ᵀ` to the block. Friction is the paper's (IPC's smoothed Coulomb friction,
-/// μ = `friction`, on the tangential displacement `u` over the substep of a still
+/// μ = `friction`, or `kinetic_friction` with Coulomb's coefficients, `StepParams::vbd_mu`, on the tangential displacement `u` over the substep of a still
 /// collider): `−μ λ f₁(|u|)/|u| u` with `f₁(y)/y = 2/ε − y/ε²` below
 /// `ε = FRICTION_EPS_V · h` and `1/y` above, its Hessian `μ λ f₁(|u|)/|u| (I − n̂n̂ᵀ)`.
 /// The normal force λ is lagged as the paper lags it, but to the block's own Newton step
@@ -326,7 +326,8 @@ fn contacts(
         *f += n * (stiffness * pen);
         add_block(h, 0.0, stiffness, n);
     });
-    if p.friction <= 0.0 {
+    let mu = p.vbd_mu();
+    if mu <= 0.0 {
         return;
     }
     let (fa, ha) = (*f, *h);
@@ -342,7 +343,7 @@ fn contacts(
         let u = dr - n * n.dot(dr);
         let y = u.dot(u).sqrt();
         let c = if y < eps { 2.0 / eps - y / (eps * eps) } else { 1.0 / y };
-        let w = p.friction * lambda * c;
+        let w = mu * lambda * c;
         *f -= u * w;
         add_block(h, w, -w, n);
     });

@@ -129,7 +129,9 @@ fn collided(m: Moved) -> Moved {
             let arm = nrm * r;
             x = s.center + arm;
             let vs = surface_vel(s.velocity.xyz, s.spin.xyz, arm);
-            v = contact_vel_moving(v, vs, nrm, p.friction);
+            let hit = surface_contact(x, v, vs, nrm);
+            x = hit.x;
+            v = hit.v;
         }
     }
     for (var k = 0u; k < p.num_boxes; k++) {
@@ -148,7 +150,9 @@ fn collided(m: Moved) -> Moved {
             if above.z < best { best = above.z; nrm = vec3<f32>(0.0, 0.0, 1.0); face = hi.z; }
             let axis = abs(nrm);
             x = x * (vec3<f32>(1.0) - axis) + axis * face;
-            v = contact_vel_moving(v, boxes[k].velocity.xyz, nrm, p.friction);
+            let hit = surface_contact(x, v, boxes[k].velocity.xyz, nrm);
+            x = hit.x;
+            v = hit.v;
         }
     }
     for (var k = 0u; k < p.num_capsules; k++) {
@@ -164,7 +168,9 @@ fn collided(m: Moved) -> Moved {
             }
             x = capsule_axis_point(c, x) + nrm * r;
             let vs = surface_vel(c.velocity.xyz, c.spin.xyz, x - capsule_center(c));
-            v = contact_vel_moving(v, vs, nrm, p.friction);
+            let hit = surface_contact(x, v, vs, nrm);
+            x = hit.x;
+            v = hit.v;
         }
     }
     for (var k = 0u; k < p.num_bodies; k++) {
@@ -172,7 +178,9 @@ fn collided(m: Moved) -> Moved {
         if s.valid && s.phi < p.margin {
             x = x + s.n * (p.margin - s.phi);
             let vs = surface_vel(body_vec(k, 16u), body_vec(k, 20u), x - body_vec(k, 12u));
-            v = contact_vel_moving(v, vs, s.n, p.friction);
+            let hit = surface_contact(x, v, vs, s.n);
+            x = hit.x;
+            v = hit.v;
         }
     }
     return Moved(x, v);

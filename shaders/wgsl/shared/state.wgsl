@@ -53,6 +53,52 @@ struct Moved {
     v: vec3<f32>,
 }
 
+// Coulomb's coefficients μs and μk (core::grid::StepParams::mu_static, mu_kinetic: in
+// gravity's and grab_target's w, the struct is full).
+fn mu_static() -> f32 {
+    return p.gravity.w;
+}
+
+fn mu_kinetic() -> f32 {
+    return p.grab_target.w;
+}
+
+// Whether contacts take Coulomb friction instead of the share p.friction
+// (StepParams::coulomb).
+fn coulomb() -> bool {
+    return mu_static() > 0.0 || mu_kinetic() > 0.0;
+}
+
+// VBD's friction coefficient (StepParams::vbd_mu).
+fn vbd_mu() -> f32 {
+    return select(p.friction, mu_kinetic(), coulomb());
+}
+
+// core::cpu::integrate::coulomb_contact: Coulomb friction at a contact of a particle at x
+// moving at v with a surface of normal nrm moving at vs, the new (x, v); the tangential
+// velocity friction removes moves the position back by it times dt.
+fn coulomb_contact(x: vec3<f32>, v: vec3<f32>, vs: vec3<f32>, nrm: vec3<f32>) -> Moved {
+    let w = v - vs;
+    let vn = dot3(w, nrm);
+    let vt = w - vn * nrm;
+    let dvn = max(-vn, 0.0);
+    let vtl = sqrt(dot3(vt, vt));
+    var keep = 0.0;
+    if vtl > mu_static() * dvn {
+        keep = 1.0 - mu_kinetic() * dvn / vtl;
+    }
+    let vt2 = vt * keep;
+    return Moved(x + (vt2 - vt) * p.dt, vs + vt2 + max(vn, 0.0) * nrm);
+}
+
+// core::cpu::integrate::contact (surface_contact: self_collide has its own `contact`): the share's or Coulomb's friction at a contact.
+fn surface_contact(x: vec3<f32>, v: vec3<f32>, vs: vec3<f32>, nrm: vec3<f32>) -> Moved {
+    if coulomb() {
+        return coulomb_contact(x, v, vs, nrm);
+    }
+    return Moved(x, contact_vel_moving(v, vs, nrm, p.friction));
+}
+
 // core::cpu::integrate::grab_vel: the velocity that takes x to the grab's target in dt.
 fn grab_vel(x: vec3<f32>) -> vec3<f32> {
     return (p.grab_target.xyz - x) * (1.0 / p.dt);
@@ -85,6 +131,9 @@ fn floor_clamp(x: vec3<f32>, v: vec3<f32>) -> Moved {
     let floor = p.floor_y + p.margin;
     if xn.y < floor {
         xn.y = floor;
+        if coulomb() {
+            return coulomb_contact(xn, vn, vec3<f32>(0.0), vec3<f32>(0.0, 1.0, 0.0));
+        }
         vn = contact_vel(vn, vec3<f32>(0.0, 1.0, 0.0), p.friction);
     }
     return Moved(xn, vn);
