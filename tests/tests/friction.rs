@@ -188,7 +188,8 @@ fn coulomb_contacts_on_moving_colliders_are_the_cpus_bits_on_every_optimized_rec
     sc.spheres = vec![clothlab_core::Sphere::new([0.0, 0.55, 0.3], 0.2)];
     sc.motions.push((ColliderId::Sphere(0), Motion { spin: [0.0, 2.0, 1.0], ..Motion::default() }));
     sc.floor_y = Some(0.0);
-    let params = SimParams { static_friction: 0.6, kinetic_friction: 0.4, strain_iterations: 1, ..SimParams::default() };
+    let params =
+        SimParams { static_friction: 0.6, kinetic_friction: 0.4, strain_iterations: 1, ..SimParams::default() };
     assert_checks("coulomb", &clothlab_tests::optimized_kernel_checks(&sc, &params, 0xc0u64));
     clothlab_tests::assert_rollouts(clothlab_tests::optimized_rollout_solvers(&sc, &params), 12);
 }

@@ -540,6 +540,20 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
             }
         }
     });
+    // Friction: the thesis's share of the tangential velocity, or Coulomb's coefficients
+    // (SimParams::static_friction, kinetic_friction; either above 0 switches to Coulomb).
+    ui.horizontal(|ui| {
+        ui.label("friction");
+        let coulomb = p.static_friction > 0.0 || p.kinetic_friction > 0.0;
+        if ui.selectable_label(!coulomb, "share").clicked() && coulomb {
+            (p.static_friction, p.kinetic_friction) = (0.0, 0.0);
+            units_changed = true;
+        }
+        if ui.selectable_label(coulomb, "Coulomb").clicked() && !coulomb {
+            (p.static_friction, p.kinetic_friction) = (0.5, 0.4);
+            units_changed = true;
+        }
+    });
     // The integrator (thesis §4.1): an explicit one that cannot integrate these springs
     // at this dt is refused in the status bar, naming the substeps it needs.
     ui.horizontal(|ui| {
@@ -601,7 +615,14 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
         ui.label(RichText::new("a mesh: edges (structural) and springs across them (bend); no shear family").weak());
     }
     f(ui, &mut p.strain_limit, 0.01..=1.0, "strain limit τ", false);
-    f(ui, &mut p.friction, 0.0..=1.0, "friction", false);
+    if p.static_friction > 0.0 || p.kinetic_friction > 0.0 {
+        // Coulomb's coefficients replace the share (SimParams::static_friction); μk ≤ μs.
+        f(ui, &mut p.static_friction, 0.0..=2.0, "static friction μs", false);
+        f(ui, &mut p.kinetic_friction, 0.0..=2.0, "kinetic friction μk", false);
+        p.kinetic_friction = p.kinetic_friction.min(p.static_friction);
+    } else {
+        f(ui, &mut p.friction, 0.0..=1.0, "friction", false);
+    }
     f(ui, &mut p.collision_margin, 0.0..=0.05, "collision margin m", false);
     f(ui, &mut p.wind_coefficient, 0.0..=5.0, "wind coefficient", false);
     changed |= ui
