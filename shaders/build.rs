@@ -144,7 +144,11 @@ fn bindings(name: &str, module: &naga::Module, info: &naga::valid::ModuleInfo) -
         let kind = match g.space {
             naga::AddressSpace::Uniform => BindKind::Uniform,
             naga::AddressSpace::Storage { .. } => BindKind::Storage,
-            naga::AddressSpace::Handle => BindKind::Image,
+            naga::AddressSpace::Handle => match module.types[g.ty].inner {
+                naga::TypeInner::Image { dim: naga::ImageDimension::D3, .. } => BindKind::Volume,
+                naga::TypeInner::Sampler { .. } => BindKind::Sampler,
+                _ => BindKind::Image,
+            },
             other => fail(format!("{name}: `{var}` in address space {other:?} at a binding")),
         };
         if kind != buf.kind() {
@@ -197,6 +201,17 @@ fn colliders_uniform(storage: &str) -> String {
         s = s.replace(&from, &to);
     }
     s
+}
+
+/// shared/colliders.wgsl (or its uniform-block twin) with the bodies' fields sampled from
+/// the 3-D image: its `body_sample` renamed `body_sample_storage` (kept, unused) and
+/// shared/sdf_image.wgsl's bindings and `body_sample` after it: `sdf=image`.
+fn sdf_image(colliders: &str, image: &str) -> String {
+    const DEF: &str = "fn body_sample(";
+    if !colliders.contains(DEF) {
+        fail("shared/colliders.wgsl: expected `fn body_sample(`".into());
+    }
+    format!("{}\n// ---- shared/sdf_image.wgsl\n{image}", colliders.replace(DEF, "fn body_sample_storage("))
 }
 
 /// Validates `source`, writes it and its SPIR-V to `out`, and lists it in `list`.
@@ -267,8 +282,16 @@ fn main() {
     };
     // `colliders_uni`, the `_cu` twins' include, is shared/colliders.wgsl with the two
     // declarations swapped for uniform blocks (the same code after them).
+    // `colliders_si` and `colliders_uni_si`, the `_si` twins' includes: the same with the
+    // bodies' fields sampled from the 3-D image (shared/sdf_image.wgsl's body_sample).
     let shared = |name: &str| {
-        if name == "colliders_uni" { colliders_uniform(&read_shared("colliders")) } else { read_shared(name) }
+        let (base, image) = match name.strip_suffix("_si") {
+            Some(b) => (b, true),
+            None => (name, false),
+        };
+        let text =
+            if base == "colliders_uni" { colliders_uniform(&read_shared("colliders")) } else { read_shared(base) };
+        if image { sdf_image(&text, &read_shared("sdf_image")) } else { text }
     };
     let types = shared("types");
     // The constants shared with Rust, then the structs: every kernel starts with these.
@@ -291,9 +314,11 @@ fn main() {
         writeln!(shared_list, "    ({stem:?}, include_str!({:?})),", path.display().to_string())
             .expect("write to string");
     }
-    fs::write(out.join("colliders_uni.wgsl"), shared("colliders_uni")).expect("write colliders_uni");
-    shared_list
-        .push_str("    (\"colliders_uni\", include_str!(concat!(env!(\"OUT_DIR\"), \"/colliders_uni.wgsl\"))),\n");
+    for generated in ["colliders_uni", "colliders_si", "colliders_uni_si"] {
+        fs::write(out.join(format!("{generated}.wgsl")), shared(generated)).expect("write a generated include");
+        writeln!(shared_list, "    ({generated:?}, include_str!(concat!(env!(\"OUT_DIR\"), \"/{generated}.wgsl\"))),")
+            .expect("write to string");
+    }
     shared_list.push_str("];\n");
     fs::write(out.join("prelude.wgsl"), &prelude).expect("write prelude");
 
@@ -322,10 +347,13 @@ fn main() {
         // this order, as clothlab_engine::kernels::KernelRef::shader_name writes them). A
         // kernel with shared/window.wgsl also gets `<name>_sh`, passing its window's
         // neighbours by subgroup shuffles (shared/window_sh.wgsl).
+        // A kernel with the colliders also gets `_si` twins (after `_cu`: `colliders` or
+        // `colliders_uni` becomes `…_si`), sampling the bodies' fields from a 3-D image.
         let subs = [
             ("atomic_cas", "atomic_f32", "_f32"),
             ("table", "table_tex", "_tex"),
             ("colliders", "colliders_uni", "_cu"),
+            ("colliders", "_si", "_si"),
             ("window", "window_sh", "_sh"),
         ];
         // `//! no table image` on the second line: a kernel that includes the table only
@@ -343,7 +371,11 @@ fn main() {
             for (k, (from, to, suffix)) in applicable.iter().enumerate() {
                 if mask & (1 << k) != 0 {
                     vname.push_str(suffix);
-                    incs.iter_mut().filter(|i| *i == from).for_each(|i| *i = (*to).to_owned());
+                    if *suffix == "_si" {
+                        incs.iter_mut().filter(|i| i.starts_with("colliders")).for_each(|i| i.push_str("_si"));
+                    } else {
+                        incs.iter_mut().filter(|i| *i == from).for_each(|i| *i = (*to).to_owned());
+                    }
                 }
             }
             // (Float atomics and the table image never meet: the registry's flavors have

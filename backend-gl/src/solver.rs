@@ -113,6 +113,7 @@ impl GlEngine {
             subgroup_shuffle: subgroups & (SUBGROUP_ARITHMETIC | SUBGROUP_SHUFFLES)
                 == SUBGROUP_ARITHMETIC | SUBGROUP_SHUFFLES,
             table_image: true,
+            sdf_image: false,
             workgroup_memory: l.shared_memory,
         };
         Ok(Self {

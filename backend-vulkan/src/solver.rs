@@ -86,6 +86,7 @@ impl VulkanEngine {
             subgroup_arithmetic: dev.subgroup_arithmetic,
             subgroup_shuffle: dev.subgroup_shuffle,
             table_image: true,
+            sdf_image: false,
             workgroup_memory: dev.max_shared_memory,
         };
         let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
@@ -161,7 +162,8 @@ fn descriptor(kind: BindKind) -> vk::DescriptorType {
     match kind {
         BindKind::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
         BindKind::Storage => vk::DescriptorType::STORAGE_BUFFER,
-        BindKind::Image => vk::DescriptorType::SAMPLED_IMAGE,
+        BindKind::Image | BindKind::Volume => vk::DescriptorType::SAMPLED_IMAGE,
+        BindKind::Sampler => vk::DescriptorType::SAMPLER,
     }
 }
 

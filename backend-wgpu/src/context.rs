@@ -83,6 +83,9 @@ pub struct GpuContext {
     pub immediates: bool,
     /// Subgroup operations in compute shaders (`Features::SUBGROUP`) are available.
     pub subgroups: bool,
+    /// 32-bit float textures can be sampled with filtering (`Features::FLOAT32_FILTERABLE`:
+    /// the bodies' distance fields as an image, `sdf=image`).
+    pub float32_filterable: bool,
     /// Errors wgpu reported outside an error scope, oldest first.
     uncaptured: Arc<Mutex<Vec<String>>>,
 }
@@ -156,6 +159,10 @@ impl GpuContext {
         if subgroups {
             required_features |= wgpu::Features::SUBGROUP;
         }
+        let float32_filterable = adapter.features().contains(wgpu::Features::FLOAT32_FILTERABLE);
+        if float32_filterable {
+            required_features |= wgpu::Features::FLOAT32_FILTERABLE;
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("clothlab"),
             required_features,
@@ -173,7 +180,18 @@ impl GpuContext {
             }
         }));
         log::info!("wgpu adapter: {} ({:?}, {})", info.name, info.backend, info.driver_info);
-        Ok(Self { adapter, device, queue, info, timestamps, float_atomics, immediates, subgroups, uncaptured })
+        Ok(Self {
+            adapter,
+            device,
+            queue,
+            info,
+            timestamps,
+            float_atomics,
+            immediates,
+            subgroups,
+            float32_filterable,
+            uncaptured,
+        })
     }
 
     /// One line naming the adapter: `llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Mesa 22.3.6)`.

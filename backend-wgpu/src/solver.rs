@@ -64,6 +64,10 @@ pub struct WgpuEngine {
     readbacks: Vec<(BufferId, u64)>,
     /// The spring table as a texture (`table=image`), and its height.
     table: Option<(wgpu::Texture, u32)>,
+    /// The bodies' distance fields as a 3-D texture (`sdf=image`), its size, and (once
+    /// bound) its view and trilinear sampler.
+    sdf: Option<(wgpu::Texture, [u32; 3])>,
+    sdf_bound: Option<(wgpu::TextureView, wgpu::Sampler)>,
 }
 
 impl WgpuEngine {
@@ -86,6 +90,7 @@ impl WgpuEngine {
             subgroup_arithmetic: ctx.subgroups,
             subgroup_shuffle: ctx.subgroups,
             table_image: true,
+            sdf_image: ctx.float32_filterable,
             workgroup_memory: limits.max_compute_workgroup_storage_size,
         };
         let timestamps = ctx.timestamps.then(|| Timestamps {
@@ -114,6 +119,8 @@ impl WgpuEngine {
             recorded: false,
             readbacks: Vec::new(),
             table: None,
+            sdf: None,
+            sdf_bound: None,
         }
     }
 
@@ -149,6 +156,17 @@ impl WgpuEngine {
                         multisampled: false,
                     }
                 }
+                BindKind::Volume => {
+                    self.sdf_bound
+                        .as_ref()
+                        .ok_or("it reads the distance-field image, which the solver did not make")?;
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D3,
+                        multisampled: false,
+                    }
+                }
+                BindKind::Sampler => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                 BindKind::Uniform => wgpu::BindingType::Buffer {
                     ty: wgpu::BufferBindingType::Uniform,
                     has_dynamic_offset: false,
@@ -176,6 +194,12 @@ impl WgpuEngine {
                 let resource = match Buf::from_binding(b) {
                     Some(Buf::Table) if view.is_some() => {
                         wgpu::BindingResource::TextureView(view.as_ref().expect("checked"))
+                    }
+                    Some(Buf::SdfImage) if self.sdf_bound.is_some() => {
+                        wgpu::BindingResource::TextureView(&self.sdf_bound.as_ref().expect("checked").0)
+                    }
+                    Some(Buf::SdfSampler) if self.sdf_bound.is_some() => {
+                        wgpu::BindingResource::Sampler(&self.sdf_bound.as_ref().expect("checked").1)
                     }
                     buf => {
                         let id =
@@ -278,10 +302,64 @@ impl Engine for WgpuEngine {
         self.ctx.check("uploading the spring-table image").map_err(backend)
     }
 
+    /// The fields as an `R32Float` 3-D texture (the thesis's texture memory, where the
+    /// hardware interpolates), written once through the queue; a trilinear sampler
+    /// clamped to the edge.
+    fn set_sdf_image(&mut self, values: &[f32], dims: [u32; 3]) -> Result<(), SolverError> {
+        let [w, h, d] = dims;
+        let max = self.ctx.device.limits().max_texture_dimension_3d;
+        if !self.info.sdf_image {
+            return Err(SolverError::Unsupported(format!(
+                "sdf=image: {} cannot filter 32-bit float textures (no FLOAT32_FILTERABLE); use sdf=storage",
+                self.info.adapter
+            )));
+        }
+        if w.max(h).max(d) > max || values.len() != (w * h * d) as usize {
+            return Err(SolverError::Unsupported(format!(
+                "sdf=image: the bodies' fields need a {w}×{h}×{d} image, more than the {max} texels a side {} allows; use sdf=storage",
+                self.info.adapter
+            )));
+        }
+        if self.sets.is_some() {
+            return Err(SolverError::Invalid("the distance-field image is made before the buffers are bound".into()));
+        }
+        let size = wgpu::Extent3d { width: w, height: h, depth_or_array_layers: d };
+        let texture = self.ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("distance fields"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        self.ctx.queue.write_texture(
+            texture.as_image_copy(),
+            bytemuck::cast_slice(values),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 4), rows_per_image: Some(h) },
+            size,
+        );
+        self.sdf = Some((texture, dims));
+        self.ctx.check("uploading the distance-field image").map_err(backend)
+    }
+
     fn bind(&mut self, sets: [Vec<(Buf, BufferId)>; 2]) -> Result<(), SolverError> {
         for &(_, id) in sets.iter().flatten() {
             self.buf(id)?;
         }
+        self.sdf_bound = self.sdf.as_ref().map(|(t, _)| {
+            let sampler = self.ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("distance fields, trilinear"),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                address_mode_w: wgpu::AddressMode::ClampToEdge,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            });
+            (t.create_view(&wgpu::TextureViewDescriptor::default()), sampler)
+        });
         let view = self.table.as_ref().map(|(t, _)| t.create_view(&wgpu::TextureViewDescriptor::default()));
         self.sets = Some((sets, view));
         Ok(())

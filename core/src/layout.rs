@@ -31,6 +31,11 @@ pub enum BindKind {
     Storage,
     /// A sampled image (`texture_2d<u32>`).
     Image,
+    /// A 3-D sampled image of floats read through a filtering sampler
+    /// (`texture_3d<f32>`): the bodies' distance fields with `sdf=image`.
+    Volume,
+    /// A filtering sampler (`sampler`): trilinear, clamped to the edge.
+    Sampler,
 }
 
 /// The bindings of the step (group 0), by the number the WGSL declares them at.
@@ -117,11 +122,18 @@ pub enum Buf {
     /// distance values (`crate::sdf`: `CAPSULES_AT`, `VALUES_AT`). One binding for both: a
     /// VBD sweep's kernel binds 16 storage blocks, llvmpipe's GL limit.
     Shapes = 34,
+    /// The bodies' distance values as one 3-D `r32float` image (`sdf=image`: the thesis's
+    /// texture memory, where the texture unit interpolates): the bodies' grids stacked
+    /// along z in body order, each in its own slices (`x, y` from the image's corner),
+    /// sampled through [`Buf::SdfSampler`]. A second home of [`Buf::Shapes`]' values.
+    SdfImage = 35,
+    /// The trilinear sampler of [`Buf::SdfImage`].
+    SdfSampler = 36,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 35] = [
+    pub const ALL: [Buf; 37] = [
         Buf::Params,
         Buf::Pos,
         Buf::Vel,
@@ -157,6 +169,8 @@ impl Buf {
         Buf::Pins,
         Buf::PinPoses,
         Buf::Shapes,
+        Buf::SdfImage,
+        Buf::SdfSampler,
     ];
 
     /// The integrators' scratch particle buffers, in order.
@@ -177,6 +191,8 @@ impl Buf {
         match self {
             Buf::Params | Buf::Interior | Buf::SpheresUniform | Buf::BoxesUniform => BindKind::Uniform,
             Buf::Table => BindKind::Image,
+            Buf::SdfImage => BindKind::Volume,
+            Buf::SdfSampler => BindKind::Sampler,
             _ => BindKind::Storage,
         }
     }
@@ -219,6 +235,8 @@ impl Buf {
             Buf::Pins => "pins",
             Buf::PinPoses => "pin_poses",
             Buf::Shapes => "shapes",
+            Buf::SdfImage => "sdf_image",
+            Buf::SdfSampler => "sdf_sampler",
         }
     }
 
@@ -230,6 +248,7 @@ impl Buf {
             Buf::ParamsStorage => Buf::Params,
             Buf::SpheresUniform => Buf::Spheres,
             Buf::BoxesUniform => Buf::Boxes,
+            Buf::SdfImage | Buf::SdfSampler => Buf::Shapes,
             b => b,
         }
     }
@@ -240,6 +259,7 @@ impl Buf {
             Buf::Params => &[Buf::ParamsStorage],
             Buf::Spheres => &[Buf::SpheresUniform],
             Buf::Boxes => &[Buf::BoxesUniform],
+            Buf::Shapes => &[Buf::SdfImage],
             _ => &[],
         }
     }

@@ -44,6 +44,9 @@ pub struct EngineInfo {
     pub subgroup_shuffle: bool,
     /// The spring table can be read from a sampled image ([`Engine::set_table_image`]).
     pub table_image: bool,
+    /// The bodies' distance fields can be read from a filtered 3-D image of 32-bit floats
+    /// ([`Engine::set_sdf_image`], `sdf=image`).
+    pub sdf_image: bool,
     /// Workgroup (shared) memory a compute shader may declare, bytes (`fusion=tile`).
     pub workgroup_memory: u32,
 }
@@ -90,6 +93,16 @@ pub trait Engine {
     fn set_table_image(&mut self, _texels: &[[u32; 4]], _height: u32) -> Result<(), SolverError> {
         Err(SolverError::Unsupported(format!(
             "{}: the spring table as an image is not implemented on {}",
+            self.info().adapter,
+            self.info().api
+        )))
+    }
+    /// Creates or rewrites the bodies' distance-field image ([`Buf::SdfImage`]): `values`
+    /// of `dims` (x fastest, then y, then z) as one `r32float` 3-D image, read through a
+    /// trilinear sampler clamped to the edge ([`Buf::SdfSampler`]).
+    fn set_sdf_image(&mut self, _values: &[f32], _dims: [u32; 3]) -> Result<(), SolverError> {
+        Err(SolverError::Unsupported(format!(
+            "{}: the bodies' distance fields as an image are not implemented on {}",
             self.info().adapter,
             self.info().api
         )))

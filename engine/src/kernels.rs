@@ -107,6 +107,8 @@ pub struct Variants {
     pub colliders_uniform: bool,
     /// `<name>_sh`: the window's neighbours passed by subgroup shuffles.
     pub shuffle: bool,
+    /// `<name>_si`: the bodies' distance fields sampled from a 3-D image (`sdf=image`).
+    pub sdf_image: bool,
 }
 
 /// Where a shader reads the step constants from.
@@ -134,6 +136,8 @@ pub struct Flavor {
     pub colliders_uniform: bool,
     /// Neighbours by subgroup shuffles.
     pub shuffle: bool,
+    /// The bodies' fields from the 3-D image.
+    pub sdf_image: bool,
 }
 
 impl Flavor {
@@ -141,13 +145,14 @@ impl Flavor {
     pub fn all() -> Vec<Flavor> {
         let mut v = Vec::new();
         for constants in [ConstantsHome::Uniform, ConstantsHome::Immediates, ConstantsHome::Storage] {
-            for bits in 0..16u8 {
+            for bits in 0..32u8 {
                 v.push(Flavor {
                     constants,
                     table_image: bits & 1 != 0,
                     float_atomics: bits & 2 != 0,
                     colliders_uniform: bits & 4 != 0,
                     shuffle: bits & 8 != 0,
+                    sdf_image: bits & 16 != 0,
                 });
             }
         }
@@ -401,6 +406,7 @@ impl KernelDef {
             && (!f.float_atomics || v.float_atomics)
             && (!f.colliders_uniform || v.colliders_uniform)
             && (!f.shuffle || v.shuffle)
+            && (!f.sdf_image || v.sdf_image)
             && !(f.table_image && f.float_atomics)
     }
 
@@ -415,6 +421,7 @@ impl KernelDef {
             float_atomics: want.float_atomics && v.float_atomics && !table_image,
             colliders_uniform: want.colliders_uniform && v.colliders_uniform,
             shuffle: want.shuffle && v.shuffle,
+            sdf_image: want.sdf_image && v.sdf_image,
         };
         KernelRef { def: self, flavor }
     }
@@ -468,16 +475,17 @@ impl std::fmt::Display for KernelRef {
 }
 
 impl KernelRef {
-    /// The shader's name: `<name>[_f32][_tex][_cu][_sh][_imm|_sto]`, as shaders/build.rs
-    /// names the twins.
+    /// The shader's name: `<name>[_f32][_tex][_cu][_si][_sh][_imm|_sto]`, as
+    /// shaders/build.rs names the twins.
     pub fn shader_name(&self) -> String {
         let f = self.flavor;
         format!(
-            "{}{}{}{}{}{}",
+            "{}{}{}{}{}{}{}",
             self.def.name,
             if f.float_atomics { "_f32" } else { "" },
             if f.table_image { "_tex" } else { "" },
             if f.colliders_uniform { "_cu" } else { "" },
+            if f.sdf_image { "_si" } else { "" },
             if f.shuffle { "_sh" } else { "" },
             match f.constants {
                 ConstantsHome::Uniform => "",
@@ -1031,11 +1039,17 @@ const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf]
     }
 }
 
-const PLAIN: Variants =
-    Variants { immediates: false, table_image: false, float_atomics: false, colliders_uniform: false, shuffle: false };
+const PLAIN: Variants = Variants {
+    immediates: false,
+    table_image: false,
+    float_atomics: false,
+    colliders_uniform: false,
+    shuffle: false,
+    sdf_image: false,
+};
 const IMM_TEX: Variants = Variants { immediates: true, table_image: true, ..PLAIN };
 const IMM_F32: Variants = Variants { immediates: true, float_atomics: true, ..PLAIN };
-const IMM_CU: Variants = Variants { immediates: true, colliders_uniform: true, ..PLAIN };
+const IMM_CU: Variants = Variants { immediates: true, colliders_uniform: true, sdf_image: true, ..PLAIN };
 /// The blocked gathers: the table's homes, and shuffles for the window.
 const BLOCKED: Variants = Variants { shuffle: true, ..IMM_TEX };
 
@@ -1379,7 +1393,7 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
         reason: "a gather over the row's springs into a 3 × 3 block, solved by cofactors (one division)",
     },
     label: timing::VBD,
-    variants: Variants { table_image: true, colliders_uniform: true, ..PLAIN },
+    variants: Variants { table_image: true, colliders_uniform: true, sdf_image: true, ..PLAIN },
     immediates: Immediates::Range,
     ..def(
         "vbd_colour",
@@ -1669,6 +1683,7 @@ mod tests {
             float_atomics: true,
             colliders_uniform: true,
             shuffle: true,
+            sdf_image: true,
         };
         assert_eq!(FORCES_SPRINGS.flavor(want).shader_name(), "forces_springs_tex_sh_imm");
         assert_eq!(SPRINGS_SCATTER.flavor(want).shader_name(), "springs_scatter_f32_imm");
@@ -1677,7 +1692,7 @@ mod tests {
             STATS_ATOMIC.flavor(Flavor { float_atomics: true, ..Flavor::default() }).shader_name(),
             "stats_atomic_f32"
         );
-        assert_eq!(INTEGRATE_COLLIDE.flavor(want).shader_name(), "integrate_collide_cu_imm");
+        assert_eq!(INTEGRATE_COLLIDE.flavor(want).shader_name(), "integrate_collide_cu_si_imm");
         let sto = Flavor { constants: ConstantsHome::Storage, ..Flavor::default() };
         assert_eq!(STRAIN_LIMIT.flavor(sto).shader_name(), "strain_limit_sto");
         assert_eq!(STATS.flavor(sto).shader_name(), "stats", "the statistics kernels use immediates for the substep");

@@ -622,8 +622,15 @@ mod tests {
         v
     }
 
-    const CAPS: Caps =
-        Caps { float_atomics: false, immediates: true, table_image: false, subgroups: false, grid: true, tile: true };
+    const CAPS: Caps = Caps {
+        float_atomics: false,
+        immediates: true,
+        table_image: false,
+        subgroups: false,
+        grid: true,
+        tile: true,
+        sdf_image: false,
+    };
 
     fn barriers_per_substep(r: &[Command]) -> usize {
         // Two substeps, counted in the second (the first also pays for the frame start).

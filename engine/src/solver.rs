@@ -26,8 +26,8 @@ use crate::recipe::{
     Caps, Command, Hazards, Integration, StatsMode, bits, dispatches, frame_end, kernels_for, kernels_of, recipe_for,
     res, stats_commands,
 };
-use crate::tables::{adjacency, face_flat, record_times, split_slots, spring_halves, table_texels};
-use crate::variant::{Colliders, Constants, Draw, Submit, Table, Variant, VariantSpec};
+use crate::tables::{adjacency, face_flat, record_times, sdf_texels, split_slots, spring_halves, table_texels};
+use crate::variant::{Colliders, Constants, Draw, Sdf, Submit, Table, Variant, VariantSpec};
 
 /// Timestamp queries per frame.
 pub const MAX_QUERIES: u32 = 4096;
@@ -143,6 +143,7 @@ impl<E: Engine> GpuSolver<E> {
             subgroups: info.subgroup_shuffle,
             grid: !scene.cloth.is_mesh(),
             tile: info.workgroup_memory >= crate::kernels::TILE_WORKGROUP_BYTES,
+            sdf_image: info.sdf_image,
         };
         let variant = variant.into().resolve(&caps, info.api).map_err(|e| SolverError::Unsupported(e.0))?;
         if options.stats == StatsMode::Subgroups && !info.subgroup_arithmetic {
@@ -265,6 +266,10 @@ impl<E: Engine> GpuSolver<E> {
             let (texels, height) = table_texels(&topo);
             engine.set_table_image(&texels, height)?;
         }
+        if variant.sdf == Sdf::Image {
+            let (texels, dims) = sdf_texels(&scene.bodies);
+            engine.set_sdf_image(&texels, dims)?;
+        }
         let id = |b: Buf| ids.iter().find(|(x, _)| *x == b).map(|(_, id)| *id).expect("every binding created");
         let pos = [id(Buf::Pos), id(Buf::PosOut)];
         let set = |k: usize| -> Vec<(Buf, BufferId)> {
@@ -334,6 +339,12 @@ impl<E: Engine> GpuSolver<E> {
         } else {
             0
         };
+        if k.flavor.sdf_image && self.variant.sdf != Sdf::Image {
+            return Err(SolverError::Shader {
+                kernel: k.shader_name(),
+                reason: "the bodies' distance-field image is uploaded only for sdf=image".into(),
+            });
+        }
         if k.flavor.table_image && self.variant.table != Table::Image {
             return Err(SolverError::Shader {
                 kernel: k.shader_name(),

@@ -5,6 +5,31 @@ use clothlab_core::grid::{SLOTS, STRAIN_SLOTS};
 use clothlab_core::layout::TABLE_WIDTH;
 use clothlab_core::{ClothTopology, Spring, SpringSlot};
 
+/// The bodies' distance fields as one 3-D image (`sdf=image`, `shared/sdf_image.wgsl`):
+/// `(values, [width, height, depth])`, the grids stacked along z in body order, each from
+/// the image's corner in x and y (the texels beyond a narrower grid hold a large value:
+/// they are never inside a grid's bounds, which the kernels check first); x fastest.
+/// With no bodies, one texel (the binding needs an image).
+pub fn sdf_texels(bodies: &[clothlab_core::sdf::Body]) -> (Vec<f32>, [u32; 3]) {
+    let w = bodies.iter().map(|b| b.sdf.dims[0]).max().unwrap_or(1);
+    let h = bodies.iter().map(|b| b.sdf.dims[1]).max().unwrap_or(1);
+    let d = bodies.iter().map(|b| b.sdf.dims[2]).sum::<u32>().max(1);
+    let mut texels = vec![1e3f32; (w * h * d) as usize];
+    let mut z0 = 0;
+    for b in bodies {
+        let [nx, ny, nz] = b.sdf.dims;
+        for k in 0..nz {
+            for j in 0..ny {
+                let src = ((k * ny + j) * nx) as usize;
+                let dst = (((z0 + k) * h + j) * w) as usize;
+                texels[dst..dst + nx as usize].copy_from_slice(&b.sdf.values[src..src + nx as usize]);
+            }
+        }
+        z0 += nz;
+    }
+    (texels, [w, h, d])
+}
+
 /// The spring table as one image of rgba32uint texels (`shared/table_tex.wgsl`): entry k
 /// of the table ([`clothlab_core::grid::Rows::entries`]: slot s of a grid's particle i at
 /// k = 12 i + s, a mesh's rows one after another) at texel k, [`TABLE_WIDTH`] texels a

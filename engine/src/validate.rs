@@ -147,6 +147,28 @@ fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
 /// CG scalars.
 pub const COMPARED_BUFFERS: usize = 11;
 
+/// How far a contact through the distance-field image (`sdf=image`) may move a particle
+/// from its twin's, in cells of the coarsest body's grid: the texture
+/// unit's weights have a few bits (8 on llvmpipe and NVIDIA, at least 4 by Vulkan's
+/// rules), so φ is within 3 h·2^-(bits+1) of the interpolant (0.006 h at 8 bits, 0.09 h
+/// at 4), and the normal comes from central differences across half a cell instead of the
+/// interpolant's gradient, turning the push of up to half a cell a little. Measured on
+/// llvmpipe: 0.023 h (the kernel checks of a turning icosphere).
+pub const SDF_IMAGE_CELLS: f32 = 0.1;
+
+/// The velocities' relative bound of the image's flavors: the contact removes the part
+/// along its normal, whose direction differs from the twin's by the central differences'
+/// few degrees (measured on llvmpipe: 3.4e-4).
+pub const SDF_IMAGE_VEL: f32 = 5e-3;
+
+/// [`SDF_IMAGE_CELLS`] of the coarsest body's cell in `scene`, m (0 without bodies): how
+/// far the image's contacts may put a particle from the twins', and the rollouts' bound
+/// with `sdf=image` (a resting contact's error does not add up: every substep pushes the
+/// particle to the level the image gives).
+pub fn sdf_image_bound(scene: &Scene) -> f32 {
+    SDF_IMAGE_CELLS * scene.bodies.iter().map(|b| b.sdf.h).fold(0.0, f32::max)
+}
+
 /// Runs each of `kernels` alone on `runner` and on the CPU engine, from the same disturbed
 /// `n × n` cloth, and compares every buffer; the kernel's pure outputs are poisoned with
 /// NaN on the runner's side first, so an element it fails to write shows. Kernels whose
@@ -237,8 +259,19 @@ pub fn validate_kernels_with(
             ("aux4", &got.aux[4], &want.aux[4]),
             ("scalars", &got.scalars, &want.scalars),
         ];
+        // The image's flavors: positions within `sdf_image_bound` of the twin's (in
+        // metres, so relative to this buffer's largest value), velocities within
+        // SDF_IMAGE_VEL of theirs (the contact's normal from the filtered samples).
+        let image = if k.flavor.sdf_image { sdf_image_bound(scene) } else { 0.0 };
         for (name, g, w) in compared {
-            checks.push(compare(&what, name, g, w, true, relative));
+            let mut c = compare(&what, name, g, w, true, relative);
+            if image > 0.0 && name == "pos" {
+                let scale = w.iter().flat_map(|v| v[..3].iter()).fold(0.0f32, |m, x| m.max(x.abs()));
+                c.bound = c.bound.max(image / scale.max(f32::MIN_POSITIVE));
+            } else if image > 0.0 && name == "vel" {
+                c.bound = c.bound.max(SDF_IMAGE_VEL);
+            }
+            checks.push(c);
         }
     }
     Ok(checks)
@@ -249,18 +282,27 @@ pub fn validate_kernels_with(
 /// them, the table image only with `table_image` (a solver uploads the image only for
 /// `table=image`). What `clothlab validate` checks, so that every switch is covered.
 pub fn flavors(caps: &Caps, table_image: bool) -> Vec<KernelRef> {
+    checked_flavors(caps, table_image).filter(|k| !k.flavor.sdf_image).collect()
+}
+
+/// The flavors of [`flavors`] that sample the bodies' fields from the image (`_si`), for
+/// a solver with `sdf=image` (the only one that uploads it); none where `caps` lack it.
+pub fn image_flavors(caps: &Caps) -> Vec<KernelRef> {
+    checked_flavors(caps, false).filter(|k| k.flavor.sdf_image && caps.sdf_image).collect()
+}
+
+fn checked_flavors(caps: &Caps, table_image: bool) -> impl Iterator<Item = KernelRef> {
     kernels::ALL
         .iter()
         .filter(|d| matches!(d.check, kernels::Check::Bound { .. }))
         .flat_map(|d| d.flavors())
-        .filter(|k| {
+        .filter(move |k| {
             let f = k.flavor;
             (caps.immediates || f.constants != ConstantsHome::Immediates)
                 && (caps.float_atomics || !f.float_atomics)
                 && (table_image || !f.table_image)
                 && (caps.subgroups || !f.shuffle)
         })
-        .collect()
 }
 
 /// How many times [`rounding_spread`] a rollout may differ: a GPU's atomics add in any
@@ -287,6 +329,7 @@ pub fn rounding_spread(scene: &Scene, params: &SimParams, frames: u32) -> Result
         subgroups: true,
         grid: !scene.cloth.is_mesh(),
         tile: true,
+        sdf_image: true,
     };
     let naive = crate::variant::Variant::NAIVE.fit(&caps);
     let mut a = crate::cpu::RecipeSolver::new(Exec::Parallel, naive, scene.clone(), params.clone())?;

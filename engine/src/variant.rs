@@ -27,6 +27,9 @@ pub struct Caps {
     /// neighbours by offset and no constants shared by every particle (`table=uniform`)
     /// and no rows whose blocks lanes could pass each other (`neighbours=shuffle`).
     pub grid: bool,
+    /// The bodies' distance fields in a 3-D image sampled through a trilinear sampler of
+    /// 32-bit floats (`sdf=image`, the `_si` twins).
+    pub sdf_image: bool,
     /// Workgroup memory for the tiled substep's region
     /// ([`crate::kernels::TILE_WORKGROUP_BYTES`], `fusion=tile`).
     pub tile: bool,
@@ -112,6 +115,19 @@ pub enum Constants {
     Push,
 }
 
+/// Where the collide kernels read the bodies' distance fields from (`crate::kernels`'
+/// `_si` twins; `core::sdf`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Sdf {
+    /// The values in the shapes' storage buffer, interpolated by the kernel (eight loads):
+    /// the CPU twins' arithmetic, bit for bit on llvmpipe.
+    Storage,
+    /// A 3-D `r32float` image the texture unit interpolates (the thesis's texture memory):
+    /// one filtered sample for φ, six for the gradient by central differences; within the
+    /// filter's precision of the twins.
+    Image,
+}
+
 /// Where the gathers read the spring table from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Table {
@@ -180,6 +196,8 @@ pub struct Variant {
     pub draw: Draw,
     /// Substeps per dispatch of the tiled substep.
     pub temporal: Temporal,
+    /// Where the bodies' distance fields are read from.
+    pub sdf: Sdf,
 }
 
 /// One switch: its key, its values (in ladder order: the naive one first) and what it
@@ -195,7 +213,7 @@ pub struct Switch {
 }
 
 /// Every switch.
-pub const SWITCHES: [Switch; 11] = [
+pub const SWITCHES: [Switch; 12] = [
     Switch {
         key: "springs",
         values: &["scatter", "gather"],
@@ -243,6 +261,11 @@ pub const SWITCHES: [Switch; 11] = [
         values: &["off", "on"],
         help: "the tiled substep advances one substep per dispatch, or several with a deeper halo (a whole frame where the cloth fits one tile); needs fusion=tile",
     },
+    Switch {
+        key: "sdf",
+        values: &["storage", "image"],
+        help: "the bodies' distance fields: a storage buffer interpolated by the kernel, or a 3-D image the texture unit interpolates",
+    },
 ];
 
 /// The presets, by name.
@@ -265,6 +288,7 @@ impl Variant {
         neighbours: Neighbours::Load,
         draw: Draw::Copy,
         temporal: Temporal::Off,
+        sdf: Sdf::Storage,
     };
     /// clothlab's optimized step, the [`LADDER`]'s rung before the tiles (every earlier
     /// rung's switch set; `fusion=tile` is left out: slower on lavapipe and on the H100,
@@ -288,6 +312,7 @@ impl Variant {
         neighbours: Neighbours::Shuffle,
         draw: Draw::Shared,
         temporal: Temporal::Off,
+        sdf: Sdf::Storage,
     };
     /// The thesis's optimized CUDA program (ch. 6.3.1): springs scattered with atomics,
     /// forces + Verlet + collisions fused, normals gathered from stored face normals, the
@@ -304,6 +329,7 @@ impl Variant {
         neighbours: Neighbours::Load,
         draw: Draw::Shared,
         temporal: Temporal::Off,
+        sdf: Sdf::Storage,
     };
 
     /// Which value of switch `key` it has: the position in the switch's
@@ -322,6 +348,7 @@ impl Variant {
             "neighbours" => self.neighbours as usize,
             "draw" => self.draw as usize,
             "temporal" => self.temporal as usize,
+            "sdf" => self.sdf as usize,
             _ => return None,
         })
     }
@@ -356,6 +383,7 @@ impl Variant {
             "colliders" => self.colliders = [Colliders::Storage, Colliders::Uniform][i],
             "neighbours" => self.neighbours = [Neighbours::Load, Neighbours::Shuffle][i],
             "draw" => self.draw = [Draw::Copy, Draw::Shared][i],
+            "sdf" => self.sdf = [Sdf::Storage, Sdf::Image][i],
             _ => self.temporal = [Temporal::Off, Temporal::On][i],
         }
         Ok(())
@@ -418,6 +446,11 @@ impl Variant {
         if self.table == Table::Image && !caps.table_image {
             return Err(VariantError(format!(
                 "switch table=image: the {api} engine has no spring-table image; use table=storage or table=uniform"
+            )));
+        }
+        if self.sdf == Sdf::Image && !caps.sdf_image {
+            return Err(VariantError(format!(
+                "switch sdf=image: the {api} engine on this adapter has no filtered 3-D image of 32-bit floats for the bodies' distance fields; use sdf=storage"
             )));
         }
         if self.table == Table::Uniform && !caps.grid {
@@ -488,6 +521,9 @@ impl Variant {
         if !caps.table_image && self.table == Table::Image {
             self.table = Table::Storage;
         }
+        if !caps.sdf_image {
+            self.sdf = Sdf::Storage;
+        }
         if !caps.subgroups || !caps.grid {
             self.neighbours = Neighbours::Load;
         }
@@ -515,13 +551,14 @@ impl Variant {
             float_atomics: self.atomics == Atomics::Float,
             colliders_uniform: self.colliders == Colliders::Uniform,
             shuffle: self.neighbours == Neighbours::Shuffle,
+            sdf_image: self.sdf == Sdf::Image,
         }
     }
 }
 
 /// The optimisation ladder: from `naive`, one switch at a time, in this order (each rung
 /// keeps the switches of the rungs before it).
-pub const LADDER: [(&str, &str); 15] = [
+pub const LADDER: [(&str, &str); 16] = [
     ("submit", "frame"),
     ("draw", "shared"),
     ("constants", "uniform"),
@@ -537,6 +574,10 @@ pub const LADDER: [(&str, &str); 15] = [
     ("normals", "frame"),
     ("fusion", "tile"),
     ("temporal", "on"),
+    // The bodies' fields from the image: measures something only on a scene with bodies
+    // (`bench --ladder --scene scenes/body-sphere.toml`); last, so that `optimized` stays
+    // the rung before the tiles and computes the twins' bits.
+    ("sdf", "image"),
 ];
 
 /// One rung of the ladder.
@@ -675,11 +716,25 @@ mod tests {
     use super::*;
 
     /// An adapter with nothing optional but the tile's workgroup memory, running a grid.
-    const BARE_CAPS: Caps =
-        Caps { float_atomics: false, immediates: false, table_image: false, subgroups: false, grid: true, tile: true };
+    const BARE_CAPS: Caps = Caps {
+        float_atomics: false,
+        immediates: false,
+        table_image: false,
+        subgroups: false,
+        grid: true,
+        tile: true,
+        sdf_image: false,
+    };
 
-    const ALL_CAPS: Caps =
-        Caps { float_atomics: true, immediates: true, table_image: true, subgroups: true, grid: true, tile: true };
+    const ALL_CAPS: Caps = Caps {
+        float_atomics: true,
+        immediates: true,
+        table_image: true,
+        subgroups: true,
+        grid: true,
+        tile: true,
+        sdf_image: true,
+    };
 
     #[test]
     fn every_switch_value_round_trips_and_bad_ones_name_the_switch() {
@@ -727,12 +782,15 @@ mod tests {
         // The rung before the tiles is the optimized preset: the preset is what the ladder
         // measured fastest on lavapipe (issue 32; the tiles lost there, issue 47), so a new
         // rung must update both.
-        assert_eq!(rungs[rungs.len() - 3].variant, Variant::OPTIMIZED);
+        assert_eq!(rungs[rungs.len() - 4].variant, Variant::OPTIMIZED);
         let mut top = Variant::OPTIMIZED;
         top.set("fusion", "tile").unwrap();
-        assert_eq!(rungs[rungs.len() - 2].variant, top);
+        assert_eq!(rungs[rungs.len() - 3].variant, top);
         top.set("temporal", "on").unwrap();
-        assert_eq!(rungs.last().unwrap().variant, top);
+        assert_eq!(rungs[rungs.len() - 2].variant, top);
+        let mut image = top;
+        image.set("sdf", "image").unwrap();
+        assert_eq!(rungs.last().unwrap().variant, image);
         // Temporal blocking without the tiles: refused, and a preset's dropped.
         let e = VariantSpec::parse("optimized", &["temporal=on".into(), "fusion=clothlab".into()])
             .unwrap()
@@ -743,7 +801,7 @@ mod tests {
         // preset asking for it explicitly refused, the preset's own fitted back.
         let small = Caps { tile: false, ..ALL_CAPS };
         let rungs = ladder(&small, "vulkan");
-        let e = rungs[rungs.len() - 2].skipped.clone().unwrap();
+        let e = rungs[rungs.len() - 3].skipped.clone().unwrap();
         assert!(e.contains("fusion=tile") && e.contains("32 KiB"), "{e}");
         let e =
             VariantSpec::parse("optimized", &["fusion=tile".into()]).unwrap().resolve(&small, "vulkan").unwrap_err();
@@ -758,7 +816,7 @@ mod tests {
         let bare = BARE_CAPS;
         let rungs = ladder(&bare, "wgpu");
         let skipped: Vec<String> = rungs.iter().filter(|r| r.skipped.is_some()).map(Rung::name).collect();
-        assert_eq!(skipped, ["+constants=push", "+table=image", "+neighbours=shuffle"]);
+        assert_eq!(skipped, ["+constants=push", "+table=image", "+neighbours=shuffle", "+sdf=image"]);
         assert_eq!(rungs[0].variant.atomics, Atomics::Cas);
         // Every value of every switch the adapter has is in some covering variant.
         let cover = covering(&ALL_CAPS, "vulkan");

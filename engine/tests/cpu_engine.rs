@@ -174,6 +174,7 @@ fn a_mesh_on_the_cpu_engine_computes_the_cpu_solvers_bits_with_every_integrator(
                 subgroups: true,
                 grid: false,
                 tile: true,
+                sdf_image: true,
             });
             // Euler and RK2 refuse these springs (they need far softer ones): skipped.
             let mut engine = match RecipeSolver::new(Exec::Serial, variant, file.scene.clone(), params.clone()) {

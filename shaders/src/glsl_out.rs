@@ -22,9 +22,12 @@ pub fn glsl_450(module: &naga::Module, info: &naga::valid::ModuleInfo, zero_work
     bound.sort_by_key(|(b, _)| *b);
     let mut binding_map = naga::back::glsl::BindingMap::default();
     for (b, g) in bound {
-        let counter = match g.space {
-            naga::AddressSpace::Storage { .. } => &mut storage,
-            naga::AddressSpace::Uniform => &mut uniform,
+        let counter = match (&g.space, &module.types[g.ty].inner) {
+            (naga::AddressSpace::Storage { .. }, _) => &mut storage,
+            (naga::AddressSpace::Uniform, _) => &mut uniform,
+            // naga combines a texture with the sampler it is sampled with: the sampler has
+            // no point of its own (the solver sets the filtering on the texture's unit).
+            (_, naga::TypeInner::Sampler { .. }) => continue,
             _ => &mut texture,
         };
         let point = *counter;

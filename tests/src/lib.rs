@@ -54,6 +54,7 @@ pub const EVERY_CAP: clothlab_engine::recipe::Caps = clothlab_engine::recipe::Ca
     subgroups: true,
     grid: true,
     tile: true,
+    sdf_image: true,
 };
 
 /// Every backend on `scene`: the two CPU solvers, then wgpu, Vulkan and OpenGL, naive and

@@ -55,6 +55,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         float_atomics: false,
         colliders_uniform: false,
         shuffle: false,
+        sdf_image: false,
     },
     immediates: Immediates::None,
     test_input: None,

@@ -7,7 +7,9 @@ use anyhow::{Context, Result, bail};
 use clothlab_core::layout::Buf;
 use clothlab_core::validate::Check;
 use clothlab_core::validate::validate_rollout;
-use clothlab_engine::validate::{SPREAD_FACTOR, bisect, flavors, rounding_spread, validate_kernels_with};
+use clothlab_engine::validate::{
+    SPREAD_FACTOR, bisect, flavors, image_flavors, rounding_spread, sdf_image_bound, validate_kernels_with,
+};
 use clothlab_engine::variant::covering;
 use clothlab_engine::{KernelRef, VariantSpec};
 
@@ -165,6 +167,17 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
             let runner = other.runner().context("validate checks GPU backends")?;
             let checks = validate_kernels_with(runner, &table_kernels, &scene, 0x5eed, &params)?;
             rows.extend(worst_rows(&table_kernels, &checks, &format!(" (table={table})")));
+            // The bodies' fields from the image (`sdf=image`), where the engine has it and
+            // the scene has bodies: the `_si` flavors on a solver that uploads it.
+            let image_kernels = image_flavors(&caps);
+            if !image_kernels.is_empty() && !scene.bodies.is_empty() {
+                let spec = VariantSpec::parse("optimized", &["sdf=image".to_owned()])?;
+                let setup = GpuSetup { variant: Some(spec), ..GpuSetup::default() };
+                let mut other = make(backend, scene.clone(), params.clone(), &setup, &Shared::None)?;
+                let runner = other.runner().context("validate checks GPU backends")?;
+                let checks = validate_kernels_with(runner, &image_kernels, &scene, 0x5eed, &params)?;
+                rows.extend(worst_rows(&image_kernels, &checks, " (sdf=image)"));
+            }
             rollouts = covering(&caps, api)
                 .into_iter()
                 .map(|v| GpuSetup { variant: Some(v.into()), ..GpuSetup::default() })
@@ -177,6 +190,11 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
             let mut rollout_solver = make(backend, scene.clone(), params.clone(), r, &Shared::None)?;
             let mut c = validate_rollout(rollout_solver.get(), frames)?;
             c.bound = c.bound.max(SPREAD_FACTOR * spread);
+            // Through the image a contact may sit a little off the twin's (the filter's
+            // weights, the normal by central differences): SDF_IMAGE_CELLS of a cell.
+            if rollout_solver.variant().is_some_and(|v| v.sdf == clothlab_engine::variant::Sdf::Image) {
+                c.bound = c.bound.max(sdf_image_bound(&scene));
+            }
             if args.every_switch {
                 c.what = format!("rollout {}", rollout_solver.variant().map(|v| v.label()).unwrap_or_default());
             }

@@ -1,0 +1,66 @@
+// The bodies' distance fields in one 3-D image (`sdf=image`, layout::Buf::SdfImage: the
+// thesis's texture memory, where the texture unit interpolates). Not an include of its
+// own: shaders/build.rs appends it to shared/colliders.wgsl for the `_si` twins, whose
+// `body_sample` it replaces. Body k's grid lies in the image's slices z0 … z0 + nz − 1
+// (z0: the slices of the bodies before it), from the image's corner in x and y
+// (clothlab_engine::tables::sdf_texels lays it out).
+
+@group(0) @binding(35) var sdf_image: texture_3d<f32>;
+@group(0) @binding(36) var sdf_sampler: sampler;
+
+// The field at t, in texels of the image (texel (i, j, k) holds grid point (i, j, k)),
+// interpolated by the texture unit: its weights have a few bits (8 on llvmpipe and
+// NVIDIA, at least 4 by Vulkan's rules), so the value is within 3·h·2^-(bits+1) of the
+// storage path's interpolant (h: the grid's cell; neighbouring values differ by ≤ h).
+fn sdf_texel(t: vec3<f32>, size: vec3<f32>) -> f32 {
+    return textureSampleLevel(sdf_image, sdf_sampler, (t + vec3<f32>(0.5)) / size, 0.0).x;
+}
+
+// Body k's field at x (core::cpu::collide::body_sample's contract): φ from one filtered
+// sample; the gradient by central differences of filtered samples half a cell each way
+// along each axis (clamped to the body's own slices), so six more; `valid` false outside
+// its grid or where φ ≥ reach (nothing to push).
+fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
+    var out = BodySample(0.0, vec3<f32>(0.0, 1.0, 0.0), false);
+    let hb = k * SDF_HEAD_FLOATS;
+    let c0 = body_vec(k, 0u);
+    let c1 = body_vec(k, 4u);
+    let c2 = body_vec(k, 8u);
+    let d = x - body_vec(k, 12u);
+    let q = vec3<f32>(dot3(c0, d), dot3(c1, d), dot3(c2, d));
+    let lo = body_vec(k, 24u);
+    let h = shapes[hb + 27u];
+    let dims = vec3<u32>(bitcast<u32>(shapes[hb + 28u]), bitcast<u32>(shapes[hb + 29u]), bitcast<u32>(shapes[hb + 30u]));
+    let g = vec3<f32>((q.x - lo.x) / h, (q.y - lo.y) / h, (q.z - lo.z) / h);
+    let top = vec3<f32>(f32(dims.x - 1u), f32(dims.y - 1u), f32(dims.z - 1u));
+    if !(g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0 && g.x <= top.x && g.y <= top.y && g.z <= top.z) {
+        return out;
+    }
+    var z0 = 0u;
+    for (var j = 0u; j < k; j++) {
+        z0 += bitcast<u32>(shapes[j * SDF_HEAD_FLOATS + 30u]);
+    }
+    let size = vec3<f32>(textureDimensions(sdf_image));
+    let off = vec3<f32>(0.0, 0.0, f32(z0));
+    out.phi = sdf_texel(g + off, size);
+    if out.phi >= reach {
+        return out;
+    }
+    let zero = vec3<f32>(0.0);
+    let ex = vec3<f32>(0.5, 0.0, 0.0);
+    let ey = vec3<f32>(0.0, 0.5, 0.0);
+    let ez = vec3<f32>(0.0, 0.0, 0.5);
+    let gr = vec3<f32>(
+        sdf_texel(clamp(g + ex, zero, top) + off, size) - sdf_texel(clamp(g - ex, zero, top) + off, size),
+        sdf_texel(clamp(g + ey, zero, top) + off, size) - sdf_texel(clamp(g - ey, zero, top) + off, size),
+        sdf_texel(clamp(g + ez, zero, top) + off, size) - sdf_texel(clamp(g - ez, zero, top) + off, size),
+    );
+    let gl = sqrt(dot3(gr, gr));
+    var nl = vec3<f32>(0.0, 1.0, 0.0);
+    if gl > 1e-12 {
+        nl = vec3<f32>(gr.x / gl, gr.y / gl, gr.z / gl);
+    }
+    out.n = c0 * nl.x + c1 * nl.y + c2 * nl.z;
+    out.valid = true;
+    return out;
+}
