@@ -62,7 +62,8 @@ struct Program {
     storage: [Vec<(u32, usize)>; 2],
     /// The same for its uniform blocks.
     uniform: [Vec<(u32, usize)>; 2],
-    /// `(texture unit, raw texture)` of the table image, if it reads it.
+    /// `(texture unit, raw texture)` of the table image and the distance fields' image,
+    /// those it reads.
     texture: Vec<(u32, usize)>,
     /// Its immediates as uniforms: `(byte offset, kind, components)`, by location index.
     uniforms: Vec<(u32, char, u8)>,
@@ -77,6 +78,8 @@ pub struct GlEngine {
     bound: bool,
     /// The table texture and its height.
     table: Option<(usize, u32)>,
+    /// The bodies' distance fields as a 3-D texture (`sdf=image`).
+    sdf: Option<usize>,
     programs: HashMap<KernelRef, Program>,
     /// Readback staging: (buffer, size); the cursor; what the frame's readbacks copied.
     staging: Option<GlBuffer>,
@@ -113,7 +116,8 @@ impl GlEngine {
             subgroup_shuffle: subgroups & (SUBGROUP_ARITHMETIC | SUBGROUP_SHUFFLES)
                 == SUBGROUP_ARITHMETIC | SUBGROUP_SHUFFLES,
             table_image: true,
-            sdf_image: false,
+            // Desktop GL filters R32F textures (GL 4.5 core §8.17).
+            sdf_image: true,
             workgroup_memory: l.shared_memory,
         };
         Ok(Self {
@@ -123,6 +127,7 @@ impl GlEngine {
             sets: [Vec::new(), Vec::new()],
             bound: false,
             table: None,
+            sdf: None,
             programs: HashMap::new(),
             staging: None,
             cursor: 0,
@@ -252,6 +257,22 @@ impl Engine for GlEngine {
         self.gl.gl().check("uploading the spring-table image").map_err(backend)
     }
 
+    /// The fields as an `R32F` 3-D texture, filtered linearly and clamped to the edge (the
+    /// thesis's texture memory, where the hardware interpolates), written once.
+    fn set_sdf_image(&mut self, values: &[f32], dims: [u32; 3]) -> Result<(), SolverError> {
+        if self.bound || self.sdf.is_some() {
+            return Err(SolverError::Invalid(
+                "the distance-field image is made once, before the buffers are bound".into(),
+            ));
+        }
+        let [w, h, d] = dims;
+        let t = self.gl.gl().create_volume(w, h, d, values).map_err(|e| {
+            SolverError::Unsupported(format!("sdf=image on {}: {e}; use sdf=storage", self.info.adapter))
+        })?;
+        self.sdf = Some(t);
+        self.gl.gl().check("uploading the distance-field image").map_err(backend)
+    }
+
     fn bind(&mut self, sets: [Vec<(Buf, BufferId)>; 2]) -> Result<(), SolverError> {
         for set in &sets {
             for &(_, id) in set {
@@ -287,6 +308,11 @@ impl Engine for GlEngine {
             let buf = Buf::from_binding(binding).ok_or_else(|| refuse(format!("binding {binding} is no buffer")))?;
             if buf.kind() == BindKind::Image {
                 let (t, _) = self.table.ok_or_else(|| refuse("built without the table image".into()))?;
+                texture.push((point, t));
+                continue;
+            }
+            if buf.kind() == BindKind::Volume {
+                let t = self.sdf.ok_or_else(|| refuse("built without the distance-field image".into()))?;
                 texture.push((point, t));
                 continue;
             }

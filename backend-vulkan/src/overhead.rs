@@ -120,7 +120,7 @@ pub fn measure(dev: &crate::Device, plan: &OverheadPlan) -> Result<Vec<OverheadR
     let kernel = Kernel::new(dev, spirv, &[(0, vk::DescriptorType::STORAGE_BUFFER)], 0)?;
     let data = Buffer::new(dev, "chain data", CHAIN_ELEMENTS * 4, USAGE, MemoryLocation::GpuOnly)?;
     let sets = Sets::new(dev, 1)?;
-    let set = sets.allocate(&kernel, &[(0, vk::DescriptorType::STORAGE_BUFFER, &data)], None)?;
+    let set = sets.allocate(&kernel, &[(0, vk::DescriptorType::STORAGE_BUFFER, &data)], &[], None)?;
     let check = Buffer::new(dev, "chain check", CHAIN_ELEMENTS * 4, USAGE, MemoryLocation::GpuToCpu)?;
     let mut target =
         Target { dev: dev.clone(), cmds: Commands::new(dev, 2)?, kernel, set, data, check, transfer: None };

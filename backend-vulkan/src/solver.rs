@@ -60,6 +60,8 @@ pub struct VulkanEngine {
     /// Readbacks recorded since the last wait: (offset in staging, size).
     readbacks: Vec<(u64, u64)>,
     table: Option<Image>,
+    /// The bodies' distance fields as a 3-D image and its trilinear sampler (`sdf=image`).
+    sdf: Option<(Image, raw::Sampler)>,
     buffers: Vec<Buffer>,
     dev: Arc<Device>,
 }
@@ -86,7 +88,7 @@ impl VulkanEngine {
             subgroup_arithmetic: dev.subgroup_arithmetic,
             subgroup_shuffle: dev.subgroup_shuffle,
             table_image: true,
-            sdf_image: false,
+            sdf_image: dev.r32f_linear,
             workgroup_memory: dev.max_shared_memory,
         };
         let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
@@ -105,6 +107,7 @@ impl VulkanEngine {
             chunk_at: (0, 0),
             readbacks: Vec::new(),
             table: None,
+            sdf: None,
             buffers: Vec::new(),
             dev,
         })
@@ -220,6 +223,39 @@ impl Engine for VulkanEngine {
         Ok(())
     }
 
+    /// The fields as an `R32_SFLOAT` 3-D image (the thesis's texture memory, where the
+    /// hardware interpolates), uploaded once through the staging buffer; a trilinear
+    /// sampler clamped to the edge.
+    fn set_sdf_image(&mut self, values: &[f32], dims: [u32; 3]) -> Result<(), SolverError> {
+        let [w, h, d] = dims;
+        if !self.info.sdf_image {
+            return Err(SolverError::Unsupported(format!(
+                "sdf=image: {} cannot filter R32_SFLOAT images; use sdf=storage",
+                self.info.adapter
+            )));
+        }
+        if values.len() != (w * h * d) as usize {
+            return Err(SolverError::Invalid(format!("{} values for a {w}×{h}×{d} image", values.len())));
+        }
+        if !self.kernels.is_empty() || self.sdf.is_some() {
+            return Err(SolverError::Invalid("the distance-field image is made once, before any kernel".into()));
+        }
+        let image = Image::volume(&self.dev, "distance fields", w, h, d)
+            .map_err(|e| SolverError::Unsupported(format!("sdf=image: {e}; use sdf=storage")))?;
+        let sampler = raw::Sampler::clamped(&self.dev).map_err(backend)?;
+        let bytes: &[u8] = bytemuck::cast_slice(values);
+        let map = self
+            .staging(bytes.len() as u64)?
+            .mapped()
+            .ok_or_else(|| SolverError::Driver("staging not host visible".into()))?;
+        map[..bytes.len()].copy_from_slice(bytes);
+        self.cmds.begin(0).map_err(backend)?;
+        self.cmds.copy_to_image(&self.staging, &image);
+        self.cmds.submit_and_wait(0).map_err(backend)?;
+        self.sdf = Some((image, sampler));
+        Ok(())
+    }
+
     fn bind(&mut self, sets: [Vec<(Buf, BufferId)>; 2]) -> Result<(), SolverError> {
         for (k, set) in sets.into_iter().enumerate() {
             self.bindings[k] = set.into_iter().map(|(b, id)| (b.binding(), descriptor(b.kind()), id)).collect();
@@ -249,14 +285,27 @@ impl Engine for VulkanEngine {
             }
             _ => None,
         };
-        if image.is_some() {
-            layout.push((Buf::Table.binding(), descriptor(BindKind::Image)));
+        let mut images: Vec<(u32, &Image)> = image.into_iter().collect();
+        let mut sampler = None;
+        if k.flavor.sdf_image {
+            let (img, smp) = self.sdf.as_ref().ok_or_else(|| SolverError::Shader {
+                kernel: k.shader_name(),
+                reason: "built without the distance-field image".into(),
+            })?;
+            images.push((Buf::SdfImage.binding(), img));
+            sampler = Some((Buf::SdfSampler.binding(), smp));
+        }
+        for &(b, _) in &images {
+            layout.push((b, vk::DescriptorType::SAMPLED_IMAGE));
+        }
+        if let Some((b, _)) = sampler {
+            layout.push((b, descriptor(BindKind::Sampler)));
         }
         let kernel = Kernel::new(&self.dev, &spirv, &layout, immediates).map_err(backend)?;
         let set = |parity: usize| {
             let bound: Vec<(u32, vk::DescriptorType, &Buffer)> =
                 self.bindings[parity].iter().map(|&(b, t, id)| (b, t, &self.buffers[id.0 as usize])).collect();
-            self.sets.allocate(&kernel, &bound, image).map_err(backend)
+            self.sets.allocate(&kernel, &bound, &images, sampler).map_err(backend)
         };
         let sets = [set(0)?, set(1)?];
         self.kernels.insert(k, (kernel, sets));

@@ -292,17 +292,15 @@ pub fn image_flavors(caps: &Caps) -> Vec<KernelRef> {
 }
 
 fn checked_flavors(caps: &Caps, table_image: bool) -> impl Iterator<Item = KernelRef> {
-    kernels::ALL
-        .iter()
-        .filter(|d| matches!(d.check, kernels::Check::Bound { .. }))
-        .flat_map(|d| d.flavors())
-        .filter(move |k| {
+    kernels::ALL.iter().filter(|d| matches!(d.check, kernels::Check::Bound { .. })).flat_map(|d| d.flavors()).filter(
+        move |k| {
             let f = k.flavor;
             (caps.immediates || f.constants != ConstantsHome::Immediates)
                 && (caps.float_atomics || !f.float_atomics)
                 && (table_image || !f.table_image)
                 && (caps.subgroups || !f.shuffle)
-        })
+        },
+    )
 }
 
 /// How many times [`rounding_spread`] a rollout may differ: a GPU's atomics add in any

@@ -13,7 +13,7 @@
 
 use clothlab_core::validate::Check;
 use clothlab_core::{CpuSolver, Exec, OrbitCamera, RenderMode, Scene, SimParams, Solver, View};
-use clothlab_engine::Variant;
+use clothlab_engine::{Variant, VariantSpec};
 use clothlab_gl::gl_solver;
 use clothlab_vulkan::vulkan_solver;
 use clothlab_wgpu::{SolverOptions, wgpu_solver};
@@ -227,18 +227,23 @@ pub fn assert_rollouts(solvers: Vec<(String, Box<dyn Solver>, bool)>, frames: u3
 /// The solvers are not stepped after: a rollout needs fresh ones
 /// ([`optimized_rollout_solvers`]).
 pub fn optimized_kernel_checks(sc: &Scene, params: &SimParams, seed: u64) -> Vec<Check> {
+    kernel_checks_of(&Variant::OPTIMIZED.into(), sc, params, seed)
+}
+
+/// [`optimized_kernel_checks`] for the recipe `spec` gives on each API.
+pub fn kernel_checks_of(spec: &VariantSpec, sc: &Scene, params: &SimParams, seed: u64) -> Vec<Check> {
     use clothlab_engine::validate::validate_kernels_with;
-    let (v, o) = (Variant::OPTIMIZED, SolverOptions::default);
+    let o = SolverOptions::default;
     let mut checks = Vec::new();
-    if let Some(mut s) = or_skip(wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
+    if let Some(mut s) = or_skip(wgpu_solver(spec.clone(), sc.clone(), params.clone(), o()), "wgpu") {
         let k = s.recipe_kernels();
         checks.extend(validate_kernels_with(&mut s, &k, sc, seed, params).unwrap());
     }
-    if let Some(mut s) = or_skip(vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
+    if let Some(mut s) = or_skip(vulkan_solver(spec.clone(), sc.clone(), params.clone(), true, o()), "vulkan") {
         let k = s.recipe_kernels();
         checks.extend(validate_kernels_with(&mut s, &k, sc, seed, params).unwrap());
     }
-    if let Some(mut s) = or_skip(gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
+    if let Some(mut s) = or_skip(gl_solver(spec.clone(), sc.clone(), params.clone(), o()), "gl") {
         let k = s.recipe_kernels();
         checks.extend(validate_kernels_with(&mut s, &k, sc, seed, params).unwrap());
     }
@@ -251,20 +256,45 @@ pub fn optimized_kernel_checks(sc: &Scene, params: &SimParams, seed: u64) -> Vec
 pub fn optimized_rollout_solvers(sc: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>, bool)> {
     let cpu = clothlab_engine::RecipeSolver::new(Exec::Serial, Variant::OPTIMIZED, sc.clone(), params.clone()).unwrap();
     let mut solvers: Vec<(String, Box<dyn Solver>, bool)> = vec![("cpu engine".into(), Box::new(cpu), true)];
-    let (v, o) = (Variant::OPTIMIZED, SolverOptions::default);
-    if let Some(s) = or_skip(wgpu_solver(v, sc.clone(), params.clone(), o()), "wgpu") {
+    for (name, s) in gpu_solvers_of(&Variant::OPTIMIZED.into(), sc, params) {
         let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("wgpu".into(), Box::new(s), exact));
-    }
-    if let Some(s) = or_skip(vulkan_solver(v, sc.clone(), params.clone(), true, o()), "vulkan") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("vulkan".into(), Box::new(s), exact));
-    }
-    if let Some(s) = or_skip(gl_solver(v, sc.clone(), params.clone(), o()), "gl") {
-        let exact = s.adapter().contains("llvmpipe");
-        solvers.push(("gl".into(), Box::new(s), exact));
+        solvers.push((name, s.into_solver(), exact));
     }
     solvers
+}
+
+/// A GPU solver of some API, for what the tests ask of every one.
+pub trait AnyGpuSolver: Solver {
+    /// Its adapter's name.
+    fn adapter(&self) -> String;
+    /// As a plain solver.
+    fn into_solver(self: Box<Self>) -> Box<dyn Solver>;
+}
+
+impl<E: clothlab_engine::Engine + 'static> AnyGpuSolver for clothlab_engine::GpuSolver<E> {
+    fn adapter(&self) -> String {
+        clothlab_engine::GpuSolver::adapter(self)
+    }
+    fn into_solver(self: Box<Self>) -> Box<dyn Solver> {
+        self
+    }
+}
+
+/// The recipe `spec` gives on wgpu, Vulkan (validation on) and GL, fresh, by API name;
+/// an API without an adapter is skipped as [`or_skip`] says.
+pub fn gpu_solvers_of(spec: &VariantSpec, sc: &Scene, params: &SimParams) -> Vec<(String, Box<dyn AnyGpuSolver>)> {
+    let o = SolverOptions::default;
+    let mut out: Vec<(String, Box<dyn AnyGpuSolver>)> = Vec::new();
+    if let Some(s) = or_skip(wgpu_solver(spec.clone(), sc.clone(), params.clone(), o()), "wgpu") {
+        out.push(("wgpu".into(), Box::new(s)));
+    }
+    if let Some(s) = or_skip(vulkan_solver(spec.clone(), sc.clone(), params.clone(), true, o()), "vulkan") {
+        out.push(("vulkan".into(), Box::new(s)));
+    }
+    if let Some(s) = or_skip(gl_solver(spec.clone(), sc.clone(), params.clone(), o()), "gl") {
+        out.push(("gl".into(), Box::new(s)));
+    }
+    out
 }
 
 /// Contacts alone act along a surface: no drag, wind or damping, no strain passes (they

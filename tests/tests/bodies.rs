@@ -296,86 +296,82 @@ fn image_spec() -> clothlab_engine::VariantSpec {
 
 #[test]
 fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_precision() {
-    use clothlab_engine::SolverOptions;
     let params = SimParams::default();
     // Physics first: the icosphere at 48 cells sampled by the texture unit drapes the
     // cloth as the analytic sphere does, within the storage path's bound (0.3 h + 2 mm:
     // the field's interpolation and the faceting; the filter's weights add at most
-    // 3 h·2^-9 with llvmpipe's 8 bits).
+    // 3 h·2^-9 with llvmpipe's 8 bits), on wgpu, Vulkan and GL.
     let h = 0.9 / 48.0;
     let mut sphere = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, drape(None), params.clone()).unwrap();
-    let Some(mut s) = clothlab_tests::or_skip(
-        clothlab_wgpu::wgpu_solver(image_spec(), drape(Some(48)), params.clone(), SolverOptions::default()),
-        "wgpu",
-    ) else {
-        return;
-    };
     for _ in 0..20 {
         sphere.step_frame().unwrap();
-        s.step_frame().unwrap();
     }
-    let (a, b) = (sphere.state().unwrap(), s.state().unwrap());
-    let worst = a
-        .pos
-        .iter()
-        .zip(&b.pos)
-        .map(|(p, q)| (0..3).map(|k| ((p[k] - q[k]) as f64).powi(2)).sum::<f64>().sqrt())
-        .fold(0.0, f64::max);
-    println!("sdf=image at 48 cells (h {h:.4} m): farthest particle {worst:.4} m from the analytic drape");
-    assert!(worst <= 0.3 * h + 0.002, "the image's drape {worst} m from the sphere's");
+    let a = sphere.state().unwrap();
+    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &drape(Some(48)), &params) {
+        for _ in 0..20 {
+            s.step_frame().unwrap();
+        }
+        let b = s.state().unwrap();
+        let worst = a
+            .pos
+            .iter()
+            .zip(&b.pos)
+            .map(|(p, q)| (0..3).map(|k| ((p[k] - q[k]) as f64).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0, f64::max);
+        println!("{api:7} sdf=image at 48 cells (h {h:.4} m): farthest particle {worst:.4} m from the analytic drape");
+        assert!(worst <= 0.3 * h + 0.002, "{api}: the image's drape {worst} m from the sphere's");
+    }
     // Its kernels against the twins (which interpolate the stored values themselves):
-    // within validate's bound for the image (`sdf_image_bound`), a turning, sliding body
-    // under the cloth as above.
+    // within validate's bound for the image (`sdf_image_bound`: 0.1 h), a turning, sliding
+    // body under the cloth as above; and 12 frames rolled out within it.
     let mut sc = drape(Some(32));
     sc.bodies[0].motion = Motion { spin: [0.0, 2.0, 0.0], velocity: [0.1, 0.0, 0.0], ..Motion::default() };
     sc.cloth.top_center[1] = 0.95;
-    let mut s = clothlab_wgpu::wgpu_solver(image_spec(), sc.clone(), params.clone(), SolverOptions::default()).unwrap();
-    let k = s.recipe_kernels();
-    assert!(k.iter().any(|k| k.flavor.sdf_image), "{k:?}: no kernel samples the image");
-    let checks = clothlab_engine::validate::validate_kernels_with(&mut s, &k, &sc, 0x5d, &params).unwrap();
+    let checks = clothlab_tests::kernel_checks_of(&image_spec(), &sc, &params, 0x5d);
+    assert!(checks.iter().any(|c| c.what.contains("_si")), "no kernel samples the image");
     assert_checks("sdf=image", &checks);
-    let s = clothlab_wgpu::wgpu_solver(image_spec(), sc.clone(), params.clone(), SolverOptions::default()).unwrap();
-    let mut c = clothlab_core::validate::validate_rollout(&mut { s }, 12).unwrap();
-    c.bound = c.bound.max(clothlab_engine::validate::sdf_image_bound(&sc));
-    println!("sdf=image rollout: {:.2e} m (bound {:.2e})", c.max_abs, c.bound);
-    assert!(c.passed(), "the image's rollout {} m from the CPU's, bound {}", c.max_abs, c.bound);
+    let bound = clothlab_engine::validate::sdf_image_bound(&sc);
+    for (api, s) in clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &params) {
+        let mut s = s.into_solver();
+        let mut c = clothlab_core::validate::validate_rollout(&mut *s, 12).unwrap();
+        c.bound = c.bound.max(bound);
+        println!("{api:7} sdf=image rollout: {:.2e} m (bound {:.2e})", c.max_abs, c.bound);
+        assert!(c.passed(), "{api}: the image's rollout {} m from the CPU's, bound {}", c.max_abs, c.bound);
+    }
 }
 
 #[test]
 fn a_patch_on_a_spinning_body_in_an_image_moves_with_its_surface() {
     // The spinning icosphere of the first test, sampled by the texture unit: the patch
     // moves at ω (r + margin) within the same 2 % (the normal by central differences
-    // points within a few degrees of the interpolant's gradient).
+    // points within a few degrees of the interpolant's gradient), on every API.
     let margin = SimParams::default().collision_margin;
     let surface = (OMEGA * (R + margin)) as f64;
-    let o = clothlab_engine::SolverOptions::default();
-    let Some(mut s) =
-        clothlab_tests::or_skip(clothlab_wgpu::wgpu_solver(image_spec(), spinning_body(), still_air(1.0), o), "wgpu")
-    else {
-        return;
-    };
-    for _ in 0..15 {
-        s.step_frame().unwrap();
+    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &spinning_body(), &still_air(1.0)) {
+        for _ in 0..15 {
+            s.step_frame().unwrap();
+        }
+        let v = mean_speed(&s.state().unwrap());
+        println!("{api:7} sdf=image sticking: mean speed {v:.4} m/s (surface {surface:.4})");
+        assert!((v - surface).abs() <= 0.02 * surface, "{api}: sticking patch at {v} m/s, the surface {surface}");
     }
-    let v = mean_speed(&s.state().unwrap());
-    println!("wgpu sdf=image sticking: mean speed {v:.4} m/s (surface {surface:.4})");
-    assert!((v - surface).abs() <= 0.02 * surface, "sticking patch at {v} m/s, the surface {surface}");
 }
 
 #[test]
-fn the_raw_apis_refuse_the_image_in_one_line() {
-    // Raw Vulkan and GL have no 3-D image path yet: `sdf=image` refused, naming the switch.
-    let o = clothlab_engine::SolverOptions::default;
-    let sc = drape(Some(24));
+fn a_scene_without_bodies_runs_the_image_switch_as_storage_does() {
+    // No bodies: the image is one texel the kernels never sample (the loop over bodies is
+    // empty), so the recipe computes the storage recipe's bits on every API.
+    let sc = Scene::with_n(24);
     let p = SimParams::default();
-    for (api, r) in [
-        ("vulkan", clothlab_vulkan::vulkan_solver(image_spec(), sc.clone(), p.clone(), true, o()).err()),
-        ("gl", clothlab_gl::gl_solver(image_spec(), sc.clone(), p.clone(), o()).err()),
-    ] {
-        let e = r.expect("sdf=image accepted").to_string();
-        println!("{api}: {e}");
-        if clothlab_tests::gpu_required() || !e.contains("no GPU adapter") {
-            assert!(e.contains("switch sdf=image") && !e.contains('\n'), "{api}: {e}");
+    let mut storage = clothlab_tests::gpu_solvers_of(&clothlab_engine::Variant::OPTIMIZED.into(), &sc, &p);
+    for ((api, mut a), (_, mut b)) in
+        clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &p).into_iter().zip(storage.drain(..))
+    {
+        for _ in 0..4 {
+            a.step_frame().unwrap();
+            b.step_frame().unwrap();
         }
+        let (a, b) = (a.state().unwrap(), b.state().unwrap());
+        assert_eq!(a.pos, b.pos, "{api}: sdf=image without bodies changed the cloth");
     }
 }

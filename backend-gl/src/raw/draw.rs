@@ -32,6 +32,8 @@ pub enum TexFormat {
     R32ui,
     /// 32-bit float depth.
     Depth32f,
+    /// One 32-bit float, filtered (the bodies' distance fields, a 3-D texture).
+    R32f,
 }
 
 impl TexFormat {
@@ -41,6 +43,7 @@ impl TexFormat {
             TexFormat::Srgba8 => glow::SRGB8_ALPHA8,
             TexFormat::R32ui => glow::R32UI,
             TexFormat::Depth32f => glow::DEPTH_COMPONENT32F,
+            TexFormat::R32f => glow::R32F,
         }
     }
 

@@ -113,6 +113,8 @@ pub struct Limits {
     pub uniform_block_size: u64,
     /// GL_MAX_TEXTURE_SIZE.
     pub texture_size: u32,
+    /// GL_MAX_3D_TEXTURE_SIZE.
+    pub texture_3d_size: u32,
     /// GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, bytes.
     pub shared_memory: u32,
     /// GL_SUBGROUP_SUPPORTED_FEATURES_KHR (0 without GL_KHR_shader_subgroup).
@@ -147,6 +149,8 @@ struct TextureObj {
     height: u32,
     format: TexFormat,
     samples: u32,
+    /// Slices of a 3-D texture ([`Gl::create_volume`]); 0 for a 2-D one.
+    depth: u32,
 }
 
 /// Every object made in the context, named by its index here. Interior mutability (the
@@ -433,6 +437,7 @@ impl Gl {
                 storage_block_size: gl.get_parameter_i64(glow::MAX_SHADER_STORAGE_BLOCK_SIZE).max(0) as u64,
                 uniform_block_size: gl.get_parameter_i64(glow::MAX_UNIFORM_BLOCK_SIZE).max(0) as u64,
                 texture_size: gl.get_parameter_i32(glow::MAX_TEXTURE_SIZE).max(0) as u32,
+                texture_3d_size: gl.get_parameter_i32(glow::MAX_3D_TEXTURE_SIZE).max(0) as u32,
                 shared_memory: gl.get_parameter_i32(glow::MAX_COMPUTE_SHARED_MEMORY_SIZE).max(0) as u32,
                 subgroup_features: if has_subgroups {
                     gl.get_parameter_i32(SUBGROUP_SUPPORTED_FEATURES) as u32
@@ -649,10 +654,63 @@ impl Gl {
             t
         };
         let mut o = self.objs.borrow_mut();
-        o.textures.push(Some(TextureObj { name: t, width, height, format, samples }));
+        o.textures.push(Some(TextureObj { name: t, width, height, format, samples, depth: 0 }));
         let i = o.textures.len() - 1;
         drop(o);
         self.check("creating a texture")?;
+        Ok(i)
+    }
+
+    /// A `width × height × depth` 3-D texture of `R32F` texels filled from `values` (x
+    /// fastest), filtered linearly and clamped to the edge: the bodies' distance fields
+    /// (`sdf=image`), sampled by compute programs.
+    pub fn create_volume(&self, width: u32, height: u32, depth: u32, values: &[f32]) -> Result<usize, GlError> {
+        let most = self.limits.texture_3d_size;
+        if width == 0 || height == 0 || depth == 0 || width.max(height).max(depth) > most {
+            return Err(GlError::Invalid("a 3-D texture side of 0 or over GL_MAX_3D_TEXTURE_SIZE"));
+        }
+        if values.len() != (width * height * depth) as usize {
+            return Err(GlError::Invalid("values that do not fill the 3-D texture"));
+        }
+        let gl = self.cur()?;
+        let t3 = glow::TEXTURE_3D;
+        // SAFETY: the context is current; immutable storage of the checked size, then
+        // `values` (exactly width × height × depth floats, checked) written into all of
+        // it with the default unpack state (alignment 4 divides a float).
+        let t = unsafe {
+            let t = gl.create_texture().map_err(|e| GlError::Gl { what: "creating a texture", reason: e })?;
+            gl.bind_texture(t3, Some(t));
+            gl.tex_storage_3d(t3, 1, glow::R32F, width as i32, height as i32, depth as i32);
+            for (what, v) in [
+                (glow::TEXTURE_MIN_FILTER, glow::LINEAR),
+                (glow::TEXTURE_MAG_FILTER, glow::LINEAR),
+                (glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE),
+                (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE),
+                (glow::TEXTURE_WRAP_R, glow::CLAMP_TO_EDGE),
+            ] {
+                gl.tex_parameter_i32(t3, what, v as i32);
+            }
+            gl.tex_sub_image_3d(
+                t3,
+                0,
+                0,
+                0,
+                0,
+                width as i32,
+                height as i32,
+                depth as i32,
+                glow::RED,
+                glow::FLOAT,
+                glow::PixelUnpackData::Slice(Some(bytemuck::cast_slice(values))),
+            );
+            gl.bind_texture(t3, None);
+            t
+        };
+        let mut o = self.objs.borrow_mut();
+        o.textures.push(Some(TextureObj { name: t, width, height, format: TexFormat::R32f, samples: 1, depth }));
+        let i = o.textures.len() - 1;
+        drop(o);
+        self.check("creating a 3-D texture")?;
         Ok(i)
     }
 
@@ -792,7 +850,9 @@ impl Gl {
             }
             for &(unit, i) in d.textures {
                 gl.active_texture(glow::TEXTURE0 + unit);
-                gl.bind_texture(glow::TEXTURE_2D, o.textures[i].map(|t| t.name));
+                let t = o.textures[i];
+                let target = if t.is_some_and(|t| t.depth > 0) { glow::TEXTURE_3D } else { glow::TEXTURE_2D };
+                gl.bind_texture(target, t.map(|t| t.name));
                 // A sampler object the renderer left on this unit would override the
                 // texture's NEAREST filters (and make an integer texture incomplete).
                 gl.bind_sampler(unit, None);

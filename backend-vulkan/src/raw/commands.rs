@@ -283,7 +283,8 @@ impl Commands {
     /// Records the upload of a whole image from `src` (tightly packed texels): layout to
     /// transfer destination, copy, layout to shader-read-only for compute.
     pub fn copy_to_image(&self, src: &Buffer, dst: &Image) {
-        if !self.recording() || src.size < dst.width as u64 * dst.height as u64 * texel_bytes(dst.format) {
+        let texels = dst.width as u64 * dst.height as u64 * dst.depth as u64;
+        if !self.recording() || src.size < texels * texel_bytes(dst.format) {
             self.poison("an image upload from a buffer too small for it");
             return;
         }
@@ -309,7 +310,7 @@ impl Commands {
             .image_subresource(
                 vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
             )
-            .image_extent(vk::Extent3D { width: dst.width, height: dst.height, depth: 1 })];
+            .image_extent(vk::Extent3D { width: dst.width, height: dst.height, depth: dst.depth })];
         // SAFETY: recording state; `src` holds width × height texels (the caller sizes it);
         // the image is live and only used by this command buffer until the barrier.
         unsafe {

@@ -89,6 +89,13 @@ pub struct Device {
     pub sync2: bool,
     /// Largest 2-D image side, texels.
     pub max_image_2d: u32,
+    /// The largest side of a 3-D image, texels.
+    pub max_image_3d: u32,
+    /// `R32_SFLOAT` images can be sampled with linear filtering (the bodies' distance
+    /// fields as an image, `sdf=image`).
+    pub r32f_linear: bool,
+    /// Bits of a filtered sample's fractional weights (`subTexelPrecisionBits`).
+    pub sub_texel_bits: u32,
     /// The queue draws too, with dynamic rendering (Vulkan 1.3): the renderer can run.
     pub dynamic_rendering: bool,
     /// The window's surface (null without a window).
@@ -373,6 +380,9 @@ impl Device {
         let name = props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
         let swapchain_loader =
             (surface != vk::SurfaceKHR::null()).then(|| ash::khr::swapchain::Device::new(&instance, &device));
+        // SAFETY: `physical` is a device of this instance.
+        let r32f = unsafe { instance.get_physical_device_format_properties(physical, vk::Format::R32_SFLOAT) };
+        let r32f_linear = r32f.optimal_tiling_features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
         let dev = Arc::new(Self {
             _entry: entry,
             instance,
@@ -398,6 +408,9 @@ impl Device {
             subgroup_shuffle,
             sync2,
             max_image_2d: props.limits.max_image_dimension2_d,
+            max_image_3d: props.limits.max_image_dimension3_d,
+            r32f_linear,
+            sub_texel_bits: props.limits.sub_texel_precision_bits,
             dynamic_rendering,
             surface,
             surface_loader,

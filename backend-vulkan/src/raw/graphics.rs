@@ -14,7 +14,7 @@ pub struct Sampler {
     dev: Arc<Device>,
     /// The Vulkan sampler.
     pub sampler: vk::Sampler,
-    alive: super::device::Alive,
+    pub(super) alive: super::device::Alive,
 }
 
 impl Sampler {
@@ -22,6 +22,16 @@ impl Sampler {
     /// repeating colour sampler.
     pub fn new(dev: &Arc<Device>, compare: bool) -> Result<Self, VkError> {
         let address = if compare { vk::SamplerAddressMode::CLAMP_TO_EDGE } else { vk::SamplerAddressMode::REPEAT };
+        Self::with(dev, address, compare)
+    }
+
+    /// A trilinear sampler clamped to the edge, no comparison (the bodies' distance
+    /// fields, `sdf=image`).
+    pub fn clamped(dev: &Arc<Device>) -> Result<Self, VkError> {
+        Self::with(dev, vk::SamplerAddressMode::CLAMP_TO_EDGE, false)
+    }
+
+    fn with(dev: &Arc<Device>, address: vk::SamplerAddressMode, compare: bool) -> Result<Self, VkError> {
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::LINEAR)
             .min_filter(vk::Filter::LINEAR)

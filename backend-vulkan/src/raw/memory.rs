@@ -99,6 +99,8 @@ pub struct Image {
     pub width: u32,
     /// Height, texels.
     pub height: u32,
+    /// Depth, texels (1 for a 2-D image).
+    pub depth: u32,
     /// Texel format.
     pub format: vk::Format,
     /// Colour or depth.
@@ -136,21 +138,55 @@ impl Image {
         )
     }
 
-    /// An image as `desc` says.
-    pub fn with_desc(dev: &Arc<Device>, name: &str, desc: ImageDesc) -> Result<Self, VkError> {
-        let ImageDesc { width, height, format, usage, samples } = desc;
-        let aspect =
-            if format == vk::Format::D32_SFLOAT { vk::ImageAspectFlags::DEPTH } else { vk::ImageAspectFlags::COLOR };
-        if width == 0 || height == 0 || width > dev.max_image_2d || height > dev.max_image_2d {
+    /// A `width × height × depth` 3-D image of `R32_SFLOAT` texels, sampled (with a
+    /// filtering sampler) by compute shaders and filled by transfer
+    /// ([`Commands::copy_to_image`]): the bodies' distance fields.
+    pub fn volume(dev: &Arc<Device>, name: &str, width: u32, height: u32, depth: u32) -> Result<Self, VkError> {
+        let most = dev.max_image_3d;
+        if width == 0 || height == 0 || depth == 0 || width.max(height).max(depth) > most {
             return Err(VkError::Vulkan {
-                what: "creating an image",
-                reason: format!("{width} × {height} texels; this device allows 1 … {} a side", dev.max_image_2d),
+                what: "creating a 3-D image",
+                reason: format!("{width} × {height} × {depth} texels; this device allows 1 … {most} a side"),
             });
         }
+        let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+        let desc =
+            ImageDesc { width, height, format: vk::Format::R32_SFLOAT, usage, samples: vk::SampleCountFlags::TYPE_1 };
+        Self::make(dev, name, desc, Some(depth))
+    }
+
+    /// An image as `desc` says.
+    pub fn with_desc(dev: &Arc<Device>, name: &str, desc: ImageDesc) -> Result<Self, VkError> {
+        if desc.width > dev.max_image_2d || desc.height > dev.max_image_2d {
+            return Err(VkError::Vulkan {
+                what: "creating an image",
+                reason: format!(
+                    "{} × {} texels; this device allows 1 … {} a side",
+                    desc.width, desc.height, dev.max_image_2d
+                ),
+            });
+        }
+        Self::make(dev, name, desc, None)
+    }
+
+    /// A 2-D image, or a 3-D one of `volume` slices (even one: the view's type must be
+    /// the shader's), sides checked by the caller.
+    fn make(dev: &Arc<Device>, name: &str, desc: ImageDesc, volume: Option<u32>) -> Result<Self, VkError> {
+        let ImageDesc { width, height, format, usage, samples } = desc;
+        let depth = volume.unwrap_or(1);
+        let aspect =
+            if format == vk::Format::D32_SFLOAT { vk::ImageAspectFlags::DEPTH } else { vk::ImageAspectFlags::COLOR };
+        if width == 0 || height == 0 || depth == 0 {
+            return Err(VkError::Vulkan {
+                what: "creating an image",
+                reason: format!("{width} × {height} × {depth} texels: a side of 0"),
+            });
+        }
+        let kind = if volume.is_some() { vk::ImageType::TYPE_3D } else { vk::ImageType::TYPE_2D };
         let info = vk::ImageCreateInfo::default()
-            .image_type(vk::ImageType::TYPE_2D)
+            .image_type(kind)
             .format(format)
-            .extent(vk::Extent3D { width, height, depth: 1 })
+            .extent(vk::Extent3D { width, height, depth })
             .mip_levels(1)
             .array_layers(1)
             .samples(samples)
@@ -192,6 +228,7 @@ impl Image {
             allocation: None,
             width,
             height,
+            depth,
             format,
             aspect,
             alive: Alive::new(),
@@ -203,7 +240,7 @@ impl Image {
         me.allocation = Some(allocation);
         let view_info = vk::ImageViewCreateInfo::default()
             .image(image)
-            .view_type(vk::ImageViewType::TYPE_2D)
+            .view_type(if volume.is_some() { vk::ImageViewType::TYPE_3D } else { vk::ImageViewType::TYPE_2D })
             .format(format)
             .subresource_range(range(aspect));
         // SAFETY: the image is live and bound; the view is destroyed first in Drop.

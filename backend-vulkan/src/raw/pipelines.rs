@@ -125,13 +125,14 @@ impl Sets {
         Ok(Self { dev: dev.clone(), pool, alive: Alive::new() })
     }
 
-    /// A set for `kernel` with `buffers[k]` (binding, type, buffer) bound whole, and
-    /// `image` (binding, image) as a sampled image.
+    /// A set for `kernel` with `buffers[k]` (binding, type, buffer) bound whole,
+    /// `images` (binding, image) as sampled images and `sampler` (binding, sampler).
     pub fn allocate(
         &self,
         kernel: &Kernel,
         buffers: &[(u32, vk::DescriptorType, &Buffer)],
-        image: Option<(u32, &Image)>,
+        images: &[(u32, &Image)],
+        sampler: Option<(u32, &super::Sampler)>,
     ) -> Result<Set, VkError> {
         let layouts = [kernel.set_layout];
         let info = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.pool).set_layouts(&layouts);
@@ -153,18 +154,31 @@ impl Sets {
                     .buffer_info(info)
             })
             .collect();
-        let image_info = image.map(|(_, img)| {
-            [vk::DescriptorImageInfo::default()
-                .image_view(img.view)
-                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
-        });
+        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = images
+            .iter()
+            .map(|(_, img)| {
+                [vk::DescriptorImageInfo::default()
+                    .image_view(img.view)
+                    .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
+            })
+            .collect();
+        let sampler_info = sampler.map(|(_, s)| [vk::DescriptorImageInfo::default().sampler(s.sampler)]);
         let mut writes = writes;
-        if let (Some((binding, _)), Some(info)) = (image, &image_info) {
+        for ((binding, _), info) in images.iter().zip(&image_infos) {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(*binding)
+                    .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                    .image_info(info),
+            );
+        }
+        if let (Some((binding, _)), Some(info)) = (sampler, &sampler_info) {
             writes.push(
                 vk::WriteDescriptorSet::default()
                     .dst_set(set)
                     .dst_binding(binding)
-                    .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                    .descriptor_type(vk::DescriptorType::SAMPLER)
                     .image_info(info),
             );
         }
@@ -172,7 +186,8 @@ impl Sets {
         unsafe { self.dev.device.update_descriptor_sets(&writes, &[]) };
         let mut alive = vec![self.alive.clone()];
         alive.extend(buffers.iter().map(|(_, _, b)| b.alive.clone()));
-        alive.extend(image.map(|(_, i)| i.alive.clone()));
+        alive.extend(images.iter().map(|(_, i)| i.alive.clone()));
+        alive.extend(sampler.map(|(_, s)| s.alive.clone()));
         Ok(Set { set, layout: kernel.set_layout, alive })
     }
 }

@@ -55,10 +55,10 @@ fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
         sdf_texel(clamp(g + ey, zero, top) + off, size) - sdf_texel(clamp(g - ey, zero, top) + off, size),
         sdf_texel(clamp(g + ez, zero, top) + off, size) - sdf_texel(clamp(g - ez, zero, top) + off, size),
     );
-    let gl = sqrt(dot3(gr, gr));
+    let glen = sqrt(dot3(gr, gr));
     var nl = vec3<f32>(0.0, 1.0, 0.0);
-    if gl > 1e-12 {
-        nl = vec3<f32>(gr.x / gl, gr.y / gl, gr.z / gl);
+    if glen > 1e-12 {
+        nl = vec3<f32>(gr.x / glen, gr.y / glen, gr.z / glen);
     }
     out.n = c0 * nl.x + c1 * nl.y + c2 * nl.z;
     out.valid = true;
