@@ -5,6 +5,8 @@
 # (lavapipe-pins, lavapipe-bodies). Run from the repository root after
 # `cargo build --release`:
 #   docs/bench/ab-scenes.sh A.toml B.toml LABEL_A LABEL_B "128 256" "cpu-par wgpu vulkan gl" ROUNDS "row1 row2"
+# A_ARGS and B_ARGS (optional) are added to A's and B's `sim` command: one scene under two
+# variants (lavapipe-sdf-image: `B_ARGS="--set-variant sdf=image"`).
 set -euo pipefail
 bin=${CLOTHLAB:-target/release/clothlab}
 a=$1 b=$2 label_a=$3 label_b=$4 sizes=$5 backends=$6 rounds=$7 rows=${8:-}
@@ -13,9 +15,10 @@ for round in $(seq 1 "$rounds"); do
   for n in $sizes; do
     for backend in $backends; do
       for which in "$label_a" "$label_b"; do
-        scene=$a
-        [ "$which" = "$label_b" ] && scene=$b
-        out=$($bin sim --scene "$scene" --backend "$backend" --n "$n" --steps "$steps" 2>&1)
+        scene=$a extra=${A_ARGS:-}
+        [ "$which" = "$label_b" ] && scene=$b extra=${B_ARGS:-}
+        # shellcheck disable=SC2086 # the extra arguments are words
+        out=$($bin sim --scene "$scene" --backend "$backend" --n "$n" --steps "$steps" $extra 2>&1)
         sub=$(echo "$out" | awk '/^time\/substep/ {print $2}')
         frame=$(echo "$out" | awk '$1 == "frame" {print $2}')
         line="round $round n $n $backend $which substep_us $sub frame_us $frame"

@@ -16,8 +16,8 @@ fn sdf_texel(t: vec3<f32>, size: vec3<f32>) -> f32 {
     return textureSampleLevel(sdf_image, sdf_sampler, (t + vec3<f32>(0.5)) / size, 0.0).x;
 }
 
-// Body k's field at x (core::cpu::collide::body_sample's contract): φ from one filtered
-// sample; the gradient by central differences of filtered samples half a cell each way
+// Body k's field at x (core::cpu::collide::body_sample's contract): where the cell's
+// first texel leaves φ possibly below reach, φ from one filtered sample; the gradient by central differences of filtered samples half a cell each way
 // along each axis (clamped to the body's own slices), so six more; `valid` false outside
 // its grid or where φ ≥ reach (nothing to push).
 fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
@@ -39,6 +39,13 @@ fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
     var z0 = 0u;
     for (var j = 0u; j < k; j++) {
         z0 += bitcast<u32>(shapes[j * SDF_HEAD_FLOATS + 30u]);
+    }
+    // The storage path's band skip (core::sdf::BAND_CELLS): one texel, not a filtered
+    // sample, where the cell's first corner shows φ ≥ reach all over the cell.
+    let c = min(floor(g), top - vec3<f32>(1.0));
+    let c000 = textureLoad(sdf_image, vec3<i32>(i32(c.x), i32(c.y), i32(c.z) + i32(z0)), 0).x;
+    if c000 - 1.75 * h >= reach {
+        return out;
     }
     let size = vec3<f32>(textureDimensions(sdf_image));
     let off = vec3<f32>(0.0, 0.0, f32(z0));
