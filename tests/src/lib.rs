@@ -297,6 +297,27 @@ pub fn gpu_solvers_of(spec: &VariantSpec, sc: &Scene, params: &SimParams) -> Vec
     out
 }
 
+/// The speed along x of [`moving_table`]'s table, m/s.
+pub const TABLE_V: f32 = 0.5;
+
+/// A 0.4 m cloth of 16 × 16 at rest lying `gap` m above the margin over a 1 m table that
+/// moves at [`TABLE_V`] along x (no floor, no spheres): the moving-contact scenes of
+/// tests/tests/motion.rs and friction.rs.
+pub fn moving_table(gap: f32) -> Scene {
+    use clothlab_core::scene::{Aabb, ColliderId, Pinning};
+    let margin = SimParams::default().collision_margin;
+    let mut sc = Scene::with_n(16);
+    sc.cloth.size = 0.4;
+    sc.cloth.pinning = Pinning::None;
+    sc.cloth.top_center = [0.0, 0.5 + margin + gap, -0.2];
+    sc.floor_y = None;
+    sc.spheres.clear();
+    sc.boxes = vec![Aabb::new([-0.5, 0.0, -0.5], [0.5, 0.5, 0.5])];
+    let motion = clothlab_core::Motion { velocity: [TABLE_V, 0.0, 0.0], ..clothlab_core::Motion::default() };
+    sc.motions = vec![(ColliderId::Box(0), motion)];
+    sc
+}
+
 /// Contacts alone act along a surface: no drag, wind or damping, no strain passes (they
 /// would move velocities after the contacts); `friction` as given.
 pub fn still_air(friction: f32) -> SimParams {

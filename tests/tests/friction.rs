@@ -6,9 +6,9 @@
 //! speed — and the GPU recipes bit for bit against the CPU with Coulomb contacts on
 //! moving colliders.
 
-use clothlab_core::scene::{Aabb, ColliderId, Pinning};
+use clothlab_core::scene::{ColliderId, Pinning};
 use clothlab_core::{ClothState, Integrator, Motion, Scene, SimParams, Solver};
-use clothlab_tests::{assert_checks, backends, every_backend, still_air};
+use clothlab_tests::{TABLE_V, assert_checks, backends, every_backend, moving_table, still_air};
 
 const G: f64 = 9.81;
 const MU_S: f32 = 0.5;
@@ -113,24 +113,6 @@ fn a_slope_holds_the_cloth_below_tan_theta_mu_s_and_lets_it_slide_above() {
     }
 }
 
-/// The table's speed along x, m/s.
-const TABLE_V: f32 = 0.5;
-
-/// A 0.4 m cloth at rest lying on a 1 m table (at the margin: in contact from the first
-/// substep) that moves at [`TABLE_V`] along x.
-fn moving_table() -> Scene {
-    let margin = SimParams::default().collision_margin;
-    let mut sc = Scene::with_n(16);
-    sc.cloth.size = 0.4;
-    sc.cloth.pinning = Pinning::None;
-    sc.cloth.top_center = [0.0, 0.5 + margin, -0.2];
-    sc.floor_y = None;
-    sc.spheres.clear();
-    sc.boxes = vec![Aabb::new([-0.5, 0.0, -0.5], [0.5, 0.5, 0.5])];
-    sc.motions = vec![(ColliderId::Box(0), Motion { velocity: [TABLE_V, 0.0, 0.0], ..Motion::default() })];
-    sc
-}
-
 #[test]
 fn a_moving_table_drags_the_cloth_at_mu_k_g_until_it_carries_it() {
     // The table slides under the cloth: kinetic friction on the velocity relative to the
@@ -147,7 +129,7 @@ fn a_moving_table_drags_the_cloth_at_mu_k_g_until_it_carries_it() {
     {
         let params = SimParams { integrator, ..coulomb(MU_S, MU_K) };
         let keep = |n: &str| integrator == Integrator::Verlet || n == "cpu" || n.ends_with("optimized");
-        for (name, mut s) in backends(&moving_table(), &params, keep) {
+        for (name, mut s) in backends(&moving_table(0.0), &params, keep) {
             let st = run(&mut *s, 6);
             let vx = mean(&st, |i| st.vel[i][0] as f64);
             let st = run(&mut *s, 24);
@@ -182,7 +164,7 @@ fn coulomb_contacts_on_moving_colliders_are_the_cpus_bits_on_every_optimized_rec
     // The moving table, a spinning sphere and the floor with Coulomb's coefficients: each
     // optimized recipe's kernels against their twins, and 12 frames rolled out bit for bit
     // on llvmpipe (the CPU's bits: the same operations in the same order).
-    let mut sc = moving_table();
+    let mut sc = moving_table(0.0);
     sc.cloth.top_center = [0.0, 0.5 + 0.01 + 2e-3, -0.45];
     sc.cloth.size = 0.9;
     sc.spheres = vec![clothlab_core::Sphere::new([0.0, 0.55, 0.3], 0.2)];

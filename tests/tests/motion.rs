@@ -5,7 +5,7 @@
 use clothlab_core::scene::{Aabb, ColliderId, Pinning};
 use clothlab_core::{ClothState, Ease, Integrator, Key, Motion, Repeat, Scene, SimParams, Solver, Sphere};
 use clothlab_engine::{RecipeSolver, Variant};
-use clothlab_tests::{assert_checks, every_backend, or_skip, still_air};
+use clothlab_tests::{TABLE_V, assert_checks, every_backend, moving_table, or_skip, still_air};
 
 /// Sphere radius, m, and its spin about z, rad/s.
 const R: f32 = 0.5;
@@ -76,27 +76,10 @@ fn a_patch_on_a_spinning_sphere_moves_with_its_surface_when_it_sticks_and_not_wh
     }
 }
 
-/// The table's speed along x, m/s.
-const TABLE_V: f32 = 0.5;
-
-/// A 0.4 m cloth lying 2 mm above a 1 m table that moves at [`TABLE_V`] along x.
-fn moving_table() -> Scene {
-    let margin = SimParams::default().collision_margin;
-    let mut sc = Scene::with_n(16);
-    sc.cloth.size = 0.4;
-    sc.cloth.pinning = Pinning::None;
-    sc.cloth.top_center = [0.0, 0.5 + margin + 2e-3, -0.2];
-    sc.floor_y = None;
-    sc.spheres.clear();
-    sc.boxes = vec![Aabb::new([-0.5, 0.0, -0.5], [0.5, 0.5, 0.5])];
-    sc.motions = vec![(ColliderId::Box(0), Motion { velocity: [TABLE_V, 0.0, 0.0], ..Motion::default() })];
-    sc
-}
-
 /// Steps `s` 0.5 s (30 frames) on the moving table; the cloth's mean x velocity and how
 /// far its centre moved, m.
 fn ride(name: &str, s: &mut dyn Solver) -> (f64, f64) {
-    let x0 = moving_table().cloth.top_center[0] as f64;
+    let x0 = moving_table(2e-3).cloth.top_center[0] as f64;
     for _ in 0..30 {
         s.step_frame().unwrap();
     }
@@ -113,7 +96,7 @@ fn a_cloth_on_a_table_moving_at_constant_velocity_moves_with_it_when_friction_st
     // within 0.03 s (2 mm and the margin at g), so by t = 0.5 s it has moved 0.5 · (0.5 −
     // 0.03) to 0.25 m.
     let v = TABLE_V as f64;
-    for (name, mut s) in every_backend(&moving_table(), &still_air(1.0)) {
+    for (name, mut s) in every_backend(&moving_table(2e-3), &still_air(1.0)) {
         let (vx, dx) = ride(&name, &mut *s);
         println!("{name:18} on the moving table: vx {vx:.6} m/s, moved {dx:.4} m");
         assert!((vx - v).abs() <= 1e-4 * v, "{name}: the cloth moves at {vx}, the table at {v}");
@@ -139,7 +122,7 @@ fn every_integrator_takes_the_moving_contacts_on_every_api() {
     ] {
         let params = SimParams { integrator, ..still_air(1.0) };
         let keep = |n: &str| n == "cpu" || n.ends_with("optimized");
-        for (name, mut s) in clothlab_tests::backends(&moving_table(), &params, keep) {
+        for (name, mut s) in clothlab_tests::backends(&moving_table(2e-3), &params, keep) {
             let (vx, dx) = ride(&name, &mut *s);
             println!("{integrator:?} {name:18} vx {vx:.6} m/s, moved {dx:.4} m");
             assert!((vx - v).abs() <= speed_bound * v, "{integrator:?} on {name}: the cloth moves at {vx}");

@@ -57,8 +57,19 @@ struct BodySample {
     valid: bool,
 }
 
-fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
-    var out = BodySample(0.0, vec3<f32>(0.0, 1.0, 0.0), false);
+// Where x lies in body k's grid: g, in cells from its first point (the frame of R's
+// columns about its translation), the last point's g (`top`), the cell h, the points per
+// axis; `inside` false outside the grid (both homes of the field: body_sample and
+// shared/sdf_image.wgsl's).
+struct BodyAt {
+    g: vec3<f32>,
+    top: vec3<f32>,
+    h: f32,
+    dims: vec3<u32>,
+    inside: bool,
+}
+
+fn body_at(k: u32, x: vec3<f32>) -> BodyAt {
     let hb = k * SDF_HEAD_FLOATS;
     let c0 = body_vec(k, 0u);
     let c1 = body_vec(k, 4u);
@@ -68,12 +79,34 @@ fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
     let lo = body_vec(k, 24u);
     let h = shapes[hb + 27u];
     let dims = vec3<u32>(bitcast<u32>(shapes[hb + 28u]), bitcast<u32>(shapes[hb + 29u]), bitcast<u32>(shapes[hb + 30u]));
-    let first = bitcast<u32>(shapes[hb + 31u]);
     let g = vec3<f32>((q.x - lo.x) / h, (q.y - lo.y) / h, (q.z - lo.z) / h);
     let top = vec3<f32>(f32(dims.x - 1u), f32(dims.y - 1u), f32(dims.z - 1u));
-    if !(g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0 && g.x <= top.x && g.y <= top.y && g.z <= top.z) {
+    let inside = g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0 && g.x <= top.x && g.y <= top.y && g.z <= top.z;
+    return BodyAt(g, top, h, dims, inside);
+}
+
+// The world direction of a gradient gr in body k's grid: normalised (up where it
+// vanishes), turned by R's columns.
+fn body_normal(k: u32, gr: vec3<f32>) -> vec3<f32> {
+    let glen = sqrt(dot3(gr, gr));
+    var nl = vec3<f32>(0.0, 1.0, 0.0);
+    if glen > 1e-12 {
+        nl = vec3<f32>(gr.x / glen, gr.y / glen, gr.z / glen);
+    }
+    return body_vec(k, 0u) * nl.x + body_vec(k, 4u) * nl.y + body_vec(k, 8u) * nl.z;
+}
+
+fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
+    var out = BodySample(0.0, vec3<f32>(0.0, 1.0, 0.0), false);
+    let at = body_at(k, x);
+    if !at.inside {
         return out;
     }
+    let g = at.g;
+    let top = at.top;
+    let h = at.h;
+    let dims = at.dims;
+    let first = bitcast<u32>(shapes[k * SDF_HEAD_FLOATS + 31u]);
     let c = min(floor(g), top - vec3<f32>(1.0));
     let f = g - c;
     let sy = dims.x;
@@ -100,12 +133,7 @@ fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
         lerp1(lerp1(c010 - c000, c110 - c100, f.x), lerp1(c011 - c001, c111 - c101, f.x), f.z),
         lerp1(lerp1(c001 - c000, c101 - c100, f.x), lerp1(c011 - c010, c111 - c110, f.x), f.y),
     );
-    let gl = sqrt(dot3(gr, gr));
-    var nl = vec3<f32>(0.0, 1.0, 0.0);
-    if gl > 1e-12 {
-        nl = vec3<f32>(gr.x / gl, gr.y / gl, gr.z / gl);
-    }
-    out.n = c0 * nl.x + c1 * nl.y + c2 * nl.z;
+    out.n = body_normal(k, gr);
     out.valid = true;
     return out;
 }

@@ -17,25 +17,19 @@ fn sdf_texel(t: vec3<f32>, size: vec3<f32>) -> f32 {
 }
 
 // Body k's field at x (core::cpu::collide::body_sample's contract): where the cell's
-// first texel leaves φ possibly below reach, φ from one filtered sample; the gradient by central differences of filtered samples half a cell each way
-// along each axis (clamped to the body's own slices), so six more; `valid` false outside
-// its grid or where φ ≥ reach (nothing to push).
+// first texel leaves φ possibly below reach, φ from one filtered sample; the gradient by
+// central differences of filtered samples half a cell each way along each axis (clamped
+// to the body's own slices), so six more; `valid` false outside its grid or where
+// φ ≥ reach (nothing to push).
 fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
     var out = BodySample(0.0, vec3<f32>(0.0, 1.0, 0.0), false);
-    let hb = k * SDF_HEAD_FLOATS;
-    let c0 = body_vec(k, 0u);
-    let c1 = body_vec(k, 4u);
-    let c2 = body_vec(k, 8u);
-    let d = x - body_vec(k, 12u);
-    let q = vec3<f32>(dot3(c0, d), dot3(c1, d), dot3(c2, d));
-    let lo = body_vec(k, 24u);
-    let h = shapes[hb + 27u];
-    let dims = vec3<u32>(bitcast<u32>(shapes[hb + 28u]), bitcast<u32>(shapes[hb + 29u]), bitcast<u32>(shapes[hb + 30u]));
-    let g = vec3<f32>((q.x - lo.x) / h, (q.y - lo.y) / h, (q.z - lo.z) / h);
-    let top = vec3<f32>(f32(dims.x - 1u), f32(dims.y - 1u), f32(dims.z - 1u));
-    if !(g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0 && g.x <= top.x && g.y <= top.y && g.z <= top.z) {
+    let at = body_at(k, x);
+    if !at.inside {
         return out;
     }
+    let g = at.g;
+    let top = at.top;
+    let h = at.h;
     var z0 = 0u;
     for (var j = 0u; j < k; j++) {
         z0 += bitcast<u32>(shapes[j * SDF_HEAD_FLOATS + 30u]);
@@ -62,12 +56,7 @@ fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
         sdf_texel(clamp(g + ey, zero, top) + off, size) - sdf_texel(clamp(g - ey, zero, top) + off, size),
         sdf_texel(clamp(g + ez, zero, top) + off, size) - sdf_texel(clamp(g - ez, zero, top) + off, size),
     );
-    let glen = sqrt(dot3(gr, gr));
-    var nl = vec3<f32>(0.0, 1.0, 0.0);
-    if glen > 1e-12 {
-        nl = vec3<f32>(gr.x / glen, gr.y / glen, gr.z / glen);
-    }
-    out.n = c0 * nl.x + c1 * nl.y + c2 * nl.z;
+    out.n = body_normal(k, gr);
     out.valid = true;
     return out;
 }
