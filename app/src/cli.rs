@@ -275,6 +275,9 @@ The switches (values in ladder order, the naive one first):
   temporal=off|on                 the tiles advance one substep per dispatch, or several
                                   with a deeper halo (a whole frame where the cloth fits
                                   one tile; needs fusion=tile)
+  sdf=storage|image               the bodies' distance fields: a storage buffer the
+                                  kernel interpolates, or a 3-D image the texture unit
+                                  interpolates (within 0.1 cell of the twins)
 A switch the adapter lacks, or two that exclude each other, is refused in one line.";
 
 /// The variant of the GPU backends: a preset and changes of single switches.
