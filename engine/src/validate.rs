@@ -148,18 +148,24 @@ fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
 pub const COMPARED_BUFFERS: usize = 11;
 
 /// How far a contact through the distance-field image (`sdf=image`) may move a particle
-/// from its twin's, in cells of the coarsest body's grid: the texture
-/// unit's weights have a few bits (8 on llvmpipe and NVIDIA, at least 4 by Vulkan's
-/// rules), so φ is within 3 h·2^-(bits+1) of the interpolant (0.006 h at 8 bits, 0.09 h
-/// at 4), and the normal comes from central differences across half a cell instead of the
-/// interpolant's gradient, turning the push of up to half a cell a little. Measured on
-/// llvmpipe: 0.023 h (the kernel checks of a turning icosphere).
+/// from its twin's, in cells of the coarsest body's grid: φ comes from the texture unit,
+/// whose weights have a few bits (`subTexelPrecisionBits`: at least 4 by Vulkan's rules,
+/// 8 on NVIDIA), so it is within 3 h·2^-(bits+1) of the interpolant — 0.094 h at 4 bits,
+/// 0.006 h at 8 — and the push is along the interpolant's own gradient from the same
+/// texels (the twin's normal). Measured on llvmpipe: 6e-8 m (its weights are finer).
 pub const SDF_IMAGE_CELLS: f32 = 0.1;
 
-/// The velocities' relative bound of the image's flavors: the contact removes the part
-/// along its normal, whose direction differs from the twin's by the central differences'
-/// few degrees (measured on llvmpipe: 3.4e-4).
-pub const SDF_IMAGE_VEL: f32 = 5e-3;
+/// The velocities' bound of the image's flavors in `scene`, m/s: a contact leaves the
+/// particle the surface's velocity at its pushed position, which the image may put
+/// [`sdf_image_bound`] off the twin's: ω × that for the fastest-turning body at time 0
+/// (the kernel checks' colliders).
+pub fn sdf_image_vel_bound(scene: &Scene) -> f32 {
+    let spin = scene.bodies.iter().map(|b| {
+        let s = b.head_at(0.0, 0).spin;
+        (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt()
+    });
+    sdf_image_bound(scene) * spin.fold(0.0, f32::max)
+}
 
 /// [`SDF_IMAGE_CELLS`] of the coarsest body's cell in `scene`, m (0 without bodies): how
 /// far the image's contacts may put a particle from the twins', and the rollouts' bound
@@ -259,17 +265,20 @@ pub fn validate_kernels_with(
             ("aux4", &got.aux[4], &want.aux[4]),
             ("scalars", &got.scalars, &want.scalars),
         ];
-        // The image's flavors: positions within `sdf_image_bound` of the twin's (in
-        // metres, so relative to this buffer's largest value), velocities within
-        // SDF_IMAGE_VEL of theirs (the contact's normal from the filtered samples).
-        let image = if k.flavor.sdf_image { sdf_image_bound(scene) } else { 0.0 };
+        // The image's flavors: positions within `sdf_image_bound` of the twin's and
+        // velocities within `sdf_image_vel_bound` (in metres and m/s, so relative to the
+        // buffer's largest value).
+        let image = if k.flavor.sdf_image { [sdf_image_bound(scene), sdf_image_vel_bound(scene)] } else { [0.0; 2] };
         for (name, g, w) in compared {
             let mut c = compare(&what, name, g, w, true, relative);
-            if image > 0.0 && name == "pos" {
+            let extra = match name {
+                "pos" => image[0],
+                "vel" => image[1],
+                _ => 0.0,
+            };
+            if extra > 0.0 {
                 let scale = w.iter().flat_map(|v| v[..3].iter()).fold(0.0f32, |m, x| m.max(x.abs()));
-                c.bound = c.bound.max(image / scale.max(f32::MIN_POSITIVE));
-            } else if image > 0.0 && name == "vel" {
-                c.bound = c.bound.max(SDF_IMAGE_VEL);
+                c.bound = c.bound.max(extra / scale.max(f32::MIN_POSITIVE));
             }
             checks.push(c);
         }

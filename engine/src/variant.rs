@@ -123,8 +123,8 @@ pub enum Sdf {
     /// the CPU twins' arithmetic, bit for bit on llvmpipe.
     Storage,
     /// A 3-D `r32float` image the texture unit interpolates (the thesis's texture memory):
-    /// one filtered sample for φ, six for the gradient by central differences; within the
-    /// filter's precision of the twins.
+    /// one filtered sample for φ, the cell's eight texels for the interpolant's gradient
+    /// (the twin's normal); within the filter's precision of the twins.
     Image,
 }
 
@@ -628,7 +628,11 @@ pub fn covering(caps: &Caps, api: &str) -> Vec<Variant> {
         ladder(caps, api).into_iter().filter(|r| r.skipped.is_none()).map(|r| r.variant).collect();
     let mut cas = Variant::NAIVE.fit(caps);
     cas.atomics = if cas.atomics == Atomics::Float { Atomics::Cas } else { Atomics::Float };
-    for extra in [Variant::THESIS.fit(caps), cas] {
+    // The image's rung sits on the temporal one, which a moving scene refuses: it is also
+    // covered on `optimized`.
+    let mut image = Variant::OPTIMIZED.fit(caps);
+    image.sdf = Sdf::Image;
+    for extra in [Variant::THESIS.fit(caps), cas, image] {
         if extra.check(caps, api).is_ok() && !v.contains(&extra) {
             v.push(extra);
         }

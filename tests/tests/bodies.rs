@@ -300,7 +300,7 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
     // Physics first: the icosphere at 48 cells sampled by the texture unit drapes the
     // cloth as the analytic sphere does, within the storage path's bound (0.3 h + 2 mm:
     // the field's interpolation and the faceting; the filter's weights add at most
-    // 3 h·2^-9 with llvmpipe's 8 bits), on wgpu, Vulkan and GL.
+    // 3 h·2^-(bits+1), 0.094 h at the 4 bits Vulkan allows), on wgpu, Vulkan and GL.
     let h = 0.9 / 48.0;
     let mut sphere = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, drape(None), params.clone()).unwrap();
     for _ in 0..20 {
@@ -343,8 +343,8 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
 #[test]
 fn a_patch_on_a_spinning_body_in_an_image_moves_with_its_surface() {
     // The spinning icosphere of the first test, sampled by the texture unit: the patch
-    // moves at ω (r + margin) within the same 2 % (the normal by central differences
-    // points within a few degrees of the interpolant's gradient), on every API.
+    // moves at ω (r + margin) within the same 2 % (φ through the filter, the push along
+    // the interpolant's gradient as through storage), on every API.
     let margin = SimParams::default().collision_margin;
     let surface = (OMEGA * (R + margin)) as f64;
     for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &spinning_body(), &still_air(1.0)) {

@@ -178,8 +178,11 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
                 let checks = validate_kernels_with(runner, &image_kernels, &scene, 0x5eed, &params)?;
                 rows.extend(worst_rows(&image_kernels, &checks, " (sdf=image)"));
             }
+            // Temporal blocking poses the colliders and pins once per dispatch: a scene
+            // where they move refuses it (its rung is not rolled out).
             rollouts = covering(&caps, api)
                 .into_iter()
+                .filter(|v| !(scene.animated() && v.temporal == clothlab_engine::variant::Temporal::On))
                 .map(|v| GpuSetup { variant: Some(v.into()), ..GpuSetup::default() })
                 .collect();
         } else {
@@ -191,7 +194,7 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
             let mut c = validate_rollout(rollout_solver.get(), frames)?;
             c.bound = c.bound.max(SPREAD_FACTOR * spread);
             // Through the image a contact may sit a little off the twin's (the filter's
-            // weights, the normal by central differences): SDF_IMAGE_CELLS of a cell.
+            // weights): SDF_IMAGE_CELLS of a cell.
             if rollout_solver.variant().is_some_and(|v| v.sdf == clothlab_engine::variant::Sdf::Image) {
                 c.bound = c.bound.max(sdf_image_bound(&scene));
             }

@@ -96,6 +96,27 @@ fn body_normal(k: u32, gr: vec3<f32>) -> vec3<f32> {
     return body_vec(k, 0u) * nl.x + body_vec(k, 4u) * nl.y + body_vec(k, 8u) * nl.z;
 }
 
+// The gradient (per cell) of the trilinear interpolant of a cell's corner values cijk
+// (at x = i, y = j, z = k) at f within the cell (core::sdf::sample_grid's): both homes of
+// the field push along it.
+fn cell_gradient(
+    c000: f32,
+    c100: f32,
+    c010: f32,
+    c110: f32,
+    c001: f32,
+    c101: f32,
+    c011: f32,
+    c111: f32,
+    f: vec3<f32>,
+) -> vec3<f32> {
+    return vec3<f32>(
+        lerp1(lerp1(c100 - c000, c110 - c010, f.y), lerp1(c101 - c001, c111 - c011, f.y), f.z),
+        lerp1(lerp1(c010 - c000, c110 - c100, f.x), lerp1(c011 - c001, c111 - c101, f.x), f.z),
+        lerp1(lerp1(c001 - c000, c101 - c100, f.x), lerp1(c011 - c010, c111 - c110, f.x), f.y),
+    );
+}
+
 fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
     var out = BodySample(0.0, vec3<f32>(0.0, 1.0, 0.0), false);
     let at = body_at(k, x);
@@ -128,12 +149,7 @@ fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
         lerp1(lerp1(c001, c101, f.x), lerp1(c011, c111, f.x), f.y),
         f.z,
     );
-    let gr = vec3<f32>(
-        lerp1(lerp1(c100 - c000, c110 - c010, f.y), lerp1(c101 - c001, c111 - c011, f.y), f.z),
-        lerp1(lerp1(c010 - c000, c110 - c100, f.x), lerp1(c011 - c001, c111 - c101, f.x), f.z),
-        lerp1(lerp1(c001 - c000, c101 - c100, f.x), lerp1(c011 - c010, c111 - c110, f.x), f.y),
-    );
-    out.n = body_normal(k, gr);
+    out.n = body_normal(k, cell_gradient(c000, c100, c010, c110, c001, c101, c011, c111, f));
     out.valid = true;
     return out;
 }
