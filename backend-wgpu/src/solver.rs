@@ -64,9 +64,9 @@ pub struct WgpuEngine {
     readbacks: Vec<(BufferId, u64)>,
     /// The spring table as a texture (`table=image`), and its height.
     table: Option<(wgpu::Texture, u32)>,
-    /// The bodies' distance fields as a 3-D texture (`sdf=image`), its size, and (once
-    /// bound) its view and trilinear sampler.
-    sdf: Option<(wgpu::Texture, [u32; 3])>,
+    /// The bodies' distance fields as a 3-D texture (`sdf=image`), and (once bound) its
+    /// view and trilinear sampler.
+    sdf: Option<wgpu::Texture>,
     sdf_bound: Option<(wgpu::TextureView, wgpu::Sampler)>,
 }
 
@@ -314,7 +314,10 @@ impl Engine for WgpuEngine {
                 self.info.adapter
             )));
         }
-        if w.max(h).max(d) > max || values.len() != (w * h * d) as usize {
+        if values.len() != (w * h * d) as usize {
+            return Err(SolverError::Invalid(format!("{} values for a {w}×{h}×{d} image", values.len())));
+        }
+        if w.max(h).max(d) > max {
             return Err(SolverError::Unsupported(format!(
                 "sdf=image: the bodies' fields need a {w}×{h}×{d} image, more than the {max} texels a side {} allows; use sdf=storage",
                 self.info.adapter
@@ -340,7 +343,7 @@ impl Engine for WgpuEngine {
             wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 4), rows_per_image: Some(h) },
             size,
         );
-        self.sdf = Some((texture, dims));
+        self.sdf = Some(texture);
         self.ctx.check("uploading the distance-field image").map_err(backend)
     }
 
@@ -348,7 +351,7 @@ impl Engine for WgpuEngine {
         for &(_, id) in sets.iter().flatten() {
             self.buf(id)?;
         }
-        self.sdf_bound = self.sdf.as_ref().map(|(t, _)| {
+        self.sdf_bound = self.sdf.as_ref().map(|t| {
             let sampler = self.ctx.device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("distance fields, trilinear"),
                 address_mode_u: wgpu::AddressMode::ClampToEdge,
