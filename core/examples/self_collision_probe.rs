@@ -118,11 +118,11 @@ fn main() {
         let st = s.state_ref();
         let p = StepParams::new(&params, &scene, None);
         let np = st.pos.len();
-        let mut cells = vec![[0.0f32; 4]; np];
-        let mut totals = vec![[0.0f32; 4]; np];
-        let mut slots = vec![[0.0f32; 4]; np];
-        build_hash(&p, &st.pos, &mut cells, &mut totals, &mut slots);
-        let cw = hash_words(&cells);
+        let mut aux = vec![vec![[0.0f32; 4]; np]; clothlab_core::cpu::AUX];
+        let mut h = hash_buffers(&mut aux);
+        build_hash(&p, &st.pos, &st.vel, &mut h);
+        let (cells, slots) = (&*h.cells, &*h.slots);
+        let cw = hash_words(cells);
         let size = table_size(np);
         let (inv, t) = (p.inv_cell, p.self_thickness);
         let (mut rows_n, mut probed, mut empty, mut entries, mut cands, mut foreign, mut near, mut max_entries) =

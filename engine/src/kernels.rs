@@ -900,44 +900,40 @@ fn implicit_finish(a: &TwinArgs, b: &mut HostBuffers) {
 
 // ---- self-collision (core::cpu::self_collide): the hash in aux2 (cells), aux3, aux4 ----
 
-fn hash_buffers(b: &mut HostBuffers) -> (&mut [V4], &mut [V4], &mut [V4]) {
+fn hash_buffers(b: &mut HostBuffers) -> cpu::HashBuffers<'_> {
     cpu::hash_buffers(&mut b.aux)
 }
 
 fn hash_count(a: &TwinArgs, b: &mut HostBuffers) {
-    let pos = std::mem::take(&mut b.pos);
-    let (cells, totals, _) = hash_buffers(b);
-    cpu::hash_count(a.p, &pos, cells, totals);
-    b.pos = pos;
+    let h = cpu::hash_buffers(&mut b.aux);
+    cpu::hash_count(a.p, &b.pos, h.cells, h.totals);
 }
 
 fn hash_scan_blocks(_: &TwinArgs, b: &mut HostBuffers) {
-    let (cells, totals, _) = hash_buffers(b);
-    cpu::hash_scan_blocks(cells, totals);
+    let h = hash_buffers(b);
+    cpu::hash_scan_blocks(h.cells, h.totals);
 }
 
 fn hash_scan_top(_: &TwinArgs, b: &mut HostBuffers) {
-    cpu::hash_scan_top(hash_buffers(b).1);
+    cpu::hash_scan_top(hash_buffers(b).totals);
 }
 
 fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
-    let pos = std::mem::take(&mut b.pos);
-    let (cells, _, slots) = hash_buffers(b);
-    cpu::hash_scatter(a.p, &pos, cells, slots);
-    b.pos = pos;
+    let h = cpu::hash_buffers(&mut b.aux);
+    cpu::hash_scatter(a.p, &b.pos, &b.vel, h.cells, h.slots, h.vel_copy);
 }
 
 fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {
-    let [.., cells, _, slots] = &b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
-    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.vel, cells, slots, Some(&a.topo.slots), &mut b.pos_out);
+    let [vel_copy, _, cells, _, slots] = &b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
+    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.vel, cells, slots, vel_copy, Some(&a.topo.slots), &mut b.pos_out);
 }
 
 /// Kernel-test inputs: the hash built by the twins up to the kernel under test (the
 /// counts cleared first, as the recipe does).
 fn hash_input(upto: usize) -> impl Fn(&TwinArgs, &mut HostBuffers) {
     move |a, b| {
-        let (cells, totals, _) = hash_buffers(b);
-        cells.iter_mut().chain(totals.iter_mut()).for_each(|c| *c = [0.0; 4]);
+        let h = hash_buffers(b);
+        h.cells.iter_mut().chain(h.totals.iter_mut()).for_each(|c| *c = [0.0; 4]);
         let steps: [Twin; 4] = [hash_count, hash_scan_top, hash_scan_blocks, hash_scatter];
         for step in &steps[..upto] {
             step(a, b);
@@ -1507,7 +1503,7 @@ pub static HASH_SCAN_BLOCKS: KernelDef = KernelDef {
 pub static HASH_SCATTER: KernelDef = KernelDef {
     test_input: Some(after_scan),
     check: Check::Own("the_gpu_hash_lists_what_the_cpu_lists_after_its_scatter"),
-    ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Pos, Aux2], &[Aux2, Aux4])
+    ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Pos, Vel, Aux2], &[Aux0, Aux2, Aux4])
 };
 /// The response's check: a gather over the contacts, in fixed point.
 const RESPONSE: Check = Check::Bound {
@@ -1523,7 +1519,7 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
     cloths: Cloths::Grid,
-    ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, Aux2, Aux4], &[PosOut, Vel])
+    ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, Aux0, Aux2, Aux4], &[PosOut, Vel])
 };
 /// [`SELF_COLLIDE`] on a mesh: pairs of consecutive particles, a particle's neighbours
 /// its springs (from the table, for the entries within the thickness).
@@ -1537,7 +1533,7 @@ pub static SELF_COLLIDE_MESH: KernelDef = KernelDef {
         "self_collide_mesh",
         self_collide,
         Count::Pairs,
-        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Aux2, Aux4],
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Aux0, Aux2, Aux4],
         &[PosOut, Vel],
     )
 };

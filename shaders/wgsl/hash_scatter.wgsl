@@ -1,8 +1,9 @@
-//! include: state, hash_atomic, hash_fn
+//! include: state, hash_atomic, hash_fn, hash_vel
 // hash_scatter — per particle: its position and slot word (as the bits of w; its bucket and
 // word computed again from its position) into the slot before its bucket's end (atomics:
 // in any order), which leaves the bucket's word at its start
-// (core::cpu::self_collide::hash_scatter).
+// (core::cpu::self_collide::hash_scatter); with Coulomb friction its velocity into
+// vel_copy (by index).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
@@ -10,6 +11,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     let i = flat_id(id, groups);
     if i >= np {
         return;
+    }
+    if coulomb() {
+        vel_copy[i] = vel[i];
     }
     let x = pos[i];
     let c = cell_of(x.xyz);

@@ -32,7 +32,8 @@ pub use integrators::{
 pub use lanes::Lanes;
 pub use normals::{FaceLanes, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows};
 pub use self_collide::{
-    build_hash, hash_buffers, hash_count, hash_scan_blocks, hash_scan_top, hash_scatter, self_collide, self_collide_at,
+    HashBuffers, build_hash, hash_buffers, hash_count, hash_scan_blocks, hash_scan_top, hash_scatter, self_collide,
+    self_collide_at,
 };
 pub use simd::{FUSED_ENV, SIMD_ENV, Simd, fused_from_env};
 pub use solver::CpuSolver;

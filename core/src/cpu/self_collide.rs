@@ -281,7 +281,14 @@ pub fn hash_scan_top(totals: &mut [V4]) {
 /// particles of a bucket in index order here, in any order on a GPU), which moves the
 /// bucket's word down to its start. Slots out of range (never after [`hash_count`] and the
 /// scans) are skipped.
-pub fn hash_scatter(p: &StepParams, pos: &[V4], cells: &mut [V4], slots: &mut [V4]) {
+///
+/// With Coulomb friction ([`StepParams::coulomb`]) every particle's velocity is also
+/// copied into `vel_copy` (by index): the response reads its contacts' velocities there,
+/// since it writes `vel` in place.
+pub fn hash_scatter(p: &StepParams, pos: &[V4], vel: &[V4], cells: &mut [V4], slots: &mut [V4], vel_copy: &mut [V4]) {
+    if p.coulomb() {
+        vel_copy[..vel.len()].copy_from_slice(vel);
+    }
     let (size, inv) = (table_size(pos.len()), inv_cell(p));
     let cells = words_mut(cells);
     for (i, x) in pos.iter().enumerate().rev() {
@@ -295,22 +302,35 @@ pub fn hash_scatter(p: &StepParams, pos: &[V4], cells: &mut [V4], slots: &mut [V
     }
 }
 
-/// The hash's three buffers among the integrators' scratch buffers (`aux`, [`super::AUX`]
-/// of them): aux2 (cells), aux3 (the blocks' totals) and aux4 (slots).
-pub fn hash_buffers(aux: &mut [Vec<V4>]) -> (&mut [V4], &mut [V4], &mut [V4]) {
-    let [_, _, cells, totals, slots, ..] = aux else { panic!("the {} integrator scratch buffers", super::AUX) };
-    (cells, totals, slots)
+/// The hash's buffers among the integrators' scratch buffers (`aux`, [`super::AUX`] of
+/// them): aux2 (cells), aux3 (the blocks' totals), aux4 (slots), and aux0, the
+/// velocities' copy that Coulomb friction between particles reads ([`hash_scatter`]).
+pub struct HashBuffers<'a> {
+    /// aux2: a word per bucket.
+    pub cells: &'a mut [V4],
+    /// aux3: the blocks' totals.
+    pub totals: &'a mut [V4],
+    /// aux4: the slots.
+    pub slots: &'a mut [V4],
+    /// aux0: the velocities before the response (Coulomb friction only).
+    pub vel_copy: &'a mut [V4],
 }
 
-/// Steps 1 to 3: the hash of `pos` in `cells`, `totals` and `slots` (one element per
-/// particle each).
-pub fn build_hash(p: &StepParams, pos: &[V4], cells: &mut [V4], totals: &mut [V4], slots: &mut [V4]) {
+/// [`HashBuffers`] in `aux`.
+pub fn hash_buffers(aux: &mut [Vec<V4>]) -> HashBuffers<'_> {
+    let [vel_copy, _, cells, totals, slots, ..] = aux else { panic!("the {} integrator scratch buffers", super::AUX) };
+    HashBuffers { cells, totals, slots, vel_copy }
+}
+
+/// Steps 1 to 3: the hash of `pos` in `h` (one element per particle each buffer).
+pub fn build_hash(p: &StepParams, pos: &[V4], vel: &[V4], h: &mut HashBuffers) {
+    let HashBuffers { cells, totals, slots, vel_copy } = h;
     cells.iter_mut().for_each(|c| *c = [0.0; 4]);
     totals[..hash_blocks(pos.len()) as usize].iter_mut().for_each(|c| *c = [0.0; 4]);
     hash_count(p, pos, cells, totals);
     hash_scan_top(totals);
     hash_scan_blocks(cells, totals);
-    hash_scatter(p, pos, cells, slots);
+    hash_scatter(p, pos, vel, cells, slots, vel_copy);
 }
 
 /// The slots `[start, end)` of bucket `b` after the scatter, clamped to the `np` slots
@@ -426,10 +446,58 @@ pub fn rows_around(x: &V4, inv: f32, size: u32, rows: &mut [Row; 9]) -> usize {
     count
 }
 
+/// The index of the particle whose slot word is `w`: a grid's `j·n + i` from its
+/// coordinates, a mesh's (`n = 0`) from the word's low bits.
+#[inline]
+pub fn slot_particle(w: u32, n: u32) -> usize {
+    if n == 0 {
+        slot_index(w) as usize
+    } else {
+        let (i, j) = slot_coords(w);
+        (j * n + i) as usize
+    }
+}
+
+/// The part of a relative tangential velocity that one sticking contact removes. The
+/// contacts of a particle are summed (Jacobi), not solved one after another: a particle
+/// of a sheet lying on another touches up to four of its particles, and four contacts that
+/// each removed all of it would reverse it threefold (against a held sheet) — a quarter
+/// each removes at most all of it, so a stuck pair's slip decays without overshooting.
+pub const STICK: f32 = 0.25;
+
+/// Coulomb friction between two particles in contact (`e = xᵢ − xⱼ`, `d2 = |e|²`, the
+/// pair pushed `sep = t − d` apart this substep, `w = vᵢ − vⱼ` their relative velocity
+/// before the response): the relative tangential velocity the contact removes. The push
+/// is the pair's normal impulse, `Δv_n = sep / dt`; a slip `|v_t| ≤ μs·Δv_n` sticks
+/// ([`STICK`] of it removed), a faster one loses `μk·Δv_n` (at most [`STICK`] of it). Odd
+/// in `(e, w)` bit for bit (every product and sum of negated inputs is the negated
+/// result), so the pair's two ends remove equal and opposite amounts: the response keeps
+/// the cloths' momentum. The shaders' `pair_friction`, in the same order.
+#[inline]
+pub fn pair_friction(p: &StepParams, e: [f32; 3], d2: f32, sep: f32, w: [f32; 3]) -> [f32; 3] {
+    let k = (w[0] * e[0] + w[1] * e[1] + w[2] * e[2]) / d2;
+    let vt: [f32; 3] = std::array::from_fn(|a| w[a] - k * e[a]);
+    let vtl = (vt[0] * vt[0] + vt[1] * vt[1] + vt[2] * vt[2]).sqrt();
+    let dvn = sep * (1.0 / p.dt);
+    let keep = if vtl > p.mu_static() * dvn { STICK.min(p.mu_kinetic() * dvn / vtl) } else { STICK };
+    vt.map(|v| v * keep)
+}
+
+/// Fixed-point units of friction per `μs·t/dt` (a contact's removal, times its share, is
+/// at most that: [`pair_friction`]), so that a sum of [`MAX_CONTACTS`] never overflows.
+#[inline]
+fn friction_scale(p: &StepParams) -> f32 {
+    UNITS * p.inv_cell * p.dt / p.mu_static()
+}
+
 /// Particle `i`'s new position and velocity: pushed out of every candidate
 /// closer than the thickness, the push added to its velocity as motion (`Δx/dt`). `table` (the gather
 /// table, `None` for a grid) refuses a mesh's neighbours; a grid's are refused by their
-/// coordinates.
+/// coordinates. With Coulomb friction ([`StepParams::coulomb`]) each contact also removes
+/// the pair's tangential slip ([`pair_friction`], the contact's velocity read from
+/// `vel_copy`), summed in fixed point as the pushes are; the position moves back by the
+/// velocity friction removed times `dt`, as at a collider (no creep).
+#[allow(clippy::too_many_arguments)] // the twin of one kernel's particle: its buffers
 pub fn self_collide_at(
     p: &StepParams,
     i: usize,
@@ -437,6 +505,7 @@ pub fn self_collide_at(
     vel: V4,
     cells: &[V4],
     slots: &[V4],
+    vel_copy: &[V4],
     table: Option<&Rows<SpringSlot>>,
 ) -> (V4, V4) {
     let x4 = pos[i];
@@ -457,6 +526,9 @@ pub fn self_collide_at(
     let scale = UNITS * inv;
     let mut sum = [0i32; 3];
     let mut contacts = 0u32;
+    let coulomb = p.coulomb();
+    let fscale = if coulomb { friction_scale(p) } else { 0.0 };
+    let mut rub = [0i32; 3];
     for row in &rows[..count] {
         for (start, end) in row_ranges(cells, *row, size, np) {
             for s in start..end {
@@ -488,6 +560,15 @@ pub fn self_collide_at(
                 for a in 0..3 {
                     sum[a] = sum[a].wrapping_add((e[a] * push) as i32);
                 }
+                if coulomb {
+                    let vj = vel_copy[slot_particle(w, p.n)];
+                    let rel = [vel[0] - vj[0], vel[1] - vj[1], vel[2] - vj[2]];
+                    let r = pair_friction(p, e, d2, t - d, rel);
+                    let f = share * fscale;
+                    for a in 0..3 {
+                        rub[a] = rub[a].wrapping_add((r[a] * f) as i32);
+                    }
+                }
             }
         }
     }
@@ -499,6 +580,17 @@ pub fn self_collide_at(
     let unit = t * (1.0 / UNITS);
     let delta = sum.map(|v| v as f32 * unit * x4[3]);
     let dd = delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2];
+    if coulomb {
+        // Friction's velocity, by inverse mass as the push.
+        let funit = p.mu_static() * t * (1.0 / UNITS) * (1.0 / p.dt);
+        let fr = rub.map(|v| v as f32 * funit * x4[3]);
+        if dd == 0.0 && fr == [0.0; 3] {
+            return (x4, vel);
+        }
+        let x: [f32; 3] = std::array::from_fn(|a| x4[a] + (delta[a] - fr[a] * p.dt));
+        let u: [f32; 3] = std::array::from_fn(|a| vel[a] + delta[a] * (1.0 / p.dt) - fr[a]);
+        return ([x[0], x[1], x[2], x4[3]], [u[0], u[1], u[2], vel[3]]);
+    }
     if dd == 0.0 {
         return (x4, vel);
     }
@@ -523,11 +615,12 @@ pub fn self_collide(
     vel: &mut [V4],
     cells: &[V4],
     slots: &[V4],
+    vel_copy: &[V4],
     table: Option<&Rows<SpringSlot>>,
     pos_out: &mut [V4],
 ) {
     for_each2(exec, pos_out, vel, |i, o, q| {
-        let (x, xp) = self_collide_at(p, i, pos, *q, cells, slots, table);
+        let (x, xp) = self_collide_at(p, i, pos, *q, cells, slots, vel_copy, table);
         *o = x;
         *q = xp;
     });
@@ -563,11 +656,13 @@ mod tests {
         let np = (n * n) as usize;
         let pos: Vec<V4> =
             (0..np).map(|i| [(i % 7) as f32 * 0.031, (i % 5) as f32 * 0.043, (i % 3) as f32 * 0.07, 1.0]).collect();
-        let (mut cells, mut totals, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
-        build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
+        let mut aux = vec![vec![[0.0; 4]; np]; super::super::AUX];
+        let mut h = hash_buffers(&mut aux);
+        build_hash(&p, &pos, &pos, &mut h);
+        let (cells, slots) = (&*h.cells, &*h.slots);
         let size = table_size(np);
         assert_eq!(size, 1024);
-        let cw = words(&cells);
+        let cw = words(cells);
         let mut listed = vec![0; np];
         let mut tiled = 0;
         for b in 0..size {
@@ -637,11 +732,12 @@ mod tests {
         let np = (n * n) as usize;
         for seed in [1, 2, 3] {
             let pos = cloud(np, 4.0 * t, seed);
-            let (mut cells, mut totals, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
-            build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
+            let mut aux = vec![vec![[0.0; 4]; np]; super::super::AUX];
+            let mut h = hash_buffers(&mut aux);
+            build_hash(&p, &pos, &pos, &mut h);
             let mut pushed = 0;
             for i in 0..np {
-                let (x, _) = self_collide_at(&p, i, &pos, pos[i], &cells, &slots, None);
+                let (x, _) = self_collide_at(&p, i, &pos, pos[i], h.cells, h.slots, h.vel_copy, None);
                 if pos[i][3] == 0.0 {
                     assert_eq!(x, pos[i], "a pinned particle stays");
                     continue;
@@ -673,10 +769,11 @@ mod tests {
         pos[b] = [0.3 + 0.6 * t, 1.0, 0.0, 1.0];
         let mut vel = vec![[0.0f32; 4]; np];
         vel[a][0] = 0.06; // a moves towards b at 6 cm/s
-        let (mut cells, mut totals, mut slots) = (vec![[0.0; 4]; np], vec![[0.0; 4]; np], vec![[0.0; 4]; np]);
-        build_hash(&p, &pos, &mut cells, &mut totals, &mut slots);
+        let mut aux = vec![vec![[0.0; 4]; np]; super::super::AUX];
+        let mut h = hash_buffers(&mut aux);
+        build_hash(&p, &pos, &vel, &mut h);
         let mut out = pos.clone();
-        self_collide(Exec::Serial, &p, &pos, &mut vel, &cells, &slots, None, &mut out);
+        self_collide(Exec::Serial, &p, &pos, &mut vel, h.cells, h.slots, h.vel_copy, None, &mut out);
         let gap = out[b][0] - out[a][0];
         assert!((gap - t).abs() < 2.0 * unit, "gap {gap}, thickness {t}");
         assert!((out[a][0] - (0.3 - 0.2 * t)).abs() < 2.0 * unit);
@@ -691,6 +788,47 @@ mod tests {
         assert_eq!([vel[a][1], vel[a][2], vel[b][1], vel[b][2]], [0.0; 4]);
         // Everyone else is untouched.
         assert_eq!(out[1], pos[1]);
+    }
+
+    #[test]
+    fn friction_between_two_particles_removes_a_quarter_of_a_sticking_slip_and_mu_k_of_a_sliding_one() {
+        // Two far-apart particles of the grid 0.8 t apart along y, slipping past each other
+        // along x, with μs 0.5, μk 0.3 (t = 2.2 cm, dt = 1/960 s): the pair is pushed 0.2 t
+        // apart, a normal velocity Δv_n = 0.2 t / dt = 4.22 m/s. A slip of 1 m/s ≤ μs Δv_n
+        // sticks: STICK of it (0.25 m/s) is removed, each end (share ½) 0.125 m/s in
+        // opposite directions (the pair's momentum stays). A slip of 10 m/s slides: μk Δv_n
+        // = 1.27 m/s is removed, 0.633 m/s each end. Within two fixed-point units of
+        // friction (μs t / dt / 65536 = 1.6e-4 m/s).
+        let (n, t) = (16, 0.022);
+        let sp = SimParams {
+            self_collision: true,
+            self_thickness: t,
+            static_friction: 0.5,
+            kinetic_friction: 0.3,
+            ..SimParams::default()
+        };
+        let p = StepParams::new(&sp, &Scene::with_n(n), None);
+        let np = (n * n) as usize;
+        let mut pos: Vec<V4> = (0..np).map(|i| [i as f32 * 10.0, 5.0, 0.0, 1.0]).collect();
+        let (a, b) = (0usize, np - 1);
+        pos[a] = [0.3, 1.0, 0.0, 1.0];
+        pos[b] = [0.3, 1.0 + 0.8 * t, 0.0, 1.0];
+        let unit = 0.5 * t / p.dt / UNITS;
+        for (slip, removed) in [(1.0f32, 0.25f32), (10.0, 0.3 * 0.2 * t / p.dt)] {
+            let mut vel = vec![[0.0f32; 4]; np];
+            vel[b][0] = slip;
+            let mut aux = vec![vec![[0.0; 4]; np]; super::super::AUX];
+            let mut h = hash_buffers(&mut aux);
+            build_hash(&p, &pos, &vel, &mut h);
+            let mut out = pos.clone();
+            self_collide(Exec::Serial, &p, &pos, &mut vel, h.cells, h.slots, h.vel_copy, None, &mut out);
+            let each = removed / 2.0;
+            assert!((vel[a][0] - each).abs() < 2.0 * unit, "slip {slip}: a dragged to {} m/s, want {each}", vel[a][0]);
+            assert!((vel[b][0] - (slip - each)).abs() < 2.0 * unit, "slip {slip}: b slowed to {} m/s", vel[b][0]);
+            assert!((vel[a][0] + vel[b][0] - slip).abs() <= slip * 1e-6, "slip {slip}: the pair's momentum");
+            // Moved back by what friction removed times dt (no creep): 0.125 m/s × dt.
+            assert!((out[a][0] - (pos[a][0] + each * p.dt)).abs() < 1e-6, "slip {slip}: a at {}", out[a][0]);
+        }
     }
 
     #[test]

@@ -5,7 +5,7 @@ use std::time::Instant;
 use super::fused::{self, Band, Soa, TetherLanes};
 use super::simd::Simd;
 use super::{
-    AUX, CgScalars, Exec, FaceLanes, Lanes, RK2, RK4, XPBD_ORDER, build_hash, cg_alpha, cg_begin, cg_beta,
+    AUX, CgScalars, Exec, FaceLanes, HashBuffers, Lanes, RK2, RK4, XPBD_ORDER, build_hash, cg_alpha, cg_begin, cg_beta,
     cg_direction, cg_matvec, cg_step, collide, euler, fold, forces, hash_buffers, implicit_finish, integrate,
     integrate_collide, partial_sums, rk_begin, rk_stage, self_collide, springs_rows, strain_count, strain_limit,
     strain_limit_rows, strain_vel, tri_normals, tri_normals_lanes, vertex_normals, vertex_normals_rows, xpbd_mesh_pass,
@@ -457,13 +457,15 @@ impl CpuSolver {
                 std::mem::swap(pos, scratch);
             }
         });
-        // Self-collision: the hash in aux2, aux3 and aux4 (dead after the integrator's kernels),
-        // the response into the other position buffer (self_collide.rs).
+        // Self-collision: the hash in aux2, aux3 and aux4, the velocities' copy for friction
+        // in aux0 (all dead after the integrator's kernels), the response into the other
+        // position buffer (self_collide.rs).
         if params.self_collision {
-            let (cells, totals, slots) = hash_buffers(aux);
-            Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, cells, totals, slots));
+            let mut h = hash_buffers(aux);
+            Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, vel, &mut h));
+            let HashBuffers { cells, slots, vel_copy, .. } = h;
             Self::timed(timer, on, SELF_COLLIDE, || {
-                self_collide(e, &p, pos, vel, cells, slots, Some(&topo.slots), scratch)
+                self_collide(e, &p, pos, vel, cells, slots, vel_copy, Some(&topo.slots), scratch)
             });
             std::mem::swap(pos, scratch);
         }

@@ -50,6 +50,13 @@ fn slot_id(i: u32) -> u32 {
     return select((i % n) | ((i / n) << COORD_BITS), i & INDEX_MASK, p.n == 0u);
 }
 
+// The index of the particle whose slot word is w (core::cpu::self_collide::slot_particle):
+// a grid's j n + i, a mesh's from the low bits.
+fn slot_particle(w: u32) -> u32 {
+    let n = max(p.n, 1u);
+    return select((w & COORD_MASK) + ((w >> COORD_BITS) & COORD_MASK) * n, w & INDEX_MASK, p.n == 0u);
+}
+
 fn row_tag(y: i32, z: i32) -> u32 {
     return bitcast<u32>((y & 7) | ((z & 15) << 3u));
 }

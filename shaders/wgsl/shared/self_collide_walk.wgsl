@@ -21,6 +21,29 @@ struct Mover {
     cells: u32,
     sum: vec3<i32>,
     contacts: u32,
+    // Its velocity before the response, and Coulomb friction's sum (fixed point, units of
+    // μs t / dt: friction_scale).
+    v: vec3<f32>,
+    rub: vec3<i32>,
+}
+
+// core::cpu::self_collide::STICK: the part of its slip one sticking contact removes.
+const STICK: f32 = 0.25;
+
+// core::cpu::self_collide::pair_friction: the relative tangential velocity a contact
+// removes (e = xi - xj, d2 = |e|², sep = t - d, w = vi - vj); odd in (e, w) bit for bit.
+fn pair_friction(e: vec3<f32>, d2: f32, sep: f32, w: vec3<f32>) -> vec3<f32> {
+    let k = dot3(w, e) / d2;
+    let vt = w - k * e;
+    let vtl = sqrt(dot3(vt, vt));
+    let dvn = sep * (1.0 / p.dt);
+    let keep = select(STICK, min(STICK, mu_kinetic() * dvn / vtl), vtl > mu_static() * dvn);
+    return vt * keep;
+}
+
+// core::cpu::self_collide::friction_scale: fixed-point units per μs t / dt.
+fn friction_scale() -> f32 {
+    return UNITS * p.inv_cell * p.dt / mu_static();
 }
 
 // The cells of m's 3 x 3 x 3 that its sphere of radius REACH (cells) reaches: those whose
@@ -71,6 +94,13 @@ fn push(m: ptr<function, Mover>, y4: vec4<f32>, w: u32) {
     // A miss adds 0 (its k may be infinite or NaN: not used).
     let k = select(0.0, (t - d) / d * share * (UNITS * p.inv_cell), hit);
     (*m).sum += vec3<i32>(e * k);
+    // Coulomb friction against the contact's velocity before the response (a uniform
+    // branch: the same for every invocation).
+    if coulomb() {
+        let vj = vel_copy[min(slot_particle(w), num_particles() - 1u)].xyz;
+        let r = pair_friction(e, d2, t - d, (*m).v - vj);
+        (*m).rub += select(vec3<i32>(0), vec3<i32>(r * (share * friction_scale())), hit);
+    }
 }
 
 // The rows of the 4 x 4 box from lo - 1 in (y, z) where m reaches a cell: bit
@@ -186,8 +216,10 @@ fn mover(i: u32, col: u32, j: u32, valid: bool) -> Mover {
     m.cells = 0u;
     m.sum = vec3<i32>(0);
     m.contacts = 0u;
+    m.rub = vec3<i32>(0);
     // Past the grid's end (an odd n's last column) a particle that stays.
     m.x4 = pos[min(i, num_particles() - 1u)];
+    m.v = vel[min(i, num_particles() - 1u)].xyz;
     m.moving = valid && m.x4.w != 0.0 && i32(i) != p.grab_index;
     let v = scaled(m.x4.xyz);
     m.c = cell_of(m.x4.xyz);
@@ -205,15 +237,20 @@ fn finish(m: Mover) {
     // Each end moves by its own mobility times the pair's share: by inverse mass.
     let delta = vec3<f32>(m.sum) * (t * (1.0 / UNITS)) * x4.w;
     let dd = delta.x * delta.x + delta.y * delta.y + delta.z * delta.z;
-    let pushed = m.moving && m.contacts <= MAX_CONTACTS && dd != 0.0;
+    // Coulomb friction's velocity, by inverse mass as the push; the position moves back
+    // by it times dt (no creep).
+    let c = coulomb();
+    let fr = select(vec3<f32>(0.0), vec3<f32>(m.rub) * (mu_static() * t * (1.0 / UNITS) * (1.0 / p.dt)) * x4.w, c);
+    let pushed = m.moving && m.contacts <= MAX_CONTACTS && (dd != 0.0 || any(fr != vec3<f32>(0.0)));
     // One site per buffer, values chosen by select: lavapipe walks the lanes of every
     // load and store site in the code, taken or not.
-    let x = select(x4.xyz, x4.xyz + delta, pushed);
+    let x = select(x4.xyz, x4.xyz + select(delta, delta - fr * p.dt, c), pushed);
     pos_out[i] = vec4<f32>(x, x4.w);
     // The push as motion: v += Δx / dt (core::cpu::self_collide::self_collide_at).
     if pushed {
         let v4 = vel[i];
-        vel[i] = vec4<f32>(v4.xyz + delta * (1.0 / p.dt), v4.w);
+        let u = v4.xyz + delta * (1.0 / p.dt);
+        vel[i] = vec4<f32>(select(u, u - fr, c), v4.w);
     }
 }
 
