@@ -520,6 +520,13 @@ impl SimParams {
         })
     }
 
+    /// Whether contacts take Coulomb friction (either coefficient above 0) instead of the
+    /// share `friction` (`StepParams::coulomb`): between cloths too, where self-collision
+    /// is on.
+    pub fn coulomb(&self) -> bool {
+        self.static_friction > 0.0 || self.kinetic_friction > 0.0
+    }
+
     /// Checks every field; the first bad one is reported. Nothing that passes can make a
     /// solver produce NaN from a valid scene.
     pub fn validate(&self) -> Result<(), ParamError> {

@@ -923,9 +923,24 @@ fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
     cpu::hash_scatter(a.p, &b.pos, &b.vel, h.cells, h.slots, h.vel_copy);
 }
 
+/// `self_collide` and `self_collide_mesh`: the response without friction between
+/// particles, whatever the parameters (the recipe takes the `_friction` kernels where they
+/// have Coulomb's coefficients).
 fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {
+    let mut p = *a.p;
+    (p.gravity[3], p.grab_target[3]) = (0.0, 0.0);
+    self_collide_with(a, &p, b);
+}
+
+/// `self_collide_friction` and `self_collide_mesh_friction`: the response with Coulomb
+/// friction at its contacts where the parameters have the coefficients.
+fn self_collide_friction(a: &TwinArgs, b: &mut HostBuffers) {
+    self_collide_with(a, a.p, b);
+}
+
+fn self_collide_with(a: &TwinArgs, p: &clothlab_core::StepParams, b: &mut HostBuffers) {
     let [vel_copy, _, cells, _, slots] = &b.aux[..] else { unreachable!("HostBuffers has the AUX buffers") };
-    cpu::self_collide(a.exec, a.p, &b.pos, &mut b.vel, cells, slots, vel_copy, Some(&a.topo.slots), &mut b.pos_out);
+    cpu::self_collide(a.exec, p, &b.pos, &mut b.vel, cells, slots, vel_copy, Some(&a.topo.slots), &mut b.pos_out);
 }
 
 /// Kernel-test inputs: the hash built by the twins up to the kernel under test (the
@@ -1519,7 +1534,24 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
     cloths: Cloths::Grid,
-    ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, Aux0, Aux2, Aux4], &[PosOut, Vel])
+    ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, Aux2, Aux4], &[PosOut, Vel])
+};
+/// [`SELF_COLLIDE`] with Coulomb friction at its contacts (the contacts' velocities from
+/// the copy in aux0 that `hash_scatter` writes): the recipe's response where the
+/// parameters have Coulomb's coefficients.
+pub static SELF_COLLIDE_FRICTION: KernelDef = KernelDef {
+    check: RESPONSE,
+    pure: &[PosOut],
+    label: timing::SELF_COLLIDE,
+    test_input: Some(built_hash),
+    cloths: Cloths::Grid,
+    ..def(
+        "self_collide_friction",
+        self_collide_friction,
+        Count::Pairs,
+        &[Params, Pos, Vel, Aux0, Aux2, Aux4],
+        &[PosOut, Vel],
+    )
 };
 /// [`SELF_COLLIDE`] on a mesh: pairs of consecutive particles, a particle's neighbours
 /// its springs (from the table, for the entries within the thickness).
@@ -1533,6 +1565,21 @@ pub static SELF_COLLIDE_MESH: KernelDef = KernelDef {
         "self_collide_mesh",
         self_collide,
         Count::Pairs,
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Aux2, Aux4],
+        &[PosOut, Vel],
+    )
+};
+/// [`SELF_COLLIDE_MESH`] with Coulomb friction at its contacts ([`SELF_COLLIDE_FRICTION`]'s).
+pub static SELF_COLLIDE_MESH_FRICTION: KernelDef = KernelDef {
+    check: RESPONSE,
+    pure: &[PosOut],
+    label: timing::SELF_COLLIDE,
+    test_input: Some(built_hash),
+    cloths: Cloths::Mesh,
+    ..def(
+        "self_collide_mesh_friction",
+        self_collide_friction,
+        Count::Pairs,
         &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Aux0, Aux2, Aux4],
         &[PosOut, Vel],
     )
@@ -1542,7 +1589,7 @@ pub static SELF_COLLISION: [&KernelDef; 5] =
     [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// Every built-in kernel of the step.
-pub static ALL: [&KernelDef; 60] = [
+pub static ALL: [&KernelDef; 62] = [
     &PINS,
     &FORCES,
     &SPRINGS,
@@ -1601,6 +1648,8 @@ pub static ALL: [&KernelDef; 60] = [
     &HASH_SCATTER,
     &SELF_COLLIDE,
     &SELF_COLLIDE_MESH,
+    &SELF_COLLIDE_FRICTION,
+    &SELF_COLLIDE_MESH_FRICTION,
     &SUBSTEP_TILE,
     &TILE_VEL,
 ];

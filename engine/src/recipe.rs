@@ -94,6 +94,9 @@ pub struct Integration {
     pub vbd_rho_bits: u32,
     /// Self-collision after the strain limit (core::cpu::self_collide).
     pub self_collision: bool,
+    /// Its contacts with Coulomb friction (the parameters have Coulomb's coefficients:
+    /// the `_friction` response kernels).
+    pub self_friction: bool,
     /// Substeps per frame (what temporal blocking may fold into one dispatch).
     pub substeps: u32,
 }
@@ -107,6 +110,7 @@ impl Integration {
         vbd_iterations: 0,
         vbd_rho_bits: 0,
         self_collision: false,
+        self_friction: false,
         substeps: 1,
     };
 
@@ -119,6 +123,7 @@ impl Integration {
             vbd_iterations: params.vbd_iterations,
             vbd_rho_bits: params.vbd_rho.to_bits(),
             self_collision: params.self_collision,
+            self_friction: params.self_collision && params.coulomb(),
             substeps: params.substeps,
         }
     }
@@ -359,6 +364,9 @@ pub fn recipe_for(
         Command::Dispatch(kr) if kr.def == &k::SELF_COLLIDE => {
             Command::Dispatch(k::SELF_COLLIDE_MESH.flavor(kr.flavor))
         }
+        Command::Dispatch(kr) if kr.def == &k::SELF_COLLIDE_FRICTION => {
+            Command::Dispatch(k::SELF_COLLIDE_MESH_FRICTION.flavor(kr.flavor))
+        }
         c => c,
     });
     let first = &k::XPBD[cpu::XPBD_ORDER[0]];
@@ -414,7 +422,11 @@ pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Co
         // Each pass after the counts it divides by (core::cpu::strain_limit).
         .chain((0..strain_passes).flat_map(|pass| [&k::STRAIN_COUNT, strain(pass)]))
         .chain(
-            k::SELF_COLLISION.iter().copied().filter(|&d| how.self_collision && !(fused_count && d == &k::HASH_COUNT)),
+            k::SELF_COLLISION
+                .iter()
+                .copied()
+                .filter(|&d| how.self_collision && !(fused_count && d == &k::HASH_COUNT))
+                .map(|d| if how.self_friction && d == &k::SELF_COLLIDE { &k::SELF_COLLIDE_FRICTION } else { d }),
         )
         .chain(normals.iter().copied())
         .flat_map(|d| run(d.flavor(flavor)))

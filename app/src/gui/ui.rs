@@ -544,7 +544,7 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     // (SimParams::static_friction, kinetic_friction; either above 0 switches to Coulomb).
     ui.horizontal(|ui| {
         ui.label("friction");
-        let coulomb = p.static_friction > 0.0 || p.kinetic_friction > 0.0;
+        let coulomb = p.coulomb();
         if ui.selectable_label(!coulomb, "share").clicked() && coulomb {
             (p.static_friction, p.kinetic_friction) = (0.0, 0.0);
             units_changed = true;
@@ -615,7 +615,7 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
         ui.label(RichText::new("a mesh: edges (structural) and springs across them (bend); no shear family").weak());
     }
     f(ui, &mut p.strain_limit, 0.01..=1.0, "strain limit τ", false);
-    if p.static_friction > 0.0 || p.kinetic_friction > 0.0 {
+    if p.coulomb() {
         // Coulomb's coefficients replace the share (SimParams::static_friction); μk ≤ μs.
         f(ui, &mut p.static_friction, 0.0..=2.0, "static friction μs", false);
         f(ui, &mut p.kinetic_friction, 0.0..=2.0, "kinetic friction μk", false);

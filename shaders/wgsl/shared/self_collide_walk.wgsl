@@ -27,25 +27,6 @@ struct Mover {
     rub: vec3<i32>,
 }
 
-// core::cpu::self_collide::STICK: the part of its slip one sticking contact removes.
-const STICK: f32 = 0.25;
-
-// core::cpu::self_collide::pair_friction: the relative tangential velocity a contact
-// removes (e = xi - xj, d2 = |e|², sep = t - d, w = vi - vj); odd in (e, w) bit for bit.
-fn pair_friction(e: vec3<f32>, d2: f32, sep: f32, w: vec3<f32>) -> vec3<f32> {
-    let k = dot3(w, e) / d2;
-    let vt = w - k * e;
-    let vtl = sqrt(dot3(vt, vt));
-    let dvn = sep * (1.0 / p.dt);
-    let keep = select(STICK, min(STICK, mu_kinetic() * dvn / vtl), vtl > mu_static() * dvn);
-    return vt * keep;
-}
-
-// core::cpu::self_collide::friction_scale: fixed-point units per μs t / dt.
-fn friction_scale() -> f32 {
-    return UNITS * p.inv_cell * p.dt / mu_static();
-}
-
 // The cells of m's 3 x 3 x 3 that its sphere of radius REACH (cells) reaches: those whose
 // squared distance from m's point, the sum of its squared gaps per axis, is below REACH².
 // Any such superset of the cells within the thickness will do (see push); the CPU's
@@ -94,13 +75,10 @@ fn push(m: ptr<function, Mover>, y4: vec4<f32>, w: u32) {
     // A miss adds 0 (its k may be infinite or NaN: not used).
     let k = select(0.0, (t - d) / d * share * (UNITS * p.inv_cell), hit);
     (*m).sum += vec3<i32>(e * k);
-    // Coulomb friction against the contact's velocity before the response (a uniform
-    // branch: the same for every invocation).
-    if coulomb() {
-        let vj = vel_copy[min(slot_particle(w), num_particles() - 1u)].xyz;
-        let r = pair_friction(e, d2, t - d, (*m).v - vj);
-        (*m).rub += select(vec3<i32>(0), vec3<i32>(r * (share * friction_scale())), hit);
-    }
+    // Coulomb friction (shared/self_friction.wgsl in the _friction kernels; nothing in
+    // the others, shared/self_frictionless.wgsl: on lavapipe a branch not taken still
+    // costs its body).
+    rub(m, e, d2, t - d, share, w, hit);
 }
 
 // The rows of the 4 x 4 box from lo - 1 in (y, z) where m reaches a cell: bit
@@ -239,7 +217,7 @@ fn finish(m: Mover) {
     let dd = delta.x * delta.x + delta.y * delta.y + delta.z * delta.z;
     // Coulomb friction's velocity, by inverse mass as the push; the position moves back
     // by it times dt (no creep).
-    let c = coulomb();
+    let c = FRICTION && coulomb();
     let fr = select(vec3<f32>(0.0), vec3<f32>(m.rub) * (mu_static() * t * (1.0 / UNITS) * (1.0 / p.dt)) * x4.w, c);
     let pushed = m.moving && m.contacts <= MAX_CONTACTS && (dd != 0.0 || any(fr != vec3<f32>(0.0)));
     // One site per buffer, values chosen by select: lavapipe walks the lanes of every
