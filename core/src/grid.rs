@@ -672,6 +672,14 @@ impl StepParams {
         self.mu_static() > 0.0 || self.mu_kinetic() > 0.0
     }
 
+    /// These constants under the share model: Coulomb's coefficients zeroed (what the
+    /// frictionless self-collision kernels compute, whatever the parameters).
+    #[inline(always)]
+    pub fn without_coulomb(mut self) -> Self {
+        (self.gravity[3], self.grab_target[3]) = (0.0, 0.0);
+        self
+    }
+
     /// The friction coefficient of VBD's smoothed Coulomb contacts: μk where
     /// [`StepParams::coulomb`], the share `friction` otherwise (the shaders' `vbd_mu`).
     #[inline(always)]

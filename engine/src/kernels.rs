@@ -927,9 +927,7 @@ fn hash_scatter(a: &TwinArgs, b: &mut HostBuffers) {
 /// particles, whatever the parameters (the recipe takes the `_friction` kernels where they
 /// have Coulomb's coefficients).
 fn self_collide(a: &TwinArgs, b: &mut HostBuffers) {
-    let mut p = *a.p;
-    (p.gravity[3], p.grab_target[3]) = (0.0, 0.0);
-    self_collide_with(a, &p, b);
+    self_collide_with(a, &a.p.without_coulomb(), b);
 }
 
 /// `self_collide_friction` and `self_collide_mesh_friction`: the response with Coulomb
