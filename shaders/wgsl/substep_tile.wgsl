@@ -7,9 +7,10 @@
 // tile and a halo as deep as the stages reach (2 for the springs' bend neighbours, 2 more
 // per strain pass: a pass divides by its neighbours' counts, which their neighbours
 // decide), runs the stages with barriers between them, every stage on a region one reach
-// smaller than the stage before, and writes only its tile: new positions into the other
-// buffer of the pair, new velocities into aux0 (`tile_vel` puts them into place after the
-// swap — other workgroups still read this substep's velocities in their halos).
+// smaller than the stage before (its invocations on that square's points only), and writes
+// only its tile — the dispatch's last stage straight from its results: new positions into
+// the other buffer of the pair, new velocities into aux0 (`tile_vel` puts them into place
+// after the swap — other workgroups still read this substep's velocities in their halos).
 // `tile_substeps` substeps per dispatch (temporal blocking) with a halo that many times as
 // deep. Every stage is the arithmetic of its unfused kernel (forces_springs_wind,
 // integrate_collide, strain_count, strain_limit) on the same points in the same order,
@@ -77,10 +78,19 @@ fn region_particle(c: i32, r: i32) -> u32 {
     return u32((origin.y + r) * i32(p.n) + origin.x + c);
 }
 
-// Whether region point (c, r) is on the grid and at least `m` points inside the region's
-// border: the stage's points.
-fn in_stage(c: i32, r: i32, m: i32) -> bool {
-    return c >= m && r >= m && c < REGION - m && r < REGION - m && region_inside(c, r);
+// A stage's k-th point: the stage's points are the square `m` inside the region's border
+// (less what lies off the grid: `region_inside`), taken densely so that the invocations
+// of a stage work on its points only — not on the whole region with most lanes idle, which
+// drivers that run a SIMD group's masked lanes (llvmpipe) pay for (−10 to −18 % there at
+// n ≥ 128: docs/variants.md).
+fn stage_points(m: i32) -> u32 {
+    let side = u32(REGION - 2 * m);
+    return side * side;
+}
+
+fn stage_cr(k: u32, m: i32) -> vec2<i32> {
+    let side = u32(REGION - 2 * m);
+    return vec2<i32>(m + i32(k % side), m + i32(k / side));
 }
 
 fn region_x(c: i32, r: i32) -> vec3<f32> {
@@ -199,11 +209,29 @@ fn limit_at(c: i32, r: i32) -> Moved {
 // Writes back this invocation's results of a stage over the points `m` inside the border.
 fn store_stage(tid: u32, m: i32) {
     var j = 0u;
-    for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
-        let cr = region_cr(k);
-        if in_stage(cr.x, cr.y, m) {
-            tx[k] = rx[j];
-            tv[k] = vec4<f32>(rv[j], 0.0);
+    for (var k = tid; k < stage_points(m); k += TILE_THREADS) {
+        let cr = stage_cr(k, m);
+        if region_inside(cr.x, cr.y) {
+            let kr = region_index(cr.x, cr.y);
+            tx[kr] = rx[j];
+            tv[kr] = vec4<f32>(rv[j], 0.0);
+        }
+        j++;
+    }
+}
+
+// Writes this invocation's results of the dispatch's last stage, whose points `m` inside
+// the border are the tile's (m = the halo: the last strain pass's, or the forces' without
+// one), as the tile's new state: positions into the other buffer of the pair, velocities
+// into aux0.
+fn write_tile(tid: u32, m: i32) {
+    var j = 0u;
+    for (var k = tid; k < stage_points(m); k += TILE_THREADS) {
+        let cr = stage_cr(k, m);
+        if region_inside(cr.x, cr.y) {
+            let i = region_particle(cr.x, cr.y);
+            pos_out[i] = rx[j];
+            vel_out[i] = vec4<f32>(rv[j], 0.0);
         }
         j++;
     }
@@ -247,51 +275,52 @@ fn main(@builtin(local_invocation_index) tid: u32, @builtin(workgroup_id) wg: ve
         // Forces, springs, wind, integrate, collide: every point 2 inside what is valid.
         let m0 = i32(sub) * reach + 2 * unit;
         var j = 0u;
-        for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
-            let cr = region_cr(k);
-            if in_stage(cr.x, cr.y, m0) {
+        for (var k = tid; k < stage_points(m0); k += TILE_THREADS) {
+            let cr = stage_cr(k, m0);
+            if region_inside(cr.x, cr.y) {
                 let moved = force_and_move(cr.x, cr.y);
-                rx[j] = vec4<f32>(moved.x, tx[k].w);
+                rx[j] = vec4<f32>(moved.x, tx[region_index(cr.x, cr.y)].w);
                 rv[j] = moved.v;
             }
             j++;
         }
-        workgroupBarrier();
-        store_stage(tid, m0);
-        workgroupBarrier();
+        // The dispatch's last stage computed exactly the tile's points: out they go (no
+        // store into the region, no two barriers). Otherwise into the region.
+        if sub + 1u == substeps && passes == 0u {
+            write_tile(tid, m0);
+        } else {
+            workgroupBarrier();
+            store_stage(tid, m0);
+            workgroupBarrier();
+        }
         for (var s = 0u; s < passes; s++) {
             // The counts one inside what is valid, the pass two inside.
             let mc = m0 + (2 * i32(s) + 1) * unit;
             let ml = mc + unit;
-            for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
-                let cr = region_cr(k);
-                if in_stage(cr.x, cr.y, mc) {
-                    tv[k].w = count_at(cr.x, cr.y);
+            for (var k = tid; k < stage_points(mc); k += TILE_THREADS) {
+                let cr = stage_cr(k, mc);
+                if region_inside(cr.x, cr.y) {
+                    tv[region_index(cr.x, cr.y)].w = count_at(cr.x, cr.y);
                 }
             }
             workgroupBarrier();
             j = 0u;
-            for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
-                let cr = region_cr(k);
-                if in_stage(cr.x, cr.y, ml) {
+            for (var k = tid; k < stage_points(ml); k += TILE_THREADS) {
+                let cr = stage_cr(k, ml);
+                if region_inside(cr.x, cr.y) {
                     let moved = limit_at(cr.x, cr.y);
-                    rx[j] = vec4<f32>(moved.x, tx[k].w);
+                    rx[j] = vec4<f32>(moved.x, tx[region_index(cr.x, cr.y)].w);
                     rv[j] = moved.v;
                 }
                 j++;
             }
-            workgroupBarrier();
-            store_stage(tid, ml);
-            workgroupBarrier();
-        }
-    }
-    // The tile's own points.
-    for (var k = tid; k < REGION_POINTS; k += TILE_THREADS) {
-        let cr = region_cr(k);
-        if in_stage(cr.x, cr.y, halo) {
-            let i = region_particle(cr.x, cr.y);
-            pos_out[i] = tx[k];
-            vel_out[i] = vec4<f32>(region_v(k), 0.0);
+            if sub + 1u == substeps && s + 1u == passes {
+                write_tile(tid, ml);
+            } else {
+                workgroupBarrier();
+                store_stage(tid, ml);
+                workgroupBarrier();
+            }
         }
     }
 }
