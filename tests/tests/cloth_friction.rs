@@ -62,8 +62,9 @@ fn a_napkin_thrown_across_a_held_sheet_stops_where_coulomb_says() {
     // a plane: the napkin lands on it from 0.9 t (a bounce) and rides over its bumps, which
     // also slow it. Bounds: 0.06 m/s at 0.2 s and 20 % of the distance (measured on the CPU
     // 0.433 m/s and 0.180 m); at 1 s below 0.05 m/s (5 % of the throw: the bounce on the
-    // lattice leaves a jiggle of a few mm/s, measured −0.004 m/s). Without friction the bumps alone slow it: it slides more than
-    // twice as far (measured 0.39 m in 1 s, still creeping).
+    // lattice leaves a jiggle of a few mm/s, measured −0.004 m/s). Without friction the
+    // bumps alone slow it: it slides more than twice as far (measured 0.39 m in 1 s, still
+    // creeping).
     let mut failed = Vec::new();
     let mut slid = [0.0f64; 2];
     for coulomb in [true, false] {

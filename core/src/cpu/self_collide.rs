@@ -649,7 +649,9 @@ pub fn self_collide(
     }
 }
 
-/// [`self_collide`] over every particle with [`response`]'s `COULOMB` chosen once.
+/// [`self_collide`] over every particle with [`response`]'s `COULOMB` chosen once (its own
+/// loop per choice: a function pointer chosen once instead, one loop, cost the frictionless
+/// response 3 % on cpu-par — 1668–1699 against 1624–1648 µs, the heap at n = 128).
 #[allow(clippy::too_many_arguments)] // self_collide's
 fn sweep<const COULOMB: bool>(
     exec: Exec,

@@ -7,14 +7,19 @@
 #              see what the barriers cost);
 # then A/B/... interleaved rounds of `sim --steps 32`, ns per particle-substep (the median
 # of the GPU timestamps), with and without the strain pass. Run from the repository root;
-# builds into target/release and copies each binary to $DIR.
+# builds into target/release and copies each binary to $DIR. The kernel as it was (with
+# any edits of yours) is put back and target/release rebuilt from it on exit, also when
+# stopped: no wrong-results binary is left behind.
 set -u
 DIR=${DIR:-/tmp/tile-anatomy}
 ROUNDS=${ROUNDS:-3}
 mkdir -p "$DIR"
 K=shaders/wgsl/substep_tile.wgsl
-build() { cargo build --release -q -p clothlab-app && cp target/release/clothlab "$DIR/$1"; git checkout -q "$K"; }
+cp "$K" "$DIR/kernel.orig"
+restore() { cp "$DIR/kernel.orig" "$K"; }
+build() { cargo build --release -q -p clothlab-app && cp target/release/clothlab "$DIR/$1"; restore; }
 if [ ! -x "$DIR/nobarrier" ]; then
+  trap 'restore; cargo build --release -q -p clothlab-app' EXIT
   build base
   sed -i 's/const TILE_THREADS: u32 = 256u;/const TILE_THREADS: u32 = 32u;/; s/const PER_THREAD: u32 = 4u;/const PER_THREAD: u32 = 32u;/; s/@workgroup_size(256)/@workgroup_size(32)/' "$K"
   build w32
