@@ -226,19 +226,35 @@ pub struct SimArgs {
 /// The simulation parameters every command that simulates takes.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct PhysicsArgs {
-    /// How a substep integrates: verlet (the thesis's, default), euler, symplectic-euler,
-    /// rk2, rk4, implicit (backward Euler, one Newton step by conjugate gradients) or
-    /// xpbd. Explicit ones refuse springs they cannot integrate, naming the substeps.
-    #[arg(long, value_parser = parse_integrator)]
+    /// How a substep integrates (the help lists `Integrator::ALL`).
+    #[arg(long, value_parser = parse_integrator, help = integrator_help())]
     pub integrator: Option<clothlab_core::Integrator>,
     /// Override a simulation parameter, e.g. `--set damping=0.001 --set wind=[2,0,1]`
     /// (names as in `SimParams`; see docs/parameters.md).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// A scene file (TOML; see scenes/ and docs/scenes.md): the cloth, floor, spheres,
-    /// boxes, parameters, camera and light. `--n`, `--integrator` and `--set` apply over it.
-    #[arg(long, value_name = "FILE")]
+    /// A scene file (the help lists the file's tables: `SceneFile::TABLES`).
+    #[arg(long, value_name = "FILE", help = scene_help())]
     pub scene: Option<PathBuf>,
+}
+
+/// `--integrator`'s help, from `Integrator::ALL`.
+fn integrator_help() -> String {
+    let list: Vec<String> =
+        clothlab_core::Integrator::ALL.iter().map(|i| format!("{} ({})", i.name(), i.summary())).collect();
+    format!(
+        "How a substep integrates: {}. Explicit ones refuse springs they cannot integrate, naming the substeps",
+        list.join(", ")
+    )
+}
+
+/// `--scene`'s help, from `SceneFile::TABLES`.
+fn scene_help() -> String {
+    format!(
+        "A scene file (TOML; see scenes/ and docs/scenes.md) whose keys are {} ([[cloth]] for several cloths). \
+         `--n`, `--integrator` and `--set` apply over it",
+        clothlab_core::SceneFile::TABLES.join(", ")
+    )
 }
 
 /// `--integrator`'s value, by its name.

@@ -39,8 +39,28 @@ impl PhysicsArgs {
     /// `default_n × default_n` cloth), with `--n` (`n`), `--integrator` and `--set`
     /// applied, all checked; nothing of a refused file is used.
     pub fn setup(&self, n: Option<u32>, default_n: u32) -> Result<Setup> {
+        // A file's parameters get `--integrator` and `--set` before they are checked against
+        // its cloth (a scene stable under XPBD is not refused for Verlet's sake), and an
+        // override's error is the command line's own.
+        let mut refused = None;
         let mut setup = match &self.scene {
-            Some(path) => Setup::from_file(SceneFile::load(path)?),
+            Some(path) => {
+                let adjust = |p: &mut SimParams| match self.apply(p) {
+                    Ok(q) => {
+                        *p = q;
+                        Ok(())
+                    }
+                    Err(e) => {
+                        let message = e.to_string();
+                        refused = Some(e);
+                        Err(message)
+                    }
+                };
+                match SceneFile::load_with(path, adjust) {
+                    Ok(f) => Setup::from_file(f),
+                    Err(e) => return Err(refused.unwrap_or_else(|| e.into())),
+                }
+            }
             None => Setup::default_with_n(default_n),
         };
         // A mesh's vertices in no triangle are dropped: said once, on stderr.

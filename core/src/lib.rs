@@ -7,7 +7,7 @@
 //! generates the WGSL constants from [`layout`] and checks its structs against this
 //! crate's `#[repr(C)]` types; `clothlab-engine` registers each kernel with its CPU twin
 //! from [`cpu`] and runs recipes on any engine; the backends (`clothlab-wgpu`,
-//! `clothlab-vulkan`) are `GpuSolver`s over that engine; the app and the tests compare
+//! `clothlab-vulkan`, `clothlab-gl`) are `GpuSolver`s over that engine; the app and the tests compare
 //! them all through [`validate`]. The state every engine carries is [`ClothState`]:
 //! positions and velocities (x, v), both f32.
 

@@ -1,5 +1,5 @@
 //! Cloth from a triangle mesh: reading an OBJ file, refusing meshes a cloth cannot be,
-//! and the mesh's springs (issue 34, first step: the model; the solvers follow).
+//! and the mesh's springs. Every solver and GPU API runs a mesh cloth as it runs a grid.
 //!
 //! The reader keeps the file's vertex numbering (`v` lines in order, from 0), so a list of
 //! pinned vertices taken from a modelling tool means what it says, and a vertex no face

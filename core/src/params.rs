@@ -120,6 +120,20 @@ impl Integrator {
         }
     }
 
+    /// What it is, in a few words (the command line's help lists them).
+    pub fn summary(self) -> &'static str {
+        match self {
+            Integrator::Verlet => "the thesis's, default",
+            Integrator::Euler => "explicit, order 1",
+            Integrator::SymplecticEuler => "semi-implicit, order 1",
+            Integrator::Rk2 => "the midpoint method",
+            Integrator::Rk4 => "classical Runge–Kutta",
+            Integrator::Implicit => "backward Euler, one Newton step by conjugate gradients",
+            Integrator::Xpbd => "extended position-based dynamics",
+            Integrator::Vbd => "Vertex Block Descent",
+        }
+    }
+
     /// The integrator named `s`.
     pub fn parse(s: &str) -> Option<Integrator> {
         Self::ALL.into_iter().find(|i| i.name() == s)
@@ -300,7 +314,7 @@ impl SimParams {
     /// These parameters with soft springs and heavy damping (Σζ > Σκ in fractions of the
     /// stability limit): a fabric every integrator runs at the default substeps, explicit
     /// Euler and the midpoint method included — the common ground of the integrator
-    /// tests (engine/tests/integrators.rs, tests/tests/integrators.rs, free_fall.rs).
+    /// tests (engine/tests/suite/integrators.rs, tests/tests/suite/integrators.rs, free_fall.rs).
     pub fn with_soft_springs(self) -> SimParams {
         SimParams {
             structural_stiffness: 0.1,

@@ -33,7 +33,7 @@
 //! substep behind the frame's end for the force-based ones).
 //!
 //! Measured with a curtain carried at constant velocity, which must be the still curtain
-//! moved (`tests/tests/pins.rs`): Verlet and implicit to rounding (≤ 9.3e-7 m after
+//! moved (`tests/tests/suite/pins.rs`): Verlet and implicit to rounding (≤ 9.3e-7 m after
 //! 0.5 s); XPBD 1.2e-4 m and VBD 1.7e-4 m (their damping takes a pin's displacement over
 //! the substep as 0: it is placed before the prediction); RK4 4.2e-3 m (its later stages
 //! see the pins at the substep's start). Moving the pins inside those integrators (a

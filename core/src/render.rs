@@ -1,4 +1,4 @@
-//! What both renderers draw, as plain data: the static scene mesh, the fabric texture, the
+//! What every renderer (wgpu's, Vulkan's, GL's) draws, as plain data: the static scene mesh, the fabric texture, the
 //! cloth's line list and the per-frame constants (camera, light) of `shaders/wgsl/render.wgsl`.
 
 use std::collections::BTreeSet;

@@ -203,6 +203,23 @@ impl<C> Repr<C> {
 }
 
 impl SceneFile {
+    /// The keys a scene file may have at its top (the command line's help lists them; a
+    /// unit test keeps the list in step with what the parser takes).
+    pub const TABLES: [&'static str; 12] = [
+        "title",
+        "description",
+        "cloth",
+        "floor",
+        "spheres",
+        "boxes",
+        "capsules",
+        "pins",
+        "bodies",
+        "params",
+        "camera",
+        "light",
+    ];
+
     /// Reads and checks `path`.
     pub fn load(path: &Path) -> Result<Self, SceneFileError> {
         let file = path.display().to_string();
@@ -211,15 +228,44 @@ impl SceneFile {
         Self::parse(&text, &file)
     }
 
+    /// Reads `path`, applies `adjust` to the file's parameters (a command line's
+    /// `--integrator` and `--set`) and checks the result: the parameters' stability
+    /// against the cloth is judged with what will run, not with the file's values alone.
+    /// An error of `adjust` comes back as the message it gave, without a place in the file.
+    pub fn load_with(
+        path: &Path,
+        adjust: impl FnOnce(&mut SimParams) -> Result<(), String>,
+    ) -> Result<Self, SceneFileError> {
+        let file = path.display().to_string();
+        let text = crate::input::read_text_capped(path, crate::input::SCENE_FILE_MAX_BYTES)
+            .map_err(|message| SceneFileError { file: file.clone(), at: None, message })?;
+        Self::parse_with(&text, &file, adjust)
+    }
+
     /// Parses and checks the text of a scene file (`file` names it in errors). Every value
     /// is checked before anything is returned: a caller applies all of it or none.
     pub fn parse(text: &str, file: &str) -> Result<Self, SceneFileError> {
+        Self::parse_with(text, file, |_| Ok(()))
+    }
+
+    /// [`SceneFile::parse`] with `adjust` applied to the file's parameters once they are
+    /// checked alone and before they are checked against the cloth ([`SceneFile::load_with`]).
+    pub fn parse_with(
+        text: &str,
+        file: &str,
+        adjust: impl FnOnce(&mut SimParams) -> Result<(), String>,
+    ) -> Result<Self, SceneFileError> {
         let err = |at: Option<(usize, usize)>, message: String| SceneFileError { file: file.to_owned(), at, message };
         let syntax = |e: toml::de::Error| {
             // The message may run over several lines (a syntax error lists what was
             // expected): one line.
-            let msg = e.message().lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
-            err(e.span().map(|s| line_col(text, s.start)), msg)
+            let mut msg = e.message().lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
+            // toml's recursion limit comes without a place: the most deeply nested line.
+            let at = e.span().map(|s| line_col(text, s.start)).or_else(|| {
+                msg.push_str(" (tables, arrays or dotted keys nested too deeply)");
+                deepest_line(text)
+            });
+            err(at, msg)
         };
         let refused = |e: ParamError, path: String| {
             let at = locate(text, &path).map(|s| line_col(text, s));
@@ -227,8 +273,13 @@ impl SceneFile {
         };
         // `[cloth]`, or `[[cloth]]` tables: several cloths.
         let table = toml::from_str::<toml::Table>(text).ok();
+        // A vector of other than three numbers (serde would take the first three of four).
+        if let Some((path, len)) = table.as_ref().and_then(|t| wrong_vector(t, "")) {
+            let at = locate(text, &path).map(|s| line_col(text, s));
+            return Err(err(at, format!("`{path}`: a vector has 3 numbers (x, y, z), this one {len}")));
+        }
         let many = table.as_ref().and_then(|t| t.get("cloth")).is_some_and(|c| c.is_array());
-        let (repr, cloths): (Repr<()>, Vec<ClothSpec>) = if many {
+        let (mut repr, cloths): (Repr<()>, Vec<ClothSpec>) = if many {
             toml::from_str::<Repr<Vec<ClothSpec>>>(text).map_err(syntax)?.split(|c| c)
         } else {
             toml::from_str::<Repr<ClothSpec>>(text).map_err(syntax)?.split(|c| vec![c])
@@ -343,6 +394,7 @@ impl SceneFile {
             refused(e, path)
         };
         repr.params.validate().map_err(at_params)?;
+        adjust(&mut repr.params).map_err(|message| err(None, message))?;
         crate::cloth::check_params(&scene, &repr.params).map_err(at_params)?;
         let camera = match repr.camera {
             None => None,
@@ -399,6 +451,63 @@ fn line_col(text: &str, at: usize) -> (usize, usize) {
     let line = before.matches('\n').count() + 1;
     let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
     (line, col)
+}
+
+/// The line (and column 1) with the most nesting marks (`.`, `[`, `{`) outside strings:
+/// where a file that is nested too deeply for the parser is deepest.
+fn deepest_line(text: &str) -> Option<(usize, usize)> {
+    let depth = |line: &str| {
+        let mut quoted = false;
+        line.chars()
+            .filter(|&c| {
+                quoted ^= c == '"';
+                !quoted && matches!(c, '.' | '[' | '{')
+            })
+            .count()
+    };
+    let (i, _) = text.lines().enumerate().max_by_key(|(i, l)| (depth(l), std::cmp::Reverse(*i)))?;
+    Some((i + 1, 1))
+}
+
+/// The keys whose values are 3-vectors (`[x, y, z]`) wherever they stand in a scene file:
+/// the cloth's placement and velocity, the colliders' points, motions' offsets, spins and
+/// velocities, the pins' boxes and pivots, bodies' placements, the camera, the light's position, and
+/// the parameters' gravity and wind.
+const VEC3_KEYS: [&str; 19] = [
+    "top_center",
+    "across",
+    "down",
+    "velocity",
+    "scale",
+    "rotate_deg",
+    "translate",
+    "center",
+    "min",
+    "max",
+    "a",
+    "b",
+    "target",
+    "position",
+    "offset",
+    "spin",
+    "pivot",
+    "gravity",
+    "wind",
+];
+
+/// The first value under a [`VEC3_KEYS`] key that is an array of other than three
+/// elements: its path (`cloth.across`, `spheres[1].center`) and length.
+fn wrong_vector(table: &toml::Table, prefix: &str) -> Option<(String, usize)> {
+    let join = |k: &str| if prefix.is_empty() { k.to_owned() } else { format!("{prefix}.{k}") };
+    table.iter().find_map(|(k, v)| match v {
+        toml::Value::Array(a) if VEC3_KEYS.contains(&k.as_str()) && a.len() != 3 => Some((join(k), a.len())),
+        toml::Value::Table(t) => wrong_vector(t, &join(k)),
+        toml::Value::Array(a) => a.iter().enumerate().find_map(|(i, e)| match e {
+            toml::Value::Table(t) => wrong_vector(t, &format!("{}[{i}]", join(k))),
+            _ => None,
+        }),
+        _ => None,
+    })
 }
 
 /// Byte offset of the value at `path` (`spheres[1].radius`, `params.gravity.x`) in the
@@ -568,5 +677,75 @@ position = [1.0, 4.0, 2.0]
                 assert!(line.contains(w), "{text:?}: `{line}` lacks `{w}`");
             }
         }
+    }
+
+    #[test]
+    fn a_vector_of_other_than_three_numbers_is_refused_where_it_stands() {
+        // serde reads the first three numbers of four and drops the fourth: refused, with
+        // the line, wherever a 3-vector stands (a cloth, a list of colliders, a motion).
+        for (text, path, line) in [
+            ("[cloth]\nacross = [1.0, 0.0, 0.0, 0.0]\n", "cloth.across", 2),
+            (
+                "[[spheres]]\ncenter = [0.0, 1.0, 0.0]\nradius = 0.2\n[[spheres]]\ncenter = [0.0, 1.0]\nradius = 0.2\n",
+                "spheres[1].center",
+                5,
+            ),
+            ("[params]\nwind = [1.0, 0.0, 0.0, 2.0, 3.0]\n", "params.wind", 2),
+        ] {
+            let e = SceneFile::parse(text, "f.toml").unwrap_err();
+            let msg = e.to_string();
+            assert!(msg.contains(&format!("`{path}`")) && msg.contains("3 numbers"), "{msg}");
+            assert_eq!(e.at.map(|a| a.0), Some(line), "{msg}");
+            assert!(!msg.contains('\n'), "{msg}");
+        }
+    }
+
+    #[test]
+    fn a_direction_within_its_tolerance_of_unit_length_is_taken_and_one_further_off_names_its_length() {
+        // 1.0005 is within 1e-3 of unit length (a component a little over 1 is not out of
+        // range for a unit vector); 1.01 is not, and the message says how long it is.
+        let ok = SceneFile::parse("[cloth]\nacross = [1.0005, 0.0, 0.0]\n", "f.toml").unwrap();
+        assert_eq!(ok.scene.cloth.across, [1.0005, 0.0, 0.0]);
+        let e = SceneFile::parse("[cloth]\nacross = [1.01, 0.0, 0.0]\n", "f.toml").unwrap_err().to_string();
+        assert!(e.contains("unit vector") && e.contains("1.01"), "{e}");
+    }
+
+    #[test]
+    fn the_keys_listed_for_the_help_are_the_keys_the_parser_takes() {
+        // serde's message for an unknown key lists the keys it knows.
+        let e = SceneFile::parse("no_such_key = 1\n", "f.toml").unwrap_err().to_string();
+        let known = e.split("expected one of").nth(1).unwrap_or_else(|| panic!("{e}"));
+        let mut from_parser: Vec<&str> = known.split(',').map(|k| k.trim().trim_matches('`')).collect();
+        let mut listed = SceneFile::TABLES.to_vec();
+        from_parser.sort_unstable();
+        listed.sort_unstable();
+        assert_eq!(from_parser, listed, "{e}");
+    }
+
+    #[test]
+    fn the_command_line_adjusts_the_parameters_before_they_are_checked_against_the_cloth() {
+        // Physical stiffness at n = 128: too stiff for Verlet at 16 substeps, stable under
+        // XPBD. Loaded alone the file is refused; with the integrator adjusted, taken.
+        let text = "[cloth]\nn = 128\n[params]\nstiffness_units = \"physical\"\n";
+        let e = SceneFile::parse(text, "f.toml").unwrap_err().to_string();
+        assert!(e.contains("params."), "{e}");
+        let xpbd = |p: &mut SimParams| {
+            p.integrator = crate::Integrator::Xpbd;
+            Ok(())
+        };
+        let f = SceneFile::parse_with(text, "f.toml", xpbd).unwrap();
+        assert_eq!(f.params.integrator, crate::Integrator::Xpbd);
+        // An adjustment's own error comes back as its message.
+        let e = SceneFile::parse_with(text, "f.toml", |_| Err("bad --set".into())).unwrap_err();
+        assert!(e.to_string().contains("bad --set") && e.at.is_none(), "{e}");
+    }
+
+    #[test]
+    fn a_file_nested_too_deeply_is_refused_with_the_line_where_it_is_deepest() {
+        // 600 dotted keys on line 2: toml stops at its recursion limit without a span.
+        let text = format!("title = \"deep\"\na{} = 1\n", ".a".repeat(600));
+        let e = SceneFile::parse(&text, "f.toml").unwrap_err();
+        assert_eq!(e.at, Some((2, 1)), "{e}");
+        assert!(e.to_string().contains("nested too deeply") && !e.to_string().contains('\n'), "{e}");
     }
 }

@@ -41,7 +41,7 @@
 //! value already shows the surface farther than the margin is left after one load
 //! ([`BAND_CELLS`]). The field is only as fine as its grid: a cloth settled on a sphere
 //! made of triangles lies where it lies on the sphere to a quarter of a cell
-//! (`tests/tests/bodies.rs`).
+//! (`tests/tests/suite/bodies.rs`).
 //!
 //! **On the GPU** the heads and the grids share one storage buffer of `f32` with the
 //! capsules ([`crate::layout::Buf::Shapes`]): [`MAX_BODIES`] heads of [`SdfHead::FLOATS`]

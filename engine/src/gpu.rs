@@ -4,12 +4,13 @@
 //! poisoning, per-kernel timing, statistics, barrier placement) is written once, in
 //! [`crate::GpuSolver`], on top of it.
 //!
-//! Implemented by `clothlab_wgpu::WgpuEngine` and `clothlab_vulkan::VulkanEngine`. What an
-//! API must do differently lives only there: wgpu tracks hazards itself (its
-//! [`Engine::barrier`] does nothing) and writes constants through its queue; Vulkan records
-//! the frame's constants as a copy in the frame's command buffer, places the barriers it is
-//! told to, binds one descriptor set per kernel and parity, and can read the spring table
-//! from a sampled image.
+//! Implemented by `clothlab_wgpu::WgpuEngine`, `clothlab_vulkan::VulkanEngine` and
+//! `clothlab_gl::GlEngine`. What an API must do differently lives only there: wgpu tracks
+//! hazards itself (its [`Engine::barrier`] does nothing) and writes constants through its
+//! queue; Vulkan records the frame's constants as a copy in the frame's command buffer,
+//! places the barriers it is told to, binds one descriptor set per kernel and parity, and
+//! can read the spring table from a sampled image; GL binds buffers to the binding points
+//! naga's GLSL names and places `glMemoryBarrier` where it is told to.
 
 use clothlab_core::SolverError;
 use clothlab_core::layout::Buf;
@@ -23,7 +24,7 @@ pub struct BufferId(pub u32);
 /// What an engine's device offers, found when it was opened.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EngineInfo {
-    /// The API, as solver names start: `wgpu`, `vulkan`.
+    /// The API, as solver names start: `wgpu`, `vulkan`, `gl`.
     pub api: &'static str,
     /// The adapter, in one line.
     pub adapter: String,

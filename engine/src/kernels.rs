@@ -6,7 +6,7 @@
 //! else matches on a kernel's name.
 //!
 //! A kernel from outside the crate is a `static KernelDef` with [`Source::Wgsl`]: its WGSL
-//! is compiled when a backend first needs it (see `tests/tests/custom_kernel.rs`).
+//! is compiled when a backend first needs it (see `tests/tests/suite/custom_kernel.rs`).
 
 use std::borrow::Cow;
 use std::hash::{Hash, Hasher};
@@ -1009,7 +1009,7 @@ const WIND_GATHER: Check = Check::Bound {
 /// corrected by its whole excess in one of them, and the second pass divides by counts
 /// that moved (the H100, 2026-11-26: 1.0e-7 with no pass, 1.5e-7 with one, 2.2e-4 with
 /// two; a rollout from the scene stays within 2.4e-7 m). Exact on lavapipe
-/// (tests/tests/tile.rs).
+/// (tests/tests/suite/tile.rs).
 const TILE_CHECK: Check = Check::Bound {
     relative: 1e-3,
     reason: "forces, integrate and strain passes fused from a disturbed state: a spring's limit decided otherwise in a last bit moves a whole correction (H100, two passes: 2.2e-4; one: 1.5e-7; lavapipe: exact)",

@@ -2,9 +2,8 @@
 //!
 //! * [`kernels`] — the kernel registry: one row per kernel (WGSL, CPU twin, what it runs
 //!   over, bindings read and written, pure outputs, bound, label, variants);
-//! * [`variant`] — variants as sets of switches (springs, normals, atomics, fusion,
-//!   submissions, constants, table, colliders) and the presets `naive`, `optimized`,
-//!   `thesis`;
+//! * [`variant`] — variants as sets of switches (every one with its values in
+//!   [`variant::SWITCHES`]) and the presets `naive`, `optimized`, `thesis`;
 //! * [`recipe`] — the commands of a substep per variant (dispatches, clears, swaps) and
 //!   the barriers they need;
 //! * [`cpu`] — the CPU engine: runs any commands through the twins;

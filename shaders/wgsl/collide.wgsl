@@ -1,5 +1,6 @@
 //! include: state, colliders
-// collide — per particle: push out of spheres and boxes.
+// collide — per particle: push out of every collider (the floor, spheres, boxes, capsules,
+// bodies' fields; shared/colliders.wgsl).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;

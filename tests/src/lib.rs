@@ -57,17 +57,63 @@ pub const EVERY_CAP: clothlab_engine::recipe::Caps = clothlab_engine::recipe::Ca
     sdf_image: true,
 };
 
+/// The GPU APIs the cross-API tests run on, listed once: a test loops over
+/// [`Api::ALL`] (GL included unless the test says why not) and asks each for a solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Api {
+    /// wgpu on its primary backend (Vulkan here).
+    Wgpu,
+    /// Raw Vulkan through ash.
+    Vulkan,
+    /// Raw OpenGL 4.5 through glow.
+    Gl,
+}
+
+impl Api {
+    /// Every API, in the order the tests report them.
+    pub const ALL: [Api; 3] = [Api::Wgpu, Api::Vulkan, Api::Gl];
+
+    /// Its name in test labels and backend names (`wgpu`, `vulkan`, `gl`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Api::Wgpu => "wgpu",
+            Api::Vulkan => "vulkan",
+            Api::Gl => "gl",
+        }
+    }
+
+    /// A fresh solver of `spec` on this API, or `None` (the reason printed) where there
+    /// is no adapter and none is required ([`or_skip`]). Vulkan runs under the Khronos
+    /// validation layer where `validation` says so: the suites about the API check its
+    /// messages ([`assert_api_clean`]); the physics tests do not pay for
+    /// it ([`backends`]).
+    pub fn solver(
+        self,
+        spec: impl Into<VariantSpec>,
+        sc: &Scene,
+        params: &SimParams,
+        validation: bool,
+    ) -> Option<Box<dyn AnyGpuSolver>> {
+        let (spec, sc, params, o) = (spec.into(), sc.clone(), params.clone(), SolverOptions::default());
+        match self {
+            Api::Wgpu => or_skip(wgpu_solver(spec, sc, params, o), "wgpu").map(|s| Box::new(s) as _),
+            Api::Vulkan => or_skip(vulkan_solver(spec, sc, params, validation, o), "vulkan").map(|s| Box::new(s) as _),
+            Api::Gl => or_skip(gl_solver(spec, sc, params, o), "gl").map(|s| Box::new(s) as _),
+        }
+    }
+}
+
 /// Every backend on `scene`: the two CPU solvers, then wgpu, Vulkan and OpenGL, naive and
-/// optimized (Vulkan under the validation layer); the GPU ones only where an adapter is
-/// (see [`or_skip`]).
+/// optimized; the GPU ones only where an adapter is (see [`or_skip`]). These are the
+/// physics tests' backends: Vulkan without the validation layer (no test here reads its
+/// messages; the API's own suites run it: api_vs_cpu.rs, scenes.rs, integrators.rs …).
 pub fn every_backend(scene: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>)> {
     backends(scene, params, |_| true)
 }
 
 /// The backends of [`every_backend`] whose names `keep` accepts (`cpu`, `cpu-par`,
 /// `wgpu naive`, `vulkan naive`, `gl naive`, `wgpu optimized`, `vulkan optimized`,
-/// `gl optimized`); the others are
-/// not built.
+/// `gl optimized`); the others are not built.
 pub fn backends(scene: &Scene, params: &SimParams, keep: impl Fn(&str) -> bool) -> Vec<(String, Box<dyn Solver>)> {
     let mut out: Vec<(String, Box<dyn Solver>)> = Vec::new();
     for exec in [Exec::Serial, Exec::Parallel] {
@@ -78,24 +124,13 @@ pub fn backends(scene: &Scene, params: &SimParams, keep: impl Fn(&str) -> bool) 
         }
     }
     for v in [Variant::NAIVE, Variant::OPTIMIZED] {
-        let name = format!("wgpu {}", v.label());
-        if keep(&name)
-            && let Some(s) = or_skip(wgpu_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "wgpu")
-        {
-            out.push((name, Box::new(s)));
-        }
-        let name = format!("vulkan {}", v.label());
-        if keep(&name)
-            && let Some(s) =
-                or_skip(vulkan_solver(v, scene.clone(), params.clone(), true, SolverOptions::default()), "vulkan")
-        {
-            out.push((name, Box::new(s)));
-        }
-        let name = format!("gl {}", v.label());
-        if keep(&name)
-            && let Some(s) = or_skip(gl_solver(v, scene.clone(), params.clone(), SolverOptions::default()), "gl")
-        {
-            out.push((name, Box::new(s)));
+        for api in Api::ALL {
+            let name = format!("{} {}", api.name(), v.label());
+            if keep(&name)
+                && let Some(s) = api.solver(v, scene, params, false)
+            {
+                out.push((name, s.into_solver()));
+            }
         }
     }
     out
@@ -141,7 +176,7 @@ pub fn assert_stats_match_twin<E: clothlab_engine::Engine>(v: &mut clothlab_engi
 /// compared buffer) and that at least `min_bounded` were — so that a recipe or flavor
 /// list that lost kernels fails here instead of passing on fewer.
 pub fn assert_kernels_match_twins(
-    runner: &mut dyn clothlab_engine::KernelRunner,
+    runner: &mut dyn clothlab_engine::validate::KernelRunner,
     kernels: &[clothlab_engine::KernelRef],
     n: u32,
     seed: u64,
@@ -224,7 +259,8 @@ pub fn assert_rollouts(solvers: Vec<(String, Box<dyn Solver>, bool)>, frames: u3
 /// Every kernel of each API's optimized recipe (wgpu, Vulkan, GL: a solver each, built
 /// for `sc` and `params`) against its CPU twin on the disturbed input of `sc` with `seed`
 /// (`validate_kernels_with`); an API without an adapter is skipped as [`or_skip`] says.
-/// The solvers are not stepped after: a rollout needs fresh ones
+/// Vulkan without the validation layer: these are the physics tests' kernel checks (the
+/// API suites run the same kernels under it). The solvers are not stepped after: a rollout needs fresh ones
 /// ([`optimized_rollout_solvers`]).
 pub fn optimized_kernel_checks(sc: &Scene, params: &SimParams, seed: u64) -> Vec<Check> {
     kernel_checks_of(&Variant::OPTIMIZED.into(), sc, params, seed)
@@ -233,30 +269,31 @@ pub fn optimized_kernel_checks(sc: &Scene, params: &SimParams, seed: u64) -> Vec
 /// [`optimized_kernel_checks`] for the recipe `spec` gives on each API.
 pub fn kernel_checks_of(spec: &VariantSpec, sc: &Scene, params: &SimParams, seed: u64) -> Vec<Check> {
     use clothlab_engine::validate::validate_kernels_with;
-    let o = SolverOptions::default;
     let mut checks = Vec::new();
-    if let Some(mut s) = or_skip(wgpu_solver(spec.clone(), sc.clone(), params.clone(), o()), "wgpu") {
+    for (_, mut s) in gpu_solvers_of(spec, sc, params, false) {
         let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, sc, seed, params).unwrap());
-    }
-    if let Some(mut s) = or_skip(vulkan_solver(spec.clone(), sc.clone(), params.clone(), true, o()), "vulkan") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, sc, seed, params).unwrap());
-    }
-    if let Some(mut s) = or_skip(gl_solver(spec.clone(), sc.clone(), params.clone(), o()), "gl") {
-        let k = s.recipe_kernels();
-        checks.extend(validate_kernels_with(&mut s, &k, sc, seed, params).unwrap());
+        checks.extend(validate_kernels_with(s.runner(), &k, sc, seed, params).unwrap());
+        assert_api_clean(&mut *s);
     }
     checks
 }
 
+/// Fails if the API reported anything to `s` since the last check ([`AnyGpuSolver::api_check`]:
+/// the Vulkan validation layer where it is on, GL's errors).
+pub fn assert_api_clean(s: &mut dyn AnyGpuSolver) {
+    if let Err(e) = s.api_check() {
+        panic!("{}: {e}", s.name());
+    }
+}
+
 /// The CPU engine's optimized recipe and each API's, fresh, for [`assert_rollouts`]: each
 /// flagged exact where it runs on llvmpipe (the optimized recipes compute the CPU
-/// solver's bits there: tests/tests/bit_identity.rs) and the CPU engine always.
+/// solver's bits there: tests/tests/suite/bit_identity.rs) and the CPU engine always;
+/// Vulkan without the validation layer, as in [`backends`].
 pub fn optimized_rollout_solvers(sc: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>, bool)> {
     let cpu = clothlab_engine::RecipeSolver::new(Exec::Serial, Variant::OPTIMIZED, sc.clone(), params.clone()).unwrap();
     let mut solvers: Vec<(String, Box<dyn Solver>, bool)> = vec![("cpu engine".into(), Box::new(cpu), true)];
-    for (name, s) in gpu_solvers_of(&Variant::OPTIMIZED.into(), sc, params) {
+    for (name, s) in gpu_solvers_of(&Variant::OPTIMIZED.into(), sc, params, false) {
         let exact = s.adapter().contains("llvmpipe");
         solvers.push((name, s.into_solver(), exact));
     }
@@ -267,6 +304,20 @@ pub fn optimized_rollout_solvers(sc: &Scene, params: &SimParams) -> Vec<(String,
 pub trait AnyGpuSolver: Solver {
     /// Its adapter's name.
     fn adapter(&self) -> String;
+    /// The kernels of its recipe, in order.
+    fn recipe_kernels(&self) -> Vec<clothlab_engine::KernelRef>;
+    /// The kernels it built: its recipe's and the plain flavor of each.
+    fn kernels(&self) -> Vec<clothlab_engine::KernelRef>;
+    /// Steps three frames and checks the GPU statistics against the CPU twin's
+    /// ([`assert_stats_match_twin`]).
+    fn stats_match_twin(&mut self, energy_bound: f32);
+    /// What its adapter and scene allow (which kernel flavors run).
+    fn caps(&self) -> clothlab_engine::recipe::Caps;
+    /// As a kernel runner, for the kernel checks.
+    fn runner(&mut self) -> &mut dyn clothlab_engine::validate::KernelRunner;
+    /// What the API reported since the last call: the Vulkan validation layer's messages,
+    /// GL's errors and debug messages of medium or high severity (`Engine::check`).
+    fn api_check(&mut self) -> Result<(), clothlab_core::SolverError>;
     /// As a plain solver.
     fn into_solver(self: Box<Self>) -> Box<dyn Solver>;
 }
@@ -275,26 +326,40 @@ impl<E: clothlab_engine::Engine + 'static> AnyGpuSolver for clothlab_engine::Gpu
     fn adapter(&self) -> String {
         clothlab_engine::GpuSolver::adapter(self)
     }
+    fn recipe_kernels(&self) -> Vec<clothlab_engine::KernelRef> {
+        clothlab_engine::GpuSolver::recipe_kernels(self)
+    }
+    fn kernels(&self) -> Vec<clothlab_engine::KernelRef> {
+        clothlab_engine::validate::KernelRunner::kernels(self)
+    }
+    fn stats_match_twin(&mut self, energy_bound: f32) {
+        assert_stats_match_twin(self, energy_bound)
+    }
+    fn caps(&self) -> clothlab_engine::recipe::Caps {
+        clothlab_engine::GpuSolver::caps(self)
+    }
+    fn runner(&mut self) -> &mut dyn clothlab_engine::validate::KernelRunner {
+        self
+    }
+    fn api_check(&mut self) -> Result<(), clothlab_core::SolverError> {
+        self.check("the test")
+    }
     fn into_solver(self: Box<Self>) -> Box<dyn Solver> {
         self
     }
 }
 
-/// The recipe `spec` gives on wgpu, Vulkan (validation on) and GL, fresh, by API name;
-/// an API without an adapter is skipped as [`or_skip`] says.
-pub fn gpu_solvers_of(spec: &VariantSpec, sc: &Scene, params: &SimParams) -> Vec<(String, Box<dyn AnyGpuSolver>)> {
-    let o = SolverOptions::default;
-    let mut out: Vec<(String, Box<dyn AnyGpuSolver>)> = Vec::new();
-    if let Some(s) = or_skip(wgpu_solver(spec.clone(), sc.clone(), params.clone(), o()), "wgpu") {
-        out.push(("wgpu".into(), Box::new(s)));
-    }
-    if let Some(s) = or_skip(vulkan_solver(spec.clone(), sc.clone(), params.clone(), true, o()), "vulkan") {
-        out.push(("vulkan".into(), Box::new(s)));
-    }
-    if let Some(s) = or_skip(gl_solver(spec.clone(), sc.clone(), params.clone(), o()), "gl") {
-        out.push(("gl".into(), Box::new(s)));
-    }
-    out
+/// The recipe `spec` gives on wgpu, Vulkan (under the validation layer where `validation`
+/// says so: [`Api::solver`]) and GL, fresh, by API name; an API without an adapter is
+/// skipped as [`or_skip`] says.
+pub fn gpu_solvers_of(
+    spec: &VariantSpec,
+    sc: &Scene,
+    params: &SimParams,
+    validation: bool,
+) -> Vec<(String, Box<dyn AnyGpuSolver>)> {
+    let solver = |api: Api| Some((api.name().to_owned(), api.solver(spec.clone(), sc, params, validation)?));
+    Api::ALL.into_iter().filter_map(solver).collect()
 }
 
 /// The speed along x of [`moving_table`]'s table, m/s.
@@ -302,7 +367,7 @@ pub const TABLE_V: f32 = 0.5;
 
 /// A 0.4 m cloth of 16 × 16 at rest lying `gap` m above the margin over a 1 m table that
 /// moves at [`TABLE_V`] along x (no floor, no spheres): the moving-contact scenes of
-/// tests/tests/motion.rs and friction.rs.
+/// tests/tests/suite/motion.rs and friction.rs.
 pub fn moving_table(gap: f32) -> Scene {
     use clothlab_core::scene::{Aabb, ColliderId, Pinning};
     let margin = SimParams::default().collision_margin;
@@ -322,4 +387,14 @@ pub fn moving_table(gap: f32) -> Scene {
 /// would move velocities after the contacts); `friction` as given.
 pub fn still_air(friction: f32) -> SimParams {
     SimParams { friction, damping: 0.0, air_drag: 0.0, wind: [0.0; 3], strain_iterations: 0, ..SimParams::default() }
+}
+
+/// The mean over the particles of `st` of `f(index)`, in f64.
+pub fn mean(st: &clothlab_core::ClothState, f: impl Fn(usize) -> f64) -> f64 {
+    (0..st.pos.len()).map(f).sum::<f64>() / st.pos.len() as f64
+}
+
+/// The particles' mean speed, m/s.
+pub fn speed(st: &clothlab_core::ClothState) -> f64 {
+    mean(st, |i| st.vel[i][..3].iter().map(|&v| (v as f64).powi(2)).sum::<f64>().sqrt())
 }

@@ -340,7 +340,7 @@ impl CpuSolver {
             *aux = vec![vec![[0.0; 4]; pos.len()]; AUX];
         }
         // The same kernels in the same order as the engine's recipe for the integrator
-        // (engine/src/recipe.rs; tests/tests/integrators.rs checks the bits).
+        // (engine/src/recipe.rs; tests/tests/suite/integrators.rs checks the bits).
         match params.integrator {
             // Symplectic Euler is Verlet's recurrence in this state (see `euler`).
             Integrator::Verlet | Integrator::SymplecticEuler => {

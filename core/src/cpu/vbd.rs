@@ -22,9 +22,10 @@
 //! A substep: `forces` (gravity, drag and the wind, explicit, as for every integrator),
 //! [`vbd_begin`] (the inertial prediction `y = x + h v'` with `v' = (1 − damping) v + h f/m`,
 //! the integrate kernel's velocity), `iterations` × the colours' [`vbd_colour`] sweeps,
-//! [`vbd_finish`] (`x = x⁰ + D`, `v = v' + (D − h v')/h`, the floor), then `collide`: contacts are
-//! resolved after the solve as XPBD's and implicit Euler's are (not yet as penalty
-//! energies inside it, as the paper does).
+//! [`vbd_finish`] (`x = x⁰ + D`, `v = v' + (D − h v')/h`, the floor), then `collide`. The
+//! colliders' contacts are penalty energies inside each vertex's solve, with smoothed
+//! friction, as the paper has them (`contacts`); the `collide` after the solve puts back
+//! outside what the penalties' reach left inside.
 //!
 //! The new velocity is the substep's displacement over h. D is kept as a sum of
 //! small terms (`h v'` and each step) instead of being taken back as `x − x⁰`: in f32

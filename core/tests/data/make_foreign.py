@@ -1,4 +1,4 @@
-"""glTF files written by another tool than clothlab (trimesh, 4.x), for core/tests/mesh_files.rs.
+"""glTF files written by another tool than clothlab (trimesh, 4.x), for core/tests/suite/mesh_files.rs.
 
 A 9 x 9 sheet of 0.8 m, its squares split along one diagonal (at most 6 triangles a
 vertex), exported by trimesh as a binary .glb and as a .gltf with its buffer embedded as a

@@ -134,7 +134,7 @@ fn block_width_of(sp: StepParams) -> u32 {
 // than its SPIR-V path and than core (1 ulp off in about a third of the lanes of a probe
 // kernel; forces_springs_wind 5.35e-8 relative off before these), while plain products
 // and sums compile as written on both. Kernels use these, so every API computes the
-// twins' bits (tests/tests/bit_identity.rs); render.wgsl keeps the built-ins.
+// twins' bits (tests/tests/suite/bit_identity.rs); render.wgsl keeps the built-ins.
 fn dot3(a: vec3<f32>, b: vec3<f32>) -> f32 {
     return a.x * b.x + a.y * b.y + a.z * b.z;
 }

@@ -146,7 +146,7 @@ fn turned_pins_sit_at_their_pose_on_every_backend() {
 fn every_gpu_recipe_and_the_cpu_engine_follow_the_cpu_with_moving_pins() {
     // The poses are evaluated on the host once per frame and read by the `pins` kernel at
     // each substep's start; the optimized recipes compute the CPU solver's bits on
-    // llvmpipe (tests/tests/bit_identity.rs), so with moving pins and self-collision too:
+    // llvmpipe (tests/tests/suite/bit_identity.rs), so with moving pins and self-collision too:
     // exactly 0 over 12 frames; elsewhere within the rollout's bound.
     let (sc, params) = twist();
     // The kernel checks on solvers of their own (a rollout starts from a fresh solver).

@@ -8,8 +8,8 @@ use std::path::Path;
 use clothlab_core::mesh::{Placement, load_obj};
 use clothlab_core::scene::Pinning;
 use clothlab_core::sdf::Body;
-use clothlab_core::{ClothState, Motion, Scene, SceneFile, SimParams, Solver, Sphere};
-use clothlab_tests::{assert_checks, every_backend, still_air};
+use clothlab_core::{Motion, Scene, SceneFile, SimParams, Solver, Sphere};
+use clothlab_tests::{assert_checks, every_backend, speed, still_air};
 
 fn meshes() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/meshes")
@@ -28,7 +28,7 @@ const R: f32 = 0.5;
 const OMEGA: f32 = 2.0;
 
 /// A 2 cm patch of 4 × 4 particles 1 mm above the top of a body (an icosphere) spinning
-/// about z: the analytic sphere's case of tests/tests/motion.rs.
+/// about z: the analytic sphere's case of tests/tests/suite/motion.rs.
 fn spinning_body() -> Scene {
     let mut s = Scene::with_n(4);
     s.cloth.size = 0.02;
@@ -39,11 +39,6 @@ fn spinning_body() -> Scene {
     s.spheres.clear();
     s.bodies = vec![icosphere([0.0, R, 0.0], R, 32, Motion { spin: [0.0, 0.0, OMEGA], ..Motion::default() })];
     s
-}
-
-fn mean_speed(st: &ClothState) -> f64 {
-    let n = st.pos.len() as f64;
-    st.vel.iter().map(|v| v[..3].iter().map(|&c| (c as f64).powi(2)).sum::<f64>().sqrt()).sum::<f64>() / n
 }
 
 #[test]
@@ -60,7 +55,7 @@ fn a_patch_on_a_spinning_body_moves_with_its_surface_when_it_sticks_and_not_when
         for _ in 0..15 {
             s.step_frame().unwrap();
         }
-        let v = mean_speed(&s.state().unwrap());
+        let v = speed(&s.state().unwrap());
         println!("{name:18} sticking: mean speed {v:.4} m/s (surface {surface:.4})");
         assert!((v - surface).abs() <= 0.02 * surface, "{name}: sticking patch at {v} m/s, the surface {surface}");
     }
@@ -71,7 +66,7 @@ fn a_patch_on_a_spinning_body_moves_with_its_surface_when_it_sticks_and_not_when
         for _ in 0..15 {
             s.step_frame().unwrap();
         }
-        let v = mean_speed(&s.state().unwrap());
+        let v = speed(&s.state().unwrap());
         println!("{name:18} sliding: mean speed {v:.4} m/s");
         assert!(v <= 0.05 * surface, "{name}: frictionless patch dragged to {v} m/s");
     }
@@ -125,7 +120,7 @@ fn a_patch_on_a_body_turned_by_keys_moves_at_the_keys_rate() {
             for _ in 0..15 {
                 s.step_frame().unwrap();
             }
-            let v = mean_speed(&s.state().unwrap());
+            let v = speed(&s.state().unwrap());
             println!("{name:18} friction {friction}: mean speed {v:.4} m/s (the surface {want:.4})");
             if sticks {
                 assert!((v - want).abs() <= 0.005 * want, "{name}: {v} m/s, the surface {want}");
@@ -307,7 +302,7 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
         sphere.step_frame().unwrap();
     }
     let a = sphere.state().unwrap();
-    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &drape(Some(48)), &params) {
+    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &drape(Some(48)), &params, true) {
         for _ in 0..20 {
             s.step_frame().unwrap();
         }
@@ -331,7 +326,7 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
     assert!(checks.iter().any(|c| c.what.contains("_si")), "no kernel samples the image");
     assert_checks("sdf=image", &checks);
     let bound = clothlab_engine::validate::sdf_image_bound(&sc);
-    for (api, s) in clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &params) {
+    for (api, s) in clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &params, true) {
         let mut s = s.into_solver();
         let mut c = clothlab_core::validate::validate_rollout(&mut *s, 12).unwrap();
         c.bound = c.bound.max(bound);
@@ -347,11 +342,11 @@ fn a_patch_on_a_spinning_body_in_an_image_moves_with_its_surface() {
     // the interpolant's gradient as through storage), on every API.
     let margin = SimParams::default().collision_margin;
     let surface = (OMEGA * (R + margin)) as f64;
-    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &spinning_body(), &still_air(1.0)) {
+    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &spinning_body(), &still_air(1.0), true) {
         for _ in 0..15 {
             s.step_frame().unwrap();
         }
-        let v = mean_speed(&s.state().unwrap());
+        let v = speed(&s.state().unwrap());
         println!("{api:7} sdf=image sticking: mean speed {v:.4} m/s (surface {surface:.4})");
         assert!((v - surface).abs() <= 0.02 * surface, "{api}: sticking patch at {v} m/s, the surface {surface}");
     }
@@ -363,9 +358,9 @@ fn a_scene_without_bodies_runs_the_image_switch_as_storage_does() {
     // empty), so the recipe computes the storage recipe's bits on every API.
     let sc = Scene::with_n(24);
     let p = SimParams::default();
-    let mut storage = clothlab_tests::gpu_solvers_of(&clothlab_engine::Variant::OPTIMIZED.into(), &sc, &p);
+    let mut storage = clothlab_tests::gpu_solvers_of(&clothlab_engine::Variant::OPTIMIZED.into(), &sc, &p, true);
     for ((api, mut a), (_, mut b)) in
-        clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &p).into_iter().zip(storage.drain(..))
+        clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &p, true).into_iter().zip(storage.drain(..))
     {
         for _ in 0..4 {
             a.step_frame().unwrap();

@@ -1,7 +1,7 @@
 //! The integrators measured, not looked at: convergence orders and the period on a
 //! spring–mass oscillator, free fall, implicit Euler's energy, the stability refusals, and
 //! the fast CPU solvers against the CPU engine's recipes bit for bit. Everything runs the
-//! recipes' twins, i.e. the commands the GPU backends record (tests/tests/integrators.rs
+//! recipes' twins, i.e. the commands the GPU backends record (tests/tests/suite/integrators.rs
 //! runs the same integrators on both GPU APIs against these twins).
 
 use std::f32::consts::TAU;

@@ -4,7 +4,7 @@
 
 use clothlab_core::scene::{ColliderId, Pinning};
 use clothlab_core::{Capsule, ClothState, Motion, Scene, SceneFile, SimParams, Sphere};
-use clothlab_tests::{assert_checks, every_backend, still_air};
+use clothlab_tests::{assert_checks, every_backend, mean, still_air};
 
 /// Radius of the roller, m, and its spin about its own axis (x), rad/s.
 const R: f32 = 0.2;
@@ -23,10 +23,6 @@ fn roller(spin: f32) -> Scene {
     s.capsules = vec![Capsule::new([-0.5, 1.0, 0.0], [0.5, 1.0, 0.0], R)];
     s.motions = vec![(ColliderId::Capsule(0), Motion { spin: [spin, 0.0, 0.0], ..Motion::default() })];
     s
-}
-
-fn mean(st: &ClothState, f: impl Fn(usize) -> f64) -> f64 {
-    (0..st.pos.len()).map(f).sum::<f64>() / st.pos.len() as f64
 }
 
 #[test]

@@ -3,9 +3,9 @@
 //! and boxes moved and spun at every substep.
 
 use clothlab_core::scene::{Aabb, ColliderId, Pinning};
-use clothlab_core::{ClothState, Ease, Integrator, Key, Motion, Repeat, Scene, SimParams, Solver, Sphere};
+use clothlab_core::{Ease, Integrator, Key, Motion, Repeat, Scene, SimParams, Solver, Sphere};
 use clothlab_engine::{RecipeSolver, Variant};
-use clothlab_tests::{TABLE_V, assert_checks, every_backend, moving_table, or_skip, still_air};
+use clothlab_tests::{TABLE_V, assert_checks, every_backend, mean, moving_table, or_skip, speed, still_air};
 
 /// Sphere radius, m, and its spin about z, rad/s.
 const R: f32 = 0.5;
@@ -26,14 +26,6 @@ fn spinning_sphere() -> Scene {
     s.boxes.clear();
     s.motions = vec![(ColliderId::Sphere(0), Motion { spin: [0.0, 0.0, OMEGA], ..Motion::default() })];
     s
-}
-
-fn mean(st: &ClothState, f: impl Fn(usize) -> f64) -> f64 {
-    (0..st.pos.len()).map(f).sum::<f64>() / st.pos.len() as f64
-}
-
-fn speed(st: &ClothState) -> f64 {
-    mean(st, |i| st.vel[i][..3].iter().map(|&v| (v as f64).powi(2)).sum::<f64>().sqrt())
 }
 
 #[test]
@@ -178,7 +170,7 @@ fn the_busy_scenes_colliders_move_the_cloth() {
 fn every_gpu_recipe_and_the_cpu_engine_follow_the_cpu_with_moving_colliders() {
     // The colliders are written before every substep (GpuSolver::record_colliders) from the
     // same host evaluation the CPU solver makes: on llvmpipe the optimized recipes compute
-    // the CPU solver's bits (tests/tests/bit_identity.rs), so with motion too: exactly 0;
+    // the CPU solver's bits (tests/tests/suite/bit_identity.rs), so with motion too: exactly 0;
     // elsewhere within the rollout's bound. 12 frames: the box pushes the cloth's edge, the
     // sphere bobs once under it, spinning. (The naive recipes' atomics add in another order
     // every run: in this scene of sticking contacts that grows chaotically, 8e-5 to 5e-4 m

@@ -1,6 +1,7 @@
 //! wgpu on its GL backend (`--wgpu-backend gl`): the fourth stack, beside raw GL as
-//! wgpu-on-Vulkan stands beside raw Vulkan. Its own test binary, because the backend
-//! choice is process-wide. Every flavor the adapter offers against its CPU twin (the
+//! wgpu-on-Vulkan stands beside raw Vulkan. Each test opens its wgpu contexts on the
+//! backend it names (`GpuContext::with_backends`), never through the process-wide choice
+//! that the other tests of this binary leave unset. Every flavor the adapter offers against its CPU twin (the
 //! rows' bounds), rollouts of both recipes, and the wgpu renderer's picture on GL against
 //! the same state drawn by wgpu on Vulkan.
 
@@ -8,13 +9,17 @@ use clothlab_core::validate::validate_rollout;
 use clothlab_core::{RenderMode, Scene, SimParams, Solver};
 use clothlab_engine::validate::flavors;
 use clothlab_tests::{assert_checks, assert_kernels_match_twins, image_diff, or_skip, test_view};
-use clothlab_wgpu::{ClothSource, GpuContext, SolverOptions, Variant, WgpuRenderer, WgpuSolver, wgpu_solver};
+use clothlab_wgpu::{ClothSource, GpuContext, GpuSolver, SolverOptions, Variant, WgpuEngine, WgpuRenderer, WgpuSolver};
+
+/// A wgpu solver on GL for `scene`, or `None` where no adapter exists and none is required.
+fn gl_solver_of(variant: Variant, scene: Scene, params: SimParams) -> Option<WgpuSolver> {
+    let ctx = or_skip(GpuContext::with_backends(wgpu::Backends::GL), "wgpu on GL")?;
+    Some(GpuSolver::new(WgpuEngine::on(ctx), variant, scene, params, SolverOptions::default()).unwrap())
+}
 
 /// A wgpu solver on GL, or `None` where no adapter exists and none is required.
 fn on_gl(variant: Variant, n: u32) -> Option<WgpuSolver> {
-    clothlab_wgpu::choose_backends(wgpu::Backends::GL);
-    let s =
-        or_skip(wgpu_solver(variant, Scene::with_n(n), SimParams::default(), SolverOptions::default()), "wgpu on GL")?;
+    let s = gl_solver_of(variant, Scene::with_n(n), SimParams::default())?;
     // The choice reached wgpu: the adapter is a GL one.
     assert_eq!(s.engine().context().info.backend, wgpu::Backend::Gl, "{}", s.engine().context().describe());
     Some(s)
@@ -65,13 +70,11 @@ fn the_wgpu_renderer_on_gl_draws_the_picture_it_draws_on_vulkan() {
     let (pos, normal) = g.vertex_buffers();
     r.render(ctx, &test_view(RenderMode::Triangles), ClothSource::Gpu { pos, normal }).unwrap();
     let on_gl = r.read_image(ctx).unwrap();
-    clothlab_wgpu::choose_backends(wgpu::Backends::VULKAN);
-    let Some(vk) = or_skip(GpuContext::new(), "wgpu on Vulkan") else { return };
+    let Some(vk) = or_skip(GpuContext::with_backends(wgpu::Backends::VULKAN), "wgpu on Vulkan") else { return };
     assert_eq!(vk.info.backend, wgpu::Backend::Vulkan);
     let mut rv = WgpuRenderer::new(&vk, g.scene(), &topo, w, h).unwrap();
     rv.render(&vk, &test_view(RenderMode::Triangles), ClothSource::Cpu(&state)).unwrap();
     let on_vk = rv.read_image(&vk).unwrap();
-    clothlab_wgpu::choose_backends(wgpu::Backends::GL);
     let (mean, bad) = image_diff(&on_gl, &on_vk);
     println!("wgpu GL vs Vulkan: mean {mean:.3}/255, {:.3} % of pixels off by > 48", bad * 100.0);
     // The golden-image threshold of the renderer tests.
@@ -115,14 +118,13 @@ fn a_raw_gl_solver_outlives_wgpu_gl_instances_made_and_dropped_beside_it() {
 
 /// A mesh (the flag: wind, pins, a hole) on wgpu's GL backend: every flavor that runs on
 /// a mesh within its bound, and the optimized recipe's 8-frame rollout exactly the CPU
-/// solver's on llvmpipe (tests/tests/mesh_gpu.rs does the other three stacks).
+/// solver's on llvmpipe (tests/tests/suite/mesh_gpu.rs does the other three stacks).
 #[test]
 fn a_mesh_on_wgpu_gl_matches_its_twins_and_the_cpu_bit_for_bit() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     let file = clothlab_core::SceneFile::load(&dir.join("mesh-flag.toml")).unwrap();
-    clothlab_wgpu::choose_backends(wgpu::Backends::GL);
-    let make = || wgpu_solver(Variant::OPTIMIZED, file.scene.clone(), file.params.clone(), SolverOptions::default());
-    let Some(mut g) = or_skip(make(), "wgpu on GL") else { return };
+    let make = || gl_solver_of(Variant::OPTIMIZED, file.scene.clone(), file.params.clone());
+    let Some(mut g) = make() else { return };
     let kernels: Vec<_> = flavors(&g.caps(), false).into_iter().collect();
     let checks =
         clothlab_engine::validate::validate_kernels_with(&mut g, &kernels, &file.scene, 0x3e5, &file.params).unwrap();

@@ -7,58 +7,14 @@
 use std::path::PathBuf;
 
 use clothlab_core::validate::validate_rollout;
-use clothlab_core::{Integrator, Scene, SceneFile, SimParams, Solver, SolverError};
-use clothlab_engine::validate::{KernelRunner, flavors, validate_kernels_with};
-use clothlab_engine::{Engine, GpuSolver, KernelRef, SolverOptions, Variant, VariantSpec};
-use clothlab_tests::{assert_checks, or_skip};
+use clothlab_core::{Integrator, Scene, SceneFile, SimParams, SolverError};
+use clothlab_engine::validate::{flavors, validate_kernels_with};
+use clothlab_engine::{Variant, VariantSpec};
+use clothlab_tests::{AnyGpuSolver, assert_api_clean, assert_checks, gpu_solvers_of};
 
 fn scene_file(name: &str) -> SceneFile {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     SceneFile::load(&dir.join(name)).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// What these tests ask of a GPU solver, whichever its engine.
-trait Gpu: Solver + KernelRunner {
-    fn every_flavor(&self) -> Vec<KernelRef>;
-    fn recipe(&self) -> Vec<KernelRef>;
-    /// What the API's validation reported since the last call (Vulkan's layer).
-    fn messages(&self) -> Vec<String>;
-}
-
-impl<E: Engine + 'static> Gpu for GpuSolver<E> {
-    fn every_flavor(&self) -> Vec<KernelRef> {
-        flavors(&self.caps(), false)
-    }
-    fn recipe(&self) -> Vec<KernelRef> {
-        self.recipe_kernels()
-    }
-    fn messages(&self) -> Vec<String> {
-        let any: &dyn std::any::Any = self.engine();
-        any.downcast_ref::<clothlab_vulkan::VulkanEngine>().map(|e| e.take_validation_messages()).unwrap_or_default()
-    }
-}
-
-/// A solver of each GPU API for `scene`, `params` and `variant` (those the machine has,
-/// unless GPUs are required).
-fn solvers(scene: &Scene, params: &SimParams, variant: impl Into<VariantSpec>) -> Vec<(&'static str, Box<dyn Gpu>)> {
-    let v: VariantSpec = variant.into();
-    let (s, p, o) = (scene, params, SolverOptions::default);
-    let mut out: Vec<(&'static str, Box<dyn Gpu>)> = Vec::new();
-    if let Some(g) = or_skip(clothlab_wgpu::wgpu_solver(v.clone(), s.clone(), p.clone(), o()), "wgpu") {
-        out.push(("wgpu", Box::new(g)));
-    }
-    if let Some(g) = or_skip(clothlab_vulkan::vulkan_solver(v.clone(), s.clone(), p.clone(), true, o()), "vulkan") {
-        out.push(("vulkan", Box::new(g)));
-    }
-    if let Some(g) = or_skip(clothlab_gl::gl_solver(v, s.clone(), p.clone(), o()), "gl") {
-        out.push(("gl", Box::new(g)));
-    }
-    out
-}
-
-fn no_messages(api: &str, s: &dyn Gpu) {
-    let m = s.messages();
-    assert!(m.is_empty(), "{api}: validation layer: {m:#?}");
 }
 
 #[test]
@@ -69,16 +25,16 @@ fn every_kernel_flavor_on_a_mesh_matches_its_twin_on_every_api() {
     // self-collision are grid-only), within its bound.
     for name in ["mesh-flag.toml", "mesh-fan.toml"] {
         let file = scene_file(name);
-        for (api, s) in solvers(&file.scene, &file.params, Variant::OPTIMIZED) {
+        for (api, s) in gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &file.params, true) {
             every_flavor_matches(&format!("{api} {name}"), s, &file);
         }
     }
 }
 
 /// Every flavor `s` has on `file`'s mesh against its twin, within its bound.
-fn every_flavor_matches(api: &str, mut s: Box<dyn Gpu>, file: &SceneFile) {
-    let kernels = s.every_flavor();
-    let checks = validate_kernels_with(&mut *s, &kernels, &file.scene, 0x3e5, &file.params).unwrap();
+fn every_flavor_matches(api: &str, mut s: Box<dyn AnyGpuSolver>, file: &SceneFile) {
+    let kernels = flavors(&s.caps(), false);
+    let checks = validate_kernels_with(s.runner(), &kernels, &file.scene, 0x3e5, &file.params).unwrap();
     let compared = checks.len() / clothlab_engine::validate::COMPARED_BUFFERS;
     println!("{api}: {compared} kernel flavors compared on the mesh");
     // Measured on lavapipe: 130 flavors on wgpu and Vulkan, 79 on GL (no immediates,
@@ -87,7 +43,7 @@ fn every_flavor_matches(api: &str, mut s: Box<dyn Gpu>, file: &SceneFile) {
     assert!(checks.iter().any(|c| c.what == "xpbd_mesh"), "{api}: the mesh's XPBD pass was not compared");
     assert!(!checks.iter().any(|c| c.what.starts_with("xpbd_0")), "{api}: a grid-only kernel ran on a mesh");
     assert_checks(&format!("{api} mesh"), &checks);
-    no_messages(api, &*s);
+    assert_api_clean(&mut *s);
 }
 
 #[test]
@@ -105,13 +61,14 @@ fn the_optimized_recipes_on_a_mesh_compute_the_cpu_solvers_bits_on_llvmpipe() {
     ] {
         let file = scene_file(name);
         let params = SimParams { integrator, ..file.params.clone() };
-        let fresh = solvers(&file.scene, &params, Variant::OPTIMIZED);
-        for ((api, mut s), (_, mut rollout)) in solvers(&file.scene, &params, Variant::OPTIMIZED).into_iter().zip(fresh)
+        let fresh = gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &params, true);
+        for ((api, mut s), (_, mut rollout)) in
+            gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &params, true).into_iter().zip(fresh)
         {
             let adapter = s.adapter();
-            let kernels = s.recipe();
+            let kernels = s.recipe_kernels();
             assert!(kernels.len() >= 4, "{api}: {kernels:?}");
-            let mut checks = validate_kernels_with(&mut *s, &kernels, &file.scene, 0xb17, &params).unwrap();
+            let mut checks = validate_kernels_with(s.runner(), &kernels, &file.scene, 0xb17, &params).unwrap();
             checks.push(validate_rollout(&mut *rollout, 8).unwrap());
             for c in &checks {
                 println!("{api} {name} {:24} {:7} max {:.2e}", c.what, c.buffer, c.max_abs);
@@ -125,9 +82,9 @@ fn the_optimized_recipes_on_a_mesh_compute_the_cpu_solvers_bits_on_llvmpipe() {
                     );
                 }
             } else {
-                assert_checks(api, &checks);
+                assert_checks(&api, &checks);
             }
-            no_messages(api, &*s);
+            assert_api_clean(&mut *s);
         }
     }
 }
@@ -141,23 +98,25 @@ fn the_naive_recipe_on_a_mesh_stays_within_the_rollout_bound() {
     // few frames whatever computes it (the CPU engine's naive recipe against the CPU
     // solver: 5 mm after 3 frames on the skirt), so they are checked bit for bit above.
     let file = scene_file("mesh-tablecloth.toml");
-    for (api, mut s) in solvers(&file.scene, &file.params, Variant::NAIVE) {
+    for (api, mut s) in gpu_solvers_of(&Variant::NAIVE.into(), &file.scene, &file.params, true) {
         let c = validate_rollout(&mut *s, 13).unwrap();
-        assert_checks(api, &[c]);
-        no_messages(api, &*s);
+        assert_checks(&api, &[c]);
+        assert_api_clean(&mut *s);
     }
 }
 
 #[test]
 fn a_grid_loaded_as_a_mesh_drapes_where_the_grid_does_on_every_api() {
-    // As core/tests/mesh_cloth.rs checks it on the CPU (the bound's reasons there): the
+    // As core/tests/suite/mesh_cloth.rs checks it on the CPU (the bound's reasons there): the
     // default scene's n = 32 grid and the same grid as a mesh, 3 s, each GPU API's
     // optimized recipe for both.
     let grid_scene = Scene::with_n(32);
     let scene = clothlab_core::cloth::grid_as_mesh(&grid_scene).unwrap();
     let params = SimParams::default();
-    let grids = solvers(&grid_scene, &params, Variant::OPTIMIZED);
-    for ((api, mut mesh), (_, mut grid)) in solvers(&scene, &params, Variant::OPTIMIZED).into_iter().zip(grids) {
+    let grids = gpu_solvers_of(&Variant::OPTIMIZED.into(), &grid_scene, &params, true);
+    for ((api, mut mesh), (_, mut grid)) in
+        gpu_solvers_of(&Variant::OPTIMIZED.into(), &scene, &params, true).into_iter().zip(grids)
+    {
         for _ in 0..180 {
             grid.step_frame().unwrap();
             mesh.step_frame().unwrap();
@@ -186,7 +145,7 @@ fn grid_only_switches_are_refused_for_a_mesh_in_one_line_and_presets_fall_back()
         assert!(e.contains(switch) && e.contains("mesh") && !e.contains('\n'), "{e}");
     }
     // The optimized preset runs, with the table from storage and neighbours loaded.
-    for (api, s) in solvers(&file.scene, &file.params, Variant::OPTIMIZED) {
+    for (api, s) in gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &file.params, true) {
         let label = s.name().to_string();
         assert!(label.contains("table=storage") && label.contains("neighbours=load"), "{api}: {label}");
     }

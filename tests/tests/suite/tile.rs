@@ -4,7 +4,7 @@
 //! edges and corners), pinned corners (tethers), a sphere and a box (colliders in the
 //! halo), wind (the faces' wind computed in the tile) and two strain passes (a halo of 6).
 //! On llvmpipe every stage is its unfused kernel's arithmetic in the same order, so the
-//! bound is exactly 0, as tests/tests/bit_identity.rs holds the other recipes; elsewhere
+//! bound is exactly 0, as tests/tests/suite/bit_identity.rs holds the other recipes; elsewhere
 //! only reported.
 
 use clothlab_core::scene::Aabb;

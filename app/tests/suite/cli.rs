@@ -2,9 +2,7 @@
 
 use std::process::{Command, Output};
 
-fn clothlab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_clothlab")).args(args).env("RUST_BACKTRACE", "1").output().expect("run clothlab")
-}
+use crate::{clothlab, gpu_required};
 
 /// A fresh folder for one test's files (removed by the test when it passes).
 fn scratch(tag: &str) -> std::path::PathBuf {
@@ -21,11 +19,6 @@ fn no_gpu(stderr: &str) -> bool {
         eprintln!("skipped: {stderr}");
     }
     skip
-}
-
-/// Whether CI asked for the GPU tests to fail rather than skip without an adapter.
-fn gpu_required() -> bool {
-    std::env::var("CLOTHLAB_REQUIRE_GPU").is_ok_and(|v| v == "1")
 }
 
 fn refused(args: &[&str], expect: &str) {
@@ -400,6 +393,36 @@ fn physical_stiffness_runs_where_verlet_can_and_names_the_substeps_where_it_cann
         .and_then(|v| v.parse().ok())
         .unwrap_or_else(|| panic!("{text}"));
     assert!(strain > 0.0 && strain <= 0.12, "max strain {strain}");
+}
+
+#[test]
+fn a_scene_file_is_judged_with_the_integrator_and_parameters_of_the_command_line() {
+    // The same n = 128 physical cloth from a file: refused for Verlet (naming its
+    // stability), run with `--integrator xpbd` (stable at any dt) and with `--set
+    // substeps=30`; a bad `--set` still gets the command line's own message.
+    let dir = scratch("scene-integrator");
+    let file = dir.join("physical.toml");
+    std::fs::write(&file, "[cloth]\nn = 128\n[params]\nstiffness_units = \"physical\"\n").unwrap();
+    let f = file.to_str().unwrap();
+    refused(&["sim", "--scene", f, "--steps", "1"], "stable with verlet only");
+    for extra in [["--integrator", "xpbd"], ["--set", "substeps=30"]] {
+        let out = clothlab(&["sim", "--backend", "cpu-par", "--scene", f, "--steps", "1", extra[0], extra[1]]);
+        assert!(out.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    refused(&["sim", "--scene", f, "--set", "no_such=1"], "unknown parameter `no_such`");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_help_lists_every_integrator_and_every_key_of_a_scene_file() {
+    let out = clothlab(&["sim", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    for i in clothlab_core::Integrator::ALL {
+        assert!(help.contains(&format!("{} (", i.name())), "`{}` missing from --integrator's help:\n{help}", i.name());
+    }
+    for key in clothlab_core::SceneFile::TABLES {
+        assert!(help.contains(key), "`{key}` missing from --scene's help:\n{help}");
+    }
 }
 
 #[test]

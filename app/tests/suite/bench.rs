@@ -3,11 +3,9 @@
 //! keeps its cells and `--resume` completes it; an interrupted run leaves old outputs.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn clothlab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_clothlab")).args(args).env("RUST_BACKTRACE", "1").output().expect("run clothlab")
-}
+use crate::{clothlab, gpu_required};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("clothlab-bench-{name}-{}", std::process::id()));
@@ -32,10 +30,6 @@ fn split_csv(line: &str) -> Vec<String> {
     }
     out.push(cur);
     out
-}
-
-fn gpu_required() -> bool {
-    std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() == Ok("1")
 }
 
 /// Decodes a PNG and checks it is a real picture: the expected size and more than a

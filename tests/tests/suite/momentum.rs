@@ -106,7 +106,7 @@ fn on_a_frictionless_floor_internal_corrections_keep_the_horizontal_momentum() {
         ("self-collision", SimParams { self_collision: true, self_thickness: 0.02, ..base.clone() }),
         ("xpbd", SimParams { integrator: Integrator::Xpbd, ..base.clone() }),
         // VBD's floor is a penalty along the normal only, but its sweeps move one vertex at
-        // a time: momentum is kept only as far as they converge (core/tests/vbd.rs: 1.2e-4
+        // a time: momentum is kept only as far as they converge (core/tests/suite/vbd.rs: 1.2e-4
         // of it at 5 sweeps, 6e-6 at 40, free). Landing and folding, 8 sweeps: measured
         // 1.34–1.35e-4 m/s on all 8 backends (3.7e-4 of the throw); bound 3e-4 m/s, below
         // what a one-sided floor force costs (> 1e-2 m/s with friction 0.6, below).

@@ -8,26 +8,26 @@
 //! its SPIR-V path (1 ulp off in about a third of the lanes of a probe kernel,
 //! forces_springs_wind 5.35e-8 relative off before), plain products and sums it compiles
 //! as written.
-//! wgpu on GL is checked bit for bit in wgpu_on_gl.rs (its own binary).
+//! wgpu on GL is checked bit for bit in wgpu_on_gl.rs.
 
 use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Integrator, Scene, SimParams};
+use clothlab_engine::Variant;
 use clothlab_engine::validate::validate_kernels;
-use clothlab_engine::{Engine, GpuSolver, SolverOptions, Variant};
-use clothlab_tests::or_skip;
+use clothlab_tests::{AnyGpuSolver, Api};
 
 /// Every kernel of `s`'s recipe and a rollout, each required to be exact (0) where the
 /// adapter is llvmpipe; elsewhere only reported (other drivers round differently, within
 /// the bounds the other tests hold them to).
-fn exact<E: Engine>(make: impl Fn() -> Option<GpuSolver<E>>, label: &str) {
+fn exact(make: impl Fn() -> Option<Box<dyn AnyGpuSolver>>, label: &str) {
     let Some(mut s) = make() else { return };
     let adapter = s.adapter();
     let kernels = s.recipe_kernels();
     assert!(kernels.len() >= 5, "{label}: {kernels:?}");
-    let mut checks = validate_kernels(&mut s, &kernels, 64, 0xb17).unwrap();
+    let mut checks = validate_kernels(s.runner(), &kernels, 64, 0xb17).unwrap();
     // A fresh solver: the kernel checks leave their disturbed cloth in this one.
     let mut s = make().unwrap();
-    checks.push(validate_rollout(&mut s, 8).unwrap());
+    checks.push(validate_rollout(&mut *s, 8).unwrap());
     for c in &checks {
         println!("{label:24} {:28} {:7} max {:.2e}", c.what, c.buffer, c.max_abs);
     }
@@ -48,17 +48,9 @@ fn the_optimized_recipes_are_bit_identical_to_the_twins_on_every_api() {
     for integrator in [Integrator::Verlet, Integrator::Xpbd] {
         let params = SimParams { integrator, ..SimParams::default() };
         let scene = Scene::with_n(64);
-        let o = SolverOptions::default;
-        let label = |api: &str| format!("{api} {integrator:?}");
-        let (s, p) = (&scene, &params);
-        exact(
-            || or_skip(clothlab_wgpu::wgpu_solver(Variant::OPTIMIZED, s.clone(), p.clone(), o()), "wgpu"),
-            &label("wgpu"),
-        );
-        exact(
-            || or_skip(clothlab_vulkan::vulkan_solver(Variant::OPTIMIZED, s.clone(), p.clone(), true, o()), "vulkan"),
-            &label("vulkan"),
-        );
-        exact(|| or_skip(clothlab_gl::gl_solver(Variant::OPTIMIZED, s.clone(), p.clone(), o()), "gl"), &label("gl"));
+        for api in Api::ALL {
+            let label = format!("{} {integrator:?}", api.name());
+            exact(|| api.solver(Variant::OPTIMIZED, &scene, &params, true), &label);
+        }
     }
 }

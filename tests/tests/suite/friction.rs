@@ -8,7 +8,7 @@
 
 use clothlab_core::scene::{ColliderId, Pinning};
 use clothlab_core::{ClothState, Integrator, Motion, Scene, SimParams, Solver};
-use clothlab_tests::{TABLE_V, assert_checks, backends, every_backend, moving_table, still_air};
+use clothlab_tests::{TABLE_V, assert_checks, backends, every_backend, mean, moving_table, still_air};
 
 const G: f64 = 9.81;
 const MU_S: f32 = 0.5;
@@ -31,10 +31,6 @@ fn on_the_floor(v0: f32) -> Scene {
     sc.spheres.clear();
     sc.boxes.clear();
     sc
-}
-
-fn mean(st: &ClothState, f: impl Fn(usize) -> f64) -> f64 {
-    (0..st.pos.len()).map(f).sum::<f64>() / st.pos.len() as f64
 }
 
 fn run(s: &mut dyn Solver, frames: u32) -> ClothState {

@@ -61,12 +61,12 @@ fn a_napkin_thrown_across_a_held_sheet_stops_where_coulomb_says() {
     // 0.34 s, having slid V0²/(2 μk g) = 0.170 m. The sheet is a lattice of particles, not
     // a plane: the napkin lands on it from 0.9 t (a bounce) and rides over its bumps, which
     // also slow it. Bounds: 0.06 m/s at 0.2 s and 20 % of the distance (measured on the CPU
-    // 0.433 m/s and 0.180 m); at 1 s below 0.05 m/s (5 % of the throw: the bounce on the
-    // lattice leaves a jiggle of a few mm/s, measured −0.004 m/s). Without friction the
-    // bumps alone slow it: it slides more than twice as far (measured 0.39 m in 1 s, still
-    // creeping).
+    // 0.433 m/s and 0.180 m); at 0.5 s below 0.05 m/s (5 % of the throw: the bounce on the
+    // lattice leaves a jiggle of a few mm/s, measured −0.004 m/s at 1 s). Without friction
+    // the bumps alone slow it: it slides more than twice as far as the longest slide with
+    // friction on any backend (measured 0.39 m in 1 s, still creeping).
     let mut failed = Vec::new();
-    let mut slid = [0.0f64; 2];
+    let (mut slid_with, mut slid_without) = (0.0f64, 0.0f64);
     for coulomb in [true, false] {
         let (sc, params) = scene(THROWN_NAPKIN, coulomb);
         for (name, mut s) in every_backend(&sc, &params) {
@@ -77,7 +77,9 @@ fn a_napkin_thrown_across_a_held_sheet_stops_where_coulomb_says() {
             }
             let st = s.state().unwrap();
             let early = napkin(&st, |i| st.vel[i][0] as f64);
-            for _ in 12..60 {
+            // 0.5 s: the napkin has been still for 0.16 s (it stops at 0.34 s), as long a
+            // wait as it takes a stopped napkin to show a creep; without friction it slides on.
+            for _ in 12..30 {
                 s.step_frame().unwrap();
             }
             let st = s.state().unwrap();
@@ -86,19 +88,29 @@ fn a_napkin_thrown_across_a_held_sheet_stops_where_coulomb_says() {
             let (want_v, want_dx) = (V0 - MU_K * G * 0.2, V0 * V0 / (2.0 * MU_K * G));
             let label = if coulomb { "coulomb" } else { "none" };
             println!(
-                "{label:8} {name:16} vx(0.2 s) {early:.4} m/s ({want_v:.3}), vx(1 s) {late:.4}, slid {dx:.4} m ({want_dx:.3}), lowest {low:.4} m"
+                "{label:8} {name:16} vx(0.2 s) {early:.4} m/s ({want_v:.3}), vx(0.5 s) {late:.4}, slid {dx:.4} m ({want_dx:.3}), lowest {low:.4} m"
             );
-            slid[usize::from(!coulomb)] = dx;
+            if coulomb {
+                slid_with = slid_with.max(dx);
+            } else if name == "cpu-par" {
+                // Without friction the napkin creeps on: its distance at 1 s (the CPU's, as
+                // the comparison below is of physics, not of a backend).
+                for _ in 30..60 {
+                    s.step_frame().unwrap();
+                }
+                let st = s.state().unwrap();
+                slid_without = napkin(&st, |i| st.pos[i][0] as f64) - x0;
+            }
             if low < 0.5 {
                 failed.push(format!("{name} {label}: the napkin went through the sheet (lowest {low} m)"));
             }
             if coulomb && ((early - want_v).abs() > 0.06 || (dx - want_dx).abs() > 0.2 * want_dx || late.abs() > 0.05) {
-                failed.push(format!("{name} Coulomb: {early} m/s at 0.2 s, {late} m/s at 1 s, slid {dx} m"));
+                failed.push(format!("{name} Coulomb: {early} m/s at 0.2 s, {late} m/s at 0.5 s, slid {dx} m"));
             }
         }
-        if !coulomb && slid[1] < 2.0 * slid[0] {
-            failed.push(format!("without friction the napkin slid {} m, with it {} m", slid[1], slid[0]));
-        }
+    }
+    if slid_without < 2.0 * slid_with {
+        failed.push(format!("without friction the napkin slid {slid_without} m in 1 s, with it {slid_with} m"));
     }
     assert!(failed.is_empty(), "{failed:?}");
 }
