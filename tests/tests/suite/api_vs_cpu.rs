@@ -17,7 +17,7 @@ use clothlab_tests::{AnyGpuSolver, Api, assert_api_clean, assert_checks, or_skip
 
 /// A solver of `spec` on `api` for the default scene at `n` (validation on).
 fn solver(api: Api, spec: impl Into<VariantSpec>, n: u32) -> Option<Box<dyn AnyGpuSolver>> {
-    api.solver(spec, &Scene::with_n(n), &SimParams::default(), true)
+    api.solver(spec, &Scene::with_n(n), &SimParams::default())
 }
 
 /// The sizes at which each API's own kernels (the optimized recipe and the plain flavor

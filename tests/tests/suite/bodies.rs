@@ -302,7 +302,7 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
         sphere.step_frame().unwrap();
     }
     let a = sphere.state().unwrap();
-    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &drape(Some(48)), &params, true) {
+    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &drape(Some(48)), &params) {
         for _ in 0..20 {
             s.step_frame().unwrap();
         }
@@ -326,7 +326,7 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
     assert!(checks.iter().any(|c| c.what.contains("_si")), "no kernel samples the image");
     assert_checks("sdf=image", &checks);
     let bound = clothlab_engine::validate::sdf_image_bound(&sc);
-    for (api, s) in clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &params, true) {
+    for (api, s) in clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &params) {
         let mut s = s.into_solver();
         let mut c = clothlab_core::validate::validate_rollout(&mut *s, 12).unwrap();
         c.bound = c.bound.max(bound);
@@ -342,7 +342,7 @@ fn a_patch_on_a_spinning_body_in_an_image_moves_with_its_surface() {
     // the interpolant's gradient as through storage), on every API.
     let margin = SimParams::default().collision_margin;
     let surface = (OMEGA * (R + margin)) as f64;
-    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &spinning_body(), &still_air(1.0), true) {
+    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &spinning_body(), &still_air(1.0)) {
         for _ in 0..15 {
             s.step_frame().unwrap();
         }
@@ -358,9 +358,9 @@ fn a_scene_without_bodies_runs_the_image_switch_as_storage_does() {
     // empty), so the recipe computes the storage recipe's bits on every API.
     let sc = Scene::with_n(24);
     let p = SimParams::default();
-    let mut storage = clothlab_tests::gpu_solvers_of(&clothlab_engine::Variant::OPTIMIZED.into(), &sc, &p, true);
+    let mut storage = clothlab_tests::gpu_solvers_of(&clothlab_engine::Variant::OPTIMIZED.into(), &sc, &p);
     for ((api, mut a), (_, mut b)) in
-        clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &p, true).into_iter().zip(storage.drain(..))
+        clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &p).into_iter().zip(storage.drain(..))
     {
         for _ in 0..4 {
             a.step_frame().unwrap();

@@ -38,7 +38,7 @@ fn every_integrator_on_every_gpu_api_follows_the_cpu_within_the_rollout_bound() 
     for integrator in Integrator::ALL {
         let p = params(integrator);
         for (api, variant) in ROWS {
-            let Some(mut s) = api.solver(variant, &scene, &p, true) else { return };
+            let Some(mut s) = api.solver(variant, &scene, &p) else { return };
             let name = format!("{} {}", api.name(), variant.label());
             let c = validate_rollout(&mut *s, frames).unwrap();
             println!(

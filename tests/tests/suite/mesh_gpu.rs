@@ -25,7 +25,7 @@ fn every_kernel_flavor_on_a_mesh_matches_its_twin_on_every_api() {
     // self-collision are grid-only), within its bound.
     for name in ["mesh-flag.toml", "mesh-fan.toml"] {
         let file = scene_file(name);
-        for (api, s) in gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &file.params, true) {
+        for (api, s) in gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &file.params) {
             every_flavor_matches(&format!("{api} {name}"), s, &file);
         }
     }
@@ -61,9 +61,9 @@ fn the_optimized_recipes_on_a_mesh_compute_the_cpu_solvers_bits_on_llvmpipe() {
     ] {
         let file = scene_file(name);
         let params = SimParams { integrator, ..file.params.clone() };
-        let fresh = gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &params, true);
+        let fresh = gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &params);
         for ((api, mut s), (_, mut rollout)) in
-            gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &params, true).into_iter().zip(fresh)
+            gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &params).into_iter().zip(fresh)
         {
             let adapter = s.adapter();
             let kernels = s.recipe_kernels();
@@ -98,7 +98,7 @@ fn the_naive_recipe_on_a_mesh_stays_within_the_rollout_bound() {
     // few frames whatever computes it (the CPU engine's naive recipe against the CPU
     // solver: 5 mm after 3 frames on the skirt), so they are checked bit for bit above.
     let file = scene_file("mesh-tablecloth.toml");
-    for (api, mut s) in gpu_solvers_of(&Variant::NAIVE.into(), &file.scene, &file.params, true) {
+    for (api, mut s) in gpu_solvers_of(&Variant::NAIVE.into(), &file.scene, &file.params) {
         let c = validate_rollout(&mut *s, 13).unwrap();
         assert_checks(&api, &[c]);
         assert_api_clean(&mut *s);
@@ -113,9 +113,9 @@ fn a_grid_loaded_as_a_mesh_drapes_where_the_grid_does_on_every_api() {
     let grid_scene = Scene::with_n(32);
     let scene = clothlab_core::cloth::grid_as_mesh(&grid_scene).unwrap();
     let params = SimParams::default();
-    let grids = gpu_solvers_of(&Variant::OPTIMIZED.into(), &grid_scene, &params, true);
+    let grids = gpu_solvers_of(&Variant::OPTIMIZED.into(), &grid_scene, &params);
     for ((api, mut mesh), (_, mut grid)) in
-        gpu_solvers_of(&Variant::OPTIMIZED.into(), &scene, &params, true).into_iter().zip(grids)
+        gpu_solvers_of(&Variant::OPTIMIZED.into(), &scene, &params).into_iter().zip(grids)
     {
         for _ in 0..180 {
             grid.step_frame().unwrap();
@@ -145,7 +145,7 @@ fn grid_only_switches_are_refused_for_a_mesh_in_one_line_and_presets_fall_back()
         assert!(e.contains(switch) && e.contains("mesh") && !e.contains('\n'), "{e}");
     }
     // The optimized preset runs, with the table from storage and neighbours loaded.
-    for (api, s) in gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &file.params, true) {
+    for (api, s) in gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &file.params) {
         let label = s.name().to_string();
         assert!(label.contains("table=storage") && label.contains("neighbours=load"), "{api}: {label}");
     }
