@@ -1,5 +1,5 @@
 #!/bin/bash
-# The device run of session 26 (issue 47): the tiled substep (fusion=tile) on the H100.
+# The device run of 2026-11-25: the tiled substep (fusion=tile) on the H100.
 # 1. validate the tile recipe against the CPU on Vulkan, wgpu and GL (n = 37, two strain
 #    passes: partial tiles at the far edges); 2. the optimized preset (A) against
 #    optimized+fusion=tile (B), interleaved A B per API and size, two rounds, ns per

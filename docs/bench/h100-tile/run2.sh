@@ -1,5 +1,5 @@
 #!/bin/bash
-# The second device call of session 26: the tile's kernel check on Vulkan with 0 and 1
+# The second device call of 2026-11-25: the tile's kernel check on Vulkan with 0 and 1
 # strain passes (the first call's 2 passes missed the kernel bound: compounding or a bug?),
 # then GL (the first call's GL runs never finished within 40 s).
 set -u

@@ -1,7 +1,7 @@
 #!/bin/bash
-# The planned device call for issue 47 after session 32 (not yet run): today's tiled substep
+# The planned device call for the tiled substep (not yet run): today's tiled substep
 # (no workgroup zeroing on any API, dense stages, the last stage written straight out) and
-# temporal blocking on a real GPU, which session 26's call did not reach.
+# temporal blocking on a real GPU, which the call of 2026-11-25 did not reach.
 # 1. validate fusion=tile (n = 37, one strain pass: partial tiles) and temporal=on on Vulkan,
 #    wgpu and GL; 2. A = optimized, B = +fusion=tile, C = +fusion=tile +temporal=on,
 #    interleaved per API and size, ROUNDS rounds, ns per particle-substep (sim's median of
@@ -10,7 +10,7 @@
 # Here, first: cargo build --release -p clothlab-app; mkdir -p .dev; cp target/release/clothlab
 # .dev/; the loaders into .gl (the device tool's README); then
 #   run(command="bash docs/bench/h100-tile/run3.sh", carry=[".dev", ".gl"], timeout_s=540)
-# About 6 minutes on the H100 (session 26's runs: ~4 s per sim at n = 2048).
+# About 6 minutes on the H100 (the runs of 2026-11-25: ~4 s per sim at n = 2048).
 # A dry run on lavapipe: LOCAL=1 B=target/release/clothlab OUT=/tmp/o SIZES="32 64" ROUNDS=1 bash …
 set -u
 if [ -z "${LOCAL:-}" ]; then

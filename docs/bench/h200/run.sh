@@ -1,5 +1,5 @@
 #!/bin/bash
-# The device run of session 24 (issue 44): validate the irregular meshes, and the
+# The device run of 2026-11-26: validate the irregular meshes, and the
 # mesh-vs-grid bench with a 250k and a 1M Delaunay disc. Results under /tmp/r, packed
 # into $OUT/results.tgz after every step.
 set -u
@@ -20,7 +20,7 @@ for s in mesh-fan mesh-cape; do
 done
 ( time timeout 75 $B validate --scene scenes/mesh-cape.toml --integrator xpbd ) > $R/validate-mesh-cape-xpbd.txt 2>&1
 wait; pack
-M="NVIDIA H200, 16 cores (device run, session 24)"
+M="NVIDIA H200, 16 cores (device run, 2026-11-26)"
 ( time timeout 200 $B bench --mesh-vs-grid --sizes 501 --irregular /tmp/disc250k.obj \
   --backends cpu-par,wgpu-naive,wgpu,vulkan-naive,vulkan,gl-naive,gl --iters 320 --repeat 3 \
   --machine "$M" --out $R/mesh-vs-grid-250k ) > $R/mvg-250k.txt 2>&1

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# What a body costs (issue 45): the spinning-sphere scene with its sphere a body made of
+# What a body costs: the spinning-sphere scene with its sphere a body made of
 # triangles (A: scenes/body-sphere.toml, the icosphere's field of 48 cells across, 8
 # loads and a trilinear sample per particle inside its grid) against the analytic sphere
 # (B: scenes/spinning-sphere.toml), interleaved A B A B per backend and grid size

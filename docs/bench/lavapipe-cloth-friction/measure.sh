@@ -1,5 +1,5 @@
 #!/bin/bash
-# Friction between cloths (issue 45): the settled heap at n = 128 (self_thickness 8 mm,
+# Friction between cloths: the settled heap at n = 128 (self_thickness 8 mm,
 # 1600 substeps: it lands and folds onto itself) with self-collision, interleaved per
 # round and backend: `old` — the binary before friction between cloths ($OLD, optional),
 # `share` — this checkout without Coulomb's coefficients (the response's friction branch

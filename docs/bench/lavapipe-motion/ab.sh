@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The cost of motion (issue 45): the spinning-sphere scene with its sphere spinning (A)
+# The cost of motion: the spinning-sphere scene with its sphere spinning (A)
 # and still (B), interleaved A B A B, per backend and grid size (docs/bench/ab-scenes.sh):
 # `sim`'s median time per substep (kernel timestamps on the GPU APIs), its frame median
 # and the host's recording time per frame (`cpu record`).

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The optimized preset before (A: normals every substep, colliders in storage, neighbours
-# loaded) and after issue 32 (B: the ladder's top), A B per API, interleaved, three rounds.
+# loaded) and after the preset became the ladder's top (B: the ladder's top), A B per API, interleaved, three rounds.
 # Prints ns per particle-substep (GPU timestamps, median of 160 substeps).
 set -euo pipefail
 bin=${1:-./target/release/clothlab}

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The cost of moving pins (issue 45): the cloth-twist scene without self-collision, its
+# The cost of moving pins: the cloth-twist scene without self-collision, its
 # two pinned strips turning (A) and held still (B: the same [[pins]] without a motion),
 # interleaved A B A B, per backend and grid size (docs/bench/ab-scenes.sh): `sim`'s
 # median time per substep (kernel timestamps on the GPU APIs), its frame median and the

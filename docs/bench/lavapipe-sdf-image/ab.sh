@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The bodies' distance fields in storage against the 3-D image (issue 45, `sdf=image`):
+# The bodies' distance fields in storage against the 3-D image(`sdf=image`):
 # scenes/body-sphere.toml (the icosphere's field, 48 cells across) on each GPU API's
 # optimized recipe, A = sdf=storage (8 loads and the kernel's trilinear arithmetic per
 # particle in the grid), B = sdf=image (the texture unit interpolates: 1 filtered sample

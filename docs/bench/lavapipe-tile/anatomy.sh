@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Where the tiled substep's time goes on lavapipe / llvmpipe (session 32, issue 47): three
+# Where the tiled substep's time goes on lavapipe / llvmpipe (2026-11-27): three
 # builds of the release binary that differ only in shaders/wgsl/substep_tile.wgsl —
 #   base:      the kernel as committed (256 invocations a workgroup, 4 region points each);
 #   w32:       32 invocations a workgroup, 32 points each (same arithmetic, same bits);

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Verlet's substep before and after the state kept velocities (issue 31): OLD and NEW
+# Verlet's substep before and after the state kept velocities: OLD and NEW
 # binaries interleaved (A B A B …), n = 512, the default scene: 160 substeps (10 frames) on
 # cpu-par, 48 (3 frames) on the GPU backends (lavapipe takes ~0.18 s a substep there).
 # Usage: OLD=path/to/old/clothlab NEW=path/to/new/clothlab ROUNDS=4 ab.sh > runs.txt

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# XPBD in small steps (issue 31): the default scene draped for 100 frames (1.67 s) with
+# XPBD in small steps: the default scene draped for 100 frames (1.67 s) with
 # physical stiffness, one XPBD iteration per substep at 16 … 128 substeps per frame, against
 # the many-iterations settings the 75-substep limit forced before; cpu-par. Prints the max
 # structural strain, the lowest point and the time per substep (cost per simulated second =
