@@ -61,7 +61,11 @@ impl PhysicsArgs {
                     Err(e) => return Err(refused.unwrap_or_else(|| e.into())),
                 }
             }
-            None => Setup::default_with_n(default_n),
+            None => {
+                let mut setup = Setup::default_with_n(default_n);
+                setup.params = self.apply(&setup.params)?;
+                setup
+            }
         };
         // A mesh's vertices in no triangle are dropped: said once, on stderr.
         if let (Some(m), Some(file)) = (&setup.scene.cloth.mesh_data, &setup.scene.cloth.mesh)
@@ -86,7 +90,6 @@ impl PhysicsArgs {
                 _ => return Err(e.into()),
             }
         }
-        setup.params = self.apply(&setup.params)?;
         Ok(setup)
     }
 

@@ -222,10 +222,7 @@ impl SceneFile {
 
     /// Reads and checks `path`.
     pub fn load(path: &Path) -> Result<Self, SceneFileError> {
-        let file = path.display().to_string();
-        let text = crate::input::read_text_capped(path, crate::input::SCENE_FILE_MAX_BYTES)
-            .map_err(|message| SceneFileError { file: file.clone(), at: None, message })?;
-        Self::parse(&text, &file)
+        Self::load_with(path, |_| Ok(()))
     }
 
     /// Reads `path`, applies `adjust` to the file's parameters (a command line's
