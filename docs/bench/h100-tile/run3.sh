@@ -1,5 +1,5 @@
 #!/bin/bash
-# The planned device call for the tiled substep (not yet run): today's tiled substep
+# A device call for the tiled substep (run on an H200 on 2026-11-27: ../h200-tile): today's tiled substep
 # (no workgroup zeroing on any API, dense stages, the last stage written straight out) and
 # temporal blocking on a real GPU, which the call of 2026-11-25 did not reach.
 # 1. validate fusion=tile (n = 37, one strain pass: partial tiles) and temporal=on on Vulkan,
@@ -8,9 +8,11 @@
 #    GPU timestamps); every run's full output kept (per-kernel tables). Results under /tmp/r,
 #    packed into $OUT/results.tgz after every size.
 # Here, first: cargo build --release -p clothlab-app; mkdir -p .dev; cp target/release/clothlab
-# .dev/; the loaders into .gl (the device tool's README); then
-#   run(command="bash docs/bench/h100-tile/run3.sh", carry=[".dev", ".gl"], timeout_s=540)
-# About 6 minutes on the H100 (the runs of 2026-11-25: ~4 s per sim at n = 2048).
+# .dev/; strip .dev/clothlab; gzip -9 .dev/clothlab (43 MB stripped, 16 MB gzipped: the tree
+# and the carried paths travel within 64 MiB); the loaders into .gl (the device tool's README);
+# then run(command="gunzip .dev/clothlab.gz && chmod +x .dev/clothlab && bash
+# docs/bench/h100-tile/run3.sh", carry=[".dev", ".gl"], timeout_s=540)
+# 341 s on the H200 of 2026-11-27.
 # A dry run on lavapipe: LOCAL=1 B=target/release/clothlab OUT=/tmp/o SIZES="32 64" ROUNDS=1 bash …
 set -u
 if [ -z "${LOCAL:-}" ]; then
