@@ -450,9 +450,9 @@ pub fn frame_end(variant: &Variant, how: Integration) -> Vec<Command> {
     normals_kernels(variant).iter().flat_map(|d| run(d.flavor(flavor))).collect()
 }
 
-/// The shaders a solver of `variant` builds when it starts: what its recipe dispatches,
-/// and the plain flavor of every kernel of the step (so that each can be validated). The
-/// statistics kernels are built with their option.
+/// The shaders a solver of `variant` offers to a validation: what its recipe dispatches,
+/// and the plain flavor of every kernel of the step (so that each can be validated). A
+/// solver builds its own recipe's when it starts and the others when first run.
 pub fn kernels_for(variant: &Variant) -> Vec<KernelRef> {
     let mut commands = recipe(variant, 1, Integration::VERLET);
     commands.extend(frame_end(variant, Integration::VERLET));

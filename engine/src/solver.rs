@@ -91,6 +91,9 @@ pub struct GpuSolver<E: Engine> {
     group: u32,
     /// Simulated time, s (moving colliders are written at every substep's).
     time: f64,
+    /// Every kernel it can run ([`KernelRunner::kernels`]): its recipe's, built when it
+    /// starts, and the plain flavor of every kernel of the step, built when first run.
+    offered: Vec<KernelRef>,
 }
 
 /// Substeps per recording of `variant`'s recipe on `topo` with `params`, refused with
@@ -285,10 +288,17 @@ impl<E: Engine> GpuSolver<E> {
         let step = recipe_for(&variant, params.strain_iterations, Integration::of(&params), &topo);
         let group = recipe_group(&variant, &params, &topo, options, &scene)?;
         let end = frame_end(&variant, Integration::of(&params));
-        let mut build_list: Vec<KernelRef> = kernels_for(&variant);
-        build_list.extend(kernels_of(&step));
+        // Only what the frame dispatches is built now; the other kernels a validation may
+        // run (`offered`) are built when first run (`run_host`). A pipeline costs lavapipe
+        // 10–40 ms to build, and most of the offered kernels are other integrators' and
+        // other features'.
+        let mut build_list: Vec<KernelRef> = kernels_of(&step);
         build_list.extend(kernels_of(&end));
         build_list.extend(dispatches(&stats_commands(options.stats, caps)));
+        let mut offered = kernels_for(&variant);
+        offered.extend(build_list.iter().copied());
+        offered.sort_by_key(|k| k.shader_name());
+        offered.dedup();
         let name = variant.solver_name(info.api);
         let mut solver = Self {
             engine,
@@ -314,6 +324,7 @@ impl<E: Engine> GpuSolver<E> {
             time_kernels: true,
             group,
             time: 0.0,
+            offered,
         };
         for k in build_list {
             solver.build(k)?;
@@ -611,7 +622,9 @@ fn interior_block(topo: &ClothTopology, table: Table) -> InteriorSlots {
 impl<E: Engine> KernelRunner for GpuSolver<E> {
     fn kernels(&self) -> Vec<KernelRef> {
         let mut v = self.engine.kernels();
+        v.extend(self.offered.iter().copied());
         v.sort_by_key(|k| k.shader_name());
+        v.dedup();
         v
     }
 
