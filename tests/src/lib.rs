@@ -95,25 +95,41 @@ impl Api {
     }
 }
 
-/// The API whose naive recipe the physics tests run beside every API's optimized one.
-/// The naive recipe is the same WGSL kernels on every API (each API's flavors are checked
-/// against their twins, and its naive rollouts against the CPU, in api_vs_cpu.rs); what a
-/// physics test adds is the recipe's physics, which one API shows as well as three. Raw
-/// Vulkan, under the validation layer, also checks the recipe's barriers.
+/// The API whose naive recipe the physics tests run. The naive recipe is the same WGSL
+/// kernels on every API (each API's flavors are checked against their twins, and its naive
+/// rollouts against the CPU, in api_vs_cpu.rs); what a physics test adds is the recipe's
+/// physics, which one API shows as well as three. Raw Vulkan, under the validation layer,
+/// also checks the recipe's barriers.
 pub const NAIVE_ON: Api = Api::Vulkan;
 
-/// The physics tests' backends on `scene`: the two CPU solvers, then each API's optimized
-/// recipe (wgpu, Vulkan, OpenGL) and the naive recipe on [`NAIVE_ON`]; the GPU ones only
-/// where an adapter is (see [`or_skip`]). Vulkan runs under the validation layer: it
-/// costs a physics run about a tenth (`sim --backend vulkan-naive --n 32`, 640 substeps:
-/// 3.1 s without, 3.4–3.6 s with, on lavapipe), so every test checks the API too.
-pub fn every_backend(scene: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>)> {
-    backends(scene, params, |_| true)
+/// The API whose optimized recipe the physics tests run. On llvmpipe the optimized recipes
+/// compute the CPU solver's bits on every API: every scene file's recipe (its integrator,
+/// colliders, motions, pins, friction, self-collision, meshes) in scenes.rs, every kernel
+/// flavor in api_vs_cpu.rs, every integrator in integrators.rs, each feature's recipe in
+/// its own "follows the CPU" test. So a physics test's bound, met by the CPU solver, holds
+/// on each API's optimized recipe alike, and one API runs it: wgpu, the app's.
+pub const OPTIMIZED_ON: Api = Api::Wgpu;
+
+/// The physics tests' backends, by name: the two CPU solvers, the naive recipe on
+/// [`NAIVE_ON`] and the optimized one on [`OPTIMIZED_ON`].
+pub fn physics_backend(name: &str) -> bool {
+    name == "cpu"
+        || name == "cpu-par"
+        || name == format!("{} naive", NAIVE_ON.name())
+        || name == format!("{} optimized", OPTIMIZED_ON.name())
 }
 
-/// The backends of [`every_backend`] whose names `keep` accepts (`cpu`, `cpu-par`,
-/// `vulkan naive`, `wgpu optimized`, `vulkan optimized`, `gl optimized`); the others are
-/// not built.
+/// The physics tests' backends on `scene` ([`physics_backend`]); the GPU ones only where
+/// an adapter is (see [`or_skip`]). Vulkan runs under the validation layer: it costs a
+/// physics run about a tenth (`sim --backend vulkan-naive --n 32`, 640 substeps: 3.1 s
+/// without, 3.4–3.6 s with, on lavapipe), so every test checks the API too.
+pub fn every_backend(scene: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>)> {
+    backends(scene, params, physics_backend)
+}
+
+/// The backends whose names `keep` accepts (`cpu`, `cpu-par`, `vulkan naive`,
+/// `wgpu optimized`, `vulkan optimized`, `gl optimized`); the others are not built. A
+/// test across the APIs keeps every optimized recipe; a physics test, [`physics_backend`].
 pub fn backends(scene: &Scene, params: &SimParams, keep: impl Fn(&str) -> bool) -> Vec<(String, Box<dyn Solver>)> {
     let mut out: Vec<(String, Box<dyn Solver>)> = Vec::new();
     for exec in [Exec::Serial, Exec::Parallel] {

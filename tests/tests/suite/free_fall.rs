@@ -9,7 +9,8 @@
 //!
 //! The CPU solvers run the whole matrix (every integrator at 8, 64 and 512 substeps per
 //! frame, 3.7 m and 50 m). A GPU substep of this small cloth costs lavapipe 0.6–5 ms
-//! (dispatches, not arithmetic), so the GPU backends run every integrator at 8 substeps
+//! (dispatches, not arithmetic), so the GPU backends (the physics tests' two recipes,
+//! `clothlab_tests::physics_backend`) run every integrator at 8 substeps
 //! from 50 m and the 64-substep fall for the integrators it matters most to (Verlet,
 //! implicit, XPBD); their kernels compute the CPU twins' bits (optimized) or follow them
 //! within the rollout bound (naive), which the kernel tests check at every substep count.
@@ -17,7 +18,7 @@
 use clothlab_core::mesh::Placement;
 use clothlab_core::scene::Pinning;
 use clothlab_core::{Integrator, Scene, SimParams};
-use clothlab_tests::{backends, every_backend, free_mesh_scene};
+use clothlab_tests::{backends, every_backend, free_mesh_scene, physics_backend};
 
 /// A free 12 × 12 cloth of 0.5 m, tilted 37° about x, its top edge at `height` m: no pins,
 /// no floor, no colliders.
@@ -140,6 +141,9 @@ fn fall_within(
 }
 
 const CPU: fn(&str) -> bool = |name| name.starts_with("cpu");
+/// The physics tests' GPU backends (`clothlab_tests::physics_backend`: the naive recipe on
+/// Vulkan, the optimized one on wgpu, whose bits every API's optimized recipe computes).
+const GPU: fn(&str) -> bool = |name| !CPU(name) && physics_backend(name);
 
 #[test]
 fn on_the_cpu_a_free_cloth_falls_by_each_integrators_recurrence_at_8_64_and_512_substeps() {
@@ -163,13 +167,12 @@ fn on_the_cpu_a_free_cloth_falls_by_each_integrators_recurrence_at_8_64_and_512_
 
 #[test]
 fn on_the_gpu_a_free_cloth_falls_by_each_integrators_recurrence() {
-    let gpu = |name: &str| !CPU(name);
     for integrator in Integrator::ALL {
-        fall(50.0, integrator, 8, 30, gpu);
+        fall(50.0, integrator, 8, 30, GPU);
     }
     // 0.13 s: 8.7 cm of fall, 360 ulps of a position at 3.7 m.
     for integrator in [Integrator::Verlet, Integrator::Implicit, Integrator::Xpbd] {
-        fall(3.7, integrator, 64, 8, gpu);
+        fall(3.7, integrator, 64, 8, GPU);
     }
 }
 
@@ -179,7 +182,8 @@ fn on_the_gpu_a_free_mesh_falls_by_each_integrators_recurrence() {
     // hold to the grid's bounds on every GPU backend, with every integrator, 64 substeps
     // (0.13 s, 8.7 cm) from 50 m at 8 substeps a frame (XPBD by the mesh's passes,
     // implicit's CG over its table). Measured on lavapipe over 240 substeps: drop within
-    // 2.3e-6 of the recurrence, nothing sideways, on all six GPU backends. 64 substeps
+    // 2.3e-6 of the recurrence, nothing sideways, on all six GPU recipes (naive and
+    // optimized on each API). 64 substeps
     // catch what 240 did: a vertex whose force and mass disagree (masses 0.03–2.3 of the
     // mean) falls at another rate from the first substep, its shape error growing as t²:
     // 1 % of a 0.03-mass vertex's acceleration is 0.9 mm at 0.13 s, above the shape bound
@@ -187,7 +191,7 @@ fn on_the_gpu_a_free_mesh_falls_by_each_integrators_recurrence() {
     for name in ["tablecloth.obj", "fan.obj"] {
         let mesh = mesh_scene(name, 50.0);
         for integrator in Integrator::ALL {
-            fall_within(&mesh, 50.0, integrator, 8, 8, |name| !CPU(name), 1e-4);
+            fall_within(&mesh, 50.0, integrator, 8, 8, GPU, 1e-4);
         }
     }
 }
