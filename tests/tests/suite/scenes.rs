@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use clothlab_core::validate::validate_rollout;
+use clothlab_core::validate::{compare, validate_rollout};
 use clothlab_core::{Exec, Scene, SceneFile, SimParams, Solver};
 use clothlab_engine::Variant;
 use clothlab_engine::validate::{KernelRunner, validate_kernels_with};
@@ -20,17 +20,25 @@ fn load(name: &str) -> SceneFile {
     SceneFile::load(&scenes_dir().join(name)).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// Every scene file under scenes/, sorted.
+fn scene_files() -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(scenes_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    v.sort();
+    v
+}
+
 #[test]
 fn every_scene_file_loads_and_builds() {
     let mut names = Vec::new();
-    for entry in std::fs::read_dir(scenes_dir()).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "toml") {
-            let f = SceneFile::load(&path).unwrap_or_else(|e| panic!("{e}"));
-            clothlab_core::build(&f.scene, &f.params).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            assert!(f.title.is_some(), "{} has no title", path.display());
-            names.push(path.file_stem().unwrap().to_string_lossy().into_owned());
-        }
+    for path in scene_files() {
+        let f = SceneFile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        clothlab_core::build(&f.scene, &f.params).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(f.title.is_some(), "{} has no title", path.display());
+        names.push(path.file_stem().unwrap().to_string_lossy().into_owned());
     }
     // The scenes the issue names.
     for want in ["thesis", "curtain", "tablecloth", "free-fall", "flag"] {
@@ -54,12 +62,7 @@ fn every_scene_file_computes_the_cpus_bits_on_every_apis_optimized_recipe() {
     // (`clothlab_tests::OPTIMIZED_ON`). Elsewhere other drivers round otherwise, and the
     // rollout bounds of the other tests apply: the difference is only printed.
     const FRAMES: u32 = 3;
-    let mut scenes: Vec<PathBuf> = std::fs::read_dir(scenes_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .collect();
-    scenes.sort();
+    let scenes = scene_files();
     assert!(scenes.len() >= 20, "{scenes:?}");
     let mut differ = Vec::new();
     for path in &scenes {
@@ -81,10 +84,8 @@ fn every_scene_file_computes_the_cpus_bits_on_every_apis_optimized_recipe() {
                 s.step_frame().unwrap();
             }
             let got = s.state().unwrap();
-            let off = |a: &[[f32; 4]], b: &[[f32; 4]]| {
-                a.iter().zip(b).flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs())).fold(0.0f32, f32::max)
-            };
-            let (dx, dv) = (off(&got.pos, &want.pos), off(&got.vel, &want.vel));
+            let off = |buf, a: &[[f32; 4]], b: &[[f32; 4]]| compare(&name, buf, a, b, false, 0.0).max_abs;
+            let (dx, dv) = (off("pos", &got.pos, &want.pos), off("vel", &got.vel, &want.vel));
             println!(
                 "{name:18} {:7} {} particles: positions {dx:.1e} m, velocities {dv:.1e} m/s off",
                 api.name(),
