@@ -192,10 +192,17 @@ fn on_the_gpu_a_free_mesh_falls_by_each_integrators_recurrence() {
     // mean) falls at another rate from the first substep, its shape error growing as t²:
     // 1 % of a 0.03-mass vertex's acceleration is 0.9 mm at 0.13 s, above the shape bound
     // (200 ulps at 50 m: 0.76 mm); the rounding stays far below the drop's 1e-4.
+    // The naive recipe falls the fan only: its masses (0.03–2.3 of the mean) and rows (6 to
+    // 128 springs) are the wider spread; every flavor (the naive recipe's among them) is
+    // held to its twin on the fan's and the flag's rows, and the naive recipe's tablecloth
+    // drape follows the CPU within the rollout bound on every API (mesh_gpu.rs). The
+    // naive tablecloth was about a third of this test's 38 s on lavapipe.
+    let naive_too = |mesh: &str| mesh == "fan.obj";
     for name in ["tablecloth.obj", "fan.obj"] {
         let mesh = mesh_scene(name, 50.0);
+        let keep = |backend: &str| GPU(backend) && (naive_too(name) || !backend.ends_with("naive"));
         for integrator in Integrator::ALL {
-            fall_within(&mesh, 50.0, integrator, 8, 8, GPU, 1e-4);
+            fall_within(&mesh, 50.0, integrator, 8, 8, keep, 1e-4);
         }
     }
 }

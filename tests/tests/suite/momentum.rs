@@ -3,14 +3,14 @@
 //! cloth pushes it sideways (no drag, no damping, no wind, no friction; the floor pushes
 //! along its normal only), so the horizontal velocity of its centre of mass must stay the
 //! throw's, whatever the strain limit, self-collision or XPBD's constraints do inside it.
-//! Before issue 43 the strain limit (each particle averaging its pulls over its own count
-//! of stretched springs) changed it by 2.2e-3 m/s here, and self-collision (each particle
-//! dropping its own velocity into a contact) by 0.22 m/s.
+//! A strain limit that averages each particle's pulls over its own count of stretched
+//! springs changes it by 2.2e-3 m/s here, and a self-collision that drops each particle's
+//! own velocity into a contact by 0.22 m/s.
 
 use clothlab_core::mesh::Placement;
 use clothlab_core::scene::Pinning;
 use clothlab_core::{ClothState, Integrator, Scene, SimParams};
-use clothlab_tests::{every_backend, free_mesh_scene};
+use clothlab_tests::{NAIVE_ON, backends, free_mesh_scene, physics_backend};
 
 /// The throw: every particle starts at this horizontal velocity, m/s.
 const THROW: [f32; 2] = [0.3, -0.2];
@@ -71,11 +71,12 @@ fn horizontal_velocity(st: &ClothState) -> [f64; 2] {
     [vx / m, vz / m]
 }
 
-/// Runs `params` on every backend for [`FRAMES`] frames; per backend the largest change of
-/// the centre's horizontal velocity over the frames, m/s, and the cloth's lowest point.
-fn drifts(scene: &Scene, params: &SimParams) -> Vec<(String, f64, f32)> {
+/// Runs `params` on the backends `keep` accepts for [`FRAMES`] frames; per backend the
+/// largest change of the centre's horizontal velocity over the frames, m/s, and the
+/// cloth's lowest point.
+fn drifts(scene: &Scene, params: &SimParams, keep: impl Fn(&str) -> bool) -> Vec<(String, f64, f32)> {
     let mut out = Vec::new();
-    for (name, mut s) in every_backend(scene, params) {
+    for (name, mut s) in backends(scene, params, keep) {
         let v0 = horizontal_velocity(&s.state().unwrap());
         assert!((v0[0] - THROW[0] as f64).abs() < 1e-6 && (v0[1] - THROW[1] as f64).abs() < 1e-6, "{name}: {v0:?}");
         let mut worst = 0.0f64;
@@ -157,7 +158,14 @@ fn on_a_frictionless_floor_internal_corrections_keep_the_horizontal_momentum() {
         } else {
             (&grid, bound(&p))
         };
-        for (name, drift, low) in drifts(scene, &p) {
+        // VBD's bound is its sweeps' convergence, not rounding: the naive recipe's other
+        // order of sums (what the naive runs here are for) moves the centre by rounding,
+        // three orders below it, and its VBD follows the CPU within the rollout bound
+        // (integrators.rs; on llvmpipe 0.0 m off over 48 substeps). The naive VBD was
+        // 10.5 of this test's 47 s on lavapipe.
+        let naive = format!("{} naive", NAIVE_ON.name());
+        let keep = |name: &str| physics_backend(name) && !(what == "vbd" && name == naive);
+        for (name, drift, low) in drifts(scene, &p, keep) {
             println!(
                 "{what:15} {name:16} horizontal velocity drift {drift:.2e} m/s (bound {tol:.1e}), lowest {low:.4} m"
             );
@@ -179,7 +187,7 @@ fn with_friction_the_floor_slows_the_throw() {
     // 0.42–0.43 m/s in a component (the floor holds each landed particle back while the
     // rest swing over it).
     let p = SimParams { friction: 0.6, strain_iterations: 1, self_collision: true, ..frictionless() };
-    for (name, drift, _) in drifts(&scene(), &p) {
+    for (name, drift, _) in drifts(&scene(), &p, physics_backend) {
         println!("friction 0.6    {name:16} horizontal velocity change {drift:.2e} m/s");
         assert!(drift > 0.1, "{name}: friction changed the throw's 0.36 m/s by only {drift:.2e} m/s");
     }
