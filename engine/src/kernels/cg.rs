@@ -113,4 +113,5 @@ pub static IMPLICIT_FINISH: KernelDef = KernelDef {
 };
 
 /// This family's kernels, in the registry's order ([`super::ALL`]).
-pub(super) const ROWS: &[&KernelDef] = &[&CG_BEGIN, &CG_MATVEC, &CG_REDUCE_PQ, &CG_STEP, &CG_REDUCE_RZ, &CG_DIRECTION, &IMPLICIT_FINISH];
+pub(super) const ROWS: &[&KernelDef] =
+    &[&CG_BEGIN, &CG_MATVEC, &CG_REDUCE_PQ, &CG_STEP, &CG_REDUCE_RZ, &CG_DIRECTION, &IMPLICIT_FINISH];

@@ -133,4 +133,15 @@ pub static FORCES_INTEGRATE_COLLIDE: KernelDef = KernelDef {
 };
 
 /// This family's kernels, in the registry's order ([`super::ALL`]).
-pub(super) const ROWS: &[&KernelDef] = &[&FORCES, &SPRINGS, &SPRINGS_SCATTER, &FORCES_SPRINGS, &FORCES_SPRINGS_WIND, &INTEGRATE, &PINS, &COLLIDE, &INTEGRATE_COLLIDE, &FORCES_INTEGRATE_COLLIDE];
+pub(super) const ROWS: &[&KernelDef] = &[
+    &FORCES,
+    &SPRINGS,
+    &SPRINGS_SCATTER,
+    &FORCES_SPRINGS,
+    &FORCES_SPRINGS_WIND,
+    &INTEGRATE,
+    &PINS,
+    &COLLIDE,
+    &INTEGRATE_COLLIDE,
+    &FORCES_INTEGRATE_COLLIDE,
+];

@@ -4,7 +4,6 @@
 
 use super::*;
 
-
 fn hash_buffers(b: &mut HostBuffers) -> cpu::HashBuffers<'_> {
     cpu::hash_buffers(&mut b.aux)
 }
@@ -87,7 +86,6 @@ fn built_hash(a: &TwinArgs, b: &mut HostBuffers) {
     }
     hash_input(4)(a, b)
 }
-
 
 /// Integer work (counts, prefix sums, indices): the same bits everywhere.
 const EXACT: Check = Check::Bound { relative: 0.0, reason: "integers: counts, prefix sums and indices" };
@@ -192,4 +190,14 @@ pub static SELF_COLLISION: [&KernelDef; 5] =
     [&HASH_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE];
 
 /// This family's kernels, in the registry's order ([`super::ALL`]).
-pub(super) const ROWS: &[&KernelDef] = &[&HASH_COUNT, &STRAIN_LIMIT_COUNT, &HASH_SCAN_TOP, &HASH_SCAN_BLOCKS, &HASH_SCATTER, &SELF_COLLIDE, &SELF_COLLIDE_MESH, &SELF_COLLIDE_FRICTION, &SELF_COLLIDE_MESH_FRICTION];
+pub(super) const ROWS: &[&KernelDef] = &[
+    &HASH_COUNT,
+    &STRAIN_LIMIT_COUNT,
+    &HASH_SCAN_TOP,
+    &HASH_SCAN_BLOCKS,
+    &HASH_SCATTER,
+    &SELF_COLLIDE,
+    &SELF_COLLIDE_MESH,
+    &SELF_COLLIDE_FRICTION,
+    &SELF_COLLIDE_MESH_FRICTION,
+];

@@ -90,4 +90,7 @@ pub static XPBD_MESH: KernelDef = KernelDef {
 };
 
 /// This family's kernels, in the registry's order ([`super::ALL`]).
-pub(super) const ROWS: &[&KernelDef] = &[&XPBD[0], &XPBD[1], &XPBD[2], &XPBD[3], &XPBD[4], &XPBD[5], &XPBD[6], &XPBD[7], &XPBD[8], &XPBD[9], &XPBD[10], &XPBD[11], &XPBD_MESH];
+pub(super) const ROWS: &[&KernelDef] = &[
+    &XPBD[0], &XPBD[1], &XPBD[2], &XPBD[3], &XPBD[4], &XPBD[5], &XPBD[6], &XPBD[7], &XPBD[8], &XPBD[9], &XPBD[10],
+    &XPBD[11], &XPBD_MESH,
+];
