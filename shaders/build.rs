@@ -12,7 +12,7 @@ use std::fs;
 use std::mem::{offset_of, size_of};
 use std::path::{Path, PathBuf};
 
-use clothlab_core::grid::{InteriorSlots, Spring, SpringSlot, StepParams, Tether};
+use clothlab_core::grid::{GridSpringConstants, Spring, SpringSlot, StepParams, Tether};
 use clothlab_core::layout::{BindKind, Buf, wgsl_constants};
 use clothlab_core::pins::{PinPose, PinSlot};
 use clothlab_core::scene::{Aabb, Capsule, Sphere};
@@ -61,7 +61,7 @@ fn expected_layouts() -> Vec<Layout> {
         layout!(SpringSlot, "SpringSlot", [neighbor, rest, ks, kd]),
         layout!(Spring, "Spring", [a, b, rest, ks, kd, kind]),
         layout!(Tether, "Tether", [pin, rest]),
-        layout!(InteriorSlots, "InteriorSlots", [slots, enabled, _pad0, _pad1, _pad2]),
+        layout!(GridSpringConstants, "GridSpringConstants", [slots, enabled, _pad0, _pad1, _pad2]),
         layout!(Sphere, "Sphere", [center, radius, velocity, spin]),
         layout!(Aabb, "Aabb", [min, max, velocity]),
         layout!(Capsule, "Capsule", [a, b, velocity, spin]),

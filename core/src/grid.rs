@@ -60,11 +60,10 @@ impl Tether {
 
 /// The spring constants of the regular grid (see [`ClothTopology::grid_slots`]), for GPU
 /// kernels to read from a uniform block (the thesis's constant memory) instead of the
-/// per-particle table; named for when only the interior used it. `#[repr(C)]`,
-/// mirrored in the shaders; `neighbor` is unused (the offsets are [`SLOT_OFFSETS`]).
+/// per-particle table. `#[repr(C)]`, mirrored in the shaders; `neighbor` is unused (the offsets are [`SLOT_OFFSETS`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-pub struct InteriorSlots {
+pub struct GridSpringConstants {
     /// Rest length and constants of slot `s` for every particle that has that slot
     /// ([`ClothTopology::grid_slots`]).
     pub slots: [SpringSlot; SLOTS],
@@ -80,7 +79,7 @@ pub struct InteriorSlots {
     pub _pad2: u32,
 }
 
-impl InteriorSlots {
+impl GridSpringConstants {
     /// From the topology's uniform interior slots, if it has them.
     pub fn new(topo: &ClothTopology) -> Self {
         match topo.grid_slots() {

@@ -9,7 +9,7 @@ use std::time::Instant;
 use clothlab_core::build;
 use clothlab_core::cpu::{self as twins, SubstepStats};
 use clothlab_core::grid::{
-    ClothState, ClothTopology, Grab, InteriorSlots, STRAIN_SLOTS, SpringSlot, StepParams, V4, spring_constants,
+    ClothState, ClothTopology, Grab, GridSpringConstants, STRAIN_SLOTS, SpringSlot, StepParams, V4, spring_constants,
 };
 use clothlab_core::layout::Buf;
 use clothlab_core::params::MAX_SUBSTEPS;
@@ -69,16 +69,16 @@ pub struct GpuSolver<E: Engine> {
     grab: Option<Grab>,
     topo: ClothTopology,
     /// The step constants of the frame being recorded (for kernels reading immediates).
-    sp: StepParams,
+    step_params: StepParams,
     recipe: Vec<Command>,
     /// What runs once after the frame's last substep (recipe::frame_end).
-    end: Vec<Command>,
+    frame_end: Vec<Command>,
     caps: Caps,
     /// Every buffer by binding; the position pair as `[pos0, pos1]`.
     ids: Vec<(Buf, BufferId)>,
     pos: [BufferId; 2],
     /// Which of `pos` holds the current positions.
-    cur: usize,
+    current_pos: usize,
     /// The renderer's own vertex buffers (positions, normals) with `draw=copy`.
     draw: Option<[BufferId; 2]>,
     hazards: Hazards,
@@ -88,7 +88,7 @@ pub struct GpuSolver<E: Engine> {
     time_kernels: bool,
     /// Substeps one recording of the recipe advances (`temporal=on`: the tiles' several
     /// per dispatch; 1 otherwise).
-    group: u32,
+    substeps_per_recording: u32,
     /// Simulated time, s (moving colliders are written at every substep's).
     time: f64,
     /// Every kernel it can run ([`KernelRunner::kernels`]): its recipe's, built when it
@@ -304,23 +304,23 @@ impl<E: Engine> GpuSolver<E> {
             variant,
             options,
             recipe: step,
-            end,
+            frame_end: end,
             scene,
             params,
             grab: None,
             topo,
-            sp,
+            step_params: sp,
             caps,
             ids,
             pos,
-            cur: 0,
+            current_pos: 0,
             draw,
             hazards: Hazards::default(),
             barriers: 0,
             stats: Vec::new(),
             timer: TimingRecorder::default(),
             time_kernels: true,
-            group,
+            substeps_per_recording: group,
             time: 0.0,
             offered,
         };
@@ -383,8 +383,8 @@ impl<E: Engine> GpuSolver<E> {
     /// The buffer bound as `buf` now (the position pair by the current parity).
     fn id(&self, buf: Buf) -> Option<BufferId> {
         match buf {
-            Buf::Pos => Some(self.pos[self.cur]),
-            Buf::PosOut => Some(self.pos[1 - self.cur]),
+            Buf::Pos => Some(self.pos[self.current_pos]),
+            Buf::PosOut => Some(self.pos[1 - self.current_pos]),
             b => self.ids.iter().find(|(x, _)| *x == b).map(|(_, id)| *id),
         }
     }
@@ -399,7 +399,7 @@ impl<E: Engine> GpuSolver<E> {
         match self.draw {
             Some([pos, normal]) => (self.engine.buffer(pos), self.engine.buffer(normal)),
             None => (
-                self.engine.buffer(self.pos[self.cur]),
+                self.engine.buffer(self.pos[self.current_pos]),
                 self.engine.buffer(self.id(Buf::Normal).expect("normal buffer")),
             ),
         }
@@ -409,9 +409,9 @@ impl<E: Engine> GpuSolver<E> {
     /// (`draw=copy`), after the barrier they need.
     fn record_draw_copy(&mut self) -> Result<(), SolverError> {
         let Some([pos, normal]) = self.draw else { return Ok(()) };
-        let (from_pos, from_normal) = (self.pos[self.cur], self.must(Buf::Normal)?);
+        let (from_pos, from_normal) = (self.pos[self.current_pos], self.must(Buf::Normal)?);
         let bytes = 16 * self.topo.num_particles() as u64;
-        let reads = bits(Buf::Pos, self.cur) | bits(Buf::Normal, self.cur);
+        let reads = bits(Buf::Pos, self.current_pos) | bits(Buf::Normal, self.current_pos);
         if self.hazards.conflicts(reads, 0) {
             self.barrier(false);
         }
@@ -451,13 +451,13 @@ impl<E: Engine> GpuSolver<E> {
     /// The commands that run once after a frame's last substep (`normals=frame`: the
     /// normals; usually none).
     pub fn frame_end(&self) -> &[Command] {
-        &self.end
+        &self.frame_end
     }
 
     /// The kernels one substep dispatches, in order (statistics included), then those the
     /// frame's end adds.
     pub fn recipe_kernels(&self) -> Vec<KernelRef> {
-        kernels_of(&[self.commands(), self.end.clone()].concat())
+        kernels_of(&[self.commands(), self.frame_end.clone()].concat())
     }
 
     /// Pipeline barriers recorded in the last frame (none on an API that places its own).
@@ -511,12 +511,12 @@ impl<E: Engine> GpuSolver<E> {
         let timestamps = self.time_kernels && self.engine.info().timestamps;
         for c in commands {
             // Only the barriers the data needs (see recipe::Hazards); a swap flips `cur`.
-            let mut cur = self.cur;
+            let mut cur = self.current_pos;
             if self.hazards.command(c, &mut cur) {
                 self.engine.barrier(false);
                 self.barriers += 1;
             }
-            self.cur = cur;
+            self.current_pos = cur;
             let k = match c {
                 Command::Clear(buf) => {
                     if let Some(id) = self.id(*buf) {
@@ -531,7 +531,7 @@ impl<E: Engine> GpuSolver<E> {
             let (k, count, range) = k;
             let range_bytes: &[u8] = bytemuck::cast_slice(&range);
             let immediates: &[u8] = if k.step_immediates() {
-                bytemuck::bytes_of(&self.sp)
+                bytemuck::bytes_of(&self.step_params)
             } else if k.def.immediates == Immediates::Substep {
                 &substep_bytes
             } else if k.def.immediates == Immediates::Range {
@@ -542,7 +542,7 @@ impl<E: Engine> GpuSolver<E> {
             let timed = timestamps && *q + 2 <= MAX_QUERIES;
             self.engine.dispatch(&Dispatch {
                 kernel: k,
-                parity: self.cur,
+                parity: self.current_pos,
                 groups: groups(count),
                 immediates,
                 timestamps: timed.then_some(*q),
@@ -576,7 +576,7 @@ impl<E: Engine> GpuSolver<E> {
         }
         self.write(Buf::Params, bytemuck::bytes_of(sp))?;
         self.write(Buf::ParamsStorage, bytemuck::bytes_of(sp))?;
-        self.sp = *sp;
+        self.step_params = *sp;
         let moved = host_buffers(commands);
         for &buf in &moved {
             if let Some(v) = bufs.get(buf) {
@@ -609,8 +609,8 @@ impl<E: Engine> GpuSolver<E> {
 
 /// The uniform block of the regular grid's spring constants, switched off when the table
 /// is to be read from storage or an image everywhere.
-fn interior_block(topo: &ClothTopology, table: Table) -> InteriorSlots {
-    let mut interior = InteriorSlots::new(topo);
+fn interior_block(topo: &ClothTopology, table: Table) -> GridSpringConstants {
+    let mut interior = GridSpringConstants::new(topo);
     if table != Table::Uniform {
         interior.enabled = 0;
     }
@@ -689,8 +689,8 @@ impl<E: Engine> Solver for GpuSolver<E> {
         }
         self.engine.check("building the integrator's kernels")?;
         self.recipe = step;
-        self.end = end;
-        self.group = group;
+        self.frame_end = end;
+        self.substeps_per_recording = group;
         self.params = params;
         Ok(())
     }
@@ -701,8 +701,8 @@ impl<E: Engine> Solver for GpuSolver<E> {
 
     fn step_frame(&mut self) -> Result<(), SolverError> {
         let t0 = Instant::now();
-        self.sp = StepParams::new(&self.params, &self.scene, self.grab);
-        self.sp.tile_substeps = self.group;
+        self.step_params = StepParams::new(&self.params, &self.scene, self.grab);
+        self.step_params.tile_substeps = self.substeps_per_recording;
         let commands = self.commands();
         let stats = self.options.stats != StatsMode::Off;
         let substeps = self.params.substeps;
@@ -713,7 +713,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
             Submit::Substep => substeps,
         };
         let per_submission = substeps / submissions;
-        let end = self.end.clone();
+        let end = self.frame_end.clone();
         let (per_substep, per_end) = (dispatches(&commands).count(), dispatches(&end).count());
         let max_q = if self.time_kernels && self.engine.info().timestamps {
             (2 * (substeps as usize * per_substep + per_end)).min(MAX_QUERIES as usize) as u32
@@ -736,7 +736,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 // The frame's constants are recorded into the frame itself (Vulkan: a copy
                 // before the first dispatch; wgpu: a queue write), not a submission of
                 // their own.
-                self.engine.record_write(params, bytemuck::bytes_of(&self.sp))?;
+                self.engine.record_write(params, bytemuck::bytes_of(&self.step_params))?;
                 // The frame's poses of the moving pins, every substep's block at once.
                 if !self.topo.pins.slots.is_empty() {
                     let poses = clothlab_core::pins::frame_poses(
@@ -752,7 +752,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 }
                 // The storage copy only for a recipe that reads it (kernel checks write both).
                 if self.variant.constants == Constants::Storage {
-                    self.engine.record_write(params_storage, bytemuck::bytes_of(&self.sp))?;
+                    self.engine.record_write(params_storage, bytemuck::bytes_of(&self.step_params))?;
                 }
                 let mut written = res::PARAMS;
                 if stats {
@@ -766,7 +766,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 self.barrier(true);
             }
             // With temporal blocking one recording advances `group` substeps.
-            let group = self.group;
+            let group = self.substeps_per_recording;
             for s in (0..per_submission).map(|s| k * per_submission + s).filter(|s| s.is_multiple_of(group)) {
                 if self.scene.moves() {
                     self.record_colliders()?;
@@ -812,7 +812,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
                     period,
                     per_substep,
                     per_end,
-                    (substeps, self.group),
+                    (substeps, self.substeps_per_recording),
                 )
             } else {
                 self.engine.finish()?;

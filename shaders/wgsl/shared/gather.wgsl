@@ -1,9 +1,9 @@
 // The spring gather (needs state.wgsl and table.wgsl or table_tex.wgsl).
 
-@group(0) @binding(16) var<uniform> interior_slots: InteriorSlots;
+@group(0) @binding(16) var<uniform> interior_slots: GridSpringConstants;
 // The grid's spring constants (the thesis's constant memory), copied at the top of the
 // kernel like `p`; `enabled` when the table is the regular grid's (core's grid_slots).
-var<private> interior: InteriorSlots;
+var<private> interior: GridSpringConstants;
 
 // A particle's position and velocity.
 struct Pt {

@@ -9,8 +9,8 @@
 // Copied from step_params by the kernel's first statement (see shared/state.wgsl).
 var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
-@group(0) @binding(16) var<uniform> interior_slots: InteriorSlots;
-var<private> interior: InteriorSlots;
+@group(0) @binding(16) var<uniform> interior_slots: GridSpringConstants;
+var<private> interior: GridSpringConstants;
 @group(0) @binding(24) var<storage, read_write> strain_counts: array<vec4<f32>>;
 
 // The pins' positions for the tethers (shared/strain_fn.wgsl's `finish`): this pass's

@@ -54,7 +54,7 @@ struct Tether {
     rest: f32,
 }
 
-struct InteriorSlots {
+struct GridSpringConstants {
     slots: array<SpringSlot, 12>,
     enabled: u32,
     _pad0: u32,

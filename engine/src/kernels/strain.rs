@@ -1,0 +1,83 @@
+//! The strain limit (core::cpu::strain_limit): the counts of stretched springs and the
+//! passes that divide by them.
+
+use super::*;
+
+/// The counts as the kernel leaves them in aux0: `(count, 0, 0, 0)` per particle.
+fn strain_count(a: &TwinArgs, b: &mut HostBuffers) {
+    let mut counts = vec![0.0; b.pos.len()];
+    cpu::strain_count(a.exec, a.p, &a.topo.slots, &b.pos, &mut counts);
+    b.aux[0] = counts.into_iter().map(|c| [c, 0.0, 0.0, 0.0]).collect();
+}
+
+fn strain_limit(a: &TwinArgs, b: &mut HostBuffers) {
+    let counts: Vec<f32> = b.aux[0].iter().map(|c| c[0]).collect();
+    cpu::strain_limit(a.exec, a.p, &a.topo.slots, &a.topo.tethers, &b.pos, &counts, &mut b.pos_out);
+    cpu::strain_vel(a.exec, a.p, &b.pos, &b.pos_out, &mut b.vel);
+}
+
+/// The strain limit's pass, then its output counted into the self-collision hash (the
+/// count's twin on the pass's output).
+fn strain_limit_count(a: &TwinArgs, b: &mut HostBuffers) {
+    strain_limit(a, b);
+    std::mem::swap(&mut b.pos, &mut b.pos_out);
+    (HASH_COUNT.twin)(a, b);
+    std::mem::swap(&mut b.pos, &mut b.pos_out);
+}
+
+/// Every particle's count of over-stretched strain-limited springs, into aux0 (dead
+/// after the integrator's kernels): what the pass after it divides each spring by the
+/// larger of its ends' counts of (the same at both ends: the pass keeps the momentum).
+/// Timed as part of the strain limit.
+pub static STRAIN_COUNT: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[Aux0],
+    variants: BLOCKED,
+    label: timing::STRAIN_LIMIT,
+    ..def(
+        "strain_count",
+        strain_count,
+        Count::Blocks,
+        &[Params, Pos, Slots, BendSlots, Adjacency, Interior, Table],
+        &[Aux0],
+    )
+};
+/// One Provot pass plus the tethers, into the other buffer of the pair; the velocities
+/// gain the move over dt.
+pub static STRAIN_LIMIT: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[PosOut],
+    variants: BLOCKED,
+    // The counts it divides by, of the disturbed positions (as the recipe runs it).
+    test_input: Some(strain_count),
+    ..def(
+        "strain_limit",
+        strain_limit,
+        Count::Blocks,
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers, Aux0],
+        &[PosOut, Vel],
+    )
+};
+/// The strain limit's last pass fused with self-collision's `hash_count` (the recipe's
+/// choice when self-collision follows a strain limit): one dispatch fewer. Its counts are
+/// checked against a recount of the positions it wrote (see
+/// [`crate::validate::validate_kernels_with`]); a wrong count is off by a whole particle,
+/// far past the positions' bound, so the bound leaves the counts exact.
+pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[PosOut],
+    accumulates: &[Aux2, Aux3],
+    variants: BLOCKED,
+    test_input: Some(strain_count),
+    label: timing::STRAIN_LIMIT_COUNT,
+    ..def(
+        "strain_limit_count",
+        strain_limit_count,
+        Count::Blocks,
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers, Aux0, Aux2, Aux3],
+        &[PosOut, Vel, Aux2, Aux3],
+    )
+};
+
+/// This family's kernels, in the registry's order ([`super::ALL`]).
+pub(super) const ROWS: &[&KernelDef] = &[&STRAIN_COUNT, &STRAIN_LIMIT];

@@ -1,0 +1,69 @@
+//! Vertex Block Descent (core::cpu::vbd): a colour of the sweep, the Chebyshev step.
+
+use super::*;
+
+fn vbd_begin(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::vbd::vbd_begin(a.exec, a.p, &b.force, &b.pos, &b.vel, &mut b.aux);
+}
+
+/// One colour of VBD's sweep: particles `first .. first + count` of the colouring's list
+/// (`topo.colours.order`, binding [`Buf::Colours`]).
+fn vbd_colour(a: &TwinArgs, b: &mut HostBuffers) {
+    let order = &a.topo.colours.order;
+    let end = (a.range.0 as usize + a.range.1 as usize).min(order.len());
+    let list = &order[(a.range.0 as usize).min(end)..end];
+    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, a.colliders, list, &mut b.aux);
+}
+
+/// The Chebyshev step after a sweep, ω the bits of the range's `first`.
+fn vbd_accelerate(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::vbd::vbd_accelerate(a.exec, a.p, f32::from_bits(a.range.0), &mut b.aux);
+}
+
+fn vbd_finish(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::vbd::vbd_finish(a.exec, a.p, &mut b.pos, &mut b.vel, &b.aux);
+}
+
+/// VBD: the predicted velocity v' (aux0; the prediction y = x⁰ + h v'), the substep's
+/// start x⁰ (aux1) and the displacement D = h v' (aux2) (core::cpu::vbd::vbd_begin).
+pub static VBD_BEGIN: KernelDef = KernelDef {
+    label: timing::INTEGRATE,
+    pure: &[Aux0, Aux1, Aux2],
+    ..def("vbd_begin", vbd_begin, Count::Particles, STATE, &[Aux0, Aux1, Aux2])
+};
+/// VBD: one colour's Newton steps, each particle of the range of the colouring's list
+/// ([`Buf::Colours`]) on its 3 × 3 block over its row of the table, into its
+/// displacement (aux2).
+pub static VBD_COLOUR: KernelDef = KernelDef {
+    check: Check::Bound {
+        relative: 2e-5,
+        reason: "a gather over the row's springs into a 3 × 3 block, solved by cofactors (one division)",
+    },
+    label: timing::VBD,
+    variants: Variants { table_image: true, colliders_uniform: true, sdf_image: true, ..PLAIN },
+    immediates: Immediates::Range,
+    ..def(
+        "vbd_colour",
+        vbd_colour,
+        Count::Range,
+        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Spheres, Boxes, Shapes, Aux0, Aux1, Aux2],
+        &[Aux2],
+    )
+};
+/// VBD: the Chebyshev acceleration after a sweep (`vbd_rho` > 0), ω in the immediates as
+/// the bits of the range's `first`, `count` the particles (core::cpu::vbd::vbd_accelerate).
+pub static VBD_ACCELERATE: KernelDef = KernelDef {
+    label: timing::VBD,
+    variants: PLAIN,
+    immediates: Immediates::Range,
+    ..def("vbd_accelerate", vbd_accelerate, Count::Range, &[Params, Aux0, Aux1, Aux2, Aux3, Aux4], &[Aux2, Aux3, Aux4])
+};
+/// VBD: x = x⁰ + D, v = v' + (D − h v')/h, with pins, grab and floor
+/// (core::cpu::vbd::vbd_finish).
+pub static VBD_FINISH: KernelDef = KernelDef {
+    label: timing::INTEGRATE,
+    ..def("vbd_finish", vbd_finish, Count::Particles, &[Params, Aux0, Aux1, Aux2], &[Pos, Vel])
+};
+
+/// This family's kernels, in the registry's order ([`super::ALL`]).
+pub(super) const ROWS: &[&KernelDef] = &[&VBD_BEGIN, &VBD_COLOUR, &VBD_ACCELERATE, &VBD_FINISH];
