@@ -108,7 +108,8 @@ fn every_integrator_takes_the_moving_contacts() {
     // optimized recipe (`OPTIMIZED_ON`), as the physics tests run: each integrator's recipe
     // follows the CPU on every API (integrators.rs; 0.0 m off on llvmpipe), every kernel
     // flavor its twin (api_vs_cpu.rs), and every API's optimized recipe computes the CPU's
-    // bits on the sliding table's moving contacts (scenes.rs, sliding-table.toml).
+    // bits with colliders that move under the cloth (the busy scene below, and friction.rs's
+    // moving table with Coulomb's contacts).
     let v = TABLE_V as f64;
     for (integrator, speed_bound, lag) in [
         (Integrator::Xpbd, 1e-4, 0.03),
