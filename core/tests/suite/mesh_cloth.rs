@@ -46,8 +46,9 @@ fn a_mesh_falls_freely_as_the_recurrence_says() {
                 .with_soft_springs();
             let mut solver = CpuSolver::new(Exec::Parallel, scene, params.clone()).unwrap();
             let start = solver.state().unwrap();
-            // 10 frames: 160 and 640 substeps.
-            let frames = 10;
+            // 5 frames: 80 and 320 substeps (10 frames took 22 s, implicit Euler's CG and
+            // VBD's sweeps at 64 substeps 12.5 of them).
+            let frames = 5;
             for _ in 0..frames {
                 solver.step_frame().unwrap();
             }
@@ -58,10 +59,10 @@ fn a_mesh_falls_freely_as_the_recurrence_says() {
                 Integrator::Rk2 | Integrator::Rk4 => 0.5 * g * (k * dt) * (k * dt),
                 _ => g * dt * dt * k * (k + 1.0) / 2.0,
             };
-            // Measured worst: 4.2e-6 m over 20 frames (at 50 m); 5e-5 m is 12× that and
-            // 8.6× below the smallest gap between two recurrences here (Euler's and
-            // Verlet's, g·dt²·k: 4.3e-4 m at 64 substeps a frame over 10 frames, 8.6e-4 m
-            // over the 20 this test once ran), so the wrong integrator's fall would fail.
+            // Measured worst: 4.2e-6 m over 20 frames (at 50 m), 1.2e-6 over 10; 5e-5 m
+            // is 4.3× below the smallest gap between two recurrences here (Euler's and
+            // Verlet's, g·dt²·k: 2.1e-4 m at 64 substeps a frame over 5 frames, 8.5e-4 m
+            // at 16), so the wrong integrator's fall fails.
             let tol = 5e-5;
             let worst =
                 start.pos.iter().zip(&end.pos).map(|(a, b)| ((a[1] - b[1]) as f64 - fall).abs()).fold(0.0, f64::max);
