@@ -2,8 +2,8 @@
 //! the shared structs have the size and field offsets of clothlab-core's `#[repr(C)]`
 //! types, and emits each kernel as WGSL (for wgpu) and SPIR-V 1.3 (for Vulkan) into
 //! OUT_DIR, with `kernels.rs` listing them. The WGSL constants shared with Rust are
-//! generated here from `clothlab_core::layout` (put between `shared/types.wgsl` and the
-//! rest), and every `@binding(k)` of every kernel is checked against core's binding table
+//! generated here from `clothlab_core::layout` and the step constants' struct from
+//! `clothlab_core::step_params` (both put before `shared/types.wgsl` and the rest), and every `@binding(k)` of every kernel is checked against core's binding table
 //! (`layout::Buf`): a number it does not know, or a uniform where it says storage, fails
 //! the build.
 
@@ -12,10 +12,11 @@ use std::fs;
 use std::mem::{offset_of, size_of};
 use std::path::{Path, PathBuf};
 
-use clothlab_core::grid::{GridSpringConstants, Spring, SpringSlot, StepParams, Tether};
+use clothlab_core::grid::{GridSpringConstants, Spring, SpringSlot, Tether};
 use clothlab_core::layout::{BindKind, Buf, wgsl_constants};
 use clothlab_core::pins::{PinPose, PinSlot};
 use clothlab_core::scene::{Aabb, Capsule, Sphere};
+use clothlab_core::step_params::StepParams;
 
 /// A struct as core lays it out: name, size, and (field, offset) pairs.
 type Layout = (&'static str, usize, Vec<(&'static str, usize)>);
@@ -29,35 +30,9 @@ fn expected_layouts() -> Vec<Layout> {
         };
     }
     vec![
-        layout!(
-            StepParams,
-            "StepParams",
-            [
-                gravity,
-                wind,
-                grab_target,
-                dt,
-                damping,
-                air_drag,
-                particle_mass,
-                floor_y,
-                margin,
-                friction,
-                strain_limit,
-                n,
-                num_spheres,
-                num_boxes,
-                grab_index,
-                self_thickness,
-                spacing,
-                inv_cell,
-                num_particles,
-                strain_passes,
-                tile_substeps,
-                num_bodies,
-                num_capsules
-            ]
-        ),
+        // Generated from the struct itself (clothlab_core::step_params): the WGSL names
+        // and order are the Rust ones, the offsets naga gives WGSL's rules are checked.
+        ("StepParams", size_of::<StepParams>(), StepParams::FIELDS.to_vec()),
         layout!(SpringSlot, "SpringSlot", [neighbor, rest, ks, kd]),
         layout!(Spring, "Spring", [a, b, rest, ks, kd, kind]),
         layout!(Tether, "Tether", [pin, rest]),
@@ -295,7 +270,7 @@ fn main() {
     };
     let types = shared("types");
     // The constants shared with Rust, then the structs: every kernel starts with these.
-    let prelude = format!("{}\n{types}", wgsl_constants());
+    let prelude = format!("{}\n{}\n{types}", wgsl_constants(), StepParams::WGSL);
     check_layouts(&prelude);
     let mut shared_list = String::from(
         "/// The shared files, by name (for kernels composed at run time).\npub const SHARED: &[(&str, &str)] = &[\n",

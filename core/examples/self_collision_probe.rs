@@ -10,8 +10,9 @@
 //! `cargo run --release -p clothlab-core --example self_collision_probe -- 128 20,50,100`
 //! (docs/scenes.md quotes its output).
 use clothlab_core::cpu::self_collide::*;
-use clothlab_core::grid::{StepParams, V4};
+use clothlab_core::grid::V4;
 use clothlab_core::scene_file::SceneFile;
+use clothlab_core::step_params::StepParams;
 use clothlab_core::{CpuSolver, Exec, Solver};
 
 /// The entries in the slots of the row that starts at bucket `first` and is `len` long.

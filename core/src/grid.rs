@@ -1,4 +1,4 @@
-//! The grid builder: particles, triangles, springs and the per-step constants.
+//! The grid builder: particles, triangles and springs.
 //!
 //! Particle `(i, j)` (column `i`, row `j`, both `0 … n-1`) has index `j·n + i`. Row 0 is
 //! the top edge, the one pinned. Every per-particle buffer is a `Vec<[f32; 4]>` (structure
@@ -151,7 +151,7 @@ pub struct ClothState {
     /// Particles per side; 0 for a mesh.
     pub n: u32,
     /// Positions, m; w = relative inverse mass: the reference mass
-    /// ([`StepParams::particle_mass`]) over the particle's (1 on a grid; a mesh's vertices
+    /// ([`crate::step_params::StepParams::particle_mass`]) over the particle's (1 on a grid; a mesh's vertices
     /// carry their share of the area), 0 pinned.
     pub pos: Vec<V4>,
     /// Velocities, m/s; w unused (0).
@@ -591,138 +591,6 @@ impl Grab {
 /// How far along u each cloth of several is moved for the renderers
 /// ([`ClothTopology::render_uvs`]): `render.wgsl`'s `CLOTH_UV_STEP`.
 pub const RENDER_UV_STEP: f32 = 64.0;
-
-/// Per-step constants every kernel reads, derived from [`SimParams`] and [`Scene`]
-/// (`#[repr(C)]`: the GPU backends upload exactly these bytes).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-pub struct StepParams {
-    /// Gravity, m/s²; w = the Coulomb static friction coefficient μs
-    /// ([`StepParams::mu_static`]).
-    pub gravity: [f32; 4],
-    /// Wind velocity, m/s; w = wind coefficient, kg/(m²·s).
-    pub wind: [f32; 4],
-    /// Grab target, m; w = the Coulomb kinetic friction coefficient μk
-    /// ([`StepParams::mu_kinetic`]).
-    pub grab_target: [f32; 4],
-    /// Substep, s.
-    pub dt: f32,
-    /// Verlet damping per substep.
-    pub damping: f32,
-    /// Air drag per unit mass, 1/s.
-    pub air_drag: f32,
-    /// Mass of one particle, kg.
-    pub particle_mass: f32,
-    /// Floor height, m.
-    pub floor_y: f32,
-    /// Collision margin, m.
-    pub margin: f32,
-    /// Contact friction in [0, 1]: the share of the tangential velocity a contact removes
-    /// (where [`StepParams::coulomb`] is false).
-    pub friction: f32,
-    /// Strain limit τ.
-    pub strain_limit: f32,
-    /// Particles per side; 0 for a mesh.
-    pub n: u32,
-    /// Number of spheres in use.
-    pub num_spheres: u32,
-    /// Number of boxes in use.
-    pub num_boxes: u32,
-    /// Grabbed particle, or -1.
-    pub grab_index: i32,
-    /// Self-collision's thickness, m; 0 when self-collision is off.
-    pub self_thickness: f32,
-    /// Rest distance between neighbouring particles, m.
-    pub spacing: f32,
-    /// `1 / self_thickness` (the hash's cells are cubes of side the thickness), computed
-    /// here so that every backend multiplies by the same number; 0 when off.
-    pub inv_cell: f32,
-    /// Number of particles (`n²` on a grid).
-    pub num_particles: u32,
-    /// Strain-limit passes per substep (`SimParams::strain_iterations`): what the tiled
-    /// substep (`fusion=tile`) runs inside its one dispatch, and its halo's depth.
-    pub strain_passes: u32,
-    /// Substeps the tiled substep advances per dispatch (temporal blocking); 1 otherwise.
-    pub tile_substeps: u32,
-    /// Number of bodies (mesh colliders, `crate::sdf`) in use.
-    pub num_bodies: u32,
-    /// Number of capsules in use. The struct is 128 bytes (a uniform block's size is a
-    /// multiple of 16; immediates must match the shader's struct): full.
-    pub num_capsules: u32,
-}
-
-impl StepParams {
-    /// The Coulomb static friction coefficient μs (in `gravity`'s w: the struct is full).
-    #[inline(always)]
-    pub fn mu_static(&self) -> f32 {
-        self.gravity[3]
-    }
-
-    /// The Coulomb kinetic friction coefficient μk (in `grab_target`'s w).
-    #[inline(always)]
-    pub fn mu_kinetic(&self) -> f32 {
-        self.grab_target[3]
-    }
-
-    /// Whether contacts take Coulomb friction (either coefficient above 0) instead of the
-    /// share `friction` (the shaders' `coulomb`).
-    #[inline(always)]
-    pub fn coulomb(&self) -> bool {
-        self.mu_static() > 0.0 || self.mu_kinetic() > 0.0
-    }
-
-    /// These constants under the share model: Coulomb's coefficients zeroed (what the
-    /// frictionless self-collision kernels compute, whatever the parameters).
-    #[inline(always)]
-    pub fn without_coulomb(mut self) -> Self {
-        (self.gravity[3], self.grab_target[3]) = (0.0, 0.0);
-        self
-    }
-
-    /// The friction coefficient of VBD's smoothed Coulomb contacts: μk where
-    /// [`StepParams::coulomb`], the share `friction` otherwise (the shaders' `vbd_mu`).
-    #[inline(always)]
-    pub fn vbd_mu(&self) -> f32 {
-        if self.coulomb() { self.mu_kinetic() } else { self.friction }
-    }
-
-    /// The constants for `scene` and `params` with an optional grab.
-    pub fn new(params: &SimParams, scene: &Scene, grab: Option<Grab>) -> Self {
-        let [gx, gy, gz] = params.gravity;
-        let [wx, wy, wz] = params.wind;
-        let (grab_index, grab_target) = match grab {
-            Some(g) if (g.particle as usize) < scene.num_particles() => {
-                (g.particle as i32, [g.target[0], g.target[1], g.target[2], params.kinetic_friction])
-            }
-            _ => (-1, [0.0, 0.0, 0.0, params.kinetic_friction]),
-        };
-        Self {
-            gravity: [gx, gy, gz, params.static_friction],
-            wind: [wx, wy, wz, params.wind_coefficient],
-            grab_target,
-            dt: params.dt(),
-            damping: params.damping,
-            air_drag: params.air_drag,
-            particle_mass: params.cloth_mass / scene.num_particles() as f32,
-            floor_y: scene.floor_height(),
-            margin: params.collision_margin,
-            friction: params.friction,
-            strain_limit: params.strain_limit,
-            n: if scene.cloth.mesh_data.is_some() { 0 } else { scene.cloth.n },
-            num_spheres: scene.spheres.len() as u32,
-            num_boxes: scene.boxes.len() as u32,
-            grab_index,
-            self_thickness: if params.self_collision { params.self_thickness } else { 0.0 },
-            spacing: scene.spacing(),
-            inv_cell: if params.self_collision { 1.0 / params.self_thickness } else { 0.0 },
-            num_particles: scene.num_particles() as u32,
-            strain_passes: params.strain_iterations,
-            tile_substeps: 1,
-            num_bodies: scene.bodies.len() as u32,
-            num_capsules: scene.capsules.len() as u32,
-        }
-    }
-}
 
 #[cfg(test)]
 mod tests {

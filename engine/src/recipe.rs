@@ -4,11 +4,11 @@
 //! the API and how it is driven; barriers follow from the rows' reads and writes
 //! ([`Hazards`]).
 
-use clothlab_core::grid::StepParams;
 use clothlab_core::layout::Buf;
+use clothlab_core::step_params::StepParams;
 use clothlab_core::{Integrator, SolverError, cpu};
 
-use crate::kernels::{self as k, Flavor, HostBuffers, KernelDef, KernelRef};
+use crate::kernels::{self as k, Dispatches, Flavor, HostBuffers, KernelDef, KernelRef};
 
 use crate::variant::{Accumulate, Fusion, Normals, Temporal};
 pub use crate::variant::{Caps, Variant};
@@ -296,7 +296,7 @@ pub fn bytes_moved(
     substeps: u32,
 ) -> u64 {
     let bytes = k::compulsory_bytes(kernel, topo, table_uniform);
-    if kernel.def != &k::SUBSTEP_TILE {
+    if kernel.def.dispatches != Dispatches::Tiles {
         return bytes;
     }
     let extra = tile_loaded_points(topo, strain_passes, substeps).saturating_sub(topo.num_particles() as u64);
@@ -328,61 +328,77 @@ fn normals_kernels(variant: &Variant) -> [&'static KernelDef; 2] {
     }
 }
 
-/// [`recipe`] for the cloth `topo`: on a mesh, each XPBD iteration runs the mesh's passes
-/// (`MeshTables::xpbd_passes`, one [`Command::Range`] of `xpbd_mesh` each) where a grid
-/// runs its 12, and self-collision's response is `self_collide_mesh`.
+/// [`recipe`] for the cloth `topo`: each kernel as its row's dispatches on the cloth
+/// ([`Expander`]: VBD's colours, the tiles, a mesh's XPBD passes), on a mesh each grid
+/// kernel as its row's mesh kernel ([`k::OnMesh`]: the mesh's XPBD passes in an
+/// iteration's place, `self_collide_mesh` for the response), and the moving pins first.
 pub fn recipe_for(
     variant: &Variant,
     strain_passes: u32,
     how: Integration,
     topo: &clothlab_core::ClothTopology,
 ) -> Vec<Command> {
-    // VBD's sweeps: each `vbd_colour` a range per colour of the cloth's colouring, each
-    // `vbd_accelerate` one over every particle with its sweep's ω.
-    let rho = f32::from_bits(how.vbd_rho_bits);
-    let mut sweep = 0;
+    let tile_substeps = dispatch_substeps(variant, how, strain_passes, topo);
+    let mut expander = Expander::new(topo, strain_passes, tile_substeps, f32::from_bits(how.vbd_rho_bits));
     // Moving pins first: every kernel of the substep sees them at their poses.
     let pins = (!topo.pins.slots.is_empty()).then(|| Command::Dispatch(k::PINS.plain()));
-    let commands: Vec<Command> = pins
-        .into_iter()
+    pins.into_iter()
         .chain(recipe(variant, strain_passes, how))
         .flat_map(|c| match c {
-            Command::Dispatch(kr) if kr.def == &k::VBD_COLOUR => {
-                sweep += 1;
-                vbd_sweep(kr, topo)
-            }
-            Command::Dispatch(kr) if kr.def == &k::VBD_ACCELERATE => vec![vbd_acceleration(kr, topo, sweep, rho)],
-            Command::Dispatch(kr) if kr.def == &k::SUBSTEP_TILE => {
-                vec![tile_command(kr, topo, strain_passes, dispatch_substeps(variant, how, strain_passes, topo))]
-            }
+            Command::Dispatch(kr) => match (&topo.mesh, kr.def.on_mesh) {
+                (Some(_), k::OnMesh::Nothing) => Vec::new(),
+                (Some(_), k::OnMesh::Kernel(mesh)) => expander.expand(mesh.flavor(kr.flavor)),
+                _ => expander.expand(kr),
+            },
             c => vec![c],
         })
-        .collect();
-    let Some(mesh) = &topo.mesh else { return commands };
-    // A mesh's self-collision response: its own kernel (neighbours from the table).
-    let commands = commands.into_iter().map(|c| match c {
-        Command::Dispatch(kr) if kr.def == &k::SELF_COLLIDE => {
-            Command::Dispatch(k::SELF_COLLIDE_MESH.flavor(kr.flavor))
-        }
-        Command::Dispatch(kr) if kr.def == &k::SELF_COLLIDE_FRICTION => {
-            Command::Dispatch(k::SELF_COLLIDE_MESH_FRICTION.flavor(kr.flavor))
-        }
-        c => c,
-    });
-    let first = &k::XPBD[cpu::XPBD_ORDER[0]];
-    let mut v = Vec::new();
-    for c in commands {
-        match c.kernel() {
-            Some(kr) if kr.def == first => v.extend(mesh.xpbd_passes.windows(2).map(|w| Command::Range {
-                kernel: k::XPBD_MESH.plain(),
-                first: w[0],
-                count: w[1] - w[0],
-            })),
-            Some(kr) if k::XPBD.iter().any(|d| d == kr.def) => {}
-            _ => v.push(c),
+        .collect()
+}
+
+/// How kernels become dispatches on a cloth ([`k::Dispatches`], each row's): the
+/// recipe's and the kernel tests' one expansion.
+pub struct Expander<'a> {
+    topo: &'a clothlab_core::ClothTopology,
+    strain_passes: u32,
+    tile_substeps: u32,
+    rho: f32,
+    /// VBD sweeps expanded so far: the Chebyshev step after sweep `k` takes ω(k).
+    pub sweeps: u32,
+}
+
+impl<'a> Expander<'a> {
+    /// For `topo` with `strain_passes` strain passes, `tile_substeps` substeps per tiled
+    /// dispatch and VBD's ρ `rho`.
+    pub fn new(topo: &'a clothlab_core::ClothTopology, strain_passes: u32, tile_substeps: u32, rho: f32) -> Self {
+        Self { topo, strain_passes, tile_substeps, rho, sweeps: 0 }
+    }
+
+    /// [`run`] with the dispatch expanded: the clears of what `kernel` adds into, its
+    /// dispatches, the swap after a kernel that writes the other position buffer.
+    pub fn run(&mut self, kernel: KernelRef) -> Vec<Command> {
+        run(kernel)
+            .into_iter()
+            .flat_map(|c| if c == Command::Dispatch(kernel) { self.expand(kernel) } else { vec![c] })
+            .collect()
+    }
+
+    /// The dispatches of `kernel` on the cloth, by its row's [`k::Dispatches`].
+    pub fn expand(&mut self, kernel: KernelRef) -> Vec<Command> {
+        let topo = self.topo;
+        match kernel.def.dispatches {
+            Dispatches::Once => vec![Command::Dispatch(kernel)],
+            Dispatches::Colours => {
+                self.sweeps += 1;
+                vbd_sweep(kernel, topo)
+            }
+            Dispatches::Chebyshev => vec![vbd_acceleration(kernel, topo, self.sweeps, self.rho)],
+            Dispatches::Tiles => vec![tile_command(kernel, topo, self.strain_passes, self.tile_substeps)],
+            Dispatches::MeshPasses => {
+                let passes = topo.mesh.as_ref().map_or(&[][..], |m| &m.xpbd_passes[..]);
+                passes.windows(2).map(|w| Command::Range { kernel, first: w[0], count: w[1] - w[0] }).collect()
+            }
         }
     }
-    v
 }
 
 /// One VBD sweep of `topo`'s colours: `kernel` (`vbd_colour` in some flavor) over each
@@ -426,7 +442,10 @@ pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Co
                 .iter()
                 .copied()
                 .filter(|&d| how.self_collision && !(fused_count && d == &k::HASH_COUNT))
-                .map(|d| if how.self_friction && d == &k::SELF_COLLIDE { &k::SELF_COLLIDE_FRICTION } else { d }),
+                .map(|d| match d.with_friction {
+                    Some(f) if how.self_friction => f,
+                    _ => d,
+                }),
         )
         .chain(normals.iter().copied())
         .flat_map(|d| run(d.flavor(flavor)))

@@ -9,12 +9,13 @@ use std::time::Instant;
 use clothlab_core::build;
 use clothlab_core::cpu::{self as twins, SubstepStats};
 use clothlab_core::grid::{
-    ClothState, ClothTopology, Grab, GridSpringConstants, STRAIN_SLOTS, SpringSlot, StepParams, V4, spring_constants,
+    ClothState, ClothTopology, Grab, GridSpringConstants, STRAIN_SLOTS, SpringSlot, V4, spring_constants,
 };
 use clothlab_core::layout::Buf;
 use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose, PinSlot};
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
+use clothlab_core::step_params::StepParams;
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, TimingRecorder};
 use clothlab_core::{SimParams, Solver, SolverError};
 

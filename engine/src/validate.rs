@@ -4,15 +4,16 @@
 
 use clothlab_core::build;
 use clothlab_core::cpu::Exec;
-use clothlab_core::grid::{Grab, StepParams};
+use clothlab_core::grid::Grab;
+use clothlab_core::step_params::StepParams;
 use clothlab_core::validate::{Check, ROLLOUT_BOUND_PER_SUBSTEP, compare, disturbed_state};
 use clothlab_core::{Scene, SimParams, SolverError};
 
 use crate::cpu::CpuEngine;
 use crate::kernels::{self, ConstantsHome, HostBuffers, KernelRef};
+use crate::recipe::Command;
 pub use crate::recipe::KernelRunner;
-use crate::recipe::{Command, run};
-use crate::variant::Caps;
+use crate::variant::{Caps, Variant};
 
 /// The scene, parameters, disturbed buffers and constants every kernel check starts from:
 /// an `n × n` cloth draped for 15 frames, then disturbed (seeded), wind on, a particle
@@ -205,32 +206,27 @@ pub fn validate_kernels_with(
         if !k.def.cloths.run_on(topo) {
             continue;
         }
-        let commands = match (&topo.mesh, k.def.immediates) {
-            // VBD's colour kernel: one sweep, every colour's range (grids and meshes).
-            (_, kernels::Immediates::Range) if k.def == &kernels::VBD_COLOUR => crate::recipe::vbd_sweep(k, topo),
+        // The kernel's dispatches on the cloth as a recipe makes them (its row's
+        // `Dispatches`): every colour of one VBD sweep, the tiles, every pass of a mesh's
+        // XPBD iteration (its λ cleared first, as the recipe does once a substep).
+        let mut expander = crate::recipe::Expander::new(topo, input.p.strain_passes, input.p.tile_substeps, 0.9);
+        let commands = match k.def.dispatches {
             // The acceleration's first sweep (ω = 1: the set-up) and a second (ω > 1).
-            (_, kernels::Immediates::Range) if k.def == &kernels::VBD_ACCELERATE => {
-                (1..=2).map(|sweep| crate::recipe::vbd_acceleration(k, topo, sweep, 0.9)).collect()
-            }
-            // The tiled substep: a workgroup per tile (the step constants' passes and
-            // substeps per dispatch), then the swap.
-            _ if k.def == &kernels::SUBSTEP_TILE => {
-                vec![crate::recipe::tile_command(k, topo, input.p.strain_passes, input.p.tile_substeps), Command::Swap]
-            }
-            // A range kernel (a mesh's XPBD pass): every range of an iteration, in order.
-            (Some(mesh), kernels::Immediates::Range) => {
+            kernels::Dispatches::Chebyshev => (1..=2)
+                .flat_map(|sweep| {
+                    expander.sweeps = sweep;
+                    expander.run(k)
+                })
+                .collect(),
+            kernels::Dispatches::MeshPasses => {
                 let mut v = vec![
                     Command::Clear(clothlab_core::layout::Buf::Aux0),
                     Command::Clear(clothlab_core::layout::Buf::Aux1),
                 ];
-                v.extend(mesh.xpbd_passes.windows(2).map(|w| Command::Range {
-                    kernel: k,
-                    first: w[0],
-                    count: w[1] - w[0],
-                }));
+                v.extend(expander.run(k));
                 v
             }
-            _ => run(k),
+            _ => expander.run(k),
         };
         let mut want = input.for_kernel(k);
         let mut got = want.clone();
@@ -241,14 +237,8 @@ pub fn validate_kernels_with(
         }
         input.engine.run(&commands, &input.p, 0, &mut want);
         runner.run_commands(&commands, &input.p, &mut got)?;
-        if k.def == &kernels::STRAIN_LIMIT_COUNT {
-            // Its hash counts come from the positions it wrote: on a GPU whose strain limit
-            // differs from the CPU's in a last bit, a point that close to a cell's face may
-            // count in the next cell. Checked against a recount of its own output (the
-            // positions themselves against the twin's, within the bound).
-            let [.., cells, totals, _] = &mut want.aux[..] else { unreachable!("the AUX buffers") };
-            cells.iter_mut().chain(totals.iter_mut()).for_each(|c| *c = [0.0; 4]);
-            clothlab_core::cpu::hash_count(&input.p, &got.pos, cells, totals);
+        if let Some(from_output) = k.def.from_output {
+            from_output(&input.p, &got, &mut want);
         }
         let what = k.shader_name();
         type Pair<'a> = (&'static str, &'a Vec<[f32; 4]>, &'a Vec<[f32; 4]>);
@@ -310,6 +300,71 @@ fn checked_flavors(caps: &Caps, table_image: bool) -> impl Iterator<Item = Kerne
                 && (caps.subgroups || !f.shuffle)
         },
     )
+}
+
+/// Kernel checks of `validate --every-switch` on one solver: which solver, which kernels,
+/// and the label their rows carry.
+#[derive(Debug, Clone)]
+pub struct KernelChecks {
+    /// The switches of the solver they run on, over the `optimized` preset; `None`: the
+    /// backend's own solver.
+    pub switches: Option<Vec<String>>,
+    /// The kernels, each in its flavor.
+    pub kernels: Vec<KernelRef>,
+    /// What the rows say after the kernel's name, e.g. ` (table=uniform)`.
+    pub label: String,
+}
+
+/// What `validate --every-switch` covers on one API with `caps`: every flavor of every
+/// kernel against its twin, on the solvers that upload what the flavors read, then a
+/// rollout of each variant of [`crate::variant::covering`]. The command runs the plan
+/// and prints it.
+#[derive(Debug, Clone)]
+pub struct SwitchPlan {
+    /// The kernel checks, in order.
+    pub kernel_checks: Vec<KernelChecks>,
+    /// The variants rolled out against the CPU.
+    pub rollouts: Vec<Variant>,
+}
+
+/// [`SwitchPlan`] for an API with `caps` (`api` its name) on `scene`: every flavor on the
+/// backend's solver (the table as uniform constants on the regular grid); the table's
+/// flavors on a solver reading it from the image (storage where the API's engine has
+/// none); the bodies' fields from the image (`sdf=image`) where the engine has it and the
+/// scene has bodies; and the covering variants, less temporal blocking where the scene
+/// moves (it poses the colliders and pins once per dispatch: such a scene refuses it).
+pub fn every_switch_plan(caps: &Caps, api: &str, scene: &Scene) -> SwitchPlan {
+    let mut kernel_checks =
+        vec![KernelChecks { switches: None, kernels: flavors(caps, false), label: " (table=uniform)".into() }];
+    let table = if caps.table_image { "image" } else { "storage" };
+    kernel_checks.push(KernelChecks {
+        switches: Some(vec![format!("table={table}")]),
+        kernels: flavors(caps, caps.table_image).into_iter().filter(|k| k.def.variants.table_image).collect(),
+        label: format!(" (table={table})"),
+    });
+    let image = image_flavors(caps);
+    if !image.is_empty() && !scene.bodies.is_empty() {
+        kernel_checks.push(KernelChecks {
+            switches: Some(vec!["sdf=image".into()]),
+            kernels: image,
+            label: " (sdf=image)".into(),
+        });
+    }
+    let rollouts = crate::variant::covering(caps, api)
+        .into_iter()
+        .filter(|v| !(scene.animated() && v.temporal == crate::variant::Temporal::On))
+        .collect();
+    SwitchPlan { kernel_checks, rollouts }
+}
+
+/// The bound of a rollout of `variant` (`None`: a solver without one) on `scene`, whose
+/// own bound is `bound` and whose rounding alone moves it `spread` ([`rounding_spread`]):
+/// at least [`SPREAD_FACTOR`] times the spread, and with `sdf=image` at least
+/// [`sdf_image_bound`] (through the image a contact may sit a little off the twin's: the
+/// filter's weights).
+pub fn rollout_bound(bound: f32, variant: Option<&Variant>, scene: &Scene, spread: f32) -> f32 {
+    let bound = bound.max(SPREAD_FACTOR * spread);
+    if variant.is_some_and(|v| v.sdf == crate::variant::Sdf::Image) { bound.max(sdf_image_bound(scene)) } else { bound }
 }
 
 /// How many times [`rounding_spread`] a rollout may differ: a GPU's atomics add in any

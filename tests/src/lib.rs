@@ -167,7 +167,7 @@ pub fn assert_stats_match_twin<E: clothlab_engine::Engine>(v: &mut clothlab_engi
     assert!(stats_gpu.iter().all(|s| s.kinetic_energy > 0.0 && s.max_strain.is_finite()), "{stats_gpu:?}");
     let state = v.state().unwrap();
     let (_, topo) = clothlab_core::build(v.scene(), v.params()).unwrap();
-    let sp = clothlab_core::grid::StepParams::new(v.params(), v.scene(), None);
+    let sp = clothlab_core::step_params::StepParams::new(v.params(), v.scene(), None);
     let want = clothlab_core::cpu::substep_stats(&sp, &topo.slots, &state.pos, &state.vel);
     let got = stats_gpu[substeps - 1];
     let strain_err = (got.max_strain - want.max_strain).abs();

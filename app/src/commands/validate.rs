@@ -8,9 +8,8 @@ use clothlab_core::layout::Buf;
 use clothlab_core::validate::Check;
 use clothlab_core::validate::validate_rollout;
 use clothlab_engine::validate::{
-    SPREAD_FACTOR, bisect, flavors, image_flavors, rounding_spread, sdf_image_bound, validate_kernels_with,
+    SPREAD_FACTOR, bisect, every_switch_plan, rollout_bound, rounding_spread, validate_kernels_with,
 };
-use clothlab_engine::variant::covering;
 use clothlab_engine::{KernelRef, VariantSpec};
 
 use crate::cli::ValidateArgs;
@@ -147,42 +146,23 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
         let mut rows = Vec::new();
         let mut rollouts: Vec<GpuSetup> = vec![setup.clone()];
         if args.every_switch {
-            // Every flavor on this solver (the table as uniform constants on the regular
-            // grid), then on one reading the table from the image (storage where the
-            // API's engine has none): the two loads of the gathers and every home.
-            let all = flavors(&caps, false);
-            let checks = validate_kernels_with(solver, &all, &scene, 0x5eed, &params)?;
-            rows.extend(worst_rows(&all, &checks, " (table=uniform)"));
-            let table = if caps.table_image { "image" } else { "storage" };
-            let spec = VariantSpec::parse("optimized", &[format!("table={table}")])?;
-            let mut other = make(
-                backend,
-                scene.clone(),
-                params.clone(),
-                &GpuSetup { variant: Some(spec), ..GpuSetup::default() },
-                &Shared::None,
-            )?;
-            let table_kernels: Vec<KernelRef> =
-                flavors(&caps, caps.table_image).into_iter().filter(|k| k.def.variants.table_image).collect();
-            let runner = other.runner().context("validate checks GPU backends")?;
-            let checks = validate_kernels_with(runner, &table_kernels, &scene, 0x5eed, &params)?;
-            rows.extend(worst_rows(&table_kernels, &checks, &format!(" (table={table})")));
-            // The bodies' fields from the image (`sdf=image`), where the engine has it and
-            // the scene has bodies: the `_si` flavors on a solver that uploads it.
-            let image_kernels = image_flavors(&caps);
-            if !image_kernels.is_empty() && !scene.bodies.is_empty() {
-                let spec = VariantSpec::parse("optimized", &["sdf=image".to_owned()])?;
-                let setup = GpuSetup { variant: Some(spec), ..GpuSetup::default() };
-                let mut other = make(backend, scene.clone(), params.clone(), &setup, &Shared::None)?;
-                let runner = other.runner().context("validate checks GPU backends")?;
-                let checks = validate_kernels_with(runner, &image_kernels, &scene, 0x5eed, &params)?;
-                rows.extend(worst_rows(&image_kernels, &checks, " (sdf=image)"));
+            let plan = every_switch_plan(&caps, api, &scene);
+            for set in &plan.kernel_checks {
+                let checks = match &set.switches {
+                    None => validate_kernels_with(solver, &set.kernels, &scene, 0x5eed, &params)?,
+                    Some(switches) => {
+                        let spec = VariantSpec::parse("optimized", switches)?;
+                        let setup = GpuSetup { variant: Some(spec), ..GpuSetup::default() };
+                        let mut other = make(backend, scene.clone(), params.clone(), &setup, &Shared::None)?;
+                        let runner = other.runner().context("validate checks GPU backends")?;
+                        validate_kernels_with(runner, &set.kernels, &scene, 0x5eed, &params)?
+                    }
+                };
+                rows.extend(worst_rows(&set.kernels, &checks, &set.label));
             }
-            // Temporal blocking poses the colliders and pins once per dispatch: a scene
-            // where they move refuses it (its rung is not rolled out).
-            rollouts = covering(&caps, api)
+            rollouts = plan
+                .rollouts
                 .into_iter()
-                .filter(|v| !(scene.animated() && v.temporal == clothlab_engine::variant::Temporal::On))
                 .map(|v| GpuSetup { variant: Some(v.into()), ..GpuSetup::default() })
                 .collect();
         } else {
@@ -192,12 +172,7 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
         for r in &rollouts {
             let mut rollout_solver = make(backend, scene.clone(), params.clone(), r, &Shared::None)?;
             let mut c = validate_rollout(rollout_solver.get(), frames)?;
-            c.bound = c.bound.max(SPREAD_FACTOR * spread);
-            // Through the image a contact may sit a little off the twin's (the filter's
-            // weights): SDF_IMAGE_CELLS of a cell.
-            if rollout_solver.variant().is_some_and(|v| v.sdf == clothlab_engine::variant::Sdf::Image) {
-                c.bound = c.bound.max(sdf_image_bound(&scene));
-            }
+            c.bound = rollout_bound(c.bound, rollout_solver.variant().as_ref(), &scene, spread);
             if args.every_switch {
                 c.what = format!("rollout {}", rollout_solver.variant().map(|v| v.label()).unwrap_or_default());
             }

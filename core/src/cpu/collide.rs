@@ -8,9 +8,10 @@ use glam::Vec3;
 
 use super::integrate::{contact, integrate_at, surface_vel};
 use super::{Exec, for_each2, v3, v4};
-use crate::grid::{StepParams, V4};
+use crate::grid::V4;
 use crate::scene::{Aabb, Capsule, Sphere};
 use crate::sdf::{Bodies, SdfHead, sample_grid};
+use crate::step_params::StepParams;
 
 /// What the particles collide with (besides the floor): the spheres, boxes, capsules and
 /// bodies at the current substep.

@@ -4,7 +4,8 @@
 use glam::Vec3;
 
 use super::{Exec, for_each, mass, v3, v4};
-use crate::grid::{StepParams, V4};
+use crate::grid::V4;
+use crate::step_params::StepParams;
 
 /// `force[i] += mᵢ g - air_drag · mᵢ · v` (mᵢ from `pos[i].w`, see `cpu::mass`).
 pub fn forces(exec: Exec, p: &StepParams, pos: &[V4], vel: &[V4], force: &mut [V4]) {

@@ -41,8 +41,9 @@ use super::simd::{F, Lanewise, M, Simd, dispatch, groups, leftover};
 use super::springs::{GridSlots, gather_at};
 use super::strain_limit::{count_at, limit_at, moved_vel};
 use super::{Exec, Fetch, v3};
-use crate::grid::{ClothState, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
+use crate::grid::{ClothState, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, TETHER_SLOTS, Tether, V4};
 use crate::layout::STRAIN_AIM;
+use crate::step_params::StepParams;
 
 use pulp::Simd as Isa;
 

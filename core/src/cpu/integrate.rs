@@ -11,7 +11,8 @@
 use glam::Vec3;
 
 use super::{Exec, dt_over_mass, for_each2, v3, v4};
-use crate::grid::{StepParams, V4};
+use crate::grid::V4;
+use crate::step_params::StepParams;
 
 /// Resolves a contact with a surface of unit normal `nrm` for a particle moving at `v`:
 /// the velocity into the surface is removed and the tangential velocity reduced by

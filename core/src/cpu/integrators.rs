@@ -31,7 +31,8 @@ use rayon::prelude::*;
 
 use super::integrate::{floor_clamp, grab_vel};
 use super::{Exec, v3, v4};
-use crate::grid::{Rows, SpringSlot, StepParams, V4};
+use crate::grid::{Rows, SpringSlot, V4};
+use crate::step_params::StepParams;
 
 /// Scratch particle buffers the integrators use.
 pub const AUX: usize = 5;

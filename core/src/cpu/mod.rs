@@ -144,7 +144,7 @@ impl<F: Fn(usize) -> V4> Fetch for F {
 /// or 0, so this is exactly `p.particle_mass` (`m / 1.0` is `m`): the grid's bits do not
 /// change.
 #[inline(always)]
-pub(crate) fn mass(p: &crate::grid::StepParams, w: f32) -> f32 {
+pub(crate) fn mass(p: &crate::step_params::StepParams, w: f32) -> f32 {
     if w > 0.0 { p.particle_mass / w } else { p.particle_mass }
 }
 
@@ -152,7 +152,7 @@ pub(crate) fn mass(p: &crate::grid::StepParams, w: f32) -> f32 {
 /// where `dt / mass(p, w)` would take a second division per particle and substep; the
 /// reference's `dt / m̄` for a held particle (w = 0). `×1.0` on a grid: the grid's bits.
 #[inline(always)]
-pub(crate) fn dt_over_mass(p: &crate::grid::StepParams, w: f32) -> f32 {
+pub(crate) fn dt_over_mass(p: &crate::step_params::StepParams, w: f32) -> f32 {
     let k = p.dt / p.particle_mass;
     if w > 0.0 { k * w } else { k }
 }

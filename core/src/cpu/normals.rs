@@ -7,7 +7,8 @@ use rayon::prelude::*;
 
 use super::simd::{F, Lanewise, Simd, dispatch, groups, leftover};
 use super::{Exec, Fetch, Lanes, for_each, for_each2, v3, v4};
-use crate::grid::{Rows, StepParams, V4};
+use crate::grid::{Rows, V4};
+use crate::step_params::StepParams;
 use pulp::Simd as Isa;
 
 /// Face normals `N` with `|N| = 2 · area(t)`; w holds `|N|`.

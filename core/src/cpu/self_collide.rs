@@ -54,8 +54,9 @@
 //! the particle there and its slot word (grid coordinates, row tag, pinned) as the bits
 //! of `.w`: the response reads one element per entry, in order.
 
-use crate::grid::{Rows, SpringSlot, StepParams, V4};
+use crate::grid::{Rows, SpringSlot, V4};
 use crate::layout::WORKGROUP;
+use crate::step_params::StepParams;
 
 use super::{Exec, for_each2};
 

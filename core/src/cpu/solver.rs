@@ -12,10 +12,11 @@ use super::{
     xpbd_pass, xpbd_pass_rows,
 };
 use crate::cloth::build;
-use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, StepParams, V4};
+use crate::grid::{ClothState, ClothTopology, Grab, SLOTS, SpringSlot, V4};
 use crate::params::{Integrator, SimParams};
 use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};
+use crate::step_params::StepParams;
 use crate::timing::{
     FORCES_SPRINGS, FRAME, FUSED_STEP, INTEGRATE_COLLIDE, KernelTimings, SELF_COLLIDE, SELF_HASH, STRAIN_LIMIT,
     SUBSTEP, TRI_NORMALS, TimingRecorder, VERTEX_NORMALS,

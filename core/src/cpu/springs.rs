@@ -6,7 +6,8 @@ use wide::f32x8;
 
 use super::forces::{forces_at, forces_consts, forces_consts_w};
 use super::{Exec, Fetch, LANES, Lanes, for_each, load3, store3, v3, v4};
-use crate::grid::{Rows, SLOT_OFFSETS, SLOTS, Spring, SpringSlot, StepParams, V4};
+use crate::grid::{Rows, SLOT_OFFSETS, SLOTS, Spring, SpringSlot, V4};
+use crate::step_params::StepParams;
 
 /// Where a particle's spring slots come from: the table, or (for the fused sweep) the
 /// regular grid's, computed from the particle's place.

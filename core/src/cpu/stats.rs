@@ -2,8 +2,9 @@
 //! solver can report every substep without reading the state back.
 
 use super::v3;
-use crate::grid::{Rows, SpringSlot, StepParams, V4};
+use crate::grid::{Rows, SpringSlot, V4};
 pub use crate::stats::SubstepStats;
+use crate::step_params::StepParams;
 
 /// Particle `i`'s share: the largest strain of the structural springs that start at it
 /// (on a grid slots 1 and 3, to its +i and +j neighbours, so that every structural spring

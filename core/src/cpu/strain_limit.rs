@@ -32,8 +32,9 @@ use wide::f32x8;
 use super::lanes::lane;
 use super::springs::SlotSource;
 use super::{Exec, Fetch, LANES, Lanes, for_each, v3, v4};
-use crate::grid::{Rows, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
+use crate::grid::{Rows, SLOT_OFFSETS, SLOTS, STRAIN_SLOTS, SpringSlot, TETHER_SLOTS, Tether, V4};
 pub use crate::layout::STRAIN_AIM;
+use crate::step_params::StepParams;
 
 /// Every particle's count of over-stretched strain-limited springs at `pos`, into
 /// `counts` (same length): what the pass that follows divides each spring by the larger

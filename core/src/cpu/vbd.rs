@@ -41,7 +41,8 @@ use super::collide::{Colliders, body_sample, capsule_axis_point, capsule_center}
 use super::integrate::surface_vel;
 use super::integrators::{finish_at, per_particle};
 use super::{Exec, dt_over_mass, mass, v3, v4};
-use crate::grid::{ClothTopology, Colours, Rows, SpringSlot, StepParams, V4};
+use crate::grid::{ClothTopology, Colours, Rows, SpringSlot, V4};
+use crate::step_params::StepParams;
 
 /// A contact's penalty stiffness as a multiple of the vertex's inertia `m/h²` (so the
 /// same at every n and dt): a cloth resting on a surface sinks `g h² / 1000` into the

@@ -2,8 +2,9 @@
 //! what it is.
 
 use clothlab_core::cpu::{self, Exec};
-use clothlab_core::grid::{Rows, SLOTS, STRAIN_SLOTS, SpringSlot, StepParams, TETHER_SLOTS, Tether, V4};
+use clothlab_core::grid::{Rows, SLOTS, STRAIN_SLOTS, SpringSlot, TETHER_SLOTS, Tether, V4};
 use clothlab_core::stats::{max_strain, summarize};
+use clothlab_core::step_params::StepParams;
 use clothlab_core::{CpuSolver, Pinning, Scene, SimParams, Solver, SpringKind, build};
 
 /// Step constants for hand-made particle sets: no gravity, drag, damping, friction or

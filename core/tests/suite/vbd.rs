@@ -4,7 +4,8 @@
 //! Euler's, momentum with only internal forces, a hanging cloth's strain.
 
 use clothlab_core::cpu::vbd::{colouring, colouring_is_valid, vbd_substep};
-use clothlab_core::grid::{SpringSlot, StepParams, V4};
+use clothlab_core::grid::{SpringSlot, V4};
+use clothlab_core::step_params::StepParams;
 use clothlab_core::{Pinning, Scene, SceneFile, SimParams, build};
 
 fn scene_file(name: &str) -> SceneFile {

@@ -19,10 +19,11 @@ use std::borrow::Cow;
 use std::hash::{Hash, Hasher};
 
 use clothlab_core::cpu::{self, Exec, SubstepStats};
-use clothlab_core::grid::{ClothTopology, StepParams, V4};
+use clothlab_core::grid::{ClothTopology, V4};
 use clothlab_core::layout::{BLOCK, Buf, WORKGROUP};
 use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose};
+use clothlab_core::step_params::StepParams;
 use clothlab_core::timing;
 
 use crate::EngineError;
@@ -118,6 +119,11 @@ pub struct Variants {
     pub sdf_image: bool,
 }
 
+impl Variants {
+    /// No generated twins: the kernel as written only.
+    pub const NONE: Variants = PLAIN;
+}
+
 /// Where a shader reads the step constants from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum ConstantsHome {
@@ -178,6 +184,37 @@ pub enum Immediates {
     /// The dispatch's range, `first` and `count` as two `u32`
     /// ([`crate::recipe::Command::Range`]).
     Range,
+}
+
+/// How a kernel named in a substep's order becomes dispatches on a cloth: the recipe
+/// ([`crate::recipe::recipe_for`]) and the kernel tests ([`crate::validate`]) both expand
+/// it by [`crate::recipe::Expander`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dispatches {
+    /// One dispatch over its [`Count`].
+    Once,
+    /// A range per colour of the cloth's colouring, in colour order (VBD's sweep).
+    Colours,
+    /// One range over every particle, the sweep's ω as the range's `first` (VBD's
+    /// Chebyshev step after a sweep).
+    Chebyshev,
+    /// A workgroup per tile of the grid (the tiled substep).
+    Tiles,
+    /// A range per pass of a mesh's spring list sorted by pass
+    /// (`MeshTables::xpbd_passes`).
+    MeshPasses,
+}
+
+/// What a grid's kernel of a substep's order is on a mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OnMesh {
+    /// Itself (it reads no grid coordinates).
+    Same,
+    /// This kernel in its place.
+    Kernel(&'static KernelDef),
+    /// Nothing: another's replacement runs its work (an XPBD pass after the first of an
+    /// iteration: the mesh's passes run in the first's place).
+    Nothing,
 }
 
 /// Which cloths a kernel runs on.
@@ -361,6 +398,10 @@ impl HostBuffers {
 /// A kernel's CPU twin: reads and writes the buffers as the kernel does.
 pub type Twin = fn(&TwinArgs, &mut HostBuffers);
 
+/// Recomputes, after a kernel test, the expected values of outputs that the kernel
+/// derives from another output of its own (`got`, the runner's), into `want`.
+pub type FromOutput = fn(&StepParams, &HostBuffers, &mut HostBuffers);
+
 /// Everything about one kernel.
 #[derive(Debug)]
 pub struct KernelDef {
@@ -394,6 +435,17 @@ pub struct KernelDef {
     pub test_input: Option<Twin>,
     /// Which cloths it runs on.
     pub cloths: Cloths,
+    /// How it becomes dispatches on a cloth.
+    pub dispatches: Dispatches,
+    /// What it is on a mesh.
+    pub on_mesh: OnMesh,
+    /// For a kernel whose outputs depend on another of its outputs (counts of the
+    /// positions it wrote): those expected from the runner's output, not the twin's (a
+    /// last bit of a position may move a count by a whole particle).
+    pub from_output: Option<FromOutput>,
+    /// What it is where the contacts have Coulomb friction (the kernel with the friction
+    /// terms), or `None`: itself.
+    pub with_friction: Option<&'static KernelDef>,
 }
 
 impl PartialEq for KernelDef {
@@ -665,22 +717,45 @@ const TABLE: &[Buf] = &[Params, Pos, Vel, Force, Slots, BendSlots, Adjacency, In
 const COLLIDERS: &[Buf] = &[Params, Pos, Vel, Spheres, Boxes, Shapes];
 const NONE: &[Buf] = &[];
 
+/// [`KernelDef::new`], as the rows here write it.
 const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf], writes: &'static [Buf]) -> KernelDef {
-    KernelDef {
-        name,
-        source: Source::Builtin,
-        twin,
-        count,
-        reads,
-        writes,
-        pure: NONE,
-        accumulates: NONE,
-        check: ELEMENT,
-        label: name,
-        variants: Variants { immediates: true, ..PLAIN },
-        immediates: Immediates::None,
-        test_input: None,
-        cloths: Cloths::Any,
+    KernelDef::new(name, twin, count, reads, writes)
+}
+
+impl KernelDef {
+    /// A row of built-in WGSL (`shaders/wgsl/{name}.wgsl`) whose other fields take their
+    /// plainest values: checked element by element, its own timing row, the `_imm` twin
+    /// only, no immediates, on any cloth, one dispatch over `count`, nothing in another's
+    /// place. A row writes what differs and takes the rest from here
+    /// (`KernelDef { check: …, ..KernelDef::new(…) }`), so that a field added to the row
+    /// later leaves it as it was.
+    pub const fn new(
+        name: &'static str,
+        twin: Twin,
+        count: Count,
+        reads: &'static [Buf],
+        writes: &'static [Buf],
+    ) -> KernelDef {
+        KernelDef {
+            name,
+            source: Source::Builtin,
+            twin,
+            count,
+            reads,
+            writes,
+            pure: NONE,
+            accumulates: NONE,
+            check: ELEMENT,
+            label: name,
+            variants: Variants { immediates: true, ..PLAIN },
+            immediates: Immediates::None,
+            test_input: None,
+            cloths: Cloths::Any,
+            dispatches: Dispatches::Once,
+            on_mesh: OnMesh::Same,
+            with_friction: None,
+            from_output: None,
+        }
     }
 }
 

@@ -135,6 +135,8 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
     cloths: Cloths::Grid,
+    on_mesh: OnMesh::Kernel(&SELF_COLLIDE_MESH),
+    with_friction: Some(&SELF_COLLIDE_FRICTION),
     ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, Aux2, Aux4], &[PosOut, Vel])
 };
 /// [`SELF_COLLIDE`] with Coulomb friction at its contacts (the contacts' velocities from
@@ -146,6 +148,7 @@ pub static SELF_COLLIDE_FRICTION: KernelDef = KernelDef {
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
     cloths: Cloths::Grid,
+    on_mesh: OnMesh::Kernel(&SELF_COLLIDE_MESH_FRICTION),
     ..def(
         "self_collide_friction",
         self_collide_friction,
@@ -162,6 +165,7 @@ pub static SELF_COLLIDE_MESH: KernelDef = KernelDef {
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
     cloths: Cloths::Mesh,
+    with_friction: Some(&SELF_COLLIDE_MESH_FRICTION),
     ..def(
         "self_collide_mesh",
         self_collide,

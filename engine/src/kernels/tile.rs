@@ -40,6 +40,7 @@ pub static SUBSTEP_TILE: KernelDef = KernelDef {
     label: timing::SUBSTEP_TILE,
     variants: IMM_CU,
     cloths: Cloths::Grid,
+    dispatches: Dispatches::Tiles,
     ..def(
         "substep_tile",
         substep_tile,

@@ -42,6 +42,7 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
     label: timing::VBD,
     variants: Variants { table_image: true, colliders_uniform: true, sdf_image: true, ..PLAIN },
     immediates: Immediates::Range,
+    dispatches: Dispatches::Colours,
     ..def(
         "vbd_colour",
         vbd_colour,
@@ -56,6 +57,7 @@ pub static VBD_ACCELERATE: KernelDef = KernelDef {
     label: timing::VBD,
     variants: PLAIN,
     immediates: Immediates::Range,
+    dispatches: Dispatches::Chebyshev,
     ..def("vbd_accelerate", vbd_accelerate, Count::Range, &[Params, Aux0, Aux1, Aux2, Aux3, Aux4], &[Aux2, Aux3, Aux4])
 };
 /// VBD: x = x⁰ + D, v = v' + (D − h v')/h, with pins, grab and floor

@@ -42,12 +42,15 @@ fn xpbd_mesh(a: &TwinArgs, b: &mut HostBuffers) {
 
 /// One XPBD pass: the springs of one direction and colour (core::cpu::XPBD_PASSES),
 /// both ends moved in place, their velocities with them.
-const fn xpbd(name: &'static str, twin: Twin) -> KernelDef {
+/// On a mesh the mesh's passes ([`XPBD_MESH`]) run in the place of an iteration's first
+/// pass (`cpu::XPBD_ORDER`), and the other passes are left out.
+const fn xpbd(name: &'static str, twin: Twin, pass: usize) -> KernelDef {
     KernelDef {
         check: GATHER,
         label: timing::XPBD,
         variants: IMM_TEX,
         cloths: Cloths::Grid,
+        on_mesh: if pass == cpu::XPBD_ORDER[0] { OnMesh::Kernel(&XPBD_MESH) } else { OnMesh::Nothing },
         ..def(
             name,
             twin,
@@ -59,18 +62,18 @@ const fn xpbd(name: &'static str, twin: Twin) -> KernelDef {
 }
 /// The 12 passes of one XPBD iteration, in order.
 pub static XPBD: [KernelDef; 12] = [
-    xpbd("xpbd_0", xpbd_0),
-    xpbd("xpbd_1", xpbd_1),
-    xpbd("xpbd_2", xpbd_2),
-    xpbd("xpbd_3", xpbd_3),
-    xpbd("xpbd_4", xpbd_4),
-    xpbd("xpbd_5", xpbd_5),
-    xpbd("xpbd_6", xpbd_6),
-    xpbd("xpbd_7", xpbd_7),
-    xpbd("xpbd_8", xpbd_8),
-    xpbd("xpbd_9", xpbd_9),
-    xpbd("xpbd_10", xpbd_10),
-    xpbd("xpbd_11", xpbd_11),
+    xpbd("xpbd_0", xpbd_0, 0),
+    xpbd("xpbd_1", xpbd_1, 1),
+    xpbd("xpbd_2", xpbd_2, 2),
+    xpbd("xpbd_3", xpbd_3, 3),
+    xpbd("xpbd_4", xpbd_4, 4),
+    xpbd("xpbd_5", xpbd_5, 5),
+    xpbd("xpbd_6", xpbd_6, 6),
+    xpbd("xpbd_7", xpbd_7, 7),
+    xpbd("xpbd_8", xpbd_8, 8),
+    xpbd("xpbd_9", xpbd_9, 9),
+    xpbd("xpbd_10", xpbd_10, 10),
+    xpbd("xpbd_11", xpbd_11, 11),
 ];
 /// One XPBD pass of a mesh: a range of its spring list sorted by pass
 /// (`MeshTables::xpbd_passes`), λ per spring in aux0 and aux1.
@@ -80,6 +83,7 @@ pub static XPBD_MESH: KernelDef = KernelDef {
     variants: PLAIN,
     immediates: Immediates::Range,
     cloths: Cloths::Mesh,
+    dispatches: Dispatches::MeshPasses,
     ..def(
         "xpbd_mesh",
         xpbd_mesh,

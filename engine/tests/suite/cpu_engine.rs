@@ -1,7 +1,7 @@
 //! The CPU engine against the fast CPU solvers, and the bisection's logic on a runner that
 //! is wrong on purpose.
 
-use clothlab_core::grid::StepParams;
+use clothlab_core::step_params::StepParams;
 use clothlab_core::timing;
 use clothlab_core::validate::ROLLOUT_BOUND_PER_SUBSTEP;
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver, SolverError};

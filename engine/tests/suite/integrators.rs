@@ -7,7 +7,8 @@
 use std::f32::consts::TAU;
 
 use clothlab_core::build;
-use clothlab_core::grid::{SpringSlot, StepParams};
+use clothlab_core::grid::SpringSlot;
+use clothlab_core::step_params::StepParams;
 use clothlab_core::{CpuSolver, Exec, Integrator, Scene, SimParams, Solver, StiffnessUnits};
 use clothlab_engine::cpu::start_buffers;
 use clothlab_engine::recipe::{Command, Integration, recipe_for};

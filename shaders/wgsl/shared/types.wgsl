@@ -1,31 +1,6 @@
 // Shared structs and pure functions. Every struct mirrors a #[repr(C)] type of
-// clothlab-core; shaders/build.rs checks their sizes and field offsets.
-
-struct StepParams {
-    gravity: vec4<f32>,
-    wind: vec4<f32>,
-    grab_target: vec4<f32>,
-    dt: f32,
-    damping: f32,
-    air_drag: f32,
-    particle_mass: f32,
-    floor_y: f32,
-    margin: f32,
-    friction: f32,
-    strain_limit: f32,
-    n: u32,
-    num_spheres: u32,
-    num_boxes: u32,
-    grab_index: i32,
-    self_thickness: f32,
-    spacing: f32,
-    inv_cell: f32,
-    num_particles: u32,
-    strain_passes: u32,
-    tile_substeps: u32,
-    num_bodies: u32,
-    num_capsules: u32,
-}
+// clothlab-core; shaders/build.rs checks their sizes and field offsets. StepParams is
+// not here: build.rs writes it from clothlab_core::step_params, before this file.
 
 struct SpringSlot {
     neighbor: i32,

@@ -5,7 +5,7 @@
 use clothlab_core::layout::Buf;
 use clothlab_core::{Exec, Scene, SimParams, SolverError};
 use clothlab_engine::SolverOptions;
-use clothlab_engine::kernels::{Check, Cloths, Count, HostBuffers, Immediates, KernelDef, Source, TwinArgs, Variants};
+use clothlab_engine::kernels::{Check, Count, HostBuffers, KernelDef, Source, TwinArgs, Variants};
 use clothlab_engine::recipe::{Command, run};
 use clothlab_engine::validate::{COMPARED_BUFFERS, KernelInput, KernelRunner, bisect, validate_kernels};
 use clothlab_engine::{CpuEngine, Variant};
@@ -25,7 +25,6 @@ fn halve_force(_: &TwinArgs, b: &mut HostBuffers) {
 
 /// A kernel from outside the crates: one table row, its WGSL given as a string.
 static HALVE_FORCE: KernelDef = KernelDef {
-    name: "halve_force",
     source: Source::Wgsl {
         includes: &["state"],
         body: "
@@ -41,25 +40,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
 }
 ",
     },
-    twin: halve_force,
-    count: Count::Particles,
-    reads: &[Buf::Params, Buf::Force],
-    writes: &[Buf::Force],
-    pure: &[],
-    accumulates: &[],
     check: Check::Bound { relative: 0.0, reason: "one exact multiplication by 0.5" },
     label: "halve_force",
-    variants: Variants {
-        immediates: false,
-        table_image: false,
-        float_atomics: false,
-        colliders_uniform: false,
-        shuffle: false,
-        sdf_image: false,
-    },
-    immediates: Immediates::None,
-    test_input: None,
-    cloths: Cloths::Any,
+    variants: Variants::NONE,
+    ..KernelDef::new("halve_force", halve_force, Count::Particles, &[Buf::Params, Buf::Force], &[Buf::Force])
 };
 
 /// The same with a type error on its line 3.

@@ -4,10 +4,10 @@
 //! twins elsewhere (they would pass even if every lane fell back to loading); this test
 //! shows the shuffles are used, and carry the neighbour's value.
 
-use clothlab_core::grid::StepParams;
 use clothlab_core::layout::Buf;
+use clothlab_core::step_params::StepParams;
 use clothlab_core::{Scene, SimParams};
-use clothlab_engine::kernels::{Check, Cloths, Count, HostBuffers, Immediates, KernelDef, Source, TwinArgs, Variants};
+use clothlab_engine::kernels::{Check, Count, HostBuffers, KernelDef, Source, TwinArgs, Variants};
 use clothlab_engine::recipe::run;
 use clothlab_engine::validate::KernelRunner;
 use clothlab_engine::{SolverOptions, Variant};
@@ -22,7 +22,6 @@ fn no_twin(_: &TwinArgs, _: &mut HostBuffers) {}
 /// Per invocation b (one per particle; every b of a "row" of 10⁶): force = (the value the
 /// left lane passed, or -1 where it holds no block b - 1; the same from the right).
 static PROBE: KernelDef = KernelDef {
-    name: "shuffle_probe",
     source: Source::Wgsl {
         includes: &["state", "window_sh"],
         body: "
@@ -39,25 +38,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
 }
 ",
     },
-    twin: no_twin,
-    count: Count::Particles,
-    reads: &[Buf::Params, Buf::Force],
-    writes: &[Buf::Force],
-    pure: &[],
-    accumulates: &[],
     check: Check::Own("the_lanes_of_a_subgroup_pass_their_neighbours_values"),
     label: "shuffle_probe",
-    variants: Variants {
-        immediates: false,
-        table_image: false,
-        float_atomics: false,
-        colliders_uniform: false,
-        shuffle: false,
-        sdf_image: false,
-    },
-    immediates: Immediates::None,
-    test_input: None,
-    cloths: Cloths::Any,
+    variants: Variants::NONE,
+    ..KernelDef::new("shuffle_probe", no_twin, Count::Particles, &[Buf::Params, Buf::Force], &[Buf::Force])
 };
 
 #[test]
