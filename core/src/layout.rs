@@ -91,15 +91,31 @@ pub enum Buf {
     BoxesUniform = 22,
     /// The step constants in a storage buffer (`constants=storage`).
     ParamsStorage = 23,
-    /// Integrator scratch 0 (RK: x₀; implicit: Δv). See `core::cpu::integrators`.
+    /// Scratch 0. The five scratch buffers hold what one kernel hands the next within a
+    /// substep, and each user's data is dead before the next user writes its own; by role:
+    /// - RK: x₀; implicit Euler: Δv; XPBD: λ (a grid's slots 1, 3, 7 at each spring's
+    ///   first end; a mesh's springs `k < n`); VBD: the predicted velocity v′
+    ///   (`core::cpu::integrators`, `core::cpu::vbd`);
+    /// - the strain limit: each particle's count of stretched springs (`strain_count`,
+    ///   read by the pass; `core::cpu::strain_limit`);
+    /// - self-collision with Coulomb friction: the velocities' copy `hash_scatter` writes
+    ///   for the response;
+    /// - the tiled substep: the new velocities, put into place by `tile_vel`.
     Aux0 = 24,
-    /// Integrator scratch 1 (RK: v₀; implicit: r, w the preconditioner's diagonal).
+    /// Scratch 1 (see [`Buf::Aux0`]): RK: v₀; implicit: r, w the preconditioner's diagonal;
+    /// XPBD: λ (a grid's slots 6, 9, 11; a mesh's springs `k ≥ n`); VBD: the substep's
+    /// start x⁰.
     Aux1 = 25,
-    /// Integrator scratch 2 (RK: Σ bₛuₛ; implicit: p).
+    /// Scratch 2: RK: Σ bₛuₛ; implicit: p; VBD: the displacement D = x − x⁰; self-collision's
+    /// hash: the per-cell counts, then the cells' starts (`hash_count`, the scans,
+    /// `hash_scatter`; `core::cpu::self_collide`).
     Aux2 = 26,
-    /// Integrator scratch 3 (RK: Σ bₛgₛ; implicit: q = A p).
+    /// Scratch 3: RK: Σ bₛgₛ; implicit: q = A p; VBD: the Chebyshev step's last
+    /// displacement; the hash: the blocks' totals of the counts.
     Aux3 = 27,
-    /// Integrator scratch 4 (RK: the substep's wind force).
+    /// Scratch 4: RK: the substep's wind force; implicit: the CG reductions' sums per
+    /// workgroup; VBD: the Chebyshev step's displacement before the last; the hash: the
+    /// particles sorted by cell (its slots).
     Aux4 = 28,
     /// The conjugate-gradient scalars `r·z`, `p·q`, `α`, `β` (one `vec4<f32>`).
     Scalars = 29,
