@@ -144,8 +144,13 @@ fn the_solvers_kernels_match_their_twins_at_sizes_that_are_not_multiples_of_a_wo
 }
 
 #[test]
-fn rollouts_of_208_substeps_of_every_preset_stay_close_to_the_cpu_on_every_api() {
-    let frames = 13; // 208 substeps of the default 16 per frame
+fn rollouts_of_112_substeps_of_every_preset_stay_close_to_the_cpu_on_every_api() {
+    // 7 frames, 112 substeps of the default 16 per frame: every kernel of each preset's
+    // recipe runs in every substep, and the bound grows with the substeps (1e-6 m each),
+    // so a kernel left out, doubled or rounding otherwise shows from its first substep
+    // at least as clearly as over 208 (on llvmpipe the optimized presets end 0.0 m off,
+    // the naive ones within rounding). 13 frames were 18 s of the suite on lavapipe.
+    let frames = 7;
     for api in Api::ALL {
         let mut ends = Vec::new();
         for &variant in presets(api) {
