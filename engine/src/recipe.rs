@@ -139,7 +139,7 @@ fn integration(variant: &Variant, how: Integration, strain_passes: u32) -> Vec<&
         Accumulate::Gather => &k::SPRINGS,
     };
     let eval: Vec<&'static KernelDef> = match variant.fusion {
-        Fusion::Clothlab | Fusion::Tile => vec![&k::FORCES_SPRINGS],
+        Fusion::IntoGather | Fusion::Tile => vec![&k::FORCES_SPRINGS],
         _ => vec![&k::FORCES, springs],
     };
     let stages = |kernels: &[&'static KernelDef]| -> Vec<&'static KernelDef> {
@@ -160,13 +160,13 @@ fn integration(variant: &Variant, how: Integration, strain_passes: u32) -> Vec<&
         // x' = x + v' dt: Verlet's kernels run both (core::cpu::integrators).
         Integrator::Verlet | Integrator::SymplecticEuler => match variant.fusion {
             Fusion::None => vec![&k::FORCES, springs, &k::INTEGRATE, &k::COLLIDE],
-            Fusion::Thesis => vec![springs, &k::FORCES_INTEGRATE_COLLIDE],
+            Fusion::IntoIntegrate => vec![springs, &k::FORCES_INTEGRATE_COLLIDE],
             // The tiles (the strain passes inside them) where `tiled` says so.
             Fusion::Tile if tiled(variant, how, strain_passes) => vec![&k::SUBSTEP_TILE, &k::TILE_VEL],
-            Fusion::Clothlab | Fusion::Tile if normals_at_frame_end(variant, how) => {
+            Fusion::IntoGather | Fusion::Tile if normals_at_frame_end(variant, how) => {
                 vec![&k::FORCES_SPRINGS_WIND, &k::INTEGRATE_COLLIDE]
             }
-            Fusion::Clothlab | Fusion::Tile => vec![&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE],
+            Fusion::IntoGather | Fusion::Tile => vec![&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE],
         },
         Integrator::Euler => then(eval, &[&k::EULER, &k::COLLIDE]),
         Integrator::Rk2 => stages(&[&k::RK2_1, &k::RK2_2]),
@@ -207,7 +207,7 @@ fn integration(variant: &Variant, how: Integration, strain_passes: u32) -> Vec<&
 /// wind that the normals kernels leave in the force buffer every substep).
 fn normals_at_frame_end(variant: &Variant, how: Integration) -> bool {
     variant.normals == Normals::Frame
-        && matches!(variant.fusion, Fusion::Clothlab | Fusion::Tile)
+        && matches!(variant.fusion, Fusion::IntoGather | Fusion::Tile)
         && matches!(how.integrator, Integrator::Verlet | Integrator::SymplecticEuler)
 }
 

@@ -72,11 +72,12 @@ pub enum Atomics {
 pub enum Fusion {
     /// One dispatch per kernel: forces, springs, integrate, collide.
     None,
-    /// The thesis's: springs alone, then forces + Verlet + collisions in one kernel.
-    Thesis,
-    /// clothlab's: forces + springs gathered (four particles of a row per invocation),
-    /// then integrate + collide.
-    Clothlab,
+    /// The forces into the integration: springs alone, then forces + Verlet + collisions
+    /// in one kernel (the thesis's fusion; the switch's value `thesis`).
+    IntoIntegrate,
+    /// The forces into the springs' gather (four particles of a row per invocation),
+    /// then integrate + collide in one kernel (the switch's value `clothlab`).
+    IntoGather,
     /// The whole Verlet substep in one dispatch over tiles of the grid held in workgroup
     /// memory with a halo as deep as the stages reach (`substep_tile`), its velocities put
     /// into place by a copy (`tile_vel`). Other integrators, meshes and more strain passes
@@ -304,7 +305,7 @@ impl Variant {
         springs: Accumulate::Gather,
         normals: Normals::Frame,
         atomics: Atomics::Float,
-        fusion: Fusion::Clothlab,
+        fusion: Fusion::IntoGather,
         submit: Submit::Frame,
         constants: Constants::Push,
         table: Table::Uniform,
@@ -321,7 +322,7 @@ impl Variant {
         springs: Accumulate::Scatter,
         normals: Normals::Gather,
         atomics: Atomics::Float,
-        fusion: Fusion::Thesis,
+        fusion: Fusion::IntoIntegrate,
         submit: Submit::Frame,
         constants: Constants::Uniform,
         table: Table::Image,
@@ -376,7 +377,7 @@ impl Variant {
             "springs" => self.springs = acc[i],
             "normals" => self.normals = [Normals::Scatter, Normals::Gather, Normals::Frame][i],
             "atomics" => self.atomics = [Atomics::Float, Atomics::Cas][i],
-            "fusion" => self.fusion = [Fusion::None, Fusion::Thesis, Fusion::Clothlab, Fusion::Tile][i],
+            "fusion" => self.fusion = [Fusion::None, Fusion::IntoIntegrate, Fusion::IntoGather, Fusion::Tile][i],
             "submit" => self.submit = [Submit::Substep, Submit::Frame][i],
             "constants" => self.constants = [Constants::Storage, Constants::Uniform, Constants::Push][i],
             "table" => self.table = [Table::Storage, Table::Image, Table::Uniform][i],
@@ -468,7 +469,7 @@ impl Variant {
                 "switch neighbours=shuffle: this adapter has no subgroup shuffles in compute shaders on {api}; use neighbours=load"
             )));
         }
-        if self.normals == Normals::Frame && !matches!(self.fusion, Fusion::Clothlab | Fusion::Tile) {
+        if self.normals == Normals::Frame && !matches!(self.fusion, Fusion::IntoGather | Fusion::Tile) {
             return Err(VariantError(
                 "switch normals=frame needs fusion=clothlab or fusion=tile: the wind is computed inside clothlab's forces+springs gather".into(),
             ));
@@ -501,7 +502,7 @@ impl Variant {
                 "switch temporal=on needs fusion=tile: several substeps per dispatch are the tiles' deeper halo".into(),
             ));
         }
-        if self.fusion == Fusion::Clothlab && self.springs == Accumulate::Scatter {
+        if self.fusion == Fusion::IntoGather && self.springs == Accumulate::Scatter {
             return Err(VariantError(
                 "switches fusion=clothlab and springs=scatter exclude each other: clothlab's fusion puts forces into the spring gather (use springs=gather, or fusion=none|thesis)".into(),
             ));
@@ -531,7 +532,7 @@ impl Variant {
             self.table = Table::Storage;
         }
         if self.fusion == Fusion::Tile && (!caps.grid || !caps.tile || self.table != Table::Uniform) {
-            self.fusion = Fusion::Clothlab;
+            self.fusion = Fusion::IntoGather;
         }
         if self.fusion != Fusion::Tile {
             self.temporal = Temporal::Off;
@@ -705,7 +706,7 @@ impl VariantSpec {
         // explicitly is refused instead.
         let tile_needs = v.springs == Accumulate::Gather && v.normals == Normals::Frame && v.table == Table::Uniform;
         if v.fusion == Fusion::Tile && !tile_needs && !self.set.iter().any(|(k, _)| k == "fusion") {
-            v.fusion = Fusion::Clothlab;
+            v.fusion = Fusion::IntoGather;
             if !self.set.iter().any(|(k, _)| k == "temporal") {
                 v.temporal = Temporal::Off;
             }
@@ -810,7 +811,7 @@ mod tests {
         let e =
             VariantSpec::parse("optimized", &["fusion=tile".into()]).unwrap().resolve(&small, "vulkan").unwrap_err();
         assert!(e.0.contains("workgroup memory"), "{e}");
-        assert_eq!((top.fit(&small).fusion, top.fit(&small).temporal), (Fusion::Clothlab, Temporal::Off));
+        assert_eq!((top.fit(&small).fusion, top.fit(&small).temporal), (Fusion::IntoGather, Temporal::Off));
         // A switch that takes away what the tiles need: refused when fusion=tile is named.
         let e = VariantSpec::parse("optimized", &["fusion=tile".into(), "normals=gather".into()])
             .unwrap()
