@@ -10,6 +10,7 @@
 //! (and max) distance of the particles from the reference.
 
 use std::fmt::Write as _;
+use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Result;
@@ -19,6 +20,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::plot::{FONT, Figure, both, err};
+use super::{Request, all_backends, cpu_label, make_out_dir};
+use crate::cli::BenchArgs;
+use crate::out::outln;
 use crate::solvers::{Backend, GpuSetup, Shared, make};
 
 /// Simulated time of every run, s (six frames of 1/60 s).
@@ -441,6 +445,23 @@ pub fn write(out: &std::path::Path, runs: &[Run], notes: &[String], machine: &st
         crate::files::write_bytes(&out.join(format!("integrators-n{n}.png")), &png)?;
     }
     Ok(())
+}
+
+/// `bench --integrators`: the mode's own defaults, then [`measure`], [`write`], [`report`]. The default size list (for the kernel
+/// tables) becomes 64 and 128, and the backends, if left at all of them, the fast three.
+pub fn run(args: &BenchArgs, request: &Request) -> Result<ExitCode> {
+    let (params, backends, sizes) = (&request.params, &request.backends[..], &request.sizes[..]);
+    let defaults = BenchArgs::default_sizes();
+    let sizes: Vec<u32> = if sizes == defaults.as_slice() { vec![64, 128] } else { sizes.to_vec() };
+    let backends: Vec<Backend> =
+        if all_backends(backends) { vec![Backend::CpuPar, Backend::Wgpu, Backend::Vulkan] } else { backends.to_vec() };
+    make_out_dir(&args.out)?;
+    let (runs, notes) = measure(params, &backends, &sizes, args.cell_budget)?;
+    let machine = args.machine.clone().unwrap_or_else(cpu_label);
+    write(&args.out, &runs, &notes, &machine)?;
+    outln!("{}", report(&runs, &notes, &machine))?;
+    outln!("wrote {}/integrators.{{md,csv}} and the plots", args.out.display())?;
+    Ok(ExitCode::SUCCESS)
 }
 
 #[cfg(test)]

@@ -15,6 +15,7 @@
 //! the rounds' median frame times per particle-substep and the rounds' spread.
 
 use std::fmt::Write as _;
+use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Result;
@@ -23,8 +24,10 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::WARMUP_FRAMES;
 use super::plot::{FONT, Figure, both, err};
+use super::{Request, WARMUP_FRAMES, all_backends, cpu_label, make_out_dir};
+use crate::cli::BenchArgs;
+use crate::out::outln;
 use crate::solvers::{AnySolver, Backend, GpuSetup, Shared, make};
 use clothlab_engine::VariantSpec;
 use clothlab_engine::variant::{Neighbours, Table};
@@ -338,4 +341,22 @@ pub fn write(out: &std::path::Path, rows: &[Row], notes: &[String], machine: &st
     crate::files::write_bytes(&out.join("mesh-vs-grid.svg"), svg.as_bytes())?;
     crate::files::write_bytes(&out.join("mesh-vs-grid.png"), &png)?;
     Ok(())
+}
+
+/// `bench --mesh-vs-grid`: the mode's own defaults, then [`measure`], [`write`], [`report`]. The default size list becomes 64 and 128,
+/// and the backends, if left at all of them, the CPU ones and each API's optimized one.
+pub fn run(args: &BenchArgs, request: &Request) -> Result<ExitCode> {
+    let (base, params, backends, sizes) = (&request.base, &request.params, &request.backends[..], &request.sizes[..]);
+    let defaults = BenchArgs::default_sizes();
+    let sizes: Vec<u32> = if sizes == defaults.as_slice() { vec![64, 128] } else { sizes.to_vec() };
+    let backends: Vec<Backend> = if all_backends(backends) { DEFAULT_BACKENDS.to_vec() } else { backends.to_vec() };
+    let frames = args.iters.div_ceil(params.substeps).max(1);
+    make_out_dir(&args.out)?;
+    let irregular = args.irregular.as_deref().map(|f| irregular(base, f)).transpose()?;
+    let (rows, notes) = measure(base, params, irregular.as_ref(), &backends, &sizes, frames, args.repeat)?;
+    let machine = args.machine.clone().unwrap_or_else(cpu_label);
+    write(&args.out, &rows, &notes, &machine, args.repeat)?;
+    outln!("{}", report(&rows, &notes, &machine, args.repeat))?;
+    outln!("wrote {}/mesh-vs-grid.{{md,csv,svg,png}}", args.out.display())?;
+    Ok(ExitCode::SUCCESS)
 }
