@@ -447,8 +447,9 @@ pub fn write(out: &std::path::Path, runs: &[Run], notes: &[String], machine: &st
     Ok(())
 }
 
-/// `bench --integrators`: the mode's own defaults, then [`measure`], [`write`], [`report`]. The default size list (for the kernel
-/// tables) becomes 64 and 128, and the backends, if left at all of them, the fast three.
+/// `bench --integrators`: [`measure`], [`write()`] and [`report`] with the mode's own
+/// defaults: the size list (for the kernel tables) 64 and 128 where left at the default,
+/// and the backends, if left at all of them, the fast three.
 pub fn run(args: &BenchArgs, request: &Request) -> Result<ExitCode> {
     let (params, backends, sizes) = (&request.params, &request.backends[..], &request.sizes[..]);
     let defaults = BenchArgs::default_sizes();

@@ -343,8 +343,9 @@ pub fn write(out: &std::path::Path, rows: &[Row], notes: &[String], machine: &st
     Ok(())
 }
 
-/// `bench --mesh-vs-grid`: the mode's own defaults, then [`measure`], [`write`], [`report`]. The default size list becomes 64 and 128,
-/// and the backends, if left at all of them, the CPU ones and each API's optimized one.
+/// `bench --mesh-vs-grid`: [`measure`], [`write()`] and [`report`] with the mode's own
+/// defaults: the size list 64 and 128 where left at the default, and the backends, if
+/// left at all of them, the CPU ones and each API's optimized one.
 pub fn run(args: &BenchArgs, request: &Request) -> Result<ExitCode> {
     let (base, params, backends, sizes) = (&request.base, &request.params, &request.backends[..], &request.sizes[..]);
     let defaults = BenchArgs::default_sizes();

@@ -8,7 +8,7 @@
 //! frame table). The final positions of 25 particles are compared with the first backend
 //! that ran at that size, so a backend cannot be fast by doing less.
 //!
-//! [`bench`] checks what every mode reads ([`Request`]) and hands it to the mode's module:
+//! [`bench()`] checks what every mode reads ([`Request`]) and hands it to the mode's module:
 //! `cells` (the backends, or `--ladder`'s rungs, at every size, and the API overheads),
 //! `integrators` (`--integrators`), `mesh_grid` (`--mesh-vs-grid`); `--replot` redraws a
 //! finished run.
