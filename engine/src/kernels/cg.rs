@@ -55,7 +55,7 @@ const CG: Check = Check::Bound {
     relative: 1e-4,
     reason: "dot products summed in another order (tree per workgroup vs in order), divided into α and β",
 };
-const CG_PARTIALS: &[Buf] = &[Params, Aux4, Scalars];
+const CG_PARTIALS: &[Buf] = &[Params, CG_SUMS, Scalars];
 /// Implicit: r = dt f − dt² K v, p = z, Δv = 0, and the partials of r·z.
 pub static CG_BEGIN: KernelDef = KernelDef {
     check: GATHER,
@@ -65,8 +65,8 @@ pub static CG_BEGIN: KernelDef = KernelDef {
         "cg_begin",
         cg_begin,
         Count::Particles,
-        &[Params, Pos, Vel, Force, Slots, BendSlots, Adjacency, Table, Aux2],
-        &[Aux0, Aux1, Aux2, Aux4],
+        &[Params, Pos, Vel, Force, Slots, BendSlots, Adjacency, Table, CG_P],
+        &[CG_DV, CG_R, CG_P, CG_SUMS],
     )
 };
 /// Implicit: q = A p and the partials of p·q.
@@ -78,8 +78,8 @@ pub static CG_MATVEC: KernelDef = KernelDef {
         "cg_matvec",
         cg_matvec,
         Count::Particles,
-        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Table, Aux2],
-        &[Aux3, Aux4],
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Table, CG_P],
+        &[CG_Q, CG_SUMS],
     )
 };
 /// Implicit: p·q folded, α = r·z / p·q.
@@ -92,7 +92,7 @@ pub static CG_REDUCE_PQ: KernelDef = KernelDef {
 pub static CG_STEP: KernelDef = KernelDef {
     check: CG,
     label: timing::CG,
-    ..def("cg_step", cg_step, Count::Particles, &[Params, Aux0, Aux1, Aux2, Aux3, Scalars], &[Aux0, Aux1, Aux4])
+    ..def("cg_step", cg_step, Count::Particles, &[Params, CG_DV, CG_R, CG_P, CG_Q, Scalars], &[CG_DV, CG_R, CG_SUMS])
 };
 /// Implicit: r·z folded, β = new / old.
 pub static CG_REDUCE_RZ: KernelDef = KernelDef {
@@ -104,12 +104,12 @@ pub static CG_REDUCE_RZ: KernelDef = KernelDef {
 pub static CG_DIRECTION: KernelDef = KernelDef {
     check: CG,
     label: timing::CG,
-    ..def("cg_direction", cg_direction, Count::Particles, &[Params, Aux1, Aux2, Scalars], &[Aux2])
+    ..def("cg_direction", cg_direction, Count::Particles, &[Params, CG_R, CG_P, Scalars], &[CG_P])
 };
 /// Implicit: v₁ = (1 − damping) v₀ + Δv, x₁ = x₀ + v₁ dt, with pins, grab and floor.
 pub static IMPLICIT_FINISH: KernelDef = KernelDef {
     label: timing::INTEGRATE,
-    ..def("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Vel, Aux0], &[Pos, Vel])
+    ..def("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Vel, CG_DV], &[Pos, Vel])
 };
 
 /// This family's kernels, in the registry's order ([`super::ALL`]).

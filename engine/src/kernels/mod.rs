@@ -678,6 +678,42 @@ fn nothing(_: &TwinArgs, _: &mut HostBuffers) {}
 
 use Buf::*;
 
+// The scratch buffers by role, as the rows name them: each is one of `Aux0..Aux4`, and
+// the roles that share a buffer never hold live data at once (`Buf::Aux0`'s doc).
+/// The strain limit's counts of stretched springs per particle.
+const STRAIN_COUNTS: Buf = Aux0;
+/// XPBD's λ per spring, in two buffers.
+const LAMBDA: [Buf; 2] = [Aux0, Aux1];
+/// The self-collision hash: per-cell counts, then the cells' starts.
+const HASH_CELLS: Buf = Aux2;
+/// The hash: the blocks' totals of the counts.
+const HASH_TOTALS: Buf = Aux3;
+/// The hash: the particles sorted by cell.
+const HASH_SLOTS: Buf = Aux4;
+/// The velocities' copy for self-collision's friction.
+const VEL_COPY: Buf = Aux0;
+/// The tiled substep's new velocities.
+const TILE_NEW_VEL: Buf = Aux0;
+/// VBD: the predicted velocity v′, the substep's start x⁰, the displacement D, and the
+/// Chebyshev step's last two displacements.
+const VBD_PREDICTED: Buf = Aux0;
+const VBD_START: Buf = Aux1;
+const VBD_DISPLACEMENT: Buf = Aux2;
+const VBD_LAST: Buf = Aux3;
+const VBD_BEFORE: Buf = Aux4;
+/// RK: x₀, v₀, Σ bₛvₛ, Σ bₛaₛ·dt, the substep's wind force.
+const RK_X0: Buf = Aux0;
+const RK_V0: Buf = Aux1;
+const RK_SUM_V: Buf = Aux2;
+const RK_SUM_A: Buf = Aux3;
+const RK_WIND: Buf = Aux4;
+/// Implicit Euler's CG: Δv, r, p, q = A p, and the reductions' sums per workgroup.
+const CG_DV: Buf = Aux0;
+const CG_R: Buf = Aux1;
+const CG_P: Buf = Aux2;
+const CG_Q: Buf = Aux3;
+const CG_SUMS: Buf = Aux4;
+
 /// Per-element kernels: a handful of f32 operations, each within the few ulps Vulkan
 /// allows for division and square root (2.5–3 ulp), plus FMA contraction.
 const ELEMENT: Check = Check::Bound {

@@ -100,26 +100,38 @@ const fn hash(
 }
 /// Each particle's bucket, and the buckets' and their blocks' counts (atomics).
 pub static HASH_COUNT: KernelDef = KernelDef {
-    accumulates: &[Aux2, Aux3],
-    ..hash("hash_count", hash_count, Count::Particles, &[Params, Pos, Aux2, Aux3], &[Aux2, Aux3])
+    accumulates: &[HASH_CELLS, HASH_TOTALS],
+    ..hash(
+        "hash_count",
+        hash_count,
+        Count::Particles,
+        &[Params, Pos, HASH_CELLS, HASH_TOTALS],
+        &[HASH_CELLS, HASH_TOTALS],
+    )
 };
 /// The blocks' totals' exclusive prefix: each block's offset (one workgroup).
 pub static HASH_SCAN_TOP: KernelDef = KernelDef {
     test_input: Some(after_count),
-    ..hash("hash_scan_top", hash_scan_top, Count::Workgroup, &[Params, Aux3], &[Aux3])
+    ..hash("hash_scan_top", hash_scan_top, Count::Workgroup, &[Params, HASH_TOTALS], &[HASH_TOTALS])
 };
 /// The counts' inclusive prefix within each block of buckets from its offset: every
 /// bucket's end in the whole array.
 pub static HASH_SCAN_BLOCKS: KernelDef = KernelDef {
     test_input: Some(after_top),
-    ..hash("hash_scan_blocks", hash_scan_blocks, Count::HashBlocks, &[Params, Aux2, Aux3], &[Aux2])
+    ..hash("hash_scan_blocks", hash_scan_blocks, Count::HashBlocks, &[Params, HASH_CELLS, HASH_TOTALS], &[HASH_CELLS])
 };
 /// Every particle's position and slot word into its bucket's range, in any order
 /// (atomics), each bucket's word moved to its start: checked bucket by bucket as sets.
 pub static HASH_SCATTER: KernelDef = KernelDef {
     test_input: Some(after_scan),
     check: Check::Own("the_gpu_hash_lists_what_the_cpu_lists_after_its_scatter"),
-    ..hash("hash_scatter", hash_scatter, Count::Particles, &[Params, Pos, Vel, Aux2], &[Aux0, Aux2, Aux4])
+    ..hash(
+        "hash_scatter",
+        hash_scatter,
+        Count::Particles,
+        &[Params, Pos, Vel, HASH_CELLS],
+        &[VEL_COPY, HASH_CELLS, HASH_SLOTS],
+    )
 };
 /// The response's check: a gather over the contacts, in fixed point.
 const RESPONSE: Check = Check::Bound {
@@ -137,7 +149,7 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     cloths: Cloths::Grid,
     on_mesh: OnMesh::Kernel(&SELF_COLLIDE_MESH),
     with_friction: Some(&SELF_COLLIDE_FRICTION),
-    ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, Aux2, Aux4], &[PosOut, Vel])
+    ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, HASH_CELLS, HASH_SLOTS], &[PosOut, Vel])
 };
 /// [`SELF_COLLIDE`] with Coulomb friction at its contacts (the contacts' velocities from
 /// the copy in aux0 that `hash_scatter` writes): the recipe's response where the
@@ -153,7 +165,7 @@ pub static SELF_COLLIDE_FRICTION: KernelDef = KernelDef {
         "self_collide_friction",
         self_collide_friction,
         Count::Pairs,
-        &[Params, Pos, Vel, Aux0, Aux2, Aux4],
+        &[Params, Pos, Vel, VEL_COPY, HASH_CELLS, HASH_SLOTS],
         &[PosOut, Vel],
     )
 };
@@ -170,7 +182,7 @@ pub static SELF_COLLIDE_MESH: KernelDef = KernelDef {
         "self_collide_mesh",
         self_collide,
         Count::Pairs,
-        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Aux2, Aux4],
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, HASH_CELLS, HASH_SLOTS],
         &[PosOut, Vel],
     )
 };
@@ -185,7 +197,7 @@ pub static SELF_COLLIDE_MESH_FRICTION: KernelDef = KernelDef {
         "self_collide_mesh_friction",
         self_collide_friction,
         Count::Pairs,
-        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Aux0, Aux2, Aux4],
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, VEL_COPY, HASH_CELLS, HASH_SLOTS],
         &[PosOut, Vel],
     )
 };

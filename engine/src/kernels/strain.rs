@@ -31,7 +31,7 @@ fn strain_limit_count(a: &TwinArgs, b: &mut HostBuffers) {
 /// Timed as part of the strain limit.
 pub static STRAIN_COUNT: KernelDef = KernelDef {
     check: GATHER,
-    pure: &[Aux0],
+    pure: &[STRAIN_COUNTS],
     variants: BLOCKED,
     label: timing::STRAIN_LIMIT,
     ..def(
@@ -39,7 +39,7 @@ pub static STRAIN_COUNT: KernelDef = KernelDef {
         strain_count,
         Count::Blocks,
         &[Params, Pos, Slots, BendSlots, Adjacency, Interior, Table],
-        &[Aux0],
+        &[STRAIN_COUNTS],
     )
 };
 /// One Provot pass plus the tethers, into the other buffer of the pair; the velocities
@@ -54,7 +54,7 @@ pub static STRAIN_LIMIT: KernelDef = KernelDef {
         "strain_limit",
         strain_limit,
         Count::Blocks,
-        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers, Aux0],
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers, STRAIN_COUNTS],
         &[PosOut, Vel],
     )
 };
@@ -75,7 +75,7 @@ fn recount(p: &StepParams, got: &HostBuffers, want: &mut HostBuffers) {
 pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
     check: GATHER,
     pure: &[PosOut],
-    accumulates: &[Aux2, Aux3],
+    accumulates: &[HASH_CELLS, HASH_TOTALS],
     variants: BLOCKED,
     test_input: Some(strain_count),
     label: timing::STRAIN_LIMIT_COUNT,
@@ -84,8 +84,21 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
         "strain_limit_count",
         strain_limit_count,
         Count::Blocks,
-        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers, Aux0, Aux2, Aux3],
-        &[PosOut, Vel, Aux2, Aux3],
+        &[
+            Params,
+            Pos,
+            Vel,
+            Slots,
+            BendSlots,
+            Adjacency,
+            Interior,
+            Table,
+            Tethers,
+            STRAIN_COUNTS,
+            HASH_CELLS,
+            HASH_TOTALS,
+        ],
+        &[PosOut, Vel, HASH_CELLS, HASH_TOTALS],
     )
 };
 

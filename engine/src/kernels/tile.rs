@@ -36,7 +36,7 @@ fn tile_vel(_: &TwinArgs, b: &mut HostBuffers) {
 /// [`crate::recipe::tile_command`] (its count of tiles depends on the pass count).
 pub static SUBSTEP_TILE: KernelDef = KernelDef {
     check: TILE_CHECK,
-    pure: &[PosOut, Aux0],
+    pure: &[PosOut, TILE_NEW_VEL],
     label: timing::SUBSTEP_TILE,
     variants: IMM_CU,
     cloths: Cloths::Grid,
@@ -46,14 +46,14 @@ pub static SUBSTEP_TILE: KernelDef = KernelDef {
         substep_tile,
         Count::Particles,
         &[Params, Pos, Vel, Interior, Spheres, Boxes, Shapes, Tethers],
-        &[PosOut, Aux0],
+        &[PosOut, TILE_NEW_VEL],
     )
 };
 /// The tiled substep's new velocities (aux0) into place, after the swap.
 pub static TILE_VEL: KernelDef = KernelDef {
     pure: &[Vel],
     label: timing::SUBSTEP_TILE,
-    ..def("tile_vel", tile_vel, Count::Particles, &[Params, Aux0], &[Vel])
+    ..def("tile_vel", tile_vel, Count::Particles, &[Params, TILE_NEW_VEL], &[Vel])
 };
 /// Workgroup memory the tiled substep needs (its 32 × 32 region of positions,
 /// velocities and strain counts).

@@ -28,8 +28,8 @@ fn vbd_finish(a: &TwinArgs, b: &mut HostBuffers) {
 /// start x⁰ (aux1) and the displacement D = h v' (aux2) (core::cpu::vbd::vbd_begin).
 pub static VBD_BEGIN: KernelDef = KernelDef {
     label: timing::INTEGRATE,
-    pure: &[Aux0, Aux1, Aux2],
-    ..def("vbd_begin", vbd_begin, Count::Particles, STATE, &[Aux0, Aux1, Aux2])
+    pure: &[VBD_PREDICTED, VBD_START, VBD_DISPLACEMENT],
+    ..def("vbd_begin", vbd_begin, Count::Particles, STATE, &[VBD_PREDICTED, VBD_START, VBD_DISPLACEMENT])
 };
 /// VBD: one colour's Newton steps, each particle of the range of the colouring's list
 /// ([`Buf::Colours`]) on its 3 × 3 block over its row of the table, into its
@@ -47,8 +47,21 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
         "vbd_colour",
         vbd_colour,
         Count::Range,
-        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Spheres, Boxes, Shapes, Aux0, Aux1, Aux2],
-        &[Aux2],
+        &[
+            Params,
+            Colours,
+            Slots,
+            BendSlots,
+            Adjacency,
+            Table,
+            Spheres,
+            Boxes,
+            Shapes,
+            VBD_PREDICTED,
+            VBD_START,
+            VBD_DISPLACEMENT,
+        ],
+        &[VBD_DISPLACEMENT],
     )
 };
 /// VBD: the Chebyshev acceleration after a sweep (`vbd_rho` > 0), ω in the immediates as
@@ -58,13 +71,25 @@ pub static VBD_ACCELERATE: KernelDef = KernelDef {
     variants: PLAIN,
     immediates: Immediates::Range,
     dispatches: Dispatches::Chebyshev,
-    ..def("vbd_accelerate", vbd_accelerate, Count::Range, &[Params, Aux0, Aux1, Aux2, Aux3, Aux4], &[Aux2, Aux3, Aux4])
+    ..def(
+        "vbd_accelerate",
+        vbd_accelerate,
+        Count::Range,
+        &[Params, VBD_PREDICTED, VBD_START, VBD_DISPLACEMENT, VBD_LAST, VBD_BEFORE],
+        &[VBD_DISPLACEMENT, VBD_LAST, VBD_BEFORE],
+    )
 };
 /// VBD: x = x⁰ + D, v = v' + (D − h v')/h, with pins, grab and floor
 /// (core::cpu::vbd::vbd_finish).
 pub static VBD_FINISH: KernelDef = KernelDef {
     label: timing::INTEGRATE,
-    ..def("vbd_finish", vbd_finish, Count::Particles, &[Params, Aux0, Aux1, Aux2], &[Pos, Vel])
+    ..def(
+        "vbd_finish",
+        vbd_finish,
+        Count::Particles,
+        &[Params, VBD_PREDICTED, VBD_START, VBD_DISPLACEMENT],
+        &[Pos, Vel],
+    )
 };
 
 /// This family's kernels, in the registry's order ([`super::ALL`]).

@@ -55,8 +55,8 @@ const fn xpbd(name: &'static str, twin: Twin, pass: usize) -> KernelDef {
             name,
             twin,
             Count::Particles,
-            &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Table, Aux0, Aux1],
-            &[Pos, Vel, Aux0, Aux1],
+            &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Table, LAMBDA[0], LAMBDA[1]],
+            &[Pos, Vel, LAMBDA[0], LAMBDA[1]],
         )
     }
 }
@@ -88,8 +88,8 @@ pub static XPBD_MESH: KernelDef = KernelDef {
         "xpbd_mesh",
         xpbd_mesh,
         Count::Range,
-        &[Params, Pos, Vel, Springs, SpringsB, Aux0, Aux1],
-        &[Pos, Vel, Aux0, Aux1],
+        &[Params, Pos, Vel, Springs, SpringsB, LAMBDA[0], LAMBDA[1]],
+        &[Pos, Vel, LAMBDA[0], LAMBDA[1]],
     )
 };
 
