@@ -25,6 +25,9 @@ use gfx::{EguiFrame, Gfx, Shot};
 use input::{Action, Panel, Tool};
 use sim::Sim;
 
+/// The frames the shown frame rate averages over.
+const FPS_FRAMES: usize = 30;
+
 /// How `clothlab run` starts.
 #[derive(Debug, Clone)]
 pub struct RunOptions {
@@ -86,7 +89,7 @@ pub struct UiState {
     pub about: bool,
     /// The last message for the status bar (errors, saved files).
     pub message: String,
-    /// Frames per second, smoothed.
+    /// Frames per second over the last [`FPS_FRAMES`] frames (0 before the second).
     pub fps: f32,
 }
 
@@ -118,7 +121,11 @@ struct Running {
     ui: UiState,
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
-    last: Instant,
+    /// When the last frames began, the newest last: the frame rate is the frames between
+    /// the first and the last over the time between them (an average of the rates of
+    /// single frames is not one: a frame that follows its predecessor at once would count
+    /// as thousands of frames a second).
+    frame_starts: std::collections::VecDeque<Instant>,
     drawn: u64,
     /// Grabbed particle and where it was when grabbed.
     dragging: Option<(u32, glam::Vec3)>,
@@ -235,7 +242,7 @@ impl App {
             ui,
             egui_ctx,
             egui_state,
-            last: Instant::now(),
+            frame_starts: std::collections::VecDeque::with_capacity(FPS_FRAMES + 1),
             drawn: 0,
             dragging: None,
             quit: false,
@@ -301,7 +308,14 @@ impl ApplicationHandler for App {
                     Ok(true) => {
                         // What the status bar showed last, and the wall clock beside it.
                         if let (Some(t), Some(wall)) = (r.sim.substep_time(), r.sim.wall_substep_ns) {
-                            outln!("status: {} | wall {:.3} ms per substep", ui::substep_label(&t), wall / 1e6).ok();
+                            outln!(
+                                "status: {} | wall {:.3} ms per substep | {:.1} fps at {} substeps a frame",
+                                ui::substep_label(&t),
+                                wall / 1e6,
+                                r.ui.fps,
+                                r.sim.solver.get_ref().params().substeps
+                            )
+                            .ok();
                         }
                         event_loop.exit();
                         Ok(())
@@ -334,10 +348,16 @@ impl Running {
     /// One frame: simulate, lay out the panels, act on what they asked, draw. Returns
     /// whether to quit.
     fn frame(&mut self, limit: Option<u64>, shot_path: Option<&std::path::Path>) -> Result<bool> {
-        let now = Instant::now();
-        let dt = (now - self.last).as_secs_f32().max(1e-4);
-        self.last = now;
-        self.ui.fps = if self.ui.fps == 0.0 { 1.0 / dt } else { 0.9 * self.ui.fps + 0.1 / dt };
+        self.frame_starts.push_back(Instant::now());
+        if self.frame_starts.len() > FPS_FRAMES + 1 {
+            self.frame_starts.pop_front();
+        }
+        self.ui.fps = match (self.frame_starts.front(), self.frame_starts.back()) {
+            (Some(first), Some(last)) if last > first => {
+                (self.frame_starts.len() - 1) as f32 / (*last - *first).as_secs_f32()
+            }
+            _ => 0.0,
+        };
         if !self.ui.paused {
             self.apply_wind();
             self.sim.step()?;

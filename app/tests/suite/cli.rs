@@ -534,6 +534,14 @@ fn the_substep_time_the_app_shows_agrees_with_the_wall_clock() {
             (0.6 * wall..=1.05 * wall).contains(&shown) || wall < 0.125,
             "{api}: the app shows {shown} ms per substep against {wall} ms of wall clock: {line}"
         );
+        // The frame rate it shows: a frame simulates its substeps at least, so no more
+        // frames a second than 1 / (substeps × the wall time of one), 5 % for the clock.
+        // (An average of single frames' rates once showed 3143 fps where frames took
+        // 120 ms: a frame that followed another at once counted as thousands a second.)
+        let fps = num(line.split(" | ").nth(2).unwrap_or_else(|| panic!("{line}")));
+        let substeps = num(line.split(" fps at ").nth(1).unwrap_or_else(|| panic!("{line}")));
+        let most = 1e3 / (wall * substeps);
+        assert!(fps > 0.0 && fps <= 1.05 * most, "{api}: the app shows {fps} fps, at most {most:.1} can be: {line}");
     }
 }
 
