@@ -401,6 +401,12 @@ impl<'a> Expander<'a> {
     }
 }
 
+/// XPBD's λ cleared ([`k::LAMBDA`]): it starts from zero every substep, before the first
+/// pass of the first iteration.
+pub fn lambda_clears() -> [Command; 2] {
+    k::LAMBDA.map(Command::Clear)
+}
+
 /// One VBD sweep of `topo`'s colours: `kernel` (`vbd_colour` in some flavor) over each
 /// colour's range of the colouring's list, in colour order.
 pub fn vbd_sweep(kernel: KernelRef, topo: &clothlab_core::ClothTopology) -> Vec<Command> {
@@ -453,7 +459,7 @@ pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Co
     // XPBD's λ (aux0, aux1) starts from zero every substep: cleared before its first pass.
     if let Some(first) = commands.iter().position(|c| c.kernel().is_some_and(|k| k.def == &k::XPBD[cpu::XPBD_ORDER[0]]))
     {
-        commands.splice(first..first, [Command::Clear(Buf::Aux0), Command::Clear(Buf::Aux1)]);
+        commands.splice(first..first, lambda_clears());
     }
     commands
 }

@@ -219,10 +219,7 @@ pub fn validate_kernels_with(
                 })
                 .collect(),
             kernels::Dispatches::MeshPasses => {
-                let mut v = vec![
-                    Command::Clear(clothlab_core::layout::Buf::Aux0),
-                    Command::Clear(clothlab_core::layout::Buf::Aux1),
-                ];
+                let mut v = crate::recipe::lambda_clears().to_vec();
                 v.extend(expander.run(k));
                 v
             }

@@ -61,7 +61,7 @@ pub static CG_BEGIN: KernelDef = KernelDef {
     check: GATHER,
     label: timing::CG,
     variants: IMM_TEX,
-    ..def(
+    ..KernelDef::new(
         "cg_begin",
         cg_begin,
         Count::Particles,
@@ -74,7 +74,7 @@ pub static CG_MATVEC: KernelDef = KernelDef {
     check: GATHER,
     label: timing::CG,
     variants: IMM_TEX,
-    ..def(
+    ..KernelDef::new(
         "cg_matvec",
         cg_matvec,
         Count::Particles,
@@ -86,30 +86,36 @@ pub static CG_MATVEC: KernelDef = KernelDef {
 pub static CG_REDUCE_PQ: KernelDef = KernelDef {
     check: CG,
     label: timing::CG,
-    ..def("cg_reduce_pq", cg_reduce_pq, Count::Workgroup, CG_PARTIALS, &[Scalars])
+    ..KernelDef::new("cg_reduce_pq", cg_reduce_pq, Count::Workgroup, CG_PARTIALS, &[Scalars])
 };
 /// Implicit: Δv += α p, r −= α q, and the partials of r·z.
 pub static CG_STEP: KernelDef = KernelDef {
     check: CG,
     label: timing::CG,
-    ..def("cg_step", cg_step, Count::Particles, &[Params, CG_DV, CG_R, CG_P, CG_Q, Scalars], &[CG_DV, CG_R, CG_SUMS])
+    ..KernelDef::new(
+        "cg_step",
+        cg_step,
+        Count::Particles,
+        &[Params, CG_DV, CG_R, CG_P, CG_Q, Scalars],
+        &[CG_DV, CG_R, CG_SUMS],
+    )
 };
 /// Implicit: r·z folded, β = new / old.
 pub static CG_REDUCE_RZ: KernelDef = KernelDef {
     check: CG,
     label: timing::CG,
-    ..def("cg_reduce_rz", cg_reduce_rz, Count::Workgroup, CG_PARTIALS, &[Scalars])
+    ..KernelDef::new("cg_reduce_rz", cg_reduce_rz, Count::Workgroup, CG_PARTIALS, &[Scalars])
 };
 /// Implicit: p = z + β p.
 pub static CG_DIRECTION: KernelDef = KernelDef {
     check: CG,
     label: timing::CG,
-    ..def("cg_direction", cg_direction, Count::Particles, &[Params, CG_R, CG_P, Scalars], &[CG_P])
+    ..KernelDef::new("cg_direction", cg_direction, Count::Particles, &[Params, CG_R, CG_P, Scalars], &[CG_P])
 };
 /// Implicit: v₁ = (1 − damping) v₀ + Δv, x₁ = x₀ + v₁ dt, with pins, grab and floor.
 pub static IMPLICIT_FINISH: KernelDef = KernelDef {
     label: timing::INTEGRATE,
-    ..def("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Vel, CG_DV], &[Pos, Vel])
+    ..KernelDef::new("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Vel, CG_DV], &[Pos, Vel])
 };
 
 /// This family's kernels, in the registry's order ([`super::ALL`]).

@@ -60,23 +60,32 @@ fn forces_integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
 }
 
 /// Gravity and drag into the force buffer (added to the wind force already there).
-pub static FORCES: KernelDef = def("forces", forces, Count::Particles, &[Params, Pos, Vel, Force], &[Force]);
+pub static FORCES: KernelDef = KernelDef::new("forces", forces, Count::Particles, &[Params, Pos, Vel, Force], &[Force]);
 /// The spring gather per particle over its 12-slot table.
-pub static SPRINGS: KernelDef =
-    KernelDef { check: GATHER, variants: IMM_TEX, ..def("springs", springs, Count::Particles, TABLE, &[Force]) };
+pub static SPRINGS: KernelDef = KernelDef {
+    check: GATHER,
+    variants: IMM_TEX,
+    ..KernelDef::new("springs", springs, Count::Particles, TABLE, &[Force])
+};
 /// The naive spring scatter: one invocation per spring, forces added with atomics.
 pub static SPRINGS_SCATTER: KernelDef = KernelDef {
     check: SCATTER,
     label: timing::SPRINGS,
     variants: IMM_F32,
-    ..def("springs_scatter", springs_scatter, Count::Springs, &[Params, Pos, Vel, Force, Springs, SpringsB], &[Force])
+    ..KernelDef::new(
+        "springs_scatter",
+        springs_scatter,
+        Count::Springs,
+        &[Params, Pos, Vel, Force, Springs, SpringsB],
+        &[Force],
+    )
 };
 /// `forces` fused into the spring gather, four particles of a row per invocation.
 pub static FORCES_SPRINGS: KernelDef = KernelDef {
     check: GATHER,
     label: timing::FORCES_SPRINGS,
     variants: BLOCKED,
-    ..def("forces_springs", forces_springs, Count::Blocks, TABLE, &[Force])
+    ..KernelDef::new("forces_springs", forces_springs, Count::Blocks, TABLE, &[Force])
 };
 /// `forces_springs` with the wind of the faces around each particle computed from the
 /// positions the gather loads anyway (`normals=frame`): the force buffer is only written.
@@ -85,7 +94,7 @@ pub static FORCES_SPRINGS_WIND: KernelDef = KernelDef {
     pure: &[Force],
     label: timing::FORCES_SPRINGS_WIND,
     variants: BLOCKED,
-    ..def(
+    ..KernelDef::new(
         "forces_springs_wind",
         forces_springs_wind,
         Count::Blocks,
@@ -94,22 +103,22 @@ pub static FORCES_SPRINGS_WIND: KernelDef = KernelDef {
     )
 };
 /// Verlet, pins, the grab and the floor.
-pub static INTEGRATE: KernelDef = def("integrate", integrate, Count::Particles, STATE, &[Pos, Vel]);
+pub static INTEGRATE: KernelDef = KernelDef::new("integrate", integrate, Count::Particles, STATE, &[Pos, Vel]);
 /// Moving pins to their poses at the substep's end (`clothlab_core::pins`).
 pub static PINS: KernelDef = KernelDef {
     variants: PLAIN,
     immediates: Immediates::Substep,
     label: timing::PINS,
-    ..def("pins", pins, Count::Pins, &[Pos, Vel, Pins, PinPoses], &[Pos, Vel])
+    ..KernelDef::new("pins", pins, Count::Pins, &[Pos, Vel, Pins, PinPoses], &[Pos, Vel])
 };
 /// Spheres, boxes and bodies.
 pub static COLLIDE: KernelDef =
-    KernelDef { variants: IMM_CU, ..def("collide", collide, Count::Particles, COLLIDERS, &[Pos, Vel]) };
+    KernelDef { variants: IMM_CU, ..KernelDef::new("collide", collide, Count::Particles, COLLIDERS, &[Pos, Vel]) };
 /// `integrate` and `collide` fused: each particle loaded and stored once.
 pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
     label: timing::INTEGRATE_COLLIDE,
     variants: IMM_CU,
-    ..def(
+    ..KernelDef::new(
         "integrate_collide",
         integrate_collide,
         Count::Particles,
@@ -123,7 +132,7 @@ pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
 pub static FORCES_INTEGRATE_COLLIDE: KernelDef = KernelDef {
     label: timing::FORCES_INTEGRATE_COLLIDE,
     variants: IMM_CU,
-    ..def(
+    ..KernelDef::new(
         "forces_integrate_collide",
         forces_integrate_collide,
         Count::Particles,

@@ -682,8 +682,9 @@ use Buf::*;
 // the roles that share a buffer never hold live data at once (`Buf::Aux0`'s doc).
 /// The strain limit's counts of stretched springs per particle.
 const STRAIN_COUNTS: Buf = Aux0;
-/// XPBD's λ per spring, in two buffers.
-const LAMBDA: [Buf; 2] = [Aux0, Aux1];
+/// XPBD's λ per spring, in two buffers (cleared before an iteration's first pass of a
+/// substep: [`crate::recipe::lambda_clears`]).
+pub const LAMBDA: [Buf; 2] = [Aux0, Aux1];
 /// The self-collision hash: per-cell counts, then the cells' starts.
 const HASH_CELLS: Buf = Aux2;
 /// The hash: the blocks' totals of the counts.
@@ -752,11 +753,6 @@ const STATE: &[Buf] = &[Params, Pos, Vel, Force];
 const TABLE: &[Buf] = &[Params, Pos, Vel, Force, Slots, BendSlots, Adjacency, Interior, Table];
 const COLLIDERS: &[Buf] = &[Params, Pos, Vel, Spheres, Boxes, Shapes];
 const NONE: &[Buf] = &[];
-
-/// [`KernelDef::new`], as the rows here write it.
-const fn def(name: &'static str, twin: Twin, count: Count, reads: &'static [Buf], writes: &'static [Buf]) -> KernelDef {
-    KernelDef::new(name, twin, count, reads, writes)
-}
 
 impl KernelDef {
     /// A row of built-in WGSL (`shaders/wgsl/{name}.wgsl`) whose other fields take their

@@ -34,8 +34,10 @@ fn vertex_normals(a: &TwinArgs, b: &mut HostBuffers) {
 
 /// Face normals per quad of the grid.
 /// A mesh's, per two triangles of the list.
-pub static TRI_NORMALS: KernelDef =
-    KernelDef { pure: &[Faces], ..def("tri_normals", tri_normals, Count::Quads, &[Params, Pos, Triangles], &[Faces]) };
+pub static TRI_NORMALS: KernelDef = KernelDef {
+    pure: &[Faces],
+    ..KernelDef::new("tri_normals", tri_normals, Count::Quads, &[Params, Pos, Triangles], &[Faces])
+};
 /// The naive face normals: per triangle, also added to the corners' normals with atomics.
 pub static TRI_NORMALS_SCATTER: KernelDef = KernelDef {
     check: SCATTER,
@@ -43,7 +45,7 @@ pub static TRI_NORMALS_SCATTER: KernelDef = KernelDef {
     accumulates: &[Normal],
     label: timing::TRI_NORMALS,
     variants: IMM_F32,
-    ..def(
+    ..KernelDef::new(
         "tri_normals_scatter",
         tri_normals_scatter,
         Count::Triangles,
@@ -55,7 +57,7 @@ pub static TRI_NORMALS_SCATTER: KernelDef = KernelDef {
 pub static VERTEX_NORMALS: KernelDef = KernelDef {
     check: GATHER,
     pure: &[Normal, Force],
-    ..def(
+    ..KernelDef::new(
         "vertex_normals",
         vertex_normals,
         Count::Particles,
@@ -69,7 +71,7 @@ pub static VERTEX_NORMALS_NAIVE: KernelDef = KernelDef {
     pure: &[Force],
     label: timing::VERTEX_NORMALS,
     test_input: Some(face_sums_input),
-    ..def(
+    ..KernelDef::new(
         "vertex_normals_naive",
         vertex_normals,
         Count::Particles,

@@ -41,18 +41,18 @@ fn rk4_4(a: &TwinArgs, b: &mut HostBuffers) {
 const RK_READS: &[Buf] = &[Params, Pos, Vel, Force, RK_X0, RK_V0, RK_SUM_V, RK_SUM_A, RK_WIND];
 /// Explicit Euler: `x' = x + u`, `u' = u + f dt²/m`.
 pub static EULER: KernelDef =
-    KernelDef { label: timing::INTEGRATE, ..def("euler", euler, Count::Particles, STATE, &[Pos, Vel]) };
+    KernelDef { label: timing::INTEGRATE, ..KernelDef::new("euler", euler, Count::Particles, STATE, &[Pos, Vel]) };
 /// Saves x₀, the damped v₀ and the wind for a Runge–Kutta substep.
 pub static RK_BEGIN: KernelDef = KernelDef {
     label: timing::INTEGRATE,
     pure: &[RK_X0, RK_V0, RK_WIND],
-    ..def("rk_begin", rk_begin, Count::Particles, STATE, &[Vel, RK_X0, RK_V0, RK_WIND])
+    ..KernelDef::new("rk_begin", rk_begin, Count::Particles, STATE, &[Vel, RK_X0, RK_V0, RK_WIND])
 };
 /// A stage kernel (every stage's shader has the force write; the last one never runs it).
 const fn rk(name: &'static str, twin: Twin) -> KernelDef {
     KernelDef {
         label: timing::INTEGRATE,
-        ..def(name, twin, Count::Particles, RK_READS, &[Pos, Vel, Force, RK_SUM_V, RK_SUM_A])
+        ..KernelDef::new(name, twin, Count::Particles, RK_READS, &[Pos, Vel, Force, RK_SUM_V, RK_SUM_A])
     }
 }
 /// RK2's first stage (to the midpoint).

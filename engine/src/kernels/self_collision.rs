@@ -96,7 +96,7 @@ const fn hash(
     reads: &'static [Buf],
     writes: &'static [Buf],
 ) -> KernelDef {
-    KernelDef { check: EXACT, label: timing::SELF_HASH, ..def(name, twin, count, reads, writes) }
+    KernelDef { check: EXACT, label: timing::SELF_HASH, ..KernelDef::new(name, twin, count, reads, writes) }
 }
 /// Each particle's bucket, and the buckets' and their blocks' counts (atomics).
 pub static HASH_COUNT: KernelDef = KernelDef {
@@ -149,7 +149,13 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
     cloths: Cloths::Grid,
     on_mesh: OnMesh::Kernel(&SELF_COLLIDE_MESH),
     with_friction: Some(&SELF_COLLIDE_FRICTION),
-    ..def("self_collide", self_collide, Count::Pairs, &[Params, Pos, Vel, HASH_CELLS, HASH_SLOTS], &[PosOut, Vel])
+    ..KernelDef::new(
+        "self_collide",
+        self_collide,
+        Count::Pairs,
+        &[Params, Pos, Vel, HASH_CELLS, HASH_SLOTS],
+        &[PosOut, Vel],
+    )
 };
 /// [`SELF_COLLIDE`] with Coulomb friction at its contacts (the contacts' velocities from
 /// the copy in aux0 that `hash_scatter` writes): the recipe's response where the
@@ -161,7 +167,7 @@ pub static SELF_COLLIDE_FRICTION: KernelDef = KernelDef {
     test_input: Some(built_hash),
     cloths: Cloths::Grid,
     on_mesh: OnMesh::Kernel(&SELF_COLLIDE_MESH_FRICTION),
-    ..def(
+    ..KernelDef::new(
         "self_collide_friction",
         self_collide_friction,
         Count::Pairs,
@@ -178,7 +184,7 @@ pub static SELF_COLLIDE_MESH: KernelDef = KernelDef {
     test_input: Some(built_hash),
     cloths: Cloths::Mesh,
     with_friction: Some(&SELF_COLLIDE_MESH_FRICTION),
-    ..def(
+    ..KernelDef::new(
         "self_collide_mesh",
         self_collide,
         Count::Pairs,
@@ -193,7 +199,7 @@ pub static SELF_COLLIDE_MESH_FRICTION: KernelDef = KernelDef {
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
     cloths: Cloths::Mesh,
-    ..def(
+    ..KernelDef::new(
         "self_collide_mesh_friction",
         self_collide_friction,
         Count::Pairs,

@@ -17,7 +17,13 @@ pub static STATS: KernelDef = KernelDef {
     label: timing::STATS,
     variants: Variants { table_image: true, ..PLAIN },
     immediates: Immediates::Substep,
-    ..def("stats", stats, Count::Particles, &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Table], &[Partials])
+    ..KernelDef::new(
+        "stats",
+        stats,
+        Count::Particles,
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Table],
+        &[Partials],
+    )
 };
 /// Statistics by atomics from every invocation.
 pub static STATS_ATOMIC: KernelDef = KernelDef {
@@ -25,7 +31,7 @@ pub static STATS_ATOMIC: KernelDef = KernelDef {
     label: timing::STATS,
     variants: Variants { table_image: true, float_atomics: true, ..PLAIN },
     immediates: Immediates::Substep,
-    ..def(
+    ..KernelDef::new(
         "stats_atomic",
         stats,
         Count::Particles,
@@ -39,7 +45,7 @@ pub static STATS_REDUCE: KernelDef = KernelDef {
     label: timing::STATS,
     variants: PLAIN,
     immediates: Immediates::Substep,
-    ..def(
+    ..KernelDef::new(
         "stats_reduce",
         nothing,
         Count::Workgroup,

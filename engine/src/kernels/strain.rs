@@ -34,7 +34,7 @@ pub static STRAIN_COUNT: KernelDef = KernelDef {
     pure: &[STRAIN_COUNTS],
     variants: BLOCKED,
     label: timing::STRAIN_LIMIT,
-    ..def(
+    ..KernelDef::new(
         "strain_count",
         strain_count,
         Count::Blocks,
@@ -50,7 +50,7 @@ pub static STRAIN_LIMIT: KernelDef = KernelDef {
     variants: BLOCKED,
     // The counts it divides by, of the disturbed positions (as the recipe runs it).
     test_input: Some(strain_count),
-    ..def(
+    ..KernelDef::new(
         "strain_limit",
         strain_limit,
         Count::Blocks,
@@ -80,7 +80,7 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
     test_input: Some(strain_count),
     label: timing::STRAIN_LIMIT_COUNT,
     from_output: Some(recount),
-    ..def(
+    ..KernelDef::new(
         "strain_limit_count",
         strain_limit_count,
         Count::Blocks,

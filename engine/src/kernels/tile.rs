@@ -41,7 +41,7 @@ pub static SUBSTEP_TILE: KernelDef = KernelDef {
     variants: IMM_CU,
     cloths: Cloths::Grid,
     dispatches: Dispatches::Tiles,
-    ..def(
+    ..KernelDef::new(
         "substep_tile",
         substep_tile,
         Count::Particles,
@@ -53,7 +53,7 @@ pub static SUBSTEP_TILE: KernelDef = KernelDef {
 pub static TILE_VEL: KernelDef = KernelDef {
     pure: &[Vel],
     label: timing::SUBSTEP_TILE,
-    ..def("tile_vel", tile_vel, Count::Particles, &[Params, TILE_NEW_VEL], &[Vel])
+    ..KernelDef::new("tile_vel", tile_vel, Count::Particles, &[Params, TILE_NEW_VEL], &[Vel])
 };
 /// Workgroup memory the tiled substep needs (its 32 × 32 region of positions,
 /// velocities and strain counts).

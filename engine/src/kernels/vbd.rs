@@ -29,7 +29,7 @@ fn vbd_finish(a: &TwinArgs, b: &mut HostBuffers) {
 pub static VBD_BEGIN: KernelDef = KernelDef {
     label: timing::INTEGRATE,
     pure: &[VBD_PREDICTED, VBD_START, VBD_DISPLACEMENT],
-    ..def("vbd_begin", vbd_begin, Count::Particles, STATE, &[VBD_PREDICTED, VBD_START, VBD_DISPLACEMENT])
+    ..KernelDef::new("vbd_begin", vbd_begin, Count::Particles, STATE, &[VBD_PREDICTED, VBD_START, VBD_DISPLACEMENT])
 };
 /// VBD: one colour's Newton steps, each particle of the range of the colouring's list
 /// ([`Buf::Colours`]) on its 3 × 3 block over its row of the table, into its
@@ -43,7 +43,7 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
     variants: Variants { table_image: true, colliders_uniform: true, sdf_image: true, ..PLAIN },
     immediates: Immediates::Range,
     dispatches: Dispatches::Colours,
-    ..def(
+    ..KernelDef::new(
         "vbd_colour",
         vbd_colour,
         Count::Range,
@@ -71,7 +71,7 @@ pub static VBD_ACCELERATE: KernelDef = KernelDef {
     variants: PLAIN,
     immediates: Immediates::Range,
     dispatches: Dispatches::Chebyshev,
-    ..def(
+    ..KernelDef::new(
         "vbd_accelerate",
         vbd_accelerate,
         Count::Range,
@@ -83,7 +83,7 @@ pub static VBD_ACCELERATE: KernelDef = KernelDef {
 /// (core::cpu::vbd::vbd_finish).
 pub static VBD_FINISH: KernelDef = KernelDef {
     label: timing::INTEGRATE,
-    ..def(
+    ..KernelDef::new(
         "vbd_finish",
         vbd_finish,
         Count::Particles,

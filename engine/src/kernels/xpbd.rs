@@ -51,7 +51,7 @@ const fn xpbd(name: &'static str, twin: Twin, pass: usize) -> KernelDef {
         variants: IMM_TEX,
         cloths: Cloths::Grid,
         on_mesh: if pass == cpu::XPBD_ORDER[0] { OnMesh::Kernel(&XPBD_MESH) } else { OnMesh::Nothing },
-        ..def(
+        ..KernelDef::new(
             name,
             twin,
             Count::Particles,
@@ -84,7 +84,7 @@ pub static XPBD_MESH: KernelDef = KernelDef {
     immediates: Immediates::Range,
     cloths: Cloths::Mesh,
     dispatches: Dispatches::MeshPasses,
-    ..def(
+    ..KernelDef::new(
         "xpbd_mesh",
         xpbd_mesh,
         Count::Range,
