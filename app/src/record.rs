@@ -182,6 +182,14 @@ fn capsule_local(c: &clothlab_core::Capsule) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     (pos, tris)
 }
 
+/// Cylinder `c` about its centre (`clothlab_core::render::cylinder_mesh`).
+fn cylinder_local(c: &clothlab_core::Cylinder) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+    let m = c.center();
+    let at = |p: [f32; 4]| [p[0] - m[0], p[1] - m[1], p[2] - m[2]];
+    let (pos, _, tris) = clothlab_core::render::cylinder_mesh(at(c.a), at(c.b), c.radius(), 24);
+    (pos, tris)
+}
+
 /// An axis-aligned box's 8 corners and 12 triangles, counter-clockwise from outside.
 fn box_mesh(lo: [f32; 3], hi: [f32; 3]) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     let pos: Vec<[f32; 3]> = (0..8)
@@ -314,6 +322,10 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
                 // About its centre, which the motion moves and turns it about.
                 (Some(*id), format!("capsule {k}"), c.center(), capsule_local(c), m)
             }
+            ColliderId::Cylinder(k) => {
+                let c = scene.cylinders.get(k)?;
+                (Some(*id), format!("cylinder {k}"), c.center(), cylinder_local(c), m)
+            }
         })
     });
     let bodies = scene.bodies.iter().enumerate().map(|(k, b)| {
@@ -428,6 +440,16 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         }
         let (p, t) = capsule_local(c);
         let node = static_mesh(&mut root, &mut bin, &format!("capsule {k}"), &p, &t);
+        root.nodes[node.value()].translation = Some(c.center());
+        nodes.push(node);
+    }
+    for (k, c) in scene.cylinders.iter().enumerate() {
+        if let Some(node) = moved(ColliderId::Cylinder(k)) {
+            nodes.push(node);
+            continue;
+        }
+        let (p, t) = cylinder_local(c);
+        let node = static_mesh(&mut root, &mut bin, &format!("cylinder {k}"), &p, &t);
         root.nodes[node.value()].translation = Some(c.center());
         nodes.push(node);
     }

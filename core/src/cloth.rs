@@ -283,6 +283,7 @@ pub fn combine(cloths: &[ClothSpec]) -> Result<ClothSpec, ParamError> {
             spheres: Vec::new(),
             boxes: Vec::new(),
             capsules: Vec::new(),
+            cylinders: Vec::new(),
             motions: Vec::new(),
             pins: Vec::new(),
             bodies: Vec::new(),

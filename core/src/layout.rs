@@ -132,10 +132,10 @@ pub enum Buf {
     Pins = 32,
     /// The frame's pin poses (`pins::PinPose`), a block of `MAX_PIN_GROUPS` per substep.
     PinPoses = 33,
-    /// The capsules and the bodies (mesh colliders), `f32`s: `MAX_BODIES` heads of
-    /// `SdfHead::FLOATS` (the bodies' poses at the current substep), `MAX_COLLIDERS`
-    /// capsules of 16 floats (`scene::Capsule`, at the current substep), then every body's
-    /// distance values (`crate::sdf`: `CAPSULES_AT`, `VALUES_AT`). One binding for both: a
+    /// The rods and the bodies (mesh colliders), `f32`s: `MAX_BODIES` heads of
+    /// `SdfHead::FLOATS` (the bodies' poses at the current substep), `MAX_RODS` rods of
+    /// 16 floats (`scene::Capsule`, `scene::Cylinder`, at the current substep, the kind in
+    /// `b.w`), then every body's distance values (`crate::sdf`: `RODS_AT`, `VALUES_AT`). One binding for all: a
     /// VBD sweep's kernel binds 16 storage blocks, llvmpipe's GL limit.
     Shapes = 34,
     /// The bodies' distance values as one 3-D `r32float` image (`sdf=image`: the thesis's
@@ -294,7 +294,9 @@ pub fn wgsl_constants() -> String {
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
     s += &u("MAX_COLLIDERS", crate::scene::MAX_COLLIDERS as u32);
     s += &u("SDF_HEAD_FLOATS", crate::sdf::SdfHead::FLOATS as u32);
-    s += &u("SHAPES_CAPSULES_AT", crate::sdf::CAPSULES_AT as u32);
+    s += &u("SHAPES_RODS_AT", crate::sdf::RODS_AT as u32);
+    s += &format!("const ROD_CAPSULE: f32 = {:?};\n", <crate::Capsule as crate::scene::Rod>::KIND);
+    s += &format!("const ROD_CYLINDER: f32 = {:?};\n", <crate::Cylinder as crate::scene::Rod>::KIND);
     s += &u("SHAPES_VALUES_AT", crate::sdf::VALUES_AT as u32);
     s += &u("MAX_PIN_GROUPS", crate::pins::MAX_PIN_GROUPS as u32);
     s += &format!("const STRAIN_AIM: f32 = {STRAIN_AIM:?};\n");

@@ -16,6 +16,7 @@
 
 pub mod camera;
 pub mod cloth;
+pub mod contact;
 pub mod cpu;
 pub mod error;
 pub mod grid;
@@ -43,7 +44,7 @@ pub use grid::{ClothState, ClothTopology, Grab, Spring, SpringKind, SpringSlot};
 pub use motion::{Ease, Key, Motion, Repeat};
 pub use params::{Integrator, ParamError, SimParams, StiffnessUnits};
 pub use pins::{MAX_PIN_GROUPS, PinGroup, PinPose, PinSlot};
-pub use scene::{Aabb, Capsule, ClothSpec, ColliderId, Pinning, Scene, Sphere};
+pub use scene::{Aabb, Capsule, ClothSpec, ColliderId, Cylinder, Pinning, Scene, Sphere};
 pub use scene_file::{SceneFile, SceneFileError};
 pub use solver::{RenderError, RenderMode, Renderer, Solver, SolverError, View};
 pub use step_params::StepParams;

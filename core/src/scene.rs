@@ -101,6 +101,88 @@ impl Capsule {
     }
 }
 
+/// A capped cylinder collider: the points within `radius` of the segment from `a` to `b`
+/// that lie between the planes through `a` and `b` across it (a post, a drum, a table's
+/// round top). `#[repr(C)]`, the layout of a [`Capsule`] (the shaders' `Rod`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
+pub struct Cylinder {
+    /// The centre of one cap, m; w the radius, m.
+    pub a: [f32; 4],
+    /// The centre of the other cap, m (w 0; the shapes buffer marks a cylinder there).
+    pub b: [f32; 4],
+    /// Velocity of its centre (the axis' midpoint) at this substep, m/s (w 0).
+    #[serde(skip)]
+    pub velocity: [f32; 4],
+    /// Angular velocity about its centre, rad/s (w 0).
+    #[serde(skip)]
+    pub spin: [f32; 4],
+}
+
+impl Cylinder {
+    /// A still cylinder about the segment `a`–`b`.
+    pub fn new(a: [f32; 3], b: [f32; 3], radius: f32) -> Self {
+        Self { a: [a[0], a[1], a[2], radius], b: [b[0], b[1], b[2], 0.0], velocity: [0.0; 4], spin: [0.0; 4] }
+    }
+
+    /// Its radius, m.
+    pub fn radius(&self) -> f32 {
+        self.a[3]
+    }
+
+    /// The axis' midpoint, m.
+    pub fn center(&self) -> [f32; 3] {
+        [(self.a[0] + self.b[0]) * 0.5, (self.a[1] + self.b[1]) * 0.5, (self.a[2] + self.b[2]) * 0.5]
+    }
+
+    /// Half its length, m.
+    pub fn half_length(&self) -> f32 {
+        let d: [f32; 3] = std::array::from_fn(|k| self.b[k] - self.a[k]);
+        0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+    }
+}
+
+/// A shape about a segment (capsules, cylinders): one record layout in the shapes buffer
+/// (`Rod` in the shaders), moved and turned about its centre by one function.
+pub(crate) trait Rod: Copy {
+    /// The record: `a` (w the radius), `b`, velocity, spin.
+    fn parts(&mut self) -> (&mut [f32; 4], &mut [f32; 4], &mut [f32; 4], &mut [f32; 4]);
+    /// The shaders' mark in `b.w` (`ROD_CAPSULE`, `ROD_CYLINDER`).
+    const KIND: f32;
+}
+
+impl Rod for Capsule {
+    fn parts(&mut self) -> (&mut [f32; 4], &mut [f32; 4], &mut [f32; 4], &mut [f32; 4]) {
+        (&mut self.a, &mut self.b, &mut self.velocity, &mut self.spin)
+    }
+    const KIND: f32 = 0.0;
+}
+
+impl Rod for Cylinder {
+    fn parts(&mut self) -> (&mut [f32; 4], &mut [f32; 4], &mut [f32; 4], &mut [f32; 4]) {
+        (&mut self.a, &mut self.b, &mut self.velocity, &mut self.spin)
+    }
+    const KIND: f32 = 1.0;
+}
+
+/// `rod` where `pose` has it: moved and turned about its centre (in f64, rounded once),
+/// with the velocities its contacts use.
+fn pose_rod(rod: &mut impl Rod, pose: &crate::motion::Pose) {
+    let (a, b, velocity, spin) = rod.parts();
+    let centre =
+        glam::DVec3::new(((a[0] + b[0]) * 0.5) as f64, ((a[1] + b[1]) * 0.5) as f64, ((a[2] + b[2]) * 0.5) as f64);
+    let offset = glam::DVec3::from(pose.offset.map(f64::from));
+    let place = |p: [f32; 4]| {
+        let q = glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) - centre;
+        (centre + offset + pose.rotation * q).as_vec3()
+    };
+    let (na, nb) = (place(*a), place(*b));
+    *a = [na.x, na.y, na.z, a[3]];
+    *b = [nb.x, nb.y, nb.z, 0.0];
+    *velocity = [pose.velocity[0], pose.velocity[1], pose.velocity[2], 0.0];
+    *spin = [pose.spin[0], pose.spin[1], pose.spin[2], 0.0];
+}
+
 /// Which collider a [`Motion`] moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ColliderId {
@@ -110,6 +192,8 @@ pub enum ColliderId {
     Box(usize),
     /// `Scene::capsules[i]`.
     Capsule(usize),
+    /// `Scene::cylinders[i]`.
+    Cylinder(usize),
 }
 
 impl ColliderId {
@@ -119,6 +203,7 @@ impl ColliderId {
             ColliderId::Sphere(i) => format!("spheres[{i}]"),
             ColliderId::Box(i) => format!("boxes[{i}]"),
             ColliderId::Capsule(i) => format!("capsules[{i}]"),
+            ColliderId::Cylinder(i) => format!("cylinders[{i}]"),
         }
     }
 }
@@ -344,6 +429,9 @@ pub struct Scene {
     /// Capsule colliders. Default: none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub capsules: Vec<Capsule>,
+    /// Capped cylinder colliders. Default: none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cylinders: Vec<Cylinder>,
     /// How colliders move (at most one motion each; none: all still). See [`crate::motion`].
     #[serde(default)]
     pub motions: Vec<(ColliderId, Motion)>,
@@ -368,6 +456,7 @@ impl Default for Scene {
             ],
             boxes: Vec::new(),
             capsules: Vec::new(),
+            cylinders: Vec::new(),
             motions: Vec::new(),
             pins: Vec::new(),
             bodies: Vec::new(),
@@ -513,16 +602,29 @@ impl Scene {
         if self.boxes.len() > MAX_COLLIDERS {
             return Err(ParamError::new("boxes", self.boxes.len(), format!("at most {MAX_COLLIDERS}")));
         }
-        if self.capsules.len() > crate::sdf::MAX_CAPSULES {
-            let most = crate::sdf::MAX_CAPSULES;
-            return Err(ParamError::new("capsules", self.capsules.len(), format!("at most {most}")));
+        if self.capsules.len() + self.cylinders.len() > crate::sdf::MAX_RODS {
+            let most = crate::sdf::MAX_RODS;
+            let rods = self.capsules.len() + self.cylinders.len();
+            return Err(ParamError::new("capsules", rods, format!("at most {most} capsules and cylinders together")));
         }
-        for (i, c) in self.capsules.iter().enumerate() {
+        let rods = (self.capsules.iter().map(|c| ("capsules", c.a, c.b)))
+            .chain(self.cylinders.iter().map(|c| ("cylinders", c.a, c.b)));
+        for (i, (kind, a, b)) in rods.enumerate() {
+            let i = if kind == "capsules" { i } else { i - self.capsules.len() };
             for k in 0..3 {
-                finite_in(format!("capsules[{i}].a"), c.a[k], -1e4, 1e4)?;
-                finite_in(format!("capsules[{i}].b"), c.b[k], -1e4, 1e4)?;
+                finite_in(format!("{kind}[{i}].a"), a[k], -1e4, 1e4)?;
+                finite_in(format!("{kind}[{i}].b"), b[k], -1e4, 1e4)?;
             }
-            finite_in(format!("capsules[{i}].radius"), c.radius(), 1e-4, 1e4)?;
+            finite_in(format!("{kind}[{i}].radius"), a[3], 1e-4, 1e4)?;
+        }
+        for (i, c) in self.cylinders.iter().enumerate() {
+            if c.half_length() < 1e-4 {
+                return Err(ParamError::new(
+                    format!("cylinders[{i}].b"),
+                    format!("{:?}", &c.b[..3]),
+                    "must lie at least 0.2 mm from a",
+                ));
+            }
         }
         for (i, s) in self.spheres.iter().enumerate() {
             for v in s.center {
@@ -544,6 +646,7 @@ impl Scene {
                 ColliderId::Sphere(i) => i < self.spheres.len(),
                 ColliderId::Box(i) => i < self.boxes.len(),
                 ColliderId::Capsule(i) => i < self.capsules.len(),
+                ColliderId::Cylinder(i) => i < self.cylinders.len(),
             };
             if !exists {
                 return Err(ParamError::new(id.field(), "motion", "moves a collider the scene does not have"));
@@ -596,6 +699,9 @@ impl Scene {
             ColliderId::Capsule(i) if i < self.capsules.len() => {
                 self.capsules.remove(i);
             }
+            ColliderId::Cylinder(i) if i < self.cylinders.len() => {
+                self.cylinders.remove(i);
+            }
             _ => return,
         }
         self.motions.retain(|(m, _)| *m != id);
@@ -604,6 +710,7 @@ impl Scene {
                 (ColliderId::Sphere(k), ColliderId::Sphere(i))
                 | (ColliderId::Box(k), ColliderId::Box(i))
                 | (ColliderId::Capsule(k), ColliderId::Capsule(i))
+                | (ColliderId::Cylinder(k), ColliderId::Cylinder(i))
                     if *k > i =>
                 {
                     *k -= 1
@@ -639,6 +746,7 @@ impl Scene {
                     .get(i)
                     .map_or(0.0, |b| (0..3).map(|k| 0.5 * (b.max[k] - b.min[k])).fold(f32::INFINITY, f32::min)),
                 ColliderId::Capsule(i) => self.capsules.get(i).map_or(0.0, Capsule::radius),
+                ColliderId::Cylinder(i) => self.cylinders.get(i).map_or(0.0, |c| c.radius().min(c.half_length())),
             };
             m.check_speed(&id.field(), size, dt)?;
         }
@@ -654,36 +762,43 @@ impl Scene {
         capsules.clone_from(&self.capsules);
         for (id, m) in &self.motions {
             let ColliderId::Capsule(i) = *id else { continue };
-            let Some(c) = capsules.get_mut(i) else { continue };
-            let pose = m.at(t);
-            let centre = glam::DVec3::from(c.center().map(f64::from));
-            let offset = glam::DVec3::from(pose.offset.map(f64::from));
-            let place = |p: [f32; 4]| {
-                let q = glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) - centre;
-                (centre + offset + pose.rotation * q).as_vec3()
-            };
-            let (a, b) = (place(c.a), place(c.b));
-            c.a = [a.x, a.y, a.z, c.a[3]];
-            c.b = [b.x, b.y, b.z, 0.0];
-            c.velocity = [pose.velocity[0], pose.velocity[1], pose.velocity[2], 0.0];
-            c.spin = [pose.spin[0], pose.spin[1], pose.spin[2], 0.0];
+            if let Some(c) = capsules.get_mut(i) {
+                pose_rod(c, &m.at(t));
+            }
+        }
+    }
+
+    /// The cylinders at simulated time `t`, s, as [`Scene::capsules_at`] has the capsules.
+    pub fn cylinders_at(&self, t: f64, cylinders: &mut Vec<Cylinder>) {
+        cylinders.clone_from(&self.cylinders);
+        for (id, m) in &self.motions {
+            let ColliderId::Cylinder(i) = *id else { continue };
+            if let Some(c) = cylinders.get_mut(i) {
+                pose_rod(c, &m.at(t));
+            }
         }
     }
 
     /// The leading [`crate::sdf::VALUES_AT`] floats of the GPU's shapes buffer
-    /// (`Buf::Shapes`) at time `t`, s: the bodies' heads, then the capsules, each region
-    /// padded with zeros to its most.
+    /// (`Buf::Shapes`) at time `t`, s: the bodies' heads, then the rods (the capsules, then
+    /// the cylinders, each marked by its kind in `b.w`), each region padded with zeros to
+    /// its most.
     pub fn shapes_at(&self, t: f64) -> Vec<f32> {
-        use crate::sdf::{CAPSULES_AT, MAX_BODIES, SdfHead, VALUES_AT};
+        use crate::sdf::{MAX_BODIES, RODS_AT, SdfHead, VALUES_AT};
         let mut out = vec![0.0f32; VALUES_AT];
         let mut heads = Vec::new();
         self.bodies_at(t, &mut heads);
         heads.truncate(MAX_BODIES);
         out[..heads.len() * SdfHead::FLOATS].copy_from_slice(bytemuck::cast_slice(&heads));
-        let mut caps = Vec::new();
+        let (mut caps, mut cyls) = (Vec::new(), Vec::new());
         self.capsules_at(t, &mut caps);
-        caps.truncate(crate::sdf::MAX_CAPSULES);
-        out[CAPSULES_AT..CAPSULES_AT + caps.len() * 16].copy_from_slice(bytemuck::cast_slice(&caps));
+        self.cylinders_at(t, &mut cyls);
+        let records = caps.iter().map(|c| (bytemuck::cast::<_, [f32; 16]>(*c), Capsule::KIND));
+        let records = records.chain(cyls.iter().map(|c| (bytemuck::cast::<_, [f32; 16]>(*c), Cylinder::KIND)));
+        for (k, (mut rec, kind)) in records.take(crate::sdf::MAX_RODS).enumerate() {
+            rec[7] = kind;
+            out[RODS_AT + 16 * k..RODS_AT + 16 * (k + 1)].copy_from_slice(&rec);
+        }
         out
     }
 
@@ -704,6 +819,7 @@ impl Scene {
         let mut s = self.clone();
         self.colliders_at(t, &mut s.spheres, &mut s.boxes);
         self.capsules_at(t, &mut s.capsules);
+        self.cylinders_at(t, &mut s.cylinders);
         // A moving body's mesh, posed (its field is left as it was: this scene is drawn,
         // not simulated).
         for b in s.bodies.iter_mut().filter(|b| b.motion != Motion::default()) {
@@ -741,8 +857,8 @@ impl Scene {
                         b.velocity = v;
                     }
                 }
-                // Moved by `capsules_at`.
-                ColliderId::Capsule(_) => {}
+                // Moved by `capsules_at`, `cylinders_at`.
+                ColliderId::Capsule(_) | ColliderId::Cylinder(_) => {}
             }
         }
     }

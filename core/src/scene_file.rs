@@ -1,4 +1,4 @@
-//! Scene files: a whole scene — the cloth, the floor, spheres, boxes, capsules, bodies
+//! Scene files: a whole scene — the cloth, the floor, spheres, boxes, capsules, cylinders, bodies
 //! (`crate::sdf`), pins (`crate::pins`), the simulation parameters and optionally the
 //! camera and the light — in TOML.
 //!
@@ -29,6 +29,10 @@
 //! a = [-0.6, 0.3, 0.4]
 //! b = [0.6, 0.3, 0.4]
 //! radius = 0.08
+//! [[cylinders]]                # capped: the points within `radius` of the axis a–b, between its ends
+//! a = [0.0, 0.0, 0.0]
+//! b = [0.0, 0.5, 0.0]
+//! radius = 0.3
 //! [[pins]]                     # holds the particles resting in the box; may move
 //! min = [-1.1, 2.1, -1.0]      # (see clothlab_core::pins)
 //! max = [1.1, 2.3, -0.8]
@@ -56,7 +60,7 @@ use thiserror::Error;
 use crate::camera::OrbitCamera;
 use crate::motion::Motion;
 use crate::params::{ParamError, SimParams};
-use crate::scene::{Aabb, Capsule, ClothSpec, ColliderId, Scene, Sphere};
+use crate::scene::{Aabb, Capsule, ClothSpec, ColliderId, Cylinder, Scene, Sphere};
 
 /// A scene file, read and checked.
 #[derive(Debug, Clone, PartialEq)]
@@ -104,7 +108,9 @@ struct Repr<C> {
     #[serde(default)]
     boxes: Vec<BoxRepr>,
     #[serde(default)]
-    capsules: Vec<CapsuleRepr>,
+    capsules: Vec<RodRepr>,
+    #[serde(default)]
+    cylinders: Vec<RodRepr>,
     #[serde(default)]
     pins: Vec<crate::pins::PinGroup>,
     #[serde(default)]
@@ -150,7 +156,7 @@ struct BoxRepr {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct CapsuleRepr {
+struct RodRepr {
     a: [f32; 3],
     b: [f32; 3],
     radius: f32,
@@ -182,8 +188,21 @@ struct LightRepr {
 impl<C> Repr<C> {
     /// The file without its cloth table(s), and the cloths (`list` makes them a list).
     fn split(self, list: impl FnOnce(C) -> Vec<ClothSpec>) -> (Repr<()>, Vec<ClothSpec>) {
-        let Repr { title, description, cloth, floor, spheres, boxes, capsules, pins, bodies, params, camera, light } =
-            self;
+        let Repr {
+            title,
+            description,
+            cloth,
+            floor,
+            spheres,
+            boxes,
+            capsules,
+            cylinders,
+            pins,
+            bodies,
+            params,
+            camera,
+            light,
+        } = self;
         let rest = Repr {
             title,
             description,
@@ -192,6 +211,7 @@ impl<C> Repr<C> {
             spheres,
             boxes,
             capsules,
+            cylinders,
             pins,
             bodies,
             params,
@@ -205,7 +225,7 @@ impl<C> Repr<C> {
 impl SceneFile {
     /// The keys a scene file may have at its top (the command line's help lists them; a
     /// unit test keeps the list in step with what the parser takes).
-    pub const TABLES: [&'static str; 12] = [
+    pub const TABLES: [&'static str; 13] = [
         "title",
         "description",
         "cloth",
@@ -213,6 +233,7 @@ impl SceneFile {
         "spheres",
         "boxes",
         "capsules",
+        "cylinders",
         "pins",
         "bodies",
         "params",
@@ -365,12 +386,17 @@ impl SceneFile {
             spheres: repr.spheres.iter().map(|s| Sphere::new(s.center, s.radius)).collect(),
             boxes: repr.boxes.iter().map(|b| Aabb::new(b.min, b.max)).collect(),
             capsules: repr.capsules.iter().map(|c| Capsule::new(c.a, c.b, c.radius)).collect(),
+            cylinders: repr.cylinders.iter().map(|c| Cylinder::new(c.a, c.b, c.radius)).collect(),
             motions: (repr.spheres.iter().enumerate())
                 .filter_map(|(i, s)| Some((ColliderId::Sphere(i), s.motion.clone()?)))
                 .chain(repr.boxes.iter().enumerate().filter_map(|(i, b)| Some((ColliderId::Box(i), b.motion.clone()?))))
                 .chain(
                     (repr.capsules.iter().enumerate())
                         .filter_map(|(i, c)| Some((ColliderId::Capsule(i), c.motion.clone()?))),
+                )
+                .chain(
+                    (repr.cylinders.iter().enumerate())
+                        .filter_map(|(i, c)| Some((ColliderId::Cylinder(i), c.motion.clone()?))),
                 )
                 .collect(),
             pins: repr.pins,
@@ -384,7 +410,7 @@ impl SceneFile {
         // masses, the self-collision thickness at its spacing).
         let at_params = |e: ParamError| {
             // A collider's motion too fast for the substeps is the collider's field.
-            let own = ["cloth.", "spheres[", "boxes[", "capsules[", "pins[", "bodies["]
+            let own = ["cloth.", "spheres[", "boxes[", "capsules[", "cylinders[", "pins[", "bodies["]
                 .iter()
                 .any(|p| e.field.starts_with(p));
             let path = if own { e.field.clone() } else { format!("params.{}", e.field) };

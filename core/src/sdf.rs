@@ -44,9 +44,9 @@
 //! (`tests/tests/suite/bodies.rs`).
 //!
 //! **On the GPU** the heads and the grids share one storage buffer of `f32` with the
-//! capsules ([`crate::layout::Buf::Shapes`]): [`MAX_BODIES`] heads of [`SdfHead::FLOATS`]
+//! rods ([`crate::layout::Buf::Shapes`]): [`MAX_BODIES`] heads of [`SdfHead::FLOATS`]
 //! floats (the bodies' poses at the current substep, rewritten every substep when one
-//! moves), the capsules from [`CAPSULES_AT`], every body's values from [`VALUES_AT`]. The
+//! moves), the rods (capsules, cylinders) from [`RODS_AT`], every body's values from [`VALUES_AT`]. The
 //! CPU twins read the same numbers in the same order.
 //!
 //! **Speed.** A body is not swept: a scene is refused where a body's surface moves more
@@ -77,13 +77,14 @@ pub const MAX_POINTS: usize = 16 << 20;
 pub const MAX_CELLS_PER_SUBSTEP: f32 = 2.0;
 /// Floats of the heads at the start of the GPU's shapes buffer (`Buf::Shapes`).
 pub const HEADS_FLOATS: usize = MAX_BODIES * SdfHead::FLOATS;
-/// Most capsules a scene may hold (`scene::Capsule`, 16 floats each in the shapes buffer;
-/// as many as spheres or boxes).
-pub const MAX_CAPSULES: usize = 16;
-/// Where the capsules start in the shapes buffer, floats.
-pub const CAPSULES_AT: usize = HEADS_FLOATS;
+/// Most rods — capsules and cylinders together — a scene may hold (`scene::Capsule`,
+/// `scene::Cylinder`: 16 floats each in the shapes buffer, the kind in `b.w`; as many as
+/// spheres or boxes).
+pub const MAX_RODS: usize = 16;
+/// Where the rods start in the shapes buffer, floats.
+pub const RODS_AT: usize = HEADS_FLOATS;
 /// Where the bodies' values start in the shapes buffer, floats.
-pub const VALUES_AT: usize = CAPSULES_AT + MAX_CAPSULES * 16;
+pub const VALUES_AT: usize = RODS_AT + MAX_RODS * 16;
 
 /// A `[[bodies]]` entry of a scene file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -104,9 +104,10 @@ shared_struct! {
         pub tile_substeps: u32,
         /// Number of bodies (mesh colliders, `crate::sdf`) in use.
         pub num_bodies: u32,
-        /// Number of capsules in use. The struct is 128 bytes (a uniform block's size is a
-        /// multiple of 16; immediates must match the shader's struct): full.
-        pub num_capsules: u32,
+        /// Number of rods (capsules, then cylinders: `crate::sdf::RODS_AT`) in use. The
+        /// struct is 128 bytes (a uniform block's size is a multiple of 16; immediates must
+        /// match the shader's struct): full.
+        pub num_rods: u32,
     }
 }
 
@@ -178,7 +179,7 @@ impl StepParams {
             strain_passes: params.strain_iterations,
             tile_substeps: 1,
             num_bodies: scene.bodies.len() as u32,
-            num_capsules: scene.capsules.len() as u32,
+            num_rods: (scene.capsules.len() + scene.cylinders.len()) as u32,
         }
     }
 }

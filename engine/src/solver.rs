@@ -132,9 +132,11 @@ impl<E: Engine> GpuSolver<E> {
     ) -> Result<Self, SolverError> {
         if scene.spheres.len() > MAX_COLLIDERS
             || scene.boxes.len() > MAX_COLLIDERS
-            || scene.capsules.len() > clothlab_core::sdf::MAX_CAPSULES
+            || scene.capsules.len() + scene.cylinders.len() > clothlab_core::sdf::MAX_RODS
         {
-            return Err(SolverError::Invalid(format!("at most {MAX_COLLIDERS} spheres, boxes and capsules")));
+            return Err(SolverError::Invalid(format!(
+                "at most {MAX_COLLIDERS} spheres, boxes, and capsules and cylinders together"
+            )));
         }
         let info = engine.info().clone();
         // Immediates hold the step constants where the device has room; the scatters use
@@ -489,8 +491,8 @@ impl<E: Engine> GpuSolver<E> {
                 self.engine.record_write(id, bytemuck::cast_slice(&boxes))?;
             }
         }
-        // The bodies' heads and the capsules lead the shapes buffer.
-        if !self.scene.bodies.is_empty() || !self.scene.capsules.is_empty() {
+        // The bodies' heads and the rods lead the shapes buffer.
+        if !self.scene.bodies.is_empty() || !self.scene.capsules.is_empty() || !self.scene.cylinders.is_empty() {
             let id = self.must(Buf::Shapes)?;
             self.engine.record_write(id, bytemuck::cast_slice(&self.scene.shapes_at(self.time)))?;
         }

@@ -96,10 +96,11 @@ impl KernelInput {
 /// Moves a few free particles of `pos` into each collider of `scene` (and under its floor):
 /// every 97th free particle, taking the colliders in turn, to a point just inside the
 /// surface below it (2 % of a sphere's or capsule's radius deep, 1 cm into a box's top,
-/// half a cell behind a body's triangle, 1 cm under the floor; a capsule's 2 % of its
-/// radius), its velocity kept. Returns whether any moved.
+/// above a cylinder's centre by half its radius or half length, half a cell behind a
+/// body's triangle, 1 cm under the floor), its velocity kept. Returns whether any moved.
 fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
-    let (spheres, boxes, capsules) = (scene.spheres.len(), scene.boxes.len(), scene.capsules.len());
+    let (spheres, boxes) = (scene.spheres.len(), scene.boxes.len());
+    let capsules = scene.capsules.len() + scene.cylinders.len();
     let targets = spheres + boxes + capsules + scene.bodies.len() + usize::from(scene.floor_y.is_some());
     if targets == 0 {
         return false;
@@ -127,6 +128,9 @@ fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
             // Half way along the axis, 2 % of the radius inside, on the upper side.
             let m = c.center();
             *p = [m[0], m[1] + 0.98 * c.radius(), m[2], p[3]];
+        } else if let Some(c) = scene.cylinders.get(t - spheres - boxes - scene.capsules.len()) {
+            let m = c.center();
+            *p = [m[0], m[1] + 0.5 * c.radius().min(c.half_length()), m[2], p[3]];
         } else if let Some(body) = scene.bodies.get(t - spheres - boxes - capsules) {
             // A triangle (a different one each time), half a cell behind its centroid.
             let m = &body.mesh;

@@ -64,63 +64,36 @@ fn touch(stiffness: f32, pen: f32, n: vec3<f32>, d: vec3<f32>, vs: vec3<f32>, fr
     add_block(w, -w, n);
 }
 
-// The floor, the spheres, the boxes, the capsules and the bodies within the margin and its reach of x, in that
-// order (core::cpu::vbd::each_contact).
+// The floor, then every collider in scene order, each grown by the margin and its reach
+// (core::cpu::vbd::each_contact).
 fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool) {
     let reach = p.margin + p.margin * CONTACT_REACH;
-    let floor = p.floor_y + reach;
-    if x.y < floor {
-        touch(stiffness, floor - x.y, vec3<f32>(0.0, 1.0, 0.0), d, vec3<f32>(0.0), friction_pass);
+    let f = floor_contact(p.floor_y, x, reach);
+    if f.hit {
+        touch(stiffness, f.depth, f.n, d, f.vs, friction_pass);
     }
     for (var k = 0u; k < p.num_spheres; k++) {
-        let s = spheres[k];
-        let r = s.radius + reach;
-        let dc = x - s.center;
-        let dist2 = dot3(dc, dc);
-        if dist2 < r * r {
-            let dist = sqrt(dist2);
-            var n = vec3<f32>(0.0, 1.0, 0.0);
-            if dist > 1e-12 {
-                n = dc * (1.0 / dist);
-            }
-            touch(stiffness, r - dist, n, d, surface_vel(s.velocity.xyz, s.spin.xyz, dc), friction_pass);
+        let c = sphere_contact(spheres[k], x, reach);
+        if c.hit {
+            touch(stiffness, c.depth, c.n, d, c.vs, friction_pass);
         }
     }
     for (var k = 0u; k < p.num_boxes; k++) {
-        let lo = boxes[k].min.xyz - vec3<f32>(reach);
-        let hi = boxes[k].max.xyz + vec3<f32>(reach);
-        if all(x > lo) && all(x < hi) {
-            let below = x - lo;
-            let above = hi - x;
-            var best = below.x;
-            var n = vec3<f32>(-1.0, 0.0, 0.0);
-            if above.x < best { best = above.x; n = vec3<f32>(1.0, 0.0, 0.0); }
-            if below.y < best { best = below.y; n = vec3<f32>(0.0, -1.0, 0.0); }
-            if above.y < best { best = above.y; n = vec3<f32>(0.0, 1.0, 0.0); }
-            if below.z < best { best = below.z; n = vec3<f32>(0.0, 0.0, -1.0); }
-            if above.z < best { best = above.z; n = vec3<f32>(0.0, 0.0, 1.0); }
-            touch(stiffness, best, n, d, boxes[k].velocity.xyz, friction_pass);
+        let c = box_contact(boxes[k], x, reach);
+        if c.hit {
+            touch(stiffness, c.depth, c.n, d, c.vs, friction_pass);
         }
     }
-    for (var k = 0u; k < p.num_capsules; k++) {
-        let c = capsule_at(k);
-        let r = c.a.w + reach;
-        let dc = x - capsule_axis_point(c, x);
-        let dist2 = dot3(dc, dc);
-        if dist2 < r * r {
-            let dist = sqrt(dist2);
-            var n = vec3<f32>(0.0, 1.0, 0.0);
-            if dist > 1e-12 {
-                n = dc * (1.0 / dist);
-            }
-            touch(stiffness, r - dist, n, d, surface_vel(c.velocity.xyz, c.spin.xyz, x - capsule_center(c)), friction_pass);
+    for (var k = 0u; k < p.num_rods; k++) {
+        let c = rod_contact(k, x, reach);
+        if c.hit {
+            touch(stiffness, c.depth, c.n, d, c.vs, friction_pass);
         }
     }
     for (var k = 0u; k < p.num_bodies; k++) {
-        let s = body_sample(k, x, reach);
-        if s.valid && s.phi < reach {
-            let vs = surface_vel(body_vec(k, 16u), body_vec(k, 20u), x - body_vec(k, 12u));
-            touch(stiffness, reach - s.phi, s.n, d, vs, friction_pass);
+        let c = body_contact(k, x, reach);
+        if c.hit {
+            touch(stiffness, c.depth, c.n, d, c.vs, friction_pass);
         }
     }
 }

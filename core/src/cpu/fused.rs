@@ -632,43 +632,26 @@ fn in_grid<S: Isa>(sd: S, col: isize, n: usize) -> M<S> {
     c.gt(F::splat(sd, -1.0)) & c.lt(F::splat(sd, n as f32))
 }
 
-/// Lanes at `x` inside a sphere or a box (inflated by the margin), by `collide`'s tests,
-/// or within a body's grid (a sphere about its pivot holding the whole grid: the scalar
-/// `collide_at` samples the field).
+/// Lanes at `x` within a collider's bound grown by the margin ([`crate::contact::Shape::bound`]:
+/// a sphere's or a box's by `collide`'s own test, a capsule's, a cylinder's or a body's
+/// a ball holding it): the lanes the scalar `collide_at` then resolves.
 #[inline(always)]
 fn inside<S: Isa>(sd: S, p: &StepParams, c: super::collide::Colliders<'_>, x: &[F<S>; 3]) -> M<S> {
-    let c = c.cut(p);
+    use crate::contact::Bound;
     let mut any = M::splat(sd, false);
-    for hd in c.bodies.heads {
-        let t = hd.translation;
-        let h = hd.lo[3];
-        let far: [f32; 3] = std::array::from_fn(|k| hd.lo[k].abs().max((hd.lo[k] + h * (hd.dims[k] - 1) as f32).abs()));
-        // Generously: a lane let through here is only sampled by the scalar path.
-        let r = (far[0] * far[0] + far[1] * far[1] + far[2] * far[2]).sqrt() * 1.01 + p.margin + 1e-3;
-        let d = [x[0] - F::splat(sd, t[0]), x[1] - F::splat(sd, t[1]), x[2] - F::splat(sd, t[2])];
-        any = any | (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).lt(F::splat(sd, r * r));
-    }
-    // A capsule: within its radius (and the margin) of its axis' bounding sphere.
-    for cap in c.capsules {
-        let m = super::collide::capsule_center(cap);
-        let half = 0.5 * (v3(cap.b) - v3(cap.a)).length();
-        let r = half + cap.a[3] + p.margin + 1e-3;
-        let d = [x[0] - F::splat(sd, m.x), x[1] - F::splat(sd, m.y), x[2] - F::splat(sd, m.z)];
-        any = any | (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).lt(F::splat(sd, r * r));
-    }
-    for sp in c.spheres {
-        let r = sp.radius + p.margin;
-        let c = sp.center;
-        let d = [x[0] - F::splat(sd, c[0]), x[1] - F::splat(sd, c[1]), x[2] - F::splat(sd, c[2])];
-        any = any | (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).lt(F::splat(sd, r * r));
-    }
-    for b in c.boxes {
-        let mut all = M::splat(sd, true);
-        for (c, xc) in x.iter().enumerate() {
-            all = all & xc.gt(F::splat(sd, b.min[c] - p.margin)) & xc.lt(F::splat(sd, b.max[c] + p.margin));
+    c.cut(p).each_bound(p.margin, |b| match b {
+        Bound::Ball { center: m, r } => {
+            let d = [x[0] - F::splat(sd, m.x), x[1] - F::splat(sd, m.y), x[2] - F::splat(sd, m.z)];
+            any = any | (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).lt(F::splat(sd, r * r));
         }
-        any = any | all;
-    }
+        Bound::Box { lo, hi } => {
+            let mut all = M::splat(sd, true);
+            for (k, xc) in x.iter().enumerate() {
+                all = all & xc.gt(F::splat(sd, lo[k])) & xc.lt(F::splat(sd, hi[k]));
+            }
+            any = any | all;
+        }
+    });
     any
 }
 

@@ -9,7 +9,7 @@
 mod collide;
 mod forces;
 mod fused;
-mod integrate;
+pub(crate) mod integrate;
 mod integrators;
 mod lanes;
 mod normals;

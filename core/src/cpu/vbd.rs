@@ -37,10 +37,10 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::collide::{Colliders, body_sample, capsule_axis_point, capsule_center};
-use super::integrate::surface_vel;
+use super::collide::Colliders;
 use super::integrators::{finish_at, per_particle};
 use super::{Exec, dt_over_mass, mass, v3, v4};
+use crate::contact::floor_contact;
 use crate::grid::{ClothTopology, Colours, Rows, SpringSlot, V4};
 use crate::step_params::StepParams;
 
@@ -352,62 +352,16 @@ fn contacts(
 }
 
 /// Calls `touch(δ, n̂, v_s)` for every contact of a vertex at `x` (see [`contacts`]): the
-/// floor, the spheres, the boxes, the capsules, the bodies, in that order; `v_s` the surface's velocity there
+/// floor, then every collider in scene order ([`Colliders::walk`]), each grown by the
+/// margin and its reach; `v_s` the surface's velocity at the contact's point
 /// (`crate::motion`; zero for a still collider).
 #[inline(always)]
 fn each_contact(p: &StepParams, colliders: Colliders<'_>, x: Vec3, mut touch: impl FnMut(f32, Vec3, Vec3)) {
     let reach = p.margin + p.margin * CONTACT_REACH;
-    let floor = p.floor_y + reach;
-    if x.y < floor {
-        touch(floor - x.y, Vec3::Y, Vec3::ZERO);
+    if let Some(c) = floor_contact(p.floor_y, x, reach) {
+        touch(c.depth, c.n, c.vs);
     }
-    for s in colliders.spheres {
-        let c = Vec3::from(s.center);
-        let r = s.radius + reach;
-        let dc = x - c;
-        let dist2 = dc.dot(dc);
-        if dist2 < r * r {
-            let dist = dist2.sqrt();
-            let n = if dist > 1e-12 { dc * (1.0 / dist) } else { Vec3::Y };
-            touch(r - dist, n, surface_vel(v3(s.velocity), v3(s.spin), dc));
-        }
-    }
-    for b in colliders.boxes {
-        let lo = v3(b.min) - Vec3::splat(reach);
-        let hi = v3(b.max) + Vec3::splat(reach);
-        if x.cmpgt(lo).all() && x.cmplt(hi).all() {
-            // The nearest face, as `collide` leaves through it.
-            let (below, above) = (x - lo, hi - x);
-            let mut best = below.x;
-            let mut n = -Vec3::X;
-            for (pen, nn) in
-                [(above.x, Vec3::X), (below.y, -Vec3::Y), (above.y, Vec3::Y), (below.z, -Vec3::Z), (above.z, Vec3::Z)]
-            {
-                if pen < best {
-                    best = pen;
-                    n = nn;
-                }
-            }
-            touch(best, n, v3(b.velocity));
-        }
-    }
-    for cap in colliders.capsules {
-        let r = cap.a[3] + reach;
-        let dc = x - capsule_axis_point(cap, x);
-        let dist2 = dc.dot(dc);
-        if dist2 < r * r {
-            let dist = dist2.sqrt();
-            let n = if dist > 1e-12 { dc * (1.0 / dist) } else { Vec3::Y };
-            touch(r - dist, n, surface_vel(v3(cap.velocity), v3(cap.spin), x - capsule_center(cap)));
-        }
-    }
-    for hd in colliders.bodies.heads {
-        if let Some((phi, n)) = body_sample(hd, colliders.bodies.values, x, reach)
-            && phi < reach
-        {
-            touch(reach - phi, n, surface_vel(v3(hd.velocity), v3(hd.spin), x - v3(hd.translation)));
-        }
-    }
+    colliders.walk(&mut x.clone(), reach, |_, c| touch(c.depth, c.n, c.vs));
 }
 
 /// `H⁻¹ f` for the symmetric `H` given as `[h00, h11, h22, h01, h02, h12]`, by cofactors;

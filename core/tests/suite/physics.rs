@@ -33,7 +33,7 @@ fn bare_params(n: u32, dt: f32, mass: f32) -> StepParams {
         strain_passes: 1,
         tile_substeps: 1,
         num_bodies: 0,
-        num_capsules: 0,
+        num_rods: 0,
     }
 }
 

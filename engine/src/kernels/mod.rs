@@ -359,7 +359,7 @@ impl HostBuffers {
         if p.n != topo.n
             || p.num_spheres as usize > MAX_COLLIDERS
             || p.num_boxes as usize > MAX_COLLIDERS
-            || p.num_capsules as usize > clothlab_core::sdf::MAX_CAPSULES
+            || p.num_rods as usize > clothlab_core::sdf::MAX_RODS
         {
             return Err(clothlab_core::SolverError::Invalid(
                 "step constants for another grid or too many colliders".into(),

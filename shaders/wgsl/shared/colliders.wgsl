@@ -1,28 +1,100 @@
-// Sphere, box, capsule and body colliders (needs state.wgsl). The build also emits every kernel
+// The colliders' contact geometry, one function per shape (core::contact: sphere_contact,
+// box_contact, rod_contact for capsules and cylinders, body_contact; needs state.wgsl),
+// and collide's walk over them. The build also emits every kernel
 // that includes this file as `<kernel>_cu`, with the first two declarations swapped for
 // uniform blocks of MAX_COLLIDERS entries (the thesis's constant memory:
 // `colliders=uniform`). The capsules and the bodies' fields stay in storage.
 
 @group(0) @binding(12) var<storage, read> spheres: array<Sphere>;
 @group(0) @binding(13) var<storage, read> boxes: array<Aabb>;
-// The capsules and bodies (core::sdf, layout::Buf::Shapes): MAX_BODIES heads of
+// The rods and bodies (core::sdf, layout::Buf::Shapes): MAX_BODIES heads of
 // SDF_HEAD_FLOATS floats (R's columns, translation, velocity, spin, the grid's first point
-// and spacing, its points per axis and first value), the capsules from
-// SHAPES_CAPSULES_AT (16 floats each), the bodies' values from SHAPES_VALUES_AT.
+// and spacing, its points per axis and first value), the rods from SHAPES_RODS_AT (16
+// floats each: capsules, then cylinders), the bodies' values from SHAPES_VALUES_AT.
 @group(0) @binding(34) var<storage, read> shapes: array<f32>;
 
 fn shapes_vec4(i: u32) -> vec4<f32> {
     return vec4<f32>(shapes[i], shapes[i + 1u], shapes[i + 2u], shapes[i + 3u]);
 }
 
-// Capsule k.
-fn capsule_at(k: u32) -> Capsule {
-    let b = SHAPES_CAPSULES_AT + 16u * k;
-    return Capsule(shapes_vec4(b), shapes_vec4(b + 4u), shapes_vec4(b + 8u), shapes_vec4(b + 12u));
+// Rod k.
+fn rod_at(k: u32) -> Rod {
+    let b = SHAPES_RODS_AT + 16u * k;
+    return Rod(shapes_vec4(b), shapes_vec4(b + 4u), shapes_vec4(b + 8u), shapes_vec4(b + 12u));
 }
 
-// The point of capsule c's axis nearest x (core::cpu::collide::capsule_axis_point).
-fn capsule_axis_point(c: Capsule, x: vec3<f32>) -> vec3<f32> {
+// A point's contact with a shape grown by a reach (core::contact::Contact): `hit` false
+// where there is none.
+struct Contact {
+    hit: bool,
+    depth: f32,
+    n: vec3<f32>,
+    at: vec3<f32>,
+    vs: vec3<f32>,
+}
+
+const NO_CONTACT = Contact(false, 0.0, vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+
+// A direction away from a centre d long dist, or up at the centre (core::contact::away).
+fn away(d: vec3<f32>, dist: f32) -> vec3<f32> {
+    if dist > 1e-12 {
+        return d / dist;
+    }
+    return vec3<f32>(0.0, 1.0, 0.0);
+}
+
+// The floor at height y (core::contact::floor_contact).
+fn floor_contact(y: f32, x: vec3<f32>, reach: f32) -> Contact {
+    let top = y + reach;
+    if x.y >= top {
+        return NO_CONTACT;
+    }
+    return Contact(true, top - x.y, vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(x.x, top, x.z), vec3<f32>(0.0));
+}
+
+// core::contact's `impl Shape for Sphere`.
+fn sphere_contact(s: Sphere, x: vec3<f32>, reach: f32) -> Contact {
+    let r = s.radius + reach;
+    let d = x - s.center;
+    let dist2 = dot3(d, d);
+    if dist2 >= r * r {
+        return NO_CONTACT;
+    }
+    let dist = sqrt(dist2);
+    let n = away(d, dist);
+    let arm = n * r;
+    return Contact(true, r - dist, n, s.center + arm, surface_vel(s.velocity.xyz, s.spin.xyz, arm));
+}
+
+// core::contact's `impl Shape for Aabb`: out through the nearest face.
+fn box_contact(b: Aabb, x: vec3<f32>, reach: f32) -> Contact {
+    let lo = b.min.xyz - vec3<f32>(reach);
+    let hi = b.max.xyz + vec3<f32>(reach);
+    if !(all(x > lo) && all(x < hi)) {
+        return NO_CONTACT;
+    }
+    let below = x - lo;
+    let above = hi - x;
+    var best = below.x;
+    var n = vec3<f32>(-1.0, 0.0, 0.0);
+    var face = lo.x;
+    if above.x < best { best = above.x; n = vec3<f32>(1.0, 0.0, 0.0); face = hi.x; }
+    if below.y < best { best = below.y; n = vec3<f32>(0.0, -1.0, 0.0); face = lo.y; }
+    if above.y < best { best = above.y; n = vec3<f32>(0.0, 1.0, 0.0); face = hi.y; }
+    if below.z < best { best = below.z; n = vec3<f32>(0.0, 0.0, -1.0); face = lo.z; }
+    if above.z < best { best = above.z; n = vec3<f32>(0.0, 0.0, 1.0); face = hi.z; }
+    let axis = abs(n);
+    return Contact(true, best, n, x * (vec3<f32>(1.0) - axis) + axis * face, b.velocity.xyz);
+}
+
+// The midpoint of a rod's axis, (a + b)·½ (core::contact::mid).
+fn rod_center(c: Rod) -> vec3<f32> {
+    return (c.a.xyz + c.b.xyz) * 0.5;
+}
+
+// core::contact's `impl Shape for Capsule`.
+fn capsule_contact(c: Rod, x: vec3<f32>, reach: f32) -> Contact {
+    let r = c.a.w + reach;
     let a = c.a.xyz;
     let ab = c.b.xyz - a;
     let len2 = dot3(ab, ab);
@@ -30,12 +102,70 @@ fn capsule_axis_point(c: Capsule, x: vec3<f32>) -> vec3<f32> {
     if len2 > 1e-24 {
         s = clamp(dot3(x - a, ab) / len2, 0.0, 1.0);
     }
-    return a + ab * s;
+    let q = a + ab * s;
+    let d = x - q;
+    let dist2 = dot3(d, d);
+    if dist2 >= r * r {
+        return NO_CONTACT;
+    }
+    let dist = sqrt(dist2);
+    let n = away(d, dist);
+    let at = q + n * r;
+    return Contact(true, r - dist, n, at, surface_vel(c.velocity.xyz, c.spin.xyz, at - rod_center(c)));
 }
 
-// Its centre, (a + b)·½ (core::cpu::collide::capsule_center).
-fn capsule_center(c: Capsule) -> vec3<f32> {
-    return (c.a.xyz + c.b.xyz) * 0.5;
+// A unit direction across the unit axis u (core::contact::across).
+fn across(u: vec3<f32>) -> vec3<f32> {
+    var w = vec3<f32>(0.0, 1.0, 0.0);
+    if abs(u.x) < 0.9 {
+        w = vec3<f32>(1.0, 0.0, 0.0);
+    }
+    let p = w - u * dot3(w, u);
+    return p / sqrt(dot3(p, p));
+}
+
+// core::contact's `impl Shape for Cylinder`: out through the side or the nearer cap.
+fn cylinder_contact(c: Rod, x: vec3<f32>, reach: f32) -> Contact {
+    let m = rod_center(c);
+    let ab = c.b.xyz - c.a.xyz;
+    let len = sqrt(dot3(ab, ab));
+    let u = ab / len;
+    let d = x - m;
+    let t = dot3(d, u);
+    let radial = d - u * t;
+    let rho2 = dot3(radial, radial);
+    let r = c.a.w + reach;
+    let h = len * 0.5 + reach;
+    if rho2 >= r * r || abs(t) >= h {
+        return NO_CONTACT;
+    }
+    let rho = sqrt(rho2);
+    let side = r - rho;
+    let cap = h - abs(t);
+    var depth = cap;
+    var n = u;
+    if t < 0.0 {
+        n = -u;
+    }
+    var at = x + n * cap;
+    if side < cap {
+        depth = side;
+        n = across(u);
+        if rho > 1e-12 {
+            n = radial / rho;
+        }
+        at = m + u * t + n * r;
+    }
+    return Contact(true, depth, n, at, surface_vel(c.velocity.xyz, c.spin.xyz, at - m));
+}
+
+// Rod k's contact: a capsule's or a cylinder's, by its kind.
+fn rod_contact(k: u32, x: vec3<f32>, reach: f32) -> Contact {
+    let c = rod_at(k);
+    if c.b.w == ROD_CYLINDER {
+        return cylinder_contact(c, x, reach);
+    }
+    return capsule_contact(c, x, reach);
 }
 
 // Floats j .. j+2 of body k's head.
@@ -154,75 +284,50 @@ fn body_sample(k: u32, x: vec3<f32>, reach: f32) -> BodySample {
     return out;
 }
 
-// core::cpu::collide::collide_at for a free particle (is_free): m pushed out of the
-// spheres, boxes and bodies, its velocity relative to their surfaces where they move.
+// core::contact's `impl Shape for Body`: pushed along the field's gradient to φ = reach.
+fn body_contact(k: u32, x: vec3<f32>, reach: f32) -> Contact {
+    let s = body_sample(k, x, reach);
+    if !(s.valid && s.phi < reach) {
+        return NO_CONTACT;
+    }
+    let at = x + s.n * (reach - s.phi);
+    return Contact(true, reach - s.phi, s.n, at, surface_vel(body_vec(k, 16u), body_vec(k, 20u), at - body_vec(k, 12u)));
+}
+
+// core::cpu::collide::collide_at for a free particle (is_free): m pushed out of every
+// collider in scene order (core::cpu::Colliders::walk), its velocity relative to their
+// surfaces where they move.
 fn collided(m: Moved) -> Moved {
     var x = m.x;
     var v = m.v;
     for (var k = 0u; k < p.num_spheres; k++) {
-        let s = spheres[k];
-        let r = s.radius + p.margin;
-        let d = x - s.center;
-        let dist2 = dot3(d, d);
-        if dist2 < r * r {
-            let dist = sqrt(dist2);
-            var nrm = vec3<f32>(0.0, 1.0, 0.0);
-            if dist > 1e-12 {
-                nrm = d / dist;
-            }
-            let arm = nrm * r;
-            x = s.center + arm;
-            let vs = surface_vel(s.velocity.xyz, s.spin.xyz, arm);
-            let hit = surface_contact(x, v, vs, nrm);
+        let c = sphere_contact(spheres[k], x, p.margin);
+        if c.hit {
+            let hit = surface_contact(c.at, v, c.vs, c.n);
             x = hit.x;
             v = hit.v;
         }
     }
     for (var k = 0u; k < p.num_boxes; k++) {
-        let lo = boxes[k].min.xyz - vec3<f32>(p.margin);
-        let hi = boxes[k].max.xyz + vec3<f32>(p.margin);
-        if all(x > lo) && all(x < hi) {
-            let below = x - lo;
-            let above = hi - x;
-            var best = below.x;
-            var nrm = vec3<f32>(-1.0, 0.0, 0.0);
-            var face = lo.x;
-            if above.x < best { best = above.x; nrm = vec3<f32>(1.0, 0.0, 0.0); face = hi.x; }
-            if below.y < best { best = below.y; nrm = vec3<f32>(0.0, -1.0, 0.0); face = lo.y; }
-            if above.y < best { best = above.y; nrm = vec3<f32>(0.0, 1.0, 0.0); face = hi.y; }
-            if below.z < best { best = below.z; nrm = vec3<f32>(0.0, 0.0, -1.0); face = lo.z; }
-            if above.z < best { best = above.z; nrm = vec3<f32>(0.0, 0.0, 1.0); face = hi.z; }
-            let axis = abs(nrm);
-            x = x * (vec3<f32>(1.0) - axis) + axis * face;
-            let hit = surface_contact(x, v, boxes[k].velocity.xyz, nrm);
+        let c = box_contact(boxes[k], x, p.margin);
+        if c.hit {
+            let hit = surface_contact(c.at, v, c.vs, c.n);
             x = hit.x;
             v = hit.v;
         }
     }
-    for (var k = 0u; k < p.num_capsules; k++) {
-        let c = capsule_at(k);
-        let r = c.a.w + p.margin;
-        let d = x - capsule_axis_point(c, x);
-        let dist2 = dot3(d, d);
-        if dist2 < r * r {
-            let dist = sqrt(dist2);
-            var nrm = vec3<f32>(0.0, 1.0, 0.0);
-            if dist > 1e-12 {
-                nrm = d / dist;
-            }
-            x = capsule_axis_point(c, x) + nrm * r;
-            let vs = surface_vel(c.velocity.xyz, c.spin.xyz, x - capsule_center(c));
-            let hit = surface_contact(x, v, vs, nrm);
+    for (var k = 0u; k < p.num_rods; k++) {
+        let c = rod_contact(k, x, p.margin);
+        if c.hit {
+            let hit = surface_contact(c.at, v, c.vs, c.n);
             x = hit.x;
             v = hit.v;
         }
     }
     for (var k = 0u; k < p.num_bodies; k++) {
-        let s = body_sample(k, x, p.margin);
-        if s.valid && s.phi < p.margin {
-            x = x + s.n * (p.margin - s.phi);
-            let vs = surface_vel(body_vec(k, 16u), body_vec(k, 20u), x - body_vec(k, 12u));
-            let hit = surface_contact(x, v, vs, s.n);
+        let c = body_contact(k, x, p.margin);
+        if c.hit {
+            let hit = surface_contact(c.at, v, c.vs, c.n);
             x = hit.x;
             v = hit.v;
         }

@@ -52,9 +52,10 @@ struct Aabb {
     velocity: vec4<f32>,
 }
 
-// The points within a.w of the segment a–b (core::scene::Capsule); it turns about the
-// midpoint.
-struct Capsule {
+// A shape about the segment a–b of radius a.w, turning about the midpoint: a capsule
+// (core::scene::Capsule, b.w = ROD_CAPSULE) or a capped cylinder (core::scene::Cylinder,
+// b.w = ROD_CYLINDER).
+struct Rod {
     a: vec4<f32>,
     b: vec4<f32>,
     velocity: vec4<f32>,

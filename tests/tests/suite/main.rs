@@ -9,6 +9,7 @@ mod bodies;
 mod capsules;
 mod cloth_friction;
 mod custom_kernel;
+mod cylinders;
 mod dt_change;
 mod free_fall;
 mod friction;

@@ -1,0 +1,336 @@
+//! Contact geometry, once per collider shape: where a point meets a shape's surface grown
+//! by a reach ([`Shape::contact`]: the depth, the outward normal, the surface point and the
+//! surface's velocity there) and the ball or box that holds the grown shape
+//! ([`Shape::bound`]). Every path that touches colliders calls these: `collide` (the reach
+//! is the collision margin; it moves the particle to [`Contact::at`]), VBD's contact
+//! energies (the margin and its reach; it uses the depth, normal and velocity), the fused
+//! sweep's skip test (the bounds). The WGSL twins of these functions are in
+//! `shaders/wgsl/shared/colliders.wgsl` (`sphere_contact`, `box_contact`,
+//! `capsule_contact`, `cylinder_contact`, `body_contact`), computed in the same order so
+//! that every backend gets the same bits. A new shape is a struct in [`crate::scene`], an
+//! `impl Shape` here and its WGSL function (see docs/architecture.md, "A collider shape").
+
+use glam::Vec3;
+
+use crate::cpu::integrate::surface_vel;
+use crate::cpu::v3;
+use crate::scene::{Aabb, Capsule, Cylinder, Sphere};
+use crate::sdf::{SdfHead, sample_grid};
+
+/// A point's contact with a shape's surface grown by a reach.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// How deep inside the grown surface the point is, m (> 0).
+    pub depth: f32,
+    /// The outward unit normal of the surface there.
+    pub n: Vec3,
+    /// The point of the grown surface the point leaves to (`collide` moves it there).
+    pub at: Vec3,
+    /// The surface's velocity at `at`, m/s (`velocity + spin × arm` for a moving shape).
+    pub vs: Vec3,
+}
+
+/// What holds a shape grown by a reach: the fused sweep tests its SIMD lanes against it
+/// before sampling a lane's contacts one by one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Bound {
+    /// Points closer than `r` to `center` (strictly).
+    Ball {
+        /// Its centre.
+        center: Vec3,
+        /// Its radius.
+        r: f32,
+    },
+    /// Points strictly between `lo` and `hi`.
+    Box {
+        /// The lower corner.
+        lo: Vec3,
+        /// The upper corner.
+        hi: Vec3,
+    },
+}
+
+/// A collider shape's contact geometry.
+pub trait Shape {
+    /// The contact of a point at `x` inside this shape grown by `reach`, or `None`.
+    fn contact(&self, x: Vec3, reach: f32) -> Option<Contact>;
+    /// A region holding this shape grown by `reach` (every `x` with a contact lies in it).
+    fn bound(&self, reach: f32) -> Bound;
+}
+
+/// `a·b` summed left to right (the WGSL's `dot3`).
+#[inline(always)]
+pub(crate) fn dot3(a: Vec3, b: Vec3) -> f32 {
+    a.x * b.x + a.y * b.y + a.z * b.z
+}
+
+/// A direction away from a centre `d` long `dist`, or up where the point is at the centre.
+#[inline(always)]
+fn away(d: Vec3, dist: f32) -> Vec3 {
+    if dist > 1e-12 { d / dist } else { Vec3::Y }
+}
+
+/// The floor at height `y`: still, its normal up.
+#[inline(always)]
+pub fn floor_contact(y: f32, x: Vec3, reach: f32) -> Option<Contact> {
+    let top = y + reach;
+    (x.y < top).then(|| Contact { depth: top - x.y, n: Vec3::Y, at: Vec3::new(x.x, top, x.z), vs: Vec3::ZERO })
+}
+
+impl Shape for Sphere {
+    #[inline(always)]
+    fn contact(&self, x: Vec3, reach: f32) -> Option<Contact> {
+        let c = Vec3::from(self.center);
+        let r = self.radius + reach;
+        let d = x - c;
+        let dist2 = d.length_squared();
+        if dist2 >= r * r {
+            return None;
+        }
+        let dist = dist2.sqrt();
+        let n = away(d, dist);
+        let arm = n * r;
+        Some(Contact { depth: r - dist, n, at: c + arm, vs: surface_vel(v3(self.velocity), v3(self.spin), arm) })
+    }
+
+    fn bound(&self, reach: f32) -> Bound {
+        Bound::Ball { center: Vec3::from(self.center), r: self.radius + reach }
+    }
+}
+
+impl Shape for Aabb {
+    #[inline(always)]
+    fn contact(&self, x: Vec3, reach: f32) -> Option<Contact> {
+        let Bound::Box { lo, hi } = self.bound(reach) else { unreachable!() };
+        if !(x.cmpgt(lo).all() && x.cmplt(hi).all()) {
+            return None;
+        }
+        // Leave through the nearest face.
+        let (below, above) = (x - lo, hi - x);
+        let (mut depth, mut n, mut face) = (below.x, -Vec3::X, lo.x);
+        for (d, nn, f) in [
+            (above.x, Vec3::X, hi.x),
+            (below.y, -Vec3::Y, lo.y),
+            (above.y, Vec3::Y, hi.y),
+            (below.z, -Vec3::Z, lo.z),
+            (above.z, Vec3::Z, hi.z),
+        ] {
+            if d < depth {
+                (depth, n, face) = (d, nn, f);
+            }
+        }
+        let axis = n.abs();
+        Some(Contact { depth, n, at: x * (Vec3::ONE - axis) + axis * face, vs: v3(self.velocity) })
+    }
+
+    fn bound(&self, reach: f32) -> Bound {
+        Bound::Box { lo: v3(self.min) - Vec3::splat(reach), hi: v3(self.max) + Vec3::splat(reach) }
+    }
+}
+
+/// The point of the segment `a`–`b` nearest `x` (the WGSL's `capsule_axis_point`).
+#[inline(always)]
+pub(crate) fn axis_point(a: Vec3, b: Vec3, x: Vec3) -> Vec3 {
+    let ab = b - a;
+    let len2 = dot3(ab, ab);
+    let s = if len2 > 1e-24 { (dot3(x - a, ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    a + ab * s
+}
+
+/// The midpoint of `a`–`b`, `(a + b)·½` (the WGSL's `rod_center`).
+#[inline(always)]
+pub(crate) fn mid(a: [f32; 4], b: [f32; 4]) -> Vec3 {
+    (v3(a) + v3(b)) * 0.5
+}
+
+impl Shape for Capsule {
+    #[inline(always)]
+    fn contact(&self, x: Vec3, reach: f32) -> Option<Contact> {
+        let r = self.a[3] + reach;
+        let q = axis_point(v3(self.a), v3(self.b), x);
+        let d = x - q;
+        let dist2 = dot3(d, d);
+        if dist2 >= r * r {
+            return None;
+        }
+        let dist = dist2.sqrt();
+        let n = away(d, dist);
+        let at = q + n * r;
+        let vs = surface_vel(v3(self.velocity), v3(self.spin), at - mid(self.a, self.b));
+        Some(Contact { depth: r - dist, n, at, vs })
+    }
+
+    fn bound(&self, reach: f32) -> Bound {
+        let half = 0.5 * (v3(self.b) - v3(self.a)).length();
+        Bound::Ball { center: mid(self.a, self.b), r: half + self.a[3] + reach + 1e-3 }
+    }
+}
+
+impl Shape for Cylinder {
+    /// The capped cylinder grown by `reach` (radius and half-length each grown by it,
+    /// edges kept sharp as a box's): leave through the side or the nearer cap, whichever
+    /// is nearer.
+    #[inline(always)]
+    fn contact(&self, x: Vec3, reach: f32) -> Option<Contact> {
+        let m = mid(self.a, self.b);
+        let ab = v3(self.b) - v3(self.a);
+        let len = dot3(ab, ab).sqrt();
+        let u = ab / len;
+        let d = x - m;
+        let t = dot3(d, u);
+        let radial = d - u * t;
+        let rho2 = dot3(radial, radial);
+        let (r, h) = (self.a[3] + reach, len * 0.5 + reach);
+        if rho2 >= r * r || t.abs() >= h {
+            return None;
+        }
+        let rho = rho2.sqrt();
+        let (side, cap) = (r - rho, h - t.abs());
+        let (depth, n, at) = if side < cap {
+            let n = if rho > 1e-12 { radial / rho } else { across(u) };
+            (side, n, m + u * t + n * r)
+        } else {
+            let n = if t < 0.0 { -u } else { u };
+            (cap, n, x + n * cap)
+        };
+        Some(Contact { depth, n, at, vs: surface_vel(v3(self.velocity), v3(self.spin), at - m) })
+    }
+
+    fn bound(&self, reach: f32) -> Bound {
+        let half = 0.5 * (v3(self.b) - v3(self.a)).length();
+        let r = self.a[3];
+        Bound::Ball { center: mid(self.a, self.b), r: (half * half + r * r).sqrt() + reach + 1e-3 }
+    }
+}
+
+/// A unit direction across the unit axis `u` (a point on a cylinder's axis leaves this
+/// way): `x̂` or `ŷ` made perpendicular to `u`. The WGSL's `across`.
+#[inline(always)]
+fn across(u: Vec3) -> Vec3 {
+    let w = if u.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    let p = w - u * dot3(w, u);
+    p / dot3(p, p).sqrt()
+}
+
+/// A body (mesh collider) at one substep: its head and every body's values.
+#[derive(Debug, Clone, Copy)]
+pub struct Body<'a> {
+    /// Its pose, velocities and grid.
+    pub head: &'a SdfHead,
+    /// Every body's values (`head.dims[3]` is its first).
+    pub values: &'a [f32],
+}
+
+impl Body<'_> {
+    /// The field at world `x`: `(φ, n̂)` with `n̂` the world direction of its gradient (up
+    /// where it vanishes), or `None` outside its grid or where φ is surely ≥ `reach`. The
+    /// WGSL's `body_sample`.
+    #[inline(always)]
+    pub fn sample(&self, x: Vec3, reach: f32) -> Option<(f32, Vec3)> {
+        let hd = self.head;
+        let (c0, c1, c2) = (v3(hd.cols[0]), v3(hd.cols[1]), v3(hd.cols[2]));
+        let d = x - v3(hd.translation);
+        let q = [dot3(c0, d), dot3(c1, d), dot3(c2, d)];
+        let [nx, ny, nz, first] = hd.dims;
+        let (phi, g) = sample_grid(&hd.lo, [nx, ny, nz], self.values.get(first as usize..)?, q, reach)?;
+        let g = Vec3::from(g);
+        let gl = dot3(g, g).sqrt();
+        let nl = if gl > 1e-12 { g / gl } else { Vec3::Y };
+        Some((phi, c0 * nl.x + c1 * nl.y + c2 * nl.z))
+    }
+}
+
+impl Shape for Body<'_> {
+    /// Where the field is below `reach`: pushed along its gradient to `φ = reach`.
+    #[inline(always)]
+    fn contact(&self, x: Vec3, reach: f32) -> Option<Contact> {
+        let (phi, n) = self.sample(x, reach).filter(|&(phi, _)| phi < reach)?;
+        let at = x + n * (reach - phi);
+        let hd = self.head;
+        Some(Contact {
+            depth: reach - phi,
+            n,
+            at,
+            vs: surface_vel(v3(hd.velocity), v3(hd.spin), at - v3(hd.translation)),
+        })
+    }
+
+    /// A ball about the pivot holding the whole grid (generously: a point let through is
+    /// only sampled).
+    fn bound(&self, reach: f32) -> Bound {
+        let hd = self.head;
+        let h = hd.lo[3];
+        let far: [f32; 3] = std::array::from_fn(|k| hd.lo[k].abs().max((hd.lo[k] + h * (hd.dims[k] - 1) as f32).abs()));
+        let r = (far[0] * far[0] + far[1] * far[1] + far[2] * far[2]).sqrt() * 1.01 + reach + 1e-3;
+        Bound::Ball { center: v3(hd.translation), r }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every contact's point lies on the grown surface: pushed there, a point has no
+    /// contact left deeper than rounding (1e-5 m), and the depth is the distance moved.
+    fn check(shape: &impl Shape, x: Vec3, reach: f32) -> Contact {
+        let c = shape.contact(x, reach).expect("inside");
+        assert!((c.n.length() - 1.0).abs() < 1e-5, "{c:?}");
+        assert!(((c.at - x).length() - c.depth).abs() < 1e-5, "{c:?}");
+        if let Some(again) = shape.contact(c.at, reach) {
+            assert!(again.depth < 1e-5, "{again:?} after {c:?}");
+        }
+        c
+    }
+
+    #[test]
+    fn a_cylinder_pushes_out_through_its_side_or_its_nearer_cap() {
+        // Axis along z from −1 to 1, radius 0.5, grown by 0.1: side at ρ = 0.6, caps at
+        // |z| = 1.1.
+        let c = Cylinder::new([0.0, 0.0, -1.0], [0.0, 0.0, 1.0], 0.5);
+        let side = check(&c, Vec3::new(0.55, 0.0, 0.2), 0.1);
+        assert!((side.depth - 0.05).abs() < 1e-6 && side.n == Vec3::X, "{side:?}");
+        let cap = check(&c, Vec3::new(0.1, 0.2, -1.05), 0.1);
+        assert!((cap.depth - 0.05).abs() < 1e-6 && cap.n == -Vec3::Z, "{cap:?}");
+        // On the axis, nearer the side than a cap: out across the axis.
+        let axis = check(&c, Vec3::ZERO, 0.1);
+        assert!((axis.depth - 0.6).abs() < 1e-6 && axis.n.z.abs() < 1e-6, "{axis:?}");
+        // Beyond the rim (outside the grown caps) and off the side: no contact.
+        assert_eq!(c.contact(Vec3::new(0.0, 0.0, 1.11), 0.1), None);
+        assert_eq!(c.contact(Vec3::new(0.0, 0.61, 0.0), 0.1), None);
+        // Turned (axis along x + y), the same point relative to it, the same depth.
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        let t = Cylinder::new([-s, -s, 0.0], [s, s, 0.0], 0.5);
+        let turned = check(&t, Vec3::new(0.0, 0.0, 0.55), 0.1);
+        assert!((turned.depth - 0.05).abs() < 1e-6 && turned.n == Vec3::Z, "{turned:?}");
+    }
+
+    #[test]
+    fn every_contact_lies_inside_its_shapes_bound() {
+        let c = Cylinder::new([0.1, 0.2, -1.0], [0.3, 0.0, 1.0], 0.4);
+        let (Bound::Ball { center, r }, reach) = (c.bound(0.05), 0.05) else { panic!() };
+        let mut hits = 0;
+        let mut seed = 12345u64;
+        let mut f = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32 * 3.0 - 1.5
+        };
+        for _ in 0..4096 {
+            let x = Vec3::new(f(), f(), f());
+            if c.contact(x, reach).is_some() {
+                hits += 1;
+                assert!((x - center).length() < r, "{x} outside the bound");
+            }
+        }
+        assert!(hits > 100, "{hits} of 4096 sample points inside: the test would hold nothing");
+    }
+
+    #[test]
+    fn a_moving_cylinders_surface_moves_with_its_spin() {
+        let mut c = Cylinder::new([0.0, -1.0, 0.0], [0.0, 1.0, 0.0], 0.5);
+        c.spin = [0.0, 2.0, 0.0, 0.0];
+        c.velocity = [0.0, 0.0, 1.0, 0.0];
+        // On the side at +x: spin × arm = (0, 2, 0) × (0.5, y, 0) = (0, 0, −1).
+        let hit = c.contact(Vec3::new(0.45, 0.3, 0.0), 0.0).unwrap();
+        assert!((hit.vs - Vec3::new(0.0, 0.0, 0.0)).length() < 1e-6, "{hit:?}");
+    }
+}

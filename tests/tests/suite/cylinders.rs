@@ -1,0 +1,140 @@
+//! Cylinders (`core::scene::Cylinder`, `core::contact`'s `impl Shape for Cylinder`): a
+//! capped cylinder, moving and turning like any collider. Analytic cases on every backend
+//! (a patch at rest on the cap and on the side, a turntable), the GPU recipes and kernels
+//! against the CPU twins, refusals.
+
+use clothlab_core::scene::{ColliderId, Pinning};
+use clothlab_core::{Capsule, Cylinder, Integrator, Motion, Scene, SceneFile, SimParams};
+use clothlab_tests::{assert_checks, every_backend, mean, still_air};
+
+/// A 2 cm patch of 4 × 4 particles 1 mm above the top cap (y = 1) of an upright cylinder
+/// of radius 0.3 m, its centre `off` m from the axis along x, the cylinder turning at
+/// `spin` rad/s about its axis.
+fn turntable(off: f32, spin: f32) -> Scene {
+    let mut s = Scene::with_n(4);
+    s.cloth.size = 0.02;
+    s.cloth.pinning = Pinning::None;
+    let margin = SimParams::default().collision_margin;
+    s.cloth.top_center = [off, 1.0 + margin + 1e-3, -0.01];
+    s.floor_y = None;
+    s.spheres.clear();
+    s.cylinders = vec![Cylinder::new([0.0, 0.6, 0.0], [0.0, 1.0, 0.0], 0.3)];
+    s.motions = vec![(ColliderId::Cylinder(0), Motion { spin: [0.0, spin, 0.0], ..Motion::default() })];
+    s
+}
+
+#[test]
+fn a_patch_rests_on_the_cap_and_the_side_and_a_turntable_carries_it_round() {
+    let margin = SimParams::default().collision_margin;
+    // On the cap: after 0.25 s every particle lies at the cap's height plus the margin,
+    // to 1e-6 m (a few ulps of 1 m: the contact puts it there exactly).
+    for (name, mut s) in every_backend(&turntable(0.1, 0.0), &still_air(0.5)) {
+        for _ in 0..15 {
+            s.step_frame().unwrap();
+        }
+        let st = s.state().unwrap();
+        let worst = st.pos.iter().map(|p| (p[1] - (1.0 + margin)).abs()).fold(0.0f32, f32::max);
+        println!("{name:18} on the cap: farthest particle {worst:.2e} m off it");
+        assert!(worst <= 1e-6, "{name}: a particle {worst} m off the cap");
+    }
+    // On the side of a lying cylinder (axis along x): every particle at the radius plus
+    // the margin from the axis, to 1e-6 m, as on a capsule's tube.
+    let mut side = turntable(0.0, 0.0);
+    side.cylinders = vec![Cylinder::new([-0.5, 1.0, 0.0], [0.5, 1.0, 0.0], 0.2)];
+    side.cloth.top_center = [0.0, 1.2 + margin + 1e-3, -0.01];
+    side.motions.clear();
+    for (name, mut s) in every_backend(&side, &still_air(0.5)) {
+        for _ in 0..15 {
+            s.step_frame().unwrap();
+        }
+        let st = s.state().unwrap();
+        let off = |p: &[f32; 4]| (((p[1] - 1.0).powi(2) + p[2].powi(2)).sqrt() - (0.2 + margin)).abs();
+        let worst = st.pos.iter().map(off).fold(0.0f32, f32::max);
+        println!("{name:18} on the side: farthest particle {worst:.2e} m off it");
+        assert!(worst <= 1e-6, "{name}: a particle {worst} m off the side");
+    }
+    // A turntable at ω = 2 rad/s with friction 1: each particle leaves each contact at the
+    // cap's velocity there, ω times its distance from the axis, so the mean speed is ω
+    // times the mean distance within 0.5 % (the last substep's gravity and rounding;
+    // measured to 4 digits), and the patch has turned about the axis (its centre's angle
+    // from +x moved by more than 0.5 rad in 0.5 s: ω t = 1 rad less the first contacts).
+    for (name, mut s) in every_backend(&turntable(0.1, 2.0), &still_air(1.0)) {
+        for _ in 0..30 {
+            s.step_frame().unwrap();
+        }
+        let st = s.state().unwrap();
+        let r = |i: usize| (st.pos[i][0] as f64).hypot(st.pos[i][2] as f64);
+        let v = mean(&st, |i| st.vel[i][..3].iter().map(|&c| (c as f64).powi(2)).sum::<f64>().sqrt());
+        let expect = 2.0 * mean(&st, r);
+        let (x, z) = (mean(&st, |i| st.pos[i][0] as f64), mean(&st, |i| st.pos[i][2] as f64));
+        let turned = (-z).atan2(x);
+        println!("{name:18} turntable: mean speed {v:.4} m/s (ω r̄ {expect:.4}), turned {turned:.3} rad");
+        assert!((v - expect).abs() <= 0.005 * expect, "{name}: {v} m/s, the cap {expect}");
+        assert!(turned > 0.5, "{name}: turned {turned} rad");
+    }
+}
+
+#[test]
+fn every_gpu_recipe_and_kernel_follows_the_cpu_with_a_moving_turning_cylinder() {
+    // A drum that turns, slides and bobs (keys) under a falling cloth, a still post
+    // beside it and a capsule after them (the rods' table holds both kinds): the
+    // optimized recipes give the CPU's bits (0 m over 12 frames); the kernel checks —
+    // collide, and VBD's colour sweep with its contact energies — sink particles into
+    // every collider.
+    let mut sc = Scene::with_n(24);
+    sc.cloth.size = 1.2;
+    sc.cloth.pinning = Pinning::None;
+    sc.cloth.top_center = [0.0, 1.0, -0.6];
+    sc.spheres.clear();
+    sc.capsules = vec![Capsule::new([-0.6, 0.5, 0.4], [0.6, 0.5, 0.4], 0.05)];
+    sc.cylinders = vec![
+        Cylinder::new([-0.6, 0.75, 0.1], [0.6, 0.75, 0.1], 0.12),
+        Cylinder::new([0.0, 0.0, -0.3], [0.0, 0.7, -0.3], 0.08),
+    ];
+    let keys = vec![
+        clothlab_core::Key::new(0.0, [0.0; 3]),
+        clothlab_core::Key { rotate_deg: [0.0, 30.0, 20.0], ..clothlab_core::Key::new(0.2, [0.1, 0.05, 0.0]) },
+    ];
+    sc.motions = vec![(ColliderId::Cylinder(0), Motion { keys, ..Motion::default() })];
+    let params = SimParams::default();
+    let checks = clothlab_tests::optimized_kernel_checks(&sc, &params, 0xc7);
+    assert!(checks.iter().any(|c| c.what.contains("collide")), "no check of a collide kernel");
+    assert_checks("cylinders", &checks);
+    let vbd = SimParams { integrator: Integrator::Vbd, ..params.clone() };
+    let checks = clothlab_tests::optimized_kernel_checks(&sc, &vbd, 0xc8);
+    assert!(checks.iter().any(|c| c.what.contains("vbd_colour")), "no check of VBD's sweep");
+    assert_checks("cyl. vbd", &checks);
+    clothlab_tests::assert_rollouts(clothlab_tests::optimized_rollout_solvers(&sc, &params), 12);
+}
+
+#[test]
+fn bad_cylinders_are_refused_in_one_line() {
+    let file = |cyl: &str| format!("[cloth]\nn = 8\nsize = 1.0\ntop_center = [0, 2, 0]\npinning = \"none\"\n{cyl}");
+    let cases = [
+        ("[[cylinders]]\na = [0, 0, 0]\nb = [1, 0, 0]\nradius = -1\n", "cylinders[0].radius", None),
+        ("[[cylinders]]\na = [0, 0, 0]\nb = [0, 0, 0]\nradius = 0.1\n", "cylinders[0].b", None),
+        ("[[cylinders]]\na = [0, 0, inf]\nb = [1, 0, 0]\nradius = 0.1\n", "cylinders[0].a", None),
+        ("[[cylinders]]\na = [0, 0, 0]\nb = [1, 0, 0]\n", "missing field `radius`", Some(6)),
+        ("[[cylinders]]\na = [0, 0, 0]\nb = [1, 0, 0]\nradius = 0.1\nheight = 2\n", "unknown field", Some(10)),
+        (
+            "[[cylinders]]\na = [0, 0, 0]\nb = [1, 0, 0]\nradius = 0.1\nmotion = { spin = [0, 900, 0] }\n",
+            "cylinders[0]",
+            None,
+        ),
+    ];
+    for (cyl, expect, line) in cases {
+        let e = SceneFile::parse(&file(cyl), "bad.toml").expect_err(expect);
+        let msg = e.to_string();
+        println!("{msg}");
+        assert!(msg.contains(expect) && !msg.contains('\n'), "{expect}: {msg}");
+        if let Some(l) = line {
+            assert_eq!(e.at.map(|a| a.0), Some(l), "{msg}");
+        }
+    }
+    // Capsules and cylinders share the rods' table of 16.
+    let mut s = turntable(0.0, 0.0);
+    s.cylinders = vec![s.cylinders[0]; 9];
+    s.capsules = vec![Capsule::new([0.0; 3], [1.0, 0.0, 0.0], 0.1); 8];
+    let e = s.validate().unwrap_err().to_string();
+    assert!(e.contains("at most 16 capsules and cylinders together"), "{e}");
+}
