@@ -16,7 +16,7 @@ use clothlab_core::grid::{GridSpringConstants, Spring, SpringSlot, Tether};
 use clothlab_core::layout::{BindKind, Buf, wgsl_constants};
 use clothlab_core::pins::{PinPose, PinSlot};
 use clothlab_core::scene::{Aabb, Capsule, Cylinder, Sphere};
-use clothlab_core::step_params::StepParams;
+use clothlab_core::step_params::{ContactParams, StepParams};
 
 /// A struct as core lays it out: name, size, and (field, offset) pairs.
 type Layout = (&'static str, usize, Vec<(&'static str, usize)>);
@@ -32,7 +32,8 @@ fn expected_layouts() -> Vec<Layout> {
     vec![
         // Generated from the struct itself (clothlab_core::step_params): the WGSL names
         // and order are the Rust ones, the offsets naga gives WGSL's rules are checked.
-        ("StepParams", size_of::<StepParams>(), StepParams::FIELDS.to_vec()),
+        ("StepParams", StepParams::GPU_BYTES, StepParams::FIELDS.to_vec()),
+        ("ContactParams", size_of::<ContactParams>(), ContactParams::FIELDS.to_vec()),
         layout!(SpringSlot, "SpringSlot", [neighbor, rest, ks, kd]),
         layout!(Spring, "Spring", [a, b, rest, ks, kd, kind]),
         layout!(Tether, "Tether", [pin, rest]),
@@ -271,7 +272,7 @@ fn main() {
     };
     let types = shared("types");
     // The constants shared with Rust, then the structs: every kernel starts with these.
-    let prelude = format!("{}\n{}\n{types}", wgsl_constants(), StepParams::WGSL);
+    let prelude = format!("{}\n{}\n{}\n{types}", wgsl_constants(), StepParams::WGSL, ContactParams::WGSL);
     check_layouts(&prelude);
     let mut shared_list = String::from(
         "/// The shared files, by name (for kernels composed at run time).\npub const SHARED: &[(&str, &str)] = &[\n",

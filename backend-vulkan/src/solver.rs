@@ -81,7 +81,7 @@ impl VulkanEngine {
             adapter: dev.name.clone(),
             float_atomics: dev.float_atomics,
             // 128 bytes is the Vulkan minimum, so always in practice.
-            immediates: dev.max_push_constants as usize >= std::mem::size_of::<clothlab_core::StepParams>(),
+            immediates: dev.max_push_constants as usize >= clothlab_core::StepParams::GPU_BYTES,
             timestamps: dev.timestamps,
             timestamp_period_ns: dev.timestamp_period as f64,
             max_binding: dev.max_storage_range,

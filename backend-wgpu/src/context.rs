@@ -147,7 +147,7 @@ impl GpuContext {
             required_features |= wgpu::Features::TIMESTAMP_QUERY;
         }
         let immediates = adapter.features().contains(wgpu::Features::IMMEDIATES)
-            && adapter.limits().max_immediate_size as usize >= std::mem::size_of::<clothlab_core::StepParams>();
+            && adapter.limits().max_immediate_size as usize >= clothlab_core::StepParams::GPU_BYTES;
         if immediates {
             required_features |= wgpu::Features::IMMEDIATES;
         }

@@ -145,11 +145,14 @@ pub enum Buf {
     SdfImage = 35,
     /// The trilinear sampler of [`Buf::SdfImage`].
     SdfSampler = 36,
+    /// The contact, friction and solver constants ([`crate::step_params::ContactParams`],
+    /// `StepParams::contact`): a uniform block beside the step's.
+    Contact = 37,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 37] = [
+    pub const ALL: [Buf; 38] = [
         Buf::Params,
         Buf::Pos,
         Buf::Vel,
@@ -187,6 +190,7 @@ impl Buf {
         Buf::Shapes,
         Buf::SdfImage,
         Buf::SdfSampler,
+        Buf::Contact,
     ];
 
     /// The integrators' scratch particle buffers, in order.
@@ -205,7 +209,7 @@ impl Buf {
     /// What kind of binding it is.
     pub const fn kind(self) -> BindKind {
         match self {
-            Buf::Params | Buf::Interior | Buf::SpheresUniform | Buf::BoxesUniform => BindKind::Uniform,
+            Buf::Params | Buf::Interior | Buf::SpheresUniform | Buf::BoxesUniform | Buf::Contact => BindKind::Uniform,
             Buf::Table => BindKind::Image,
             Buf::SdfImage => BindKind::Volume,
             Buf::SdfSampler => BindKind::Sampler,
@@ -253,6 +257,7 @@ impl Buf {
             Buf::Shapes => "shapes",
             Buf::SdfImage => "sdf_image",
             Buf::SdfSampler => "sdf_sampler",
+            Buf::Contact => "contact",
         }
     }
 

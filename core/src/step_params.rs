@@ -1,6 +1,13 @@
 //! The constants of a step that every kernel reads ([`StepParams`]): defined here once,
-//! as Rust; `shaders/build.rs` writes the WGSL struct from [`StepParams::WGSL`] into every
-//! kernel's prelude and checks its layout against this one.
+//! as Rust; `shaders/build.rs` writes the WGSL structs from [`StepParams::WGSL`] and
+//! [`ContactParams::WGSL`] into every kernel's prelude and checks their layouts against
+//! these.
+//!
+//! On the GPU they are two blocks: the step's 128 bytes (binding 0, or immediates, or
+//! storage by the `constants` switch: a push-constant block's size on many devices, so
+//! full) and [`ContactParams`] (binding `layout::Buf::Contact`, always a uniform block):
+//! contact, friction and solver parameters, with room for more. On the CPU they are one
+//! struct, so that every twin reads both through its `p: &StepParams`.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -34,6 +41,31 @@ macro_rules! shared_struct {
         pub struct $name {
             $($(#[$fmeta])* pub $field: $ty,)*
         }
+        shared_struct!(@wgsl $name { $($field: $ty,)* });
+    };
+    // A struct whose last field is a block of its own on the GPU (`apart`): the WGSL and
+    // the field list are the fields before it; `GPU_BYTES` is where it starts.
+    ($(#[$meta:meta])* pub struct $name:ident { $($(#[$fmeta:meta])* pub $field:ident: $ty:tt,)*
+        apart $(#[$ameta:meta])* pub $afield:ident: $aty:ident, }) => {
+        $(#[$meta])*
+        #[repr(C)]
+        #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+        pub struct $name {
+            $($(#[$fmeta])* pub $field: $ty,)*
+            $(#[$ameta])* pub $afield: $aty,
+        }
+        shared_struct!(@wgsl $name { $($field: $ty,)* });
+        impl $name {
+            /// The bytes of the first block (the fields before the one kept apart).
+            pub const GPU_BYTES: usize = std::mem::offset_of!($name, $afield);
+
+            /// The first block's bytes, as the GPU reads them.
+            pub fn gpu_bytes(&self) -> &[u8] {
+                &bytemuck::bytes_of(self)[..Self::GPU_BYTES]
+            }
+        }
+    };
+    (@wgsl $name:ident { $($field:ident: $ty:tt,)* }) => {
 
         impl $name {
             /// The struct in WGSL, field for field.
@@ -51,17 +83,38 @@ macro_rules! shared_struct {
     };
 }
 
+impl Default for ContactParams {
+    /// No Coulomb friction, no acceleration.
+    fn default() -> Self {
+        Self::zeroed()
+    }
+}
+
+shared_struct! {
+    /// Contact, friction and solver constants ([`StepParams::contact`]; on the GPU the
+    /// uniform block `contact` at `layout::Buf::Contact`, beside the step's 128 bytes).
+    /// New contact parameters go here: a uniform block has room.
+    pub struct ContactParams {
+        /// Coulomb's static friction coefficient μs (`SimParams::static_friction`).
+        pub static_friction: f32,
+        /// Coulomb's kinetic friction coefficient μk (`SimParams::kinetic_friction`).
+        pub kinetic_friction: f32,
+        /// VBD's spectral radius ρ for Chebyshev acceleration (`SimParams::vbd_rho`; 0 off).
+        pub vbd_rho: f32,
+        /// Unused (a uniform block is a multiple of 16 bytes); 0.
+        pub spare: f32,
+    }
+}
+
 shared_struct! {
     /// Per-step constants every kernel reads, derived from [`SimParams`] and [`Scene`]
     /// (`#[repr(C)]`: the GPU backends upload exactly these bytes).
     pub struct StepParams {
-        /// Gravity, m/s²; w = the Coulomb static friction coefficient μs
-        /// ([`StepParams::mu_static`]).
+        /// Gravity, m/s² (w 0).
         pub gravity: [f32; 4],
         /// Wind velocity, m/s; w = wind coefficient, kg/(m²·s).
         pub wind: [f32; 4],
-        /// Grab target, m; w = the Coulomb kinetic friction coefficient μk
-        /// ([`StepParams::mu_kinetic`]).
+        /// Grab target, m (w 0).
         pub grab_target: [f32; 4],
         /// Substep, s.
         pub dt: f32,
@@ -105,23 +158,26 @@ shared_struct! {
         /// Number of bodies (mesh colliders, `crate::sdf`) in use.
         pub num_bodies: u32,
         /// Number of rods (capsules, then cylinders: `crate::sdf::RODS_AT`) in use. The
-        /// struct is 128 bytes (a uniform block's size is a multiple of 16; immediates must
-        /// match the shader's struct): full.
+        /// struct's GPU block is 128 bytes (a uniform block's size is a multiple of 16;
+        /// immediates must match the shader's struct): full.
         pub num_rods: u32,
+        apart
+        /// Contact, friction and solver constants: a block of their own on the GPU.
+        pub contact: ContactParams,
     }
 }
 
 impl StepParams {
-    /// The Coulomb static friction coefficient μs (in `gravity`'s w: the struct is full).
+    /// The Coulomb static friction coefficient μs.
     #[inline(always)]
     pub fn mu_static(&self) -> f32 {
-        self.gravity[3]
+        self.contact.static_friction
     }
 
-    /// The Coulomb kinetic friction coefficient μk (in `grab_target`'s w).
+    /// The Coulomb kinetic friction coefficient μk.
     #[inline(always)]
     pub fn mu_kinetic(&self) -> f32 {
-        self.grab_target[3]
+        self.contact.kinetic_friction
     }
 
     /// Whether contacts take Coulomb friction (either coefficient above 0) instead of the
@@ -135,7 +191,7 @@ impl StepParams {
     /// frictionless self-collision kernels compute, whatever the parameters).
     #[inline(always)]
     pub fn without_coulomb(mut self) -> Self {
-        (self.gravity[3], self.grab_target[3]) = (0.0, 0.0);
+        (self.contact.static_friction, self.contact.kinetic_friction) = (0.0, 0.0);
         self
     }
 
@@ -152,12 +208,12 @@ impl StepParams {
         let [wx, wy, wz] = params.wind;
         let (grab_index, grab_target) = match grab {
             Some(g) if (g.particle as usize) < scene.num_particles() => {
-                (g.particle as i32, [g.target[0], g.target[1], g.target[2], params.kinetic_friction])
+                (g.particle as i32, [g.target[0], g.target[1], g.target[2], 0.0])
             }
-            _ => (-1, [0.0, 0.0, 0.0, params.kinetic_friction]),
+            _ => (-1, [0.0; 4]),
         };
         Self {
-            gravity: [gx, gy, gz, params.static_friction],
+            gravity: [gx, gy, gz, 0.0],
             wind: [wx, wy, wz, params.wind_coefficient],
             grab_target,
             dt: params.dt(),
@@ -180,6 +236,12 @@ impl StepParams {
             tile_substeps: 1,
             num_bodies: scene.bodies.len() as u32,
             num_rods: (scene.capsules.len() + scene.cylinders.len()) as u32,
+            contact: ContactParams {
+                static_friction: params.static_friction,
+                kinetic_friction: params.kinetic_friction,
+                vbd_rho: params.vbd_rho,
+                spare: 0.0,
+            },
         }
     }
 }

@@ -211,9 +211,10 @@ impl<E: Engine> GpuSolver<E> {
         let mut shapes = scene.shapes_at(0.0);
         shapes.extend(clothlab_core::sdf::concat(&scene.bodies).0);
         // Positions and normals are the renderer's vertex buffers too (no copy).
-        let contents: [(Buf, &[u8]); 34] = [
-            (Buf::Params, bytemuck::bytes_of(&sp)),
-            (Buf::ParamsStorage, bytemuck::bytes_of(&sp)),
+        let contents: [(Buf, &[u8]); 35] = [
+            (Buf::Params, sp.gpu_bytes()),
+            (Buf::ParamsStorage, sp.gpu_bytes()),
+            (Buf::Contact, bytemuck::bytes_of(&sp.contact)),
             (Buf::SpheresUniform, bytemuck::cast_slice(&spheres)),
             (Buf::BoxesUniform, bytemuck::cast_slice(&boxes)),
             (Buf::Pos, pos_bytes),
@@ -343,7 +344,7 @@ impl<E: Engine> GpuSolver<E> {
                     reason: format!("{} has no immediates", self.engine.info().adapter),
                 });
             }
-            std::mem::size_of::<StepParams>() as u32
+            StepParams::GPU_BYTES as u32
         } else if k.def.immediates == Immediates::Substep {
             4
         } else if k.def.immediates == Immediates::Range {
@@ -534,7 +535,7 @@ impl<E: Engine> GpuSolver<E> {
             let (k, count, range) = k;
             let range_bytes: &[u8] = bytemuck::cast_slice(&range);
             let immediates: &[u8] = if k.step_immediates() {
-                bytemuck::bytes_of(&self.step_params)
+                self.step_params.gpu_bytes()
             } else if k.def.immediates == Immediates::Substep {
                 &substep_bytes
             } else if k.def.immediates == Immediates::Range {
@@ -577,8 +578,9 @@ impl<E: Engine> GpuSolver<E> {
         for k in dispatches(commands) {
             self.build(k)?;
         }
-        self.write(Buf::Params, bytemuck::bytes_of(sp))?;
-        self.write(Buf::ParamsStorage, bytemuck::bytes_of(sp))?;
+        self.write(Buf::Params, sp.gpu_bytes())?;
+        self.write(Buf::ParamsStorage, sp.gpu_bytes())?;
+        self.write(Buf::Contact, bytemuck::bytes_of(&sp.contact))?;
         self.step_params = *sp;
         let moved = host_buffers(commands);
         for &buf in &moved {
@@ -725,8 +727,9 @@ impl<E: Engine> Solver for GpuSolver<E> {
         };
         let (mut q, mut labels) = (0, Vec::new());
         let (mut record_ns, mut submit_ns) = (0.0, 0.0);
-        let (params, params_storage, stats_max, stats_energy) = (
+        let (params, contact, params_storage, stats_max, stats_energy) = (
             self.must(Buf::Params)?,
+            self.must(Buf::Contact)?,
             self.must(Buf::ParamsStorage)?,
             self.must(Buf::StatsMax)?,
             self.must(Buf::StatsEnergy)?,
@@ -739,7 +742,8 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 // The frame's constants are recorded into the frame itself (Vulkan: a copy
                 // before the first dispatch; wgpu: a queue write), not a submission of
                 // their own.
-                self.engine.record_write(params, bytemuck::bytes_of(&self.step_params))?;
+                self.engine.record_write(params, self.step_params.gpu_bytes())?;
+                self.engine.record_write(contact, bytemuck::bytes_of(&self.step_params.contact))?;
                 // The frame's poses of the moving pins, every substep's block at once.
                 if !self.topo.pins.slots.is_empty() {
                     let poses = clothlab_core::pins::frame_poses(
@@ -755,7 +759,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 }
                 // The storage copy only for a recipe that reads it (kernel checks write both).
                 if self.variant.constants == Constants::Storage {
-                    self.engine.record_write(params_storage, bytemuck::bytes_of(&self.step_params))?;
+                    self.engine.record_write(params_storage, self.step_params.gpu_bytes())?;
                 }
                 let mut written = res::PARAMS;
                 if stats {

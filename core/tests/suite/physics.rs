@@ -34,6 +34,7 @@ fn bare_params(n: u32, dt: f32, mass: f32) -> StepParams {
         tile_substeps: 1,
         num_bodies: 0,
         num_rods: 0,
+        contact: Default::default(),
     }
 }
 

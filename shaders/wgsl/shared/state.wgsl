@@ -53,14 +53,18 @@ struct Moved {
     v: vec3<f32>,
 }
 
-// Coulomb's coefficients μs and μk (core::grid::StepParams::mu_static, mu_kinetic: in
-// gravity's and grab_target's w, the struct is full).
+// The contact, friction and solver constants (core::step_params::ContactParams,
+// layout::Buf::Contact): a uniform block beside the step's, read only by the kernels that
+// call these.
+@group(0) @binding(37) var<uniform> contact_params: ContactParams;
+
+// Coulomb's coefficients μs and μk (core::step_params::StepParams::mu_static, mu_kinetic).
 fn mu_static() -> f32 {
-    return p.gravity.w;
+    return contact_params.static_friction;
 }
 
 fn mu_kinetic() -> f32 {
-    return p.grab_target.w;
+    return contact_params.kinetic_friction;
 }
 
 // Whether contacts take Coulomb friction instead of the share p.friction
