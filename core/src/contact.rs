@@ -93,6 +93,7 @@ impl Shape for Sphere {
         Some(Contact { depth: r - dist, n, at: c + arm, vs: surface_vel(v3(self.velocity), v3(self.spin), arm) })
     }
 
+    #[inline(always)]
     fn bound(&self, reach: f32) -> Bound {
         Bound::Ball { center: Vec3::from(self.center), r: self.radius + reach }
     }
@@ -123,6 +124,7 @@ impl Shape for Aabb {
         Some(Contact { depth, n, at: x * (Vec3::ONE - axis) + axis * face, vs: v3(self.velocity) })
     }
 
+    #[inline(always)]
     fn bound(&self, reach: f32) -> Bound {
         Bound::Box { lo: v3(self.min) - Vec3::splat(reach), hi: v3(self.max) + Vec3::splat(reach) }
     }
@@ -160,6 +162,7 @@ impl Shape for Capsule {
         Some(Contact { depth: r - dist, n, at, vs })
     }
 
+    #[inline(always)]
     fn bound(&self, reach: f32) -> Bound {
         let half = 0.5 * (v3(self.b) - v3(self.a)).length();
         Bound::Ball { center: mid(self.a, self.b), r: half + self.a[3] + reach + 1e-3 }
@@ -196,6 +199,7 @@ impl Shape for Cylinder {
         Some(Contact { depth, n, at, vs: surface_vel(v3(self.velocity), v3(self.spin), at - m) })
     }
 
+    #[inline(always)]
     fn bound(&self, reach: f32) -> Bound {
         let half = 0.5 * (v3(self.b) - v3(self.a)).length();
         let r = self.a[3];
@@ -257,6 +261,7 @@ impl Shape for Body<'_> {
 
     /// A ball about the pivot holding the whole grid (generously: a point let through is
     /// only sampled).
+    #[inline(always)]
     fn bound(&self, reach: f32) -> Bound {
         let hd = self.head;
         let h = hd.lo[3];

@@ -81,16 +81,6 @@ impl<'a> Colliders<'a> {
         let values = self.bodies.values;
         self.bodies.heads.iter().map(move |head| Body { head, values })
     }
-
-    /// Every collider's bound grown by `reach` (the fused sweep's skip test), to `f`.
-    #[inline(always)]
-    pub fn each_bound(&self, reach: f32, mut f: impl FnMut(crate::contact::Bound)) {
-        self.bodies().for_each(|s| f(s.bound(reach)));
-        self.capsules.iter().for_each(|s| f(s.bound(reach)));
-        self.cylinders.iter().for_each(|s| f(s.bound(reach)));
-        self.spheres.iter().for_each(|s| f(s.bound(reach)));
-        self.boxes.iter().for_each(|s| f(s.bound(reach)));
-    }
 }
 
 /// The colliders of a scene at one time, owned: what [`Colliders`] views.
