@@ -12,8 +12,6 @@
 
 use glam::Vec3;
 
-use crate::cpu::integrate::surface_vel;
-use crate::cpu::v3;
 use crate::scene::{Aabb, Capsule, Cylinder, Sphere};
 use crate::sdf::{SdfHead, sample_grid};
 
@@ -56,6 +54,25 @@ pub trait Shape {
     fn contact(&self, x: Vec3, reach: f32) -> Option<Contact>;
     /// A region holding this shape grown by `reach` (every `x` with a contact lies in it).
     fn bound(&self, reach: f32) -> Bound;
+}
+
+/// The velocity `v + ω × arm` of a surface point at `arm` from the centre of a body
+/// moving at `v` and spinning at `ω`, added left to right as the shaders' `surface_vel`:
+/// `(v.x + ω.y·arm.z) − ω.z·arm.y`, … (Mesa reassociates `v + (p − q)` into that order on
+/// the GPU, so it is written so).
+#[inline(always)]
+pub fn surface_vel(v: Vec3, spin: Vec3, arm: Vec3) -> Vec3 {
+    Vec3::new(
+        v.x + spin.y * arm.z - spin.z * arm.y,
+        v.y + spin.z * arm.x - spin.x * arm.z,
+        v.z + spin.x * arm.y - spin.y * arm.x,
+    )
+}
+
+/// The xyz of a `[f32; 4]`.
+#[inline(always)]
+fn v3(a: [f32; 4]) -> Vec3 {
+    Vec3::new(a[0], a[1], a[2])
 }
 
 /// `a·b` summed left to right (the WGSL's `dot3`).

@@ -146,7 +146,8 @@ pub enum Buf {
     /// The trilinear sampler of [`Buf::SdfImage`].
     SdfSampler = 36,
     /// The contact, friction and solver constants ([`crate::step_params::ContactParams`],
-    /// `StepParams::contact`): a uniform block beside the step's.
+    /// `StepParams::contact`): a uniform block beside the step's, part of
+    /// [`Buf::Params`]' data (a row that reads the constants reads both).
     Contact = 37,
 }
 
@@ -266,7 +267,7 @@ impl Buf {
     /// registry rows, hazards and host copies need to know only one.
     pub const fn data(self) -> Buf {
         match self {
-            Buf::ParamsStorage => Buf::Params,
+            Buf::ParamsStorage | Buf::Contact => Buf::Params,
             Buf::SpheresUniform => Buf::Spheres,
             Buf::BoxesUniform => Buf::Boxes,
             Buf::SdfImage | Buf::SdfSampler => Buf::Shapes,
@@ -277,7 +278,7 @@ impl Buf {
     /// The other homes of this buffer's data (see [`Buf::data`]).
     pub const fn homes(self) -> &'static [Buf] {
         match self {
-            Buf::Params => &[Buf::ParamsStorage],
+            Buf::Params => &[Buf::ParamsStorage, Buf::Contact],
             Buf::Spheres => &[Buf::SpheresUniform],
             Buf::Boxes => &[Buf::BoxesUniform],
             Buf::Shapes => &[Buf::SdfImage],

@@ -571,7 +571,7 @@ pub fn bits(buf: Buf, cur: usize) -> u32 {
         Buf::Force => FORCE,
         Buf::Normal => NORMAL,
         Buf::Faces => FACES,
-        Buf::Params | Buf::Contact => PARAMS,
+        Buf::Params => PARAMS,
         Buf::StatsMax | Buf::StatsEnergy => STATS,
         Buf::Partials => PARTIALS,
         Buf::Aux0 | Buf::Aux1 | Buf::Aux2 | Buf::Aux3 | Buf::Aux4 => AUX,

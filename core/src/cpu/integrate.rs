@@ -37,19 +37,6 @@ pub(crate) fn contact_vel_moving(v: Vec3, vs: Vec3, nrm: Vec3, friction: f32) ->
     vs + vt * (1.0 - friction) + vn.max(0.0) * nrm
 }
 
-/// The velocity `v + ω × arm` of a surface point at `arm` from the centre of a body
-/// moving at `v` and spinning at `ω`, added left to right as the shaders' `surface_vel`:
-/// `(v.x + ω.y·arm.z) − ω.z·arm.y`, … (Mesa reassociates `v + (p − q)` into that order on
-/// the GPU, so it is written so).
-#[inline(always)]
-pub(crate) fn surface_vel(v: Vec3, spin: Vec3, arm: Vec3) -> Vec3 {
-    Vec3::new(
-        v.x + spin.y * arm.z - spin.z * arm.y,
-        v.y + spin.z * arm.x - spin.x * arm.z,
-        v.z + spin.x * arm.y - spin.y * arm.x,
-    )
-}
-
 /// Coulomb friction at a contact (`SimParams::static_friction`, `kinetic_friction`; on
 /// when [`StepParams::coulomb`]) for a particle at `x` (already on the surface) moving at
 /// `v` against a surface of unit normal `nrm` moving at `vs`: the contact removes the
