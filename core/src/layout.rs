@@ -287,6 +287,49 @@ impl Buf {
     }
 }
 
+/// What a scene uses of the collider walk's code: the kernels' `USES_*` constants. The
+/// built kernels say `true` for all (they serve every scene); `specialize=on` rebuilds a
+/// scene's kernels with what it uses ([`Uses::of`]), so that a kernel compiles to the code
+/// the scene needs: code a scene does not use costs a kernel on llvmpipe about as much as
+/// code it runs (docs/bench/lavapipe-specialise).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Uses {
+    /// Capsules or cylinders (`USES_RODS`: the rods' loops).
+    pub rods: bool,
+    /// Bodies (`USES_BODIES`: the bodies' loops and their fields' reads).
+    pub bodies: bool,
+    /// Coulomb friction (`USES_COULOMB`: `coulomb()` is false without it).
+    pub coulomb: bool,
+    /// Moving colliders (`USES_MOTION`: a surface's velocity is zero without it).
+    pub motion: bool,
+}
+
+impl Uses {
+    /// Everything: the code every scene may run (what the build compiles).
+    pub const ALL: Uses = Uses { rods: true, bodies: true, coulomb: true, motion: true };
+
+    /// What `scene` with `params` uses: what a kernel specialised to it keeps. Every
+    /// `false` is a value the kernels would compute anyway (no rod or body to loop over,
+    /// Coulomb's coefficients zero, every collider's velocity and spin zero), so a
+    /// specialised kernel computes the general one's bits.
+    pub fn of(scene: &crate::Scene, params: &crate::SimParams) -> Uses {
+        Uses {
+            rods: !scene.capsules.is_empty() || !scene.cylinders.is_empty(),
+            bodies: !scene.bodies.is_empty(),
+            coulomb: params.coulomb(),
+            motion: scene.moves(),
+        }
+    }
+
+    /// The WGSL constants (`const USES_RODS: bool = true;` …).
+    pub fn wgsl(&self) -> String {
+        format!(
+            "const USES_RODS: bool = {};\nconst USES_BODIES: bool = {};\nconst USES_COULOMB: bool = {};\nconst USES_MOTION: bool = {};\n",
+            self.rods, self.bodies, self.coulomb, self.motion
+        )
+    }
+}
+
 /// The WGSL `const` declarations of the values above (prepended to every kernel).
 pub fn wgsl_constants() -> String {
     let u = |name: &str, v: u32| format!("const {name}: u32 = {v}u;\n");
@@ -306,6 +349,7 @@ pub fn wgsl_constants() -> String {
     s += &u("SHAPES_VALUES_AT", crate::sdf::VALUES_AT as u32);
     s += &u("MAX_PIN_GROUPS", crate::pins::MAX_PIN_GROUPS as u32);
     s += &format!("const STRAIN_AIM: f32 = {STRAIN_AIM:?};\n");
+    s += &Uses::ALL.wgsl();
     s
 }
 

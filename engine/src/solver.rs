@@ -11,7 +11,7 @@ use clothlab_core::cpu::{self as twins, SubstepStats};
 use clothlab_core::grid::{
     ClothState, ClothTopology, Grab, GridSpringConstants, STRAIN_SLOTS, SpringSlot, V4, spring_constants,
 };
-use clothlab_core::layout::Buf;
+use clothlab_core::layout::{Buf, Uses};
 use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose, PinSlot};
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
@@ -28,7 +28,7 @@ use crate::recipe::{
     res, stats_commands,
 };
 use crate::tables::{adjacency, face_flat, record_times, sdf_texels, split_slots, spring_halves, table_texels};
-use crate::variant::{Colliders, Constants, Draw, Sdf, Submit, Table, Variant, VariantSpec};
+use crate::variant::{Colliders, Constants, Draw, Sdf, Specialize, Submit, Table, Variant, VariantSpec};
 
 /// Timestamp queries per frame.
 pub const MAX_QUERIES: u32 = 4096;
@@ -289,9 +289,10 @@ impl<E: Engine> GpuSolver<E> {
                 .collect()
         };
         engine.bind([set(0), set(1)])?;
-        let step = recipe_for(&variant, params.strain_iterations, Integration::of(&params), &topo);
+        let uses = uses_of(&variant, &scene, &params);
+        let step = specialised(recipe_for(&variant, params.strain_iterations, Integration::of(&params), &topo), uses);
         let group = recipe_group(&variant, &params, &topo, options, &scene)?;
-        let end = frame_end(&variant, Integration::of(&params));
+        let end = specialised(frame_end(&variant, Integration::of(&params)), uses);
         // Only what the frame dispatches is built now; the other kernels a validation may
         // run (`offered`) are built when first run (`run_host`): most are other
         // integrators' and other features', and building them all took a Vulkan solver's
@@ -612,6 +613,30 @@ impl<E: Engine> GpuSolver<E> {
     }
 }
 
+/// What `variant`'s kernels keep of the collider walk for `scene` and `params`: the
+/// scene's uses with `specialize=on`, everything otherwise.
+fn uses_of(variant: &Variant, scene: &Scene, params: &SimParams) -> Uses {
+    match variant.specialize {
+        Specialize::On => Uses::of(scene, params),
+        Specialize::Off => Uses::ALL,
+    }
+}
+
+/// `commands` with every kernel specialised to `uses`.
+fn specialised(commands: Vec<Command>, uses: Uses) -> Vec<Command> {
+    if uses == Uses::ALL {
+        return commands;
+    }
+    commands
+        .into_iter()
+        .map(|c| match c {
+            Command::Dispatch(k) => Command::Dispatch(k.with_uses(uses)),
+            Command::Range { kernel, first, count } => Command::Range { kernel: kernel.with_uses(uses), first, count },
+            c => c,
+        })
+        .collect()
+}
+
 /// The uniform block of the regular grid's spring constants, switched off when the table
 /// is to be read from storage or an image everywhere.
 fn interior_block(topo: &ClothTopology, table: Table) -> GridSpringConstants {
@@ -686,9 +711,12 @@ impl<E: Engine> Solver for GpuSolver<E> {
             self.write(Buf::SpringsB, bytemuck::cast_slice(&b))?;
             self.write(Buf::Interior, bytemuck::bytes_of(&interior))?;
         }
-        let step = recipe_for(&self.variant, params.strain_iterations, Integration::of(&params), &self.topo);
+        // Specialised kernels follow what the parameters use (Coulomb's coefficients).
+        let uses = uses_of(&self.variant, &self.scene, &params);
+        let integration = Integration::of(&params);
+        let step = specialised(recipe_for(&self.variant, params.strain_iterations, integration, &self.topo), uses);
         let group = recipe_group(&self.variant, &params, &self.topo, self.options, &self.scene)?;
-        let end = frame_end(&self.variant, Integration::of(&params));
+        let end = specialised(frame_end(&self.variant, integration), uses);
         for k in kernels_of(&step).into_iter().chain(kernels_of(&end)) {
             self.build(k)?;
         }

@@ -129,6 +129,19 @@ pub enum Sdf {
     Image,
 }
 
+/// Whether the kernels are compiled for the scene (`core::layout::Uses`): the collider
+/// walk's code for rods, bodies, Coulomb friction and moving surfaces kept only where the
+/// scene has them. The same bits either way (what is dropped computes nothing the scene
+/// needs); what it buys is measured by the ladder's rung.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Specialize {
+    /// The kernels as built: every scene's code.
+    Off,
+    /// Each kernel rebuilt with the scene's `USES_*` constants when the solver is made
+    /// (and again when a parameter changes what it uses: Coulomb's coefficients).
+    On,
+}
+
 /// Where the gathers read the spring table from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Table {
@@ -199,6 +212,8 @@ pub struct Variant {
     pub temporal: Temporal,
     /// Where the bodies' distance fields are read from.
     pub sdf: Sdf,
+    /// Whether the kernels are compiled for the scene.
+    pub specialize: Specialize,
 }
 
 /// One switch: its key, its values (in ladder order: the naive one first) and what it
@@ -214,7 +229,7 @@ pub struct Switch {
 }
 
 /// Every switch.
-pub const SWITCHES: [Switch; 12] = [
+pub const SWITCHES: [Switch; 13] = [
     Switch {
         key: "springs",
         values: &["scatter", "gather"],
@@ -267,6 +282,11 @@ pub const SWITCHES: [Switch; 12] = [
         values: &["storage", "image"],
         help: "the bodies' distance fields: a storage buffer interpolated by the kernel, or a 3-D image the texture unit interpolates",
     },
+    Switch {
+        key: "specialize",
+        values: &["off", "on"],
+        help: "the kernels as built for every scene, or compiled for the scene: the code for rods, bodies, Coulomb friction and moving colliders only where it has them",
+    },
 ];
 
 /// The presets, by name.
@@ -290,6 +310,7 @@ impl Variant {
         draw: Draw::Copy,
         temporal: Temporal::Off,
         sdf: Sdf::Storage,
+        specialize: Specialize::Off,
     };
     /// clothlab's optimized step, the [`LADDER`]'s rung before the tiles (every earlier
     /// rung's switch set; `fusion=tile` is left out: slower on lavapipe and on the H100,
@@ -297,7 +318,7 @@ impl Variant {
     /// gathers, its fusion with the wind computed in the forces gather and the normals once
     /// per frame, one submission per frame, push constants, the table as uniform constants
     /// with neighbours by offset, colliders in a uniform block, neighbours' columns by
-    /// subgroup shuffles. [`Variant::fit`] falls back where an adapter lacks a switch (no
+    /// subgroup shuffles, the kernels compiled for the scene. [`Variant::fit`] falls back where an adapter lacks a switch (no
     /// subgroups: loads; no push constants: a uniform block). Measured on lavapipe
     /// (docs/variants.md) it is the fastest combination the ladder reached on both APIs,
     /// and `validate --every-switch` checks it against the twins like every rung.
@@ -314,6 +335,7 @@ impl Variant {
         draw: Draw::Shared,
         temporal: Temporal::Off,
         sdf: Sdf::Storage,
+        specialize: Specialize::On,
     };
     /// The thesis's optimized CUDA program (ch. 6.3.1): springs scattered with atomics,
     /// forces + Verlet + collisions fused, normals gathered from stored face normals, the
@@ -331,6 +353,7 @@ impl Variant {
         draw: Draw::Shared,
         temporal: Temporal::Off,
         sdf: Sdf::Storage,
+        specialize: Specialize::Off,
     };
 
     /// Which value of switch `key` it has: the position in the switch's
@@ -350,6 +373,7 @@ impl Variant {
             "draw" => self.draw as usize,
             "temporal" => self.temporal as usize,
             "sdf" => self.sdf as usize,
+            "specialize" => self.specialize as usize,
             _ => return None,
         })
     }
@@ -385,6 +409,7 @@ impl Variant {
             "neighbours" => self.neighbours = [Neighbours::Load, Neighbours::Shuffle][i],
             "draw" => self.draw = [Draw::Copy, Draw::Shared][i],
             "sdf" => self.sdf = [Sdf::Storage, Sdf::Image][i],
+            "specialize" => self.specialize = [Specialize::Off, Specialize::On][i],
             _ => self.temporal = [Temporal::Off, Temporal::On][i],
         }
         Ok(())
@@ -559,7 +584,7 @@ impl Variant {
 
 /// The optimisation ladder: from `naive`, one switch at a time, in this order (each rung
 /// keeps the switches of the rungs before it).
-pub const LADDER: [(&str, &str); 16] = [
+pub const LADDER: [(&str, &str); 17] = [
     ("submit", "frame"),
     ("draw", "shared"),
     ("constants", "uniform"),
@@ -573,6 +598,9 @@ pub const LADDER: [(&str, &str); 16] = [
     ("table", "uniform"),
     ("neighbours", "shuffle"),
     ("normals", "frame"),
+    // The kernels compiled for the scene: the code for rods, bodies, Coulomb friction and
+    // moving colliders only where it has them (docs/bench/lavapipe-specialise).
+    ("specialize", "on"),
     ("fusion", "tile"),
     ("temporal", "on"),
     // The bodies' fields from the image: measures something only on a scene with bodies

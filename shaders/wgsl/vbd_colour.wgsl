@@ -84,16 +84,20 @@ fn each_contact(stiffness: f32, x: vec3<f32>, d: vec3<f32>, friction_pass: bool)
             touch(stiffness, c.depth, c.n, d, c.vs, friction_pass);
         }
     }
-    for (var k = 0u; k < p.num_rods; k++) {
-        let c = rod_contact(k, x, reach);
-        if c.hit {
-            touch(stiffness, c.depth, c.n, d, c.vs, friction_pass);
+    if USES_RODS {
+        for (var k = 0u; k < p.num_rods; k++) {
+            let c = rod_contact(k, x, reach);
+            if c.hit {
+                touch(stiffness, c.depth, c.n, d, c.vs, friction_pass);
+            }
         }
     }
-    for (var k = 0u; k < p.num_bodies; k++) {
-        let c = body_contact(k, x, reach);
-        if c.hit {
-            touch(stiffness, c.depth, c.n, d, c.vs, friction_pass);
+    if USES_BODIES {
+        for (var k = 0u; k < p.num_bodies; k++) {
+            let c = body_contact(k, x, reach);
+            if c.hit {
+                touch(stiffness, c.depth, c.n, d, c.vs, friction_pass);
+            }
         }
     }
 }

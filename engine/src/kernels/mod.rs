@@ -20,7 +20,7 @@ use std::hash::{Hash, Hasher};
 
 use clothlab_core::cpu::{self, Exec, SubstepStats};
 use clothlab_core::grid::{ClothTopology, V4};
-use clothlab_core::layout::{BLOCK, Buf, WORKGROUP};
+use clothlab_core::layout::{BLOCK, Buf, Uses, WORKGROUP};
 use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose};
 use clothlab_core::step_params::StepParams;
@@ -482,17 +482,21 @@ impl KernelDef {
             shuffle: want.shuffle && v.shuffle,
             sdf_image: want.sdf_image && v.sdf_image,
         };
-        KernelRef { def: self, flavor }
+        KernelRef { def: self, flavor, uses: Uses::ALL }
     }
 
     /// The kernel in its plain flavor.
     pub fn plain(&'static self) -> KernelRef {
-        KernelRef { def: self, flavor: Flavor::default() }
+        KernelRef { def: self, flavor: Flavor::default(), uses: Uses::ALL }
     }
 
     /// Every flavor the kernel has.
     pub fn flavors(&'static self) -> Vec<KernelRef> {
-        Flavor::all().into_iter().filter(|f| self.has(*f)).map(|flavor| KernelRef { def: self, flavor }).collect()
+        Flavor::all()
+            .into_iter()
+            .filter(|f| self.has(*f))
+            .map(|flavor| KernelRef { def: self, flavor, uses: Uses::ALL })
+            .collect()
     }
 
     /// Whether it writes the other buffer of the position pair (a recipe swaps the pair
@@ -510,11 +514,14 @@ pub struct KernelRef {
     pub def: &'static KernelDef,
     /// Which of its variants.
     pub flavor: Flavor,
+    /// What of the collider walk's code it keeps (`specialize=on`: the scene's
+    /// [`Uses::of`]; [`Uses::ALL`], the built shader, otherwise).
+    pub uses: Uses,
 }
 
 impl PartialEq for KernelRef {
     fn eq(&self, other: &Self) -> bool {
-        self.def.name == other.def.name && self.flavor == other.flavor
+        self.def.name == other.def.name && self.flavor == other.flavor && self.uses == other.uses
     }
 }
 
@@ -524,6 +531,7 @@ impl Hash for KernelRef {
     fn hash<H: Hasher>(&self, state: &mut H) {
         self.def.name.hash(state);
         self.flavor.hash(state);
+        self.uses.hash(state);
     }
 }
 
@@ -559,21 +567,41 @@ impl KernelRef {
         self.flavor.constants == ConstantsHome::Immediates
     }
 
-    /// The complete WGSL.
+    /// This kernel specialised to `uses` (see [`KernelRef::uses`]).
+    pub fn with_uses(self, uses: Uses) -> KernelRef {
+        KernelRef { uses, ..self }
+    }
+
+    /// Whether its shader is compiled when it is built (a kernel given as WGSL at run
+    /// time, or one specialised to a scene), not taken from what the build compiled.
+    fn compiled_at_run_time(&self) -> bool {
+        matches!(self.def.source, Source::Wgsl { .. }) || self.uses != Uses::ALL
+    }
+
+    /// The complete WGSL (specialised: the prelude's `USES_*` constants set to
+    /// [`KernelRef::uses`]).
     pub fn wgsl(&self) -> Result<Cow<'static, str>, EngineError> {
-        match self.def.source {
-            Source::Builtin => Ok(Cow::Borrowed(self.builtin()?.wgsl)),
+        let general = match self.def.source {
+            Source::Builtin => Cow::Borrowed(self.builtin()?.wgsl),
             Source::Wgsl { includes, body } => {
-                clothlab_shaders::compose(includes, body).map(Cow::Owned).map_err(|e| self.error(e))
+                Cow::Owned(clothlab_shaders::compose(includes, body).map_err(|e| self.error(e))?)
             }
+        };
+        if self.uses == Uses::ALL {
+            return Ok(general);
         }
+        let all = Uses::ALL.wgsl();
+        if !general.contains(&all) {
+            return Err(self.error("its WGSL lacks the prelude's USES_* constants to specialise".into()));
+        }
+        Ok(Cow::Owned(general.replacen(&all, &self.uses.wgsl(), 1)))
     }
 
     /// SPIR-V 1.3, little-endian words as bytes.
     pub fn spirv(&self) -> Result<Cow<'static, [u8]>, EngineError> {
         match self.def.source {
-            Source::Builtin => Ok(Cow::Borrowed(self.builtin()?.spirv)),
-            Source::Wgsl { .. } => {
+            Source::Builtin if !self.compiled_at_run_time() => Ok(Cow::Borrowed(self.builtin()?.spirv)),
+            _ => {
                 let wgsl = self.wgsl()?;
                 let words = clothlab_shaders::compile_spirv(self.def.name, &wgsl).map_err(|e| self.error(e))?;
                 Ok(Cow::Owned(words.iter().flat_map(|w| w.to_le_bytes()).collect()))
@@ -585,7 +613,7 @@ impl KernelRef {
     /// (see [`clothlab_shaders::Kernel::gl_points`] and `gl_uniforms`).
     pub fn glsl(&self) -> Result<Glsl, EngineError> {
         match self.def.source {
-            Source::Builtin => {
+            Source::Builtin if !self.compiled_at_run_time() => {
                 let k = self.builtin()?;
                 Ok(Glsl {
                     text: Cow::Borrowed(k.glsl),
@@ -593,7 +621,7 @@ impl KernelRef {
                     uniforms: k.gl_uniforms.iter().map(|&(n, o, c, w)| (n.to_string(), o, c, w)).collect(),
                 })
             }
-            Source::Wgsl { .. } => {
+            _ => {
                 let wgsl = self.wgsl()?;
                 let (text, points, uniforms) =
                     clothlab_shaders::compile_glsl(self.def.name, &wgsl).map_err(|e| self.error(e))?;

@@ -23,6 +23,16 @@ fn rod_at(k: u32) -> Rod {
     return Rod(shapes_vec4(b), shapes_vec4(b + 4u), shapes_vec4(b + 8u), shapes_vec4(b + 12u));
 }
 
+// The surface's velocity at `arm` from the centre of a shape moving at v and spinning at
+// spin (surface_vel); zero where nothing in the scene moves (USES_MOTION false: every
+// velocity and spin is zero, and so, to the bit, is surface_vel's sum).
+fn moving_vel(v: vec3<f32>, spin: vec3<f32>, arm: vec3<f32>) -> vec3<f32> {
+    if USES_MOTION {
+        return surface_vel(v, spin, arm);
+    }
+    return vec3<f32>(0.0);
+}
+
 // A point's contact with a shape grown by a reach (core::contact::Contact): `hit` false
 // where there is none.
 struct Contact {
@@ -63,7 +73,7 @@ fn sphere_contact(s: Sphere, x: vec3<f32>, reach: f32) -> Contact {
     let dist = sqrt(dist2);
     let n = away(d, dist);
     let arm = n * r;
-    return Contact(true, r - dist, n, s.center + arm, surface_vel(s.velocity.xyz, s.spin.xyz, arm));
+    return Contact(true, r - dist, n, s.center + arm, moving_vel(s.velocity.xyz, s.spin.xyz, arm));
 }
 
 // core::contact's `impl Shape for Aabb`: out through the nearest face.
@@ -84,7 +94,7 @@ fn box_contact(b: Aabb, x: vec3<f32>, reach: f32) -> Contact {
     if below.z < best { best = below.z; n = vec3<f32>(0.0, 0.0, -1.0); face = lo.z; }
     if above.z < best { best = above.z; n = vec3<f32>(0.0, 0.0, 1.0); face = hi.z; }
     let axis = abs(n);
-    return Contact(true, best, n, x * (vec3<f32>(1.0) - axis) + axis * face, b.velocity.xyz);
+    return Contact(true, best, n, x * (vec3<f32>(1.0) - axis) + axis * face, select(vec3<f32>(0.0), b.velocity.xyz, USES_MOTION));
 }
 
 // The midpoint of a rod's axis, (a + b)·½ (core::contact::mid).
@@ -111,7 +121,7 @@ fn capsule_contact(c: Rod, x: vec3<f32>, reach: f32) -> Contact {
     let dist = sqrt(dist2);
     let n = away(d, dist);
     let at = q + n * r;
-    return Contact(true, r - dist, n, at, surface_vel(c.velocity.xyz, c.spin.xyz, at - rod_center(c)));
+    return Contact(true, r - dist, n, at, moving_vel(c.velocity.xyz, c.spin.xyz, at - rod_center(c)));
 }
 
 // A unit direction across the unit axis u (core::contact::across).
@@ -156,7 +166,7 @@ fn cylinder_contact(c: Rod, x: vec3<f32>, reach: f32) -> Contact {
         }
         at = m + u * t + n * r;
     }
-    return Contact(true, depth, n, at, surface_vel(c.velocity.xyz, c.spin.xyz, at - m));
+    return Contact(true, depth, n, at, moving_vel(c.velocity.xyz, c.spin.xyz, at - m));
 }
 
 // Rod k's contact: a capsule's or a cylinder's, by its kind.
@@ -291,7 +301,7 @@ fn body_contact(k: u32, x: vec3<f32>, reach: f32) -> Contact {
         return NO_CONTACT;
     }
     let at = x + s.n * (reach - s.phi);
-    return Contact(true, reach - s.phi, s.n, at, surface_vel(body_vec(k, 16u), body_vec(k, 20u), at - body_vec(k, 12u)));
+    return Contact(true, reach - s.phi, s.n, at, moving_vel(body_vec(k, 16u), body_vec(k, 20u), at - body_vec(k, 12u)));
 }
 
 // core::cpu::collide::collide_at for a free particle (is_free): m pushed out of every
@@ -316,20 +326,24 @@ fn collided(m: Moved) -> Moved {
             v = hit.v;
         }
     }
-    for (var k = 0u; k < p.num_rods; k++) {
-        let c = rod_contact(k, x, p.margin);
-        if c.hit {
-            let hit = surface_contact(c.at, v, c.vs, c.n);
-            x = hit.x;
-            v = hit.v;
+    if USES_RODS {
+        for (var k = 0u; k < p.num_rods; k++) {
+            let c = rod_contact(k, x, p.margin);
+            if c.hit {
+                let hit = surface_contact(c.at, v, c.vs, c.n);
+                x = hit.x;
+                v = hit.v;
+            }
         }
     }
-    for (var k = 0u; k < p.num_bodies; k++) {
-        let c = body_contact(k, x, p.margin);
-        if c.hit {
-            let hit = surface_contact(c.at, v, c.vs, c.n);
-            x = hit.x;
-            v = hit.v;
+    if USES_BODIES {
+        for (var k = 0u; k < p.num_bodies; k++) {
+            let c = body_contact(k, x, p.margin);
+            if c.hit {
+                let hit = surface_contact(c.at, v, c.vs, c.n);
+                x = hit.x;
+                v = hit.v;
+            }
         }
     }
     return Moved(x, v);

@@ -70,7 +70,7 @@ fn mu_kinetic() -> f32 {
 // Whether contacts take Coulomb friction instead of the share p.friction
 // (StepParams::coulomb).
 fn coulomb() -> bool {
-    return mu_static() > 0.0 || mu_kinetic() > 0.0;
+    return USES_COULOMB && (mu_static() > 0.0 || mu_kinetic() > 0.0);
 }
 
 // VBD's friction coefficient (StepParams::vbd_mu).

@@ -23,6 +23,7 @@ mod pins;
 mod render;
 mod scenes;
 mod self_collision;
+mod specialize;
 mod subgroup_shuffle;
 mod tile;
 mod two_cloths;
