@@ -294,6 +294,9 @@ The switches (values in ladder order, the naive one first):
   sdf=storage|image               the bodies' distance fields: a storage buffer the
                                   kernel interpolates, or a 3-D image the texture unit
                                   interpolates (within 0.1 cell of the twins)
+  specialize=off|on               the kernels as built for every scene, or compiled for
+                                  the scene: the code for rods, bodies, Coulomb friction
+                                  and moving colliders only where it has them (same bits)
 A switch the adapter lacks, or two that exclude each other, is refused in one line.";
 
 /// The variant of the GPU backends: a preset and changes of single switches.

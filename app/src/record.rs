@@ -433,24 +433,18 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         let (p, t) = box_mesh(lo, hi);
         nodes.push(static_mesh(&mut root, &mut bin, &format!("box {k}"), &p, &t));
     }
-    for (k, c) in scene.capsules.iter().enumerate() {
-        if let Some(node) = moved(ColliderId::Capsule(k)) {
+    // The rods, each about its centre.
+    let capsules = (scene.capsules.iter().enumerate())
+        .map(|(k, c)| (ColliderId::Capsule(k), format!("capsule {k}"), c.center(), capsule_local(c)));
+    let cylinders = (scene.cylinders.iter().enumerate())
+        .map(|(k, c)| (ColliderId::Cylinder(k), format!("cylinder {k}"), c.center(), cylinder_local(c)));
+    for (id, name, centre, (p, t)) in capsules.chain(cylinders) {
+        if let Some(node) = moved(id) {
             nodes.push(node);
             continue;
         }
-        let (p, t) = capsule_local(c);
-        let node = static_mesh(&mut root, &mut bin, &format!("capsule {k}"), &p, &t);
-        root.nodes[node.value()].translation = Some(c.center());
-        nodes.push(node);
-    }
-    for (k, c) in scene.cylinders.iter().enumerate() {
-        if let Some(node) = moved(ColliderId::Cylinder(k)) {
-            nodes.push(node);
-            continue;
-        }
-        let (p, t) = cylinder_local(c);
-        let node = static_mesh(&mut root, &mut bin, &format!("cylinder {k}"), &p, &t);
-        root.nodes[node.value()].translation = Some(c.center());
+        let node = static_mesh(&mut root, &mut bin, &name, &p, &t);
+        root.nodes[node.value()].translation = Some(centre);
         nodes.push(node);
     }
     nodes.extend(body_nodes);

@@ -66,75 +66,79 @@ impl Aabb {
     }
 }
 
-/// A capsule collider: the points within `radius` of the segment from `a` to `b` (a
-/// limb, a bar). `#[repr(C)]`, mirrored in the shaders.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
-pub struct Capsule {
-    /// One end of the axis, m; w the radius, m.
-    pub a: [f32; 4],
-    /// The other end, m (w 0).
-    pub b: [f32; 4],
-    /// Velocity of its centre (the axis' midpoint) at this substep, m/s (w 0).
-    #[serde(skip)]
-    pub velocity: [f32; 4],
-    /// Angular velocity about its centre, rad/s (w 0): the surface at `x` moves at
-    /// `velocity + spin × (x − (a + b)/2)`.
-    #[serde(skip)]
-    pub spin: [f32; 4],
+/// A shape about a segment (a *rod*): the `#[repr(C)]` record the shaders' `Rod` mirrors
+/// (16 floats in the shapes buffer), a still constructor, its radius and centre.
+macro_rules! rod {
+    ($(#[$meta:meta])* $name:ident, $what:literal, $end:literal) => {
+        $(#[$meta])*
+        #[repr(C)]
+        #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
+        pub struct $name {
+            #[doc = concat!($end, ", m; w the radius, m.")]
+            pub a: [f32; 4],
+            /// The other end, m (w 0; the shapes buffer marks the kind there).
+            pub b: [f32; 4],
+            /// Velocity of its centre (the axis' midpoint) at this substep, m/s (w 0).
+            #[serde(skip)]
+            pub velocity: [f32; 4],
+            /// Angular velocity about its centre, rad/s (w 0): the surface at `x` moves at
+            /// `velocity + spin × (x − (a + b)/2)`.
+            #[serde(skip)]
+            pub spin: [f32; 4],
+        }
+
+        impl $name {
+            #[doc = concat!("A still ", $what, " about the segment `a`–`b`.")]
+            pub fn new(a: [f32; 3], b: [f32; 3], radius: f32) -> Self {
+                Self { a: [a[0], a[1], a[2], radius], b: [b[0], b[1], b[2], 0.0], velocity: [0.0; 4], spin: [0.0; 4] }
+            }
+
+            /// Its radius, m.
+            pub fn radius(&self) -> f32 {
+                self.a[3]
+            }
+
+            /// The axis' midpoint, m, as the kernels compute it (`(a + b)·½`).
+            pub fn center(&self) -> [f32; 3] {
+                [(self.a[0] + self.b[0]) * 0.5, (self.a[1] + self.b[1]) * 0.5, (self.a[2] + self.b[2]) * 0.5]
+            }
+        }
+
+        impl Rod for $name {
+            fn parts(&mut self) -> (&mut [f32; 4], &mut [f32; 4], &mut [f32; 4], &mut [f32; 4]) {
+                (&mut self.a, &mut self.b, &mut self.velocity, &mut self.spin)
+            }
+            const KIND: f32 = rod_kind::$name;
+        }
+    };
 }
 
-impl Capsule {
-    /// A still capsule about the segment `a`–`b`.
-    pub fn new(a: [f32; 3], b: [f32; 3], radius: f32) -> Self {
-        Self { a: [a[0], a[1], a[2], radius], b: [b[0], b[1], b[2], 0.0], velocity: [0.0; 4], spin: [0.0; 4] }
-    }
-
-    /// Its radius, m.
-    pub fn radius(&self) -> f32 {
-        self.a[3]
-    }
-
-    /// The axis' midpoint, m, as the kernels compute it (`(a + b)·½`).
-    pub fn center(&self) -> [f32; 3] {
-        [(self.a[0] + self.b[0]) * 0.5, (self.a[1] + self.b[1]) * 0.5, (self.a[2] + self.b[2]) * 0.5]
-    }
+/// The kinds' marks in a rod's `b.w` in the shapes buffer (the shaders' `ROD_CAPSULE`,
+/// `ROD_CYLINDER`).
+#[allow(non_upper_case_globals)]
+mod rod_kind {
+    pub const Capsule: f32 = 0.0;
+    pub const Cylinder: f32 = 1.0;
 }
 
-/// A capped cylinder collider: the points within `radius` of the segment from `a` to `b`
-/// that lie between the planes through `a` and `b` across it (a post, a drum, a table's
-/// round top). `#[repr(C)]`, the layout of a [`Capsule`] (the shaders' `Rod`).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
-pub struct Cylinder {
-    /// The centre of one cap, m; w the radius, m.
-    pub a: [f32; 4],
-    /// The centre of the other cap, m (w 0; the shapes buffer marks a cylinder there).
-    pub b: [f32; 4],
-    /// Velocity of its centre (the axis' midpoint) at this substep, m/s (w 0).
-    #[serde(skip)]
-    pub velocity: [f32; 4],
-    /// Angular velocity about its centre, rad/s (w 0).
-    #[serde(skip)]
-    pub spin: [f32; 4],
-}
+rod!(
+    /// A capsule collider: the points within `radius` of the segment from `a` to `b` (a
+    /// limb, a bar). `#[repr(C)]`, mirrored in the shaders (`Rod`).
+    Capsule,
+    "capsule",
+    "One end of the axis"
+);
+
+rod!(
+    /// A capped cylinder collider: the points within `radius` of the segment from `a` to
+    /// `b` that lie between the planes through `a` and `b` across it (a post, a drum, a
+    /// table's round top). `#[repr(C)]`, mirrored in the shaders (`Rod`).
+    Cylinder,
+    "cylinder",
+    "The centre of one cap"
+);
 
 impl Cylinder {
-    /// A still cylinder about the segment `a`–`b`.
-    pub fn new(a: [f32; 3], b: [f32; 3], radius: f32) -> Self {
-        Self { a: [a[0], a[1], a[2], radius], b: [b[0], b[1], b[2], 0.0], velocity: [0.0; 4], spin: [0.0; 4] }
-    }
-
-    /// Its radius, m.
-    pub fn radius(&self) -> f32 {
-        self.a[3]
-    }
-
-    /// The axis' midpoint, m.
-    pub fn center(&self) -> [f32; 3] {
-        [(self.a[0] + self.b[0]) * 0.5, (self.a[1] + self.b[1]) * 0.5, (self.a[2] + self.b[2]) * 0.5]
-    }
-
     /// Half its length, m.
     pub fn half_length(&self) -> f32 {
         let d: [f32; 3] = std::array::from_fn(|k| self.b[k] - self.a[k]);
@@ -149,20 +153,6 @@ pub(crate) trait Rod: Copy {
     fn parts(&mut self) -> (&mut [f32; 4], &mut [f32; 4], &mut [f32; 4], &mut [f32; 4]);
     /// The shaders' mark in `b.w` (`ROD_CAPSULE`, `ROD_CYLINDER`).
     const KIND: f32;
-}
-
-impl Rod for Capsule {
-    fn parts(&mut self) -> (&mut [f32; 4], &mut [f32; 4], &mut [f32; 4], &mut [f32; 4]) {
-        (&mut self.a, &mut self.b, &mut self.velocity, &mut self.spin)
-    }
-    const KIND: f32 = 0.0;
-}
-
-impl Rod for Cylinder {
-    fn parts(&mut self) -> (&mut [f32; 4], &mut [f32; 4], &mut [f32; 4], &mut [f32; 4]) {
-        (&mut self.a, &mut self.b, &mut self.velocity, &mut self.spin)
-    }
-    const KIND: f32 = 1.0;
 }
 
 /// `rod` where `pose` has it: moved and turned about its centre (in f64, rounded once),
