@@ -749,22 +749,21 @@ impl Scene {
     /// The capsules at simulated time `t`, s: moved and turned about their centres by their
     /// motions (in f64, rounded once), with the velocities their contacts use.
     pub fn capsules_at(&self, t: f64, capsules: &mut Vec<Capsule>) {
-        capsules.clone_from(&self.capsules);
-        for (id, m) in &self.motions {
-            let ColliderId::Capsule(i) = *id else { continue };
-            if let Some(c) = capsules.get_mut(i) {
-                pose_rod(c, &m.at(t));
-            }
-        }
+        self.rods_at(t, &self.capsules, ColliderId::Capsule, capsules);
     }
 
     /// The cylinders at simulated time `t`, s, as [`Scene::capsules_at`] has the capsules.
     pub fn cylinders_at(&self, t: f64, cylinders: &mut Vec<Cylinder>) {
-        cylinders.clone_from(&self.cylinders);
-        for (id, m) in &self.motions {
-            let ColliderId::Cylinder(i) = *id else { continue };
-            if let Some(c) = cylinders.get_mut(i) {
-                pose_rod(c, &m.at(t));
+        self.rods_at(t, &self.cylinders, ColliderId::Cylinder, cylinders);
+    }
+
+    /// `rods` (the scene's, named `id(i)` by the motions) at time `t`, into `out`.
+    fn rods_at<R: Rod>(&self, t: f64, rods: &[R], id: fn(usize) -> ColliderId, out: &mut Vec<R>) {
+        out.clear();
+        out.extend_from_slice(rods);
+        for (i, r) in out.iter_mut().enumerate() {
+            if let Some((_, m)) = self.motions.iter().find(|(m, _)| *m == id(i)) {
+                pose_rod(r, &m.at(t));
             }
         }
     }
