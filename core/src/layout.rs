@@ -321,6 +321,16 @@ impl Uses {
         }
     }
 
+    /// What it keeps, in words: `rods, coulomb`, or `none`.
+    pub fn kept(&self) -> String {
+        let kept: Vec<&str> =
+            [(self.rods, "rods"), (self.bodies, "bodies"), (self.coulomb, "coulomb"), (self.motion, "motion")]
+                .into_iter()
+                .filter_map(|(on, name)| on.then_some(name))
+                .collect();
+        if kept.is_empty() { "none".into() } else { kept.join(", ") }
+    }
+
     /// The WGSL constants (`const USES_RODS: bool = true;` …).
     pub fn wgsl(&self) -> String {
         format!(

@@ -33,6 +33,7 @@ pub mod sdf;
 pub mod solver;
 pub mod stats;
 pub mod step_params;
+pub mod substep;
 pub mod tables;
 pub mod timing;
 pub mod validate;

@@ -6,6 +6,8 @@
 
 use clothlab_core::layout::Buf;
 use clothlab_core::step_params::StepParams;
+pub use clothlab_core::substep::Integration;
+use clothlab_core::substep::Stage;
 use clothlab_core::{Integrator, SolverError, cpu};
 
 use crate::kernels::{self as k, Dispatches, Flavor, HostBuffers, KernelDef, KernelRef};
@@ -79,62 +81,15 @@ pub fn run(kernel: KernelRef) -> Vec<Command> {
     v
 }
 
-/// How a recipe integrates: the integrator, and for `implicit` its CG iterations.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Integration {
-    /// The integrator.
-    pub integrator: Integrator,
-    /// Conjugate-gradient iterations (`implicit` only).
-    pub cg_iterations: u32,
-    /// Gauss–Seidel iterations (`xpbd` only).
-    pub xpbd_iterations: u32,
-    /// Sweeps over the vertex colours (`vbd` only).
-    pub vbd_iterations: u32,
-    /// The Chebyshev ρ of `vbd` as f32 bits (0: no acceleration).
-    pub vbd_rho_bits: u32,
-    /// Self-collision after the strain limit (core::cpu::self_collide).
-    pub self_collision: bool,
-    /// Its contacts with Coulomb friction (the parameters have Coulomb's coefficients:
-    /// the `_friction` response kernels).
-    pub self_friction: bool,
-    /// Substeps per frame (what temporal blocking may fold into one dispatch).
-    pub substeps: u32,
-}
-
-impl Integration {
-    /// Verlet, the thesis's.
-    pub const VERLET: Integration = Integration {
-        integrator: Integrator::Verlet,
-        cg_iterations: 0,
-        xpbd_iterations: 0,
-        vbd_iterations: 0,
-        vbd_rho_bits: 0,
-        self_collision: false,
-        self_friction: false,
-        substeps: 1,
-    };
-
-    /// What `params` ask for.
-    pub fn of(params: &clothlab_core::SimParams) -> Self {
-        Self {
-            integrator: params.integrator,
-            cg_iterations: params.cg_iterations,
-            xpbd_iterations: params.xpbd_iterations,
-            vbd_iterations: params.vbd_iterations,
-            vbd_rho_bits: params.vbd_rho.to_bits(),
-            self_collision: params.self_collision,
-            self_friction: params.self_collision && params.coulomb(),
-            substeps: params.substeps,
-        }
-    }
-}
-
-/// The kernels that integrate one substep with `how`, before the strain limit: the force
-/// evaluations in the variant's form (fused with `fusion=clothlab`, the springs scattered
-/// with `springs=scatter`; the thesis's fusion is Verlet's own) and the integrator's
-/// kernels (core::cpu::integrators).
-fn integration(variant: &Variant, how: Integration, strain_passes: u32) -> Vec<&'static KernelDef> {
-    let springs = match variant.springs {
+/// The kernels of one substep with `strain_passes` strain passes, integrated by `how`:
+/// the stages of [`Integration::stages`] (the order, written once) each as the variant's
+/// kernels — the force evaluation in the variant's form (fused with `fusion=clothlab`,
+/// the springs scattered with `springs=scatter`), Verlet's force, update and colliders
+/// fused as `fusion` says (the thesis's fusion is Verlet's own; the tiles run the strain
+/// passes too), the last strain pass counting for the self-collision's hash, and the
+/// normals left to the frame's end with `normals=frame`.
+fn stage_kernels(variant: &Variant, how: Integration, strain_passes: u32) -> Vec<&'static KernelDef> {
+    let springs: &'static KernelDef = match variant.springs {
         Accumulate::Scatter => &k::SPRINGS_SCATTER,
         Accumulate::Gather => &k::SPRINGS,
     };
@@ -142,63 +97,71 @@ fn integration(variant: &Variant, how: Integration, strain_passes: u32) -> Vec<&
         Fusion::IntoGather | Fusion::Tile => vec![&k::FORCES_SPRINGS],
         _ => vec![&k::FORCES, springs],
     };
-    let stages = |kernels: &[&'static KernelDef]| -> Vec<&'static KernelDef> {
-        let mut v = vec![&k::RK_BEGIN];
-        for s in kernels {
-            v.extend(&eval);
-            v.push(s);
+    let tile = tiled(variant, how, strain_passes);
+    let frame_normals = normals_at_frame_end(variant, how);
+    // Self-collision after a strain limit: its count fused into the last pass (one
+    // dispatch and one read of the positions fewer).
+    let fused_count = how.self_collision && strain_passes > 0 && !tile;
+    let stages = how.stages(strain_passes);
+    let mut v: Vec<&'static KernelDef> = Vec::new();
+    let mut rest = &stages[..];
+    while let Some((stage, tail)) = rest.split_first() {
+        // The force, the update and the colliders of Verlet (the one integrator whose
+        // stages these three are), fused as the variant says.
+        if let ([Stage::Eval, Stage::Integrate, Stage::Collide, after @ ..], false) =
+            (rest, variant.fusion == Fusion::None)
+        {
+            v.extend(match variant.fusion {
+                Fusion::IntoIntegrate => vec![springs, &k::FORCES_INTEGRATE_COLLIDE],
+                Fusion::Tile if tile => vec![&k::SUBSTEP_TILE, &k::TILE_VEL],
+                _ if frame_normals => vec![&k::FORCES_SPRINGS_WIND, &k::INTEGRATE_COLLIDE],
+                _ => vec![&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE],
+            });
+            rest = after;
+            continue;
         }
-        v.push(&k::COLLIDE);
-        v
-    };
-    let then = |mut v: Vec<&'static KernelDef>, rest: &[&'static KernelDef]| {
-        v.extend(rest);
-        v
-    };
-    match how.integrator {
-        // In the (x, v) state both are one recurrence, v' = (1 − damping) v + f dt/m,
-        // x' = x + v' dt: Verlet's kernels run both (core::cpu::integrators).
-        Integrator::Verlet | Integrator::SymplecticEuler => match variant.fusion {
-            Fusion::None => vec![&k::FORCES, springs, &k::INTEGRATE, &k::COLLIDE],
-            Fusion::IntoIntegrate => vec![springs, &k::FORCES_INTEGRATE_COLLIDE],
-            // The tiles (the strain passes inside them) where `tiled` says so.
-            Fusion::Tile if tiled(variant, how, strain_passes) => vec![&k::SUBSTEP_TILE, &k::TILE_VEL],
-            Fusion::IntoGather | Fusion::Tile if normals_at_frame_end(variant, how) => {
-                vec![&k::FORCES_SPRINGS_WIND, &k::INTEGRATE_COLLIDE]
+        rest = tail;
+        match *stage {
+            Stage::Eval => v.extend(&eval),
+            Stage::Forces => v.push(&k::FORCES),
+            Stage::Integrate => v.push(&k::INTEGRATE),
+            Stage::Euler => v.push(&k::EULER),
+            Stage::RkBegin => v.push(&k::RK_BEGIN),
+            Stage::Rk { order: 2, stage } => v.push([&k::RK2_1, &k::RK2_2][stage as usize]),
+            Stage::Rk { stage, .. } => v.push([&k::RK4_1, &k::RK4_2, &k::RK4_3, &k::RK4_4][stage as usize]),
+            Stage::CgBegin => v.extend([&k::CG_BEGIN, &k::CG_REDUCE_RZ]),
+            Stage::CgIteration => {
+                v.extend([&k::CG_MATVEC, &k::CG_REDUCE_PQ, &k::CG_STEP, &k::CG_REDUCE_RZ, &k::CG_DIRECTION])
             }
-            Fusion::IntoGather | Fusion::Tile => vec![&k::FORCES_SPRINGS, &k::INTEGRATE_COLLIDE],
-        },
-        Integrator::Euler => then(eval, &[&k::EULER, &k::COLLIDE]),
-        Integrator::Rk2 => stages(&[&k::RK2_1, &k::RK2_2]),
-        Integrator::Rk4 => stages(&[&k::RK4_1, &k::RK4_2, &k::RK4_3, &k::RK4_4]),
-        Integrator::Implicit => {
-            let mut v = then(eval, &[&k::CG_BEGIN, &k::CG_REDUCE_RZ]);
-            for _ in 0..how.cg_iterations {
-                v.extend([&k::CG_MATVEC, &k::CG_REDUCE_PQ, &k::CG_STEP, &k::CG_REDUCE_RZ, &k::CG_DIRECTION]);
+            Stage::ImplicitFinish => v.push(&k::IMPLICIT_FINISH),
+            Stage::XpbdIteration => v.extend(cpu::XPBD_ORDER.iter().map(|&pass| &k::XPBD[pass])),
+            // One `vbd_colour` per sweep here; `recipe_for` makes it a dispatch per colour
+            // of the cloth's colouring (core::cpu::vbd).
+            Stage::VbdBegin => v.push(&k::VBD_BEGIN),
+            Stage::VbdSweep => v.push(&k::VBD_COLOUR),
+            Stage::VbdAccelerate => v.push(&k::VBD_ACCELERATE),
+            Stage::VbdFinish => v.push(&k::VBD_FINISH),
+            Stage::Collide => v.push(&k::COLLIDE),
+            // The tiles run the strain passes themselves.
+            Stage::StrainPass(_) if tile => {}
+            // Each pass after the counts it divides by (core::cpu::strain_limit).
+            Stage::StrainPass(pass) => v.extend([
+                &k::STRAIN_COUNT,
+                if fused_count && pass + 1 == strain_passes { &k::STRAIN_LIMIT_COUNT } else { &k::STRAIN_LIMIT },
+            ]),
+            Stage::SelfCollision => {
+                v.extend(k::SELF_COLLISION.iter().copied().filter(|&d| !(fused_count && d == &k::HASH_COUNT)).map(
+                    |d| match d.with_friction {
+                        Some(f) if how.self_friction => f,
+                        _ => d,
+                    },
+                ))
             }
-            then(v, &[&k::IMPLICIT_FINISH, &k::COLLIDE])
-        }
-        Integrator::Xpbd => {
-            let mut v: Vec<&'static KernelDef> = vec![&k::FORCES, &k::INTEGRATE];
-            for _ in 0..how.xpbd_iterations {
-                v.extend(cpu::XPBD_ORDER.iter().map(|&pass| &k::XPBD[pass]));
-            }
-            then(v, &[&k::COLLIDE])
-        }
-        // One `vbd_colour` per iteration here; `recipe_for` makes each a dispatch per
-        // colour of the cloth's colouring (core::cpu::vbd).
-        Integrator::Vbd => {
-            let mut v: Vec<&'static KernelDef> = vec![&k::FORCES, &k::VBD_BEGIN];
-            let accelerate = f32::from_bits(how.vbd_rho_bits) > 0.0;
-            for _ in 0..how.vbd_iterations {
-                v.push(&k::VBD_COLOUR);
-                if accelerate {
-                    v.push(&k::VBD_ACCELERATE);
-                }
-            }
-            then(v, &[&k::VBD_FINISH, &k::COLLIDE])
+            Stage::Normals if frame_normals => {}
+            Stage::Normals => v.extend(normals_kernels(variant)),
         }
     }
+    v
 }
 
 /// Whether `variant` integrated by `how` computes the normals once per frame
@@ -426,36 +389,9 @@ pub fn vbd_acceleration(kernel: KernelRef, topo: &clothlab_core::ClothTopology, 
 /// stand here as one `vbd_colour` dispatch per iteration). What runs once after a
 /// frame's last substep is [`frame_end`].
 pub fn recipe(variant: &Variant, strain_passes: u32, how: Integration) -> Vec<Command> {
-    let step = integration(variant, how, strain_passes);
-    let tile = tiled(variant, how, strain_passes);
-    let normals: &[&'static KernelDef] =
-        if normals_at_frame_end(variant, how) { &[] } else { &normals_kernels(variant) };
     let flavor = variant.flavor();
-    // Self-collision after a strain limit: its count fused into the last pass (one
-    // dispatch and one read of the positions fewer).
-    let fused_count = how.self_collision && strain_passes > 0 && !tile;
-    // The tiles run the strain passes themselves.
-    let strain_passes = if tile { 0 } else { strain_passes };
-    let strain = |pass: u32| {
-        if fused_count && pass + 1 == strain_passes { &k::STRAIN_LIMIT_COUNT } else { &k::STRAIN_LIMIT }
-    };
-    let mut commands: Vec<Command> = step
-        .into_iter()
-        // Each pass after the counts it divides by (core::cpu::strain_limit).
-        .chain((0..strain_passes).flat_map(|pass| [&k::STRAIN_COUNT, strain(pass)]))
-        .chain(
-            k::SELF_COLLISION
-                .iter()
-                .copied()
-                .filter(|&d| how.self_collision && !(fused_count && d == &k::HASH_COUNT))
-                .map(|d| match d.with_friction {
-                    Some(f) if how.self_friction => f,
-                    _ => d,
-                }),
-        )
-        .chain(normals.iter().copied())
-        .flat_map(|d| run(d.flavor(flavor)))
-        .collect();
+    let mut commands: Vec<Command> =
+        stage_kernels(variant, how, strain_passes).into_iter().flat_map(|d| run(d.flavor(flavor))).collect();
     // XPBD's λ (aux0, aux1) starts from zero every substep: cleared before its first pass.
     if let Some(first) = commands.iter().position(|c| c.kernel().is_some_and(|k| k.def == &k::XPBD[cpu::XPBD_ORDER[0]]))
     {

@@ -241,7 +241,7 @@ pub fn validate_kernels_with(
         if let Some(from_output) = k.def.from_output {
             from_output(&input.p, &got, &mut want);
         }
-        let what = k.shader_name();
+        let what = k.report_name();
         type Pair<'a> = (&'static str, &'a Vec<[f32; 4]>, &'a Vec<[f32; 4]>);
         let compared: [Pair; COMPARED_BUFFERS] = [
             ("pos", &got.pos, &want.pos),
@@ -487,7 +487,7 @@ pub fn bisect(
                 worst = c;
             }
         }
-        let first_gpu = gpu.iter().find_map(Command::kernel).map(|k| k.shader_name());
+        let first_gpu = gpu.iter().find_map(Command::kernel).map(|k| k.report_name());
         let what = format!("bisect {k}: {} on GPU", first_gpu.as_deref().unwrap_or("-"));
         splits.push(Split {
             cpu_dispatches: k,

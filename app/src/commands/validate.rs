@@ -43,7 +43,7 @@ fn print_check(backend: &str, c: &Check, width: usize) -> Result<(), crate::out:
 fn worst_rows(kernels: &[KernelRef], checks: &[Check], suffix: &str) -> Vec<Check> {
     let mut rows = Vec::new();
     for &k in kernels {
-        let shader = k.shader_name();
+        let shader = k.report_name();
         let worst = checks
             .iter()
             .filter(|c| c.what == shader)

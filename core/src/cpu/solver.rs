@@ -17,6 +17,7 @@ use crate::params::{Integrator, SimParams};
 use crate::scene::Scene;
 use crate::solver::{Solver, SolverError};
 use crate::step_params::StepParams;
+use crate::substep::{Integration, Stage};
 use crate::timing::{
     FORCES_SPRINGS, FRAME, FUSED_STEP, INTEGRATE_COLLIDE, KernelTimings, SELF_COLLIDE, SELF_HASH, STRAIN_LIMIT,
     SUBSTEP, TRI_NORMALS, TimingRecorder, VERTEX_NORMALS,
@@ -276,17 +277,6 @@ impl CpuSolver {
         vertex_normals(self.exec, &p, &self.topo.face_slots, &self.face, &mut self.state.normal, &mut self.state.force);
     }
 
-    /// Runs `f`, recording its duration under `label` when timing is on.
-    fn timed(timer: &mut TimingRecorder, on: bool, label: &str, f: impl FnOnce()) {
-        if on {
-            let t = Instant::now();
-            f();
-            timer.record(label, t.elapsed().as_nanos() as f64);
-        } else {
-            f();
-        }
-    }
-
     /// One substep: the kernels of DESIGN.md's step, in order. Kernels that touch only
     /// their own particle run fused with their neighbour in the step (`forces` into
     /// `springs`, `integrate` with `collide`), and on a regular grid the gathers run on
@@ -297,12 +287,17 @@ impl CpuSolver {
         self.sync();
     }
 
-    /// One substep kernel by kernel.
+    /// One substep kernel by kernel: the stages of [`Integration::stages`] (the order the
+    /// engine's recipes follow too; tests/tests/suite/integrators.rs checks the bits),
+    /// each as its twins — the forces fused into the spring gather, the update with the
+    /// colliders where one follows the other, the gathers on SIMD rows on a regular grid.
+    /// Each label's time is the substep's sum over the stages it names.
     fn substep_kernels(&mut self) {
         let p = self.step_params();
         let e = self.exec;
         let on = self.time_kernels;
         let t0 = Instant::now();
+        let stages = Integration::of(&self.params).stages(self.params.strain_iterations);
         let Self {
             state,
             topo,
@@ -340,64 +335,88 @@ impl CpuSolver {
         if needs_aux && aux.len() != AUX {
             *aux = vec![vec![[0.0; 4]; pos.len()]; AUX];
         }
-        // The same kernels in the same order as the engine's recipe for the integrator
-        // (engine/src/recipe.rs; tests/tests/suite/integrators.rs checks the bits).
-        match params.integrator {
-            // Symplectic Euler is Verlet's recurrence in this state (see `euler`).
-            Integrator::Verlet | Integrator::SymplecticEuler => {
-                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || integrate_collide(e, &p, c, force, pos, vel));
-            }
-            Integrator::Euler => {
-                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
-                    euler(e, &p, force, pos, vel);
-                    collide(e, &p, c, pos, vel)
-                });
-            }
-            Integrator::Rk2 | Integrator::Rk4 => {
-                let stages: &[super::RkStage] = if params.integrator == Integrator::Rk2 { &RK2 } else { &RK4 };
-                rk_begin(e, &p, force, pos, vel, aux);
-                for st in stages {
-                    Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
-                    Self::timed(timer, on, INTEGRATE_COLLIDE, || rk_stage(e, &p, st, force, pos, vel, aux));
+        // Sums as the kernels make them: per workgroup, then folded.
+        let total = |terms: Vec<f32>| fold(&partial_sums(&terms));
+        // The time spent per label in this substep.
+        let mut spent: Vec<(&'static str, f64)> = Vec::new();
+        let mut add = |label: &'static str, t: Option<Instant>| {
+            if let Some(t) = t {
+                let ns = t.elapsed().as_nanos() as f64;
+                match spent.iter_mut().find(|(l, _)| *l == label) {
+                    Some((_, s)) => *s += ns,
+                    None => spent.push((label, ns)),
                 }
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || collide(e, &p, c, pos, vel));
             }
-            Integrator::Implicit => {
-                Self::timed(timer, on, FORCES_SPRINGS, || eval(lanes, pos, vel, force));
-                let cg = &mut *cg;
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
-                    // Sums as the kernels make them: per workgroup, then folded.
-                    let total = |terms: Vec<f32>| fold(&partial_sums(&terms));
+        };
+        let now = || on.then(Instant::now);
+        let mut sweeps = 0;
+        let mut lambda_cleared = false;
+        let mut rest = &stages[..];
+        while let Some((&stage, tail)) = rest.split_first() {
+            rest = tail;
+            let t = now();
+            let label = match stage {
+                Stage::Eval => {
+                    eval(lanes, pos, vel, force);
+                    FORCES_SPRINGS
+                }
+                // The update and the colliders in one pass where one follows the other.
+                Stage::Integrate if rest.first() == Some(&Stage::Collide) => {
+                    rest = &rest[1..];
+                    integrate_collide(e, &p, c, force, pos, vel);
+                    INTEGRATE_COLLIDE
+                }
+                Stage::Integrate => {
+                    integrate(e, &p, force, pos, vel);
+                    INTEGRATE_COLLIDE
+                }
+                Stage::Forces => {
+                    forces(e, &p, pos, vel, force);
+                    INTEGRATE_COLLIDE
+                }
+                Stage::Euler => {
+                    euler(e, &p, force, pos, vel);
+                    INTEGRATE_COLLIDE
+                }
+                Stage::RkBegin => {
+                    rk_begin(e, &p, force, pos, vel, aux);
+                    INTEGRATE_COLLIDE
+                }
+                Stage::Rk { order, stage } => {
+                    let stages: &[super::RkStage] = if order == 2 { &RK2 } else { &RK4 };
+                    rk_stage(e, &p, &stages[stage as usize], force, pos, vel, aux);
+                    INTEGRATE_COLLIDE
+                }
+                Stage::CgBegin => {
                     let rz = total(cg_begin(e, &p, &topo.slots, force, pos, vel, aux));
                     cg_beta(cg, rz);
-                    for _ in 0..params.cg_iterations {
-                        let pq = total(cg_matvec(e, &p, &topo.slots, pos, aux));
-                        cg_alpha(cg, pq);
-                        let rz = total(cg_step(e, cg, aux));
-                        cg_beta(cg, rz);
-                        cg_direction(e, cg, aux);
-                    }
+                    INTEGRATE_COLLIDE
+                }
+                Stage::CgIteration => {
+                    let pq = total(cg_matvec(e, &p, &topo.slots, pos, aux));
+                    cg_alpha(cg, pq);
+                    let rz = total(cg_step(e, cg, aux));
+                    cg_beta(cg, rz);
+                    cg_direction(e, cg, aux);
+                    INTEGRATE_COLLIDE
+                }
+                Stage::ImplicitFinish => {
                     implicit_finish(e, &p, pos, vel, aux);
-                    collide(e, &p, c, pos, vel)
-                });
-            }
-            Integrator::Xpbd => {
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
-                    forces(e, &p, pos, vel, force);
-                    integrate(e, &p, force, pos, vel);
+                    INTEGRATE_COLLIDE
+                }
+                Stage::XpbdIteration => {
                     // λ per spring, from zero every substep (the recipe's clears).
-                    aux[..2].iter_mut().flatten().for_each(|v| *v = [0.0; 4]);
-                    mesh_lambda.iter_mut().for_each(|l| *l = 0.0);
-                    for _ in 0..params.xpbd_iterations {
-                        if let Some(m) = &topo.mesh {
-                            for pass in m.xpbd_passes.windows(2) {
-                                let range = pass[0] as usize..pass[1] as usize;
-                                xpbd_mesh_pass(e, &p, &topo.springs, range, pos, vel, mesh_lambda);
-                            }
-                            continue;
+                    if !lambda_cleared {
+                        lambda_cleared = true;
+                        aux[..2].iter_mut().flatten().for_each(|v| *v = [0.0; 4]);
+                        mesh_lambda.iter_mut().for_each(|l| *l = 0.0);
+                    }
+                    if let Some(m) = &topo.mesh {
+                        for pass in m.xpbd_passes.windows(2) {
+                            let range = pass[0] as usize..pass[1] as usize;
+                            xpbd_mesh_pass(e, &p, &topo.springs, range, pos, vel, mesh_lambda);
                         }
+                    } else {
                         for pass in XPBD_ORDER {
                             if grid.is_some() {
                                 xpbd_pass_rows(e, &p, &topo.slots, pass, pos, vel, aux);
@@ -406,83 +425,94 @@ impl CpuSolver {
                             }
                         }
                     }
-                    collide(e, &p, c, pos, vel)
-                });
-            }
-            // The kernels of the engine's recipe (cpu::vbd): forces, the prediction, the
-            // colours' sweeps, the finish, the colliders.
-            Integrator::Vbd => {
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
-                    forces(e, &p, pos, vel, force);
-                    super::vbd::vbd_begin(e, &p, force, pos, vel, aux)
-                });
-                Self::timed(timer, on, crate::timing::VBD, || {
-                    for it in 1..=params.vbd_iterations {
-                        for k in 0..topo.colours.len() {
-                            super::vbd::vbd_colour(e, &p, &topo.slots, c, topo.colours.colour(k), aux);
-                        }
-                        if params.vbd_rho > 0.0 {
-                            let omega = super::vbd::chebyshev_omega(it, params.vbd_rho);
-                            super::vbd::vbd_accelerate(e, &p, omega, aux);
-                        }
+                    INTEGRATE_COLLIDE
+                }
+                Stage::VbdBegin => {
+                    super::vbd::vbd_begin(e, &p, force, pos, vel, aux);
+                    INTEGRATE_COLLIDE
+                }
+                Stage::VbdSweep => {
+                    sweeps += 1;
+                    for k in 0..topo.colours.len() {
+                        super::vbd::vbd_colour(e, &p, &topo.slots, c, topo.colours.colour(k), aux);
                     }
-                });
-                Self::timed(timer, on, INTEGRATE_COLLIDE, || {
+                    crate::timing::VBD
+                }
+                Stage::VbdAccelerate => {
+                    let omega = super::vbd::chebyshev_omega(sweeps, params.vbd_rho);
+                    super::vbd::vbd_accelerate(e, &p, omega, aux);
+                    crate::timing::VBD
+                }
+                Stage::VbdFinish => {
                     super::vbd::vbd_finish(e, &p, pos, vel, aux);
-                    collide(e, &p, c, pos, vel)
-                });
-            }
-        }
-        Self::timed(timer, on, STRAIN_LIMIT, || {
-            for _ in 0..params.strain_iterations {
-                if fast {
-                    lanes.fill(e, n, pos, None);
+                    INTEGRATE_COLLIDE
                 }
-                strain_count(e, &p, &topo.slots, pos, strain_counts);
-                if mesh {
-                    strain_limit(e, &p, &topo.slots, &topo.tethers, pos, strain_counts, scratch);
-                } else {
-                    strain_limit_rows(
-                        e,
-                        &p,
-                        &topo.slots,
-                        uniform.as_ref(),
-                        &topo.tethers,
-                        lanes,
-                        pos,
-                        strain_counts,
-                        scratch,
-                    );
+                Stage::Collide => {
+                    collide(e, &p, c, pos, vel);
+                    INTEGRATE_COLLIDE
                 }
-                strain_vel(e, &p, pos, scratch, vel);
-                std::mem::swap(pos, scratch);
-            }
-        });
-        // Self-collision: the hash in aux2, aux3 and aux4, the velocities' copy for friction
-        // in aux0 (all dead after the integrator's kernels), the response into the other
-        // position buffer (self_collide.rs).
-        if params.self_collision {
-            let mut h = hash_buffers(aux);
-            Self::timed(timer, on, SELF_HASH, || build_hash(&p, pos, vel, &mut h));
-            let HashBuffers { cells, slots, vel_copy, .. } = h;
-            Self::timed(timer, on, SELF_COLLIDE, || {
-                self_collide(e, &p, pos, vel, cells, slots, vel_copy, Some(&topo.slots), scratch)
-            });
-            std::mem::swap(pos, scratch);
-        }
-        if fast {
-            Self::timed(timer, on, TRI_NORMALS, || {
-                lanes.fill(e, n, pos, None);
-                tri_normals_lanes(e, n, lanes, face_lanes)
-            });
-            Self::timed(timer, on, VERTEX_NORMALS, || {
-                vertex_normals_rows(e, &p, &topo.face_slots, face_lanes, normal, force)
-            });
-        } else {
-            Self::timed(timer, on, TRI_NORMALS, || tri_normals(e, &topo.triangles, pos, face));
-            Self::timed(timer, on, VERTEX_NORMALS, || vertex_normals(e, &p, &topo.face_slots, face, normal, force));
+                Stage::StrainPass(_) => {
+                    if fast {
+                        lanes.fill(e, n, pos, None);
+                    }
+                    strain_count(e, &p, &topo.slots, pos, strain_counts);
+                    if mesh {
+                        strain_limit(e, &p, &topo.slots, &topo.tethers, pos, strain_counts, scratch);
+                    } else {
+                        strain_limit_rows(
+                            e,
+                            &p,
+                            &topo.slots,
+                            uniform.as_ref(),
+                            &topo.tethers,
+                            lanes,
+                            pos,
+                            strain_counts,
+                            scratch,
+                        );
+                    }
+                    strain_vel(e, &p, pos, scratch, vel);
+                    std::mem::swap(pos, scratch);
+                    STRAIN_LIMIT
+                }
+                // The hash in aux2, aux3 and aux4, the velocities' copy for friction in aux0
+                // (all dead after the integrator's kernels), the response into the other
+                // position buffer (self_collide.rs).
+                Stage::SelfCollision => {
+                    let mut h = hash_buffers(aux);
+                    build_hash(&p, pos, vel, &mut h);
+                    add(SELF_HASH, t);
+                    let t = now();
+                    let HashBuffers { cells, slots, vel_copy, .. } = h;
+                    self_collide(e, &p, pos, vel, cells, slots, vel_copy, Some(&topo.slots), scratch);
+                    std::mem::swap(pos, scratch);
+                    add(SELF_COLLIDE, t);
+                    continue;
+                }
+                Stage::Normals => {
+                    if fast {
+                        lanes.fill(e, n, pos, None);
+                        tri_normals_lanes(e, n, lanes, face_lanes);
+                        add(TRI_NORMALS, t);
+                        let t = now();
+                        vertex_normals_rows(e, &p, &topo.face_slots, face_lanes, normal, force);
+                        add(VERTEX_NORMALS, t);
+                    } else {
+                        tri_normals(e, &topo.triangles, pos, face);
+                        add(TRI_NORMALS, t);
+                        let t = now();
+                        vertex_normals(e, &p, &topo.face_slots, face, normal, force);
+                        add(VERTEX_NORMALS, t);
+                    }
+                    continue;
+                }
+            };
+            add(label, t);
         }
         if on {
+            for (label, ns) in spent {
+                timer.record(label, ns);
+            }
             timer.record(SUBSTEP, t0.elapsed().as_nanos() as f64);
         }
     }

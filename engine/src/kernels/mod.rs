@@ -562,6 +562,16 @@ impl KernelRef {
         )
     }
 
+    /// The name reports give it: [`KernelRef::shader_name`], and for a kernel specialised
+    /// to a scene what it keeps (`integrate_collide_imm[uses: motion]`, `[uses: none]`),
+    /// so that a validation's rows tell the built kernel and its specialisation apart.
+    pub fn report_name(&self) -> String {
+        if self.uses == Uses::ALL {
+            return self.shader_name();
+        }
+        format!("{}[uses: {}]", self.shader_name(), self.uses.kept())
+    }
+
     /// Whether the shader reads the step constants from immediates.
     pub fn step_immediates(&self) -> bool {
         self.flavor.constants == ConstantsHome::Immediates

@@ -69,6 +69,9 @@ fn a_specialised_kernel_says_what_the_scene_uses_and_compiles_on_every_path() {
         assert!(wgsl.contains("const USES_RODS: bool = false;") && wgsl.contains("const USES_MOTION: bool = false;"));
         assert!(general.wgsl().unwrap().contains("const USES_RODS: bool = true;"));
         assert_ne!(special, general, "a specialised kernel is another pipeline");
+        // A validation offers both: its rows name them apart.
+        assert_eq!(general.report_name(), general.shader_name());
+        assert_eq!(special.report_name(), format!("{}[uses: none]", general.shader_name()));
         assert!(!special.spirv().unwrap().is_empty(), "{special}: no SPIR-V");
         assert!(special.glsl().unwrap().text.contains("void main"), "{special}: no GLSL");
     }

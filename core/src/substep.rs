@@ -1,0 +1,204 @@
+//! The order of a substep, written once: the [`Stage`]s each integrator and switch runs,
+//! in order. Two paths follow it — the engine's recipes (`clothlab_engine::recipe`: each
+//! stage as the variant's kernels, fused as its switches say) and the CPU solver's
+//! kernel-by-kernel path ([`crate::cpu::CpuSolver`]: each stage as its twins, on SIMD
+//! rows where the grid allows). The fused SIMD sweep (`cpu::fused`) is the CPU's fast
+//! path for Verlet on a grid and is tested to give this order's bits.
+
+use crate::params::{Integrator, SimParams};
+
+/// How a substep integrates: the integrator with its iteration counts and the switches
+/// that add stages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Integration {
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Conjugate-gradient iterations (`implicit` only).
+    pub cg_iterations: u32,
+    /// Gauss–Seidel iterations (`xpbd` only).
+    pub xpbd_iterations: u32,
+    /// Sweeps over the vertex colours (`vbd` only).
+    pub vbd_iterations: u32,
+    /// The Chebyshev ρ of `vbd` as f32 bits (0: no acceleration).
+    pub vbd_rho_bits: u32,
+    /// Self-collision after the strain limit (core::cpu::self_collide).
+    pub self_collision: bool,
+    /// Its contacts with Coulomb friction (the parameters have Coulomb's coefficients:
+    /// the `_friction` response kernels).
+    pub self_friction: bool,
+    /// Substeps per frame (what temporal blocking may fold into one dispatch).
+    pub substeps: u32,
+}
+
+impl Integration {
+    /// Verlet, the thesis's.
+    pub const VERLET: Integration = Integration {
+        integrator: Integrator::Verlet,
+        cg_iterations: 0,
+        xpbd_iterations: 0,
+        vbd_iterations: 0,
+        vbd_rho_bits: 0,
+        self_collision: false,
+        self_friction: false,
+        substeps: 1,
+    };
+
+    /// What `params` ask for.
+    pub fn of(params: &SimParams) -> Self {
+        Self {
+            integrator: params.integrator,
+            cg_iterations: params.cg_iterations,
+            xpbd_iterations: params.xpbd_iterations,
+            vbd_iterations: params.vbd_iterations,
+            vbd_rho_bits: params.vbd_rho.to_bits(),
+            self_collision: params.self_collision,
+            self_friction: params.self_collision && params.coulomb(),
+            substeps: params.substeps,
+        }
+    }
+
+    /// VBD's Chebyshev ρ (0: no acceleration).
+    pub fn vbd_rho(&self) -> f32 {
+        f32::from_bits(self.vbd_rho_bits)
+    }
+
+    /// The stages of one substep with `strain_passes` strain passes, in order: the
+    /// integrator's (see [`Stage`]), then the strain passes, the self-collision and the
+    /// normals.
+    pub fn stages(&self, strain_passes: u32) -> Vec<Stage> {
+        use Stage::*;
+        let rk = |order: u8| {
+            let mut v = vec![RkBegin];
+            for stage in 0..order {
+                v.extend([Eval, Rk { order, stage }]);
+            }
+            v.push(Collide);
+            v
+        };
+        let mut v = match self.integrator {
+            // In the (x, v) state both are one recurrence, v' = (1 − damping) v + f dt/m,
+            // x' = x + v' dt (core::cpu::integrators).
+            Integrator::Verlet | Integrator::SymplecticEuler => vec![Eval, Integrate, Collide],
+            Integrator::Euler => vec![Eval, Euler, Collide],
+            Integrator::Rk2 => rk(2),
+            Integrator::Rk4 => rk(4),
+            Integrator::Implicit => {
+                let mut v = vec![Eval, CgBegin];
+                v.extend((0..self.cg_iterations).map(|_| CgIteration));
+                v.extend([ImplicitFinish, Collide]);
+                v
+            }
+            Integrator::Xpbd => {
+                let mut v = vec![Forces, Integrate];
+                v.extend((0..self.xpbd_iterations).map(|_| XpbdIteration));
+                v.push(Collide);
+                v
+            }
+            Integrator::Vbd => {
+                let mut v = vec![Forces, VbdBegin];
+                for _ in 0..self.vbd_iterations {
+                    v.push(VbdSweep);
+                    if self.vbd_rho() > 0.0 {
+                        v.push(VbdAccelerate);
+                    }
+                }
+                v.extend([VbdFinish, Collide]);
+                v
+            }
+        };
+        v.extend((0..strain_passes).map(StrainPass));
+        if self.self_collision {
+            v.push(SelfCollision);
+        }
+        v.push(Normals);
+        v
+    }
+}
+
+/// One stage of a substep: what runs, not how (which kernels, fused with which, on
+/// which lanes is each path's business).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// The force of the current (x, v): gravity, drag, wind and the springs.
+    Eval,
+    /// Gravity, drag and wind alone (XPBD and VBD: their solves take the springs).
+    Forces,
+    /// v' = (1 − damping) v + f dt/m, x' = x + v' dt (Verlet and symplectic Euler; XPBD's
+    /// prediction).
+    Integrate,
+    /// Explicit Euler's update.
+    Euler,
+    /// Runge–Kutta's start: the substep's state kept, the sum cleared.
+    RkBegin,
+    /// Stage `stage` (from 0) of Runge–Kutta of order `order` (2 or 4), after the force
+    /// at the stage's point.
+    Rk {
+        /// 2 or 4.
+        order: u8,
+        /// From 0.
+        stage: u8,
+    },
+    /// Implicit Euler's system and the conjugate gradient's start (its first r·z).
+    CgBegin,
+    /// One conjugate-gradient iteration: A p, p·q, the step, r·z, the direction.
+    CgIteration,
+    /// Implicit Euler's update from the solution.
+    ImplicitFinish,
+    /// One XPBD iteration: a pass over each class of springs (a mesh: each colour's
+    /// range); λ starts from zero at the substep's first.
+    XpbdIteration,
+    /// VBD's prediction.
+    VbdBegin,
+    /// One VBD sweep over the vertex colours.
+    VbdSweep,
+    /// VBD's Chebyshev step after the sweep before it.
+    VbdAccelerate,
+    /// VBD's velocities from the solved positions.
+    VbdFinish,
+    /// The colliders' response.
+    Collide,
+    /// Strain pass `k` (from 0): the over-stretched springs counted, then limited.
+    StrainPass(u32),
+    /// Particle–particle self-collision (the hash, then the response).
+    SelfCollision,
+    /// Face and vertex normals (and the wind force they give).
+    Normals,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_integrator_ends_with_the_colliders_then_the_strain_passes_and_the_normals() {
+        for integrator in Integrator::ALL {
+            let how = Integration {
+                integrator,
+                cg_iterations: 2,
+                xpbd_iterations: 3,
+                vbd_iterations: 2,
+                vbd_rho_bits: 0.9f32.to_bits(),
+                self_collision: true,
+                ..Integration::VERLET
+            };
+            let s = how.stages(2);
+            let tail =
+                [Stage::Collide, Stage::StrainPass(0), Stage::StrainPass(1), Stage::SelfCollision, Stage::Normals];
+            assert_eq!(s[s.len() - tail.len()..], tail, "{integrator:?}: {s:?}");
+            let count = |st: Stage| s.iter().filter(|&&x| x == st).count();
+            let iterations = match integrator {
+                Integrator::Implicit => count(Stage::CgIteration),
+                Integrator::Xpbd => count(Stage::XpbdIteration),
+                Integrator::Vbd => count(Stage::VbdSweep) + count(Stage::VbdAccelerate),
+                _ => 0,
+            };
+            let expected = match integrator {
+                Integrator::Implicit => 2,
+                Integrator::Xpbd => 3,
+                Integrator::Vbd => 4,
+                _ => 0,
+            };
+            assert_eq!(iterations, expected, "{integrator:?}");
+        }
+    }
+}
