@@ -824,7 +824,10 @@ fn stage_strain<S: Isa>(
         let ci = cnt.lanes(sd, j, 0, i0);
         let mut corr = [zero; 3];
         let mut count = zero;
-        for (sl, slot) in s.uni[..STRAIN_SLOTS].iter().enumerate() {
+        // Lanes whose counts are all 0 have no spring over its limit (the counts are this
+        // pass's, found as the pass finds them): nothing to add (limit_at skips them alike).
+        let springs = if ci.gt(zero).any() { &s.uni[..STRAIN_SLOTS] } else { &[][..] };
+        for (sl, slot) in springs.iter().enumerate() {
             let Some(StrainSpring { row, col, d, len, live }) =
                 strain_spring(sd, src, j, i0, &xi, sl, slot, stretch, edge)
             else {

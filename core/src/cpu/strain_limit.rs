@@ -111,24 +111,28 @@ pub(crate) fn limit_at(
     let ci = counts(i);
     let mut corr = glam::Vec3::ZERO;
     let mut count = 0.0f32;
-    slots.each(i, true, |s| {
-        if s.neighbor < 0 {
-            return;
-        }
-        let b = s.neighbor as usize;
-        let d = v3(pos.at(b)) - xi;
-        let len = d.length();
-        if len > stretch * s.rest {
-            let wb = mobility(b);
-            // share · excess / len / max(cᵢ, c_b) with share = wi / (wi + wb), in one
-            // division: the same divisor at both ends, the momentum stays. (Dividing a
-            // spring to a pin by cᵢ alone, where there is nothing to keep, measured a worse
-            // drape: the thesis scene's max strain 0.105 against 0.104 at n = 64.) cᵢ ≥ 1
-            // here when the counts are this pass's; at least 1 whatever they are.
-            corr += d * (wi * (len - aim * s.rest) / ((wi + wb) * len * ci.max(counts(b)).max(1.0)));
-            count += 1.0;
-        }
-    });
+    // A count of 0: none of the particle's springs is over its limit (the count found
+    // each as this pass would), so none adds anything; the kernels skip them alike.
+    if ci > 0.0 {
+        slots.each(i, true, |s| {
+            if s.neighbor < 0 {
+                return;
+            }
+            let b = s.neighbor as usize;
+            let d = v3(pos.at(b)) - xi;
+            let len = d.length();
+            if len > stretch * s.rest {
+                let wb = mobility(b);
+                // share · excess / len / max(cᵢ, c_b) with share = wi / (wi + wb), in one
+                // division: the same divisor at both ends, the momentum stays. (Dividing a
+                // spring to a pin by cᵢ alone, where there is nothing to keep, measured a worse
+                // drape: the thesis scene's max strain 0.105 against 0.104 at n = 64.) cᵢ ≥ 1
+                // here when the counts are this pass's; at least 1 whatever they are.
+                corr += d * (wi * (len - aim * s.rest) / ((wi + wb) * len * ci.max(counts(b)).max(1.0)));
+                count += 1.0;
+            }
+        });
+    }
     let mut x = if count > 0.0 { xi + corr } else { xi };
     for t in &tethers[i] {
         if t.pin < 0 {
@@ -222,13 +226,16 @@ fn limit_lanes(
     let ci = lane(counts, a0);
     let mut corr = [zero; 3];
     let mut count = zero;
-    for (s, slot) in uni[..STRAIN_SLOTS].iter().enumerate() {
+    // As limit_at: a particle whose count is 0 takes no spring's share.
+    let strained = ci.simd_gt(zero);
+    let springs = if strained.any() { &uni[..STRAIN_SLOTS] } else { &[][..] };
+    for (s, slot) in springs.iter().enumerate() {
         let (di, dj) = SLOT_OFFSETS[s];
         let b0 = (a0 as isize + di as isize + dj as isize * n) as usize;
         let xb = lanes.pos3(b0);
         let d = [xb[0] - xi[0], xb[1] - xi[1], xb[2] - xi[2]];
         let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        let live = len.simd_gt(f32x8::splat(stretch * slot.rest));
+        let live = len.simd_gt(f32x8::splat(stretch * slot.rest)) & strained;
         let wb = mobility_lanes(lanes, b0, p.grab_index);
         let m = ci.max(lane(counts, b0)).max(f32x8::ONE);
         let f = wi * (len - f32x8::splat(aim * slot.rest)) / ((wi + wb) * len * m);

@@ -26,14 +26,18 @@ fn block_particle(row: u32, col: u32, a: Gp, s0: Gp, s1: Gp, s2: Gp, s3: Gp, s4:
     let wi = mobility(a.k, a.x4.w);
     let ci = strain_counts[a.k].x;
     var c = Correction(vec3<f32>(0.0), 0.0);
-    limit_grid(&c, s0, 0u, xi, wi, ci);
-    limit_grid(&c, s1, 1u, xi, wi, ci);
-    limit_grid(&c, s2, 2u, xi, wi, ci);
-    limit_grid(&c, s3, 3u, xi, wi, ci);
-    limit_grid(&c, s4, 4u, xi, wi, ci);
-    limit_grid(&c, s5, 5u, xi, wi, ci);
-    limit_grid(&c, s6, 6u, xi, wi, ci);
-    limit_grid(&c, s7, 7u, xi, wi, ci);
+    // A count of 0: none of the particle's springs is over its limit (strain_count found
+    // each as limit_spring would), so none adds anything.
+    if ci > 0.0 {
+        limit_grid(&c, s0, 0u, xi, wi, ci);
+        limit_grid(&c, s1, 1u, xi, wi, ci);
+        limit_grid(&c, s2, 2u, xi, wi, ci);
+        limit_grid(&c, s3, 3u, xi, wi, ci);
+        limit_grid(&c, s4, 4u, xi, wi, ci);
+        limit_grid(&c, s5, 5u, xi, wi, ci);
+        limit_grid(&c, s6, 6u, xi, wi, ci);
+        limit_grid(&c, s7, 7u, xi, wi, ci);
+    }
     let out = finish(a.k, a.x4, wi, c);
     if a.inside && interior.enabled != 0u {
         store_point(a.k, a.x4, out);
@@ -47,7 +51,9 @@ fn table_particle(i: u32) {
     let ci = strain_counts[i].x;
     var c = Correction(vec3<f32>(0.0), 0.0);
     let r = slot_row(i);
-    for (var s = 0u; s < r.head; s++) {
+    // No spring of a particle whose count is 0 is over its limit (see block_particle).
+    let head = select(0u, r.head, ci > 0.0);
+    for (var s = 0u; s < head; s++) {
         let slot = row_slot(i, r, s);
         if slot.neighbor >= 0 {
             let b = u32(slot.neighbor);
