@@ -219,6 +219,10 @@ pub struct SimArgs {
     /// With `--record`: keep every K-th frame (and the first).
     #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub record_every: u32,
+    /// Count the crossings (edges through triangles they share no vertex with) after every
+    /// frame, not only in the final state: the most in a frame and the first frame with any.
+    #[arg(long)]
+    pub check_crossings: bool,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }

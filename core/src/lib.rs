@@ -18,6 +18,7 @@ pub mod camera;
 pub mod cloth;
 pub mod contact;
 pub mod cpu;
+pub mod crossings;
 pub mod error;
 pub mod grid;
 pub mod input;

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Result, bail};
+use clothlab_core::crossings;
 use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 
@@ -66,6 +67,11 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     if record.is_some() {
         recording.push(0.0, &solver.state()?);
     }
+    let (_, topo) = clothlab_core::build(&scene, solver.params())?;
+    // With --check-crossings: the most crossings in a frame, at which frame, and the first
+    // frame with any.
+    let mut most = (0usize, 0u64);
+    let mut first = None;
     for f in 1..=frames {
         let t0 = Instant::now();
         solver.step_frame()?;
@@ -74,9 +80,17 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         if record.is_some() && f % args.record_every as u64 == 0 {
             recording.push(f as f32 * frame_dt, &solver.state()?);
         }
+        if args.check_crossings {
+            let c = crossings::count(&solver.state()?.pos, &topo.triangles).pairs;
+            if c > most.0 {
+                most = (c, f);
+            }
+            if c > 0 && first.is_none() {
+                first = Some(f);
+            }
+        }
     }
     let state = solver.state()?;
-    let (_, topo) = clothlab_core::build(&scene, solver.params())?;
     let summary = summarize(&state, &topo);
     let np = scene.num_particles() as f64;
     let per_substep =
@@ -114,6 +128,14 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         "NaN            {}",
         if summary.nan_count == 0 { "none".to_string() } else { format!("{} components", summary.nan_count) }
     )?;
+    let last = crossings::count(&state.pos, &topo.triangles).pairs;
+    outln!("crossings      {last} (edges through triangles they share no vertex with, final state)")?;
+    if args.check_crossings {
+        match first {
+            Some(first) => outln!("  every frame  at most {} (frame {}); the first at frame {first}", most.0, most.1)?,
+            None => outln!("  every frame  none in any of the {frames} frames")?,
+        }
+    }
 
     if let Some(last) = solver.substep_stats().last() {
         outln!(
