@@ -37,6 +37,7 @@ pub mod step_params;
 pub mod substep;
 pub mod tables;
 pub mod timing;
+pub mod tri_contact;
 pub mod validate;
 
 pub use camera::OrbitCamera;
