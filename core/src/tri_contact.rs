@@ -4,6 +4,7 @@
 //! response spread over the primitives' vertices by the weights returned here.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// Where on a triangle (a, b, c) the closest point lies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -130,6 +131,135 @@ pub fn edge_edge(p0: Vec3, p1: Vec3, q0: Vec3, q1: Vec3) -> EdgeEdge {
     at(s, t, false)
 }
 
+/// The fraction of its distance to the nearest primitive it shares no vertex with that a
+/// vertex may move before contacts are found again (OGC's γ, VBD's truncation): under ½,
+/// so that two primitives each moving less than it cannot meet.
+pub const BOUND_FRACTION: f32 = 0.45;
+
+/// How far each vertex of the cloth with triangles `triangles` at `pos` may move before
+/// any two primitives that share no vertex could meet: [`BOUND_FRACTION`] of the smallest
+/// distance between such a pair that it belongs to — a vertex and a triangle, or two
+/// edges — and at most that fraction of `reach` (pairs farther apart are not looked for).
+///
+/// Why it holds: every point of a primitive is a weighted mean of its vertices, so it
+/// moves no more than the farthest-moving vertex. Two primitives `d` apart whose vertices
+/// each move less than γ·d (each vertex's bound is at most γ times the distance of every
+/// pair it belongs to) close in by less than 2γ·d < d: they do not meet, and a primitive
+/// cannot pass through another without meeting it.
+pub fn motion_bounds(pos: &[crate::grid::V4], triangles: &[[u32; 3]], reach: f32) -> Vec<f32> {
+    let mut bound = vec![reach; pos.len()];
+    let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
+    let mut take = |ks: &[u32], d: f32| {
+        for &k in ks {
+            let b = &mut bound[k as usize];
+            *b = b.min(d);
+        }
+    };
+    let edges = crate::crossings::edges(triangles);
+    // A point of an edge is within a quarter of its length of its ends or its middle, where
+    // the edge looks: a primitive within `reach` of it is within a cell of one of them.
+    let longest = edges.iter().map(|&[a, b]| (at(a) - at(b)).length()).filter(|l| l.is_finite()).fold(0.0, f32::max);
+    let cell = (reach + 0.5 * longest).max(1e-6);
+    let key = |x: Vec3| {
+        let c = (x / cell).floor();
+        [c.x as i32, c.y as i32, c.z as i32]
+    };
+    // Each triangle and edge in the cells its box covers; a vertex looks in its own cell and
+    // the 26 around it (a primitive within `reach` covers one of them).
+    let mut grid: std::collections::HashMap<[i32; 3], (Vec<u32>, Vec<u32>)> = std::collections::HashMap::new();
+    let mut insert = |ks: &[u32], id: u32, tri: bool| {
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for &k in ks {
+            lo = lo.min(at(k));
+            hi = hi.max(at(k));
+        }
+        if !(lo.is_finite() && hi.is_finite()) {
+            return;
+        }
+        let (l, h) = (key(lo), key(hi));
+        for i in l[0]..=h[0] {
+            for j in l[1]..=h[1] {
+                for k in l[2]..=h[2] {
+                    let e = grid.entry([i, j, k]).or_default();
+                    if tri { e.0.push(id) } else { e.1.push(id) }
+                }
+            }
+        }
+    };
+    for (t, tri) in triangles.iter().enumerate() {
+        insert(tri, t as u32, true);
+    }
+    for (e, edge) in edges.iter().enumerate() {
+        insert(edge, e as u32, false);
+    }
+    // The triangles (`tri`) or edges near `xs`: those registered in the 27 cells around
+    // each, once each, sorted.
+    let around = |xs: &[Vec3], tri: bool| -> Vec<u32> {
+        let mut ids = Vec::new();
+        for &x in xs {
+            let c = key(x);
+            for i in -1..=1 {
+                for j in -1..=1 {
+                    for k in -1..=1 {
+                        if let Some(cell) = grid.get(&[c[0] + i, c[1] + j, c[2] + k]) {
+                            ids.extend_from_slice(if tri { &cell.0 } else { &cell.1 });
+                        }
+                    }
+                }
+            }
+        }
+        ids.sort_unstable();
+        ids.dedup();
+        ids
+    };
+    // Vertex–triangle pairs closer than `reach`, found vertex by vertex in parallel.
+    let vt: Vec<(u32, u32, f32)> = (0..pos.len() as u32)
+        .into_par_iter()
+        .flat_map_iter(|v| {
+            let x = at(v);
+            let near = if x.is_finite() { around(&[x], true) } else { Vec::new() };
+            near.into_iter().filter_map(move |t| {
+                let tri = triangles[t as usize];
+                if tri.contains(&v) {
+                    return None;
+                }
+                let d = (point_triangle(x, at(tri[0]), at(tri[1]), at(tri[2])).point - x).length();
+                (d < reach).then_some((v, t, d))
+            })
+        })
+        .collect();
+    for (v, t, d) in vt {
+        take(&[v], BOUND_FRACTION * d);
+        take(&triangles[t as usize], BOUND_FRACTION * d);
+    }
+    // Edge–edge pairs closer than `reach` (each pair once: the second edge after the first).
+    let edge_list = &edges;
+    let ee: Vec<(u32, u32, f32)> = (0..edges.len() as u32)
+        .into_par_iter()
+        .flat_map_iter(|e| {
+            let [a, b] = edge_list[e as usize];
+            let (p0, p1) = (at(a), at(b));
+            let near =
+                if p0.is_finite() && p1.is_finite() { around(&[p0, p1, 0.5 * (p0 + p1)], false) } else { Vec::new() };
+            near.into_iter().filter_map(move |f| {
+                let [c, d] = edge_list[f as usize];
+                if f <= e || c == a || c == b || d == a || d == b {
+                    return None;
+                }
+                let r = edge_edge(p0, p1, at(c), at(d));
+                let dist = (r.p - r.q).length();
+                (dist < reach).then_some((e, f, dist))
+            })
+        })
+        .collect();
+    for (e, f, d) in ee {
+        let ([a, b], [c, dd]) = (edges[e as usize], edges[f as usize]);
+        take(&[a, b, c, dd], BOUND_FRACTION * d);
+    }
+    bound.iter_mut().for_each(|b| *b = b.min(BOUND_FRACTION * reach));
+    bound
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -167,6 +297,28 @@ mod tests {
             let rebuilt = A * r.weights[0] + B * r.weights[1] + C * r.weights[2];
             assert!((rebuilt - r.point).length() < 1e-6 && (r.weights.iter().sum::<f32>() - 1.0).abs() < 1e-6);
         }
+    }
+
+    #[test]
+    fn a_bound_is_the_fraction_of_the_nearest_pair_a_vertex_belongs_to() {
+        // A triangle and, 0.2 above its face, a small one: its corner over the face is 0.2 from
+        // it (vertex–triangle), which bounds every vertex of both; every other pair (the
+        // big one's corners, the edges) is farther apart.
+        let pos = [
+            [0.0, 0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0, 1.0],
+            [0.0, 1.0, 0.0, 1.0],
+            [0.2, 0.2, 0.2, 1.0],
+            [0.3, 0.2, 0.2, 1.0],
+            [0.3, 0.3, 0.2, 1.0],
+        ];
+        let b = motion_bounds(&pos, &[[0, 1, 2], [3, 4, 5]], 1.0);
+        for (k, b) in b.iter().enumerate() {
+            assert!((b - BOUND_FRACTION * 0.2).abs() < 1e-6, "vertex {k}: {b}");
+        }
+        // Beyond the reach, only the reach bounds them.
+        let b = motion_bounds(&pos, &[[0, 1, 2], [3, 4, 5]], 0.1);
+        assert!(b.iter().all(|&b| b == BOUND_FRACTION * 0.1), "{b:?}");
     }
 
     #[test]

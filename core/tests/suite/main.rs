@@ -4,6 +4,7 @@
 //! with the whole stack rather than once per file (docs/testing.md, "Where a new test goes").
 
 mod cloths;
+mod contact;
 mod fused;
 mod mesh_cloth;
 mod mesh_files;
