@@ -136,25 +136,23 @@ pub fn edge_edge(p0: Vec3, p1: Vec3, q0: Vec3, q1: Vec3) -> EdgeEdge {
 /// so that two primitives each moving less than it cannot meet.
 pub const BOUND_FRACTION: f32 = 0.45;
 
-/// How far each vertex of the cloth with triangles `triangles` at `pos` may move before
-/// any two primitives that share no vertex could meet: [`BOUND_FRACTION`] of the smallest
-/// distance between such a pair that it belongs to — a vertex and a triangle, or two
-/// edges — and at most that fraction of `reach` (pairs farther apart are not looked for).
-///
-/// Why it holds: every point of a primitive is a weighted mean of its vertices, so it
-/// moves no more than the farthest-moving vertex. Two primitives `d` apart whose vertices
-/// each move less than γ·d (each vertex's bound is at most γ times the distance of every
-/// pair it belongs to) close in by less than 2γ·d < d: they do not meet, and a primitive
-/// cannot pass through another without meeting it.
-pub fn motion_bounds(pos: &[crate::grid::V4], triangles: &[[u32; 3]], reach: f32) -> Vec<f32> {
-    let mut bound = vec![reach; pos.len()];
+/// The pairs of primitives that share no vertex and are closer than `reach`, of the cloth
+/// with triangles `triangles` at `pos`: vertex–triangle pairs `(vertex, triangle,
+/// distance)` and edge–edge pairs `(edge, edge, distance)` (each once, the first edge's
+/// index lower), edges indexing `edges` — found through a grid of cells `reach` plus half
+/// the longest edge wide, vertex by vertex and edge by edge in parallel.
+pub struct NearPairs {
+    /// The cloth's edges, each once ([`crate::crossings::edges`]).
+    pub edges: Vec<[u32; 2]>,
+    /// Vertex, triangle, distance.
+    pub vt: Vec<(u32, u32, f32)>,
+    /// Edge, edge, distance.
+    pub ee: Vec<(u32, u32, f32)>,
+}
+
+/// [`NearPairs`] of `pos` within `reach`.
+pub fn near_pairs(pos: &[crate::grid::V4], triangles: &[[u32; 3]], reach: f32) -> NearPairs {
     let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
-    let mut take = |ks: &[u32], d: f32| {
-        for &k in ks {
-            let b = &mut bound[k as usize];
-            *b = b.min(d);
-        }
-    };
     let edges = crate::crossings::edges(triangles);
     // A point of an edge is within a quarter of its length of its ends or its middle, where
     // the edge looks: a primitive within `reach` of it is within a cell of one of them.
@@ -228,10 +226,6 @@ pub fn motion_bounds(pos: &[crate::grid::V4], triangles: &[[u32; 3]], reach: f32
             })
         })
         .collect();
-    for (v, t, d) in vt {
-        take(&[v], BOUND_FRACTION * d);
-        take(&triangles[t as usize], BOUND_FRACTION * d);
-    }
     // Edge–edge pairs closer than `reach` (each pair once: the second edge after the first).
     let edge_list = &edges;
     let ee: Vec<(u32, u32, f32)> = (0..edges.len() as u32)
@@ -252,12 +246,101 @@ pub fn motion_bounds(pos: &[crate::grid::V4], triangles: &[[u32; 3]], reach: f32
             })
         })
         .collect();
-    for (e, f, d) in ee {
-        let ([a, b], [c, dd]) = (edges[e as usize], edges[f as usize]);
+    NearPairs { edges, vt, ee }
+}
+
+/// How far each vertex of the cloth with triangles `triangles` at `pos` may move before
+/// any two primitives that share no vertex could meet: [`BOUND_FRACTION`] of the smallest
+/// distance between such a pair that it belongs to — a vertex and a triangle, or two
+/// edges — and at most that fraction of `reach` (pairs farther apart are not looked for).
+///
+/// Why it holds: every point of a primitive is a weighted mean of its vertices, so it
+/// moves no more than the farthest-moving vertex. Two primitives `d` apart whose vertices
+/// each move less than γ·d (each vertex's bound is at most γ times the distance of every
+/// pair it belongs to) close in by less than 2γ·d < d: they do not meet, and a primitive
+/// cannot pass through another without meeting it.
+pub fn motion_bounds(pos: &[crate::grid::V4], triangles: &[[u32; 3]], reach: f32) -> Vec<f32> {
+    let mut bound = vec![reach; pos.len()];
+    let mut take = |ks: &[u32], d: f32| {
+        for &k in ks {
+            let b = &mut bound[k as usize];
+            *b = b.min(d);
+        }
+    };
+    let pairs = near_pairs(pos, triangles, reach);
+    for &(v, t, d) in &pairs.vt {
+        take(&[v], BOUND_FRACTION * d);
+        take(&triangles[t as usize], BOUND_FRACTION * d);
+    }
+    for &(e, f, d) in &pairs.ee {
+        let ([a, b], [c, dd]) = (pairs.edges[e as usize], pairs.edges[f as usize]);
         take(&[a, b, c, dd], BOUND_FRACTION * d);
     }
     bound.iter_mut().for_each(|b| *b = b.min(BOUND_FRACTION * reach));
     bound
+}
+
+/// One Jacobi pass of the contact between primitives: each pair of [`near_pairs`] closer
+/// than `thickness` is pushed apart to it along the line between its closest points — the
+/// constraint `n·(p − q) ≥ thickness` projected with the vertices' inverse masses
+/// `inv_mass` (0: pinned) and the closest points' weights, so that the pair's momentum
+/// does not change (its pushes weighted by mass sum to zero). Each vertex's pushes are
+/// summed in fixed point ([`crate::cpu::self_collide::UNITS`] per thickness, truncated:
+/// the same sum in any order, as the particle contact's). Writes the moved positions to
+/// `out` and returns the pairs pushed.
+pub fn separate(
+    pos: &[crate::grid::V4],
+    triangles: &[[u32; 3]],
+    inv_mass: &[f32],
+    thickness: f32,
+    out: &mut [crate::grid::V4],
+) -> usize {
+    use crate::cpu::self_collide::UNITS;
+    let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
+    let pairs = near_pairs(pos, triangles, thickness);
+    let unit = thickness / UNITS;
+    let mut sum = vec![[0i64; 3]; pos.len()];
+    let mut pushed = 0;
+    // Pushes `scale · n` on each of `ks` (weights `ws`, the sign for the pair's side).
+    let mut push = |ks: &[u32], ws: &[f32], sign: f32, n: Vec3, s: f32| {
+        for (&k, &w) in ks.iter().zip(ws) {
+            let d = n * (sign * inv_mass[k as usize] * w * s / unit);
+            let acc = &mut sum[k as usize];
+            for c in 0..3 {
+                acc[c] += d[c] as i64;
+            }
+        }
+    };
+    // Projects one pair with points p (vertices `a`, weights `wa`) and q (`b`, `wb`).
+    let mut pair = |a: &[u32], wa: &[f32], b: &[u32], wb: &[f32], p: Vec3, q: Vec3, fallback: Vec3| {
+        let d = (p - q).length();
+        let n = if d > 0.0 { (p - q) / d } else { fallback };
+        let k: f32 = a.iter().zip(wa).chain(b.iter().zip(wb)).map(|(&v, &w)| inv_mass[v as usize] * w * w).sum();
+        if k == 0.0 || !n.is_finite() {
+            return;
+        }
+        let s = (thickness - d) / k;
+        push(a, wa, 1.0, n, s);
+        push(b, wb, -1.0, n, s);
+        pushed += 1;
+    };
+    for &(v, t, _) in &pairs.vt {
+        let [ta, tb, tc] = triangles[t as usize];
+        let (x, a, b, c) = (at(v), at(ta), at(tb), at(tc));
+        let r = point_triangle(x, a, b, c);
+        pair(&[v], &[1.0], &[ta, tb, tc], &r.weights, x, r.point, (b - a).cross(c - a).normalize());
+    }
+    for &(e, f, _) in &pairs.ee {
+        let ([a, b], [c, d]) = (pairs.edges[e as usize], pairs.edges[f as usize]);
+        let r = edge_edge(at(a), at(b), at(c), at(d));
+        let fallback = (at(b) - at(a)).cross(at(d) - at(c)).normalize();
+        pair(&[a, b], &[1.0 - r.s, r.s], &[c, d], &[1.0 - r.t, r.t], r.p, r.q, fallback);
+    }
+    for (k, o) in out.iter_mut().enumerate() {
+        let x = pos[k];
+        *o = [x[0] + sum[k][0] as f32 * unit, x[1] + sum[k][1] as f32 * unit, x[2] + sum[k][2] as f32 * unit, x[3]];
+    }
+    pushed
 }
 
 #[cfg(test)]
@@ -319,6 +402,75 @@ mod tests {
         // Beyond the reach, only the reach bounds them.
         let b = motion_bounds(&pos, &[[0, 1, 2], [3, 4, 5]], 0.1);
         assert!(b.iter().all(|&b| b == BOUND_FRACTION * 0.1), "{b:?}");
+    }
+
+    /// Σ of the moves of `out` from `pos` weighted by mass (1 / inverse mass; pinned left out).
+    fn momentum(pos: &[crate::grid::V4], out: &[crate::grid::V4], inv_mass: &[f32]) -> Vec3 {
+        pos.iter()
+            .zip(out)
+            .zip(inv_mass)
+            .filter(|(_, w)| **w > 0.0)
+            .map(|((a, b), w)| (Vec3::from_slice(&b[..3]) - Vec3::from_slice(&a[..3])) / *w)
+            .sum()
+    }
+
+    #[test]
+    fn a_vertex_and_a_triangle_or_two_edges_closer_than_the_thickness_are_pushed_to_it_momentum_kept() {
+        let t = 0.01;
+        let unit = t / crate::cpu::self_collide::UNITS;
+        // A vertex 0.4 t above a triangle's centroid, masses 1 (inverse mass 1) and, for the
+        // triangle's vertices, 2 (0.5): its plane and the vertex end t apart, the pushes
+        // weighted by mass sum to zero (to the fixed point's truncation, a unit a vertex).
+        let c = Vec3::new(1.0 / 3.0, 1.0 / 3.0, 0.0);
+        let pos = [
+            [0.0, 0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0, 1.0],
+            [0.0, 1.0, 0.0, 1.0],
+            [c.x, c.y, 0.4 * t, 1.0],
+            [c.x, c.y, 0.9, 1.0],
+            [c.x + 0.1, c.y, 0.9, 1.0],
+        ];
+        let tris = [[0, 1, 2], [3, 4, 5]];
+        let inv = [0.5, 0.5, 0.5, 1.0, 1.0, 1.0];
+        let mut out = pos;
+        assert_eq!(separate(&pos, &tris, &inv, t, &mut out), 1);
+        let plane_z = (out[0][2] + out[1][2] + out[2][2]) / 3.0;
+        assert!((out[3][2] - plane_z - t).abs() < 4.0 * unit, "gap {} for {t}", out[3][2] - plane_z);
+        // Each push truncates by under a unit a component: three vertices of mass 2 and one
+        // of 1 leave under 7 units a component, 7√3 < 12.2 in length.
+        assert!(momentum(&pos, &out, &inv).length() < 12.2 * unit, "{:?}", momentum(&pos, &out, &inv));
+        // The triangle pinned: the vertex goes the whole way.
+        let pinned = [0.0, 0.0, 0.0, 1.0, 1.0, 1.0];
+        separate(&pos, &tris, &pinned, t, &mut out);
+        assert!((out[3][2] - t).abs() < 2.0 * unit && out[0] == pos[0], "{:?}", out[3]);
+        // Two edges crossed 0.5 t apart (two lone triangles whose nearest edges cross): each
+        // edge moves half the gap.
+        let pos = [
+            [-1.0, 0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0, 1.0],
+            [0.0, -1.0, 0.5 * t, 1.0],
+            [0.0, 1.0, 0.5 * t, 1.0],
+            [0.0, 0.0, 1.0, 1.0],
+        ];
+        let tris = [[0, 1, 2], [3, 4, 5]];
+        let inv = [1.0; 6];
+        let mut out = pos;
+        separate(&pos, &tris, &inv, t, &mut out);
+        let r = edge_edge(
+            Vec3::from_slice(&out[0][..3]),
+            Vec3::from_slice(&out[1][..3]),
+            Vec3::from_slice(&out[3][..3]),
+            Vec3::from_slice(&out[4][..3]),
+        );
+        assert!(((r.p - r.q).length() - t).abs() < 4.0 * unit, "{:?}", r);
+        // Four vertices of mass 1: under 4 units a component, 4√3 < 7 in length.
+        assert!(momentum(&pos, &out, &inv).length() < 7.0 * unit);
+        // Primitives that share a vertex are never pushed; nor are pairs farther than t.
+        let pos = [[0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 1.0], [1.0, 1.0, 0.001, 1.0]];
+        let mut out = pos;
+        assert_eq!(separate(&pos, &[[0, 1, 2], [1, 3, 2]], &[1.0; 4], t, &mut out), 0);
+        assert_eq!(out, pos);
     }
 
     #[test]
