@@ -308,43 +308,32 @@ fn body_contact(k: u32, x: vec3<f32>, reach: f32) -> Contact {
 // collider in scene order (core::cpu::Colliders::walk), its velocity relative to their
 // surfaces where they move.
 fn collided(m: Moved) -> Moved {
-    var x = m.x;
-    var v = m.v;
+    var o = m;
     for (var k = 0u; k < p.num_spheres; k++) {
-        let c = sphere_contact(spheres[k], x, p.margin);
-        if c.hit {
-            let hit = surface_contact(c.at, v, c.vs, c.n);
-            x = hit.x;
-            v = hit.v;
-        }
+        o = touched(o, sphere_contact(spheres[k], o.x, p.margin));
     }
     for (var k = 0u; k < p.num_boxes; k++) {
-        let c = box_contact(boxes[k], x, p.margin);
-        if c.hit {
-            let hit = surface_contact(c.at, v, c.vs, c.n);
-            x = hit.x;
-            v = hit.v;
-        }
+        o = touched(o, box_contact(boxes[k], o.x, p.margin));
     }
     if USES_RODS {
         for (var k = 0u; k < p.num_rods; k++) {
-            let c = rod_contact(k, x, p.margin);
-            if c.hit {
-                let hit = surface_contact(c.at, v, c.vs, c.n);
-                x = hit.x;
-                v = hit.v;
-            }
+            o = touched(o, rod_contact(k, o.x, p.margin));
         }
     }
     if USES_BODIES {
         for (var k = 0u; k < p.num_bodies; k++) {
-            let c = body_contact(k, x, p.margin);
-            if c.hit {
-                let hit = surface_contact(c.at, v, c.vs, c.n);
-                x = hit.x;
-                v = hit.v;
-            }
+            o = touched(o, body_contact(k, o.x, p.margin));
         }
     }
-    return Moved(x, v);
+    return o;
+}
+
+// m moved to contact c's point, its velocity relative to the surface there (the Rust
+// walk's `touch`); m itself where c is no contact.
+fn touched(m: Moved, c: Contact) -> Moved {
+    if !c.hit {
+        return m;
+    }
+    let hit = surface_contact(c.at, m.v, c.vs, c.n);
+    return Moved(hit.x, hit.v);
 }
