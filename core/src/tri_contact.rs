@@ -353,6 +353,8 @@ mod tests {
 
     #[test]
     fn a_point_finds_the_face_the_edge_or_the_vertex_it_is_nearest() {
+        // Bounds here: a few f32 roundings of values of order 1 (ε = 1.2e-7): 1e-7 where
+        // the result is one or two operations, 1e-6 where it is a sum of several products.
         // Above the face: the foot of the perpendicular, its weights the coordinates.
         let f = point_triangle(Vec3::new(0.25, 0.25, 0.3), A, B, C);
         assert_eq!(f.region, Region::Face);
@@ -435,6 +437,7 @@ mod tests {
         let mut out = pos;
         assert_eq!(separate(&pos, &tris, &inv, t, &mut out), 1);
         let plane_z = (out[0][2] + out[1][2] + out[2][2]) / 3.0;
+        // Each of the four pushed vertices truncates its push by under a unit: 4 units.
         assert!((out[3][2] - plane_z - t).abs() < 4.0 * unit, "gap {} for {t}", out[3][2] - plane_z);
         // Each push truncates by under a unit a component: three vertices of mass 2 and one
         // of 1 leave under 7 units a component, 7√3 < 12.2 in length.
@@ -442,6 +445,7 @@ mod tests {
         // The triangle pinned: the vertex goes the whole way.
         let pinned = [0.0, 0.0, 0.0, 1.0, 1.0, 1.0];
         separate(&pos, &tris, &pinned, t, &mut out);
+        // One push, truncated by under a unit, plus the gap's own rounding: 2 units.
         assert!((out[3][2] - t).abs() < 2.0 * unit && out[0] == pos[0], "{:?}", out[3]);
         // Two edges crossed 0.5 t apart (two lone triangles whose nearest edges cross): each
         // edge moves half the gap.
@@ -463,6 +467,7 @@ mod tests {
             Vec3::from_slice(&out[3][..3]),
             Vec3::from_slice(&out[4][..3]),
         );
+        // Four vertices pushed, each truncated by under a unit: 4 units.
         assert!(((r.p - r.q).length() - t).abs() < 4.0 * unit, "{:?}", r);
         // Four vertices of mass 1: under 4 units a component, 4√3 < 7 in length.
         assert!(momentum(&pos, &out, &inv).length() < 7.0 * unit);
@@ -475,6 +480,7 @@ mod tests {
 
     #[test]
     fn two_edges_find_their_closest_points_crossed_skew_and_parallel() {
+        // (Bounds: f32 roundings of values of order 1, as in the test above.)
         // Crossed 0.2 apart: the middles.
         let r = edge_edge(
             Vec3::new(-1.0, 0.0, 0.0),
