@@ -236,6 +236,13 @@ pub struct MeshTables {
     /// The smallest rest distance between two particles that share no spring but a
     /// neighbour, m: self-collision's thickness must stay below half of it.
     pub closest_unsprung: f32,
+    /// The smallest rest distance between a vertex and a triangle or two edges that share
+    /// no vertex, m (at most two mean edges: pairs farther apart are not looked for): the
+    /// contact between triangles' thickness must stay below [`TRIANGLE_THICKNESS_FRACTION`]
+    /// of it.
+    ///
+    /// [`TRIANGLE_THICKNESS_FRACTION`]: crate::params::TRIANGLE_THICKNESS_FRACTION
+    pub closest_primitives: f32,
     /// The cloths of a scene of several, their ranges of the particles and triangles
     /// (empty for one cloth).
     pub parts: Vec<crate::mesh::ClothPart>,
@@ -342,6 +349,7 @@ impl ClothTopology {
             None => params.validate_for(self.n, self.spacing),
             Some(m) => {
                 params.check_mesh(self.num_particles(), m.closest_unsprung)?;
+                params.check_triangles(m.closest_primitives, "this mesh's")?;
                 params.validate_for_mass(m.min_mass, self.spacing, "for this mesh")
             }
         }

@@ -45,7 +45,7 @@ pub use cloth::build;
 pub use cpu::{CpuSolver, Exec, SIMD_ENV, Simd};
 pub use grid::{ClothState, ClothTopology, Grab, Spring, SpringKind, SpringSlot};
 pub use motion::{Ease, Key, Motion, Repeat};
-pub use params::{Integrator, ParamError, SimParams, StiffnessUnits};
+pub use params::{Integrator, ParamError, SelfCollision, SimParams, StiffnessUnits};
 pub use pins::{MAX_PIN_GROUPS, PinGroup, PinPose, PinSlot};
 pub use scene::{Aabb, Capsule, ClothSpec, ColliderId, Cylinder, Pinning, Scene, Sphere};
 pub use scene_file::{SceneFile, SceneFileError};

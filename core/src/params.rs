@@ -57,6 +57,92 @@ pub enum StiffnessUnits {
     Physical,
 }
 
+/// How the cloth keeps clear of itself and of other cloths (`self_collision`).
+///
+/// In a scene file and in `--set` it is `"off"`, `"particles"` or `"triangles"`; `false`
+/// and `true` stay accepted for off and particles (and are what those two are written
+/// as, so that older files and outputs read the same).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SelfCollision {
+    /// No contact between parts of the cloths.
+    #[default]
+    Off,
+    /// Particles that are not neighbours keep `self_thickness` apart (a spatial hash
+    /// rebuilt every substep; `core::cpu::self_collide`): the cheap rung, the thesis-era
+    /// method. Surfaces stay apart only while the thickness is more than 0.71 spacing.
+    Particles,
+    /// Vertex–triangle and edge–edge contact between primitives that share no vertex,
+    /// with each vertex's motion in a substep bounded so that no two primitives can pass
+    /// through each other (`core::tri_contact`, docs/contact.md). The CPU solvers run it.
+    Triangles,
+}
+
+impl SelfCollision {
+    /// Every mode, in the order the app lists them.
+    pub const ALL: [SelfCollision; 3] = [SelfCollision::Off, SelfCollision::Particles, SelfCollision::Triangles];
+
+    /// The name in a scene file and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            SelfCollision::Off => "off",
+            SelfCollision::Particles => "particles",
+            SelfCollision::Triangles => "triangles",
+        }
+    }
+
+    /// Whether the particle contact runs.
+    pub fn particles(self) -> bool {
+        self == SelfCollision::Particles
+    }
+
+    /// Whether the contact between triangles runs.
+    pub fn triangles(self) -> bool {
+        self == SelfCollision::Triangles
+    }
+
+    /// Whether either contact runs (the thickness is used).
+    pub fn on(self) -> bool {
+        self != SelfCollision::Off
+    }
+}
+
+impl From<bool> for SelfCollision {
+    fn from(on: bool) -> Self {
+        if on { SelfCollision::Particles } else { SelfCollision::Off }
+    }
+}
+
+impl Serialize for SelfCollision {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            SelfCollision::Off => s.serialize_bool(false),
+            SelfCollision::Particles => s.serialize_bool(true),
+            SelfCollision::Triangles => s.serialize_str("triangles"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for SelfCollision {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = SelfCollision;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("\"off\", \"particles\" or \"triangles\" (or false / true)")
+            }
+            fn visit_bool<E: serde::de::Error>(self, v: bool) -> Result<SelfCollision, E> {
+                Ok(v.into())
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<SelfCollision, E> {
+                SelfCollision::ALL.into_iter().find(|m| m.name() == v).ok_or_else(|| {
+                    E::custom(format!("unknown self_collision `{v}`: expected \"off\", \"particles\" or \"triangles\""))
+                })
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
 /// How a substep advances the particles (thesis §4.1.1–4.1.2). Every integrator keeps
 /// the same state, positions and velocities (x, v) in f32, so the force kernels (which
 /// read v) serve all of them unchanged.
@@ -256,11 +342,11 @@ pub struct SimParams {
     /// `D ← ω_k (D − D⁽ᵏ⁻²⁾) + D⁽ᵏ⁻²⁾` with `ω₁ = 1`, `ω₂ = 2/(2 − ρ²)`,
     /// `ω_k = 4/(4 − ρ² ω_{k−1})`. 0 switches it off. Default 0.
     pub vbd_rho: f32,
-    /// Self-collision: particles that are not neighbours in the grid keep
-    /// `self_thickness` apart (found through a spatial hash rebuilt every substep; see
-    /// `core::cpu::self_collide`). Default off.
-    pub self_collision: bool,
-    /// The cloth's thickness for self-collision, m, in 0.001 ..= 0.5. Default 0.02.
+    /// Contact of the cloths with themselves and each other: [`SelfCollision`] (off,
+    /// particles, triangles). Default off.
+    pub self_collision: SelfCollision,
+    /// The cloth's thickness for self-collision, m, in 0.001 ..= 0.5 (the triangles'
+    /// contact: from 0.1 of the spacing up). Default 0.02.
     pub self_thickness: f32,
 }
 
@@ -296,11 +382,16 @@ impl Default for SimParams {
             xpbd_iterations: 1,
             vbd_iterations: 8,
             vbd_rho: 0.0,
-            self_collision: false,
+            self_collision: SelfCollision::Off,
             self_thickness: 0.02,
         }
     }
 }
+
+/// The contact between triangles' thickness is below this fraction of the closest rest
+/// distance between primitives that share no vertex (a grid's: the spacing over √2), so that
+/// a cloth at rest does not push itself apart.
+pub const TRIANGLE_THICKNESS_FRACTION: f32 = 0.9;
 
 /// Upper bound on substeps per frame (a frame of more would never be interactive).
 pub const MAX_SUBSTEPS: u32 = 1024;
@@ -332,14 +423,14 @@ impl SimParams {
     /// a thickness below half that distance (a pair closer than twice the thickness at
     /// rest would push apart while the cloth lies still).
     pub fn check_mesh(&self, particles: usize, closest_unsprung: f32) -> Result<(), ParamError> {
-        if !self.self_collision {
+        if !self.self_collision.particles() {
             return Ok(());
         }
         let max = crate::tables::SELF_COLLISION_MAX_PARTICLES;
         if particles > max {
             return Err(ParamError::new(
                 "self_collision",
-                true,
+                "particles",
                 format!(
                     "a mesh of {particles} particles is too large for self-collision (its hash holds {max} at most)"
                 ),
@@ -355,6 +446,25 @@ impl SimParams {
                     "two particles of this mesh that share no spring lie {closest_unsprung:.4} m apart at rest, within twice the thickness: \
                      they would push each other apart; use less than {:.4} m",
                     0.5 * closest_unsprung
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The contact between triangles on a cloth whose closest primitives that share no
+    /// vertex lie `closest` apart at rest (`what` names them in a refusal: "this mesh's"):
+    /// a thickness below [`TRIANGLE_THICKNESS_FRACTION`] of that.
+    pub fn check_triangles(&self, closest: f32, what: &str) -> Result<(), ParamError> {
+        let max = TRIANGLE_THICKNESS_FRACTION * closest;
+        if self.self_collision.triangles() && self.self_thickness >= max {
+            return Err(ParamError::new(
+                "self_thickness",
+                self.self_thickness,
+                format!(
+                    "{what} closest vertex and triangle (or two edges) that share no vertex lie {closest:.4} m apart at rest: \
+                     the contact between triangles takes a thickness under {max:.4} m ({TRIANGLE_THICKNESS_FRACTION} of that), \
+                     or a cloth at rest would push itself apart"
                 ),
             ));
         }
@@ -428,11 +538,23 @@ impl SimParams {
         1.5 * spacing
     }
 
+    /// The largest thickness `mode` takes on a grid of spacing `spacing` (0 when off): the
+    /// particle contact's [`SimParams::max_grid_thickness`], or just under the contact
+    /// between triangles' [`TRIANGLE_THICKNESS_FRACTION`] of the spacing over √2.
+    pub fn max_thickness_on_grid(mode: SelfCollision, spacing: f32) -> f32 {
+        match mode {
+            SelfCollision::Off => 0.0,
+            SelfCollision::Particles => Self::max_grid_thickness(spacing),
+            SelfCollision::Triangles => 0.999 * TRIANGLE_THICKNESS_FRACTION * spacing * std::f32::consts::FRAC_1_SQRT_2,
+        }
+    }
+
     /// Self-collision on an `n × n` grid of spacing `spacing`: a thickness of at most
     /// [`SimParams::max_grid_thickness`].
     pub fn check_grid(&self, n: u32, spacing: f32) -> Result<(), ParamError> {
+        self.check_triangles(spacing * std::f32::consts::FRAC_1_SQRT_2, &format!("at n = {n} the grid's"))?;
         let max = Self::max_grid_thickness(spacing);
-        if self.self_collision && self.self_thickness > max {
+        if self.self_collision.particles() && self.self_thickness > max {
             return Err(ParamError::new(
                 "self_thickness",
                 self.self_thickness,

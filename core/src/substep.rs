@@ -21,8 +21,11 @@ pub struct Integration {
     pub vbd_iterations: u32,
     /// The Chebyshev ρ of `vbd` as f32 bits (0: no acceleration).
     pub vbd_rho_bits: u32,
-    /// Self-collision after the strain limit (core::cpu::self_collide).
+    /// The particle contact after the strain limit (core::cpu::self_collide).
     pub self_collision: bool,
+    /// The contact between triangles (core::tri_contact::Contact): bounds at the start,
+    /// the separation before the colliders, the clamp after the strain limit.
+    pub triangles: bool,
     /// Its contacts with Coulomb friction (the parameters have Coulomb's coefficients:
     /// the `_friction` response kernels).
     pub self_friction: bool,
@@ -39,6 +42,7 @@ impl Integration {
         vbd_iterations: 0,
         vbd_rho_bits: 0,
         self_collision: false,
+        triangles: false,
         self_friction: false,
         substeps: 1,
     };
@@ -51,8 +55,9 @@ impl Integration {
             xpbd_iterations: params.xpbd_iterations,
             vbd_iterations: params.vbd_iterations,
             vbd_rho_bits: params.vbd_rho.to_bits(),
-            self_collision: params.self_collision,
-            self_friction: params.self_collision && params.coulomb(),
+            self_collision: params.self_collision.particles(),
+            triangles: params.self_collision.triangles(),
+            self_friction: params.self_collision.particles() && params.coulomb(),
             substeps: params.substeps,
         }
     }
@@ -106,9 +111,21 @@ impl Integration {
                 v
             }
         };
+        if self.triangles {
+            // Every integrator collides once, at its end: the separation goes before it
+            // (the colliders then push out of what the separation pushed in), the
+            // bounds before everything and the clamp after everything that moves.
+            if let Some(k) = v.iter().rposition(|&s| s == Collide) {
+                v.insert(k, TriangleSeparate);
+            }
+            v.insert(0, TriangleBounds);
+        }
         v.extend((0..strain_passes).map(StrainPass));
         if self.self_collision {
             v.push(SelfCollision);
+        }
+        if self.triangles {
+            v.push(TriangleClamp);
         }
         v.push(Normals);
         v
@@ -161,6 +178,13 @@ pub enum Stage {
     StrainPass(u32),
     /// Particle–particle self-collision (the hash, then the response).
     SelfCollision,
+    /// Contact between triangles: each vertex's bound on its motion in this substep, from
+    /// the pairs of primitives near it at the substep's start.
+    TriangleBounds,
+    /// Contact between triangles: the pairs closer than the thickness pushed apart.
+    TriangleSeparate,
+    /// Contact between triangles: every vertex's motion in the substep cut to its bound.
+    TriangleClamp,
     /// Face and vertex normals (and the wind force they give).
     Normals,
 }

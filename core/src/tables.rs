@@ -11,6 +11,10 @@ pub const STRAIN_SLOTS: usize = 8;
 pub const FACE_SLOTS: usize = 6;
 /// Tether slots per particle (long-range attachments to pins).
 pub const TETHER_SLOTS: usize = 2;
+/// Fixed-point units of a contact's push per thickness (the particle contact's and the
+/// triangles'; a push is at most the thickness: 2¹⁶ units): integers add up to the same
+/// bits in any order.
+pub const CONTACT_UNITS: f32 = 65536.0;
 /// The most particles a mesh may have for self-collision: a hash slot's word holds the
 /// particle's index in 24 bits (`cpu::self_collide::slot_word`).
 pub const SELF_COLLISION_MAX_PARTICLES: usize = 1 << 24;

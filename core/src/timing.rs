@@ -57,8 +57,15 @@ pub const SELF_HASH: &str = "self_hash";
 pub const STRAIN_LIMIT_COUNT: &str = "strain_limit+hash_count";
 /// Self-collision's response.
 pub const SELF_COLLIDE: &str = "self_collide";
+/// The contact between triangles' bounds: the pairs within reach at the substep's start
+/// and each vertex's bound on its motion (core::tri_contact).
+pub const TRI_BOUNDS: &str = "tri_bounds";
+/// The contact between triangles' response: the pairs closer than the thickness pushed
+/// apart, then every vertex's motion clamped to its bound.
+pub const TRI_CONTACT: &str = "tri_contact";
 /// Every label a kernel (a registry row or a CPU sweep) is timed under, in step order.
-pub const KERNEL_LABELS: [&str; 21] = [
+pub const KERNEL_LABELS: [&str; 23] = [
+    TRI_BOUNDS,
     PINS,
     FORCES,
     SPRINGS,
@@ -75,6 +82,7 @@ pub const KERNEL_LABELS: [&str; 21] = [
     STRAIN_LIMIT_COUNT,
     SELF_HASH,
     SELF_COLLIDE,
+    TRI_CONTACT,
     TRI_NORMALS,
     VERTEX_NORMALS,
     STATS,

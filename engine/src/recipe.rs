@@ -157,6 +157,9 @@ fn stage_kernels(variant: &Variant, how: Integration, strain_passes: u32) -> Vec
                     },
                 ))
             }
+            // The contact between triangles runs on the CPU solvers only: a GPU solver
+            // refuses `self_collision = "triangles"` (GpuSolver::new, set_params).
+            Stage::TriangleBounds | Stage::TriangleSeparate | Stage::TriangleClamp => {}
             Stage::Normals if frame_normals => {}
             Stage::Normals => v.extend(normals_kernels(variant)),
         }

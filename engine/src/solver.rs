@@ -120,6 +120,17 @@ fn recipe_group(
     Ok(group)
 }
 
+/// The GPU solvers have no kernels for the contact between triangles yet: refused with
+/// what runs it.
+fn check_contact(params: &SimParams) -> Result<(), SolverError> {
+    if params.self_collision.triangles() {
+        return Err(SolverError::Unsupported(
+            "self_collision = \"triangles\" runs on the CPU solvers (cpu, cpu-par); the GPU backends have the particle contact (\"particles\")".to_owned(),
+        ));
+    }
+    Ok(())
+}
+
 impl<E: Engine> GpuSolver<E> {
     /// Builds the cloth of `scene` on `engine`, stepped by `variant` (a preset falls back
     /// to what the adapter has; a switch set explicitly is refused where it lacks it).
@@ -138,6 +149,7 @@ impl<E: Engine> GpuSolver<E> {
                 "at most {MAX_COLLIDERS} spheres, boxes, and capsules and cylinders together"
             )));
         }
+        check_contact(&params)?;
         let info = engine.info().clone();
         // Immediates hold the step constants where the device has room; the scatters use
         // float atomics where the device has them, compare-exchange otherwise: the same
@@ -689,6 +701,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
     }
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
+        check_contact(&params)?;
         self.topo.validate_params(&params)?;
         self.scene.check_motion_speed(params.dt())?;
         // A new dt keeps the velocity as it is: the state holds it, not Verlet's history.

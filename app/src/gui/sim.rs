@@ -173,8 +173,9 @@ impl Sim {
         let mut params = self.solver.get_ref().params().clone();
         let mut scene = self.solver.get_ref().scene().clone();
         scene.cloth.n = n;
-        if params.self_collision && !scene.cloth.is_mesh() {
-            let max = SimParams::max_grid_thickness(scene.cloth.size / (n.max(2) - 1) as f32);
+        if params.self_collision.on() && !scene.cloth.is_mesh() {
+            let spacing = scene.cloth.size / (n.max(2) - 1) as f32;
+            let max = SimParams::max_thickness_on_grid(params.self_collision, spacing);
             params.self_thickness = params.self_thickness.min(max);
         }
         *self = Self::new(self.backend, scene, params, shared)?;

@@ -628,19 +628,24 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     changed |= ui
         .add(egui::Slider::new(&mut p.strain_iterations, 0..=MAX_STRAIN_ITERATIONS.min(16)).text("strain passes"))
         .changed();
-    // Self-collision (off by default): a spatial hash every substep, then the response. A
-    // grid's thickness is bounded by its spacing (SimParams::max_grid_thickness): the
-    // slider ends there (a mesh's bound, from its closest unsprung pair, is refused in the
-    // status bar).
-    let max_thickness = if mesh {
-        0.1
-    } else {
-        let c = &s.scene.cloth;
-        clothlab_core::SimParams::max_grid_thickness(c.size / (c.n - 1) as f32).min(0.1)
-    };
+    // Self-collision (off by default): the particles' contact or the triangles' (the CPU
+    // solvers; a GPU backend refuses it in the status bar). A grid's thickness is bounded
+    // by its spacing (SimParams::max_thickness_on_grid): the slider ends there (a mesh's
+    // bound, from its closest pair, is refused in the status bar).
     ui.horizontal(|ui| {
-        changed |= ui.checkbox(&mut p.self_collision, "self-collision").changed();
-        if p.self_collision {
+        ui.label("self-collision");
+        egui::ComboBox::from_id_salt("self_collision").selected_text(p.self_collision.name()).show_ui(ui, |ui| {
+            for mode in clothlab_core::SelfCollision::ALL {
+                changed |= ui.selectable_value(&mut p.self_collision, mode, mode.name()).changed();
+            }
+        });
+        let max_thickness = if mesh {
+            0.1
+        } else {
+            let c = &s.scene.cloth;
+            clothlab_core::SimParams::max_thickness_on_grid(p.self_collision, c.size / (c.n - 1) as f32).min(0.1)
+        };
+        if p.self_collision.on() {
             let lo = MIN_THICKNESS.min(max_thickness);
             if p.self_thickness > max_thickness {
                 p.self_thickness = max_thickness.max(MIN_THICKNESS);

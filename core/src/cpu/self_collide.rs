@@ -68,7 +68,7 @@ const CELL_LIMIT: f32 = 1e9;
 /// above the particle count): few foreign cells share a bucket a probe reads.
 pub const TABLE_FACTOR: u32 = 4;
 /// Fixed-point units of a push per thickness (a push is at most `t`: 2¹⁶ units).
-pub const UNITS: f32 = 65536.0;
+pub const UNITS: f32 = crate::tables::CONTACT_UNITS;
 /// Contacts a particle's pushes are summed for at most: below 2³¹ / 2¹⁶, so the sum never
 /// overflows. A particle with more (a pile far denser than cloth lies) is not pushed:
 /// decided by the count, which is the same in any order.
@@ -679,7 +679,11 @@ mod tests {
     use crate::scene::Scene;
 
     fn params(n: u32, t: f32) -> StepParams {
-        let sp = SimParams { self_collision: true, self_thickness: t, ..SimParams::default() };
+        let sp = SimParams {
+            self_collision: crate::params::SelfCollision::Particles,
+            self_thickness: t,
+            ..SimParams::default()
+        };
         StepParams::new(&sp, &Scene::with_n(n), None)
     }
 
@@ -847,7 +851,7 @@ mod tests {
         // friction (μs t / dt / 65536 = 1.6e-4 m/s).
         let (n, t) = (16, 0.022);
         let sp = SimParams {
-            self_collision: true,
+            self_collision: crate::params::SelfCollision::Particles,
             self_thickness: t,
             static_friction: 0.5,
             kinetic_friction: 0.3,

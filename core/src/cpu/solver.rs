@@ -20,7 +20,7 @@ use crate::step_params::StepParams;
 use crate::substep::{Integration, Stage};
 use crate::timing::{
     FORCES_SPRINGS, FRAME, FUSED_STEP, INTEGRATE_COLLIDE, KernelTimings, SELF_COLLIDE, SELF_HASH, STRAIN_LIMIT,
-    SUBSTEP, TRI_NORMALS, TimingRecorder, VERTEX_NORMALS,
+    SUBSTEP, TRI_BOUNDS, TRI_CONTACT, TRI_NORMALS, TimingRecorder, VERTEX_NORMALS,
 };
 
 /// The CPU solver; [`Exec::Serial`] is the thesis's CPU variant, [`Exec::Parallel`] its
@@ -77,6 +77,9 @@ pub struct CpuSolver {
     tether_lanes: TetherLanes,
     /// A mesh's springs' λ (XPBD; empty for a grid).
     mesh_lambda: Vec<f32>,
+    /// The contact between triangles' buffers (`self_collision = "triangles"`), made when
+    /// a substep first needs them.
+    contact: Option<crate::tri_contact::Contact>,
 }
 
 impl CpuSolver {
@@ -114,6 +117,7 @@ impl CpuSolver {
             pins: Vec::new(),
             tether_lanes: TetherLanes::default(),
             mesh_lambda: Vec::new(),
+            contact: None,
         };
         if s.topo.mesh.is_some() {
             s.mesh_lambda = vec![0.0; s.topo.springs.len()];
@@ -155,7 +159,7 @@ impl CpuSolver {
         self.fused
             && self.grid.is_some()
             && matches!(self.params.integrator, Integrator::Verlet | Integrator::SymplecticEuler)
-            && !self.params.self_collision
+            && !self.params.self_collision.on()
             && self.topo.n >= 8
             && self.pins.iter().all(|&k| self.state.pos[k][3] == 0.0)
     }
@@ -170,7 +174,7 @@ impl CpuSolver {
             "the fused sweep switched off: CLOTHLAB_CPU_FUSED=off".to_owned()
         } else if !matches!(self.params.integrator, Integrator::Verlet | Integrator::SymplecticEuler) {
             format!("the fused sweep runs Verlet only, not {:?}", self.params.integrator)
-        } else if self.params.self_collision {
+        } else if self.params.self_collision.on() {
             "the fused sweep has no self-collision".to_owned()
         } else if self.topo.mesh.is_some() {
             "the fused sweep is the grid's; a mesh runs its kernels over the tables".to_owned()
@@ -314,8 +318,13 @@ impl CpuSolver {
             cg,
             grid,
             mesh_lambda,
+            contact,
+            exec,
             ..
         } = self;
+        if params.self_collision.triangles() && contact.is_none() {
+            *contact = Some(crate::tri_contact::Contact::new(&topo.triangles, *exec == Exec::Parallel));
+        }
         let n = topo.n as usize;
         let fast = uniform.is_some();
         let mesh = topo.mesh.is_some();
@@ -330,8 +339,8 @@ impl CpuSolver {
             springs_rows(e, rows, &topo.slots, uniform.as_ref(), Some(&p), lanes, pos, vel, force)
         };
         let c = colliders.view();
-        let needs_aux =
-            params.self_collision || !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler);
+        let needs_aux = params.self_collision.particles()
+            || !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler);
         if needs_aux && aux.len() != AUX {
             *aux = vec![vec![[0.0; 4]; pos.len()]; AUX];
         }
@@ -488,6 +497,28 @@ impl CpuSolver {
                     std::mem::swap(pos, scratch);
                     add(SELF_COLLIDE, t);
                     continue;
+                }
+                Stage::TriangleBounds => {
+                    if let Some(c) = contact {
+                        let mu = crate::tri_contact::Friction {
+                            stat: params.static_friction,
+                            kinetic: params.kinetic_friction,
+                        };
+                        c.begin(pos, vel, &topo.triangles, params.dt(), params.gravity, params.self_thickness, mu);
+                    }
+                    TRI_BOUNDS
+                }
+                Stage::TriangleSeparate => {
+                    if let Some(c) = contact {
+                        c.separate(pos, vel, &topo.triangles, params.self_thickness, params.dt());
+                    }
+                    TRI_CONTACT
+                }
+                Stage::TriangleClamp => {
+                    if let Some(c) = contact {
+                        c.clamp(pos, vel, params.dt());
+                    }
+                    TRI_CONTACT
                 }
                 Stage::Normals => {
                     if fast {

@@ -14,7 +14,7 @@ fn the_fast_cpu_solvers_compute_the_bits_of_the_self_collision_recipe() {
     // itself; 40 frames, Verlet and XPBD.
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/heap.toml");
     let f = SceneFile::load(&path).unwrap();
-    assert!(f.params.self_collision);
+    assert!(f.params.self_collision.particles());
     let mut scene = f.scene.clone();
     scene.cloth.n = 24;
     for integrator in [Integrator::Verlet, Integrator::Xpbd] {
@@ -22,7 +22,7 @@ fn the_fast_cpu_solvers_compute_the_bits_of_the_self_collision_recipe() {
         let mut engine = RecipeSolver::new(Exec::Serial, Variant::OPTIMIZED, scene.clone(), params.clone()).unwrap();
         let mut serial = CpuSolver::new(Exec::Serial, scene.clone(), params.clone()).unwrap();
         let mut rayon = CpuSolver::new(Exec::Parallel, scene.clone(), params.clone()).unwrap();
-        let off = clothlab_core::SimParams { self_collision: false, ..params.clone() };
+        let off = clothlab_core::SimParams { self_collision: clothlab_core::SelfCollision::Off, ..params.clone() };
         let mut without = CpuSolver::new(Exec::Serial, scene.clone(), off).unwrap();
         for frame in 0..40 {
             engine.step_frame().unwrap();

@@ -107,7 +107,10 @@ fn on_a_frictionless_floor_internal_corrections_keep_the_horizontal_momentum() {
     let base = frictionless();
     let cases = [
         ("strain limit", SimParams { strain_iterations: 2, ..base.clone() }),
-        ("self-collision", SimParams { self_collision: true, self_thickness: 0.02, ..base.clone() }),
+        (
+            "self-collision",
+            SimParams { self_collision: clothlab_core::SelfCollision::Particles, self_thickness: 0.02, ..base.clone() },
+        ),
         ("xpbd", SimParams { integrator: Integrator::Xpbd, ..base.clone() }),
         // VBD's floor is a penalty along the normal only, but its sweeps move one vertex at
         // a time: momentum is kept only as far as they converge (core/tests/suite/vbd.rs: 1.2e-4
@@ -120,7 +123,7 @@ fn on_a_frictionless_floor_internal_corrections_keep_the_horizontal_momentum() {
             SimParams {
                 integrator: Integrator::Xpbd,
                 strain_iterations: 2,
-                self_collision: true,
+                self_collision: clothlab_core::SelfCollision::Particles,
                 self_thickness: 0.02,
                 ..base.clone()
             },
@@ -131,14 +134,19 @@ fn on_a_frictionless_floor_internal_corrections_keep_the_horizontal_momentum() {
     // self-collision within half its closest spring-free pair).
     let verlet = (
         "verlet, cape mesh",
-        SimParams { strain_iterations: 2, self_collision: true, self_thickness: 0.01, ..base.clone() },
+        SimParams {
+            strain_iterations: 2,
+            self_collision: clothlab_core::SelfCollision::Particles,
+            self_thickness: 0.01,
+            ..base.clone()
+        },
     );
     let mesh = (
         "all, cape mesh",
         SimParams {
             integrator: Integrator::Xpbd,
             strain_iterations: 2,
-            self_collision: true,
+            self_collision: clothlab_core::SelfCollision::Particles,
             self_thickness: 0.01,
             ..base.clone()
         },
@@ -187,7 +195,12 @@ fn with_friction_the_floor_slows_the_throw() {
     // every backend: the centre's horizontal velocity (0.3, −0.2) m/s changes by
     // 0.42–0.43 m/s in a component (the floor holds each landed particle back while the
     // rest swing over it).
-    let p = SimParams { friction: 0.6, strain_iterations: 1, self_collision: true, ..frictionless() };
+    let p = SimParams {
+        friction: 0.6,
+        strain_iterations: 1,
+        self_collision: clothlab_core::SelfCollision::Particles,
+        ..frictionless()
+    };
     for (name, drift, _) in drifts(&scene(), &p, physics_backend) {
         println!("friction 0.6    {name:16} horizontal velocity change {drift:.2e} m/s");
         assert!(drift > 0.1, "{name}: friction changed the throw's 0.36 m/s by only {drift:.2e} m/s");

@@ -21,7 +21,7 @@ use clothlab_wgpu::{SolverOptions, wgpu_solver};
 
 fn heap(n: u32) -> (Scene, SimParams) {
     let f = SceneFile::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/heap.toml")).unwrap();
-    assert!(f.params.self_collision);
+    assert!(f.params.self_collision.particles());
     let mut scene = f.scene;
     scene.cloth.n = n;
     (scene, f.params)
@@ -75,7 +75,7 @@ fn the_heap_keeps_its_layers_apart_on_every_backend() {
         // 0.0100 m); 5 cm is far below the 0.25 m its lower edge starts at.
         assert!(lowest < 0.05, "{name}: the cloth has not landed (lowest point {lowest} m)");
     }
-    let off = SimParams { self_collision: false, ..params };
+    let off = SimParams { self_collision: clothlab_core::SelfCollision::Off, ..params };
     let mut s = CpuSolver::new(Exec::Parallel, scene, off).unwrap();
     for _ in 0..frames {
         s.step_frame().unwrap();
@@ -235,7 +235,7 @@ fn a_mesh_heap_keeps_its_layers_apart_on_every_backend() {
         ran += 1;
     }
     assert!(ran >= 2, "the CPU solvers at least");
-    let off = SimParams { self_collision: false, ..params.clone() };
+    let off = SimParams { self_collision: clothlab_core::SelfCollision::Off, ..params.clone() };
     let mut s = CpuSolver::new(Exec::Parallel, scene.clone(), off).unwrap();
     for _ in 0..frames {
         s.step_frame().unwrap();
