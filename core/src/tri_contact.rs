@@ -287,8 +287,8 @@ fn bounds(xs: impl Iterator<Item = Vec3>) -> [Vec3; 2] {
 /// The vertex–triangle and edge–edge pairs of [`NearPairs`] for `edges` (the triangles'
 /// edges, each once): the triangles' and the edges' boxes in two grids of cells (`BoxGrid`)
 /// twice the reach or 1.5 mean edges wide (the larger: the fastest of 0.6, 1, 1.5 and 2.5
-/// on the five-sheet stack), each vertex's and edge's box grown
-/// by `reach` looked up in them, vertex by vertex and edge by edge in parallel.
+/// on the five-sheet stack), each vertex's and edge's box grown by `reach` looked up in
+/// them, vertex by vertex and edge by edge (in parallel with `parallel`).
 pub fn find_pairs(
     pos: &[crate::grid::V4],
     triangles: &[[u32; 3]],
@@ -850,6 +850,26 @@ mod tests {
         assert!(b.iter().all(|&b| b == BOUND_FRACTION * 0.1), "{b:?}");
     }
 
+    /// Two lone triangles whose nearest edges (0–1 along x, 3–4 along y) cross `gap` apart
+    /// in z, inverse masses 1.
+    fn crossed_edges(gap: f32) -> Vec<crate::grid::V4> {
+        vec![
+            [-1.0, 0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0, 1.0],
+            [0.0, -1.0, gap, 1.0],
+            [0.0, 1.0, gap, 1.0],
+            [0.0, 0.0, 1.0, 1.0],
+        ]
+    }
+
+    /// The distance between edges 0–1 and 3–4 of `pos`.
+    fn edges_gap(pos: &[crate::grid::V4]) -> f32 {
+        let at = |k: usize| Vec3::from_slice(&pos[k][..3]);
+        let r = edge_edge(at(0), at(1), at(3), at(4));
+        (r.p - r.q).length()
+    }
+
     /// Σ of the moves of `out` from `pos` weighted by mass (1 / inverse mass; pinned left out).
     fn momentum(pos: &[crate::grid::V4], out: &[crate::grid::V4], inv_mass: &[f32]) -> Vec3 {
         pos.iter()
@@ -893,26 +913,14 @@ mod tests {
         assert!((out[3][2] - t).abs() < 2.0 * unit && out[0] == pos[0], "{:?}", out[3]);
         // Two edges crossed 0.5 t apart (two lone triangles whose nearest edges cross): each
         // edge moves half the gap.
-        let pos = [
-            [-1.0, 0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0, 1.0],
-            [0.0, -1.0, 0.5 * t, 1.0],
-            [0.0, 1.0, 0.5 * t, 1.0],
-            [0.0, 0.0, 1.0, 1.0],
-        ];
+        let pos = crossed_edges(0.5 * t);
         let tris = [[0, 1, 2], [3, 4, 5]];
         let inv = [1.0; 6];
-        let mut out = pos;
+        let mut out = pos.clone();
         separate(&pos, &tris, &inv, t, &mut out);
-        let r = edge_edge(
-            Vec3::from_slice(&out[0][..3]),
-            Vec3::from_slice(&out[1][..3]),
-            Vec3::from_slice(&out[3][..3]),
-            Vec3::from_slice(&out[4][..3]),
-        );
         // Four vertices pushed, each truncated by under a unit: 4 units.
-        assert!(((r.p - r.q).length() - t).abs() < 4.0 * unit, "{:?}", r);
+        let gap = edges_gap(&out);
+        assert!((gap - t).abs() < 4.0 * unit, "gap {gap}");
         // Four vertices of mass 1: under 4 units a component, 4√3 < 7 in length.
         assert!(momentum(&pos, &out, &inv).length() < 7.0 * unit);
         // Primitives that share a vertex are never pushed; nor are pairs farther than t.
@@ -1015,14 +1023,7 @@ mod tests {
         // the edges t apart with the momentum kept and no cut; fast or shoved, the bounds
         // cut the motion, the edges never pass each other, and the gap ends at t.
         let (t, dt) = (0.01f32, 1e-3f32);
-        let start = vec![
-            [-1.0, 0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0, 1.0],
-            [0.0, -1.0, 5.0 * t, 1.0],
-            [0.0, 1.0, 5.0 * t, 1.0],
-            [0.0, 0.0, 1.0, 1.0],
-        ];
+        let start = crossed_edges(5.0 * t);
         let tris = [[0, 1, 2], [3, 4, 5]];
         let unit_rate = t / crate::tables::CONTACT_UNITS / dt;
         // (speed, kick, substeps): 8 substeps of the fast ones, before the upper apex (not
@@ -1040,13 +1041,7 @@ mod tests {
                 let gap = 0.5 * (p[3][2] + p[4][2]) - 0.5 * (p[0][2] + p[1][2]);
                 assert!(gap > 0.0, "speed {speed} kick {kick}: the edges passed at substep {k} ({gap})");
             }
-            let r = edge_edge(
-                Vec3::from_slice(&pos[0][..3]),
-                Vec3::from_slice(&pos[1][..3]),
-                Vec3::from_slice(&pos[3][..3]),
-                Vec3::from_slice(&pos[4][..3]),
-            );
-            let gap = (r.p - r.q).length();
+            let gap = edges_gap(&pos);
             println!("speed {speed} t, kick {kick} t a substep: gap {:.3} t, {clamped} cut", gap / t);
             if speed < 1.0 && kick == 0.0 {
                 assert_eq!(clamped, 0, "speed {speed}");
