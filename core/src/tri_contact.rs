@@ -136,26 +136,6 @@ pub fn edge_edge(p0: Vec3, p1: Vec3, q0: Vec3, q1: Vec3) -> EdgeEdge {
 /// so that two primitives each moving less than it cannot meet.
 pub const BOUND_FRACTION: f32 = 0.45;
 
-/// The pairs of primitives that share no vertex and are closer than `reach`, of the cloth
-/// with triangles `triangles` at `pos`: vertex–triangle pairs `(vertex, triangle,
-/// distance)` and edge–edge pairs `(edge, edge, distance)` (each once, the first edge's
-/// index lower), edges indexing `edges` — found by [`find_pairs`].
-pub struct NearPairs {
-    /// The cloth's edges, each once ([`crate::crossings::edges`]).
-    pub edges: Vec<[u32; 2]>,
-    /// Vertex, triangle, distance.
-    pub vt: Vec<(u32, u32, f32)>,
-    /// Edge, edge, distance.
-    pub ee: Vec<(u32, u32, f32)>,
-}
-
-/// [`NearPairs`] of `pos` within `reach`.
-pub fn near_pairs(pos: &[crate::grid::V4], triangles: &[[u32; 3]], reach: f32) -> NearPairs {
-    let edges = crate::crossings::edges(triangles);
-    let (vt, ee) = find_pairs(pos, triangles, &edges, reach, true);
-    NearPairs { edges, vt, ee }
-}
-
 /// A cell's integer coordinates.
 type Cell = [i32; 3];
 
@@ -284,8 +264,11 @@ fn bounds(xs: impl Iterator<Item = Vec3>) -> [Vec3; 2] {
     xs.fold([Vec3::INFINITY, Vec3::NEG_INFINITY], |[lo, hi], x| [lo.min(x), hi.max(x)])
 }
 
-/// The vertex–triangle and edge–edge pairs of [`NearPairs`] for `edges` (the triangles'
-/// edges, each once): the triangles' and the edges' boxes in two grids of cells (`BoxGrid`)
+/// The pairs of primitives that share no vertex and are closer than `reach`, of the cloth
+/// with triangles `triangles` (and their `edges`, each once: [`crate::crossings::edges`])
+/// at `pos`: vertex–triangle pairs `(vertex, triangle, distance)` and edge–edge pairs
+/// `(edge, edge, distance)` (each once, the first edge's index lower). The triangles' and
+/// the edges' boxes in two grids of cells (`BoxGrid`)
 /// twice the reach or 1.5 mean edges wide (the larger: the fastest of 0.6, 1, 1.5 and 2.5
 /// on the five-sheet stack), each vertex's and edge's box grown by `reach` looked up in
 /// them, vertex by vertex and edge by edge (in parallel with `parallel`).
@@ -416,7 +399,7 @@ pub fn bounds_into(
     (vt, ee)
 }
 
-/// One Jacobi pass of the contact between primitives: each pair of [`near_pairs`] closer
+/// One Jacobi pass of the contact between primitives: each pair of [`find_pairs`] closer
 /// than `thickness` is pushed apart to it along the line between its closest points — the
 /// constraint `n·(p − q) ≥ thickness` projected with the vertices' inverse masses
 /// `inv_mass` (0: pinned) and the closest points' weights, so that the pair's momentum
