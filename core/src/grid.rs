@@ -239,10 +239,11 @@ pub struct MeshTables {
     /// The smallest rest distance between a vertex and a triangle or two edges that share
     /// no vertex, m (at most two mean edges: pairs farther apart are not looked for): the
     /// contact between triangles' thickness must stay below [`TRIANGLE_THICKNESS_FRACTION`]
-    /// of it.
+    /// of it. Measured when the mesh is built with `self_collision = "triangles"` (None
+    /// otherwise: the search is not paid for by the other modes).
     ///
     /// [`TRIANGLE_THICKNESS_FRACTION`]: crate::params::TRIANGLE_THICKNESS_FRACTION
-    pub closest_primitives: f32,
+    pub closest_primitives: Option<f32>,
     /// The cloths of a scene of several, their ranges of the particles and triangles
     /// (empty for one cloth).
     pub parts: Vec<crate::mesh::ClothPart>,
@@ -349,7 +350,17 @@ impl ClothTopology {
             None => params.validate_for(self.n, self.spacing),
             Some(m) => {
                 params.check_mesh(self.num_particles(), m.closest_unsprung)?;
-                params.check_triangles(m.closest_primitives, "this mesh's")?;
+                if params.self_collision.triangles() {
+                    let Some(closest) = m.closest_primitives else {
+                        return Err(ParamError::new(
+                            "self_collision",
+                            "triangles",
+                            "this mesh was built without the contact between triangles, whose thickness bound is measured \
+                             when the mesh is built: load the scene with self_collision = \"triangles\"",
+                        ));
+                    };
+                    params.check_triangles(closest, "this mesh's")?;
+                }
                 params.validate_for_mass(m.min_mass, self.spacing, "for this mesh")
             }
         }

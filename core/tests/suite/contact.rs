@@ -125,3 +125,23 @@ fn a_thin_heap_on_a_frictionless_floor_keeps_its_horizontal_momentum() {
     println!("horizontal momentum {:.2e}, {:.2e} kg m/s against m g t = {scale:.2}", p[0], p[2]);
     assert!(p[0].abs() < 0.02 * scale && p[2].abs() < 0.02 * scale, "{p:?}");
 }
+
+#[test]
+fn a_mesh_measures_its_closest_pair_only_for_the_triangles_and_refuses_what_it_did_not_measure() {
+    use clothlab_core::SelfCollision;
+    let f = SceneFile::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/stack.toml")).unwrap();
+    // Built with the particle contact: no search at build, so a switch to triangles is refused
+    // with what to do instead of running without its thickness bound.
+    let particles = clothlab_core::SimParams { self_collision: SelfCollision::Particles, ..f.params.clone() };
+    let mut s = CpuSolver::new(Exec::Serial, f.scene.clone(), particles.clone()).unwrap();
+    assert!(s.topology().mesh.as_ref().unwrap().closest_primitives.is_none());
+    let e = s.set_params(f.params.clone()).unwrap_err().to_string();
+    assert!(e.contains("load the scene with self_collision"), "{e}");
+    // Built with triangles: measured (a grid's closest pair is the spacing over √2, 1/31/√2 m,
+    // within f32 rounding), and a thickness at or over 0.9 of it is refused.
+    let mut s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+    let closest = s.topology().mesh.as_ref().unwrap().closest_primitives.unwrap();
+    assert!((closest - 1.0 / 31.0 / 2f32.sqrt()).abs() < 1e-5, "{closest}");
+    let thick = clothlab_core::SimParams { self_thickness: 0.9 * closest, ..f.params.clone() };
+    assert!(s.set_params(thick).unwrap_err().to_string().contains("self_thickness"));
+}
