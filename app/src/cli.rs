@@ -1,13 +1,13 @@
 //! The command line, as clap types and nothing else: what each subcommand takes. The
 //! commands themselves are in `commands/` (and `bench/`); the backends, APIs and the one
-//! solver factory in `solvers.rs`.
+//! solver factory in the `clothlab` library (`clothlab::backend`).
 
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use clothlab_engine::{SolverOptions, StatsMode, VariantSpec};
 
-use crate::solvers::{Api, Backend, GpuSetup};
+use clothlab::backend::{Api, Backend, GpuSetup};
 
 #[derive(Parser)]
 #[command(name = "clothlab", version, about = "Interactive, GPU-accelerated cloth simulation testbed")]
@@ -58,17 +58,12 @@ pub enum Mode {
 }
 
 impl Mode {
-    /// The default view of the scene in this mode: the orbit camera's start and a light
-    /// above and in front.
-    pub fn view(self) -> clothlab_core::View {
-        clothlab_core::View {
-            camera: clothlab_core::OrbitCamera::default(),
-            light: [2.0, 5.5, 3.0],
-            mode: match self {
-                Mode::Points => clothlab_core::RenderMode::Points,
-                Mode::Lines => clothlab_core::RenderMode::Lines,
-                Mode::Triangles => clothlab_core::RenderMode::Triangles,
-            },
+    /// The renderer's mode.
+    pub fn render_mode(self) -> clothlab_core::RenderMode {
+        match self {
+            Mode::Points => clothlab_core::RenderMode::Points,
+            Mode::Lines => clothlab_core::RenderMode::Lines,
+            Mode::Triangles => clothlab_core::RenderMode::Triangles,
         }
     }
 }
@@ -242,6 +237,26 @@ pub struct PhysicsArgs {
     pub scene: Option<PathBuf>,
 }
 
+impl PhysicsArgs {
+    /// The library's form: the scene file (or the default scene), the integrator, the
+    /// overrides.
+    pub fn physics(&self) -> clothlab::Physics {
+        clothlab::Physics {
+            scene: match &self.scene {
+                Some(path) => clothlab::SceneSource::File(path.clone()),
+                None => clothlab::SceneSource::Default,
+            },
+            integrator: self.integrator,
+            set: self.set.clone(),
+        }
+    }
+
+    /// [`clothlab::Physics::setup`] of [`PhysicsArgs::physics`].
+    pub fn setup(&self, n: Option<u32>, default_n: u32) -> anyhow::Result<clothlab::Setup> {
+        self.physics().setup(n, default_n)
+    }
+}
+
 /// `--integrator`'s help, from `Integrator::ALL`.
 fn integrator_help() -> String {
     let list: Vec<String> =
@@ -320,18 +335,7 @@ impl VariantArgs {
     /// `--set-variant` changes), or `None` when neither option is given. Refused for a CPU
     /// backend.
     pub fn spec(&self, backend: Backend) -> anyhow::Result<Option<VariantSpec>> {
-        if self.variant.is_none() && self.set_variant.is_empty() {
-            return Ok(None);
-        }
-        let preset = self.variant.as_deref().or(backend.preset()).unwrap_or("optimized");
-        let spec = VariantSpec::parse(preset, &self.set_variant)?;
-        if backend.api().is_none() {
-            anyhow::bail!(
-                "--variant and --set-variant apply to the GPU backends only ({} runs its own SIMD step)",
-                backend.name()
-            );
-        }
-        Ok(Some(spec))
+        clothlab::variant_spec(backend, self.variant.as_deref(), &self.set_variant)
     }
 }
 

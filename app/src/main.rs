@@ -1,21 +1,18 @@
 //! `clothlab`: the interactive app (`clothlab` or `clothlab run`) and the command line.
 //!
-//! How it fits: the top of the workspace. `solvers` turns a backend name into a solver
-//! from clothlab-core (CPU), clothlab-wgpu or clothlab-vulkan; `commands` runs `sim`,
-//! `render`, `validate` and the app; `bench` measures and writes the reports; `gui` is the
-//! egui/winit app on either API. The guide to the commands is docs/cli.md.
+//! How it fits: the top of the workspace, over the `clothlab` library (which turns a
+//! backend name into a solver, loads scenes with their overrides, renders, records,
+//! validates and measures cells); `cli` is the command line as clap types, `commands` runs
+//! `sim`, `render`, `validate` and the app; `bench` measures and writes the reports; `gui`
+//! is the egui/winit app on any API. The guide to the commands is docs/cli.md.
 
 #![forbid(unsafe_code)]
 
 mod bench;
 mod cli;
 mod commands;
-mod files;
 mod gui;
 mod out;
-mod overrides;
-mod record;
-mod solvers;
 
 use std::process::ExitCode;
 

@@ -19,6 +19,19 @@ pub fn checked_time(t: f64) -> Result<f64, SolverError> {
     }
 }
 
+/// One array of a solver's state (see [`Solver::field`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StateField {
+    /// Positions; w the relative inverse mass.
+    Pos,
+    /// Velocities.
+    Vel,
+    /// The force accumulator.
+    Force,
+    /// Vertex normals.
+    Normal,
+}
+
 /// A cloth simulation on some backend.
 pub trait Solver {
     /// Short name of the backend and variant, e.g. `cpu`, `cpu-par`.
@@ -35,6 +48,17 @@ pub trait Solver {
     fn step_frame(&mut self) -> Result<(), SolverError>;
     /// A copy of the current state (read back from the GPU where it lives there).
     fn state(&mut self) -> Result<ClothState, SolverError>;
+    /// One array of the state, without the others: a GPU solver reads back that buffer
+    /// alone (a script reading positions every frame pays for one buffer, not four).
+    fn field(&mut self, field: StateField) -> Result<Vec<crate::grid::V4>, SolverError> {
+        let s = self.state()?;
+        Ok(match field {
+            StateField::Pos => s.pos,
+            StateField::Vel => s.vel,
+            StateField::Force => s.force,
+            StateField::Normal => s.normal,
+        })
+    }
     /// Replaces the current state, e.g. when switching backends mid-run.
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError>;
     /// Simulated time, s: the sum of the substeps run (moving colliders are where their

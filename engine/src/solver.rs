@@ -881,6 +881,16 @@ impl<E: Engine> Solver for GpuSolver<E> {
         })
     }
 
+    fn field(&mut self, field: clothlab_core::StateField) -> Result<Vec<clothlab_core::grid::V4>, SolverError> {
+        use clothlab_core::StateField;
+        self.read(match field {
+            StateField::Pos => Buf::Pos,
+            StateField::Vel => Buf::Vel,
+            StateField::Force => Buf::Force,
+            StateField::Normal => Buf::Normal,
+        })
+    }
+
     fn time(&self) -> f64 {
         self.time
     }

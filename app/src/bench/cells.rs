@@ -8,91 +8,20 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clothlab_core::timing::{OverheadPlan, OverheadRow};
-use clothlab_core::{ClothState, Scene, SimParams};
+use clothlab_core::{Scene, SimParams};
 use clothlab_engine::recipe::{bytes_moved, dispatches};
 use clothlab_engine::variant::{Table, Variant, ladder as ladder_rungs};
-use clothlab_gl::{GlCloth, GlRenderer};
-use clothlab_vulkan::{Device, VkCloth, VulkanRenderer};
-use clothlab_wgpu::{ClothSource, GpuContext, WgpuRenderer};
+use clothlab_vulkan::Device;
+use clothlab_wgpu::GpuContext;
 use indicatif::{ProgressBar, ProgressStyle};
+
+use clothlab::bench::{Devices, is_gl, is_vulkan, is_wgpu, measure};
 
 use super::results::{self, Cell, LadderCell};
 use super::{Request, WARMUP_FRAMES, cpu_label, journal, make_out_dir, output};
-use crate::cli::{BenchArgs, Mode};
+use crate::cli::BenchArgs;
 use crate::out::outln;
-use crate::solvers::{AnySolver, Api, Backend, GpuSetup, Shared, make, vulkan_validation};
-
-/// Particles per side of the lattice whose final positions are compared.
-const CHECK_LATTICE: u32 = 5;
-enum Painter {
-    Wgpu(Box<(GpuContext, WgpuRenderer)>),
-    Vulkan(Box<VulkanRenderer>),
-    Gl(Box<GlRenderer>),
-    None,
-}
-
-/// The devices opened once: they tell which APIs have an adapter, and draw the CPU
-/// backends' frames. GPU cells and the overhead benchmarks get fresh devices (see
-/// `run_cell`).
-struct Devices {
-    wgpu: Option<GpuContext>,
-    vulkan: Option<Device>,
-    /// The OpenGL context's description (a probe's; every GL cell opens its own).
-    gl: Option<String>,
-    /// wgpu on its GL backend, when wgpu's backend was not chosen and the default is
-    /// another: its overhead benchmarks run as a fourth stack, `wgpu-gl`.
-    wgpu_gl: Option<String>,
-    wgpu_error: Option<String>,
-    vulkan_error: Option<String>,
-    gl_error: Option<String>,
-}
-
-impl Devices {
-    fn open(need_wgpu: bool, need_vulkan: bool, need_gl: bool) -> Self {
-        let (wgpu, wgpu_error) = if need_wgpu {
-            match GpuContext::new() {
-                Ok(c) => (Some(c), None),
-                Err(e) => (None, Some(e.to_string())),
-            }
-        } else {
-            (None, None)
-        };
-        let (vulkan, vulkan_error) = if need_vulkan {
-            match Device::new(vulkan_validation()) {
-                Ok(d) => (Some(d), None),
-                Err(e) => (None, Some(e.to_string())),
-            }
-        } else {
-            (None, None)
-        };
-        let (gl, gl_error) = if need_gl {
-            match clothlab_gl::GlEngine::new() {
-                Ok(e) => (Some(e.describe()), None),
-                Err(e) => (None, Some(e.to_string())),
-            }
-        } else {
-            (None, None)
-        };
-        let wgpu_gl = wgpu
-            .as_ref()
-            .filter(|c| clothlab_wgpu::chosen_backends().is_none() && c.info.backend != wgpu::Backend::Gl)
-            .and_then(|_| GpuContext::with_backends(wgpu::Backends::GL).ok())
-            .map(|c| c.describe());
-        Self { wgpu, vulkan, gl, wgpu_gl, wgpu_error, vulkan_error, gl_error }
-    }
-}
-
-fn is_vulkan(b: Backend) -> bool {
-    matches!(b, Backend::VulkanNaive | Backend::Vulkan)
-}
-
-fn is_wgpu(b: Backend) -> bool {
-    matches!(b, Backend::WgpuNaive | Backend::Wgpu)
-}
-
-fn is_gl(b: Backend) -> bool {
-    matches!(b, Backend::GlNaive | Backend::Gl)
-}
+use clothlab::backend::{Api, Backend, GpuSetup, Shared, make, vulkan_validation};
 
 /// The cells of `request` as `args` asks, and the overhead benchmarks.
 pub fn run(args: &BenchArgs, request: Request) -> Result<ExitCode> {
@@ -275,7 +204,7 @@ pub fn run(args: &BenchArgs, request: Request) -> Result<ExitCode> {
                     bar.inc(1);
                     continue;
                 }
-                let cell = run_cell(job, sized(n), &params, frames, args.resolution, &devices)
+                let cell = measure(job.backend, job.variant, sized(n), &params, frames, args.resolution, &devices)
                     .with_context(|| format!("{label} at n={n}"))?;
                 let sub = cell.kernels.iter().find(|r| r.label == clothlab_core::timing::SUBSTEP);
                 let frame = cell.frames.iter().find(|r| r.label == "frame");
@@ -471,140 +400,4 @@ impl Job {
             bytes: bytes_of(&commands) / u64::from(group) + bytes_of(&end) / u64::from(params.substeps.max(1)),
         })
     }
-}
-
-fn run_cell(
-    job: &Job,
-    scene: Scene,
-    params: &SimParams,
-    frames: u32,
-    (width, height): (u32, u32),
-    devices: &Devices,
-) -> Result<Cell> {
-    let t_cell = Instant::now();
-    let n = scene.cloth.n;
-    let p = params.clone();
-    // A device of its own for every GPU cell (see below).
-    let setup = GpuSetup { variant: job.variant.map(Into::into), ..GpuSetup::default() };
-    let mut sim = make(job.backend, scene.clone(), p, &setup, &Shared::None)?;
-    let (_, topo) = clothlab_core::build(&scene, params)?;
-    let mut painter = match &sim {
-        AnySolver::Wgpu(s, _) => {
-            let ctx = s.engine().context();
-            Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, &topo, width, height)?)))
-        }
-        AnySolver::Vulkan(s, _) => {
-            Painter::Vulkan(Box::new(VulkanRenderer::new(&s.engine().device(), &scene, &topo, width, height)?))
-        }
-        AnySolver::Gl(s) => Painter::Gl(Box::new(GlRenderer::new(s.engine().context(), &scene, &topo, width, height)?)),
-        // The CPU solvers, drawn from their state uploaded.
-        AnySolver::Cpu(_) => match (&devices.wgpu, &devices.vulkan) {
-            (Some(ctx), _) => {
-                Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, &topo, width, height)?)))
-            }
-            (None, Some(dev)) => Painter::Vulkan(Box::new(VulkanRenderer::new(dev, &scene, &topo, width, height)?)),
-            (None, None) => Painter::None,
-        },
-    };
-    let adapter = match &sim {
-        AnySolver::Cpu(_) => cpu_label(),
-        gpu => gpu.adapter(),
-    };
-    let view = Mode::Triangles.view();
-
-    // Nothing is drawn before the per-kernel table: on lavapipe, once a device has drawn,
-    // its timestamps no longer bracket compute dispatches (llvmpipe then takes timestamp
-    // queries through the rasterizer's scene, at the next flush), so every GPU cell runs
-    // on a device of its own and draws only after its kernels were timed.
-    for _ in 0..WARMUP_FRAMES {
-        sim.get().step_frame()?;
-    }
-    // Per-kernel table.
-    sim.get().set_kernel_timing(true);
-    sim.get().reset_timings();
-    for _ in 0..frames {
-        sim.get().step_frame()?;
-    }
-    let kernels = sim.get().timings().rows;
-    // Frame table: per-kernel timestamps off, each frame simulated, waited for, drawn
-    // (after one unmeasured draw that builds the renderer's pipelines and shadow map).
-    sim.get().set_kernel_timing(false);
-    draw(&mut sim, &mut painter, &view)?;
-    let mut rec = clothlab_core::TimingRecorder::new(frames as usize);
-    for _ in 0..frames {
-        let t = Instant::now();
-        sim.get().step_frame()?;
-        sim.finish()?;
-        let t_sim = t.elapsed().as_nanos() as f64;
-        let t = Instant::now();
-        let drew = draw(&mut sim, &mut painter, &view)?;
-        let t_render = t.elapsed().as_nanos() as f64;
-        rec.record("sim", t_sim);
-        if drew {
-            rec.record("render", t_render);
-        }
-        rec.record("frame", t_sim + if drew { t_render } else { 0.0 });
-    }
-    let state = sim.get().state()?;
-    Ok(Cell {
-        backend: sim.get_ref().name().to_owned(),
-        n,
-        adapter,
-        kernels,
-        frames: rec.table().rows,
-        probe: probe(&state),
-        seconds: t_cell.elapsed().as_secs_f64(),
-        runs: Vec::new(),
-    })
-}
-
-/// Draws the cloth offscreen and waits for the picture; false when there is no renderer.
-fn draw(sim: &mut AnySolver, painter: &mut Painter, view: &clothlab_core::View) -> Result<bool> {
-    match (painter, sim) {
-        (Painter::None, _) => return Ok(false),
-        (Painter::Wgpu(p), AnySolver::Cpu(s)) => {
-            let (ctx, r) = &mut **p;
-            r.render(ctx, view, ClothSource::Cpu(s.state_ref()))?;
-            ctx.wait_idle()?;
-        }
-        (Painter::Wgpu(p), AnySolver::Wgpu(s, _)) => {
-            let (ctx, r) = &mut **p;
-            let (pos, normal) = s.vertex_buffers();
-            r.render(ctx, view, ClothSource::Gpu { pos, normal })?;
-            ctx.wait_idle()?;
-        }
-        (Painter::Vulkan(r), AnySolver::Cpu(s)) => r.render(view, VkCloth::Cpu(s.state_ref()))?,
-        (Painter::Gl(r), AnySolver::Gl(s)) => {
-            let (&pos, &normal) = s.vertex_buffers();
-            r.render(s.engine().context(), view, GlCloth::Gpu { pos, normal })?;
-            // The picture finished, as the other APIs wait for theirs.
-            s.finish()?;
-        }
-        (Painter::Vulkan(r), AnySolver::Vulkan(s, _)) => {
-            let (pos, normal) = s.vertex_buffers();
-            r.render(view, VkCloth::Gpu { pos, normal })?;
-        }
-        _ => bail!("a GPU solver's buffers are drawn by its own API"),
-    }
-    Ok(true)
-}
-
-/// Positions of a `CHECK_LATTICE`² lattice of particles, corners included; of a mesh
-/// (`n = 0`), as many spread evenly over its particles, the first and last included.
-fn probe(state: &ClothState) -> Vec<[f32; 3]> {
-    let n = state.n as usize;
-    let m = CHECK_LATTICE as usize;
-    if n == 0 {
-        let (count, last) = (m * m, state.pos.len().saturating_sub(1));
-        return (0..count).map(|k| state.pos[k * last / (count - 1)]).map(|p| [p[0], p[1], p[2]]).collect();
-    }
-    let at = |k: usize| if n == 1 { 0 } else { k * (n - 1) / (m - 1) };
-    let mut v = Vec::with_capacity(m * m);
-    for j in 0..m {
-        for i in 0..m {
-            let p = state.pos[at(j) * n + at(i)];
-            v.push([p[0], p[1], p[2]]);
-        }
-    }
-    v
 }

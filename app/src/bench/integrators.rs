@@ -23,7 +23,7 @@ use super::plot::{FONT, Figure, both, err};
 use super::{Request, all_backends, cpu_label, make_out_dir};
 use crate::cli::BenchArgs;
 use crate::out::outln;
-use crate::solvers::{Backend, GpuSetup, Shared, make};
+use clothlab::backend::{Backend, GpuSetup, Shared, make};
 
 /// Simulated time of every run, s (six frames of 1/60 s).
 pub const SIM_SECONDS: f32 = 0.1;
@@ -273,7 +273,7 @@ pub fn replot(out: &std::path::Path) -> Result<Vec<std::path::PathBuf>> {
             [(format!("integrators-n{n}.svg"), svg.into_bytes()), (format!("integrators-n{n}.png"), png)]
         {
             let p = out.join(name);
-            crate::files::write_bytes(&p, &bytes)?;
+            clothlab::files::write_bytes(&p, &bytes)?;
             files.push(p);
         }
     }
@@ -435,14 +435,14 @@ impl Figure for WorkPrecision<'_> {
 
 /// Writes `integrators.csv`, `integrators.md` and the plots into `out`.
 pub fn write(out: &std::path::Path, runs: &[Run], notes: &[String], machine: &str) -> Result<()> {
-    crate::files::write_bytes(&out.join("integrators.csv"), csv(runs).as_bytes())?;
-    crate::files::write_bytes(&out.join("integrators.md"), report(runs, notes, machine).as_bytes())?;
+    clothlab::files::write_bytes(&out.join("integrators.csv"), csv(runs).as_bytes())?;
+    clothlab::files::write_bytes(&out.join("integrators.md"), report(runs, notes, machine).as_bytes())?;
     let mut sizes: Vec<u32> = runs.iter().map(|r| r.n).collect();
     sizes.dedup();
     for n in sizes {
         let (svg, png) = both(&WorkPrecision { runs, n, machine })?;
-        crate::files::write_bytes(&out.join(format!("integrators-n{n}.svg")), svg.as_bytes())?;
-        crate::files::write_bytes(&out.join(format!("integrators-n{n}.png")), &png)?;
+        clothlab::files::write_bytes(&out.join(format!("integrators-n{n}.svg")), svg.as_bytes())?;
+        clothlab::files::write_bytes(&out.join(format!("integrators-n{n}.png")), &png)?;
     }
     Ok(())
 }

@@ -28,7 +28,7 @@ use super::plot::{FONT, Figure, both, err};
 use super::{Request, WARMUP_FRAMES, all_backends, cpu_label, make_out_dir};
 use crate::cli::BenchArgs;
 use crate::out::outln;
-use crate::solvers::{AnySolver, Backend, GpuSetup, Shared, make};
+use clothlab::backend::{AnySolver, Backend, GpuSetup, Shared, make};
 use clothlab_engine::VariantSpec;
 use clothlab_engine::variant::{Neighbours, Table};
 
@@ -335,11 +335,11 @@ impl Figure for Bars<'_> {
 
 /// Writes mesh-vs-grid.{md,csv,svg,png} into `out`.
 pub fn write(out: &std::path::Path, rows: &[Row], notes: &[String], machine: &str, repeat: u32) -> Result<()> {
-    crate::files::write_bytes(&out.join("mesh-vs-grid.csv"), csv(rows).as_bytes())?;
-    crate::files::write_bytes(&out.join("mesh-vs-grid.md"), report(rows, notes, machine, repeat).as_bytes())?;
+    clothlab::files::write_bytes(&out.join("mesh-vs-grid.csv"), csv(rows).as_bytes())?;
+    clothlab::files::write_bytes(&out.join("mesh-vs-grid.md"), report(rows, notes, machine, repeat).as_bytes())?;
     let (svg, png) = both(&Bars { rows, machine })?;
-    crate::files::write_bytes(&out.join("mesh-vs-grid.svg"), svg.as_bytes())?;
-    crate::files::write_bytes(&out.join("mesh-vs-grid.png"), &png)?;
+    clothlab::files::write_bytes(&out.join("mesh-vs-grid.svg"), svg.as_bytes())?;
+    clothlab::files::write_bytes(&out.join("mesh-vs-grid.png"), &png)?;
     Ok(())
 }
 

@@ -29,7 +29,7 @@ use clothlab_core::{Scene, SimParams};
 
 use crate::cli::BenchArgs;
 use crate::out::outln;
-use crate::solvers::Backend;
+use clothlab::backend::Backend;
 
 /// Whether `backends` is every backend (`--backends` left at its default).
 fn all_backends(backends: &[Backend]) -> bool {
@@ -42,24 +42,7 @@ fn make_out_dir(dir: &std::path::Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))
 }
 
-/// The CPU in one line: model and logical cores.
-pub fn cpu_label() -> String {
-    let model = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, m)| m.trim().to_owned())
-        })
-        .unwrap_or_else(|| std::env::consts::ARCH.to_owned());
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-    format!("{model}, {cores} threads")
-}
-
-/// Unmeasured frames at the start of every cell (pipelines, caches, clocks, the cloth's
-/// first fall).
-pub const WARMUP_FRAMES: u32 = 3;
+pub use clothlab::bench::{WARMUP_FRAMES, cpu_label};
 
 /// What every measuring mode reads, checked before the output folder is made: the sizes
 /// (sorted, each once), the backends (each once), the scene of `--scene` or the default

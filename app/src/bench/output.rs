@@ -441,7 +441,7 @@ pub fn targets(r: &Results) -> Vec<String> {
 /// Writes `bytes` to `dir/name` and notes the path in `files`.
 fn put(dir: &Path, files: &mut Vec<PathBuf>, name: &str, bytes: &[u8]) -> Result<()> {
     let p = dir.join(name);
-    crate::files::write_bytes(&p, bytes)?;
+    clothlab::files::write_bytes(&p, bytes)?;
     files.push(p);
     Ok(())
 }

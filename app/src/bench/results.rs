@@ -18,67 +18,7 @@ use serde::{Deserialize, Serialize};
 /// millimetre per substep at the speeds of the default scene).
 pub const CHECK_BOUND_PER_SUBSTEP: f64 = 5e-5;
 
-/// One backend × size measurement.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Cell {
-    /// Backend name.
-    pub backend: String,
-    /// Particles per side.
-    pub n: u32,
-    /// Where it ran: the adapter, or the CPU.
-    pub adapter: String,
-    /// Per-kernel table (per substep; `frame`, `cpu record`, `cpu submit` per frame).
-    pub kernels: Vec<clothlab_core::TimingRow>,
-    /// Whole frames with per-kernel timing off: `sim` (substeps, until the GPU is done),
-    /// `render` (offscreen, until done) and `frame` (both).
-    pub frames: Vec<clothlab_core::TimingRow>,
-    /// Positions of the check lattice after the run.
-    pub probe: Vec<[f32; 3]>,
-    /// Seconds the cell took.
-    pub seconds: f64,
-    /// The substep median of every round (`--repeat`), ns, in the order run.
-    pub runs: Vec<f64>,
-}
-
-impl Cell {
-    /// One cell from the rounds of one job at one size: per label the median of the
-    /// rounds' medians, the smallest minimum and the largest maximum, the samples summed;
-    /// the probe of the first round (each is checked against the reference alike).
-    pub fn merge(rounds: Vec<Cell>) -> Option<Cell> {
-        let first = rounds.first()?.clone();
-        let merge_rows = |pick: &dyn Fn(&Cell) -> &Vec<clothlab_core::TimingRow>| -> Vec<clothlab_core::TimingRow> {
-            pick(&first)
-                .iter()
-                .map(|row| {
-                    let same: Vec<&clothlab_core::TimingRow> =
-                        rounds.iter().filter_map(|c| pick(c).iter().find(|r| r.label == row.label)).collect();
-                    let mut medians: Vec<f64> = same.iter().map(|r| r.median_ns).collect();
-                    medians.sort_by(f64::total_cmp);
-                    let m = medians.len();
-                    let median = if m % 2 == 1 { medians[m / 2] } else { (medians[m / 2 - 1] + medians[m / 2]) / 2.0 };
-                    clothlab_core::TimingRow {
-                        label: row.label.clone(),
-                        samples: same.iter().map(|r| r.samples).sum(),
-                        median_ns: median,
-                        min_ns: same.iter().map(|r| r.min_ns).fold(f64::INFINITY, f64::min),
-                        max_ns: same.iter().map(|r| r.max_ns).fold(0.0, f64::max),
-                    }
-                })
-                .collect()
-        };
-        let runs = rounds
-            .iter()
-            .filter_map(|c| c.kernels.iter().find(|r| r.label == clothlab_core::timing::SUBSTEP).map(|r| r.median_ns))
-            .collect();
-        Some(Cell {
-            kernels: merge_rows(&|c| &c.kernels),
-            frames: merge_rows(&|c| &c.frames),
-            seconds: rounds.iter().map(|c| c.seconds).sum(),
-            runs,
-            ..first
-        })
-    }
-}
+pub use clothlab::bench::Cell;
 
 /// One rung of one API's ladder at one size, as measured (results.json keeps them).
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -5,22 +5,17 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Result, bail};
+use clothlab::record::{MAX_GLB_BYTES, Recording, glb};
+use clothlab::{AnySolver, MAX_STEPS, Sim, SimOptions};
 use clothlab_core::crossings;
 use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
 
 use crate::cli::{SimArgs, StatsArg};
 use crate::out::outln;
-use crate::record::{MAX_GLB_BYTES, Recording, glb};
-use crate::solvers::{Shared, make};
-
-/// Most substeps one `sim` run may ask for.
-const MAX_STEPS: u64 = 100_000_000;
 
 /// Runs `sim`.
 pub fn sim(args: SimArgs) -> Result<ExitCode> {
-    let loaded = args.physics.setup(args.n, 100)?;
-    let (scene, params) = (loaded.scene, loaded.params);
     if args.steps == 0 || args.steps > MAX_STEPS {
         bail!("invalid --steps {}: must be in 1 ..= {MAX_STEPS}", args.steps);
     }
@@ -29,19 +24,22 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     let out = match &args.out {
         Some(path) => {
             let format = out_format(path)?;
-            crate::files::check_writable(path)?;
+            clothlab::files::check_writable(path)?;
             Some((path, format))
         }
         None => None,
     };
-    let frames = args.steps.div_ceil(params.substeps as u64);
-    let substeps = frames * params.substeps as u64;
+    let gpu = args.gpu.setup(args.backend)?;
+    let mut sim = Sim::open(SimOptions { backend: args.backend, physics: args.physics.physics(), n: args.n, gpu })?;
+    let scene = sim.scene().clone();
+    let frames = args.steps.div_ceil(sim.params().substeps as u64);
+    let substeps = frames * sim.params().substeps as u64;
     let record = match &args.record {
         Some(path) => {
             if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
                 bail!("--record {}: a recording is binary glTF, give a .glb file name", path.display());
             }
-            crate::files::check_writable(path)?;
+            clothlab::files::check_writable(path)?;
             let kept = 1 + frames / args.record_every as u64;
             let np = scene.num_particles() as u64;
             let bytes = Recording::predicted_bytes(kept, np, 2 * np);
@@ -55,19 +53,18 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         None => None,
     };
     let mut recording = Recording::default();
-    let setup = args.gpu.setup(args.backend)?;
-    let mut any = make(args.backend, scene.clone(), params, &setup, &Shared::None)?;
-    let cpu_path = match &any {
-        crate::solvers::AnySolver::Cpu(cpu) => Some(cpu.path()),
+    let cpu_path = match sim.solver() {
+        AnySolver::Cpu(cpu) => Some(cpu.path()),
         _ => None,
     };
-    let solver = any.get();
+    let title = sim.title().map(str::to_owned);
+    let topo = sim.topology().clone();
+    let solver = sim.solver().get();
     let frame_dt = solver.params().frame_dt;
     let mut wall = std::time::Duration::ZERO;
     if record.is_some() {
         recording.push(0.0, &solver.state()?);
     }
-    let (_, topo) = clothlab_core::build(&scene, solver.params())?;
     // With --check-crossings: the most crossings in a frame, at which frame, and the first
     // frame with any.
     let mut most = (0usize, 0u64);
@@ -101,7 +98,7 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         outln!("cpu path       {path}")?;
     }
     if let Some(path) = &args.physics.scene {
-        outln!("scene          {} ({})", loaded.title.as_deref().unwrap_or("untitled"), path.display())?;
+        outln!("scene          {} ({})", title.as_deref().unwrap_or("untitled"), path.display())?;
     }
     match &scene.cloth.mesh {
         Some(mesh) if scene.cloth.is_mesh() => outln!(
@@ -159,7 +156,7 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     }
 
     if let Some((path, format)) = out {
-        crate::files::write_atomic(path, |w| match format {
+        clothlab::files::write_atomic(path, |w| match format {
             OutFormat::Obj => write_obj(w, &state, &topo),
             OutFormat::Json => write_json(w, &state),
         })?;
@@ -167,7 +164,7 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     }
     if let Some(path) = record {
         let bytes = glb(&recording, &topo, &scene)?;
-        crate::files::write_atomic(path, |w| std::io::Write::write_all(w, &bytes))?;
+        clothlab::files::write_atomic(path, |w| std::io::Write::write_all(w, &bytes))?;
         outln!("recorded       {} ({} frames, {} bytes)", path.display(), recording.frames.len(), bytes.len())?;
     }
     Ok(if summary.nan_count == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })

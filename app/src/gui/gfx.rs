@@ -11,8 +11,8 @@ use clothlab_vulkan::{Overlay, Presenter, VulkanRenderer};
 use clothlab_wgpu::{GpuContext, WgpuRenderer};
 use winit::window::Window;
 
-use crate::solvers::Api;
-use crate::solvers::{AnySolver, Shared, gl_cloth, vulkan_cloth, wgpu_cloth};
+use clothlab::backend::Api;
+use clothlab::backend::{AnySolver, Shared, gl_cloth, vulkan_cloth, wgpu_cloth};
 
 /// A picture of the whole window (scene and panels), sRGB RGBA8.
 pub struct Shot {
@@ -125,7 +125,7 @@ impl Gfx {
                 Gfx::Wgpu(Box::new(WgpuGfx { ctx, surface, config, renderer, egui, scene_tex, capturable }))
             }
             Api::Vulkan => {
-                let dev = Device::for_window(crate::solvers::vulkan_validation(), window.as_ref())?;
+                let dev = Device::for_window(clothlab::backend::vulkan_validation(), window.as_ref())?;
                 let renderer = VulkanRenderer::new(&dev, scene, &topo, w, h)?;
                 let presenter = Presenter::new(&dev, w, h)?;
                 Gfx::Vulkan(Box::new(VulkanGfx { renderer, presenter, dev }))

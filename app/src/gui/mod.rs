@@ -20,7 +20,7 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::window::{Window, WindowId};
 
 use crate::out::outln;
-use crate::solvers::{Api, Backend};
+use clothlab::backend::{Api, Backend};
 use gfx::{EguiFrame, Gfx, Shot};
 use input::{Action, Panel, Tool};
 use sim::Sim;
@@ -48,7 +48,7 @@ pub struct RunOptions {
     /// Drop this file on the window at frame 3, as a user would (a test).
     pub drop_file: Option<PathBuf>,
     /// The scene and parameters to start with (`--scene`, `--n`, `--set`, `--integrator`).
-    pub setup: crate::overrides::Setup,
+    pub setup: clothlab::setup::Setup,
 }
 
 /// Everything the panels show and change.
@@ -173,7 +173,7 @@ pub fn run(opts: RunOptions) -> Result<ExitCode> {
 impl UiState {
     /// Shows a new scene: its cloth size, parameters, colliders, the file's camera and
     /// light (or the defaults), and its wind in the wind panel (steady: no gusts).
-    fn take_setup(&mut self, setup: &crate::overrides::Setup, title: String) {
+    fn take_setup(&mut self, setup: &clothlab::setup::Setup, title: String) {
         self.grid_n = setup.scene.cloth.n;
         self.params = setup.params.clone();
         self.scene = setup.scene.clone();
@@ -506,7 +506,7 @@ impl Running {
             self.ui.message = format!("{}: the app takes 10 ..= 1024 particles per side, not {n}", path.display());
             return Ok(());
         }
-        let setup = crate::overrides::Setup::from_file(file);
+        let setup = clothlab::setup::Setup::from_file(file);
         let sim = match Sim::new(self.sim.backend, setup.scene.clone(), setup.params.clone(), &self.gfx.shared()) {
             Ok(sim) => sim,
             Err(e) => {
@@ -535,7 +535,7 @@ impl Running {
         }
         let backend = self.sim.backend;
         let variant = self.sim.solver.variant();
-        self.sim.switch(Backend::Cpu, &crate::solvers::Shared::None)?;
+        self.sim.switch(Backend::Cpu, &clothlab::backend::Shared::None)?;
         let scene = self.sim.solver.get_ref().scene().clone();
         let params = self.sim.solver.get_ref().params().clone();
         // The old surface must be gone before the new one is made.
@@ -675,5 +675,5 @@ impl Running {
 }
 
 fn save_png(path: &std::path::Path, shot: &Shot) -> Result<()> {
-    crate::files::write_png(path, &shot.rgba, shot.width, shot.height)
+    clothlab::files::write_png(path, &shot.rgba, shot.width, shot.height)
 }

@@ -10,7 +10,7 @@ use clothlab_core::{Scene, SimParams};
 
 use clothlab_engine::{Variant, VariantSpec};
 
-use crate::solvers::{AnySolver, Backend, GpuSetup, Shared, make};
+use clothlab::backend::{AnySolver, Backend, GpuSetup, Shared, make};
 
 /// Frames of timing history the chart shows.
 pub const HISTORY: usize = 240;

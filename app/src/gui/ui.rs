@@ -12,7 +12,7 @@ use egui_plot::{Legend, Line, Plot, PlotPoints};
 
 use super::input::{self, Action, Panel, SHORTCUT_KEYS, Tool};
 use super::{Command, UiState};
-use crate::solvers::{Api, Backend};
+use clothlab::backend::{Api, Backend};
 
 /// What the panels show that the UI does not own.
 pub struct Info<'a> {

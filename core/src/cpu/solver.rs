@@ -597,6 +597,16 @@ impl Solver for CpuSolver {
         Ok(self.state.clone())
     }
 
+    fn field(&mut self, field: crate::solver::StateField) -> Result<Vec<crate::grid::V4>, SolverError> {
+        use crate::solver::StateField;
+        Ok(match field {
+            StateField::Pos => self.state.pos.clone(),
+            StateField::Vel => self.state.vel.clone(),
+            StateField::Force => self.state.force.clone(),
+            StateField::Normal => self.state.normal.clone(),
+        })
+    }
+
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
         state.check(&self.topo)?;
         self.state = state.clone();

@@ -1,11 +1,9 @@
-//! The one place that turns a backend name into a solver, for every command and the app:
-//! the backends and graphics APIs the user names, and [`AnySolver`], a solver of any
-//! backend kept by type so that a GPU solver can hand its buffers to its API's renderer.
-//! This module imports nothing of the app's own, so the command modules, the app and the
-//! benchmark can all use it without importing each other.
+//! The one place that turns a backend name into a solver, for the library, the command
+//! line and the app: the backends and graphics APIs the user names, and [`AnySolver`], a
+//! solver of any backend kept by type so that a GPU solver can hand its buffers to its
+//! API's renderer.
 
 use anyhow::{Result, bail};
-use clap::ValueEnum;
 use clothlab_core::grid::ClothState;
 use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
 use clothlab_engine::gpu::Engine as _;
@@ -17,9 +15,11 @@ use clothlab_vulkan::{Device, VkCloth, VulkanEngine, VulkanSolver};
 use clothlab_wgpu::{ClothSource, GpuContext, WgpuEngine, WgpuSolver};
 
 /// Solver backends.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Backend {
     /// CPU, one thread (the thesis's CPU variant).
+    #[default]
     Cpu,
     /// CPU, rayon threads (the thesis's OpenMP variant).
     CpuPar,
@@ -39,6 +39,35 @@ pub enum Backend {
 }
 
 impl Backend {
+    /// Every backend, in the order reports list them.
+    pub const ALL: [Backend; 8] = [
+        Backend::Cpu,
+        Backend::CpuPar,
+        Backend::WgpuNaive,
+        Backend::Wgpu,
+        Backend::VulkanNaive,
+        Backend::Vulkan,
+        Backend::GlNaive,
+        Backend::Gl,
+    ];
+
+    /// The backend of a name (`cpu`, `cpu-par`, `wgpu-naive`, `wgpu`, `vulkan-naive`,
+    /// `vulkan`, `gl-naive`, `gl`); refused in one line that lists the names.
+    pub fn parse(name: &str) -> Result<Backend> {
+        match Backend::ALL.into_iter().find(|b| b.name() == name.trim()) {
+            Some(b) => Ok(b),
+            None => {
+                let names: Vec<&str> = Backend::ALL.iter().map(|b| b.name()).collect();
+                bail!("unknown backend `{name}` (known: {})", names.join(", "))
+            }
+        }
+    }
+
+    /// Whether it runs on a GPU (through one of the [`Api`]s).
+    pub fn is_gpu(self) -> bool {
+        self.api().is_some()
+    }
+
     /// The name on the command line.
     pub fn name(self) -> &'static str {
         match self {
@@ -82,7 +111,8 @@ impl Backend {
 }
 
 /// Graphics APIs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Api {
     /// wgpu (Vulkan, Metal, DX12 or GL underneath).
     Wgpu,
@@ -93,6 +123,17 @@ pub enum Api {
 }
 
 impl Api {
+    /// Every graphics API.
+    pub const ALL: [Api; 3] = [Api::Wgpu, Api::Vulkan, Api::Gl];
+
+    /// The API of a name (`wgpu`, `vulkan`, `gl`); refused in one line that lists them.
+    pub fn parse(name: &str) -> Result<Api> {
+        match Api::ALL.into_iter().find(|a| a.name() == name.trim()) {
+            Some(a) => Ok(a),
+            None => bail!("unknown graphics API `{name}` (known: wgpu, vulkan, gl)"),
+        }
+    }
+
     /// The name solver names start with and reports use: `wgpu`, `vulkan`, `gl`.
     pub fn name(self) -> &'static str {
         match self {
@@ -156,6 +197,20 @@ pub struct GpuSetup {
     pub options: SolverOptions,
     /// The variant; `None`: the backend's preset.
     pub variant: Option<VariantSpec>,
+}
+
+/// The variant asked for `backend`: `preset` (else the backend's) with the `set_variant`
+/// changes (`KEY=VALUE`), or `None` when neither is given. Refused for a CPU backend.
+pub fn variant_spec(backend: Backend, preset: Option<&str>, set_variant: &[String]) -> Result<Option<VariantSpec>> {
+    if preset.is_none() && set_variant.is_empty() {
+        return Ok(None);
+    }
+    let name = preset.or(backend.preset()).unwrap_or("optimized");
+    let spec = VariantSpec::parse(name, set_variant)?;
+    if !backend.is_gpu() {
+        bail!("--variant and --set-variant apply to the GPU backends only ({} runs its own SIMD step)", backend.name());
+    }
+    Ok(Some(spec))
 }
 
 /// A solver of any backend, kept by type so that a GPU solver on a renderer's device can

@@ -1,11 +1,35 @@
-//! What a command simulates: the scene and parameters of `--scene FILE` (or the defaults),
-//! with `--n`, `--integrator` and `--set NAME=VALUE` (through the serde form of
-//! `SimParams`) applied over them.
+//! What is simulated: the scene and parameters of a scene file, a scene file's text, or
+//! the default scene, with a grid size, an integrator and `NAME=VALUE` overrides (through
+//! the serde form of `SimParams`) applied over them — the command line's `--scene`,
+//! `--n`, `--integrator` and `--set`.
+
+use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use clothlab_core::{OrbitCamera, Scene, SceneFile, SimParams};
+use clothlab_core::{Integrator, OrbitCamera, Scene, SceneFile, SimParams};
 
-use crate::cli::PhysicsArgs;
+/// Where a scene comes from.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum SceneSource {
+    /// The default scene (three spheres and a floor under a grid).
+    #[default]
+    Default,
+    /// A scene file (TOML; see `scenes/` and docs/scenes.md).
+    File(PathBuf),
+    /// A scene file's text (mesh paths in it are relative to the working folder).
+    Toml(String),
+}
+
+/// A scene and what applies over it: what every command that simulates takes.
+#[derive(Debug, Clone, Default)]
+pub struct Physics {
+    /// The scene.
+    pub scene: SceneSource,
+    /// The integrator, over the scene's.
+    pub integrator: Option<Integrator>,
+    /// `NAME=VALUE` parameter overrides (names as in `SimParams`; docs/parameters.md).
+    pub set: Vec<String>,
+}
 
 /// A scene and its parameters, checked, with what a scene file says about the view.
 #[derive(Debug, Clone)]
@@ -34,34 +58,37 @@ impl Setup {
     }
 }
 
-impl PhysicsArgs {
-    /// The scene file's scene and parameters (without `--scene`: the default scene with an
-    /// `default_n × default_n` cloth), with `--n` (`n`), `--integrator` and `--set`
-    /// applied, all checked; nothing of a refused file is used.
+impl Physics {
+    /// The scene file's scene and parameters (for [`SceneSource::Default`]: the default
+    /// scene with an `default_n × default_n` cloth), with `n` (a grid's side), the
+    /// integrator and the overrides applied, all checked; nothing of a refused file is
+    /// used. A mesh's vertices in no triangle are dropped, said once on stderr.
     pub fn setup(&self, n: Option<u32>, default_n: u32) -> Result<Setup> {
         // A file's parameters get `--integrator` and `--set` before they are checked against
         // its cloth (a scene stable under XPBD is not refused for Verlet's sake), and an
         // override's error is the command line's own.
         let mut refused = None;
-        let mut setup = match &self.scene {
-            Some(path) => {
-                let adjust = |p: &mut SimParams| match self.apply(p) {
-                    Ok(q) => {
-                        *p = q;
-                        Ok(())
-                    }
-                    Err(e) => {
-                        let message = e.to_string();
-                        refused = Some(e);
-                        Err(message)
-                    }
-                };
-                match SceneFile::load_with(path, adjust) {
-                    Ok(f) => Setup::from_file(f),
-                    Err(e) => return Err(refused.unwrap_or_else(|| e.into())),
-                }
+        let adjust = |p: &mut SimParams| match self.apply(p) {
+            Ok(q) => {
+                *p = q;
+                Ok(())
             }
-            None => {
+            Err(e) => {
+                let message = e.to_string();
+                refused = Some(e);
+                Err(message)
+            }
+        };
+        let mut setup = match &self.scene {
+            SceneSource::File(path) => match SceneFile::load_with(path, adjust) {
+                Ok(f) => Setup::from_file(f),
+                Err(e) => return Err(refused.unwrap_or_else(|| e.into())),
+            },
+            SceneSource::Toml(text) => match SceneFile::parse_with(text, "<scene text>", adjust) {
+                Ok(f) => Setup::from_file(f),
+                Err(e) => return Err(refused.unwrap_or_else(|| e.into())),
+            },
+            SceneSource::Default => {
                 let mut setup = Setup::default_with_n(default_n);
                 setup.params = self.apply(&setup.params)?;
                 setup
@@ -93,7 +120,7 @@ impl PhysicsArgs {
         Ok(setup)
     }
 
-    /// `params` with `--set` and `--integrator` applied, validated.
+    /// `params` with the overrides and the integrator applied, validated.
     pub fn apply(&self, params: &SimParams) -> Result<SimParams> {
         let mut p = apply_overrides(params, &self.set)?;
         if let Some(i) = self.integrator {

@@ -1,0 +1,526 @@
+//! clothlab's native Python module, `clothlab._clothlab`: the facade crate's [`clothlab::Sim`],
+//! `backends`, `validate` and `bench` for Python. The package's Python layer
+//! (`python/clothlab/__init__.py`) is the public API: it checks and converts arguments
+//! (numpy arrays, parameter values) and documents every call; this module does the work.
+//!
+//! Each `Sim` runs on a thread of its own, which opens the solver and keeps it: a GPU
+//! context (OpenGL's above all) stays on the thread that made it, and Python threads may
+//! call from anywhere. A call hands the thread a job and waits for its answer with the GIL
+//! released, so other Python threads run while the cloth steps. Every error is a
+//! `clothlab.ClothlabError` (a `ValueError`) with the command line's one-line message; a
+//! panic on the thread (never expected) is one too, and the `Sim` is closed after it.
+
+use std::sync::Mutex;
+use std::sync::mpsc::{Receiver, Sender, channel, sync_channel};
+use std::thread::JoinHandle;
+
+use clothlab::{Backend, Physics, SceneSource, SimOptions};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+pyo3::create_exception!(
+    _clothlab,
+    ClothlabError,
+    PyValueError,
+    "What clothlab refused or could not do, in one line (a bad argument, a missing GPU, a scene file's error)."
+);
+
+/// An error as Python sees it: the message and its causes on one line.
+fn py_err(e: anyhow::Error) -> PyErr {
+    let msg: Vec<String> = e.chain().map(|c| c.to_string()).collect();
+    ClothlabError::new_err(msg.join(": "))
+}
+
+/// A job for a simulation's thread.
+type Job = Box<dyn FnOnce(&mut clothlab::Sim) + Send>;
+
+/// A simulation on its own thread.
+#[pyclass(module = "clothlab._clothlab")]
+struct Sim {
+    jobs: Mutex<Option<Sender<Job>>>,
+    thread: Mutex<Option<JoinHandle<()>>>,
+}
+
+impl Sim {
+    /// Runs `f` on the simulation's thread with the GIL released and returns its answer.
+    fn call<T: Send + 'static>(
+        &self,
+        py: Python<'_>,
+        f: impl FnOnce(&mut clothlab::Sim) -> anyhow::Result<T> + Send + 'static,
+    ) -> PyResult<T> {
+        let (tx, rx) = sync_channel(1);
+        let sent = {
+            let jobs = self.jobs.lock().map_err(|_| ClothlabError::new_err("the simulation is closed"))?;
+            let Some(jobs) = jobs.as_ref() else {
+                return Err(ClothlabError::new_err("the simulation is closed"));
+            };
+            jobs.send(Box::new(move |sim: &mut clothlab::Sim| {
+                let _ = tx.send(f(sim));
+            }))
+        };
+        if sent.is_err() {
+            return Err(ClothlabError::new_err("the simulation's thread has stopped"));
+        }
+        match py.detach(move || rx.recv()) {
+            Ok(r) => r.map_err(py_err),
+            Err(_) => {
+                // The job dropped its answer: it panicked, and the thread is gone.
+                self.shut();
+                Err(ClothlabError::new_err("internal error: the simulation's thread stopped (a bug: please report it)"))
+            }
+        }
+    }
+
+    /// Ends the thread (after the jobs already sent).
+    fn shut(&self) {
+        if let Ok(mut jobs) = self.jobs.lock() {
+            jobs.take();
+        }
+        let handle = self.thread.lock().ok().and_then(|mut t| t.take());
+        if let Some(h) = handle
+            && h.thread().id() != std::thread::current().id()
+        {
+            let _ = h.join();
+        }
+    }
+}
+
+/// A timing row: label, samples, median, min and max (ns).
+type TimingRow = (String, usize, f64, f64, f64);
+
+/// A backend as `backends()` lists it: name, API, adapter, why not.
+type BackendRow = (String, Option<String>, Option<String>, Option<String>);
+
+/// Rows of `(N, 3)` float32 as a flat vector of triples.
+fn rows3(a: &PyReadonlyArray2<'_, f32>) -> PyResult<Vec<[f32; 3]>> {
+    let v = a.as_array();
+    if v.ncols() != 3 {
+        return Err(ClothlabError::new_err(format!("expected an (N, 3) array, got ({}, {})", v.nrows(), v.ncols())));
+    }
+    Ok(v.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect())
+}
+
+/// `(N, 3)` float32 of triples.
+fn array3<'py>(py: Python<'py>, v: Vec<[f32; 3]>) -> PyResult<Bound<'py, PyAny>> {
+    let n = v.len();
+    Ok(PyArray1::from_vec(py, v.into_flattened()).reshape([n, 3])?.into_any())
+}
+
+#[pymethods]
+impl Sim {
+    /// Opens a scene on a backend (see `clothlab.Sim`).
+    #[new]
+    #[pyo3(signature = (backend, scene=None, toml=None, n=None, integrator=None, sets=Vec::new(), preset=None, set_variant=Vec::new()))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        backend: &str,
+        scene: Option<std::path::PathBuf>,
+        toml: Option<String>,
+        n: Option<u32>,
+        integrator: Option<&str>,
+        sets: Vec<String>,
+        preset: Option<String>,
+        set_variant: Vec<String>,
+    ) -> PyResult<Self> {
+        let options = (|| -> anyhow::Result<SimOptions> {
+            let backend = Backend::parse(backend)?;
+            let scene = match (scene, toml) {
+                (Some(_), Some(_)) => anyhow::bail!("give a scene file or a scene's TOML text, not both"),
+                (Some(path), None) => SceneSource::File(path),
+                (None, Some(text)) => SceneSource::Toml(text),
+                (None, None) => SceneSource::Default,
+            };
+            let integrator = match integrator {
+                None => None,
+                Some(name) => Some(clothlab::Integrator::parse(name).ok_or_else(|| {
+                    let names: Vec<&str> = clothlab::Integrator::ALL.iter().map(|i| i.name()).collect();
+                    anyhow::anyhow!("unknown integrator `{name}` (known: {})", names.join(", "))
+                })?),
+            };
+            let variant = clothlab::variant_spec(backend, preset.as_deref(), &set_variant)?;
+            Ok(SimOptions {
+                backend,
+                physics: Physics { scene, integrator, set: sets },
+                n,
+                gpu: clothlab::GpuSetup { variant, ..Default::default() },
+            })
+        })()
+        .map_err(py_err)?;
+        let (jobs, inbox): (Sender<Job>, Receiver<Job>) = channel();
+        let (ready_tx, ready_rx) = sync_channel::<anyhow::Result<()>>(1);
+        let thread = std::thread::Builder::new()
+            .name("clothlab-sim".into())
+            .spawn(move || {
+                let mut sim = match clothlab::Sim::open(options) {
+                    Ok(s) => {
+                        let _ = ready_tx.send(Ok(()));
+                        s
+                    }
+                    Err(e) => {
+                        let _ = ready_tx.send(Err(e));
+                        return;
+                    }
+                };
+                while let Ok(job) = inbox.recv() {
+                    job(&mut sim);
+                }
+            })
+            .map_err(|e| ClothlabError::new_err(format!("cannot start the simulation's thread: {e}")))?;
+        match py.detach(move || ready_rx.recv()) {
+            Ok(Ok(())) => Ok(Sim { jobs: Mutex::new(Some(jobs)), thread: Mutex::new(Some(thread)) }),
+            Ok(Err(e)) => {
+                let _ = thread.join();
+                Err(py_err(e))
+            }
+            Err(_) => {
+                let _ = thread.join();
+                Err(ClothlabError::new_err("internal error: opening the simulation stopped its thread"))
+            }
+        }
+    }
+
+    /// Facts about the simulation: backend, solver name, adapter, particles, triangles,
+    /// scene title.
+    fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (backend, name, adapter, np, nt, title) = self.call(py, |s| {
+            Ok((
+                s.backend().name(),
+                s.name().to_owned(),
+                s.adapter(),
+                s.num_particles(),
+                s.triangles().len(),
+                s.title().map(str::to_owned),
+            ))
+        })?;
+        let d = PyDict::new(py);
+        d.set_item("backend", backend)?;
+        d.set_item("name", name)?;
+        d.set_item("adapter", adapter)?;
+        d.set_item("particles", np)?;
+        d.set_item("triangles", nt)?;
+        d.set_item("title", title)?;
+        Ok(d)
+    }
+
+    /// Advances `frames` frames.
+    fn step(&self, py: Python<'_>, frames: u64) -> PyResult<()> {
+        self.call(py, move |s| s.step(frames))
+    }
+
+    /// Advances `k` substeps.
+    fn substep(&self, py: Python<'_>, k: u64) -> PyResult<()> {
+        self.call(py, move |s| s.substep(k))
+    }
+
+    /// Simulated time, s.
+    fn time(&self, py: Python<'_>) -> PyResult<f64> {
+        self.call(py, |s| Ok(s.time()))
+    }
+
+    /// Sets the simulated time, s.
+    fn set_time(&self, py: Python<'_>, t: f64) -> PyResult<()> {
+        self.call(py, move |s| s.set_time(t))
+    }
+
+    /// Positions, (N, 3) float32.
+    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        array3(py, self.call(py, |s| s.positions())?)
+    }
+
+    /// Velocities, (N, 3) float32.
+    fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        array3(py, self.call(py, |s| s.velocities())?)
+    }
+
+    /// Normals, (N, 3) float32.
+    fn normals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        array3(py, self.call(py, |s| s.normals())?)
+    }
+
+    /// Inverse masses, (N,) float32.
+    fn inverse_masses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f32>>> {
+        Ok(PyArray1::from_vec(py, self.call(py, |s| s.inverse_masses())?))
+    }
+
+    /// Sets the positions from (N, 3) float32.
+    fn set_positions(&self, py: Python<'_>, x: PyReadonlyArray2<'_, f32>) -> PyResult<()> {
+        let x = rows3(&x)?;
+        self.call(py, move |s| s.set_positions(&x))
+    }
+
+    /// Sets the velocities from (N, 3) float32.
+    fn set_velocities(&self, py: Python<'_>, v: PyReadonlyArray2<'_, f32>) -> PyResult<()> {
+        let v = rows3(&v)?;
+        self.call(py, move |s| s.set_velocities(&v))
+    }
+
+    /// Sets the inverse masses from (N,) float32.
+    fn set_inverse_masses(&self, py: Python<'_>, w: PyReadonlyArray1<'_, f32>) -> PyResult<()> {
+        let w = w.as_array().to_vec();
+        self.call(py, move |s| s.set_inverse_masses(&w))
+    }
+
+    /// Triangles, (T, 3) int32.
+    fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let t = self.call(py, |s| Ok(s.triangles().to_vec()))?;
+        let n = t.len();
+        let flat: Vec<i32> = t.into_iter().flatten().map(|i| i as i32).collect();
+        Ok(PyArray1::from_vec(py, flat).reshape([n, 3])?.into_any())
+    }
+
+    /// Each cloth's ranges: a list of dicts.
+    fn cloths<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let parts = self.call(py, |s| Ok(s.cloths()))?;
+        let list = PyList::empty(py);
+        for p in parts {
+            let d = PyDict::new(py);
+            d.set_item("label", p.label)?;
+            d.set_item("first", p.first)?;
+            d.set_item("count", p.count)?;
+            d.set_item("first_triangle", p.first_triangle)?;
+            d.set_item("triangles", p.triangles)?;
+            list.append(d)?;
+        }
+        Ok(list)
+    }
+
+    /// Applies `NAME=VALUE` overrides (all or none).
+    fn set(&self, py: Python<'_>, sets: Vec<String>) -> PyResult<()> {
+        self.call(py, move |s| s.set(&sets))
+    }
+
+    /// The parameters as JSON text.
+    fn params_json(&self, py: Python<'_>) -> PyResult<String> {
+        self.call(py, |s| Ok(serde_json::to_string(&s.params_json()?)?))
+    }
+
+    /// Grabs a particle and holds it at a target.
+    fn grab(&self, py: Python<'_>, particle: u32, target: [f32; 3]) -> PyResult<()> {
+        self.call(py, move |s| s.grab(particle, target))
+    }
+
+    /// Lets go of the grabbed particle.
+    fn release(&self, py: Python<'_>) -> PyResult<()> {
+        self.call(py, |s| {
+            s.release();
+            Ok(())
+        })
+    }
+
+    /// Per-kernel timings: a list of (label, samples, median_ns, min_ns, max_ns).
+    fn timings(&self, py: Python<'_>) -> PyResult<Vec<TimingRow>> {
+        let t = self.call(py, |s| Ok(s.timings()))?;
+        Ok(t.rows.into_iter().map(|r| (r.label, r.samples, r.median_ns, r.min_ns, r.max_ns)).collect())
+    }
+
+    /// Forgets the timings.
+    fn reset_timings(&self, py: Python<'_>) -> PyResult<()> {
+        self.call(py, |s| {
+            s.reset_timings();
+            Ok(())
+        })
+    }
+
+    /// Crossings in the current state.
+    fn crossings(&self, py: Python<'_>) -> PyResult<usize> {
+        self.call(py, |s| s.crossings())
+    }
+
+    /// The scene drawn now: (H, W, 4) uint8 and the adapter.
+    #[pyo3(signature = (width, height, mode, api=None))]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        width: u32,
+        height: u32,
+        mode: &str,
+        api: Option<&str>,
+    ) -> PyResult<(Bound<'py, PyAny>, String)> {
+        let mode = match mode {
+            "triangles" => clothlab::RenderMode::Triangles,
+            "lines" => clothlab::RenderMode::Lines,
+            "points" => clothlab::RenderMode::Points,
+            other => {
+                return Err(ClothlabError::new_err(format!(
+                    "unknown render mode `{other}` (known: triangles, lines, points)"
+                )));
+            }
+        };
+        let api = api.map(clothlab::Api::parse).transpose().map_err(py_err)?;
+        let (pixels, adapter) = self.call(py, move |s| {
+            let view = s.view(mode);
+            s.render(width, height, &view, api)
+        })?;
+        let image = PyArray1::from_vec(py, pixels).reshape([height as usize, width as usize, 4])?;
+        Ok((image.into_any(), adapter))
+    }
+
+    /// Records `frames` frames to a .glb; returns the frames kept.
+    fn record(&self, py: Python<'_>, path: std::path::PathBuf, frames: u64, every: u32) -> PyResult<usize> {
+        self.call(py, move |s| s.record(&path, frames, every))
+    }
+
+    /// Ends the simulation's thread; later calls raise.
+    fn close(&self) {
+        self.shut();
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        self.shut();
+    }
+}
+
+/// Every backend: (name, api or None, adapter or None, why not or None).
+#[pyfunction]
+fn backends(py: Python<'_>) -> Vec<BackendRow> {
+    let found = py.detach(clothlab::available);
+    found
+        .into_iter()
+        .map(|(b, r)| {
+            let api = b.api().map(|a| a.name().to_owned());
+            match r {
+                Ok(adapter) => (b.name().to_owned(), api, Some(adapter), None),
+                Err(e) => (b.name().to_owned(), api, None, Some(e)),
+            }
+        })
+        .collect()
+}
+
+/// Parses backend names.
+fn parse_backends(names: &[String]) -> anyhow::Result<Vec<Backend>> {
+    names.iter().map(|n| Backend::parse(n)).collect()
+}
+
+/// The scene of a file or a TOML text.
+fn source(scene: Option<std::path::PathBuf>, toml: Option<String>) -> anyhow::Result<SceneSource> {
+    Ok(match (scene, toml) {
+        (Some(_), Some(_)) => anyhow::bail!("give a scene file or a scene's TOML text, not both"),
+        (Some(p), None) => SceneSource::File(p),
+        (None, Some(t)) => SceneSource::Toml(t),
+        (None, None) => SceneSource::Default,
+    })
+}
+
+/// One validation check as a dict.
+type CheckRow = (String, String, String, f64, f64, f64, f64, bool, String);
+
+/// Runs validate; a list of (backend, check, buffer, max_abs, rms, error, bound, passed, adapter).
+#[pyfunction]
+#[pyo3(signature = (backends, scene=None, toml=None, n=None, steps=200, every_switch=false, bisect=false, sets=Vec::new()))]
+#[allow(clippy::too_many_arguments)]
+fn validate(
+    py: Python<'_>,
+    backends: Vec<String>,
+    scene: Option<std::path::PathBuf>,
+    toml: Option<String>,
+    n: Option<u32>,
+    steps: u32,
+    every_switch: bool,
+    bisect: bool,
+    sets: Vec<String>,
+) -> PyResult<Vec<CheckRow>> {
+    let run = move || -> anyhow::Result<Vec<CheckRow>> {
+        let opts = clothlab::ValidateOptions {
+            backends: parse_backends(&backends)?,
+            physics: Physics { scene: source(scene, toml)?, integrator: None, set: sets },
+            n,
+            steps,
+            bisect,
+            every_switch,
+            preset: None,
+            set_variant: Vec::new(),
+        };
+        let v = clothlab::validate(&opts, |_| Ok(()))?;
+        Ok(v.checks()
+            .map(|(b, c)| {
+                (
+                    b.to_owned(),
+                    c.what.clone(),
+                    c.buffer.to_string(),
+                    f64::from(c.max_abs),
+                    f64::from(c.rms),
+                    f64::from(c.error),
+                    f64::from(c.bound),
+                    c.passed(),
+                    v.adapter(b).unwrap_or_default().to_owned(),
+                )
+            })
+            .collect())
+    };
+    // The GPU devices are opened and closed on this thread, with the GIL released.
+    py.detach(run).map_err(py_err)
+}
+
+/// One bench row: (backend, n, adapter, table, label, samples, median_ns, min_ns, max_ns).
+type BenchRow = (String, u32, String, String, String, usize, f64, f64, f64);
+
+/// Runs bench cells; rows, and the backends skipped with why.
+#[pyfunction]
+#[pyo3(signature = (backends, sizes, frames=30, scene=None, toml=None, sets=Vec::new(), resolution=(640, 360)))]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(name = "bench")]
+fn bench_cells(
+    py: Python<'_>,
+    backends: Vec<String>,
+    sizes: Vec<u32>,
+    frames: u32,
+    scene: Option<std::path::PathBuf>,
+    toml: Option<String>,
+    sets: Vec<String>,
+    resolution: (u32, u32),
+) -> PyResult<(Vec<BenchRow>, Vec<String>)> {
+    let run = move || -> anyhow::Result<(Vec<BenchRow>, Vec<String>)> {
+        let opts = clothlab::bench::BenchOptions {
+            backends: parse_backends(&backends)?,
+            sizes,
+            frames,
+            resolution,
+            physics: Physics { scene: source(scene, toml)?, integrator: None, set: sets },
+        };
+        let run = clothlab::bench::cells(&opts)?;
+        let mut rows = Vec::new();
+        for c in &run.cells {
+            for (table, list) in [("kernel", &c.kernels), ("frame", &c.frames)] {
+                for r in list {
+                    rows.push((
+                        c.backend.clone(),
+                        c.n,
+                        c.adapter.clone(),
+                        table.to_owned(),
+                        r.label.clone(),
+                        r.samples,
+                        r.median_ns,
+                        r.min_ns,
+                        r.max_ns,
+                    ));
+                }
+            }
+        }
+        Ok((rows, run.skipped))
+    };
+    py.detach(run).map_err(py_err)
+}
+
+/// The integrators' names.
+#[pyfunction]
+fn integrators() -> Vec<(&'static str, &'static str)> {
+    clothlab::Integrator::ALL.iter().map(|i| (i.name(), i.summary())).collect()
+}
+
+/// The native module.
+#[pymodule]
+fn _clothlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("ClothlabError", m.py().get_type::<ClothlabError>())?;
+    m.add_class::<Sim>()?;
+    m.add_function(wrap_pyfunction!(backends, m)?)?;
+    m.add_function(wrap_pyfunction!(validate, m)?)?;
+    m.add_function(wrap_pyfunction!(bench_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(integrators, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

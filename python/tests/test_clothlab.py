@@ -1,0 +1,247 @@
+"""The Python package against the library underneath: state in and out, refusals with
+their messages, free fall against the analytic recurrence, substeps against frames,
+validate's rows, a rendered image, a recording, bench's rows, a GL solver called from
+another thread.
+
+GPU tests run on whatever Vulkan and GL this machine has (lavapipe and llvmpipe in CI);
+with CLOTHLAB_REQUIRE_GPU=1 (as .ci/run sets) a missing one fails instead of skipping.
+"""
+
+import os
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import clothlab
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENES = ROOT / "scenes"
+
+
+def _need(backend):
+    """Skips (or, with CLOTHLAB_REQUIRE_GPU=1, fails) where `backend` has no adapter."""
+    found = {b["name"]: b for b in clothlab.backends()}
+    if not found[backend]["available"]:
+        msg = f"{backend}: {found[backend]['error']}"
+        if os.environ.get("CLOTHLAB_REQUIRE_GPU") == "1":
+            pytest.fail(msg)
+        pytest.skip(msg)
+
+
+def test_backends_lists_every_backend_and_the_cpu_runs_everywhere():
+    found = clothlab.backends()
+    assert [b["name"] for b in found] == list(clothlab.BACKENDS)
+    cpu = found[0]
+    assert cpu["available"] and cpu["api"] is None and cpu["error"] is None
+    for b in found:
+        # Either an adapter or why not: never both, never neither.
+        assert (b["adapter"] is None) != (b["error"] is None), b
+
+
+def test_state_goes_in_and_comes_out_exactly_and_bad_state_is_refused_with_nothing_changed():
+    sim = clothlab.Sim(n=16, backend="cpu-par")
+    assert sim.num_particles == 256
+    x = sim.positions()
+    assert x.shape == (256, 3) and x.dtype == np.float32
+    moved = x + np.float32(0.25)
+    sim.set_positions(moved)
+    # Written and read as float32: exact.
+    assert np.array_equal(sim.positions(), moved)
+    v = np.tile(np.array([0.5, -1.0, 0.25], dtype=np.float64), (256, 1))  # float64 in: converted
+    sim.set_velocities(v)
+    assert np.array_equal(sim.velocities(), v.astype(np.float32))
+
+    bad = moved.copy()
+    bad[7, 1] = np.nan
+    with pytest.raises(clothlab.ClothlabError, match="particle 7"):
+        sim.set_positions(bad)
+    with pytest.raises(ValueError, match=r"shape \(256, 3\)"):
+        sim.set_positions(moved[:10])
+    assert np.array_equal(sim.positions(), moved), "a refused state changes nothing"
+
+    tri = sim.triangles()
+    assert tri.shape == (2 * 15 * 15, 3) and tri.dtype == np.int32
+    assert tri.min() == 0 and tri.max() == 255
+    assert sim.cloths() == [{"label": "cloth", "first": 0, "count": 256, "first_triangle": 0, "triangles": 450}]
+
+
+def test_inverse_masses_are_the_particles_mass_and_zero_where_pinned():
+    sim = clothlab.Sim(n=10, backend="cpu")
+    w = sim.inverse_masses()
+    mass = sim.params["cloth_mass"]
+    free = w[w > 0]
+    # A grid's particles share the cloth's mass equally: 1/w = mass/N to float rounding.
+    assert np.allclose(1.0 / free, mass / 100, rtol=1e-6)
+    assert (w == 0).sum() >= 1, "the default scene pins its top corners"
+    w2 = np.full(100, 2.0, dtype=np.float32)
+    sim.set_inverse_masses(w2)
+    assert np.allclose(sim.inverse_masses(), w2, rtol=1e-6)
+    with pytest.raises(ValueError, match="≥ 0"):
+        sim.set_inverse_masses(-w2)
+
+
+def test_parameters_are_checked_and_refused_with_the_command_lines_message():
+    sim = clothlab.Sim(n=8)
+    sim.set("damping", 0.001)
+    assert sim.params["damping"] == pytest.approx(0.001)
+    sim.set("wind", [2, 0, 1])
+    assert sim.params["wind"] == [2.0, 0.0, 1.0]
+    with pytest.raises(ValueError, match="finite"):
+        sim.set("damping", float("nan"))
+    with pytest.raises(ValueError, match=r"unknown parameter `dampig` \(known: .*damping"):
+        sim.set("dampig", 0.1)
+    with pytest.raises(ValueError, match="substeps"):
+        sim.set("substeps", 0)
+    before = sim.params
+    with pytest.raises(ValueError):
+        sim.update({"damping": 0.002, "substeps": -1})
+    assert sim.params == before, "a refused update changes nothing"
+    with pytest.raises(ValueError, match=r"unknown backend `cuda` \(known: cpu, cpu-par"):
+        clothlab.Sim(backend="cuda")
+    with pytest.raises(ValueError, match="unknown integrator"):
+        clothlab.Sim(integrator="euler-forward")
+    with pytest.raises(ValueError, match="n"):
+        clothlab.Sim(n=1)
+    with pytest.raises(ValueError, match="missing.toml"):
+        clothlab.Sim(scene="missing.toml")
+    with pytest.raises(ValueError, match="GPU backends only"):
+        clothlab.Sim(backend="cpu", variant="naive")
+    with pytest.raises(ValueError, match=r"<scene text>:1:7: unclosed table"):
+        clothlab.Sim(toml="[cloth\nn = 4")
+
+
+@pytest.mark.parametrize("backend", ["cpu", "vulkan"])
+def test_free_fall_follows_the_analytic_recurrence(backend):
+    if backend != "cpu":
+        _need(backend)
+    sim = clothlab.Sim(scene=SCENES / "free-fall.toml", backend=backend)
+    p = sim.params
+    dt = p["frame_dt"] / p["substeps"]
+    g = p["gravity"][1]
+    x0 = sim.positions().astype(np.float64)
+    # The velocity at -dt/2 of a cloth at rest at 0: Verlet in velocity form is then
+    # exact on the parabola but for f32 rounding.
+    v = np.zeros_like(x0)
+    v[:, 1] = -0.5 * g * dt
+    sim.set_velocities(v)
+    frames = 20
+    sim.step(frames=frames)
+    k = frames * p["substeps"]
+    # The recurrence v += g dt; y += v dt, in float64.
+    y, vy = x0[:, 1].copy(), np.full(len(x0), -0.5 * g * dt)
+    for _ in range(k):
+        vy += g * dt
+        y += vy * dt
+    t = frames * p["frame_dt"]
+    assert np.allclose(y, x0[:, 1] + 0.5 * g * t * t, atol=1e-9), "the recurrence is the parabola"
+    got = sim.positions()
+    # f32 rounding of y and v over k substeps (the Rust suite's bound for this scene).
+    ulp = 2.0**-22
+    bound = k / 2 * ulp + k * k / 2 * ulp * dt
+    err = np.abs(got[:, 1] - y).max()
+    assert err <= bound, f"{backend}: {err:.2e} m from the recurrence (bound {bound:.1e})"
+    assert sim.time == pytest.approx(t, rel=1e-6)
+
+
+def test_substeps_add_up_to_a_frame():
+    a = clothlab.Sim(n=12, backend="cpu")
+    b = clothlab.Sim(n=12, backend="cpu")
+    a.step(frames=1)
+    b.substep(a.params["substeps"])
+    assert b.time == pytest.approx(a.time, rel=1e-9)
+    # The same substeps; only what runs once a frame (normals, wind) runs more often.
+    assert np.abs(a.positions() - b.positions()).max() < 1e-5
+    assert b.params["substeps"] == a.params["substeps"], "the frame's substeps are restored"
+
+
+def test_a_grabbed_particle_is_held_at_its_target():
+    sim = clothlab.Sim(n=10)
+    sim.grab(55, [0.1, 2.5, -0.2])
+    sim.step(frames=3)
+    assert np.allclose(sim.positions()[55], [0.1, 2.5, -0.2], atol=1e-6)
+    sim.release()
+    with pytest.raises(ValueError, match="particle 100"):
+        sim.grab(100, [0, 0, 0])
+
+
+def test_validate_gives_one_passed_row_per_check():
+    _need("vulkan")
+    rows = clothlab.validate(backend="vulkan", n=8, steps=32)
+    assert rows, "no checks"
+    assert {"backend", "check", "buffer", "max_abs", "error", "bound", "passed", "adapter"} <= set(rows[0])
+    assert any(r["check"].startswith("rollout") for r in rows)
+    for r in rows:
+        assert r["passed"] and r["error"] <= r["bound"], r
+        assert "llvmpipe" in r["adapter"] or r["adapter"]
+    with pytest.raises(ValueError, match="reference itself"):
+        clothlab.validate(backend="cpu")
+
+
+def test_render_draws_the_scene():
+    _need("vulkan")
+    sim = clothlab.Sim(scene=SCENES / "heap.toml", backend="vulkan")
+    sim.step(frames=2)
+    img = sim.render(96, 64)
+    assert img.shape == (64, 96, 4) and img.dtype == np.uint8
+    assert (img[..., 3] == 255).all(), "opaque"
+    # A picture, not a cleared target: the sky, the floor and the cloth differ.
+    assert img[..., :3].std() > 10
+    with pytest.raises(ValueError, match="own API"):
+        sim.render(96, 64, api="gl")
+    with pytest.raises(ValueError, match="render mode"):
+        sim.render(96, 64, mode="wireframe")
+
+
+def test_a_gl_solver_steps_when_called_from_another_thread():
+    _need("gl")
+    sim = clothlab.Sim(n=12, backend="gl")
+    out = {}
+
+    def work():
+        sim.step(frames=2)
+        out["x"] = sim.positions()
+
+    t = threading.Thread(target=work)
+    t.start()
+    t.join()
+    cpu = clothlab.Sim(n=12, backend="cpu")
+    cpu.step(frames=2)
+    # GL on llvmpipe computes the CPU's bits on this scene; a real GPU rounds otherwise.
+    assert np.abs(out["x"] - cpu.positions()).max() < 1e-4
+
+
+def test_record_writes_a_glb(tmp_path):
+    sim = clothlab.Sim(n=8)
+    kept = sim.record(tmp_path / "run.glb", frames=4, every=2)
+    assert kept == 3  # the first frame and frames 2 and 4
+    data = (tmp_path / "run.glb").read_bytes()
+    assert data[:4] == b"glTF"
+    with pytest.raises(ValueError, match=".glb"):
+        sim.record(tmp_path / "run.gltf", frames=1)
+
+
+def test_bench_gives_kernel_and_frame_rows():
+    rows = clothlab.bench(sizes=[16], backends=["cpu"], frames=2, resolution=(32, 32))
+    kernel = {r["label"]: r for r in rows if r["table"] == "kernel"}
+    frame = {r["label"]: r for r in rows if r["table"] == "frame"}
+    assert "substep" in kernel and kernel["substep"]["median_us"] > 0
+    assert "sim" in frame and frame["sim"]["samples"] == 2
+    assert all(r["backend"] == "cpu" and r["n"] == 16 for r in rows)
+    with pytest.raises(ValueError, match="2 ..= 4096"):
+        clothlab.bench(sizes=[1], backends=["cpu"])
+
+
+def test_a_pinned_particle_moved_by_its_position_stays_there():
+    # The default scene pins the top corners (inverse mass 0): a pin's target is its
+    # position, moved by set_positions and held there by every integrator.
+    for integrator in ["verlet", "xpbd"]:
+        sim = clothlab.Sim(n=10, integrator=integrator)
+        pinned = np.flatnonzero(sim.inverse_masses() == 0)
+        assert len(pinned) >= 1
+        x = sim.positions()
+        x[pinned] += np.float32(0.3)
+        sim.set_positions(x)
+        sim.step(frames=5)
+        assert np.array_equal(sim.positions()[pinned], x[pinned]), integrator
