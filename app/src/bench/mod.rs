@@ -33,7 +33,7 @@ use clothlab::backend::Backend;
 
 /// Whether `backends` is every backend (`--backends` left at its default).
 fn all_backends(backends: &[Backend]) -> bool {
-    backends.len() == <Backend as clap::ValueEnum>::value_variants().len()
+    backends.len() == Backend::ALL.len()
 }
 
 /// Makes the output folder: only once every argument has been checked, so that a refused

@@ -60,17 +60,6 @@ pub enum Drag {
     End,
 }
 
-const BACKENDS: [Backend; 8] = [
-    Backend::Cpu,
-    Backend::CpuPar,
-    Backend::WgpuNaive,
-    Backend::Wgpu,
-    Backend::VulkanNaive,
-    Backend::Vulkan,
-    Backend::GlNaive,
-    Backend::Gl,
-];
-
 fn shown(ui: &UiState, p: Panel) -> bool {
     ui.panels.contains(&p)
 }
@@ -330,7 +319,7 @@ pub fn substep_label(t: &super::sim::SubstepTime) -> String {
 
 fn backend_picker(ui: &mut egui::Ui, info: &Info<'_>, out: &mut Vec<Command>) {
     egui::ComboBox::from_id_salt("backend").selected_text(info.backend.name()).show_ui(ui, |ui| {
-        for b in BACKENDS {
+        for b in Backend::ALL {
             if ui.selectable_label(b == info.backend, b.name()).clicked() && b != info.backend {
                 out.push(Command::Backend(b));
             }
@@ -759,9 +748,9 @@ mod tests {
         use clap::ValueEnum;
         // A backend added to the CLI but not to the picker fails here.
         for b in Backend::value_variants() {
-            assert!(BACKENDS.contains(b), "{b:?} missing from the backend picker");
+            assert!(Backend::ALL.contains(b), "{b:?} missing from the backend picker");
         }
-        assert_eq!(BACKENDS.len(), Backend::value_variants().len());
+        assert_eq!(Backend::ALL.len(), Backend::value_variants().len());
     }
 
     #[test]
