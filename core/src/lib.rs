@@ -49,6 +49,6 @@ pub use params::{Integrator, ParamError, SelfCollision, SimParams, StiffnessUnit
 pub use pins::{MAX_PIN_GROUPS, PinGroup, PinPose, PinSlot};
 pub use scene::{Aabb, Capsule, ClothSpec, ColliderId, Cylinder, Pinning, Scene, Sphere};
 pub use scene_file::{SceneFile, SceneFileError};
-pub use solver::{RenderError, RenderMode, Renderer, Solver, SolverError, StateField, View};
+pub use solver::{ContactStats, RenderError, RenderMode, Renderer, Solver, SolverError, StateField, View};
 pub use step_params::StepParams;
 pub use timing::{KernelTimings, TimingRecorder, TimingRow};

@@ -32,6 +32,22 @@ pub enum StateField {
     Normal,
 }
 
+/// What the contact between triangles did in a solver's last substep (see
+/// [`Solver::contact_stats`]; `core::tri_contact::Contact`'s counts).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ContactStats {
+    /// How far the pair search looked, m.
+    pub reach: f32,
+    /// Pairs (vertex–triangle and edge–edge) within the reach at the substep's start.
+    pub pairs: usize,
+    /// Pairs whose approach the velocity pass slowed.
+    pub slowed: usize,
+    /// Pairs the separation pushed apart.
+    pub pushed: usize,
+    /// Vertices whose motion the bound cut short.
+    pub clamped: usize,
+}
+
 /// A cloth simulation on some backend.
 pub trait Solver {
     /// Short name of the backend and variant, e.g. `cpu`, `cpu-par`.
@@ -75,6 +91,11 @@ pub trait Solver {
     /// around every dispatch and read them back each frame while it is on; `clothlab bench`
     /// turns it off to time whole frames without that cost. CPU solvers ignore it.
     fn set_kernel_timing(&mut self, _on: bool) {}
+    /// The contact between triangles' counts in the last substep, where the solver runs
+    /// it (the CPU solvers with `self_collision = "triangles"`); `None` otherwise.
+    fn contact_stats(&self) -> Option<ContactStats> {
+        None
+    }
     /// Statistics of every substep of the last frame, where the solver computes them on
     /// the way (the Vulkan solver with statistics on); empty otherwise.
     fn substep_stats(&self) -> Vec<SubstepStats> {

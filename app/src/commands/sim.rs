@@ -69,10 +69,16 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     // frame with any.
     let mut most = (0usize, 0u64);
     let mut first = None;
+    // The contact between triangles' pairs at each frame's last substep: their sum and most.
+    let (mut pair_sum, mut pair_most) = (0usize, 0usize);
     for f in 1..=frames {
         let t0 = Instant::now();
         solver.step_frame()?;
         wall += t0.elapsed();
+        if let Some(c) = solver.contact_stats() {
+            pair_sum += c.pairs;
+            pair_most = pair_most.max(c.pairs);
+        }
         // Read back outside the timed part (a GPU solver waits for its frame here).
         if record.is_some() && f % args.record_every as u64 == 0 {
             recording.push(f as f32 * frame_dt, &solver.state()?);
@@ -134,6 +140,21 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         }
     }
 
+    if let Some(c) = solver.contact_stats() {
+        outln!(
+            "contact pairs  {:.0} on average at the frames' last substeps, at most {pair_most} ({:.2} per particle; reach {:.1} mm)",
+            pair_sum as f64 / frames as f64,
+            pair_most as f64 / np,
+            c.reach * 1e3
+        )?;
+        outln!(
+            "  last substep {} pairs: {} approaches slowed, {} pushed apart, {} vertices' motion cut to their bound",
+            c.pairs,
+            c.slowed,
+            c.pushed,
+            c.clamped
+        )?;
+    }
     if let Some(last) = solver.substep_stats().last() {
         outln!(
             "GPU statistics max strain {:.4}, kinetic energy {:.4e} J (last substep, reduced by {})",

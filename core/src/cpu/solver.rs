@@ -597,6 +597,16 @@ impl Solver for CpuSolver {
         Ok(self.state.clone())
     }
 
+    fn contact_stats(&self) -> Option<crate::solver::ContactStats> {
+        self.contact.as_ref().map(|c| crate::solver::ContactStats {
+            reach: c.reach,
+            pairs: c.pairs,
+            slowed: c.slowed,
+            pushed: c.pushed,
+            clamped: c.clamped,
+        })
+    }
+
     fn field(&mut self, field: crate::solver::StateField) -> Result<Vec<crate::grid::V4>, SolverError> {
         use crate::solver::StateField;
         Ok(match field {

@@ -135,6 +135,8 @@ fn a_mesh_measures_its_closest_pair_only_for_the_triangles_and_refuses_what_it_d
     let particles = clothlab_core::SimParams { self_collision: SelfCollision::Particles, ..f.params.clone() };
     let mut s = CpuSolver::new(Exec::Serial, f.scene.clone(), particles.clone()).unwrap();
     assert!(s.topology().mesh.as_ref().unwrap().closest_primitives.is_none());
+    s.step_frame().unwrap();
+    assert_eq!(s.contact_stats(), None, "the particle contact has no pairs of primitives to count");
     let e = s.set_params(f.params.clone()).unwrap_err().to_string();
     assert!(e.contains("load the scene with self_collision"), "{e}");
     // Built with triangles: measured (a grid's closest pair is the spacing over √2, 1/31/√2 m,
@@ -142,6 +144,12 @@ fn a_mesh_measures_its_closest_pair_only_for_the_triangles_and_refuses_what_it_d
     let mut s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
     let closest = s.topology().mesh.as_ref().unwrap().closest_primitives.unwrap();
     assert!((closest - 1.0 / 31.0 / 2f32.sqrt()).abs() < 1e-5, "{closest}");
+    // One frame in, the sheets still flat and 10 cm apart, slow: the search looks as far
+    // as the thickness (the motion allows no farther) and finds no pair (the closest
+    // primitives of a flat sheet are 2.3 cm apart, the layers 10 cm).
+    s.step_frame().unwrap();
+    let c = s.contact_stats().expect("the contact between triangles counts its pairs");
+    assert_eq!((c.reach, c.pairs, c.pushed, c.clamped), (f.params.self_thickness, 0, 0, 0), "{c:?}");
     let thick = clothlab_core::SimParams { self_thickness: 0.9 * closest, ..f.params.clone() };
     assert!(s.set_params(thick).unwrap_err().to_string().contains("self_thickness"));
 }
