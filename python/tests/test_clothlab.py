@@ -245,3 +245,36 @@ def test_a_pinned_particle_moved_by_its_position_stays_there():
         sim.set_positions(x)
         sim.step(frames=5)
         assert np.array_equal(sim.positions()[pinned], x[pinned]), integrator
+
+
+def test_stepping_releases_the_gil():
+    # With a switch interval of 1 s no Python thread takes the GIL from another: a counting
+    # thread only counts while the main thread is inside a call that released it. Held
+    # through a 20-frame step, the count would not move; released, it moves by at least
+    # thousands (Python counts about ten million a second).
+    import sys
+
+    sim = clothlab.Sim(n=24, backend="cpu")
+    count = [0]
+    stop = threading.Event()
+    started = threading.Event()
+
+    def counter():
+        started.set()
+        while not stop.is_set():
+            count[0] += 1
+
+    old = sys.getswitchinterval()
+    t = threading.Thread(target=counter)
+    t.start()
+    started.wait()
+    sys.setswitchinterval(1.0)
+    try:
+        before = count[0]
+        sim.step(frames=20)
+        during = count[0] - before
+    finally:
+        sys.setswitchinterval(old)
+        stop.set()
+        t.join()
+    assert during > 1000, f"the counting thread counted {during} while the cloth stepped"
