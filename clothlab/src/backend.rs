@@ -289,6 +289,16 @@ impl AnySolver {
         }
     }
 
+    /// The cloth's connectivity and spring constants, as the solver runs them.
+    pub fn topology(&self) -> &clothlab_core::ClothTopology {
+        match self {
+            AnySolver::Cpu(s) => s.topology(),
+            AnySolver::Wgpu(s, _) => s.topology(),
+            AnySolver::Vulkan(s, _) => s.topology(),
+            AnySolver::Gl(s) => s.topology(),
+        }
+    }
+
     /// A GPU solver's kernels, runnable one by one (`None` for the CPU solvers).
     pub fn runner(&mut self) -> Option<&mut dyn KernelRunner> {
         match self {

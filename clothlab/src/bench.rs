@@ -202,22 +202,22 @@ pub fn measure(
     // A device of its own for every GPU cell (see below).
     let setup = GpuSetup { variant: variant.map(Into::into), ..GpuSetup::default() };
     let mut sim = make(backend, scene.clone(), p, &setup, &Shared::None)?;
-    let (_, topo) = clothlab_core::build(&scene, params)?;
+    let topo = sim.topology();
     let mut painter = match &sim {
         AnySolver::Wgpu(s, _) => {
             let ctx = s.engine().context();
-            Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, &topo, width, height)?)))
+            Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, topo, width, height)?)))
         }
         AnySolver::Vulkan(s, _) => {
-            Painter::Vulkan(Box::new(VulkanRenderer::new(&s.engine().device(), &scene, &topo, width, height)?))
+            Painter::Vulkan(Box::new(VulkanRenderer::new(&s.engine().device(), &scene, topo, width, height)?))
         }
-        AnySolver::Gl(s) => Painter::Gl(Box::new(GlRenderer::new(s.engine().context(), &scene, &topo, width, height)?)),
+        AnySolver::Gl(s) => Painter::Gl(Box::new(GlRenderer::new(s.engine().context(), &scene, topo, width, height)?)),
         // The CPU solvers, drawn from their state uploaded.
         AnySolver::Cpu(_) => match (&devices.wgpu, &devices.vulkan) {
             (Some(ctx), _) => {
-                Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, &topo, width, height)?)))
+                Painter::Wgpu(Box::new((ctx.clone(), WgpuRenderer::new(ctx, &scene, topo, width, height)?)))
             }
-            (None, Some(dev)) => Painter::Vulkan(Box::new(VulkanRenderer::new(dev, &scene, &topo, width, height)?)),
+            (None, Some(dev)) => Painter::Vulkan(Box::new(VulkanRenderer::new(dev, &scene, topo, width, height)?)),
             (None, None) => Painter::None,
         },
     };

@@ -3,7 +3,7 @@
 //! own API; a CPU solver's state is uploaded to whichever API is asked for.
 
 use anyhow::{Result, bail};
-use clothlab_core::{ClothTopology, OrbitCamera, RenderMode, Scene, View};
+use clothlab_core::{OrbitCamera, RenderMode, Scene, View};
 use clothlab_gl::{GlCloth, GlContext, GlRenderer};
 use clothlab_vulkan::{VkCloth, VulkanRenderer};
 use clothlab_wgpu::{ClothSource, WgpuRenderer};
@@ -24,7 +24,6 @@ pub fn default_view(mode: RenderMode) -> View {
 pub fn image(
     solver: &mut AnySolver,
     scene: &Scene,
-    topo: &ClothTopology,
     view: &View,
     (width, height): (u32, u32),
     api: Option<Api>,
@@ -50,7 +49,7 @@ pub fn image(
     let adapter = solver.adapter();
     Ok(match solver {
         AnySolver::Cpu(s) => {
-            let state = s.state_ref();
+            let (state, topo) = (s.state_ref(), s.topology());
             match api {
                 Api::Vulkan => {
                     let dev = clothlab_vulkan::Device::new(vulkan_validation())?;
@@ -73,21 +72,21 @@ pub fn image(
             }
         }
         AnySolver::Vulkan(s, _) => {
-            let mut r = VulkanRenderer::new(&s.engine().device(), &scene, topo, width, height)?;
+            let mut r = VulkanRenderer::new(&s.engine().device(), &scene, s.topology(), width, height)?;
             let (pos, normal) = s.vertex_buffers();
             r.render(view, VkCloth::Gpu { pos, normal })?;
             (r.read_image()?, adapter)
         }
         AnySolver::Wgpu(s, _) => {
             let ctx = s.engine().context();
-            let mut r = WgpuRenderer::new(ctx, &scene, topo, width, height)?;
+            let mut r = WgpuRenderer::new(ctx, &scene, s.topology(), width, height)?;
             let (pos, normal) = s.vertex_buffers();
             r.render(ctx, view, ClothSource::Gpu { pos, normal })?;
             (r.read_image(ctx)?, adapter)
         }
         AnySolver::Gl(s) => {
             let ctx = s.engine().context();
-            let mut r = GlRenderer::new(ctx, &scene, topo, width, height)?;
+            let mut r = GlRenderer::new(ctx, &scene, s.topology(), width, height)?;
             let (&pos, &normal) = s.vertex_buffers();
             r.render(ctx, view, GlCloth::Gpu { pos, normal })?;
             (r.read_image(ctx)?, adapter)

@@ -59,7 +59,6 @@ pub struct Sim {
     solver: AnySolver,
     backend: Backend,
     setup: Setup,
-    topo: ClothTopology,
 }
 
 impl Sim {
@@ -68,8 +67,7 @@ impl Sim {
     pub fn open(opts: SimOptions) -> Result<Sim> {
         let setup = opts.physics.setup(opts.n, DEFAULT_N)?;
         let solver = make(opts.backend, setup.scene.clone(), setup.params.clone(), &opts.gpu, &Shared::None)?;
-        let (_, topo) = clothlab_core::build(&setup.scene, &setup.params)?;
-        Ok(Sim { solver, backend: opts.backend, setup, topo })
+        Ok(Sim { solver, backend: opts.backend, setup })
     }
 
     /// The backend.
@@ -99,7 +97,7 @@ impl Sim {
 
     /// The cloth's topology: triangles, springs, each cloth's range.
     pub fn topology(&self) -> &ClothTopology {
-        &self.topo
+        self.solver.topology()
     }
 
     /// The parameters in use.
@@ -131,7 +129,7 @@ impl Sim {
 
     /// Particles in the state.
     pub fn num_particles(&self) -> usize {
-        self.topo.num_particles()
+        self.topology().num_particles()
     }
 
     /// Advances `frames` frames of `params().substeps` substeps.
@@ -183,7 +181,7 @@ impl Sim {
 
     /// Replaces the state: of this cloth, finite, or refused with nothing changed.
     pub fn set_state(&mut self, state: &ClothState) -> Result<()> {
-        state.check(&self.topo)?;
+        state.check(self.topology())?;
         Ok(self.solver.get().set_state(state)?)
     }
 
@@ -251,19 +249,19 @@ impl Sim {
 
     /// The triangles, as particle indices.
     pub fn triangles(&self) -> &[[u32; 3]] {
-        &self.topo.triangles
+        &self.topology().triangles
     }
 
     /// Each cloth's particles and triangles (one range for a single grid).
     pub fn cloths(&self) -> Vec<ClothRange> {
-        let parts = self.topo.parts();
+        let parts = self.topology().parts();
         if parts.is_empty() {
             return vec![ClothRange {
                 label: "cloth".into(),
                 first: 0,
                 count: self.num_particles() as u32,
                 first_triangle: 0,
-                triangles: self.topo.triangles.len() as u32,
+                triangles: self.topology().triangles.len() as u32,
             }];
         }
         parts
@@ -309,7 +307,7 @@ impl Sim {
 
     /// Edges through triangles they share no vertex with, in the current state.
     pub fn crossings(&mut self) -> Result<usize> {
-        Ok(clothlab_core::crossings::count(&self.field(StateField::Pos)?, &self.topo.triangles).pairs)
+        Ok(clothlab_core::crossings::count(&self.field(StateField::Pos)?, &self.topology().triangles).pairs)
     }
 
     /// The scene file's view in `mode` (its camera and light, else the default view).
@@ -333,7 +331,7 @@ impl Sim {
         view: &View,
         api: Option<crate::Api>,
     ) -> Result<(Vec<u8>, String)> {
-        crate::render::image(&mut self.solver, &self.setup.scene, &self.topo, view, (width, height), api)
+        crate::render::image(&mut self.solver, &self.setup.scene, view, (width, height), api)
     }
 
     /// Runs `frames` frames recording every `every`-th (and the first) and writes them to
@@ -351,7 +349,7 @@ impl Sim {
         crate::files::check_writable(path)?;
         let kept = 1 + frames / u64::from(every);
         let np = self.num_particles() as u64;
-        let bytes = Recording::predicted_bytes(kept, np, self.topo.triangles.len() as u64);
+        let bytes = Recording::predicted_bytes(kept, np, self.topology().triangles.len() as u64);
         if bytes > MAX_GLB_BYTES {
             bail!(
                 "record: {kept} frames of {np} particles would be {bytes} bytes, more than the {MAX_GLB_BYTES} a .glb may hold; record every more frames"
@@ -366,7 +364,7 @@ impl Sim {
                 recording.push(self.time() as f32 - t0, &self.state()?);
             }
         }
-        let bytes = glb(&recording, &self.topo, &self.setup.scene)?;
+        let bytes = glb(&recording, self.topology(), &self.setup.scene)?;
         crate::files::write_bytes(path, &bytes)?;
         Ok(recording.frames.len())
     }

@@ -410,6 +410,11 @@ impl<E: Engine> GpuSolver<E> {
         self.id(buf).ok_or_else(|| SolverError::Invalid(format!("no buffer {}", buf.name())))
     }
 
+    /// The connectivity and spring constants it runs.
+    pub fn topology(&self) -> &ClothTopology {
+        &self.topo
+    }
+
     /// The renderer's vertex buffers, positions and normals: the simulation's own
     /// (`draw=shared`), or the copies made at the end of every frame (`draw=copy`).
     pub fn vertex_buffers(&self) -> (&E::Buffer, &E::Buffer) {

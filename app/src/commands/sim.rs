@@ -7,9 +7,9 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use clothlab::record::{MAX_GLB_BYTES, Recording, glb};
 use clothlab::{AnySolver, MAX_STEPS, Sim, SimOptions};
-use clothlab_core::crossings;
 use clothlab_core::stats::{summarize, write_json, write_obj};
 use clothlab_core::timing::SUBSTEP;
+use clothlab_core::{StateField, crossings};
 
 use crate::cli::{SimArgs, StatsArg};
 use crate::out::outln;
@@ -58,12 +58,11 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         _ => None,
     };
     let title = sim.title().map(str::to_owned);
-    let topo = sim.topology().clone();
-    let solver = sim.solver().get();
-    let frame_dt = solver.params().frame_dt;
+    let any = sim.solver();
+    let frame_dt = any.get_ref().params().frame_dt;
     let mut wall = std::time::Duration::ZERO;
     if record.is_some() {
-        recording.push(0.0, &solver.state()?);
+        recording.push(0.0, &any.get().state()?);
     }
     // With --check-crossings: the most crossings in a frame, at which frame, and the first
     // frame with any.
@@ -73,18 +72,18 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     let (mut pair_sum, mut pair_most) = (0usize, 0usize);
     for f in 1..=frames {
         let t0 = Instant::now();
-        solver.step_frame()?;
+        any.get().step_frame()?;
         wall += t0.elapsed();
-        if let Some(c) = solver.contact_stats() {
+        if let Some(c) = any.get_ref().contact_stats() {
             pair_sum += c.pairs;
             pair_most = pair_most.max(c.pairs);
         }
         // Read back outside the timed part (a GPU solver waits for its frame here).
         if record.is_some() && f % args.record_every as u64 == 0 {
-            recording.push(f as f32 * frame_dt, &solver.state()?);
+            recording.push(f as f32 * frame_dt, &any.get().state()?);
         }
         if args.check_crossings {
-            let c = crossings::count(&solver.state()?.pos, &topo.triangles).pairs;
+            let c = crossings::count(&any.get().field(StateField::Pos)?, &any.topology().triangles).pairs;
             if c > most.0 {
                 most = (c, f);
             }
@@ -93,13 +92,13 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
             }
         }
     }
-    let state = solver.state()?;
-    let summary = summarize(&state, &topo);
+    let state = any.get().state()?;
+    let summary = summarize(&state, any.topology());
     let np = scene.num_particles() as f64;
     let per_substep =
-        solver.timings().get(SUBSTEP).map(|r| r.median_ns).unwrap_or(wall.as_nanos() as f64 / substeps as f64);
+        any.get_ref().timings().get(SUBSTEP).map(|r| r.median_ns).unwrap_or(wall.as_nanos() as f64 / substeps as f64);
 
-    outln!("backend        {}", solver.name())?;
+    outln!("backend        {}", any.get_ref().name())?;
     if let Some(path) = &cpu_path {
         outln!("cpu path       {path}")?;
     }
@@ -110,16 +109,16 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         Some(mesh) if scene.cloth.is_mesh() => outln!(
             "mesh           {} ({np} particles, {} triangles, {} springs)",
             mesh.display(),
-            topo.triangles.len(),
-            topo.springs.len()
+            any.topology().triangles.len(),
+            any.topology().springs.len()
         )?,
         _ => outln!("grid           {n}x{n} ({np} particles)", n = scene.cloth.n)?,
     }
     // A scene of several cloths: each one's particles in the state (`--out`'s arrays).
-    for (k, part) in topo.parts().iter().enumerate() {
+    for (k, part) in any.topology().parts().iter().enumerate() {
         outln!("  cloth[{k}]     particles {}..{}: {}", part.first, part.first + part.count, part.label)?;
     }
-    outln!("substeps       {substeps} ({frames} frames of {})", solver.params().substeps)?;
+    outln!("substeps       {substeps} ({frames} frames of {})", any.get_ref().params().substeps)?;
     outln!("wall time      {:.3} s", wall.as_secs_f64())?;
     outln!("time/substep   {:.1} us median ({:.2} ns per particle-substep)", per_substep / 1e3, per_substep / np)?;
     outln!("max strain     {:.4} (structural springs, |L|/rest - 1)", summary.max_strain)?;
@@ -131,7 +130,7 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         "NaN            {}",
         if summary.nan_count == 0 { "none".to_string() } else { format!("{} components", summary.nan_count) }
     )?;
-    let last = crossings::count(&state.pos, &topo.triangles).pairs;
+    let last = crossings::count(&state.pos, &any.topology().triangles).pairs;
     outln!("crossings      {last} (edges through triangles they share no vertex with, final state)")?;
     if args.check_crossings {
         match first {
@@ -140,7 +139,7 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         }
     }
 
-    if let Some(c) = solver.contact_stats() {
+    if let Some(c) = any.get_ref().contact_stats() {
         outln!(
             "contact pairs  {:.0} on average at the frames' last substeps, at most {pair_most} ({:.2} per particle; reach {:.1} mm)",
             pair_sum as f64 / frames as f64,
@@ -155,7 +154,7 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
             c.clamped
         )?;
     }
-    if let Some(last) = solver.substep_stats().last() {
+    if let Some(last) = any.get_ref().substep_stats().last() {
         outln!(
             "GPU statistics max strain {:.4}, kinetic energy {:.4e} J (last substep, reduced by {})",
             last.max_strain,
@@ -165,7 +164,7 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     }
 
     outln!("kernel              median us    min us    max us  samples")?;
-    for r in solver.timings().rows {
+    for r in any.get_ref().timings().rows {
         outln!(
             "  {:<16} {:>10.1} {:>9.1} {:>9.1} {:>8}",
             r.label,
@@ -178,13 +177,13 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
 
     if let Some((path, format)) = out {
         clothlab::files::write_atomic(path, |w| match format {
-            OutFormat::Obj => write_obj(w, &state, &topo),
+            OutFormat::Obj => write_obj(w, &state, any.topology()),
             OutFormat::Json => write_json(w, &state),
         })?;
         outln!("state written  {}", path.display())?;
     }
     if let Some(path) = record {
-        let bytes = glb(&recording, &topo, &scene)?;
+        let bytes = glb(&recording, any.topology(), &scene)?;
         clothlab::files::write_atomic(path, |w| std::io::Write::write_all(w, &bytes))?;
         outln!("recorded       {} ({} frames, {} bytes)", path.display(), recording.frames.len(), bytes.len())?;
     }
