@@ -316,6 +316,9 @@ The switches (values in ladder order, the naive one first):
   specialize=off|on               the kernels as built for every scene, or compiled for
                                   the scene: the code for rods, bodies, Coulomb friction
                                   and moving colliders only where it has them (same bits)
+  strain_counts=dispatch|inline   the strain limit's counts of springs over their limit:
+                                  a count dispatch before each pass, or counted by the
+                                  pass itself where it needs them (same bits)
 A switch the adapter lacks, or two that exclude each other, is refused in one line.";
 
 /// The variant of the GPU backends: a preset and changes of single switches.

@@ -12,7 +12,7 @@ use clothlab_core::{Integrator, SolverError, cpu};
 
 use crate::kernels::{self as k, Dispatches, Flavor, HostBuffers, KernelDef, KernelRef};
 
-use crate::variant::{Accumulate, Fusion, Normals, Temporal};
+use crate::variant::{Accumulate, Fusion, Normals, StrainCounts, Temporal};
 pub use crate::variant::{Caps, Variant};
 
 /// One command of a recipe.
@@ -144,11 +144,19 @@ fn stage_kernels(variant: &Variant, how: Integration, strain_passes: u32) -> Vec
             Stage::Collide => v.push(&k::COLLIDE),
             // The tiles run the strain passes themselves.
             Stage::StrainPass(_) if tile => {}
-            // Each pass after the counts it divides by (core::cpu::strain_limit).
-            Stage::StrainPass(pass) => v.extend([
-                &k::STRAIN_COUNT,
-                if fused_count && pass + 1 == strain_passes { &k::STRAIN_LIMIT_COUNT } else { &k::STRAIN_LIMIT },
-            ]),
+            // Each pass after the counts it divides by (core::cpu::strain_limit), or
+            // counting them itself.
+            Stage::StrainPass(pass) => {
+                let hashed = fused_count && pass + 1 == strain_passes;
+                match variant.strain_counts {
+                    StrainCounts::Dispatch => {
+                        v.extend([&k::STRAIN_COUNT, if hashed { &k::STRAIN_LIMIT_COUNT } else { &k::STRAIN_LIMIT }])
+                    }
+                    StrainCounts::Inline => {
+                        v.push(if hashed { &k::STRAIN_LIMIT_INLINE_COUNT } else { &k::STRAIN_LIMIT_INLINE })
+                    }
+                }
+            }
             Stage::SelfCollision => {
                 v.extend(k::SELF_COLLISION.iter().copied().filter(|&d| !(fused_count && d == &k::HASH_COUNT)).map(
                     |d| match d.with_friction {
@@ -587,12 +595,15 @@ impl Hazards {
 mod tests {
     use super::*;
 
-    /// The optimized preset with the normals every substep, colliders in storage and
-    /// neighbours loaded: the five-kernel fused step these tests count (the preset itself
-    /// is the ladder's top, tested in `normals_once_per_frame…`).
+    /// The optimized preset with the normals every substep, colliders in storage,
+    /// neighbours loaded and the strain counts dispatched: the six-kernel fused step these
+    /// tests count (the preset itself is the ladder's top, tested in
+    /// `normals_once_per_frame…` and `a_strain_pass_that_counts…`).
     fn gathered() -> Variant {
         let mut v = Variant::OPTIMIZED;
-        for (k, val) in [("normals", "gather"), ("colliders", "storage"), ("neighbours", "load")] {
+        let switches =
+            [("normals", "gather"), ("colliders", "storage"), ("neighbours", "load"), ("strain_counts", "dispatch")];
+        for (k, val) in switches {
             v.set(k, val).unwrap();
         }
         v
@@ -753,6 +764,30 @@ mod tests {
                 "vertex_normals"
             ]
         );
+    }
+
+    #[test]
+    fn a_strain_pass_that_counts_for_itself_replaces_the_count_dispatch() {
+        assert_eq!(Variant::OPTIMIZED.strain_counts, StrainCounts::Inline, "the optimized preset counts in the pass");
+        let mut inline = gathered();
+        inline.set("strain_counts", "inline").unwrap();
+        let names =
+            |how: Integration| -> Vec<&str> { dispatches(&recipe(&inline, 2, how)).map(|k| k.def.name).collect() };
+        let normals = ["tri_normals", "vertex_normals"];
+        let step = ["forces_springs", "integrate_collide", "strain_limit_inline", "strain_limit_inline"];
+        assert_eq!(names(Integration::VERLET), [&step[..], &normals].concat());
+        // With self-collision the last pass counts into the hash, as the dispatched one does,
+        // after the same clears.
+        let sc = Integration { self_collision: true, ..Integration::VERLET };
+        let hash = ["hash_scan_top", "hash_scan_blocks", "hash_scatter", "self_collide"];
+        let head = ["forces_springs", "integrate_collide", "strain_limit_inline", "strain_limit_inline_count"];
+        assert_eq!(names(sc), [&head[..], &hash, &normals].concat());
+        let r = recipe(&inline, 1, sc);
+        let at = r.iter().position(|c| c.kernel().is_some_and(|k| k.def == &k::STRAIN_LIMIT_INLINE_COUNT)).unwrap();
+        assert_eq!(r[at - 2..at], [Command::Clear(Buf::Aux2), Command::Clear(Buf::Aux3)]);
+        // Each pass still follows what it reads: one barrier per dispatch.
+        let plain = recipe(&inline, 1, Integration::VERLET);
+        assert_eq!(barriers_per_substep(&plain), dispatches(&plain).count());
     }
 
     #[test]

@@ -142,6 +142,19 @@ pub enum Specialize {
     On,
 }
 
+/// Where the strain limit's pass gets the counts it divides by (the springs over their
+/// limit at each end: core::cpu::strain_limit).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum StrainCounts {
+    /// A count dispatch before each pass writes every particle's count (aux0); the pass
+    /// reads them.
+    Dispatch,
+    /// The pass counts for itself: its own count from the window it loads, a neighbour's
+    /// only for a spring over its limit (two rings out). One dispatch and one write and read
+    /// of the counts fewer per pass; the same counts, the same bits.
+    Inline,
+}
+
 /// Where the gathers read the spring table from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Table {
@@ -214,6 +227,8 @@ pub struct Variant {
     pub sdf: Sdf,
     /// Whether the kernels are compiled for the scene.
     pub specialize: Specialize,
+    /// Where the strain limit's pass gets its counts.
+    pub strain_counts: StrainCounts,
 }
 
 /// One switch: its key, its values (in ladder order: the naive one first) and what it
@@ -229,7 +244,7 @@ pub struct Switch {
 }
 
 /// Every switch.
-pub const SWITCHES: [Switch; 13] = [
+pub const SWITCHES: [Switch; 14] = [
     Switch {
         key: "springs",
         values: &["scatter", "gather"],
@@ -287,6 +302,11 @@ pub const SWITCHES: [Switch; 13] = [
         values: &["off", "on"],
         help: "the kernels as built for every scene, or compiled for the scene: the code for rods, bodies, Coulomb friction and moving colliders only where it has them",
     },
+    Switch {
+        key: "strain_counts",
+        values: &["dispatch", "inline"],
+        help: "the strain limit's counts of springs over their limit: a count dispatch before each pass, or counted by the pass itself where it needs them",
+    },
 ];
 
 /// The presets, by name.
@@ -311,6 +331,7 @@ impl Variant {
         temporal: Temporal::Off,
         sdf: Sdf::Storage,
         specialize: Specialize::Off,
+        strain_counts: StrainCounts::Dispatch,
     };
     /// clothlab's optimized step, the [`LADDER`]'s rung before the tiles (every earlier
     /// rung's switch set; `fusion=tile` is left out: slower on lavapipe and on the H100,
@@ -318,7 +339,8 @@ impl Variant {
     /// gathers, its fusion with the wind computed in the forces gather and the normals once
     /// per frame, one submission per frame, push constants, the table as uniform constants
     /// with neighbours by offset, colliders in a uniform block, neighbours' columns by
-    /// subgroup shuffles, the kernels compiled for the scene. [`Variant::fit`] falls back where an adapter lacks a switch (no
+    /// subgroup shuffles, the kernels compiled for the scene, the strain pass counting for
+    /// itself. [`Variant::fit`] falls back where an adapter lacks a switch (no
     /// subgroups: loads; no push constants: a uniform block). Measured on lavapipe
     /// (docs/variants.md) it is the fastest combination the ladder reached on both APIs,
     /// and `validate --every-switch` checks it against the twins like every rung.
@@ -336,6 +358,7 @@ impl Variant {
         temporal: Temporal::Off,
         sdf: Sdf::Storage,
         specialize: Specialize::On,
+        strain_counts: StrainCounts::Inline,
     };
     /// The thesis's optimized CUDA program (ch. 6.3.1): springs scattered with atomics,
     /// forces + Verlet + collisions fused, normals gathered from stored face normals, the
@@ -354,6 +377,7 @@ impl Variant {
         temporal: Temporal::Off,
         sdf: Sdf::Storage,
         specialize: Specialize::Off,
+        strain_counts: StrainCounts::Dispatch,
     };
 
     /// Which value of switch `key` it has: the position in the switch's
@@ -374,6 +398,7 @@ impl Variant {
             "temporal" => self.temporal as usize,
             "sdf" => self.sdf as usize,
             "specialize" => self.specialize as usize,
+            "strain_counts" => self.strain_counts as usize,
             _ => return None,
         })
     }
@@ -410,6 +435,7 @@ impl Variant {
             "draw" => self.draw = [Draw::Copy, Draw::Shared][i],
             "sdf" => self.sdf = [Sdf::Storage, Sdf::Image][i],
             "specialize" => self.specialize = [Specialize::Off, Specialize::On][i],
+            "strain_counts" => self.strain_counts = [StrainCounts::Dispatch, StrainCounts::Inline][i],
             _ => self.temporal = [Temporal::Off, Temporal::On][i],
         }
         Ok(())
@@ -584,7 +610,7 @@ impl Variant {
 
 /// The optimisation ladder: from `naive`, one switch at a time, in this order (each rung
 /// keeps the switches of the rungs before it).
-pub const LADDER: [(&str, &str); 17] = [
+pub const LADDER: [(&str, &str); 18] = [
     ("submit", "frame"),
     ("draw", "shared"),
     ("constants", "uniform"),
@@ -601,6 +627,9 @@ pub const LADDER: [(&str, &str); 17] = [
     // The kernels compiled for the scene: the code for rods, bodies, Coulomb friction and
     // moving colliders only where it has them (docs/bench/lavapipe-specialise).
     ("specialize", "on"),
+    // The strain limit's pass counting for itself: no count dispatch
+    // (docs/bench/lavapipe-strain-inline).
+    ("strain_counts", "inline"),
     ("fusion", "tile"),
     ("temporal", "on"),
     // The bodies' fields from the image: measures something only on a scene with bodies

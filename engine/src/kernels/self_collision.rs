@@ -215,6 +215,7 @@ pub static SELF_COLLISION: [&KernelDef; 5] =
 pub(super) const ROWS: &[&KernelDef] = &[
     &HASH_COUNT,
     &STRAIN_LIMIT_COUNT,
+    &STRAIN_LIMIT_INLINE_COUNT,
     &HASH_SCAN_TOP,
     &HASH_SCAN_BLOCKS,
     &HASH_SCATTER,

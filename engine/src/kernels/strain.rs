@@ -10,19 +10,42 @@ fn strain_count(a: &TwinArgs, b: &mut HostBuffers) {
     b.aux[0] = counts.into_iter().map(|c| [c, 0.0, 0.0, 0.0]).collect();
 }
 
-fn strain_limit(a: &TwinArgs, b: &mut HostBuffers) {
-    let counts: Vec<f32> = b.aux[0].iter().map(|c| c[0]).collect();
-    cpu::strain_limit(a.exec, a.p, &a.topo.slots, &a.topo.tethers, &b.pos, &counts, &mut b.pos_out);
+/// One pass dividing by `counts`, the velocities gaining the move.
+fn limit_by(a: &TwinArgs, b: &mut HostBuffers, counts: &[f32]) {
+    cpu::strain_limit(a.exec, a.p, &a.topo.slots, &a.topo.tethers, &b.pos, counts, &mut b.pos_out);
     cpu::strain_vel(a.exec, a.p, &b.pos, &b.pos_out, &mut b.vel);
 }
 
-/// The strain limit's pass, then its output counted into the self-collision hash (the
-/// count's twin on the pass's output).
-fn strain_limit_count(a: &TwinArgs, b: &mut HostBuffers) {
-    strain_limit(a, b);
+fn strain_limit(a: &TwinArgs, b: &mut HostBuffers) {
+    let counts: Vec<f32> = b.aux[0].iter().map(|c| c[0]).collect();
+    limit_by(a, b, &counts);
+}
+
+/// A pass that counts for itself: the counts of its input, then the pass.
+fn strain_limit_inline(a: &TwinArgs, b: &mut HostBuffers) {
+    let mut counts = vec![0.0; b.pos.len()];
+    cpu::strain_count(a.exec, a.p, &a.topo.slots, &b.pos, &mut counts);
+    limit_by(a, b, &counts);
+}
+
+/// The output of `pass` counted into the self-collision hash (the count's twin on the
+/// pass's output).
+fn then_hash_count(a: &TwinArgs, b: &mut HostBuffers) {
     std::mem::swap(&mut b.pos, &mut b.pos_out);
     (HASH_COUNT.twin)(a, b);
     std::mem::swap(&mut b.pos, &mut b.pos_out);
+}
+
+/// The strain limit's pass, then its output counted into the self-collision hash.
+fn strain_limit_count(a: &TwinArgs, b: &mut HostBuffers) {
+    strain_limit(a, b);
+    then_hash_count(a, b);
+}
+
+/// The pass that counts for itself, then its output counted into the hash.
+fn strain_limit_inline_count(a: &TwinArgs, b: &mut HostBuffers) {
+    strain_limit_inline(a, b);
+    then_hash_count(a, b);
 }
 
 /// Every particle's count of over-stretched strain-limited springs, into aux0 (dead
@@ -55,6 +78,23 @@ pub static STRAIN_LIMIT: KernelDef = KernelDef {
         strain_limit,
         Count::Blocks,
         &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers, STRAIN_COUNTS],
+        &[PosOut, Vel],
+    )
+};
+/// [`STRAIN_LIMIT`] counting the springs over their limit itself (`strain_counts=inline`:
+/// no [`STRAIN_COUNT`] dispatch before it): its own count from the window it loads, a
+/// neighbour's only for a spring over its limit. The same counts, so the same twin.
+pub static STRAIN_LIMIT_INLINE: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[PosOut],
+    variants: BLOCKED,
+    // Timed as the strain limit, as the count and the pass it replaces are.
+    label: timing::STRAIN_LIMIT,
+    ..KernelDef::new(
+        "strain_limit_inline",
+        strain_limit_inline,
+        Count::Blocks,
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers],
         &[PosOut, Vel],
     )
 };
@@ -102,5 +142,23 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
     )
 };
 
+/// [`STRAIN_LIMIT_COUNT`] counting the springs over their limit itself
+/// (`strain_counts=inline`, as [`STRAIN_LIMIT_INLINE`]).
+pub static STRAIN_LIMIT_INLINE_COUNT: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[PosOut],
+    accumulates: &[HASH_CELLS, HASH_TOTALS],
+    variants: BLOCKED,
+    label: timing::STRAIN_LIMIT_COUNT,
+    from_output: Some(recount),
+    ..KernelDef::new(
+        "strain_limit_inline_count",
+        strain_limit_inline_count,
+        Count::Blocks,
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers, HASH_CELLS, HASH_TOTALS],
+        &[PosOut, Vel, HASH_CELLS, HASH_TOTALS],
+    )
+};
+
 /// This family's kernels, in the registry's order ([`super::ALL`]).
-pub(super) const ROWS: &[&KernelDef] = &[&STRAIN_COUNT, &STRAIN_LIMIT];
+pub(super) const ROWS: &[&KernelDef] = &[&STRAIN_COUNT, &STRAIN_LIMIT, &STRAIN_LIMIT_INLINE];

@@ -1,13 +1,21 @@
 // The strain limit's pass (strain_limit.wgsl, strain_limit_count.wgsl) over
 // shared/strain_window.wgsl: everything but `strained`, which each kernel defines: what
-// it does with a particle's corrected point after storing it. Reads the counts that
-// strain_count wrote into aux0 for these positions.
+// it does with a particle's corrected point after storing it. The counts it divides by
+// come from shared/strain_counts_aux.wgsl (strain_count's, in aux0) or
+// shared/strain_counts_inline.wgsl (computed here).
 @group(0) @binding(2) var<storage, read_write> vel: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
 
 fn limit_grid(c: ptr<function, Correction>, b: Gp, s: u32, xi: vec3<f32>, wi: f32, ci: f32) {
     if b.inside {
-        limit_spring(c, b.k, b.x4, interior.slots[s].rest, xi, wi, ci, strain_counts[b.k].x);
+        let rest = interior.slots[s].rest;
+        // The neighbour's count only for a spring over its limit: limit_spring adds
+        // nothing for the others.
+        var cb = 0.0;
+        if over(xi, b.x4, rest) != 0.0 {
+            cb = grid_neighbour_count(b);
+        }
+        limit_spring(c, b.k, b.x4, rest, xi, wi, ci, cb);
     }
 }
 
@@ -24,10 +32,10 @@ fn store_point(k: u32, x4: vec4<f32>, out: vec4<f32>) {
 fn block_particle(row: u32, col: u32, a: Gp, s0: Gp, s1: Gp, s2: Gp, s3: Gp, s4: Gp, s5: Gp, s6: Gp, s7: Gp) {
     let xi = a.x4.xyz;
     let wi = mobility(a.k, a.x4.w);
-    let ci = strain_counts[a.k].x;
+    let ci = own_block_count(a, s0, s1, s2, s3, s4, s5, s6, s7);
     var c = Correction(vec3<f32>(0.0), 0.0);
-    // A count of 0: none of the particle's springs is over its limit (strain_count found
-    // each as limit_spring would), so none adds anything.
+    // A count of 0: none of the particle's springs is over its limit (counted as
+    // limit_spring finds each), so none adds anything.
     if ci > 0.0 {
         limit_grid(&c, s0, 0u, xi, wi, ci);
         limit_grid(&c, s1, 1u, xi, wi, ci);
@@ -48,7 +56,7 @@ fn block_particle(row: u32, col: u32, a: Gp, s0: Gp, s1: Gp, s2: Gp, s3: Gp, s4:
 fn table_particle(i: u32) {
     let x4 = pos[i];
     let wi = mobility(i, x4.w);
-    let ci = strain_counts[i].x;
+    let ci = own_row_count(i, x4.xyz);
     var c = Correction(vec3<f32>(0.0), 0.0);
     let r = slot_row(i);
     // No spring of a particle whose count is 0 is over its limit (see block_particle).
@@ -57,7 +65,12 @@ fn table_particle(i: u32) {
         let slot = row_slot(i, r, s);
         if slot.neighbor >= 0 {
             let b = u32(slot.neighbor);
-            limit_spring(&c, b, pos[b], slot.rest, x4.xyz, wi, ci, strain_counts[b].x);
+            let xb4 = pos[b];
+            var cb = 0.0;
+            if over(x4.xyz, xb4, slot.rest) != 0.0 {
+                cb = row_neighbour_count(b, xb4.xyz);
+            }
+            limit_spring(&c, b, xb4, slot.rest, x4.xyz, wi, ci, cb);
         }
     }
     let out = finish(i, x4, wi, c);

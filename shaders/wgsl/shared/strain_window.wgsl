@@ -2,16 +2,15 @@
 // the step constants, the positions and the spring table's interior, a block's window of
 // 18 grid points (rows j - 1 … j + 1) and the entry point. Each including file defines
 // `block_particle(row, col, a, s0 … s7)` (a grid point and its neighbours in slot order)
-// and `table_particle(i)` (a particle from its table), and declares aux0 as
-// `strain_counts` (the counts of over-stretched springs the pass divides by:
-// core::cpu::strain_limit).
+// and `table_particle(i)` (a particle from its table); the counts of over-stretched
+// springs (core::cpu::strain_limit) come from shared/strain_count_fn.wgsl and
+// shared/strain_counts_aux.wgsl or shared/strain_counts_inline.wgsl.
 @group(0) @binding(0) var<uniform> step_params: StepParams;
 // Copied from step_params by the kernel's first statement (see shared/state.wgsl).
 var<private> p: StepParams;
 @group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
 @group(0) @binding(16) var<uniform> interior_slots: GridSpringConstants;
 var<private> interior: GridSpringConstants;
-@group(0) @binding(24) var<storage, read_write> strain_counts: array<vec4<f32>>;
 
 // The pins' positions for the tethers (shared/strain_fn.wgsl's `finish`): this pass's
 // input positions.
