@@ -9,11 +9,10 @@
 //! edge line). An edge that only touches a triangle — an end on its plane, the segment
 //! through its edge or corner — does not count: a crossing is a strict one.
 
-use std::collections::HashMap;
-
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::box_grid::{BoxGrid, bounds};
 use crate::grid::V4;
 
 /// The crossings of a state.
@@ -70,65 +69,31 @@ pub fn count(pos: &[V4], triangles: &[[u32; 3]]) -> Crossings {
     if edges.is_empty() {
         return Crossings::default();
     }
-    // Cells the size of the mean edge: a triangle's box covers a few of them.
+    let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
+    // Cells the size of the mean edge: a triangle's box covers a few of them. The boxes
+    // are exact (the positions' own f32 extremes), so an edge through a triangle always
+    // meets the triangle's box; the grid only skips pairs that cannot cross.
     let mean = edges.iter().map(|&[a, b]| (p(pos, a) - p(pos, b)).length()).sum::<f64>() / edges.len() as f64;
-    let cell = if mean.is_finite() && mean > 0.0 { mean } else { 1.0 };
-    let key = |x: DVec3| {
-        let c = (x / cell).floor();
-        [c.x as i64, c.y as i64, c.z as i64]
-    };
-    let bounds = |ks: &[u32]| {
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for &k in ks {
-            lo = lo.min(p(pos, k));
-            hi = hi.max(p(pos, k));
-        }
-        (key(lo), key(hi))
-    };
-    let finite = |ks: &[u32]| ks.iter().all(|&k| pos[k as usize][..3].iter().all(|v| v.is_finite()));
-    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-    for (t, tri) in triangles.iter().enumerate() {
-        if !finite(tri) {
-            continue;
-        }
-        let (lo, hi) = bounds(tri);
-        for i in lo[0]..=hi[0] {
-            for j in lo[1]..=hi[1] {
-                for k in lo[2]..=hi[2] {
-                    grid.entry([i, j, k]).or_default().push(t as u32);
-                }
-            }
-        }
-    }
+    let cell = if mean.is_finite() && mean > 0.0 { mean as f32 } else { 1.0 };
+    let grid = BoxGrid::new(cell, triangles.len(), |t| triangles[t].iter().map(|&k| at(k)));
     let pairs = edges
         .par_iter()
         .map(|e| {
-            if !finite(e) {
-                return 0;
-            }
-            let (lo, hi) = bounds(e);
+            // A box that is not finite covers no cell: a NaN edge meets nothing.
+            let b = bounds(e.iter().map(|&k| at(k)));
             let (ep, eq) = (p(pos, e[0]), p(pos, e[1]));
-            let mut seen: Vec<u32> = Vec::new();
-            for i in lo[0]..=hi[0] {
-                for j in lo[1]..=hi[1] {
-                    for k in lo[2]..=hi[2] {
-                        let Some(ts) = grid.get(&[i, j, k]) else { continue };
-                        for &t in ts {
-                            let tri = triangles[t as usize];
-                            if tri.contains(&e[0]) || tri.contains(&e[1]) || seen.contains(&t) {
-                                continue;
-                            }
-                            seen.push(t);
-                        }
-                    }
+            let mut crossed: usize = 0;
+            grid.query(grid.cells_of(b, 0.0), |t| {
+                let tri = triangles[t as usize];
+                if tri.contains(&e[0]) || tri.contains(&e[1]) || !grid.meets(t, b, 0.0) {
+                    return;
                 }
-            }
-            seen.iter()
-                .filter(|&&t| {
-                    let [a, b, c] = triangles[t as usize];
-                    segment_crosses_triangle(ep, eq, p(pos, a), p(pos, b), p(pos, c))
-                })
-                .count()
+                let [a, bb, c] = tri;
+                if segment_crosses_triangle(ep, eq, p(pos, a), p(pos, bb), p(pos, c)) {
+                    crossed += 1;
+                }
+            });
+            crossed
         })
         .sum();
     Crossings { pairs, edges: edges.len() }
