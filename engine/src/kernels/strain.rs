@@ -3,11 +3,16 @@
 
 use super::*;
 
-/// The counts as the kernel leaves them in aux0: `(count, 0, 0, 0)` per particle.
-fn strain_count(a: &TwinArgs, b: &mut HostBuffers) {
+/// Every particle's count of springs over their limit at the positions in `b`.
+fn counts_of(a: &TwinArgs, b: &HostBuffers) -> Vec<f32> {
     let mut counts = vec![0.0; b.pos.len()];
     cpu::strain_count(a.exec, a.p, &a.topo.slots, &b.pos, &mut counts);
-    b.aux[0] = counts.into_iter().map(|c| [c, 0.0, 0.0, 0.0]).collect();
+    counts
+}
+
+/// The counts as the kernel leaves them in aux0: `(count, 0, 0, 0)` per particle.
+fn strain_count(a: &TwinArgs, b: &mut HostBuffers) {
+    b.aux[0] = counts_of(a, b).into_iter().map(|c| [c, 0.0, 0.0, 0.0]).collect();
 }
 
 /// One pass dividing by `counts`, the velocities gaining the move.
@@ -23,13 +28,12 @@ fn strain_limit(a: &TwinArgs, b: &mut HostBuffers) {
 
 /// A pass that counts for itself: the counts of its input, then the pass.
 fn strain_limit_inline(a: &TwinArgs, b: &mut HostBuffers) {
-    let mut counts = vec![0.0; b.pos.len()];
-    cpu::strain_count(a.exec, a.p, &a.topo.slots, &b.pos, &mut counts);
+    let counts = counts_of(a, b);
     limit_by(a, b, &counts);
 }
 
-/// The output of `pass` counted into the self-collision hash (the count's twin on the
-/// pass's output).
+/// The pass's output (`pos_out`) counted into the self-collision hash (the count's twin
+/// on it).
 fn then_hash_count(a: &TwinArgs, b: &mut HostBuffers) {
     std::mem::swap(&mut b.pos, &mut b.pos_out);
     (HASH_COUNT.twin)(a, b);
