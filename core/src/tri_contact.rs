@@ -408,16 +408,10 @@ pub struct Contact {
     bounds: Vec<f32>,
     inv: Vec<f32>,
     out: Vec<crate::grid::V4>,
-    /// The reach of the last [`Contact::begin`], m.
-    pub reach: f32,
-    /// Pairs within the reach at the last [`Contact::begin`].
-    pub pairs: usize,
-    /// Pairs whose approach the last [`Contact::begin`] slowed.
-    pub slowed: usize,
-    /// Pairs pushed apart by the last [`Contact::separate`].
-    pub pushed: usize,
-    /// Vertices whose motion the last [`Contact::clamp`] cut short.
-    pub clamped: usize,
+    /// What the last substep's stages did: the reach and pairs of [`Contact::begin`], the
+    /// approaches it slowed, the pairs [`Contact::separate`] pushed and the vertices
+    /// [`Contact::clamp`] cut short (what [`crate::Solver::contact_stats`] reports).
+    pub stats: crate::solver::ContactStats,
 }
 
 /// Coulomb's coefficients at the contacts between triangles (both 0: frictionless).
@@ -583,13 +577,13 @@ impl Contact {
         thickness: f32,
         mu: Friction,
     ) {
-        self.reach = Self::reach(pos, vel, &self.edges, dt, gravity, thickness);
+        self.stats.reach = Self::reach(pos, vel, &self.edges, dt, gravity, thickness);
         self.start.clear();
         self.start.extend_from_slice(pos);
-        let (vt, ee) = bounds_into(pos, triangles, &self.edges, self.reach, self.parallel, &mut self.bounds);
-        self.pairs = vt.len() + ee.len();
+        let (vt, ee) = bounds_into(pos, triangles, &self.edges, self.stats.reach, self.parallel, &mut self.bounds);
+        self.stats.pairs = vt.len() + ee.len();
         let pairs = Pairs { triangles, edges: &self.edges, vt: &vt, ee: &ee };
-        self.slowed = approach_impulses(pos, vel, &pairs, thickness, dt, mu);
+        self.stats.slowed = approach_impulses(pos, vel, &pairs, thickness, dt, mu);
     }
 
     /// [`SEPARATION_PASSES`] passes of the separation on `pos` over the pairs closer than
@@ -608,9 +602,9 @@ impl Contact {
         self.out.extend_from_slice(pos);
         let (vt, ee) = find_pairs(pos, triangles, &self.edges, thickness, self.parallel);
         let pairs = Pairs { triangles, edges: &self.edges, vt: &vt, ee: &ee };
-        self.pushed = 0;
+        self.stats.pushed = 0;
         for _ in 0..SEPARATION_PASSES {
-            self.pushed = self.pushed.max(separation_pass(&mut self.out, &pairs, &self.inv, thickness));
+            self.stats.pushed = self.stats.pushed.max(separation_pass(&mut self.out, &pairs, &self.inv, thickness));
         }
         for ((x, v), o) in pos.iter_mut().zip(vel.iter_mut()).zip(&self.out) {
             for c in 0..3 {
@@ -624,7 +618,7 @@ impl Contact {
     /// from its velocity too (over `dt`).
     pub fn clamp(&mut self, pos: &mut [crate::grid::V4], vel: &mut [crate::grid::V4], dt: f32) {
         let (start, bounds) = (&self.start, &self.bounds);
-        self.clamped = pos
+        self.stats.clamped = pos
             .par_iter_mut()
             .zip(vel.par_iter_mut())
             .enumerate()
@@ -818,7 +812,7 @@ mod tests {
             }
             c.separate(pos, vel, tris, t, dt);
             c.clamp(pos, vel, dt);
-            clamped += c.clamped;
+            clamped += c.stats.clamped;
             path.push(pos.to_vec());
         }
         (path, clamped)

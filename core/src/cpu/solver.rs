@@ -598,13 +598,7 @@ impl Solver for CpuSolver {
     }
 
     fn contact_stats(&self) -> Option<crate::solver::ContactStats> {
-        self.contact.as_ref().map(|c| crate::solver::ContactStats {
-            reach: c.reach,
-            pairs: c.pairs,
-            slowed: c.slowed,
-            pushed: c.pushed,
-            clamped: c.clamped,
-        })
+        self.contact.as_ref().map(|c| c.stats)
     }
 
     fn field(&mut self, field: crate::solver::StateField) -> Result<Vec<crate::grid::V4>, SolverError> {
