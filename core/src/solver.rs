@@ -46,6 +46,11 @@ pub struct ContactStats {
     pub pushed: usize,
     /// Vertices whose motion the bound cut short.
     pub clamped: usize,
+    /// How far the cloths moved as one in the last substep, m: their mean displacement
+    /// where no vertex moved farther from it than its bound but some moved farther than
+    /// it from rest (measured from the mean, nothing was cut), else 0
+    /// (`core::tri_contact::Contact::clamp`).
+    pub shared: f32,
 }
 
 /// A cloth simulation on some backend.

@@ -615,8 +615,28 @@ impl Contact {
     }
 
     /// Every vertex's motion since [`Contact::begin`] cut to its bound, the cut taken
-    /// from its velocity too (over `dt`).
+    /// from its velocity too (over `dt`) — unless the cloths move as one: measured from
+    /// their mean displacement, no vertex over its bound ([`Contact::mean_within_bounds`]).
+    /// A displacement all vertices share changes no distance, so the bounds hold in that
+    /// frame too and nothing is cut: two sheets falling together are not slowed, however
+    /// fast. (Cutting in the mean's frame where some vertex is over it was tried: the thin
+    /// heap's landed half was dragged into the floor's margin and its closest pair came
+    /// to 0.42 of the thickness instead of 0.93; each vertex's own motion is cut instead.)
     pub fn clamp(&mut self, pos: &mut [crate::grid::V4], vel: &mut [crate::grid::V4], dt: f32) {
+        if let Some(mean) = self.mean_within_bounds(pos) {
+            // Reported only where it spared a cut: a cloth at rest is within its bounds
+            // from either frame.
+            let spared = self
+                .start
+                .iter()
+                .zip(pos.iter())
+                .zip(&self.bounds)
+                .any(|((a, b), &bound)| (Vec3::from_slice(&b[..3]) - Vec3::from_slice(&a[..3])).length() > bound);
+            self.stats.shared = if spared { mean.length() } else { 0.0 };
+            self.stats.clamped = 0;
+            return;
+        }
+        self.stats.shared = 0.0;
         let (start, bounds) = (&self.start, &self.bounds);
         self.stats.clamped = pos
             .par_iter_mut()
@@ -638,6 +658,26 @@ impl Contact {
                 1
             })
             .sum();
+    }
+
+    /// The free vertices' mean displacement since [`Contact::begin`] if every vertex's
+    /// (pinned ones' too) is within its bound of it, else `None`. Summed in f64 in vertex
+    /// order: `cpu` and `cpu-par` decide alike.
+    fn mean_within_bounds(&self, pos: &[crate::grid::V4]) -> Option<Vec3> {
+        let moves =
+            || self.start.iter().zip(pos).map(|(a, b)| (Vec3::from_slice(&b[..3]) - Vec3::from_slice(&a[..3]), b[3]));
+        let (mut sum, mut count) = ([0.0f64; 3], 0usize);
+        for (d, w) in moves() {
+            if w > 0.0 {
+                for c in 0..3 {
+                    sum[c] += d[c] as f64;
+                }
+                count += 1;
+            }
+        }
+        let mean = Vec3::new(sum[0] as f32, sum[1] as f32, sum[2] as f32) / count.max(1) as f32;
+        // A vertex that is not finite fails the test (NaN compares false): cut as before.
+        moves().zip(&self.bounds).all(|((d, _), &b)| (d - mean).length() <= b).then_some(mean)
     }
 }
 
@@ -873,9 +913,11 @@ mod tests {
         // Two lone triangles whose nearest edges cross 5 thicknesses apart, the upper one
         // thrown down at 0.2 t a substep, thrown at 10 t (twice the gap in a substep), and
         // shoved to 10 t a substep within the first substep, where the velocity pass does
-        // not see it (a force, as the integrator's). Thrown slowly, the velocity pass stops
-        // the edges t apart with the momentum kept and no cut; fast or shoved, the bounds
-        // cut the motion, the edges never pass each other, and the gap ends at t.
+        // not see it (a force, as the integrator's). Thrown, slowly or fast, the velocity
+        // pass stops the edges t apart with the momentum kept and no cut (thrown fast, the
+        // pair then moves on as one at the mean velocity, which the bounds do not cut);
+        // shoved, the bounds cut the motion, the edges never pass each other, and the gap
+        // ends at t.
         let (t, dt) = (0.01f32, 1e-3f32);
         let start = crossed_edges(5.0 * t);
         let tris = [[0, 1, 2], [3, 4, 5]];
@@ -897,7 +939,7 @@ mod tests {
             }
             let gap = edges_gap(&pos);
             println!("speed {speed} t, kick {kick} t a substep: gap {:.3} t, {clamped} cut", gap / t);
-            if speed < 1.0 && kick == 0.0 {
+            if kick == 0.0 {
                 assert_eq!(clamped, 0, "speed {speed}");
                 // As in the test above: 1e-3 t, and 4 units over dt a substep of momentum.
                 assert!((gap - t).abs() < 1e-3 * t, "speed {speed}: final gap {gap}");
@@ -906,8 +948,7 @@ mod tests {
             } else {
                 // The cut is not an internal force: the momentum is not kept. What the test
                 // holds: the bounds cut, and the pair ends no closer than t (1 % for the
-                // fixed point and f32) — the bounds stop it early (thrown: 5 t, shoved:
-                // 1.4 t apart, then moving as one).
+                // fixed point and f32).
                 assert!(clamped > 0, "the bounds never cut a motion of 10 t a substep");
                 assert!(gap > 0.99 * t, "final gap {gap} for t = {t}");
             }

@@ -147,11 +147,15 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
             c.reach * 1e3
         )?;
         outln!(
-            "  last substep {} pairs: {} approaches slowed, {} pushed apart, {} vertices' motion cut to their bound",
+            "  last substep {} pairs: {} approaches slowed, {} pushed apart, {}",
             c.pairs,
             c.slowed,
             c.pushed,
-            c.clamped
+            if c.shared > 0.0 {
+                format!("moved as one by {:.2} mm (no vertex farther from it than its bound: none cut)", c.shared * 1e3)
+            } else {
+                format!("{} vertices' motion cut to their bound", c.clamped)
+            }
         )?;
     }
     if let Some(last) = any.get_ref().substep_stats().last() {
