@@ -79,13 +79,13 @@ pub fn count(pos: &[V4], triangles: &[[u32; 3]]) -> Crossings {
     let pairs = edges
         .par_iter()
         .map(|e| {
-            // A box that is not finite covers no cell: a NaN edge meets nothing.
+            // A box that is not finite meets nothing: neither does a NaN edge.
             let b = bounds(e.iter().map(|&k| at(k)));
             let (ep, eq) = (p(pos, e[0]), p(pos, e[1]));
             let mut crossed: usize = 0;
-            grid.query(grid.cells_of(b, 0.0), |t| {
+            grid.query(b, 0.0, |t| {
                 let tri = triangles[t as usize];
-                if tri.contains(&e[0]) || tri.contains(&e[1]) || !grid.meets(t, b, 0.0) {
+                if tri.contains(&e[0]) || tri.contains(&e[1]) {
                     return;
                 }
                 let [a, bb, c] = tri;

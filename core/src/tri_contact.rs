@@ -147,8 +147,9 @@ pub type Pair = (u32, u32, f32);
 /// `(edge, edge, distance)` (each once, the first edge's index lower). The triangles' and
 /// the edges' boxes in two grids of cells (`BoxGrid`)
 /// twice the reach or 1.5 mean edges wide (the larger: the fastest of 0.6, 1, 1.5 and 2.5
-/// on the five-sheet stack), each vertex's and edge's box grown by `reach` looked up in
-/// them, vertex by vertex and edge by edge (in parallel with `parallel`).
+/// on the five-sheet stack; with each box listed once, 0.5 to 3 mean edges all within
+/// 1.2× of it, 1 to 2 within the noise), each vertex's and edge's box grown by `reach`
+/// looked up in them, vertex by vertex and edge by edge (in parallel with `parallel`).
 pub fn find_pairs(
     pos: &[crate::grid::V4],
     triangles: &[[u32; 3]],
@@ -168,9 +169,9 @@ pub fn find_pairs(
         .flat_map_iter(|v| {
             let x = at(v);
             let mut found = Vec::new();
-            tris.query(tris.cells_of([x, x], reach), |t| {
+            tris.query([x, x], reach, |t| {
                 let tri = triangles[t as usize];
-                if !tris.meets(t, [x, x], reach) || tri.contains(&v) {
+                if tri.contains(&v) {
                     return;
                 }
                 let d = (point_triangle(x, at(tri[0]), at(tri[1]), at(tri[2])).point - x).length();
@@ -190,9 +191,9 @@ pub fn find_pairs(
             let (p0, p1) = (at(a), at(b));
             let mut found = Vec::new();
             let eb = [p0.min(p1), p0.max(p1)];
-            edge_grid.query(edge_grid.cells_of(eb, reach), |f| {
+            edge_grid.query(eb, reach, |f| {
                 let [c, d] = edges[f as usize];
-                if f <= e || c == a || c == b || d == a || d == b || !edge_grid.meets(f, eb, reach) {
+                if f <= e || c == a || c == b || d == a || d == b {
                     return;
                 }
                 let r = edge_edge(p0, p1, at(c), at(d));
