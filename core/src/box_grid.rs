@@ -108,9 +108,11 @@ impl BoxGrid {
         g
     }
 
-    /// Calls `f` once for every primitive whose box meets the box `b` grown by `grow`
-    /// (closed: boxes that touch meet).
-    pub(crate) fn query(&self, b: [Vec3; 2], grow: f32, mut f: impl FnMut(u32)) {
+    /// Calls `f` once for every primitive numbered `first` or more whose box meets the box
+    /// `b` grown by `grow` (closed: boxes that touch meet). A search of pairs among the
+    /// primitives of one grid passes the one after its own, so that each pair is met once
+    /// and the others cost an integer test.
+    pub(crate) fn query(&self, b: [Vec3; 2], grow: f32, first: u32, mut f: impl FnMut(u32)) {
         let [lo, hi] = b;
         if !(lo.is_finite() && hi.is_finite()) {
             return;
@@ -126,7 +128,7 @@ impl BoxGrid {
                     let c = [i, j, k];
                     let bucket = self.bucket(c);
                     for e in &self.entries[self.starts[bucket] as usize..self.starts[bucket + 1] as usize] {
-                        if e.cell == c && meets(e) {
+                        if e.id >= first && e.cell == c && meets(e) {
                             f(e.id);
                         }
                     }
@@ -134,7 +136,7 @@ impl BoxGrid {
             }
         }
         for e in &self.big {
-            if meets(e) {
+            if e.id >= first && meets(e) {
                 f(e.id);
             }
         }

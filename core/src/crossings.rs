@@ -83,7 +83,7 @@ pub fn count(pos: &[V4], triangles: &[[u32; 3]]) -> Crossings {
             let b = bounds(e.iter().map(|&k| at(k)));
             let (ep, eq) = (p(pos, e[0]), p(pos, e[1]));
             let mut crossed: usize = 0;
-            grid.query(b, 0.0, |t| {
+            grid.query(b, 0.0, 0, |t| {
                 let tri = triangles[t as usize];
                 if tri.contains(&e[0]) || tri.contains(&e[1]) {
                     return;

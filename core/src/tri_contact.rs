@@ -169,7 +169,7 @@ pub fn find_pairs(
         .flat_map_iter(|v| {
             let x = at(v);
             let mut found = Vec::new();
-            tris.query([x, x], reach, |t| {
+            tris.query([x, x], reach, 0, |t| {
                 let tri = triangles[t as usize];
                 if tri.contains(&v) {
                     return;
@@ -191,9 +191,9 @@ pub fn find_pairs(
             let (p0, p1) = (at(a), at(b));
             let mut found = Vec::new();
             let eb = [p0.min(p1), p0.max(p1)];
-            edge_grid.query(eb, reach, |f| {
+            edge_grid.query(eb, reach, e + 1, |f| {
                 let [c, d] = edges[f as usize];
-                if f <= e || c == a || c == b || d == a || d == b {
+                if c == a || c == b || d == a || d == b {
                     return;
                 }
                 let r = edge_edge(p0, p1, at(c), at(d));
