@@ -617,8 +617,8 @@ impl Contact {
 
     /// Every vertex's motion since [`Contact::begin`] cut to its bound, the cut taken
     /// from its velocity too (over `dt`) — unless the cloths move as one: measured from
-    /// their mean displacement, no vertex over its bound ([`Contact::mean_within_bounds`]).
-    /// A displacement all vertices share changes no distance, so the bounds hold in that
+    /// their mean displacement (of the free vertices, summed in f64 in vertex order), no
+    /// vertex over its bound. A displacement all vertices share changes no distance, so the bounds hold in that
     /// frame too and nothing is cut: two sheets falling together are not slowed, however
     /// fast. (Cutting in the mean's frame where some vertex is over it was tried: the thin
     /// heap's landed half was dragged into the floor's margin and its closest pair came
