@@ -314,6 +314,44 @@ pub fn separate_with(
 /// One Jacobi pass of the separation over `pairs` (found before) at `pos`, in place;
 /// returns the pairs closer than `thickness` it pushed.
 pub fn separation_pass(pos: &mut [crate::grid::V4], pairs: &Pairs, inv_mass: &[f32], thickness: f32) -> usize {
+    let (moves, pushed) = separation_shares(pos, pairs, inv_mass, thickness);
+    for (x, d) in pos.iter_mut().zip(&moves) {
+        for c in 0..3 {
+            x[c] += d[c];
+        }
+    }
+    pushed
+}
+
+/// One pass of the contact stage's separation (`Contact::separate`): [`separation_pass`]
+/// with the inverse masses from `pos`'s w, each vertex's move also added to its velocity
+/// (over `dt`); returns the pairs pushed.
+fn separation_moves(
+    pos: &mut [crate::grid::V4],
+    vel: &mut [crate::grid::V4],
+    pairs: &Pairs,
+    thickness: f32,
+    dt: f32,
+) -> usize {
+    let inv: Vec<f32> = pos.iter().map(|x| x[3]).collect();
+    let (moves, pushed) = separation_shares(pos, pairs, &inv, thickness);
+    for ((x, v), d) in pos.iter_mut().zip(vel.iter_mut()).zip(&moves) {
+        for c in 0..3 {
+            x[c] += d[c];
+            v[c] += d[c] / dt;
+        }
+    }
+    pushed
+}
+
+/// Each vertex's move in one Jacobi pass of the separation over `pairs` at `pos`, and
+/// the pairs closer than `thickness` that it pushes.
+fn separation_shares(
+    pos: &[crate::grid::V4],
+    pairs: &Pairs,
+    inv_mass: &[f32],
+    thickness: f32,
+) -> (Vec<[f32; 3]>, usize) {
     let inv = |k: u32| inv_mass[k as usize];
     let responses: Vec<Response> = (0..pairs.vt.len() + pairs.ee.len())
         .filter_map(|k| {
@@ -332,12 +370,7 @@ pub fn separation_pass(pos: &mut [crate::grid::V4], pairs: &Pairs, inv_mass: &[f
         })
         .collect();
     let moves = share(&responses, pos.len(), inv, thickness / crate::tables::CONTACT_UNITS);
-    for (x, d) in pos.iter_mut().zip(&moves) {
-        for c in 0..3 {
-            x[c] += d[c];
-        }
-    }
-    responses.len()
+    (moves, responses.len())
 }
 
 /// One pair's response: `change` to the relative motion of its closest points (p − q),
@@ -361,7 +394,8 @@ fn mass_term(ks: &[u32; 3], ws: &[f32; 3], inv: impl Fn(u32) -> f32) -> f32 {
 /// scaled by one over the most pairs any of its vertices is in — the same factor on both
 /// sides, so the momentum is still kept, and a vertex in k pairs is not moved k times
 /// over (a Jacobi sum's overshoot: without it the velocity pass diverged on a heap).
-/// Summed in fixed point of `unit` (truncated: the same sum in any order).
+/// Summed in fixed point of `unit` (truncated, then added as 32-bit integers with
+/// wrap-around — a GPU's atomics: the same sum in any order, on every backend).
 fn share(responses: &[Response], n: usize, inv: impl Fn(u32) -> f32, unit: f32) -> Vec<[f32; 3]> {
     let mut count = vec![0u32; n];
     let acting = |ks: &[u32; 3], ws: &[f32; 3]| {
@@ -372,7 +406,7 @@ fn share(responses: &[Response], n: usize, inv: impl Fn(u32) -> f32, unit: f32) 
             count[k as usize] += 1;
         }
     }
-    let mut sum = vec![[0i64; 3]; n];
+    let mut sum = vec![[0i32; 3]; n];
     for r in responses {
         let most = acting(&r.a, &r.wa).into_iter().chain(acting(&r.b, &r.wb)).map(|k| count[k as usize]).max();
         let scale = 1.0 / most.unwrap_or(1).max(1) as f32 / r.m / unit;
@@ -384,7 +418,8 @@ fn share(responses: &[Response], n: usize, inv: impl Fn(u32) -> f32, unit: f32) 
                 let d = r.change * (sign * inv(k) * w * scale);
                 let acc = &mut sum[k as usize];
                 for c in 0..3 {
-                    acc[c] += d[c] as i64;
+                    // Saturating conversion and wrapping sums: what a GPU's i32 atomics do.
+                    acc[c] = acc[c].wrapping_add(d[c] as i32);
                 }
             }
         }
@@ -407,8 +442,10 @@ pub struct Contact {
     edges: Vec<[u32; 2]>,
     start: Vec<crate::grid::V4>,
     bounds: Vec<f32>,
-    inv: Vec<f32>,
-    out: Vec<crate::grid::V4>,
+    /// The pairs within the reach at the substep's start: the velocity pass's and the
+    /// separation's.
+    vt: Vec<Pair>,
+    ee: Vec<Pair>,
     /// What the last substep's stages did: the reach and pairs of [`Contact::begin`], the
     /// approaches it slowed, the pairs [`Contact::separate`] pushed and the vertices
     /// [`Contact::clamp`] cut short (what [`crate::Solver::contact_stats`] reports).
@@ -526,9 +563,10 @@ pub fn approach_impulses(
 /// thickness.
 pub const SEPARATION_PASSES: usize = 4;
 
-/// The reach of the bounds at most, in mean edges beyond the thickness: a vertex alone may
-/// move [`BOUND_FRACTION`] of the reach in a substep, and a larger reach finds more pairs.
-pub const MAX_REACH_EDGES: f32 = 2.0;
+/// The reach of the bounds at most, in spacings beyond the thickness (the scene's rest
+/// spacing: a grid's, a mesh's mean edge): a vertex alone may move [`BOUND_FRACTION`] of
+/// the reach in a substep, and a larger reach finds more pairs.
+pub const MAX_REACH_SPACINGS: f32 = 2.0;
 
 impl Contact {
     /// The stages' buffers for the cloths of `triangles`.
@@ -543,11 +581,12 @@ impl Contact {
     /// How far the bounds look at the substep's start: the thickness, or farther where
     /// the cloth moves fast — far enough that a vertex with nothing near may move 1.25
     /// times the fastest vertex's motion (`|v| dt + |g| dt²`), at most the thickness plus
-    /// [`MAX_REACH_EDGES`] mean edges.
+    /// [`MAX_REACH_SPACINGS`] times `spacing` (the scene's rest spacing: a constant,
+    /// so that no sum over the edges is taken a substep).
     pub fn reach(
         pos: &[crate::grid::V4],
         vel: &[crate::grid::V4],
-        edges: &[[u32; 2]],
+        spacing: f32,
         dt: f32,
         gravity: [f32; 3],
         thickness: f32,
@@ -560,13 +599,13 @@ impl Contact {
             .filter(|s| s.is_finite())
             .fold(0.0, f32::max);
         let motion = fastest * dt + Vec3::from(gravity).length() * dt * dt;
-        (1.25 * motion / BOUND_FRACTION).clamp(thickness, thickness + MAX_REACH_EDGES * mean_edge(pos, edges))
+        (1.25 * motion / BOUND_FRACTION).clamp(thickness, thickness + MAX_REACH_SPACINGS * spacing)
     }
 
     /// At the substep's start: the positions kept, each vertex's bound found, and the
     /// approach of every pair within the reach that would close to under the thickness in
     /// this substep slowed to what closes it to the thickness ([`approach_impulses`], with
-    /// Coulomb friction `mu`).
+    /// Coulomb friction `mu`); `spacing` the scene's rest spacing ([`Contact::reach`]).
     #[allow(clippy::too_many_arguments)]
     pub fn begin(
         &mut self,
@@ -576,19 +615,24 @@ impl Contact {
         dt: f32,
         gravity: [f32; 3],
         thickness: f32,
+        spacing: f32,
         mu: Friction,
     ) {
-        self.stats.reach = Self::reach(pos, vel, &self.edges, dt, gravity, thickness);
+        self.stats.reach = Self::reach(pos, vel, spacing, dt, gravity, thickness);
         self.start.clear();
         self.start.extend_from_slice(pos);
-        let (vt, ee) = bounds_into(pos, triangles, &self.edges, self.stats.reach, self.parallel, &mut self.bounds);
-        self.stats.pairs = vt.len() + ee.len();
-        let pairs = Pairs { triangles, edges: &self.edges, vt: &vt, ee: &ee };
+        (self.vt, self.ee) =
+            bounds_into(pos, triangles, &self.edges, self.stats.reach, self.parallel, &mut self.bounds);
+        self.stats.pairs = self.vt.len() + self.ee.len();
+        let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
         self.stats.slowed = approach_impulses(pos, vel, &pairs, thickness, dt, mu);
     }
 
-    /// [`SEPARATION_PASSES`] passes of the separation on `pos` over the pairs closer than
-    /// the thickness (found once), its moves added to `vel` (over `dt`).
+    /// [`SEPARATION_PASSES`] passes of the separation on `pos` over the pairs of the
+    /// substep's start (within the reach, which is at least the thickness) that are now
+    /// closer than the thickness, each pass's moves added to `vel` too (over `dt`). No
+    /// second search: a pair that came within the thickness from beyond the reach in this
+    /// substep is pushed in the next (the bounds keep it from crossing meanwhile).
     pub fn separate(
         &mut self,
         pos: &mut [crate::grid::V4],
@@ -597,21 +641,10 @@ impl Contact {
         thickness: f32,
         dt: f32,
     ) {
-        self.inv.clear();
-        self.inv.extend(pos.iter().map(|x| x[3]));
-        self.out.clear();
-        self.out.extend_from_slice(pos);
-        let (vt, ee) = find_pairs(pos, triangles, &self.edges, thickness, self.parallel);
-        let pairs = Pairs { triangles, edges: &self.edges, vt: &vt, ee: &ee };
+        let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
         self.stats.pushed = 0;
         for _ in 0..SEPARATION_PASSES {
-            self.stats.pushed = self.stats.pushed.max(separation_pass(&mut self.out, &pairs, &self.inv, thickness));
-        }
-        for ((x, v), o) in pos.iter_mut().zip(vel.iter_mut()).zip(&self.out) {
-            for c in 0..3 {
-                v[c] += (o[c] - x[c]) / dt;
-            }
-            x[..3].copy_from_slice(&o[..3]);
+            self.stats.pushed = self.stats.pushed.max(separation_moves(pos, vel, &pairs, thickness, dt));
         }
     }
 
@@ -662,24 +695,37 @@ impl Contact {
     }
 
     /// The free vertices' mean displacement since [`Contact::begin`] if every vertex's
-    /// (pinned ones' too) is within its bound of it, else `None`. Summed in f64 in vertex
-    /// order: `cpu` and `cpu-par` decide alike.
+    /// (pinned ones' too) is within its bound of it, else `None`. Summed in fixed point
+    /// ([`mean_displacement`]): the same bits in any order, on every backend.
     fn mean_within_bounds(&self, pos: &[crate::grid::V4]) -> Option<Vec3> {
-        let moves =
-            || self.start.iter().zip(pos).map(|(a, b)| (Vec3::from_slice(&b[..3]) - Vec3::from_slice(&a[..3]), b[3]));
-        let (mut sum, mut count) = ([0.0f64; 3], 0usize);
-        for (d, w) in moves() {
-            if w > 0.0 {
-                for c in 0..3 {
-                    sum[c] += d[c] as f64;
-                }
-                count += 1;
-            }
-        }
-        let mean = Vec3::new(sum[0] as f32, sum[1] as f32, sum[2] as f32) / count.max(1) as f32;
+        let mean = mean_displacement(&self.start, pos);
+        let moves = self.start.iter().zip(pos).map(|(a, b)| Vec3::from_slice(&b[..3]) - Vec3::from_slice(&a[..3]));
         // A vertex that is not finite fails the test (NaN compares false): cut as before.
-        moves().zip(&self.bounds).all(|((d, _), &b)| (d - mean).length() <= b).then_some(mean)
+        moves.zip(&self.bounds).all(|(d, &b)| (d - mean).length() <= b).then_some(mean)
     }
+}
+
+/// The fixed point of [`mean_displacement`]'s sums, m: a power of two, so that a
+/// displacement becomes units exactly before it is truncated (2⁻²⁴ m; a vertex's
+/// displacement saturates at 128 m a substep).
+pub const MEAN_UNIT: f32 = 1.0 / 16_777_216.0;
+
+/// The free vertices' (w > 0) mean displacement from `start` to `pos`: each component
+/// in [`MEAN_UNIT`]s truncated to 32 bits (saturating), summed in 64 bits (wrapping: a
+/// GPU's pair of 32-bit atomics with a carry), the sum's high and low words to f32 and
+/// back to metres over the count — the same bits in any order and on every backend.
+pub fn mean_displacement(start: &[crate::grid::V4], pos: &[crate::grid::V4]) -> Vec3 {
+    let (mut sum, mut count) = ([0i64; 3], 0u32);
+    for (a, b) in start.iter().zip(pos) {
+        if b[3] > 0.0 {
+            for c in 0..3 {
+                sum[c] = sum[c].wrapping_add(((b[c] - a[c]) / MEAN_UNIT) as i32 as i64);
+            }
+            count += 1;
+        }
+    }
+    let mean = |s: i64| ((s >> 32) as i32 as f32 * 4_294_967_296.0 + s as u32 as f32) * MEAN_UNIT / count.max(1) as f32;
+    Vec3::new(mean(sum[0]), mean(sum[1]), mean(sum[2]))
 }
 
 #[cfg(test)]
@@ -840,7 +886,7 @@ mod tests {
         let mut c = Contact::new(tris, false);
         let (mut path, mut clamped) = (Vec::new(), 0);
         for step in 0..steps {
-            c.begin(pos, vel, tris, dt, [0.0; 3], t, Friction::default());
+            c.begin(pos, vel, tris, dt, [0.0; 3], t, 1.0, Friction::default());
             if step == 0 {
                 for v in &mut vel[3..] {
                     v[2] += kick;

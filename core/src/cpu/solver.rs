@@ -504,7 +504,16 @@ impl CpuSolver {
                             stat: params.static_friction,
                             kinetic: params.kinetic_friction,
                         };
-                        c.begin(pos, vel, &topo.triangles, params.dt(), params.gravity, params.self_thickness, mu);
+                        c.begin(
+                            pos,
+                            vel,
+                            &topo.triangles,
+                            params.dt(),
+                            params.gravity,
+                            params.self_thickness,
+                            p.spacing,
+                            mu,
+                        );
                     }
                     TRI_BOUNDS
                 }
