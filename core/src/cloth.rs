@@ -205,6 +205,7 @@ pub fn build_mesh(
         mesh: Some(std::sync::Arc::new(tables)),
         colours: Default::default(),
         pins: moving_pins,
+        edges: Default::default(),
     };
     // VBD's colouring (cpu::vbd::colouring computes the same).
     let greedy =

@@ -215,6 +215,9 @@ pub struct ClothTopology {
     pub colours: std::sync::Arc<Colours>,
     /// The pins the scene's `[[pins]]` groups move (`crate::pins`; empty: none move).
     pub pins: crate::pins::MovingPins,
+    /// The triangles' edges, each once (`crate::crossings::edges`): found when first
+    /// asked for (the contact between triangles), not at build.
+    pub edges: std::sync::OnceLock<std::sync::Arc<Vec<[u32; 2]>>>,
 }
 
 /// The tables of a cloth made from a mesh that a grid computes from its place: the kind of
@@ -250,6 +253,11 @@ pub struct MeshTables {
 }
 
 impl ClothTopology {
+    /// The triangles' edges, each once, in `crate::crossings::edges`' order.
+    pub fn edges(&self) -> &[[u32; 2]] {
+        self.edges.get_or_init(|| std::sync::Arc::new(crate::crossings::edges(&self.triangles)))
+    }
+
     /// Number of particles.
     pub fn num_particles(&self) -> usize {
         self.uv.len()
@@ -584,6 +592,7 @@ pub fn build_grid(scene: &Scene, params: &SimParams) -> Result<(ClothState, Clot
         mesh: None,
         colours: Default::default(),
         pins: moving_pins,
+        edges: Default::default(),
     };
     // VBD's colouring (cpu::vbd::colouring computes the same).
     topo.colours = std::sync::Arc::new(Colours::from_lists(&Colours::grid(n as usize)));

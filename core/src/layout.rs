@@ -12,6 +12,9 @@ pub const WORKGROUP: u32 = 64;
 pub const BLOCK: u32 = 4;
 /// Texels per row of the spring-table image (the thesis's texture memory).
 pub const TABLE_WIDTH: u32 = 4096;
+/// Pairs each owner of the contact between triangles keeps (a vertex its triangles, an
+/// edge its edges; more are counted, not kept).
+pub const TRI_SLOTS: u32 = 32;
 
 /// A spring over `(1 + τ)·rest` is pulled towards `(1 + STRAIN_AIM·τ)·rest`, a little
 /// inside the limit: corrections proportional to the excess over the limit itself make
@@ -149,11 +152,25 @@ pub enum Buf {
     /// `StepParams::contact`): a uniform block beside the step's, part of
     /// [`Buf::Params`]' data (a row that reads the constants reads both).
     Contact = 37,
+    /// The contact between triangles' edges (`core::cpu::tri_contact::TriLayout::
+    /// edges_words`): a header `[triangles, edges, buckets, 0]`, then two vertices an
+    /// edge. One element where the scene has no such contact (so the other three).
+    TriEdges = 38,
+    /// The contact between triangles: each particle's position at the substep's start
+    /// and its bound on its motion (f32 bits in w, lowered by atomic minima).
+    TriFloats = 39,
+    /// The contact between triangles' integers (`core::cpu::tri_contact::TriLayout`):
+    /// its scalars, the two grids of the primitives' boxes, each owner's count of pairs,
+    /// each particle's fixed-point sums. Cleared at the substep's start.
+    TriInts = 40,
+    /// The contact between triangles' pairs: [`TRI_SLOTS`] an owner (a vertex's
+    /// triangles, an edge's edges).
+    TriPairs = 41,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 38] = [
+    pub const ALL: [Buf; 42] = [
         Buf::Params,
         Buf::Pos,
         Buf::Vel,
@@ -192,6 +209,10 @@ impl Buf {
         Buf::SdfImage,
         Buf::SdfSampler,
         Buf::Contact,
+        Buf::TriEdges,
+        Buf::TriFloats,
+        Buf::TriInts,
+        Buf::TriPairs,
     ];
 
     /// The integrators' scratch particle buffers, in order.
@@ -259,6 +280,10 @@ impl Buf {
             Buf::SdfImage => "sdf_image",
             Buf::SdfSampler => "sdf_sampler",
             Buf::Contact => "contact",
+            Buf::TriEdges => "tri_edges",
+            Buf::TriFloats => "tri_floats",
+            Buf::TriInts => "tri_ints",
+            Buf::TriPairs => "tri_pairs",
         }
     }
 
@@ -351,6 +376,7 @@ pub fn wgsl_constants() -> String {
     s += &u("TETHER_SLOTS", TETHER_SLOTS as u32);
     s += &u("BLOCK", BLOCK);
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
+    s += &u("TRI_SLOTS", TRI_SLOTS);
     s += &u("MAX_COLLIDERS", crate::scene::MAX_COLLIDERS as u32);
     s += &u("SDF_HEAD_FLOATS", crate::sdf::SdfHead::FLOATS as u32);
     s += &u("SHAPES_RODS_AT", crate::sdf::RODS_AT as u32);

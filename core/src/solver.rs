@@ -42,7 +42,7 @@ pub struct ContactStats {
     pub pairs: usize,
     /// Pairs whose approach the velocity pass slowed.
     pub slowed: usize,
-    /// Pairs the separation pushed apart.
+    /// Pair pushes of the separation (summed over its passes).
     pub pushed: usize,
     /// Vertices whose motion the bound cut short.
     pub clamped: usize,

@@ -12,7 +12,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::grid::Grab;
-use crate::params::SimParams;
+use crate::params::{SelfCollision, SimParams};
 use crate::scene::Scene;
 
 /// The WGSL type of a field's Rust type.
@@ -141,7 +141,8 @@ shared_struct! {
         pub num_boxes: u32,
         /// Grabbed particle, or -1.
         pub grab_index: i32,
-        /// Self-collision's thickness, m; 0 when self-collision is off.
+        /// Self-collision's thickness, m (the particles' or the triangles'); 0 when
+        /// self-collision is off.
         pub self_thickness: f32,
         /// Rest distance between neighbouring particles, m.
         pub spacing: f32,
@@ -228,7 +229,7 @@ impl StepParams {
             num_spheres: scene.spheres.len() as u32,
             num_boxes: scene.boxes.len() as u32,
             grab_index,
-            self_thickness: if params.self_collision.particles() { params.self_thickness } else { 0.0 },
+            self_thickness: if params.self_collision == SelfCollision::Off { 0.0 } else { params.self_thickness },
             spacing: scene.spacing(),
             inv_cell: if params.self_collision.particles() { 1.0 / params.self_thickness } else { 0.0 },
             num_particles: scene.num_particles() as u32,

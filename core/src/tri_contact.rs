@@ -644,7 +644,7 @@ impl Contact {
         let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
         self.stats.pushed = 0;
         for _ in 0..SEPARATION_PASSES {
-            self.stats.pushed = self.stats.pushed.max(separation_moves(pos, vel, &pairs, thickness, dt));
+            self.stats.pushed += separation_moves(pos, vel, &pairs, thickness, dt);
         }
     }
 

@@ -19,6 +19,7 @@ mod solver;
 mod springs;
 mod stats;
 mod strain_limit;
+pub mod tri_contact;
 pub mod vbd;
 
 pub use collide::{ColliderSet, Colliders, collide, integrate_collide};

@@ -196,3 +196,69 @@ fn two_sheets_a_thickness_and_a_half_apart_fall_freely_together() {
     assert!((gap - 0.0075).abs() < 0.01 * 0.0075, "gap {gap}");
     assert_eq!(crossings::count(&st.pos, &s.topology().triangles).pairs, 0);
 }
+
+#[test]
+fn the_gpu_kernels_twins_in_order_give_the_contact_stages_bits() {
+    // The thin heap at n = 24 after 60 frames (piled: pairs within the reach), one substep
+    // of the contact both ways: `Contact`'s stages (what the CPU solvers run) and the
+    // kernels' twins in the GPU recipe's order (core::cpu::tri_contact), with a shove
+    // between the start and the separation (every 5th vertex moved 0.6 thicknesses: the
+    // separation pushes and the clamp cuts). Positions, velocities and the stages'
+    // counts must be the same bits: the pairs do not depend on the broad phase and every
+    // sum is an integer sum.
+    use clothlab_core::cpu::tri_contact::{self as tk, Pass, TriBufs, TriLayout};
+    let (_, _, s) = thin_heap(60, |_| {});
+    let (topo, params) = (s.topology(), s.params().clone());
+    let p = clothlab_core::StepParams::new(&params, s.scene(), None);
+    let (pos0, vel0) = (s.state_ref().pos.clone(), s.state_ref().vel.clone());
+    let t = params.self_thickness;
+    let shove = |pos: &mut Vec<[f32; 4]>| {
+        for (k, x) in pos.iter_mut().enumerate().filter(|(k, _)| k % 5 == 0) {
+            let d = jitter(k, 9);
+            for c in 0..3 {
+                x[c] += d[c] * 0.6 * t;
+            }
+        }
+    };
+    // The stages.
+    let (mut pos, mut vel) = (pos0.clone(), vel0.clone());
+    let mut c = clothlab_core::tri_contact::Contact::new(&topo.triangles, false);
+    let mu = clothlab_core::tri_contact::Friction { stat: params.static_friction, kinetic: params.kinetic_friction };
+    c.begin(&pos, &mut vel, &topo.triangles, params.dt(), params.gravity, t, topo.spacing, mu);
+    shove(&mut pos);
+    c.separate(&mut pos, &mut vel, &topo.triangles, t, params.dt());
+    c.clamp(&mut pos, &mut vel, params.dt());
+    // The twins.
+    let l = TriLayout::of(topo);
+    let (mut floats, mut ints, mut pairs) =
+        (vec![[0.0f32; 4]; l.np], vec![0u32; l.words()], vec![0u32; l.pair_words()]);
+    let mut b = TriBufs { l, floats: &mut floats, ints: &mut ints, pairs: &mut pairs };
+    let (mut tp, mut tv) = (pos0.clone(), vel0.clone());
+    tk::tri_speed(&tp, &tv, &mut b);
+    tk::tri_start(&p, &tp, &mut b);
+    tk::tri_grid_count(topo, &tp, &mut b);
+    tk::tri_grid_scan(&mut b);
+    tk::tri_grid_scatter(topo, &tp, &mut b);
+    tk::tri_grid_sort(&mut b);
+    tk::tri_pairs(topo, &tp, &mut b);
+    tk::tri_count(&p, topo, &tp, &tv, &mut b, Pass::Velocity);
+    tk::tri_share(&p, topo, &tp, &tv, &mut b, Pass::Velocity);
+    tk::tri_apply(&p, &mut tp, &mut tv, &mut b, Pass::Velocity);
+    shove(&mut tp);
+    for _ in 0..clothlab_core::tri_contact::SEPARATION_PASSES {
+        tk::tri_count(&p, topo, &tp, &tv, &mut b, Pass::Separation);
+        tk::tri_share(&p, topo, &tp, &tv, &mut b, Pass::Separation);
+        tk::tri_apply(&p, &mut tp, &mut tv, &mut b, Pass::Separation);
+    }
+    tk::tri_clamp_sum(&tp, &mut b);
+    tk::tri_clamp_check(&tp, &mut b);
+    tk::tri_clamp(&p, &mut tp, &mut tv, &mut b);
+    let stats = tk::stats(b.ints);
+    println!("stages {:?}\ntwins  {stats:?}", c.stats);
+    assert_eq!(b.ints[tk::at::OVERFLOW], 0, "an owner found more pairs than it keeps");
+    assert!(stats.pairs > 10 && stats.slowed > 0 && stats.pushed > 0 && stats.clamped > 0, "{stats:?}");
+    assert_eq!(stats, c.stats);
+    let bits = |v: &[[f32; 4]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<u32>>();
+    assert!(bits(&tp) == bits(&pos), "positions differ");
+    assert!(bits(&tv) == bits(&vel), "velocities differ");
+}

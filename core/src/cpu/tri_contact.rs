@@ -1,0 +1,695 @@
+//! The contact between triangles as GPU kernels see it (`shaders/wgsl/tri_*.wgsl`): one
+//! function per kernel, each the kernel's CPU twin, on the buffers the kernels share —
+//! the edges ([`TriLayout::edges_words`]: a header, then two vertices an edge), a
+//! particle's start and bound (`[x, y, z, bound]`), the integers ([`TriLayout`]: the
+//! scalars, the two grids' buckets and entries, each owner's count of pairs, each
+//! particle's fixed-point sums) and the pairs ([`TRI_SLOTS`] an owner).
+//!
+//! Run in order they give what `crate::tri_contact::Contact`'s stages give, bit for bit,
+//! as long as no owner finds more than [`TRI_SLOTS`] pairs (the scalars count what did
+//! not fit): the pairs do not depend on the broad phase, and every sum is an integer sum.
+//! The CPU solvers run `Contact` (its grid is faster on a CPU); these are what the GPU
+//! solvers run and what their kernels are checked against.
+//!
+//! Owners: vertex `v` (`0 ≤ o < np`) owns its vertex–triangle pairs, edge `e` (`o = np +
+//! e`) its edge–edge pairs with the edges numbered above it.
+
+use glam::Vec3;
+
+use crate::grid::V4;
+use crate::step_params::StepParams;
+use crate::tri_contact::{BOUND_FRACTION, MAX_REACH_SPACINGS, MEAN_UNIT, edge_edge, point_triangle};
+
+pub use crate::layout::TRI_SLOTS;
+
+/// The scalars at the head of the integers, by index (u32 words; f32 values as bits).
+pub mod at {
+    /// The fastest free vertex's speed (f32 bits: atomic max).
+    pub const SPEED: usize = 0;
+    /// The substep's reach (f32).
+    pub const REACH: usize = 1;
+    /// The grids' cell (f32).
+    pub const CELL: usize = 2;
+    /// The triangles' largest box extent, x y z (f32, atomic max).
+    pub const EXTENT_T: usize = 3;
+    /// The edges' largest box extent, x y z (f32, atomic max).
+    pub const EXTENT_E: usize = 6;
+    /// Pairs found in all.
+    pub const PAIRS: usize = 9;
+    /// Pairs found beyond an owner's [`super::TRI_SLOTS`] (left out of the responses).
+    pub const OVERFLOW: usize = 10;
+    /// Pairs the velocity pass slowed.
+    pub const SLOWED: usize = 11;
+    /// Pair pushes of the separation's passes.
+    pub const PUSHED: usize = 12;
+    /// Vertices the clamp cut.
+    pub const CLAMPED: usize = 13;
+    /// The free vertices' displacement sums: x low, x high, y low, y high, z low, z high.
+    pub const MEAN: usize = 14;
+    /// The free vertices.
+    pub const FREE: usize = 20;
+    /// 1 where some vertex is farther than its bound from the mean displacement.
+    pub const OVER: usize = 21;
+    /// 1 where some vertex moved farther than its bound.
+    pub const MOVED: usize = 22;
+    /// The scalars' words.
+    pub const WORDS: usize = 32;
+}
+
+/// The fixed-point units of the velocity pass's and the separation's sums.
+const UNITS: f32 = crate::tables::CONTACT_UNITS;
+
+/// Where the contact's integers lie, in u32 words, for a cloth of `np` particles, `tris`
+/// triangles and `edges` edges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TriLayout {
+    /// Particles.
+    pub np: usize,
+    /// Triangles.
+    pub tris: usize,
+    /// Edges.
+    pub edges: usize,
+    /// Buckets of each grid (a power of two, at least twice the primitives of either).
+    pub buckets: usize,
+}
+
+impl TriLayout {
+    /// The layout of a cloth of these sizes.
+    pub fn new(np: usize, tris: usize, edges: usize) -> Self {
+        Self { np, tris, edges, buckets: (2 * tris.max(edges).max(1)).next_power_of_two() }
+    }
+
+    /// The layout of `topo`'s cloth.
+    pub fn of(topo: &crate::grid::ClothTopology) -> Self {
+        Self::new(topo.num_particles(), topo.triangles.len(), topo.edges().len())
+    }
+
+    /// The grids' bucket counts (the triangles' buckets, then the edges'), then after
+    /// the scan and the scatter each bucket's end.
+    pub fn grid(&self) -> usize {
+        at::WORDS
+    }
+
+    /// The grids' entries: the triangles' (by bucket), then the edges'.
+    pub fn entries(&self) -> usize {
+        self.grid() + 2 * self.buckets
+    }
+
+    /// Each owner's count of pairs found (may exceed [`TRI_SLOTS`]).
+    pub fn owners(&self) -> usize {
+        self.entries() + self.tris + self.edges
+    }
+
+    /// Each particle's fixed-point sums: x, y, z, then its count of acting pairs (i32).
+    pub fn sums(&self) -> usize {
+        self.owners() + self.np + self.edges
+    }
+
+    /// Words of the integers.
+    pub fn words(&self) -> usize {
+        self.sums() + 4 * self.np
+    }
+
+    /// Words of the pairs: [`TRI_SLOTS`] an owner.
+    pub fn pair_words(&self) -> usize {
+        (self.np + self.edges) * TRI_SLOTS as usize
+    }
+
+    /// Owners: the vertices, then the edges.
+    pub fn num_owners(&self) -> usize {
+        self.np + self.edges
+    }
+
+    /// The edges' buffer: `[triangles, edges, buckets, 0]`, then each edge's two vertices.
+    pub fn edges_words(&self, edges: &[[u32; 2]]) -> Vec<u32> {
+        let mut v = vec![self.tris as u32, self.edges as u32, self.buckets as u32, 0];
+        v.extend(edges.iter().flatten());
+        v
+    }
+}
+
+/// The buffers of the contact's kernels, as their twins see them.
+pub struct TriBufs<'a> {
+    /// The layout.
+    pub l: TriLayout,
+    /// Each particle's start position and bound (f32 bits in w).
+    pub floats: &'a mut [V4],
+    /// The integers.
+    pub ints: &'a mut [u32],
+    /// The pairs.
+    pub pairs: &'a mut [u32],
+}
+
+fn v3(x: &V4) -> Vec3 {
+    Vec3::new(x[0], x[1], x[2])
+}
+
+fn f(bits: u32) -> f32 {
+    f32::from_bits(bits)
+}
+
+/// `tri_speed`: the fastest free vertex's speed into the scalars (the integers cleared
+/// before).
+pub fn tri_speed(pos: &[V4], vel: &[V4], b: &mut TriBufs) {
+    for (x, v) in pos.iter().zip(vel) {
+        let s = v3(v).length();
+        if x[3] > 0.0 && s.is_finite() {
+            b.ints[at::SPEED] = b.ints[at::SPEED].max(s.to_bits());
+        }
+    }
+}
+
+/// The substep's reach from the fastest speed (`crate::tri_contact::Contact::reach`).
+pub fn reach_of(p: &StepParams, fastest: f32) -> f32 {
+    let g = Vec3::new(p.gravity[0], p.gravity[1], p.gravity[2]).length();
+    let motion = fastest * p.dt + g * p.dt * p.dt;
+    let t = p.self_thickness;
+    (1.25 * motion / BOUND_FRACTION).clamp(t, t + MAX_REACH_SPACINGS * p.spacing)
+}
+
+/// `tri_start`: each particle's start position and its bound at the reach's fraction;
+/// the reach and the grids' cell into the scalars.
+pub fn tri_start(p: &StepParams, pos: &[V4], b: &mut TriBufs) {
+    let reach = reach_of(p, f(b.ints[at::SPEED]));
+    for (s, x) in b.floats.iter_mut().zip(pos) {
+        *s = [x[0], x[1], x[2], BOUND_FRACTION * reach];
+    }
+    b.ints[at::REACH] = reach.to_bits();
+    b.ints[at::CELL] = (2.0 * reach).max(1.5 * p.spacing).to_bits();
+}
+
+/// The box of primitive `o` (triangles first, then edges).
+fn prim_box(o: usize, pos: &[V4], tris: &[[u32; 3]], edges: &[[u32; 2]]) -> [Vec3; 2] {
+    let at = |k: u32| v3(&pos[k as usize]);
+    if o < tris.len() {
+        let [a, b, c] = tris[o];
+        let (a, b, c) = (at(a), at(b), at(c));
+        [a.min(b).min(c), a.max(b).max(c)]
+    } else {
+        let [a, b] = edges[o - tris.len()];
+        let (a, b) = (at(a), at(b));
+        [a.min(b), a.max(b)]
+    }
+}
+
+/// A point's cell (`crate::box_grid`'s).
+fn cell_of(x: Vec3, inv_cell: f32) -> [i32; 3] {
+    let c = (x * inv_cell).floor().clamp(Vec3::splat(-1e6), Vec3::splat(1e6));
+    [c.x as i32, c.y as i32, c.z as i32]
+}
+
+/// A cell's bucket within its grid.
+fn hash(c: [i32; 3], buckets: usize) -> usize {
+    let h = (c[0] as u32).wrapping_mul(73_856_093)
+        ^ (c[1] as u32).wrapping_mul(19_349_663)
+        ^ (c[2] as u32).wrapping_mul(83_492_791);
+    h as usize & (buckets - 1)
+}
+
+/// Primitive `o`'s bucket (in the triangles' or the edges' grid) and box, or `None` where
+/// its box is not finite.
+fn bucket_of(
+    o: usize,
+    pos: &[V4],
+    topo: &crate::grid::ClothTopology,
+    l: &TriLayout,
+    cell: f32,
+) -> Option<(usize, [Vec3; 2])> {
+    let bx = prim_box(o, pos, &topo.triangles, topo.edges());
+    if !(bx[0].is_finite() && bx[1].is_finite()) {
+        return None;
+    }
+    let grid = if o < l.tris { 0 } else { l.buckets };
+    Some((grid + hash(cell_of(bx[0], 1.0 / cell), l.buckets), bx))
+}
+
+/// `tri_grid_count`: each primitive one more in its bucket's count, its box's extent into
+/// its grid's largest.
+pub fn tri_grid_count(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
+    let cell = f(b.ints[at::CELL]);
+    for o in 0..b.l.tris + b.l.edges {
+        let Some((bucket, [lo, hi])) = bucket_of(o, pos, topo, &b.l, cell) else { continue };
+        b.ints[b.l.grid() + bucket] += 1;
+        let ext = if o < b.l.tris { at::EXTENT_T } else { at::EXTENT_E };
+        for c in 0..3 {
+            b.ints[ext + c] = b.ints[ext + c].max((hi[c] - lo[c]).to_bits());
+        }
+    }
+}
+
+/// `tri_grid_scan`: the buckets' counts to their exclusive prefix (each bucket's start).
+pub fn tri_grid_scan(b: &mut TriBufs) {
+    let mut acc = 0u32;
+    for w in &mut b.ints[b.l.grid()..b.l.entries()] {
+        let n = *w;
+        *w = acc;
+        acc += n;
+    }
+}
+
+/// `tri_grid_scatter`: each primitive into its bucket's next entry (its bucket's word
+/// becomes the bucket's end).
+pub fn tri_grid_scatter(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
+    let cell = f(b.ints[at::CELL]);
+    for o in 0..b.l.tris + b.l.edges {
+        let Some((bucket, _)) = bucket_of(o, pos, topo, &b.l, cell) else { continue };
+        let slot = b.ints[b.l.grid() + bucket] as usize;
+        b.ints[b.l.grid() + bucket] += 1;
+        let id = if o < b.l.tris { o } else { o - b.l.tris };
+        b.ints[b.l.entries() + slot] = id as u32;
+    }
+}
+
+/// Bucket `k`'s entries (of both grids' `2 · buckets`), after the scatter.
+fn bucket_range(ints: &[u32], l: &TriLayout, k: usize) -> std::ops::Range<usize> {
+    let start = if k == 0 { 0 } else { ints[l.grid() + k - 1] as usize };
+    l.entries() + start..l.entries() + ints[l.grid() + k] as usize
+}
+
+/// `tri_grid_sort`: each bucket's entries in increasing order (the scatter's atomics put
+/// them in any order).
+pub fn tri_grid_sort(b: &mut TriBufs) {
+    for k in 0..2 * b.l.buckets {
+        let r = bucket_range(b.ints, &b.l, k);
+        b.ints[r].sort_unstable();
+    }
+}
+
+/// Calls `f` with every primitive of one grid (`grid` 0: triangles, 1: edges) numbered
+/// `first` or more whose box meets `[lo, hi]` grown by `grow`: the cells from the box's
+/// lowest corner less the grid's largest extent to its highest, each entry whose own
+/// lowest corner lies in the cell visited (`crate::box_grid::BoxGrid::query`'s rule).
+#[allow(clippy::too_many_arguments)]
+fn query(
+    ints: &[u32],
+    l: &TriLayout,
+    pos: &[V4],
+    topo: &crate::grid::ClothTopology,
+    grid: usize,
+    [lo, hi]: [Vec3; 2],
+    grow: f32,
+    first: u32,
+    mut f: impl FnMut(u32),
+) {
+    if !(lo.is_finite() && hi.is_finite()) {
+        return;
+    }
+    let cell = self::f(ints[at::CELL]);
+    let inv = 1.0 / cell;
+    let ext_at = if grid == 0 { at::EXTENT_T } else { at::EXTENT_E };
+    let extent = Vec3::new(self::f(ints[ext_at]), self::f(ints[ext_at + 1]), self::f(ints[ext_at + 2]));
+    let g = Vec3::splat(grow);
+    let slack = Vec3::splat(1e-4 * cell + 1e-6 * lo.abs().max(hi.abs()).max_element());
+    let (c0, c1) = (cell_of(lo - g - extent - slack, inv), cell_of(hi + g + slack, inv));
+    let offset = if grid == 0 { 0 } else { l.tris };
+    for i in c0[0]..=c1[0] {
+        for j in c0[1]..=c1[1] {
+            for k in c0[2]..=c1[2] {
+                let c = [i, j, k];
+                let bucket = grid * l.buckets + hash(c, l.buckets);
+                for e in bucket_range(ints, l, bucket) {
+                    let id = ints[e];
+                    if id < first {
+                        continue;
+                    }
+                    let [elo, ehi] = prim_box(offset + id as usize, pos, &topo.triangles, topo.edges());
+                    if cell_of(elo, inv) == c && (elo - g).cmple(hi).all() && lo.cmple(ehi + g).all() {
+                        f(id);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Lowers vertex `k`'s bound to `bound` (the kernels' atomic minimum on its bits).
+fn lower(floats: &mut [V4], k: u32, bound: f32) {
+    let w = &mut floats[k as usize][3];
+    if bound.to_bits() < w.to_bits() {
+        *w = bound;
+    }
+}
+
+/// `tri_pairs`: each owner's pairs closer than the reach, in the order its query meets
+/// them, the first [`TRI_SLOTS`] kept; each vertex's bound lowered to the fraction of every
+/// pair's distance it belongs to.
+pub fn tri_pairs(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
+    let l = b.l;
+    let reach = f(b.ints[at::REACH]);
+    let at_ = |k: u32| v3(&pos[k as usize]);
+    let edges = topo.edges();
+    for o in 0..l.num_owners() {
+        let mut found: Vec<(u32, f32)> = Vec::new();
+        if o < l.np {
+            let x = at_(o as u32);
+            query(b.ints, &l, pos, topo, 0, [x, x], reach, 0, |t| {
+                let tri = topo.triangles[t as usize];
+                if tri.contains(&(o as u32)) {
+                    return;
+                }
+                let d = (point_triangle(x, at_(tri[0]), at_(tri[1]), at_(tri[2])).point - x).length();
+                if d < reach {
+                    found.push((t, d));
+                }
+            });
+        } else {
+            let e = (o - l.np) as u32;
+            let [a, bb] = edges[e as usize];
+            let (p0, p1) = (at_(a), at_(bb));
+            query(b.ints, &l, pos, topo, 1, [p0.min(p1), p0.max(p1)], reach, e + 1, |g| {
+                let [c, d] = edges[g as usize];
+                if c == a || c == bb || d == a || d == bb {
+                    return;
+                }
+                let r = edge_edge(p0, p1, at_(c), at_(d));
+                let dist = (r.p - r.q).length();
+                if dist < reach {
+                    found.push((g, dist));
+                }
+            });
+        }
+        for (slot, &(other, d)) in found.iter().enumerate() {
+            let verts: Vec<u32> = if o < l.np {
+                std::iter::once(o as u32).chain(topo.triangles[other as usize]).collect()
+            } else {
+                edges[o - l.np].iter().chain(&edges[other as usize]).copied().collect()
+            };
+            for k in verts {
+                lower(b.floats, k, BOUND_FRACTION * d);
+            }
+            if slot < TRI_SLOTS as usize {
+                b.pairs[o * TRI_SLOTS as usize + slot] = other;
+            }
+        }
+        let n = found.len() as u32;
+        b.ints[l.owners() + o] = n;
+        b.ints[at::PAIRS] += n;
+        b.ints[at::OVERFLOW] += n.saturating_sub(TRI_SLOTS);
+    }
+}
+
+/// A pair's vertices, their weights at the closest points and the points: `(a, wa, p)`
+/// on one side, `(b, wb, q)` on the other, and a normal for when p and q coincide
+/// (`crate::tri_contact`'s sides).
+struct Sides {
+    a: [u32; 3],
+    wa: [f32; 3],
+    p: Vec3,
+    b: [u32; 3],
+    wb: [f32; 3],
+    q: Vec3,
+    fallback: Vec3,
+}
+
+fn sides(topo: &crate::grid::ClothTopology, pos: &[V4], l: &TriLayout, o: usize, other: u32) -> Sides {
+    let at_ = |k: u32| v3(&pos[k as usize]);
+    if o < l.np {
+        let v = o as u32;
+        let tri = topo.triangles[other as usize];
+        let (x, a, b, c) = (at_(v), at_(tri[0]), at_(tri[1]), at_(tri[2]));
+        let r = point_triangle(x, a, b, c);
+        Sides {
+            a: [v, v, v],
+            wa: [1.0, 0.0, 0.0],
+            p: x,
+            b: tri,
+            wb: r.weights,
+            q: r.point,
+            fallback: (b - a).cross(c - a).normalize(),
+        }
+    } else {
+        let edges = topo.edges();
+        let ([a, b], [c, d]) = (edges[o - l.np], edges[other as usize]);
+        let r = edge_edge(at_(a), at_(b), at_(c), at_(d));
+        let n = (at_(b) - at_(a)).cross(at_(d) - at_(c)).normalize();
+        Sides {
+            a: [a, b, b],
+            wa: [1.0 - r.s, r.s, 0.0],
+            p: r.p,
+            b: [c, d, d],
+            wb: [1.0 - r.t, r.t, 0.0],
+            q: r.q,
+            fallback: n,
+        }
+    }
+}
+
+/// One pair's response: the change of its closest points' relative motion and
+/// Σ inverse mass × weight² (`crate::tri_contact`'s `Response`).
+struct Response {
+    s: Sides,
+    m: f32,
+    change: Vec3,
+}
+
+/// What a pass computes of a pair: the velocity pass's impulse, or the separation's push.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pass {
+    /// `approach_impulses`.
+    Velocity,
+    /// `separation_pass`.
+    Separation,
+}
+
+fn mass_term(ks: &[u32; 3], ws: &[f32; 3], pos: &[V4]) -> f32 {
+    ks.iter().zip(ws).map(|(&k, &w)| pos[k as usize][3] * w * w).sum()
+}
+
+fn response(p: &StepParams, pos: &[V4], vel: &[V4], s: Sides, pass: Pass) -> Option<Response> {
+    let t = p.self_thickness;
+    let d = (s.p - s.q).length();
+    let n = if d > 0.0 { (s.p - s.q) / d } else { s.fallback };
+    let m = mass_term(&s.a, &s.wa, pos) + mass_term(&s.b, &s.wb, pos);
+    match pass {
+        Pass::Separation => (m > 0.0 && n.is_finite() && d < t).then(|| Response { s, m, change: n * (t - d) }),
+        Pass::Velocity => {
+            if m == 0.0 || !n.is_finite() {
+                return None;
+            }
+            let speed = |ks: &[u32; 3], ws: &[f32; 3]| -> Vec3 {
+                ks.iter().zip(ws).map(|(&k, &w)| v3(&vel[k as usize]) * w).sum()
+            };
+            let rel = speed(&s.a, &s.wa) - speed(&s.b, &s.wb);
+            let vn = rel.dot(n);
+            let want = (t - d) / p.dt;
+            if vn >= want {
+                return None;
+            }
+            let dn = want - vn;
+            let slide = rel - n * vn;
+            let sl = slide.length();
+            let (ms, mk) = (p.mu_static(), p.mu_kinetic());
+            let stop = if sl == 0.0 || (ms == 0.0 && mk == 0.0) {
+                Vec3::ZERO
+            } else if sl <= ms * dn {
+                -slide
+            } else {
+                -slide * (mk * dn / sl).min(1.0)
+            };
+            Some(Response { s, m, change: n * dn + stop })
+        }
+    }
+}
+
+/// The fixed point of a pass's sums.
+fn unit(p: &StepParams, pass: Pass) -> f32 {
+    match pass {
+        Pass::Velocity => p.self_thickness / p.dt / UNITS,
+        Pass::Separation => p.self_thickness / UNITS,
+    }
+}
+
+/// Every kept pair of every owner, with its response where it has one.
+fn each_response(
+    p: &StepParams,
+    topo: &crate::grid::ClothTopology,
+    pos: &[V4],
+    vel: &[V4],
+    b: &TriBufs,
+    pass: Pass,
+    mut f: impl FnMut(Response),
+) {
+    for o in 0..b.l.num_owners() {
+        let n = b.ints[b.l.owners() + o].min(TRI_SLOTS) as usize;
+        for slot in 0..n {
+            let other = b.pairs[o * TRI_SLOTS as usize + slot];
+            if let Some(r) = response(p, pos, vel, sides(topo, pos, &b.l, o, other), pass) {
+                f(r);
+            }
+        }
+    }
+}
+
+/// The vertices of a side with a weight (those a response moves).
+fn acting(ks: &[u32; 3], ws: &[f32; 3]) -> impl Iterator<Item = u32> {
+    let (ks, ws) = (*ks, *ws);
+    (0..3).filter(move |&i| ws[i] != 0.0).map(move |i| ks[i])
+}
+
+/// `tri_impulse_count` and `tri_separate_count`: each vertex's count of the pairs with a
+/// response that move it (word 3 of its sums).
+pub fn tri_count(
+    p: &StepParams,
+    topo: &crate::grid::ClothTopology,
+    pos: &[V4],
+    vel: &[V4],
+    b: &mut TriBufs,
+    pass: Pass,
+) {
+    let mut counts = Vec::new();
+    each_response(p, topo, pos, vel, b, pass, |r| {
+        counts.extend(acting(&r.s.a, &r.s.wa).chain(acting(&r.s.b, &r.s.wb)));
+    });
+    let sums = b.l.sums();
+    for k in counts {
+        let w = &mut b.ints[sums + 4 * k as usize + 3];
+        *w = w.wrapping_add(1);
+    }
+}
+
+/// `tri_impulse_share` and `tri_separate_share`: each response spread over its vertices
+/// (`crate::tri_contact`'s share: over the most pairs any of its vertices is in, by
+/// inverse mass and weight), in fixed point into the sums; the responses counted.
+pub fn tri_share(
+    p: &StepParams,
+    topo: &crate::grid::ClothTopology,
+    pos: &[V4],
+    vel: &[V4],
+    b: &mut TriBufs,
+    pass: Pass,
+) {
+    let (sums, u) = (b.l.sums(), unit(p, pass));
+    let mut adds: Vec<(u32, [i32; 3])> = Vec::new();
+    let mut responses = 0u32;
+    let ints = &*b.ints;
+    each_response(p, topo, pos, vel, b, pass, |r| {
+        responses += 1;
+        let most = acting(&r.s.a, &r.s.wa)
+            .chain(acting(&r.s.b, &r.s.wb))
+            .map(|k| ints[sums + 4 * k as usize + 3] as i32)
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        let scale = 1.0 / most as f32 / r.m / u;
+        for (ks, ws, sign) in [(&r.s.a, &r.s.wa, 1.0f32), (&r.s.b, &r.s.wb, -1.0)] {
+            for (&k, &w) in ks.iter().zip(ws) {
+                if w == 0.0 {
+                    continue;
+                }
+                let d = r.change * (sign * pos[k as usize][3] * w * scale);
+                adds.push((k, [d[0] as i32, d[1] as i32, d[2] as i32]));
+            }
+        }
+    });
+    for (k, d) in adds {
+        for (c, dc) in d.iter().enumerate() {
+            let w = &mut b.ints[sums + 4 * k as usize + c];
+            *w = (*w as i32).wrapping_add(*dc) as u32;
+        }
+    }
+    let stat = if pass == Pass::Velocity { at::SLOWED } else { at::PUSHED };
+    b.ints[stat] += responses;
+}
+
+/// `tri_impulse_apply` and `tri_separate_apply`: each particle's sums added (the
+/// velocity pass's to its velocity; the separation's to its position and, over dt, its
+/// velocity), the sums cleared.
+pub fn tri_apply(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs, pass: Pass) {
+    let (sums, u) = (b.l.sums(), unit(p, pass));
+    for (k, (x, v)) in pos.iter_mut().zip(vel.iter_mut()).enumerate() {
+        let s = &mut b.ints[sums + 4 * k..sums + 4 * k + 4];
+        for c in 0..3 {
+            let d = s[c] as i32 as f32 * u;
+            match pass {
+                Pass::Velocity => v[c] += d,
+                Pass::Separation => {
+                    x[c] += d;
+                    v[c] += d / p.dt;
+                }
+            }
+        }
+        s.fill(0);
+    }
+}
+
+/// `tri_clamp_sum`: the free vertices' displacements since the start, in
+/// [`MEAN_UNIT`]s, into the 64-bit sums (`crate::tri_contact::mean_displacement`), and
+/// their count.
+pub fn tri_clamp_sum(pos: &[V4], b: &mut TriBufs) {
+    for (x, s) in pos.iter().zip(b.floats.iter()) {
+        if x[3] <= 0.0 {
+            continue;
+        }
+        for c in 0..3 {
+            let units = ((x[c] - s[c]) / MEAN_UNIT) as i32 as i64;
+            let (lo, hi) = (at::MEAN + 2 * c, at::MEAN + 2 * c + 1);
+            let sum = ((b.ints[hi] as u64) << 32 | b.ints[lo] as u64) as i64;
+            let sum = sum.wrapping_add(units);
+            (b.ints[lo], b.ints[hi]) = (sum as u32, (sum >> 32) as u32);
+        }
+        b.ints[at::FREE] += 1;
+    }
+}
+
+/// The free vertices' mean displacement from the sums.
+pub fn clamp_mean(ints: &[u32]) -> Vec3 {
+    let count = ints[at::FREE].max(1) as f32;
+    let c = |k: usize| {
+        let (lo, hi) = (ints[at::MEAN + 2 * k], ints[at::MEAN + 2 * k + 1]);
+        (hi as i32 as f32 * 4_294_967_296.0 + lo as f32) * MEAN_UNIT / count
+    };
+    Vec3::new(c(0), c(1), c(2))
+}
+
+/// `tri_clamp_check`: whether some vertex is farther than its bound from the mean
+/// displacement, and whether some moved farther than its bound.
+pub fn tri_clamp_check(pos: &[V4], b: &mut TriBufs) {
+    let mean = clamp_mean(b.ints);
+    for (x, s) in pos.iter().zip(b.floats.iter()) {
+        let d = v3(x) - v3(s);
+        // NaN compares false: over.
+        if !((d - mean).length() <= s[3]) {
+            b.ints[at::OVER] = 1;
+        }
+        if d.length() > s[3] {
+            b.ints[at::MOVED] = 1;
+        }
+    }
+}
+
+/// `tri_clamp`: where some vertex is over its bound from the mean, every vertex's motion
+/// since the start cut to its bound, the cut taken from its velocity (over dt).
+pub fn tri_clamp(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs) {
+    if b.ints[at::OVER] == 0 {
+        return;
+    }
+    let mut clamped = 0;
+    for ((x, v), s) in pos.iter_mut().zip(vel.iter_mut()).zip(b.floats.iter()) {
+        let x0 = v3(s);
+        let d = v3(x) - x0;
+        let len = d.length();
+        if len <= s[3] || !len.is_finite() {
+            continue;
+        }
+        let to = x0 + d * (s[3] / len);
+        for c in 0..3 {
+            v[c] += (to[c] - x[c]) / p.dt;
+            x[c] = to[c];
+        }
+        clamped += 1;
+    }
+    b.ints[at::CLAMPED] += clamped;
+}
+
+/// What the last substep did, from the scalars (`crate::solver::ContactStats`).
+pub fn stats(ints: &[u32]) -> crate::solver::ContactStats {
+    let spared = ints[at::OVER] == 0 && ints[at::MOVED] != 0;
+    crate::solver::ContactStats {
+        reach: f(ints[at::REACH]),
+        pairs: ints[at::PAIRS] as usize,
+        slowed: ints[at::SLOWED] as usize,
+        pushed: ints[at::PUSHED] as usize,
+        clamped: ints[at::CLAMPED] as usize,
+        shared: if spared { clamp_mean(ints).length() } else { 0.0 },
+    }
+}
