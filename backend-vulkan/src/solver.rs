@@ -274,7 +274,14 @@ impl Engine for VulkanEngine {
             });
         }
         let spirv = k.spirv()?;
-        let mut layout: Vec<(u32, vk::DescriptorType)> = self.bindings[0].iter().map(|(b, t, _)| (*b, *t)).collect();
+        // Only the buffers its row reads or writes (a second home of their data counts
+        // as the data): a layout of every binding would pass lavapipe's 32 storage
+        // buffers a stage.
+        let used = |b: u32| {
+            Buf::from_binding(b).is_some_and(|buf| k.def.reads.iter().chain(k.def.writes).any(|&r| r == buf.data()))
+        };
+        let mut layout: Vec<(u32, vk::DescriptorType)> =
+            self.bindings[0].iter().filter(|(b, ..)| used(*b)).map(|(b, t, _)| (*b, *t)).collect();
         let image = match (&self.table, k.flavor.table_image) {
             (Some(i), true) => Some((Buf::Table.binding(), i)),
             (None, true) => {
@@ -303,8 +310,11 @@ impl Engine for VulkanEngine {
         }
         let kernel = Kernel::new(&self.dev, &spirv, &layout, immediates).map_err(backend)?;
         let set = |parity: usize| {
-            let bound: Vec<(u32, vk::DescriptorType, &Buffer)> =
-                self.bindings[parity].iter().map(|&(b, t, id)| (b, t, &self.buffers[id.0 as usize])).collect();
+            let bound: Vec<(u32, vk::DescriptorType, &Buffer)> = self.bindings[parity]
+                .iter()
+                .filter(|(b, ..)| used(*b))
+                .map(|&(b, t, id)| (b, t, &self.buffers[id.0 as usize]))
+                .collect();
             self.sets.allocate(&kernel, &bound, &images, sampler).map_err(backend)
         };
         let sets = [set(0)?, set(1)?];

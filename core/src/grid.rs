@@ -215,7 +215,7 @@ pub struct ClothTopology {
     pub colours: std::sync::Arc<Colours>,
     /// The pins the scene's `[[pins]]` groups move (`crate::pins`; empty: none move).
     pub pins: crate::pins::MovingPins,
-    /// The triangles' edges, each once (`crate::crossings::edges`): found when first
+    /// The triangles' edges, each once (`crate::tables::edges`): found when first
     /// asked for (the contact between triangles), not at build.
     pub edges: std::sync::OnceLock<std::sync::Arc<Vec<[u32; 2]>>>,
 }
@@ -253,9 +253,9 @@ pub struct MeshTables {
 }
 
 impl ClothTopology {
-    /// The triangles' edges, each once, in `crate::crossings::edges`' order.
+    /// The triangles' edges, each once, in `crate::tables::edges`' order.
     pub fn edges(&self) -> &[[u32; 2]] {
-        self.edges.get_or_init(|| std::sync::Arc::new(crate::crossings::edges(&self.triangles)))
+        self.edges.get_or_init(|| std::sync::Arc::new(crate::tables::edges(&self.triangles)))
     }
 
     /// Number of particles.

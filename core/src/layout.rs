@@ -15,6 +15,10 @@ pub const TABLE_WIDTH: u32 = 4096;
 /// Pairs each owner of the contact between triangles keeps (a vertex its triangles, an
 /// edge its edges; more are counted, not kept).
 pub const TRI_SLOTS: u32 = 32;
+/// The most cells a query of the contact between triangles' grids walks: a query over
+/// more (a primitive, or the grid's largest, spanning metres) scans its grid's entries in
+/// their order instead.
+pub const TRI_QUERY_CELLS: u32 = 4096;
 
 /// A spring over `(1 + τ)·rest` is pulled towards `(1 + STRAIN_AIM·τ)·rest`, a little
 /// inside the limit: corrections proportional to the excess over the limit itself make
@@ -365,6 +369,41 @@ impl Uses {
     }
 }
 
+/// The contact between triangles' scalars at the head of its integers ([`Buf::TriInts`]),
+/// by index (u32 words; f32 values as bits): `core::cpu::tri_contact::at`.
+pub mod tri_at {
+    /// The fastest free vertex's speed (f32 bits: atomic max).
+    pub const SPEED: usize = 0;
+    /// The substep's reach (f32).
+    pub const REACH: usize = 1;
+    /// The grids' cell (f32).
+    pub const CELL: usize = 2;
+    /// The triangles' largest box extent, x y z (f32, atomic max).
+    pub const EXTENT_T: usize = 3;
+    /// The edges' largest box extent, x y z (f32, atomic max).
+    pub const EXTENT_E: usize = 6;
+    /// Pairs found in all.
+    pub const PAIRS: usize = 9;
+    /// Pairs found beyond an owner's [`super::TRI_SLOTS`] (left out of the responses).
+    pub const OVERFLOW: usize = 10;
+    /// Pairs the velocity pass slowed.
+    pub const SLOWED: usize = 11;
+    /// Pair pushes of the separation's passes.
+    pub const PUSHED: usize = 12;
+    /// Vertices the clamp cut.
+    pub const CLAMPED: usize = 13;
+    /// The free vertices' displacement sums: x low, x high, y low, y high, z low, z high.
+    pub const MEAN: usize = 14;
+    /// The free vertices.
+    pub const FREE: usize = 20;
+    /// 1 where some vertex is farther than its bound from the mean displacement.
+    pub const OVER: usize = 21;
+    /// 1 where some vertex moved farther than its bound.
+    pub const MOVED: usize = 22;
+    /// The scalars' words.
+    pub const WORDS: usize = 32;
+}
+
 /// The WGSL `const` declarations of the values above (prepended to every kernel).
 pub fn wgsl_constants() -> String {
     let u = |name: &str, v: u32| format!("const {name}: u32 = {v}u;\n");
@@ -377,6 +416,35 @@ pub fn wgsl_constants() -> String {
     s += &u("BLOCK", BLOCK);
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
     s += &u("TRI_SLOTS", TRI_SLOTS);
+    s += &u("TRI_QUERY_CELLS", TRI_QUERY_CELLS);
+    {
+        use tri_at as at;
+        for (name, v) in [
+            ("SPEED", at::SPEED),
+            ("REACH", at::REACH),
+            ("CELL", at::CELL),
+            ("EXTENT_T", at::EXTENT_T),
+            ("EXTENT_E", at::EXTENT_E),
+            ("PAIRS", at::PAIRS),
+            ("OVERFLOW", at::OVERFLOW),
+            ("SLOWED", at::SLOWED),
+            ("PUSHED", at::PUSHED),
+            ("CLAMPED", at::CLAMPED),
+            ("MEAN", at::MEAN),
+            ("FREE", at::FREE),
+            ("OVER", at::OVER),
+            ("MOVED", at::MOVED),
+            ("WORDS", at::WORDS),
+        ] {
+            s += &u(&format!("TRI_AT_{name}"), v as u32);
+        }
+    }
+    s += &format!("const CONTACT_UNITS: f32 = {:?};\n", crate::tables::CONTACT_UNITS);
+    s += &format!("const TRI_BOUND_FRACTION: f32 = {:?};\n", crate::tri_contact::BOUND_FRACTION);
+    s += &format!("const TRI_REACH_PER_MOTION: f32 = {:?};\n", crate::tri_contact::REACH_PER_MOTION);
+    // tri_start.wgsl writes the reach's cap as t + (s + s).
+    const _: () = assert!(crate::tri_contact::MAX_REACH_SPACINGS == 2.0);
+    s += &format!("const TRI_MEAN_UNIT: f32 = {:?};\n", crate::tri_contact::MEAN_UNIT);
     s += &u("MAX_COLLIDERS", crate::scene::MAX_COLLIDERS as u32);
     s += &u("SDF_HEAD_FLOATS", crate::sdf::SdfHead::FLOATS as u32);
     s += &u("SHAPES_RODS_AT", crate::sdf::RODS_AT as u32);

@@ -218,3 +218,15 @@ impl Colours {
         lists
     }
 }
+
+/// The edges of `triangles`, each once (lower index first), sorted.
+pub fn edges(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    let mut e: Vec<[u32; 2]> = triangles
+        .iter()
+        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
+        .map(|[a, b]| [a.min(b), a.max(b)])
+        .collect();
+    e.sort_unstable();
+    e.dedup();
+    e
+}

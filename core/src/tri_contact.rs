@@ -52,7 +52,7 @@ pub fn point_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> PointTriangle {
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
+        let v = d1 * (1.0 / (d1 - d3));
         return PointTriangle { weights: [1.0 - v, v, 0.0], point: a + ab * v, region: Region::Edge(0) };
     }
     let cp = p - c;
@@ -62,12 +62,12 @@ pub fn point_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> PointTriangle {
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
+        let w = d2 * (1.0 / (d2 - d6));
         return PointTriangle { weights: [1.0 - w, 0.0, w], point: a + ac * w, region: Region::Edge(2) };
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        let w = (d4 - d3) * (1.0 / ((d4 - d3) + (d5 - d6)));
         return PointTriangle { weights: [0.0, 1.0 - w, w], point: b + (c - b) * w, region: Region::Edge(1) };
     }
     let denom = 1.0 / (va + vb + vc);
@@ -105,30 +105,30 @@ pub fn edge_edge(p0: Vec3, p1: Vec3, q0: Vec3, q1: Vec3) -> EdgeEdge {
         return at(0.0, 0.0, false);
     }
     if a == 0.0 {
-        return at(0.0, (f / e).clamp(0.0, 1.0), false);
+        return at(0.0, (f * (1.0 / e)).clamp(0.0, 1.0), false);
     }
     let c = d1.dot(r);
     if e == 0.0 {
-        return at((-c / a).clamp(0.0, 1.0), 0.0, false);
+        return at((-c * (1.0 / a)).clamp(0.0, 1.0), 0.0, false);
     }
     let b = d1.dot(d2);
     let denom = a * e - b * b;
     if denom <= PARALLEL_SIN2 * a * e {
         // The overlap of q's projection on p, its middle, and the closest point of q to it.
-        let s0 = ((q0 - p0).dot(d1) / a).clamp(0.0, 1.0);
-        let s1 = ((q1 - p0).dot(d1) / a).clamp(0.0, 1.0);
+        let s0 = ((q0 - p0).dot(d1) * (1.0 / a)).clamp(0.0, 1.0);
+        let s1 = ((q1 - p0).dot(d1) * (1.0 / a)).clamp(0.0, 1.0);
         let s = 0.5 * (s0 + s1);
-        let t = ((p0 + d1 * s - q0).dot(d2) / e).clamp(0.0, 1.0);
+        let t = ((p0 + d1 * s - q0).dot(d2) * (1.0 / e)).clamp(0.0, 1.0);
         return at(s, t, true);
     }
-    let mut s = ((b * f - c * e) / denom).clamp(0.0, 1.0);
-    let mut t = (b * s + f) / e;
+    let mut s = ((b * f - c * e) * (1.0 / denom)).clamp(0.0, 1.0);
+    let mut t = (b * s + f) * (1.0 / e);
     if t < 0.0 {
         t = 0.0;
-        s = (-c / a).clamp(0.0, 1.0);
+        s = (-c * (1.0 / a)).clamp(0.0, 1.0);
     } else if t > 1.0 {
         t = 1.0;
-        s = ((b - c) / a).clamp(0.0, 1.0);
+        s = ((b - c) * (1.0 / a)).clamp(0.0, 1.0);
     }
     at(s, t, false)
 }
@@ -137,6 +137,11 @@ pub fn edge_edge(p0: Vec3, p1: Vec3, q0: Vec3, q1: Vec3) -> EdgeEdge {
 /// vertex may move before contacts are found again (OGC's γ, VBD's truncation): under ½,
 /// so that two primitives each moving less than it cannot meet.
 pub const BOUND_FRACTION: f32 = 0.45;
+
+/// The reach per unit of the fastest vertex's motion in a substep: 1.25 / [`BOUND_FRACTION`]
+/// (a product by this constant on every backend: a division by a constant may be compiled
+/// as a product by its reciprocal, a last bit off).
+pub const REACH_PER_MOTION: f32 = 1.25 / BOUND_FRACTION;
 
 /// A pair of primitives: vertex and triangle, or edge and edge; and their distance.
 pub type Pair = (u32, u32, f32);
@@ -338,7 +343,7 @@ fn separation_moves(
     for ((x, v), d) in pos.iter_mut().zip(vel.iter_mut()).zip(&moves) {
         for c in 0..3 {
             x[c] += d[c];
-            v[c] += d[c] / dt;
+            v[c] += d[c] * (1.0 / dt);
         }
     }
     pushed
@@ -357,7 +362,7 @@ fn separation_shares(
         .filter_map(|k| {
             let (a, wa, p, b, wb, q, fallback) = sides(pos, pairs, k);
             let d = (p - q).length();
-            let n = if d > 0.0 { (p - q) / d } else { fallback };
+            let n = if d > 0.0 { (p - q) * (1.0 / d) } else { fallback };
             let m = mass_term(&a, &wa, inv) + mass_term(&b, &wb, inv);
             (m > 0.0 && n.is_finite() && d < thickness).then_some(Response {
                 a,
@@ -369,7 +374,7 @@ fn separation_shares(
             })
         })
         .collect();
-    let moves = share(&responses, pos.len(), inv, thickness / crate::tables::CONTACT_UNITS);
+    let moves = share(&responses, pos.len(), inv, thickness * (1.0 / crate::tables::CONTACT_UNITS));
     (moves, responses.len())
 }
 
@@ -409,7 +414,7 @@ fn share(responses: &[Response], n: usize, inv: impl Fn(u32) -> f32, unit: f32) 
     let mut sum = vec![[0i32; 3]; n];
     for r in responses {
         let most = acting(&r.a, &r.wa).into_iter().chain(acting(&r.b, &r.wb)).map(|k| count[k as usize]).max();
-        let scale = 1.0 / most.unwrap_or(1).max(1) as f32 / r.m / unit;
+        let scale = (1.0 / most.unwrap_or(1).max(1) as f32) * (1.0 / r.m) * (1.0 / unit);
         for (ks, ws, sign) in [(&r.a, &r.wa, 1.0f32), (&r.b, &r.wb, -1.0)] {
             for (&k, &w) in ks.iter().zip(ws) {
                 if w == 0.0 {
@@ -522,7 +527,7 @@ pub fn approach_impulses(
         .filter_map(|k| {
             let (a, wa, p, b, wb, q, fallback) = sides(pos, pairs, k);
             let d = (p - q).length();
-            let n = if d > 0.0 { (p - q) / d } else { fallback };
+            let n = if d > 0.0 { (p - q) * (1.0 / d) } else { fallback };
             let m = mass_term(&a, &wa, inv) + mass_term(&b, &wb, inv);
             if m == 0.0 || !n.is_finite() {
                 return None;
@@ -530,7 +535,7 @@ pub fn approach_impulses(
             let rel = speed(&a, &wa) - speed(&b, &wb);
             let vn = rel.dot(n);
             // The normal speed that closes the gap to the thickness by the substep's end.
-            let want = (thickness - d) / dt;
+            let want = (thickness - d) * (1.0 / dt);
             if vn >= want {
                 return None;
             }
@@ -544,12 +549,12 @@ pub fn approach_impulses(
             } else if s <= mu.stat * dn {
                 -slide
             } else {
-                -slide * (mu.kinetic * dn / s).min(1.0)
+                -slide * (mu.kinetic * dn * (1.0 / s)).min(1.0)
             };
             Some(Response { a, wa, b, wb, m, change: n * dn + stop })
         })
         .collect();
-    let changes = share(&responses, pos.len(), inv, thickness / dt / crate::tables::CONTACT_UNITS);
+    let changes = share(&responses, pos.len(), inv, thickness * (1.0 / dt) * (1.0 / crate::tables::CONTACT_UNITS));
     for (v, d) in vel.iter_mut().zip(&changes) {
         for c in 0..3 {
             v[c] += d[c];
@@ -598,8 +603,9 @@ impl Contact {
             .map(|(v, _)| Vec3::from_slice(&v[..3]).length())
             .filter(|s| s.is_finite())
             .fold(0.0, f32::max);
-        let motion = fastest * dt + Vec3::from(gravity).length() * dt * dt;
-        (1.25 * motion / BOUND_FRACTION).clamp(thickness, thickness + MAX_REACH_SPACINGS * spacing)
+        // g (dt dt): the GPU's compilers hoist the product of the constants.
+        let motion = fastest * dt + Vec3::from(gravity).length() * (dt * dt);
+        (REACH_PER_MOTION * motion).clamp(thickness, thickness + MAX_REACH_SPACINGS * spacing)
     }
 
     /// At the substep's start: the positions kept, each vertex's bound found, and the
@@ -684,9 +690,9 @@ impl Contact {
                 if len <= bounds[k] || !len.is_finite() {
                     return 0;
                 }
-                let to = x0 + d * (bounds[k] / len);
+                let to = x0 + d * (bounds[k] * (1.0 / len));
                 for c in 0..3 {
-                    v[c] += (to[c] - x[c]) / dt;
+                    v[c] += (to[c] - x[c]) * (1.0 / dt);
                     x[c] = to[c];
                 }
                 1
@@ -724,7 +730,9 @@ pub fn mean_displacement(start: &[crate::grid::V4], pos: &[crate::grid::V4]) -> 
             count += 1;
         }
     }
-    let mean = |s: i64| ((s >> 32) as i32 as f32 * 4_294_967_296.0 + s as u32 as f32) * MEAN_UNIT / count.max(1) as f32;
+    let mean = |s: i64| {
+        ((s >> 32) as i32 as f32 * 4_294_967_296.0 + s as u32 as f32) * MEAN_UNIT * (1.0 / count.max(1) as f32)
+    };
     Vec3::new(mean(sum[0]), mean(sum[1]), mean(sum[2]))
 }
 

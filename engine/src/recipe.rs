@@ -165,9 +165,14 @@ fn stage_kernels(variant: &Variant, how: Integration, strain_passes: u32) -> Vec
                     },
                 ))
             }
-            // The contact between triangles runs on the CPU solvers only: a GPU solver
-            // refuses `self_collision = "triangles"` (GpuSolver::new, set_params).
-            Stage::TriangleBounds | Stage::TriangleSeparate | Stage::TriangleClamp => {}
+            // The contact between triangles (core::cpu::tri_contact's twins).
+            Stage::TriangleBounds => v.extend(k::TRI_BEGIN),
+            Stage::TriangleSeparate => {
+                for _ in 0..clothlab_core::tri_contact::SEPARATION_PASSES {
+                    v.extend(k::TRI_SEPARATE);
+                }
+            }
+            Stage::TriangleClamp => v.extend(k::TRI_CLAMP_STAGE),
             Stage::Normals if frame_normals => {}
             Stage::Normals => v.extend(normals_kernels(variant)),
         }
@@ -177,10 +182,15 @@ fn stage_kernels(variant: &Variant, how: Integration, strain_passes: u32) -> Vec
 
 /// Whether `variant` integrated by `how` computes the normals once per frame
 /// (`normals=frame` where the forces gather computes the wind itself: Verlet and
-/// symplectic Euler fused by clothlab; the other integrators' force kernels read the
-/// wind that the normals kernels leave in the force buffer every substep).
+/// symplectic Euler fused by clothlab, without the contact between triangles; the other
+/// integrators' force kernels read the wind that the normals kernels leave in the force
+/// buffer every substep).
 fn normals_at_frame_end(variant: &Variant, how: Integration) -> bool {
-    variant.normals == Normals::Frame
+    // The contact between triangles' separation sits between Verlet's update and its
+    // colliders, so the gather that computes the wind itself is not fused in: the forces
+    // read the wind the normals leave every substep.
+    !how.triangles
+        && variant.normals == Normals::Frame
         && matches!(variant.fusion, Fusion::IntoGather | Fusion::Tile)
         && matches!(how.integrator, Integrator::Verlet | Integrator::SymplecticEuler)
 }
@@ -429,7 +439,9 @@ pub fn kernels_for(variant: &Variant) -> Vec<KernelRef> {
     let mut commands = recipe(variant, 1, Integration::VERLET);
     commands.extend(frame_end(variant, Integration::VERLET));
     let mut v = kernels_of(&commands);
-    for def in k::ALL.iter().filter(|d| d.immediates == k::Immediates::None) {
+    // (The contact between triangles' kernels only where the recipe has them: with a
+    // scene's constants without that contact they have no thickness to act on.)
+    for def in k::ALL.iter().filter(|d| d.immediates == k::Immediates::None && !k::TRI_CONTACT_KERNELS.contains(d)) {
         if !v.contains(&def.plain()) {
             v.push(def.plain());
         }
@@ -502,8 +514,10 @@ pub mod res {
     pub const AUX: u32 = 1 << 9;
     /// The conjugate-gradient scalars.
     pub const SCALARS: u32 = 1 << 10;
+    /// The contact between triangles' start, integers and pairs (one bit).
+    pub const TRI: u32 = 1 << 11;
     /// Everything.
-    pub const ALL: u32 = (1 << 11) - 1;
+    pub const ALL: u32 = (1 << 12) - 1;
 }
 
 /// The hazard bits of `buf` when the current positions are `pos[cur]`.
@@ -523,6 +537,7 @@ pub fn bits(buf: Buf, cur: usize) -> u32 {
         Buf::Partials => PARTIALS,
         Buf::Aux0 | Buf::Aux1 | Buf::Aux2 | Buf::Aux3 | Buf::Aux4 => AUX,
         Buf::Scalars => SCALARS,
+        Buf::TriFloats | Buf::TriInts | Buf::TriPairs => TRI,
         // Tables: written only between frames, with a full barrier.
         _ => 0,
     }

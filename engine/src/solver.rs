@@ -45,16 +45,20 @@ pub struct SolverOptions {
 /// CG scalars only when a command touches them (a Verlet bisection moves no more than
 /// before there were any).
 fn host_buffers(commands: &[Command]) -> Vec<Buf> {
-    let scratch = |b: &Buf| Buf::AUX.contains(b) || *b == Buf::Scalars;
-    let touched = commands.iter().any(|c| match c {
-        Command::Dispatch(k) | Command::Range { kernel: k, .. } => k.def.reads.iter().chain(k.def.writes).any(scratch),
-        Command::Clear(b) => scratch(b),
-        Command::Swap => false,
-    });
+    let touches = |what: &dyn Fn(&Buf) -> bool| {
+        commands.iter().any(|c| match c {
+            Command::Dispatch(k) | Command::Range { kernel: k, .. } => k.def.reads.iter().chain(k.def.writes).any(what),
+            Command::Clear(b) => what(b),
+            Command::Swap => false,
+        })
+    };
     let mut v = vec![Buf::Pos, Buf::PosOut, Buf::Vel, Buf::Force, Buf::Normal, Buf::Faces];
-    if touched {
+    if touches(&|b| Buf::AUX.contains(b) || *b == Buf::Scalars) {
         v.extend(Buf::AUX);
         v.push(Buf::Scalars);
+    }
+    if touches(&|b| matches!(b, Buf::TriFloats | Buf::TriInts | Buf::TriPairs)) {
+        v.extend([Buf::TriFloats, Buf::TriInts, Buf::TriPairs]);
     }
     v
 }
@@ -92,6 +96,11 @@ pub struct GpuSolver<E: Engine> {
     substeps_per_recording: u32,
     /// Simulated time, s (moving colliders are written at every substep's).
     time: f64,
+    /// Whether it has the contact between triangles' buffers ([`has_tri_buffers`]).
+    tri_buffers: bool,
+    /// What the contact between triangles did in the last frame's last substep (read
+    /// back at the frame's end where the parameters use it).
+    contact: Option<clothlab_core::solver::ContactStats>,
     /// Every kernel it can run ([`KernelRunner::kernels`]): its recipe's, built when it
     /// starts, and the plain flavor of every kernel of the step, built when first run.
     offered: Vec<KernelRef>,
@@ -120,15 +129,45 @@ fn recipe_group(
     Ok(group)
 }
 
-/// The GPU solvers have no kernels for the contact between triangles yet: refused with
-/// what runs it.
-fn check_contact(params: &SimParams) -> Result<(), SolverError> {
-    if params.self_collision.triangles() {
-        return Err(SolverError::Unsupported(
-            "self_collision = \"triangles\" runs on the CPU solvers (cpu, cpu-par); the GPU backends have the particle contact (\"particles\")".to_owned(),
-        ));
+/// Cloths of at most this many particles get the contact between triangles' buffers
+/// whether or not their parameters use it (about 0.5 KiB a particle: 8 MiB at 128 ×
+/// 128), so that the app's switch finds them. Larger cloths get them only when built
+/// with that contact.
+pub const TRI_BUFFERS_ALWAYS: usize = 128 * 128;
+
+/// Whether the solver of `topo` built with `params` has the contact between triangles'
+/// buffers.
+fn has_tri_buffers(topo: &ClothTopology, params: &SimParams) -> bool {
+    params.self_collision.triangles() || topo.num_particles() <= TRI_BUFFERS_ALWAYS
+}
+
+/// Refuses the contact between triangles on a solver built without its buffers.
+fn check_contact(topo: &ClothTopology, built_with: bool, params: &SimParams) -> Result<(), SolverError> {
+    if params.self_collision.triangles() && !built_with {
+        return Err(SolverError::Unsupported(format!(
+            "self_collision = \"triangles\" on a GPU cloth of {} particles is set when the solver is built (its buffers are made then for cloths over {TRI_BUFFERS_ALWAYS}): start with it",
+            topo.num_particles()
+        )));
     }
     Ok(())
+}
+
+/// The contact between triangles' buffers' first contents: the edges with their header,
+/// zeroed starts, integers and pairs; one zero element each where `on` is false.
+fn tri_contents(topo: &ClothTopology, on: bool) -> [(Buf, Vec<u8>); 4] {
+    let zeros = |words: usize| vec![0u8; 16 * words.div_ceil(4).max(1)];
+    if !on {
+        return [Buf::TriEdges, Buf::TriFloats, Buf::TriInts, Buf::TriPairs].map(|b| (b, zeros(1)));
+    }
+    let l = clothlab_core::cpu::tri_contact::TriLayout::of(topo);
+    let mut edges = l.edges_words(topo.edges());
+    edges.resize(edges.len().div_ceil(4) * 4, 0);
+    [
+        (Buf::TriEdges, bytemuck::cast_slice(&edges).to_vec()),
+        (Buf::TriFloats, zeros(4 * l.np)),
+        (Buf::TriInts, zeros(l.words())),
+        (Buf::TriPairs, zeros(l.pair_words())),
+    ]
 }
 
 impl<E: Engine> GpuSolver<E> {
@@ -149,7 +188,6 @@ impl<E: Engine> GpuSolver<E> {
                 "at most {MAX_COLLIDERS} spheres, boxes, and capsules and cylinders together"
             )));
         }
-        check_contact(&params)?;
         let info = engine.info().clone();
         // Immediates hold the step constants where the device has room; the scatters use
         // float atomics where the device has them, compare-exchange otherwise: the same
@@ -175,6 +213,9 @@ impl<E: Engine> GpuSolver<E> {
         let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
         SolverError::check_table(scene.cloth.n, per_particle, info.max_binding, &info.adapter)?;
         let (state, topo) = build(&scene, &params)?;
+        let tri_buffers = has_tri_buffers(&topo, &params);
+        check_contact(&topo, tri_buffers, &params)?;
+        let tri = tri_contents(&topo, tri_buffers);
         // A mesh's table in two bindings (its rows split by entries, whole rows each).
         let (first, second) = split_slots(&topo);
         let table_bytes = std::mem::size_of_val(first.as_slice()).max(std::mem::size_of_val(second.as_slice())) as u64;
@@ -223,7 +264,7 @@ impl<E: Engine> GpuSolver<E> {
         let mut shapes = scene.shapes_at(0.0);
         shapes.extend(clothlab_core::sdf::concat(&scene.bodies).0);
         // Positions and normals are the renderer's vertex buffers too (no copy).
-        let contents: [(Buf, &[u8]); 35] = [
+        let contents: [(Buf, &[u8]); 39] = [
             (Buf::Params, sp.gpu_bytes()),
             (Buf::ParamsStorage, sp.gpu_bytes()),
             (Buf::Contact, bytemuck::bytes_of(&sp.contact)),
@@ -259,6 +300,10 @@ impl<E: Engine> GpuSolver<E> {
             (Buf::Pins, bytemuck::cast_slice(pin_slots)),
             (Buf::PinPoses, &pin_poses),
             (Buf::Shapes, bytemuck::cast_slice(&shapes)),
+            (tri[0].0, &tri[0].1),
+            (tri[1].0, &tri[1].1),
+            (tri[2].0, &tri[2].1),
+            (tri[3].0, &tri[3].1),
         ];
         let mut ids = Vec::with_capacity(contents.len());
         for (buf, bytes) in contents {
@@ -339,6 +384,8 @@ impl<E: Engine> GpuSolver<E> {
             time_kernels: true,
             substeps_per_recording: group,
             time: 0.0,
+            tri_buffers,
+            contact: None,
             offered,
         };
         for k in build_list {
@@ -601,6 +648,14 @@ impl<E: Engine> GpuSolver<E> {
         self.write(Buf::Contact, bytemuck::bytes_of(&sp.contact))?;
         self.step_params = *sp;
         let moved = host_buffers(commands);
+        if moved.contains(&Buf::TriInts) {
+            if !self.tri_buffers {
+                return Err(SolverError::Unsupported(
+                    "the contact between triangles' kernels on a solver built without its buffers".into(),
+                ));
+            }
+            bufs.tri_sized(clothlab_core::cpu::tri_contact::TriLayout::of(&self.topo));
+        }
         for &buf in &moved {
             if let Some(v) = bufs.get(buf) {
                 self.write(buf, bytemuck::cast_slice(v))?;
@@ -706,7 +761,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
     }
 
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
-        check_contact(&params)?;
+        check_contact(&self.topo, self.tri_buffers, &params)?;
         self.topo.validate_params(&params)?;
         self.scene.check_motion_speed(params.dt())?;
         // A new dt keeps the velocity as it is: the state holds it, not Verlet's history.
@@ -780,6 +835,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
             self.must(Buf::StatsMax)?,
             self.must(Buf::StatsEnergy)?,
         );
+        let (tri_ints, contact_on) = (self.must(Buf::TriInts)?, self.params.self_collision.triangles());
         self.barriers = 0;
         for k in 0..submissions {
             let t_record = Instant::now();
@@ -840,6 +896,14 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 self.engine.readback(stats_max, 4 * substeps as u64)?;
                 self.engine.readback(stats_energy, 4 * substeps as u64)?;
             }
+            if last && contact_on {
+                // The contact's scalars (the head of its integers): its last substep's counts.
+                if self.hazards.conflicts(res::TRI, 0) {
+                    self.barrier(false);
+                }
+                self.hazards.add(res::TRI, 0);
+                self.engine.readback(tri_ints, 4 * clothlab_core::cpu::tri_contact::at::WORDS as u64)?;
+            }
             record_ns += t_record.elapsed().as_nanos() as f64;
             let t_submit = Instant::now();
             self.engine.submit(last)?;
@@ -847,12 +911,20 @@ impl<E: Engine> Solver for GpuSolver<E> {
         }
         let finished = self.engine.wait(q)?;
         self.engine.check("simulating a frame")?;
-        if let [max, energy] = &finished.readbacks[..] {
+        let mut readbacks = finished.readbacks.iter();
+        if stats && let (Some(max), Some(energy)) = (readbacks.next(), readbacks.next()) {
             let word = |b: &[u8], k: usize| f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]);
             self.stats = (0..substeps as usize)
                 .map(|k| SubstepStats { max_strain: word(max, k), kinetic_energy: word(energy, k) })
                 .collect();
         }
+        self.contact = match readbacks.next() {
+            Some(b) if contact_on => {
+                let words: Vec<u32> = b.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect();
+                Some(clothlab_core::cpu::tri_contact::stats(&words))
+            }
+            _ => None,
+        };
         if self.time_kernels {
             self.timer.record(CPU_RECORD, record_ns);
             self.timer.record(CPU_SUBMIT, submit_ns);
@@ -928,6 +1000,10 @@ impl<E: Engine> Solver for GpuSolver<E> {
 
     fn set_kernel_timing(&mut self, on: bool) {
         self.time_kernels = on;
+    }
+
+    fn contact_stats(&self) -> Option<clothlab_core::solver::ContactStats> {
+        self.contact
     }
 
     fn substep_stats(&self) -> Vec<SubstepStats> {

@@ -148,9 +148,25 @@ fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
 }
 
 /// The buffers [`validate_kernels`] compares after each kernel: the positions,
-/// velocities, forces, normals, face normals, the five integrator scratch buffers and the
-/// CG scalars.
-pub const COMPARED_BUFFERS: usize = 11;
+/// velocities, forces, normals, face normals, the five integrator scratch buffers, the
+/// CG scalars, and the contact between triangles' starts, integers and pairs (the last
+/// two exactly: integers, with the scalars' f32 values as their bits).
+pub const COMPARED_BUFFERS: usize = 14;
+
+/// `words` (u32s four to an element) as elements whose compared components (xyz) hold
+/// each word's two 16-bit halves, exact in f32: an exact comparison of these compares the
+/// words.
+fn halves(words: &[[f32; 4]]) -> Vec<[f32; 4]> {
+    words
+        .iter()
+        .flat_map(|v| v.map(|x| [(x.to_bits() & 0xffff) as f32, (x.to_bits() >> 16) as f32, 0.0, 0.0]))
+        .collect()
+}
+
+/// `v`'s w components in the compared xyz (after xyz): the contact's bounds.
+fn with_w(v: &[[f32; 4]]) -> Vec<[f32; 4]> {
+    v.iter().flat_map(|x| [*x, [x[3], 0.0, 0.0, 0.0]]).collect()
+}
 
 /// How far a contact through the distance-field image (`sdf=image`) may move a particle
 /// from its twin's, in cells of the coarsest body's grid: φ comes from the texture unit,
@@ -255,13 +271,17 @@ pub fn validate_kernels_with(
             ("aux3", &got.aux[3], &want.aux[3]),
             ("aux4", &got.aux[4], &want.aux[4]),
             ("scalars", &got.scalars, &want.scalars),
+            ("tri_floats", &with_w(&got.tri_floats), &with_w(&want.tri_floats)),
+            ("tri_ints", &halves(&got.tri_ints), &halves(&want.tri_ints)),
+            ("tri_pairs", &halves(&got.tri_pairs), &halves(&want.tri_pairs)),
         ];
         // The image's flavors: positions within `sdf_image_bound` of the twin's and
         // velocities within `sdf_image_vel_bound` (in metres and m/s, so relative to the
         // buffer's largest value).
         let image = if k.flavor.sdf_image { [sdf_image_bound(scene), sdf_image_vel_bound(scene)] } else { [0.0; 2] };
         for (name, g, w) in compared {
-            let mut c = compare(&what, name, g, w, true, relative);
+            let exact = matches!(name, "tri_ints" | "tri_pairs");
+            let mut c = compare(&what, name, g, w, !exact, if exact { 0.0 } else { relative });
             let extra = match name {
                 "pos" => image[0],
                 "vel" => image[1],
@@ -292,15 +312,20 @@ pub fn image_flavors(caps: &Caps) -> Vec<KernelRef> {
 }
 
 fn checked_flavors(caps: &Caps, table_image: bool) -> impl Iterator<Item = KernelRef> {
-    kernels::ALL.iter().filter(|d| matches!(d.check, kernels::Check::Bound { .. })).flat_map(|d| d.flavors()).filter(
-        move |k| {
+    // The contact between triangles' kernels are checked with a scene that has it
+    // (tests/tests/suite/tri_contact.rs; `validate --scene` of such a scene checks its
+    // recipe's): with other scenes' constants they have no thickness to act on.
+    kernels::ALL
+        .iter()
+        .filter(|d| matches!(d.check, kernels::Check::Bound { .. }) && !kernels::TRI_CONTACT_KERNELS.contains(d))
+        .flat_map(|d| d.flavors())
+        .filter(move |k| {
             let f = k.flavor;
             (caps.immediates || f.constants != ConstantsHome::Immediates)
                 && (caps.float_atomics || !f.float_atomics)
                 && (table_image || !f.table_image)
                 && (caps.subgroups || !f.shuffle)
-        },
-    )
+        })
 }
 
 /// Kernel checks of `validate --every-switch` on one solver: which solver, which kernels,

@@ -18,43 +18,11 @@ use glam::Vec3;
 
 use crate::grid::V4;
 use crate::step_params::StepParams;
-use crate::tri_contact::{BOUND_FRACTION, MAX_REACH_SPACINGS, MEAN_UNIT, edge_edge, point_triangle};
+use crate::tri_contact::{BOUND_FRACTION, MAX_REACH_SPACINGS, MEAN_UNIT, REACH_PER_MOTION, edge_edge, point_triangle};
 
 pub use crate::layout::TRI_SLOTS;
 
-/// The scalars at the head of the integers, by index (u32 words; f32 values as bits).
-pub mod at {
-    /// The fastest free vertex's speed (f32 bits: atomic max).
-    pub const SPEED: usize = 0;
-    /// The substep's reach (f32).
-    pub const REACH: usize = 1;
-    /// The grids' cell (f32).
-    pub const CELL: usize = 2;
-    /// The triangles' largest box extent, x y z (f32, atomic max).
-    pub const EXTENT_T: usize = 3;
-    /// The edges' largest box extent, x y z (f32, atomic max).
-    pub const EXTENT_E: usize = 6;
-    /// Pairs found in all.
-    pub const PAIRS: usize = 9;
-    /// Pairs found beyond an owner's [`super::TRI_SLOTS`] (left out of the responses).
-    pub const OVERFLOW: usize = 10;
-    /// Pairs the velocity pass slowed.
-    pub const SLOWED: usize = 11;
-    /// Pair pushes of the separation's passes.
-    pub const PUSHED: usize = 12;
-    /// Vertices the clamp cut.
-    pub const CLAMPED: usize = 13;
-    /// The free vertices' displacement sums: x low, x high, y low, y high, z low, z high.
-    pub const MEAN: usize = 14;
-    /// The free vertices.
-    pub const FREE: usize = 20;
-    /// 1 where some vertex is farther than its bound from the mean displacement.
-    pub const OVER: usize = 21;
-    /// 1 where some vertex moved farther than its bound.
-    pub const MOVED: usize = 22;
-    /// The scalars' words.
-    pub const WORDS: usize = 32;
-}
+pub use crate::layout::tri_at as at;
 
 /// The fixed-point units of the velocity pass's and the separation's sums.
 const UNITS: f32 = crate::tables::CONTACT_UNITS;
@@ -162,9 +130,9 @@ pub fn tri_speed(pos: &[V4], vel: &[V4], b: &mut TriBufs) {
 /// The substep's reach from the fastest speed (`crate::tri_contact::Contact::reach`).
 pub fn reach_of(p: &StepParams, fastest: f32) -> f32 {
     let g = Vec3::new(p.gravity[0], p.gravity[1], p.gravity[2]).length();
-    let motion = fastest * p.dt + g * p.dt * p.dt;
+    let motion = fastest * p.dt + g * (p.dt * p.dt);
     let t = p.self_thickness;
-    (1.25 * motion / BOUND_FRACTION).clamp(t, t + MAX_REACH_SPACINGS * p.spacing)
+    (REACH_PER_MOTION * motion).clamp(t, t + MAX_REACH_SPACINGS * p.spacing)
 }
 
 /// `tri_start`: each particle's start position and its bound at the reach's fraction;
@@ -278,7 +246,9 @@ pub fn tri_grid_sort(b: &mut TriBufs) {
 /// Calls `f` with every primitive of one grid (`grid` 0: triangles, 1: edges) numbered
 /// `first` or more whose box meets `[lo, hi]` grown by `grow`: the cells from the box's
 /// lowest corner less the grid's largest extent to its highest, each entry whose own
-/// lowest corner lies in the cell visited (`crate::box_grid::BoxGrid::query`'s rule).
+/// lowest corner lies in the cell visited (`crate::box_grid::BoxGrid::query`'s rule); a
+/// range of more than [`crate::layout::TRI_QUERY_CELLS`] cells scans the grid's entries
+/// in their order instead.
 #[allow(clippy::too_many_arguments)]
 fn query(
     ints: &[u32],
@@ -302,6 +272,22 @@ fn query(
     let slack = Vec3::splat(1e-4 * cell + 1e-6 * lo.abs().max(hi.abs()).max_element());
     let (c0, c1) = (cell_of(lo - g - extent - slack, inv), cell_of(hi + g + slack, inv));
     let offset = if grid == 0 { 0 } else { l.tris };
+    let meets = |id: u32| {
+        let [elo, ehi] = prim_box(offset + id as usize, pos, &topo.triangles, topo.edges());
+        ((elo - g).cmple(hi).all() && lo.cmple(ehi + g).all()).then_some(elo)
+    };
+    let max = crate::layout::TRI_QUERY_CELLS;
+    let span = [0, 1, 2].map(|k| (c1[k] - c0[k] + 1) as u32);
+    if span.iter().any(|&s| s > max) || span[0] * span[1] > max || span[0] * span[1] * span[2] > max {
+        let (first_bucket, last_bucket) = (grid * l.buckets, grid * l.buckets + l.buckets - 1);
+        let (start, end) = (bucket_range(ints, l, first_bucket).start, bucket_range(ints, l, last_bucket).end);
+        for &id in &ints[start..end] {
+            if id >= first && meets(id).is_some() {
+                f(id);
+            }
+        }
+        return;
+    }
     for i in c0[0]..=c1[0] {
         for j in c0[1]..=c1[1] {
             for k in c0[2]..=c1[2] {
@@ -312,8 +298,7 @@ fn query(
                     if id < first {
                         continue;
                     }
-                    let [elo, ehi] = prim_box(offset + id as usize, pos, &topo.triangles, topo.edges());
-                    if cell_of(elo, inv) == c && (elo - g).cmple(hi).all() && lo.cmple(ehi + g).all() {
+                    if meets(id).is_some_and(|elo| cell_of(elo, inv) == c) {
                         f(id);
                     }
                 }
@@ -457,8 +442,12 @@ fn mass_term(ks: &[u32; 3], ws: &[f32; 3], pos: &[V4]) -> f32 {
 
 fn response(p: &StepParams, pos: &[V4], vel: &[V4], s: Sides, pass: Pass) -> Option<Response> {
     let t = p.self_thickness;
+    // No thickness (constants of a scene without the contact): no response.
+    if t.is_nan() || t <= 0.0 {
+        return None;
+    }
     let d = (s.p - s.q).length();
-    let n = if d > 0.0 { (s.p - s.q) / d } else { s.fallback };
+    let n = if d > 0.0 { (s.p - s.q) * (1.0 / d) } else { s.fallback };
     let m = mass_term(&s.a, &s.wa, pos) + mass_term(&s.b, &s.wb, pos);
     match pass {
         Pass::Separation => (m > 0.0 && n.is_finite() && d < t).then(|| Response { s, m, change: n * (t - d) }),
@@ -471,7 +460,7 @@ fn response(p: &StepParams, pos: &[V4], vel: &[V4], s: Sides, pass: Pass) -> Opt
             };
             let rel = speed(&s.a, &s.wa) - speed(&s.b, &s.wb);
             let vn = rel.dot(n);
-            let want = (t - d) / p.dt;
+            let want = (t - d) * (1.0 / p.dt);
             if vn >= want {
                 return None;
             }
@@ -484,7 +473,7 @@ fn response(p: &StepParams, pos: &[V4], vel: &[V4], s: Sides, pass: Pass) -> Opt
             } else if sl <= ms * dn {
                 -slide
             } else {
-                -slide * (mk * dn / sl).min(1.0)
+                -slide * (mk * dn * (1.0 / sl)).min(1.0)
             };
             Some(Response { s, m, change: n * dn + stop })
         }
@@ -494,8 +483,8 @@ fn response(p: &StepParams, pos: &[V4], vel: &[V4], s: Sides, pass: Pass) -> Opt
 /// The fixed point of a pass's sums.
 fn unit(p: &StepParams, pass: Pass) -> f32 {
     match pass {
-        Pass::Velocity => p.self_thickness / p.dt / UNITS,
-        Pass::Separation => p.self_thickness / UNITS,
+        Pass::Velocity => p.self_thickness * (1.0 / p.dt) * (1.0 / UNITS),
+        Pass::Separation => p.self_thickness * (1.0 / UNITS),
     }
 }
 
@@ -570,7 +559,7 @@ pub fn tri_share(
             .max()
             .unwrap_or(1)
             .max(1);
-        let scale = 1.0 / most as f32 / r.m / u;
+        let scale = (1.0 / most as f32) * (1.0 / r.m) * (1.0 / u);
         for (ks, ws, sign) in [(&r.s.a, &r.s.wa, 1.0f32), (&r.s.b, &r.s.wb, -1.0)] {
             for (&k, &w) in ks.iter().zip(ws) {
                 if w == 0.0 {
@@ -604,7 +593,7 @@ pub fn tri_apply(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs
                 Pass::Velocity => v[c] += d,
                 Pass::Separation => {
                     x[c] += d;
-                    v[c] += d / p.dt;
+                    v[c] += d * (1.0 / p.dt);
                 }
             }
         }
@@ -633,10 +622,10 @@ pub fn tri_clamp_sum(pos: &[V4], b: &mut TriBufs) {
 
 /// The free vertices' mean displacement from the sums.
 pub fn clamp_mean(ints: &[u32]) -> Vec3 {
-    let count = ints[at::FREE].max(1) as f32;
+    let count = 1.0 / ints[at::FREE].max(1) as f32;
     let c = |k: usize| {
         let (lo, hi) = (ints[at::MEAN + 2 * k], ints[at::MEAN + 2 * k + 1]);
-        (hi as i32 as f32 * 4_294_967_296.0 + lo as f32) * MEAN_UNIT / count
+        (hi as i32 as f32 * 4_294_967_296.0 + lo as f32) * MEAN_UNIT * count
     };
     Vec3::new(c(0), c(1), c(2))
 }
@@ -648,7 +637,11 @@ pub fn tri_clamp_check(pos: &[V4], b: &mut TriBufs) {
     for (x, s) in pos.iter().zip(b.floats.iter()) {
         let d = v3(x) - v3(s);
         // NaN compares false: over.
-        if !((d - mean).length() <= s[3]) {
+        let within = matches!(
+            (d - mean).length().partial_cmp(&s[3]),
+            Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+        );
+        if !within {
             b.ints[at::OVER] = 1;
         }
         if d.length() > s[3] {
@@ -671,9 +664,9 @@ pub fn tri_clamp(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs
         if len <= s[3] || !len.is_finite() {
             continue;
         }
-        let to = x0 + d * (s[3] / len);
+        let to = x0 + d * (s[3] * (1.0 / len));
         for c in 0..3 {
-            v[c] += (to[c] - x[c]) / p.dt;
+            v[c] += (to[c] - x[c]) * (1.0 / p.dt);
             x[c] = to[c];
         }
         clamped += 1;

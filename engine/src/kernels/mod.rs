@@ -52,6 +52,13 @@ pub enum Count {
     Pairs,
     /// One per moving pin (`topo.pins.slots`).
     Pins,
+    /// One per primitive of the contact between triangles: the triangles, then the edges.
+    Primitives,
+    /// One per bucket of the contact between triangles' two grids.
+    TriBuckets,
+    /// One per owner of the contact between triangles' pairs: the vertices, then the
+    /// edges.
+    TriOwners,
     /// As many as the dispatch's range says ([`crate::recipe::Command::Range`]: a mesh's
     /// XPBD pass); of the topology, the whole spring list.
     Range,
@@ -73,6 +80,9 @@ impl Count {
             Count::Pairs => topo.n * topo.n.div_ceil(2),
             Count::Range => topo.springs.len() as u32,
             Count::Pins => topo.pins.slots.len() as u32,
+            Count::Primitives => (topo.triangles.len() + topo.edges().len()) as u32,
+            Count::TriBuckets => 2 * cpu::tri_contact::TriLayout::of(topo).buckets as u32,
+            Count::TriOwners => (topo.num_particles() + topo.edges().len()) as u32,
         }
     }
 }
@@ -295,6 +305,13 @@ pub struct HostBuffers {
     /// The frame's pin poses ([`Buf::PinPoses`]): `clothlab_core::pins::frame_poses` as
     /// [`V4`]s, a block of `MAX_PIN_GROUPS` poses per substep (identities to start).
     pub pin_poses: Vec<V4>,
+    /// The contact between triangles' start positions and bounds ([`Buf::TriFloats`]):
+    /// empty until a kernel of that contact runs ([`HostBuffers::tri_sized`]).
+    pub tri_floats: Vec<V4>,
+    /// Its integers ([`Buf::TriInts`]), u32 words four to an element.
+    pub tri_ints: Vec<V4>,
+    /// Its pairs ([`Buf::TriPairs`]), u32 words four to an element.
+    pub tri_pairs: Vec<V4>,
 }
 
 impl HostBuffers {
@@ -319,6 +336,24 @@ impl HostBuffers {
                 1,
             ))
             .to_vec(),
+            tri_floats: Vec::new(),
+            tri_ints: Vec::new(),
+            tri_pairs: Vec::new(),
+        }
+    }
+
+    /// The contact between triangles' buffers sized for `l` (zeroed where their size
+    /// changes): what its kernels and their twins run on.
+    pub fn tri_sized(&mut self, l: cpu::tri_contact::TriLayout) {
+        let sizes = [
+            (&mut self.tri_floats, l.np),
+            (&mut self.tri_ints, l.words().div_ceil(4)),
+            (&mut self.tri_pairs, l.pair_words().div_ceil(4)),
+        ];
+        for (v, n) in sizes {
+            if v.len() != n {
+                *v = vec![[0.0; 4]; n];
+            }
         }
     }
 
@@ -333,6 +368,9 @@ impl HostBuffers {
             Buf::Faces => &self.faces,
             Buf::Scalars => &self.scalars,
             Buf::PinPoses => &self.pin_poses,
+            Buf::TriFloats => &self.tri_floats,
+            Buf::TriInts => &self.tri_ints,
+            Buf::TriPairs => &self.tri_pairs,
             b => return Buf::AUX.iter().position(|a| *a == b).map(|k| &self.aux[k]),
         })
     }
@@ -348,6 +386,9 @@ impl HostBuffers {
             Buf::Faces => &mut self.faces,
             Buf::Scalars => &mut self.scalars,
             Buf::PinPoses => &mut self.pin_poses,
+            Buf::TriFloats => &mut self.tri_floats,
+            Buf::TriInts => &mut self.tri_ints,
+            Buf::TriPairs => &mut self.tri_pairs,
             b => return Buf::AUX.iter().position(|a| *a == b).map(|k| &mut self.aux[k]),
         })
     }
@@ -851,6 +892,7 @@ mod self_collision;
 mod stats;
 mod strain;
 mod tile;
+mod tri_contact;
 mod vbd;
 mod xpbd;
 
@@ -862,6 +904,7 @@ pub use self_collision::*;
 pub use stats::*;
 pub use strain::*;
 pub use tile::*;
+pub use tri_contact::*;
 pub use vbd::*;
 pub use xpbd::*;
 
@@ -878,6 +921,7 @@ const FAMILIES: &[&[&KernelDef]] = &[
     cg::ROWS,
     self_collision::ROWS,
     tile::ROWS,
+    tri_contact::ROWS,
 ];
 
 /// How many kernels the families hold.

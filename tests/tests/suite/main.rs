@@ -26,6 +26,7 @@ mod self_collision;
 mod specialize;
 mod subgroup_shuffle;
 mod tile;
+mod tri_contact;
 mod two_cloths;
 mod vulkan_render;
 mod vulkan_window;

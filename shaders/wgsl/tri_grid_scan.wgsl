@@ -1,0 +1,31 @@
+//! include: state, tri
+// tri_grid_scan — one workgroup: both grids' bucket counts to their exclusive prefix, each
+// bucket's start among the entries (core::cpu::tri_contact::tri_grid_scan). Each
+// invocation sums a run of consecutive counts, the runs before it offset it, and it writes
+// its run's prefixes (hash_scan_top's pattern).
+var<workgroup> run_sums: array<u32, WORKGROUP>;
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(local_invocation_index) li: u32) {
+    p = step_params;
+    let count = 2u * buckets();
+    let per = (count + WORKGROUP - 1u) / WORKGROUP;
+    let first = min(li * per, count);
+    let last = min(first + per, count);
+    let g = grid_at();
+    var sum = 0u;
+    for (var k = first; k < last; k++) {
+        sum += atomicLoad(&tri_ints[g + k]);
+    }
+    run_sums[li] = sum;
+    workgroupBarrier();
+    var acc = 0u;
+    for (var k = 0u; k < li; k++) {
+        acc += run_sums[k];
+    }
+    for (var k = first; k < last; k++) {
+        let n = atomicLoad(&tri_ints[g + k]);
+        atomicStore(&tri_ints[g + k], acc);
+        acc += n;
+    }
+}

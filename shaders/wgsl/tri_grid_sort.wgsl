@@ -1,0 +1,23 @@
+//! include: state, tri
+// tri_grid_sort — per bucket (both grids'): its entries in increasing order, by insertion
+// (a bucket holds a few), so that every query meets them in one order
+// (core::cpu::tri_contact::tri_grid_sort).
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    let k = flat_id(id, groups);
+    if k >= 2u * buckets() {
+        return;
+    }
+    let start = bucket_start(k);
+    let end = bucket_end(k);
+    for (var i = start + 1u; i < end; i++) {
+        let v = atomicLoad(&tri_ints[i]);
+        var j = i;
+        while j > start && atomicLoad(&tri_ints[j - 1u]) > v {
+            atomicStore(&tri_ints[j], atomicLoad(&tri_ints[j - 1u]));
+            j -= 1u;
+        }
+        atomicStore(&tri_ints[j], v);
+    }
+}

@@ -1,0 +1,134 @@
+//! include: state, tri, tri_bounds
+// tri_pairs — per owner (the vertices, then the edges): its pairs closer than the reach
+// through the grid of the other primitives' boxes, in the order its query meets them,
+// the first TRI_SLOTS kept and all counted; every vertex of a pair has its bound lowered
+// to the fraction of the pair's distance (core::cpu::tri_contact::tri_pairs, whose query
+// is core::box_grid's: the cells from the box's corner less the grid's largest extent to
+// its other corner, each entry whose own lowest corner lies in the cell visited).
+fn lower(k: u32, d: f32) {
+    atomicMin(&tri_bounds[4u * k + 3u], bitcast<u32>(TRI_BOUND_FRACTION * d));
+}
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    let o = flat_id(id, groups);
+    if o >= num_owners() {
+        return;
+    }
+    let np = num_particles();
+    let reach = load_f(TRI_AT_REACH);
+    let cell = load_f(TRI_AT_CELL);
+    let inv = 1.0 / cell;
+    let vertex = o < np;
+    var lo: vec3<f32>;
+    var hi: vec3<f32>;
+    var first = 0u;
+    var own = vec2<u32>(o, o);
+    var ext_at = TRI_AT_EXTENT_T;
+    var grid = 0u;
+    var offset = 0u;
+    if vertex {
+        lo = at3(o);
+        hi = lo;
+    } else {
+        own = edge_at(o - np);
+        let p0 = at3(own.x);
+        let p1 = at3(own.y);
+        lo = min(p0, p1);
+        hi = max(p0, p1);
+        first = o - np + 1u;
+        ext_at = TRI_AT_EXTENT_E;
+        grid = buckets();
+        offset = tris_len();
+    }
+    var found = 0u;
+    if finite3(lo) && finite3(hi) {
+        let extent = vec3<f32>(load_f(ext_at), load_f(ext_at + 1u), load_f(ext_at + 2u));
+        let g = vec3<f32>(reach);
+        let m = max(abs(lo), abs(hi));
+        let slack = vec3<f32>(1e-4 * cell + 1e-6 * max(m.x, max(m.y, m.z)));
+        let c0 = cell_of(lo - g - extent - slack, inv);
+        let c1 = cell_of(hi + g + slack, inv);
+        // The cells of the range in one loop (x slowest, z fastest: the twin's order).
+        // A range of more than TRI_QUERY_CELLS cells: the grid's entries in their order.
+        let span = vec3<u32>(c1 - c0) + vec3<u32>(1u);
+        let most = TRI_QUERY_CELLS;
+        let scan = span.x > most || span.y > most || span.z > most || span.x * span.y > most
+            || span.x * span.y * span.z > most;
+        var cells = span.x * span.y * span.z;
+        var bucket = 0u;
+        var e = 0u;
+        var end = 0u;
+        var cell = 0u;
+        var c = c0;
+        if scan {
+            cells = 0u;
+            e = bucket_start(grid);
+            end = bucket_end(grid + buckets() - 1u);
+        }
+        loop {
+            if e >= end {
+                // The next cell's bucket.
+                if cell >= cells {
+                    break;
+                }
+                c = c0 + vec3<i32>(vec3<u32>(cell / (span.y * span.z), (cell / span.z) % span.y, cell % span.z));
+                cell += 1u;
+                bucket = grid + hash_cell(c);
+                e = bucket_start(bucket);
+                end = bucket_end(bucket);
+                continue;
+            }
+            let other = load_int(e);
+            e += 1u;
+            if other < first {
+                continue;
+            }
+            let b = prim_box(offset + other);
+            if (!scan && any(cell_of(b.lo, inv) != c)) || any(b.lo - g > hi) || any(lo > b.hi + g) {
+                continue;
+            }
+            var d = 0.0;
+            if vertex {
+                let t = tri_at(other);
+                if t.x == o || t.y == o || t.z == o {
+                    continue;
+                }
+                d = len3(point_triangle(lo, at3(t.x), at3(t.y), at3(t.z)).q - lo);
+                if !(d < reach) {
+                    continue;
+                }
+                lower(o, d);
+                lower(t.x, d);
+                lower(t.y, d);
+                lower(t.z, d);
+            } else {
+                let f = edge_at(other);
+                if f.x == own.x || f.x == own.y || f.y == own.x || f.y == own.y {
+                    continue;
+                }
+                let r = edge_edge(at3(own.x), at3(own.y), at3(f.x), at3(f.y));
+                d = len3(r.p - r.q);
+                if !(d < reach) {
+                    continue;
+                }
+                lower(own.x, d);
+                lower(own.y, d);
+                lower(f.x, d);
+                lower(f.y, d);
+            }
+            if found < TRI_SLOTS {
+                tri_pairs[o * TRI_SLOTS + found] = other;
+            }
+            found += 1u;
+        }
+    }
+    atomicStore(&tri_ints[owners_at() + o], found);
+    if found > 0u {
+        atomicAdd(&tri_ints[TRI_AT_PAIRS], found);
+    }
+    if found > TRI_SLOTS {
+        atomicAdd(&tri_ints[TRI_AT_OVERFLOW], found - TRI_SLOTS);
+    }
+}
