@@ -390,7 +390,7 @@ struct Response {
 }
 
 /// Σ inverse mass × weight² of a side.
-fn mass_term(ks: &[u32; 3], ws: &[f32; 3], inv: impl Fn(u32) -> f32) -> f32 {
+pub(crate) fn mass_term(ks: &[u32; 3], ws: &[f32; 3], inv: impl Fn(u32) -> f32) -> f32 {
     ks.iter().zip(ws).map(|(&k, &w)| inv(k) * w * w).sum()
 }
 

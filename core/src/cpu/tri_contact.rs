@@ -436,8 +436,10 @@ pub enum Pass {
     Separation,
 }
 
+/// Σ inverse mass × weight² of a side (`crate::tri_contact`'s, the inverse masses from
+/// `pos`'s w).
 fn mass_term(ks: &[u32; 3], ws: &[f32; 3], pos: &[V4]) -> f32 {
-    ks.iter().zip(ws).map(|(&k, &w)| pos[k as usize][3] * w * w).sum()
+    crate::tri_contact::mass_term(ks, ws, |k| pos[k as usize][3])
 }
 
 fn response(p: &StepParams, pos: &[V4], vel: &[V4], s: Sides, pass: Pass) -> Option<Response> {
