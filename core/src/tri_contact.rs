@@ -563,6 +563,41 @@ pub fn approach_impulses(
     responses.len()
 }
 
+/// The pairs an owner acts on at most (a vertex its vertex–triangle pairs, an edge its
+/// edge–edge pairs with the edges numbered above it): the nearest, by distance then
+/// index — a set that does not depend on the search's order, so the GPU's fixed slots
+/// ([`crate::layout::TRI_SLOTS`]) hold the same pairs. The bounds see every pair.
+pub const PAIRS_PER_OWNER: usize = crate::layout::TRI_SLOTS as usize;
+
+/// Each owner's pairs in `pairs` (grouped by owner, as [`find_pairs`] gives them) cut to
+/// its [`PAIRS_PER_OWNER`] nearest (distance, then index), the order otherwise kept.
+pub fn keep_nearest(pairs: &mut Vec<Pair>) {
+    let key = |p: &Pair| (p.2, p.1);
+    let mut out = 0;
+    let mut start = 0;
+    while start < pairs.len() {
+        let owner = pairs[start].0;
+        let end = start + pairs[start..].iter().take_while(|p| p.0 == owner).count();
+        if end - start > PAIRS_PER_OWNER {
+            let mut keys: Vec<(f32, u32)> = pairs[start..end].iter().map(key).collect();
+            keys.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let last = keys[PAIRS_PER_OWNER - 1];
+            for k in start..end {
+                let (d, other) = key(&pairs[k]);
+                if d < last.0 || (d == last.0 && other <= last.1) {
+                    pairs[out] = pairs[k];
+                    out += 1;
+                }
+            }
+        } else {
+            pairs.copy_within(start..end, out);
+            out += end - start;
+        }
+        start = end;
+    }
+    pairs.truncate(out);
+}
+
 /// Passes of the separation a substep (over the pairs found once): each pair's push is
 /// shared among the pairs its vertices are in, so one pass leaves a pile short of the
 /// thickness.
@@ -630,6 +665,8 @@ impl Contact {
         (self.vt, self.ee) =
             bounds_into(pos, triangles, &self.edges, self.stats.reach, self.parallel, &mut self.bounds);
         self.stats.pairs = self.vt.len() + self.ee.len();
+        keep_nearest(&mut self.vt);
+        keep_nearest(&mut self.ee);
         let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
         self.stats.slowed = approach_impulses(pos, vel, &pairs, thickness, dt, mu);
     }

@@ -1,12 +1,18 @@
 //! include: state, tri, tri_bounds
 // tri_pairs — per owner (the vertices, then the edges): its pairs closer than the reach
-// through the grid of the other primitives' boxes, in the order its query meets them,
-// the first TRI_SLOTS kept and all counted; every vertex of a pair has its bound lowered
-// to the fraction of the pair's distance (core::cpu::tri_contact::tri_pairs, whose query
+// through the grid of the other primitives' boxes, the TRI_SLOTS nearest kept (by
+// distance, then index: the same set in any order of the query) and all counted; every
+// vertex of a pair has its bound lowered to the fraction of the pair's distance (core::cpu::tri_contact::tri_pairs, whose query
 // is core::box_grid's: the cells from the box's corner less the grid's largest extent to
 // its other corner, each entry whose own lowest corner lies in the cell visited).
 fn lower(k: u32, d: f32) {
     atomicMin(&tri_bounds[4u * k + 3u], bitcast<u32>(TRI_BOUND_FRACTION * d));
+}
+
+// Whether a pair `d` away with `other` lies after one `e` away with `f` in the order of
+// nearness (distance, then index: no two of an owner's pairs tie).
+fn farther(d: f32, other: u32, e: f32, f: u32) -> bool {
+    return d > e || (d == e && other > f);
 }
 
 @compute @workgroup_size(WORKGROUP)
@@ -43,6 +49,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         offset = tris_len();
     }
     var found = 0u;
+    var near: array<f32, TRI_SLOTS>;
     if finite3(lo) && finite3(hi) {
         let extent = vec3<f32>(load_f(ext_at), load_f(ext_at + 1u), load_f(ext_at + 2u));
         let g = vec3<f32>(reach);
@@ -118,8 +125,22 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
                 lower(f.x, d);
                 lower(f.y, d);
             }
+            let base = o * TRI_SLOTS;
             if found < TRI_SLOTS {
-                tri_pairs[o * TRI_SLOTS + found] = other;
+                tri_pairs[base + found] = other;
+                near[found] = d;
+            } else {
+                // Full: the farthest kept (by distance, then index) gives way to a nearer.
+                var far = 0u;
+                for (var k = 1u; k < TRI_SLOTS; k++) {
+                    if farther(near[k], tri_pairs[base + k], near[far], tri_pairs[base + far]) {
+                        far = k;
+                    }
+                }
+                if farther(near[far], tri_pairs[base + far], d, other) {
+                    tri_pairs[base + far] = other;
+                    near[far] = d;
+                }
             }
             found += 1u;
         }

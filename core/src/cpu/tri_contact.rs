@@ -5,9 +5,9 @@
 //! scalars, the two grids' buckets and entries, each owner's count of pairs, each
 //! particle's fixed-point sums) and the pairs ([`TRI_SLOTS`] an owner).
 //!
-//! Run in order they give what `crate::tri_contact::Contact`'s stages give, bit for bit,
-//! as long as no owner finds more than [`TRI_SLOTS`] pairs (the scalars count what did
-//! not fit): the pairs do not depend on the broad phase, and every sum is an integer sum.
+//! Run in order they give what `crate::tri_contact::Contact`'s stages give, bit for bit:
+//! the pairs do not depend on the broad phase (an owner keeps its [`TRI_SLOTS`] nearest;
+//! the scalars count what did not fit), and every sum is an integer sum.
 //! The CPU solvers run `Contact` (its grid is faster on a CPU); these are what the GPU
 //! solvers run and what their kernels are checked against.
 //!
@@ -88,7 +88,9 @@ impl TriLayout {
         self.np + self.edges
     }
 
-    /// The edges' buffer: `[triangles, edges, buckets, 0]`, then each edge's two vertices.
+    /// The edges' buffer: `[triangles, edges, buckets, 0]`, then each edge's two vertices
+    /// (the header's 0 is a zero the shader compilers cannot see: the kernels pass a
+    /// side's weights through it so that no compiler rewrites (1 − s)·a + s·b as a lerp).
     pub fn edges_words(&self, edges: &[[u32; 2]]) -> Vec<u32> {
         let mut v = vec![self.tris as u32, self.edges as u32, self.buckets as u32, 0];
         v.extend(edges.iter().flatten());
@@ -315,9 +317,15 @@ fn lower(floats: &mut [V4], k: u32, bound: f32) {
     }
 }
 
-/// `tri_pairs`: each owner's pairs closer than the reach, in the order its query meets
-/// them, the first [`TRI_SLOTS`] kept; each vertex's bound lowered to the fraction of every
-/// pair's distance it belongs to.
+/// Whether a pair `(distance, other)` lies after another in the order of nearness
+/// (distance, then index: no two of an owner's pairs tie).
+fn farther(a: (f32, u32), b: (f32, u32)) -> bool {
+    a.0 > b.0 || (a.0 == b.0 && a.1 > b.1)
+}
+
+/// `tri_pairs`: each owner's pairs closer than the reach, the [`TRI_SLOTS`] nearest kept
+/// (by distance, then index; in the slots where the kernel's walk leaves them); each
+/// vertex's bound lowered to the fraction of every pair's distance it belongs to.
 pub fn tri_pairs(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
     let l = b.l;
     let reach = f(b.ints[at::REACH]);
@@ -353,7 +361,9 @@ pub fn tri_pairs(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs)
                 }
             });
         }
-        for (slot, &(other, d)) in found.iter().enumerate() {
+        let slots = TRI_SLOTS as usize;
+        let mut near = [0.0f32; TRI_SLOTS as usize];
+        for (n, &(other, d)) in found.iter().enumerate() {
             let verts: Vec<u32> = if o < l.np {
                 std::iter::once(o as u32).chain(topo.triangles[other as usize]).collect()
             } else {
@@ -362,8 +372,18 @@ pub fn tri_pairs(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs)
             for k in verts {
                 lower(b.floats, k, BOUND_FRACTION * d);
             }
-            if slot < TRI_SLOTS as usize {
-                b.pairs[o * TRI_SLOTS as usize + slot] = other;
+            let kept = &mut b.pairs[o * slots..(o + 1) * slots];
+            if n < slots {
+                kept[n] = other;
+                near[n] = d;
+            } else {
+                // Full: the farthest kept gives way to a nearer (the kernel's walk).
+                let far = (1..slots)
+                    .fold(0, |far, k| if farther((near[k], kept[k]), (near[far], kept[far])) { k } else { far });
+                if farther((near[far], kept[far]), (d, other)) {
+                    kept[far] = other;
+                    near[far] = d;
+                }
             }
         }
         let n = found.len() as u32;

@@ -223,7 +223,16 @@ fn mass_term(ks: vec3<u32>, ws: vec3<f32>) -> f32 {
     return m;
 }
 
-fn speed_of(ks: vec3<u32>, ws: vec3<f32>) -> vec3<f32> {
+// `w` through a word the compiler cannot know is zero (the edges' header's fourth), so
+// that a side's weights (1 − s, s) stay opaque: Mesa's GLSL path otherwise finds a lerp
+// in (1 − s)·a + s·b and computes it as s·(b − a) + a fused, a last bit off the twin's.
+fn opaque(w: vec3<f32>) -> vec3<f32> {
+    return bitcast<vec3<f32>>(bitcast<vec3<u32>>(w) | vec3<u32>(tri_edges[3]));
+}
+
+// The velocity of a side's point: Σ w_i v_i in the order of its vertices.
+fn speed_of(ks: vec3<u32>, weights: vec3<f32>) -> vec3<f32> {
+    let ws = opaque(weights);
     var v = vec3<f32>(0.0);
     for (var i = 0u; i < 3u; i++) {
         v = v + vel[ks[i]].xyz * ws[i];
