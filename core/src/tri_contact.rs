@@ -359,20 +359,7 @@ fn separation_shares(
 ) -> (Vec<[f32; 3]>, usize) {
     let inv = |k: u32| inv_mass[k as usize];
     let responses: Vec<Response> = (0..pairs.vt.len() + pairs.ee.len())
-        .filter_map(|k| {
-            let (a, wa, p, b, wb, q, fallback) = sides(pos, pairs, k);
-            let d = (p - q).length();
-            let n = if d > 0.0 { (p - q) * (1.0 / d) } else { fallback };
-            let m = mass_term(&a, &wa, inv) + mass_term(&b, &wb, inv);
-            (m > 0.0 && n.is_finite() && d < thickness).then_some(Response {
-                a,
-                wa,
-                b,
-                wb,
-                m,
-                change: n * (thickness - d),
-            })
-        })
+        .filter_map(|k| response(sides(pos, pairs, k), inv, &[], thickness, 1.0, Friction::default(), Pass::Separation))
         .collect();
     let moves = share(&responses, pos.len(), inv, thickness * (1.0 / crate::tables::CONTACT_UNITS));
     (moves, responses.len())
@@ -380,13 +367,75 @@ fn separation_shares(
 
 /// One pair's response: `change` to the relative motion of its closest points (p − q),
 /// `m` = Σ inverse mass × weight² over its vertices (how much a unit impulse moves it).
-struct Response {
-    a: [u32; 3],
-    wa: [f32; 3],
-    b: [u32; 3],
-    wb: [f32; 3],
-    m: f32,
-    change: Vec3,
+pub(crate) struct Response {
+    pub(crate) s: Sides,
+    pub(crate) m: f32,
+    pub(crate) change: Vec3,
+}
+
+/// What a pass computes of a pair: the velocity pass's impulse, or the separation's push.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pass {
+    /// [`approach_impulses`].
+    Velocity,
+    /// [`separation_pass`].
+    Separation,
+}
+
+/// A pair's response in `pass` (the one computation of it: `Contact`'s stages and the
+/// GPU kernels' twins both call it), `None` where it has none: with the inverse masses
+/// `inv`, the velocities `vel` (the velocity pass's only), the `thickness` (none where it
+/// is not positive: a scene without the contact), the substep `dt` and Coulomb's `mu`.
+///
+/// - Separation: a pair closer than the thickness is pushed apart to it along the line
+///   between its closest points (`n (t − d)`).
+/// - Velocity: a pair whose relative normal velocity would bring it under the thickness
+///   within `dt` has it changed to what brings it to the thickness instead, and its
+///   sliding stopped where μs times that change can, else slowed by μk times it.
+pub(crate) fn response(
+    s: Sides,
+    inv: impl Fn(u32) -> f32,
+    vel: &[crate::grid::V4],
+    thickness: f32,
+    dt: f32,
+    mu: Friction,
+    pass: Pass,
+) -> Option<Response> {
+    if thickness.is_nan() || thickness <= 0.0 {
+        return None;
+    }
+    let d = (s.p - s.q).length();
+    let n = if d > 0.0 { (s.p - s.q) * (1.0 / d) } else { s.fallback };
+    let m = mass_term(&s.a, &s.wa, &inv) + mass_term(&s.b, &s.wb, &inv);
+    if pass == Pass::Separation {
+        return (m > 0.0 && n.is_finite() && d < thickness).then(|| Response { s, m, change: n * (thickness - d) });
+    }
+    if m == 0.0 || !n.is_finite() {
+        return None;
+    }
+    let speed = |ks: &[u32; 3], ws: &[f32; 3]| -> Vec3 {
+        ks.iter().zip(ws).map(|(&k, &w)| Vec3::from_slice(&vel[k as usize][..3]) * w).sum()
+    };
+    let rel = speed(&s.a, &s.wa) - speed(&s.b, &s.wb);
+    let vn = rel.dot(n);
+    // The normal speed that closes the gap to the thickness by the substep's end.
+    let want = (thickness - d) * (1.0 / dt);
+    if vn >= want {
+        return None;
+    }
+    let dn = want - vn;
+    // Friction on the sliding, from the normal change (a change of the relative velocity
+    // per unit of `m` is an impulse).
+    let slide = rel - n * vn;
+    let sl = slide.length();
+    let stop = if sl == 0.0 || mu == Friction::default() {
+        Vec3::ZERO
+    } else if sl <= mu.stat * dn {
+        -slide
+    } else {
+        -slide * (mu.kinetic * dn * (1.0 / sl)).min(1.0)
+    };
+    Some(Response { s, m, change: n * dn + stop })
 }
 
 /// Σ inverse mass × weight² of a side.
@@ -407,15 +456,15 @@ fn share(responses: &[Response], n: usize, inv: impl Fn(u32) -> f32, unit: f32) 
         ks.iter().zip(ws).filter(|(_, w)| **w != 0.0).map(|(&k, _)| k).collect::<Vec<u32>>()
     };
     for r in responses {
-        for k in acting(&r.a, &r.wa).into_iter().chain(acting(&r.b, &r.wb)) {
+        for k in acting(&r.s.a, &r.s.wa).into_iter().chain(acting(&r.s.b, &r.s.wb)) {
             count[k as usize] += 1;
         }
     }
     let mut sum = vec![[0i32; 3]; n];
     for r in responses {
-        let most = acting(&r.a, &r.wa).into_iter().chain(acting(&r.b, &r.wb)).map(|k| count[k as usize]).max();
+        let most = acting(&r.s.a, &r.s.wa).into_iter().chain(acting(&r.s.b, &r.s.wb)).map(|k| count[k as usize]).max();
         let scale = (1.0 / most.unwrap_or(1).max(1) as f32) * (1.0 / r.m) * (1.0 / unit);
-        for (ks, ws, sign) in [(&r.a, &r.wa, 1.0f32), (&r.b, &r.wb, -1.0)] {
+        for (ks, ws, sign) in [(&r.s.a, &r.s.wa, 1.0f32), (&r.s.b, &r.s.wb, -1.0)] {
             for (&k, &w) in ks.iter().zip(ws) {
                 if w == 0.0 {
                     continue;
@@ -478,26 +527,54 @@ pub struct Pairs<'a> {
     pub ee: &'a [(u32, u32, f32)],
 }
 
-/// Each pair's vertices, their weights at the closest points and the points: `(a, wa, p)`
-/// on one side, `(b, wb, q)` on the other, and a normal for when p and q coincide.
-type Sides = ([u32; 3], [f32; 3], Vec3, [u32; 3], [f32; 3], Vec3, Vec3);
+/// A pair's vertices, their weights at the closest points and the points: `(a, wa, p)`
+/// on one side, `(b, wb, q)` on the other, and a normal for when p and q coincide (a side
+/// of fewer than three vertices has weight 0 on the rest).
+pub(crate) struct Sides {
+    pub(crate) a: [u32; 3],
+    pub(crate) wa: [f32; 3],
+    pub(crate) p: Vec3,
+    pub(crate) b: [u32; 3],
+    pub(crate) wb: [f32; 3],
+    pub(crate) q: Vec3,
+    pub(crate) fallback: Vec3,
+}
 
-/// The closest points of `pairs`' pair `k` (vertex–triangle pairs first, then edge–edge),
-/// as [`Sides`] (a side of fewer than three vertices has weight 0 on the rest).
-fn sides(pos: &[crate::grid::V4], pairs: &Pairs, k: usize) -> Sides {
-    let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
-    if k < pairs.vt.len() {
-        let (v, t, _) = pairs.vt[k];
-        let tri = pairs.triangles[t as usize];
+impl Sides {
+    /// Vertex `v` and triangle `tri` at `pos`.
+    pub(crate) fn vertex_triangle(pos: &[crate::grid::V4], v: u32, tri: [u32; 3]) -> Self {
+        let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
         let (x, a, b, c) = (at(v), at(tri[0]), at(tri[1]), at(tri[2]));
         let r = point_triangle(x, a, b, c);
-        ([v, v, v], [1.0, 0.0, 0.0], x, tri, r.weights, r.point, (b - a).cross(c - a).normalize())
+        let fallback = (b - a).cross(c - a).normalize();
+        Sides { a: [v, v, v], wa: [1.0, 0.0, 0.0], p: x, b: tri, wb: r.weights, q: r.point, fallback }
+    }
+
+    /// Edges `[a, b]` and `[c, d]` at `pos`.
+    pub(crate) fn edge_edge(pos: &[crate::grid::V4], [a, b]: [u32; 2], [c, d]: [u32; 2]) -> Self {
+        let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
+        let r = edge_edge(at(a), at(b), at(c), at(d));
+        let fallback = (at(b) - at(a)).cross(at(d) - at(c)).normalize();
+        Sides {
+            a: [a, b, b],
+            wa: [1.0 - r.s, r.s, 0.0],
+            p: r.p,
+            b: [c, d, d],
+            wb: [1.0 - r.t, r.t, 0.0],
+            q: r.q,
+            fallback,
+        }
+    }
+}
+
+/// The [`Sides`] of `pairs`' pair `k` (vertex–triangle pairs first, then edge–edge).
+fn sides(pos: &[crate::grid::V4], pairs: &Pairs, k: usize) -> Sides {
+    if k < pairs.vt.len() {
+        let (v, t, _) = pairs.vt[k];
+        Sides::vertex_triangle(pos, v, pairs.triangles[t as usize])
     } else {
         let (e, f, _) = pairs.ee[k - pairs.vt.len()];
-        let ([a, b], [c, d]) = (pairs.edges[e as usize], pairs.edges[f as usize]);
-        let r = edge_edge(at(a), at(b), at(c), at(d));
-        let n = (at(b) - at(a)).cross(at(d) - at(c)).normalize();
-        ([a, b, b], [1.0 - r.s, r.s, 0.0], r.p, [c, d, d], [1.0 - r.t, r.t, 0.0], r.q, n)
+        Sides::edge_edge(pos, pairs.edges[e as usize], pairs.edges[f as usize])
     }
 }
 
@@ -520,39 +597,8 @@ pub fn approach_impulses(
     mu: Friction,
 ) -> usize {
     let inv = |k: u32| pos[k as usize][3];
-    let speed = |ks: &[u32; 3], ws: &[f32; 3]| -> Vec3 {
-        ks.iter().zip(ws).map(|(&k, &w)| Vec3::from_slice(&vel[k as usize][..3]) * w).sum()
-    };
     let responses: Vec<Response> = (0..pairs.vt.len() + pairs.ee.len())
-        .filter_map(|k| {
-            let (a, wa, p, b, wb, q, fallback) = sides(pos, pairs, k);
-            let d = (p - q).length();
-            let n = if d > 0.0 { (p - q) * (1.0 / d) } else { fallback };
-            let m = mass_term(&a, &wa, inv) + mass_term(&b, &wb, inv);
-            if m == 0.0 || !n.is_finite() {
-                return None;
-            }
-            let rel = speed(&a, &wa) - speed(&b, &wb);
-            let vn = rel.dot(n);
-            // The normal speed that closes the gap to the thickness by the substep's end.
-            let want = (thickness - d) * (1.0 / dt);
-            if vn >= want {
-                return None;
-            }
-            let dn = want - vn;
-            // Friction on the sliding, from the normal change (a change of the relative
-            // velocity per unit of `m` is an impulse).
-            let slide = rel - n * vn;
-            let s = slide.length();
-            let stop = if s == 0.0 || mu == Friction::default() {
-                Vec3::ZERO
-            } else if s <= mu.stat * dn {
-                -slide
-            } else {
-                -slide * (mu.kinetic * dn * (1.0 / s)).min(1.0)
-            };
-            Some(Response { a, wa, b, wb, m, change: n * dn + stop })
-        })
+        .filter_map(|k| response(sides(pos, pairs, k), inv, vel, thickness, dt, mu, Pass::Velocity))
         .collect();
     let changes = share(&responses, pos.len(), inv, thickness * (1.0 / dt) * (1.0 / crate::tables::CONTACT_UNITS));
     for (v, d) in vel.iter_mut().zip(&changes) {

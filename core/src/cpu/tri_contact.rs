@@ -393,113 +393,24 @@ pub fn tri_pairs(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs)
     }
 }
 
-/// A pair's vertices, their weights at the closest points and the points: `(a, wa, p)`
-/// on one side, `(b, wb, q)` on the other, and a normal for when p and q coincide
-/// (`crate::tri_contact`'s sides).
-struct Sides {
-    a: [u32; 3],
-    wa: [f32; 3],
-    p: Vec3,
-    b: [u32; 3],
-    wb: [f32; 3],
-    q: Vec3,
-    fallback: Vec3,
-}
+pub use crate::tri_contact::Pass;
+use crate::tri_contact::{Response, Sides};
 
+/// Owner `o`'s pair with primitive `other`: a vertex and a triangle, or two edges.
 fn sides(topo: &crate::grid::ClothTopology, pos: &[V4], l: &TriLayout, o: usize, other: u32) -> Sides {
-    let at_ = |k: u32| v3(&pos[k as usize]);
     if o < l.np {
-        let v = o as u32;
-        let tri = topo.triangles[other as usize];
-        let (x, a, b, c) = (at_(v), at_(tri[0]), at_(tri[1]), at_(tri[2]));
-        let r = point_triangle(x, a, b, c);
-        Sides {
-            a: [v, v, v],
-            wa: [1.0, 0.0, 0.0],
-            p: x,
-            b: tri,
-            wb: r.weights,
-            q: r.point,
-            fallback: (b - a).cross(c - a).normalize(),
-        }
+        Sides::vertex_triangle(pos, o as u32, topo.triangles[other as usize])
     } else {
         let edges = topo.edges();
-        let ([a, b], [c, d]) = (edges[o - l.np], edges[other as usize]);
-        let r = edge_edge(at_(a), at_(b), at_(c), at_(d));
-        let n = (at_(b) - at_(a)).cross(at_(d) - at_(c)).normalize();
-        Sides {
-            a: [a, b, b],
-            wa: [1.0 - r.s, r.s, 0.0],
-            p: r.p,
-            b: [c, d, d],
-            wb: [1.0 - r.t, r.t, 0.0],
-            q: r.q,
-            fallback: n,
-        }
+        Sides::edge_edge(pos, edges[o - l.np], edges[other as usize])
     }
 }
 
-/// One pair's response: the change of its closest points' relative motion and
-/// Σ inverse mass × weight² (`crate::tri_contact`'s `Response`).
-struct Response {
-    s: Sides,
-    m: f32,
-    change: Vec3,
-}
-
-/// What a pass computes of a pair: the velocity pass's impulse, or the separation's push.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Pass {
-    /// `approach_impulses`.
-    Velocity,
-    /// `separation_pass`.
-    Separation,
-}
-
-/// Σ inverse mass × weight² of a side (`crate::tri_contact`'s, the inverse masses from
-/// `pos`'s w).
-fn mass_term(ks: &[u32; 3], ws: &[f32; 3], pos: &[V4]) -> f32 {
-    crate::tri_contact::mass_term(ks, ws, |k| pos[k as usize][3])
-}
-
+/// The pair's response (`crate::tri_contact`'s, with the inverse masses from `pos`'s w
+/// and the step's thickness, substep and friction).
 fn response(p: &StepParams, pos: &[V4], vel: &[V4], s: Sides, pass: Pass) -> Option<Response> {
-    let t = p.self_thickness;
-    // No thickness (constants of a scene without the contact): no response.
-    if t.is_nan() || t <= 0.0 {
-        return None;
-    }
-    let d = (s.p - s.q).length();
-    let n = if d > 0.0 { (s.p - s.q) * (1.0 / d) } else { s.fallback };
-    let m = mass_term(&s.a, &s.wa, pos) + mass_term(&s.b, &s.wb, pos);
-    match pass {
-        Pass::Separation => (m > 0.0 && n.is_finite() && d < t).then(|| Response { s, m, change: n * (t - d) }),
-        Pass::Velocity => {
-            if m == 0.0 || !n.is_finite() {
-                return None;
-            }
-            let speed = |ks: &[u32; 3], ws: &[f32; 3]| -> Vec3 {
-                ks.iter().zip(ws).map(|(&k, &w)| v3(&vel[k as usize]) * w).sum()
-            };
-            let rel = speed(&s.a, &s.wa) - speed(&s.b, &s.wb);
-            let vn = rel.dot(n);
-            let want = (t - d) * (1.0 / p.dt);
-            if vn >= want {
-                return None;
-            }
-            let dn = want - vn;
-            let slide = rel - n * vn;
-            let sl = slide.length();
-            let (ms, mk) = (p.mu_static(), p.mu_kinetic());
-            let stop = if sl == 0.0 || (ms == 0.0 && mk == 0.0) {
-                Vec3::ZERO
-            } else if sl <= ms * dn {
-                -slide
-            } else {
-                -slide * (mk * dn * (1.0 / sl)).min(1.0)
-            };
-            Some(Response { s, m, change: n * dn + stop })
-        }
-    }
+    let mu = crate::tri_contact::Friction { stat: p.mu_static(), kinetic: p.mu_kinetic() };
+    crate::tri_contact::response(s, |k| pos[k as usize][3], vel, p.self_thickness, p.dt, mu, pass)
 }
 
 /// The fixed point of a pass's sums.
