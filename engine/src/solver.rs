@@ -130,7 +130,7 @@ fn recipe_group(
 }
 
 /// Cloths of at most this many particles get the contact between triangles' buffers
-/// whether or not their parameters use it (about 0.5 KiB a particle: 8 MiB at 128 ×
+/// whether or not their parameters use it (about 1.1 KiB a particle: 18 MiB at 128 ×
 /// 128), so that the app's switch finds them. Larger cloths get them only when built
 /// with that contact.
 pub const TRI_BUFFERS_ALWAYS: usize = 128 * 128;

@@ -15,18 +15,42 @@ fn farther(d: f32, other: u32, e: f32, f: u32) -> bool {
     return d > e || (d == e && other > f);
 }
 
-@compute @workgroup_size(WORKGROUP)
-fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    p = step_params;
-    let o = flat_id(id, groups);
-    if o >= num_owners() {
-        return;
+// Owner o's n-th pair found within its first TRI_SLOTS: `other`, `d` away (the kept
+// pairs' distances in the buffer's second half, f32 bits).
+fn keep(o: u32, n: u32, other: u32, d: f32) {
+    tri_pairs[o * TRI_SLOTS + n] = other;
+    tri_pairs[(num_owners() + o) * TRI_SLOTS + n] = bitcast<u32>(d);
+}
+
+// A later pair of owner o, `other` `d` away: in place of the farthest kept if nearer.
+fn replace(o: u32, other: u32, d: f32) {
+    let base = o * TRI_SLOTS;
+    let dist = num_owners() * TRI_SLOTS + base;
+    var far = 0u;
+    var far_d = bitcast<f32>(tri_pairs[dist]);
+    for (var k = 1u; k < TRI_SLOTS; k++) {
+        let dk = bitcast<f32>(tri_pairs[dist + k]);
+        if farther(dk, tri_pairs[base + k], far_d, tri_pairs[base + far]) {
+            far = k;
+            far_d = dk;
+        }
     }
+    if farther(far_d, tri_pairs[base + far], d, other) {
+        keep(o, far, other, d);
+    }
+}
+
+// Owner o's walk over the grid: every pair closer than the reach counted; on the first
+// walk (`again` false) the bounds lowered and the first TRI_SLOTS kept, on the second
+// (only for an owner with more) every later one offered to `replace`. Two walks because a
+// lane of a CPU driver's SIMD runs every branch of the loop masked: the replacement's
+// scan in the one walk made the kernel 3 times slower with no owner over its slots.
+fn walk(o: u32, again: bool) -> u32 {
     let np = num_particles();
+    let vertex = o < np;
     let reach = load_f(TRI_AT_REACH);
     let cell = load_f(TRI_AT_CELL);
     let inv = 1.0 / cell;
-    let vertex = o < np;
     var lo: vec3<f32>;
     var hi: vec3<f32>;
     var first = 0u;
@@ -49,7 +73,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         offset = tris_len();
     }
     var found = 0u;
-    var near: array<f32, TRI_SLOTS>;
     if finite3(lo) && finite3(hi) {
         let extent = vec3<f32>(load_f(ext_at), load_f(ext_at + 1u), load_f(ext_at + 2u));
         let g = vec3<f32>(reach);
@@ -69,6 +92,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         var end = 0u;
         var cell = 0u;
         var c = c0;
+        var step = vec3<u32>(0u);
         if scan {
             cells = 0u;
             e = bucket_start(grid);
@@ -80,8 +104,18 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
                 if cell >= cells {
                     break;
                 }
-                c = c0 + vec3<i32>(vec3<u32>(cell / (span.y * span.z), (cell / span.z) % span.y, cell % span.z));
+                c = c0 + vec3<i32>(step);
                 cell += 1u;
+                // The next cell's offset, z fastest (counters: no division a cell).
+                step.z += 1u;
+                if step.z == span.z {
+                    step.z = 0u;
+                    step.y += 1u;
+                    if step.y == span.y {
+                        step.y = 0u;
+                        step.x += 1u;
+                    }
+                }
                 bucket = grid + hash_cell(c);
                 e = bucket_start(bucket);
                 end = bucket_end(bucket);
@@ -106,10 +140,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
                 if !(d < reach) {
                     continue;
                 }
-                lower(o, d);
-                lower(t.x, d);
-                lower(t.y, d);
-                lower(t.z, d);
+                if !again {
+                    lower(o, d);
+                    lower(t.x, d);
+                    lower(t.y, d);
+                    lower(t.z, d);
+                }
             } else {
                 let f = edge_at(other);
                 if f.x == own.x || f.x == own.y || f.y == own.x || f.y == own.y {
@@ -120,30 +156,36 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
                 if !(d < reach) {
                     continue;
                 }
-                lower(own.x, d);
-                lower(own.y, d);
-                lower(f.x, d);
-                lower(f.y, d);
+                if !again {
+                    lower(own.x, d);
+                    lower(own.y, d);
+                    lower(f.x, d);
+                    lower(f.y, d);
+                }
             }
-            let base = o * TRI_SLOTS;
-            if found < TRI_SLOTS {
-                tri_pairs[base + found] = other;
-                near[found] = d;
-            } else {
-                // Full: the farthest kept (by distance, then index) gives way to a nearer.
-                var far = 0u;
-                for (var k = 1u; k < TRI_SLOTS; k++) {
-                    if farther(near[k], tri_pairs[base + k], near[far], tri_pairs[base + far]) {
-                        far = k;
-                    }
+            if !again {
+                if found < TRI_SLOTS {
+                    keep(o, found, other, d);
                 }
-                if farther(near[far], tri_pairs[base + far], d, other) {
-                    tri_pairs[base + far] = other;
-                    near[far] = d;
-                }
+            } else if found >= TRI_SLOTS {
+                replace(o, other, d);
             }
             found += 1u;
         }
+    }
+    return found;
+}
+
+@compute @workgroup_size(WORKGROUP)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    p = step_params;
+    let o = flat_id(id, groups);
+    if o >= num_owners() {
+        return;
+    }
+    let found = walk(o, false);
+    if found > TRI_SLOTS {
+        walk(o, true);
     }
     atomicStore(&tri_ints[owners_at() + o], found);
     if found > 0u {

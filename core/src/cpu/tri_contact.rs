@@ -78,9 +78,10 @@ impl TriLayout {
         self.sums() + 4 * self.np
     }
 
-    /// Words of the pairs: [`TRI_SLOTS`] an owner.
+    /// Words of the pairs: [`TRI_SLOTS`] an owner (the other primitive), then as many
+    /// again (each kept pair's distance, f32 bits: which one a nearer pair replaces).
     pub fn pair_words(&self) -> usize {
-        (self.np + self.edges) * TRI_SLOTS as usize
+        2 * self.num_owners() * TRI_SLOTS as usize
     }
 
     /// Owners: the vertices, then the edges.
@@ -362,7 +363,8 @@ pub fn tri_pairs(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs)
             });
         }
         let slots = TRI_SLOTS as usize;
-        let mut near = [0.0f32; TRI_SLOTS as usize];
+        let (kept, near) = b.pairs.split_at_mut(l.num_owners() * slots);
+        let (kept, near) = (&mut kept[o * slots..(o + 1) * slots], &mut near[o * slots..(o + 1) * slots]);
         for (n, &(other, d)) in found.iter().enumerate() {
             let verts: Vec<u32> = if o < l.np {
                 std::iter::once(o as u32).chain(topo.triangles[other as usize]).collect()
@@ -372,17 +374,16 @@ pub fn tri_pairs(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs)
             for k in verts {
                 lower(b.floats, k, BOUND_FRACTION * d);
             }
-            let kept = &mut b.pairs[o * slots..(o + 1) * slots];
             if n < slots {
                 kept[n] = other;
-                near[n] = d;
+                near[n] = d.to_bits();
             } else {
                 // Full: the farthest kept gives way to a nearer (the kernel's walk).
-                let far = (1..slots)
-                    .fold(0, |far, k| if farther((near[k], kept[k]), (near[far], kept[far])) { k } else { far });
-                if farther((near[far], kept[far]), (d, other)) {
+                let key = |k: usize| (f32::from_bits(near[k]), kept[k]);
+                let far = (1..slots).fold(0, |far, k| if farther(key(k), key(far)) { k } else { far });
+                if farther(key(far), (d, other)) {
                     kept[far] = other;
-                    near[far] = d;
+                    near[far] = d.to_bits();
                 }
             }
         }

@@ -74,3 +74,69 @@ fn the_thin_heap_runs_on_every_api_with_the_cpu_bits() {
         assert!(got.pos == state.pos && got.vel == state.vel, "{}: not the CPU's bits", api.name());
     }
 }
+
+#[test]
+fn owners_over_their_slots_keep_their_nearest_pairs_on_every_api() {
+    // The heap piled 60 frames at n = 24, its velocities 40 times the pile's (the reach at
+    // its cap, two spacings beyond the thickness: thousands of owners find more pairs
+    // than their 32 slots): the start stage (speed, start, grid, pairs) on each API
+    // against the CPU engine's twins — the kept pairs (the nearest, in the slots the
+    // kernel's walk leaves them), their distances, counts and bounds, exactly.
+    use clothlab_core::{StepParams, build};
+    use clothlab_engine::cpu::{CpuEngine, start_buffers};
+    use clothlab_engine::recipe::{Command, KernelRunner};
+    let f = thin_heap(24);
+    let mut cpu = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+    for _ in 0..60 {
+        cpu.step_frame().unwrap();
+    }
+    let mut state = cpu.state().unwrap();
+    for v in &mut state.vel {
+        for c in v.iter_mut().take(3) {
+            *c *= 40.0;
+        }
+    }
+    let (_, topo) = build(&f.scene, &f.params).unwrap();
+    let engine = CpuEngine::new(Exec::Serial, f.scene.clone(), topo);
+    let p = StepParams::new(&f.params, &f.scene, None);
+    let start = start_buffers(Exec::Serial, &p, engine.topology(), &state);
+    let until_pairs = |commands: &[Command]| -> Vec<Command> {
+        let end = commands.iter().position(|c| c.kernel().is_some_and(|k| k.def.name == "tri_pairs")).unwrap();
+        commands[..=end].to_vec()
+    };
+    let words = |v: &[[f32; 4]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<u32>>();
+    let options = clothlab_engine::SolverOptions::default;
+    let mut runners: Vec<(&str, Box<dyn KernelRunner>, Vec<Command>)> = Vec::new();
+    let (sc, pa) = (f.scene.clone(), f.params.clone());
+    if let Some(g) = clothlab_tests::or_skip(
+        clothlab_wgpu::wgpu_solver(Variant::OPTIMIZED, sc.clone(), pa.clone(), options()),
+        "wgpu",
+    ) {
+        let c = until_pairs(&g.commands());
+        runners.push(("wgpu", Box::new(g), c));
+    }
+    if let Some(g) = clothlab_tests::or_skip(
+        clothlab_vulkan::vulkan_solver(Variant::OPTIMIZED, sc.clone(), pa.clone(), true, options()),
+        "vulkan",
+    ) {
+        let c = until_pairs(&g.commands());
+        runners.push(("vulkan", Box::new(g), c));
+    }
+    if let Some(g) = clothlab_tests::or_skip(clothlab_gl::gl_solver(Variant::OPTIMIZED, sc, pa, options()), "gl") {
+        let c = until_pairs(&g.commands());
+        runners.push(("gl", Box::new(g), c));
+    }
+    for (name, mut r, commands) in runners {
+        let mut want = start.clone();
+        engine.run(&commands, &p, 0, &mut want);
+        let ints = words(&want.tri_ints);
+        let over = ints[clothlab_core::cpu::tri_contact::at::OVERFLOW];
+        println!("{name}: {} pairs, {over} beyond the owners' slots", ints[clothlab_core::cpu::tri_contact::at::PAIRS]);
+        assert!(over > 1000, "{over} pairs beyond the slots: the test would hold little");
+        let mut got = start.clone();
+        r.run_commands(&commands, &p, &mut got).unwrap();
+        assert!(words(&got.tri_pairs) == words(&want.tri_pairs), "{name}: the kept pairs differ");
+        assert!(words(&got.tri_ints) == ints, "{name}: the counts or the grid differ");
+        assert!(words(&got.tri_floats) == words(&want.tri_floats), "{name}: the bounds differ");
+    }
+}
