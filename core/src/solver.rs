@@ -42,7 +42,8 @@ pub struct ContactStats {
     pub pairs: usize,
     /// Pairs whose approach the velocity pass slowed.
     pub slowed: usize,
-    /// Pair pushes of the separation (summed over its passes).
+    /// Pair pushes of the separation (summed over its passes, and over XPBD's iterations
+    /// where each takes one).
     pub pushed: usize,
     /// Vertices whose motion the bound cut short.
     pub clamped: usize,

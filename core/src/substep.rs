@@ -115,7 +115,17 @@ impl Integration {
             // Every integrator collides once, at its end: the separation goes before it
             // (the colliders then push out of what the separation pushed in), the
             // bounds before everything and the clamp after everything that moves.
-            if let Some(k) = v.iter().rposition(|&s| s == Collide) {
+            // XPBD takes the contacts as constraints of its iterations: the separation
+            // after each (one iteration: the same place as the others').
+            if self.integrator == Integrator::Xpbd {
+                let mut k = 0;
+                while k < v.len() {
+                    if v[k] == XpbdIteration {
+                        v.insert(k + 1, TriangleSeparate);
+                    }
+                    k += 1;
+                }
+            } else if let Some(k) = v.iter().rposition(|&s| s == Collide) {
                 v.insert(k, TriangleSeparate);
             }
             v.insert(0, TriangleBounds);
@@ -223,6 +233,25 @@ mod tests {
                 _ => 0,
             };
             assert_eq!(iterations, expected, "{integrator:?}");
+        }
+    }
+
+    #[test]
+    fn the_contact_between_triangles_separates_once_before_the_colliders_or_after_each_xpbd_iteration() {
+        for integrator in Integrator::ALL {
+            let how = Integration { integrator, xpbd_iterations: 3, triangles: true, ..Integration::VERLET };
+            let s = how.stages(1);
+            assert_eq!(s[0], Stage::TriangleBounds, "{integrator:?}");
+            assert_eq!(s[s.len() - 2..], [Stage::TriangleClamp, Stage::Normals], "{integrator:?}: {s:?}");
+            let after = |st: Stage| s.windows(2).filter(|w| w == &[st, Stage::TriangleSeparate]).count();
+            let separations = s.iter().filter(|&&x| x == Stage::TriangleSeparate).count();
+            if integrator == Integrator::Xpbd {
+                assert_eq!((separations, after(Stage::XpbdIteration)), (3, 3), "{s:?}");
+            } else {
+                // Once, right before the colliders.
+                let before = s.windows(2).filter(|w| w == &[Stage::TriangleSeparate, Stage::Collide]).count();
+                assert_eq!((separations, before), (1, 1), "{integrator:?}: {s:?}");
+            }
         }
     }
 }

@@ -711,6 +711,8 @@ impl Contact {
         (self.vt, self.ee) =
             bounds_into(pos, triangles, &self.edges, self.stats.reach, self.parallel, &mut self.bounds);
         self.stats.pairs = self.vt.len() + self.ee.len();
+        // Summed over the substep's separations (XPBD's iterations take one each).
+        self.stats.pushed = 0;
         keep_nearest(&mut self.vt);
         keep_nearest(&mut self.ee);
         let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
@@ -731,7 +733,6 @@ impl Contact {
         dt: f32,
     ) {
         let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
-        self.stats.pushed = 0;
         for _ in 0..SEPARATION_PASSES {
             self.stats.pushed += separation_moves(pos, vel, &pairs, thickness, dt);
         }

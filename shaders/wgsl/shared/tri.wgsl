@@ -191,6 +191,14 @@ struct Sides {
     fallback: vec3<f32>,
 }
 
+// `w` through a word the compiler cannot know is zero (the edges' header's fourth), so
+// that a side's weights (1 − s, s) stay opaque: Mesa's GLSL path otherwise finds a lerp
+// in every (1 − s)·a + s·b the response sums (the velocity at a point, Σ w² / m) and
+// computes it as s·(b − a) + a fused, a last bit off the twin's.
+fn opaque(w: vec3<f32>) -> vec3<f32> {
+    return bitcast<vec3<f32>>(bitcast<vec3<u32>>(w) | vec3<u32>(tri_edges[3]));
+}
+
 // Owner o's pair with primitive `other`: a vertex and a triangle, or two edges.
 fn sides(o: u32, other: u32) -> Sides {
     let np = num_particles();
@@ -201,7 +209,7 @@ fn sides(o: u32, other: u32) -> Sides {
         let b = at3(tri.y);
         let c = at3(tri.z);
         let r = point_triangle(x, a, b, c);
-        return Sides(vec3<u32>(o), vec3<f32>(1.0, 0.0, 0.0), x, tri, r.w, r.q, normalize3(cross3(b - a, c - a)));
+        return Sides(vec3<u32>(o), vec3<f32>(1.0, 0.0, 0.0), x, tri, opaque(r.w), r.q, normalize3(cross3(b - a, c - a)));
     }
     let e = edge_at(o - np);
     let g = edge_at(other);
@@ -211,8 +219,8 @@ fn sides(o: u32, other: u32) -> Sides {
     let d = at3(g.y);
     let r = edge_edge(a, b, c, d);
     let n = normalize3(cross3(b - a, d - c));
-    return Sides(vec3<u32>(e.x, e.y, e.y), vec3<f32>(1.0 - r.s, r.s, 0.0), r.p, vec3<u32>(g.x, g.y, g.y),
-        vec3<f32>(1.0 - r.t, r.t, 0.0), r.q, n);
+    return Sides(vec3<u32>(e.x, e.y, e.y), opaque(vec3<f32>(1.0 - r.s, r.s, 0.0)), r.p, vec3<u32>(g.x, g.y, g.y),
+        opaque(vec3<f32>(1.0 - r.t, r.t, 0.0)), r.q, n);
 }
 
 fn mass_term(ks: vec3<u32>, ws: vec3<f32>) -> f32 {
@@ -223,16 +231,8 @@ fn mass_term(ks: vec3<u32>, ws: vec3<f32>) -> f32 {
     return m;
 }
 
-// `w` through a word the compiler cannot know is zero (the edges' header's fourth), so
-// that a side's weights (1 − s, s) stay opaque: Mesa's GLSL path otherwise finds a lerp
-// in (1 − s)·a + s·b and computes it as s·(b − a) + a fused, a last bit off the twin's.
-fn opaque(w: vec3<f32>) -> vec3<f32> {
-    return bitcast<vec3<f32>>(bitcast<vec3<u32>>(w) | vec3<u32>(tri_edges[3]));
-}
-
 // The velocity of a side's point: Σ w_i v_i in the order of its vertices.
-fn speed_of(ks: vec3<u32>, weights: vec3<f32>) -> vec3<f32> {
-    let ws = opaque(weights);
+fn speed_of(ks: vec3<u32>, ws: vec3<f32>) -> vec3<f32> {
     var v = vec3<f32>(0.0);
     for (var i = 0u; i < 3u; i++) {
         v = v + vel[ks[i]].xyz * ws[i];

@@ -140,3 +140,38 @@ fn owners_over_their_slots_keep_their_nearest_pairs_on_every_api() {
         assert!(words(&got.tri_floats) == words(&want.tri_floats), "{name}: the bounds differ");
     }
 }
+
+#[test]
+fn xpbd_takes_the_contact_as_constraints_of_each_iteration_with_the_cpu_bits_on_every_api() {
+    // XPBD with four iterations, the separation after each: 40 frames of the thin heap at
+    // n = 24 (landing from frame 30) give the CPU's bits on every API and no crossing (a
+    // GL run of 90 frames left them at substep 930 until a side's weights were made
+    // opaque to Mesa's lerp rewrite in Σ w² / m too: checked by hand, 90 frames).
+    const FRAMES: usize = 40;
+    let mut f = thin_heap(24);
+    f.params.integrator = clothlab_core::Integrator::Xpbd;
+    f.params.xpbd_iterations = 4;
+    let mut cpu = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+    let (mut most, mut pushed) = (0, 0);
+    for _ in 0..FRAMES {
+        cpu.step_frame().unwrap();
+        let s = cpu.contact_stats().unwrap();
+        (most, pushed) = (most.max(s.pairs), pushed + s.pushed);
+    }
+    let (state, stats) = (cpu.state().unwrap(), cpu.contact_stats().unwrap());
+    println!("cpu: at most {most} pairs, {pushed} pushes at the frames' last substeps");
+    assert!(most > 1000 && pushed > 100, "the heap did not pile: the test would hold little");
+    let triangles = cpu.topology().triangles.clone();
+    for api in Api::ALL {
+        let Some(gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &f.params) else { continue };
+        let mut s = gpu.into_solver();
+        for _ in 0..FRAMES {
+            s.step_frame().unwrap();
+        }
+        let got = s.state().unwrap();
+        let crossed = clothlab_core::crossings::count(&got.pos, &triangles).pairs;
+        assert_eq!(crossed, 0, "{}: the heap crossed itself", api.name());
+        assert!(got.pos == state.pos && got.vel == state.vel, "{}: not the CPU's bits", api.name());
+        assert_eq!(s.contact_stats().unwrap(), stats, "{}", api.name());
+    }
+}
