@@ -225,7 +225,7 @@ pub static TRI_PAIRS: KernelDef = row(
     "tri_pairs",
     tri_pairs,
     Count::TriOwners,
-    &[Params, Pos, Triangles, TriEdges, TriFloats, TriInts],
+    &[Params, Pos, Triangles, TriEdges, TriFloats, TriInts, TriPairs],
     &[TriFloats, TriInts, TriPairs],
     B,
     after_sort,
