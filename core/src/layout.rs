@@ -14,7 +14,7 @@ pub const BLOCK: u32 = 4;
 pub const TABLE_WIDTH: u32 = 4096;
 /// Pairs each owner of the contact between triangles keeps (a vertex its triangles, an
 /// edge its edges; more are counted, not kept).
-pub const TRI_SLOTS: u32 = 32;
+pub const TRI_SLOTS: u32 = crate::tri_contact::PAIRS_PER_OWNER as u32;
 /// The most cells a query of the contact between triangles' grids walks: a query over
 /// more (a primitive, or the grid's largest, spanning metres) scans its grid's entries in
 /// their order instead.

@@ -612,8 +612,8 @@ pub fn approach_impulses(
 /// The pairs an owner acts on at most (a vertex its vertex–triangle pairs, an edge its
 /// edge–edge pairs with the edges numbered above it): the nearest, by distance then
 /// index — a set that does not depend on the search's order, so the GPU's fixed slots
-/// ([`crate::layout::TRI_SLOTS`]) hold the same pairs. The bounds see every pair.
-pub const PAIRS_PER_OWNER: usize = crate::layout::TRI_SLOTS as usize;
+/// (the layout's `TRI_SLOTS`, this number) hold the same pairs. The bounds see every pair.
+pub const PAIRS_PER_OWNER: usize = 32;
 
 /// Each owner's pairs in `pairs` (grouped by owner, as [`find_pairs`] gives them) cut to
 /// its [`PAIRS_PER_OWNER`] nearest (distance, then index), the order otherwise kept.
