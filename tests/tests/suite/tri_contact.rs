@@ -142,9 +142,9 @@ fn owners_over_their_slots_keep_their_nearest_pairs_on_every_api() {
 }
 
 #[test]
-fn xpbd_takes_the_contact_as_constraints_of_each_iteration_with_the_cpu_bits_on_every_api() {
+fn xpbd_takes_the_contact_as_constraints_of_each_iteration_with_the_cpu_bits_on_vulkan_and_gl() {
     // XPBD with four iterations, the separation after each: 40 frames of the thin heap at
-    // n = 24 (landing from frame 30) give the CPU's bits on every API and no crossing (a
+    // n = 24 (landing from frame 30) give the CPU's bits and no crossing (a
     // GL run of 90 frames left them at substep 930 until a side's weights were made
     // opaque to Mesa's lerp rewrite in Σ w² / m too: checked by hand, 90 frames).
     const FRAMES: usize = 40;
@@ -162,7 +162,9 @@ fn xpbd_takes_the_contact_as_constraints_of_each_iteration_with_the_cpu_bits_on_
     println!("cpu: at most {most} pairs, {pushed} pushes at the frames' last substeps");
     assert!(most > 1000 && pushed > 100, "the heap did not pile: the test would hold little");
     let triangles = cpu.topology().triangles.clone();
-    for api in Api::ALL {
+    // Raw Vulkan and GL: wgpu compiles the same WGSL through the same SPIR-V path as raw
+    // Vulkan (the thin-heap test above holds all three), and the suite's time is budgeted.
+    for api in [Api::Vulkan, Api::Gl] {
         let Some(gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &f.params) else { continue };
         let mut s = gpu.into_solver();
         for _ in 0..FRAMES {
