@@ -191,7 +191,8 @@ pub enum Stage {
     /// Contact between triangles: each vertex's bound on its motion in this substep, from
     /// the pairs of primitives near it at the substep's start.
     TriangleBounds,
-    /// Contact between triangles: the pairs closer than the thickness pushed apart.
+    /// Contact between triangles: the pairs closer than the thickness pushed apart
+    /// (before the colliders; under XPBD after each iteration, as its constraints).
     TriangleSeparate,
     /// Contact between triangles: every vertex's motion in the substep cut to its bound.
     TriangleClamp,
