@@ -319,7 +319,7 @@ pub fn separate_with(
 /// One Jacobi pass of the separation over `pairs` (found before) at `pos`, in place;
 /// returns the pairs closer than `thickness` it pushed.
 pub fn separation_pass(pos: &mut [crate::grid::V4], pairs: &Pairs, inv_mass: &[f32], thickness: f32) -> usize {
-    let (moves, pushed) = separation_shares(pos, pairs, inv_mass, thickness);
+    let (moves, pushed) = separation_shares(pos, pairs, |k| inv_mass[k as usize], thickness);
     for (x, d) in pos.iter_mut().zip(&moves) {
         for c in 0..3 {
             x[c] += d[c];
@@ -338,8 +338,9 @@ fn separation_moves(
     thickness: f32,
     dt: f32,
 ) -> usize {
-    let inv: Vec<f32> = pos.iter().map(|x| x[3]).collect();
-    let (moves, pushed) = separation_shares(pos, pairs, &inv, thickness);
+    // The inverse masses are the positions' w, which the moves leave as they are.
+    let at: &[crate::grid::V4] = pos;
+    let (moves, pushed) = separation_shares(at, pairs, |k| at[k as usize][3], thickness);
     for ((x, v), d) in pos.iter_mut().zip(vel.iter_mut()).zip(&moves) {
         for c in 0..3 {
             x[c] += d[c];
@@ -354,10 +355,9 @@ fn separation_moves(
 fn separation_shares(
     pos: &[crate::grid::V4],
     pairs: &Pairs,
-    inv_mass: &[f32],
+    inv: impl Fn(u32) -> f32 + Copy,
     thickness: f32,
 ) -> (Vec<[f32; 3]>, usize) {
-    let inv = |k: u32| inv_mass[k as usize];
     let responses: Vec<Response> = (0..pairs.vt.len() + pairs.ee.len())
         .filter_map(|k| response(sides(pos, pairs, k), inv, &[], thickness, 1.0, Friction::default(), Pass::Separation))
         .collect();
