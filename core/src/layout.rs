@@ -416,6 +416,7 @@ pub fn wgsl_constants() -> String {
     s += &u("BLOCK", BLOCK);
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
     s += &u("TRI_SLOTS", TRI_SLOTS);
+    s += &u("VBD_TERMS", crate::tri_contact::VBD_TERMS as u32);
     s += &u("TRI_QUERY_CELLS", TRI_QUERY_CELLS);
     {
         use tri_at as at;

@@ -148,6 +148,9 @@ pub struct Colours {
     pub order: Vec<u32>,
     /// Where each colour starts in `order`, and one past the last colour's end.
     pub bounds: Vec<u32>,
+    /// Each particle's colour (the contact between triangles' terms under VBD are
+    /// gathered for one colour at a time).
+    pub of: Vec<u32>,
 }
 
 impl Colours {
@@ -159,7 +162,22 @@ impl Colours {
             order.extend_from_slice(l);
             bounds.push(order.len() as u32);
         }
-        Self { order, bounds }
+        let mut of = vec![0u32; order.len()];
+        for (c, l) in lists.iter().enumerate() {
+            for &k in l {
+                if let Some(slot) = of.get_mut(k as usize) {
+                    *slot = c as u32;
+                }
+            }
+        }
+        Self { order, bounds, of }
+    }
+
+    /// The GPU's words ([`crate::layout::Buf::Colours`]): `order`, then `of`.
+    pub fn words(&self) -> Vec<u32> {
+        let mut v = self.order.clone();
+        v.extend_from_slice(&self.of);
+        v
     }
 
     /// How many colours.

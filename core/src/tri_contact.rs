@@ -500,6 +500,8 @@ pub struct Contact {
     /// separation's.
     vt: Vec<Pair>,
     ee: Vec<Pair>,
+    /// VBD's contact terms of the colour being swept ([`VBD_TERMS`] words a particle).
+    vbd: Vec<u32>,
     /// What the last substep's stages did: the reach and pairs of [`Contact::begin`], the
     /// approaches it slowed, the pairs [`Contact::separate`] pushed and the vertices
     /// [`Contact::clamp`] cut short (what [`crate::Solver::contact_stats`] reports).
@@ -607,6 +609,59 @@ pub fn approach_impulses(
         }
     }
     responses.len()
+}
+
+/// Words a particle of VBD's contact terms ([`vbd_terms`]): the force's x, y, z, then the
+/// block's six entries `[h00, h11, h22, h01, h02, h12]`, each a fixed-point sum.
+pub const VBD_TERMS: usize = 9;
+
+/// A pair's contact energy inside VBD's local solves (the paper's §3.5 for the contact
+/// between primitives): `E = ½ k (t − d)²` while the closest points are `d` < `thickness`
+/// (`t`) apart, `n` the normal from the second side's point to the first's. Each acting
+/// vertex (weight `w` ≠ 0) that `wanted` takes (the colour being swept, not held) gets
+/// its force `−∂E/∂x = ± k (t − d) w n` (`+` on the first side) in units of
+/// `t / CONTACT_UNITS`, and its block `k w n nᵀ` in units of `1 / CONTACT_UNITS`, over
+/// `k` (the block multiplies it in: `cpu::vbd`), added to its [`VBD_TERMS`] words of
+/// `sums` as 32-bit integers (truncated, wrapping: the same sum in any order, as the GPU's
+/// atomics). Returns whether the pair is closer than `t`.
+///
+/// The block is the Gauss–Newton `k w² n nᵀ` raised to `k w n nᵀ` (w ≤ 1: still the
+/// pair's energy's majorant along n), so that a vertex's step is its pairs' gaps to the
+/// thickness averaged by weight and never more than the largest. With `w²` a vertex whose
+/// pairs mix weights (vertex–triangle at 1, edge–edge at ½) stepped past the thickness,
+/// where the one-sided energy is zero and the inertia pulled it back: a sheet pressed to
+/// 0.6 t on another went to 1.03 t and back to 0.6 t sweep after sweep.
+pub(crate) fn vbd_terms(s: &Sides, thickness: f32, wanted: impl Fn(u32) -> bool, sums: &mut [u32]) -> bool {
+    if thickness.is_nan() || thickness <= 0.0 {
+        return false;
+    }
+    let d = (s.p - s.q).length();
+    // (A NaN distance adds nothing either.)
+    if d.is_nan() || d >= thickness {
+        return false;
+    }
+    let n = if d > 0.0 { (s.p - s.q) * (1.0 / d) } else { s.fallback };
+    if !n.is_finite() {
+        return false;
+    }
+    let scale = (thickness - d) * (1.0 / (thickness * (1.0 / crate::tables::CONTACT_UNITS)));
+    for (ks, ws, sign) in [(&s.a, &s.wa, 1.0f32), (&s.b, &s.wb, -1.0)] {
+        for (&k, &w) in ks.iter().zip(ws) {
+            if w == 0.0 || !wanted(k) {
+                continue;
+            }
+            let f = n * (sign * w * scale);
+            // The block's k w n nᵀ, not the Gauss–Newton k w² n nᵀ (see above).
+            let hw = w * crate::tables::CONTACT_UNITS;
+            let h = [n.x * n.x * hw, n.y * n.y * hw, n.z * n.z * hw, n.x * n.y * hw, n.x * n.z * hw, n.y * n.z * hw];
+            let at = &mut sums[VBD_TERMS * k as usize..][..VBD_TERMS];
+            for (word, v) in at.iter_mut().zip(f.to_array().into_iter().chain(h)) {
+                // Saturating conversion and wrapping sums: what a GPU's i32 atomics do.
+                *word = word.wrapping_add(v as i32 as u32);
+            }
+        }
+    }
+    true
 }
 
 /// The pairs an owner acts on at most (a vertex its vertex–triangle pairs, an edge its
@@ -736,6 +791,48 @@ impl Contact {
         for _ in 0..SEPARATION_PASSES {
             self.stats.pushed += separation_moves(pos, vel, &pairs, thickness, dt);
         }
+    }
+
+    /// VBD's contact terms ([`vbd_terms`]) of the pairs of the substep's start at `pos`
+    /// (the sweep's iterate, `x⁰ + D`), for the vertices of colour `colour`
+    /// (`colour_of`: each particle's) that are not held (pinned, or the grabbed
+    /// `grab`): what `cpu::vbd::vbd_colour` adds to their blocks, and clears. Returns the
+    /// pairs closer than the thickness with a vertex in the colour.
+    pub fn vbd_terms(
+        &mut self,
+        pos: &[crate::grid::V4],
+        triangles: &[[u32; 3]],
+        thickness: f32,
+        colour_of: &[u32],
+        colour: u32,
+        grab: i32,
+    ) -> usize {
+        self.vbd.resize(VBD_TERMS * pos.len(), 0);
+        let wanted = |k: u32| colour_of[k as usize] == colour && k as i32 != grab && pos[k as usize][3] != 0.0;
+        let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
+        let mut touching = 0;
+        for k in 0..self.vt.len() + self.ee.len() {
+            // The closest points only for a pair with a vertex to act on.
+            let verts: [u32; 4] = if k < self.vt.len() {
+                let (v, t, _) = self.vt[k];
+                let [a, b, c] = triangles[t as usize];
+                [v, a, b, c]
+            } else {
+                let (e, f, _) = self.ee[k - self.vt.len()];
+                let ([a, b], [c, d]) = (self.edges[e as usize], self.edges[f as usize]);
+                [a, b, c, d]
+            };
+            if verts.iter().any(|&v| wanted(v)) && vbd_terms(&sides(pos, &pairs, k), thickness, wanted, &mut self.vbd) {
+                touching += 1;
+            }
+        }
+        touching
+    }
+
+    /// The terms [`Contact::vbd_terms`] left, for `cpu::vbd::vbd_colour` (which clears
+    /// its colour's).
+    pub fn vbd_sums(&mut self) -> &mut [u32] {
+        &mut self.vbd
     }
 
     /// Every vertex's motion since [`Contact::begin`] cut to its bound, the cut taken

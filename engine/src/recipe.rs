@@ -137,8 +137,13 @@ fn stage_kernels(variant: &Variant, how: Integration, strain_passes: u32) -> Vec
             Stage::XpbdIteration => v.extend(cpu::XPBD_ORDER.iter().map(|&pass| &k::XPBD[pass])),
             // One `vbd_colour` per sweep here; `recipe_for` makes it a dispatch per colour
             // of the cloth's colouring (core::cpu::vbd).
+            // With the contact between triangles its terms go inside the solves: found
+            // at the iterate, which the positions hold from the prediction on.
+            Stage::VbdBegin if how.triangles => v.extend([&k::VBD_BEGIN, &k::VBD_POSITIONS]),
             Stage::VbdBegin => v.push(&k::VBD_BEGIN),
+            Stage::VbdSweep if how.triangles => v.push(&k::VBD_COLOUR_TRI),
             Stage::VbdSweep => v.push(&k::VBD_COLOUR),
+            Stage::VbdAccelerate if how.triangles => v.extend([&k::VBD_ACCELERATE, &k::VBD_POSITIONS]),
             Stage::VbdAccelerate => v.push(&k::VBD_ACCELERATE),
             Stage::VbdFinish => v.push(&k::VBD_FINISH),
             Stage::Collide => v.push(&k::COLLIDE),
@@ -375,6 +380,17 @@ impl<'a> Expander<'a> {
                 self.sweeps += 1;
                 vbd_sweep(kernel, topo)
             }
+            Dispatches::ColoursWithContact => {
+                self.sweeps += 1;
+                let terms = k::TRI_VBD.flavor(kernel.flavor);
+                let terms = KernelRef { uses: kernel.uses, ..terms };
+                contact_colours(terms, topo)
+                    .into_iter()
+                    .zip(vbd_sweep(kernel, topo))
+                    .flat_map(|(a, b)| [a, b])
+                    .collect()
+            }
+            Dispatches::ContactColours => contact_colours(kernel, topo),
             Dispatches::Chebyshev => vec![vbd_acceleration(kernel, topo, self.sweeps, self.rho)],
             Dispatches::Tiles => vec![tile_command(kernel, topo, self.strain_passes, self.tile_substeps)],
             Dispatches::MeshPasses => {
@@ -395,6 +411,13 @@ pub fn lambda_clears() -> [Command; 2] {
 /// colour's range of the colouring's list, in colour order.
 pub fn vbd_sweep(kernel: KernelRef, topo: &clothlab_core::ClothTopology) -> Vec<Command> {
     topo.colours.ranges().map(|(first, count)| Command::Range { kernel, first, count }).collect()
+}
+
+/// `kernel` (`tri_vbd`) over the contact between triangles' owners once per colour of
+/// `topo`'s colouring, the colour's index as the range's `first`.
+pub fn contact_colours(kernel: KernelRef, topo: &clothlab_core::ClothTopology) -> Vec<Command> {
+    let owners = cpu::tri_contact::TriLayout::of(topo).num_owners() as u32;
+    (0..topo.colours.len() as u32).map(|c| Command::Range { kernel, first: c, count: owners }).collect()
 }
 
 /// VBD's Chebyshev step after sweep `k` (from 1) with ρ `rho`: `kernel`

@@ -241,6 +241,7 @@ impl<E: Engine> GpuSolver<E> {
         spheres[..at0.len()].copy_from_slice(&at0);
         let mut boxes = [Aabb::new([0.0; 3], [0.0; 3]); MAX_COLLIDERS];
         boxes[..boxes0.len()].copy_from_slice(&boxes0);
+        let colours = topo.colours.words();
         let tri_flat: Vec<u32> = topo.triangles.iter().flatten().copied().collect();
         let face_flat = face_flat(&topo);
         let adjacency = adjacency(&topo);
@@ -281,7 +282,7 @@ impl<E: Engine> GpuSolver<E> {
             (Buf::Triangles, bytemuck::cast_slice(&tri_flat)),
             (Buf::FaceSlots, bytemuck::cast_slice(face_flat)),
             (Buf::Adjacency, bytemuck::cast_slice(&adjacency)),
-            (Buf::Colours, bytemuck::cast_slice(&topo.colours.order)),
+            (Buf::Colours, bytemuck::cast_slice(&colours)),
             (Buf::Faces, bytemuck::cast_slice(face)),
             (Buf::Spheres, bytemuck::cast_slice(&spheres)),
             (Buf::Boxes, bytemuck::cast_slice(&boxes)),

@@ -9,7 +9,7 @@ pub type GlslOut = (String, Vec<(u32, u8)>, Vec<(String, u32, char, u8)>);
 /// of its `@binding`s (group 0) goes: `(binding, binding point)`. GL numbers shader
 /// storage blocks, uniform blocks and texture units apart, and a compute shader may use
 /// only a few of each (16 storage blocks on llvmpipe), so every kind is numbered from 0
-/// in binding order, over the bindings this module declares.
+/// in binding order, over the bindings the entry point uses.
 ///
 /// GL has no push constants: naga writes a module's immediates as plain uniforms, one per
 /// scalar or vector, set with `glUniform*` before each dispatch. The third part lists them:
@@ -17,8 +17,19 @@ pub type GlslOut = (String, Vec<(u32, u8)>, Vec<(String, u32, char, u8)>);
 pub fn glsl_450(module: &naga::Module, info: &naga::valid::ModuleInfo, zero_workgroup: bool) -> Result<GlslOut, String> {
     let mut points = Vec::new();
     let (mut storage, mut uniform, mut texture) = (0u8, 0u8, 0u8);
-    let mut bound: Vec<(u32, &naga::GlobalVariable)> =
-        module.global_variables.iter().filter_map(|(_, g)| g.binding.as_ref().map(|b| (b.binding, g))).collect();
+    // Only what `main` uses: a kernel's includes declare more than it reads (the state's
+    // buffers, the contact's), and each declared block would take one of the few points.
+    let uses = module
+        .entry_points
+        .iter()
+        .position(|e| e.stage == naga::ShaderStage::Compute && e.name == "main")
+        .map(|index| info.get_entry_point(index));
+    let mut bound: Vec<(u32, &naga::GlobalVariable)> = module
+        .global_variables
+        .iter()
+        .filter(|(h, _)| uses.is_none_or(|u| !u[*h].is_empty()))
+        .filter_map(|(_, g)| g.binding.as_ref().map(|b| (b.binding, g)))
+        .collect();
     bound.sort_by_key(|(b, _)| *b);
     let mut binding_map = naga::back::glsl::BindingMap::default();
     for (b, g) in bound {

@@ -322,6 +322,8 @@ impl CpuSolver {
             exec,
             ..
         } = self;
+        // VBD takes the contact between triangles inside its solves.
+        let vbd_contact = params.self_collision.triangles() && params.integrator == Integrator::Vbd;
         if params.self_collision.triangles() && contact.is_none() {
             *contact = Some(crate::tri_contact::Contact::new(&topo.triangles, *exec == Exec::Parallel));
         }
@@ -438,18 +440,38 @@ impl CpuSolver {
                 }
                 Stage::VbdBegin => {
                     super::vbd::vbd_begin(e, &p, force, pos, vel, aux);
+                    if vbd_contact {
+                        // The contact's terms are found at the iterate (the positions are
+                        // the substep's start until the finish otherwise).
+                        super::vbd::vbd_positions(e, pos, aux);
+                    }
                     INTEGRATE_COLLIDE
                 }
                 Stage::VbdSweep => {
                     sweeps += 1;
                     for k in 0..topo.colours.len() {
-                        super::vbd::vbd_colour(e, &p, &topo.slots, c, topo.colours.colour(k), aux);
+                        let colour = topo.colours.colour(k);
+                        let tri = contact.as_mut().filter(|_| vbd_contact).map(|ct| {
+                            ct.vbd_terms(
+                                pos,
+                                &topo.triangles,
+                                params.self_thickness,
+                                &topo.colours.of,
+                                k as u32,
+                                p.grab_index,
+                            );
+                            super::vbd::TriVbd { sums: ct.vbd_sums(), pos: &mut pos[..] }
+                        });
+                        super::vbd::vbd_colour(e, &p, &topo.slots, c, colour, aux, tri);
                     }
                     crate::timing::VBD
                 }
                 Stage::VbdAccelerate => {
                     let omega = super::vbd::chebyshev_omega(sweeps, params.vbd_rho);
                     super::vbd::vbd_accelerate(e, &p, omega, aux);
+                    if vbd_contact {
+                        super::vbd::vbd_positions(e, pos, aux);
+                    }
                     crate::timing::VBD
                 }
                 Stage::VbdFinish => {

@@ -55,7 +55,7 @@ impl TriLayout {
     /// The grids' bucket counts (the triangles' buckets, then the edges'), then after
     /// the scan and the scatter each bucket's end.
     pub fn grid(&self) -> usize {
-        at::WORDS
+        self.vbd() + crate::tri_contact::VBD_TERMS * self.np
     }
 
     /// The grids' entries: the triangles' (by bucket), then the edges'.
@@ -71,6 +71,12 @@ impl TriLayout {
     /// Each particle's fixed-point sums: x, y, z, then its count of acting pairs (i32).
     pub fn sums(&self) -> usize {
         self.owners() + self.np + self.edges
+    }
+
+    /// VBD's contact terms, after the scalars: [`crate::tri_contact::VBD_TERMS`] words a
+    /// particle (i32; where a kernel finds them without the edges' header).
+    pub fn vbd(&self) -> usize {
+        at::WORDS
     }
 
     /// Words of the integers.
@@ -438,6 +444,33 @@ fn each_response(
             let other = b.pairs[o * TRI_SLOTS as usize + slot];
             if let Some(r) = response(p, pos, vel, sides(topo, pos, &b.l, o, other), pass) {
                 f(r);
+            }
+        }
+    }
+}
+
+/// `tri_vbd`: the contact terms under VBD (`crate::tri_contact::vbd_terms`) of every kept
+/// pair at `pos` (the sweep's iterate) for the vertices of colour `colour`
+/// (`topo.colours.of`) that are not held, into their sums ([`TriLayout::vbd`]).
+pub fn tri_vbd(p: &StepParams, topo: &crate::grid::ClothTopology, pos: &[V4], colour: u32, b: &mut TriBufs) {
+    let of = &topo.colours.of;
+    let wanted = |k: u32| of[k as usize] == colour && k as i32 != p.grab_index && pos[k as usize][3] != 0.0;
+    let edges = topo.edges();
+    let (l, at) = (b.l, b.l.vbd());
+    for o in 0..l.num_owners() {
+        let n = b.ints[l.owners() + o].min(TRI_SLOTS) as usize;
+        for slot in 0..n {
+            let other = b.pairs[o * TRI_SLOTS as usize + slot];
+            let verts: [u32; 4] = if o < l.np {
+                let [a, b, c] = topo.triangles[other as usize];
+                [o as u32, a, b, c]
+            } else {
+                let ([a, b], [c, d]) = (edges[o - l.np], edges[other as usize]);
+                [a, b, c, d]
+            };
+            if verts.iter().any(|&v| wanted(v)) {
+                let s = sides(topo, pos, &l, o, other);
+                crate::tri_contact::vbd_terms(&s, p.self_thickness, wanted, &mut b.ints[at..]);
             }
         }
     }

@@ -131,9 +131,22 @@ fn begin_at(i: usize, p: &StepParams, force: V4, x4: V4, vel: V4) -> (Vec3, Vec3
     }
 }
 
+/// The contact between triangles inside VBD's solves (`vbd_colour_tri`): each particle's
+/// contact terms for the colour being swept (`crate::tri_contact::Contact::vbd_terms`, or
+/// the `tri_vbd` kernel's twin; [`crate::tri_contact::VBD_TERMS`] words a particle), which
+/// the sweep adds to its block and clears, and the positions, which it keeps at the
+/// iterate `x⁰ + D` for the next colour's terms.
+pub struct TriVbd<'a> {
+    /// The terms.
+    pub sums: &'a mut [u32],
+    /// The positions.
+    pub pos: &'a mut [V4],
+}
+
 /// One colour's sweep: every particle of `colour` (no two of which share a spring) takes
 /// its Newton step on its own block against its neighbours' newest displacements and adds
-/// it to its displacement `aux[2]`. Pinned and grabbed particles stay.
+/// it to its displacement `aux[2]`. Pinned and grabbed particles stay. With `tri` (the
+/// contact between triangles) each block takes its contact terms too.
 pub fn vbd_colour(
     exec: Exec,
     p: &StepParams,
@@ -141,10 +154,12 @@ pub fn vbd_colour(
     colliders: Colliders<'_>,
     colour: &[u32],
     aux: &mut [Vec<V4>],
+    mut tri: Option<TriVbd<'_>>,
 ) {
     let (pred, start, disp) = (&aux[0], &aux[1], &aux[2]);
     let colliders = colliders.cut(p);
-    let step = |&i: &u32| block_step(p, slots, colliders, i as usize, pred, start, disp);
+    let sums = tri.as_ref().map(|t| &*t.sums);
+    let step = |&i: &u32| block_step(p, slots, colliders, i as usize, pred, start, disp, sums);
     let steps: Vec<Vec3> = match exec {
         Exec::Serial => colour.iter().map(step).collect(),
         Exec::Parallel => colour.par_iter().with_min_len(1024).map(step).collect(),
@@ -152,7 +167,25 @@ pub fn vbd_colour(
     for (&i, s) in colour.iter().zip(steps) {
         let i = i as usize;
         aux[2][i] = v4(v3(aux[2][i]) + s, 0.0);
+        if let Some(t) = &mut tri {
+            t.sums[crate::tri_contact::VBD_TERMS * i..][..crate::tri_contact::VBD_TERMS].fill(0);
+            t.pos[i] = iterate_at(&aux[1][i], &aux[2][i]);
+        }
     }
+}
+
+/// The iterate `x⁰ + D` of a particle with start `x4` (its w kept) and displacement `d`.
+#[inline(always)]
+fn iterate_at(x4: &V4, d: &V4) -> V4 {
+    v4(v3(*x4) + v3(*d), x4[3])
+}
+
+/// The positions at the iterate, `x⁰ + D` (`vbd_positions`): what the contact between
+/// triangles' terms are found at (after the prediction and each Chebyshev step; each
+/// colour's sweep keeps its own particles').
+pub fn vbd_positions(exec: Exec, pos: &mut [V4], aux: &[Vec<V4>]) {
+    let out = per_particle(exec, pos.len(), |i| iterate_at(&aux[1][i], &aux[2][i]));
+    pos.copy_from_slice(&out);
 }
 
 /// The end of a VBD substep: `x = x⁰ + D`, `v = v' + (D − h v')/h`, the floor's contact,
@@ -223,7 +256,7 @@ pub fn vbd_substep(
     vbd_begin(e, p, &force, pos, vel, &mut aux);
     for _ in 0..iterations {
         for colour in colours {
-            vbd_colour(e, p, &topo.slots, Colliders::default(), colour, &mut aux);
+            vbd_colour(e, p, &topo.slots, Colliders::default(), colour, &mut aux, None);
         }
     }
     vbd_finish(e, p, pos, vel, &aux);
@@ -235,7 +268,9 @@ pub fn vbd_substep(
 /// held particle and where the
 /// block cannot be solved (its determinant not positive and finite in f32). Written
 /// scalar by scalar in the order `vbd_colour.wgsl` computes it: the block's six entries
-/// summed slot by slot, then the contacts (penalties and friction, `contacts`), solved by cofactors.
+/// summed slot by slot, then the contact between triangles' terms (`tri`, see [`TriVbd`]),
+/// then the colliders' contacts (penalties and friction, `contacts`), solved by cofactors.
+#[allow(clippy::too_many_arguments)]
 pub fn block_step(
     p: &StepParams,
     slots: &Rows<SpringSlot>,
@@ -244,6 +279,7 @@ pub fn block_step(
     pred: &[V4],
     start: &[V4],
     disp: &[V4],
+    tri: Option<&[u32]>,
 ) -> Vec3 {
     let x4 = start[i];
     if i as i32 == p.grab_index || x4[3] == 0.0 {
@@ -285,8 +321,28 @@ pub fn block_step(
         }
         add_block(&mut hess, a * scale, b * scale, n);
     }
+    if let Some(sums) = tri {
+        tri_terms(p, &sums[crate::tri_contact::VBD_TERMS * i..][..crate::tri_contact::VBD_TERMS], &mut f, &mut hess);
+    }
     contacts(p, colliders, inertia * CONTACT_STIFFNESS, x0 + moved, moved, &mut f, &mut hess);
     solve_sym3(hess, f)
+}
+
+/// A particle's contact terms between triangles (`crate::tri_contact::vbd_terms`'s
+/// fixed-point sums) added to its force and block, times the contact's stiffness
+/// `k` = [`CONTACT_STIFFNESS`] × the reference particle's inertia m̄/h² (one stiffness for
+/// every pair, so that the terms are one energy's): the force in units of
+/// `k t / CONTACT_UNITS`, the block in `k / CONTACT_UNITS`.
+#[inline(always)]
+fn tri_terms(p: &StepParams, s: &[u32], f: &mut Vec3, h: &mut [f32; 6]) {
+    let k = p.particle_mass / (p.dt * p.dt) * CONTACT_STIFFNESS;
+    let fu = k * (p.self_thickness * (1.0 / crate::tables::CONTACT_UNITS));
+    let hu = k * (1.0 / crate::tables::CONTACT_UNITS);
+    let at = |w: usize| s[w] as i32 as f32;
+    *f += Vec3::new(at(0), at(1), at(2)) * fu;
+    for (c, e) in h.iter_mut().enumerate() {
+        *e += at(3 + c) * hu;
+    }
 }
 
 /// Adds `a I + b n̂n̂ᵀ` to the block `[h00, h11, h22, h01, h02, h12]`.

@@ -205,6 +205,13 @@ pub enum Dispatches {
     Once,
     /// A range per colour of the cloth's colouring, in colour order (VBD's sweep).
     Colours,
+    /// Per colour, in colour order: `tri_vbd` over the contact's owners for the colour
+    /// (its index as the range's `first`), then the kernel over the colour's range (VBD's
+    /// sweep with the contact between triangles inside its solves).
+    ColoursWithContact,
+    /// A range over the contact's owners per colour, the colour's index as the range's
+    /// `first` (`tri_vbd`).
+    ContactColours,
     /// One range over every particle, the sweep's ω as the range's `first` (VBD's
     /// Chebyshev step after a sweep).
     Chebyshev,

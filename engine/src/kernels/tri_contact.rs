@@ -105,6 +105,29 @@ fn tri_clamp(a: &TwinArgs, b: &mut HostBuffers) {
     tc::tri_clamp(a.p, pos, vel, &mut t);
 }
 
+fn tri_vbd(a: &TwinArgs, b: &mut HostBuffers) {
+    let (pos, _, mut t) = split(a, b);
+    tc::tri_vbd(a.p, a.topo, pos, a.range.0, &mut t);
+}
+
+/// One colour of VBD's sweep with the contact's terms (`core::cpu::vbd::vbd_colour` with
+/// `TriVbd`): particles `first .. first + count` of the colouring's list.
+fn vbd_colour_tri(a: &TwinArgs, b: &mut HostBuffers) {
+    let l = TriLayout::of(a.topo);
+    b.tri_sized(l);
+    let order = &a.topo.colours.order;
+    let end = (a.range.0 as usize + a.range.1 as usize).min(order.len());
+    let list = &order[(a.range.0 as usize).min(end)..end];
+    let HostBuffers { pos, aux, tri_ints, .. } = b;
+    let ints: &mut [u32] = bytemuck::cast_slice_mut(tri_ints.as_mut_slice());
+    let tri = cpu::vbd::TriVbd { sums: &mut ints[l.vbd()..l.words()], pos };
+    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, a.colliders, list, aux, Some(tri));
+}
+
+fn vbd_positions(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::vbd::vbd_positions(a.exec, &mut b.pos, &b.aux);
+}
+
 /// The kernels in the recipe's order (the separation's three once), for the kernel
 /// tests' inputs: each kernel's input is the twins before it run from the disturbed
 /// state, the integers cleared first as the recipe clears them.
@@ -157,6 +180,14 @@ inputs!(
     after_clamp_sum = 14,
     after_clamp_check = 15
 );
+
+/// VBD's sweep's input: the start stage's pairs (the velocity pass done), VBD's prediction
+/// from the disturbed state and the positions at its iterate.
+fn after_vbd_begin(a: &TwinArgs, b: &mut HostBuffers) {
+    upto(a, b, 10);
+    cpu::vbd::vbd_begin(a.exec, a.p, &b.force, &b.pos, &b.vel, &mut b.aux);
+    vbd_positions(a, b);
+}
 
 /// The first kernel's input: the integers cleared (the recipe clears them before it).
 fn cleared(a: &TwinArgs, b: &mut HostBuffers) {
@@ -294,6 +325,52 @@ pub static TRI_CLAMP: KernelDef = row(
     after_clamp_check,
 );
 
+/// VBD with the contact: the positions at the iterate x⁰ + D (after the prediction and
+/// each Chebyshev step).
+pub static VBD_POSITIONS: KernelDef = KernelDef {
+    label: timing::VBD,
+    ..row("vbd_positions", vbd_positions, Count::Particles, &[Params, Aux1, Aux2], &[Pos], timing::VBD, after_vbd_begin)
+};
+/// VBD with the contact: one colour's terms of every owner's kept pairs at the iterate,
+/// into the colour's particles' sums (the colour's index the range's `first`).
+pub static TRI_VBD: KernelDef = KernelDef {
+    immediates: Immediates::Range,
+    dispatches: Dispatches::ContactColours,
+    variants: PLAIN,
+    ..row(
+        "tri_vbd",
+        tri_vbd,
+        Count::Range,
+        &[Params, Pos, Triangles, TriEdges, TriInts, TriPairs, Colours],
+        &[TriInts],
+        timing::VBD,
+        after_vbd_begin,
+    )
+};
+/// VBD with the contact: one colour's Newton steps (`vbd_colour`'s) with the colour's
+/// contact terms in each block (taken and cleared), its positions kept at the iterate;
+/// each colour after its `tri_vbd`.
+pub static VBD_COLOUR_TRI: KernelDef = KernelDef {
+    check: Check::Bound {
+        relative: 1e-4,
+        reason: "vbd_colour's block and solve (its divisions a last bit off the twin's on lavapipe, so VBD's \
+                 rollouts are held to bounds), carried from colour to colour through the contact's terms, \
+                 a thousand times the inertia (measured 2.1e-5 on wgpu over a sweep of 9 colours)",
+    },
+    variants: Variants { table_image: true, colliders_uniform: true, sdf_image: true, ..PLAIN },
+    immediates: Immediates::Range,
+    dispatches: Dispatches::ColoursWithContact,
+    ..row(
+        "vbd_colour_tri",
+        vbd_colour_tri,
+        Count::Range,
+        &[Params, Colours, Slots, BendSlots, Adjacency, Table, Spheres, Boxes, Shapes, Aux0, Aux1, Aux2, TriInts, Pos],
+        &[Aux2, Pos, TriInts],
+        timing::VBD,
+        after_vbd_begin,
+    )
+};
+
 /// The stage at the substep's start, in order.
 pub static TRI_BEGIN: [&KernelDef; 10] = [
     &TRI_SPEED,
@@ -330,6 +407,9 @@ pub(super) const ROWS: &[&KernelDef] = &[
     &TRI_CLAMP_SUM,
     &TRI_CLAMP_CHECK,
     &TRI_CLAMP,
+    &VBD_POSITIONS,
+    &TRI_VBD,
+    &VBD_COLOUR_TRI,
 ];
 
 /// Every kernel of the contact, in the recipe's order.

@@ -12,7 +12,7 @@ fn vbd_colour(a: &TwinArgs, b: &mut HostBuffers) {
     let order = &a.topo.colours.order;
     let end = (a.range.0 as usize + a.range.1 as usize).min(order.len());
     let list = &order[(a.range.0 as usize).min(end)..end];
-    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, a.colliders, list, &mut b.aux);
+    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, a.colliders, list, &mut b.aux, None);
 }
 
 /// The Chebyshev step after a sweep, ω the bits of the range's `first`.

@@ -31,8 +31,14 @@ fn tri_at(t: u32) -> vec3<u32> {
     return vec3<u32>(triangles[3u * t], triangles[3u * t + 1u], triangles[3u * t + 2u]);
 }
 
-fn grid_at() -> u32 {
+// VBD's contact terms, after the scalars: VBD_TERMS words a particle
+// (core::cpu::tri_contact::TriLayout::vbd).
+fn vbd_terms_at() -> u32 {
     return TRI_AT_WORDS;
+}
+
+fn grid_at() -> u32 {
+    return TRI_AT_WORDS + VBD_TERMS * num_particles();
 }
 
 fn entries_at() -> u32 {
