@@ -611,7 +611,7 @@ pub fn approach_impulses(
     responses.len()
 }
 
-/// Words a particle of VBD's contact terms ([`vbd_terms`]): the force's x, y, z, then the
+/// Words a particle of VBD's contact terms (`vbd_terms`): the force's x, y, z, then the
 /// block's six entries `[h00, h11, h22, h01, h02, h12]`, each a fixed-point sum.
 pub const VBD_TERMS: usize = 9;
 
@@ -793,7 +793,7 @@ impl Contact {
         }
     }
 
-    /// VBD's contact terms ([`vbd_terms`]) of the pairs of the substep's start at `pos`
+    /// VBD's contact terms (`vbd_terms`) of the pairs of the substep's start at `pos`
     /// (the sweep's iterate, `x⁰ + D`), for the vertices of colour `colour`
     /// (`colour_of`: each particle's) that are not held (pinned, or the grabbed
     /// `grab`): what `cpu::vbd::vbd_colour` adds to their blocks, and clears. Returns the
