@@ -241,8 +241,9 @@ pub fn validate_kernels_with(
             // One colour's terms and solves: the next colour's terms are found at the
             // positions this one moved, where a pair at the thickness's edge may count on
             // one side and not on the other (its block jumps by k w n nᵀ), so over a sweep
-            // a last bit of the solve may grow to a step. The sweep is the rollouts' to
-            // check (tests/tests/suite/tri_contact.rs).
+            // a last bit of the solve on a GPU whose division or square root is not the
+            // CPU's may grow to a step. The sweep is the rollouts' to check
+            // (tests/tests/suite/tri_contact.rs: the CPU's bits on llvmpipe).
             kernels::Dispatches::ColoursWithContact => {
                 let all = expander.run(k);
                 let first = all.iter().position(|c| c.kernel() == Some(k)).map_or(all.len(), |i| i + 1);

@@ -353,9 +353,8 @@ pub static TRI_VBD: KernelDef = KernelDef {
 pub static VBD_COLOUR_TRI: KernelDef = KernelDef {
     check: Check::Bound {
         relative: 2e-5,
-        reason: "vbd_colour's block and solve (its divisions a last bit off the twin's on lavapipe, so VBD's \
-                 rollouts are held to bounds), with the colour's integer terms; checked over one colour \
-                 (validate.rs says why)",
+        reason: "vbd_colour's block and solve (a division and square roots a spring, exact on llvmpipe), \
+                 with the colour's integer terms; checked over one colour (validate.rs says why)",
     },
     variants: Variants { table_image: true, colliders_uniform: true, sdf_image: true, ..PLAIN },
     immediates: Immediates::Range,

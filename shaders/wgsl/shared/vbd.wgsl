@@ -15,12 +15,20 @@ var<private> force_acc: vec3<f32>;
 
 // Adds a I + b n̂n̂ᵀ to the block (core::cpu::vbd::add_block).
 fn add_block(a: f32, b: f32, n: vec3<f32>) {
-    hess[0] += a + b * n.x * n.x;
-    hess[1] += a + b * n.y * n.y;
-    hess[2] += a + b * n.z * n.z;
-    hess[3] += b * n.x * n.y;
-    hess[4] += b * n.x * n.z;
-    hess[5] += b * n.y * n.z;
+    hess[0] += kept(a + kept(b * n.x * n.x));
+    hess[1] += kept(a + kept(b * n.y * n.y));
+    hess[2] += kept(a + kept(b * n.z * n.z));
+    hess[3] += kept(b * n.x * n.y);
+    hess[4] += kept(b * n.x * n.z);
+    hess[5] += kept(b * n.y * n.z);
+}
+
+// `x` through a word that is 0 but that the compiler cannot know is (ContactParams's
+// spare), so that the block's sums stay the twin's: lavapipe's compiler otherwise
+// evaluated the running sum of a + b·n.x·n.x differently (its terms summed apart were the
+// twin's bits, the sum one ulp off), and VBD's rollouts left the CPU's bits.
+fn kept(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) | bitcast<u32>(contact_params.spare));
 }
 
 // The block and force after the penalties (the friction pass's λ reads them).

@@ -179,14 +179,15 @@ fn xpbd_takes_the_contact_as_constraints_of_each_iteration_with_the_cpu_bits_on_
 }
 
 #[test]
-fn vbd_takes_the_contact_inside_its_solves_on_vulkan_and_gl_without_a_crossing() {
+fn vbd_takes_the_contact_inside_its_solves_with_the_cpu_bits_on_vulkan_and_gl() {
     // The thin heap at n = 24 piled by 45 frames of Verlet on the CPU, then 3 frames of VBD
     // (8 sweeps a substep, each colour's contact terms found at the iterate before its
-    // solves) from that state on raw Vulkan and GL (wgpu shares raw Vulkan's SPIR-V path;
-    // the kernel checks above hold all three to the twins). VBD's kernels are held to
-    // bounds, not bits (their divisions), so the piles are compared by what must never
-    // happen: no crossing at any frame's end, and no two primitives closer than a quarter of
-    // the thickness (the core tests measure 0.86–0.96 t on the CPU).
+    // solves) from that state on the CPU and on raw Vulkan and GL (wgpu shares raw Vulkan's
+    // SPIR-V path; the kernel checks above hold all three to the twins): the contact's
+    // counts at every frame's end and the final state the CPU's bits (integer sums, and
+    // the block's sums kept from the compiler's rewrites: shared/vbd.wgsl's `kept`), no
+    // crossing at any frame's end, and no two primitives closer than a quarter of the
+    // thickness (the core tests measure 0.86–0.96 t on the CPU).
     const FRAMES: usize = 3;
     let f = thin_heap(24);
     let mut pile = CpuSolver::new(Exec::Parallel, f.scene.clone(), f.params.clone()).unwrap();
@@ -198,9 +199,9 @@ fn vbd_takes_the_contact_inside_its_solves_on_vulkan_and_gl_without_a_crossing()
     let t = f.params.self_thickness;
     let mut params = f.params.clone();
     params.integrator = clothlab_core::Integrator::Vbd;
-    let check = |name: &str, s: &mut dyn Solver| {
+    let run = |name: &str, s: &mut dyn Solver| {
         s.set_state(&piled).unwrap();
-        let mut most = 0;
+        let mut stats = Vec::new();
         for _ in 0..FRAMES {
             s.step_frame().unwrap();
             let st = s.state().unwrap();
@@ -209,19 +210,22 @@ fn vbd_takes_the_contact_inside_its_solves_on_vulkan_and_gl_without_a_crossing()
                 0,
                 "{name}: the heap crossed itself"
             );
-            most = most.max(s.contact_stats().unwrap().pairs);
+            stats.push(s.contact_stats().unwrap());
         }
-        let st = s.state().unwrap();
-        let closest = clothlab_core::tri_contact::closest_pair(&st.pos, &triangles);
-        println!("{name}: at most {most} pairs, closest pair {:.2} t", closest / t);
-        // (Measured 500–1400 pairs within the reach at a frame's last substep.)
-        assert!(most > 300, "{name}: {most} pairs: the heap is not piled, the test would hold little");
-        assert!(closest > 0.25 * t, "{name}: two primitives {closest} m apart, thickness {t}");
-        assert!(st.pos.iter().chain(&st.vel).all(|v| v.iter().all(|c| c.is_finite())), "{name}: not finite");
+        (s.state().unwrap(), stats)
     };
-    check("cpu", &mut CpuSolver::new(Exec::Parallel, f.scene.clone(), params.clone()).unwrap());
+    let (want, want_stats) = run("cpu", &mut CpuSolver::new(Exec::Parallel, f.scene.clone(), params.clone()).unwrap());
+    let most = want_stats.iter().map(|s| s.pairs).max().unwrap();
+    let closest = clothlab_core::tri_contact::closest_pair(&want.pos, &triangles);
+    println!("cpu: at most {most} pairs, closest pair {:.2} t", closest / t);
+    // (Measured 500–1400 pairs within the reach at a frame's last substep.)
+    assert!(most > 300, "{most} pairs: the heap is not piled, the test would hold little");
+    assert!(closest > 0.25 * t, "two primitives {closest} m apart, thickness {t}");
+    assert!(want.pos.iter().chain(&want.vel).all(|v| v.iter().all(|c| c.is_finite())), "not finite");
     for api in [Api::Vulkan, Api::Gl] {
         let Some(gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &params) else { continue };
-        check(api.name(), &mut *gpu.into_solver());
+        let (got, got_stats) = run(api.name(), &mut *gpu.into_solver());
+        assert_eq!(got_stats, want_stats, "{}: the contact's counts", api.name());
+        assert!(got.pos == want.pos && got.vel == want.vel, "{}: not the CPU's bits", api.name());
     }
 }
