@@ -316,9 +316,12 @@ The switches (values in ladder order, the naive one first):
   specialize=off|on               the kernels as built for every scene, or compiled for
                                   the scene: the code for rods, bodies, Coulomb friction
                                   and moving colliders only where it has them (same bits)
-  strain_counts=dispatch|inline   the strain limit's counts of springs over their limit:
-                                  a count dispatch before each pass, or counted by the
-                                  pass itself where it needs them (same bits)
+  strain_counts=dispatch|inline|strip
+                                  the strain limit's counts of springs over their limit:
+                                  a count dispatch before each pass, counted by the pass
+                                  itself where it needs them, or by a pass down strips of
+                                  rows that computes each spring's length once (same
+                                  bits; the optimized preset's on a CPU adapter)
 A switch the adapter lacks, or two that exclude each other, is refused in one line.";
 
 /// The variant of the GPU backends: a preset and changes of single switches.

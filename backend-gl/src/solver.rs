@@ -115,6 +115,8 @@ impl GlEngine {
             subgroup_arithmetic: subgroups & SUBGROUP_ARITHMETIC != 0,
             subgroup_shuffle: subgroups & (SUBGROUP_ARITHMETIC | SUBGROUP_SHUFFLES)
                 == SUBGROUP_ARITHMETIC | SUBGROUP_SHUFFLES,
+            // GL names no device type: Mesa's and Google's software renderers by name.
+            cpu: ["llvmpipe", "softpipe", "SwiftShader"].iter().any(|r| l.renderer.contains(r)),
             table_image: true,
             // Desktop GL filters R32F textures (GL 4.5 core §8.17).
             sdf_image: true,

@@ -87,6 +87,7 @@ impl VulkanEngine {
             max_binding: dev.max_storage_range,
             subgroup_arithmetic: dev.subgroup_arithmetic,
             subgroup_shuffle: dev.subgroup_shuffle,
+            cpu: dev.cpu,
             table_image: true,
             sdf_image: dev.r32f_linear,
             workgroup_memory: dev.max_shared_memory,

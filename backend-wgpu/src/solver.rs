@@ -89,6 +89,7 @@ impl WgpuEngine {
             max_binding: limits.max_storage_buffer_binding_size.min(limits.max_buffer_size),
             subgroup_arithmetic: ctx.subgroups,
             subgroup_shuffle: ctx.subgroups,
+            cpu: ctx.info.device_type == wgpu::DeviceType::Cpu,
             table_image: true,
             sdf_image: ctx.float32_filterable,
             workgroup_memory: limits.max_compute_workgroup_storage_size,

@@ -10,6 +10,10 @@ pub use crate::grid::{FACE_SLOTS, SLOTS, STRAIN_SLOTS, TETHER_SLOTS};
 pub const WORKGROUP: u32 = 64;
 /// Particles per invocation of the blocked kernels (consecutive particles of a row).
 pub const BLOCK: u32 = 4;
+/// Rows of a strip of the strain limit's pass down strips (`strain_counts=strip`): an
+/// invocation carries its block's columns through this many rows, each spring's length
+/// and each count computed once; two rows above and below it are the strip's overhead.
+pub const STRIP_ROWS: u32 = 16;
 /// Texels per row of the spring-table image (the thesis's texture memory).
 pub const TABLE_WIDTH: u32 = 4096;
 /// Pairs each owner of the contact between triangles keeps (a vertex its triangles, an
@@ -414,6 +418,7 @@ pub fn wgsl_constants() -> String {
     s += &u("FACE_SLOTS", FACE_SLOTS as u32);
     s += &u("TETHER_SLOTS", TETHER_SLOTS as u32);
     s += &u("BLOCK", BLOCK);
+    s += &u("STRIP_ROWS", STRIP_ROWS);
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
     s += &u("TRI_SLOTS", TRI_SLOTS);
     s += &u("VBD_TERMS", crate::tri_contact::VBD_TERMS as u32);

@@ -43,6 +43,9 @@ pub struct EngineInfo {
     /// Relative subgroup shuffles (`subgroupShuffleUp`/`Down`) with the arithmetic: the
     /// `_sh` flavors (`neighbours=shuffle`).
     pub subgroup_shuffle: bool,
+    /// The adapter runs on the CPU (lavapipe, llvmpipe, SwiftShader): a few wide threads,
+    /// where a kernel's arithmetic, not the lanes it keeps busy, is its cost.
+    pub cpu: bool,
     /// The spring table can be read from a sampled image ([`Engine::set_table_image`]).
     pub table_image: bool,
     /// The bodies' distance fields can be read from a filtered 3-D image of 32-bit floats

@@ -160,6 +160,9 @@ fn stage_kernels(variant: &Variant, how: Integration, strain_passes: u32) -> Vec
                     StrainCounts::Inline => {
                         v.push(if hashed { &k::STRAIN_LIMIT_INLINE_COUNT } else { &k::STRAIN_LIMIT_INLINE })
                     }
+                    StrainCounts::Strip => {
+                        v.push(if hashed { &k::STRAIN_LIMIT_STRIP_COUNT } else { &k::STRAIN_LIMIT_STRIP })
+                    }
                 }
             }
             Stage::SelfCollision => {
@@ -655,6 +658,7 @@ mod tests {
         grid: true,
         tile: true,
         sdf_image: false,
+        cpu: false,
     };
 
     fn barriers_per_substep(r: &[Command]) -> usize {
@@ -806,7 +810,7 @@ mod tests {
 
     #[test]
     fn a_strain_pass_that_counts_for_itself_replaces_the_count_dispatch() {
-        assert_eq!(Variant::OPTIMIZED.strain_counts, StrainCounts::Inline, "the optimized preset counts in the pass");
+        assert_eq!(Variant::OPTIMIZED.strain_counts, StrainCounts::Strip, "the optimized preset counts in the pass");
         let mut inline = gathered();
         inline.set("strain_counts", "inline").unwrap();
         let names =

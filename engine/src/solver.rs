@@ -200,6 +200,7 @@ impl<E: Engine> GpuSolver<E> {
             grid: !scene.cloth.is_mesh(),
             tile: info.workgroup_memory >= crate::kernels::TILE_WORKGROUP_BYTES,
             sdf_image: info.sdf_image,
+            cpu: info.cpu,
         };
         let variant = variant.into().resolve(&caps, info.api).map_err(|e| SolverError::Unsupported(e.0))?;
         if options.stats == StatsMode::Subgroups && !info.subgroup_arithmetic {

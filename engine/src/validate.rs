@@ -429,6 +429,7 @@ pub fn rounding_spread(scene: &Scene, params: &SimParams, frames: u32) -> Result
         grid: !scene.cloth.is_mesh(),
         tile: true,
         sdf_image: true,
+        cpu: false,
     };
     let naive = crate::variant::Variant::NAIVE.fit(&caps);
     let mut a = crate::cpu::RecipeSolver::new(Exec::Parallel, naive, scene.clone(), params.clone())?;

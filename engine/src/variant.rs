@@ -33,6 +33,8 @@ pub struct Caps {
     /// Workgroup memory for the tiled substep's region
     /// ([`crate::kernels::TILE_WORKGROUP_BYTES`], `fusion=tile`).
     pub tile: bool,
+    /// The adapter runs on the CPU ([`crate::gpu::EngineInfo::cpu`]).
+    pub cpu: bool,
 }
 
 /// How the forces of springs reach the particles.
@@ -153,6 +155,11 @@ pub enum StrainCounts {
     /// only for a spring over its limit (two rings out). One dispatch and one write and read
     /// of the counts fewer per pass; the same counts, the same bits.
     Inline,
+    /// The pass counts for itself down strips of rows: an invocation carries a block's
+    /// columns through `STRIP_ROWS` rows, each spring's length computed once for the counts
+    /// of both its ends and for the pass. Fewer invocations (a sixteenth), less arithmetic;
+    /// the same counts, the same bits.
+    Strip,
 }
 
 /// Where the gathers read the spring table from.
@@ -304,8 +311,8 @@ pub const SWITCHES: [Switch; 14] = [
     },
     Switch {
         key: "strain_counts",
-        values: &["dispatch", "inline"],
-        help: "the strain limit's counts of springs over their limit: a count dispatch before each pass, or counted by the pass itself where it needs them",
+        values: &["dispatch", "inline", "strip"],
+        help: "the strain limit's counts of springs over their limit: a count dispatch before each pass, counted by the pass itself where it needs them, or by a pass down strips of rows that computes each spring's length once",
     },
 ];
 
@@ -340,8 +347,9 @@ impl Variant {
     /// per frame, one submission per frame, push constants, the table as uniform constants
     /// with neighbours by offset, colliders in a uniform block, neighbours' columns by
     /// subgroup shuffles, the kernels compiled for the scene, the strain pass counting for
-    /// itself. [`Variant::fit`] falls back where an adapter lacks a switch (no
-    /// subgroups: loads; no push constants: a uniform block). Measured on lavapipe
+    /// itself down strips of rows. [`Variant::fit`] falls back where an adapter lacks a
+    /// switch (no subgroups: loads; no push constants: a uniform block) and, on a GPU,
+    /// counts inline instead of down strips (the strips keep few of a GPU's lanes busy). Measured on lavapipe
     /// (docs/variants.md) it is the fastest combination the ladder reached on both APIs,
     /// and `validate --every-switch` checks it against the twins like every rung.
     pub const OPTIMIZED: Variant = Variant {
@@ -358,7 +366,7 @@ impl Variant {
         temporal: Temporal::Off,
         sdf: Sdf::Storage,
         specialize: Specialize::On,
-        strain_counts: StrainCounts::Inline,
+        strain_counts: StrainCounts::Strip,
     };
     /// The thesis's optimized CUDA program (ch. 6.3.1): springs scattered with atomics,
     /// forces + Verlet + collisions fused, normals gathered from stored face normals, the
@@ -435,7 +443,9 @@ impl Variant {
             "draw" => self.draw = [Draw::Copy, Draw::Shared][i],
             "sdf" => self.sdf = [Sdf::Storage, Sdf::Image][i],
             "specialize" => self.specialize = [Specialize::Off, Specialize::On][i],
-            "strain_counts" => self.strain_counts = [StrainCounts::Dispatch, StrainCounts::Inline][i],
+            "strain_counts" => {
+                self.strain_counts = [StrainCounts::Dispatch, StrainCounts::Inline, StrainCounts::Strip][i]
+            }
             _ => self.temporal = [Temporal::Off, Temporal::On][i],
         }
         Ok(())
@@ -588,6 +598,12 @@ impl Variant {
         if self.fusion != Fusion::Tile {
             self.temporal = Temporal::Off;
         }
+        // The strain pass down strips runs a sixteenth of the invocations: on a CPU
+        // adapter that costs nothing and its lengths computed once are the gain; a GPU
+        // would keep few of its lanes busy, so there the pass counts inline.
+        if !caps.cpu && self.strain_counts == StrainCounts::Strip {
+            self.strain_counts = StrainCounts::Inline;
+        }
         self
     }
 
@@ -610,7 +626,7 @@ impl Variant {
 
 /// The optimisation ladder: from `naive`, one switch at a time, in this order (each rung
 /// keeps the switches of the rungs before it).
-pub const LADDER: [(&str, &str); 18] = [
+pub const LADDER: [(&str, &str); 19] = [
     ("submit", "frame"),
     ("draw", "shared"),
     ("constants", "uniform"),
@@ -630,6 +646,9 @@ pub const LADDER: [(&str, &str); 18] = [
     // The strain limit's pass counting for itself: no count dispatch
     // (docs/bench/lavapipe-strain-inline).
     ("strain_counts", "inline"),
+    // The strain pass down strips of rows, each length computed once: the optimized
+    // preset's on a CPU adapter (docs/bench/lavapipe-strain-strip).
+    ("strain_counts", "strip"),
     ("fusion", "tile"),
     ("temporal", "on"),
     // The bodies' fields from the image: measures something only on a scene with bodies
@@ -786,6 +805,7 @@ mod tests {
         grid: true,
         tile: true,
         sdf_image: false,
+        cpu: false,
     };
 
     const ALL_CAPS: Caps = Caps {
@@ -796,6 +816,7 @@ mod tests {
         grid: true,
         tile: true,
         sdf_image: true,
+        cpu: true,
     };
 
     #[test]
@@ -818,6 +839,12 @@ mod tests {
         let bare = BARE_CAPS;
         let opt = VariantSpec::from(Variant::OPTIMIZED).resolve(&bare, "wgpu").unwrap();
         assert_eq!((opt.constants, opt.atomics, opt.neighbours), (Constants::Uniform, Atomics::Cas, Neighbours::Load));
+        // A GPU counts inline; a CPU adapter down strips; either named by hand is run.
+        assert_eq!(opt.strain_counts, StrainCounts::Inline);
+        let on_cpu = VariantSpec::from(Variant::OPTIMIZED).resolve(&Caps { cpu: true, ..bare }, "wgpu").unwrap();
+        assert_eq!(on_cpu.strain_counts, StrainCounts::Strip);
+        let strips = VariantSpec::parse("optimized", &["strain_counts=strip".into()]).unwrap();
+        assert_eq!(strips.resolve(&bare, "wgpu").unwrap().strain_counts, StrainCounts::Strip);
         let thesis = VariantSpec::from(Variant::THESIS).resolve(&bare, "wgpu").unwrap();
         assert_eq!(thesis.table, Table::Storage);
         assert!(VariantSpec::exact(Variant::THESIS).resolve(&bare, "wgpu").unwrap_err().0.contains("atomics=float"));

@@ -1,4 +1,4 @@
-//! include: table, window, strain_window, strain_counts_aux, strain_count_fn, adjacency, strain_fn
+//! include: table, window, strain_points, strain_window, strain_counts_aux, strain_count_fn, adjacency, strain_fn
 // strain_count — every particle's count of strain-limited springs over (1 + τ)·rest
 // (core::cpu::strain_limit::count_at), into aux0.x: what the pass after it divides each
 // spring by the larger of its two ends' counts of. The same blocks, window and table

@@ -55,6 +55,7 @@ pub const EVERY_CAP: clothlab_engine::recipe::Caps = clothlab_engine::recipe::Ca
     grid: true,
     tile: true,
     sdf_image: true,
+    cpu: true,
 };
 
 /// The GPU APIs the cross-API tests run on, listed once: a test loops over

@@ -84,6 +84,8 @@ pub struct Device {
     pub subgroup_arithmetic: bool,
     /// Relative subgroup shuffles (subgroupShuffleUp/Down) besides the arithmetic.
     pub subgroup_shuffle: bool,
+    /// The device runs on the CPU (`VK_PHYSICAL_DEVICE_TYPE_CPU`: lavapipe, SwiftShader).
+    pub cpu: bool,
     /// synchronization2 (Vulkan 1.3) enabled: timestamps by `vkCmdWriteTimestamp2`,
     /// barriers by `vkCmdPipelineBarrier2`.
     pub sync2: bool,
@@ -406,6 +408,7 @@ impl Device {
             subgroup_size: subgroup.subgroup_size,
             subgroup_arithmetic,
             subgroup_shuffle,
+            cpu: props.device_type == vk::PhysicalDeviceType::CPU,
             sync2,
             max_image_2d: props.limits.max_image_dimension2_d,
             max_image_3d: props.limits.max_image_dimension3_d,

@@ -20,7 +20,7 @@ use std::hash::{Hash, Hasher};
 
 use clothlab_core::cpu::{self, Exec, SubstepStats};
 use clothlab_core::grid::{ClothTopology, V4};
-use clothlab_core::layout::{BLOCK, Buf, Uses, WORKGROUP};
+use clothlab_core::layout::{BLOCK, Buf, STRIP_ROWS, Uses, WORKGROUP};
 use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose};
 use clothlab_core::step_params::StepParams;
@@ -36,6 +36,10 @@ pub enum Count {
     /// One per [`BLOCK`] consecutive particles of a row: `n · ⌈n / BLOCK⌉` on a grid, a
     /// mesh's particles as one row (`⌈particles / BLOCK⌉`).
     Blocks,
+    /// One per [`BLOCK`] consecutive columns of [`STRIP_ROWS`] rows (the strain limit's
+    /// pass down strips): `⌈n / STRIP_ROWS⌉ · ⌈n / BLOCK⌉` on a grid; on a mesh, as
+    /// [`Count::Blocks`] (its particles are one row).
+    Strips,
     /// One per quad of the grid (two triangles); on a mesh, one per two triangles of the
     /// list.
     Quads,
@@ -71,6 +75,8 @@ impl Count {
             Count::Particles => topo.num_particles() as u32,
             Count::Blocks if topo.n == 0 => (topo.num_particles() as u32).div_ceil(BLOCK),
             Count::Blocks => topo.n * topo.n.div_ceil(BLOCK),
+            Count::Strips if topo.n == 0 => (topo.num_particles() as u32).div_ceil(BLOCK),
+            Count::Strips => topo.n.div_ceil(STRIP_ROWS) * topo.n.div_ceil(BLOCK),
             Count::Quads => topo.triangles.len().div_ceil(2) as u32,
             Count::Springs => topo.springs.len() as u32,
             Count::Triangles => topo.triangles.len() as u32,

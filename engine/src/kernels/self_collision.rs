@@ -216,6 +216,7 @@ pub(super) const ROWS: &[&KernelDef] = &[
     &HASH_COUNT,
     &STRAIN_LIMIT_COUNT,
     &STRAIN_LIMIT_INLINE_COUNT,
+    &STRAIN_LIMIT_STRIP_COUNT,
     &HASH_SCAN_TOP,
     &HASH_SCAN_BLOCKS,
     &HASH_SCATTER,

@@ -102,6 +102,23 @@ pub static STRAIN_LIMIT_INLINE: KernelDef = KernelDef {
         &[PosOut, Vel],
     )
 };
+/// [`STRAIN_LIMIT_INLINE`] down strips of rows (`strain_counts=strip`): an invocation
+/// carries a block's columns through [`STRIP_ROWS`](clothlab_core::layout::STRIP_ROWS)
+/// rows, each spring's length computed once for the counts of both its ends and for the
+/// pass. The same counts, so the same twin.
+pub static STRAIN_LIMIT_STRIP: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[PosOut],
+    variants: IMM_TEX,
+    label: timing::STRAIN_LIMIT,
+    ..KernelDef::new(
+        "strain_limit_strip",
+        strain_limit_inline,
+        Count::Strips,
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers],
+        &[PosOut, Vel],
+    )
+};
 /// The hash's counts of the positions the kernel wrote (`got.pos` after its swap): on a
 /// GPU whose strain limit differs from the CPU's in a last bit, a point that close to a
 /// cell's face may count in the next cell.
@@ -164,5 +181,23 @@ pub static STRAIN_LIMIT_INLINE_COUNT: KernelDef = KernelDef {
     )
 };
 
+/// [`STRAIN_LIMIT_INLINE_COUNT`] down strips of rows (`strain_counts=strip`, as
+/// [`STRAIN_LIMIT_STRIP`]).
+pub static STRAIN_LIMIT_STRIP_COUNT: KernelDef = KernelDef {
+    check: GATHER,
+    pure: &[PosOut],
+    accumulates: &[HASH_CELLS, HASH_TOTALS],
+    variants: IMM_TEX,
+    label: timing::STRAIN_LIMIT_COUNT,
+    from_output: Some(recount),
+    ..KernelDef::new(
+        "strain_limit_strip_count",
+        strain_limit_inline_count,
+        Count::Strips,
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Interior, Table, Tethers, HASH_CELLS, HASH_TOTALS],
+        &[PosOut, Vel, HASH_CELLS, HASH_TOTALS],
+    )
+};
+
 /// This family's kernels, in the registry's order ([`super::ALL`]).
-pub(super) const ROWS: &[&KernelDef] = &[&STRAIN_COUNT, &STRAIN_LIMIT, &STRAIN_LIMIT_INLINE];
+pub(super) const ROWS: &[&KernelDef] = &[&STRAIN_COUNT, &STRAIN_LIMIT, &STRAIN_LIMIT_INLINE, &STRAIN_LIMIT_STRIP];

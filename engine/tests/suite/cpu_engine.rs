@@ -175,6 +175,7 @@ fn a_mesh_on_the_cpu_engine_computes_the_cpu_solvers_bits_with_every_integrator(
                 grid: false,
                 tile: true,
                 sdf_image: true,
+                cpu: true,
             });
             // Euler and RK2 refuse these springs (they need far softer ones): skipped.
             let mut engine = match RecipeSolver::new(Exec::Serial, variant, file.scene.clone(), params.clone()) {

@@ -12,7 +12,7 @@ use clothlab_core::{CpuSolver, Exec, Scene, SceneFile, SimParams, Solver};
 use clothlab_engine::Variant;
 use clothlab_engine::kernels::{
     HASH_COUNT, HASH_SCATTER, KernelRef, SELF_COLLIDE_MESH, SELF_COLLISION, STRAIN_LIMIT_COUNT,
-    STRAIN_LIMIT_INLINE_COUNT,
+    STRAIN_LIMIT_INLINE_COUNT, STRAIN_LIMIT_STRIP_COUNT,
 };
 use clothlab_engine::recipe::Command;
 use clothlab_engine::validate::{KernelInput, KernelRunner, validate_kernels_with};
@@ -121,14 +121,16 @@ fn check_kernels(
         .into_iter()
         .filter(|k| {
             SELF_COLLISION.contains(&k.def)
-                || [&STRAIN_LIMIT_COUNT, &STRAIN_LIMIT_INLINE_COUNT, &SELF_COLLIDE_MESH].contains(&k.def)
+                || [&STRAIN_LIMIT_COUNT, &STRAIN_LIMIT_INLINE_COUNT, &STRAIN_LIMIT_STRIP_COUNT, &SELF_COLLIDE_MESH]
+                    .contains(&k.def)
         })
         .collect();
     // The heap strain-limits: the hash's count runs in the last strain pass (after its
-    // counts, or counting for itself as the optimized preset's does), not alone.
+    // counts, or counting for itself, inline or down strips, as the optimized preset's
+    // does), not alone.
     let fused = *kernels
         .iter()
-        .find(|k| [&STRAIN_LIMIT_COUNT, &STRAIN_LIMIT_INLINE_COUNT].contains(&k.def))
+        .find(|k| [&STRAIN_LIMIT_COUNT, &STRAIN_LIMIT_INLINE_COUNT, &STRAIN_LIMIT_STRIP_COUNT].contains(&k.def))
         .unwrap_or_else(|| panic!("{label}: {kernels:?}"));
     assert!(!kernels.iter().any(|k| k.def == &HASH_COUNT), "{label}: {kernels:?}");
     assert_eq!(kernels.len(), SELF_COLLISION.len(), "{label}: {kernels:?}");
