@@ -404,8 +404,7 @@ pub(crate) fn response(
     if thickness.is_nan() || thickness <= 0.0 {
         return None;
     }
-    let d = (s.p - s.q).length();
-    let n = if d > 0.0 { (s.p - s.q) * (1.0 / d) } else { s.fallback };
+    let (d, n) = s.gap();
     let m = mass_term(&s.a, &s.wa, &inv) + mass_term(&s.b, &s.wb, &inv);
     if pass == Pass::Separation {
         return (m > 0.0 && n.is_finite() && d < thickness).then(|| Response { s, m, change: n * (thickness - d) });
@@ -543,6 +542,14 @@ pub(crate) struct Sides {
 }
 
 impl Sides {
+    /// The distance between the closest points and the unit normal from q to p (the
+    /// fallback where they coincide), as [`response`] and [`vbd_terms`] take them; the
+    /// normal may be NaN (degenerate primitives), which each caller refuses.
+    pub(crate) fn gap(&self) -> (f32, Vec3) {
+        let d = (self.p - self.q).length();
+        (d, if d > 0.0 { (self.p - self.q) * (1.0 / d) } else { self.fallback })
+    }
+
     /// Vertex `v` and triangle `tri` at `pos`.
     pub(crate) fn vertex_triangle(pos: &[crate::grid::V4], v: u32, tri: [u32; 3]) -> Self {
         let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
@@ -635,13 +642,9 @@ pub(crate) fn vbd_terms(s: &Sides, thickness: f32, wanted: impl Fn(u32) -> bool,
     if thickness.is_nan() || thickness <= 0.0 {
         return false;
     }
-    let d = (s.p - s.q).length();
+    let (d, n) = s.gap();
     // (A NaN distance adds nothing either.)
-    if d.is_nan() || d >= thickness {
-        return false;
-    }
-    let n = if d > 0.0 { (s.p - s.q) * (1.0 / d) } else { s.fallback };
-    if !n.is_finite() {
+    if d.is_nan() || d >= thickness || !n.is_finite() {
         return false;
     }
     let scale = (thickness - d) * (1.0 / (thickness * (1.0 / crate::tables::CONTACT_UNITS)));

@@ -65,15 +65,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             continue;
         }
         let s = sides(o, other);
-        let d = len3(s.p - s.q);
-        if !(d < t) {
-            continue;
-        }
-        var n = s.fallback;
-        if d > 0.0 {
-            n = (s.p - s.q) * (1.0 / d);
-        }
-        if !finite3(n) {
+        let g = gap(s);
+        let d = g.d;
+        let n = g.n;
+        if !(d < t) || !finite3(n) {
             continue;
         }
         let scale = (t - d) * (1.0 / (t * (1.0 / CONTACT_UNITS)));

@@ -247,6 +247,23 @@ fn speed_of(ks: vec3<u32>, ws: vec3<f32>) -> vec3<f32> {
 }
 
 // A pair's response (core::cpu::tri_contact::response): `ok` where it has one.
+// The distance between a pair's closest points and the unit normal from q to p (the
+// fallback where they coincide; NaN for degenerate primitives, which each caller refuses):
+// core::tri_contact::Sides::gap, for the response and VBD's terms (tri_vbd.wgsl).
+struct Gap {
+    d: f32,
+    n: vec3<f32>,
+}
+
+fn gap(s: Sides) -> Gap {
+    let d = len3(s.p - s.q);
+    var n = s.fallback;
+    if d > 0.0 {
+        n = (s.p - s.q) * (1.0 / d);
+    }
+    return Gap(d, n);
+}
+
 struct Response {
     ok: bool,
     s: Sides,
@@ -260,11 +277,9 @@ fn response(o: u32, other: u32, velocity: bool) -> Response {
     if !(t > 0.0) {
         return Response(false, s, 0.0, vec3<f32>(0.0));
     }
-    let d = len3(s.p - s.q);
-    var n = s.fallback;
-    if d > 0.0 {
-        n = (s.p - s.q) * (1.0 / d);
-    }
+    let g = gap(s);
+    let d = g.d;
+    let n = g.n;
     let m = mass_term(s.a, s.wa) + mass_term(s.b, s.wb);
     if !velocity {
         return Response(m > 0.0 && finite3(n) && d < t, s, m, n * (t - d));
