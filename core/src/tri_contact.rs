@@ -622,6 +622,19 @@ pub fn approach_impulses(
 /// block's six entries `[h00, h11, h22, h01, h02, h12]`, each a fixed-point sum.
 pub const VBD_TERMS: usize = 9;
 
+/// Whether VBD's contact terms act on vertex `k` while colour `colour` is swept: a
+/// vertex of that colour (`colour_of`: each particle's) that is not held (pinned, its
+/// `pos` w 0, or the grabbed `grab`). [`Contact::vbd_terms`] and
+/// `cpu::tri_contact::tri_vbd` (the `tri_vbd` kernel's twin) both ask this.
+pub(crate) fn vbd_wanted<'a>(
+    pos: &'a [crate::grid::V4],
+    colour_of: &'a [u32],
+    colour: u32,
+    grab: i32,
+) -> impl Fn(u32) -> bool + Copy + 'a {
+    move |k: u32| colour_of[k as usize] == colour && k as i32 != grab && pos[k as usize][3] != 0.0
+}
+
 /// A pair's contact energy inside VBD's local solves (the paper's §3.5 for the contact
 /// between primitives): `E = ½ k (t − d)²` while the closest points are `d` < `thickness`
 /// (`t`) apart, `n` the normal from the second side's point to the first's. Each acting
@@ -811,7 +824,7 @@ impl Contact {
         grab: i32,
     ) -> usize {
         self.vbd.resize(VBD_TERMS * pos.len(), 0);
-        let wanted = |k: u32| colour_of[k as usize] == colour && k as i32 != grab && pos[k as usize][3] != 0.0;
+        let wanted = vbd_wanted(pos, colour_of, colour, grab);
         let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
         let mut touching = 0;
         for k in 0..self.vt.len() + self.ee.len() {

@@ -453,8 +453,7 @@ fn each_response(
 /// pair at `pos` (the sweep's iterate) for the vertices of colour `colour`
 /// (`topo.colours.of`) that are not held, into their sums ([`TriLayout::vbd`]).
 pub fn tri_vbd(p: &StepParams, topo: &crate::grid::ClothTopology, pos: &[V4], colour: u32, b: &mut TriBufs) {
-    let of = &topo.colours.of;
-    let wanted = |k: u32| of[k as usize] == colour && k as i32 != p.grab_index && pos[k as usize][3] != 0.0;
+    let wanted = crate::tri_contact::vbd_wanted(pos, &topo.colours.of, colour, p.grab_index);
     let edges = topo.edges();
     let (l, at) = (b.l, b.l.vbd());
     for o in 0..l.num_owners() {

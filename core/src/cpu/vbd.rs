@@ -184,8 +184,7 @@ fn iterate_at(x4: &V4, d: &V4) -> V4 {
 /// triangles' terms are found at (after the prediction and each Chebyshev step; each
 /// colour's sweep keeps its own particles').
 pub fn vbd_positions(exec: Exec, pos: &mut [V4], aux: &[Vec<V4>]) {
-    let out = per_particle(exec, pos.len(), |i| iterate_at(&aux[1][i], &aux[2][i]));
-    pos.copy_from_slice(&out);
+    super::for_each(exec, pos, |i, x| *x = iterate_at(&aux[1][i], &aux[2][i]));
 }
 
 /// The end of a VBD substep: `x = x⁰ + D`, `v = v' + (D − h v')/h`, the floor's contact,

@@ -115,9 +115,7 @@ fn tri_vbd(a: &TwinArgs, b: &mut HostBuffers) {
 fn vbd_colour_tri(a: &TwinArgs, b: &mut HostBuffers) {
     let l = TriLayout::of(a.topo);
     b.tri_sized(l);
-    let order = &a.topo.colours.order;
-    let end = (a.range.0 as usize + a.range.1 as usize).min(order.len());
-    let list = &order[(a.range.0 as usize).min(end)..end];
+    let list = super::vbd::colour_list(a);
     let HostBuffers { pos, aux, tri_ints, .. } = b;
     let ints: &mut [u32] = bytemuck::cast_slice_mut(tri_ints.as_mut_slice());
     let tri = cpu::vbd::TriVbd { sums: &mut ints[l.vbd()..l.words()], pos };

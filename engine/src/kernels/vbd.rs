@@ -9,10 +9,15 @@ fn vbd_begin(a: &TwinArgs, b: &mut HostBuffers) {
 /// One colour of VBD's sweep: particles `first .. first + count` of the colouring's list
 /// (`topo.colours.order`, binding [`Buf::Colours`]).
 fn vbd_colour(a: &TwinArgs, b: &mut HostBuffers) {
+    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, a.colliders, colour_list(a), &mut b.aux, None);
+}
+
+/// The particles of the colouring's list the dispatch's range covers (`first .. first +
+/// count`, cut to the list): one colour of VBD's sweep.
+pub(super) fn colour_list<'a>(a: &TwinArgs<'a>) -> &'a [u32] {
     let order = &a.topo.colours.order;
     let end = (a.range.0 as usize + a.range.1 as usize).min(order.len());
-    let list = &order[(a.range.0 as usize).min(end)..end];
-    cpu::vbd::vbd_colour(a.exec, a.p, &a.topo.slots, a.colliders, list, &mut b.aux, None);
+    &order[(a.range.0 as usize).min(end)..end]
 }
 
 /// The Chebyshev step after a sweep, ω the bits of the range's `first`.
