@@ -118,19 +118,31 @@ fn a_thin_heap_on_a_frictionless_floor_keeps_its_horizontal_momentum() {
     // changes only through the contact between triangles. Its velocity pass and its
     // separation are internal (the pushes of a pair weigh equally, to the fixed point's
     // truncation: with the clamp switched off, 1.9e-4 kg m/s here); its clamp is not: a
-    // vertex whose motion is cut loses velocity alone. Measured 0.2 % of the vertical
-    // momentum the fall builds (m g t); held to 2 %.
-    let (_, _, s) = thin_heap(70, |p| {
-        p.friction = 0.0;
-        p.air_drag = 0.0;
-        p.damping = 0.0;
-    });
-    let st = s.state_ref();
-    let mass = 0.5 / st.pos.len() as f32;
-    let p: [f32; 3] = std::array::from_fn(|c| st.vel.iter().map(|v| v[c] * mass).sum());
-    let scale = 0.5 * 9.81 * 70.0 / 60.0;
-    println!("horizontal momentum {:.2e}, {:.2e} kg m/s against m g t = {scale:.2}", p[0], p[2]);
-    assert!(p[0].abs() < 0.02 * scale && p[2].abs() < 0.02 * scale, "{p:?}");
+    // vertex whose motion is cut loses velocity alone. Under VBD the contact's energy in
+    // each vertex's solve moves one colour at a time (Gauss–Seidel: a pair's second side
+    // finds the gap its first closed), so the pushes are equal and opposite only as far
+    // as the sweeps converge, as VBD's springs and floor are (tests/tests/suite/momentum.rs).
+    // Measured against the vertical momentum the fall builds (m g t): Verlet 0.2 %, VBD
+    // 0.37 %; held to 2 %.
+    for integrator in [clothlab_core::Integrator::Verlet, clothlab_core::Integrator::Vbd] {
+        let (_, _, s) = thin_heap(70, |p| {
+            p.friction = 0.0;
+            p.air_drag = 0.0;
+            p.damping = 0.0;
+            p.integrator = integrator;
+        });
+        let st = s.state_ref();
+        let mass = 0.5 / st.pos.len() as f32;
+        let p: [f32; 3] = std::array::from_fn(|c| st.vel.iter().map(|v| v[c] * mass).sum());
+        let scale = 0.5 * 9.81 * 70.0 / 60.0;
+        println!(
+            "{integrator:?}: horizontal momentum {:.2e}, {:.2e} kg m/s against m g t = {scale:.2} ({:.2} %)",
+            p[0],
+            p[2],
+            100.0 * p[0].abs().max(p[2].abs()) / scale
+        );
+        assert!(p[0].abs() < 0.02 * scale && p[2].abs() < 0.02 * scale, "{integrator:?}: {p:?}");
+    }
 }
 
 #[test]
