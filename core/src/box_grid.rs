@@ -117,9 +117,9 @@ impl BoxGrid {
         if !(lo.is_finite() && hi.is_finite()) {
             return;
         }
-        let g = Vec3::splat(grow);
-        let meets = |e: &Entry| (e.lo - g).cmple(hi).all() && lo.cmple(e.hi + g).all();
+        let meets = |e: &Entry| boxes_meet([e.lo, e.hi], b, grow);
         // A little more than rounding can move a corner (the test above decides).
+        let g = Vec3::splat(grow);
         let slack = Vec3::splat(1e-4 * self.cell + 1e-6 * lo.abs().max(hi.abs()).max_element());
         let [c0, c1] = [self.cell(lo - g - self.extent - slack), self.cell(hi + g + slack)];
         for i in c0[0]..=c1[0] {
@@ -141,6 +141,14 @@ impl BoxGrid {
             }
         }
     }
+}
+
+/// Whether box `e` grown by `grow` meets box `b` (closed: boxes that touch meet) — the
+/// one test of [`BoxGrid::query`], which the kept pairs' filter
+/// (`crate::tri_contact::Contact::begin`) repeats so that it keeps what a search finds.
+pub(crate) fn boxes_meet(e: [Vec3; 2], b: [Vec3; 2], grow: f32) -> bool {
+    let g = Vec3::splat(grow);
+    (e[0] - g).cmple(b[1]).all() && b[0].cmple(e[1] + g).all()
 }
 
 /// The box of points `xs`, lowest and highest corner.

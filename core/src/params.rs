@@ -348,6 +348,12 @@ pub struct SimParams {
     /// The cloth's thickness for self-collision, m, in 0.001 ..= 0.5 (the triangles'
     /// contact: from 0.1 of the spacing up). Default 0.02.
     pub self_thickness: f32,
+    /// `self_collision = triangles`: how far beyond a substep's reach the search for
+    /// pairs looks, in rest spacings, in 0 ..= 4. Its pairs then serve the substeps after
+    /// it until some vertex has moved (from the cloths' mean motion) half that far; the
+    /// pairs each substep acts on, and so the results, are the same whatever the margin
+    /// (docs/contact.md). 0 searches every substep. Default 0.5.
+    pub search_margin: f32,
 }
 
 impl Default for SimParams {
@@ -384,6 +390,7 @@ impl Default for SimParams {
             vbd_rho: 0.0,
             self_collision: SelfCollision::Off,
             self_thickness: 0.02,
+            search_margin: 0.5,
         }
     }
 }
@@ -738,6 +745,7 @@ impl SimParams {
             return Err(ParamError::new("vbd_rho", self.vbd_rho, "must be in 0 ..< 1 (0: no acceleration)"));
         }
         finite_in("self_thickness", self.self_thickness, 1e-3, 0.5)?;
+        finite_in("search_margin", self.search_margin, 0.0, 4.0)?;
         if self.cg_iterations == 0 || self.cg_iterations > MAX_CG_ITERATIONS {
             return Err(ParamError::new(
                 "cg_iterations",

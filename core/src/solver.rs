@@ -40,6 +40,16 @@ pub struct ContactStats {
     pub reach: f32,
     /// Pairs (vertex–triangle and edge–edge) within the reach at the substep's start.
     pub pairs: usize,
+    /// Searches for pairs since the solver was built (the pairs a search finds within its
+    /// reach and a margin serve the substeps after it until some vertex has moved too far:
+    /// docs/contact.md).
+    pub searches: u64,
+    /// Partial searches since the solver was built: the pairs of the primitives of the
+    /// vertices that moved too far, found again (the rest still held).
+    pub refreshes: u64,
+    /// Pairs the last search kept (within its reach and margin), which each substep's
+    /// pairs are filtered from.
+    pub kept: usize,
     /// Pairs whose approach the velocity pass slowed.
     pub slowed: usize,
     /// Pair pushes of the separation (summed over its passes, and over XPBD's iterations
@@ -52,6 +62,15 @@ pub struct ContactStats {
     /// it from rest (measured from the mean, nothing was cut), else 0
     /// (`core::tri_contact::Contact::clamp`).
     pub shared: f32,
+}
+
+impl ContactStats {
+    /// What the contact did, without how its pairs were found (`searches`, `refreshes`
+    /// and `kept` cleared): those differ between backends and margins, the pairs and so
+    /// the rest do not — what the bit-identity tests compare.
+    pub fn outcome(self) -> Self {
+        Self { searches: 0, refreshes: 0, kept: 0, ..self }
+    }
 }
 
 /// A cloth simulation on some backend.

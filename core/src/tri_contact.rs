@@ -174,16 +174,7 @@ pub fn find_pairs(
         .flat_map_iter(|v| {
             let x = at(v);
             let mut found = Vec::new();
-            tris.query([x, x], reach, 0, |t| {
-                let tri = triangles[t as usize];
-                if tri.contains(&v) {
-                    return;
-                }
-                let d = (point_triangle(x, at(tri[0]), at(tri[1]), at(tri[2])).point - x).length();
-                if d < reach {
-                    found.push((v, t, d));
-                }
-            });
+            tris.query([x, x], reach, 0, |t| found.extend(vt_pair(pos, triangles, v, t, reach)));
             found
         })
         .collect();
@@ -196,21 +187,72 @@ pub fn find_pairs(
             let (p0, p1) = (at(a), at(b));
             let mut found = Vec::new();
             let eb = [p0.min(p1), p0.max(p1)];
-            edge_grid.query(eb, reach, e + 1, |f| {
-                let [c, d] = edges[f as usize];
-                if c == a || c == b || d == a || d == b {
-                    return;
-                }
-                let r = edge_edge(p0, p1, at(c), at(d));
-                let dist = (r.p - r.q).length();
-                if dist < reach {
-                    found.push((e, f, dist));
-                }
-            });
+            edge_grid.query(eb, reach, e + 1, |f| found.extend(ee_pair(pos, edges, e, f, reach)));
             found
         })
         .collect();
     (vt, ee)
+}
+
+/// Vertex `v` and triangle `t` at `pos` as a pair of [`find_pairs`] within `reach`, once
+/// their boxes meet: none where the triangle holds the vertex or the closest points are
+/// `reach` or more apart.
+fn vt_pair(pos: &[crate::grid::V4], triangles: &[[u32; 3]], v: u32, t: u32, reach: f32) -> Option<Pair> {
+    let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
+    let tri = triangles[t as usize];
+    if tri.contains(&v) {
+        return None;
+    }
+    let (x, a, b, c) = (at(v), at(tri[0]), at(tri[1]), at(tri[2]));
+    // Every point of the triangle lies within its corners' farthest from their mean.
+    let mid = (a + b + c) * (1.0 / 3.0);
+    let radius = (a - mid).length().max((b - mid).length()).max((c - mid).length());
+    if surely_beyond((x - mid).length() - radius, reach, x.abs().max(mid.abs()).max_element()) {
+        return None;
+    }
+    let d = (point_triangle(x, a, b, c).point - x).length();
+    (d < reach).then_some((v, t, d))
+}
+
+/// Whether a lower bound `lower` on a distance, computed from points whose largest
+/// coordinate is `scale`, puts it at `reach` or beyond even if every rounding in it and in
+/// the exact distance went the other way (a relative 1e-4 of the reach, and 1e-6 of the
+/// coordinates: hundreds of ulps of either). A pair it rules out is never within the
+/// reach, so the exact test that it saves would have refused it too.
+fn surely_beyond(lower: f32, reach: f32, scale: f32) -> bool {
+    lower >= reach * 1.0001 + 1e-6 * scale
+}
+
+/// Edges `e` and `f` at `pos` as a pair of [`find_pairs`] within `reach`, once their
+/// boxes meet: none where they share a vertex or are `reach` or more apart.
+fn ee_pair(pos: &[crate::grid::V4], edges: &[[u32; 2]], e: u32, f: u32, reach: f32) -> Option<Pair> {
+    let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
+    let ([a, b], [c, d]) = (edges[e as usize], edges[f as usize]);
+    if c == a || c == b || d == a || d == b {
+        return None;
+    }
+    let (p0, p1, q0, q1) = (at(a), at(b), at(c), at(d));
+    // Every point of a segment lies within half its length of its middle.
+    let (mp, mq) = ((p0 + p1) * 0.5, (q0 + q1) * 0.5);
+    let lower = (mp - mq).length() - 0.5 * ((p1 - p0).length() + (q1 - q0).length());
+    if surely_beyond(lower, reach, p0.abs().max(p1.abs()).max(q0.abs()).max(q1.abs()).max_element()) {
+        return None;
+    }
+    let r = edge_edge(p0, p1, q0, q1);
+    let dist = (r.p - r.q).length();
+    (dist < reach).then_some((e, f, dist))
+}
+
+/// Two lists sorted by `key` as one.
+fn merge(a: Vec<Pair>, b: Vec<Pair>, key: impl Fn(&Pair) -> (u32, u32)) -> Vec<Pair> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut a, mut b) = (a.into_iter().peekable(), b.into_iter().peekable());
+    while let (Some(x), Some(y)) = (a.peek(), b.peek()) {
+        out.push(if key(x) <= key(y) { a.next() } else { b.next() }.expect("peeked"));
+    }
+    out.extend(a);
+    out.extend(b);
+    out
 }
 
 /// The mean length of `edges` at `pos` (those of finite length; 0 if none).
@@ -262,24 +304,240 @@ pub fn bounds_into(
     parallel: bool,
     bound: &mut Vec<f32>,
 ) -> (Vec<Pair>, Vec<Pair>) {
+    let (vt, ee) = find_pairs(pos, triangles, edges, reach, parallel);
+    bounds_of(pos.len(), &Pairs { triangles, edges, vt: &vt, ee: &ee }, reach, bound);
+    (vt, ee)
+}
+
+/// Each of `np` vertices' bound into `bound`: [`BOUND_FRACTION`] of the nearest of
+/// `pairs` (all the pairs within `reach`) it belongs to, at most that fraction of `reach`.
+fn bounds_of(np: usize, pairs: &Pairs, reach: f32, bound: &mut Vec<f32>) {
     bound.clear();
-    bound.resize(pos.len(), BOUND_FRACTION * reach);
+    bound.resize(np, BOUND_FRACTION * reach);
     let mut take = |ks: &[u32], d: f32| {
         for &k in ks {
             let b = &mut bound[k as usize];
             *b = b.min(BOUND_FRACTION * d);
         }
     };
-    let (vt, ee) = find_pairs(pos, triangles, edges, reach, parallel);
-    for &(v, t, d) in &vt {
+    for &(v, t, d) in pairs.vt {
         take(&[v], d);
-        take(&triangles[t as usize], d);
+        take(&pairs.triangles[t as usize], d);
     }
-    for &(e, f, d) in &ee {
-        let ([a, b], [c, dd]) = (edges[e as usize], edges[f as usize]);
+    for &(e, f, d) in pairs.ee {
+        let ([a, b], [c, dd]) = (pairs.edges[e as usize], pairs.edges[f as usize]);
         take(&[a, b, c, dd], d);
     }
-    (vt, ee)
+}
+
+/// The pairs of the last search (within its reach at its positions) and what it needs
+/// to tell whether they still hold every pair within a substep's reach.
+///
+/// Why they do: a point of a primitive is a weighted mean of its vertices, so relative to
+/// any common motion `m` it has moved no farther than the farthest vertex (`δ = max |Δₖ −
+/// m|`), and two primitives' distance has changed by at most 2δ since the search. A pair
+/// within `r` now was within `r + 2δ` then: found by a search that looked as far, and the
+/// boxes' test (each coordinate moves by at most δ relative to `m`) the same. The pairs
+/// within `r` are then filtered from the kept ones with the search's own tests
+/// (`boxes_meet`, [`vt_pair`], [`ee_pair`]): the same pairs, the same distances' bits,
+/// so the contact computes what a search every substep computes.
+#[derive(Debug, Clone, Default)]
+struct Search {
+    /// The positions it searched at.
+    at: Vec<crate::grid::V4>,
+    /// How far it looked.
+    reach: f32,
+    /// Its pairs: vertex–triangle and edge–edge, grouped by owner as [`find_pairs`]'s.
+    vt: Vec<Pair>,
+    ee: Vec<Pair>,
+    /// [`drift`] at the last [`Search::covers`] that held (0 after a search): a kept pair
+    /// `d` apart at the search is at least `d − 2δ` apart.
+    delta: f32,
+    scale: f32,
+}
+
+/// Each vertex's `|Δₖ − m|`, `Δₖ` its displacement from `from` to `to` and `m` their mean
+/// (any common motion serves: [`Search`]), `m`, and the largest coordinate of `to` in
+/// magnitude; a position that is not finite has an infinite one.
+fn drift(from: &[crate::grid::V4], to: &[crate::grid::V4], min_len: usize) -> (Vec<f32>, Vec3, f32) {
+    let delta = |k: usize| Vec3::from_slice(&to[k][..3]) - Vec3::from_slice(&from[k][..3]);
+    let sum = (0..to.len())
+        .into_par_iter()
+        .with_min_len(min_len)
+        .map(|k| delta(k).as_dvec3())
+        .filter(|d| d.is_finite())
+        .reduce(|| glam::DVec3::ZERO, |a, b| a + b);
+    let mean = (sum / to.len().max(1) as f64).as_vec3();
+    let drifts: Vec<f32> = (0..to.len())
+        .into_par_iter()
+        .with_min_len(min_len)
+        .map(|k| {
+            let d = (delta(k) - mean).length();
+            if d.is_finite() && Vec3::from_slice(&to[k][..3]).is_finite() { d } else { f32::INFINITY }
+        })
+        .collect();
+    let scale = to.iter().map(|x| Vec3::from_slice(&x[..3]).abs().max_element()).fold(0.0, f32::max);
+    (drifts, mean, scale)
+}
+
+/// What the kept pairs need at a substep ([`Search::covers`]).
+enum Cover {
+    /// Nothing: they hold every pair within the reach.
+    Holds,
+    /// The pairs of these vertices' primitives found again (the rest hold).
+    Refresh(Vec<bool>),
+    /// A new search.
+    Search,
+}
+
+/// A partial search refreshes at most this fraction of the vertices; more make a search.
+const REFRESH_MOST: f32 = 0.25;
+
+impl Search {
+    /// Whether the kept pairs hold every pair within `reach` at `pos`: `reach + δ_P + δ_Q`
+    /// within the search's reach for every two primitives (each `δ` the largest [`drift`]
+    /// of its vertices, with room for the distances' rounding). Where only some vertices
+    /// drifted too far, those vertices' snapshot is moved to where they are (less the
+    /// mean motion) and their primitives' pairs are to be found again ([`Cover::Refresh`]).
+    fn covers(&mut self, pos: &[crate::grid::V4], reach: f32, min_len: usize) -> Cover {
+        if self.at.len() != pos.len() || reach.is_nan() || reach >= self.reach {
+            return Cover::Search;
+        }
+        let (drifts, mean, scale) = drift(&self.at, pos, min_len);
+        self.scale = scale;
+        // A distance's rounding: a few ulps of the coordinates and of the reach.
+        let slack = 1e-6 * scale + 1e-5 * self.reach;
+        let limit = 0.5 * (self.reach - reach - slack);
+        let most = drifts.iter().copied().fold(0.0, f32::max);
+        if limit.is_nan() || limit <= 0.0 || !most.is_finite() {
+            return Cover::Search;
+        }
+        if most <= limit {
+            self.delta = most;
+            return Cover::Holds;
+        }
+        // Those over half the limit, so that the rest have room for a few substeps more.
+        let fast: Vec<bool> = drifts.iter().map(|&d| d > 0.5 * limit).collect();
+        let count = fast.iter().filter(|&&f| f).count();
+        if count as f32 > REFRESH_MOST * pos.len() as f32 {
+            return Cover::Search;
+        }
+        for (k, _) in fast.iter().enumerate().filter(|(_, f)| **f) {
+            for c in 0..3 {
+                self.at[k][c] = pos[k][c] - mean[c];
+            }
+        }
+        self.delta = drifts.iter().zip(&fast).filter(|(_, f)| !**f).map(|(d, _)| *d).fold(0.0, f32::max);
+        Cover::Refresh(fast)
+    }
+
+    /// The pairs within the search's reach of the primitives with a vertex in `fast`,
+    /// found again at the snapshot (whose `fast` vertices [`Search::covers`] moved): every
+    /// other pair's distance there is as it was.
+    fn refresh(&mut self, fast: &[bool], triangles: &[[u32; 3]], edges: &[[u32; 2]], min_len: usize) {
+        let (at, reach) = (&self.at[..], self.reach);
+        let point = |k: u32| Vec3::from_slice(&at[k as usize][..3]);
+        let tri_fast: Vec<bool> = triangles.iter().map(|t| t.iter().any(|&k| fast[k as usize])).collect();
+        let edge_fast: Vec<bool> = edges.iter().map(|e| e.iter().any(|&k| fast[k as usize])).collect();
+        self.vt.retain(|&(v, t, _)| !fast[v as usize] && !tri_fast[t as usize]);
+        self.ee.retain(|&(e, f, _)| !edge_fast[e as usize] && !edge_fast[f as usize]);
+        let cell = (2.0 * reach).max(1.5 * mean_edge(at, edges)).max(1e-6);
+        let list =
+            |flags: &[bool]| flags.iter().enumerate().filter(|(_, f)| **f).map(|(k, _)| k as u32).collect::<Vec<u32>>();
+        let tris = BoxGrid::new(cell, triangles.len(), |t| triangles[t].iter().map(|&k| point(k)));
+        let points = BoxGrid::new(cell, at.len(), |k| std::iter::once(point(k as u32)));
+        let edge_grid = BoxGrid::new(cell, edges.len(), |e| edges[e].iter().map(|&k| point(k)));
+        // A fast vertex against every triangle; a fast triangle against the other vertices.
+        let mut vt: Vec<Pair> = list(fast)
+            .into_par_iter()
+            .with_min_len(16)
+            .flat_map_iter(|v| {
+                let x = point(v);
+                let mut found = Vec::new();
+                tris.query([x, x], reach, 0, |t| found.extend(vt_pair(at, triangles, v, t, reach)));
+                found
+            })
+            .collect();
+        vt.par_extend(list(&tri_fast).into_par_iter().with_min_len(16).flat_map_iter(|t| {
+            let b = crate::box_grid::bounds(triangles[t as usize].iter().map(|&k| point(k)));
+            let mut found = Vec::new();
+            points.query(b, reach, 0, |v| {
+                if !fast[v as usize] {
+                    found.extend(vt_pair(at, triangles, v, t, reach));
+                }
+            });
+            found
+        }));
+        // A fast edge against every other (each pair once: from the lower fast edge).
+        let mut ee: Vec<Pair> = list(&edge_fast)
+            .into_par_iter()
+            .with_min_len(16)
+            .flat_map_iter(|e| {
+                let [a, b] = edges[e as usize];
+                let (p0, p1) = (point(a), point(b));
+                let mut found = Vec::new();
+                edge_grid.query([p0.min(p1), p0.max(p1)], reach, 0, |f| {
+                    if f != e && !(edge_fast[f as usize] && f < e) {
+                        found.extend(ee_pair(at, edges, e.min(f), e.max(f), reach));
+                    }
+                });
+                found
+            })
+            .collect();
+        let by_owner = |p: &Pair| (p.0, p.1);
+        vt.par_sort_unstable_by_key(by_owner);
+        ee.par_sort_unstable_by_key(by_owner);
+        self.vt = merge(std::mem::take(&mut self.vt), vt, by_owner);
+        self.ee = merge(std::mem::take(&mut self.ee), ee, by_owner);
+        let _ = min_len;
+    }
+
+    /// The kept pairs within `reach` at `pos`: what [`find_pairs`] finds there, in the
+    /// same order of owners.
+    fn within(
+        &self,
+        pos: &[crate::grid::V4],
+        triangles: &[[u32; 3]],
+        edges: &[[u32; 2]],
+        reach: f32,
+        min_len: usize,
+    ) -> (Vec<Pair>, Vec<Pair>) {
+        let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
+        let finite = |b: [Vec3; 2]| b[0].is_finite() && b[1].is_finite();
+        let vt = self
+            .vt
+            .par_iter()
+            .with_min_len(min_len)
+            .filter_map(|&(v, t, d)| {
+                if surely_beyond(d - 2.0 * self.delta, reach, self.scale) {
+                    return None;
+                }
+                let x = at(v);
+                let tri = crate::box_grid::bounds(triangles[t as usize].iter().map(|&k| at(k)));
+                (finite([x, x]) && finite(tri) && crate::box_grid::boxes_meet(tri, [x, x], reach))
+                    .then(|| vt_pair(pos, triangles, v, t, reach))
+                    .flatten()
+            })
+            .collect();
+        let ee = self
+            .ee
+            .par_iter()
+            .with_min_len(min_len)
+            .filter_map(|&(e, f, d)| {
+                if surely_beyond(d - 2.0 * self.delta, reach, self.scale) {
+                    return None;
+                }
+                let [a, b] = edges[e as usize];
+                let (p0, p1) = (at(a), at(b));
+                let eb = [p0.min(p1), p0.max(p1)];
+                let fb = crate::box_grid::bounds(edges[f as usize].iter().map(|&k| at(k)));
+                (finite(eb) && finite(fb) && crate::box_grid::boxes_meet(fb, eb, reach))
+                    .then(|| ee_pair(pos, edges, e, f, reach))
+                    .flatten()
+            })
+            .collect();
+        (vt, ee)
+    }
 }
 
 /// One Jacobi pass of the contact between primitives: each pair of [`find_pairs`] closer
@@ -319,7 +577,7 @@ pub fn separate_with(
 /// One Jacobi pass of the separation over `pairs` (found before) at `pos`, in place;
 /// returns the pairs closer than `thickness` it pushed.
 pub fn separation_pass(pos: &mut [crate::grid::V4], pairs: &Pairs, inv_mass: &[f32], thickness: f32) -> usize {
-    let (moves, pushed) = separation_shares(pos, pairs, |k| inv_mass[k as usize], thickness);
+    let (moves, pushed) = separation_shares(pos, pairs, |k| inv_mass[k as usize], thickness, usize::MAX);
     for (x, d) in pos.iter_mut().zip(&moves) {
         for c in 0..3 {
             x[c] += d[c];
@@ -337,16 +595,17 @@ fn separation_moves(
     pairs: &Pairs,
     thickness: f32,
     dt: f32,
+    min_len: usize,
 ) -> usize {
     // The inverse masses are the positions' w, which the moves leave as they are.
     let at: &[crate::grid::V4] = pos;
-    let (moves, pushed) = separation_shares(at, pairs, |k| at[k as usize][3], thickness);
-    for ((x, v), d) in pos.iter_mut().zip(vel.iter_mut()).zip(&moves) {
+    let (moves, pushed) = separation_shares(at, pairs, |k| at[k as usize][3], thickness, min_len);
+    pos.par_iter_mut().zip(vel.par_iter_mut()).zip(&moves).with_min_len(min_len.max(1024)).for_each(|((x, v), d)| {
         for c in 0..3 {
             x[c] += d[c];
             v[c] += d[c] * (1.0 / dt);
         }
-    }
+    });
     pushed
 }
 
@@ -355,13 +614,16 @@ fn separation_moves(
 fn separation_shares(
     pos: &[crate::grid::V4],
     pairs: &Pairs,
-    inv: impl Fn(u32) -> f32 + Copy,
+    inv: impl Fn(u32) -> f32 + Copy + Sync + Send,
     thickness: f32,
+    min_len: usize,
 ) -> (Vec<[f32; 3]>, usize) {
     let responses: Vec<Response> = (0..pairs.vt.len() + pairs.ee.len())
+        .into_par_iter()
+        .with_min_len(min_len)
         .filter_map(|k| response(sides(pos, pairs, k), inv, &[], thickness, 1.0, Friction::default(), Pass::Separation))
         .collect();
-    let moves = share(&responses, pos.len(), inv, thickness * (1.0 / crate::tables::CONTACT_UNITS));
+    let moves = share(&responses, pos.len(), inv, thickness * (1.0 / crate::tables::CONTACT_UNITS), min_len);
     (moves, responses.len())
 }
 
@@ -449,35 +711,40 @@ pub(crate) fn mass_term(ks: &[u32; 3], ws: &[f32; 3], inv: impl Fn(u32) -> f32) 
 /// over (a Jacobi sum's overshoot: without it the velocity pass diverged on a heap).
 /// Summed in fixed point of `unit` (truncated, then added as 32-bit integers with
 /// wrap-around — a GPU's atomics: the same sum in any order, on every backend).
-fn share(responses: &[Response], n: usize, inv: impl Fn(u32) -> f32, unit: f32) -> Vec<[f32; 3]> {
-    let mut count = vec![0u32; n];
-    let acting = |ks: &[u32; 3], ws: &[f32; 3]| {
-        ks.iter().zip(ws).filter(|(_, w)| **w != 0.0).map(|(&k, _)| k).collect::<Vec<u32>>()
+fn share(
+    responses: &[Response],
+    n: usize,
+    inv: impl Fn(u32) -> f32 + Sync,
+    unit: f32,
+    min_len: usize,
+) -> Vec<[f32; 3]> {
+    use std::sync::atomic::{AtomicI32, AtomicU32, Ordering::Relaxed};
+    // A side's acting vertices (weight ≠ 0), with their weights.
+    let acting = |ks: &'_ [u32; 3], ws: &'_ [f32; 3]| {
+        ks.iter().zip(ws).filter(|(_, w)| **w != 0.0).map(|(&k, &w)| (k, w)).collect::<Vec<_>>()
     };
-    for r in responses {
-        for k in acting(&r.s.a, &r.s.wa).into_iter().chain(acting(&r.s.b, &r.s.wb)) {
-            count[k as usize] += 1;
+    let count: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(0)).collect();
+    responses.par_iter().with_min_len(min_len).for_each(|r| {
+        for (k, _) in acting(&r.s.a, &r.s.wa).into_iter().chain(acting(&r.s.b, &r.s.wb)) {
+            count[k as usize].fetch_add(1, Relaxed);
         }
-    }
-    let mut sum = vec![[0i32; 3]; n];
-    for r in responses {
-        let most = acting(&r.s.a, &r.s.wa).into_iter().chain(acting(&r.s.b, &r.s.wb)).map(|k| count[k as usize]).max();
+    });
+    let sum: Vec<[AtomicI32; 3]> = (0..n).map(|_| [AtomicI32::new(0), AtomicI32::new(0), AtomicI32::new(0)]).collect();
+    responses.par_iter().with_min_len(min_len).for_each(|r| {
+        let (a, b) = (acting(&r.s.a, &r.s.wa), acting(&r.s.b, &r.s.wb));
+        let most = a.iter().chain(&b).map(|&(k, _)| count[k as usize].load(Relaxed)).max();
         let scale = (1.0 / most.unwrap_or(1).max(1) as f32) * (1.0 / r.m) * (1.0 / unit);
-        for (ks, ws, sign) in [(&r.s.a, &r.s.wa, 1.0f32), (&r.s.b, &r.s.wb, -1.0)] {
-            for (&k, &w) in ks.iter().zip(ws) {
-                if w == 0.0 {
-                    continue;
-                }
+        for (side, sign) in [(a, 1.0f32), (b, -1.0)] {
+            for (k, w) in side {
                 let d = r.change * (sign * inv(k) * w * scale);
-                let acc = &mut sum[k as usize];
-                for c in 0..3 {
+                for (acc, c) in sum[k as usize].iter().zip(d.to_array()) {
                     // Saturating conversion and wrapping sums: what a GPU's i32 atomics do.
-                    acc[c] = acc[c].wrapping_add(d[c] as i32);
+                    acc.fetch_add(c as i32, Relaxed);
                 }
             }
         }
-    }
-    sum.iter().map(|s| s.map(|c| c as f32 * unit)).collect()
+    });
+    sum.iter().map(|s| s.each_ref().map(|c| c.load(Relaxed) as f32 * unit)).collect()
 }
 
 /// The contact between triangles as stages of a substep (docs/contact.md, the CPU
@@ -501,6 +768,8 @@ pub struct Contact {
     ee: Vec<Pair>,
     /// VBD's contact terms of the colour being swept ([`VBD_TERMS`] words a particle).
     vbd: Vec<u32>,
+    /// The last search's pairs, which serve the substeps until a vertex has moved too far.
+    search: Search,
     /// What the last substep's stages did: the reach and pairs of [`Contact::begin`], the
     /// approaches it slowed, the pairs [`Contact::separate`] pushed and the vertices
     /// [`Contact::clamp`] cut short (what [`crate::Solver::contact_stats`] reports).
@@ -605,11 +874,28 @@ pub fn approach_impulses(
     dt: f32,
     mu: Friction,
 ) -> usize {
+    approach_impulses_on(pos, vel, pairs, thickness, dt, mu, usize::MAX)
+}
+
+/// [`approach_impulses`], its pairs taken `min_len` at a time on rayon's threads.
+fn approach_impulses_on(
+    pos: &[crate::grid::V4],
+    vel: &mut [crate::grid::V4],
+    pairs: &Pairs,
+    thickness: f32,
+    dt: f32,
+    mu: Friction,
+    min_len: usize,
+) -> usize {
     let inv = |k: u32| pos[k as usize][3];
+    let seen: &[crate::grid::V4] = vel;
     let responses: Vec<Response> = (0..pairs.vt.len() + pairs.ee.len())
-        .filter_map(|k| response(sides(pos, pairs, k), inv, vel, thickness, dt, mu, Pass::Velocity))
+        .into_par_iter()
+        .with_min_len(min_len)
+        .filter_map(|k| response(sides(pos, pairs, k), inv, seen, thickness, dt, mu, Pass::Velocity))
         .collect();
-    let changes = share(&responses, pos.len(), inv, thickness * (1.0 / dt) * (1.0 / crate::tables::CONTACT_UNITS));
+    let unit = thickness * (1.0 / dt) * (1.0 / crate::tables::CONTACT_UNITS);
+    let changes = share(&responses, pos.len(), inv, unit, min_len);
     for (v, d) in vel.iter_mut().zip(&changes) {
         for c in 0..3 {
             v[c] += d[c];
@@ -735,6 +1021,11 @@ impl Contact {
         if self.parallel { 1 } else { usize::MAX }
     }
 
+    /// The pairs (or vertices) a task of the passes over them takes on rayon's threads.
+    fn pass_len(&self) -> usize {
+        if self.parallel { 256 } else { usize::MAX }
+    }
+
     /// How far the bounds look at the substep's start: the thickness, or farther where
     /// the cloth moves fast — far enough that a vertex with nothing near may move 1.25
     /// times the fastest vertex's motion (`|v| dt + |g| dt²`), at most the thickness plus
@@ -775,19 +1066,38 @@ impl Contact {
         thickness: f32,
         spacing: f32,
         mu: Friction,
+        margin: f32,
     ) {
-        self.stats.reach = Self::reach(pos, vel, spacing, dt, gravity, thickness);
+        let reach = Self::reach(pos, vel, spacing, dt, gravity, thickness);
+        self.stats.reach = reach;
         self.start.clear();
         self.start.extend_from_slice(pos);
-        (self.vt, self.ee) =
-            bounds_into(pos, triangles, &self.edges, self.stats.reach, self.parallel, &mut self.bounds);
+        let min_len = self.pass_len();
+        match self.search.covers(pos, reach, min_len) {
+            Cover::Holds => {}
+            Cover::Refresh(fast) => {
+                self.search.refresh(&fast, triangles, &self.edges, min_len);
+                self.stats.refreshes += 1;
+            }
+            Cover::Search => {
+                let far = reach + margin * spacing;
+                let (vt, ee) = find_pairs(pos, triangles, &self.edges, far, self.parallel);
+                let scale = pos.iter().map(|x| Vec3::from_slice(&x[..3]).abs().max_element()).fold(0.0, f32::max);
+                self.search = Search { at: pos.to_vec(), reach: far, vt, ee, delta: 0.0, scale };
+                self.stats.searches += 1;
+            }
+        }
+        self.stats.kept = self.search.vt.len() + self.search.ee.len();
+        (self.vt, self.ee) = self.search.within(pos, triangles, &self.edges, reach, min_len);
+        let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
+        bounds_of(pos.len(), &pairs, reach, &mut self.bounds);
         self.stats.pairs = self.vt.len() + self.ee.len();
         // Summed over the substep's separations (XPBD's iterations take one each).
         self.stats.pushed = 0;
         keep_nearest(&mut self.vt);
         keep_nearest(&mut self.ee);
         let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
-        self.stats.slowed = approach_impulses(pos, vel, &pairs, thickness, dt, mu);
+        self.stats.slowed = approach_impulses_on(pos, vel, &pairs, thickness, dt, mu, self.pass_len());
     }
 
     /// [`SEPARATION_PASSES`] passes of the separation on `pos` over the pairs of the
@@ -805,7 +1115,7 @@ impl Contact {
     ) {
         let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
         for _ in 0..SEPARATION_PASSES {
-            self.stats.pushed += separation_moves(pos, vel, &pairs, thickness, dt);
+            self.stats.pushed += separation_moves(pos, vel, &pairs, thickness, dt, self.pass_len());
         }
     }
 
@@ -843,6 +1153,11 @@ impl Contact {
             }
         }
         touching
+    }
+
+    /// Each vertex's bound of the last [`Contact::begin`].
+    pub fn bounds(&self) -> &[f32] {
+        &self.bounds
     }
 
     /// The terms [`Contact::vbd_terms`] left, for `cpu::vbd::vbd_colour` (which clears
@@ -1091,7 +1406,7 @@ mod tests {
         let mut c = Contact::new(tris, false);
         let (mut path, mut clamped) = (Vec::new(), 0);
         for step in 0..steps {
-            c.begin(pos, vel, tris, dt, [0.0; 3], t, 1.0, Friction::default());
+            c.begin(pos, vel, tris, dt, [0.0; 3], t, 1.0, Friction::default(), 0.5);
             if step == 0 {
                 for v in &mut vel[3..] {
                     v[2] += kick;

@@ -101,6 +101,8 @@ pub struct GpuSolver<E: Engine> {
     /// What the contact between triangles did in the last frame's last substep (read
     /// back at the frame's end where the parameters use it).
     contact: Option<clothlab_core::solver::ContactStats>,
+    /// Searches for the contact's pairs so far (the kernels search every substep).
+    searches: u64,
     /// Every kernel it can run ([`KernelRunner::kernels`]): its recipe's, built when it
     /// starts, and the plain flavor of every kernel of the step, built when first run.
     offered: Vec<KernelRef>,
@@ -388,6 +390,7 @@ impl<E: Engine> GpuSolver<E> {
             time: 0.0,
             tri_buffers,
             contact: None,
+            searches: 0,
             offered,
         };
         for k in build_list {
@@ -923,7 +926,11 @@ impl<E: Engine> Solver for GpuSolver<E> {
         self.contact = match readbacks.next() {
             Some(b) if contact_on => {
                 let words: Vec<u32> = b.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect();
-                Some(clothlab_core::cpu::tri_contact::stats(&words))
+                self.searches += substeps as u64;
+                Some(clothlab_core::solver::ContactStats {
+                    searches: self.searches,
+                    ..clothlab_core::cpu::tri_contact::stats(&words)
+                })
             }
             _ => None,
         };

@@ -70,6 +70,8 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     let mut first = None;
     // The contact between triangles' pairs at each frame's last substep: their sum and most.
     let (mut pair_sum, mut pair_most) = (0usize, 0usize);
+    // And the searches for them since the start (the pairs of one serve later substeps).
+    let before = any.get_ref().contact_stats().map_or((0, 0), |c| (c.searches, c.refreshes));
     for f in 1..=frames {
         let t0 = Instant::now();
         any.get().step_frame()?;
@@ -145,6 +147,17 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
             pair_sum as f64 / frames as f64,
             pair_most as f64 / np,
             c.reach * 1e3
+        )?;
+        let (searches, refreshes) = (c.searches - before.0, c.refreshes - before.1);
+        outln!(
+            "  searches     {searches} in {substeps} substeps ({:.2} a frame), {refreshes} partial ({:.2} a frame){}",
+            searches as f64 / frames as f64,
+            refreshes as f64 / frames as f64,
+            if c.kept > 0 {
+                format!("; the last kept {} pairs within its reach and margin", c.kept)
+            } else {
+                String::new()
+            }
         )?;
         outln!(
             "  last substep {} pairs: {} approaches slowed, {} pushed apart, {}",

@@ -535,6 +535,7 @@ impl CpuSolver {
                             params.self_thickness,
                             p.spacing,
                             mu,
+                            params.search_margin,
                         );
                     }
                     TRI_BOUNDS

@@ -650,5 +650,6 @@ pub fn stats(ints: &[u32]) -> crate::solver::ContactStats {
         pushed: ints[at::PUSHED] as usize,
         clamped: ints[at::CLAMPED] as usize,
         shared: if spared { clamp_mean(ints).length() } else { 0.0 },
+        ..Default::default()
     }
 }
