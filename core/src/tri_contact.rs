@@ -770,6 +770,9 @@ pub struct Contact {
     vbd: Vec<u32>,
     /// The last search's pairs, which serve the substeps until a vertex has moved too far.
     search: Search,
+    /// The indices of the substep's pairs with a vertex of each colour (VBD's terms),
+    /// found at the first colour's terms after each [`Contact::begin`].
+    by_colour: Vec<Vec<u32>>,
     /// What the last substep's stages did: the reach and pairs of [`Contact::begin`], the
     /// approaches it slowed, the pairs [`Contact::separate`] pushed and the vertices
     /// [`Contact::clamp`] cut short (what [`crate::Solver::contact_stats`] reports).
@@ -938,6 +941,12 @@ pub(crate) fn vbd_wanted<'a>(
 /// where the one-sided energy is zero and the inertia pulled it back: a sheet pressed to
 /// 0.6 t on another went to 1.03 t and back to 0.6 t sweep after sweep.
 pub(crate) fn vbd_terms(s: &Sides, thickness: f32, wanted: impl Fn(u32) -> bool, sums: &mut [u32]) -> bool {
+    vbd_terms_each(s, thickness, wanted, |i, v| sums[i] = sums[i].wrapping_add(v))
+}
+
+/// [`vbd_terms`] with each word's addition handed to `add` (the word's index in the sums,
+/// the value to add with wrap-around).
+fn vbd_terms_each(s: &Sides, thickness: f32, wanted: impl Fn(u32) -> bool, mut add: impl FnMut(usize, u32)) -> bool {
     if thickness.is_nan() || thickness <= 0.0 {
         return false;
     }
@@ -956,10 +965,9 @@ pub(crate) fn vbd_terms(s: &Sides, thickness: f32, wanted: impl Fn(u32) -> bool,
             // The block's k w n nᵀ, not the Gauss–Newton k w² n nᵀ (see above).
             let hw = w * crate::tables::CONTACT_UNITS;
             let h = [n.x * n.x * hw, n.y * n.y * hw, n.z * n.z * hw, n.x * n.y * hw, n.x * n.z * hw, n.y * n.z * hw];
-            let at = &mut sums[VBD_TERMS * k as usize..][..VBD_TERMS];
-            for (word, v) in at.iter_mut().zip(f.to_array().into_iter().chain(h)) {
+            for (j, v) in f.to_array().into_iter().chain(h).enumerate() {
                 // Saturating conversion and wrapping sums: what a GPU's i32 atomics do.
-                *word = word.wrapping_add(v as i32 as u32);
+                add(VBD_TERMS * k as usize + j, v as i32 as u32);
             }
         }
     }
@@ -1087,6 +1095,7 @@ impl Contact {
                 self.stats.searches += 1;
             }
         }
+        self.by_colour.clear();
         self.stats.kept = self.search.vt.len() + self.search.ee.len();
         (self.vt, self.ee) = self.search.within(pos, triangles, &self.edges, reach, min_len);
         let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
@@ -1136,10 +1145,8 @@ impl Contact {
         self.vbd.resize(VBD_TERMS * pos.len(), 0);
         let wanted = vbd_wanted(pos, colour_of, colour, grab);
         let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
-        let mut touching = 0;
-        for k in 0..self.vt.len() + self.ee.len() {
-            // The closest points only for a pair with a vertex to act on.
-            let verts: [u32; 4] = if k < self.vt.len() {
+        let verts = |k: usize| -> [u32; 4] {
+            if k < self.vt.len() {
                 let (v, t, _) = self.vt[k];
                 let [a, b, c] = triangles[t as usize];
                 [v, a, b, c]
@@ -1147,9 +1154,48 @@ impl Contact {
                 let (e, f, _) = self.ee[k - self.vt.len()];
                 let ([a, b], [c, d]) = (self.edges[e as usize], self.edges[f as usize]);
                 [a, b, c, d]
-            };
-            if verts.iter().any(|&v| wanted(v)) && vbd_terms(&sides(pos, &pairs, k), thickness, wanted, &mut self.vbd) {
+            }
+        };
+        // Each colour's pairs (a vertex of it in the pair), once a substep.
+        if self.by_colour.is_empty() {
+            let colours = colour_of.iter().copied().max().map_or(0, |c| c as usize + 1);
+            self.by_colour = vec![Vec::new(); colours];
+            for k in 0..self.vt.len() + self.ee.len() {
+                let mut seen = [u32::MAX; 4];
+                for (j, v) in verts(k).into_iter().enumerate() {
+                    let c = colour_of[v as usize];
+                    if !seen[..j].contains(&c) {
+                        self.by_colour[c as usize].push(k as u32);
+                    }
+                    seen[j] = c;
+                }
+            }
+        }
+        let list = self.by_colour.get(colour as usize).map_or(&[][..], |l| &l[..]);
+        // The closest points only for a pair with a vertex to act on; each pair's words
+        // found on rayon's threads and added in any order (integer sums: the same bits).
+        let found: Vec<(usize, u32)> = list
+            .par_iter()
+            .with_min_len(self.pass_len().min(list.len().max(1)).max(64))
+            .flat_map_iter(|&k| {
+                let mut words = Vec::new();
+                let k = k as usize;
+                if verts(k).iter().any(|&v| wanted(v)) {
+                    let touching = vbd_terms_each(&sides(pos, &pairs, k), thickness, wanted, |i, v| words.push((i, v)));
+                    // A touching pair's mark: one word past the sums (counted, not added).
+                    if touching {
+                        words.push((usize::MAX, 0));
+                    }
+                }
+                words
+            })
+            .collect();
+        let mut touching = 0;
+        for (i, v) in found {
+            if i == usize::MAX {
                 touching += 1;
+            } else {
+                self.vbd[i] = self.vbd[i].wrapping_add(v);
             }
         }
         touching

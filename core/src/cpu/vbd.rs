@@ -162,7 +162,7 @@ pub fn vbd_colour(
     let step = |&i: &u32| block_step(p, slots, colliders, i as usize, pred, start, disp, sums);
     let steps: Vec<Vec3> = match exec {
         Exec::Serial => colour.iter().map(step).collect(),
-        Exec::Parallel => colour.par_iter().with_min_len(1024).map(step).collect(),
+        Exec::Parallel => colour.par_iter().with_min_len(128).map(step).collect(),
     };
     for (&i, s) in colour.iter().zip(steps) {
         let i = i as usize;
