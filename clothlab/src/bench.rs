@@ -59,6 +59,10 @@ pub struct Cell {
     pub seconds: f64,
     /// The substep median of every round (`--repeat`), ns, in the order run.
     pub runs: Vec<f64>,
+    /// With the contact between triangles: its searches for pairs a frame over the
+    /// per-kernel frames, full and partial (docs/contact.md, "How often it searches").
+    #[serde(default)]
+    pub searches: Option<[f64; 2]>,
 }
 
 impl Cell {
@@ -237,9 +241,13 @@ pub fn measure(
     // Per-kernel table.
     sim.get().set_kernel_timing(true);
     sim.get().reset_timings();
+    let counts = |sim: &AnySolver| sim.get_ref().contact_stats().map(|c| [c.searches as f64, c.refreshes as f64]);
+    let before = counts(&sim);
     for _ in 0..frames {
         sim.get().step_frame()?;
     }
+    let searches =
+        counts(&sim).map(|after| [0, 1].map(|k| (after[k] - before.map_or(0.0, |b| b[k])) / frames.max(1) as f64));
     let kernels = sim.get().timings().rows;
     // Frame table: per-kernel timestamps off, each frame simulated, waited for, drawn
     // (after one unmeasured draw that builds the renderer's pipelines and shadow map).
@@ -270,6 +278,7 @@ pub fn measure(
         probe: probe(&state),
         seconds: t_cell.elapsed().as_secs_f64(),
         runs: Vec::new(),
+        searches,
     })
 }
 

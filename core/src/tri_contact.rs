@@ -164,20 +164,9 @@ pub fn find_pairs(
 ) -> (Vec<Pair>, Vec<Pair>) {
     let min_len = if parallel { 1 } else { usize::MAX };
     let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
-    let cell = (2.0 * reach).max(1.5 * mean_edge(pos, edges)).max(1e-6);
-    let tris = BoxGrid::new(cell, triangles.len(), |t| triangles[t].iter().map(|&k| at(k)));
-    let edge_grid = BoxGrid::new(cell, edges.len(), |e| edges[e].iter().map(|&k| at(k)));
+    let (tris, edge_grid) = box_grids(pos, triangles, edges, reach);
     // Vertex–triangle pairs closer than `reach`, vertex by vertex.
-    let vt: Vec<(u32, u32, f32)> = (0..pos.len() as u32)
-        .into_par_iter()
-        .with_min_len(min_len)
-        .flat_map_iter(|v| {
-            let x = at(v);
-            let mut found = Vec::new();
-            tris.query([x, x], reach, 0, |t| found.extend(vt_pair(pos, triangles, v, t, reach)));
-            found
-        })
-        .collect();
+    let vt = vertex_pairs(pos, triangles, &tris, (0..pos.len() as u32).into_par_iter().with_min_len(min_len), reach);
     // Edge–edge pairs closer than `reach` (each pair once: the second edge after the first).
     let ee: Vec<(u32, u32, f32)> = (0..edges.len() as u32)
         .into_par_iter()
@@ -192,6 +181,36 @@ pub fn find_pairs(
         })
         .collect();
     (vt, ee)
+}
+
+/// The triangles' and the edges' boxes at `pos` in two grids of cells twice the reach or
+/// 1.5 mean edges wide (the larger; [`find_pairs`]).
+fn box_grids(pos: &[crate::grid::V4], triangles: &[[u32; 3]], edges: &[[u32; 2]], reach: f32) -> (BoxGrid, BoxGrid) {
+    let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
+    let cell = (2.0 * reach).max(1.5 * mean_edge(pos, edges)).max(1e-6);
+    let tris = BoxGrid::new(cell, triangles.len(), |t| triangles[t].iter().map(|&k| at(k)));
+    let edge_grid = BoxGrid::new(cell, edges.len(), |e| edges[e].iter().map(|&k| at(k)));
+    (tris, edge_grid)
+}
+
+/// The vertex–triangle pairs within `reach` at `pos` of the vertices `owners` (on rayon's
+/// threads as the iterator splits), each found in the triangles' grid `tris`; grouped by
+/// vertex in the owners' order.
+fn vertex_pairs(
+    pos: &[crate::grid::V4],
+    triangles: &[[u32; 3]],
+    tris: &BoxGrid,
+    owners: impl IndexedParallelIterator<Item = u32>,
+    reach: f32,
+) -> Vec<Pair> {
+    owners
+        .flat_map_iter(|v| {
+            let x = Vec3::from_slice(&pos[v as usize][..3]);
+            let mut found = Vec::new();
+            tris.query([x, x], reach, 0, |t| found.extend(vt_pair(pos, triangles, v, t, reach)));
+            found
+        })
+        .collect()
 }
 
 /// Vertex `v` and triangle `t` at `pos` as a pair of [`find_pairs`] within `reach`, once
@@ -434,30 +453,20 @@ impl Search {
     /// The pairs within the search's reach of the primitives with a vertex in `fast`,
     /// found again at the snapshot (whose `fast` vertices [`Search::covers`] moved): every
     /// other pair's distance there is as it was.
-    fn refresh(&mut self, fast: &[bool], triangles: &[[u32; 3]], edges: &[[u32; 2]], min_len: usize) {
+    fn refresh(&mut self, fast: &[bool], triangles: &[[u32; 3]], edges: &[[u32; 2]]) {
         let (at, reach) = (&self.at[..], self.reach);
         let point = |k: u32| Vec3::from_slice(&at[k as usize][..3]);
         let tri_fast: Vec<bool> = triangles.iter().map(|t| t.iter().any(|&k| fast[k as usize])).collect();
         let edge_fast: Vec<bool> = edges.iter().map(|e| e.iter().any(|&k| fast[k as usize])).collect();
         self.vt.retain(|&(v, t, _)| !fast[v as usize] && !tri_fast[t as usize]);
         self.ee.retain(|&(e, f, _)| !edge_fast[e as usize] && !edge_fast[f as usize]);
-        let cell = (2.0 * reach).max(1.5 * mean_edge(at, edges)).max(1e-6);
         let list =
             |flags: &[bool]| flags.iter().enumerate().filter(|(_, f)| **f).map(|(k, _)| k as u32).collect::<Vec<u32>>();
-        let tris = BoxGrid::new(cell, triangles.len(), |t| triangles[t].iter().map(|&k| point(k)));
+        let (tris, edge_grid) = box_grids(at, triangles, edges, reach);
+        let cell = (2.0 * reach).max(1.5 * mean_edge(at, edges)).max(1e-6);
         let points = BoxGrid::new(cell, at.len(), |k| std::iter::once(point(k as u32)));
-        let edge_grid = BoxGrid::new(cell, edges.len(), |e| edges[e].iter().map(|&k| point(k)));
         // A fast vertex against every triangle; a fast triangle against the other vertices.
-        let mut vt: Vec<Pair> = list(fast)
-            .into_par_iter()
-            .with_min_len(16)
-            .flat_map_iter(|v| {
-                let x = point(v);
-                let mut found = Vec::new();
-                tris.query([x, x], reach, 0, |t| found.extend(vt_pair(at, triangles, v, t, reach)));
-                found
-            })
-            .collect();
+        let mut vt = vertex_pairs(at, triangles, &tris, list(fast).into_par_iter().with_min_len(16), reach);
         vt.par_extend(list(&tri_fast).into_par_iter().with_min_len(16).flat_map_iter(|t| {
             let b = crate::box_grid::bounds(triangles[t as usize].iter().map(|&k| point(k)));
             let mut found = Vec::new();
@@ -489,7 +498,6 @@ impl Search {
         ee.par_sort_unstable_by_key(by_owner);
         self.vt = merge(std::mem::take(&mut self.vt), vt, by_owner);
         self.ee = merge(std::mem::take(&mut self.ee), ee, by_owner);
-        let _ = min_len;
     }
 
     /// The kept pairs within `reach` at `pos`: what [`find_pairs`] finds there, in the
@@ -504,38 +512,32 @@ impl Search {
     ) -> (Vec<Pair>, Vec<Pair>) {
         let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
         let finite = |b: [Vec3; 2]| b[0].is_finite() && b[1].is_finite();
-        let vt = self
-            .vt
-            .par_iter()
-            .with_min_len(min_len)
-            .filter_map(|&(v, t, d)| {
-                if surely_beyond(d - 2.0 * self.delta, reach, self.scale) {
-                    return None;
-                }
-                let x = at(v);
-                let tri = crate::box_grid::bounds(triangles[t as usize].iter().map(|&k| at(k)));
-                (finite([x, x]) && finite(tri) && crate::box_grid::boxes_meet(tri, [x, x], reach))
-                    .then(|| vt_pair(pos, triangles, v, t, reach))
-                    .flatten()
-            })
-            .collect();
-        let ee = self
-            .ee
-            .par_iter()
-            .with_min_len(min_len)
-            .filter_map(|&(e, f, d)| {
-                if surely_beyond(d - 2.0 * self.delta, reach, self.scale) {
-                    return None;
-                }
-                let [a, b] = edges[e as usize];
-                let (p0, p1) = (at(a), at(b));
-                let eb = [p0.min(p1), p0.max(p1)];
-                let fb = crate::box_grid::bounds(edges[f as usize].iter().map(|&k| at(k)));
-                (finite(eb) && finite(fb) && crate::box_grid::boxes_meet(fb, eb, reach))
-                    .then(|| ee_pair(pos, edges, e, f, reach))
-                    .flatten()
-            })
-            .collect();
+        // The kept pairs that pass `test`, those that cannot have come within the reach
+        // since the search ruled out first.
+        let keep = |list: &[Pair], test: &(dyn Fn(u32, u32) -> Option<Pair> + Sync)| -> Vec<Pair> {
+            list.par_iter()
+                .with_min_len(min_len)
+                .filter_map(
+                    |&(o, k, d)| if surely_beyond(d - 2.0 * self.delta, reach, self.scale) { None } else { test(o, k) },
+                )
+                .collect()
+        };
+        let vt = keep(&self.vt, &|v, t| {
+            let x = at(v);
+            let tri = crate::box_grid::bounds(triangles[t as usize].iter().map(|&k| at(k)));
+            (finite([x, x]) && finite(tri) && crate::box_grid::boxes_meet(tri, [x, x], reach))
+                .then(|| vt_pair(pos, triangles, v, t, reach))
+                .flatten()
+        });
+        let ee = keep(&self.ee, &|e, f| {
+            let [a, b] = edges[e as usize];
+            let (p0, p1) = (at(a), at(b));
+            let eb = [p0.min(p1), p0.max(p1)];
+            let fb = crate::box_grid::bounds(edges[f as usize].iter().map(|&k| at(k)));
+            (finite(eb) && finite(fb) && crate::box_grid::boxes_meet(fb, eb, reach))
+                .then(|| ee_pair(pos, edges, e, f, reach))
+                .flatten()
+        });
         (vt, ee)
     }
 }
@@ -1084,7 +1086,7 @@ impl Contact {
         match self.search.covers(pos, reach, min_len) {
             Cover::Holds => {}
             Cover::Refresh(fast) => {
-                self.search.refresh(&fast, triangles, &self.edges, min_len);
+                self.search.refresh(&fast, triangles, &self.edges);
                 self.stats.refreshes += 1;
             }
             Cover::Search => {

@@ -230,6 +230,7 @@ mod tests {
             probe: vec![[0.0; 3]; 25],
             seconds: 1.0,
             runs: vec![],
+            searches: None,
         }
     }
 

@@ -231,6 +231,20 @@ pub fn report(r: &Results) -> String {
         );
         let samples = r.get("kernel", &backends[0], n, SUBSTEP, None).map(|x| x.samples).unwrap_or(0);
         let _ = writeln!(s, "Samples per kernel: {samples} substeps.\n");
+        let searches: Vec<String> = r
+            .searches
+            .iter()
+            .filter(|c| c.n as u64 == n)
+            .map(|c| format!("{} {:.2} (+ {:.2} partial)", c.backend, c.per_frame[0], c.per_frame[1]))
+            .collect();
+        if !searches.is_empty() {
+            let _ = writeln!(
+                s,
+                "The contact between triangles' searches for pairs a frame of {} substeps (the `tri_bounds` row is the substep's start with them): {}.\n",
+                r.settings.substeps,
+                searches.join(", ")
+            );
+        }
     }
 
     let _ = writeln!(s, "## Time per frame and frames per second against grid size (Figures 7.5–7.8)\n");
@@ -491,11 +505,24 @@ mod tests {
             probe: (0..25).map(|i| [i as f32 * 0.1 + shift_m, 1.0, 0.0]).collect(),
             seconds: 1.0,
             runs: vec![],
+            searches: None,
         }
     }
 
     fn results(cells: Vec<Cell>, overhead: Vec<(String, String, Vec<OverheadRow>)>) -> Results {
         test_results(cells, overhead, vec![])
+    }
+
+    #[test]
+    fn the_report_gives_the_contacts_searches_a_frame() {
+        // A cell with the contact between triangles names its searches a frame (the
+        // counts as the cell measured them, two decimals); one without it adds nothing.
+        let mut c = cell("cpu", 64, 1e5, 0.0);
+        c.searches = Some([1.5, 2.25]);
+        let rep = report(&results(vec![c], vec![]));
+        assert!(rep.contains("cpu 1.50 (+ 2.25 partial)"), "{rep}");
+        let rep = report(&results(vec![cell("cpu", 64, 1e5, 0.0)], vec![]));
+        assert!(!rep.contains("searches for pairs"), "{rep}");
     }
 
     #[test]

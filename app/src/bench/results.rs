@@ -153,6 +153,9 @@ pub struct Results {
     /// The substep median of every round of every cell run more than once (`--repeat`).
     #[serde(default)]
     pub rounds: Vec<Rounds>,
+    /// The searches of the contact between triangles, for the cells that have it.
+    #[serde(default)]
+    pub searches: Vec<Searches>,
     /// Set when the run was stopped before its end: `after k of N cells`.
     #[serde(default)]
     pub interrupted: Option<String>,
@@ -190,6 +193,17 @@ pub fn known_peak(r: &Results) -> Option<f64> {
             .find(|(card, _)| names.iter().any(|a| a.as_deref().is_some_and(|a| a.contains(card))))
             .map(|&(_, gbps)| gbps)
     })
+}
+
+/// The contact between triangles' searches a frame of one cell.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Searches {
+    /// Backend (the cell's name).
+    pub backend: String,
+    /// Particles per side.
+    pub n: u32,
+    /// Full searches and partial ones a frame, over the per-kernel frames.
+    pub per_frame: [f64; 2],
 }
 
 /// The rounds of one cell (`--repeat`).
@@ -316,6 +330,11 @@ impl Results {
                 .iter()
                 .filter(|c| c.runs.len() > 1)
                 .map(|c| Rounds { backend: c.backend.clone(), n: c.n, substep_ns: c.runs.clone() })
+                .collect(),
+            searches: i
+                .cells
+                .iter()
+                .filter_map(|c| c.searches.map(|per_frame| Searches { backend: c.backend.clone(), n: c.n, per_frame }))
                 .collect(),
         }
     }
