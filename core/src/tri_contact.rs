@@ -164,7 +164,7 @@ pub fn find_pairs(
 ) -> (Vec<Pair>, Vec<Pair>) {
     let min_len = if parallel { 1 } else { usize::MAX };
     let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
-    let (tris, edge_grid) = box_grids(pos, triangles, edges, reach);
+    let (tris, edge_grid, _) = box_grids(pos, triangles, edges, reach);
     // Vertex–triangle pairs closer than `reach`, vertex by vertex.
     let vt = vertex_pairs(pos, triangles, &tris, (0..pos.len() as u32).into_par_iter().with_min_len(min_len), reach);
     // Edge–edge pairs closer than `reach` (each pair once: the second edge after the first).
@@ -184,13 +184,18 @@ pub fn find_pairs(
 }
 
 /// The triangles' and the edges' boxes at `pos` in two grids of cells twice the reach or
-/// 1.5 mean edges wide (the larger; [`find_pairs`]).
-fn box_grids(pos: &[crate::grid::V4], triangles: &[[u32; 3]], edges: &[[u32; 2]], reach: f32) -> (BoxGrid, BoxGrid) {
+/// 1.5 mean edges wide (the larger; [`find_pairs`]), and that width.
+fn box_grids(
+    pos: &[crate::grid::V4],
+    triangles: &[[u32; 3]],
+    edges: &[[u32; 2]],
+    reach: f32,
+) -> (BoxGrid, BoxGrid, f32) {
     let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
     let cell = (2.0 * reach).max(1.5 * mean_edge(pos, edges)).max(1e-6);
     let tris = BoxGrid::new(cell, triangles.len(), |t| triangles[t].iter().map(|&k| at(k)));
     let edge_grid = BoxGrid::new(cell, edges.len(), |e| edges[e].iter().map(|&k| at(k)));
-    (tris, edge_grid)
+    (tris, edge_grid, cell)
 }
 
 /// The vertex–triangle pairs within `reach` at `pos` of the vertices `owners` (on rayon's
@@ -462,8 +467,7 @@ impl Search {
         self.ee.retain(|&(e, f, _)| !edge_fast[e as usize] && !edge_fast[f as usize]);
         let list =
             |flags: &[bool]| flags.iter().enumerate().filter(|(_, f)| **f).map(|(k, _)| k as u32).collect::<Vec<u32>>();
-        let (tris, edge_grid) = box_grids(at, triangles, edges, reach);
-        let cell = (2.0 * reach).max(1.5 * mean_edge(at, edges)).max(1e-6);
+        let (tris, edge_grid, cell) = box_grids(at, triangles, edges, reach);
         let points = BoxGrid::new(cell, at.len(), |k| std::iter::once(point(k as u32)));
         // A fast vertex against every triangle; a fast triangle against the other vertices.
         let mut vt = vertex_pairs(at, triangles, &tris, list(fast).into_par_iter().with_min_len(16), reach);
