@@ -12,7 +12,7 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-use crate::box_grid::{BoxGrid, bounds};
+use crate::broad::{BoxGrid, bounds};
 use crate::grid::V4;
 
 /// The crossings of a state.

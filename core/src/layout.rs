@@ -423,6 +423,7 @@ pub fn wgsl_constants() -> String {
     s += &u("TRI_SLOTS", TRI_SLOTS);
     s += &u("VBD_TERMS", crate::tri_contact::VBD_TERMS as u32);
     s += &u("TRI_QUERY_CELLS", TRI_QUERY_CELLS);
+    s += &format!("const BIG_CELLS: f32 = {:?};\n", crate::broad::BIG_CELLS);
     {
         use tri_at as at;
         for (name, v) in [

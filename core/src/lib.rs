@@ -14,7 +14,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-mod box_grid;
+pub mod broad;
 pub mod camera;
 pub mod cloth;
 pub mod contact;

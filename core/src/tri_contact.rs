@@ -6,7 +6,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::box_grid::BoxGrid;
+use crate::broad::BoxGrid;
 
 /// Where on a triangle (a, b, c) the closest point lies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -472,7 +472,7 @@ impl Search {
         // A fast vertex against every triangle; a fast triangle against the other vertices.
         let mut vt = vertex_pairs(at, triangles, &tris, list(fast).into_par_iter().with_min_len(16), reach);
         vt.par_extend(list(&tri_fast).into_par_iter().with_min_len(16).flat_map_iter(|t| {
-            let b = crate::box_grid::bounds(triangles[t as usize].iter().map(|&k| point(k)));
+            let b = crate::broad::bounds(triangles[t as usize].iter().map(|&k| point(k)));
             let mut found = Vec::new();
             points.query(b, reach, 0, |v| {
                 if !fast[v as usize] {
@@ -528,8 +528,8 @@ impl Search {
         };
         let vt = keep(&self.vt, &|v, t| {
             let x = at(v);
-            let tri = crate::box_grid::bounds(triangles[t as usize].iter().map(|&k| at(k)));
-            (finite([x, x]) && finite(tri) && crate::box_grid::boxes_meet(tri, [x, x], reach))
+            let tri = crate::broad::bounds(triangles[t as usize].iter().map(|&k| at(k)));
+            (finite([x, x]) && finite(tri) && crate::broad::boxes_meet(tri, [x, x], reach))
                 .then(|| vt_pair(pos, triangles, v, t, reach))
                 .flatten()
         });
@@ -537,8 +537,8 @@ impl Search {
             let [a, b] = edges[e as usize];
             let (p0, p1) = (at(a), at(b));
             let eb = [p0.min(p1), p0.max(p1)];
-            let fb = crate::box_grid::bounds(edges[f as usize].iter().map(|&k| at(k)));
-            (finite(eb) && finite(fb) && crate::box_grid::boxes_meet(fb, eb, reach))
+            let fb = crate::broad::bounds(edges[f as usize].iter().map(|&k| at(k)));
+            (finite(eb) && finite(fb) && crate::broad::boxes_meet(fb, eb, reach))
                 .then(|| ee_pair(pos, edges, e, f, reach))
                 .flatten()
         });

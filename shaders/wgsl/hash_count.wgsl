@@ -1,4 +1,4 @@
-//! include: state, hash_atomic, hash_totals_atomic, hash_fn
+//! include: state, hash_atomic, hash_totals_atomic, hash_fn, cells
 // hash_count — per particle: one more in its bucket's count and in its block's total
 // (core::cpu::self_collide::hash_count; the recipe clears both before). The blocks'
 // totals here spare the scan a pass that adds their offsets back (a dispatch costs

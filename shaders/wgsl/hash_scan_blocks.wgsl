@@ -1,4 +1,4 @@
-//! include: state, hash_vec4, hash_fn
+//! include: state, hash_vec4, hash_fn, cells
 // hash_scan_blocks — per WORKGROUP consecutive buckets (one invocation each, in order, no
 // barriers: on lavapipe a workgroup-wide scan's twelve barriers cost more than the sums),
 // read and written four at a time: the inclusive prefix of the counts in place, from the

@@ -1,4 +1,4 @@
-//! include: state, hash, hash_fn
+//! include: state, hash, hash_fn, cells
 // hash_scan_top — one workgroup: the exclusive prefix of the blocks' totals (totals[4g + 2],
 // counted by hash_count) in place, each block's offset (core::cpu::self_collide::
 // hash_scan_top). Each invocation sums a run of consecutive totals, one scan over the

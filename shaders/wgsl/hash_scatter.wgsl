@@ -1,4 +1,4 @@
-//! include: state, hash_atomic, hash_fn, hash_vel
+//! include: state, hash_atomic, hash_fn, hash_vel, cells
 // hash_scatter — per particle: its position and slot word (as the bits of w; its bucket and
 // word computed again from its position) into the slot before its bucket's end (atomics:
 // in any order), which leaves the bucket's word at its start

@@ -1,4 +1,4 @@
-//! include: state, tri, tri_floats
+//! include: state, tri, tri_floats, cells
 // tri_clamp — per particle, where some vertex is over its bound from the mean: its motion
 // since the start cut to its bound, the cut taken from its velocity
 // (core::cpu::tri_contact::tri_clamp).

@@ -1,4 +1,4 @@
-//! include: state, tri, tri_floats
+//! include: state, tri, tri_floats, cells
 // tri_clamp_check — per particle: whether it is farther than its bound from the free
 // vertices' mean displacement, and whether it moved farther than its bound
 // (core::cpu::tri_contact::tri_clamp_check).

@@ -1,4 +1,4 @@
-//! include: state, tri, tri_floats
+//! include: state, tri, tri_floats, cells
 // tri_clamp_sum — per particle: a free vertex's displacement since the start, in
 // TRI_MEAN_UNITs, into the 64-bit sums (two words, the carry added to the high one), and
 // the count (core::cpu::tri_contact::tri_clamp_sum).

@@ -1,6 +1,7 @@
-//! include: state, tri
+//! include: state, tri, cells
 // tri_grid_count — per primitive (triangles, then edges): one more in its bucket's count,
-// its box's extent into its grid's largest (core::cpu::tri_contact::tri_grid_count).
+// its box's extent into its grid's largest, a wide box's not (it is listed apart)
+// (core::cpu::tri_contact::tri_grid_count).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
@@ -12,7 +13,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if !(finite3(b.lo) && finite3(b.hi)) {
         return;
     }
-    atomicAdd(&tri_ints[grid_at() + bucket_of(b, o, 1.0 / load_f(TRI_AT_CELL))], 1u);
+    let cell = load_f(TRI_AT_CELL);
+    atomicAdd(&tri_ints[grid_at() + bucket_of(b, o, cell)], 1u);
+    if is_big(b, cell) {
+        return;
+    }
     let ext = select(TRI_AT_EXTENT_E, TRI_AT_EXTENT_T, o < tris_len());
     let e = b.hi - b.lo;
     atomicMax(&tri_ints[ext], bitcast<u32>(e.x));

@@ -1,4 +1,4 @@
-//! include: state, tri
+//! include: state, tri, cells
 // tri_grid_scan — one workgroup: both grids' bucket counts to their exclusive prefix, each
 // bucket's start among the entries (core::cpu::tri_contact::tri_grid_scan). Each
 // invocation sums a run of consecutive counts, the runs before it offset it, and it writes
@@ -8,7 +8,7 @@ var<workgroup> run_sums: array<u32, WORKGROUP>;
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(local_invocation_index) li: u32) {
     p = step_params;
-    let count = 2u * buckets();
+    let count = 2u * (buckets() + 1u);
     let per = (count + WORKGROUP - 1u) / WORKGROUP;
     let first = min(li * per, count);
     let last = min(first + per, count);

@@ -1,4 +1,4 @@
-//! include: state, tri
+//! include: state, tri, cells
 // tri_grid_sort — per bucket (both grids'): its entries in increasing order, by insertion
 // (a bucket holds a few), so that every query meets them in one order
 // (core::cpu::tri_contact::tri_grid_sort).
@@ -6,7 +6,7 @@
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     let k = flat_id(id, groups);
-    if k >= 2u * buckets() {
+    if k >= 2u * (buckets() + 1u) {
         return;
     }
     let start = bucket_start(k);

@@ -1,10 +1,11 @@
-//! include: state, tri, tri_bounds
+//! include: state, tri, tri_bounds, cells
 // tri_pairs — per owner (the vertices, then the edges): its pairs closer than the reach
 // through the grid of the other primitives' boxes, the TRI_SLOTS nearest kept (by
 // distance, then index: the same set in any order of the query) and all counted; every
-// vertex of a pair has its bound lowered to the fraction of the pair's distance (core::cpu::tri_contact::tri_pairs, whose query
-// is core::box_grid's: the cells from the box's corner less the grid's largest extent to
-// its other corner, each entry whose own lowest corner lies in the cell visited).
+// vertex of a pair has its bound lowered to the fraction of the pair's distance
+// (core::cpu::tri_contact::tri_pairs, whose query is core::broad::query: the cells from
+// the box's corner less the grid's largest extent to its other corner, each entry whose
+// own lowest corner lies in the cell visited, then the wide boxes).
 fn lower(k: u32, d: f32) {
     atomicMin(&tri_bounds[4u * k + 3u], bitcast<u32>(TRI_BOUND_FRACTION * d));
 }
@@ -69,7 +70,7 @@ fn walk(o: u32, again: bool) -> u32 {
         hi = max(p0, p1);
         first = o - np + 1u;
         ext_at = TRI_AT_EXTENT_E;
-        grid = buckets();
+        grid = buckets() + 1u;
         offset = tris_len();
     }
     var found = 0u;
@@ -80,45 +81,57 @@ fn walk(o: u32, again: bool) -> u32 {
         let slack = vec3<f32>(1e-4 * cell + 1e-6 * max(m.x, max(m.y, m.z)));
         let c0 = cell_of(lo - g - extent - slack, inv);
         let c1 = cell_of(hi + g + slack, inv);
-        // The cells of the range in one loop (x slowest, z fastest: the twin's order).
-        // A range of more than TRI_QUERY_CELLS cells: the grid's entries in their order.
+        // The cells of the range in one loop (z slowest, x fastest: a row is a run of
+        // buckets; core::broad::query's order), then the wide boxes' bucket whole. A range
+        // of more than TRI_QUERY_CELLS cells: the grid's entries in their order, the wide
+        // boxes' last.
         let span = vec3<u32>(c1 - c0) + vec3<u32>(1u);
         let most = TRI_QUERY_CELLS;
         let scan = span.x > most || span.y > most || span.z > most || span.x * span.y > most
             || span.x * span.y * span.z > most;
         var cells = span.x * span.y * span.z;
-        var bucket = 0u;
         var e = 0u;
         var end = 0u;
         var cell = 0u;
         var c = c0;
+        var row = 0u;
         var step = vec3<u32>(0u);
+        // Whether the walk is in the wide boxes' bucket (or a scan): no entry's cell to test.
+        var wide = scan;
         if scan {
             cells = 0u;
             e = bucket_start(grid);
-            end = bucket_end(grid + buckets() - 1u);
+            end = bucket_end(grid + buckets());
         }
         loop {
             if e >= end {
-                // The next cell's bucket.
-                if cell >= cells {
+                if cell < cells {
+                    // The next cell's bucket (counters: no division a cell).
+                    c = c0 + vec3<i32>(step);
+                    if step.x == 0u {
+                        row = row_start(c.y, c.z);
+                    }
+                    let k = grid + ((row + bitcast<u32>(c.x)) & (buckets() - 1u));
+                    e = bucket_start(k);
+                    end = bucket_end(k);
+                    cell += 1u;
+                    step.x += 1u;
+                    if step.x == span.x {
+                        step.x = 0u;
+                        step.y += 1u;
+                        if step.y == span.y {
+                            step.y = 0u;
+                            step.z += 1u;
+                        }
+                    }
+                    continue;
+                }
+                if wide {
                     break;
                 }
-                c = c0 + vec3<i32>(step);
-                cell += 1u;
-                // The next cell's offset, z fastest (counters: no division a cell).
-                step.z += 1u;
-                if step.z == span.z {
-                    step.z = 0u;
-                    step.y += 1u;
-                    if step.y == span.y {
-                        step.y = 0u;
-                        step.x += 1u;
-                    }
-                }
-                bucket = grid + hash_cell(c);
-                e = bucket_start(bucket);
-                end = bucket_end(bucket);
+                wide = true;
+                e = bucket_start(grid + buckets());
+                end = bucket_end(grid + buckets());
                 continue;
             }
             let other = load_int(e);
@@ -127,7 +140,7 @@ fn walk(o: u32, again: bool) -> u32 {
                 continue;
             }
             let b = prim_box(offset + other);
-            if (!scan && any(cell_of(b.lo, inv) != c)) || any(b.lo - g > hi) || any(lo > b.hi + g) {
+            if (!wide && any(cell_of(b.lo, inv) != c)) || any(b.lo - g > hi) || any(lo > b.hi + g) {
                 continue;
             }
             var d = 0.0;

@@ -1,4 +1,4 @@
-//! include: state, tri
+//! include: state, tri, cells
 // tri_separate_apply — per particle: its sums added (the separation's pushes) and cleared
 // (core::cpu::tri_contact::tri_apply).
 @compute @workgroup_size(WORKGROUP)

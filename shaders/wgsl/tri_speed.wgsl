@@ -1,4 +1,4 @@
-//! include: state, tri
+//! include: state, tri, cells
 // tri_speed — per particle: the fastest free vertex's speed into the contact's scalars
 // (core::cpu::tri_contact::tri_speed; the recipe clears the integers before).
 @compute @workgroup_size(WORKGROUP)

@@ -1,4 +1,4 @@
-//! include: state, tri, tri_floats
+//! include: state, tri, tri_floats, cells
 // tri_start — per particle: its start position and its bound at the reach's fraction;
 // the reach and the grids' cell into the scalars (core::cpu::tri_contact::tri_start).
 @compute @workgroup_size(WORKGROUP)

@@ -1,4 +1,4 @@
-//! include: state, tri, range
+//! include: state, tri, range, cells
 // tri_vbd — per owner: the contact terms of its pairs at the positions (VBD's iterate) for
 // the vertices of one colour (the range's `first`; core::cpu::tri_contact::tri_vbd), added
 // into their fixed-point sums, which vbd_colour_tri takes and clears.

@@ -60,8 +60,9 @@ use crate::step_params::StepParams;
 
 use super::{Exec, for_each2};
 
-/// The hash's primes for a cell's row (y, z) (Teschner et al. 2003).
-pub const PRIMES: [i32; 2] = [689_287_499, 283_923_481];
+/// The cell-to-bucket rule of every contact's broad phase ([`crate::broad`]): a row of
+/// cells in x is a run of consecutive buckets.
+pub use crate::broad::{PRIMES, bucket, row_start};
 /// Cell coordinates are clamped to ±1e9 before they are converted to integers.
 const CELL_LIMIT: f32 = 1e9;
 /// Buckets per particle, about (the table is this times the largest power of two not
@@ -121,27 +122,6 @@ pub fn table_size(len: usize) -> u32 {
 #[inline]
 pub fn hash_blocks(len: usize) -> u32 {
     table_size(len).div_ceil(WORKGROUP)
-}
-
-/// Where a row of cells (y, z) starts among the buckets: `4·((y mod 4) + 4·(z mod 4))`
-/// plus 64 times its hash. Two different rows within two cells of each other in y and z
-/// differ in the first part (by a multiple of 4 below 64) and so start at least four
-/// buckets apart modulo any table of 64 or more: the three cells of one row never share a
-/// bucket with those of another row around the same point, and a probe needs no check
-/// for buckets read twice. (Tables are 64 or more from n = 4; smaller grids have no pair
-/// that may collide.)
-#[inline]
-pub fn row_start(y: i32, z: i32) -> u32 {
-    let low = ((y & 3) + 4 * (z & 3)) as u32;
-    let hash = (y.wrapping_mul(PRIMES[0]) ^ z.wrapping_mul(PRIMES[1])) as u32;
-    4 * low + hash.wrapping_mul(64)
-}
-
-/// The bucket of a cell among `size` (a power of two): its row's start plus its x, so
-/// that neighbours in x are consecutive buckets.
-#[inline]
-pub fn bucket(c: [i32; 3], size: u32) -> u32 {
-    row_start(c[1], c[2]).wrapping_add(c[0] as u32) & (size - 1)
 }
 
 /// Bits of a grid coordinate in a slot's word (n ≤ 4096).

@@ -52,15 +52,15 @@ impl TriLayout {
         Self::new(topo.num_particles(), topo.triangles.len(), topo.edges().len())
     }
 
-    /// The grids' bucket counts (the triangles' buckets, then the edges'), then after
-    /// the scan and the scatter each bucket's end.
+    /// The grids' bucket counts (the triangles' buckets and their wide boxes' bucket,
+    /// then the edges'), then after the scan and the scatter each bucket's end.
     pub fn grid(&self) -> usize {
         self.vbd() + crate::tri_contact::VBD_TERMS * self.np
     }
 
     /// The grids' entries: the triangles' (by bucket), then the edges'.
     pub fn entries(&self) -> usize {
-        self.grid() + 2 * self.buckets
+        self.grid() + 2 * (self.buckets + 1)
     }
 
     /// Each owner's count of pairs found (may exceed [`TRI_SLOTS`]).
@@ -169,22 +169,9 @@ fn prim_box(o: usize, pos: &[V4], tris: &[[u32; 3]], edges: &[[u32; 2]]) -> [Vec
     }
 }
 
-/// A point's cell (`crate::box_grid`'s).
-fn cell_of(x: Vec3, inv_cell: f32) -> [i32; 3] {
-    let c = (x * inv_cell).floor().clamp(Vec3::splat(-1e6), Vec3::splat(1e6));
-    [c.x as i32, c.y as i32, c.z as i32]
-}
-
-/// A cell's bucket within its grid.
-fn hash(c: [i32; 3], buckets: usize) -> usize {
-    let h = (c[0] as u32).wrapping_mul(73_856_093)
-        ^ (c[1] as u32).wrapping_mul(19_349_663)
-        ^ (c[2] as u32).wrapping_mul(83_492_791);
-    h as usize & (buckets - 1)
-}
-
-/// Primitive `o`'s bucket (in the triangles' or the edges' grid) and box, or `None` where
-/// its box is not finite.
+/// Primitive `o`'s bucket among both grids' (the triangles', then the edges', each
+/// [`TriLayout::buckets`] and one for the wide boxes: [`crate::broad::slot_of`]) and its
+/// box, or `None` where its box is not finite.
 fn bucket_of(
     o: usize,
     pos: &[V4],
@@ -193,20 +180,21 @@ fn bucket_of(
     cell: f32,
 ) -> Option<(usize, [Vec3; 2])> {
     let bx = prim_box(o, pos, &topo.triangles, topo.edges());
-    if !(bx[0].is_finite() && bx[1].is_finite()) {
-        return None;
-    }
-    let grid = if o < l.tris { 0 } else { l.buckets };
-    Some((grid + hash(cell_of(bx[0], 1.0 / cell), l.buckets), bx))
+    let slot = crate::broad::slot_of(bx, cell, l.buckets as u32)?;
+    let grid = if o < l.tris { 0 } else { l.buckets + 1 };
+    Some((grid + slot as usize, bx))
 }
 
 /// `tri_grid_count`: each primitive one more in its bucket's count, its box's extent into
-/// its grid's largest.
+/// its grid's largest (a wide box's not: it is listed apart).
 pub fn tri_grid_count(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
     let cell = f(b.ints[at::CELL]);
     for o in 0..b.l.tris + b.l.edges {
         let Some((bucket, [lo, hi])) = bucket_of(o, pos, topo, &b.l, cell) else { continue };
         b.ints[b.l.grid() + bucket] += 1;
+        if crate::broad::is_big([lo, hi], cell) {
+            continue;
+        }
         let ext = if o < b.l.tris { at::EXTENT_T } else { at::EXTENT_E };
         for c in 0..3 {
             b.ints[ext + c] = b.ints[ext + c].max((hi[c] - lo[c]).to_bits());
@@ -237,7 +225,7 @@ pub fn tri_grid_scatter(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut T
     }
 }
 
-/// Bucket `k`'s entries (of both grids' `2 · buckets`), after the scatter.
+/// Bucket `k`'s entries (of both grids' `2 · (buckets + 1)`), after the scatter.
 fn bucket_range(ints: &[u32], l: &TriLayout, k: usize) -> std::ops::Range<usize> {
     let start = if k == 0 { 0 } else { ints[l.grid() + k - 1] as usize };
     l.entries() + start..l.entries() + ints[l.grid() + k] as usize
@@ -246,18 +234,38 @@ fn bucket_range(ints: &[u32], l: &TriLayout, k: usize) -> std::ops::Range<usize>
 /// `tri_grid_sort`: each bucket's entries in increasing order (the scatter's atomics put
 /// them in any order).
 pub fn tri_grid_sort(b: &mut TriBufs) {
-    for k in 0..2 * b.l.buckets {
+    for k in 0..2 * (b.l.buckets + 1) {
         let r = bucket_range(b.ints, &b.l, k);
         b.ints[r].sort_unstable();
     }
 }
 
+/// One grid of the GPU buffers (`grid` 0: triangles, 1: edges) as
+/// [`crate::broad::query`] walks it: the entries after the scatter and the sort, each
+/// box from the positions.
+struct Listed<'a> {
+    ints: &'a [u32],
+    l: TriLayout,
+    pos: &'a [V4],
+    topo: &'a crate::grid::ClothTopology,
+    grid: usize,
+}
+
+impl crate::broad::Listing for Listed<'_> {
+    fn range(&self, b: usize) -> std::ops::Range<usize> {
+        bucket_range(self.ints, &self.l, self.grid * (self.l.buckets + 1) + b)
+    }
+
+    fn entry(&self, e: usize) -> (u32, [Vec3; 2]) {
+        let id = self.ints[e];
+        let offset = if self.grid == 0 { 0 } else { self.l.tris };
+        (id, prim_box(offset + id as usize, self.pos, &self.topo.triangles, self.topo.edges()))
+    }
+}
+
 /// Calls `f` with every primitive of one grid (`grid` 0: triangles, 1: edges) numbered
-/// `first` or more whose box meets `[lo, hi]` grown by `grow`: the cells from the box's
-/// lowest corner less the grid's largest extent to its highest, each entry whose own
-/// lowest corner lies in the cell visited (`crate::box_grid::BoxGrid::query`'s rule); a
-/// range of more than [`crate::layout::TRI_QUERY_CELLS`] cells scans the grid's entries
-/// in their order instead.
+/// `first` or more whose box meets `b` grown by `grow`: [`crate::broad::query`] over the
+/// buffers, as the kernel walks them.
 #[allow(clippy::too_many_arguments)]
 fn query(
     ints: &[u32],
@@ -265,55 +273,17 @@ fn query(
     pos: &[V4],
     topo: &crate::grid::ClothTopology,
     grid: usize,
-    [lo, hi]: [Vec3; 2],
+    b: [Vec3; 2],
     grow: f32,
     first: u32,
-    mut f: impl FnMut(u32),
+    f: impl FnMut(u32),
 ) {
-    if !(lo.is_finite() && hi.is_finite()) {
-        return;
-    }
     let cell = self::f(ints[at::CELL]);
-    let inv = 1.0 / cell;
     let ext_at = if grid == 0 { at::EXTENT_T } else { at::EXTENT_E };
     let extent = Vec3::new(self::f(ints[ext_at]), self::f(ints[ext_at + 1]), self::f(ints[ext_at + 2]));
-    let g = Vec3::splat(grow);
-    let slack = Vec3::splat(1e-4 * cell + 1e-6 * lo.abs().max(hi.abs()).max_element());
-    let (c0, c1) = (cell_of(lo - g - extent - slack, inv), cell_of(hi + g + slack, inv));
-    let offset = if grid == 0 { 0 } else { l.tris };
-    let meets = |id: u32| {
-        let [elo, ehi] = prim_box(offset + id as usize, pos, &topo.triangles, topo.edges());
-        ((elo - g).cmple(hi).all() && lo.cmple(ehi + g).all()).then_some(elo)
-    };
-    let max = crate::layout::TRI_QUERY_CELLS;
-    let span = [0, 1, 2].map(|k| (c1[k] - c0[k] + 1) as u32);
-    if span.iter().any(|&s| s > max) || span[0] * span[1] > max || span[0] * span[1] * span[2] > max {
-        let (first_bucket, last_bucket) = (grid * l.buckets, grid * l.buckets + l.buckets - 1);
-        let (start, end) = (bucket_range(ints, l, first_bucket).start, bucket_range(ints, l, last_bucket).end);
-        for &id in &ints[start..end] {
-            if id >= first && meets(id).is_some() {
-                f(id);
-            }
-        }
-        return;
-    }
-    for i in c0[0]..=c1[0] {
-        for j in c0[1]..=c1[1] {
-            for k in c0[2]..=c1[2] {
-                let c = [i, j, k];
-                let bucket = grid * l.buckets + hash(c, l.buckets);
-                for e in bucket_range(ints, l, bucket) {
-                    let id = ints[e];
-                    if id < first {
-                        continue;
-                    }
-                    if meets(id).is_some_and(|elo| cell_of(elo, inv) == c) {
-                        f(id);
-                    }
-                }
-            }
-        }
-    }
+    let shape =
+        crate::broad::Shape { cell, size: l.buckets as u32, extent, most_cells: crate::layout::TRI_QUERY_CELLS };
+    crate::broad::query(&Listed { ints, l: *l, pos, topo, grid }, &shape, b, grow, first, f);
 }
 
 /// Lowers vertex `k`'s bound to `bound` (the kernels' atomic minimum on its bits).

@@ -1,10 +1,7 @@
 // The hash of core::cpu::self_collide: cells are cubes of side self_thickness (the point
 // times 1/t, computed on the host: a product rounds alike everywhere, a quotient does
-// not), buckets a power of two, a cell's bucket its row's start (the primes of Teschner et
-// al. 2003) plus its x: the cells of a row in x are consecutive buckets.
+// not), buckets a power of two, a cell's bucket by the broad phase's rule (cells.wgsl).
 const CELL_LIMIT: f32 = 1e9;
-const PRIME_Y: i32 = 689287499;
-const PRIME_Z: i32 = 283923481;
 // core::cpu::self_collide::TABLE_FACTOR.
 const TABLE_FACTOR: u32 = 4u;
 
@@ -20,19 +17,6 @@ fn cell_of(x: vec3<f32>) -> vec3<i32> {
 // TABLE_FACTOR times the largest power of two not above n².
 fn table_size() -> u32 {
     return TABLE_FACTOR << firstLeadingBit(max(p.num_particles, 1u));
-}
-
-// core::cpu::self_collide::row_start: 4 ((y mod 4) + 4 (z mod 4)) + 64 hash(y, z), so
-// that no two rows around a point share a bucket.
-fn row_start(y: i32, z: i32) -> u32 {
-    let low = bitcast<u32>((y & 3) + 4 * (z & 3));
-    let hash = bitcast<u32>((y * PRIME_Y) ^ (z * PRIME_Z));
-    return 4u * low + hash * 64u;
-}
-
-// The cell's bucket among size (a power of two): its row's start plus its x.
-fn bucket(c: vec3<i32>, size: u32) -> u32 {
-    return (row_start(c.y, c.z) + bitcast<u32>(c.x)) & (size - 1u);
 }
 
 // What a slot holds for particle i in cell c besides its position: its grid coordinates,

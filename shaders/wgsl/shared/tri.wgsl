@@ -42,7 +42,7 @@ fn grid_at() -> u32 {
 }
 
 fn entries_at() -> u32 {
-    return grid_at() + 2u * buckets();
+    return grid_at() + 2u * (buckets() + 1u);
 }
 
 fn owners_at() -> u32 {
@@ -402,14 +402,16 @@ fn take_sums(i: u32, velocity: bool) -> vec3<f32> {
     return d;
 }
 
-// A point's cell (core::box_grid's).
+// A box corner's cell (core::broad::cell_of).
 fn cell_of(x: vec3<f32>, inv_cell: f32) -> vec3<i32> {
     return vec3<i32>(clamp(floor(x * inv_cell), vec3<f32>(-1e6), vec3<f32>(1e6)));
 }
 
-fn hash_cell(c: vec3<i32>) -> u32 {
-    let h = bitcast<u32>(c.x) * 73856093u ^ bitcast<u32>(c.y) * 19349663u ^ bitcast<u32>(c.z) * 83492791u;
-    return h & (buckets() - 1u);
+// Whether a box is wider than BIG_CELLS cells on some axis (core::broad::is_big): listed
+// in the bucket after its grid's, which every query reads whole.
+fn is_big(b: Box, cell: f32) -> bool {
+    let e = b.hi - b.lo;
+    return max(e.x, max(e.y, e.z)) > BIG_CELLS * cell;
 }
 
 // Primitive o's box (triangles first, then edges): lowest and highest corner.
@@ -432,9 +434,11 @@ fn prim_box(o: u32) -> Box {
     return Box(min(a, b), max(a, b));
 }
 
-// Primitive o's bucket among both grids' (its grid's first bucket added).
-fn bucket_of(b: Box, o: u32, inv_cell: f32) -> u32 {
-    return select(buckets(), 0u, o < tris_len()) + hash_cell(cell_of(b.lo, inv_cell));
+// Primitive o's bucket among both grids' (each buckets() and one for its wide boxes;
+// its grid's first bucket added: core::broad::slot_of).
+fn bucket_of(b: Box, o: u32, cell: f32) -> u32 {
+    let slot = select(bucket(cell_of(b.lo, 1.0 / cell), buckets()), buckets(), is_big(b, cell));
+    return select(buckets() + 1u, 0u, o < tris_len()) + slot;
 }
 
 // Bucket k's entries, after the scatter: [start, end).
