@@ -228,10 +228,15 @@ fn vt_pair(pos: &[crate::grid::V4], triangles: &[[u32; 3]], v: u32, t: u32, reac
         return None;
     }
     let (x, a, b, c) = (at(v), at(tri[0]), at(tri[1]), at(tri[2]));
-    // Every point of the triangle lies within its corners' farthest from their mean.
+    // Every point of the triangle lies in its box, and within its corners' farthest from
+    // their mean.
+    let scale = x.abs().max(a.abs()).max(b.abs()).max(c.abs()).max_element();
+    if surely_beyond(box_gap([x, x], [a.min(b).min(c), a.max(b).max(c)]), reach, scale) {
+        return None;
+    }
     let mid = (a + b + c) * (1.0 / 3.0);
     let radius = (a - mid).length().max((b - mid).length()).max((c - mid).length());
-    if surely_beyond((x - mid).length() - radius, reach, x.abs().max(mid.abs()).max_element()) {
+    if surely_beyond((x - mid).length() - radius, reach, scale) {
         return None;
     }
     let d = (point_triangle(x, a, b, c).point - x).length();
@@ -247,6 +252,13 @@ fn surely_beyond(lower: f32, reach: f32, scale: f32) -> bool {
     lower >= reach * 1.0001 + 1e-6 * scale
 }
 
+/// The distance between two boxes (0 where they meet): no point of one is nearer a point
+/// of the other. Where a grid's box test (per axis) lets two boxes meet across a corner
+/// or an edge of their grown boxes, this rules them out before the closest points.
+fn box_gap(a: [Vec3; 2], b: [Vec3; 2]) -> f32 {
+    (b[0] - a[1]).max(a[0] - b[1]).max(Vec3::ZERO).length()
+}
+
 /// Edges `e` and `f` at `pos` as a pair of [`find_pairs`] within `reach`, once their
 /// boxes meet: none where they share a vertex or are `reach` or more apart.
 fn ee_pair(pos: &[crate::grid::V4], edges: &[[u32; 2]], e: u32, f: u32, reach: f32) -> Option<Pair> {
@@ -256,10 +268,14 @@ fn ee_pair(pos: &[crate::grid::V4], edges: &[[u32; 2]], e: u32, f: u32, reach: f
         return None;
     }
     let (p0, p1, q0, q1) = (at(a), at(b), at(c), at(d));
-    // Every point of a segment lies within half its length of its middle.
+    // Every point of a segment lies in its box, and within half its length of its middle.
+    let scale = p0.abs().max(p1.abs()).max(q0.abs()).max(q1.abs()).max_element();
+    if surely_beyond(box_gap([p0.min(p1), p0.max(p1)], [q0.min(q1), q0.max(q1)]), reach, scale) {
+        return None;
+    }
     let (mp, mq) = ((p0 + p1) * 0.5, (q0 + q1) * 0.5);
     let lower = (mp - mq).length() - 0.5 * ((p1 - p0).length() + (q1 - q0).length());
-    if surely_beyond(lower, reach, p0.abs().max(p1.abs()).max(q0.abs()).max(q1.abs()).max_element()) {
+    if surely_beyond(lower, reach, scale) {
         return None;
     }
     let r = edge_edge(p0, p1, q0, q1);
@@ -374,9 +390,10 @@ struct Search {
     /// Its pairs: vertex–triangle and edge–edge, grouped by owner as [`find_pairs`]'s.
     vt: Vec<Pair>,
     ee: Vec<Pair>,
-    /// [`drift`] at the last [`Search::covers`] that held (0 after a search): a kept pair
-    /// `d` apart at the search is at least `d − 2δ` apart.
-    delta: f32,
+    /// Each vertex's [`drift`] at the last [`Search::covers`] (0 after a search, and for
+    /// the vertices a partial search moved): a kept pair `d` apart at the search is at
+    /// least `d − δ_P − δ_Q` apart, each `δ` the largest of its primitive's vertices'.
+    drifts: Vec<f32>,
     scale: f32,
 }
 
@@ -437,7 +454,7 @@ impl Search {
             return Cover::Search;
         }
         if most <= limit {
-            self.delta = most;
+            self.drifts = drifts;
             return Cover::Holds;
         }
         // Those over half the limit, so that the rest have room for a few substeps more.
@@ -451,7 +468,7 @@ impl Search {
                 self.at[k][c] = pos[k][c] - mean[c];
             }
         }
-        self.delta = drifts.iter().zip(&fast).filter(|(_, f)| !**f).map(|(d, _)| *d).fold(0.0, f32::max);
+        self.drifts = drifts.iter().zip(&fast).map(|(&d, &f)| if f { 0.0 } else { d }).collect();
         Cover::Refresh(fast)
     }
 
@@ -517,23 +534,31 @@ impl Search {
         let at = |k: u32| Vec3::from_slice(&pos[k as usize][..3]);
         let finite = |b: [Vec3; 2]| b[0].is_finite() && b[1].is_finite();
         // The kept pairs that pass `test`, those that cannot have come within the reach
-        // since the search ruled out first.
-        let keep = |list: &[Pair], test: &(dyn Fn(u32, u32) -> Option<Pair> + Sync)| -> Vec<Pair> {
+        // since the search ruled out first: `moved(o, k)` is how much nearer the pair may
+        // have come (its two primitives' largest drifts: most vertices drift far less than
+        // the fastest, so this rules out more than twice the largest drift).
+        let drift = |ks: &[u32]| ks.iter().map(|&k| self.drifts[k as usize]).fold(0.0, f32::max);
+        let keep = |list: &[Pair],
+                    moved: &(dyn Fn(u32, u32) -> f32 + Sync),
+                    test: &(dyn Fn(u32, u32) -> Option<Pair> + Sync)|
+         -> Vec<Pair> {
             list.par_iter()
                 .with_min_len(min_len)
                 .filter_map(
-                    |&(o, k, d)| if surely_beyond(d - 2.0 * self.delta, reach, self.scale) { None } else { test(o, k) },
+                    |&(o, k, d)| if surely_beyond(d - moved(o, k), reach, self.scale) { None } else { test(o, k) },
                 )
                 .collect()
         };
-        let vt = keep(&self.vt, &|v, t| {
+        let vt_moved = |v: u32, t: u32| self.drifts[v as usize] + drift(&triangles[t as usize]);
+        let ee_moved = |e: u32, f: u32| drift(&edges[e as usize]) + drift(&edges[f as usize]);
+        let vt = keep(&self.vt, &vt_moved, &|v, t| {
             let x = at(v);
             let tri = crate::broad::bounds(triangles[t as usize].iter().map(|&k| at(k)));
             (finite([x, x]) && finite(tri) && crate::broad::boxes_meet(tri, [x, x], reach))
                 .then(|| vt_pair(pos, triangles, v, t, reach))
                 .flatten()
         });
-        let ee = keep(&self.ee, &|e, f| {
+        let ee = keep(&self.ee, &ee_moved, &|e, f| {
             let [a, b] = edges[e as usize];
             let (p0, p1) = (at(a), at(b));
             let eb = [p0.min(p1), p0.max(p1)];
@@ -1097,7 +1122,7 @@ impl Contact {
                 let far = reach + margin * spacing;
                 let (vt, ee) = find_pairs(pos, triangles, &self.edges, far, self.parallel);
                 let scale = pos.iter().map(|x| Vec3::from_slice(&x[..3]).abs().max_element()).fold(0.0, f32::max);
-                self.search = Search { at: pos.to_vec(), reach: far, vt, ee, delta: 0.0, scale };
+                self.search = Search { at: pos.to_vec(), reach: far, vt, ee, drifts: vec![0.0; pos.len()], scale };
                 self.stats.searches += 1;
             }
         }
