@@ -54,6 +54,10 @@ pub fn bucket(c: Cell, size: u32) -> u32 {
 /// shares the border cells instead of overflowing).
 const CELL_LIMIT: f32 = 1e6;
 
+/// The most cells a box query walks: a query over more (a primitive, or the grid's
+/// largest, spanning metres) reads its grid's entries in their order instead.
+pub const QUERY_CELLS: u32 = 4096;
+
 /// A box wider than this many cells on some axis is listed apart (the bucket after the
 /// grid's: [`slot_of`]).
 pub const BIG_CELLS: f32 = 4.0;
@@ -106,7 +110,7 @@ pub struct Shape {
     /// The largest extent of a box listed in the grid's buckets, per axis.
     pub extent: Vec3,
     /// A query over more cells than this (on an axis, in a plane or in all) reads every
-    /// entry instead ([`crate::layout::TRI_QUERY_CELLS`]).
+    /// entry instead ([`QUERY_CELLS`]).
     pub most_cells: u32,
 }
 
@@ -232,7 +236,7 @@ impl BoxGrid {
             entries[*at as usize] = e;
             *at += 1;
         }
-        let most_cells = crate::layout::TRI_QUERY_CELLS;
+        let most_cells = QUERY_CELLS;
         BoxGrid { shape: Shape { cell, size, extent, most_cells }, starts, entries }
     }
 

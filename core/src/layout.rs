@@ -19,10 +19,9 @@ pub const TABLE_WIDTH: u32 = 4096;
 /// Pairs each owner of the contact between triangles keeps (a vertex its triangles, an
 /// edge its edges; more are counted, not kept).
 pub const TRI_SLOTS: u32 = crate::tri_contact::PAIRS_PER_OWNER as u32;
-/// The most cells a query of the contact between triangles' grids walks: a query over
-/// more (a primitive, or the grid's largest, spanning metres) scans its grid's entries in
-/// their order instead.
-pub const TRI_QUERY_CELLS: u32 = 4096;
+/// The most cells a query of the contact between triangles' grids walks
+/// ([`crate::broad::QUERY_CELLS`]).
+pub const TRI_QUERY_CELLS: u32 = crate::broad::QUERY_CELLS;
 
 /// A spring over `(1 + τ)·rest` is pulled towards `(1 + STRAIN_AIM·τ)·rest`, a little
 /// inside the limit: corrections proportional to the excess over the limit itself make
