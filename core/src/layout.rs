@@ -448,7 +448,7 @@ pub fn wgsl_constants() -> String {
     s += &format!("const CONTACT_UNITS: f32 = {:?};\n", crate::tables::CONTACT_UNITS);
     s += &format!("const TRI_BOUND_FRACTION: f32 = {:?};\n", crate::tri_contact::BOUND_FRACTION);
     s += &format!("const TRI_REACH_PER_MOTION: f32 = {:?};\n", crate::tri_contact::REACH_PER_MOTION);
-    // tri_start.wgsl writes the reach's cap as s + s.
+    // tri_start.wgsl writes the reach's cap as t + (s + s).
     const _: () = assert!(crate::tri_contact::MAX_REACH_SPACINGS == 2.0);
     s += &format!("const TRI_MEAN_UNIT: f32 = {:?};\n", crate::tri_contact::MEAN_UNIT);
     s += &u("MAX_COLLIDERS", crate::scene::MAX_COLLIDERS as u32);

@@ -1135,16 +1135,13 @@ pub(crate) fn speed_of(x: &crate::grid::V4, v: &crate::grid::V4) -> f32 {
     if x[3] > 0.0 && s.is_finite() { s } else { 0.0 }
 }
 
-/// The reach of a vertex moving at `speed`: the thickness and as far again as lets it
-/// move 1.25 times its motion in the substep (`|v| dt + |g| dt²`) with nothing near —
-/// beyond the thickness, so that a pair a hair past it that closes in this substep is
-/// found by the velocity pass (and its friction) before it is in contact — at most the
-/// thickness plus [`MAX_REACH_SPACINGS`] times `spacing` ([`Contact::reaches`]).
+/// The reach of a vertex moving at `speed`: the thickness, or far enough that with
+/// nothing near it may move 1.25 times its motion in the substep (`|v| dt + |g| dt²`), at
+/// most the thickness plus [`MAX_REACH_SPACINGS`] times `spacing` ([`Contact::reaches`]).
 pub fn reach_at_speed(speed: f32, spacing: f32, dt: f32, gravity: [f32; 3], thickness: f32) -> f32 {
-    // g (dt dt): the GPU's compilers hoist the product of the constants. The minimum
-    // between the product and the sum keeps a compiler from fusing them.
+    // g (dt dt): the GPU's compilers hoist the product of the constants.
     let motion = speed * dt + Vec3::from(gravity).length() * (dt * dt);
-    thickness + (REACH_PER_MOTION * motion).min(MAX_REACH_SPACINGS * spacing)
+    (REACH_PER_MOTION * motion).clamp(thickness, thickness + MAX_REACH_SPACINGS * spacing)
 }
 
 /// The reach of the bounds at most, in spacings beyond the thickness (the scene's rest

@@ -7,9 +7,9 @@ fn reach_at_speed(speed: f32) -> f32 {
     let g = len3(p.gravity.xyz);
     let motion = speed * p.dt + g * (p.dt * p.dt);
     let t = p.self_thickness;
-    // The cap 2 s as s + s (exact; TRI_MAX_REACH_SPACINGS is 2: layout.rs checks); the
-    // minimum between the product and the sum keeps Mesa from fusing them.
-    return t + min(TRI_REACH_PER_MOTION * motion, p.spacing + p.spacing);
+    // The cap t + 2 s as s + s (exact) added to t: Mesa fuses t + 2.0 * s into one
+    // rounding, core rounds twice (TRI_MAX_REACH_SPACINGS is 2: layout.rs checks).
+    return clamp(TRI_REACH_PER_MOTION * motion, t, t + (p.spacing + p.spacing));
 }
 
 @compute @workgroup_size(WORKGROUP)
