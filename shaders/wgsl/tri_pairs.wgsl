@@ -10,12 +10,6 @@ fn lower(k: u32, d: f32) {
     atomicMin(&tri_bounds[4u * k + 3u], bitcast<u32>(TRI_BOUND_FRACTION * d));
 }
 
-// Particle k's reach (tri_start's): a pair's is the farthest of its vertices'
-// (core::tri_contact::Reach).
-fn own_reach(k: u32) -> f32 {
-    return load_f(reaches_at() + k);
-}
-
 // Whether a pair `d` away with `other` lies after one `e` away with `f` in the order of
 // nearness (distance, then index: no two of an owner's pairs tie).
 fn farther(d: f32, other: u32, e: f32, f: u32) -> bool {
@@ -156,7 +150,7 @@ fn walk(o: u32, again: bool) -> u32 {
                     continue;
                 }
                 d = len3(point_triangle(lo, at3(t.x), at3(t.y), at3(t.z)).q - lo);
-                if !(d < max(max(own_reach(o), own_reach(t.x)), max(own_reach(t.y), own_reach(t.z)))) {
+                if !(d < reach) {
                     continue;
                 }
                 if !again {
@@ -172,7 +166,7 @@ fn walk(o: u32, again: bool) -> u32 {
                 }
                 let r = edge_edge(at3(own.x), at3(own.y), at3(f.x), at3(f.y));
                 d = len3(r.p - r.q);
-                if !(d < max(max(own_reach(own.x), own_reach(own.y)), max(own_reach(f.x), own_reach(f.y)))) {
+                if !(d < reach) {
                     continue;
                 }
                 if !again {

@@ -18,7 +18,7 @@ use glam::Vec3;
 
 use crate::grid::V4;
 use crate::step_params::StepParams;
-use crate::tri_contact::{BOUND_FRACTION, MEAN_UNIT, edge_edge, point_triangle};
+use crate::tri_contact::{BOUND_FRACTION, MAX_REACH_SPACINGS, MEAN_UNIT, REACH_PER_MOTION, edge_edge, point_triangle};
 
 pub use crate::layout::TRI_SLOTS;
 
@@ -79,15 +79,9 @@ impl TriLayout {
         at::WORDS
     }
 
-    /// Each particle's reach at the substep's start (f32 bits;
-    /// `crate::tri_contact::Reach`), after the sums.
-    pub fn reaches(&self) -> usize {
-        self.sums() + 4 * self.np
-    }
-
     /// Words of the integers.
     pub fn words(&self) -> usize {
-        self.reaches() + self.np
+        self.sums() + 4 * self.np
     }
 
     /// Words of the pairs: [`TRI_SLOTS`] an owner (the other primitive), then as many
@@ -142,23 +136,20 @@ pub fn tri_speed(pos: &[V4], vel: &[V4], b: &mut TriBufs) {
     }
 }
 
-/// A reach from a speed (`crate::tri_contact::reach_at_speed`): the substep's largest from the fastest
-/// vertex's, each vertex's from its own.
+/// The substep's reach from the fastest speed (`crate::tri_contact::Contact::reach`).
 pub fn reach_of(p: &StepParams, fastest: f32) -> f32 {
-    let g = [p.gravity[0], p.gravity[1], p.gravity[2]];
-    crate::tri_contact::reach_at_speed(fastest, p.spacing, p.dt, g, p.self_thickness)
+    let g = Vec3::new(p.gravity[0], p.gravity[1], p.gravity[2]).length();
+    let motion = fastest * p.dt + g * (p.dt * p.dt);
+    let t = p.self_thickness;
+    (REACH_PER_MOTION * motion).clamp(t, t + MAX_REACH_SPACINGS * p.spacing)
 }
 
-/// `tri_start`: each particle's start position, its reach (from its own speed:
-/// `crate::tri_contact::Contact::reaches`) and its bound at the reach's fraction; the
-/// largest reach (the fastest's) and the grids' cell into the scalars.
-pub fn tri_start(p: &StepParams, pos: &[V4], vel: &[V4], b: &mut TriBufs) {
+/// `tri_start`: each particle's start position and its bound at the reach's fraction;
+/// the reach and the grids' cell into the scalars.
+pub fn tri_start(p: &StepParams, pos: &[V4], b: &mut TriBufs) {
     let reach = reach_of(p, f(b.ints[at::SPEED]));
-    let reaches = b.l.reaches();
-    for (k, (s, x)) in b.floats.iter_mut().zip(pos).enumerate() {
-        let own = reach_of(p, crate::tri_contact::speed_of(x, &vel[k]));
-        *s = [x[0], x[1], x[2], BOUND_FRACTION * own];
-        b.ints[reaches + k] = own.to_bits();
+    for (s, x) in b.floats.iter_mut().zip(pos) {
+        *s = [x[0], x[1], x[2], BOUND_FRACTION * reach];
     }
     b.ints[at::REACH] = reach.to_bits();
     b.ints[at::CELL] = (2.0 * reach).max(1.5 * p.spacing).to_bits();
@@ -315,9 +306,6 @@ fn farther(a: (f32, u32), b: (f32, u32)) -> bool {
 pub fn tri_pairs(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
     let l = b.l;
     let reach = f(b.ints[at::REACH]);
-    // A pair's reach: the farthest of its vertices' (`crate::tri_contact::Reach`).
-    let reaches: Vec<f32> = b.ints[l.reaches()..l.reaches() + l.np].iter().map(|&w| f(w)).collect();
-    let own = |ks: [u32; 4]| ks.iter().map(|&k| reaches[k as usize]).fold(0.0, f32::max);
     let at_ = |k: u32| v3(&pos[k as usize]);
     let edges = topo.edges();
     for o in 0..l.num_owners() {
@@ -330,7 +318,7 @@ pub fn tri_pairs(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs)
                     return;
                 }
                 let d = (point_triangle(x, at_(tri[0]), at_(tri[1]), at_(tri[2])).point - x).length();
-                if d < own([o as u32, tri[0], tri[1], tri[2]]) {
+                if d < reach {
                     found.push((t, d));
                 }
             });
@@ -345,7 +333,7 @@ pub fn tri_pairs(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut TriBufs)
                 }
                 let r = edge_edge(p0, p1, at_(c), at_(d));
                 let dist = (r.p - r.q).length();
-                if dist < own([a, bb, c, d]) {
+                if dist < reach {
                     found.push((g, dist));
                 }
             });

@@ -24,8 +24,8 @@ fn tri_speed(a: &TwinArgs, b: &mut HostBuffers) {
 }
 
 fn tri_start(a: &TwinArgs, b: &mut HostBuffers) {
-    let (pos, vel, mut t) = split(a, b);
-    tc::tri_start(a.p, pos, vel, &mut t);
+    let (pos, _, mut t) = split(a, b);
+    tc::tri_start(a.p, pos, &mut t);
 }
 
 fn tri_grid_count(a: &TwinArgs, b: &mut HostBuffers) {
@@ -220,17 +220,9 @@ pub static TRI_SPEED: KernelDef = KernelDef {
     accumulates: &[TriInts],
     ..row("tri_speed", tri_speed, Count::Particles, &[Params, Pos, Vel, TriInts], &[TriInts], B, cleared)
 };
-/// Each particle's start, reach and bound at its reach's fraction; the largest reach and
-/// the cell.
-pub static TRI_START: KernelDef = row(
-    "tri_start",
-    tri_start,
-    Count::Particles,
-    &[Params, Pos, Vel, TriEdges, TriInts],
-    &[TriFloats, TriInts],
-    B,
-    after_speed,
-);
+/// Each particle's start and bound at the reach's fraction; the reach and the cell.
+pub static TRI_START: KernelDef =
+    row("tri_start", tri_start, Count::Particles, &[Params, Pos, TriInts], &[TriFloats, TriInts], B, after_speed);
 /// The primitives' bucket counts and largest extents.
 pub static TRI_GRID_COUNT: KernelDef = row(
     "tri_grid_count",

@@ -53,12 +53,6 @@ fn sums_at() -> u32 {
     return owners_at() + num_particles() + edges_len();
 }
 
-// Each particle's reach at the substep's start, after the sums
-// (core::cpu::tri_contact::TriLayout::reaches).
-fn reaches_at() -> u32 {
-    return sums_at() + 4u * num_particles();
-}
-
 fn num_owners() -> u32 {
     return num_particles() + edges_len();
 }
