@@ -160,8 +160,7 @@ fn xpbd_takes_the_contact_as_constraints_of_each_iteration_with_the_cpu_bits_on_
     }
     let (state, stats) = (cpu.state().unwrap(), cpu.contact_stats().unwrap().outcome());
     println!("cpu: at most {most} pairs, {pushed} pushes at the frames' last substeps");
-    // (Measured 957 pairs and 10 235 pushes: each vertex looks as far as it moves.)
-    assert!(most > 500 && pushed > 100, "the heap did not pile: the test would hold little");
+    assert!(most > 1000 && pushed > 100, "the heap did not pile: the test would hold little");
     let triangles = cpu.topology().triangles.clone();
     // Raw Vulkan and GL: wgpu compiles the same WGSL through the same SPIR-V path as raw
     // Vulkan (the thin-heap test above holds all three), and the suite's time is budgeted.
@@ -181,7 +180,7 @@ fn xpbd_takes_the_contact_as_constraints_of_each_iteration_with_the_cpu_bits_on_
 
 #[test]
 fn vbd_takes_the_contact_inside_its_solves_with_the_cpu_bits_on_vulkan_and_gl() {
-    // The thin heap at n = 24 landing after 33 frames of Verlet on the CPU, then 3 frames of VBD
+    // The thin heap at n = 24 piled by 45 frames of Verlet on the CPU, then 3 frames of VBD
     // (8 sweeps a substep, each colour's contact terms found at the iterate before its
     // solves) from that state on the CPU and on raw Vulkan and GL (wgpu shares raw Vulkan's
     // SPIR-V path; the kernel checks above hold all three to the twins): the contact's
@@ -192,7 +191,7 @@ fn vbd_takes_the_contact_inside_its_solves_with_the_cpu_bits_on_vulkan_and_gl() 
     const FRAMES: usize = 3;
     let f = thin_heap(24);
     let mut pile = CpuSolver::new(Exec::Parallel, f.scene.clone(), f.params.clone()).unwrap();
-    for _ in 0..33 {
+    for _ in 0..45 {
         pile.step_frame().unwrap();
     }
     let piled = pile.state().unwrap();
@@ -219,7 +218,7 @@ fn vbd_takes_the_contact_inside_its_solves_with_the_cpu_bits_on_vulkan_and_gl() 
     let most = want_stats.iter().map(|s| s.pairs).max().unwrap();
     let closest = clothlab_core::tri_contact::closest_pair(&want.pos, &triangles);
     println!("cpu: at most {most} pairs, closest pair {:.2} t", closest / t);
-    // (Measured 517 pairs within their reach at a frame's last substep.)
+    // (Measured 500–1400 pairs within the reach at a frame's last substep.)
     assert!(most > 300, "{most} pairs: the heap is not piled, the test would hold little");
     assert!(closest > 0.25 * t, "two primitives {closest} m apart, thickness {t}");
     assert!(want.pos.iter().chain(&want.vel).all(|v| v.iter().all(|c| c.is_finite())), "not finite");
