@@ -58,9 +58,15 @@ impl TriLayout {
         self.vbd() + crate::tri_contact::VBD_TERMS * self.np
     }
 
+    /// The buckets of one grid: its cells' [`TriLayout::buckets`] and the wide boxes' one
+    /// after them ([`crate::broad::slot_of`]).
+    pub fn grid_buckets(&self) -> usize {
+        self.buckets + 1
+    }
+
     /// The grids' entries: the triangles' (by bucket), then the edges'.
     pub fn entries(&self) -> usize {
-        self.grid() + 2 * (self.buckets + 1)
+        self.grid() + 2 * self.grid_buckets()
     }
 
     /// Each owner's count of pairs found (may exceed [`TRI_SLOTS`]).
@@ -181,7 +187,7 @@ fn bucket_of(
 ) -> Option<(usize, [Vec3; 2])> {
     let bx = prim_box(o, pos, &topo.triangles, topo.edges());
     let slot = crate::broad::slot_of(bx, cell, l.buckets as u32)?;
-    let grid = if o < l.tris { 0 } else { l.buckets + 1 };
+    let grid = if o < l.tris { 0 } else { l.grid_buckets() };
     Some((grid + slot as usize, bx))
 }
 
@@ -225,7 +231,7 @@ pub fn tri_grid_scatter(topo: &crate::grid::ClothTopology, pos: &[V4], b: &mut T
     }
 }
 
-/// Bucket `k`'s entries (of both grids' `2 · (buckets + 1)`), after the scatter.
+/// Bucket `k`'s entries (of both grids' [`TriLayout::grid_buckets`]), after the scatter.
 fn bucket_range(ints: &[u32], l: &TriLayout, k: usize) -> std::ops::Range<usize> {
     let start = if k == 0 { 0 } else { ints[l.grid() + k - 1] as usize };
     l.entries() + start..l.entries() + ints[l.grid() + k] as usize
@@ -234,7 +240,7 @@ fn bucket_range(ints: &[u32], l: &TriLayout, k: usize) -> std::ops::Range<usize>
 /// `tri_grid_sort`: each bucket's entries in increasing order (the scatter's atomics put
 /// them in any order).
 pub fn tri_grid_sort(b: &mut TriBufs) {
-    for k in 0..2 * (b.l.buckets + 1) {
+    for k in 0..2 * b.l.grid_buckets() {
         let r = bucket_range(b.ints, &b.l, k);
         b.ints[r].sort_unstable();
     }
@@ -253,7 +259,7 @@ struct Listed<'a> {
 
 impl crate::broad::Listing for Listed<'_> {
     fn range(&self, b: usize) -> std::ops::Range<usize> {
-        bucket_range(self.ints, &self.l, self.grid * (self.l.buckets + 1) + b)
+        bucket_range(self.ints, &self.l, self.grid * self.l.grid_buckets() + b)
     }
 
     fn entry(&self, e: usize) -> (u32, [Vec3; 2]) {

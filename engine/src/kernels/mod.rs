@@ -87,7 +87,7 @@ impl Count {
             Count::Range => topo.springs.len() as u32,
             Count::Pins => topo.pins.slots.len() as u32,
             Count::Primitives => (topo.triangles.len() + topo.edges().len()) as u32,
-            Count::TriBuckets => 2 * (cpu::tri_contact::TriLayout::of(topo).buckets as u32 + 1),
+            Count::TriBuckets => 2 * cpu::tri_contact::TriLayout::of(topo).grid_buckets() as u32,
             Count::TriOwners => (topo.num_particles() + topo.edges().len()) as u32,
         }
     }
