@@ -201,9 +201,15 @@ pub struct SimArgs {
     /// Substeps to simulate (rounded up to whole frames of `substeps` each).
     #[arg(long, default_value_t = 1000)]
     pub steps: u64,
+    /// Worlds: copies of the scene stepped together, each with its own state and
+    /// parameters (`--set damping=[0.01,0.02]` gives one value a world); default the scene
+    /// file's `envs`, else 1. On cpu and cpu-par.
+    #[arg(long, value_name = "N")]
+    pub envs: Option<u32>,
     #[command(flatten)]
     pub physics: PhysicsArgs,
-    /// Write the final state: `.obj` (mesh with normals and uvs) or `.json` (full state).
+    /// Write the final state: `.obj` (mesh with normals and uvs) or `.json` (full state;
+    /// with worlds, every world's, world after world).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Record the run as binary glTF (`.glb`): the cloth with a morph target per recorded

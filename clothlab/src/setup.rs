@@ -44,17 +44,26 @@ pub struct Setup {
     pub light: Option<[f32; 3]>,
     /// The file's title, if it has one.
     pub title: Option<String>,
+    /// The file's `envs` (worlds), if it says.
+    pub envs: Option<u32>,
 }
 
 impl Setup {
     /// The default scene with an `n × n` cloth and the default parameters.
     pub fn default_with_n(n: u32) -> Self {
-        Self { scene: Scene::with_n(n), params: SimParams::default(), camera: None, light: None, title: None }
+        Self {
+            scene: Scene::with_n(n),
+            params: SimParams::default(),
+            camera: None,
+            light: None,
+            title: None,
+            envs: None,
+        }
     }
 
     /// A scene file's contents.
     pub fn from_file(f: SceneFile) -> Self {
-        Self { scene: f.scene, params: f.params, camera: f.camera, light: f.light, title: f.title }
+        Self { scene: f.scene, params: f.params, camera: f.camera, light: f.light, title: f.title, envs: f.envs }
     }
 }
 
@@ -162,4 +171,48 @@ pub fn apply_overrides(params: &SimParams, sets: &[String]) -> Result<SimParams>
         serde_json::from_value(value).map_err(|e| anyhow::anyhow!("a parameter of the wrong type: {e}"))?;
     out.validate()?;
     Ok(out)
+}
+
+/// An override with one value per world: the parameter's name and the worlds' values.
+pub type WorldSet = (String, Vec<serde_json::Value>);
+
+/// `NAME=VALUE` overrides split into those every world takes and those with one value per
+/// world: a list where the parameter takes one value (`damping=[0.01,0.02]`), or a list of
+/// lists where it takes a list (`wind=[[1,0,0,0],[2,0,0,0]]`). What is not one of these
+/// (an unknown name, a word) is left to [`apply_overrides`] to take or refuse.
+pub fn split_world_sets(sets: &[String]) -> Result<(Vec<String>, Vec<WorldSet>)> {
+    let shape = serde_json::to_value(SimParams::default())?;
+    let (mut common, mut per_world) = (Vec::new(), Vec::new());
+    for s in sets {
+        let parsed = s.split_once('=').and_then(|(name, raw)| {
+            let slot = shape.get(name.trim())?;
+            let value: serde_json::Value = serde_json::from_str(raw.trim()).ok()?;
+            let list = value.as_array()?;
+            let per = if slot.is_array() { list.iter().all(|v| v.is_array()) && !list.is_empty() } else { true };
+            per.then(|| (name.trim().to_owned(), list.clone()))
+        });
+        match parsed {
+            Some(w) => per_world.push(w),
+            None => common.push(s.clone()),
+        }
+    }
+    Ok((common, per_world))
+}
+
+/// Each of `envs` worlds' parameters: `base` with world k's value of every override in
+/// `per_world` applied (each list one value per world), each world's checked on its own;
+/// a refusal names the world.
+pub fn world_params(base: &[SimParams], per_world: &[WorldSet], envs: usize) -> Result<Vec<SimParams>> {
+    for (name, values) in per_world {
+        if values.len() != envs {
+            let worlds = if envs == 1 { "1 world".to_string() } else { format!("{envs} worlds") };
+            bail!("`{name}` has {} values for {worlds}: give one per world", values.len());
+        }
+    }
+    (0..envs)
+        .map(|k| {
+            let sets: Vec<String> = per_world.iter().map(|(name, v)| format!("{name}={}", v[k])).collect();
+            apply_overrides(&base[k.min(base.len() - 1)], &sets).map_err(|e| anyhow::anyhow!("world {k}: {e}"))
+        })
+        .collect()
 }

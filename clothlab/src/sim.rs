@@ -4,11 +4,21 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use clothlab_core::grid::Grab;
-use clothlab_core::{ClothState, ClothTopology, KernelTimings, RenderMode, Scene, SimParams, StateField, View};
+use clothlab_core::{
+    ClothState, ClothTopology, CpuSolver, Exec, KernelTimings, RenderMode, Scene, SimParams, Solver, StateField, View,
+};
+use rayon::prelude::*;
 
 use crate::backend::{AnySolver, Backend, GpuSetup, Shared, make};
 use crate::record::{MAX_GLB_BYTES, Recording, glb};
-use crate::setup::{Physics, Setup, apply_overrides};
+use crate::setup::{Physics, Setup, split_world_sets, world_params};
+
+pub use clothlab_core::scene_file::MAX_ENVS;
+
+/// Most particles a batch of worlds may hold in all (as one cloth of [`MAX_N`]²).
+///
+/// [`MAX_N`]: clothlab_core::scene::MAX_N
+pub const MAX_BATCH_PARTICLES: usize = (clothlab_core::scene::MAX_N as usize).pow(2);
 
 /// The grid's side when neither the options nor the scene file give one (as `clothlab sim`).
 pub const DEFAULT_N: u32 = 100;
@@ -28,6 +38,10 @@ pub struct SimOptions {
     pub n: Option<u32>,
     /// A GPU backend's variant and statistics; refused for a CPU backend unless default.
     pub gpu: GpuSetup,
+    /// Worlds: copies of the scene stepped together, each with its own state and
+    /// parameters (default: the scene file's `envs`, else 1). More than one runs on the
+    /// CPU backends for now.
+    pub envs: Option<u32>,
 }
 
 /// One cloth's particles and triangles in a scene's arrays.
@@ -55,19 +69,122 @@ pub struct ClothRange {
 /// println!("lowest point after {:.3} s: {lowest:.3} m", sim.time());
 /// # Ok::<(), anyhow::Error>(())
 /// ```
+///
+/// A batch of worlds (`envs` > 1) is the scene copied: world k's state and parameters are
+/// its own, and it computes, bit for bit, what a single run of the scene with world k's
+/// parameters computes. The state's arrays ([`Sim::positions`] and the like) hold every
+/// world's particles, world after world; what reads one cloth (its state, a picture, a
+/// recording) reads world 0. On the CPU each world is a solver of its own, the worlds
+/// stepped on rayon's threads on `cpu-par` (a kernel costs no launch there, so a world
+/// runs its substeps through without waiting for the others).
 pub struct Sim {
+    /// World 0.
     solver: AnySolver,
+    /// Worlds 1 and on (a batch on a CPU backend).
+    worlds: Vec<CpuSolver>,
     backend: Backend,
     setup: Setup,
+    /// World 0's state when opened (what [`Sim::reset`] restores on a GPU backend).
+    initial: Option<ClothState>,
 }
 
 impl Sim {
     /// Opens the scene of `opts` on its backend. Every argument is checked first; a GPU
     /// backend without an adapter is refused in one line.
     pub fn open(opts: SimOptions) -> Result<Sim> {
-        let setup = opts.physics.setup(opts.n, DEFAULT_N)?;
-        let solver = make(opts.backend, setup.scene.clone(), setup.params.clone(), &opts.gpu, &Shared::None)?;
-        Ok(Sim { solver, backend: opts.backend, setup })
+        let (common, per_world) = split_world_sets(&opts.physics.set)?;
+        let physics = Physics { set: common, ..opts.physics.clone() };
+        let setup = physics.setup(opts.n, DEFAULT_N)?;
+        let envs = opts.envs.or(setup.envs).unwrap_or(1);
+        if !(1..=MAX_ENVS).contains(&envs) {
+            bail!("invalid envs {envs}: must be in 1 ..= {MAX_ENVS}");
+        }
+        let np = setup.scene.num_particles();
+        if envs as usize * np > MAX_BATCH_PARTICLES {
+            bail!(
+                "envs {envs}: {envs} worlds of {np} particles are more than the {MAX_BATCH_PARTICLES} a batch holds; at most {} worlds of this scene",
+                MAX_BATCH_PARTICLES / np.max(1)
+            );
+        }
+        if envs > 1 && opts.backend.is_gpu() {
+            bail!(
+                "envs {envs}: a batch of worlds runs on the cpu and cpu-par backends; the GPU backends' world dimension is not built yet"
+            );
+        }
+        let params = world_params(std::slice::from_ref(&setup.params), &per_world, envs as usize)?;
+        for (k, p) in params.iter().enumerate() {
+            clothlab_core::cloth::check_params(&setup.scene, p)
+                .map_err(|e| if envs > 1 { anyhow::anyhow!("world {k}: {e}") } else { e.into() })?;
+        }
+        if envs == 1 {
+            let mut solver = make(opts.backend, setup.scene.clone(), params[0].clone(), &opts.gpu, &Shared::None)?;
+            // A GPU solver's reset takes back the state it starts from (a CPU one is built again).
+            let initial = if opts.backend.is_gpu() { Some(solver.get().state()?) } else { None };
+            return Ok(Sim { solver, worlds: Vec::new(), backend: opts.backend, setup, initial });
+        }
+        if opts.gpu.variant.is_some() {
+            bail!("--preset and --set-variant choose a GPU backend's kernels, and {} is the CPU", opts.backend.name());
+        }
+        let mut worlds = Self::build_worlds(opts.backend, &setup.scene, &params)?;
+        let first = worlds.remove(0);
+        Ok(Sim { solver: AnySolver::Cpu(Box::new(first)), worlds, backend: opts.backend, setup, initial: None })
+    }
+
+    /// One CPU solver a world (each on one thread: the worlds are what runs in parallel),
+    /// built on rayon's threads on `cpu-par`.
+    fn build_worlds(backend: Backend, scene: &Scene, params: &[SimParams]) -> Result<Vec<CpuSolver>> {
+        let one = |p: &SimParams| -> Result<CpuSolver> {
+            let mut s = CpuSolver::new(Exec::Serial, scene.clone(), p.clone())?;
+            s.time_kernels = false;
+            Ok(s)
+        };
+        if backend == Backend::CpuPar { params.par_iter().map(one).collect() } else { params.iter().map(one).collect() }
+    }
+
+    /// How many worlds (1 for a single run).
+    pub fn envs(&self) -> usize {
+        1 + self.worlds.len()
+    }
+
+    /// Every world's solver, world 0 first (a batch: all CPU solvers).
+    fn batch(&mut self) -> Vec<&mut CpuSolver> {
+        let AnySolver::Cpu(first) = &mut self.solver else {
+            unreachable!("a batch of worlds is built on the CPU only")
+        };
+        std::iter::once(first.as_mut()).chain(self.worlds.iter_mut()).collect()
+    }
+
+    /// Runs `f` on every world, on rayon's threads on `cpu-par`; the first error is
+    /// returned.
+    fn each_world(&mut self, f: impl Fn(&mut dyn Solver) -> Result<()> + Sync + Send) -> Result<()> {
+        if self.worlds.is_empty() {
+            return f(self.solver.get());
+        }
+        let parallel = self.backend == Backend::CpuPar;
+        let mut batch = self.batch();
+        if parallel {
+            batch.par_iter_mut().enumerate().try_for_each(|(k, s)| f(&mut **s).with_context(|| format!("world {k}")))
+        } else {
+            batch.iter_mut().enumerate().try_for_each(|(k, s)| f(&mut **s).with_context(|| format!("world {k}")))
+        }
+    }
+
+    /// World `k`'s solver.
+    fn world(&mut self, k: usize) -> Result<&mut dyn Solver> {
+        match k {
+            0 => Ok(self.solver.get()),
+            _ if k < self.envs() => Ok(&mut self.worlds[k - 1]),
+            _ => bail!("world {k}: the batch has {} worlds (0 ..= {})", self.envs(), self.envs() - 1),
+        }
+    }
+
+    /// World `k`'s solver, to read.
+    fn world_ref(&self, k: usize) -> Result<&dyn Solver> {
+        match k {
+            0 => Ok(self.solver.get_ref()),
+            _ if k < self.envs() => Ok(&self.worlds[k - 1]),
+            _ => bail!("world {k}: the batch has {} worlds (0 ..= {})", self.envs(), self.envs() - 1),
+        }
     }
 
     /// The backend.
@@ -77,7 +194,7 @@ impl Sim {
 
     /// The solver's name (backend and variant, e.g. `vulkan`, `cpu-par`).
     pub fn name(&self) -> &str {
-        self.solver.get_ref().name()
+        if self.worlds.is_empty() { self.solver.get_ref().name() } else { self.backend.name() }
     }
 
     /// Where it runs: the adapter (and API), or the CPU.
@@ -100,9 +217,14 @@ impl Sim {
         self.solver.topology()
     }
 
-    /// The parameters in use.
+    /// The parameters in use (world 0's).
     pub fn params(&self) -> &SimParams {
         self.solver.get_ref().params()
+    }
+
+    /// World `k`'s parameters.
+    pub fn world_params(&self, k: usize) -> Result<&SimParams> {
+        Ok(self.world_ref(k)?.params())
     }
 
     /// The parameters as `NAME → value` (the names `set` takes).
@@ -113,18 +235,53 @@ impl Sim {
         }
     }
 
-    /// Replaces the parameters (validated against the cloth first; on error nothing
-    /// changes).
+    /// Replaces the parameters, of every world (validated against the cloth first; on
+    /// error nothing changes).
     pub fn set_params(&mut self, params: SimParams) -> Result<()> {
-        clothlab_core::cloth::check_params(&self.setup.scene, &params)?;
-        self.solver.get().set_params(params)?;
+        self.set_world_params(vec![params; self.envs()])
+    }
+
+    /// Replaces each world's parameters (one each, every one validated against the cloth
+    /// first; on error nothing changes).
+    fn set_world_params(&mut self, params: Vec<SimParams>) -> Result<()> {
+        if params.len() != self.envs() {
+            bail!("{} parameter sets for {} worlds", params.len(), self.envs());
+        }
+        let batch = self.envs() > 1;
+        for (k, p) in params.iter().enumerate() {
+            clothlab_core::cloth::check_params(&self.setup.scene, p)
+                .map_err(|e| if batch { anyhow::anyhow!("world {k}: {e}") } else { e.into() })?;
+        }
+        // What the solvers check besides (a moving collider's speed against the substep)
+        // is checked on a copy of each world's first, so that all or none change.
+        if batch {
+            let scene = &self.setup.scene;
+            for (k, p) in params.iter().enumerate() {
+                scene.check_motion_speed(p.dt()).map_err(|e| anyhow::anyhow!("world {k}: {e}"))?;
+            }
+        }
+        if self.worlds.is_empty() {
+            let p = params.into_iter().next().context("one parameter set")?;
+            return Ok(self.solver.get().set_params(p)?);
+        }
+        for (k, (s, p)) in self.batch().into_iter().zip(params).enumerate() {
+            s.set_params(p).map_err(|e| anyhow::anyhow!("world {k}: {e}"))?;
+        }
         Ok(())
     }
 
     /// Applies `NAME=VALUE` overrides (as `--set`): every one checked, all or none applied.
+    /// A value may be one per world: a list for a parameter that takes a number or a word
+    /// (`damping=[0.01,0.02]`), a list of lists for one that takes a list.
     pub fn set(&mut self, sets: &[String]) -> Result<()> {
-        let params = apply_overrides(self.params(), sets)?;
-        self.set_params(params)
+        let (common, per_world) = split_world_sets(sets)?;
+        let mut each = Vec::with_capacity(self.envs());
+        for k in 0..self.envs() {
+            let p = crate::setup::apply_overrides(self.world_ref(k)?.params(), &common)?;
+            each.push(p);
+        }
+        let params = world_params(&each, &per_world, self.envs())?;
+        self.set_world_params(params)
     }
 
     /// Particles in the state.
@@ -137,10 +294,18 @@ impl Sim {
         if frames > MAX_STEPS {
             bail!("invalid frames {frames}: must be in 0 ..= {MAX_STEPS}");
         }
-        for _ in 0..frames {
-            self.solver.get().step_frame()?;
+        if self.worlds.is_empty() {
+            for _ in 0..frames {
+                self.solver.get().step_frame()?;
+            }
+            return Ok(());
         }
-        Ok(())
+        self.each_world(|s| {
+            for _ in 0..frames {
+                s.step_frame()?;
+            }
+            Ok(())
+        })
     }
 
     /// Advances `k` substeps, each run as a frame of one substep of the same dt (what runs
@@ -152,14 +317,15 @@ impl Sim {
         if k == 0 {
             return Ok(());
         }
-        let whole = self.params().clone();
-        if whole.substeps == 1 {
+        let whole: Vec<SimParams> =
+            (0..self.envs()).map(|w| self.world_ref(w).map(|s| s.params().clone())).collect::<Result<_>>()?;
+        if whole.iter().all(|p| p.substeps == 1) {
             return self.step(k);
         }
-        let single = SimParams { frame_dt: whole.dt(), substeps: 1, ..whole.clone() };
-        self.solver.get().set_params(single).context("a frame of one substep")?;
+        let single = whole.iter().map(|p| SimParams { frame_dt: p.dt(), substeps: 1, ..p.clone() }).collect();
+        self.set_world_params(single).context("a frame of one substep")?;
         let stepped = self.step(k);
-        self.solver.get().set_params(whole)?;
+        self.set_world_params(whole)?;
         stepped
     }
 
@@ -168,21 +334,91 @@ impl Sim {
         self.solver.get_ref().time()
     }
 
-    /// Sets the simulated time (finite, ≥ 0): moving colliders and pins go where their
-    /// motion puts them then.
-    pub fn set_time(&mut self, t: f64) -> Result<()> {
-        Ok(self.solver.get().set_time(t)?)
+    /// World `k`'s simulated time, s.
+    pub fn world_time(&self, k: usize) -> Result<f64> {
+        Ok(self.world_ref(k)?.time())
     }
 
-    /// A copy of the state (read back from the GPU where it lives there).
+    /// Sets the simulated time of every world (finite, ≥ 0): moving colliders and pins
+    /// go where their motion puts them then.
+    pub fn set_time(&mut self, t: f64) -> Result<()> {
+        clothlab_core::solver::checked_time(t)?;
+        self.each_world(|s| Ok(s.set_time(t)?))
+    }
+
+    /// A copy of the state (world 0's; read back from the GPU where it lives there).
     pub fn state(&mut self) -> Result<ClothState> {
         Ok(self.solver.get().state()?)
     }
 
-    /// Replaces the state: of this cloth, finite, or refused with nothing changed.
+    /// A copy of world `k`'s state.
+    pub fn world_state(&mut self, k: usize) -> Result<ClothState> {
+        Ok(self.world(k)?.state()?)
+    }
+
+    /// Replaces the state (world 0's): of this cloth, finite, or refused with nothing
+    /// changed.
     pub fn set_state(&mut self, state: &ClothState) -> Result<()> {
+        self.set_world_state(0, state)
+    }
+
+    /// Replaces world `k`'s state: of this cloth, finite, or refused with nothing changed.
+    pub fn set_world_state(&mut self, k: usize, state: &ClothState) -> Result<()> {
         state.check(self.topology())?;
-        Ok(self.solver.get().set_state(state)?)
+        Ok(self.world(k)?.set_state(state)?)
+    }
+
+    /// Restores worlds to how they were opened — their state and their time, as a new
+    /// run of the scene with their parameters starts (`None`: every world). Each world's
+    /// parameters stay. A world named twice or past the batch is refused, nothing reset.
+    pub fn reset(&mut self, worlds: Option<&[usize]>) -> Result<()> {
+        let all: Vec<usize> = (0..self.envs()).collect();
+        let chosen = worlds.unwrap_or(&all);
+        for (i, &k) in chosen.iter().enumerate() {
+            if k >= self.envs() {
+                bail!("reset: world {k}: the batch has {} worlds (0 ..= {})", self.envs(), self.envs() - 1);
+            }
+            if chosen[..i].contains(&k) {
+                bail!("reset: world {k} is named twice");
+            }
+        }
+        let cpu_exec = match &self.solver {
+            AnySolver::Cpu(_) if self.worlds.is_empty() => {
+                Some(if self.backend == Backend::CpuPar { Exec::Parallel } else { Exec::Serial })
+            }
+            AnySolver::Cpu(_) => Some(Exec::Serial),
+            _ => None,
+        };
+        match cpu_exec {
+            // A CPU world is built again: what a new run starts from, caches included.
+            Some(exec) => {
+                let scene = self.setup.scene.clone();
+                let timed = self.worlds.is_empty();
+                let fresh: Vec<(usize, CpuSolver)> = chosen
+                    .iter()
+                    .map(|&k| {
+                        let mut s = CpuSolver::new(exec, scene.clone(), self.world_ref(k)?.params().clone())?;
+                        s.time_kernels = timed;
+                        Ok((k, s))
+                    })
+                    .collect::<Result<_>>()?;
+                for (k, s) in fresh {
+                    match k {
+                        0 => self.solver = AnySolver::Cpu(Box::new(s)),
+                        _ => self.worlds[k - 1] = s,
+                    }
+                }
+            }
+            // A GPU solver takes the state it was opened with and the time 0.
+            None => {
+                if !chosen.is_empty() {
+                    let initial = self.initial.clone().context("reset: the state at opening was not kept")?;
+                    self.solver.get().set_state(&initial)?;
+                    self.solver.get().set_time(0.0)?;
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The reference mass inverse masses are relative to, kg (the cloth's mass over its
@@ -191,9 +427,17 @@ impl Sim {
         self.params().cloth_mass / self.num_particles().max(1) as f32
     }
 
-    /// One array of the state as it is (w: see [`ClothState`]), read back alone.
+    /// One array of the state as it is (w: see [`ClothState`]), read back alone: every
+    /// world's, world after world.
     pub fn field(&mut self, field: StateField) -> Result<Vec<[f32; 4]>> {
-        Ok(self.solver.get().field(field)?)
+        if self.worlds.is_empty() {
+            return Ok(self.solver.get().field(field)?);
+        }
+        let mut all = Vec::with_capacity(self.envs() * self.num_particles());
+        for s in self.batch() {
+            all.extend(s.field(field)?);
+        }
+        Ok(all)
     }
 
     /// Positions, m.
@@ -217,34 +461,62 @@ impl Sim {
         Ok(self.field(StateField::Pos)?.iter().map(|p| p[3] / m).collect())
     }
 
-    /// Sets the positions, one per particle, finite (inverse masses kept).
+    /// Each world's new state: `edit` given a world's state and its rows of `values`
+    /// (one per particle of every world, world after world), all checked before any
+    /// world changes.
+    fn set_rows<T>(
+        &mut self,
+        values: &[T],
+        what: &str,
+        edit: impl Fn(&mut ClothState, &[T]) -> Result<()>,
+    ) -> Result<()> {
+        let (np, envs) = (self.num_particles(), self.envs());
+        if values.len() != np * envs {
+            match envs {
+                1 => bail!("{what}: {} rows for {np} particles", values.len()),
+                _ => bail!(
+                    "{what}: {} rows for {envs} worlds of {np} particles (give {}, world after world)",
+                    values.len(),
+                    np * envs
+                ),
+            }
+        }
+        let mut states = Vec::with_capacity(envs);
+        for k in 0..envs {
+            let mut s = self.world_state(k)?;
+            edit(&mut s, &values[k * np..(k + 1) * np])
+                .map_err(|e| if envs > 1 { e.context(format!("world {k}")) } else { e })?;
+            states.push(s);
+        }
+        for (k, s) in states.iter().enumerate() {
+            self.set_world_state(k, s)?;
+        }
+        Ok(())
+    }
+
+    /// Sets the positions, one per particle of every world, finite (inverse masses kept).
     pub fn set_positions(&mut self, x: &[[f32; 3]]) -> Result<()> {
-        let mut s = self.state()?;
-        put_xyz(&mut s.pos, x, "positions")?;
-        self.set_state(&s)
+        self.set_rows(x, "positions", |s, x| put_xyz(&mut s.pos, x, "positions"))
     }
 
-    /// Sets the velocities, one per particle, finite.
+    /// Sets the velocities, one per particle of every world, finite.
     pub fn set_velocities(&mut self, v: &[[f32; 3]]) -> Result<()> {
-        let mut s = self.state()?;
-        put_xyz(&mut s.vel, v, "velocities")?;
-        self.set_state(&s)
+        self.set_rows(v, "velocities", |s, v| put_xyz(&mut s.vel, v, "velocities"))
     }
 
-    /// Sets the inverse masses, 1/kg: one per particle, finite and ≥ 0 (0 pins it).
+    /// Sets the inverse masses, 1/kg: one per particle of every world, finite and ≥ 0
+    /// (0 pins it).
     pub fn set_inverse_masses(&mut self, w: &[f32]) -> Result<()> {
-        let mut s = self.state()?;
-        if w.len() != s.pos.len() {
-            bail!("inverse masses: {} values for {} particles", w.len(), s.pos.len());
-        }
-        if let Some((i, v)) = w.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= 0.0)) {
-            bail!("inverse masses: particle {i} has {v}; an inverse mass is finite and ≥ 0");
-        }
         let m = self.reference_mass();
-        for (p, &inv) in s.pos.iter_mut().zip(w) {
-            p[3] = inv * m;
-        }
-        self.set_state(&s)
+        self.set_rows(w, "inverse masses", |s, w| {
+            if let Some((i, v)) = w.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= 0.0)) {
+                bail!("inverse masses: particle {i} has {v}; an inverse mass is finite and ≥ 0");
+            }
+            for (p, &inv) in s.pos.iter_mut().zip(w) {
+                p[3] = inv * m;
+            }
+            Ok(())
+        })
     }
 
     /// The triangles, as particle indices.
@@ -278,21 +550,28 @@ impl Sim {
 
     /// Grabs `particle` and holds it at `target` (moved there every substep) until
     /// [`Sim::release`] or another grab.
+    /// (In a batch, `particle` counts every world's particles, world after world: world
+    /// `particle / num_particles()` grabs one; each world holds at most one.)
     pub fn grab(&mut self, particle: u32, target: [f32; 3]) -> Result<()> {
         let np = self.num_particles();
-        if particle as usize >= np {
-            bail!("particle {particle}: the cloth has {np} particles (0 ..= {})", np.saturating_sub(1));
+        let all = np * self.envs();
+        if particle as usize >= all {
+            bail!("particle {particle}: the cloth has {all} particles (0 ..= {})", all.saturating_sub(1));
         }
         if !target.iter().all(|v| v.is_finite()) {
             bail!("grab target {target:?}: a position is finite");
         }
-        self.solver.get().set_grab(Some(Grab { particle, target }));
+        let (k, particle) = (particle as usize / np.max(1), particle % np.max(1) as u32);
+        self.world(k)?.set_grab(Some(Grab { particle, target }));
         Ok(())
     }
 
-    /// Lets go of the grabbed particle.
+    /// Lets go of the grabbed particle (every world's).
     pub fn release(&mut self) {
-        self.solver.get().set_grab(None);
+        let _ = self.each_world(|s| {
+            s.set_grab(None);
+            Ok(())
+        });
     }
 
     /// Per-kernel timings since the last reset (per substep; `frame` per frame).
@@ -306,8 +585,14 @@ impl Sim {
     }
 
     /// Edges through triangles they share no vertex with, in the current state.
+    /// (In a batch: summed over the worlds.)
     pub fn crossings(&mut self) -> Result<usize> {
-        Ok(clothlab_core::crossings::count(&self.field(StateField::Pos)?, &self.topology().triangles).pairs)
+        let mut sum = 0;
+        for k in 0..self.envs() {
+            let pos = self.world(k)?.field(StateField::Pos)?;
+            sum += clothlab_core::crossings::count(&pos, &self.topology().triangles).pairs;
+        }
+        Ok(sum)
     }
 
     /// The scene file's view in `mode` (its camera and light, else the default view).
@@ -413,4 +698,168 @@ pub fn available() -> Vec<(Backend, Result<String, String>)> {
             (b, r)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::setup::SceneSource;
+
+    fn scenes() -> std::path::PathBuf {
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+    }
+
+    fn open(file: &str, backend: Backend, n: u32, envs: u32, sets: &[&str]) -> Result<Sim> {
+        Sim::open(SimOptions {
+            backend,
+            physics: Physics {
+                scene: SceneSource::File(scenes().join(file)),
+                set: sets.iter().map(|s| s.to_string()).collect(),
+                ..Default::default()
+            },
+            n: Some(n),
+            envs: Some(envs),
+            ..Default::default()
+        })
+    }
+
+    /// The bits of a state's positions and velocities.
+    fn bits(s: &ClothState) -> Vec<u32> {
+        s.pos.iter().chain(&s.vel).flatten().map(|v| v.to_bits()).collect()
+    }
+
+    #[test]
+    fn world_k_of_a_batch_is_a_single_run_with_its_parameters_bit_for_bit() {
+        // The default scene (springs, pins, spheres, floor) under Verlet, XPBD and VBD, each
+        // world with its own damping and wind; the thin heap with the contact between
+        // triangles, two worlds of one place: each sees only itself.
+        let cases: [(&str, u32, &[&str], u64); 4] = [
+            (
+                "thesis.toml",
+                10,
+                &["integrator=\"verlet\"", "damping=[0,0.003,0.01]", "wind=[[0,0,0],[2,0,1],[0,0,-3]]"],
+                12,
+            ),
+            (
+                "thesis.toml",
+                10,
+                &["integrator=\"xpbd\"", "damping=[0,0.003,0.01]", "structural_stiffness=[0.45,0.3,0.2]"],
+                12,
+            ),
+            ("thesis.toml", 10, &["integrator=\"vbd\"", "damping=[0,0.003,0.01]", "air_drag=[0,0.2,1]"], 12),
+            ("thin-heap.toml", 12, &["static_friction=[0.1,0.6,0.3]"], 30),
+        ];
+        for (file, n, sets, frames) in cases {
+            let envs = 3;
+            let mut batch = open(file, Backend::CpuPar, n, envs, sets).unwrap_or_else(|e| panic!("{file}: {e:#}"));
+            batch.step(frames).unwrap();
+            for k in 0..envs as usize {
+                // The single run: the world's own value of each list.
+                let one: Vec<String> = sets
+                    .iter()
+                    .map(|s| {
+                        let (name, raw) = s.split_once('=').unwrap();
+                        match serde_json::from_str::<serde_json::Value>(raw).unwrap() {
+                            serde_json::Value::Array(v) => format!("{name}={}", v[k]),
+                            _ => s.to_string(),
+                        }
+                    })
+                    .collect();
+                let one: Vec<&str> = one.iter().map(|s| s.as_str()).collect();
+                let mut single = open(file, Backend::Cpu, n, 1, &one).unwrap();
+                single.step(frames).unwrap();
+                let (a, b) = (batch.world_state(k).unwrap(), single.state().unwrap());
+                assert!(bits(&a) == bits(&b), "{file} {sets:?}: world {k} differs from its single run");
+                assert_eq!(
+                    clothlab_core::crossings::count(&a.pos, &single.topology().triangles).pairs,
+                    0,
+                    "{file}: world {k} crossed"
+                );
+            }
+            // The worlds differ (each its own parameters), so the comparison saw something.
+            assert!(bits(&batch.world_state(0).unwrap()) != bits(&batch.world_state(2).unwrap()), "{file}");
+        }
+    }
+
+    #[test]
+    fn each_world_falls_freely_by_its_own_gravity() {
+        // Verlet's free fall from rest: the drop after k substeps is g dt² k(k+1)/2 (the
+        // recurrence free_fall.rs checks), here per world; the springs' forces sum to zero.
+        let g = [9.81f64, 4.0, 1.0];
+        let mut sim =
+            open("free-fall.toml", Backend::CpuPar, 8, 3, &["gravity=[[0,-9.81,0],[0,-4,0],[0,-1,0]]"]).unwrap();
+        let y0: Vec<f64> = (0..3).map(|k| mean_y(&sim.world_state(k).unwrap())).collect();
+        sim.step(30).unwrap();
+        let p = sim.params().clone();
+        let (dt, steps) = (p.dt() as f64, 30.0 * p.substeps as f64);
+        for k in 0..3 {
+            let drop = y0[k] - mean_y(&sim.world_state(k).unwrap());
+            let exact = g[k] * dt * dt * steps * (steps + 1.0) / 2.0;
+            // f32 positions summed over 30 frames: well within 1e-4 of the drop.
+            assert!((drop - exact).abs() < 1e-4 * exact, "world {k}: fell {drop} m, the recurrence {exact} m");
+        }
+    }
+
+    fn mean_y(s: &ClothState) -> f64 {
+        s.pos.iter().map(|p| p[1] as f64).sum::<f64>() / s.pos.len() as f64
+    }
+
+    #[test]
+    fn a_reset_world_starts_again_as_a_new_run_and_the_others_go_on() {
+        let mut batch = open("thesis.toml", Backend::Cpu, 8, 2, &["damping=[0.001,0.004]"]).unwrap();
+        batch.step(5).unwrap();
+        batch.reset(Some(&[1])).unwrap();
+        assert_eq!(batch.world_time(1).unwrap(), 0.0);
+        batch.step(5).unwrap();
+        let mut fresh = open("thesis.toml", Backend::Cpu, 8, 2, &["damping=[0.001,0.004]"]).unwrap();
+        fresh.step(5).unwrap();
+        assert!(bits(&batch.world_state(1).unwrap()) == bits(&fresh.world_state(1).unwrap()), "world 1 after reset");
+        fresh.step(5).unwrap();
+        assert!(bits(&batch.world_state(0).unwrap()) == bits(&fresh.world_state(0).unwrap()), "world 0 went on");
+        assert_eq!(batch.world_time(0).unwrap(), fresh.world_time(0).unwrap());
+        // Refused, nothing reset.
+        for (worlds, says) in [(&[2usize][..], "world 2: the batch has 2 worlds"), (&[0, 0][..], "named twice")] {
+            let e = batch.reset(Some(worlds)).unwrap_err().to_string();
+            assert!(e.contains(says), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_batch_s_arrays_hold_every_world_and_bad_rows_are_refused_with_nothing_changed() {
+        let mut sim = open("thesis.toml", Backend::Cpu, 4, 3, &[]).unwrap();
+        let np = sim.num_particles();
+        let x = sim.positions().unwrap();
+        assert_eq!(x.len(), 3 * np);
+        let moved: Vec<[f32; 3]> = x.iter().enumerate().map(|(i, p)| [p[0] + i as f32, p[1], p[2]]).collect();
+        sim.set_positions(&moved).unwrap();
+        assert_eq!(sim.positions().unwrap(), moved);
+        assert_eq!(sim.world_state(2).unwrap().pos[0][0], moved[2 * np][0]);
+        let e = sim.set_positions(&moved[..np]).unwrap_err().to_string();
+        assert!(e.contains(&format!("{np} rows for 3 worlds of {np} particles")), "{e}");
+        let mut bad = moved.clone();
+        bad[2 * np + 1][1] = f32::NAN;
+        let e = format!("{:#}", sim.set_positions(&bad).unwrap_err());
+        assert!(e.contains("world 2") && e.contains("particle 1"), "{e}");
+        assert_eq!(sim.positions().unwrap(), moved, "nothing changed");
+        // One world's bad value in a sweep: refused naming it, no world changed.
+        let e = sim.set(&["damping=[0.1,0.2,0.9]".into()]).unwrap_err().to_string();
+        assert!(e.contains("world 2"), "{e}");
+        assert!((0..3).all(|k| sim.world_params(k).unwrap().damping == SimParams::default().damping));
+        sim.set(&["damping=[0.1,0.2,0.3]".into()]).unwrap();
+        assert_eq!(sim.world_params(2).unwrap().damping, 0.3);
+    }
+
+    #[test]
+    fn a_scene_file_asks_for_worlds_and_the_options_override_it() {
+        let text = |envs: u32| format!("envs = {envs}\n[cloth]\nn = 4\n");
+        let opts = |envs: u32, over: Option<u32>| SimOptions {
+            physics: Physics { scene: SceneSource::Toml(text(envs)), ..Default::default() },
+            envs: over,
+            ..Default::default()
+        };
+        assert_eq!(Sim::open(opts(5, None)).unwrap().envs(), 5);
+        assert_eq!(Sim::open(opts(5, Some(2))).unwrap().envs(), 2);
+        let e = Sim::open(opts(0, None)).err().expect("refused").to_string();
+        assert!(e.contains("<scene text>:1:") && e.contains("`envs` = 0"), "{e}");
+    }
 }

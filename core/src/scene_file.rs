@@ -75,7 +75,13 @@ pub struct SceneFile {
     pub camera: Option<OrbitCamera>,
     /// The light's position, m, if the file sets one.
     pub light: Option<[f32; 3]>,
+    /// The file's `envs`: how many worlds (copies of the scene, stepped together) it
+    /// asks for, if it says (1 ..= [`MAX_ENVS`]).
+    pub envs: Option<u32>,
 }
+
+/// The most worlds a batch may hold (`envs`).
+pub const MAX_ENVS: u32 = 65_536;
 
 /// Why a scene file was refused: one line naming the file and, where the problem is in
 /// the text, its line and column.
@@ -99,6 +105,8 @@ struct Repr<C> {
     #[serde(default)]
     #[allow(dead_code)]
     description: Option<String>,
+    #[serde(default)]
+    envs: Option<u32>,
     #[serde(default)]
     cloth: C,
     #[serde(default)]
@@ -191,6 +199,7 @@ impl<C> Repr<C> {
         let Repr {
             title,
             description,
+            envs,
             cloth,
             floor,
             spheres,
@@ -206,6 +215,7 @@ impl<C> Repr<C> {
         let rest = Repr {
             title,
             description,
+            envs,
             cloth: (),
             floor,
             spheres,
@@ -225,9 +235,10 @@ impl<C> Repr<C> {
 impl SceneFile {
     /// The keys a scene file may have at its top (the command line's help lists them; a
     /// unit test keeps the list in step with what the parser takes).
-    pub const TABLES: [&'static str; 13] = [
+    pub const TABLES: [&'static str; 14] = [
         "title",
         "description",
+        "envs",
         "cloth",
         "floor",
         "spheres",
@@ -464,7 +475,13 @@ impl SceneFile {
                 Some(l.position)
             }
         };
-        Ok(Self { title: repr.title, scene, params: repr.params, camera, light })
+        if let Some(e) = repr.envs
+            && !(1..=MAX_ENVS).contains(&e)
+        {
+            let at = locate(text, "envs").map(|s| line_col(text, s));
+            return Err(err(at, format!("`envs` = {e}: the worlds a scene holds, 1 ..= {MAX_ENVS}")));
+        }
+        Ok(Self { title: repr.title, scene, params: repr.params, camera, light, envs: repr.envs })
     }
 }
 

@@ -93,7 +93,7 @@ class Sim:
     """A scene simulated on one backend.
 
     ``Sim(scene=None, backend="cpu", integrator=None, params=None, n=None, toml=None,
-    variant=None, set_variant=None)``
+    variant=None, set_variant=None, envs=None)``
 
     * ``scene`` -- a scene file (TOML, see ``scenes/``); ``toml`` -- a scene file's text
       instead; neither: the default scene (a grid over three spheres and a floor).
@@ -106,6 +106,12 @@ class Sim:
     * ``n`` -- a grid's particles per side (default 100, or the scene file's).
     * ``variant``, ``set_variant`` -- a GPU backend's preset (``"naive"``,
       ``"optimized"``, ``"thesis"``) and single switches (``["fusion=tile"]``).
+    * ``envs`` -- worlds: copies of the scene stepped together, each with its own state
+      and parameters (default: the scene file's ``envs``, else 1; on ``cpu`` and
+      ``cpu-par``). A parameter takes one value per world as an array
+      (``params={"damping": np.linspace(0, 0.01, 64)}``); the state's arrays gain a
+      leading axis of worlds, ``(envs, N, 3)``. World k computes, bit for bit, what a
+      single run with its parameters computes.
 
     Everything is checked before the solver opens; a refusal raises
     :class:`ClothlabError` with the reason. The solver lives on a thread of its own:
@@ -122,11 +128,14 @@ class Sim:
         toml: Optional[str] = None,
         variant: Optional[str] = None,
         set_variant: Optional[Sequence[str]] = None,
+        envs: Optional[int] = None,
     ) -> None:
         if not isinstance(backend, str):
             raise ClothlabError(f"backend must be a name such as 'cpu' or 'vulkan', not {backend!r}")
         if n is not None and (not isinstance(n, (int, np.integer)) or isinstance(n, bool) or not 0 < n < 2**32):
             raise ClothlabError(f"n must be a positive whole number of particles per side, not {n!r}")
+        if envs is not None and (not isinstance(envs, (int, np.integer)) or isinstance(envs, bool) or not 0 < envs < 2**32):
+            raise ClothlabError(f"envs must be a positive whole number of worlds, not {envs!r}")
         self._sim = _clothlab.Sim(
             backend,
             scene=_path(scene),
@@ -136,6 +145,7 @@ class Sim:
             sets=_sets(params),
             preset=variant,
             set_variant=list(set_variant or []),
+            envs=None if envs is None else int(envs),
         )
         self._info = self._sim.info()
 
@@ -163,8 +173,27 @@ class Sim:
 
     @property
     def num_particles(self) -> int:
-        """Particles in the state (the rows of :meth:`positions`)."""
+        """Particles in the state (of one world: the rows of :meth:`positions`)."""
         return self._info["particles"]
+
+    @property
+    def envs(self) -> int:
+        """Worlds (1 for a single run)."""
+        return self._info["envs"]
+
+    def _shaped(self, a: np.ndarray) -> np.ndarray:
+        """Every world's rows as ``(envs, N, ...)`` in a batch, as they are in a single run."""
+        return a if self.envs == 1 else a.reshape((self.envs, self.num_particles) + a.shape[1:])
+
+    def _rows(self, x: Any, what: str) -> np.ndarray:
+        """``x`` as the rows of every world: ``(N, 3)``, or ``(envs, N, 3)`` in a batch."""
+        if self.envs == 1:
+            return _rows3(x, self.num_particles, what)
+        a = np.ascontiguousarray(x, dtype=np.float32)
+        want = (self.envs, self.num_particles, 3)
+        if a.shape != want:
+            raise ClothlabError(f"{what}: expected an array of shape {want}, got {a.shape}")
+        return a.reshape(-1, 3)
 
     @property
     def title(self) -> Optional[str]:
@@ -195,36 +224,44 @@ class Sim:
     # -- state --------------------------------------------------------------------------
 
     def positions(self) -> np.ndarray:
-        """Positions, m: float32 array of shape (N, 3)."""
-        return self._sim.positions()
+        """Positions, m: float32 array of shape (N, 3), or (envs, N, 3) in a batch."""
+        return self._shaped(self._sim.positions())
 
     def velocities(self) -> np.ndarray:
-        """Velocities, m/s: float32 array of shape (N, 3)."""
-        return self._sim.velocities()
+        """Velocities, m/s: float32 array of shape (N, 3), or (envs, N, 3)."""
+        return self._shaped(self._sim.velocities())
 
     def normals(self) -> np.ndarray:
-        """Unit vertex normals: float32 array of shape (N, 3)."""
-        return self._sim.normals()
+        """Unit vertex normals: float32 array of shape (N, 3), or (envs, N, 3)."""
+        return self._shaped(self._sim.normals())
 
     def inverse_masses(self) -> np.ndarray:
-        """Inverse masses, 1/kg: float32 array of shape (N,); 0 is pinned."""
-        return self._sim.inverse_masses()
+        """Inverse masses, 1/kg: float32 array of shape (N,), or (envs, N); 0 is pinned."""
+        return self._shaped(self._sim.inverse_masses())
 
     def set_positions(self, x: Any) -> None:
-        """Set the positions (any array-like of shape (N, 3); finite, else refused with
-        nothing changed)."""
-        self._sim.set_positions(_rows3(x, self.num_particles, "positions"))
+        """Set the positions (any array-like of shape (N, 3), or (envs, N, 3) in a batch;
+        finite, else refused with nothing changed)."""
+        self._sim.set_positions(self._rows(x, "positions"))
 
     def set_velocities(self, v: Any) -> None:
-        """Set the velocities (any array-like of shape (N, 3); finite)."""
-        self._sim.set_velocities(_rows3(v, self.num_particles, "velocities"))
+        """Set the velocities (any array-like of shape (N, 3), or (envs, N, 3); finite)."""
+        self._sim.set_velocities(self._rows(v, "velocities"))
 
     def set_inverse_masses(self, w: Any) -> None:
-        """Set the inverse masses, 1/kg (shape (N,), finite, ≥ 0; 0 pins a particle)."""
+        """Set the inverse masses, 1/kg (shape (N,), or (envs, N); finite, ≥ 0; 0 pins a
+        particle)."""
         a = np.ascontiguousarray(w, dtype=np.float32)
-        if a.shape != (self.num_particles,):
-            raise ClothlabError(f"inverse masses: expected shape ({self.num_particles},), got {a.shape}")
-        self._sim.set_inverse_masses(a)
+        want = (self.num_particles,) if self.envs == 1 else (self.envs, self.num_particles)
+        if a.shape != want:
+            raise ClothlabError(f"inverse masses: expected shape {want}, got {a.shape}")
+        self._sim.set_inverse_masses(a.reshape(-1))
+
+    def reset(self, envs: Optional[Iterable[int]] = None) -> None:
+        """Restore worlds to their state and time at opening, as a new run starts (all of
+        them, or the worlds listed in ``envs``); their parameters stay."""
+        worlds = None if envs is None else [_count(k, "a world") for k in envs]
+        self._sim.reset(worlds)
 
     def triangles(self) -> np.ndarray:
         """The triangles as particle indices: int32 array of shape (T, 3)."""
@@ -241,7 +278,8 @@ class Sim:
     def set(self, name: str, value: Any) -> None:
         """Set one parameter (any ``--set`` name, e.g. ``sim.set("damping", 0.001)`` or
         ``sim.set("wind", [2, 0, 1])``), checked against the cloth; refused with nothing
-        changed."""
+        changed. In a batch one value per world: ``sim.set("damping", array_of_envs)``
+        (``wind``: an (envs, 4) array)."""
         if not isinstance(name, str):
             raise ClothlabError(f"a parameter name is a string, not {name!r}")
         self._sim.set([f"{name}={_value(value)}"])

@@ -112,7 +112,7 @@ fn array3<'py>(py: Python<'py>, v: Vec<[f32; 3]>) -> PyResult<Bound<'py, PyAny>>
 impl Sim {
     /// Opens a scene on a backend (see `clothlab.Sim`).
     #[new]
-    #[pyo3(signature = (backend, scene=None, toml=None, n=None, integrator=None, sets=Vec::new(), preset=None, set_variant=Vec::new()))]
+    #[pyo3(signature = (backend, scene=None, toml=None, n=None, integrator=None, sets=Vec::new(), preset=None, set_variant=Vec::new(), envs=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -124,6 +124,7 @@ impl Sim {
         sets: Vec<String>,
         preset: Option<String>,
         set_variant: Vec<String>,
+        envs: Option<u32>,
     ) -> PyResult<Self> {
         let options = (|| -> anyhow::Result<SimOptions> {
             let backend = Backend::parse(backend)?;
@@ -146,6 +147,7 @@ impl Sim {
                 physics: Physics { scene, integrator, set: sets },
                 n,
                 gpu: clothlab::GpuSetup { variant, ..Default::default() },
+                envs,
             })
         })()
         .map_err(py_err)?;
@@ -185,7 +187,7 @@ impl Sim {
     /// Facts about the simulation: backend, solver name, adapter, particles, triangles,
     /// scene title.
     fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (backend, name, adapter, np, nt, title) = self.call(py, |s| {
+        let (backend, name, adapter, np, nt, title, envs) = self.call(py, |s| {
             Ok((
                 s.backend().name(),
                 s.name().to_owned(),
@@ -193,6 +195,7 @@ impl Sim {
                 s.num_particles(),
                 s.triangles().len(),
                 s.title().map(str::to_owned),
+                s.envs(),
             ))
         })?;
         let d = PyDict::new(py);
@@ -202,6 +205,7 @@ impl Sim {
         d.set_item("particles", np)?;
         d.set_item("triangles", nt)?;
         d.set_item("title", title)?;
+        d.set_item("envs", envs)?;
         Ok(d)
     }
 
@@ -213,6 +217,12 @@ impl Sim {
     /// Advances `k` substeps.
     fn substep(&self, py: Python<'_>, k: u64) -> PyResult<()> {
         self.call(py, move |s| s.substep(k))
+    }
+
+    /// Restores worlds (all, or those listed) to their state and time at opening.
+    #[pyo3(signature = (worlds=None))]
+    fn reset(&self, py: Python<'_>, worlds: Option<Vec<usize>>) -> PyResult<()> {
+        self.call(py, move |s| s.reset(worlds.as_deref()))
     }
 
     /// Simulated time, s.

@@ -29,7 +29,13 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
             own.name()
         );
     }
-    let mut sim = Sim::open(SimOptions { backend: args.backend, physics: args.physics.physics(), n: args.n, gpu })?;
+    let mut sim = Sim::open(SimOptions {
+        backend: args.backend,
+        physics: args.physics.physics(),
+        n: args.n,
+        gpu,
+        envs: Some(1),
+    })?;
     sim.step(u64::from(args.frames))?;
     let view = sim.view(args.mode.render_mode());
     let (pixels, adapter) = sim.render(args.width, args.height, &view, Some(api))?;

@@ -30,10 +30,19 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         None => None,
     };
     let gpu = args.gpu.setup(args.backend)?;
-    let mut sim = Sim::open(SimOptions { backend: args.backend, physics: args.physics.physics(), n: args.n, gpu })?;
+    let mut sim = Sim::open(SimOptions {
+        backend: args.backend,
+        physics: args.physics.physics(),
+        n: args.n,
+        gpu,
+        envs: args.envs,
+    })?;
     let scene = sim.scene().clone();
     let frames = args.steps.div_ceil(sim.params().substeps as u64);
     let substeps = frames * sim.params().substeps as u64;
+    if sim.envs() > 1 {
+        return batch(&args, &mut sim, frames, out);
+    }
     let record = match &args.record {
         Some(path) => {
             if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
@@ -205,6 +214,103 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         outln!("recorded       {} ({} frames, {} bytes)", path.display(), recording.frames.len(), bytes.len())?;
     }
     Ok(if summary.nan_count == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+}
+
+/// `sim` of a batch of worlds: the worlds stepped together, what they took, and their
+/// states summed up (the most strain, the lowest point, NaN and crossings of all).
+fn batch(
+    args: &SimArgs,
+    sim: &mut Sim,
+    frames: u64,
+    out: Option<(&std::path::PathBuf, OutFormat)>,
+) -> Result<ExitCode> {
+    let envs = sim.envs();
+    if let Some(path) = &args.record {
+        bail!("--record {}: a recording holds one world; record with --envs 1", path.display());
+    }
+    if let Some((path, OutFormat::Obj)) = &out {
+        bail!(
+            "--out {}: an .obj holds one cloth; with --envs {envs} write .json (every world's state)",
+            path.display()
+        );
+    }
+    let np = sim.num_particles();
+    let mut most = (0usize, 0u64);
+    let mut first = None;
+    let mut wall = std::time::Duration::ZERO;
+    for f in 1..=frames {
+        let t0 = Instant::now();
+        sim.step(1)?;
+        wall += t0.elapsed();
+        if args.check_crossings {
+            let c = sim.crossings()?;
+            if c > most.0 {
+                most = (c, f);
+            }
+            if c > 0 && first.is_none() {
+                first = Some(f);
+            }
+        }
+    }
+    let substeps: Vec<u64> =
+        (0..envs).map(|k| sim.world_params(k).map(|p| frames * p.substeps as u64)).collect::<Result<_>>()?;
+    let world_substeps: u64 = substeps.iter().sum();
+    let (mut max_strain, mut lowest, mut nan, mut crossed) = (0f32, f32::INFINITY, 0usize, 0usize);
+    let mut all =
+        clothlab_core::ClothState { n: 0, pos: Vec::new(), vel: Vec::new(), force: Vec::new(), normal: Vec::new() };
+    for k in 0..envs {
+        let state = sim.world_state(k)?;
+        let summary = summarize(&state, sim.topology());
+        max_strain = max_strain.max(summary.max_strain);
+        lowest = lowest.min(summary.lowest_y);
+        nan += summary.nan_count;
+        crossed += crossings::count(&state.pos, &sim.topology().triangles).pairs;
+        all.n = state.n;
+        all.pos.extend(state.pos);
+        all.vel.extend(state.vel);
+        all.force.extend(state.force);
+        all.normal.extend(state.normal);
+    }
+    let scene = sim.scene().clone();
+    outln!(
+        "backend        {} ({envs} worlds, {})",
+        sim.name(),
+        if sim.name() == "cpu-par" { "on rayon's threads" } else { "one after another" }
+    )?;
+    if let Some(path) = &args.physics.scene {
+        outln!("scene          {} ({})", sim.title().unwrap_or("untitled"), path.display())?;
+    }
+    match &scene.cloth.mesh {
+        Some(mesh) if scene.cloth.is_mesh() => outln!("mesh           {} ({np} particles a world)", mesh.display())?,
+        _ => outln!("grid           {n}x{n} ({np} particles a world, {} in all)", np * envs, n = scene.cloth.n)?,
+    }
+    outln!("frames         {frames} ({world_substeps} world-substeps)")?;
+    outln!("wall time      {:.3} s", wall.as_secs_f64())?;
+    let per = wall.as_nanos() as f64 / world_substeps.max(1) as f64;
+    outln!(
+        "world-substep  {:.2} us ({:.0} world-substeps a second, {:.2} ns per particle-substep)",
+        per / 1e3,
+        1e9 / per,
+        per / np as f64
+    )?;
+    outln!("max strain     {max_strain:.4} (structural springs, |L|/rest - 1; the most of any world)")?;
+    match scene.floor_y {
+        Some(y) => outln!("lowest point   {lowest:.4} m (floor at {y} m; the lowest of any world)")?,
+        None => outln!("lowest point   {lowest:.4} m (no floor; the lowest of any world)")?,
+    }
+    outln!("NaN            {}", if nan == 0 { "none".to_string() } else { format!("{nan} components") })?;
+    outln!("crossings      {crossed} (edges through triangles they share no vertex with, final states, all worlds)")?;
+    if args.check_crossings {
+        match first {
+            Some(first) => outln!("  every frame  at most {} (frame {}); the first at frame {first}", most.0, most.1)?,
+            None => outln!("  every frame  none in any of the {frames} frames")?,
+        }
+    }
+    if let Some((path, _)) = out {
+        clothlab::files::write_atomic(path, |w| write_json(w, &all))?;
+        outln!("state written  {} ({envs} worlds, world after world)", path.display())?;
+    }
+    Ok(if nan == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }
 
 enum OutFormat {

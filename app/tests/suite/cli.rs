@@ -185,6 +185,20 @@ fn bad_input_is_refused_with_one_clear_message() {
         "cannot write /nonexistent-dir/x.png",
     );
     refused(&["frobnicate"], "unrecognized subcommand");
+    // Worlds: a count out of range, a batch over the particles a batch holds, a list of
+    // the wrong length, one world's bad value, a batch on a GPU backend, one cloth's output.
+    refused(&["sim", "--n", "4", "--envs", "0"], "invalid envs 0: must be in 1 ..= 65536");
+    refused(&["sim", "--n", "1024", "--envs", "17"], "at most 16 worlds of this scene");
+    refused(&["sim", "--n", "4", "--envs", "3", "--set", "damping=[0.1,0.2]"], "`damping` has 2 values for 3 worlds");
+    refused(
+        &["sim", "--n", "4", "--envs", "2", "--set", "damping=[0.1,-1]"],
+        "world 1: invalid parameter `damping` = -1",
+    );
+    refused(
+        &["sim", "--n", "4", "--envs", "2", "--backend", "vulkan"],
+        "a batch of worlds runs on the cpu and cpu-par",
+    );
+    refused(&["sim", "--n", "4", "--envs", "2", "--out", "/tmp/worlds.obj"], "an .obj holds one cloth");
 }
 
 #[test]
