@@ -458,6 +458,12 @@ pub struct BenchArgs {
     /// particle-substep either way).
     #[arg(long, value_name = "FILE", requires = "mesh_vs_grid")]
     pub irregular: Option<PathBuf>,
+    /// Worlds: at each size and each count of worlds, the batch's time per world-substep
+    /// against the same worlds run as separate simulations one after another (at most 64
+    /// of them, their time per world-substep); the sizes default to 16 and 32, the
+    /// backends to cpu and cpu-par. Writes worlds.{md,csv,svg,png}.
+    #[arg(long, value_delimiter = ',', value_name = "N,..", conflicts_with_all = ["ladder", "integrators", "mesh_vs_grid"])]
+    pub envs: Vec<u32>,
     #[command(flatten)]
     pub physics: PhysicsArgs,
     #[command(flatten)]
@@ -482,7 +488,7 @@ pub struct BenchArgs {
     /// (DIR/cells.jsonl), check that the plan is the same (options, machine, adapters,
     /// build; refused in one line if not) and measure only what is missing. Give the
     /// stopped run's options again.
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["replot", "integrators", "mesh_vs_grid"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["replot", "integrators", "mesh_vs_grid", "envs"])]
     pub resume: Option<PathBuf>,
 }
 

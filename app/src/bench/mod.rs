@@ -10,8 +10,8 @@
 //!
 //! [`bench()`] checks what every mode reads ([`Request`]) and hands it to the mode's module:
 //! `cells` (the backends, or `--ladder`'s rungs, at every size, and the API overheads),
-//! `integrators` (`--integrators`), `mesh_grid` (`--mesh-vs-grid`); `--replot` redraws a
-//! finished run.
+//! `integrators` (`--integrators`), `mesh_grid` (`--mesh-vs-grid`), `worlds` (`--envs`);
+//! `--replot` redraws a finished run.
 
 mod cells;
 mod integrators;
@@ -21,6 +21,7 @@ mod mesh_grid;
 mod output;
 mod plot;
 mod results;
+mod worlds;
 
 use std::process::ExitCode;
 
@@ -147,6 +148,9 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
     }
     if args.mesh_vs_grid {
         return mesh_grid::run(&args, &request);
+    }
+    if !args.envs.is_empty() {
+        return worlds::run(&args, &request);
     }
     cells::run(&args, request)
 }

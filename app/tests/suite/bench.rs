@@ -286,6 +286,8 @@ fn bad_bench_input_is_refused_in_one_line() {
         (&["bench", "--resume", "/tmp/a", "--out", "/tmp/b"], "--resume /tmp/a writes there: leave out --out /tmp/b"),
         (&["bench", "--integrators", "--resume", "/tmp/a"], "cannot be used with"),
         (&["bench", "--mesh-vs-grid", "--ladder"], "cannot be used with"),
+        (&["bench", "--envs", "0", "--sizes", "4"], "invalid --envs 0"),
+        (&["bench", "--envs", "4", "--ladder"], "cannot be used with"),
         (&["bench", "--irregular", "../scenes/meshes/fan.obj"], "--mesh-vs-grid"),
         (
             &["bench", "--mesh-vs-grid", "--backends", "cpu", "--sizes", "8", "--irregular", "../scenes/mesh-fan.toml"],
@@ -489,6 +491,32 @@ fn mesh_vs_grid_measures_the_grid_and_the_same_grid_as_a_mesh() {
         assert!(!gpu_required(), "CI has lavapipe, but: {err}");
     }
     assert!(std::fs::metadata(out.join("mesh-vs-grid.png")).unwrap().len() > 1000);
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// `--envs`: a batch and the same worlds as separate simulations on the CPU backends, at
+/// every count of worlds, each time positive and finite; a GPU backend named in the notes
+/// with its refusal; the files written.
+#[test]
+fn worlds_measure_a_batch_against_separate_simulations() {
+    let out = tmp("worlds");
+    let args = ["bench", "--envs", "1,3", "--sizes", "6", "--iters", "8", "--backends", "cpu,cpu-par,vulkan", "--out"];
+    let o = clothlab(&[&args[..], &[out.to_str().unwrap()]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "bench failed: {err}");
+    let csv = std::fs::read_to_string(out.join("worlds.csv")).unwrap();
+    let rows: Vec<Vec<String>> = csv.lines().skip(1).map(split_csv).collect();
+    let cells: Vec<(&str, &str)> = rows.iter().map(|r| (r[1].as_str(), r[2].as_str())).collect();
+    assert_eq!(cells, [("cpu", "1"), ("cpu", "3"), ("cpu-par", "1"), ("cpu-par", "3")]);
+    for r in &rows {
+        for v in [&r[3], &r[5]] {
+            let us: f64 = v.parse().unwrap();
+            assert!(us.is_finite() && us > 0.0, "{r:?}");
+        }
+    }
+    let md = std::fs::read_to_string(out.join("worlds.md")).unwrap();
+    assert!(md.contains("- vulkan at n = 6: envs 2: a batch of worlds runs on the cpu and cpu-par"), "{md}");
+    check_png(&out.join("worlds.png"));
     std::fs::remove_dir_all(&out).ok();
 }
 
