@@ -566,6 +566,50 @@ impl Sim {
         Ok(())
     }
 
+    /// Moves `[[pins]]` group `group` — one the scene marks `scripted = true` — to `offset`
+    /// (m, from where the scene placed it) turned by `rotate_deg` about its pivot (degrees
+    /// about x, then y, then z, as a motion key's), over the next frame at constant speed
+    /// from where it is now, and holds it there: its motion becomes those two keys
+    /// (`core::pins`). In a batch, world `world`'s group, or every world's (`None`).
+    pub fn set_pin_pose(
+        &mut self,
+        group: usize,
+        offset: [f32; 3],
+        rotate_deg: [f32; 3],
+        world: Option<usize>,
+    ) -> Result<()> {
+        use clothlab_core::motion::{Key, Motion};
+        let worlds: Vec<usize> = match world {
+            Some(k) => vec![k],
+            None => (0..self.envs()).collect(),
+        };
+        for k in worlds {
+            let s = self.world(k)?;
+            let now = s.time();
+            let frame = s.params().frame_dt as f64;
+            let Some(g) = s.scene().pins.get(group) else {
+                bail!("pin group {group}: the scene has {} [[pins]] groups", s.scene().pins.len());
+            };
+            // Where the group is now: its motion's pose (a turn as a key's angles).
+            let pose = g.motion.at(now);
+            let (rz, ry, rx) = pose.rotation.to_euler(glam::EulerRot::ZYX);
+            let from = [rx, ry, rz].map(|a| a.to_degrees() as f32);
+            let (t0, t1) = (now as f32, (now + frame) as f32);
+            if t1 <= t0 {
+                bail!("set_pin_pose at t = {now} s: the keys' times (f32) cannot tell a frame apart; reset the time");
+            }
+            let motion = Motion {
+                keys: vec![Key { t: t0, offset: pose.offset, rotate_deg: from }, Key { t: t1, offset, rotate_deg }],
+                ..Motion::default()
+            };
+            s.set_pin_motion(group, motion).map_err(|e| {
+                let e = anyhow::Error::from(e);
+                if self.worlds.is_empty() { e } else { e.context(format!("world {k}")) }
+            })?;
+        }
+        Ok(())
+    }
+
     /// Lets go of the grabbed particle (every world's).
     pub fn release(&mut self) {
         let _ = self.each_world(|s| {
@@ -861,5 +905,89 @@ mod tests {
         assert_eq!(Sim::open(opts(5, Some(2))).unwrap().envs(), 2);
         let e = Sim::open(opts(0, None)).err().expect("refused").to_string();
         assert!(e.contains("<scene text>:1:") && e.contains("`envs` = 0"), "{e}");
+    }
+
+    /// A free cloth hanging from a scripted top edge, no floor.
+    const SCRIPTED: &str = "[cloth]\nn = 8\nsize = 1.0\ntop_center = [0.0, 2.0, 0.0]\nacross = [1.0, 0.0, 0.0]\ndown = [0.0, -1.0, 0.0]\npinning = \"none\"\n[floor]\nenabled = false\n[[pins]]\nmin = [-0.6, 1.99, -0.01]\nmax = [0.6, 2.01, 0.01]\nscripted = true\n";
+
+    fn scripted(backend: Backend, envs: u32) -> Result<Sim> {
+        Sim::open(SimOptions {
+            backend,
+            physics: Physics { scene: SceneSource::Toml(SCRIPTED.into()), ..Default::default() },
+            envs: Some(envs),
+            ..Default::default()
+        })
+    }
+
+    /// The pinned particles (the top edge, row 0) of a state.
+    fn top(s: &ClothState) -> Vec<[f32; 4]> {
+        s.pos[..8].to_vec()
+    }
+
+    #[test]
+    fn a_script_moves_a_pin_group_over_a_frame_and_holds_it_on_every_backend_alike() {
+        let mut cpu = scripted(Backend::Cpu, 1).unwrap();
+        let rest = top(&cpu.state().unwrap());
+        // Untouched, a scripted group stays where it was placed (to a rounding).
+        cpu.step(1).unwrap();
+        for (a, b) in top(&cpu.state().unwrap()).iter().zip(&rest) {
+            assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-6), "{a:?} {b:?}");
+        }
+        cpu.set_pin_pose(0, [0.25, 0.0, 0.0], [0.0, 0.0, 90.0], None).unwrap();
+        cpu.step(2).unwrap();
+        // A quarter turn about z at the pivot (the edge's centre, (0, 2, 0)) then 0.25 m
+        // along x: a pin at (x, 2, 0) goes to (0.25, 2 + x, 0). The keys' f32 times and
+        // the pose's f32 rotation: within 2e-6 m.
+        for (a, b) in top(&cpu.state().unwrap()).iter().zip(&rest) {
+            let want = [0.25, 2.0 + b[0], 0.0];
+            assert!((0..3).all(|k| (a[k] - want[k]).abs() < 2e-6), "{a:?} want {want:?}");
+        }
+        // Held there: a frame later the pins have not moved.
+        let held = top(&cpu.state().unwrap());
+        cpu.step(1).unwrap();
+        assert_eq!(top(&cpu.state().unwrap()), held);
+        // The others are refused in one line.
+        let e = cpu.set_pin_pose(1, [0.0; 3], [0.0; 3], None).unwrap_err().to_string();
+        assert!(e.contains("pin group 1: the scene has 1 [[pins]] groups"), "{e}");
+        let mut plain = Sim::open(SimOptions {
+            physics: Physics {
+                scene: SceneSource::Toml(SCRIPTED.replace("scripted = true", "")),
+                ..Default::default()
+            },
+            ..Default::default()
+        })
+        .unwrap();
+        let e = plain.set_pin_pose(0, [0.0; 3], [0.0; 3], None).unwrap_err().to_string();
+        assert!(e.contains("scripted = true"), "{e}");
+        // A GPU backend computes the CPU's bits (the same poses from the same keys).
+        match scripted(Backend::Vulkan, 1) {
+            Ok(mut gpu) => {
+                let mut cpu = scripted(Backend::Cpu, 1).unwrap();
+                for s in [&mut cpu, &mut gpu] {
+                    s.step(1).unwrap();
+                    s.set_pin_pose(0, [0.25, 0.0, 0.0], [0.0, 0.0, 90.0], None).unwrap();
+                    s.step(2).unwrap();
+                }
+                assert!(bits(&cpu.state().unwrap()) == bits(&gpu.state().unwrap()), "vulkan differs from cpu");
+            }
+            Err(e) => {
+                assert!(std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1"), "{e:#}");
+                eprintln!("no Vulkan here: {e:#}");
+            }
+        }
+    }
+
+    #[test]
+    fn in_a_batch_a_script_moves_each_world_s_group_its_own_way() {
+        let mut batch = scripted(Backend::CpuPar, 2).unwrap();
+        batch.set_pin_pose(0, [0.1, 0.0, 0.0], [0.0; 3], Some(1)).unwrap();
+        batch.step(2).unwrap();
+        let mut one = scripted(Backend::Cpu, 1).unwrap();
+        one.set_pin_pose(0, [0.1, 0.0, 0.0], [0.0; 3], None).unwrap();
+        one.step(2).unwrap();
+        assert!(bits(&batch.world_state(1).unwrap()) == bits(&one.state().unwrap()), "world 1 moved as a single run");
+        let mut still = scripted(Backend::Cpu, 1).unwrap();
+        still.step(2).unwrap();
+        assert!(bits(&batch.world_state(0).unwrap()) == bits(&still.state().unwrap()), "world 0 left alone");
     }
 }

@@ -46,6 +46,12 @@
 //!
 //! Keyframes may turn a group too (`rotate_deg`, `crate::motion`): `R(t)` is then the keys'
 //! turn and `spin` their angular velocity.
+//!
+//! A group with `scripted = true` is moved by a script (`Sim::set_pin_pose`, Python
+//! `set_pin_pose`): each call gives its motion two keys — its pose now and the pose asked
+//! for, a frame later — so the pins go there over the next frame at constant speed and
+//! hold; every backend drives it from its motion as any moving group's
+//! (`Solver::set_pin_motion`). A script moves a group as one rigid body, as a motion does.
 
 use serde::{Deserialize, Serialize};
 
@@ -74,6 +80,11 @@ pub struct PinGroup {
     /// Its motion (none: the group is simply held).
     #[serde(default)]
     pub motion: Motion,
+    /// Moved by a script (`Sim::set_pin_pose`): its pins are driven every substep, at
+    /// their pose (at rest until a script moves them: each pin then `pivot + (rest −
+    /// pivot)`, the same to a rounding).
+    #[serde(default)]
+    pub scripted: bool,
 }
 
 impl PinGroup {
@@ -101,6 +112,26 @@ impl PinGroup {
         }
         self.motion.check(&format!("pins[{i}]"), true)
     }
+}
+
+/// Gives group `group` of `groups` a new `motion` (a script's: `Solver::set_pin_motion`),
+/// checked as a scene file's; refused for a group the scene does not mark `scripted` (its
+/// pins have no slots to drive) and for one out of range.
+pub fn set_scripted(groups: &mut [PinGroup], group: usize, motion: Motion) -> Result<(), ParamError> {
+    let count = groups.len();
+    let Some(g) = groups.get_mut(group) else {
+        return Err(ParamError::new("pin group", group, format!("the scene has {count} [[pins]] groups")));
+    };
+    if !g.scripted {
+        return Err(ParamError::new(
+            format!("pins[{group}]"),
+            "not scripted",
+            "a script moves a group the scene marks `scripted = true`",
+        ));
+    }
+    motion.check(&format!("pins[{group}]"), true)?;
+    g.motion = motion;
+    Ok(())
 }
 
 /// One moving pin, as the `pins` kernel reads it (WGSL `PinSlot`, 32 bytes): the
@@ -229,7 +260,7 @@ pub fn moving(groups: &[PinGroup], of: &[Option<u32>], pos: &[V4]) -> MovingPins
         .enumerate()
         .filter_map(|(i, (o, p))| {
             let g = (*o)? as usize;
-            (!groups[g].motion.is_still()).then(|| PinSlot {
+            (!groups[g].motion.is_still() || groups[g].scripted).then(|| PinSlot {
                 rest: std::array::from_fn(|k| p[k] - pivots[g][k]),
                 index: i as u32,
                 group: g as u32,
@@ -338,6 +369,7 @@ mod tests {
             max: [hi, 1.0, 1.0],
             pivot: None,
             motion: m,
+            scripted: false,
         };
         let moving_m =
             Motion { keys: vec![Key::new(0.0, [0.0; 3]), Key::new(1.0, [1.0, 0.0, 0.0])], ..Motion::default() };

@@ -715,9 +715,9 @@ impl Scene {
         self.motions.iter().any(|(_, m)| !m.is_still()) || self.bodies.iter().any(|b| !b.motion.is_still())
     }
 
-    /// Whether any `[[pins]]` group moves.
+    /// Whether any `[[pins]]` group moves (by its motion, or may by a script's).
     pub fn pins_move(&self) -> bool {
-        self.pins.iter().any(|g| !g.motion.is_still())
+        self.pins.iter().any(|g| g.scripted || !g.motion.is_still())
     }
 
     /// Whether anything in the scene moves by itself (colliders or pins): what a

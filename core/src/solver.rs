@@ -126,6 +126,9 @@ pub trait Solver {
     fn substep_stats(&self) -> Vec<SubstepStats> {
         Vec::new()
     }
+    /// Gives `[[pins]]` group `group` — one the scene marks `scripted` — a new motion,
+    /// which its pins follow from the next substep (`crate::pins::set_scripted`).
+    fn set_pin_motion(&mut self, group: usize, motion: crate::motion::Motion) -> Result<(), SolverError>;
 }
 
 /// How the cloth is drawn.

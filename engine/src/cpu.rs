@@ -204,6 +204,10 @@ impl Solver for RecipeSolver {
         &self.engine.scene
     }
 
+    fn set_pin_motion(&mut self, group: usize, motion: clothlab_core::motion::Motion) -> Result<(), SolverError> {
+        Ok(clothlab_core::pins::set_scripted(&mut self.engine.scene.pins, group, motion)?)
+    }
+
     fn params(&self) -> &SimParams {
         &self.params
     }

@@ -757,6 +757,10 @@ impl<E: Engine> Solver for GpuSolver<E> {
         &self.name
     }
 
+    fn set_pin_motion(&mut self, group: usize, motion: clothlab_core::motion::Motion) -> Result<(), SolverError> {
+        Ok(clothlab_core::pins::set_scripted(&mut self.scene.pins, group, motion)?)
+    }
+
     fn scene(&self) -> &Scene {
         &self.scene
     }

@@ -306,6 +306,29 @@ class Sim:
         """Let go of the grabbed particle."""
         self._sim.release()
 
+    def set_pin_pose(self, group: int, offset: Any, rotate_deg: Any = (0.0, 0.0, 0.0)) -> None:
+        """Move ``[[pins]]`` group ``group`` (one the scene marks ``scripted = true``) to
+        ``offset`` (m, from where the scene placed it) turned by ``rotate_deg`` about its
+        pivot (degrees about x, then y, then z), over the next frame at constant speed, and
+        hold it there. In a batch ``offset`` and ``rotate_deg`` may be ``(envs, 3)``: one
+        pose per world."""
+        g = _count(group, "group")
+        o = np.asarray(offset, dtype=np.float32)
+        r = np.asarray(rotate_deg, dtype=np.float32)
+        per_world = o.ndim == 2 or r.ndim == 2
+        if per_world:
+            want = (self.envs, 3)
+            o = np.broadcast_to(o, want) if o.shape in ((3,), want) else o
+            r = np.broadcast_to(r, want) if r.shape in ((3,), want) else r
+            if o.shape != want or r.shape != want:
+                raise ClothlabError(f"set_pin_pose: one pose per world is ({self.envs}, 3), got {o.shape} and {r.shape}")
+            for k in range(self.envs):
+                self._sim.set_pin_pose(g, [float(v) for v in o[k]], [float(v) for v in r[k]], k)
+            return
+        if o.shape != (3,) or r.shape != (3,):
+            raise ClothlabError(f"set_pin_pose: offset and rotate_deg are (x, y, z), got {o.shape} and {r.shape}")
+        self._sim.set_pin_pose(g, [float(v) for v in o], [float(v) for v in r], None)
+
     # -- measuring ----------------------------------------------------------------------
 
     def timings(self) -> Dict[str, Dict[str, float]]:

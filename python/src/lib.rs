@@ -219,6 +219,19 @@ impl Sim {
         self.call(py, move |s| s.substep(k))
     }
 
+    /// Moves a scripted pin group to a pose over the next frame (world `world`, or all).
+    #[pyo3(signature = (group, offset, rotate_deg, world=None))]
+    fn set_pin_pose(
+        &self,
+        py: Python<'_>,
+        group: usize,
+        offset: [f32; 3],
+        rotate_deg: [f32; 3],
+        world: Option<usize>,
+    ) -> PyResult<()> {
+        self.call(py, move |s| s.set_pin_pose(group, offset, rotate_deg, world))
+    }
+
     /// Restores worlds (all, or those listed) to their state and time at opening.
     #[pyo3(signature = (worlds=None))]
     fn reset(&self, py: Python<'_>, worlds: Option<Vec<usize>>) -> PyResult<()> {

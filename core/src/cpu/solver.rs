@@ -236,7 +236,8 @@ impl CpuSolver {
         self.time += self.params.dt() as f64;
         // Moving pins go to their pose at the substep's start or end, as the integrator
         // takes them (crate::pins::at_substep_end).
-        let poses = self.scene.pins_move().then(|| {
+        // A group moved by its motion or by a script has slots (`pins::moving`).
+        let poses = (!self.topo.pins.slots.is_empty()).then(|| {
             crate::pins::frame_poses(
                 &self.scene.pins,
                 &self.topo.pins.pivots,
@@ -661,6 +662,10 @@ impl Solver for CpuSolver {
 
     fn timings(&self) -> KernelTimings {
         self.timer.table()
+    }
+
+    fn set_pin_motion(&mut self, group: usize, motion: crate::motion::Motion) -> Result<(), SolverError> {
+        Ok(crate::pins::set_scripted(&mut self.scene.pins, group, motion)?)
     }
 
     fn reset_timings(&mut self) {

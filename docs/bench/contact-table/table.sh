@@ -23,7 +23,7 @@ for c in "${cells[@]}"; do
       med=$(awk '/^time\/substep/{print $2}' "$f")
       tb=$(awk '$1=="tri_bounds"{print $2}' "$f")
       tc=$(awk '$1=="tri_contact"{print $2}' "$f")
-      srch=$(awk '$1=="searches"{print $2, $7}' "$f")
+      srch=$(awk '$1=="searches"{print $2, $9}' "$f")
       cr=$(awk '/^crossings/{print $2}' "$f")
       echo "$name $be $mode ${med:-?} ${tb:--} ${tc:--} ${srch:-- -} ${cr:-?}"
     done

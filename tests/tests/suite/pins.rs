@@ -30,6 +30,7 @@ fn curtain(v: [f32; 3]) -> Scene {
         max: [0.6, 2.01, 0.01],
         pivot: None,
         motion: Motion { velocity: v, ..Motion::default() },
+        scripted: false,
     }];
     s
 }
