@@ -155,7 +155,14 @@ pub fn validate(opts: &ValidateOptions, mut on_line: impl FnMut(&Line) -> Result
     let (scene, params) = (setup.scene, setup.params);
     let n = scene.cloth.n;
     if !(2..=1024).contains(&n) {
-        bail!("invalid --n {n}: must be in 2 ..= 1024");
+        // Named as the user gave it: --n, or the scene file's cloth.
+        match (opts.n, &opts.physics.scene) {
+            (None, crate::SceneSource::File(path)) => {
+                bail!("{}: cloth.n = {n}: validate takes grids of 2 ..= 1024 particles per side", path.display())
+            }
+            (None, _) => bail!("the scene's cloth.n = {n}: validate takes grids of 2 ..= 1024 particles per side"),
+            (Some(_), _) => bail!("invalid --n {n}: must be in 2 ..= 1024"),
+        }
     }
     if opts.steps == 0 || opts.steps > 100_000 {
         bail!("invalid --steps {}: must be in 1 ..= 100000", opts.steps);

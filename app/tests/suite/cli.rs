@@ -216,6 +216,11 @@ fn validate_checks_the_gpu_backends_or_says_why_not() {
     refused(&["render", "--backend", "gl", "--api", "wgpu", "--out", "/tmp/never.png"], "draws through its own API");
     refused(&["validate", "--n", "1"], "invalid --n 1");
     refused(&["validate", "--backends", "cpu"], "reference itself");
+    // A scene file's grid too large for validate is named as the file's, not as --n.
+    let big = std::env::temp_dir().join(format!("clothlab-validate-big-{}.toml", std::process::id()));
+    std::fs::write(&big, "[cloth]\nn = 2000\n").unwrap();
+    refused(&["validate", "--scene", big.to_str().unwrap()], "cloth.n = 2000: validate takes grids of 2 ..= 1024");
+    std::fs::remove_file(&big).ok();
     let out = clothlab(&["validate", "--n", "20", "--steps", "32"]);
     let text = String::from_utf8_lossy(&out.stdout);
     let err = String::from_utf8_lossy(&out.stderr);
