@@ -14,8 +14,11 @@ Quick start::
     sim.step(frames=10)
     x = sim.positions()                      # numpy float32 (N, 3)
 
-Errors are :class:`ClothlabError` (a ``ValueError``) with the command line's one-line
-message. Stepping releases the GIL.
+Errors are :class:`ClothlabError` with the command line's one-line message, raised as
+:class:`ClothlabTypeError` (also a ``TypeError``: an argument of the wrong type),
+:class:`ClothlabValueError` (also a ``ValueError``: a bad value, a scene file's error) or
+:class:`ClothlabRuntimeError` (also a ``RuntimeError``: no GPU adapter, a driver's
+failure). Stepping releases the GIL.
 """
 
 from __future__ import annotations
@@ -27,9 +30,20 @@ from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
 import numpy as np
 
 from . import _clothlab
-from ._clothlab import ClothlabError
+from ._clothlab import ClothlabError, ClothlabRuntimeError, ClothlabTypeError, ClothlabValueError
 
-__all__ = ["Sim", "ClothlabError", "backends", "integrators", "validate", "bench", "__version__"]
+__all__ = [
+    "Sim",
+    "ClothlabError",
+    "ClothlabTypeError",
+    "ClothlabValueError",
+    "ClothlabRuntimeError",
+    "backends",
+    "integrators",
+    "validate",
+    "bench",
+    "__version__",
+]
 __version__: str = _clothlab.__version__
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -48,14 +62,14 @@ def _value(value: Any) -> str:
     try:
         return json.dumps(value, allow_nan=True)
     except TypeError as e:
-        raise ClothlabError(f"a parameter value must be a number, a bool, a string or a list: {e}") from None
+        raise ClothlabTypeError(f"a parameter value must be a number, a bool, a string or a list: {e}") from None
 
 
 def _sets(params: Optional[Mapping[str, Any]]) -> List[str]:
     if params is None:
         return []
     if not isinstance(params, Mapping):
-        raise ClothlabError(f"params must be a dict of parameter names to values, not {type(params).__name__}")
+        raise ClothlabTypeError(f"params must be a dict of parameter names to values, not {type(params).__name__}")
     return [f"{name}={_value(v)}" for name, v in params.items()]
 
 
@@ -63,11 +77,26 @@ def _path(p: Optional[PathLike]) -> Optional[str]:
     return None if p is None else os.fspath(p)
 
 
+def _floats(x: Any, what: str) -> np.ndarray:
+    """``x`` as a contiguous float32 array, or a :class:`ClothlabTypeError` saying why not."""
+    try:
+        return np.ascontiguousarray(x, dtype=np.float32)
+    except (TypeError, ValueError) as e:
+        raise ClothlabTypeError(f"{what}: expected an array of numbers, got {type(x).__name__} ({e})") from None
+
+
 def _rows3(x: Any, n: int, what: str) -> np.ndarray:
-    a = np.ascontiguousarray(x, dtype=np.float32)
+    a = _floats(x, what)
     if a.shape != (n, 3):
-        raise ClothlabError(f"{what}: expected an array of shape ({n}, 3), got {a.shape}")
+        raise ClothlabValueError(f"{what}: expected an array of shape ({n}, 3), got {a.shape}")
     return a
+
+
+def _whole(k: Any, what: str) -> int:
+    """``k`` as an int: a :class:`ClothlabTypeError` for what is not a whole number."""
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
+        raise ClothlabTypeError(f"{what} must be a whole number, not {k!r}")
+    return int(k)
 
 
 def backends() -> List[Dict[str, Any]]:
@@ -131,11 +160,11 @@ class Sim:
         envs: Optional[int] = None,
     ) -> None:
         if not isinstance(backend, str):
-            raise ClothlabError(f"backend must be a name such as 'cpu' or 'vulkan', not {backend!r}")
-        if n is not None and (not isinstance(n, (int, np.integer)) or isinstance(n, bool) or not 0 < n < 2**32):
-            raise ClothlabError(f"n must be a positive whole number of particles per side, not {n!r}")
-        if envs is not None and (not isinstance(envs, (int, np.integer)) or isinstance(envs, bool) or not 0 < envs < 2**32):
-            raise ClothlabError(f"envs must be a positive whole number of worlds, not {envs!r}")
+            raise ClothlabTypeError(f"backend must be a name such as 'cpu' or 'vulkan', not {backend!r}")
+        if n is not None and not 0 < _whole(n, "n") < 2**32:
+            raise ClothlabValueError(f"n must be a positive whole number of particles per side, not {n!r}")
+        if envs is not None and not 0 < _whole(envs, "envs") < 2**32:
+            raise ClothlabValueError(f"envs must be a positive whole number of worlds, not {envs!r}")
         self._sim = _clothlab.Sim(
             backend,
             scene=_path(scene),
@@ -189,10 +218,10 @@ class Sim:
         """``x`` as the rows of every world: ``(N, 3)``, or ``(envs, N, 3)`` in a batch."""
         if self.envs == 1:
             return _rows3(x, self.num_particles, what)
-        a = np.ascontiguousarray(x, dtype=np.float32)
+        a = _floats(x, what)
         want = (self.envs, self.num_particles, 3)
         if a.shape != want:
-            raise ClothlabError(f"{what}: expected an array of shape {want}, got {a.shape}")
+            raise ClothlabValueError(f"{what}: expected an array of shape {want}, got {a.shape}")
         return a.reshape(-1, 3)
 
     @property
@@ -251,10 +280,10 @@ class Sim:
     def set_inverse_masses(self, w: Any) -> None:
         """Set the inverse masses, 1/kg (shape (N,), or (envs, N); finite, ≥ 0; 0 pins a
         particle)."""
-        a = np.ascontiguousarray(w, dtype=np.float32)
+        a = _floats(w, "inverse masses")
         want = (self.num_particles,) if self.envs == 1 else (self.envs, self.num_particles)
         if a.shape != want:
-            raise ClothlabError(f"inverse masses: expected shape {want}, got {a.shape}")
+            raise ClothlabValueError(f"inverse masses: expected shape {want}, got {a.shape}")
         self._sim.set_inverse_masses(a.reshape(-1))
 
     def reset(self, envs: Optional[Iterable[int]] = None) -> None:
@@ -281,7 +310,7 @@ class Sim:
         changed. In a batch one value per world: ``sim.set("damping", array_of_envs)``
         (``wind``: an (envs, 4) array)."""
         if not isinstance(name, str):
-            raise ClothlabError(f"a parameter name is a string, not {name!r}")
+            raise ClothlabTypeError(f"a parameter name is a string, not {name!r}")
         self._sim.set([f"{name}={_value(value)}"])
 
     def update(self, params: Mapping[str, Any]) -> None:
@@ -297,9 +326,9 @@ class Sim:
 
     def grab(self, particle: int, target: Sequence[float]) -> None:
         """Grab ``particle`` and hold it at ``target`` (x, y, z in m) until :meth:`release`."""
-        t = [float(v) for v in target]
+        t = [float(v) for v in _floats(target, "a grab target").reshape(-1)]
         if len(t) != 3:
-            raise ClothlabError(f"a grab target is (x, y, z), got {len(t)} values")
+            raise ClothlabValueError(f"a grab target is (x, y, z), got {len(t)} values")
         self._sim.grab(_count(particle, "particle"), t)
 
     def release(self) -> None:
@@ -313,20 +342,20 @@ class Sim:
         hold it there. In a batch ``offset`` and ``rotate_deg`` may be ``(envs, 3)``: one
         pose per world."""
         g = _count(group, "group")
-        o = np.asarray(offset, dtype=np.float32)
-        r = np.asarray(rotate_deg, dtype=np.float32)
+        o = _floats(offset, "set_pin_pose: offset")
+        r = _floats(rotate_deg, "set_pin_pose: rotate_deg")
         per_world = o.ndim == 2 or r.ndim == 2
         if per_world:
             want = (self.envs, 3)
             o = np.broadcast_to(o, want) if o.shape in ((3,), want) else o
             r = np.broadcast_to(r, want) if r.shape in ((3,), want) else r
             if o.shape != want or r.shape != want:
-                raise ClothlabError(f"set_pin_pose: one pose per world is ({self.envs}, 3), got {o.shape} and {r.shape}")
+                raise ClothlabValueError(f"set_pin_pose: one pose per world is ({self.envs}, 3), got {o.shape} and {r.shape}")
             for k in range(self.envs):
                 self._sim.set_pin_pose(g, [float(v) for v in o[k]], [float(v) for v in r[k]], k)
             return
         if o.shape != (3,) or r.shape != (3,):
-            raise ClothlabError(f"set_pin_pose: offset and rotate_deg are (x, y, z), got {o.shape} and {r.shape}")
+            raise ClothlabValueError(f"set_pin_pose: offset and rotate_deg are (x, y, z), got {o.shape} and {r.shape}")
         self._sim.set_pin_pose(g, [float(v) for v in o], [float(v) for v in r], None)
 
     # -- measuring ----------------------------------------------------------------------
@@ -374,14 +403,14 @@ class Sim:
 
 
 def _count(k: Any, what: str) -> int:
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 0:
-        raise ClothlabError(f"{what} must be a whole number ≥ 0, not {k!r}")
+    if _whole(k, what) < 0:
+        raise ClothlabValueError(f"{what} must be a whole number ≥ 0, not {k!r}")
     return int(k)
 
 
 def _names(backend: Optional[str], backends: Optional[Iterable[str]], default: Sequence[str]) -> List[str]:
     if backend is not None and backends is not None:
-        raise ClothlabError("give backend or backends, not both")
+        raise ClothlabValueError("give backend or backends, not both")
     if backend is not None:
         return [backend]
     if backends is not None:
@@ -449,9 +478,11 @@ def bench(
     names = _names(None, backends, ["cpu", "cpu-par"])
     if isinstance(sizes, (int, np.integer)):
         sizes = [sizes]
-    res = [int(v) for v in resolution]
+    if isinstance(resolution, (str, bytes)) or not isinstance(resolution, Iterable):
+        raise ClothlabTypeError(f"resolution is (width, height), not {resolution!r}")
+    res = [_whole(v, "a resolution") for v in resolution]
     if len(res) != 2:
-        raise ClothlabError(f"resolution is (width, height), got {len(res)} values")
+        raise ClothlabValueError(f"resolution is (width, height), got {len(res)} values")
     rows, skipped = _clothlab.bench(
         names,
         [_count(s, "size") for s in sizes],

@@ -8,8 +8,17 @@ import numpy.typing as npt
 
 __version__: str
 
-class ClothlabError(ValueError):
-    """What clothlab refused or could not do, in one line."""
+class ClothlabError(Exception):
+    """What clothlab refused or could not do, in one line (raised as one of the three below)."""
+
+class ClothlabTypeError(ClothlabError, TypeError):
+    """An argument of the wrong type."""
+
+class ClothlabValueError(ClothlabError, ValueError):
+    """An argument, parameter or file clothlab refuses."""
+
+class ClothlabRuntimeError(ClothlabError, RuntimeError):
+    """A device, driver or thread that failed."""
 
 class Sim:
     def __init__(

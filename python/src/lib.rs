@@ -7,8 +7,10 @@
 //! context (OpenGL's above all) stays on the thread that made it, and Python threads may
 //! call from anywhere. A call hands the thread a job and waits for its answer with the GIL
 //! released, so other Python threads run while the cloth steps. Every error is a
-//! `clothlab.ClothlabError` (a `ValueError`) with the command line's one-line message; a
-//! panic on the thread (never expected) is one too, and the `Sim` is closed after it.
+//! `clothlab.ClothlabError` with the command line's one-line message — a
+//! `ClothlabValueError` (a `ValueError`), or a `ClothlabRuntimeError` (a `RuntimeError`)
+//! where a device or driver failed; a panic on the thread (never expected) is one too, and
+//! the `Sim` is closed after it.
 
 use std::sync::Mutex;
 use std::sync::mpsc::{Receiver, Sender, channel, sync_channel};
@@ -16,21 +18,53 @@ use std::thread::JoinHandle;
 
 use clothlab::{Backend, Physics, SceneSource, SimOptions};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyException, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyDict, PyList, PyTuple};
 
 pyo3::create_exception!(
     _clothlab,
     ClothlabError,
-    PyValueError,
-    "What clothlab refused or could not do, in one line (a bad argument, a missing GPU, a scene file's error)."
+    PyException,
+    "What clothlab refused or could not do, in one line: raised as ClothlabTypeError (a TypeError: a wrong type), ClothlabValueError (a ValueError: a bad value, a scene file's error) or ClothlabRuntimeError (a RuntimeError: a missing GPU, a driver's failure)."
 );
 
-/// An error as Python sees it: the message and its causes on one line.
+/// The three kinds of [`ClothlabError`] (each also the builtin error it names), made when
+/// the module loads: `(name, builtin, doc)`.
+const KINDS: [(&str, &str, &str); 3] = [
+    ("ClothlabTypeError", "TypeError", "An argument of the wrong type."),
+    ("ClothlabValueError", "ValueError", "An argument, parameter or file clothlab refuses."),
+    (
+        "ClothlabRuntimeError",
+        "RuntimeError",
+        "A device, driver or thread that failed (no GPU adapter, a driver error).",
+    ),
+];
+
+/// An error as Python sees it: the message and its causes on one line, as a
+/// `ClothlabRuntimeError` where a device or driver failed, else a `ClothlabValueError`.
 fn py_err(e: anyhow::Error) -> PyErr {
+    let runtime = e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<clothlab::core::error::SolverError>(),
+            Some(clothlab::core::error::SolverError::NoAdapter(_) | clothlab::core::error::SolverError::Driver(_))
+        )
+    });
     let msg: Vec<String> = e.chain().map(|c| c.to_string()).collect();
-    ClothlabError::new_err(msg.join(": "))
+    kind_err(if runtime { "ClothlabRuntimeError" } else { "ClothlabValueError" }, msg.join(": "))
+}
+
+/// A `name` error (one of [`KINDS`]) with `msg`; the base class if the module's own is
+/// not found (never expected: made when it loads).
+fn kind_err(name: &str, msg: impl Into<String>) -> PyErr {
+    let msg: String = msg.into();
+    Python::attach(|py| {
+        let class = py.import("clothlab._clothlab").and_then(|m| m.getattr(name));
+        match class.and_then(|c| c.call1((msg.clone(),))) {
+            Ok(err) => PyErr::from_value(err),
+            Err(_) => ClothlabError::new_err(msg),
+        }
+    })
 }
 
 /// A job for a simulation's thread.
@@ -52,23 +86,26 @@ impl Sim {
     ) -> PyResult<T> {
         let (tx, rx) = sync_channel(1);
         let sent = {
-            let jobs = self.jobs.lock().map_err(|_| ClothlabError::new_err("the simulation is closed"))?;
+            let jobs = self.jobs.lock().map_err(|_| kind_err("ClothlabValueError", "the simulation is closed"))?;
             let Some(jobs) = jobs.as_ref() else {
-                return Err(ClothlabError::new_err("the simulation is closed"));
+                return Err(kind_err("ClothlabValueError", "the simulation is closed"));
             };
             jobs.send(Box::new(move |sim: &mut clothlab::Sim| {
                 let _ = tx.send(f(sim));
             }))
         };
         if sent.is_err() {
-            return Err(ClothlabError::new_err("the simulation's thread has stopped"));
+            return Err(kind_err("ClothlabRuntimeError", "the simulation's thread has stopped"));
         }
         match py.detach(move || rx.recv()) {
             Ok(r) => r.map_err(py_err),
             Err(_) => {
                 // The job dropped its answer: it panicked, and the thread is gone.
                 self.shut();
-                Err(ClothlabError::new_err("internal error: the simulation's thread stopped (a bug: please report it)"))
+                Err(kind_err(
+                    "ClothlabRuntimeError",
+                    "internal error: the simulation's thread stopped (a bug: please report it)",
+                ))
             }
         }
     }
@@ -97,7 +134,10 @@ type BackendRow = (String, Option<String>, Option<String>, Option<String>);
 fn rows3(a: &PyReadonlyArray2<'_, f32>) -> PyResult<Vec<[f32; 3]>> {
     let v = a.as_array();
     if v.ncols() != 3 {
-        return Err(ClothlabError::new_err(format!("expected an (N, 3) array, got ({}, {})", v.nrows(), v.ncols())));
+        return Err(kind_err(
+            "ClothlabValueError",
+            format!("expected an (N, 3) array, got ({}, {})", v.nrows(), v.ncols()),
+        ));
     }
     Ok(v.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect())
 }
@@ -170,7 +210,7 @@ impl Sim {
                     job(&mut sim);
                 }
             })
-            .map_err(|e| ClothlabError::new_err(format!("cannot start the simulation's thread: {e}")))?;
+            .map_err(|e| kind_err("ClothlabRuntimeError", format!("cannot start the simulation's thread: {e}")))?;
         match py.detach(move || ready_rx.recv()) {
             Ok(Ok(())) => Ok(Sim { jobs: Mutex::new(Some(jobs)), thread: Mutex::new(Some(thread)) }),
             Ok(Err(e)) => {
@@ -179,7 +219,7 @@ impl Sim {
             }
             Err(_) => {
                 let _ = thread.join();
-                Err(ClothlabError::new_err("internal error: opening the simulation stopped its thread"))
+                Err(kind_err("ClothlabRuntimeError", "internal error: opening the simulation stopped its thread"))
             }
         }
     }
@@ -367,9 +407,10 @@ impl Sim {
             "lines" => clothlab::RenderMode::Lines,
             "points" => clothlab::RenderMode::Points,
             other => {
-                return Err(ClothlabError::new_err(format!(
-                    "unknown render mode `{other}` (known: triangles, lines, points)"
-                )));
+                return Err(kind_err(
+                    "ClothlabValueError",
+                    format!("unknown render mode `{other}` (known: triangles, lines, points)"),
+                ));
             }
         };
         let api = api.map(clothlab::Api::parse).transpose().map_err(py_err)?;
@@ -538,7 +579,23 @@ fn integrators() -> Vec<(&'static str, &'static str)> {
 /// The native module.
 #[pymodule]
 fn _clothlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add("ClothlabError", m.py().get_type::<ClothlabError>())?;
+    let py = m.py();
+    let base = py.get_type::<ClothlabError>();
+    m.add("ClothlabError", &base)?;
+    let builtins = [
+        ("TypeError", py.get_type::<PyTypeError>()),
+        ("ValueError", py.get_type::<PyValueError>()),
+        ("RuntimeError", py.get_type::<PyRuntimeError>()),
+    ];
+    for (name, builtin, doc) in KINDS {
+        let other = builtins.iter().find(|(n, _)| *n == builtin).map(|(_, t)| t.clone()).expect("a builtin of KINDS");
+        let attrs = PyDict::new(py);
+        attrs.set_item("__doc__", doc)?;
+        attrs.set_item("__module__", "clothlab")?;
+        let bases = PyTuple::new(py, [base.clone().into_any(), other.into_any()])?;
+        let class = py.import("builtins")?.getattr("type")?.call1((name, bases, attrs))?;
+        m.add(name, class)?;
+    }
     m.add_class::<Sim>()?;
     m.add_function(wrap_pyfunction!(backends, m)?)?;
     m.add_function(wrap_pyfunction!(validate, m)?)?;

@@ -350,3 +350,43 @@ def test_a_script_moves_each_world_s_pinned_edge_where_it_says():
         sim.set_pin_pose(0, np.zeros((2, 3)))
     with pytest.raises(clothlab.ClothlabError, match="pin group 4"):
         sim.set_pin_pose(4, [0, 0, 0])
+
+
+def test_errors_are_type_value_or_runtime_errors_and_all_clothlab_errors():
+    sim = clothlab.Sim(n=8)
+    # A wrong type: a TypeError (and a ClothlabError), never a ValueError.
+    for call in (
+        lambda: clothlab.Sim(n="eight"),
+        lambda: clothlab.Sim(backend=3),
+        lambda: sim.set(4, 0.1),
+        lambda: sim.set_positions("not numbers"),
+        lambda: sim.step("ten"),
+        lambda: sim.update([("damping", 0.1)]),
+    ):
+        with pytest.raises(clothlab.ClothlabTypeError) as e:
+            call()
+        assert isinstance(e.value, TypeError) and isinstance(e.value, clothlab.ClothlabError)
+        assert not isinstance(e.value, ValueError), e.value
+    # A bad value, from the Python layer or the library underneath: a ValueError.
+    for call in (
+        lambda: clothlab.Sim(n=-3),
+        lambda: sim.set("damping", -1.0),
+        lambda: sim.set_positions(np.zeros((3, 3))),
+        lambda: clothlab.Sim(scene="missing.toml"),
+    ):
+        with pytest.raises(clothlab.ClothlabValueError) as e:
+            call()
+        assert isinstance(e.value, ValueError) and not isinstance(e.value, TypeError), e.value
+    # A device that is not there: a RuntimeError. Vulkan with its loader pointed at no
+    # driver, in a process of its own (the loader reads the variable when it starts).
+    import subprocess
+    import sys
+
+    code = (
+        "import clothlab\n"
+        "try:\n    clothlab.Sim(n=8, backend='vulkan')\n"
+        "except clothlab.ClothlabRuntimeError as e:\n    print('runtime', isinstance(e, RuntimeError), e)\n"
+    )
+    env = dict(os.environ, VK_ICD_FILENAMES="/nonexistent-clothlab-icd.json")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert out.stdout.startswith("runtime True no GPU adapter found (Vulkan)"), (out.stdout, out.stderr)
