@@ -46,6 +46,8 @@ pub struct Setup {
     pub title: Option<String>,
     /// The file's `envs` (worlds), if it says.
     pub envs: Option<u32>,
+    /// The file's `[params]` values given one per world (`SceneFile::world_params`).
+    pub world_params: Vec<WorldSet>,
 }
 
 impl Setup {
@@ -58,12 +60,21 @@ impl Setup {
             light: None,
             title: None,
             envs: None,
+            world_params: Vec::new(),
         }
     }
 
     /// A scene file's contents.
     pub fn from_file(f: SceneFile) -> Self {
-        Self { scene: f.scene, params: f.params, camera: f.camera, light: f.light, title: f.title, envs: f.envs }
+        Self {
+            scene: f.scene,
+            params: f.params,
+            camera: f.camera,
+            light: f.light,
+            title: f.title,
+            envs: f.envs,
+            world_params: f.world_params,
+        }
     }
 }
 
@@ -206,7 +217,8 @@ pub fn world_params(base: &[SimParams], per_world: &[WorldSet], envs: usize) -> 
     for (name, values) in per_world {
         if values.len() != envs {
             let worlds = if envs == 1 { "1 world".to_string() } else { format!("{envs} worlds") };
-            bail!("`{name}` has {} values for {worlds}: give one per world", values.len());
+            let n = values.len();
+            bail!("`{name}` has {n} value{} for {worlds}: give one per world", if n == 1 { "" } else { "s" });
         }
     }
     (0..envs)

@@ -111,6 +111,11 @@ impl Sim {
                 "envs {envs}: a batch of worlds runs on the cpu and cpu-par backends; the GPU backends' world dimension is not built yet"
             );
         }
+        // The file's per-world values, less those the command line sets again.
+        let named = |s: &String| s.split_once('=').map(|(n, _)| n.trim().to_owned());
+        let given: Vec<String> = opts.physics.set.iter().filter_map(named).collect();
+        let per_world: Vec<_> =
+            setup.world_params.iter().filter(|(name, _)| !given.contains(name)).cloned().chain(per_world).collect();
         let params = world_params(std::slice::from_ref(&setup.params), &per_world, envs as usize)?;
         for (k, p) in params.iter().enumerate() {
             clothlab_core::cloth::check_params(&setup.scene, p)
@@ -989,5 +994,42 @@ mod tests {
         let mut still = scripted(Backend::Cpu, 1).unwrap();
         still.step(2).unwrap();
         assert!(bits(&batch.world_state(0).unwrap()) == bits(&still.state().unwrap()), "world 0 left alone");
+    }
+
+    #[test]
+    fn a_scene_file_gives_one_value_per_world_and_the_command_line_overrides_it() {
+        let text = "envs = 3\n[cloth]\nn = 4\n[params]\ndamping = [0.0, 0.002, 0.01]\nwind = [[1, 0, 0], [0, 0, 0], [0, 0, 2]]\nsubsteps = 8\n";
+        let open = |set: &[&str]| {
+            Sim::open(SimOptions {
+                physics: Physics {
+                    scene: SceneSource::Toml(text.into()),
+                    set: set.iter().map(|s| s.to_string()).collect(),
+                    ..Default::default()
+                },
+                ..Default::default()
+            })
+        };
+        let sim = open(&[]).unwrap();
+        let damping: Vec<f32> = (0..3).map(|k| sim.world_params(k).unwrap().damping).collect();
+        assert_eq!(damping, [0.0, 0.002, 0.01]);
+        assert_eq!(sim.world_params(2).unwrap().wind, [0.0, 0.0, 2.0]);
+        assert!((0..3).all(|k| sim.world_params(k).unwrap().substeps == 8), "the rest as a single file's");
+        // The command line's value for every world, or its own list, wins.
+        let sim = open(&["damping=0.005"]).unwrap();
+        assert!((0..3).all(|k| sim.world_params(k).unwrap().damping == 0.005));
+        let sim = open(&["damping=[0.1,0.2,0.3]"]).unwrap();
+        assert_eq!(sim.world_params(1).unwrap().damping, 0.2);
+        // A list that does not fit the worlds, or a world's bad value: refused in one line.
+        let e = open(&["wind=[[0,0,0]]"]).err().expect("refused").to_string();
+        assert!(e.contains("`wind` has 1 value for 3 worlds"), "{e}");
+        let bad = text.replace("0.01]", "0.9]");
+        let e = Sim::open(SimOptions {
+            physics: Physics { scene: SceneSource::Toml(bad), ..Default::default() },
+            ..Default::default()
+        })
+        .err()
+        .expect("refused")
+        .to_string();
+        assert!(e.contains("world 2: invalid parameter `damping` = 0.9"), "{e}");
     }
 }

@@ -78,6 +78,32 @@ pub struct SceneFile {
     /// The file's `envs`: how many worlds (copies of the scene, stepped together) it
     /// asks for, if it says (1 ..= [`MAX_ENVS`]).
     pub envs: Option<u32>,
+    /// `[params]` values given one per world (a list where the parameter takes a number or
+    /// a word, a list of lists where it takes a list): each name and its worlds' values,
+    /// as `--set` would read them. Not in [`SceneFile::params`], which holds the rest;
+    /// the library applies them world by world.
+    pub world_params: Vec<WorldList>,
+}
+
+/// A parameter's name and its values, one per world ([`SceneFile::world_params`]).
+pub type WorldList = (String, Vec<serde_json::Value>);
+
+/// The entries of a `[params]` table `params` that give one value per world (see
+/// [`SceneFile::world_params`]), and the table without them; `None` where there are none.
+fn world_lists(params: &toml::Table) -> Option<(Vec<WorldList>, toml::Table)> {
+    let shape = serde_json::to_value(SimParams::default()).ok()?;
+    let mut lists = Vec::new();
+    let mut rest = params.clone();
+    for (name, value) in params {
+        let (Some(slot), Some(list)) = (shape.get(name), value.as_array()) else { continue };
+        let per_world = if slot.is_array() { !list.is_empty() && list.iter().all(|v| v.is_array()) } else { true };
+        if per_world {
+            let values: Option<Vec<serde_json::Value>> = list.iter().map(|v| serde_json::to_value(v).ok()).collect();
+            lists.push((name.clone(), values?));
+            rest.remove(name);
+        }
+    }
+    (!lists.is_empty()).then_some((lists, rest))
 }
 
 /// The most worlds a batch may hold (`envs`).
@@ -308,11 +334,24 @@ impl SceneFile {
             return Err(err(at, format!("`{path}`: a vector has 3 numbers (x, y, z), this one {len}")));
         }
         let many = table.as_ref().and_then(|t| t.get("cloth")).is_some_and(|c| c.is_array());
-        let (mut repr, cloths): (Repr<()>, Vec<ClothSpec>) = if many {
-            toml::from_str::<Repr<Vec<ClothSpec>>>(text).map_err(syntax)?.split(|c| c)
-        } else {
-            toml::from_str::<Repr<ClothSpec>>(text).map_err(syntax)?.split(|c| vec![c])
+        // Per-world `[params]` lists come out first; the rest is read from the table then
+        // (its errors without a line: a file with them is read from its text as before).
+        let worlds = table.as_ref().and_then(|t| t.get("params")?.as_table()).and_then(world_lists);
+        let (mut repr, cloths): (Repr<()>, Vec<ClothSpec>) = match (&worlds, &table) {
+            (Some((_, rest)), Some(t)) => {
+                let mut t = t.clone();
+                t.insert("params".into(), toml::Value::Table(rest.clone()));
+                let value = toml::Value::Table(t);
+                if many {
+                    value.try_into::<Repr<Vec<ClothSpec>>>().map_err(syntax)?.split(|c| c)
+                } else {
+                    value.try_into::<Repr<ClothSpec>>().map_err(syntax)?.split(|c| vec![c])
+                }
+            }
+            _ if many => toml::from_str::<Repr<Vec<ClothSpec>>>(text).map_err(syntax)?.split(|c| c),
+            _ => toml::from_str::<Repr<ClothSpec>>(text).map_err(syntax)?.split(|c| vec![c]),
         };
+        let world_params = worlds.map(|(lists, _)| lists).unwrap_or_default();
         if cloths.is_empty() {
             return Err(err(locate(text, "cloth").map(|s| line_col(text, s)), "`cloth`: no cloth in the list".into()));
         }
@@ -481,7 +520,7 @@ impl SceneFile {
             let at = locate(text, "envs").map(|s| line_col(text, s));
             return Err(err(at, format!("`envs` = {e}: the worlds a scene holds, 1 ..= {MAX_ENVS}")));
         }
-        Ok(Self { title: repr.title, scene, params: repr.params, camera, light, envs: repr.envs })
+        Ok(Self { title: repr.title, scene, params: repr.params, camera, light, envs: repr.envs, world_params })
     }
 }
 
