@@ -96,6 +96,13 @@ pub struct RenderArgs {
     /// to either).
     #[arg(long, value_enum)]
     pub api: Option<Api>,
+    /// Worlds, as `sim --envs` (default the scene file's `envs`, else 1; on cpu and
+    /// cpu-par); the picture is of `--world`.
+    #[arg(long, value_name = "N")]
+    pub envs: Option<u32>,
+    /// Which world of the batch to draw (0-based).
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    pub world: usize,
     #[command(flatten)]
     pub physics: PhysicsArgs,
     #[command(flatten)]

@@ -668,6 +668,35 @@ impl Sim {
         crate::render::image(&mut self.solver, &self.setup.scene, view, (width, height), api)
     }
 
+    /// World `k`'s picture, as [`Sim::render`] draws world 0.
+    pub fn render_world(
+        &mut self,
+        k: usize,
+        width: u32,
+        height: u32,
+        view: &View,
+        api: Option<crate::Api>,
+    ) -> Result<(Vec<u8>, String)> {
+        if k >= self.envs() {
+            bail!("world {k}: the batch has {} worlds (0 ..= {})", self.envs(), self.envs() - 1);
+        }
+        if k == 0 {
+            return self.render(width, height, view, api);
+        }
+        // World k takes world 0's place for the picture (a batch's worlds are all CPU
+        // solvers), and goes back after it.
+        let AnySolver::Cpu(first) = &mut self.solver else {
+            unreachable!("a batch of worlds is built on the CPU only")
+        };
+        std::mem::swap(first.as_mut(), &mut self.worlds[k - 1]);
+        let drawn = self.render(width, height, view, api);
+        let AnySolver::Cpu(first) = &mut self.solver else {
+            unreachable!("a batch of worlds is built on the CPU only")
+        };
+        std::mem::swap(first.as_mut(), &mut self.worlds[k - 1]);
+        drawn
+    }
+
     /// Runs `frames` frames recording every `every`-th (and the first) and writes them to
     /// `path` as binary glTF (as `sim --record`); returns the frames kept.
     pub fn record(&mut self, path: &Path, frames: u64, every: u32) -> Result<usize> {
@@ -1031,5 +1060,31 @@ mod tests {
         .expect("refused")
         .to_string();
         assert!(e.contains("world 2: invalid parameter `damping` = 0.9"), "{e}");
+    }
+
+    #[test]
+    fn a_batch_draws_any_world_as_its_single_run_draws() {
+        let mut batch = open("thesis.toml", Backend::Cpu, 8, 2, &["wind=[[0,0,0],[4,0,3]]"]).unwrap();
+        let mut single = open("thesis.toml", Backend::Cpu, 8, 1, &["wind=[4,0,3]"]).unwrap();
+        batch.step(5).unwrap();
+        single.step(5).unwrap();
+        let view = single.view(RenderMode::Triangles);
+        let one = match single.render(64, 48, &view, None) {
+            Ok((pixels, _)) => pixels,
+            Err(e) => {
+                assert!(std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1"), "{e:#}");
+                return eprintln!("no wgpu adapter here: {e:#}");
+            }
+        };
+        let (world1, _) = batch.render_world(1, 64, 48, &view, None).unwrap();
+        assert!(world1 == one, "world 1's picture is its single run's");
+        let (world0, _) = batch.render_world(0, 64, 48, &view, None).unwrap();
+        assert!(world0 != one, "world 0 (no wind) looks otherwise");
+        // Drawn and put back: world 1 still steps as its single run.
+        batch.step(1).unwrap();
+        single.step(1).unwrap();
+        assert!(bits(&batch.world_state(1).unwrap()) == bits(&single.state().unwrap()));
+        let e = batch.render_world(2, 64, 48, &view, None).unwrap_err().to_string();
+        assert!(e.contains("world 2: the batch has 2 worlds"), "{e}");
     }
 }

@@ -34,11 +34,14 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
         physics: args.physics.physics(),
         n: args.n,
         gpu,
-        envs: Some(1),
+        envs: args.envs,
     })?;
+    if args.world >= sim.envs() {
+        bail!("invalid --world {}: the batch has {} worlds (0 ..= {})", args.world, sim.envs(), sim.envs() - 1);
+    }
     sim.step(u64::from(args.frames))?;
     let view = sim.view(args.mode.render_mode());
-    let (pixels, adapter) = sim.render(args.width, args.height, &view, Some(api))?;
+    let (pixels, adapter) = sim.render_world(args.world, args.width, args.height, &view, Some(api))?;
     clothlab::files::write_png(&args.out, &pixels, args.width, args.height)?;
     outln!(
         "wrote {} ({}x{}, {} frames, {:?}, adapter {adapter})",
