@@ -191,23 +191,19 @@ pub type WorldSet = (String, Vec<serde_json::Value>);
 /// world: a list where the parameter takes one value (`damping=[0.01,0.02]`), or a list of
 /// lists where it takes a list (`wind=[[1,0,0,0],[2,0,0,0]]`). What is not one of these
 /// (an unknown name, a word) is left to [`apply_overrides`] to take or refuse.
-pub fn split_world_sets(sets: &[String]) -> Result<(Vec<String>, Vec<WorldSet>)> {
-    let shape = serde_json::to_value(SimParams::default())?;
+pub fn split_world_sets(sets: &[String]) -> (Vec<String>, Vec<WorldSet>) {
     let (mut common, mut per_world) = (Vec::new(), Vec::new());
     for s in sets {
         let parsed = s.split_once('=').and_then(|(name, raw)| {
-            let slot = shape.get(name.trim())?;
             let value: serde_json::Value = serde_json::from_str(raw.trim()).ok()?;
-            let list = value.as_array()?;
-            let per = if slot.is_array() { list.iter().all(|v| v.is_array()) && !list.is_empty() } else { true };
-            per.then(|| (name.trim().to_owned(), list.clone()))
+            Some((name.trim().to_owned(), clothlab_core::params::per_world(name.trim(), &value)?))
         });
         match parsed {
             Some(w) => per_world.push(w),
             None => common.push(s.clone()),
         }
     }
-    Ok((common, per_world))
+    (common, per_world)
 }
 
 /// Each of `envs` worlds' parameters: `base` with world k's value of every override in

@@ -84,15 +84,15 @@ pub struct Sim {
     worlds: Vec<CpuSolver>,
     backend: Backend,
     setup: Setup,
-    /// World 0's state when opened (what [`Sim::reset`] restores on a GPU backend).
-    initial: Option<ClothState>,
+    /// The GPU variant it was opened with (what [`Sim::reset`] builds a GPU world with).
+    gpu: GpuSetup,
 }
 
 impl Sim {
     /// Opens the scene of `opts` on its backend. Every argument is checked first; a GPU
     /// backend without an adapter is refused in one line.
     pub fn open(opts: SimOptions) -> Result<Sim> {
-        let (common, per_world) = split_world_sets(&opts.physics.set)?;
+        let (common, per_world) = split_world_sets(&opts.physics.set);
         let physics = Physics { set: common, ..opts.physics.clone() };
         let setup = physics.setup(opts.n, DEFAULT_N)?;
         let envs = opts.envs.or(setup.envs).unwrap_or(1);
@@ -122,27 +122,21 @@ impl Sim {
                 .map_err(|e| if envs > 1 { anyhow::anyhow!("world {k}: {e}") } else { e.into() })?;
         }
         if envs == 1 {
-            let mut solver = make(opts.backend, setup.scene.clone(), params[0].clone(), &opts.gpu, &Shared::None)?;
-            // A GPU solver's reset takes back the state it starts from (a CPU one is built again).
-            let initial = if opts.backend.is_gpu() { Some(solver.get().state()?) } else { None };
-            return Ok(Sim { solver, worlds: Vec::new(), backend: opts.backend, setup, initial });
+            let solver = make(opts.backend, setup.scene.clone(), params[0].clone(), &opts.gpu, &Shared::None)?;
+            return Ok(Sim { solver, worlds: Vec::new(), backend: opts.backend, setup, gpu: opts.gpu });
         }
         if opts.gpu.variant.is_some() {
             bail!("--preset and --set-variant choose a GPU backend's kernels, and {} is the CPU", opts.backend.name());
         }
         let mut worlds = Self::build_worlds(opts.backend, &setup.scene, &params)?;
         let first = worlds.remove(0);
-        Ok(Sim { solver: AnySolver::Cpu(Box::new(first)), worlds, backend: opts.backend, setup, initial: None })
+        Ok(Sim { solver: AnySolver::Cpu(Box::new(first)), worlds, backend: opts.backend, setup, gpu: opts.gpu })
     }
 
     /// One CPU solver a world (each on one thread: the worlds are what runs in parallel),
     /// built on rayon's threads on `cpu-par`.
     fn build_worlds(backend: Backend, scene: &Scene, params: &[SimParams]) -> Result<Vec<CpuSolver>> {
-        let one = |p: &SimParams| -> Result<CpuSolver> {
-            let mut s = CpuSolver::new(Exec::Serial, scene.clone(), p.clone())?;
-            s.time_kernels = false;
-            Ok(s)
-        };
+        let one = |p: &SimParams| world_solver(scene, p);
         if backend == Backend::CpuPar { params.par_iter().map(one).collect() } else { params.iter().map(one).collect() }
     }
 
@@ -279,7 +273,7 @@ impl Sim {
     /// A value may be one per world: a list for a parameter that takes a number or a word
     /// (`damping=[0.01,0.02]`), a list of lists for one that takes a list.
     pub fn set(&mut self, sets: &[String]) -> Result<()> {
-        let (common, per_world) = split_world_sets(sets)?;
+        let (common, per_world) = split_world_sets(sets);
         let mut each = Vec::with_capacity(self.envs());
         for k in 0..self.envs() {
             let p = crate::setup::apply_overrides(self.world_ref(k)?.params(), &common)?;
@@ -374,8 +368,9 @@ impl Sim {
     }
 
     /// Restores worlds to how they were opened — their state and their time, as a new
-    /// run of the scene with their parameters starts (`None`: every world). Each world's
-    /// parameters stay. A world named twice or past the batch is refused, nothing reset.
+    /// run of the scene with their parameters starts (`None`: every world): each is built
+    /// again (a GPU run's pipelines too). Each world's parameters stay; a script's pin
+    /// motions go. A world named twice or past the batch is refused, nothing reset.
     pub fn reset(&mut self, worlds: Option<&[usize]>) -> Result<()> {
         let all: Vec<usize> = (0..self.envs()).collect();
         let chosen = worlds.unwrap_or(&all);
@@ -387,40 +382,16 @@ impl Sim {
                 bail!("reset: world {k} is named twice");
             }
         }
-        let cpu_exec = match &self.solver {
-            AnySolver::Cpu(_) if self.worlds.is_empty() => {
-                Some(if self.backend == Backend::CpuPar { Exec::Parallel } else { Exec::Serial })
-            }
-            AnySolver::Cpu(_) => Some(Exec::Serial),
-            _ => None,
-        };
-        match cpu_exec {
-            // A CPU world is built again: what a new run starts from, caches included.
-            Some(exec) => {
-                let scene = self.setup.scene.clone();
-                let timed = self.worlds.is_empty();
-                let fresh: Vec<(usize, CpuSolver)> = chosen
-                    .iter()
-                    .map(|&k| {
-                        let mut s = CpuSolver::new(exec, scene.clone(), self.world_ref(k)?.params().clone())?;
-                        s.time_kernels = timed;
-                        Ok((k, s))
-                    })
-                    .collect::<Result<_>>()?;
-                for (k, s) in fresh {
-                    match k {
-                        0 => self.solver = AnySolver::Cpu(Box::new(s)),
-                        _ => self.worlds[k - 1] = s,
-                    }
+        // Each chosen world is built again, as a new run starts (its caches, grab and time
+        // with it): a batch's world as `build_worlds` builds it, a single run as `open`.
+        for &k in chosen {
+            let params = self.world_ref(k)?.params().clone();
+            match k {
+                0 if self.worlds.is_empty() => {
+                    self.solver = make(self.backend, self.setup.scene.clone(), params, &self.gpu, &Shared::None)?;
                 }
-            }
-            // A GPU solver takes the state it was opened with and the time 0.
-            None => {
-                if !chosen.is_empty() {
-                    let initial = self.initial.clone().context("reset: the state at opening was not kept")?;
-                    self.solver.get().set_state(&initial)?;
-                    self.solver.get().set_time(0.0)?;
-                }
+                0 => self.solver = AnySolver::Cpu(Box::new(world_solver(&self.setup.scene, &params)?)),
+                _ => self.worlds[k - 1] = world_solver(&self.setup.scene, &params)?,
             }
         }
         Ok(())
@@ -738,6 +709,14 @@ impl Sim {
     }
 }
 
+/// A batch's world: a CPU solver on one thread (the worlds are what runs in parallel),
+/// without per-kernel timing.
+fn world_solver(scene: &Scene, params: &SimParams) -> Result<CpuSolver> {
+    let mut s = CpuSolver::new(Exec::Serial, scene.clone(), params.clone())?;
+    s.time_kernels = false;
+    Ok(s)
+}
+
 /// The first three components of each.
 fn xyz(v: &[[f32; 4]]) -> Vec<[f32; 3]> {
     v.iter().map(|p| [p[0], p[1], p[2]]).collect()
@@ -899,6 +878,22 @@ mod tests {
         for (worlds, says) in [(&[2usize][..], "world 2: the batch has 2 worlds"), (&[0, 0][..], "named twice")] {
             let e = batch.reset(Some(worlds)).unwrap_err().to_string();
             assert!(e.contains(says), "{e}");
+        }
+        // A GPU run is built again too: after a reset it steps as a new run does.
+        match open("thesis.toml", Backend::Vulkan, 8, 1, &[]) {
+            Ok(mut gpu) => {
+                gpu.step(3).unwrap();
+                gpu.reset(None).unwrap();
+                assert_eq!(gpu.time(), 0.0);
+                gpu.step(2).unwrap();
+                let mut fresh = open("thesis.toml", Backend::Vulkan, 8, 1, &[]).unwrap();
+                fresh.step(2).unwrap();
+                assert!(bits(&gpu.state().unwrap()) == bits(&fresh.state().unwrap()), "vulkan after reset");
+            }
+            Err(e) => {
+                assert!(std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1"), "{e:#}");
+                eprintln!("no Vulkan here: {e:#}");
+            }
         }
     }
 

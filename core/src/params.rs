@@ -768,6 +768,19 @@ pub(crate) fn finite_in(field: impl Into<String>, v: f32, lo: f32, hi: f32) -> R
     Ok(())
 }
 
+/// The values of parameter `name` one per world, where `value` gives them so: a list where
+/// the parameter takes a number or a word (`damping = [0.0, 0.01]`), a list of lists where
+/// it takes a list (`wind = [[1, 0, 0], [2, 0, 0]]`); `None` where `value` is one value
+/// for every world, or `name` is not a parameter. The one rule the command line's `--set`
+/// and a scene file's `[params]` follow.
+pub fn per_world(name: &str, value: &serde_json::Value) -> Option<Vec<serde_json::Value>> {
+    let shape = serde_json::to_value(SimParams::default()).ok()?;
+    let slot = shape.get(name)?;
+    let list = value.as_array()?;
+    let per = if slot.is_array() { !list.is_empty() && list.iter().all(|v| v.is_array()) } else { true };
+    per.then(|| list.clone())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

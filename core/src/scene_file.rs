@@ -91,15 +91,12 @@ pub type WorldList = (String, Vec<serde_json::Value>);
 /// The entries of a `[params]` table `params` that give one value per world (see
 /// [`SceneFile::world_params`]), and the table without them; `None` where there are none.
 fn world_lists(params: &toml::Table) -> Option<(Vec<WorldList>, toml::Table)> {
-    let shape = serde_json::to_value(SimParams::default()).ok()?;
     let mut lists = Vec::new();
     let mut rest = params.clone();
     for (name, value) in params {
-        let (Some(slot), Some(list)) = (shape.get(name), value.as_array()) else { continue };
-        let per_world = if slot.is_array() { !list.is_empty() && list.iter().all(|v| v.is_array()) } else { true };
-        if per_world {
-            let values: Option<Vec<serde_json::Value>> = list.iter().map(|v| serde_json::to_value(v).ok()).collect();
-            lists.push((name.clone(), values?));
+        let values = serde_json::to_value(value).ok().and_then(|v| crate::params::per_world(name, &v));
+        if let Some(values) = values {
+            lists.push((name.clone(), values));
             rest.remove(name);
         }
     }
