@@ -29,8 +29,19 @@ from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
-from . import _clothlab
-from ._clothlab import ClothlabError, ClothlabRuntimeError, ClothlabTypeError, ClothlabValueError
+# Mesa's device-select layer (an implicit Vulkan layer) connects to the Wayland display
+# for every Vulkan instance that enables the Wayland surface extension (wgpu's always
+# does), and libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set" on stderr
+# wherever that variable is unset: X11, Xvfb, a terminal or a notebook server without a
+# login session. There the layer is switched off by its documented variable, as the
+# command line does (app/src/main.rs runs itself again with it); it only orders the GPUs,
+# and clothlab picks its own. The Vulkan loader reads it when an instance is created, so
+# setting it before the first one is enough. A variable the user set is left as it is.
+if "XDG_RUNTIME_DIR" not in os.environ:
+    os.environ.setdefault("NODEVICE_SELECT", "1")
+
+from . import _clothlab  # noqa: E402
+from ._clothlab import ClothlabError, ClothlabRuntimeError, ClothlabTypeError, ClothlabValueError  # noqa: E402
 
 __all__ = [
     "Sim",

@@ -390,3 +390,86 @@ def test_errors_are_type_value_or_runtime_errors_and_all_clothlab_errors():
     env = dict(os.environ, VK_ICD_FILENAMES="/nonexistent-clothlab-icd.json")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert out.stdout.startswith("runtime True no GPU adapter found (Vulkan)"), (out.stdout, out.stderr)
+
+
+def test_listing_and_drawing_print_nothing_on_stderr_without_a_login_session():
+    # Where XDG_RUNTIME_DIR is unset (Xvfb, CI, a terminal without a login session),
+    # Mesa's device-select Vulkan layer made libwayland print "XDG_RUNTIME_DIR is invalid"
+    # twice for every listing of the backends and every picture; the package switches the
+    # layer off there (NODEVICE_SELECT), so stderr stays empty. In a process of its own:
+    # the loader reads the variable when the first instance is created. Run with the
+    # variable the user may have set removed too, so the package's own default is tested.
+    import subprocess
+    import sys
+
+    code = (
+        "import os, clothlab\n"
+        "names = [b['name'] for b in clothlab.backends() if b['available']]\n"
+        "sim = clothlab.Sim(n=8, backend='cpu')\n"
+        "img = sim.render(64, 48)\n"
+        "print(len(names), img.shape, os.environ.get('NODEVICE_SELECT'))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k not in ("XDG_RUNTIME_DIR", "NODEVICE_SELECT")}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    # Every backend of this machine listed (cpu and cpu-par at least), a picture drawn.
+    count, shape = out.stdout.split(" ", 1)
+    assert int(count) >= 2 and "(48, 64, 4)" in shape and shape.strip().endswith("1"), out.stdout
+    assert out.stderr == "", out.stderr
+    # And with the variable set by the user, the package leaves it alone.
+    env["NODEVICE_SELECT"] = "0"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert out.stdout.strip().endswith(" 0"), out.stdout
+
+
+def test_the_native_modules_stubs_name_every_function_and_parameter_it_has():
+    # python/clothlab/_clothlab.pyi is what type checkers and editors read for the native
+    # module: every public function, class and method the module has is in it with the
+    # same parameters in the same order (from pyo3's text signatures), and it names
+    # nothing the module lacks. The package itself (__init__.py) is typed inline and
+    # ships py.typed.
+    import ast
+    import inspect
+
+    from clothlab import _clothlab
+
+    stub = ast.parse((Path(clothlab.__file__).parent / "_clothlab.pyi").read_text())
+    assert (Path(clothlab.__file__).parent / "py.typed").exists()
+
+    def params(f: ast.FunctionDef) -> list:
+        return [a.arg for a in f.args.args if a.arg != "self"]
+
+    def native(obj) -> list:
+        sig = getattr(obj, "__text_signature__", None)
+        assert sig, f"{obj} has no text signature"
+        return [p for p in inspect.signature(obj).parameters if p not in ("self", "$self")]
+
+    stubbed = {}
+    for node in stub.body:
+        if isinstance(node, ast.FunctionDef):
+            stubbed[node.name] = params(node)
+        elif isinstance(node, ast.ClassDef):
+            stubbed[node.name] = None
+            for m in node.body:
+                if isinstance(m, ast.FunctionDef):
+                    stubbed[f"{node.name}.{m.name}"] = params(m)
+    have = {}
+    for name, obj in vars(_clothlab).items():
+        if name.startswith("_"):
+            continue
+        if inspect.isclass(obj):
+            have[name] = None
+            for m, f in vars(obj).items():
+                if not m.startswith("_") and callable(f):
+                    have[f"{name}.{m}"] = native(f)
+            if obj is _clothlab.Sim:
+                have["Sim.__init__"] = native(obj)
+        elif callable(obj):
+            have[name] = native(obj)
+    missing = sorted(set(have) - set(stubbed))
+    extra = sorted(set(stubbed) - set(have) - {"__version__"})
+    assert not missing and not extra, (missing, extra)
+    differ = {k: (stubbed[k], have[k]) for k in have if have[k] is not None and stubbed[k] != have[k]}
+    assert not differ, differ
+    # Sim's methods and the four functions at least: a reader that found none proves nothing.
+    assert len([k for k in have if k.startswith("Sim.")]) >= 25 and "validate" in have, sorted(have)

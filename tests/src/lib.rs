@@ -70,6 +70,12 @@ pub enum Api {
     Gl,
 }
 
+impl std::fmt::Display for Api {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.name())
+    }
+}
+
 impl Api {
     /// Every API, in the order the tests report them.
     pub const ALL: [Api; 3] = [Api::Wgpu, Api::Vulkan, Api::Gl];
@@ -114,18 +120,74 @@ pub const OPTIMIZED_ON: Api = Api::Wgpu;
 /// The physics tests' backends, by name: the two CPU solvers, the naive recipe on
 /// [`NAIVE_ON`] and the optimized one on [`OPTIMIZED_ON`].
 pub fn physics_backend(name: &str) -> bool {
-    name == "cpu"
-        || name == "cpu-par"
-        || name == format!("{} naive", NAIVE_ON.name())
-        || name == format!("{} optimized", OPTIMIZED_ON.name())
+    PHYSICS_BACKENDS.contains(&name)
 }
 
-/// The physics tests' backends on `scene` ([`physics_backend`]); the GPU ones only where
-/// an adapter is (see [`or_skip`]). Vulkan runs under the validation layer: it costs a
-/// physics run about a tenth (`sim --backend vulkan-naive --n 32`, 640 substeps: 3.1 s
-/// without, 3.4–3.6 s with, on lavapipe), so every test checks the API too.
-pub fn every_backend(scene: &Scene, params: &SimParams) -> Vec<(String, Box<dyn Solver>)> {
-    backends(scene, params, physics_backend)
+/// The physics tests' backends by name, in the order the rows run: the two CPU solvers,
+/// the naive recipe on [`NAIVE_ON`], the optimized one on [`OPTIMIZED_ON`]
+/// ([`physics_backend`] accepts exactly these).
+pub const PHYSICS_BACKENDS: [&str; 4] = ["cpu", "cpu-par", "vulkan naive", "wgpu optimized"];
+
+/// The solver of one of [`PHYSICS_BACKENDS`] (or any name [`backends`] builds) on `scene`,
+/// or `None` where it is a GPU one and there is no adapter and none is required
+/// ([`or_skip`]): what a test row of [`per_backend!`] runs.
+pub fn backend(name: &str, scene: &Scene, params: &SimParams) -> Option<Box<dyn Solver>> {
+    let mut all = backends(scene, params, |b| b == name);
+    assert!(all.len() <= 1, "{name}: {} backends", all.len());
+    let s = all.pop();
+    assert!(s.is_some() || !gpu_required(), "{name}: no such backend");
+    s.map(|(_, s)| s)
+}
+
+/// One `#[test]` per physics backend, so that a failing backend names itself
+/// (`name::vulkan_naive`) and the others still run: `per_backend!(name)` makes a module
+/// `name` whose rows call the function `name(backend)` beside it with each name of
+/// [`PHYSICS_BACKENDS`] (which builds its solver with [`backend`]).
+#[macro_export]
+macro_rules! per_backend {
+    ($($name:ident),* $(,)?) => {$(
+        mod $name {
+            #[test]
+            fn cpu() {
+                super::$name("cpu")
+            }
+            #[test]
+            fn cpu_par() {
+                super::$name("cpu-par")
+            }
+            #[test]
+            fn vulkan_naive() {
+                super::$name("vulkan naive")
+            }
+            #[test]
+            fn wgpu_optimized() {
+                super::$name("wgpu optimized")
+            }
+        }
+    )*};
+}
+
+/// One `#[test]` per GPU API ([`Api::ALL`]), so that a failing API names itself
+/// (`name::gl`) and the others still run: `per_api!(name)` makes a module `name` whose
+/// rows call the function `name(api)` beside it.
+#[macro_export]
+macro_rules! per_api {
+    ($($name:ident),* $(,)?) => {$(
+        mod $name {
+            #[test]
+            fn wgpu() {
+                super::$name($crate::Api::Wgpu)
+            }
+            #[test]
+            fn vulkan() {
+                super::$name($crate::Api::Vulkan)
+            }
+            #[test]
+            fn gl() {
+                super::$name($crate::Api::Gl)
+            }
+        }
+    )*};
 }
 
 /// The backends whose names `keep` accepts (`cpu`, `cpu-par`, `vulkan naive`,
@@ -405,4 +467,18 @@ pub fn mean(st: &clothlab_core::ClothState, f: impl Fn(usize) -> f64) -> f64 {
 /// The particles' mean speed, m/s.
 pub fn speed(st: &clothlab_core::ClothState) -> f64 {
     mean(st, |i| st.vel[i][..3].iter().map(|&v| (v as f64).powi(2)).sum::<f64>().sqrt())
+}
+
+#[cfg(test)]
+mod rows {
+    #[test]
+    fn the_physics_rows_are_the_cpu_solvers_and_the_recipes_the_constants_name() {
+        let want = [
+            "cpu".to_owned(),
+            "cpu-par".to_owned(),
+            format!("{} naive", super::NAIVE_ON.name()),
+            format!("{} optimized", super::OPTIMIZED_ON.name()),
+        ];
+        assert_eq!(super::PHYSICS_BACKENDS.map(String::from), want);
+    }
 }

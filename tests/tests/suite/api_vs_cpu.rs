@@ -127,50 +127,48 @@ fn kernels_match_on(api: Api, n: u32, every_flavor: bool) {
     assert_api_clean(&mut *g);
 }
 
-#[test]
-fn every_kernel_flavor_matches_its_cpu_twin_at_n_64_on_every_api() {
-    for api in Api::ALL {
-        kernels_match_on(api, 64, true);
+clothlab_tests::per_api!(every_kernel_flavor_matches_its_cpu_twin_at_n_64);
+
+fn every_kernel_flavor_matches_its_cpu_twin_at_n_64(api: Api) {
+    kernels_match_on(api, 64, true);
+}
+
+clothlab_tests::per_api!(the_solvers_kernels_match_their_twins_at_sizes_that_are_not_multiples_of_a_workgroup);
+
+fn the_solvers_kernels_match_their_twins_at_sizes_that_are_not_multiples_of_a_workgroup(api: Api) {
+    for &n in odd_sizes(api) {
+        kernels_match_on(api, n, false);
     }
 }
 
-#[test]
-fn the_solvers_kernels_match_their_twins_at_sizes_that_are_not_multiples_of_a_workgroup() {
-    for api in Api::ALL {
-        for &n in odd_sizes(api) {
-            kernels_match_on(api, n, false);
-        }
-    }
-}
+clothlab_tests::per_api!(rollouts_of_112_substeps_of_every_preset_stay_close_to_the_cpu);
 
-#[test]
-fn rollouts_of_112_substeps_of_every_preset_stay_close_to_the_cpu_on_every_api() {
+fn rollouts_of_112_substeps_of_every_preset_stay_close_to_the_cpu(api: Api) {
     // 7 frames, 112 substeps of the default 16 per frame: every kernel of each preset's
     // recipe runs in every substep, and the bound grows with the substeps (1e-6 m each),
     // so a kernel left out, doubled or rounding otherwise shows from its first substep
     // at least as clearly as over 208 (on llvmpipe the optimized presets end 0.0 m off,
     // the naive ones within rounding). 13 frames were 18 s of the suite on lavapipe.
     let frames = 7;
-    for api in Api::ALL {
-        let mut ends = Vec::new();
-        for &variant in presets(api) {
-            let Some(mut s) = solver(api, variant, 64) else { return };
-            let c = validate_rollout(&mut *s, frames).unwrap();
-            assert_checks(s.name(), std::slice::from_ref(&c));
-            assert_api_clean(&mut *s);
-            ends.push((c.bound, s.state().unwrap().pos));
-        }
-        // Naive against optimized: both differ from the CPU within the bound, so from each
-        // other within twice of it.
-        let mut ab = compare("naive vs opt", "pos", &ends[0].1, &ends[1].1, false, 0.0);
-        ab.bound = 2.0 * ends[0].0;
-        ab.error = ab.max_abs;
-        assert_checks(&format!("{} rollout", api.name()), &[ab]);
+    let mut ends = Vec::new();
+    for &variant in presets(api) {
+        let Some(mut s) = solver(api, variant, 64) else { return };
+        let c = validate_rollout(&mut *s, frames).unwrap();
+        assert_checks(s.name(), std::slice::from_ref(&c));
+        assert_api_clean(&mut *s);
+        ends.push((c.bound, s.state().unwrap().pos));
     }
+    // Naive against optimized: both differ from the CPU within the bound, so from each
+    // other within twice of it.
+    let mut ab = compare("naive vs opt", "pos", &ends[0].1, &ends[1].1, false, 0.0);
+    ab.bound = 2.0 * ends[0].0;
+    ab.error = ab.max_abs;
+    assert_checks(&format!("{} rollout", api.name()), &[ab]);
 }
 
-#[test]
-fn changed_parameters_reach_the_kernels_on_every_api() {
+clothlab_tests::per_api!(changed_parameters_reach_the_kernels);
+
+fn changed_parameters_reach_the_kernels(api: Api) {
     // Stiffer bend springs, two strain passes and wind: a rollout with them must still
     // match the CPU solver given the same parameters (bound as in validate_rollout).
     let params = SimParams { bend_stiffness: 0.1, strain_iterations: 2, wind: [2.0, 0.0, 1.0], ..SimParams::default() };
@@ -180,68 +178,65 @@ fn changed_parameters_reach_the_kernels_on_every_api() {
     // in 128 substeps, over ROLLOUT_BOUND_PER_SUBSTEP, with or without a table upload:
     // measured on lavapipe; the optimized variants stay bit-exact.)
     let light = SimParams { wind: [2.0, 0.0, 1.0], gravity: [0.0, -9.0, 0.0], ..SimParams::default() };
-    for api in Api::ALL {
-        for (what, p) in [("tables", &params), ("constants only", &light)] {
-            for variant in [Variant::NAIVE, Variant::OPTIMIZED] {
-                let Some(mut s) = solver(api, variant, 48) else { return };
-                s.set_params(p.clone()).unwrap();
-                let c = validate_rollout(&mut *s, 8).unwrap();
-                assert_checks(&format!("{} set_params {what}", s.name()), &[c]);
-                assert_api_clean(&mut *s);
-            }
+    for (what, p) in [("tables", &params), ("constants only", &light)] {
+        for variant in [Variant::NAIVE, Variant::OPTIMIZED] {
+            let Some(mut s) = solver(api, variant, 48) else { return };
+            s.set_params(p.clone()).unwrap();
+            let c = validate_rollout(&mut *s, 8).unwrap();
+            assert_checks(&format!("{} set_params {what}", s.name()), &[c]);
+            assert_api_clean(&mut *s);
         }
     }
 }
 
-#[test]
-fn the_spring_table_from_storage_uniforms_or_an_image_gives_the_twins_results_on_every_api() {
+clothlab_tests::per_api!(the_spring_table_from_storage_uniforms_or_an_image_gives_the_twins_results);
+
+fn the_spring_table_from_storage_uniforms_or_an_image_gives_the_twins_results(api: Api) {
     // With the interior's uniform constants off, every particle reads its slots from the
     // table ([`tables`]): from read-only storage buffers, uniform blocks, or a sampled
     // image (the thesis's texture memory). Same arithmetic as the twins, so the kernel bounds of
     // validate_kernels apply; and a rollout stays within the rollout bound.
-    for api in Api::ALL {
-        for &table in tables(api) {
-            let spec = VariantSpec::parse("optimized", &[format!("table={table}")]).unwrap();
-            let Some(mut s) = solver(api, spec.clone(), 65) else { return };
-            // With the image: its `_tex` flavors (every other flavor is the same kernel as
-            // in the every-flavor test, which does not read the table's image).
-            let kernels = if table == "image" {
-                flavors(&s.caps(), true).into_iter().filter(|k| k.flavor.table_image).collect()
-            } else {
-                s.kernels()
-            };
-            if table == "image" {
-                let names: Vec<String> = kernels.iter().map(|k| k.shader_name()).collect();
-                assert!(names.iter().any(|k| k == "forces_springs_tex_sto"), "{names:?}");
-                assert!(names.iter().any(|k| k.starts_with("strain_limit_tex")), "{names:?}");
-                let tex = kernels.iter().filter(|k| k.flavor.table_image).count();
-                assert!(tex >= 9, "{}: {tex} `_tex` flavors: {names:?}", api.name());
-                // Every kernel of the recipe that reads the table reads it from the image.
-                let recipe = s.recipe_kernels();
-                assert!(recipe.iter().all(|k| !k.def.variants.table_image || k.flavor.table_image), "{recipe:?}");
-            }
-            let checks = validate_kernels(s.runner(), &kernels, 65, 0x7ab1e).unwrap();
-            assert_checks(&format!("{} table={table}", api.name()), &checks);
-            assert_api_clean(&mut *s);
-            // A fresh solver: the kernel checks left the disturbed state in this one.
-            let Some(mut s) = solver(api, spec, 65) else { return };
-            let c = validate_rollout(&mut *s, 6).unwrap();
-            assert_checks(&format!("{} table={table} rollout", api.name()), &[c]);
-            assert_api_clean(&mut *s);
+    for &table in tables(api) {
+        let spec = VariantSpec::parse("optimized", &[format!("table={table}")]).unwrap();
+        let Some(mut s) = solver(api, spec.clone(), 65) else { return };
+        // With the image: its `_tex` flavors (every other flavor is the same kernel as
+        // in the every-flavor test, which does not read the table's image).
+        let kernels = if table == "image" {
+            flavors(&s.caps(), true).into_iter().filter(|k| k.flavor.table_image).collect()
+        } else {
+            s.kernels()
+        };
+        if table == "image" {
+            let names: Vec<String> = kernels.iter().map(|k| k.shader_name()).collect();
+            assert!(names.iter().any(|k| k == "forces_springs_tex_sto"), "{names:?}");
+            assert!(names.iter().any(|k| k.starts_with("strain_limit_tex")), "{names:?}");
+            let tex = kernels.iter().filter(|k| k.flavor.table_image).count();
+            assert!(tex >= 9, "{}: {tex} `_tex` flavors: {names:?}", api.name());
+            // Every kernel of the recipe that reads the table reads it from the image.
+            let recipe = s.recipe_kernels();
+            assert!(recipe.iter().all(|k| !k.def.variants.table_image || k.flavor.table_image), "{recipe:?}");
         }
-        // The thesis preset (springs scattered, the strain limit reading the image) rolled
-        // out after stiffer springs are set, so that the image is rewritten (the raw APIs
-        // roll it out in the rollouts' test).
-        if api != Api::Wgpu {
-            continue;
-        }
-        let Some(mut t) = solver(api, Variant::THESIS, 48) else { return };
-        assert_eq!(t.name(), format!("{}-thesis", api.name()));
-        t.set_params(SimParams { bend_stiffness: 0.1, ..SimParams::default() }).unwrap();
-        let c = validate_rollout(&mut *t, 8).unwrap();
-        assert_checks(&format!("{} thesis rollout", api.name()), &[c]);
-        assert_api_clean(&mut *t);
+        let checks = validate_kernels(s.runner(), &kernels, 65, 0x7ab1e).unwrap();
+        assert_checks(&format!("{} table={table}", api.name()), &checks);
+        assert_api_clean(&mut *s);
+        // A fresh solver: the kernel checks left the disturbed state in this one.
+        let Some(mut s) = solver(api, spec, 65) else { return };
+        let c = validate_rollout(&mut *s, 6).unwrap();
+        assert_checks(&format!("{} table={table} rollout", api.name()), &[c]);
+        assert_api_clean(&mut *s);
     }
+    // The thesis preset (springs scattered, the strain limit reading the image) rolled
+    // out after stiffer springs are set, so that the image is rewritten (the raw APIs
+    // roll it out in the rollouts' test).
+    if api != Api::Wgpu {
+        return;
+    }
+    let Some(mut t) = solver(api, Variant::THESIS, 48) else { return };
+    assert_eq!(t.name(), format!("{}-thesis", api.name()));
+    t.set_params(SimParams { bend_stiffness: 0.1, ..SimParams::default() }).unwrap();
+    let c = validate_rollout(&mut *t, 8).unwrap();
+    assert_checks(&format!("{} thesis rollout", api.name()), &[c]);
+    assert_api_clean(&mut *t);
 }
 
 /// A solver with GPU statistics in `stats` mode, or `None` where the adapter refuses the
@@ -264,24 +259,23 @@ fn with_stats(api: Api, variant: Variant, stats: StatsMode) -> Option<Box<dyn An
     }
 }
 
-#[test]
-fn gpu_statistics_match_the_cpu_twin_by_subgroups_and_by_atomics_on_every_api() {
+clothlab_tests::per_api!(gpu_statistics_match_the_cpu_twin_by_subgroups_and_by_atomics);
+
+fn gpu_statistics_match_the_cpu_twin_by_subgroups_and_by_atomics(api: Api) {
     // n = 65: 4225 particles, the last workgroup partly empty. The max strain is a max of
     // the same f32 values the twin computes (length and a division: within 4 ulps of
     // ~1.1, so 1e-6 absolute). The energy is a sum of 4225 positive terms in another
     // order than the twin's f64 sum: by atomics in any order, relative error below
     // N·2^-24 = 2.5e-4; by subgroups a tree of depth ~log2(N) plus 67 partials in
     // sequence, so below 1e-4 too (measured on lavapipe: ~1e-7 both).
-    for api in Api::ALL {
-        for (variant, stats, energy_bound) in [
-            (Variant::OPTIMIZED, StatsMode::Subgroups, 1e-4),
-            (Variant::OPTIMIZED, StatsMode::Atomics, 2.5e-4),
-            (Variant::NAIVE, StatsMode::Atomics, 2.5e-4),
-        ] {
-            let Some(mut s) = with_stats(api, variant, stats) else { continue };
-            s.stats_match_twin(energy_bound);
-            assert_api_clean(&mut *s);
-        }
+    for (variant, stats, energy_bound) in [
+        (Variant::OPTIMIZED, StatsMode::Subgroups, 1e-4),
+        (Variant::OPTIMIZED, StatsMode::Atomics, 2.5e-4),
+        (Variant::NAIVE, StatsMode::Atomics, 2.5e-4),
+    ] {
+        let Some(mut s) = with_stats(api, variant, stats) else { return };
+        s.stats_match_twin(energy_bound);
+        assert_api_clean(&mut *s);
     }
 }
 

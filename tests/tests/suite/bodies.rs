@@ -9,7 +9,7 @@ use clothlab_core::mesh::{Placement, load_obj};
 use clothlab_core::scene::Pinning;
 use clothlab_core::sdf::Body;
 use clothlab_core::{Motion, Scene, SceneFile, SimParams, Solver, Sphere};
-use clothlab_tests::{assert_checks, every_backend, speed, still_air};
+use clothlab_tests::{Api, assert_checks, backend, speed, still_air};
 
 fn meshes() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/meshes")
@@ -41,8 +41,9 @@ fn spinning_body() -> Scene {
     s
 }
 
-#[test]
-fn a_patch_on_a_spinning_body_moves_with_its_surface_when_it_sticks_and_not_when_it_slides() {
+clothlab_tests::per_backend!(a_patch_on_a_spinning_body_moves_with_its_surface_when_it_sticks_and_not_when_it_slides);
+
+fn a_patch_on_a_spinning_body_moves_with_its_surface_when_it_sticks_and_not_when_it_slides(name: &str) {
     // The icosphere's top vertex sits on the axis' normal plane at r: the patch rests on
     // the faces around it, whose field's zero level is within the faceting (≤ 3 mm at
     // 0.5 m, 1280 faces) of the sphere, plus the margin. With friction 1 each particle
@@ -51,7 +52,7 @@ fn a_patch_on_a_spinning_body_moves_with_its_surface_when_it_sticks_and_not_when
     // plane, the field's interpolation).
     let margin = SimParams::default().collision_margin;
     let surface = (OMEGA * (R + margin)) as f64;
-    for (name, mut s) in every_backend(&spinning_body(), &still_air(1.0)) {
+    if let Some(mut s) = backend(name, &spinning_body(), &still_air(1.0)) {
         for _ in 0..15 {
             s.step_frame().unwrap();
         }
@@ -62,7 +63,7 @@ fn a_patch_on_a_spinning_body_moves_with_its_surface_when_it_sticks_and_not_when
     // Friction 0: only the normal part of the relative velocity goes; the patch stays on
     // the top, sliding off only as gravity pulls it down the faces (under 5 % of the
     // sticking speed after 0.25 s, as on the analytic sphere).
-    for (name, mut s) in every_backend(&spinning_body(), &still_air(0.0)) {
+    if let Some(mut s) = backend(name, &spinning_body(), &still_air(0.0)) {
         for _ in 0..15 {
             s.step_frame().unwrap();
         }
@@ -93,8 +94,9 @@ fn box_mesh(lo: [f32; 3], hi: [f32; 3]) -> clothlab_core::mesh::TriMesh {
     clothlab_core::mesh::TriMesh { positions, uvs: None, triangles }
 }
 
-#[test]
-fn a_patch_on_a_body_turned_by_keys_moves_at_the_keys_rate() {
+clothlab_tests::per_backend!(a_patch_on_a_body_turned_by_keys_moves_at_the_keys_rate);
+
+fn a_patch_on_a_body_turned_by_keys_moves_at_the_keys_rate(name: &str) {
     use clothlab_core::Key;
     // A 1 m × 0.2 m × 1 m box body turned by keys 0 → 90° about y in 1 s (linear: ω =
     // π/2 rad/s about its centre); a 2 cm patch lies on its top 0.3 m from the axis. With
@@ -116,7 +118,7 @@ fn a_patch_on_a_body_turned_by_keys_moves_at_the_keys_rate() {
     sc.bodies = vec![Body::new(box_mesh([-0.5, 0.0, -0.5], [0.5, 0.2, 0.5]), 32, None, None, turn).unwrap()];
     let want = std::f64::consts::FRAC_PI_2 * 0.3;
     for (friction, sticks) in [(1.0, true), (0.0, false)] {
-        for (name, mut s) in every_backend(&sc, &still_air(friction)) {
+        if let Some(mut s) = backend(name, &sc, &still_air(friction)) {
             for _ in 0..15 {
                 s.step_frame().unwrap();
             }
@@ -149,8 +151,9 @@ fn drape(body: Option<u32>) -> Scene {
     s
 }
 
-#[test]
-fn an_icosphere_body_drapes_a_cloth_as_the_sphere_does_and_holds_it_outside() {
+clothlab_tests::per_backend!(an_icosphere_body_drapes_a_cloth_as_the_sphere_does_and_holds_it_outside);
+
+fn an_icosphere_body_drapes_a_cloth_as_the_sphere_does_and_holds_it_outside(name: &str) {
     let params = SimParams::default();
     let run = |scene: &Scene, frames: u32| {
         let mut s = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, scene.clone(), params.clone()).unwrap();
@@ -187,7 +190,7 @@ fn an_icosphere_body_drapes_a_cloth_as_the_sphere_does_and_holds_it_outside() {
     // field's gradient to its margin level); the strain passes after them could pull one
     // back in where the cloth wraps round (measured: none, the deepest at the margin).
     let scene = drape(Some(32));
-    for (name, mut s) in every_backend(&scene, &params) {
+    if let Some(mut s) = backend(name, &scene, &params) {
         for _ in 0..40 {
             s.step_frame().unwrap();
         }
@@ -289,8 +292,9 @@ fn image_spec() -> clothlab_engine::VariantSpec {
     clothlab_engine::VariantSpec::parse("optimized", &["sdf=image".into()]).unwrap()
 }
 
-#[test]
-fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_precision() {
+clothlab_tests::per_api!(the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_precision);
+
+fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_precision(api: Api) {
     let params = SimParams::default();
     // Physics first: the icosphere at 48 cells sampled by the texture unit drapes the
     // cloth as the analytic sphere does, within the storage path's bound (0.3 h + 2 mm:
@@ -302,7 +306,7 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
         sphere.step_frame().unwrap();
     }
     let a = sphere.state().unwrap();
-    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &drape(Some(48)), &params) {
+    if let Some(mut s) = api.solver(image_spec(), &drape(Some(48)), &params) {
         for _ in 0..20 {
             s.step_frame().unwrap();
         }
@@ -322,11 +326,14 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
     let mut sc = drape(Some(32));
     sc.bodies[0].motion = Motion { spin: [0.0, 2.0, 0.0], velocity: [0.1, 0.0, 0.0], ..Motion::default() };
     sc.cloth.top_center[1] = 0.95;
-    let checks = clothlab_tests::kernel_checks_of(&image_spec(), &sc, &params, 0x5d);
-    assert!(checks.iter().any(|c| c.what.contains("_si")), "no kernel samples the image");
-    assert_checks("sdf=image", &checks);
+    let Some(mut k) = api.solver(image_spec(), &sc, &params) else { return };
+    let kernels = k.recipe_kernels();
+    let checks = clothlab_engine::validate::validate_kernels_with(k.runner(), &kernels, &sc, 0x5d, &params).unwrap();
+    clothlab_tests::assert_api_clean(&mut *k);
+    assert!(checks.iter().any(|c| c.what.contains("_si")), "{api}: no kernel samples the image");
+    assert_checks(&format!("{api} sdf=image"), &checks);
     let bound = clothlab_engine::validate::sdf_image_bound(&sc);
-    for (api, s) in clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &params) {
+    if let Some(s) = api.solver(image_spec(), &sc, &params) {
         let mut s = s.into_solver();
         let mut c = clothlab_core::validate::validate_rollout(&mut *s, 12).unwrap();
         c.bound = c.bound.max(bound);
@@ -335,14 +342,15 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
     }
 }
 
-#[test]
-fn a_patch_on_a_spinning_body_in_an_image_moves_with_its_surface() {
+clothlab_tests::per_api!(a_patch_on_a_spinning_body_in_an_image_moves_with_its_surface);
+
+fn a_patch_on_a_spinning_body_in_an_image_moves_with_its_surface(api: Api) {
     // The spinning icosphere of the first test, sampled by the texture unit: the patch
     // moves at ω (r + margin) within the same 2 % (φ through the filter, the push along
     // the interpolant's gradient as through storage), on every API.
     let margin = SimParams::default().collision_margin;
     let surface = (OMEGA * (R + margin)) as f64;
-    for (api, mut s) in clothlab_tests::gpu_solvers_of(&image_spec(), &spinning_body(), &still_air(1.0)) {
+    if let Some(mut s) = api.solver(image_spec(), &spinning_body(), &still_air(1.0)) {
         for _ in 0..15 {
             s.step_frame().unwrap();
         }
@@ -352,16 +360,15 @@ fn a_patch_on_a_spinning_body_in_an_image_moves_with_its_surface() {
     }
 }
 
-#[test]
-fn a_scene_without_bodies_runs_the_image_switch_as_storage_does() {
+clothlab_tests::per_api!(a_scene_without_bodies_runs_the_image_switch_as_storage_does);
+
+fn a_scene_without_bodies_runs_the_image_switch_as_storage_does(api: Api) {
     // No bodies: the image is one texel the kernels never sample (the loop over bodies is
     // empty), so the recipe computes the storage recipe's bits on every API.
     let sc = Scene::with_n(24);
     let p = SimParams::default();
-    let mut storage = clothlab_tests::gpu_solvers_of(&clothlab_engine::Variant::OPTIMIZED.into(), &sc, &p);
-    for ((api, mut a), (_, mut b)) in
-        clothlab_tests::gpu_solvers_of(&image_spec(), &sc, &p).into_iter().zip(storage.drain(..))
-    {
+    let storage = api.solver(clothlab_engine::Variant::OPTIMIZED, &sc, &p);
+    if let (Some(mut a), Some(mut b)) = (api.solver(image_spec(), &sc, &p), storage) {
         for _ in 0..4 {
             a.step_frame().unwrap();
             b.step_frame().unwrap();

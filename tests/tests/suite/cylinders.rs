@@ -5,7 +5,7 @@
 
 use clothlab_core::scene::{ColliderId, Pinning};
 use clothlab_core::{Capsule, Cylinder, Integrator, Motion, Scene, SceneFile, SimParams};
-use clothlab_tests::{assert_checks, every_backend, mean, still_air};
+use clothlab_tests::{assert_checks, backend, mean, still_air};
 
 /// A 2 cm patch of 4 × 4 particles 1 mm above the top cap (y = 1) of an upright cylinder
 /// of radius 0.3 m, its centre `off` m from the axis along x, the cylinder turning at
@@ -23,12 +23,13 @@ fn turntable(off: f32, spin: f32) -> Scene {
     s
 }
 
-#[test]
-fn a_patch_rests_on_the_cap_and_the_side_and_a_turntable_carries_it_round() {
+clothlab_tests::per_backend!(a_patch_rests_on_the_cap_and_the_side_and_a_turntable_carries_it_round);
+
+fn a_patch_rests_on_the_cap_and_the_side_and_a_turntable_carries_it_round(name: &str) {
     let margin = SimParams::default().collision_margin;
     // On the cap: after 0.25 s every particle lies at the cap's height plus the margin,
     // to 1e-6 m (a few ulps of 1 m: the contact puts it there exactly).
-    for (name, mut s) in every_backend(&turntable(0.1, 0.0), &still_air(0.5)) {
+    if let Some(mut s) = backend(name, &turntable(0.1, 0.0), &still_air(0.5)) {
         for _ in 0..15 {
             s.step_frame().unwrap();
         }
@@ -43,7 +44,7 @@ fn a_patch_rests_on_the_cap_and_the_side_and_a_turntable_carries_it_round() {
     side.cylinders = vec![Cylinder::new([-0.5, 1.0, 0.0], [0.5, 1.0, 0.0], 0.2)];
     side.cloth.top_center = [0.0, 1.2 + margin + 1e-3, -0.01];
     side.motions.clear();
-    for (name, mut s) in every_backend(&side, &still_air(0.5)) {
+    if let Some(mut s) = backend(name, &side, &still_air(0.5)) {
         for _ in 0..15 {
             s.step_frame().unwrap();
         }
@@ -58,7 +59,7 @@ fn a_patch_rests_on_the_cap_and_the_side_and_a_turntable_carries_it_round() {
     // times the mean distance within 0.5 % (the last substep's gravity and rounding;
     // measured to 4 digits), and the patch has turned about the axis (its centre's angle
     // from +x moved by more than 0.5 rad in 0.5 s: ω t = 1 rad less the first contacts).
-    for (name, mut s) in every_backend(&turntable(0.1, 2.0), &still_air(1.0)) {
+    if let Some(mut s) = backend(name, &turntable(0.1, 2.0), &still_air(1.0)) {
         for _ in 0..30 {
             s.step_frame().unwrap();
         }

@@ -8,7 +8,7 @@
 
 use clothlab_core::scene::{ColliderId, Pinning};
 use clothlab_core::{ClothState, Integrator, Motion, Scene, SimParams, Solver};
-use clothlab_tests::{TABLE_V, assert_checks, backends, every_backend, mean, moving_table, still_air};
+use clothlab_tests::{TABLE_V, assert_checks, backend, backends, mean, moving_table, still_air};
 
 const G: f64 = 9.81;
 const MU_S: f32 = 0.5;
@@ -40,8 +40,9 @@ fn run(s: &mut dyn Solver, frames: u32) -> ClothState {
     s.state().unwrap()
 }
 
-#[test]
-fn a_cloth_sliding_on_the_floor_slows_at_mu_k_g_and_stops_where_coulomb_says() {
+clothlab_tests::per_backend!(a_cloth_sliding_on_the_floor_slows_at_mu_k_g_and_stops_where_coulomb_says);
+
+fn a_cloth_sliding_on_the_floor_slows_at_mu_k_g_and_stops_where_coulomb_says(name: &str) {
     // Every substep gravity adds g·dt into the floor and the contact removes it: the
     // tangential speed loses μk·g·dt, exactly, until it is below μs·g·dt and sticks. The
     // cloth moves as one piece (its springs unstretched), so after 0.25 s every particle
@@ -50,7 +51,7 @@ fn a_cloth_sliding_on_the_floor_slows_at_mu_k_g_and_stops_where_coulomb_says() {
     // v0·dt/2 (the substeps' sum: each moves by the speed after its own friction) =
     // 0.6786 m: 1 mm covers the last substep's fraction. At 1 s it is still, to 1e-6 m/s.
     let (v0, dt) = (2.0, SimParams::default().dt() as f64);
-    for (name, mut s) in every_backend(&on_the_floor(v0 as f32), &coulomb(MU_S, MU_K)) {
+    if let Some(mut s) = backend(name, &on_the_floor(v0 as f32), &coulomb(MU_S, MU_K)) {
         let start = s.state().unwrap();
         let cx0 = mean(&start, |i| start.pos[i][0] as f64);
         let st = run(&mut *s, 15);
@@ -73,8 +74,9 @@ fn slope(deg: f64, params: SimParams) -> (Scene, SimParams) {
     (on_the_floor(0.0), SimParams { gravity, ..params })
 }
 
-#[test]
-fn a_slope_holds_the_cloth_below_tan_theta_mu_s_and_lets_it_slide_above() {
+clothlab_tests::per_backend!(a_slope_holds_the_cloth_below_tan_theta_mu_s_and_lets_it_slide_above);
+
+fn a_slope_holds_the_cloth_below_tan_theta_mu_s_and_lets_it_slide_above(name: &str) {
     // 20°: tan θ = 0.364 < μs = 0.5. Each substep gravity's tangential g sin θ·dt is at
     // most μs times the normal g cos θ·dt the contact removes: the velocity stays 0 and
     // the position is moved back by what friction took, so the cloth does not creep — in
@@ -82,7 +84,7 @@ fn a_slope_holds_the_cloth_below_tan_theta_mu_s_and_lets_it_slide_above() {
     // ulp 7e-9). The share model (friction 0.4) cannot hold it: it creeps at
     // 1.5 g sin θ·dt = 5 mm/s, more than 1 mm in 0.5 s.
     let (sc, p) = slope(20.0, coulomb(MU_S, MU_K));
-    for (name, mut s) in every_backend(&sc, &p) {
+    if let Some(mut s) = backend(name, &sc, &p) {
         let start = s.state().unwrap();
         let st = run(&mut *s, 30);
         let moved = (0..st.pos.len())
@@ -101,7 +103,7 @@ fn a_slope_holds_the_cloth_below_tan_theta_mu_s_and_lets_it_slide_above() {
     // = 2.357 m/s²: 1.1784 m/s after 0.5 s, to 1e-4 m/s (rounding, as on the floor).
     let want = G * (30f64.to_radians().sin() - MU_K as f64 * 30f64.to_radians().cos()) * 0.5;
     let (sc, p) = slope(30.0, coulomb(MU_S, MU_K));
-    for (name, mut s) in every_backend(&sc, &p) {
+    if let Some(mut s) = backend(name, &sc, &p) {
         let st = run(&mut *s, 30);
         let vx = mean(&st, |i| st.vel[i][0] as f64);
         println!("{name:18} 30° slope: vx {vx:.5} m/s (Coulomb {want:.5})");

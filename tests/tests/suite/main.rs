@@ -10,6 +10,7 @@ mod capsules;
 mod cloth_friction;
 mod custom_kernel;
 mod cylinders;
+mod docs_names;
 mod dt_change;
 mod free_fall;
 mod friction;

@@ -10,22 +10,23 @@ use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Integrator, Scene, SceneFile, SimParams, SolverError};
 use clothlab_engine::validate::{flavors, validate_kernels_with};
 use clothlab_engine::{Variant, VariantSpec};
-use clothlab_tests::{AnyGpuSolver, assert_api_clean, assert_checks, gpu_solvers_of};
+use clothlab_tests::{AnyGpuSolver, Api, assert_api_clean, assert_checks, gpu_solvers_of};
 
 fn scene_file(name: &str) -> SceneFile {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     SceneFile::load(&dir.join(name)).unwrap_or_else(|e| panic!("{e}"))
 }
 
-#[test]
-fn every_kernel_flavor_on_a_mesh_matches_its_twin_on_every_api() {
+clothlab_tests::per_api!(every_kernel_flavor_on_a_mesh_matches_its_twin);
+
+fn every_kernel_flavor_on_a_mesh_matches_its_twin(api: Api) {
     // The flag: wind, pins, a hole (border vertices of every valence); the fan: vertices
     // of 3 to 64 triangles (rows of 6 to 128 springs). Every flavor of every kernel that
     // runs on a mesh (the XPBD mesh passes included; the grid's XPBD passes and
     // self-collision are grid-only), within its bound.
     for name in ["mesh-flag.toml", "mesh-fan.toml"] {
         let file = scene_file(name);
-        for (api, s) in gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &file.params) {
+        if let Some(s) = api.solver(Variant::OPTIMIZED, &file.scene, &file.params) {
             every_flavor_matches(&format!("{api} {name}"), s, &file);
         }
     }
@@ -46,8 +47,9 @@ fn every_flavor_matches(api: &str, mut s: Box<dyn AnyGpuSolver>, file: &SceneFil
     assert_api_clean(&mut *s);
 }
 
-#[test]
-fn the_optimized_recipes_on_a_mesh_compute_the_cpu_solvers_bits_on_llvmpipe() {
+clothlab_tests::per_api!(the_optimized_recipes_on_a_mesh_compute_the_cpu_solvers_bits_on_llvmpipe);
+
+fn the_optimized_recipes_on_a_mesh_compute_the_cpu_solvers_bits_on_llvmpipe(api: Api) {
     // Verlet on the flag (forces, springs and wind fused over the table, the general
     // strain limit, normals over the triangle list) and XPBD on the skirt (the mesh's
     // passes): each kernel of the recipe and an 8-frame rollout exactly the CPU's on
@@ -61,10 +63,8 @@ fn the_optimized_recipes_on_a_mesh_compute_the_cpu_solvers_bits_on_llvmpipe() {
     ] {
         let file = scene_file(name);
         let params = SimParams { integrator, ..file.params.clone() };
-        let fresh = gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &params);
-        for ((api, mut s), (_, mut rollout)) in
-            gpu_solvers_of(&Variant::OPTIMIZED.into(), &file.scene, &params).into_iter().zip(fresh)
-        {
+        let fresh = || api.solver(Variant::OPTIMIZED, &file.scene, &params);
+        if let (Some(mut s), Some(mut rollout)) = (fresh(), fresh()) {
             let adapter = s.adapter();
             let kernels = s.recipe_kernels();
             assert!(kernels.len() >= 4, "{api}: {kernels:?}");
@@ -82,15 +82,16 @@ fn the_optimized_recipes_on_a_mesh_compute_the_cpu_solvers_bits_on_llvmpipe() {
                     );
                 }
             } else {
-                assert_checks(&api, &checks);
+                assert_checks(api.name(), &checks);
             }
             assert_api_clean(&mut *s);
         }
     }
 }
 
-#[test]
-fn the_naive_recipe_on_a_mesh_stays_within_the_rollout_bound() {
+clothlab_tests::per_api!(the_naive_recipe_on_a_mesh_stays_within_the_rollout_bound);
+
+fn the_naive_recipe_on_a_mesh_stays_within_the_rollout_bound(api: Api) {
     // The tablecloth falling onto its sphere: scatters with atomics add in another order
     // than the twins (rounding only), and for these 13 frames the drape amplifies none of
     // it (measured on lavapipe: 3e-7 m against a bound of 2e-4 m). The skirt and the flag
@@ -98,9 +99,9 @@ fn the_naive_recipe_on_a_mesh_stays_within_the_rollout_bound() {
     // few frames whatever computes it (the CPU engine's naive recipe against the CPU
     // solver: 5 mm after 3 frames on the skirt), so they are checked bit for bit above.
     let file = scene_file("mesh-tablecloth.toml");
-    for (api, mut s) in gpu_solvers_of(&Variant::NAIVE.into(), &file.scene, &file.params) {
+    if let Some(mut s) = api.solver(Variant::NAIVE, &file.scene, &file.params) {
         let c = validate_rollout(&mut *s, 13).unwrap();
-        assert_checks(&api, &[c]);
+        assert_checks(api.name(), &[c]);
         assert_api_clean(&mut *s);
     }
 }

@@ -5,7 +5,7 @@
 use clothlab_core::scene::{Aabb, ColliderId, Pinning};
 use clothlab_core::{Ease, Integrator, Key, Motion, Repeat, Scene, SimParams, Solver, Sphere};
 use clothlab_engine::{RecipeSolver, Variant};
-use clothlab_tests::{TABLE_V, assert_checks, every_backend, mean, moving_table, or_skip, speed, still_air};
+use clothlab_tests::{TABLE_V, assert_checks, backend, mean, moving_table, or_skip, speed, still_air};
 
 /// Sphere radius, m, and its spin about z, rad/s.
 const R: f32 = 0.5;
@@ -28,8 +28,9 @@ fn spinning_sphere() -> Scene {
     s
 }
 
-#[test]
-fn a_patch_on_a_spinning_sphere_moves_with_its_surface_when_it_sticks_and_not_when_it_slides() {
+clothlab_tests::per_backend!(a_patch_on_a_spinning_sphere_moves_with_its_surface_when_it_sticks_and_not_when_it_slides);
+
+fn a_patch_on_a_spinning_sphere_moves_with_its_surface_when_it_sticks_and_not_when_it_slides(name: &str) {
     let margin = SimParams::default().collision_margin;
     // The surface under the patch moves at ω (r + margin): the contacts push the particles
     // to the margin's sphere and leave them the surface's velocity there (friction 1: no
@@ -39,7 +40,7 @@ fn a_patch_on_a_spinning_sphere_moves_with_its_surface_when_it_sticks_and_not_wh
     // axis is 0.9998 of the radius) and the substep's rounding; the patch turns with the
     // sphere as one piece, its springs unstretched.
     let surface = (OMEGA * (R + margin)) as f64;
-    for (name, mut s) in every_backend(&spinning_sphere(), &still_air(1.0)) {
+    if let Some(mut s) = backend(name, &spinning_sphere(), &still_air(1.0)) {
         for _ in 0..FRAMES {
             s.step_frame().unwrap();
         }
@@ -57,7 +58,7 @@ fn a_patch_on_a_spinning_sphere_moves_with_its_surface_when_it_sticks_and_not_wh
     // spin cannot drag the patch. It stays on the top, sliding off it only as its outer
     // particles (1 cm off the top, 0.02 rad) fall away at g·sin θ ≤ 0.2 m/s²: under
     // 0.05 m/s after 0.25 s, so below 5 % of the sticking speed.
-    for (name, mut s) in every_backend(&spinning_sphere(), &still_air(0.0)) {
+    if let Some(mut s) = backend(name, &spinning_sphere(), &still_air(0.0)) {
         for _ in 0..FRAMES {
             s.step_frame().unwrap();
         }
@@ -80,16 +81,17 @@ fn ride(name: &str, s: &mut dyn Solver) -> (f64, f64) {
     (mean(&st, |i| st.vel[i][0] as f64), mean(&st, |i| st.pos[i][0] as f64) - x0)
 }
 
-#[test]
-fn a_cloth_on_a_table_moving_at_constant_velocity_moves_with_it_when_friction_sticks() {
+clothlab_tests::per_backend!(a_cloth_on_a_table_moving_at_constant_velocity_moves_with_it_when_friction_sticks);
+
+fn a_cloth_on_a_table_moving_at_constant_velocity_moves_with_it_when_friction_sticks(name: &str) {
     // With sticking friction every particle on the table leaves each contact with the
     // table's x velocity exactly (the tangential velocity relative to it is removed, the
     // top's normal is y): the mean vx is 0.5 to rounding (1e-4 relative). The cloth lands
     // within 0.03 s (2 mm and the margin at g), so by t = 0.5 s it has moved 0.5 · (0.5 −
     // 0.03) to 0.25 m.
     let v = TABLE_V as f64;
-    for (name, mut s) in every_backend(&moving_table(2e-3), &still_air(1.0)) {
-        let (vx, dx) = ride(&name, &mut *s);
+    if let Some(mut s) = backend(name, &moving_table(2e-3), &still_air(1.0)) {
+        let (vx, dx) = ride(name, &mut *s);
         println!("{name:18} on the moving table: vx {vx:.6} m/s, moved {dx:.4} m");
         assert!((vx - v).abs() <= 1e-4 * v, "{name}: the cloth moves at {vx}, the table at {v}");
         assert!((v * 0.47 - 1e-3..=v * 0.5).contains(&dx), "{name}: the cloth moved {dx} m");

@@ -8,7 +8,7 @@ use clothlab_core::validate::{compare, validate_rollout};
 use clothlab_core::{Exec, Scene, SceneFile, SimParams, Solver};
 use clothlab_engine::Variant;
 use clothlab_engine::validate::{KernelRunner, validate_kernels_with};
-use clothlab_tests::{Api, assert_checks, every_backend, or_skip};
+use clothlab_tests::{Api, assert_checks, backend, or_skip};
 use clothlab_vulkan::vulkan_solver;
 use clothlab_wgpu::{SolverOptions, wgpu_solver};
 
@@ -50,8 +50,48 @@ fn every_scene_file_loads_and_builds() {
     assert_eq!(thesis.params, SimParams::default());
 }
 
-#[test]
-fn every_scene_file_computes_the_cpus_bits_on_every_apis_optimized_recipe() {
+/// Frames each scene file runs in the bits test: every kernel of a recipe runs in each
+/// substep, and the second frame starts from what the first frame's end wrote (the normals
+/// of `normals=frame`, which its forces read for the wind). 3 frames took 40 s on lavapipe.
+const SCENE_FRAMES: u32 = 2;
+
+/// Every scene file (a grid at most 32 × 32), with the serial CPU solver's state after
+/// [`SCENE_FRAMES`]: computed once for the API rows. Where the scene has the contact
+/// between triangles, the rayon solver is checked to compute the serial one's bits (its
+/// sums are integer sums).
+fn cpu_ends() -> &'static [(String, SceneFile, clothlab_core::ClothState)] {
+    static ENDS: std::sync::OnceLock<Vec<(String, SceneFile, clothlab_core::ClothState)>> = std::sync::OnceLock::new();
+    ENDS.get_or_init(|| {
+        let scenes = scene_files();
+        assert!(scenes.len() >= 20, "{scenes:?}");
+        let run = |s: &mut dyn Solver| {
+            for _ in 0..SCENE_FRAMES {
+                s.step_frame().unwrap();
+            }
+            s.state().unwrap()
+        };
+        let mut ends = Vec::new();
+        for path in &scenes {
+            let mut f = SceneFile::load(path).unwrap_or_else(|e| panic!("{e}"));
+            if !f.scene.cloth.is_mesh() {
+                f.scene.cloth.n = f.scene.cloth.n.min(32);
+            }
+            let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+            let new = |exec| clothlab_core::CpuSolver::new(exec, f.scene.clone(), f.params.clone()).unwrap();
+            let want = run(&mut new(Exec::Serial));
+            if f.params.self_collision.triangles() {
+                let got = run(&mut new(Exec::Parallel));
+                assert!(got.pos == want.pos && got.vel == want.vel, "{name}: cpu-par is not cpu's bits");
+            }
+            ends.push((name, f, want));
+        }
+        ends
+    })
+}
+
+clothlab_tests::per_api!(every_scene_file_computes_the_cpus_bits_on_the_optimized_recipe);
+
+fn every_scene_file_computes_the_cpus_bits_on_the_optimized_recipe(api: Api) {
     // Every scene under scenes/ (together: every integrator a scene names, the floor,
     // spheres, boxes, capsules, bodies, moving colliders and pins, Coulomb friction,
     // self-collision, several cloths, meshes), 2 frames on each API's optimized recipe
@@ -64,60 +104,36 @@ fn every_scene_file_computes_the_cpus_bits_on_every_apis_optimized_recipe() {
     // Two frames: every kernel of a recipe runs in each substep, and the second frame
     // starts from what the first frame's end wrote (the normals of `normals=frame`, which
     // its forces read for the wind). 3 frames took 40 s on lavapipe.
-    const FRAMES: u32 = 2;
-    let scenes = scene_files();
-    assert!(scenes.len() >= 20, "{scenes:?}");
     let mut differ = Vec::new();
-    for path in &scenes {
-        let mut f = SceneFile::load(path).unwrap_or_else(|e| panic!("{e}"));
-        if !f.scene.cloth.is_mesh() {
-            f.scene.cloth.n = f.scene.cloth.n.min(32);
-        }
-        let name = path.file_stem().unwrap().to_string_lossy().into_owned();
-        let mut cpu = clothlab_core::CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
-        for _ in 0..FRAMES {
-            cpu.step_frame().unwrap();
-        }
-        let want = cpu.state().unwrap();
+    for (name, f, want) in cpu_ends() {
         let triangles = f.params.self_collision.triangles();
-        if triangles {
-            // The contact between triangles: the rayon solver computes the serial one's
-            // bits (its sums are integer sums).
-            let mut par = clothlab_core::CpuSolver::new(Exec::Parallel, f.scene.clone(), f.params.clone()).unwrap();
-            for _ in 0..FRAMES {
-                par.step_frame().unwrap();
-            }
-            let got = par.state().unwrap();
-            assert!(got.pos == want.pos && got.vel == want.vel, "{name}: cpu-par is not cpu's bits");
+        let Some(gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &f.params) else { continue };
+        let adapter = gpu.adapter();
+        let mut s = gpu.into_solver();
+        for _ in 0..SCENE_FRAMES {
+            s.step_frame().unwrap();
         }
-        for api in Api::ALL {
-            let Some(gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &f.params) else { continue };
-            let adapter = gpu.adapter();
-            let mut s = gpu.into_solver();
-            for _ in 0..FRAMES {
-                s.step_frame().unwrap();
-            }
-            let got = s.state().unwrap();
-            let off = |buf, a: &[[f32; 4]], b: &[[f32; 4]]| compare(&name, buf, a, b, false, 0.0).max_abs;
-            let (dx, dv) = (off("pos", &got.pos, &want.pos), off("vel", &got.vel, &want.vel));
-            println!(
-                "{name:18} {:7} {} particles: positions {dx:.1e} m, velocities {dv:.1e} m/s off",
-                api.name(),
-                got.pos.len()
-            );
-            // (Raw GL's contact between triangles is not yet the CPU's bits:
-            // tests/tests/suite/tri_contact.rs.)
-            let gl_triangles = triangles && api == Api::Gl;
-            if adapter.contains("llvmpipe") && !gl_triangles && (got.pos != want.pos || got.vel != want.vel) {
-                differ.push(format!("{name} on {}: {dx:.1e} m, {dv:.1e} m/s", api.name()));
-            }
+        let got = s.state().unwrap();
+        let off = |buf, a: &[[f32; 4]], b: &[[f32; 4]]| compare(name, buf, a, b, false, 0.0).max_abs;
+        let (dx, dv) = (off("pos", &got.pos, &want.pos), off("vel", &got.vel, &want.vel));
+        println!(
+            "{name:18} {:7} {} particles: positions {dx:.1e} m, velocities {dv:.1e} m/s off",
+            api.name(),
+            got.pos.len()
+        );
+        // (Raw GL's contact between triangles is not yet the CPU's bits:
+        // tests/tests/suite/tri_contact.rs.)
+        let gl_triangles = triangles && api == Api::Gl;
+        if adapter.contains("llvmpipe") && !gl_triangles && (got.pos != want.pos || got.vel != want.vel) {
+            differ.push(format!("{name} on {}: {dx:.1e} m, {dv:.1e} m/s", api.name()));
         }
     }
     assert!(differ.is_empty(), "not the CPU's bits: {differ:?}");
 }
 
-#[test]
-fn the_free_falling_scene_falls_as_y0_minus_half_g_t_squared_on_every_backend() {
+clothlab_tests::per_backend!(the_free_falling_scene_falls_as_y0_minus_half_g_t_squared);
+
+fn the_free_falling_scene_falls_as_y0_minus_half_g_t_squared(name: &str) {
     // The scene holds nothing and has no floor, drag or damping: every particle falls
     // freely, at the scene's own dt (1/960 s), 20 frames (0.33 s, 0.54 m of fall). The
     // velocity is set to the one at −dt/2 of a particle at rest at 0, for which Verlet (in
@@ -137,7 +153,7 @@ fn the_free_falling_scene_falls_as_y0_minus_half_g_t_squared_on_every_backend() 
     let k = (frames * p.substeps) as f32;
     let ulp = 2.0f32.powi(-22); // of |y| in [2, 4): the cloth starts at y = 2
     let bound = k / 2.0 * ulp + k * k / 2.0 * 2.0f32.powi(-22) * dt;
-    for (name, mut s) in every_backend(&scene, &p) {
+    if let Some(mut s) = backend(name, &scene, &p) {
         let mut st = s.state().unwrap();
         let start = st.pos.clone();
         // The velocity at −dt/2 of a cloth at rest at 0: Verlet (in velocity form, it keeps
@@ -179,8 +195,9 @@ fn deepest_in_a_box(scene: &Scene, pos: &[[f32; 4]]) -> f32 {
     deepest
 }
 
-#[test]
-fn the_tablecloth_ends_outside_its_box_and_draped_over_it_on_every_backend() {
+clothlab_tests::per_backend!(the_tablecloth_ends_outside_its_box_and_draped_over_it);
+
+fn the_tablecloth_ends_outside_its_box_and_draped_over_it(name: &str) {
     // The tablecloth at n = 32, 90 frames (1.5 s: it lands on the table at 0.3 s and
     // drapes). No particle may be inside the box: collisions push particles out to the
     // margin every substep, so depth 0 (a particle exactly on a face counts as outside).
@@ -190,7 +207,7 @@ fn the_tablecloth_ends_outside_its_box_and_draped_over_it_on_every_backend() {
     let p = f.params.clone();
     assert_eq!(scene.boxes.len(), 1);
     let table_top = scene.boxes[0].max[1];
-    for (name, mut s) in every_backend(&scene, &p) {
+    if let Some(mut s) = backend(name, &scene, &p) {
         for _ in 0..90 {
             s.step_frame().unwrap();
         }

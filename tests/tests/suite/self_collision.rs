@@ -16,7 +16,7 @@ use clothlab_engine::kernels::{
 };
 use clothlab_engine::recipe::Command;
 use clothlab_engine::validate::{KernelInput, KernelRunner, validate_kernels_with};
-use clothlab_tests::{assert_checks, every_backend, or_skip};
+use clothlab_tests::{assert_checks, backend, or_skip};
 use clothlab_vulkan::vulkan_solver;
 use clothlab_wgpu::{SolverOptions, wgpu_solver};
 
@@ -43,42 +43,54 @@ fn closest_candidates(pos: &[[f32; 4]], p: &clothlab_core::StepParams) -> f32 {
     best
 }
 
-#[test]
-fn the_heap_keeps_its_layers_apart_on_every_backend() {
+clothlab_tests::per_backend!(the_heap_keeps_its_layers_apart);
+
+fn the_heap_keeps_its_layers_apart(name: &str) {
     // n = 32, 60 frames (1 s: the cloth lands at 0.25 s and folds over).
     // Every pair that may collide ends at least half the thickness apart (the
     // bound; the response aims at the whole thickness, and a substep's motion and several
     // contacts at once leave less). Without self-collision the layers pass through each
-    // other: the same check fails, so it can.
+    // other: the same check fails, so it can (the next test).
     let (scene, params) = heap(32);
     let t = params.self_thickness;
-    let frames = 60;
     let sp = clothlab_core::StepParams::new(&params, &scene, None);
     let triangles = clothlab_core::build(&scene, &params).unwrap().1.triangles;
-    for (name, mut s) in every_backend(&scene, &params) {
-        for _ in 0..frames {
-            s.step_frame().unwrap();
-        }
-        let pos = s.state().unwrap().pos;
-        // Particles kept apart are not surfaces kept apart: at n = 32 the thickness is 0.62
-        // of the spacing, under the 0.71 a particle needs not to slip between four others,
-        // and edges pass through triangles (core::crossings; measured 5 on the CPU and
-        // wgpu, 254 on naive Vulkan, 589 without self-collision). Printed, not bounded:
-        // the contact between triangles is what bounds them.
-        let crossed = crossings::count(&pos, &triangles).pairs;
-        let closest = closest_candidates(&pos, &sp);
-        let lowest = pos.iter().map(|p| p[1]).fold(f32::INFINITY, f32::min);
-        println!(
-            "{name:16} closest pair that may collide {closest:.4} m (thickness {t} m); lowest {lowest:.4} m; {crossed} crossings"
-        );
-        assert!(closest >= 0.5 * t, "{name}: two layers {closest} m apart, under half the thickness {t}");
-        // Landed: the lowest particle rests at the floor's 1 cm margin (measured 0.0099 to
-        // 0.0100 m); 5 cm is far below the 0.25 m its lower edge starts at.
-        assert!(lowest < 0.05, "{name}: the cloth has not landed (lowest point {lowest} m)");
+    let Some(mut s) = backend(name, &scene, &params) else { return };
+    for _ in 0..HEAP_FRAMES {
+        s.step_frame().unwrap();
     }
+    let pos = s.state().unwrap().pos;
+    // Particles kept apart are not surfaces kept apart: at n = 32 the thickness is 0.62
+    // of the spacing, under the 0.71 a particle needs not to slip between four others,
+    // and edges pass through triangles (core::crossings; measured 5 on the CPU and
+    // wgpu, 254 on naive Vulkan, 589 without self-collision). Printed, not bounded:
+    // the contact between triangles is what bounds them.
+    let crossed = crossings::count(&pos, &triangles).pairs;
+    let closest = closest_candidates(&pos, &sp);
+    let lowest = pos.iter().map(|p| p[1]).fold(f32::INFINITY, f32::min);
+    println!(
+        "{name:16} closest pair that may collide {closest:.4} m (thickness {t} m); lowest {lowest:.4} m; {crossed} crossings"
+    );
+    assert!(closest >= 0.5 * t, "{name}: two layers {closest} m apart, under half the thickness {t}");
+    // Landed: the lowest particle rests at the floor's 1 cm margin (measured 0.0099 to
+    // 0.0100 m); 5 cm is far below the 0.25 m its lower edge starts at.
+    assert!(lowest < 0.05, "{name}: the cloth has not landed (lowest point {lowest} m)");
+}
+
+/// Frames the heap of n = 32 falls in the layer tests (1 s).
+const HEAP_FRAMES: u32 = 60;
+
+#[test]
+fn without_self_collision_the_heaps_layers_meet_and_cross() {
+    // What makes the layer test able to fail: the same heap, the same frames, with
+    // self-collision off.
+    let (scene, params) = heap(32);
+    let t = params.self_thickness;
+    let sp = clothlab_core::StepParams::new(&params, &scene, None);
+    let triangles = clothlab_core::build(&scene, &params).unwrap().1.triangles;
     let off = SimParams { self_collision: clothlab_core::SelfCollision::Off, ..params };
     let mut s = CpuSolver::new(Exec::Parallel, scene, off).unwrap();
-    for _ in 0..frames {
+    for _ in 0..HEAP_FRAMES {
         s.step_frame().unwrap();
     }
     let pos = s.state().unwrap().pos;
@@ -215,35 +227,44 @@ fn closest_mesh_candidates(pos: &[[f32; 4]], table: &clothlab_core::grid::Rows<c
     best
 }
 
-#[test]
-fn a_mesh_heap_keeps_its_layers_apart_on_every_backend() {
-    // The round tablecloth (2813 particles) dropped edge first onto the floor, 50 frames
-    // (0.83 s: it lands at 0.24 s and its top reaches the floor by 0.5 s): it lands and
-    // folds over; the run without self-collision below shows that the layers have met
-    // by then (the check can fail at this length). As for the grid's heap: every pair that may collide (no
-    // spring between them) ends at least half the thickness apart on every backend
-    // (measured 0.0107–0.0115 m for t = 0.012 m); without self-collision the same check
-    // fails (0.0007 m). Then the self-collision kernels of the mesh (the response its
-    // own: neighbours from the table) against their twins, the scatter as sets.
+clothlab_tests::per_backend!(a_mesh_heap_keeps_its_layers_apart);
+
+/// The round tablecloth's heap (`scenes/mesh-heap.toml`), its tables, and the frames it
+/// falls (50, 0.83 s: it lands at 0.24 s and its top reaches the floor by 0.5 s).
+fn mesh_heap() -> (Scene, SimParams, clothlab_core::ClothTopology, u32) {
     let f = SceneFile::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/mesh-heap.toml")).unwrap();
-    let (scene, params) = (f.scene, f.params);
+    let (_, topo) = clothlab_core::build(&f.scene, &f.params).unwrap();
+    (f.scene, f.params, topo, 50)
+}
+
+fn a_mesh_heap_keeps_its_layers_apart(name: &str) {
+    // The round tablecloth (2813 particles) dropped edge first onto the floor: it lands
+    // and folds over; the run without self-collision (the next test) shows that the layers
+    // have met by then (the check can fail at this length). As for the grid's heap: every
+    // pair that may collide (no spring between them) ends at least half the thickness
+    // apart on every backend (measured 0.0107–0.0115 m for t = 0.012 m); without
+    // self-collision the same check fails (0.0007 m).
+    let (scene, params, topo, frames) = mesh_heap();
     let t = params.self_thickness;
-    let (_, topo) = clothlab_core::build(&scene, &params).unwrap();
-    let frames = 50;
-    let mut ran = 0;
-    for (name, mut s) in every_backend(&scene, &params) {
-        for _ in 0..frames {
-            s.step_frame().unwrap();
-        }
-        let pos = s.state().unwrap().pos;
-        let closest = closest_mesh_candidates(&pos, &topo.slots);
-        let lowest = pos.iter().map(|p| p[1]).fold(f32::INFINITY, f32::min);
-        println!("{name:16} closest pair that may collide {closest:.4} m (thickness {t} m); lowest {lowest:.4} m");
-        assert!(closest >= 0.5 * t, "{name}: two layers {closest} m apart, under half the thickness {t}");
-        assert!(lowest < 0.05, "{name}: the cloth has not landed (lowest point {lowest} m)");
-        ran += 1;
+    let Some(mut s) = backend(name, &scene, &params) else { return };
+    for _ in 0..frames {
+        s.step_frame().unwrap();
     }
-    assert!(ran >= 2, "the CPU solvers at least");
+    let pos = s.state().unwrap().pos;
+    let closest = closest_mesh_candidates(&pos, &topo.slots);
+    let lowest = pos.iter().map(|p| p[1]).fold(f32::INFINITY, f32::min);
+    println!("{name:16} closest pair that may collide {closest:.4} m (thickness {t} m); lowest {lowest:.4} m");
+    assert!(closest >= 0.5 * t, "{name}: two layers {closest} m apart, under half the thickness {t}");
+    assert!(lowest < 0.05, "{name}: the cloth has not landed (lowest point {lowest} m)");
+}
+
+#[test]
+fn without_self_collision_a_mesh_heaps_layers_meet_and_its_kernels_match_their_twins() {
+    // The mesh heap's check can fail (its layers meet without self-collision); then the
+    // self-collision kernels of the mesh (the response its own: neighbours from the table)
+    // against their twins, the scatter as sets.
+    let (scene, params, topo, frames) = mesh_heap();
+    let t = params.self_thickness;
     let off = SimParams { self_collision: clothlab_core::SelfCollision::Off, ..params.clone() };
     let mut s = CpuSolver::new(Exec::Parallel, scene.clone(), off).unwrap();
     for _ in 0..frames {

@@ -19,8 +19,9 @@ fn thin_heap(n: u32) -> SceneFile {
     f
 }
 
-#[test]
-fn every_kernel_of_the_contact_between_triangles_matches_its_twin_on_every_api() {
+clothlab_tests::per_api!(every_kernel_of_the_contact_between_triangles_matches_its_twin);
+
+fn every_kernel_of_the_contact_between_triangles_matches_its_twin(api: Api) {
     // The kernel checks' disturbed drape (validate.rs) with the heap's parameters: its
     // velocities put the reach at its cap, so every owner has pairs to find and push.
     let f = thin_heap(16);
@@ -30,17 +31,16 @@ fn every_kernel_of_the_contact_between_triangles_matches_its_twin_on_every_api()
     let pairs = ints[clothlab_core::cpu::tri_contact::at::PAIRS];
     println!("the kernels' input: {pairs} pairs");
     assert!(pairs > 500, "{pairs} pairs: the kernel checks would hold little");
-    for api in Api::ALL {
-        let Some(mut gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &f.params) else { continue };
-        let kernels: Vec<_> = TRI_CONTACT_KERNELS.iter().map(|d| d.plain()).collect();
-        let checks = validate_kernels_with(gpu.runner(), &kernels, &f.scene, 5, &f.params).unwrap();
-        assert_eq!(checks.len(), kernels.len() * clothlab_engine::validate::COMPARED_BUFFERS);
-        assert_checks(api.name(), &checks);
-    }
+    let Some(mut gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &f.params) else { return };
+    let kernels: Vec<_> = TRI_CONTACT_KERNELS.iter().map(|d| d.plain()).collect();
+    let checks = validate_kernels_with(gpu.runner(), &kernels, &f.scene, 5, &f.params).unwrap();
+    assert_eq!(checks.len(), kernels.len() * clothlab_engine::validate::COMPARED_BUFFERS);
+    assert_checks(api.name(), &checks);
 }
 
-#[test]
-fn the_thin_heap_runs_on_every_api_with_the_cpu_bits() {
+clothlab_tests::per_api!(the_thin_heap_runs_with_the_cpu_bits);
+
+fn the_thin_heap_runs_with_the_cpu_bits(api: Api) {
     // 24 × 24, 90 frames: the heap lands and piles (pairs within the reach, impulses,
     // pushes and cuts at the frames' ends); every API's state and the contact's counts
     // at every frame's end are the CPU's bits (every sum is an integer sum, and every
@@ -59,20 +59,18 @@ fn the_thin_heap_runs_on_every_api_with_the_cpu_bits() {
     println!("cpu: at most {most} pairs, the contact acting at {acted} of {FRAMES} frames' ends");
     assert!(most > 100 && acted > 5, "the heap did not pile: the test would hold little");
     let triangles = cpu.topology().triangles.clone();
-    for api in Api::ALL {
-        let Some(gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &f.params) else { continue };
-        let mut s = gpu.into_solver();
-        for (frame, w) in want.iter().enumerate() {
-            s.step_frame().unwrap();
-            let got = s.contact_stats().unwrap().outcome();
-            assert_eq!(got, *w, "{} frame {frame}", api.name());
-        }
-        let got = s.state().unwrap();
-        let crossed = clothlab_core::crossings::count(&got.pos, &triangles).pairs;
-        println!("{}: {crossed} crossings, CPU's bits: {}", api.name(), got.pos == state.pos && got.vel == state.vel);
-        assert_eq!(crossed, 0, "{}: the heap crossed itself", api.name());
-        assert!(got.pos == state.pos && got.vel == state.vel, "{}: not the CPU's bits", api.name());
+    let Some(gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &f.params) else { return };
+    let mut s = gpu.into_solver();
+    for (frame, w) in want.iter().enumerate() {
+        s.step_frame().unwrap();
+        let got = s.contact_stats().unwrap().outcome();
+        assert_eq!(got, *w, "{} frame {frame}", api.name());
     }
+    let got = s.state().unwrap();
+    let crossed = clothlab_core::crossings::count(&got.pos, &triangles).pairs;
+    println!("{}: {crossed} crossings, CPU's bits: {}", api.name(), got.pos == state.pos && got.vel == state.vel);
+    assert_eq!(crossed, 0, "{}: the heap crossed itself", api.name());
+    assert!(got.pos == state.pos && got.vel == state.vel, "{}: not the CPU's bits", api.name());
 }
 
 #[test]
