@@ -5,7 +5,8 @@
 
 use anyhow::{Result, bail};
 use clothlab_core::grid::ClothState;
-use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_core::{Scene, SimParams, Solver};
+use clothlab_cpu::{CpuSolver, Exec};
 use clothlab_engine::gpu::Engine as _;
 use clothlab_engine::recipe::Command as StepCommand;
 use clothlab_engine::validate::KernelRunner;

@@ -4,9 +4,8 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use clothlab_core::grid::Grab;
-use clothlab_core::{
-    ClothState, ClothTopology, CpuSolver, Exec, KernelTimings, RenderMode, Scene, SimParams, Solver, StateField, View,
-};
+use clothlab_core::{ClothState, ClothTopology, KernelTimings, RenderMode, Scene, SimParams, Solver, StateField, View};
+use clothlab_cpu::{CpuSolver, Exec};
 use rayon::prelude::*;
 
 use crate::backend::{AnySolver, Backend, GpuSetup, Shared, make};

@@ -5,7 +5,7 @@
 
 use anyhow::{Context, Result, bail};
 use clothlab_core::layout::Buf;
-use clothlab_core::validate::{Check, validate_rollout};
+use clothlab_cpu::validate::{Check, validate_rollout};
 use clothlab_engine::validate::{
     SPREAD_FACTOR, bisect, every_switch_plan, rollout_bound, rounding_spread, validate_kernels_with,
 };
@@ -112,7 +112,7 @@ impl Validation {
              started one ulp off); a rollout's bound is the larger of {:.0e} m per substep and {SPREAD_FACTOR}× that",
             self.spread,
             self.substeps,
-            clothlab_core::validate::ROLLOUT_BOUND_PER_SUBSTEP
+            clothlab_cpu::validate::ROLLOUT_BOUND_PER_SUBSTEP
         )
     }
 }

@@ -1,7 +1,7 @@
 //! The order of a substep, written once: the [`Stage`]s each integrator and switch runs,
 //! in order. Two paths follow it — the engine's recipes (`clothlab_engine::recipe`: each
 //! stage as the variant's kernels, fused as its switches say) and the CPU solver's
-//! kernel-by-kernel path ([`crate::cpu::CpuSolver`]: each stage as its twins, on SIMD
+//! kernel-by-kernel path (`clothlab_cpu::CpuSolver`: each stage as its twins, on SIMD
 //! rows where the grid allows). The fused SIMD sweep (`cpu::fused`) is the CPU's fast
 //! path for Verlet on a grid and is tested to give this order's bits.
 

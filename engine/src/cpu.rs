@@ -6,14 +6,14 @@
 use std::time::Instant;
 
 use clothlab_core::build;
-use clothlab_core::cpu::ColliderSet;
-use clothlab_core::cpu::{self as twins, Exec};
 use clothlab_core::grid::{ClothState, ClothTopology, Grab, V4};
 use clothlab_core::layout::Buf;
 use clothlab_core::scene::Scene;
 use clothlab_core::step_params::StepParams;
 use clothlab_core::timing::{FRAME, KernelTimings, SUBSTEP, TimingRecorder};
 use clothlab_core::{SimParams, Solver, SolverError};
+use clothlab_cpu::ColliderSet;
+use clothlab_cpu::{self as twins, Exec};
 
 use crate::kernels::{HostBuffers, KernelRef, TwinArgs};
 use crate::recipe::KernelRunner;

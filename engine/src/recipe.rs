@@ -8,7 +8,8 @@ use clothlab_core::layout::Buf;
 use clothlab_core::step_params::StepParams;
 pub use clothlab_core::substep::Integration;
 use clothlab_core::substep::Stage;
-use clothlab_core::{Integrator, SolverError, cpu};
+use clothlab_core::{Integrator, SolverError};
+use clothlab_cpu as cpu;
 
 use crate::kernels::{self as k, Dispatches, Flavor, HostBuffers, KernelDef, KernelRef};
 

@@ -7,7 +7,6 @@
 use std::time::Instant;
 
 use clothlab_core::build;
-use clothlab_core::cpu::{self as twins, SubstepStats};
 use clothlab_core::grid::{
     ClothState, ClothTopology, Grab, GridSpringConstants, STRAIN_SLOTS, SpringSlot, V4, spring_constants,
 };
@@ -18,6 +17,7 @@ use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
 use clothlab_core::step_params::StepParams;
 use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, KernelTimings, TimingRecorder};
 use clothlab_core::{SimParams, Solver, SolverError};
+use clothlab_cpu::{self as twins, SubstepStats};
 
 use crate::cpu::start_buffers;
 use crate::gpu::{BufferId, Dispatch, Engine};
@@ -161,7 +161,7 @@ fn tri_contents(topo: &ClothTopology, on: bool) -> [(Buf, Vec<u8>); 4] {
     if !on {
         return [Buf::TriEdges, Buf::TriFloats, Buf::TriInts, Buf::TriPairs].map(|b| (b, zeros(1)));
     }
-    let l = clothlab_core::cpu::tri_contact::TriLayout::of(topo);
+    let l = clothlab_cpu::tri_contact::TriLayout::of(topo);
     let mut edges = l.edges_words(topo.edges());
     edges.resize(edges.len().div_ceil(4) * 4, 0);
     [
@@ -659,7 +659,7 @@ impl<E: Engine> GpuSolver<E> {
                     "the contact between triangles' kernels on a solver built without its buffers".into(),
                 ));
             }
-            bufs.tri_sized(clothlab_core::cpu::tri_contact::TriLayout::of(&self.topo));
+            bufs.tri_sized(clothlab_cpu::tri_contact::TriLayout::of(&self.topo));
         }
         for &buf in &moved {
             if let Some(v) = bufs.get(buf) {
@@ -911,7 +911,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
                     self.barrier(false);
                 }
                 self.hazards.add(res::TRI, 0);
-                self.engine.readback(tri_ints, 4 * clothlab_core::cpu::tri_contact::at::WORDS as u64)?;
+                self.engine.readback(tri_ints, 4 * clothlab_cpu::tri_contact::at::WORDS as u64)?;
             }
             record_ns += t_record.elapsed().as_nanos() as f64;
             let t_submit = Instant::now();
@@ -933,7 +933,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 self.searches += substeps as u64;
                 Some(clothlab_core::solver::ContactStats {
                     searches: self.searches,
-                    ..clothlab_core::cpu::tri_contact::stats(&words)
+                    ..clothlab_cpu::tri_contact::stats(&words)
                 })
             }
             _ => None,

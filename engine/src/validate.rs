@@ -3,11 +3,11 @@
 //! GPU backend ([`bisect`]). Used by the cross-backend tests and by `clothlab validate`.
 
 use clothlab_core::build;
-use clothlab_core::cpu::Exec;
 use clothlab_core::grid::Grab;
 use clothlab_core::step_params::StepParams;
-use clothlab_core::validate::{Check, ROLLOUT_BOUND_PER_SUBSTEP, compare, disturbed_state};
 use clothlab_core::{Scene, SimParams, SolverError};
+use clothlab_cpu::Exec;
+use clothlab_cpu::validate::{Check, ROLLOUT_BOUND_PER_SUBSTEP, compare, disturbed_state};
 
 use crate::cpu::CpuEngine;
 use crate::kernels::{self, ConstantsHome, HostBuffers, KernelRef};
@@ -50,7 +50,7 @@ impl KernelInput {
         let params = SimParams { wind, ..params.clone() };
         let (mut st, topo, mut faces) = disturbed_state(&scene, &params, seed)?;
         if sink_into_colliders(&scene, &mut st.pos) {
-            clothlab_core::cpu::tri_normals(Exec::Serial, &topo.triangles, &st.pos, &mut faces);
+            clothlab_cpu::tri_normals(Exec::Serial, &topo.triangles, &st.pos, &mut faces);
         }
         let grab = Some(Grab { particle: st.pos.len() as u32 / 2 + 3, target: [0.1, 1.2, 0.3] });
         let p = StepParams::new(&params, &scene, grab);
@@ -433,8 +433,8 @@ pub fn rounding_spread(scene: &Scene, params: &SimParams, frames: u32) -> Result
     };
     let naive = crate::variant::Variant::NAIVE.fit(&caps);
     let mut a = crate::cpu::RecipeSolver::new(Exec::Parallel, naive, scene.clone(), params.clone())?;
-    let mut b = clothlab_core::CpuSolver::new(Exec::Parallel, scene.clone(), params.clone())?;
-    let mut c = clothlab_core::CpuSolver::new(Exec::Parallel, scene.clone(), params.clone())?;
+    let mut b = clothlab_cpu::CpuSolver::new(Exec::Parallel, scene.clone(), params.clone())?;
+    let mut c = clothlab_cpu::CpuSolver::new(Exec::Parallel, scene.clone(), params.clone())?;
     let mut nudged = c.state()?;
     for x in nudged.pos.iter_mut().filter(|x| x[3] != 0.0) {
         x[..3].iter_mut().for_each(|v| *v = v.next_up());

@@ -16,7 +16,7 @@ scipy (`pip install numpy scipy`); run from anywhere:
 - --big N PATH: a Delaunay disc of about N jittered points (radius 1 m, xz-plane), for
   `bench --mesh` on meshes of a quarter of a million vertices and more (not committed).
 
-The committed files are checked by `cargo test -p clothlab-core --test mesh_files`.
+The committed files are checked by `cargo test -p clothlab-core mesh_files`.
 Positions in metres, in the mesh's own frame (a scene places them); uvs in [0, 1]. The
 random points come from a fixed seed: the files are the same at every run.
 """

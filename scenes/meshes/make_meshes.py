@@ -6,7 +6,7 @@ quads split along one diagonal as clothlab's grid is. Run from anywhere:
 
     python3 scenes/meshes/make_meshes.py
 
-The files are committed; `cargo test -p clothlab-core --test mesh_files` checks that they
+The files are committed; `cargo test -p clothlab-core mesh_files` checks that they
 load and what they hold. Positions in metres, in the mesh's own frame (a scene places
 them); uvs in [0, 1].
 """

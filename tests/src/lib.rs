@@ -3,7 +3,7 @@
 //! GPU tests run wherever an adapter exists (Mesa's lavapipe counts). Without one they
 //! print why and pass, unless `CLOTHLAB_REQUIRE_GPU=1` (CI sets it), which makes a
 //! missing adapter a failure. The comparisons themselves live in
-//! `clothlab_core::validate`, shared with `clothlab validate`.
+//! `clothlab_cpu::validate`, shared with `clothlab validate`.
 //!
 //! How it fits: it depends on every other crate and is depended on by none; this library
 //! holds what the test files share (solver factories that skip or fail without an
@@ -11,8 +11,9 @@
 //! what it checks: docs/testing.md.
 #![forbid(unsafe_code)]
 
-use clothlab_core::validate::Check;
-use clothlab_core::{CpuSolver, Exec, OrbitCamera, RenderMode, Scene, SimParams, Solver, View};
+use clothlab_core::{OrbitCamera, RenderMode, Scene, SimParams, Solver, View};
+use clothlab_cpu::validate::Check;
+use clothlab_cpu::{CpuSolver, Exec};
 use clothlab_engine::{Variant, VariantSpec};
 use clothlab_gl::gl_solver;
 use clothlab_vulkan::vulkan_solver;
@@ -231,7 +232,7 @@ pub fn assert_stats_match_twin<E: clothlab_engine::Engine>(v: &mut clothlab_engi
     let state = v.state().unwrap();
     let (_, topo) = clothlab_core::build(v.scene(), v.params()).unwrap();
     let sp = clothlab_core::step_params::StepParams::new(v.params(), v.scene(), None);
-    let want = clothlab_core::cpu::substep_stats(&sp, &topo.slots, &state.pos, &state.vel);
+    let want = clothlab_cpu::substep_stats(&sp, &topo.slots, &state.pos, &state.vel);
     let got = stats_gpu[substeps - 1];
     let strain_err = (got.max_strain - want.max_strain).abs();
     let energy_err = ((got.kinetic_energy - want.kinetic_energy) / want.kinetic_energy).abs();
@@ -325,7 +326,7 @@ pub fn free_mesh_scene(name: &str, placement: clothlab_core::mesh::Placement) ->
 pub fn assert_rollouts(solvers: Vec<(String, Box<dyn Solver>, bool)>, frames: u32) {
     let mut bad = Vec::new();
     for (name, mut s, exact) in solvers {
-        let c = clothlab_core::validate::validate_rollout(&mut *s, frames).unwrap();
+        let c = clothlab_cpu::validate::validate_rollout(&mut *s, frames).unwrap();
         println!("{name:18} {} max {:.2e} (bound {:.0e})", c.what, c.max_abs, c.bound);
         if (exact && c.max_abs != 0.0) || c.error > c.bound {
             bad.push(format!("{name}: {:.2e} (exact: {exact})", c.max_abs));

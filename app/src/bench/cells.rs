@@ -309,7 +309,7 @@ pub fn run(args: &BenchArgs, request: Request) -> Result<ExitCode> {
         wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
         vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name().to_owned()),
         gl_adapter: devices.gl.clone(),
-        cpu_simd: clothlab_core::cpu::fused_path_label(),
+        cpu_simd: clothlab_cpu::fused_path_label(),
         params: params.clone(),
         scene: scene_label.clone(),
         frames,

@@ -15,7 +15,8 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clothlab_core::params::MAX_SUBSTEPS;
-use clothlab_core::{CpuSolver, Exec, Integrator, Scene, SimParams, Solver, StiffnessUnits};
+use clothlab_core::{Integrator, Scene, SimParams, Solver, StiffnessUnits};
+use clothlab_cpu::{CpuSolver, Exec};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 

@@ -19,7 +19,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Result;
-use clothlab_core::{CpuSolver, Exec, Scene, SimParams};
+use clothlab_core::{Scene, SimParams};
+use clothlab_cpu::{CpuSolver, Exec};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clothlab::validate::{Line, ValidateOptions, validate as run};
-use clothlab_core::validate::Check;
+use clothlab_cpu::validate::Check;
 
 use crate::cli::ValidateArgs;
 use crate::out::outln;

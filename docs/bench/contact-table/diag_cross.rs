@@ -1,7 +1,9 @@
 //! Temporary diagnostic: the first substep where the thin heap at n = 128, t = 2 mm crosses.
 use clothlab_core::crossings::{edges, segment_crosses_triangle};
-use clothlab_core::tri_contact::{Contact, edge_edge, motion_bounds, point_triangle};
-use clothlab_core::{CpuSolver, Exec, SceneFile, SimParams, Solver};
+use clothlab_core::tri_contact::{edge_edge, motion_bounds, point_triangle};
+use clothlab_cpu::tri_pipeline::Contact;
+use clothlab_core::{SceneFile, SimParams, Solver};
+use clothlab_cpu::{CpuSolver, Exec};
 use glam::{DVec3, Vec3};
 
 fn main() {

@@ -1,5 +1,7 @@
-use clothlab_core::tri_contact::{Contact, edge_edge, motion_bounds};
-use clothlab_core::{CpuSolver, Exec, SceneFile, SimParams, Solver};
+use clothlab_core::tri_contact::{edge_edge, motion_bounds};
+use clothlab_cpu::tri_pipeline::Contact;
+use clothlab_core::{SceneFile, SimParams, Solver};
+use clothlab_cpu::{CpuSolver, Exec};
 use glam::Vec3;
 
 fn main() {

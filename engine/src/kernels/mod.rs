@@ -18,13 +18,14 @@
 use std::borrow::Cow;
 use std::hash::{Hash, Hasher};
 
-use clothlab_core::cpu::{self, Exec, SubstepStats};
 use clothlab_core::grid::{ClothTopology, V4};
 use clothlab_core::layout::{BLOCK, Buf, STRIP_ROWS, Uses, WORKGROUP};
 use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose};
 use clothlab_core::step_params::StepParams;
 use clothlab_core::timing;
+use clothlab_cpu as cpu;
+use clothlab_cpu::{Exec, SubstepStats};
 
 use crate::EngineError;
 

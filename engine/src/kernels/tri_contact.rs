@@ -3,7 +3,7 @@
 //! primitives' boxes, each owner's pairs, the bounds and the velocity pass; after the
 //! integrator the separation's passes; at the end the clamp.
 
-use clothlab_core::cpu::tri_contact::{self as tc, Pass, TriBufs, TriLayout};
+use clothlab_cpu::tri_contact::{self as tc, Pass, TriBufs, TriLayout};
 
 use super::*;
 

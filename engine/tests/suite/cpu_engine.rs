@@ -3,8 +3,9 @@
 
 use clothlab_core::step_params::StepParams;
 use clothlab_core::timing;
-use clothlab_core::validate::ROLLOUT_BOUND_PER_SUBSTEP;
-use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver, SolverError};
+use clothlab_core::{Scene, SimParams, Solver, SolverError};
+use clothlab_cpu::validate::ROLLOUT_BOUND_PER_SUBSTEP;
+use clothlab_cpu::{CpuSolver, Exec};
 use clothlab_engine::kernels::{self as k, HostBuffers, KernelRef};
 use clothlab_engine::recipe::{Command, recipe};
 use clothlab_engine::validate::{KernelRunner, bisect, validate_kernels};

@@ -1,7 +1,8 @@
 //! Self-collision on the CPU: the fast solvers (serial and rayon) compute the bits of the
 //! recipe the GPU backends run (the CPU engine executing the twins, kernel by kernel).
 
-use clothlab_core::{CpuSolver, Exec, Integrator, SceneFile, Solver};
+use clothlab_core::{Integrator, SceneFile, Solver};
+use clothlab_cpu::{CpuSolver, Exec};
 use clothlab_engine::{RecipeSolver, Variant};
 
 fn bits(v: &[[f32; 4]]) -> Vec<[u32; 4]> {

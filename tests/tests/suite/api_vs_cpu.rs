@@ -7,8 +7,8 @@
 //! GL debug message of medium or high severity fails the test that caused it
 //! ([`assert_api_clean`]). Bounds and their reasons: the rows of `clothlab_engine::kernels`.
 
-use clothlab_core::validate::{compare, validate_rollout};
 use clothlab_core::{Scene, SimParams, Solver, SolverError};
+use clothlab_cpu::validate::{compare, validate_rollout};
 use clothlab_engine::kernels::{self as k, Check};
 use clothlab_engine::recipe::StatsMode;
 use clothlab_engine::validate::{COMPARED_BUFFERS, flavors, validate_kernels};

@@ -10,8 +10,8 @@
 //! as written.
 //! wgpu on GL is checked bit for bit in wgpu_on_gl.rs.
 
-use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Integrator, Scene, SimParams};
+use clothlab_cpu::validate::validate_rollout;
 use clothlab_engine::Variant;
 use clothlab_engine::validate::validate_kernels;
 use clothlab_tests::{AnyGpuSolver, Api};

@@ -156,7 +156,7 @@ clothlab_tests::per_backend!(an_icosphere_body_drapes_a_cloth_as_the_sphere_does
 fn an_icosphere_body_drapes_a_cloth_as_the_sphere_does_and_holds_it_outside(name: &str) {
     let params = SimParams::default();
     let run = |scene: &Scene, frames: u32| {
-        let mut s = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, scene.clone(), params.clone()).unwrap();
+        let mut s = clothlab_cpu::CpuSolver::new(clothlab_cpu::Exec::Serial, scene.clone(), params.clone()).unwrap();
         for _ in 0..frames {
             s.step_frame().unwrap();
         }
@@ -301,7 +301,7 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
     // the field's interpolation and the faceting; the filter's weights add at most
     // 3 h·2^-(bits+1), 0.094 h at the 4 bits Vulkan allows), on wgpu, Vulkan and GL.
     let h = 0.9 / 48.0;
-    let mut sphere = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, drape(None), params.clone()).unwrap();
+    let mut sphere = clothlab_cpu::CpuSolver::new(clothlab_cpu::Exec::Serial, drape(None), params.clone()).unwrap();
     for _ in 0..20 {
         sphere.step_frame().unwrap();
     }
@@ -335,7 +335,7 @@ fn the_fields_in_an_image_drape_the_cloth_as_the_sphere_does_within_the_filters_
     let bound = clothlab_engine::validate::sdf_image_bound(&sc);
     if let Some(s) = api.solver(image_spec(), &sc, &params) {
         let mut s = s.into_solver();
-        let mut c = clothlab_core::validate::validate_rollout(&mut *s, 12).unwrap();
+        let mut c = clothlab_cpu::validate::validate_rollout(&mut *s, 12).unwrap();
         c.bound = c.bound.max(bound);
         println!("{api:7} sdf=image rollout: {:.2e} m (bound {:.2e})", c.max_abs, c.bound);
         assert!(c.passed(), "{api}: the image's rollout {} m from the CPU's, bound {}", c.max_abs, c.bound);

@@ -3,7 +3,8 @@
 //! bisection of rollouts on every GPU API.
 
 use clothlab_core::layout::Buf;
-use clothlab_core::{Exec, Scene, SimParams, SolverError};
+use clothlab_core::{Scene, SimParams, SolverError};
+use clothlab_cpu::Exec;
 use clothlab_engine::SolverOptions;
 use clothlab_engine::kernels::{Check, Count, HostBuffers, KernelDef, Source, TwinArgs, Variants};
 use clothlab_engine::recipe::{Command, run};

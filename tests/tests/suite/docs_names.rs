@@ -133,7 +133,8 @@ fn every_path_and_item_the_reference_pages_name_exists() {
             let found = if owner.starts_with(|c: char| c.is_ascii_uppercase()) {
                 // A type's member: in a file that declares or implements the type.
                 sources.iter().any(|(_, code)| {
-                    let has_type = declares(code, owner) || code.contains(&format!("for {owner}"))
+                    let has_type = declares(code, owner)
+                        || code.contains(&format!("for {owner}"))
                         || code.contains(&format!("impl {owner}"))
                         || code.contains(&format!("impl<E: Engine> {owner}"));
                     has_type && declares(code, last)

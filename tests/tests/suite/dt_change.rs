@@ -3,7 +3,8 @@
 //! them as they are. (When the state was Verlet's history it had to be rescaled: without
 //! that, halving dt doubled the apparent velocity `(x − x*) / dt` at once.)
 
-use clothlab_core::{CpuSolver, Exec, Scene, SimParams, Solver};
+use clothlab_core::{Scene, SimParams, Solver};
+use clothlab_cpu::{CpuSolver, Exec};
 use clothlab_engine::{RecipeSolver, Variant};
 use clothlab_tests::Api;
 

@@ -94,7 +94,7 @@ fn a_slope_holds_the_cloth_below_tan_theta_mu_s_and_lets_it_slide_above(name: &s
         assert!(moved <= 1e-5, "{name}: static friction let the cloth move {moved} m");
     }
     let (sc, p) = slope(20.0, still_air(0.4));
-    let mut s = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, sc, p).unwrap();
+    let mut s = clothlab_cpu::CpuSolver::new(clothlab_cpu::Exec::Serial, sc, p).unwrap();
     let st = run(&mut s, 30);
     let crept = mean(&st, |i| st.pos[i][0] as f64);
     println!("share 0.4 on the 20° slope: crept {crept:.4} m in 0.5 s");
@@ -190,7 +190,7 @@ fn bad_coulomb_coefficients_are_refused_in_one_line() {
         let e = coulomb(mu_s, mu_k).validate().unwrap_err().to_string();
         println!("μs {mu_s}, μk {mu_k}: {e}");
         assert!(e.contains(what) && !e.contains('\n'), "{e}");
-        let r = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, on_the_floor(0.0), coulomb(mu_s, mu_k));
+        let r = clothlab_cpu::CpuSolver::new(clothlab_cpu::Exec::Serial, on_the_floor(0.0), coulomb(mu_s, mu_k));
         assert!(r.is_err(), "a solver took μs {mu_s}, μk {mu_k}");
     }
 }

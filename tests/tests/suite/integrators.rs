@@ -4,8 +4,8 @@
 //! are checked one by one against their twins with every other kernel
 //! (`validate::flavors` lists them: api_vs_cpu.rs).
 
-use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Integrator, Scene, SimParams, Solver};
+use clothlab_cpu::validate::validate_rollout;
 use clothlab_engine::Variant;
 use clothlab_tests::{Api, assert_api_clean, or_skip};
 use clothlab_wgpu::{SolverOptions, wgpu_solver};
@@ -70,7 +70,7 @@ fn switching_the_integrator_while_running_keeps_the_cloth_and_the_gpu_on_the_cpu
     else {
         return;
     };
-    let mut c = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, scene, p.clone()).unwrap();
+    let mut c = clothlab_cpu::CpuSolver::new(clothlab_cpu::Exec::Serial, scene, p.clone()).unwrap();
     let switches = [Integrator::Rk4, Integrator::Implicit, Integrator::Xpbd, Integrator::Vbd];
     for (k, integrator) in switches.into_iter().enumerate() {
         for s in [&mut g as &mut dyn Solver, &mut c] {

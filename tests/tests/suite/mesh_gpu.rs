@@ -6,8 +6,8 @@
 
 use std::path::PathBuf;
 
-use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Integrator, Scene, SceneFile, SimParams, SolverError};
+use clothlab_cpu::validate::validate_rollout;
 use clothlab_engine::validate::{flavors, validate_kernels_with};
 use clothlab_engine::{Variant, VariantSpec};
 use clothlab_tests::{AnyGpuSolver, Api, assert_api_clean, assert_checks, gpu_solvers_of};

@@ -9,7 +9,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-const CRATES: [&str; 6] = ["core", "engine", "shaders", "backend-wgpu", "backend-vulkan", "app"];
+const CRATES: [&str; 7] = ["core", "cpu", "engine", "shaders", "backend-wgpu", "backend-vulkan", "app"];
 
 fn files(path: &Path, out: &mut Vec<PathBuf>) {
     if path.is_dir() {

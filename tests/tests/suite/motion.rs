@@ -161,7 +161,7 @@ fn the_busy_scenes_colliders_move_the_cloth() {
     let (sc, params) = busy();
     let still = Scene { motions: Vec::new(), ..sc.clone() };
     let run = |sc: Scene| {
-        let mut s = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, sc, params.clone()).unwrap();
+        let mut s = clothlab_cpu::CpuSolver::new(clothlab_cpu::Exec::Serial, sc, params.clone()).unwrap();
         for _ in 0..12 {
             s.step_frame().unwrap();
         }
@@ -194,14 +194,14 @@ fn motions_a_substep_cannot_resolve_and_temporal_blocking_with_motion_are_refuse
     let mut sc = Scene::with_n(16);
     sc.spheres = vec![Sphere::new([0.0, 0.3, 0.0], 0.05)];
     sc.motions = vec![(ColliderId::Sphere(0), Motion { velocity: [30.0, 0.0, 0.0], ..Motion::default() })];
-    let e = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, sc.clone(), SimParams::default())
+    let e = clothlab_cpu::CpuSolver::new(clothlab_cpu::Exec::Serial, sc.clone(), SimParams::default())
         .err()
         .expect("too fast for a substep")
         .to_string();
     assert!(e.contains("spheres[0].motion") && e.contains("per substep") && !e.contains('\n'), "{e}");
     // 64 substeps resolve it (0.0078 m per substep)…
     let fine = SimParams { substeps: 64, ..SimParams::default() };
-    let mut s = clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, sc.clone(), fine).unwrap();
+    let mut s = clothlab_cpu::CpuSolver::new(clothlab_cpu::Exec::Serial, sc.clone(), fine).unwrap();
     // …and going back to 16 is refused, the solver keeping its parameters.
     assert!(s.set_params(SimParams::default()).is_err());
     assert_eq!(s.params().substeps, 64);
@@ -214,7 +214,7 @@ fn motions_a_substep_cannot_resolve_and_temporal_blocking_with_motion_are_refuse
     let spec = clothlab_engine::VariantSpec::parse("optimized", &["fusion=tile".into(), "temporal=on".into()]).unwrap();
     let o = clothlab_engine::SolverOptions::default();
     let v = spec.resolve(&clothlab_tests::EVERY_CAP, "vulkan").unwrap();
-    let e = RecipeSolver::new(clothlab_core::Exec::Serial, v, busy_scene.clone(), SimParams::default()).err().unwrap();
+    let e = RecipeSolver::new(clothlab_cpu::Exec::Serial, v, busy_scene.clone(), SimParams::default()).err().unwrap();
     assert!(e.to_string().contains("moving colliders or pins need temporal=off"), "{e}");
     match clothlab_vulkan::vulkan_solver(spec, busy_scene, SimParams::default(), true, o) {
         Ok(_) => panic!("temporal blocking accepted moving colliders"),
@@ -257,7 +257,7 @@ fn a_moving_scene_at_many_substeps_steps_on_every_api() {
         solvers.push(("gl", Box::new(s)));
     }
     for (name, mut s) in solvers {
-        let c = clothlab_core::validate::validate_rollout(&mut *s, 2).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let c = clothlab_cpu::validate::validate_rollout(&mut *s, 2).unwrap_or_else(|e| panic!("{name}: {e}"));
         println!("{name:8} {} max {:.2e} (bound {:.0e})", c.what, c.max_abs, c.bound);
         assert!(c.error <= c.bound, "{name}: {:.2e} over {:.0e}", c.error, c.bound);
     }

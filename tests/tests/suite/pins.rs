@@ -202,7 +202,7 @@ fn bad_pin_groups_are_refused_in_one_line() {
     let v = spec.resolve(&clothlab_tests::EVERY_CAP, "vulkan").unwrap();
     let (sc, params) = twist();
     let params = SimParams { self_collision: clothlab_core::SelfCollision::Off, ..params };
-    let e = RecipeSolver::new(clothlab_core::Exec::Serial, v, sc, params).err().expect("refused").to_string();
+    let e = RecipeSolver::new(clothlab_cpu::Exec::Serial, v, sc, params).err().expect("refused").to_string();
     assert!(e.contains("moving colliders or pins need temporal=off"), "{e}");
     // A still group only holds: no pins kernel in the recipe.
     let mut still = curtain([0.0; 3]);

@@ -2,8 +2,9 @@
 
 use std::path::PathBuf;
 
-use clothlab_core::cpu::Exec;
-use clothlab_core::{CpuSolver, RenderError, RenderMode, Scene, SimParams, Solver, View};
+use clothlab_core::{RenderError, RenderMode, Scene, SimParams, Solver, View};
+use clothlab_cpu::CpuSolver;
+use clothlab_cpu::Exec;
 use clothlab_tests::{image_diff, or_skip, test_view};
 use clothlab_wgpu::{ClothSource, SolverOptions, Variant, WgpuRenderer, WgpuSolver, wgpu_solver};
 

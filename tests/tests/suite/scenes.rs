@@ -4,8 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use clothlab_core::validate::{compare, validate_rollout};
-use clothlab_core::{Exec, Scene, SceneFile, SimParams, Solver};
+use clothlab_core::{Scene, SceneFile, SimParams, Solver};
+use clothlab_cpu::Exec;
+use clothlab_cpu::validate::{compare, validate_rollout};
 use clothlab_engine::Variant;
 use clothlab_engine::validate::{KernelRunner, validate_kernels_with};
 use clothlab_tests::{Api, assert_checks, backend, or_skip};
@@ -77,7 +78,7 @@ fn cpu_ends() -> &'static [(String, SceneFile, clothlab_core::ClothState)] {
                 f.scene.cloth.n = f.scene.cloth.n.min(32);
             }
             let name = path.file_stem().unwrap().to_string_lossy().into_owned();
-            let new = |exec| clothlab_core::CpuSolver::new(exec, f.scene.clone(), f.params.clone()).unwrap();
+            let new = |exec| clothlab_cpu::CpuSolver::new(exec, f.scene.clone(), f.params.clone()).unwrap();
             let want = run(&mut new(Exec::Serial));
             if f.params.self_collision.triangles() {
                 let got = run(&mut new(Exec::Parallel));
@@ -282,8 +283,8 @@ fn the_kernel_checks_input_puts_particles_inside_every_collider_and_collide_take
         below_floor(&pos)
     );
     assert!(in_box >= 2 && inside_sphere(&pos) >= 2 && below_floor(&pos) >= 2);
-    let colliders = clothlab_core::cpu::Colliders::new(&scene.spheres, &scene.boxes);
-    clothlab_core::cpu::collide(Exec::Serial, &input.p, colliders, &mut pos, &mut vel);
+    let colliders = clothlab_cpu::Colliders::new(&scene.spheres, &scene.boxes);
+    clothlab_cpu::collide(Exec::Serial, &input.p, colliders, &mut pos, &mut vel);
     assert_eq!(deepest_in_a_box(&scene, &pos), 0.0);
     assert_eq!(inside_sphere(&pos), 0);
     // The floor is the integration's (integrate, forces_integrate_collide): collide leaves it.

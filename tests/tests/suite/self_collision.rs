@@ -5,10 +5,11 @@
 
 use std::path::Path;
 
-use clothlab_core::cpu::self_collide::{bucket_range, hash_words, table_size};
 use clothlab_core::crossings;
-use clothlab_core::validate::validate_rollout;
-use clothlab_core::{CpuSolver, Exec, Scene, SceneFile, SimParams, Solver};
+use clothlab_core::{Scene, SceneFile, SimParams, Solver};
+use clothlab_cpu::self_collide::{bucket_range, hash_words, table_size};
+use clothlab_cpu::validate::validate_rollout;
+use clothlab_cpu::{CpuSolver, Exec};
 use clothlab_engine::Variant;
 use clothlab_engine::kernels::{
     HASH_COUNT, HASH_SCATTER, KernelRef, SELF_COLLIDE_MESH, SELF_COLLISION, STRAIN_LIMIT_COUNT,
@@ -34,7 +35,7 @@ fn closest_candidates(pos: &[[f32; 4]], p: &clothlab_core::StepParams) -> f32 {
     let mut best = f32::INFINITY;
     for a in 0..pos.len() {
         for b in a + 1..pos.len() {
-            if clothlab_core::cpu::self_collide::candidates(p, a as u32, b as u32) {
+            if clothlab_cpu::self_collide::candidates(p, a as u32, b as u32) {
                 let d = (0..3).map(|k| (pos[a][k] - pos[b][k]).powi(2)).sum::<f32>().sqrt();
                 best = best.min(d);
             }
@@ -218,7 +219,7 @@ fn closest_mesh_candidates(pos: &[[f32; 4]], table: &clothlab_core::grid::Rows<c
     let mut best = f32::INFINITY;
     for a in 0..pos.len() {
         for b in a + 1..pos.len() {
-            if clothlab_core::cpu::self_collide::mesh_candidates(table, a, b) {
+            if clothlab_cpu::self_collide::mesh_candidates(table, a, b) {
                 let d = (0..3).map(|k| (pos[a][k] - pos[b][k]).powi(2)).sum::<f32>().sqrt();
                 best = best.min(d);
             }

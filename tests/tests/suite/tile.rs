@@ -8,8 +8,8 @@
 //! only reported.
 
 use clothlab_core::scene::Aabb;
-use clothlab_core::validate::validate_rollout;
 use clothlab_core::{Scene, SimParams, Solver};
+use clothlab_cpu::validate::validate_rollout;
 use clothlab_engine::kernels::{SUBSTEP_TILE, TILE_VEL};
 use clothlab_engine::recipe::{Command, KernelRunner, tile_command, tile_side};
 use clothlab_engine::validate::{KernelInput, validate_kernels_with};
@@ -152,7 +152,7 @@ fn temporal_blocking_folds_substeps_into_one_dispatch_and_keeps_the_bits() {
         // Two dispatches per recording (the tiles, the velocities' copy), whatever the group.
         let cmds = recipe_for(&v, p.strain_iterations, Integration::of(&p), &topo);
         assert_eq!(cmds.iter().filter(|c| c.kernel().is_some()).count(), 2, "n = {n}: {cmds:?}");
-        let cpu = RecipeSolver::new(clothlab_core::cpu::Exec::Serial, v, sc.clone(), p.clone()).unwrap();
+        let cpu = RecipeSolver::new(clothlab_cpu::Exec::Serial, v, sc.clone(), p.clone()).unwrap();
         rollout_exact(Box::new(cpu), &format!("cpu engine n={n}"), "");
         let o = SolverOptions::default;
         if let Some(s) =

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use clothlab_core::{CpuSolver, Exec, SceneFile, Solver};
+use clothlab_core::{SceneFile, Solver};
+use clothlab_cpu::{CpuSolver, Exec};
 use clothlab_engine::Variant;
 use clothlab_engine::kernels::TRI_CONTACT_KERNELS;
 use clothlab_engine::validate::validate_kernels_with;
@@ -28,7 +29,7 @@ fn every_kernel_of_the_contact_between_triangles_matches_its_twin(api: Api) {
     let input = clothlab_engine::validate::KernelInput::for_scene(&f.scene, 5, &f.params).unwrap();
     let b = input.for_kernel(clothlab_engine::kernels::TRI_IMPULSE_COUNT.plain());
     let ints: Vec<u32> = b.tri_ints.iter().flat_map(|v| v.map(f32::to_bits)).collect();
-    let pairs = ints[clothlab_core::cpu::tri_contact::at::PAIRS];
+    let pairs = ints[clothlab_cpu::tri_contact::at::PAIRS];
     println!("the kernels' input: {pairs} pairs");
     assert!(pairs > 500, "{pairs} pairs: the kernel checks would hold little");
     let Some(mut gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &f.params) else { return };
@@ -128,8 +129,8 @@ fn owners_over_their_slots_keep_their_nearest_pairs_on_every_api() {
         let mut want = start.clone();
         engine.run(&commands, &p, 0, &mut want);
         let ints = words(&want.tri_ints);
-        let over = ints[clothlab_core::cpu::tri_contact::at::OVERFLOW];
-        println!("{name}: {} pairs, {over} beyond the owners' slots", ints[clothlab_core::cpu::tri_contact::at::PAIRS]);
+        let over = ints[clothlab_cpu::tri_contact::at::OVERFLOW];
+        println!("{name}: {} pairs, {over} beyond the owners' slots", ints[clothlab_cpu::tri_contact::at::PAIRS]);
         assert!(over > 1000, "{over} pairs beyond the slots: the test would hold little");
         let mut got = start.clone();
         r.run_commands(&commands, &p, &mut got).unwrap();

@@ -5,8 +5,8 @@
 //! rows' bounds), rollouts of both recipes, and the wgpu renderer's picture on GL against
 //! the same state drawn by wgpu on Vulkan.
 
-use clothlab_core::validate::validate_rollout;
 use clothlab_core::{RenderMode, Scene, SimParams, Solver};
+use clothlab_cpu::validate::validate_rollout;
 use clothlab_engine::validate::flavors;
 use clothlab_tests::{assert_checks, assert_kernels_match_twins, image_diff, or_skip, test_view};
 use clothlab_wgpu::{ClothSource, GpuContext, GpuSolver, SolverOptions, Variant, WgpuEngine, WgpuRenderer, WgpuSolver};
@@ -104,14 +104,13 @@ fn a_raw_gl_solver_outlives_wgpu_gl_instances_made_and_dropped_beside_it() {
         frames += 1;
     }
     let mut cpu =
-        clothlab_core::CpuSolver::new(clothlab_core::Exec::Serial, raw.scene().clone(), raw.params().clone()).unwrap();
+        clothlab_cpu::CpuSolver::new(clothlab_cpu::Exec::Serial, raw.scene().clone(), raw.params().clone()).unwrap();
     for _ in 0..frames {
         cpu.step_frame().unwrap();
     }
-    let mut c =
-        clothlab_core::validate::compare("", "pos", &raw.state().unwrap().pos, &cpu.state_ref().pos, false, 0.0);
+    let mut c = clothlab_cpu::validate::compare("", "pos", &raw.state().unwrap().pos, &cpu.state_ref().pos, false, 0.0);
     // The rollout bound of every backend (1e-6 m per substep), over the 32 substeps.
-    c.bound = clothlab_core::validate::ROLLOUT_BOUND_PER_SUBSTEP * 32.0;
+    c.bound = clothlab_cpu::validate::ROLLOUT_BOUND_PER_SUBSTEP * 32.0;
     c.error = c.max_abs;
     assert_checks("raw GL after wgpu GL instances", &[c]);
 }

@@ -1,0 +1,637 @@
+//! The contact between triangles as GPU kernels see it (`shaders/wgsl/tri_*.wgsl`): one
+//! function per kernel, each the kernel's CPU twin, on the buffers the kernels share —
+//! the edges ([`TriLayout::edges_words`]: a header, then two vertices an edge), a
+//! particle's start and bound (`[x, y, z, bound]`), the integers ([`TriLayout`]: the
+//! scalars, the two grids' buckets and entries, each owner's count of pairs, each
+//! particle's fixed-point sums) and the pairs ([`TRI_SLOTS`] an owner).
+//!
+//! Run in order they give what `crate::tri_pipeline::Contact`'s stages give, bit for bit:
+//! the pairs do not depend on the broad phase (an owner keeps its [`TRI_SLOTS`] nearest;
+//! the scalars count what did not fit), and every sum is an integer sum.
+//! The CPU solvers run `Contact` (its grid is faster on a CPU); these are what the GPU
+//! solvers run and what their kernels are checked against.
+//!
+//! Owners: vertex `v` (`0 ≤ o < np`) owns its vertex–triangle pairs, edge `e` (`o = np +
+//! e`) its edge–edge pairs with the edges numbered above it.
+
+use glam::Vec3;
+
+use clothlab_core::grid::V4;
+use clothlab_core::step_params::StepParams;
+use clothlab_core::tri_contact::{
+    BOUND_FRACTION, MAX_REACH_SPACINGS, MEAN_UNIT, REACH_PER_MOTION, edge_edge, point_triangle,
+};
+
+pub use clothlab_core::layout::TRI_SLOTS;
+
+pub use clothlab_core::layout::tri_at as at;
+
+/// The fixed-point units of the velocity pass's and the separation's sums.
+const UNITS: f32 = clothlab_core::tables::CONTACT_UNITS;
+
+/// Where the contact's integers lie, in u32 words, for a cloth of `np` particles, `tris`
+/// triangles and `edges` edges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TriLayout {
+    /// Particles.
+    pub np: usize,
+    /// Triangles.
+    pub tris: usize,
+    /// Edges.
+    pub edges: usize,
+    /// Buckets of each grid (a power of two, at least twice the primitives of either).
+    pub buckets: usize,
+}
+
+impl TriLayout {
+    /// The layout of a cloth of these sizes.
+    pub fn new(np: usize, tris: usize, edges: usize) -> Self {
+        Self { np, tris, edges, buckets: (2 * tris.max(edges).max(1)).next_power_of_two() }
+    }
+
+    /// The layout of `topo`'s cloth.
+    pub fn of(topo: &clothlab_core::grid::ClothTopology) -> Self {
+        Self::new(topo.num_particles(), topo.triangles.len(), topo.edges().len())
+    }
+
+    /// The grids' bucket counts (the triangles' buckets and their wide boxes' bucket,
+    /// then the edges'), then after the scan and the scatter each bucket's end.
+    pub fn grid(&self) -> usize {
+        self.vbd() + clothlab_core::tri_contact::VBD_TERMS * self.np
+    }
+
+    /// The buckets of one grid: its cells' [`TriLayout::buckets`] and the wide boxes' one
+    /// after them ([`clothlab_core::broad::slot_of`]).
+    pub fn grid_buckets(&self) -> usize {
+        self.buckets + 1
+    }
+
+    /// The grids' entries: the triangles' (by bucket), then the edges'.
+    pub fn entries(&self) -> usize {
+        self.grid() + 2 * self.grid_buckets()
+    }
+
+    /// Each owner's count of pairs found (may exceed [`TRI_SLOTS`]).
+    pub fn owners(&self) -> usize {
+        self.entries() + self.tris + self.edges
+    }
+
+    /// Each particle's fixed-point sums: x, y, z, then its count of acting pairs (i32).
+    pub fn sums(&self) -> usize {
+        self.owners() + self.np + self.edges
+    }
+
+    /// VBD's contact terms, after the scalars: [`clothlab_core::tri_contact::VBD_TERMS`] words a
+    /// particle (i32; where a kernel finds them without the edges' header).
+    pub fn vbd(&self) -> usize {
+        at::WORDS
+    }
+
+    /// Words of the integers.
+    pub fn words(&self) -> usize {
+        self.sums() + 4 * self.np
+    }
+
+    /// Words of the pairs: [`TRI_SLOTS`] an owner (the other primitive), then as many
+    /// again (each kept pair's distance, f32 bits: which one a nearer pair replaces).
+    pub fn pair_words(&self) -> usize {
+        2 * self.num_owners() * TRI_SLOTS as usize
+    }
+
+    /// Owners: the vertices, then the edges.
+    pub fn num_owners(&self) -> usize {
+        self.np + self.edges
+    }
+
+    /// The edges' buffer: `[triangles, edges, buckets, 0]`, then each edge's two vertices
+    /// (the header's 0 is a zero the shader compilers cannot see: the kernels pass a
+    /// side's weights through it so that no compiler rewrites (1 − s)·a + s·b as a lerp).
+    pub fn edges_words(&self, edges: &[[u32; 2]]) -> Vec<u32> {
+        let mut v = vec![self.tris as u32, self.edges as u32, self.buckets as u32, 0];
+        v.extend(edges.iter().flatten());
+        v
+    }
+}
+
+/// The buffers of the contact's kernels, as their twins see them.
+pub struct TriBufs<'a> {
+    /// The layout.
+    pub l: TriLayout,
+    /// Each particle's start position and bound (f32 bits in w).
+    pub floats: &'a mut [V4],
+    /// The integers.
+    pub ints: &'a mut [u32],
+    /// The pairs.
+    pub pairs: &'a mut [u32],
+}
+
+fn v3(x: &V4) -> Vec3 {
+    Vec3::new(x[0], x[1], x[2])
+}
+
+fn f(bits: u32) -> f32 {
+    f32::from_bits(bits)
+}
+
+/// `tri_speed`: the fastest free vertex's speed into the scalars (the integers cleared
+/// before).
+pub fn tri_speed(pos: &[V4], vel: &[V4], b: &mut TriBufs) {
+    for (x, v) in pos.iter().zip(vel) {
+        let s = v3(v).length();
+        if x[3] > 0.0 && s.is_finite() {
+            b.ints[at::SPEED] = b.ints[at::SPEED].max(s.to_bits());
+        }
+    }
+}
+
+/// The substep's reach from the fastest speed (`crate::tri_pipeline::Contact::reach`).
+pub fn reach_of(p: &StepParams, fastest: f32) -> f32 {
+    let g = Vec3::new(p.gravity[0], p.gravity[1], p.gravity[2]).length();
+    let motion = fastest * p.dt + g * (p.dt * p.dt);
+    let t = p.self_thickness;
+    (REACH_PER_MOTION * motion).clamp(t, t + MAX_REACH_SPACINGS * p.spacing)
+}
+
+/// `tri_start`: each particle's start position and its bound at the reach's fraction;
+/// the reach and the grids' cell into the scalars.
+pub fn tri_start(p: &StepParams, pos: &[V4], b: &mut TriBufs) {
+    let reach = reach_of(p, f(b.ints[at::SPEED]));
+    for (s, x) in b.floats.iter_mut().zip(pos) {
+        *s = [x[0], x[1], x[2], BOUND_FRACTION * reach];
+    }
+    b.ints[at::REACH] = reach.to_bits();
+    b.ints[at::CELL] = (2.0 * reach).max(1.5 * p.spacing).to_bits();
+}
+
+/// The box of primitive `o` (triangles first, then edges).
+fn prim_box(o: usize, pos: &[V4], tris: &[[u32; 3]], edges: &[[u32; 2]]) -> [Vec3; 2] {
+    let at = |k: u32| v3(&pos[k as usize]);
+    if o < tris.len() {
+        let [a, b, c] = tris[o];
+        let (a, b, c) = (at(a), at(b), at(c));
+        [a.min(b).min(c), a.max(b).max(c)]
+    } else {
+        let [a, b] = edges[o - tris.len()];
+        let (a, b) = (at(a), at(b));
+        [a.min(b), a.max(b)]
+    }
+}
+
+/// Primitive `o`'s bucket among both grids' (the triangles', then the edges', each
+/// [`TriLayout::buckets`] and one for the wide boxes: [`clothlab_core::broad::slot_of`]) and its
+/// box, or `None` where its box is not finite.
+fn bucket_of(
+    o: usize,
+    pos: &[V4],
+    topo: &clothlab_core::grid::ClothTopology,
+    l: &TriLayout,
+    cell: f32,
+) -> Option<(usize, [Vec3; 2])> {
+    let bx = prim_box(o, pos, &topo.triangles, topo.edges());
+    let slot = clothlab_core::broad::slot_of(bx, cell, l.buckets as u32)?;
+    let grid = if o < l.tris { 0 } else { l.grid_buckets() };
+    Some((grid + slot as usize, bx))
+}
+
+/// `tri_grid_count`: each primitive one more in its bucket's count, its box's extent into
+/// its grid's largest (a wide box's not: it is listed apart).
+pub fn tri_grid_count(topo: &clothlab_core::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
+    let cell = f(b.ints[at::CELL]);
+    for o in 0..b.l.tris + b.l.edges {
+        let Some((bucket, [lo, hi])) = bucket_of(o, pos, topo, &b.l, cell) else { continue };
+        b.ints[b.l.grid() + bucket] += 1;
+        if clothlab_core::broad::is_big([lo, hi], cell) {
+            continue;
+        }
+        let ext = if o < b.l.tris { at::EXTENT_T } else { at::EXTENT_E };
+        for c in 0..3 {
+            b.ints[ext + c] = b.ints[ext + c].max((hi[c] - lo[c]).to_bits());
+        }
+    }
+}
+
+/// `tri_grid_scan`: the buckets' counts to their exclusive prefix (each bucket's start).
+pub fn tri_grid_scan(b: &mut TriBufs) {
+    let mut acc = 0u32;
+    for w in &mut b.ints[b.l.grid()..b.l.entries()] {
+        let n = *w;
+        *w = acc;
+        acc += n;
+    }
+}
+
+/// `tri_grid_scatter`: each primitive into its bucket's next entry (its bucket's word
+/// becomes the bucket's end).
+pub fn tri_grid_scatter(topo: &clothlab_core::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
+    let cell = f(b.ints[at::CELL]);
+    for o in 0..b.l.tris + b.l.edges {
+        let Some((bucket, _)) = bucket_of(o, pos, topo, &b.l, cell) else { continue };
+        let slot = b.ints[b.l.grid() + bucket] as usize;
+        b.ints[b.l.grid() + bucket] += 1;
+        let id = if o < b.l.tris { o } else { o - b.l.tris };
+        b.ints[b.l.entries() + slot] = id as u32;
+    }
+}
+
+/// Bucket `k`'s entries (of both grids' [`TriLayout::grid_buckets`]), after the scatter.
+fn bucket_range(ints: &[u32], l: &TriLayout, k: usize) -> std::ops::Range<usize> {
+    let start = if k == 0 { 0 } else { ints[l.grid() + k - 1] as usize };
+    l.entries() + start..l.entries() + ints[l.grid() + k] as usize
+}
+
+/// `tri_grid_sort`: each bucket's entries in increasing order (the scatter's atomics put
+/// them in any order).
+pub fn tri_grid_sort(b: &mut TriBufs) {
+    for k in 0..2 * b.l.grid_buckets() {
+        let r = bucket_range(b.ints, &b.l, k);
+        b.ints[r].sort_unstable();
+    }
+}
+
+/// One grid of the GPU buffers (`grid` 0: triangles, 1: edges) as
+/// [`clothlab_core::broad::query`] walks it: the entries after the scatter and the sort, each
+/// box from the positions.
+struct Listed<'a> {
+    ints: &'a [u32],
+    l: TriLayout,
+    pos: &'a [V4],
+    topo: &'a clothlab_core::grid::ClothTopology,
+    grid: usize,
+}
+
+impl clothlab_core::broad::Listing for Listed<'_> {
+    fn range(&self, b: usize) -> std::ops::Range<usize> {
+        bucket_range(self.ints, &self.l, self.grid * self.l.grid_buckets() + b)
+    }
+
+    fn entry(&self, e: usize) -> (u32, [Vec3; 2]) {
+        let id = self.ints[e];
+        let offset = if self.grid == 0 { 0 } else { self.l.tris };
+        (id, prim_box(offset + id as usize, self.pos, &self.topo.triangles, self.topo.edges()))
+    }
+}
+
+/// Calls `f` with every primitive of one grid (`grid` 0: triangles, 1: edges) numbered
+/// `first` or more whose box meets `b` grown by `grow`: [`clothlab_core::broad::query`] over the
+/// buffers, as the kernel walks them.
+#[allow(clippy::too_many_arguments)]
+fn query(
+    ints: &[u32],
+    l: &TriLayout,
+    pos: &[V4],
+    topo: &clothlab_core::grid::ClothTopology,
+    grid: usize,
+    b: [Vec3; 2],
+    grow: f32,
+    first: u32,
+    f: impl FnMut(u32),
+) {
+    let cell = self::f(ints[at::CELL]);
+    let ext_at = if grid == 0 { at::EXTENT_T } else { at::EXTENT_E };
+    let extent = Vec3::new(self::f(ints[ext_at]), self::f(ints[ext_at + 1]), self::f(ints[ext_at + 2]));
+    let shape = clothlab_core::broad::Shape {
+        cell,
+        size: l.buckets as u32,
+        extent,
+        most_cells: clothlab_core::layout::TRI_QUERY_CELLS,
+    };
+    clothlab_core::broad::query(&Listed { ints, l: *l, pos, topo, grid }, &shape, b, grow, first, f);
+}
+
+/// Lowers vertex `k`'s bound to `bound` (the kernels' atomic minimum on its bits).
+fn lower(floats: &mut [V4], k: u32, bound: f32) {
+    let w = &mut floats[k as usize][3];
+    if bound.to_bits() < w.to_bits() {
+        *w = bound;
+    }
+}
+
+/// Whether a pair `(distance, other)` lies after another in the order of nearness
+/// (distance, then index: no two of an owner's pairs tie).
+fn farther(a: (f32, u32), b: (f32, u32)) -> bool {
+    a.0 > b.0 || (a.0 == b.0 && a.1 > b.1)
+}
+
+/// `tri_pairs`: each owner's pairs closer than the reach, the [`TRI_SLOTS`] nearest kept
+/// (by distance, then index; in the slots where the kernel's walk leaves them); each
+/// vertex's bound lowered to the fraction of every pair's distance it belongs to.
+pub fn tri_pairs(topo: &clothlab_core::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
+    let l = b.l;
+    let reach = f(b.ints[at::REACH]);
+    let at_ = |k: u32| v3(&pos[k as usize]);
+    let edges = topo.edges();
+    for o in 0..l.num_owners() {
+        let mut found: Vec<(u32, f32)> = Vec::new();
+        if o < l.np {
+            let x = at_(o as u32);
+            query(b.ints, &l, pos, topo, 0, [x, x], reach, 0, |t| {
+                let tri = topo.triangles[t as usize];
+                if tri.contains(&(o as u32)) {
+                    return;
+                }
+                let d = (point_triangle(x, at_(tri[0]), at_(tri[1]), at_(tri[2])).point - x).length();
+                if d < reach {
+                    found.push((t, d));
+                }
+            });
+        } else {
+            let e = (o - l.np) as u32;
+            let [a, bb] = edges[e as usize];
+            let (p0, p1) = (at_(a), at_(bb));
+            query(b.ints, &l, pos, topo, 1, [p0.min(p1), p0.max(p1)], reach, e + 1, |g| {
+                let [c, d] = edges[g as usize];
+                if c == a || c == bb || d == a || d == bb {
+                    return;
+                }
+                let r = edge_edge(p0, p1, at_(c), at_(d));
+                let dist = (r.p - r.q).length();
+                if dist < reach {
+                    found.push((g, dist));
+                }
+            });
+        }
+        let slots = TRI_SLOTS as usize;
+        let (kept, near) = b.pairs.split_at_mut(l.num_owners() * slots);
+        let (kept, near) = (&mut kept[o * slots..(o + 1) * slots], &mut near[o * slots..(o + 1) * slots]);
+        for (n, &(other, d)) in found.iter().enumerate() {
+            let verts: Vec<u32> = if o < l.np {
+                std::iter::once(o as u32).chain(topo.triangles[other as usize]).collect()
+            } else {
+                edges[o - l.np].iter().chain(&edges[other as usize]).copied().collect()
+            };
+            for k in verts {
+                lower(b.floats, k, BOUND_FRACTION * d);
+            }
+            if n < slots {
+                kept[n] = other;
+                near[n] = d.to_bits();
+            } else {
+                // Full: the farthest kept gives way to a nearer (the kernel's walk).
+                let key = |k: usize| (f32::from_bits(near[k]), kept[k]);
+                let far = (1..slots).fold(0, |far, k| if farther(key(k), key(far)) { k } else { far });
+                if farther(key(far), (d, other)) {
+                    kept[far] = other;
+                    near[far] = d.to_bits();
+                }
+            }
+        }
+        let n = found.len() as u32;
+        b.ints[l.owners() + o] = n;
+        b.ints[at::PAIRS] += n;
+        b.ints[at::OVERFLOW] += n.saturating_sub(TRI_SLOTS);
+    }
+}
+
+pub use crate::tri_pipeline::Pass;
+use crate::tri_pipeline::{Response, Sides};
+
+/// Owner `o`'s pair with primitive `other`: a vertex and a triangle, or two edges.
+fn sides(topo: &clothlab_core::grid::ClothTopology, pos: &[V4], l: &TriLayout, o: usize, other: u32) -> Sides {
+    if o < l.np {
+        Sides::vertex_triangle(pos, o as u32, topo.triangles[other as usize])
+    } else {
+        let edges = topo.edges();
+        Sides::edge_edge(pos, edges[o - l.np], edges[other as usize])
+    }
+}
+
+/// The pair's response (`clothlab_core::tri_contact`'s, with the inverse masses from `pos`'s w
+/// and the step's thickness, substep and friction).
+fn response(p: &StepParams, pos: &[V4], vel: &[V4], s: Sides, pass: Pass) -> Option<Response> {
+    let mu = crate::tri_pipeline::Friction { stat: p.mu_static(), kinetic: p.mu_kinetic() };
+    crate::tri_pipeline::response(s, |k| pos[k as usize][3], vel, p.self_thickness, p.dt, mu, pass)
+}
+
+/// The fixed point of a pass's sums.
+fn unit(p: &StepParams, pass: Pass) -> f32 {
+    match pass {
+        Pass::Velocity => p.self_thickness * (1.0 / p.dt) * (1.0 / UNITS),
+        Pass::Separation => p.self_thickness * (1.0 / UNITS),
+    }
+}
+
+/// Every kept pair of every owner, with its response where it has one.
+fn each_response(
+    p: &StepParams,
+    topo: &clothlab_core::grid::ClothTopology,
+    pos: &[V4],
+    vel: &[V4],
+    b: &TriBufs,
+    pass: Pass,
+    mut f: impl FnMut(Response),
+) {
+    for o in 0..b.l.num_owners() {
+        let n = b.ints[b.l.owners() + o].min(TRI_SLOTS) as usize;
+        for slot in 0..n {
+            let other = b.pairs[o * TRI_SLOTS as usize + slot];
+            if let Some(r) = response(p, pos, vel, sides(topo, pos, &b.l, o, other), pass) {
+                f(r);
+            }
+        }
+    }
+}
+
+/// `tri_vbd`: the contact terms under VBD (`crate::tri_pipeline::vbd_terms`) of every kept
+/// pair at `pos` (the sweep's iterate) for the vertices of colour `colour`
+/// (`topo.colours.of`) that are not held, into their sums ([`TriLayout::vbd`]).
+pub fn tri_vbd(p: &StepParams, topo: &clothlab_core::grid::ClothTopology, pos: &[V4], colour: u32, b: &mut TriBufs) {
+    let wanted = crate::tri_pipeline::vbd_wanted(pos, &topo.colours.of, colour, p.grab_index);
+    let edges = topo.edges();
+    let (l, at) = (b.l, b.l.vbd());
+    for o in 0..l.num_owners() {
+        let n = b.ints[l.owners() + o].min(TRI_SLOTS) as usize;
+        for slot in 0..n {
+            let other = b.pairs[o * TRI_SLOTS as usize + slot];
+            let verts: [u32; 4] = if o < l.np {
+                let [a, b, c] = topo.triangles[other as usize];
+                [o as u32, a, b, c]
+            } else {
+                let ([a, b], [c, d]) = (edges[o - l.np], edges[other as usize]);
+                [a, b, c, d]
+            };
+            if verts.iter().any(|&v| wanted(v)) {
+                let s = sides(topo, pos, &l, o, other);
+                crate::tri_pipeline::vbd_terms(&s, p.self_thickness, wanted, &mut b.ints[at..]);
+            }
+        }
+    }
+}
+
+/// The vertices of a side with a weight (those a response moves).
+fn acting(ks: &[u32; 3], ws: &[f32; 3]) -> impl Iterator<Item = u32> {
+    let (ks, ws) = (*ks, *ws);
+    (0..3).filter(move |&i| ws[i] != 0.0).map(move |i| ks[i])
+}
+
+/// `tri_impulse_count` and `tri_separate_count`: each vertex's count of the pairs with a
+/// response that move it (word 3 of its sums).
+pub fn tri_count(
+    p: &StepParams,
+    topo: &clothlab_core::grid::ClothTopology,
+    pos: &[V4],
+    vel: &[V4],
+    b: &mut TriBufs,
+    pass: Pass,
+) {
+    let mut counts = Vec::new();
+    each_response(p, topo, pos, vel, b, pass, |r| {
+        counts.extend(acting(&r.s.a, &r.s.wa).chain(acting(&r.s.b, &r.s.wb)));
+    });
+    let sums = b.l.sums();
+    for k in counts {
+        let w = &mut b.ints[sums + 4 * k as usize + 3];
+        *w = w.wrapping_add(1);
+    }
+}
+
+/// `tri_impulse_share` and `tri_separate_share`: each response spread over its vertices
+/// (`clothlab_core::tri_contact`'s share: over the most pairs any of its vertices is in, by
+/// inverse mass and weight), in fixed point into the sums; the responses counted.
+pub fn tri_share(
+    p: &StepParams,
+    topo: &clothlab_core::grid::ClothTopology,
+    pos: &[V4],
+    vel: &[V4],
+    b: &mut TriBufs,
+    pass: Pass,
+) {
+    let (sums, u) = (b.l.sums(), unit(p, pass));
+    let mut adds: Vec<(u32, [i32; 3])> = Vec::new();
+    let mut responses = 0u32;
+    let ints = &*b.ints;
+    each_response(p, topo, pos, vel, b, pass, |r| {
+        responses += 1;
+        let most = acting(&r.s.a, &r.s.wa)
+            .chain(acting(&r.s.b, &r.s.wb))
+            .map(|k| ints[sums + 4 * k as usize + 3] as i32)
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        let scale = (1.0 / most as f32) * (1.0 / r.m) * (1.0 / u);
+        for (ks, ws, sign) in [(&r.s.a, &r.s.wa, 1.0f32), (&r.s.b, &r.s.wb, -1.0)] {
+            for (&k, &w) in ks.iter().zip(ws) {
+                if w == 0.0 {
+                    continue;
+                }
+                let d = r.change * (sign * pos[k as usize][3] * w * scale);
+                adds.push((k, [d[0] as i32, d[1] as i32, d[2] as i32]));
+            }
+        }
+    });
+    for (k, d) in adds {
+        for (c, dc) in d.iter().enumerate() {
+            let w = &mut b.ints[sums + 4 * k as usize + c];
+            *w = (*w as i32).wrapping_add(*dc) as u32;
+        }
+    }
+    let stat = if pass == Pass::Velocity { at::SLOWED } else { at::PUSHED };
+    b.ints[stat] += responses;
+}
+
+/// `tri_impulse_apply` and `tri_separate_apply`: each particle's sums added (the
+/// velocity pass's to its velocity; the separation's to its position and, over dt, its
+/// velocity), the sums cleared.
+pub fn tri_apply(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs, pass: Pass) {
+    let (sums, u) = (b.l.sums(), unit(p, pass));
+    for (k, (x, v)) in pos.iter_mut().zip(vel.iter_mut()).enumerate() {
+        let s = &mut b.ints[sums + 4 * k..sums + 4 * k + 4];
+        for c in 0..3 {
+            let d = s[c] as i32 as f32 * u;
+            match pass {
+                Pass::Velocity => v[c] += d,
+                Pass::Separation => {
+                    x[c] += d;
+                    v[c] += d * (1.0 / p.dt);
+                }
+            }
+        }
+        s.fill(0);
+    }
+}
+
+/// `tri_clamp_sum`: the free vertices' displacements since the start, in
+/// [`MEAN_UNIT`]s, into the 64-bit sums (`clothlab_core::tri_contact::mean_displacement`), and
+/// their count.
+pub fn tri_clamp_sum(pos: &[V4], b: &mut TriBufs) {
+    for (x, s) in pos.iter().zip(b.floats.iter()) {
+        if x[3] <= 0.0 {
+            continue;
+        }
+        for c in 0..3 {
+            let units = ((x[c] - s[c]) / MEAN_UNIT) as i32 as i64;
+            let (lo, hi) = (at::MEAN + 2 * c, at::MEAN + 2 * c + 1);
+            let sum = ((b.ints[hi] as u64) << 32 | b.ints[lo] as u64) as i64;
+            let sum = sum.wrapping_add(units);
+            (b.ints[lo], b.ints[hi]) = (sum as u32, (sum >> 32) as u32);
+        }
+        b.ints[at::FREE] += 1;
+    }
+}
+
+/// The free vertices' mean displacement from the sums.
+pub fn clamp_mean(ints: &[u32]) -> Vec3 {
+    let count = 1.0 / ints[at::FREE].max(1) as f32;
+    let c = |k: usize| {
+        let (lo, hi) = (ints[at::MEAN + 2 * k], ints[at::MEAN + 2 * k + 1]);
+        (hi as i32 as f32 * 4_294_967_296.0 + lo as f32) * MEAN_UNIT * count
+    };
+    Vec3::new(c(0), c(1), c(2))
+}
+
+/// `tri_clamp_check`: whether some vertex is farther than its bound from the mean
+/// displacement, and whether some moved farther than its bound.
+pub fn tri_clamp_check(pos: &[V4], b: &mut TriBufs) {
+    let mean = clamp_mean(b.ints);
+    for (x, s) in pos.iter().zip(b.floats.iter()) {
+        let d = v3(x) - v3(s);
+        // NaN compares false: over.
+        let within = matches!(
+            (d - mean).length().partial_cmp(&s[3]),
+            Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+        );
+        if !within {
+            b.ints[at::OVER] = 1;
+        }
+        if d.length() > s[3] {
+            b.ints[at::MOVED] = 1;
+        }
+    }
+}
+
+/// `tri_clamp`: where some vertex is over its bound from the mean, every vertex's motion
+/// since the start cut to its bound, the cut taken from its velocity (over dt).
+pub fn tri_clamp(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs) {
+    if b.ints[at::OVER] == 0 {
+        return;
+    }
+    let mut clamped = 0;
+    for ((x, v), s) in pos.iter_mut().zip(vel.iter_mut()).zip(b.floats.iter()) {
+        let x0 = v3(s);
+        let d = v3(x) - x0;
+        let len = d.length();
+        if len <= s[3] || !len.is_finite() {
+            continue;
+        }
+        let to = x0 + d * (s[3] * (1.0 / len));
+        for c in 0..3 {
+            v[c] += (to[c] - x[c]) * (1.0 / p.dt);
+            x[c] = to[c];
+        }
+        clamped += 1;
+    }
+    b.ints[at::CLAMPED] += clamped;
+}
+
+/// What the last substep did, from the scalars (`clothlab_core::solver::ContactStats`).
+pub fn stats(ints: &[u32]) -> clothlab_core::solver::ContactStats {
+    let spared = ints[at::OVER] == 0 && ints[at::MOVED] != 0;
+    clothlab_core::solver::ContactStats {
+        reach: f(ints[at::REACH]),
+        pairs: ints[at::PAIRS] as usize,
+        slowed: ints[at::SLOWED] as usize,
+        pushed: ints[at::PUSHED] as usize,
+        clamped: ints[at::CLAMPED] as usize,
+        shared: if spared { clamp_mean(ints).length() } else { 0.0 },
+        ..Default::default()
+    }
+}
