@@ -29,6 +29,22 @@ macro_rules! wgsl_type {
     (i32) => {
         "i32"
     };
+    (ZeroWord) => {
+        "u32"
+    };
+}
+
+/// A 32-bit word that is 0 and cannot be made anything else (its field is private): the
+/// word the VBD kernels OR their block's sums with (`kept` in shared/vbd.wgsl), so that
+/// the compiler cannot know the sum is unchanged and re-associate it — lavapipe's did,
+/// one ulp off the twin's. Were it not 0 the sums would change; the type holds the rule.
+#[repr(transparent)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Pod, Zeroable)]
+pub struct ZeroWord(u32);
+
+impl ZeroWord {
+    /// The one value.
+    pub const ZERO: Self = Self(0);
 }
 
 /// A `#[repr(C)]` struct shared with the kernels, and its WGSL declaration as a
@@ -101,8 +117,9 @@ shared_struct! {
         pub kinetic_friction: f32,
         /// VBD's spectral radius ρ for Chebyshev acceleration (`SimParams::vbd_rho`; 0 off).
         pub vbd_rho: f32,
-        /// Unused (a uniform block is a multiple of 16 bytes); 0.
-        pub spare: f32,
+        /// 0, always: the word the VBD kernels' sums go through so that the compiler
+        /// keeps their order ([`ZeroWord`]); it also fills the block to 16 bytes.
+        pub zero: ZeroWord,
     }
 }
 
@@ -241,7 +258,7 @@ impl StepParams {
                 static_friction: params.static_friction,
                 kinetic_friction: params.kinetic_friction,
                 vbd_rho: params.vbd_rho,
-                spare: 0.0,
+                zero: ZeroWord::ZERO,
             },
         }
     }

@@ -24,11 +24,11 @@ fn add_block(a: f32, b: f32, n: vec3<f32>) {
 }
 
 // `x` through a word that is 0 but that the compiler cannot know is (ContactParams's
-// spare), so that the block's sums stay the twin's: lavapipe's compiler otherwise
+// `zero`, a core::step_params::ZeroWord: 0 by its type), so that the block's sums stay the twin's: lavapipe's compiler otherwise
 // evaluated the running sum of a + b·n.x·n.x differently (its terms summed apart were the
 // twin's bits, the sum one ulp off), and VBD's rollouts left the CPU's bits.
 fn kept(x: f32) -> f32 {
-    return bitcast<f32>(bitcast<u32>(x) | bitcast<u32>(contact_params.spare));
+    return bitcast<f32>(bitcast<u32>(x) | contact_params.zero);
 }
 
 // The block and force after the penalties (the friction pass's λ reads them).
