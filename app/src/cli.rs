@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use clothlab_engine::{SolverOptions, StatsMode, VariantSpec};
+use clothlab::engine::{SolverOptions, StatsMode, VariantSpec};
 
 use clothlab::backend::{Api, Backend, GpuSetup};
 
@@ -59,11 +59,11 @@ pub enum Mode {
 
 impl Mode {
     /// The renderer's mode.
-    pub fn render_mode(self) -> clothlab_core::RenderMode {
+    pub fn render_mode(self) -> clothlab::core::RenderMode {
         match self {
-            Mode::Points => clothlab_core::RenderMode::Points,
-            Mode::Lines => clothlab_core::RenderMode::Lines,
-            Mode::Triangles => clothlab_core::RenderMode::Triangles,
+            Mode::Points => clothlab::core::RenderMode::Points,
+            Mode::Lines => clothlab::core::RenderMode::Lines,
+            Mode::Triangles => clothlab::core::RenderMode::Triangles,
         }
     }
 }
@@ -240,7 +240,7 @@ pub struct SimArgs {
 pub struct PhysicsArgs {
     /// How a substep integrates (the help lists `Integrator::ALL`).
     #[arg(long, value_parser = parse_integrator, help = integrator_help())]
-    pub integrator: Option<clothlab_core::Integrator>,
+    pub integrator: Option<clothlab::core::Integrator>,
     /// Override a simulation parameter, e.g. `--set damping=0.001 --set wind=[2,0,1]`
     /// (names as in `SimParams`; see docs/parameters.md).
     #[arg(long = "set", value_name = "NAME=VALUE")]
@@ -273,7 +273,7 @@ impl PhysicsArgs {
 /// `--integrator`'s help, from `Integrator::ALL`.
 fn integrator_help() -> String {
     let list: Vec<String> =
-        clothlab_core::Integrator::ALL.iter().map(|i| format!("{} ({})", i.name(), i.summary())).collect();
+        clothlab::core::Integrator::ALL.iter().map(|i| format!("{} ({})", i.name(), i.summary())).collect();
     format!(
         "How a substep integrates: {}. Explicit ones refuse springs they cannot integrate, naming the substeps",
         list.join(", ")
@@ -285,19 +285,19 @@ fn scene_help() -> String {
     format!(
         "A scene file (TOML; see scenes/ and docs/scenes.md) whose keys are {} ([[cloth]] for several cloths). \
          `--n`, `--integrator` and `--set` apply over it",
-        clothlab_core::SceneFile::TABLES.join(", ")
+        clothlab::core::SceneFile::TABLES.join(", ")
     )
 }
 
 /// `--integrator`'s value, by its name.
-fn parse_integrator(s: &str) -> Result<clothlab_core::Integrator, String> {
-    clothlab_core::Integrator::parse(s).ok_or_else(|| {
-        let names: Vec<&str> = clothlab_core::Integrator::ALL.iter().map(|i| i.name()).collect();
+fn parse_integrator(s: &str) -> Result<clothlab::core::Integrator, String> {
+    clothlab::core::Integrator::parse(s).ok_or_else(|| {
+        let names: Vec<&str> = clothlab::core::Integrator::ALL.iter().map(|i| i.name()).collect();
         format!("unknown integrator `{s}` (known: {})", names.join(", "))
     })
 }
 
-/// What `--set-variant` takes (kept in step with `clothlab_engine::variant::SWITCHES` by a
+/// What `--set-variant` takes (kept in step with `clothlab::engine::variant::SWITCHES` by a
 /// test).
 pub const SET_VARIANT_HELP: &str = "GPU backends: change one switch of the variant, KEY=VALUE (repeatable). \
 The switches (values in ladder order, the naive one first):
@@ -541,7 +541,7 @@ mod tests {
     fn the_set_variant_help_lists_every_switch_and_value() {
         // The help is a fixed text (clap takes a constant); a switch added to the engine
         // without it here fails this test.
-        for s in clothlab_engine::variant::SWITCHES {
+        for s in clothlab::engine::variant::SWITCHES {
             let entry = format!("{}={}", s.key, s.values.join("|"));
             assert!(SET_VARIANT_HELP.contains(&entry), "--set-variant's help lacks `{entry}`");
         }

@@ -172,6 +172,12 @@ impl Api {
     }
 }
 
+/// Which of its backends wgpu opens from now on in this process (the command line's
+/// `--wgpu-backend`): GL where `gl`, else Vulkan.
+pub fn choose_wgpu_backends(gl: bool) {
+    clothlab_wgpu::choose_backends(if gl { wgpu::Backends::GL } else { wgpu::Backends::VULKAN });
+}
+
 /// Whether the Vulkan backends run with the Khronos validation layer: in debug builds,
 /// or when CLOTHLAB_VALIDATION=1.
 pub fn vulkan_validation() -> bool {

@@ -24,6 +24,12 @@ use crate::backend::{AnySolver, Backend, GpuSetup, Shared, make, vulkan_validati
 /// first fall).
 pub const WARMUP_FRAMES: u32 = 3;
 
+/// What the CPU solvers run a Verlet substep on here (the fused sweep at the instruction
+/// set chosen, or why not), for reports.
+pub fn cpu_path_label() -> String {
+    clothlab_cpu::fused_path_label()
+}
+
 /// The CPU in one line: model and logical cores.
 pub fn cpu_label() -> String {
     let model = std::fs::read_to_string("/proc/cpuinfo")
@@ -441,4 +447,64 @@ pub fn cells(opts: &BenchOptions) -> Result<BenchRun> {
         }
     }
     Ok(run)
+}
+
+/// The API-overhead micro-benchmarks (`OverheadPlan`: an empty submit and wait, dependent
+/// and independent dispatches, uploads, readbacks) of one stack by name — `wgpu` (its
+/// default backend), `wgpu-gl` (wgpu on its GL backend), `vulkan`, `gl` — on a fresh
+/// device of its own, never drawn on (GL's described as `devices` found it): its
+/// adapter's description and the rows.
+pub fn overheads(
+    api: &str,
+    plan: &clothlab_core::timing::OverheadPlan,
+    devices: &Devices,
+) -> Result<(String, Vec<clothlab_core::timing::OverheadRow>)> {
+    use anyhow::Context as _;
+    Ok(match api {
+        "wgpu" => {
+            let ctx = GpuContext::new()?;
+            let rows = clothlab_wgpu::overhead::measure(&ctx, plan).context("wgpu overhead benchmarks")?;
+            (ctx.describe(), rows)
+        }
+        "wgpu-gl" => {
+            let ctx = GpuContext::with_backends(wgpu::Backends::GL)?;
+            let rows = clothlab_wgpu::overhead::measure(&ctx, plan).context("wgpu-on-GL overhead benchmarks")?;
+            (ctx.describe(), rows)
+        }
+        "gl" => {
+            let rows = clothlab_gl::overhead::measure(plan).context("OpenGL overhead benchmarks")?;
+            (devices.gl.clone().unwrap_or_default(), rows)
+        }
+        "vulkan" => {
+            let dev = Device::new(vulkan_validation())?;
+            let rows = clothlab_vulkan::overhead::measure(&dev, plan).context("Vulkan overhead benchmarks")?;
+            (format!("{} (Vulkan)", dev.name()), rows)
+        }
+        other => bail!("no overhead benchmarks for {other:?}: wgpu, wgpu-gl, vulkan or gl"),
+    })
+}
+
+/// What a variant's recipe moves and dispatches a substep on an `n` × `n` grid with
+/// `params`: its dispatches a substep and its bytes read and written a substep (the
+/// frame's end counted by its share; with temporal blocking a recording advances several
+/// substeps, each counted by its share), as `clothlab bench --ladder` reports them.
+pub fn recipe_traffic(variant: &Variant, n: u32, params: &SimParams) -> Result<(usize, u64)> {
+    use clothlab_engine::recipe::{
+        Command, Integration, bytes_moved, dispatch_substeps, dispatches, frame_end, recipe_for,
+    };
+    let (_, topo) = clothlab_core::build(&Scene::with_n(n), params)?;
+    let how = Integration::of(params);
+    let commands = recipe_for(variant, params.strain_iterations, how, &topo);
+    // What runs once per frame (normals=frame) counts its share per substep in the
+    // bytes; its dispatches (two per frame) are left out of the per-substep count.
+    let end = frame_end(variant, how);
+    let uniform = variant.table == clothlab_engine::variant::Table::Uniform;
+    let group = dispatch_substeps(variant, how, params.strain_iterations, &topo);
+    let bytes_of = |c: &[Command]| -> u64 {
+        dispatches(c).map(|k| bytes_moved(k, &topo, uniform, params.strain_iterations, group)).sum()
+    };
+    Ok((
+        dispatches(&commands).count().div_ceil(group as usize),
+        bytes_of(&commands) / u64::from(group) + bytes_of(&end) / u64::from(params.substeps.max(1)),
+    ))
 }

@@ -47,5 +47,6 @@ pub use setup::{Physics, SceneSource, Setup, apply_overrides};
 pub use sim::{ClothRange, DEFAULT_N, MAX_STEPS, Sim, SimOptions, available};
 pub use validate::{ValidateOptions, Validation, validate};
 
-/// The crates underneath, for what the facade does not wrap.
-pub use {clothlab_core as core, clothlab_engine as engine};
+/// The crates underneath, for what the facade does not wrap: the model (its types are the
+/// library's: `Scene`, `SimParams`, …), the CPU backends and the step as data.
+pub use {clothlab_core as core, clothlab_cpu as cpu, clothlab_engine as engine};

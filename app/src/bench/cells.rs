@@ -7,12 +7,9 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use clothlab_core::timing::{OverheadPlan, OverheadRow};
-use clothlab_core::{Scene, SimParams};
-use clothlab_engine::recipe::{bytes_moved, dispatches};
-use clothlab_engine::variant::{Table, Variant, ladder as ladder_rungs};
-use clothlab_vulkan::Device;
-use clothlab_wgpu::GpuContext;
+use clothlab::core::timing::{OverheadPlan, OverheadRow};
+use clothlab::core::{Scene, SimParams};
+use clothlab::engine::variant::{Variant, ladder as ladder_rungs};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use clothlab::bench::{Devices, is_gl, is_vulkan, is_wgpu, measure};
@@ -21,7 +18,7 @@ use super::results::{self, Cell, LadderCell};
 use super::{Request, WARMUP_FRAMES, cpu_label, journal, make_out_dir, output};
 use crate::cli::BenchArgs;
 use crate::out::outln;
-use clothlab::backend::{Api, Backend, GpuSetup, Shared, make, vulkan_validation};
+use clothlab::backend::{Api, Backend, GpuSetup, Shared, make};
 
 /// The cells of `request` as `args` asks, and the overhead benchmarks.
 pub fn run(args: &BenchArgs, request: Request) -> Result<ExitCode> {
@@ -206,7 +203,7 @@ pub fn run(args: &BenchArgs, request: Request) -> Result<ExitCode> {
                 }
                 let cell = measure(job.backend, job.variant, sized(n), &params, frames, args.resolution, &devices)
                     .with_context(|| format!("{label} at n={n}"))?;
-                let sub = cell.kernels.iter().find(|r| r.label == clothlab_core::timing::SUBSTEP);
+                let sub = cell.kernels.iter().find(|r| r.label == clothlab::core::timing::SUBSTEP);
                 let frame = cell.frames.iter().find(|r| r.label == "frame");
                 say(
                     &bar,
@@ -260,28 +257,7 @@ pub fn run(args: &BenchArgs, request: Request) -> Result<ExitCode> {
                     bar.inc(1);
                     continue;
                 }
-                None if api == "wgpu" => {
-                    let ctx = GpuContext::new()?;
-                    let rows =
-                        clothlab_wgpu::overhead::measure(&ctx, &overhead_plan).context("wgpu overhead benchmarks")?;
-                    (ctx.describe(), rows)
-                }
-                None if api == "wgpu-gl" => {
-                    let ctx = GpuContext::with_backends(wgpu::Backends::GL)?;
-                    let rows = clothlab_wgpu::overhead::measure(&ctx, &overhead_plan)
-                        .context("wgpu-on-GL overhead benchmarks")?;
-                    (ctx.describe(), rows)
-                }
-                None if api == "gl" => {
-                    let rows = clothlab_gl::overhead::measure(&overhead_plan).context("OpenGL overhead benchmarks")?;
-                    (devices.gl.clone().unwrap_or_default(), rows)
-                }
-                None => {
-                    let dev = Device::new(vulkan_validation())?;
-                    let rows = clothlab_vulkan::overhead::measure(&dev, &overhead_plan)
-                        .context("Vulkan overhead benchmarks")?;
-                    (format!("{} (Vulkan)", dev.name()), rows)
-                }
+                None => clothlab::bench::overheads(api, &overhead_plan, &devices)?,
             };
             journal.add_overhead(api, &adapter, &rows)?;
             overhead.push((api.to_owned(), adapter, rows));
@@ -309,7 +285,7 @@ pub fn run(args: &BenchArgs, request: Request) -> Result<ExitCode> {
         wgpu_adapter: devices.wgpu.as_ref().map(|c| c.describe()),
         vulkan_adapter: devices.vulkan.as_ref().map(|d| d.name().to_owned()),
         gl_adapter: devices.gl.clone(),
-        cpu_simd: clothlab_cpu::fused_path_label(),
+        cpu_simd: clothlab::bench::cpu_path_label(),
         params: params.clone(),
         scene: scene_label.clone(),
         frames,
@@ -376,18 +352,7 @@ impl Job {
         skipped: Option<String>,
     ) -> Result<LadderCell> {
         let v = self.variant.context("a ladder job has a variant")?;
-        let (_, topo) = clothlab_core::build(&Scene::with_n(n), params)?;
-        let how = clothlab_engine::recipe::Integration::of(params);
-        let commands = clothlab_engine::recipe::recipe_for(&v, params.strain_iterations, how, &topo);
-        // What runs once per frame (normals=frame) counts its share per substep in the
-        // bytes; its dispatches (two per frame) are left out of the per-substep count.
-        let end = clothlab_engine::recipe::frame_end(&v, how);
-        let uniform = v.table == Table::Uniform;
-        // With temporal blocking a recording of the commands advances `group` substeps.
-        let group = clothlab_engine::recipe::dispatch_substeps(&v, how, params.strain_iterations, &topo);
-        let bytes_of = |c: &[clothlab_engine::recipe::Command]| -> u64 {
-            dispatches(c).map(|k| bytes_moved(k, &topo, uniform, params.strain_iterations, group)).sum()
-        };
+        let (dispatches, bytes) = clothlab::bench::recipe_traffic(&v, n, params)?;
         Ok(LadderCell {
             api: self.backend.api().map_or("cpu", Api::name).into(),
             n,
@@ -396,8 +361,8 @@ impl Job {
             backend: backend.to_string(),
             switches: v.switches(),
             skipped,
-            dispatches: dispatches(&commands).count().div_ceil(group as usize),
-            bytes: bytes_of(&commands) / u64::from(group) + bytes_of(&end) / u64::from(params.substeps.max(1)),
+            dispatches,
+            bytes,
         })
     }
 }

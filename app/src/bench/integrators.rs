@@ -14,9 +14,9 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Result;
-use clothlab_core::params::MAX_SUBSTEPS;
-use clothlab_core::{Integrator, Scene, SimParams, Solver, StiffnessUnits};
-use clothlab_cpu::{CpuSolver, Exec};
+use clothlab::core::params::MAX_SUBSTEPS;
+use clothlab::core::{Integrator, Scene, SimParams, Solver, StiffnessUnits};
+use clothlab::cpu::{CpuSolver, Exec};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context, Result, bail};
-use clothlab_core::timing::OverheadRow;
+use clothlab::core::timing::OverheadRow;
 use serde::{Deserialize, Serialize};
 
 use super::results::Cell;

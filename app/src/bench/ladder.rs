@@ -1,15 +1,15 @@
 //! `clothlab bench --ladder`: from `naive` to the fastest combination, one switch at a
-//! time (`clothlab_engine::variant::LADDER`), on each GPU API at each size, plus the
+//! time (`clothlab::engine::variant::LADDER`), on each GPU API at each size, plus the
 //! `thesis` preset; per rung the substep, per-kernel, CPU record/submit and frame times
 //! (the cells of the ordinary benchmark), what the rung bought, and which resource bounds
 //! it on this adapter.
 
 use std::fmt::Write as _;
 
-use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, SUBSTEP};
+use clothlab::core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, SUBSTEP};
 
 use super::results::{LadderCell, Results, chain_slope, known_peak};
-use clothlab_engine::recipe::STATE_BYTES;
+use clothlab::engine::recipe::STATE_BYTES;
 
 /// The thesis's own figure for its optimized CUDA port against the direct one
 /// (ch. 7: "about 4 frames per second more").
@@ -213,8 +213,8 @@ pub fn report(r: &Results) -> String {
 mod tests {
     use super::*;
     use crate::bench::results::{Cell, test_results as results};
-    use clothlab_core::TimingRow;
-    use clothlab_core::timing::{OverheadRow, overhead};
+    use clothlab::core::TimingRow;
+    use clothlab::core::timing::{OverheadRow, overhead};
 
     fn t(label: &str, ns: f64) -> TimingRow {
         TimingRow { label: label.into(), samples: 8, median_ns: ns, min_ns: ns, max_ns: ns }

@@ -19,8 +19,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Result;
-use clothlab_core::{Scene, SimParams};
-use clothlab_cpu::{CpuSolver, Exec};
+use clothlab::core::{Scene, SimParams};
+use clothlab::cpu::{CpuSolver, Exec};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -30,8 +30,8 @@ use super::{Request, WARMUP_FRAMES, all_backends, cpu_label, make_out_dir};
 use crate::cli::BenchArgs;
 use crate::out::outln;
 use clothlab::backend::{AnySolver, Backend, GpuSetup, Shared, make};
-use clothlab_engine::VariantSpec;
-use clothlab_engine::variant::{Neighbours, Table};
+use clothlab::engine::VariantSpec;
+use clothlab::engine::variant::{Neighbours, Table};
 
 /// The backends measured unless `--backends` says otherwise: the CPU ones and each GPU
 /// API's optimized one (the naive recipes have no grid-only switch to compare).
@@ -70,12 +70,12 @@ pub struct Row {
 /// top edge is, unpinned; refused in one line if the file cannot be a cloth or the
 /// scene's parameters cannot simulate it.
 pub fn irregular(base: &Scene, file: &std::path::Path) -> Result<Scene> {
-    use clothlab_core::mesh::{PlacedMesh, Placement};
+    use clothlab::core::mesh::{PlacedMesh, Placement};
     let placement = Placement { translate: base.cloth.top_center, ..Placement::default() };
     let placed = PlacedMesh::load(file, None, &placement).map_err(|e| anyhow::anyhow!("--irregular: {e}"))?;
     let mut scene = base.clone();
     scene.cloth.mesh = Some(file.to_path_buf());
-    scene.cloth.pinning = clothlab_core::Pinning::None;
+    scene.cloth.pinning = clothlab::core::Pinning::None;
     scene.cloth.translate = placement.translate;
     scene.cloth.mesh_data = Some(std::sync::Arc::new(placed));
     Ok(scene)
@@ -83,7 +83,7 @@ pub fn irregular(base: &Scene, file: &std::path::Path) -> Result<Scene> {
 
 /// The scene's grid at side `n` as a mesh (`core::cloth::grid_as_mesh`).
 pub fn as_mesh(grid: &Scene) -> Result<Scene> {
-    clothlab_core::cloth::grid_as_mesh(grid)
+    clothlab::core::cloth::grid_as_mesh(grid)
         .map_err(|e| anyhow::anyhow!("--mesh-vs-grid compares the scene's grid with itself as a mesh: {e}"))
 }
 

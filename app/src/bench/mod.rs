@@ -26,7 +26,7 @@ mod worlds;
 use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
-use clothlab_core::{Scene, SimParams};
+use clothlab::core::{Scene, SimParams};
 
 use crate::cli::BenchArgs;
 use crate::out::outln;
@@ -100,10 +100,10 @@ impl Request {
             s
         };
         if base.cloth.is_mesh() {
-            clothlab_core::cloth::check_params(&base, &params)?;
+            clothlab::core::cloth::check_params(&base, &params)?;
         } else if !args.integrators {
             for &n in &sizes {
-                clothlab_core::cloth::check_params(&sized(n), &params)
+                clothlab::core::cloth::check_params(&sized(n), &params)
                     .with_context(|| format!("the scene's parameters at size {n} of --sizes"))?;
             }
         }

@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, SUBSTEP, overhead};
+use clothlab::core::timing::{CPU_RECORD, CPU_SUBMIT, SUBSTEP, overhead};
 
 use super::results::{CHECK_BOUND_PER_SUBSTEP, Results, chain_slope};
 
@@ -484,8 +484,8 @@ pub fn write_report(results: &Results, dir: &Path) -> Result<Vec<PathBuf>> {
 mod tests {
     use super::*;
     use crate::bench::results::{Cell, test_results};
-    use clothlab_core::TimingRow;
-    use clothlab_core::timing::OverheadRow;
+    use clothlab::core::TimingRow;
+    use clothlab::core::timing::OverheadRow;
 
     fn timing(label: &str, ns: f64) -> TimingRow {
         TimingRow { label: label.into(), samples: 16, median_ns: ns, min_ns: ns * 0.9, max_ns: ns * 1.2 }

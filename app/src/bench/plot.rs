@@ -5,7 +5,7 @@
 use std::sync::Once;
 
 use anyhow::{Result, anyhow};
-use clothlab_core::timing::overhead;
+use clothlab::core::timing::overhead;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -307,7 +307,7 @@ impl Figure for Waterfall<'_> {
         for c in self.r.ladder.iter().filter(|c| c.api == self.api && c.n == self.n) {
             let ms = self
                 .r
-                .get("kernel", &c.backend, self.n as u64, clothlab_core::timing::SUBSTEP, None)
+                .get("kernel", &c.backend, self.n as u64, clothlab::core::timing::SUBSTEP, None)
                 .map(|x| x.median_ns / 1e6);
             let Some(ms) = ms.filter(|_| c.skipped.is_none()) else {
                 bars.push((format!("{} (skipped)", c.rung), 0.0, 0.0, WHITE));
@@ -326,7 +326,7 @@ impl Figure for Waterfall<'_> {
         }
         // The state's 64 bytes per particle-substep at the memory's peak, where known.
         let floor_ms = super::results::known_peak(self.r)
-            .map(|gbps| clothlab_engine::recipe::STATE_BYTES as f64 * (self.n as f64).powi(2) / gbps / 1e6);
+            .map(|gbps| clothlab::engine::recipe::STATE_BYTES as f64 * (self.n as f64).powi(2) / gbps / 1e6);
         let top = bars.iter().map(|b| b.1.max(b.2)).chain(floor_ms).fold(0.0, f64::max).max(1e-6) * 1.25;
         let k = bars.len().max(1) as i32;
         let mut chart = ChartBuilder::on(root)
@@ -385,7 +385,7 @@ impl Figure for Waterfall<'_> {
                 .map_err(err)?
                 .label(format!(
                     "bound: {} B per particle-substep at the memory's peak",
-                    clothlab_engine::recipe::STATE_BYTES
+                    clothlab::engine::recipe::STATE_BYTES
                 ))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
             chart

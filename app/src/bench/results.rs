@@ -3,8 +3,8 @@
 //! (`output`: CSV, JSON, report.md; `ladder`: the ladder's tables; `plot`: the figures)
 //! only read it, so none of them imports another's data.
 
-use clothlab_core::SimParams;
-use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, OverheadPlan, OverheadRow, overhead};
+use clothlab::core::SimParams;
+use clothlab::core::timing::{CPU_RECORD, CPU_SUBMIT, OverheadPlan, OverheadRow, overhead};
 use serde::{Deserialize, Serialize};
 
 /// Bound on a sampled particle's distance from the reference backend's after the run,
@@ -39,7 +39,7 @@ pub struct LadderCell {
     pub skipped: Option<String>,
     /// Dispatches per substep.
     pub dispatches: usize,
-    /// Compulsory bytes per substep (`clothlab_engine::kernels::compulsory_bytes`).
+    /// Compulsory bytes per substep (`clothlab::engine::kernels::compulsory_bytes`).
     pub bytes: u64,
 }
 
@@ -377,7 +377,7 @@ impl Results {
     }
 }
 
-fn row(section: &str, backend: &str, size: u64, r: &clothlab_core::TimingRow, clock: &str, adapter: &str) -> Row {
+fn row(section: &str, backend: &str, size: u64, r: &clothlab::core::TimingRow, clock: &str, adapter: &str) -> Row {
     Row {
         section: section.to_owned(),
         backend: backend.to_owned(),

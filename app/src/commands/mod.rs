@@ -24,10 +24,7 @@ pub fn run() -> Result<ExitCode> {
         }
     };
     if let Some(b) = cli.wgpu_backend {
-        clothlab_wgpu::choose_backends(match b {
-            crate::cli::WgpuBackend::Vulkan => wgpu::Backends::VULKAN,
-            crate::cli::WgpuBackend::Gl => wgpu::Backends::GL,
-        });
+        clothlab::backend::choose_wgpu_backends(b == crate::cli::WgpuBackend::Gl);
     }
     match cli.command.unwrap_or(Command::Run(RunArgs::default())) {
         Command::Run(args) => run::run_app(args),

@@ -5,11 +5,11 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Result, bail};
+use clothlab::core::stats::{summarize, write_json, write_obj};
+use clothlab::core::timing::SUBSTEP;
+use clothlab::core::{StateField, crossings};
 use clothlab::record::{MAX_GLB_BYTES, Recording, glb};
 use clothlab::{AnySolver, MAX_STEPS, Sim, SimOptions};
-use clothlab_core::stats::{summarize, write_json, write_obj};
-use clothlab_core::timing::SUBSTEP;
-use clothlab_core::{StateField, crossings};
 
 use crate::cli::{SimArgs, StatsArg};
 use crate::out::outln;
@@ -257,7 +257,7 @@ fn batch(
     let world_substeps: u64 = substeps.iter().sum();
     let (mut max_strain, mut lowest, mut nan, mut crossed) = (0f32, f32::INFINITY, 0usize, 0usize);
     let mut all =
-        clothlab_core::ClothState { n: 0, pos: Vec::new(), vel: Vec::new(), force: Vec::new(), normal: Vec::new() };
+        clothlab::core::ClothState { n: 0, pos: Vec::new(), vel: Vec::new(), force: Vec::new(), normal: Vec::new() };
     for k in 0..envs {
         let state = sim.world_state(k)?;
         let summary = summarize(&state, sim.topology());

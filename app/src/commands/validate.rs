@@ -5,8 +5,8 @@
 use std::process::ExitCode;
 
 use anyhow::Result;
+use clothlab::cpu::validate::Check;
 use clothlab::validate::{Line, ValidateOptions, validate as run};
-use clothlab_cpu::validate::Check;
 
 use crate::cli::ValidateArgs;
 use crate::out::outln;

@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
-use clothlab_core::{Scene, View};
+use clothlab::core::{Scene, View};
 use clothlab_gl::{GlContext, GlOverlay, GlRenderer};
 use clothlab_vulkan::Device;
 use clothlab_vulkan::{Overlay, Presenter, VulkanRenderer};
@@ -82,10 +82,10 @@ impl Gfx {
 
     /// Graphics for `window` on `api`, drawing `scene` (its cloth topology built from
     /// `params`) at the window's size.
-    pub fn new(api: Api, window: &Arc<Window>, scene: &Scene, params: &clothlab_core::SimParams) -> Result<Self> {
+    pub fn new(api: Api, window: &Arc<Window>, scene: &Scene, params: &clothlab::core::SimParams) -> Result<Self> {
         let size = window.inner_size();
         let (w, h) = (size.width.max(1), size.height.max(1));
-        let (_, topo) = clothlab_core::build(scene, params)?;
+        let (_, topo) = clothlab::core::build(scene, params)?;
         Ok(match api {
             Api::Gl => {
                 let ctx = GlContext::for_window(window.clone())?;
@@ -172,8 +172,8 @@ impl Gfx {
     }
 
     /// A new cloth topology (the grid size changed): the renderer is made anew.
-    pub fn rebuild(&mut self, scene: &Scene, params: &clothlab_core::SimParams) -> Result<()> {
-        let (_, topo) = clothlab_core::build(scene, params)?;
+    pub fn rebuild(&mut self, scene: &Scene, params: &clothlab::core::SimParams) -> Result<()> {
+        let (_, topo) = clothlab::core::build(scene, params)?;
         match self {
             Gfx::Wgpu(g) => {
                 let (w, h) = g.renderer.size();

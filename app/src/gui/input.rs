@@ -1,7 +1,7 @@
 //! What the user can ask for, and how keys and mouse motion map onto it — plain logic,
 //! tested without a window.
 
-use clothlab_core::{OrbitCamera, RenderMode};
+use clothlab::core::{OrbitCamera, RenderMode};
 use glam::Vec3;
 
 /// The mouse tool (the thesis's View menu).

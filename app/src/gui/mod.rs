@@ -12,7 +12,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
-use clothlab_core::{OrbitCamera, RenderMode, SimParams, View};
+use clothlab::core::{OrbitCamera, RenderMode, SimParams, View};
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::WindowEvent;
@@ -78,7 +78,7 @@ pub struct UiState {
     /// Parameters being edited (applied when valid).
     pub params: SimParams,
     /// The scene's colliders and floor being edited (applied with the panel's Apply).
-    pub scene: clothlab_core::Scene,
+    pub scene: clothlab::core::Scene,
     /// The scene's title (the file's), or its file name.
     pub scene_title: String,
     /// The Open scene window is open.
@@ -101,13 +101,13 @@ pub enum Command {
     /// Another solver, keeping the cloth.
     Backend(Backend),
     /// Another variant of the running GPU solver, keeping the cloth.
-    Variant(clothlab_engine::Variant),
+    Variant(clothlab::engine::Variant),
     /// Another grid size.
     Grid(u32),
     /// New parameters.
     Params(SimParams),
     /// New colliders and floor under the same cloth (the Scene panel's Apply).
-    Scene(Box<clothlab_core::Scene>),
+    Scene(Box<clothlab::core::Scene>),
     /// Open a scene file (File → Open scene, or a file dropped on the window).
     OpenScene(PathBuf),
     /// Draw through the other API (the solver follows where it is a GPU solver).
@@ -494,7 +494,7 @@ impl Running {
     /// backend. A file that is refused (unreadable, malformed, a refused value, a cloth the
     /// app does not take) changes nothing and says why in the status bar.
     fn open_scene(&mut self, path: &std::path::Path) -> Result<()> {
-        let file = match clothlab_core::SceneFile::load(path) {
+        let file = match clothlab::core::SceneFile::load(path) {
             Ok(f) => f,
             Err(e) => {
                 self.ui.message = e.to_string();
@@ -654,7 +654,7 @@ impl Running {
                     let p = state.pos[id as usize];
                     let at = glam::Vec3::new(p[0], p[1], p[2]);
                     self.dragging = Some((id, at));
-                    self.sim.grab = Some(clothlab_core::Grab { particle: id, target: [p[0], p[1], p[2]] });
+                    self.sim.grab = Some(clothlab::core::Grab { particle: id, target: [p[0], p[1], p[2]] });
                     self.ui.message = format!("grabbed particle {id}");
                 }
             }
@@ -662,7 +662,7 @@ impl Running {
                 if let Some((id, at)) = self.dragging {
                     let floor = self.sim.solver.get_ref().scene().floor_height();
                     let target = input::drag_target(&view.camera, at, x, y, w, h, floor);
-                    self.sim.grab = Some(clothlab_core::Grab { particle: id, target });
+                    self.sim.grab = Some(clothlab::core::Grab { particle: id, target });
                 }
             }
             ui::Drag::End => {

@@ -4,11 +4,11 @@
 use std::collections::VecDeque;
 
 use anyhow::{Context, Result};
-use clothlab_core::grid::{ClothState, Grab};
-use clothlab_core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, SUBSTEP};
-use clothlab_core::{Scene, SimParams};
+use clothlab::core::grid::{ClothState, Grab};
+use clothlab::core::timing::{CPU_RECORD, CPU_SUBMIT, FRAME, SUBSTEP};
+use clothlab::core::{Scene, SimParams};
 
-use clothlab_engine::{Variant, VariantSpec};
+use clothlab::engine::{Variant, VariantSpec};
 
 use clothlab::backend::{AnySolver, Backend, GpuSetup, Shared, make};
 
@@ -241,7 +241,7 @@ mod tests {
         let before = sim.solver.get().state().unwrap();
         let mut scene = sim.solver.get_ref().scene().clone();
         scene.spheres.clear();
-        scene.boxes.push(clothlab_core::Aabb::new([-0.5, 0.0, -0.5], [0.5, 0.6, 0.5]));
+        scene.boxes.push(clothlab::core::Aabb::new([-0.5, 0.0, -0.5], [0.5, 0.6, 0.5]));
         sim.set_scene(scene.clone(), &Shared::None).unwrap();
         assert_eq!(sim.solver.get_ref().scene(), &scene);
         // The cloth is moved, not rebuilt: bit for bit where it was.

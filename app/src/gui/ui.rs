@@ -3,10 +3,10 @@
 
 use std::collections::VecDeque;
 
-use clothlab_core::RenderMode;
-use clothlab_core::params::StiffnessUnits;
-use clothlab_core::params::{MAX_STRAIN_ITERATIONS, MAX_SUBSTEPS};
-use clothlab_core::timing::SUBSTEP;
+use clothlab::core::RenderMode;
+use clothlab::core::params::StiffnessUnits;
+use clothlab::core::params::{MAX_STRAIN_ITERATIONS, MAX_SUBSTEPS};
+use clothlab::core::timing::SUBSTEP;
 use egui::{Color32, RichText};
 use egui_plot::{Legend, Line, Plot, PlotPoints};
 
@@ -19,7 +19,7 @@ pub struct Info<'a> {
     /// Running solver.
     pub backend: Backend,
     /// Its variant and what its adapter and cloth offer (GPU solvers).
-    pub variant: Option<(clothlab_engine::Variant, clothlab_engine::Caps)>,
+    pub variant: Option<(clothlab::engine::Variant, clothlab::engine::Caps)>,
     /// Drawing API.
     pub api: Api,
     /// The window's adapter in one line.
@@ -329,10 +329,15 @@ fn backend_picker(ui: &mut egui::Ui, info: &Info<'_>, out: &mut Vec<Command>) {
 
 /// The GPU solver's variant: the presets (as they fit the adapter and the cloth: a mesh
 /// has no table=uniform or shuffles, an adapter may lack push constants or subgroups),
-/// and one picker per switch (see `clothlab_engine::variant::SWITCHES`); a pick the
+/// and one picker per switch (see `clothlab::engine::variant::SWITCHES`); a pick the
 /// adapter or cloth lacks is refused with the reason in the status bar.
-fn variant_panel(ui: &mut egui::Ui, v: clothlab_engine::Variant, caps: clothlab_engine::Caps, out: &mut Vec<Command>) {
-    use clothlab_engine::variant::{PRESETS, SWITCHES};
+fn variant_panel(
+    ui: &mut egui::Ui,
+    v: clothlab::engine::Variant,
+    caps: clothlab::engine::Caps,
+    out: &mut Vec<Command>,
+) {
+    use clothlab::engine::variant::{PRESETS, SWITCHES};
     let preset = PRESETS.iter().find(|(_, p)| p.fit(&caps) == v);
     let title = match preset {
         Some((name, p)) if *p != v => format!("Variant: {name} (fitted)"),
@@ -465,7 +470,7 @@ fn scene_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
         });
     }
     if let Some(i) = remove.take() {
-        sc.remove_collider(clothlab_core::ColliderId::Sphere(i));
+        sc.remove_collider(clothlab::core::ColliderId::Sphere(i));
     }
     for (i, b) in sc.boxes.iter_mut().enumerate() {
         ui.horizontal(|ui| {
@@ -485,15 +490,15 @@ fn scene_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
         }
     }
     if let Some(i) = remove {
-        sc.remove_collider(clothlab_core::ColliderId::Box(i));
+        sc.remove_collider(clothlab::core::ColliderId::Box(i));
     }
     ui.horizontal(|ui| {
-        let room = clothlab_core::scene::MAX_COLLIDERS;
+        let room = clothlab::core::scene::MAX_COLLIDERS;
         if ui.add_enabled(sc.spheres.len() < room, egui::Button::new("+ sphere")).clicked() {
-            sc.spheres.push(clothlab_core::Sphere::new([0.0, 0.4, 0.0], 0.4));
+            sc.spheres.push(clothlab::core::Sphere::new([0.0, 0.4, 0.0], 0.4));
         }
         if ui.add_enabled(sc.boxes.len() < room, egui::Button::new("+ box")).clicked() {
-            sc.boxes.push(clothlab_core::Aabb::new([-0.4, 0.0, -0.4], [0.4, 0.6, 0.4]));
+            sc.boxes.push(clothlab::core::Aabb::new([-0.4, 0.0, -0.4], [0.4, 0.6, 0.4]));
         }
         if ui.button("Apply").on_hover_text("the cloth stays where it is").clicked() {
             out.push(Command::Scene(Box::new(sc.clone())));
@@ -548,7 +553,7 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     ui.horizontal(|ui| {
         ui.label("integrator");
         egui::ComboBox::from_id_salt("integrator").selected_text(p.integrator.name()).show_ui(ui, |ui| {
-            for i in clothlab_core::Integrator::ALL {
+            for i in clothlab::core::Integrator::ALL {
                 if ui.selectable_label(p.integrator == i, i.name()).clicked() && p.integrator != i {
                     p.integrator = i;
                     units_changed = true;
@@ -556,18 +561,18 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
             }
         });
     });
-    if p.integrator == clothlab_core::Integrator::Implicit {
+    if p.integrator == clothlab::core::Integrator::Implicit {
         units_changed |= ui
             .add(
-                egui::Slider::new(&mut p.cg_iterations, 1..=clothlab_core::params::MAX_CG_ITERATIONS.min(64))
+                egui::Slider::new(&mut p.cg_iterations, 1..=clothlab::core::params::MAX_CG_ITERATIONS.min(64))
                     .text("CG iterations"),
             )
             .changed();
     }
-    if p.integrator == clothlab_core::Integrator::Xpbd {
+    if p.integrator == clothlab::core::Integrator::Xpbd {
         units_changed |= ui.add(egui::Slider::new(&mut p.xpbd_iterations, 1..=16).text("XPBD iterations")).changed();
     }
-    if p.integrator == clothlab_core::Integrator::Vbd {
+    if p.integrator == clothlab::core::Integrator::Vbd {
         units_changed |= ui.add(egui::Slider::new(&mut p.vbd_iterations, 1..=64).text("VBD iterations")).changed();
         units_changed |= ui.add(egui::Slider::new(&mut p.vbd_rho, 0.0..=0.99).text("VBD Chebyshev ρ")).changed();
     }
@@ -624,7 +629,7 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
     ui.horizontal(|ui| {
         ui.label("self-collision");
         egui::ComboBox::from_id_salt("self_collision").selected_text(p.self_collision.name()).show_ui(ui, |ui| {
-            for mode in clothlab_core::SelfCollision::ALL {
+            for mode in clothlab::core::SelfCollision::ALL {
                 changed |= ui.selectable_value(&mut p.self_collision, mode, mode.name()).changed();
             }
         });
@@ -632,7 +637,7 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
             0.1
         } else {
             let c = &s.scene.cloth;
-            clothlab_core::SimParams::max_thickness_on_grid(p.self_collision, c.size / (c.n - 1) as f32).min(0.1)
+            clothlab::core::SimParams::max_thickness_on_grid(p.self_collision, c.size / (c.n - 1) as f32).min(0.1)
         };
         if p.self_collision.on() {
             let lo = MIN_THICKNESS.min(max_thickness);
@@ -652,7 +657,7 @@ fn params_panel(ui: &mut egui::Ui, s: &mut UiState, out: &mut Vec<Command>) {
         }
     }
     if ui.button("Defaults").clicked() {
-        *p = clothlab_core::SimParams { wind: p.wind, ..Default::default() };
+        *p = clothlab::core::SimParams { wind: p.wind, ..Default::default() };
         out.push(Command::Params(p.clone()));
     }
 }

@@ -241,7 +241,7 @@ fn the_ladder_climbs_one_switch_at_a_time_and_plots_what_each_buys() {
             .filter(|l| l.starts_with("| ") && !l.starts_with("| rung"))
             .collect();
         // naive, the rungs of the ladder, the thesis preset.
-        let rows = clothlab_engine::variant::LADDER.len() + 2;
+        let rows = clothlab::engine::variant::LADDER.len() + 2;
         assert_eq!(table.len(), rows, "{api}: {table:#?}");
         assert!(table[0].starts_with("| naive | ") && table[0].contains("| 1.00× |"), "{}", table[0]);
         assert!(table[rows - 1].starts_with("| **thesis (preset)** |"), "{}", table[rows - 1]);

@@ -437,10 +437,10 @@ fn a_scene_file_is_judged_with_the_integrator_and_parameters_of_the_command_line
 fn the_help_lists_every_integrator_and_every_key_of_a_scene_file() {
     let out = clothlab(&["sim", "--help"]);
     let help = String::from_utf8_lossy(&out.stdout);
-    for i in clothlab_core::Integrator::ALL {
+    for i in clothlab::core::Integrator::ALL {
         assert!(help.contains(&format!("{} (", i.name())), "`{}` missing from --integrator's help:\n{help}", i.name());
     }
-    for key in clothlab_core::SceneFile::TABLES {
+    for key in clothlab::core::SceneFile::TABLES {
         assert!(help.contains(key), "`{key}` missing from --scene's help:\n{help}");
     }
 }

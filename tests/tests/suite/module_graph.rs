@@ -184,3 +184,32 @@ fn no_crate_and_no_directory_module_has_an_import_cycle() {
     }
     assert!(directories >= 4, "{directories} directory modules found — is the path right?");
 }
+
+#[test]
+fn the_app_reaches_everything_but_its_drawing_surface_through_the_library() {
+    // The app builds its simulations, solvers, pictures and bench cells through the
+    // `clothlab` crate (the model's types are the library's re-exports): its manifest names
+    // no crate underneath but the three APIs' drawing code, and only the drawing surface
+    // (`gui/gfx.rs`: the renderers, the presenter, the overlays on a window) uses them.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let manifest = std::fs::read_to_string(root.join("app/Cargo.toml")).unwrap();
+    for under in ["clothlab-core", "clothlab-cpu", "clothlab-engine", "clothlab-shaders"] {
+        assert!(!manifest.contains(&format!("{under}.workspace")), "app/Cargo.toml depends on {under}");
+    }
+    let mut all = Vec::new();
+    files(&root.join("app/src"), &mut all);
+    assert!(all.len() >= 20, "{} files under app/src", all.len());
+    let mut reaching = Vec::new();
+    for f in &all {
+        let text = code(&std::fs::read_to_string(f).unwrap());
+        let rel = f.strip_prefix(&root).unwrap().to_string_lossy().replace('\\', "/");
+        let apis = ["clothlab_wgpu", "clothlab_vulkan", "clothlab_gl"];
+        let below = ["clothlab_core", "clothlab_cpu", "clothlab_engine"];
+        if below.iter().any(|c| text.contains(c))
+            || (rel != "app/src/gui/gfx.rs" && apis.iter().any(|c| text.contains(c)))
+        {
+            reaching.push(rel);
+        }
+    }
+    assert!(reaching.is_empty(), "app files reaching past the library: {reaching:?}");
+}
