@@ -97,12 +97,13 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     pub api: Option<Api>,
     /// Worlds, as `sim --envs` (default the scene file's `envs`, else 1; on cpu and
-    /// cpu-par); the picture is of `--world`.
+    /// cpu-par); the picture lays them out on a grid (the first 64), or draws `--world`.
     #[arg(long, value_name = "N")]
     pub envs: Option<u32>,
-    /// Which world of the batch to draw (0-based).
-    #[arg(long, value_name = "K", default_value_t = 0)]
-    pub world: usize,
+    /// Which world of the batch to draw alone (0-based); without it a batch's worlds are
+    /// laid out on a grid.
+    #[arg(long, value_name = "K")]
+    pub world: Option<usize>,
     #[command(flatten)]
     pub physics: PhysicsArgs,
     #[command(flatten)]

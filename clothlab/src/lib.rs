@@ -44,7 +44,7 @@ pub use backend::{AnySolver, Api, Backend, GpuSetup, Shared, make, variant_spec}
 pub use clothlab_core::{ClothState, Integrator, KernelTimings, RenderMode, Scene, SimParams, TimingRow, View};
 pub use clothlab_engine::{SolverOptions, StatsMode, VariantSpec};
 pub use setup::{Physics, SceneSource, Setup, apply_overrides};
-pub use sim::{ClothRange, DEFAULT_N, MAX_STEPS, Sim, SimOptions, available};
+pub use sim::{ClothRange, DEFAULT_N, MAX_STEPS, MOSAIC_WORLDS, Sim, SimOptions, available};
 pub use validate::{ValidateOptions, Validation, validate};
 
 /// The crates underneath, for what the facade does not wrap: the model (its types are the

@@ -638,6 +638,47 @@ impl Sim {
         crate::render::image(&mut self.solver, &self.setup.scene, view, (width, height), api)
     }
 
+    /// The worlds `first ..` (at most [`MOSAIC_WORLDS`], and no more than the batch has)
+    /// laid out on a grid in one picture of `width` × `height`: row after row, each world
+    /// drawn as [`Sim::render_world`] draws it at its tile's size (`width / cols` ×
+    /// `height / rows`, `cols` the smallest whose square holds them), the rest of the
+    /// picture the background's grey. Returns the picture, the adapter and the worlds
+    /// drawn.
+    pub fn render_worlds(
+        &mut self,
+        first: usize,
+        width: u32,
+        height: u32,
+        view: &View,
+        api: Option<crate::Api>,
+    ) -> Result<(Vec<u8>, String, std::ops::Range<usize>)> {
+        if first >= self.envs() {
+            bail!("world {first}: the batch has {} worlds (0 ..= {})", self.envs(), self.envs() - 1);
+        }
+        let worlds = first..self.envs().min(first + MOSAIC_WORLDS);
+        let (cols, rows) = mosaic_grid(worlds.len());
+        let (tw, th) = (width / cols, height / rows);
+        if tw == 0 || th == 0 {
+            bail!("a picture of {width}x{height} cannot hold {} worlds on a {cols}x{rows} grid", worlds.len());
+        }
+        let mut out = vec![0u8; width as usize * height as usize * 4];
+        for px in out.chunks_exact_mut(4) {
+            px.copy_from_slice(&MOSAIC_BACKGROUND);
+        }
+        let mut adapter = String::new();
+        for (i, k) in worlds.clone().enumerate() {
+            let (tile, a) = self.render_world(k, tw, th, view, api)?;
+            adapter = a;
+            let (x0, y0) = ((i as u32 % cols) * tw, (i as u32 / cols) * th);
+            for y in 0..th {
+                let from = (y * tw * 4) as usize;
+                let to = (((y0 + y) * width + x0) * 4) as usize;
+                out[to..to + (tw * 4) as usize].copy_from_slice(&tile[from..from + (tw * 4) as usize]);
+            }
+        }
+        Ok((out, adapter, worlds))
+    }
+
     /// World `k`'s picture, as [`Sim::render`] draws world 0.
     pub fn render_world(
         &mut self,
@@ -754,6 +795,19 @@ pub fn available() -> Vec<(Backend, Result<String, String>)> {
             (b, r)
         })
         .collect()
+}
+
+/// The most worlds [`Sim::render_worlds`] lays out in one picture (an 8 × 8 grid).
+pub const MOSAIC_WORLDS: usize = 64;
+
+/// The grey between and around the tiles of [`Sim::render_worlds`], RGBA.
+const MOSAIC_BACKGROUND: [u8; 4] = [40, 40, 40, 255];
+
+/// Columns and rows of the grid that holds `m` tiles: the fewest columns whose square
+/// holds them, then the rows they fill.
+fn mosaic_grid(m: usize) -> (u32, u32) {
+    let cols = (1..).find(|c: &usize| c * c >= m.max(1)).unwrap_or(1);
+    (cols as u32, m.max(1).div_ceil(cols) as u32)
 }
 
 #[cfg(test)]
@@ -1080,5 +1134,40 @@ mod tests {
         assert!(bits(&batch.world_state(1).unwrap()) == bits(&single.state().unwrap()));
         let e = batch.render_world(2, 64, 48, &view, None).unwrap_err().to_string();
         assert!(e.contains("world 2: the batch has 2 worlds"), "{e}");
+    }
+
+    #[test]
+    fn a_batch_laid_out_on_a_grid_draws_each_world_in_its_tile_as_alone() {
+        // Five worlds of different winds on a 3 × 2 grid: tile k is world k's picture at
+        // the tile's size, pixel for pixel; the sixth tile is the background.
+        let winds = "wind=[[0,0,0],[2,0,0],[4,0,3],[0,0,4],[-3,0,2]]";
+        let mut batch = open("thesis.toml", Backend::Cpu, 8, 5, &[winds]).unwrap();
+        batch.step(4).unwrap();
+        let view = batch.view(RenderMode::Triangles);
+        let (w, h) = (96, 64);
+        let (grid, _, drawn) = match batch.render_worlds(0, w, h, &view, None) {
+            Ok(r) => r,
+            Err(e) => {
+                assert!(std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1"), "{e:#}");
+                return eprintln!("no wgpu adapter here: {e:#}");
+            }
+        };
+        assert_eq!(drawn, 0..5);
+        assert_eq!(super::mosaic_grid(5), (3, 2));
+        let (tw, th) = (w / 3, h / 2);
+        let tile = |i: u32| -> Vec<u8> {
+            let (x0, y0) = ((i % 3) * tw, (i / 3) * th);
+            (0..th).flat_map(|y| grid[(((y0 + y) * w + x0) * 4) as usize..][..(tw * 4) as usize].to_vec()).collect()
+        };
+        for k in 0..5 {
+            let (alone, _) = batch.render_world(k, tw, th, &view, None).unwrap();
+            assert!(tile(k as u32) == alone, "tile {k} is not world {k}'s picture");
+        }
+        assert!(tile(0) != tile(2), "two worlds of different winds look alike");
+        assert!(tile(5).chunks(4).all(|p| p == super::MOSAIC_BACKGROUND), "the empty tile is not the background");
+        assert_eq!(super::mosaic_grid(64), (8, 8));
+        assert_eq!(super::mosaic_grid(1), (1, 1));
+        let e = batch.render_worlds(0, 2, 2, &view, None).unwrap_err().to_string();
+        assert!(e.contains("cannot hold 5 worlds"), "{e}");
     }
 }

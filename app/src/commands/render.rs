@@ -36,15 +36,35 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
         gpu,
         envs: args.envs,
     })?;
-    if args.world >= sim.envs() {
-        bail!("invalid --world {}: the batch has {} worlds (0 ..= {})", args.world, sim.envs(), sim.envs() - 1);
+    if let Some(k) = args.world
+        && k >= sim.envs()
+    {
+        bail!("invalid --world {k}: the batch has {} worlds (0 ..= {})", sim.envs(), sim.envs() - 1);
     }
     sim.step(u64::from(args.frames))?;
     let view = sim.view(args.mode.render_mode());
-    let (pixels, adapter) = sim.render_world(args.world, args.width, args.height, &view, Some(api))?;
+    let (pixels, adapter, drawn) = match args.world {
+        Some(k) => {
+            let (pixels, adapter) = sim.render_world(k, args.width, args.height, &view, Some(api))?;
+            (pixels, adapter, format!(", world {k} of {}", sim.envs()))
+        }
+        None if sim.envs() > 1 => {
+            let (pixels, adapter, worlds) = sim.render_worlds(0, args.width, args.height, &view, Some(api))?;
+            let more = if worlds.len() < sim.envs() { " (--world K draws any one)" } else { "" };
+            (
+                pixels,
+                adapter,
+                format!(", worlds {} ..= {} of {} on a grid{more}", worlds.start, worlds.end - 1, sim.envs()),
+            )
+        }
+        None => {
+            let (pixels, adapter) = sim.render(args.width, args.height, &view, Some(api))?;
+            (pixels, adapter, String::new())
+        }
+    };
     clothlab::files::write_png(&args.out, &pixels, args.width, args.height)?;
     outln!(
-        "wrote {} ({}x{}, {} frames, {:?}, adapter {adapter})",
+        "wrote {} ({}x{}, {} frames, {:?}{drawn}, adapter {adapter})",
         args.out.display(),
         args.width,
         args.height,
