@@ -312,6 +312,28 @@ fn render_writes_a_png_or_refuses_bad_sizes() {
 }
 
 #[test]
+fn render_lays_a_batch_out_on_a_grid_or_draws_the_world_asked_for() {
+    // Four worlds without --world: one picture with all four (the library's test holds
+    // each tile to its world's picture); --world 5 of 4 refused in one line.
+    let out_path = std::env::temp_dir().join(format!("clothlab-grid-{}.png", std::process::id()));
+    let args =
+        ["render", "--backend", "cpu", "--envs", "4", "--n", "8", "--frames", "2", "--width", "64", "--height", "48"];
+    let out = clothlab(&[&args[..], &["--out", out_path.to_str().unwrap()]].concat());
+    let err = String::from_utf8_lossy(&out.stderr);
+    if no_gpu(&err) {
+        return;
+    }
+    assert!(out.status.success(), "{err}");
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(said.contains("worlds 0 ..= 3 of 4 on a grid"), "{said}");
+    std::fs::remove_file(&out_path).ok();
+    refused(
+        &[&args[..], &["--world", "5", "--out", "/tmp/x.png"]].concat(),
+        "invalid --world 5: the batch has 4 worlds",
+    );
+}
+
+#[test]
 fn no_adapter_is_one_clear_line() {
     // An ICD list that names no driver: the Vulkan loader finds no adapter.
     for args in [
