@@ -59,6 +59,35 @@ pub const EVERY_CAP: clothlab_engine::recipe::Caps = clothlab_engine::recipe::Ca
     cpu: true,
 };
 
+/// The flavors of `kernels` one switch away from the plain one: every home of the step
+/// constants with the other switches off, and each other switch alone with the uniform
+/// constants (`table_image` counts as off where `base_image`: the table test's base).
+///
+/// What wgpu's rows of the every-flavor tests check. wgpu and raw Vulkan compile the
+/// same WGSL through the same naga to SPIR-V for the same driver; what wgpu adds is its
+/// binding model and its bounds checks, which each switch's value on each kernel shows.
+/// The switches' combinations are checked on raw Vulkan (under the validation layer) and
+/// on GL. Each flavor is a pipeline for llvmpipe to compile (0.5–1 s apiece: on a cold
+/// shader cache most of these tests' time), so the subset took wgpu's every-flavor row
+/// from 78 to about a third of it.
+pub fn one_switch_at_a_time(
+    kernels: Vec<clothlab_engine::kernels::KernelRef>,
+    base_image: bool,
+) -> Vec<clothlab_engine::kernels::KernelRef> {
+    use clothlab_engine::kernels::ConstantsHome;
+    kernels
+        .into_iter()
+        .filter(|k| {
+            let f = k.flavor;
+            let on = [f.table_image && !base_image, f.float_atomics, f.colliders_uniform, f.shuffle, f.sdf_image]
+                .into_iter()
+                .filter(|&b| b)
+                .count();
+            on == 0 || (on == 1 && f.constants == ConstantsHome::Uniform)
+        })
+        .collect()
+}
+
 /// The GPU APIs the cross-API tests run on, listed once: a test loops over
 /// [`Api::ALL`] (GL included unless the test says why not) and asks each for a solver.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
