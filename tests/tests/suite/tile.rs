@@ -101,7 +101,16 @@ fn exact<E: Engine>(s: Option<GpuSolver<E>>, label: &str, passes: u32) {
     }
 }
 
-clothlab_tests::per_api!(the_tiled_substep_is_bit_identical_to_its_twins_on_every_api);
+// One row per API for both tests: they build the same tile kernel (the temporal loop's
+// substeps and the tile's side are the dispatch's), and as two rows running at once on the
+// harness's two threads each compiled it from a cold shader cache (GL: 45 s apiece);
+// one after the other, the second finds it compiled.
+clothlab_tests::per_api!(the_tiles_on_each_api);
+
+fn the_tiles_on_each_api(api: Api) {
+    the_tiled_substep_is_bit_identical_to_its_twins_on_every_api(api);
+    temporal_blocking_folds_substeps_into_one_dispatch_and_keeps_the_bits(api);
+}
 
 fn the_tiled_substep_is_bit_identical_to_its_twins_on_every_api(api: Api) {
     // Two passes: a halo of 6, tiles of 20; 37 = 20 + 17 (a partial tile at the far edge).
@@ -144,8 +153,6 @@ fn rollout_exact(mut s: Box<dyn Solver>, label: &str, adapter: &str) {
         assert!(c.error <= c.bound, "{label} on {adapter}: {:.2e} over {:.0e}", c.error, c.bound);
     }
 }
-
-clothlab_tests::per_api!(temporal_blocking_folds_substeps_into_one_dispatch_and_keeps_the_bits);
 
 fn temporal_blocking_folds_substeps_into_one_dispatch_and_keeps_the_bits(api: Api) {
     use clothlab_engine::recipe::{Integration, dispatch_substeps, recipe_for};
