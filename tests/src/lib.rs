@@ -68,8 +68,8 @@ pub const EVERY_CAP: clothlab_engine::recipe::Caps = clothlab_engine::recipe::Ca
 /// binding model and its bounds checks, which each switch's value on each kernel shows.
 /// The switches' combinations are checked on raw Vulkan (under the validation layer) and
 /// on GL. Each flavor is a pipeline for llvmpipe to compile (0.5–1 s apiece: on a cold
-/// shader cache most of these tests' time), so the subset took wgpu's every-flavor row
-/// from 78 to about a third of it.
+/// shader cache most of these tests' time): the subset took wgpu's every-flavor row from
+/// 85 to 48 s, cold and alone on the 2-vCPU dev VM.
 pub fn one_switch_at_a_time(
     kernels: Vec<clothlab_engine::kernels::KernelRef>,
     base_image: bool,

@@ -11,10 +11,10 @@ use clothlab_core::scene::Aabb;
 use clothlab_core::{Scene, SimParams, Solver};
 use clothlab_cpu::validate::validate_rollout;
 use clothlab_engine::kernels::{SUBSTEP_TILE, TILE_VEL};
-use clothlab_engine::recipe::{Command, KernelRunner, tile_command, tile_side};
+use clothlab_engine::recipe::{Command, tile_command, tile_side};
 use clothlab_engine::validate::{KernelInput, validate_kernels_with};
-use clothlab_engine::{Engine, GpuSolver, SolverOptions, VariantSpec};
-use clothlab_tests::{Api, or_skip};
+use clothlab_engine::{SolverOptions, VariantSpec};
+use clothlab_tests::Api;
 
 fn scene() -> Scene {
     let mut s = Scene::with_n(37);
@@ -35,8 +35,9 @@ fn tile_spec() -> VariantSpec {
     VariantSpec::parse("optimized", &["fusion=tile".into()]).unwrap()
 }
 
-fn exact<E: Engine>(s: Option<GpuSolver<E>>, label: &str, passes: u32) {
-    let Some(mut s) = s else { return };
+fn exact(api: Api, passes: u32) {
+    let Some(mut s) = api.solver(tile_spec(), &scene(), &params_with(passes)) else { return };
+    let label = api.name();
     let params = || params_with(passes);
     let adapter = s.adapter();
     let kernels: Vec<_> =
@@ -44,7 +45,7 @@ fn exact<E: Engine>(s: Option<GpuSolver<E>>, label: &str, passes: u32) {
     assert_eq!(kernels.len(), 2, "{label}: the recipe runs the tiles: {kernels:?}");
     let start = s.state().unwrap();
     let sc = s.scene().clone();
-    let mut checks = validate_kernels_with(&mut s, &kernels, &sc, 0x711e, &params()).unwrap();
+    let mut checks = validate_kernels_with(s.runner(), &kernels, &sc, 0x711e, &params()).unwrap();
     // The temporal loop: two substeps per dispatch (with two passes a halo of 12, tiles of 8:
     // 37 = 4 × 8 + 5), the disturbed cloth with its grab, against the twin's two substeps.
     let input = KernelInput::for_scene(&sc, 0x7e3, &params()).unwrap();
@@ -59,7 +60,7 @@ fn exact<E: Engine>(s: Option<GpuSolver<E>>, label: &str, passes: u32) {
         v.iter_mut().for_each(|x| *x = [f32::NAN; 4]);
     }
     input.engine.run(&commands, &p, 0, &mut want);
-    s.run_commands(&commands, &p, &mut got).unwrap();
+    s.runner().run_commands(&commands, &p, &mut got).unwrap();
     let diff = |a: &[[f32; 4]], b: &[[f32; 4]]| {
         a.iter()
             .flatten()
@@ -78,7 +79,7 @@ fn exact<E: Engine>(s: Option<GpuSolver<E>>, label: &str, passes: u32) {
         assert!(dx <= 1e-3 * scale, "{label} on {adapter}: two substeps per dispatch {dx:.2e} off");
     }
     s.set_state(&start).unwrap();
-    checks.push(validate_rollout(&mut s, 4).unwrap());
+    checks.push(validate_rollout(&mut *s, 4).unwrap());
     for c in &checks {
         println!("{label:8} {passes} passes {:28} {:7} max {:.2e}", c.what, c.buffer, c.max_abs);
     }
@@ -108,11 +109,11 @@ fn exact<E: Engine>(s: Option<GpuSolver<E>>, label: &str, passes: u32) {
 clothlab_tests::per_api!(the_tiles_on_each_api);
 
 fn the_tiles_on_each_api(api: Api) {
-    the_tiled_substep_is_bit_identical_to_its_twins_on_every_api(api);
+    the_tiled_substep_is_bit_identical_to_its_twins(api);
     temporal_blocking_folds_substeps_into_one_dispatch_and_keeps_the_bits(api);
 }
 
-fn the_tiled_substep_is_bit_identical_to_its_twins_on_every_api(api: Api) {
+fn the_tiled_substep_is_bit_identical_to_its_twins(api: Api) {
     // Two passes: a halo of 6, tiles of 20; 37 = 20 + 17 (a partial tile at the far edge).
     // One pass: tiles of 24 (37 = 24 + 13); none: 28 (37 = 28 + 9), where the forces'
     // stage is the last and writes the tile out itself. Two passes run every stage of the
@@ -120,21 +121,9 @@ fn the_tiled_substep_is_bit_identical_to_its_twins_on_every_api(api: Api) {
     // side: each a pipeline of its own, whose compilation by llvmpipe is most of this
     // test's time) on Vulkan, under the validation layer.
     assert_eq!((tile_side(2, 1), tile_side(1, 1), tile_side(0, 1)), (20, 24, 28));
-    let o = SolverOptions::default;
     let passes: &[u32] = if api == Api::Vulkan { &[2, 1, 0] } else { &[2] };
     for &passes in passes {
-        let p = || params_with(passes);
-        match api {
-            Api::Vulkan => exact(
-                or_skip(clothlab_vulkan::vulkan_solver(tile_spec(), scene(), p(), true, o()), "vulkan"),
-                "vulkan",
-                passes,
-            ),
-            Api::Wgpu => {
-                exact(or_skip(clothlab_wgpu::wgpu_solver(tile_spec(), scene(), p(), o()), "wgpu"), "wgpu", passes)
-            }
-            Api::Gl => exact(or_skip(clothlab_gl::gl_solver(tile_spec(), scene(), p(), o()), "gl"), "gl", passes),
-        }
+        exact(api, passes);
     }
 }
 
@@ -163,48 +152,25 @@ fn temporal_blocking_folds_substeps_into_one_dispatch_and_keeps_the_bits(api: Ap
         let mut sc = scene();
         sc.cloth.n = n;
         let p = params();
-        let o = SolverOptions::default;
-        let label = format!("{api} n={n}");
-        match api {
-            Api::Vulkan => {
-                // The recipe and the CPU engine's rollout of it are the API's own once.
-                let v = temporal_spec().resolve(&clothlab_tests::EVERY_CAP, "vulkan").unwrap();
-                let (_, topo) = clothlab_core::build(&sc, &p).unwrap();
-                assert_eq!(dispatch_substeps(&v, Integration::of(&p), p.strain_iterations, &topo), group, "n = {n}");
-                // Two dispatches per recording (the tiles, the velocities' copy), whatever the group.
-                let cmds = recipe_for(&v, p.strain_iterations, Integration::of(&p), &topo);
-                assert_eq!(cmds.iter().filter(|c| c.kernel().is_some()).count(), 2, "n = {n}: {cmds:?}");
-                let cpu = RecipeSolver::new(clothlab_cpu::Exec::Serial, v, sc.clone(), p.clone()).unwrap();
-                rollout_exact(Box::new(cpu), &format!("cpu engine n={n}"), "");
-                let Some(s) = or_skip(
-                    clothlab_vulkan::vulkan_solver(temporal_spec(), sc.clone(), p.clone(), true, o()),
-                    "vulkan",
-                ) else {
-                    return;
-                };
-                let a = s.adapter();
-                rollout_exact(Box::new(s), &label, &a);
-                // Per-substep statistics cannot be had between the substeps of one dispatch.
-                let stats = SolverOptions { stats: StatsMode::Atomics };
-                let e =
-                    clothlab_vulkan::vulkan_solver(temporal_spec(), sc.clone(), p.clone(), true, stats).err().unwrap();
-                assert!(e.to_string().contains("temporal=off"), "{e}");
-            }
-            Api::Wgpu => {
-                let Some(s) = or_skip(clothlab_wgpu::wgpu_solver(temporal_spec(), sc.clone(), p.clone(), o()), "wgpu")
-                else {
-                    return;
-                };
-                let a = s.adapter();
-                rollout_exact(Box::new(s), &label, &a);
-            }
-            Api::Gl => {
-                let Some(s) = or_skip(clothlab_gl::gl_solver(temporal_spec(), sc.clone(), p.clone(), o()), "gl") else {
-                    return;
-                };
-                let a = s.adapter();
-                rollout_exact(Box::new(s), &label, &a);
-            }
+        if api == Api::Vulkan {
+            // The recipe and the CPU engine's rollout of it, once (they are no API's).
+            let v = temporal_spec().resolve(&clothlab_tests::EVERY_CAP, "vulkan").unwrap();
+            let (_, topo) = clothlab_core::build(&sc, &p).unwrap();
+            assert_eq!(dispatch_substeps(&v, Integration::of(&p), p.strain_iterations, &topo), group, "n = {n}");
+            // Two dispatches per recording (the tiles, the velocities' copy), whatever the group.
+            let cmds = recipe_for(&v, p.strain_iterations, Integration::of(&p), &topo);
+            assert_eq!(cmds.iter().filter(|c| c.kernel().is_some()).count(), 2, "n = {n}: {cmds:?}");
+            let cpu = RecipeSolver::new(clothlab_cpu::Exec::Serial, v, sc.clone(), p.clone()).unwrap();
+            rollout_exact(Box::new(cpu), &format!("cpu engine n={n}"), "");
+        }
+        let Some(s) = api.solver(temporal_spec(), &sc, &p) else { return };
+        let a = s.adapter();
+        rollout_exact(s.into_solver(), &format!("{api} n={n}"), &a);
+        if api == Api::Vulkan {
+            // Per-substep statistics cannot be had between the substeps of one dispatch.
+            let stats = SolverOptions { stats: StatsMode::Atomics };
+            let e = clothlab_vulkan::vulkan_solver(temporal_spec(), sc.clone(), p.clone(), true, stats).err().unwrap();
+            assert!(e.to_string().contains("temporal=off"), "{e}");
         }
     }
 }

@@ -8,7 +8,7 @@
 use clothlab_core::{RenderMode, Scene, SimParams, Solver};
 use clothlab_cpu::validate::validate_rollout;
 use clothlab_engine::validate::flavors;
-use clothlab_tests::{assert_checks, assert_kernels_match_twins, image_diff, one_switch_at_a_time, or_skip, test_view};
+use clothlab_tests::{assert_checks, assert_kernels_match_twins, image_diff, or_skip, test_view};
 use clothlab_wgpu::{ClothSource, GpuContext, GpuSolver, SolverOptions, Variant, WgpuEngine, WgpuRenderer, WgpuSolver};
 
 /// A wgpu solver on GL for `scene`, or `None` where no adapter exists and none is required.
@@ -115,10 +115,8 @@ fn a_raw_gl_solver_outlives_wgpu_gl_instances_made_and_dropped_beside_it() {
     assert_checks("raw GL after wgpu GL instances", &[c]);
 }
 
-/// A mesh (the flag: wind, pins, a hole) on wgpu's GL backend: the flavors one switch
-/// from the plain one ([`one_switch_at_a_time`]: their combinations are held on a mesh on
-/// the other three stacks, mesh_gpu.rs, and on this stack on the grid, above) within
-/// their bounds, and the optimized recipe's 8-frame rollout exactly the CPU
+/// A mesh (the flag: wind, pins, a hole) on wgpu's GL backend: every flavor that runs on
+/// a mesh within its bound, and the optimized recipe's 8-frame rollout exactly the CPU
 /// solver's on llvmpipe (tests/tests/suite/mesh_gpu.rs does the other three stacks).
 #[test]
 fn a_mesh_on_wgpu_gl_matches_its_twins_and_the_cpu_bit_for_bit() {
@@ -126,7 +124,7 @@ fn a_mesh_on_wgpu_gl_matches_its_twins_and_the_cpu_bit_for_bit() {
     let file = clothlab_core::SceneFile::load(&dir.join("mesh-flag.toml")).unwrap();
     let make = || gl_solver_of(Variant::OPTIMIZED, file.scene.clone(), file.params.clone());
     let Some(mut g) = make() else { return };
-    let kernels = one_switch_at_a_time(flavors(&g.caps(), false), false);
+    let kernels: Vec<_> = flavors(&g.caps(), false).into_iter().collect();
     let checks =
         clothlab_engine::validate::validate_kernels_with(&mut g, &kernels, &file.scene, 0x3e5, &file.params).unwrap();
     assert!(checks.iter().any(|c| c.what == "xpbd_mesh"), "the mesh's XPBD pass was not compared");
