@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use clothlab_core::grid::{GridSpringConstants, Spring, SpringSlot, Tether};
 use clothlab_core::layout::{BindKind, Buf, wgsl_constants};
 use clothlab_core::pins::{PinPose, PinSlot};
-use clothlab_core::scene::{Aabb, Capsule, Cylinder, Sphere};
+use clothlab_core::scene::{Aabb, RodRecord, Sphere};
 use clothlab_core::step_params::{ContactParams, StepParams};
 
 /// A struct as core lays it out: name, size, and (field, offset) pairs.
@@ -40,8 +40,7 @@ fn expected_layouts() -> Vec<Layout> {
         layout!(GridSpringConstants, "GridSpringConstants", [slots, enabled, _pad0, _pad1, _pad2]),
         layout!(Sphere, "Sphere", [center, radius, velocity, spin]),
         layout!(Aabb, "Aabb", [min, max, velocity]),
-        layout!(Capsule, "Rod", [a, b, velocity, spin]),
-        layout!(Cylinder, "Rod", [a, b, velocity, spin]),
+        layout!(RodRecord, "Rod", [a, b, velocity, spin]),
         layout!(PinSlot, "PinSlot", [rest, index, group, pad]),
         layout!(PinPose, "PinPose", [cols, translation, velocity, spin]),
     ]

@@ -174,19 +174,14 @@ fn sphere_mesh(c: [f32; 3], r: f32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     (pos, tris)
 }
 
-/// Capsule `c` about its centre (`clothlab_core::render::capsule_mesh`).
-fn capsule_local(c: &clothlab_core::Capsule) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-    let m = c.center();
-    let at = |p: [f32; 4]| [p[0] - m[0], p[1] - m[1], p[2] - m[2]];
-    let (pos, _, tris) = clothlab_core::render::capsule_mesh(at(c.a), at(c.b), c.radius(), 6, 24);
-    (pos, tris)
-}
-
-/// Cylinder `c` about its centre (`clothlab_core::render::cylinder_mesh`).
-fn cylinder_local(c: &clothlab_core::Cylinder) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-    let m = c.center();
-    let at = |p: [f32; 4]| [p[0] - m[0], p[1] - m[1], p[2] - m[2]];
-    let (pos, _, tris) = clothlab_core::render::cylinder_mesh(at(c.a), at(c.b), c.radius(), 24);
+/// Rod `rod` about its centre (`clothlab_core::render::rod_mesh`).
+fn rod_local(rod: &clothlab_core::Rod) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+    let (m, mut local) = (rod.center(), *rod);
+    for (k, m) in m.into_iter().enumerate() {
+        local.a[k] -= m;
+        local.b[k] -= m;
+    }
+    let (pos, _, tris) = clothlab_core::render::rod_mesh(&local, 24);
     (pos, tris)
 }
 
@@ -317,14 +312,10 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
                 let (lo, hi) = ([b.min[0], b.min[1], b.min[2]], [b.max[0], b.max[1], b.max[2]]);
                 (Some(*id), format!("box {k}"), [0.0; 3], box_mesh(lo, hi), m)
             }
-            ColliderId::Capsule(k) => {
-                let c = scene.capsules.get(k)?;
+            ColliderId::Rod(kind, k) => {
+                let c = &scene.rods[scene.rod_index(kind, k)?];
                 // About its centre, which the motion moves and turns it about.
-                (Some(*id), format!("capsule {k}"), c.center(), capsule_local(c), m)
-            }
-            ColliderId::Cylinder(k) => {
-                let c = scene.cylinders.get(k)?;
-                (Some(*id), format!("cylinder {k}"), c.center(), cylinder_local(c), m)
+                (Some(*id), format!("{} {k}", kind.name()), c.center(), rod_local(c), m)
             }
         })
     });
@@ -434,11 +425,11 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         nodes.push(static_mesh(&mut root, &mut bin, &format!("box {k}"), &p, &t));
     }
     // The rods, each about its centre.
-    let capsules = (scene.capsules.iter().enumerate())
-        .map(|(k, c)| (ColliderId::Capsule(k), format!("capsule {k}"), c.center(), capsule_local(c)));
-    let cylinders = (scene.cylinders.iter().enumerate())
-        .map(|(k, c)| (ColliderId::Cylinder(k), format!("cylinder {k}"), c.center(), cylinder_local(c)));
-    for (id, name, centre, (p, t)) in capsules.chain(cylinders) {
+    let rods = scene.rods.iter().enumerate().map(|(k, c)| {
+        let i = scene.rods[..k].iter().filter(|o| o.kind == c.kind).count();
+        (scene.rod_id(k), format!("{} {i}", c.kind.name()), c.center(), rod_local(c))
+    });
+    for (id, name, centre, (p, t)) in rods {
         if let Some(node) = moved(id) {
             nodes.push(node);
             continue;

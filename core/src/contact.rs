@@ -12,7 +12,7 @@
 
 use glam::Vec3;
 
-use crate::scene::{Aabb, Capsule, Cylinder, Sphere};
+use crate::scene::{Aabb, Rod, RodKind, Sphere};
 use crate::sdf::{SdfHead, sample_grid};
 
 /// A point's contact with a shape's surface grown by a reach.
@@ -169,66 +169,73 @@ pub(crate) fn mid(a: [f32; 4], b: [f32; 4]) -> Vec3 {
     (v3(a) + v3(b)) * 0.5
 }
 
-impl Shape for Capsule {
+impl Shape for Rod {
+    /// By its kind: [`capsule_contact`], [`cylinder_contact`].
     #[inline(always)]
     fn contact(&self, x: Vec3, reach: f32) -> Option<Contact> {
-        let r = self.a[3] + reach;
-        let q = axis_point(v3(self.a), v3(self.b), x);
-        let d = x - q;
-        let dist2 = dot3(d, d);
-        if dist2 >= r * r {
-            return None;
+        match self.kind {
+            RodKind::Capsule => capsule_contact(self, x, reach),
+            RodKind::Cylinder => cylinder_contact(self, x, reach),
         }
-        let dist = dist2.sqrt();
-        let n = away(d, dist);
-        let at = q + n * r;
-        let vs = surface_vel(v3(self.velocity), v3(self.spin), at - mid(self.a, self.b));
-        Some(Contact { depth: r - dist, n, at, vs })
-    }
-
-    #[inline(always)]
-    fn bound(&self, reach: f32) -> Bound {
-        let half = 0.5 * (v3(self.b) - v3(self.a)).length();
-        Bound::Ball { center: mid(self.a, self.b), r: half + self.a[3] + reach + 1e-3 }
-    }
-}
-
-impl Shape for Cylinder {
-    /// The capped cylinder grown by `reach` (radius and half-length each grown by it,
-    /// edges kept sharp as a box's): leave through the side or the nearer cap, whichever
-    /// is nearer.
-    #[inline(always)]
-    fn contact(&self, x: Vec3, reach: f32) -> Option<Contact> {
-        let m = mid(self.a, self.b);
-        let ab = v3(self.b) - v3(self.a);
-        let len = dot3(ab, ab).sqrt();
-        let u = ab / len;
-        let d = x - m;
-        let t = dot3(d, u);
-        let radial = d - u * t;
-        let rho2 = dot3(radial, radial);
-        let (r, h) = (self.a[3] + reach, len * 0.5 + reach);
-        if rho2 >= r * r || t.abs() >= h {
-            return None;
-        }
-        let rho = rho2.sqrt();
-        let (side, cap) = (r - rho, h - t.abs());
-        let (depth, n, at) = if side < cap {
-            let n = if rho > 1e-12 { radial / rho } else { across(u) };
-            (side, n, m + u * t + n * r)
-        } else {
-            let n = if t < 0.0 { -u } else { u };
-            (cap, n, x + n * cap)
-        };
-        Some(Contact { depth, n, at, vs: surface_vel(v3(self.velocity), v3(self.spin), at - m) })
     }
 
     #[inline(always)]
     fn bound(&self, reach: f32) -> Bound {
         let half = 0.5 * (v3(self.b) - v3(self.a)).length();
         let r = self.a[3];
-        Bound::Ball { center: mid(self.a, self.b), r: (half * half + r * r).sqrt() + reach + 1e-3 }
+        let r = match self.kind {
+            RodKind::Capsule => half + r,
+            RodKind::Cylinder => (half * half + r * r).sqrt(),
+        };
+        Bound::Ball { center: mid(self.a, self.b), r: r + reach + 1e-3 }
     }
+}
+
+/// A capsule's contact: the points within its radius grown by `reach` of its axis leave
+/// along the line from the axis' nearest point.
+#[inline(always)]
+fn capsule_contact(c: &Rod, x: Vec3, reach: f32) -> Option<Contact> {
+    let r = c.a[3] + reach;
+    let q = axis_point(v3(c.a), v3(c.b), x);
+    let d = x - q;
+    let dist2 = dot3(d, d);
+    if dist2 >= r * r {
+        return None;
+    }
+    let dist = dist2.sqrt();
+    let n = away(d, dist);
+    let at = q + n * r;
+    let vs = surface_vel(v3(c.velocity), v3(c.spin), at - mid(c.a, c.b));
+    Some(Contact { depth: r - dist, n, at, vs })
+}
+
+/// A capped cylinder's contact, the cylinder grown by `reach` (radius and half-length
+/// each grown by it, edges kept sharp as a box's): leave through the side or the nearer
+/// cap, whichever is nearer.
+#[inline(always)]
+fn cylinder_contact(c: &Rod, x: Vec3, reach: f32) -> Option<Contact> {
+    let m = mid(c.a, c.b);
+    let ab = v3(c.b) - v3(c.a);
+    let len = dot3(ab, ab).sqrt();
+    let u = ab / len;
+    let d = x - m;
+    let t = dot3(d, u);
+    let radial = d - u * t;
+    let rho2 = dot3(radial, radial);
+    let (r, h) = (c.a[3] + reach, len * 0.5 + reach);
+    if rho2 >= r * r || t.abs() >= h {
+        return None;
+    }
+    let rho = rho2.sqrt();
+    let (side, cap) = (r - rho, h - t.abs());
+    let (depth, n, at) = if side < cap {
+        let n = if rho > 1e-12 { radial / rho } else { across(u) };
+        (side, n, m + u * t + n * r)
+    } else {
+        let n = if t < 0.0 { -u } else { u };
+        (cap, n, x + n * cap)
+    };
+    Some(Contact { depth, n, at, vs: surface_vel(v3(c.velocity), v3(c.spin), at - m) })
 }
 
 /// A unit direction across the unit axis `u` (a point on a cylinder's axis leaves this
@@ -315,7 +322,7 @@ mod tests {
     fn a_cylinder_pushes_out_through_its_side_or_its_nearer_cap() {
         // Axis along z from −1 to 1, radius 0.5, grown by 0.1: side at ρ = 0.6, caps at
         // |z| = 1.1.
-        let c = Cylinder::new([0.0, 0.0, -1.0], [0.0, 0.0, 1.0], 0.5);
+        let c = Rod::new(RodKind::Cylinder, [0.0, 0.0, -1.0], [0.0, 0.0, 1.0], 0.5);
         let side = check(&c, Vec3::new(0.55, 0.0, 0.2), 0.1);
         assert!((side.depth - 0.05).abs() < 1e-6 && side.n == Vec3::X, "{side:?}");
         let cap = check(&c, Vec3::new(0.1, 0.2, -1.05), 0.1);
@@ -328,14 +335,14 @@ mod tests {
         assert_eq!(c.contact(Vec3::new(0.0, 0.61, 0.0), 0.1), None);
         // Turned (axis along x + y), the same point relative to it, the same depth.
         let s = std::f32::consts::FRAC_1_SQRT_2;
-        let t = Cylinder::new([-s, -s, 0.0], [s, s, 0.0], 0.5);
+        let t = Rod::new(RodKind::Cylinder, [-s, -s, 0.0], [s, s, 0.0], 0.5);
         let turned = check(&t, Vec3::new(0.0, 0.0, 0.55), 0.1);
         assert!((turned.depth - 0.05).abs() < 1e-6 && turned.n == Vec3::Z, "{turned:?}");
     }
 
     #[test]
     fn every_contact_lies_inside_its_shapes_bound() {
-        let c = Cylinder::new([0.1, 0.2, -1.0], [0.3, 0.0, 1.0], 0.4);
+        let c = Rod::new(RodKind::Cylinder, [0.1, 0.2, -1.0], [0.3, 0.0, 1.0], 0.4);
         let (Bound::Ball { center, r }, reach) = (c.bound(0.05), 0.05) else { panic!() };
         let mut hits = 0;
         let mut seed = 12345u64;
@@ -355,7 +362,7 @@ mod tests {
 
     #[test]
     fn a_moving_cylinders_surface_moves_with_its_spin() {
-        let mut c = Cylinder::new([0.0, -1.0, 0.0], [0.0, 1.0, 0.0], 0.5);
+        let mut c = Rod::new(RodKind::Cylinder, [0.0, -1.0, 0.0], [0.0, 1.0, 0.0], 0.5);
         c.spin = [0.0, 2.0, 0.0, 0.0];
         c.velocity = [0.0, 0.0, 1.0, 0.0];
         // On the side at +x: spin × arm = (0, 2, 0) × (0.5, y, 0) = (0, 0, −1).

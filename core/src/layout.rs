@@ -144,7 +144,7 @@ pub enum Buf {
     PinPoses = 33,
     /// The rods and the bodies (mesh colliders), `f32`s: `MAX_BODIES` heads of
     /// `SdfHead::FLOATS` (the bodies' poses at the current substep), `MAX_RODS` rods of
-    /// 16 floats (`scene::Capsule`, `scene::Cylinder`, at the current substep, the kind in
+    /// 16 floats (`scene::RodRecord`, at the current substep, the kind in
     /// `b.w`), then every body's distance values (`crate::sdf`: `RODS_AT`, `VALUES_AT`). One binding for all: a
     /// VBD sweep's kernel binds 16 storage blocks, llvmpipe's GL limit.
     Shapes = 34,
@@ -326,7 +326,7 @@ impl Buf {
 /// code it runs (docs/bench/lavapipe-specialise).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Uses {
-    /// Capsules or cylinders (`USES_RODS`: the rods' loops).
+    /// Rods: capsules, cylinders (`USES_RODS`: the rods' loops).
     pub rods: bool,
     /// Bodies (`USES_BODIES`: the bodies' loops and their fields' reads).
     pub bodies: bool,
@@ -346,7 +346,7 @@ impl Uses {
     /// specialised kernel computes the general one's bits.
     pub fn of(scene: &crate::Scene, params: &crate::SimParams) -> Uses {
         Uses {
-            rods: !scene.capsules.is_empty() || !scene.cylinders.is_empty(),
+            rods: !scene.rods.is_empty(),
             bodies: !scene.bodies.is_empty(),
             coulomb: params.coulomb(),
             motion: scene.moves(),
@@ -454,8 +454,9 @@ pub fn wgsl_constants() -> String {
     s += &u("MAX_COLLIDERS", crate::scene::MAX_COLLIDERS as u32);
     s += &u("SDF_HEAD_FLOATS", crate::sdf::SdfHead::FLOATS as u32);
     s += &u("SHAPES_RODS_AT", crate::sdf::RODS_AT as u32);
-    s += &format!("const ROD_CAPSULE: f32 = {:?};\n", <crate::Capsule as crate::scene::Rod>::KIND);
-    s += &format!("const ROD_CYLINDER: f32 = {:?};\n", <crate::Cylinder as crate::scene::Rod>::KIND);
+    for kind in crate::scene::RodKind::ALL {
+        s += &format!("const ROD_{}: f32 = {:?};\n", kind.name().to_uppercase(), kind.mark());
+    }
     s += &u("SHAPES_VALUES_AT", crate::sdf::VALUES_AT as u32);
     s += &u("MAX_PIN_GROUPS", crate::pins::MAX_PIN_GROUPS as u32);
     s += &format!("const STRAIN_AIM: f32 = {STRAIN_AIM:?};\n");

@@ -51,7 +51,7 @@ pub use grid::{ClothState, ClothTopology, Grab, Spring, SpringKind, SpringSlot};
 pub use motion::{Ease, Key, Motion, Repeat};
 pub use params::{Integrator, ParamError, SelfCollision, SimParams, StiffnessUnits};
 pub use pins::{MAX_PIN_GROUPS, PinGroup, PinPose, PinSlot};
-pub use scene::{Aabb, Capsule, ClothSpec, ColliderId, Cylinder, Pinning, Scene, Sphere};
+pub use scene::{Aabb, ClothSpec, ColliderId, Pinning, Rod, RodKind, Scene, Sphere};
 pub use scene_file::{SceneFile, SceneFileError};
 pub use solver::{ContactStats, RenderError, RenderMode, Renderer, Solver, SolverError, StateField, View};
 pub use step_params::StepParams;

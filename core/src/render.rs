@@ -160,13 +160,23 @@ pub fn cylinder_mesh(a: [f32; 3], b: [f32; 3], r: f32, around: u32) -> CapsuleMe
     (pos, nrm, tris)
 }
 
+/// Rod `rod`'s mesh by its kind ([`capsule_mesh`] with `around / 4` rings a hemisphere,
+/// [`cylinder_mesh`]), `around` steps about its axis.
+pub fn rod_mesh(rod: &crate::Rod, around: u32) -> CapsuleMesh {
+    let at = |p: [f32; 4]| [p[0], p[1], p[2]];
+    let (a, b, r) = (at(rod.a), at(rod.b), rod.radius());
+    match rod.kind {
+        crate::RodKind::Capsule => capsule_mesh(a, b, r, around / 4, around),
+        crate::RodKind::Cylinder => cylinder_mesh(a, b, r, around),
+    }
+}
+
 /// [`capsule_mesh`]'s positions, normals and triangles.
 pub type CapsuleMesh = (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[u32; 3]>);
 
 /// Floor, spheres, boxes, capsules, cylinders and bodies as one triangle list (never empty). A body is drawn
 /// as its mesh with smooth normals (area-weighted), where [`Scene::moved_to`] put it.
 pub fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
-    let at = |p: [f32; 4]| [p[0], p[1], p[2]];
     let mut v = Vec::new();
     let mut idx = Vec::new();
     let mut quad = |v: &mut Vec<StaticVertex>, corners: [[f32; 3]; 4], normal: [f32; 3], material: u32| {
@@ -237,9 +247,7 @@ pub fn static_mesh(scene: &Scene) -> (Vec<StaticVertex>, Vec<u32>) {
             }
         }
     }
-    let capsules = scene.capsules.iter().map(|c| capsule_mesh(at(c.a), at(c.b), c.radius(), 12, 48));
-    let cylinders = scene.cylinders.iter().map(|c| cylinder_mesh(at(c.a), at(c.b), c.radius(), 48));
-    for (p, n, t) in capsules.chain(cylinders) {
+    for (p, n, t) in scene.rods.iter().map(|r| rod_mesh(r, 48)) {
         let base = v.len() as u32;
         for (pos, normal) in p.into_iter().zip(n) {
             v.push(StaticVertex { pos, normal, uv: [0.0, 0.0], material: 1 });
@@ -333,7 +341,7 @@ mod capsule_tests {
         // inside (a contact): the mesh is the surface the
         // contact pushes to, drawn the right way round; every edge is in two triangles.
         let (a, b, r) = ([0.1, 0.2, 0.3], [0.9, -0.4, 0.5], 0.15);
-        let cyl = crate::Cylinder::new(a, b, r);
+        let cyl = crate::Rod::new(crate::RodKind::Cylinder, a, b, r);
         let (pos, nrm, tris) = super::cylinder_mesh(a, b, r, 16);
         assert_eq!(pos.len(), nrm.len());
         for t in &tris {

@@ -66,99 +66,139 @@ impl Aabb {
     }
 }
 
-/// A shape about a segment (a *rod*): the `#[repr(C)]` record the shaders' `Rod` mirrors
-/// (16 floats in the shapes buffer), a still constructor, its radius and centre.
-macro_rules! rod {
-    ($(#[$meta:meta])* $name:ident, $what:literal, $end:literal) => {
-        $(#[$meta])*
-        #[repr(C)]
-        #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable, Serialize, Deserialize)]
-        pub struct $name {
-            #[doc = concat!($end, ", m; w the radius, m.")]
-            pub a: [f32; 4],
-            /// The other end, m (w 0; the shapes buffer marks the kind there).
-            pub b: [f32; 4],
-            /// Velocity of its centre (the axis' midpoint) at this substep, m/s (w 0).
-            #[serde(skip)]
-            pub velocity: [f32; 4],
-            /// Angular velocity about its centre, rad/s (w 0): the surface at `x` moves at
-            /// `velocity + spin × (x − (a + b)/2)`.
-            #[serde(skip)]
-            pub spin: [f32; 4],
-        }
-
-        impl $name {
-            #[doc = concat!("A still ", $what, " about the segment `a`–`b`.")]
-            pub fn new(a: [f32; 3], b: [f32; 3], radius: f32) -> Self {
-                Self { a: [a[0], a[1], a[2], radius], b: [b[0], b[1], b[2], 0.0], velocity: [0.0; 4], spin: [0.0; 4] }
-            }
-
-            /// Its radius, m.
-            pub fn radius(&self) -> f32 {
-                self.a[3]
-            }
-
-            /// The axis' midpoint, m, as the kernels compute it (`(a + b)·½`).
-            pub fn center(&self) -> [f32; 3] {
-                [(self.a[0] + self.b[0]) * 0.5, (self.a[1] + self.b[1]) * 0.5, (self.a[2] + self.b[2]) * 0.5]
-            }
-        }
-
-        impl Rod for $name {
-            fn parts(&mut self) -> (&mut [f32; 4], &mut [f32; 4], &mut [f32; 4], &mut [f32; 4]) {
-                (&mut self.a, &mut self.b, &mut self.velocity, &mut self.spin)
-            }
-            const KIND: f32 = rod_kind::$name;
-        }
-    };
-}
-
-/// The kinds' marks in a rod's `b.w` in the shapes buffer (the shaders' `ROD_CAPSULE`,
-/// `ROD_CYLINDER`).
-#[allow(non_upper_case_globals)]
-mod rod_kind {
-    pub const Capsule: f32 = 0.0;
-    pub const Cylinder: f32 = 1.0;
-}
-
-rod!(
-    /// A capsule collider: the points within `radius` of the segment from `a` to `b` (a
-    /// limb, a bar). `#[repr(C)]`, mirrored in the shaders (`Rod`).
+/// The kinds of rod, each a shape about the segment `a`–`b` of a [`Rod`]. A kind is
+/// named here, its contact written in `crate::contact` (`Rod`'s `impl Shape`) and in the
+/// shaders (`rod_contact`), its picture in `crate::render::rod_mesh`; a scene file's
+/// table of its name (`[[capsules]]`) and the shaders' mark (`ROD_CAPSULE`) follow from
+/// this list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RodKind {
+    /// A capsule: the points within `radius` of the segment from `a` to `b` (a limb, a
+    /// bar).
     Capsule,
-    "capsule",
-    "One end of the axis"
-);
-
-rod!(
-    /// A capped cylinder collider: the points within `radius` of the segment from `a` to
-    /// `b` that lie between the planes through `a` and `b` across it (a post, a drum, a
-    /// table's round top). `#[repr(C)]`, mirrored in the shaders (`Rod`).
+    /// A capped cylinder: the points within `radius` of the segment from `a` to `b` that
+    /// lie between the planes through `a` and `b` across it (a post, a drum, a table's
+    /// round top).
     Cylinder,
-    "cylinder",
-    "The centre of one cap"
-);
+}
 
-impl Cylinder {
-    /// Half its length, m.
+impl RodKind {
+    /// Every kind, in the order a scene file's tables are read (the order of a scene
+    /// file's rods in the shapes buffer).
+    pub const ALL: [RodKind; 2] = [RodKind::Capsule, RodKind::Cylinder];
+
+    /// Its name (`capsule`; the shaders' mark is `ROD_` and the name in capitals).
+    pub fn name(self) -> &'static str {
+        match self {
+            RodKind::Capsule => "capsule",
+            RodKind::Cylinder => "cylinder",
+        }
+    }
+
+    /// Its scene file's table, and the name of the scene's list of it in messages
+    /// (`capsules`).
+    pub fn table(self) -> &'static str {
+        match self {
+            RodKind::Capsule => "capsules",
+            RodKind::Cylinder => "cylinders",
+        }
+    }
+
+    /// What `a` is (for the documentation of a scene file's table).
+    pub fn end(self) -> &'static str {
+        match self {
+            RodKind::Capsule => "one end of the axis",
+            RodKind::Cylinder => "the centre of one cap",
+        }
+    }
+
+    /// Its mark in `b.w` of its record in the shapes buffer: its place in [`RodKind::ALL`].
+    pub fn mark(self) -> f32 {
+        self as u32 as f32
+    }
+
+    /// Whether its two ends must lie apart (a capsule's may meet: a sphere).
+    fn needs_length(self) -> bool {
+        !matches!(self, RodKind::Capsule)
+    }
+}
+
+/// A rod collider: a shape about the segment from `a` to `b` of its [`RodKind`]. Every
+/// kind has one record in the shapes buffer ([`RodRecord`], the shaders' `Rod`), one
+/// count (`StepParams::num_rods`), one loop in each walk and one motion ([`pose_rod`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Rod {
+    /// What shape it is.
+    pub kind: RodKind,
+    /// One end of the axis ([`RodKind::end`]), m; w the radius, m.
+    pub a: [f32; 4],
+    /// The other end, m (w 0; the shapes buffer marks the kind there).
+    pub b: [f32; 4],
+    /// Velocity of its centre (the axis' midpoint) at this substep, m/s (w 0).
+    #[serde(skip)]
+    pub velocity: [f32; 4],
+    /// Angular velocity about its centre, rad/s (w 0): the surface at `x` moves at
+    /// `velocity + spin × (x − (a + b)/2)`.
+    #[serde(skip)]
+    pub spin: [f32; 4],
+}
+
+/// A rod's record in the shapes buffer (`Buf::Shapes`, from `sdf::RODS_AT`, 16 floats):
+/// `#[repr(C)]`, mirrored in the shaders (`Rod`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct RodRecord {
+    /// One end, w the radius.
+    pub a: [f32; 4],
+    /// The other end, w the kind's [`RodKind::mark`].
+    pub b: [f32; 4],
+    /// Velocity of its centre, w 0.
+    pub velocity: [f32; 4],
+    /// Angular velocity about its centre, w 0.
+    pub spin: [f32; 4],
+}
+
+impl Rod {
+    /// A still rod of `kind` about the segment `a`–`b`.
+    pub fn new(kind: RodKind, a: [f32; 3], b: [f32; 3], radius: f32) -> Self {
+        Self { kind, a: [a[0], a[1], a[2], radius], b: [b[0], b[1], b[2], 0.0], velocity: [0.0; 4], spin: [0.0; 4] }
+    }
+
+    /// Its radius, m.
+    pub fn radius(&self) -> f32 {
+        self.a[3]
+    }
+
+    /// The axis' midpoint, m, as the kernels compute it (`(a + b)·½`).
+    pub fn center(&self) -> [f32; 3] {
+        [(self.a[0] + self.b[0]) * 0.5, (self.a[1] + self.b[1]) * 0.5, (self.a[2] + self.b[2]) * 0.5]
+    }
+
+    /// Half its axis' length, m.
     pub fn half_length(&self) -> f32 {
         let d: [f32; 3] = std::array::from_fn(|k| self.b[k] - self.a[k]);
         0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
     }
-}
 
-/// A shape about a segment (capsules, cylinders): one record layout in the shapes buffer
-/// (`Rod` in the shaders), moved and turned about its centre by one function.
-pub(crate) trait Rod: Copy {
-    /// The record: `a` (w the radius), `b`, velocity, spin.
-    fn parts(&mut self) -> (&mut [f32; 4], &mut [f32; 4], &mut [f32; 4], &mut [f32; 4]);
-    /// The shaders' mark in `b.w` (`ROD_CAPSULE`, `ROD_CYLINDER`).
-    const KIND: f32;
+    /// Its smallest size, m: how far its motion may carry it in a substep
+    /// ([`Motion::check_speed`]); a point half of it above its centre lies inside it.
+    pub fn size(&self) -> f32 {
+        if self.kind.needs_length() { self.radius().min(self.half_length()) } else { self.radius() }
+    }
+
+    /// Its record in the shapes buffer.
+    pub fn record(&self) -> RodRecord {
+        let mut b = self.b;
+        b[3] = self.kind.mark();
+        RodRecord { a: self.a, b, velocity: self.velocity, spin: self.spin }
+    }
 }
 
 /// `rod` where `pose` has it: moved and turned about its centre (in f64, rounded once),
 /// with the velocities its contacts use.
-fn pose_rod(rod: &mut impl Rod, pose: &crate::motion::Pose) {
-    let (a, b, velocity, spin) = rod.parts();
+fn pose_rod(rod: &mut Rod, pose: &crate::motion::Pose) {
+    let Rod { a, b, velocity, spin, .. } = rod;
     let centre =
         glam::DVec3::new(((a[0] + b[0]) * 0.5) as f64, ((a[1] + b[1]) * 0.5) as f64, ((a[2] + b[2]) * 0.5) as f64);
     let offset = glam::DVec3::from(pose.offset.map(f64::from));
@@ -180,10 +220,8 @@ pub enum ColliderId {
     Sphere(usize),
     /// `Scene::boxes[i]`.
     Box(usize),
-    /// `Scene::capsules[i]`.
-    Capsule(usize),
-    /// `Scene::cylinders[i]`.
-    Cylinder(usize),
+    /// The `i`-th rod of its kind in `Scene::rods` (a scene file's `capsules[i]`).
+    Rod(RodKind, usize),
 }
 
 impl ColliderId {
@@ -192,8 +230,7 @@ impl ColliderId {
         match self {
             ColliderId::Sphere(i) => format!("spheres[{i}]"),
             ColliderId::Box(i) => format!("boxes[{i}]"),
-            ColliderId::Capsule(i) => format!("capsules[{i}]"),
-            ColliderId::Cylinder(i) => format!("cylinders[{i}]"),
+            ColliderId::Rod(kind, i) => format!("{}[{i}]", kind.table()),
         }
     }
 }
@@ -416,12 +453,10 @@ pub struct Scene {
     pub spheres: Vec<Sphere>,
     /// Axis-aligned box colliders. Default: none.
     pub boxes: Vec<Aabb>,
-    /// Capsule colliders. Default: none.
+    /// Rod colliders (capsules, cylinders), in the order the kernels walk them.
+    /// Default: none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub capsules: Vec<Capsule>,
-    /// Capped cylinder colliders. Default: none.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub cylinders: Vec<Cylinder>,
+    pub rods: Vec<Rod>,
     /// How colliders move (at most one motion each; none: all still). See [`crate::motion`].
     #[serde(default)]
     pub motions: Vec<(ColliderId, Motion)>,
@@ -445,8 +480,7 @@ impl Default for Scene {
                 Sphere::new([-0.05, 0.25, 0.55], 0.25),
             ],
             boxes: Vec::new(),
-            capsules: Vec::new(),
-            cylinders: Vec::new(),
+            rods: Vec::new(),
             motions: Vec::new(),
             pins: Vec::new(),
             bodies: Vec::new(),
@@ -592,26 +626,24 @@ impl Scene {
         if self.boxes.len() > MAX_COLLIDERS {
             return Err(ParamError::new("boxes", self.boxes.len(), format!("at most {MAX_COLLIDERS}")));
         }
-        if self.capsules.len() + self.cylinders.len() > crate::sdf::MAX_RODS {
+        if self.rods.len() > crate::sdf::MAX_RODS {
             let most = crate::sdf::MAX_RODS;
-            let rods = self.capsules.len() + self.cylinders.len();
-            return Err(ParamError::new("capsules", rods, format!("at most {most} capsules and cylinders together")));
+            let kinds = RodKind::ALL.map(RodKind::table).join(", ");
+            let field = self.rods.last().map_or("rods", |r| r.kind.table());
+            return Err(ParamError::new(field, self.rods.len(), format!("at most {most} rods ({kinds}) together")));
         }
-        let rods = (self.capsules.iter().map(|c| ("capsules", c.a, c.b)))
-            .chain(self.cylinders.iter().map(|c| ("cylinders", c.a, c.b)));
-        for (i, (kind, a, b)) in rods.enumerate() {
-            let i = if kind == "capsules" { i } else { i - self.capsules.len() };
-            for k in 0..3 {
-                finite_in(format!("{kind}[{i}].a"), a[k], -1e4, 1e4)?;
-                finite_in(format!("{kind}[{i}].b"), b[k], -1e4, 1e4)?;
+        for (k, r) in self.rods.iter().enumerate() {
+            let (kind, i) = (r.kind, self.rank(k));
+            let name = kind.table();
+            for c in 0..3 {
+                finite_in(format!("{name}[{i}].a"), r.a[c], -1e4, 1e4)?;
+                finite_in(format!("{name}[{i}].b"), r.b[c], -1e4, 1e4)?;
             }
-            finite_in(format!("{kind}[{i}].radius"), a[3], 1e-4, 1e4)?;
-        }
-        for (i, c) in self.cylinders.iter().enumerate() {
-            if c.half_length() < 1e-4 {
+            finite_in(format!("{name}[{i}].radius"), r.a[3], 1e-4, 1e4)?;
+            if kind.needs_length() && r.half_length() < 1e-4 {
                 return Err(ParamError::new(
-                    format!("cylinders[{i}].b"),
-                    format!("{:?}", &c.b[..3]),
+                    format!("{name}[{i}].b"),
+                    format!("{:?}", &r.b[..3]),
                     "must lie at least 0.2 mm from a",
                 ));
             }
@@ -635,8 +667,7 @@ impl Scene {
             let exists = match *id {
                 ColliderId::Sphere(i) => i < self.spheres.len(),
                 ColliderId::Box(i) => i < self.boxes.len(),
-                ColliderId::Capsule(i) => i < self.capsules.len(),
-                ColliderId::Cylinder(i) => i < self.cylinders.len(),
+                ColliderId::Rod(kind, i) => self.rod_index(kind, i).is_some(),
             };
             if !exists {
                 return Err(ParamError::new(id.field(), "motion", "moves a collider the scene does not have"));
@@ -686,25 +717,18 @@ impl Scene {
             ColliderId::Box(i) if i < self.boxes.len() => {
                 self.boxes.remove(i);
             }
-            ColliderId::Capsule(i) if i < self.capsules.len() => {
-                self.capsules.remove(i);
-            }
-            ColliderId::Cylinder(i) if i < self.cylinders.len() => {
-                self.cylinders.remove(i);
+            ColliderId::Rod(kind, i) if self.rod_index(kind, i).is_some() => {
+                self.rods.remove(self.rod_index(kind, i).unwrap_or_default());
             }
             _ => return,
         }
         self.motions.retain(|(m, _)| *m != id);
         for (m, _) in &mut self.motions {
             match (m, id) {
-                (ColliderId::Sphere(k), ColliderId::Sphere(i))
-                | (ColliderId::Box(k), ColliderId::Box(i))
-                | (ColliderId::Capsule(k), ColliderId::Capsule(i))
-                | (ColliderId::Cylinder(k), ColliderId::Cylinder(i))
-                    if *k > i =>
-                {
+                (ColliderId::Sphere(k), ColliderId::Sphere(i)) | (ColliderId::Box(k), ColliderId::Box(i)) if *k > i => {
                     *k -= 1
                 }
+                (ColliderId::Rod(kind, k), ColliderId::Rod(of, i)) if *kind == of && *k > i => *k -= 1,
                 _ => {}
             }
         }
@@ -735,8 +759,7 @@ impl Scene {
                     .boxes
                     .get(i)
                     .map_or(0.0, |b| (0..3).map(|k| 0.5 * (b.max[k] - b.min[k])).fold(f32::INFINITY, f32::min)),
-                ColliderId::Capsule(i) => self.capsules.get(i).map_or(0.0, Capsule::radius),
-                ColliderId::Cylinder(i) => self.cylinders.get(i).map_or(0.0, |c| c.radius().min(c.half_length())),
+                ColliderId::Rod(kind, i) => self.rod_index(kind, i).map_or(0.0, |k| self.rods[k].size()),
             };
             m.check_speed(&id.field(), size, dt)?;
         }
@@ -746,32 +769,36 @@ impl Scene {
         Ok(())
     }
 
-    /// The capsules at simulated time `t`, s: moved and turned about their centres by their
+    /// Where the `i`-th rod of `kind` lies in [`Scene::rods`].
+    pub fn rod_index(&self, kind: RodKind, i: usize) -> Option<usize> {
+        self.rods.iter().enumerate().filter(|(_, r)| r.kind == kind).nth(i).map(|(k, _)| k)
+    }
+
+    /// The name of `rods[k]` (the `i`-th of its kind): what a motion moves.
+    pub fn rod_id(&self, k: usize) -> ColliderId {
+        ColliderId::Rod(self.rods[k].kind, self.rank(k))
+    }
+
+    /// How many rods of `rods[k]`'s kind come before it.
+    fn rank(&self, k: usize) -> usize {
+        self.rods[..k].iter().filter(|r| r.kind == self.rods[k].kind).count()
+    }
+
+    /// The rods at simulated time `t`, s: moved and turned about their centres by their
     /// motions (in f64, rounded once), with the velocities their contacts use.
-    pub fn capsules_at(&self, t: f64, capsules: &mut Vec<Capsule>) {
-        self.rods_at(t, &self.capsules, ColliderId::Capsule, capsules);
-    }
-
-    /// The cylinders at simulated time `t`, s, as [`Scene::capsules_at`] has the capsules.
-    pub fn cylinders_at(&self, t: f64, cylinders: &mut Vec<Cylinder>) {
-        self.rods_at(t, &self.cylinders, ColliderId::Cylinder, cylinders);
-    }
-
-    /// `rods` (the scene's, named `id(i)` by the motions) at time `t`, into `out`.
-    fn rods_at<R: Rod>(&self, t: f64, rods: &[R], id: fn(usize) -> ColliderId, out: &mut Vec<R>) {
-        out.clear();
-        out.extend_from_slice(rods);
-        for (i, r) in out.iter_mut().enumerate() {
-            if let Some((_, m)) = self.motions.iter().find(|(m, _)| *m == id(i)) {
+    pub fn rods_at(&self, t: f64, out: &mut Vec<Rod>) {
+        out.clone_from(&self.rods);
+        for (k, r) in out.iter_mut().enumerate() {
+            let id = self.rod_id(k);
+            if let Some((_, m)) = self.motions.iter().find(|(m, _)| *m == id) {
                 pose_rod(r, &m.at(t));
             }
         }
     }
 
     /// The leading [`crate::sdf::VALUES_AT`] floats of the GPU's shapes buffer
-    /// (`Buf::Shapes`) at time `t`, s: the bodies' heads, then the rods (the capsules, then
-    /// the cylinders, each marked by its kind in `b.w`), each region padded with zeros to
-    /// its most.
+    /// (`Buf::Shapes`) at time `t`, s: the bodies' heads, then the rods (each marked by its
+    /// kind in `b.w`), each region padded with zeros to its most.
     pub fn shapes_at(&self, t: f64) -> Vec<f32> {
         use crate::sdf::{MAX_BODIES, RODS_AT, SdfHead, VALUES_AT};
         let mut out = vec![0.0f32; VALUES_AT];
@@ -779,14 +806,10 @@ impl Scene {
         self.bodies_at(t, &mut heads);
         heads.truncate(MAX_BODIES);
         out[..heads.len() * SdfHead::FLOATS].copy_from_slice(bytemuck::cast_slice(&heads));
-        let (mut caps, mut cyls) = (Vec::new(), Vec::new());
-        self.capsules_at(t, &mut caps);
-        self.cylinders_at(t, &mut cyls);
-        let records = caps.iter().map(|c| (bytemuck::cast::<_, [f32; 16]>(*c), Capsule::KIND));
-        let records = records.chain(cyls.iter().map(|c| (bytemuck::cast::<_, [f32; 16]>(*c), Cylinder::KIND)));
-        for (k, (mut rec, kind)) in records.take(crate::sdf::MAX_RODS).enumerate() {
-            rec[7] = kind;
-            out[RODS_AT + 16 * k..RODS_AT + 16 * (k + 1)].copy_from_slice(&rec);
+        let mut rods = Vec::new();
+        self.rods_at(t, &mut rods);
+        for (k, rod) in rods.iter().take(crate::sdf::MAX_RODS).enumerate() {
+            out[RODS_AT + 16 * k..RODS_AT + 16 * (k + 1)].copy_from_slice(bytemuck::cast_slice(&[rod.record()]));
         }
         out
     }
@@ -807,8 +830,7 @@ impl Scene {
     pub fn moved_to(&self, t: f64) -> Scene {
         let mut s = self.clone();
         self.colliders_at(t, &mut s.spheres, &mut s.boxes);
-        self.capsules_at(t, &mut s.capsules);
-        self.cylinders_at(t, &mut s.cylinders);
+        self.rods_at(t, &mut s.rods);
         // A moving body's mesh, posed (its field is left as it was: this scene is drawn,
         // not simulated).
         for b in s.bodies.iter_mut().filter(|b| b.motion != Motion::default()) {
@@ -846,8 +868,8 @@ impl Scene {
                         b.velocity = v;
                     }
                 }
-                // Moved by `capsules_at`, `cylinders_at`.
-                ColliderId::Capsule(_) | ColliderId::Cylinder(_) => {}
+                // Moved by `rods_at`.
+                ColliderId::Rod(..) => {}
             }
         }
     }

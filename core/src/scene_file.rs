@@ -60,7 +60,7 @@ use thiserror::Error;
 use crate::camera::OrbitCamera;
 use crate::motion::Motion;
 use crate::params::{ParamError, SimParams};
-use crate::scene::{Aabb, Capsule, ClothSpec, ColliderId, Cylinder, Scene, Sphere};
+use crate::scene::{Aabb, ClothSpec, ColliderId, Rod, RodKind, Scene, Sphere};
 
 /// A scene file, read and checked.
 #[derive(Debug, Clone, PartialEq)]
@@ -217,6 +217,17 @@ struct LightRepr {
 }
 
 impl<C> Repr<C> {
+    /// The rods' tables, each with its kind, in [`RodKind::ALL`]'s order.
+    fn rods(&self) -> [(RodKind, &[RodRepr]); RodKind::ALL.len()] {
+        RodKind::ALL.map(|kind| {
+            let rods = match kind {
+                RodKind::Capsule => &self.capsules,
+                RodKind::Cylinder => &self.cylinders,
+            };
+            (kind, &rods[..])
+        })
+    }
+
     /// The file without its cloth table(s), and the cloths (`list` makes them a list).
     fn split(self, list: impl FnOnce(C) -> Vec<ClothSpec>) -> (Repr<()>, Vec<ClothSpec>) {
         let Repr {
@@ -432,19 +443,16 @@ impl SceneFile {
             floor_y: repr.floor.enabled.then_some(repr.floor.y),
             spheres: repr.spheres.iter().map(|s| Sphere::new(s.center, s.radius)).collect(),
             boxes: repr.boxes.iter().map(|b| Aabb::new(b.min, b.max)).collect(),
-            capsules: repr.capsules.iter().map(|c| Capsule::new(c.a, c.b, c.radius)).collect(),
-            cylinders: repr.cylinders.iter().map(|c| Cylinder::new(c.a, c.b, c.radius)).collect(),
+            rods: (repr.rods().into_iter())
+                .flat_map(|(kind, rods)| rods.iter().map(move |r| Rod::new(kind, r.a, r.b, r.radius)))
+                .collect(),
             motions: (repr.spheres.iter().enumerate())
                 .filter_map(|(i, s)| Some((ColliderId::Sphere(i), s.motion.clone()?)))
                 .chain(repr.boxes.iter().enumerate().filter_map(|(i, b)| Some((ColliderId::Box(i), b.motion.clone()?))))
-                .chain(
-                    (repr.capsules.iter().enumerate())
-                        .filter_map(|(i, c)| Some((ColliderId::Capsule(i), c.motion.clone()?))),
-                )
-                .chain(
-                    (repr.cylinders.iter().enumerate())
-                        .filter_map(|(i, c)| Some((ColliderId::Cylinder(i), c.motion.clone()?))),
-                )
+                .chain(repr.rods().into_iter().flat_map(|(kind, rods)| {
+                    (rods.iter().enumerate())
+                        .filter_map(move |(i, c)| Some((ColliderId::Rod(kind, i), c.motion.clone()?)))
+                }))
                 .collect(),
             pins: repr.pins,
             bodies,
@@ -457,9 +465,8 @@ impl SceneFile {
         // masses, the self-collision thickness at its spacing).
         let at_params = |e: ParamError| {
             // A collider's motion too fast for the substeps is the collider's field.
-            let own = ["cloth.", "spheres[", "boxes[", "capsules[", "cylinders[", "pins[", "bodies["]
-                .iter()
-                .any(|p| e.field.starts_with(p));
+            let own = ["cloth.", "spheres[", "boxes[", "pins[", "bodies["].iter().any(|p| e.field.starts_with(p))
+                || RodKind::ALL.iter().any(|k| e.field.starts_with(&format!("{}[", k.table())));
             let path = if own { e.field.clone() } else { format!("params.{}", e.field) };
             refused(e, path)
         };

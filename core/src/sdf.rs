@@ -77,8 +77,8 @@ pub const MAX_POINTS: usize = 16 << 20;
 pub const MAX_CELLS_PER_SUBSTEP: f32 = 2.0;
 /// Floats of the heads at the start of the GPU's shapes buffer (`Buf::Shapes`).
 pub const HEADS_FLOATS: usize = MAX_BODIES * SdfHead::FLOATS;
-/// Most rods — capsules and cylinders together — a scene may hold (`scene::Capsule`,
-/// `scene::Cylinder`: 16 floats each in the shapes buffer, the kind in `b.w`; as many as
+/// Most rods — capsules, cylinders, every kind together — a scene may hold
+/// (`scene::RodRecord`: 16 floats each in the shapes buffer, the kind in `b.w`; as many as
 /// spheres or boxes).
 pub const MAX_RODS: usize = 16;
 /// Where the rods start in the shapes buffer, floats.

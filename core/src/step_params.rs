@@ -175,7 +175,7 @@ shared_struct! {
         pub tile_substeps: u32,
         /// Number of bodies (mesh colliders, `crate::sdf`) in use.
         pub num_bodies: u32,
-        /// Number of rods (capsules, then cylinders: `crate::sdf::RODS_AT`) in use. The
+        /// Number of rods (`Scene::rods`, in its order: `crate::sdf::RODS_AT`) in use. The
         /// struct's GPU block is 128 bytes (a uniform block's size is a multiple of 16;
         /// immediates must match the shader's struct): full.
         pub num_rods: u32,
@@ -253,7 +253,7 @@ impl StepParams {
             strain_passes: params.strain_iterations,
             tile_substeps: 1,
             num_bodies: scene.bodies.len() as u32,
-            num_rods: (scene.capsules.len() + scene.cylinders.len()) as u32,
+            num_rods: scene.rods.len() as u32,
             contact: ContactParams {
                 static_friction: params.static_friction,
                 kinetic_friction: params.kinetic_friction,

@@ -1,4 +1,4 @@
-//! `collide` — per particle: push particles out of spheres, boxes, capsules, cylinders and
+//! `collide` — per particle: push particles out of spheres, boxes, rods (capsules, cylinders) and
 //! bodies (grown by the collision margin) to the nearest surface point
 //! ([`clothlab_core::contact`]: a body's along its field's gradient, `clothlab_core::sdf`); the velocity
 //! into the surface is removed and the tangential velocity reduced by friction, both
@@ -10,49 +10,44 @@ use super::integrate::{contact, integrate_at};
 use super::{Exec, for_each2, v3, v4};
 use clothlab_core::contact::{Body, Contact, Shape};
 use clothlab_core::grid::V4;
-use clothlab_core::scene::{Aabb, Capsule, Cylinder, Sphere};
+use clothlab_core::scene::{Aabb, Rod, Sphere};
 use clothlab_core::sdf::{Bodies, SdfHead};
 use clothlab_core::step_params::StepParams;
 
-/// What the particles collide with (besides the floor): the spheres, boxes, capsules,
-/// cylinders and bodies at the current substep.
+/// What the particles collide with (besides the floor): the spheres, boxes, rods
+/// (capsules, cylinders) and bodies at the current substep.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Colliders<'a> {
     /// Spheres.
     pub spheres: &'a [Sphere],
     /// Boxes.
     pub boxes: &'a [Aabb],
-    /// Capsules.
-    pub capsules: &'a [Capsule],
-    /// Cylinders.
-    pub cylinders: &'a [Cylinder],
+    /// Rods.
+    pub rods: &'a [Rod],
     /// Bodies (mesh colliders).
     pub bodies: Bodies<'a>,
 }
 
 impl<'a> Colliders<'a> {
-    /// Spheres and boxes, no capsules or bodies.
+    /// Spheres and boxes, no rods or bodies.
     pub fn new(spheres: &'a [Sphere], boxes: &'a [Aabb]) -> Self {
-        Self { spheres, boxes, capsules: &[], cylinders: &[], bodies: Bodies::default() }
+        Self { spheres, boxes, rods: &[], bodies: Bodies::default() }
     }
 
     /// Cut to the counts in `p` (what the kernels loop over).
     #[inline(always)]
     pub fn cut(self, p: &StepParams) -> Self {
         let heads = self.bodies.heads;
-        let capsules = (p.num_rods as usize).min(self.capsules.len());
-        let cylinders = (p.num_rods as usize - capsules).min(self.cylinders.len());
         Self {
             spheres: &self.spheres[..(p.num_spheres as usize).min(self.spheres.len())],
             boxes: &self.boxes[..(p.num_boxes as usize).min(self.boxes.len())],
-            capsules: &self.capsules[..capsules],
-            cylinders: &self.cylinders[..cylinders],
+            rods: &self.rods[..(p.num_rods as usize).min(self.rods.len())],
             bodies: Bodies { heads: &heads[..(p.num_bodies as usize).min(heads.len())], values: self.bodies.values },
         }
     }
 
     /// Every collider's contact with a point at `x`, in scene order (spheres, boxes,
-    /// capsules, cylinders, bodies), each shape grown by `reach`: `touch(x, contact)` may
+    /// rods, bodies), each shape grown by `reach`: `touch(x, contact)` may
     /// move `x` before the next shape is tested (`collide` moves it to the contact's
     /// point; VBD's contact energies leave it).
     #[inline(always)]
@@ -71,8 +66,7 @@ impl<'a> Colliders<'a> {
         }
         each(self.spheres.iter().copied(), x, reach, &mut touch);
         each(self.boxes.iter().copied(), x, reach, &mut touch);
-        each(self.capsules.iter().copied(), x, reach, &mut touch);
-        each(self.cylinders.iter().copied(), x, reach, &mut touch);
+        each(self.rods.iter().copied(), x, reach, &mut touch);
         each(self.bodies(), x, reach, &mut touch);
     }
 
@@ -90,10 +84,8 @@ pub struct ColliderSet {
     pub spheres: Vec<Sphere>,
     /// Boxes, moved.
     pub boxes: Vec<Aabb>,
-    /// Capsules, moved.
-    pub capsules: Vec<Capsule>,
-    /// Cylinders, moved.
-    pub cylinders: Vec<Cylinder>,
+    /// Rods, moved.
+    pub rods: Vec<Rod>,
     /// The bodies' heads.
     pub heads: Vec<SdfHead>,
     /// The bodies' values (`clothlab_core::sdf::concat`; fixed).
@@ -111,8 +103,7 @@ impl ColliderSet {
     /// Puts them where `scene`'s motions have them at time `t`, s.
     pub fn move_to(&mut self, scene: &clothlab_core::Scene, t: f64) {
         scene.colliders_at(t, &mut self.spheres, &mut self.boxes);
-        scene.capsules_at(t, &mut self.capsules);
-        scene.cylinders_at(t, &mut self.cylinders);
+        scene.rods_at(t, &mut self.rods);
         scene.bodies_at(t, &mut self.heads);
     }
 
@@ -121,8 +112,7 @@ impl ColliderSet {
         Colliders {
             spheres: &self.spheres,
             boxes: &self.boxes,
-            capsules: &self.capsules,
-            cylinders: &self.cylinders,
+            rods: &self.rods,
             bodies: Bodies { heads: &self.heads, values: &self.values },
         }
     }

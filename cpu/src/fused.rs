@@ -634,7 +634,7 @@ fn in_grid<S: Isa>(sd: S, col: isize, n: usize) -> M<S> {
 }
 
 /// Lanes at `x` within a collider's bound grown by the margin ([`Shape::bound`]: a
-/// sphere's or a box's by `collide`'s own test, a capsule's, a cylinder's or a body's a
+/// sphere's or a box's by `collide`'s own test, a rod's or a body's a
 /// ball holding it): the lanes the scalar `collide_at` then resolves. (Plain loops, no
 /// closure: a closure is compiled outside the SIMD context and its intrinsics become
 /// calls — measured 1.5× the substep at n = 512.)
@@ -646,10 +646,7 @@ fn inside<S: Isa>(sd: S, p: &StepParams, c: super::collide::Colliders<'_>, x: &[
     for b in c.bodies() {
         any = any | within(sd, b.bound(r), x);
     }
-    for s in c.capsules {
-        any = any | within(sd, s.bound(r), x);
-    }
-    for s in c.cylinders {
+    for s in c.rods {
         any = any | within(sd, s.bound(r), x);
     }
     for s in c.spheres {

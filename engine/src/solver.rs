@@ -184,10 +184,11 @@ impl<E: Engine> GpuSolver<E> {
     ) -> Result<Self, SolverError> {
         if scene.spheres.len() > MAX_COLLIDERS
             || scene.boxes.len() > MAX_COLLIDERS
-            || scene.capsules.len() + scene.cylinders.len() > clothlab_core::sdf::MAX_RODS
+            || scene.rods.len() > clothlab_core::sdf::MAX_RODS
         {
             return Err(SolverError::Invalid(format!(
-                "at most {MAX_COLLIDERS} spheres, boxes, and capsules and cylinders together"
+                "at most {MAX_COLLIDERS} spheres, {MAX_COLLIDERS} boxes and {} rods (capsules, cylinders together)",
+                clothlab_core::sdf::MAX_RODS
             )));
         }
         let info = engine.info().clone();
@@ -563,7 +564,7 @@ impl<E: Engine> GpuSolver<E> {
             }
         }
         // The bodies' heads and the rods lead the shapes buffer.
-        if !self.scene.bodies.is_empty() || !self.scene.capsules.is_empty() || !self.scene.cylinders.is_empty() {
+        if !self.scene.bodies.is_empty() || !self.scene.rods.is_empty() {
             let id = self.must(Buf::Shapes)?;
             self.engine.record_write(id, bytemuck::cast_slice(&self.scene.shapes_at(self.time)))?;
         }

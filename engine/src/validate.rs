@@ -95,13 +95,13 @@ impl KernelInput {
 
 /// Moves a few free particles of `pos` into each collider of `scene` (and under its floor):
 /// every 97th free particle, taking the colliders in turn, to a point just inside the
-/// surface below it (2 % of a sphere's or capsule's radius deep, 1 cm into a box's top,
-/// above a cylinder's centre by half its radius or half length, half a cell behind a
-/// body's triangle, 1 cm under the floor), its velocity kept. Returns whether any moved.
+/// surface below it (2 % of a sphere's radius deep, 1 cm into a box's top, above a rod's
+/// centre by half its smallest size, half a cell behind a body's triangle, 1 cm under
+/// the floor), its velocity kept. Returns whether any moved.
 fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
     let (spheres, boxes) = (scene.spheres.len(), scene.boxes.len());
-    let capsules = scene.capsules.len() + scene.cylinders.len();
-    let targets = spheres + boxes + capsules + scene.bodies.len() + usize::from(scene.floor_y.is_some());
+    let rods = scene.rods.len();
+    let targets = spheres + boxes + rods + scene.bodies.len() + usize::from(scene.floor_y.is_some());
     if targets == 0 {
         return false;
     }
@@ -124,14 +124,10 @@ fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
             let clamp = |v: f32, lo: f32, hi: f32| v.clamp(lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo));
             let depth = 0.01f32.min(0.25 * (b.max[1] - b.min[1]));
             *p = [clamp(p[0], b.min[0], b.max[0]), b.max[1] - depth, clamp(p[2], b.min[2], b.max[2]), p[3]];
-        } else if let Some(c) = scene.capsules.get(t - spheres - boxes) {
-            // Half way along the axis, 2 % of the radius inside, on the upper side.
+        } else if let Some(c) = scene.rods.get(t - spheres - boxes) {
             let m = c.center();
-            *p = [m[0], m[1] + 0.98 * c.radius(), m[2], p[3]];
-        } else if let Some(c) = scene.cylinders.get(t - spheres - boxes - scene.capsules.len()) {
-            let m = c.center();
-            *p = [m[0], m[1] + 0.5 * c.radius().min(c.half_length()), m[2], p[3]];
-        } else if let Some(body) = scene.bodies.get(t - spheres - boxes - capsules) {
+            *p = [m[0], m[1] + 0.5 * c.size(), m[2], p[3]];
+        } else if let Some(body) = scene.bodies.get(t - spheres - boxes - rods) {
             // A triangle (a different one each time), half a cell behind its centroid.
             let m = &body.mesh;
             let [a, b, c] = m.triangles[(i * 7919) % m.triangles.len()].map(|v| m.positions[v as usize]);

@@ -463,11 +463,10 @@ impl Running {
                     let scene = self.sim.solver.get_ref().scene().clone();
                     self.gfx.rebuild(&scene, &self.ui.params)?;
                     self.ui.message = format!(
-                        "scene: {} spheres, {} boxes, {} capsules, {} cylinders, {} bodies, {}",
+                        "scene: {} spheres, {} boxes, {} rods, {} bodies, {}",
                         scene.spheres.len(),
                         scene.boxes.len(),
-                        scene.capsules.len(),
-                        scene.cylinders.len(),
+                        scene.rods.len(),
                         scene.bodies.len(),
                         scene.floor_y.map_or("no floor".into(), |y| format!("floor at {y} m"))
                     );

@@ -3,7 +3,7 @@
 //! capsule against the sphere, the GPU recipes against the CPU twins, refusals.
 
 use clothlab_core::scene::{ColliderId, Pinning};
-use clothlab_core::{Capsule, ClothState, Motion, Scene, SceneFile, SimParams, Sphere};
+use clothlab_core::{ClothState, Motion, Rod, RodKind, Scene, SceneFile, SimParams, Sphere};
 use clothlab_tests::{assert_checks, backend, mean, still_air};
 
 /// Radius of the roller, m, and its spin about its own axis (x), rad/s.
@@ -20,8 +20,8 @@ fn roller(spin: f32) -> Scene {
     s.cloth.top_center = [0.0, 1.0 + R + margin + 1e-3, -0.01];
     s.floor_y = None;
     s.spheres.clear();
-    s.capsules = vec![Capsule::new([-0.5, 1.0, 0.0], [0.5, 1.0, 0.0], R)];
-    s.motions = vec![(ColliderId::Capsule(0), Motion { spin: [spin, 0.0, 0.0], ..Motion::default() })];
+    s.rods = vec![Rod::new(RodKind::Capsule, [-0.5, 1.0, 0.0], [0.5, 1.0, 0.0], R)];
+    s.motions = vec![(ColliderId::Rod(RodKind::Capsule, 0), Motion { spin: [spin, 0.0, 0.0], ..Motion::default() })];
     s
 }
 
@@ -74,7 +74,8 @@ fn a_capsule_of_no_length_is_the_sphere_to_the_bit() {
     let mut spheres = Scene::with_n(24);
     spheres.cloth.size = 1.6;
     let mut capsules = spheres.clone();
-    capsules.capsules = spheres.spheres.iter().map(|s: &Sphere| Capsule::new(s.center, s.center, s.radius)).collect();
+    capsules.rods =
+        spheres.spheres.iter().map(|s: &Sphere| Rod::new(RodKind::Capsule, s.center, s.center, s.radius)).collect();
     capsules.spheres.clear();
     let run = |scene: &Scene, keep: &str| -> Vec<(String, ClothState)> {
         clothlab_tests::backends(scene, &params, |n| n.contains(keep))
@@ -111,15 +112,15 @@ fn every_gpu_recipe_and_the_cpu_engine_follow_the_cpu_with_a_moving_capsule() {
     sc.cloth.pinning = Pinning::None;
     sc.cloth.top_center = [0.0, 1.0, -0.6];
     sc.spheres.clear();
-    sc.capsules = vec![
-        Capsule::new([-0.6, 0.75, 0.1], [0.6, 0.75, 0.1], 0.1),
-        Capsule::new([-0.6, 0.6, -0.3], [0.6, 0.7, -0.3], 0.05),
+    sc.rods = vec![
+        Rod::new(RodKind::Capsule, [-0.6, 0.75, 0.1], [0.6, 0.75, 0.1], 0.1),
+        Rod::new(RodKind::Capsule, [-0.6, 0.6, -0.3], [0.6, 0.7, -0.3], 0.05),
     ];
     let keys = vec![
         clothlab_core::Key::new(0.0, [0.0; 3]),
         clothlab_core::Key { rotate_deg: [0.0, 30.0, 0.0], ..clothlab_core::Key::new(0.2, [0.1, 0.05, 0.0]) },
     ];
-    sc.motions = vec![(ColliderId::Capsule(0), Motion { keys, ..Motion::default() })];
+    sc.motions = vec![(ColliderId::Rod(RodKind::Capsule, 0), Motion { keys, ..Motion::default() })];
     let params = SimParams::default();
     let checks = clothlab_tests::optimized_kernel_checks(&sc, &params, 0xc4);
     assert!(checks.iter().any(|c| c.what.contains("collide")), "no check of a collide kernel");
@@ -151,7 +152,7 @@ fn bad_capsules_are_refused_in_one_line() {
         }
     }
     let mut s = roller(0.0);
-    s.capsules = vec![s.capsules[0]; 17];
+    s.rods = vec![s.rods[0]; 17];
     let e = s.validate().unwrap_err().to_string();
     assert!(e.contains("capsules") && e.contains("at most 16"), "{e}");
 }

@@ -4,7 +4,7 @@
 //! against the CPU twins, refusals.
 
 use clothlab_core::scene::{ColliderId, Pinning};
-use clothlab_core::{Capsule, Cylinder, Integrator, Motion, Scene, SceneFile, SimParams};
+use clothlab_core::{Integrator, Motion, Rod, RodKind, Scene, SceneFile, SimParams};
 use clothlab_tests::{assert_checks, backend, mean, still_air};
 
 /// A 2 cm patch of 4 × 4 particles 1 mm above the top cap (y = 1) of an upright cylinder
@@ -18,8 +18,8 @@ fn turntable(off: f32, spin: f32) -> Scene {
     s.cloth.top_center = [off, 1.0 + margin + 1e-3, -0.01];
     s.floor_y = None;
     s.spheres.clear();
-    s.cylinders = vec![Cylinder::new([0.0, 0.6, 0.0], [0.0, 1.0, 0.0], 0.3)];
-    s.motions = vec![(ColliderId::Cylinder(0), Motion { spin: [0.0, spin, 0.0], ..Motion::default() })];
+    s.rods = vec![Rod::new(RodKind::Cylinder, [0.0, 0.6, 0.0], [0.0, 1.0, 0.0], 0.3)];
+    s.motions = vec![(ColliderId::Rod(RodKind::Cylinder, 0), Motion { spin: [0.0, spin, 0.0], ..Motion::default() })];
     s
 }
 
@@ -41,7 +41,7 @@ fn a_patch_rests_on_the_cap_and_the_side_and_a_turntable_carries_it_round(name: 
     // On the side of a lying cylinder (axis along x): every particle at the radius plus
     // the margin from the axis, to 1e-6 m, as on a capsule's tube.
     let mut side = turntable(0.0, 0.0);
-    side.cylinders = vec![Cylinder::new([-0.5, 1.0, 0.0], [0.5, 1.0, 0.0], 0.2)];
+    side.rods = vec![Rod::new(RodKind::Cylinder, [-0.5, 1.0, 0.0], [0.5, 1.0, 0.0], 0.2)];
     side.cloth.top_center = [0.0, 1.2 + margin + 1e-3, -0.01];
     side.motions.clear();
     if let Some(mut s) = backend(name, &side, &still_air(0.5)) {
@@ -87,16 +87,16 @@ fn every_gpu_recipe_and_kernel_follows_the_cpu_with_a_moving_turning_cylinder() 
     sc.cloth.pinning = Pinning::None;
     sc.cloth.top_center = [0.0, 1.0, -0.6];
     sc.spheres.clear();
-    sc.capsules = vec![Capsule::new([-0.6, 0.5, 0.4], [0.6, 0.5, 0.4], 0.05)];
-    sc.cylinders = vec![
-        Cylinder::new([-0.6, 0.75, 0.1], [0.6, 0.75, 0.1], 0.12),
-        Cylinder::new([0.0, 0.0, -0.3], [0.0, 0.7, -0.3], 0.08),
+    sc.rods = vec![
+        Rod::new(RodKind::Capsule, [-0.6, 0.5, 0.4], [0.6, 0.5, 0.4], 0.05),
+        Rod::new(RodKind::Cylinder, [-0.6, 0.75, 0.1], [0.6, 0.75, 0.1], 0.12),
+        Rod::new(RodKind::Cylinder, [0.0, 0.0, -0.3], [0.0, 0.7, -0.3], 0.08),
     ];
     let keys = vec![
         clothlab_core::Key::new(0.0, [0.0; 3]),
         clothlab_core::Key { rotate_deg: [0.0, 30.0, 20.0], ..clothlab_core::Key::new(0.2, [0.1, 0.05, 0.0]) },
     ];
-    sc.motions = vec![(ColliderId::Cylinder(0), Motion { keys, ..Motion::default() })];
+    sc.motions = vec![(ColliderId::Rod(RodKind::Cylinder, 0), Motion { keys, ..Motion::default() })];
     let params = SimParams::default();
     let checks = clothlab_tests::optimized_kernel_checks(&sc, &params, 0xc7);
     assert!(checks.iter().any(|c| c.what.contains("collide")), "no check of a collide kernel");
@@ -134,8 +134,8 @@ fn bad_cylinders_are_refused_in_one_line() {
     }
     // Capsules and cylinders share the rods' table of 16.
     let mut s = turntable(0.0, 0.0);
-    s.cylinders = vec![s.cylinders[0]; 9];
-    s.capsules = vec![Capsule::new([0.0; 3], [1.0, 0.0, 0.0], 0.1); 8];
+    s.rods = vec![s.rods[0]; 9];
+    s.rods.extend([Rod::new(RodKind::Capsule, [0.0; 3], [1.0, 0.0, 0.0], 0.1); 8]);
     let e = s.validate().unwrap_err().to_string();
-    assert!(e.contains("at most 16 capsules and cylinders together"), "{e}");
+    assert!(e.contains("at most 16 rods (capsules, cylinders) together"), "{e}");
 }
