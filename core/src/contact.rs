@@ -170,24 +170,32 @@ pub(crate) fn mid(a: [f32; 4], b: [f32; 4]) -> Vec3 {
 }
 
 impl Shape for Rod {
-    /// By its kind: [`capsule_contact`], [`cylinder_contact`].
+    /// By its kind: `capsule_contact`, `cylinder_contact`, `cone_contact`.
     #[inline(always)]
     fn contact(&self, x: Vec3, reach: f32) -> Option<Contact> {
         match self.kind {
             RodKind::Capsule => capsule_contact(self, x, reach),
             RodKind::Cylinder => cylinder_contact(self, x, reach),
+            RodKind::Cone => cone_contact(self, x, reach),
         }
     }
 
     #[inline(always)]
     fn bound(&self, reach: f32) -> Bound {
-        let half = 0.5 * (v3(self.b) - v3(self.a)).length();
-        let r = self.a[3];
-        let r = match self.kind {
-            RodKind::Capsule => half + r,
-            RodKind::Cylinder => (half * half + r * r).sqrt(),
+        let (half, r) = (0.5 * (v3(self.b) - v3(self.a)).length(), self.a[3]);
+        let far = match self.kind {
+            RodKind::Capsule => half + r + reach,
+            // The grown rim: the half length and the radius each grown by `reach`.
+            RodKind::Cylinder => ((half + reach).powi(2) + (r + reach).powi(2)).sqrt(),
+            // The grown apex lies `reach · slant / r` past the apex, the grown rim `reach`
+            // below the base and `reach · (slant + r) / len` out.
+            RodKind::Cone => {
+                let (len, slant) = (2.0 * half, (r * r + 4.0 * half * half).sqrt());
+                let rim = ((half + reach).powi(2) + (r + reach * (slant + r) / len).powi(2)).sqrt();
+                rim.max(half + reach * slant / r)
+            }
         };
-        Bound::Ball { center: mid(self.a, self.b), r: r + reach + 1e-3 }
+        Bound::Ball { center: mid(self.a, self.b), r: far + 1e-3 }
     }
 }
 
@@ -236,6 +244,38 @@ fn cylinder_contact(c: &Rod, x: Vec3, reach: f32) -> Option<Contact> {
         (cap, n, x + n * cap)
     };
     Some(Contact { depth, n, at, vs: surface_vel(v3(c.velocity), v3(c.spin), at - m) })
+}
+
+/// A cone's contact, the base a disc of its radius `r` about `a`, the apex at `b` (`len`
+/// from `a`), grown by `reach` (the base's plane and the slanted side each moved out by
+/// it, the rim and the apex kept sharp): leave through the side or the base, whichever is
+/// nearer. At height `t` above the base and `ρ` from the axis, the side's outward
+/// distance is `(t·r + (ρ − r)·len) / slant`, `slant = √(r² + len²)`.
+#[inline(always)]
+fn cone_contact(c: &Rod, x: Vec3, reach: f32) -> Option<Contact> {
+    let a = v3(c.a);
+    let ab = v3(c.b) - a;
+    let len = dot3(ab, ab).sqrt();
+    let u = ab / len;
+    let d = x - a;
+    let t = dot3(d, u);
+    let radial = d - u * t;
+    let rho = dot3(radial, radial).sqrt();
+    let r = c.a[3];
+    let slant = (r * r + len * len).sqrt();
+    let side = reach - (t * r + (rho - r) * len) / slant;
+    let base = reach + t;
+    if !(side > 0.0 && base > 0.0) {
+        return None;
+    }
+    let (depth, n) = if side < base {
+        let out = if rho > 1e-12 { radial / rho } else { across(u) };
+        (side, u * (r / slant) + out * (len / slant))
+    } else {
+        (base, -u)
+    };
+    let at = x + n * depth;
+    Some(Contact { depth, n, at, vs: surface_vel(v3(c.velocity), v3(c.spin), at - mid(c.a, c.b)) })
 }
 
 /// A unit direction across the unit axis `u` (a point on a cylinder's axis leaves this
@@ -341,23 +381,52 @@ mod tests {
     }
 
     #[test]
+    fn a_cone_pushes_out_through_its_side_or_its_base() {
+        // Base about the origin, radius 0.5, apex 1 up y: the side's slant √1.25, its
+        // outward normal (x̂ + ŷ/2)/√1.25 on the +x side.
+        let c = Rod::new(RodKind::Cone, [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 0.5);
+        let slant = 1.25f32.sqrt();
+        // Near the side: its distance (t·r + (ρ − r)·len)/slant = (0.1 − 0.2)/slant.
+        let side = check(&c, Vec3::new(0.3, 0.2, 0.0), 0.0);
+        let n = Vec3::new(1.0, 0.5, 0.0) / slant;
+        assert!((side.depth - 0.1 / slant).abs() < 1e-6 && (side.n - n).length() < 1e-6, "{side:?}");
+        // On the axis 0.3 up: the base (0.3 away) is nearer than the side (0.35/slant).
+        let base = check(&c, Vec3::new(0.0, 0.3, 0.0), 0.0);
+        assert!((base.depth - 0.3).abs() < 1e-6 && base.n == -Vec3::Y, "{base:?}");
+        // Grown by 0.1: below the base by 0.05 is inside, by 0.11 not; past the apex
+        // the grown tip reaches 1 + 0.1·slant/0.5 = 1.224 up the axis.
+        let under = check(&c, Vec3::new(0.2, -0.05, 0.1), 0.1);
+        assert!((under.depth - 0.05).abs() < 1e-6 && under.n == -Vec3::Y, "{under:?}");
+        assert_eq!(c.contact(Vec3::new(0.2, -0.11, 0.1), 0.1), None);
+        assert!(c.contact(Vec3::new(0.0, 1.22, 0.0), 0.1).is_some());
+        assert_eq!(c.contact(Vec3::new(0.0, 1.23, 0.0), 0.1), None);
+        assert_eq!(c.contact(Vec3::new(0.0, 1.01, 0.0), 0.0), None);
+        // Outside the side, beside the rim: none.
+        assert_eq!(c.contact(Vec3::new(0.51, 0.01, 0.0), 0.0), None);
+        // A NaN point touches nothing (the kernels' test is the same).
+        assert_eq!(c.contact(Vec3::new(f32::NAN, 0.5, 0.0), 0.1), None);
+    }
+
+    #[test]
     fn every_contact_lies_inside_its_shapes_bound() {
-        let c = Rod::new(RodKind::Cylinder, [0.1, 0.2, -1.0], [0.3, 0.0, 1.0], 0.4);
-        let (Bound::Ball { center, r }, reach) = (c.bound(0.05), 0.05) else { panic!() };
-        let mut hits = 0;
-        let mut seed = 12345u64;
-        let mut f = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 40) as f32 / (1u64 << 24) as f32 * 3.0 - 1.5
-        };
-        for _ in 0..4096 {
-            let x = Vec3::new(f(), f(), f());
-            if c.contact(x, reach).is_some() {
-                hits += 1;
-                assert!((x - center).length() < r, "{x} outside the bound");
+        for kind in RodKind::ALL {
+            let c = Rod::new(kind, [0.1, 0.2, -1.0], [0.3, 0.0, 1.0], 0.4);
+            let (Bound::Ball { center, r }, reach) = (c.bound(0.05), 0.05) else { panic!() };
+            let mut hits = 0;
+            let mut seed = 12345u64;
+            let mut f = || {
+                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (seed >> 40) as f32 / (1u64 << 24) as f32 * 3.0 - 1.5
+            };
+            for _ in 0..8192 {
+                let x = Vec3::new(f(), f(), f());
+                if c.contact(x, reach).is_some() {
+                    hits += 1;
+                    assert!((x - center).length() < r, "{kind:?}: {x} outside the bound");
+                }
             }
+            assert!(hits > 100, "{kind:?}: {hits} of 8192 sample points inside: the test would hold nothing");
         }
-        assert!(hits > 100, "{hits} of 4096 sample points inside: the test would hold nothing");
     }
 
     #[test]

@@ -161,14 +161,54 @@ pub fn cylinder_mesh(a: [f32; 3], b: [f32; 3], r: f32, around: u32) -> CapsuleMe
 }
 
 /// Rod `rod`'s mesh by its kind ([`capsule_mesh`] with `around / 4` rings a hemisphere,
-/// [`cylinder_mesh`]), `around` steps about its axis.
+/// [`cylinder_mesh`], [`cone_mesh`]), `around` steps about its axis.
 pub fn rod_mesh(rod: &crate::Rod, around: u32) -> CapsuleMesh {
     let at = |p: [f32; 4]| [p[0], p[1], p[2]];
     let (a, b, r) = (at(rod.a), at(rod.b), rod.radius());
     match rod.kind {
         crate::RodKind::Capsule => capsule_mesh(a, b, r, around / 4, around),
         crate::RodKind::Cylinder => cylinder_mesh(a, b, r, around),
+        crate::RodKind::Cone => cone_mesh(a, b, r, around),
     }
+}
+
+/// A cone, its base the disc of radius `r` about `a` across the axis, its apex at `b`:
+/// positions, outward normals and triangles counter-clockwise from outside (the side in
+/// `around` steps with smooth normals, the apex once a step with its step's normal, and
+/// the base a flat disc with its own vertices, so the rim stays sharp).
+pub fn cone_mesh(a: [f32; 3], b: [f32; 3], r: f32, around: u32) -> CapsuleMesh {
+    use glam::Vec3;
+    let (a, b) = (Vec3::from(a), Vec3::from(b));
+    let len = (b - a).length();
+    let axis = (b - a).try_normalize().unwrap_or(Vec3::Y);
+    let e1 = axis.any_orthonormal_vector();
+    let e2 = axis.cross(e1);
+    let ring = |ph: f32| e1 * ph.cos() + e2 * ph.sin();
+    let step = std::f32::consts::TAU / around as f32;
+    // The side's normal where the ring points along `d`: out and up the slope.
+    let slope = |d: Vec3| (d * len + axis * r).normalize_or(axis);
+    let (mut pos, mut nrm, mut tris) = (Vec::new(), Vec::new(), Vec::new());
+    // The side: rim vertex i at 2i, step i's apex at 2i + 1.
+    for i in 0..around {
+        let (d, half) = (ring(step * i as f32), ring(step * (i as f32 + 0.5)));
+        pos.extend([(a + d * r).to_array(), b.to_array()]);
+        nrm.extend([slope(d).to_array(), slope(half).to_array()]);
+    }
+    for i in 0..around {
+        tris.push([2 * i, 2 * ((i + 1) % around), 2 * i + 1]);
+    }
+    // The base: a centre and a rim facing −axis.
+    let centre = pos.len() as u32;
+    pos.push(a.to_array());
+    nrm.push((-axis).to_array());
+    for i in 0..around {
+        pos.push((a + ring(step * i as f32) * r).to_array());
+        nrm.push((-axis).to_array());
+    }
+    for i in 0..around {
+        tris.push([centre, centre + 1 + (i + 1) % around, centre + 1 + i]);
+    }
+    (pos, nrm, tris)
 }
 
 /// [`capsule_mesh`]'s positions, normals and triangles.
@@ -334,25 +374,41 @@ mod capsule_tests {
     }
 
     #[test]
-    fn a_cylinder_mesh_is_closed_lies_on_its_surface_and_faces_out() {
+    fn cylinder_and_cone_meshes_are_closed_lie_on_their_surfaces_and_face_out() {
         use crate::contact::Shape;
-        // Every triangle's centroid moved 4 mm out along its normal leaves the cylinder
+        // Every triangle's centroid moved 4 mm out along its normal leaves the shape
         // (no contact: a chord of 16 steps about r = 0.15 m lies 2.9 mm inside) and 4 mm in is
         // inside (a contact): the mesh is the surface the
         // contact pushes to, drawn the right way round; every edge is in two triangles.
-        let (a, b, r) = ([0.1, 0.2, 0.3], [0.9, -0.4, 0.5], 0.15);
-        let cyl = crate::Rod::new(crate::RodKind::Cylinder, a, b, r);
-        let (pos, nrm, tris) = super::cylinder_mesh(a, b, r, 16);
-        assert_eq!(pos.len(), nrm.len());
-        for t in &tris {
-            let [p0, p1, p2] = t.map(|k| glam::Vec3::from(pos[k as usize]));
-            let n = (p1 - p0).cross(p2 - p0).normalize();
-            let c = (p0 + p1 + p2) / 3.0;
-            assert!(cyl.contact(c + n * 4e-3, 0.0).is_none(), "triangle {t:?} faces in");
-            assert!(cyl.contact(c - n * 4e-3, 0.0).is_some(), "triangle {t:?} off the surface");
+        for kind in [crate::RodKind::Cylinder, crate::RodKind::Cone] {
+            let (a, b, r) = ([0.1, 0.2, 0.3], [0.9, -0.4, 0.5], 0.15);
+            let rod = crate::Rod::new(kind, a, b, r);
+            let (pos, nrm, tris) = super::rod_mesh(&rod, 16);
+            assert_eq!(pos.len(), nrm.len());
+            for t in &tris {
+                let [p0, p1, p2] = t.map(|k| glam::Vec3::from(pos[k as usize]));
+                let n = (p1 - p0).cross(p2 - p0).normalize();
+                let c = (p0 + p1 + p2) / 3.0;
+                assert!(rod.contact(c + n * 4e-3, 0.0).is_none(), "{kind:?}: triangle {t:?} faces in");
+                assert!(rod.contact(c - n * 4e-3, 0.0).is_some(), "{kind:?}: triangle {t:?} off the surface");
+            }
+            // Each vertex's normal within 12° of its triangles' (the apex's: its step's).
+            for t in &tris {
+                let [p0, p1, p2] = t.map(|k| glam::Vec3::from(pos[k as usize]));
+                let n = (p1 - p0).cross(p2 - p0).normalize();
+                for &k in t {
+                    let v = glam::Vec3::from(nrm[k as usize]);
+                    assert!(v.dot(n) > 12f32.to_radians().cos(), "{kind:?}: vertex {k}'s normal {v} against {n}");
+                }
+            }
+            closed(&pos, &tris);
         }
+    }
+
+    /// Every edge of `tris` is in two triangles (vertices at one place are one).
+    fn closed(pos: &[[f32; 3]], tris: &[[u32; 3]]) {
         let mut edges = std::collections::HashMap::new();
-        for t in &tris {
+        for t in tris {
             for k in 0..3 {
                 let (p, q) = (pos[t[k] as usize], pos[t[(k + 1) % 3] as usize]);
                 let key = |v: [f32; 3]| v.map(|c| (c * 1e5).round() as i64);

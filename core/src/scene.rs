@@ -81,18 +81,22 @@ pub enum RodKind {
     /// lie between the planes through `a` and `b` across it (a post, a drum, a table's
     /// round top).
     Cylinder,
+    /// A cone: its base the disc of `radius` about `a` across the axis, its apex at `b`
+    /// (a lampshade, a traffic cone, a funnel's tip).
+    Cone,
 }
 
 impl RodKind {
     /// Every kind, in the order a scene file's tables are read (the order of a scene
     /// file's rods in the shapes buffer).
-    pub const ALL: [RodKind; 2] = [RodKind::Capsule, RodKind::Cylinder];
+    pub const ALL: [RodKind; 3] = [RodKind::Capsule, RodKind::Cylinder, RodKind::Cone];
 
     /// Its name (`capsule`; the shaders' mark is `ROD_` and the name in capitals).
     pub fn name(self) -> &'static str {
         match self {
             RodKind::Capsule => "capsule",
             RodKind::Cylinder => "cylinder",
+            RodKind::Cone => "cone",
         }
     }
 
@@ -102,6 +106,7 @@ impl RodKind {
         match self {
             RodKind::Capsule => "capsules",
             RodKind::Cylinder => "cylinders",
+            RodKind::Cone => "cones",
         }
     }
 
@@ -110,6 +115,7 @@ impl RodKind {
         match self {
             RodKind::Capsule => "one end of the axis",
             RodKind::Cylinder => "the centre of one cap",
+            RodKind::Cone => "the centre of the base",
         }
     }
 
@@ -126,7 +132,7 @@ impl RodKind {
 
 /// A rod collider: a shape about the segment from `a` to `b` of its [`RodKind`]. Every
 /// kind has one record in the shapes buffer ([`RodRecord`], the shaders' `Rod`), one
-/// count (`StepParams::num_rods`), one loop in each walk and one motion ([`pose_rod`]).
+/// count (`StepParams::num_rods`), one loop in each walk and one motion (`pose_rod`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Rod {
     /// What shape it is.
@@ -184,7 +190,12 @@ impl Rod {
     /// Its smallest size, m: how far its motion may carry it in a substep
     /// ([`Motion::check_speed`]); a point half of it above its centre lies inside it.
     pub fn size(&self) -> f32 {
-        if self.kind.needs_length() { self.radius().min(self.half_length()) } else { self.radius() }
+        match self.kind {
+            RodKind::Capsule => self.radius(),
+            RodKind::Cylinder => self.radius().min(self.half_length()),
+            // Its radius half way up is half the base's.
+            RodKind::Cone => (0.5 * self.radius()).min(self.half_length()),
+        }
     }
 
     /// Its record in the shapes buffer.

@@ -33,6 +33,10 @@
 //! a = [0.0, 0.0, 0.0]
 //! b = [0.0, 0.5, 0.0]
 //! radius = 0.3
+//! [[cones]]                    # the base a disc of `radius` about a, the apex at b
+//! a = [1.0, 0.0, 0.0]
+//! b = [1.0, 0.6, 0.0]
+//! radius = 0.25
 //! [[pins]]                     # holds the particles resting in the box; may move
 //! min = [-1.1, 2.1, -1.0]      # (see clothlab_core::pins)
 //! max = [1.1, 2.3, -0.8]
@@ -143,6 +147,8 @@ struct Repr<C> {
     #[serde(default)]
     cylinders: Vec<RodRepr>,
     #[serde(default)]
+    cones: Vec<RodRepr>,
+    #[serde(default)]
     pins: Vec<crate::pins::PinGroup>,
     #[serde(default)]
     bodies: Vec<crate::sdf::BodySpec>,
@@ -223,6 +229,7 @@ impl<C> Repr<C> {
             let rods = match kind {
                 RodKind::Capsule => &self.capsules,
                 RodKind::Cylinder => &self.cylinders,
+                RodKind::Cone => &self.cones,
             };
             (kind, &rods[..])
         })
@@ -240,6 +247,7 @@ impl<C> Repr<C> {
             boxes,
             capsules,
             cylinders,
+            cones,
             pins,
             bodies,
             params,
@@ -256,6 +264,7 @@ impl<C> Repr<C> {
             boxes,
             capsules,
             cylinders,
+            cones,
             pins,
             bodies,
             params,
@@ -269,7 +278,7 @@ impl<C> Repr<C> {
 impl SceneFile {
     /// The keys a scene file may have at its top (the command line's help lists them; a
     /// unit test keeps the list in step with what the parser takes).
-    pub const TABLES: [&'static str; 14] = [
+    pub const TABLES: [&'static str; 15] = [
         "title",
         "description",
         "envs",
@@ -279,6 +288,7 @@ impl SceneFile {
         "boxes",
         "capsules",
         "cylinders",
+        "cones",
         "pins",
         "bodies",
         "params",

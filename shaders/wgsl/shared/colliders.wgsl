@@ -102,7 +102,7 @@ fn rod_center(c: Rod) -> vec3<f32> {
     return (c.a.xyz + c.b.xyz) * 0.5;
 }
 
-// core::contact's `impl Shape for Capsule`.
+// core::contact::capsule_contact.
 fn capsule_contact(c: Rod, x: vec3<f32>, reach: f32) -> Contact {
     let r = c.a.w + reach;
     let a = c.a.xyz;
@@ -134,7 +134,7 @@ fn across(u: vec3<f32>) -> vec3<f32> {
     return p / sqrt(dot3(p, p));
 }
 
-// core::contact's `impl Shape for Cylinder`: out through the side or the nearer cap.
+// core::contact::cylinder_contact: out through the side or the nearer cap.
 fn cylinder_contact(c: Rod, x: vec3<f32>, reach: f32) -> Contact {
     let m = rod_center(c);
     let ab = c.b.xyz - c.a.xyz;
@@ -169,11 +169,46 @@ fn cylinder_contact(c: Rod, x: vec3<f32>, reach: f32) -> Contact {
     return Contact(true, depth, n, at, moving_vel(c.velocity.xyz, c.spin.xyz, at - m));
 }
 
-// Rod k's contact: a capsule's or a cylinder's, by its kind.
+// core::contact::cone_contact: the base a disc about a, the apex at b; out through the
+// side or the base.
+fn cone_contact(c: Rod, x: vec3<f32>, reach: f32) -> Contact {
+    let a = c.a.xyz;
+    let ab = c.b.xyz - a;
+    let len = sqrt(dot3(ab, ab));
+    let u = ab / len;
+    let d = x - a;
+    let t = dot3(d, u);
+    let radial = d - u * t;
+    let rho = sqrt(dot3(radial, radial));
+    let r = c.a.w;
+    let slant = sqrt(r * r + len * len);
+    let side = reach - (t * r + (rho - r) * len) / slant;
+    let base = reach + t;
+    if !(side > 0.0 && base > 0.0) {
+        return NO_CONTACT;
+    }
+    var depth = base;
+    var n = -u;
+    if side < base {
+        var out = across(u);
+        if rho > 1e-12 {
+            out = radial / rho;
+        }
+        depth = side;
+        n = u * (r / slant) + out * (len / slant);
+    }
+    let at = x + n * depth;
+    return Contact(true, depth, n, at, moving_vel(c.velocity.xyz, c.spin.xyz, at - rod_center(c)));
+}
+
+// Rod k's contact, by its kind (core::contact's `impl Shape for Rod`).
 fn rod_contact(k: u32, x: vec3<f32>, reach: f32) -> Contact {
     let c = rod_at(k);
     if c.b.w == ROD_CYLINDER {
         return cylinder_contact(c, x, reach);
+    }
+    if c.b.w == ROD_CONE {
+        return cone_contact(c, x, reach);
     }
     return capsule_contact(c, x, reach);
 }

@@ -52,9 +52,8 @@ struct Aabb {
     velocity: vec4<f32>,
 }
 
-// A shape about the segment a–b of radius a.w, turning about the midpoint: a capsule
-// (core::scene::Capsule, b.w = ROD_CAPSULE) or a capped cylinder (core::scene::Cylinder,
-// b.w = ROD_CYLINDER).
+// A shape about the segment a–b of radius a.w, turning about the midpoint, its kind's
+// mark in b.w (core::scene::RodRecord; ROD_CAPSULE, ROD_CYLINDER, …: core::scene::RodKind).
 struct Rod {
     a: vec4<f32>,
     b: vec4<f32>,

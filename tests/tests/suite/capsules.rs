@@ -1,4 +1,4 @@
-//! Capsules (issue 45, `core::scene::Capsule`): the points within a radius of a segment,
+//! Capsules (`core::scene::RodKind::Capsule`): the points within a radius of a segment,
 //! moving and turning like any collider. Analytic cases on every backend, the degenerate
 //! capsule against the sphere, the GPU recipes against the CPU twins, refusals.
 

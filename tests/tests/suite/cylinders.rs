@@ -1,7 +1,7 @@
-//! Cylinders (`core::scene::Cylinder`, `core::contact`'s `impl Shape for Cylinder`): a
+//! Cylinders (`core::scene::RodKind::Cylinder`, `core::contact::cylinder_contact`): a
 //! capped cylinder, moving and turning like any collider. Analytic cases on every backend
 //! (a patch at rest on the cap and on the side, a turntable), the GPU recipes and kernels
-//! against the CPU twins, refusals.
+//! against the CPU twins with a rod of every kind, refusals of every kind's table.
 
 use clothlab_core::scene::{ColliderId, Pinning};
 use clothlab_core::{Integrator, Motion, Rod, RodKind, Scene, SceneFile, SimParams};
@@ -76,12 +76,12 @@ fn a_patch_rests_on_the_cap_and_the_side_and_a_turntable_carries_it_round(name: 
 }
 
 #[test]
-fn every_gpu_recipe_and_kernel_follows_the_cpu_with_a_moving_turning_cylinder() {
+fn every_gpu_recipe_and_kernel_follows_the_cpu_with_moving_turning_rods_of_every_kind() {
     // A drum that turns, slides and bobs (keys) under a falling cloth, a still post
-    // beside it and a capsule after them (the rods' table holds both kinds): the
-    // optimized recipes give the CPU's bits (0 m over 12 frames); the kernel checks —
-    // collide, and VBD's colour sweep with its contact energies — sink particles into
-    // every collider.
+    // beside it, a capsule before them and a spinning cone whose apex the cloth meets
+    // (the rods' table holds every kind): the optimized recipes give the CPU's bits
+    // (0 m over 12 frames); the kernel checks — collide, and VBD's colour sweep with its
+    // contact energies — sink particles into every collider.
     let mut sc = Scene::with_n(24);
     sc.cloth.size = 1.2;
     sc.cloth.pinning = Pinning::None;
@@ -91,12 +91,16 @@ fn every_gpu_recipe_and_kernel_follows_the_cpu_with_a_moving_turning_cylinder() 
         Rod::new(RodKind::Capsule, [-0.6, 0.5, 0.4], [0.6, 0.5, 0.4], 0.05),
         Rod::new(RodKind::Cylinder, [-0.6, 0.75, 0.1], [0.6, 0.75, 0.1], 0.12),
         Rod::new(RodKind::Cylinder, [0.0, 0.0, -0.3], [0.0, 0.7, -0.3], 0.08),
+        Rod::new(RodKind::Cone, [0.35, 0.3, -0.1], [0.35, 0.9, -0.1], 0.15),
     ];
     let keys = vec![
         clothlab_core::Key::new(0.0, [0.0; 3]),
         clothlab_core::Key { rotate_deg: [0.0, 30.0, 20.0], ..clothlab_core::Key::new(0.2, [0.1, 0.05, 0.0]) },
     ];
-    sc.motions = vec![(ColliderId::Rod(RodKind::Cylinder, 0), Motion { keys, ..Motion::default() })];
+    sc.motions = vec![
+        (ColliderId::Rod(RodKind::Cylinder, 0), Motion { keys, ..Motion::default() }),
+        (ColliderId::Rod(RodKind::Cone, 0), Motion { spin: [0.0, 3.0, 0.0], ..Motion::default() }),
+    ];
     let params = SimParams::default();
     let checks = clothlab_tests::optimized_kernel_checks(&sc, &params, 0xc7);
     assert!(checks.iter().any(|c| c.what.contains("collide")), "no check of a collide kernel");
@@ -109,7 +113,7 @@ fn every_gpu_recipe_and_kernel_follows_the_cpu_with_a_moving_turning_cylinder() 
 }
 
 #[test]
-fn bad_cylinders_are_refused_in_one_line() {
+fn bad_cylinders_and_cones_are_refused_in_one_line() {
     let file = |cyl: &str| format!("[cloth]\nn = 8\nsize = 1.0\ntop_center = [0, 2, 0]\npinning = \"none\"\n{cyl}");
     let cases = [
         ("[[cylinders]]\na = [0, 0, 0]\nb = [1, 0, 0]\nradius = -1\n", "cylinders[0].radius", None),
@@ -122,6 +126,14 @@ fn bad_cylinders_are_refused_in_one_line() {
             "cylinders[0]",
             None,
         ),
+        // A cone's ends must lie apart too, and its index is its own table's.
+        ("[[cones]]\na = [0, 0, 0]\nb = [0, 0, 0]\nradius = 0.1\n", "cones[0].b", None),
+        (
+            "[[cylinders]]\na = [0, 0, 0]\nb = [1, 0, 0]\nradius = 0.1\n[[cones]]\na = [0, 0, 0]\nb = [0, 1, 0]\nradius = 0\n",
+            "cones[0].radius",
+            None,
+        ),
+        ("[[cones]]\na = [0, 0, 0]\nb = [0, 1, 0]\nradius = 0.1\napex = 2\n", "unknown field", Some(10)),
     ];
     for (cyl, expect, line) in cases {
         let e = SceneFile::parse(&file(cyl), "bad.toml").expect_err(expect);
@@ -132,10 +144,10 @@ fn bad_cylinders_are_refused_in_one_line() {
             assert_eq!(e.at.map(|a| a.0), Some(l), "{msg}");
         }
     }
-    // Capsules and cylinders share the rods' table of 16.
+    // Every kind shares the rods' table of 16.
     let mut s = turntable(0.0, 0.0);
     s.rods = vec![s.rods[0]; 9];
     s.rods.extend([Rod::new(RodKind::Capsule, [0.0; 3], [1.0, 0.0, 0.0], 0.1); 8]);
     let e = s.validate().unwrap_err().to_string();
-    assert!(e.contains("at most 16 rods (capsules, cylinders) together"), "{e}");
+    assert!(e.contains("at most 16 rods (capsules, cylinders, cones) together"), "{e}");
 }

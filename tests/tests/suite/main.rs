@@ -8,6 +8,7 @@ mod bit_identity;
 mod bodies;
 mod capsules;
 mod cloth_friction;
+mod cones;
 mod custom_kernel;
 mod cylinders;
 mod docs_names;
