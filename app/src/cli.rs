@@ -225,6 +225,10 @@ pub struct SimArgs {
     /// ones as animated nodes; Blender imports it as shape keys).
     #[arg(long, value_name = "FILE.glb")]
     pub record: Option<PathBuf>,
+    /// With `--record` and `--envs`: record world K alone (0-based); without it every
+    /// world is recorded, each a node `world k` on a grid.
+    #[arg(long, value_name = "K")]
+    pub world: Option<usize>,
     /// With `--record`: keep every K-th frame (and the first).
     #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub record_every: u32,

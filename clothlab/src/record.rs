@@ -10,6 +10,11 @@
 //! sphere (a UV sphere of 24 × 12), each box, and the floor as a square of 10 m; a moving
 //! collider's node is animated (translation, and a spinning sphere's rotation about its
 //! centre, LINEAR, sampled at the recorded frames' times: `core::motion`).
+//!
+//! A batch's worlds ([`glb_worlds`]) are recorded side by side: a node `world k` each,
+//! placed on a grid (row after row along x, rows along z, a world's width and a quarter
+//! apart), holding that world's cloths and its copies of the colliders (the meshes and
+//! the motions' samplers shared), over one floor under them all.
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -48,6 +53,94 @@ impl Recording {
         }
         self.times.push(t);
         self.frames.push(state.pos.iter().map(|p| [p[0], p[1], p[2]]).collect());
+    }
+}
+
+/// A run's recording as it goes (`sim --record`, [`crate::Sim::record`]; made by
+/// [`crate::Sim::recorder`], which checks it all before the run): the first frame and
+/// every `every`-th of one world or of every world of a batch, written by
+/// [`Recorder::finish`] as one `.glb` ([`glb_worlds`]).
+#[derive(Debug)]
+pub struct Recorder {
+    path: std::path::PathBuf,
+    every: u64,
+    frame_dt: f32,
+    worlds: Vec<usize>,
+    recs: Vec<Recording>,
+}
+
+impl Recorder {
+    /// A recording to `path` (a `.glb` name, writable) of a run of `frames` frames, every
+    /// `every`-th kept, of `world` of a batch of `envs` (`None`: every world), whose
+    /// worlds' frames last `frame_dt` s each (they must agree to be recorded together) and
+    /// hold `particles` particles and `triangles` triangles; refused, naming what, where
+    /// it cannot be.
+    pub fn new(
+        path: &std::path::Path,
+        frames: u64,
+        every: u32,
+        world: Option<usize>,
+        frame_dt: &[f32],
+        particles: usize,
+        triangles: usize,
+    ) -> Result<Self> {
+        if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
+            bail!("--record {}: a recording is binary glTF, give a .glb file name", path.display());
+        }
+        if !(1..=1_000_000).contains(&every) {
+            bail!("invalid every {every}: must be in 1 ..= 1000000");
+        }
+        let envs = frame_dt.len();
+        let worlds: Vec<usize> = match world {
+            Some(k) if k >= envs => {
+                bail!("world {k}: the batch has {envs} worlds (0 ..= {})", envs.saturating_sub(1))
+            }
+            Some(k) => vec![k],
+            None => (0..envs).collect(),
+        };
+        let first = frame_dt[worlds[0]];
+        if let Some(&k) = worlds.iter().find(|&&k| frame_dt[k] != first) {
+            bail!(
+                "--record: world {k}'s frames last {} s, world {}'s {first} s: worlds are recorded together at one frame time; record one (--world)",
+                frame_dt[k],
+                worlds[0]
+            );
+        }
+        crate::files::check_writable(path)?;
+        let kept = 1 + frames / u64::from(every);
+        let bytes = worlds.len() as u64 * Recording::predicted_bytes(kept, particles as u64, triangles as u64);
+        if bytes > MAX_GLB_BYTES {
+            bail!(
+                "--record: {kept} frames of {} world(s) of {particles} particles would be {bytes} bytes, more than the {MAX_GLB_BYTES} a .glb may hold; raise --record-every or record one world (--world)",
+                worlds.len()
+            );
+        }
+        let recs = vec![Recording::default(); worlds.len()];
+        Ok(Self { path: path.to_owned(), every: u64::from(every), frame_dt: first, worlds, recs })
+    }
+
+    /// The worlds it records.
+    pub fn worlds(&self) -> Vec<usize> {
+        self.worlds.clone()
+    }
+
+    /// After frame `frame` of the run (0: before it): each recorded world's state from
+    /// `state(k)` (world k's), where the frame is one kept.
+    pub fn frame(&mut self, frame: u64, mut state: impl FnMut(usize) -> Result<ClothState>) -> Result<()> {
+        if frame.is_multiple_of(self.every) {
+            for (rec, &k) in self.recs.iter_mut().zip(&self.worlds) {
+                rec.push(frame as f32 * self.frame_dt, &state(k)?);
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the recording (the file whole or not at all); returns its path, the frames
+    /// kept and its bytes.
+    pub fn finish(self, topo: &ClothTopology, scene: &Scene) -> Result<(std::path::PathBuf, usize, usize)> {
+        let bytes = glb_worlds(&self.recs, topo, scene)?;
+        crate::files::write_bytes(&self.path, &bytes)?;
+        Ok((self.path, self.recs[0].frames.len(), bytes.len()))
     }
 }
 
@@ -204,8 +297,19 @@ fn box_mesh(lo: [f32; 3], hi: [f32; 3]) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
 
 /// The recording as `.glb` bytes.
 pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u8>> {
+    glb_worlds(std::slice::from_ref(rec), topo, scene)
+}
+
+/// The recordings of a batch's worlds (recorded at the same times, world 0 first) as one
+/// `.glb`, laid out on a grid; of one world, [`glb`]'s bytes.
+pub fn glb_worlds(recs: &[Recording], topo: &ClothTopology, scene: &Scene) -> Result<Vec<u8>> {
+    let Some(rec) = recs.first() else { bail!("--record: no world was recorded") };
     let Some(base) = rec.frames.first() else { bail!("--record: no frame was recorded") };
-    let predicted = Recording::predicted_bytes(rec.frames.len() as u64, base.len() as u64, topo.triangles.len() as u64);
+    if let Some(k) = recs.iter().position(|r| r.times != rec.times || r.frames.len() != rec.frames.len()) {
+        bail!("--record: world {k} was recorded at other times than world 0; record one world (--world)");
+    }
+    let predicted = recs.len() as u64
+        * Recording::predicted_bytes(rec.frames.len() as u64, base.len() as u64, topo.triangles.len() as u64);
     if predicted > MAX_GLB_BYTES {
         bail!(
             "--record: {predicted} bytes, more than the {MAX_GLB_BYTES} a .glb may hold; record fewer frames (--record-every)"
@@ -226,20 +330,28 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
             parts.iter().enumerate().map(|(k, p)| (format!("cloth[{k}]"), p.range(), p.triangle_range())).collect()
         }
     };
-    let mut cloths = Vec::with_capacity(parts.len());
-    for (name, range, tris) in parts {
-        let base = &base[range.clone()];
+    // Each world's cloths (`world_cloths[w]`); the uvs and triangles are the first world's.
+    let worlds = recs.len();
+    let mut world_cloths = vec![Vec::with_capacity(parts.len()); worlds];
+    let mut shared = vec![None; parts.len()];
+    for ((w, rec), (p, (name, range, tris))) in
+        recs.iter().enumerate().flat_map(|w| parts.iter().cloned().enumerate().map(move |p| (w, p)))
+    {
+        let name = if worlds > 1 { format!("world {w} {name}") } else { name };
+        let base = &rec.frames[0][range.clone()];
         let pv = view(&mut root, &mut bin, bytemuck::cast_slice(base), Some(t));
         let positions = accessor(&mut root, pv, base.len(), C::F32, T::Vec3, Some(bounds(base)));
         let nv = view(&mut root, &mut bin, bytemuck::cast_slice(&rec.normals[range.clone()]), Some(t));
         let normals = accessor(&mut root, nv, range.len(), C::F32, T::Vec3, None);
-        let uv = view(&mut root, &mut bin, bytemuck::cast_slice(&topo.uv[range.clone()]), Some(t));
-        let uvs = accessor(&mut root, uv, range.len(), C::F32, T::Vec2, None);
-        let first = range.start as u32;
-        let local: Vec<[u32; 3]> = topo.triangles[tris].iter().map(|t| t.map(|v| v - first)).collect();
-        let iv =
-            view(&mut root, &mut bin, bytemuck::cast_slice(&local), Some(json::buffer::Target::ElementArrayBuffer));
-        let indices = accessor(&mut root, iv, 3 * local.len(), C::U32, T::Scalar, None);
+        let (uvs, indices) = *shared[p].get_or_insert_with(|| {
+            let uv = view(&mut root, &mut bin, bytemuck::cast_slice(&topo.uv[range.clone()]), Some(t));
+            let uvs = accessor(&mut root, uv, range.len(), C::F32, T::Vec2, None);
+            let first = range.start as u32;
+            let local: Vec<[u32; 3]> = topo.triangles[tris].iter().map(|t| t.map(|v| v - first)).collect();
+            let iv =
+                view(&mut root, &mut bin, bytemuck::cast_slice(&local), Some(json::buffer::Target::ElementArrayBuffer));
+            (uvs, accessor(&mut root, iv, 3 * local.len(), C::U32, T::Scalar, None))
+        });
         let mut targets = Vec::with_capacity(frames);
         for frame in &rec.frames {
             let d: Vec<[f32; 3]> =
@@ -270,7 +382,7 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
             primitives: vec![primitive],
             weights: Some(weights0),
         });
-        cloths.push(root.push(json::Node { mesh: Some(mesh), name: Some(name), ..Default::default() }));
+        world_cloths[w].push(root.push(json::Node { mesh: Some(mesh), name: Some(name), ..Default::default() }));
     }
 
     // The animation: at frame k's time, target k alone (STEP).
@@ -364,28 +476,82 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         }
         moving.push((id, node, channels));
     }
+    // The colliders (the moving ones made above): world 0's.
+    let mut colliders = Vec::new();
+    let moved = |id: ColliderId| moving.iter().find(|m| m.0 == Some(id)).map(|m| m.1);
+    for (k, s) in scene.spheres.iter().enumerate() {
+        if let Some(node) = moved(ColliderId::Sphere(k)) {
+            colliders.push(node);
+            continue;
+        }
+        let (p, t) = sphere_mesh(s.center, s.radius);
+        colliders.push(static_mesh(&mut root, &mut bin, &format!("sphere {k}"), &p, &t));
+    }
+    for (k, b) in scene.boxes.iter().enumerate() {
+        if let Some(node) = moved(ColliderId::Box(k)) {
+            colliders.push(node);
+            continue;
+        }
+        let lo = [b.min[0], b.min[1], b.min[2]];
+        let hi = [b.max[0], b.max[1], b.max[2]];
+        let (p, t) = box_mesh(lo, hi);
+        colliders.push(static_mesh(&mut root, &mut bin, &format!("box {k}"), &p, &t));
+    }
+    // The rods, each about its centre.
+    let rods = scene.rods.iter().enumerate().map(|(k, c)| {
+        let i = scene.rods[..k].iter().filter(|o| o.kind == c.kind).count();
+        (scene.rod_id(k), format!("{} {i}", c.kind.name()), c.center(), rod_local(c))
+    });
+    for (id, name, centre, (p, t)) in rods {
+        if let Some(node) = moved(id) {
+            colliders.push(node);
+            continue;
+        }
+        let node = static_mesh(&mut root, &mut bin, &name, &p, &t);
+        root.nodes[node.value()].translation = Some(centre);
+        colliders.push(node);
+    }
+    colliders.extend(body_nodes);
+    // Every other world's copies of them: the same meshes, moved by the same samplers.
+    let mut copies = vec![colliders.clone()];
+    for w in 1..worlds {
+        copies.push(
+            colliders
+                .iter()
+                .map(|n| {
+                    let mut node = root.nodes[n.value()].clone();
+                    node.name = node.name.map(|name| format!("world {w} {name}"));
+                    root.push(node)
+                })
+                .collect(),
+        );
+    }
     let mut collider_channels = Vec::new();
-    for (_, _, channels) in &moving {
-        for &(node, sampler, property) in channels {
-            collider_channels.push(json::animation::Channel {
-                sampler: json::Index::new(sampler as u32),
-                target: json::animation::Target {
+    for copy in &copies {
+        for (_, node, channels) in &moving {
+            let at = colliders.iter().position(|n| n == node).expect("a moving collider is one of the colliders");
+            for &(_, sampler, property) in channels {
+                collider_channels.push(json::animation::Channel {
+                    sampler: json::Index::new(sampler as u32),
+                    target: json::animation::Target {
+                        extensions: Default::default(),
+                        extras: Default::default(),
+                        node: copy[at],
+                        path: Valid(property),
+                    },
                     extensions: Default::default(),
                     extras: Default::default(),
-                    node,
-                    path: Valid(property),
-                },
-                extensions: Default::default(),
-                extras: Default::default(),
-            });
+                });
+            }
         }
     }
     root.push(json::Animation {
         extensions: Default::default(),
         extras: Default::default(),
         // Every cloth's weights from the one sampler, then the colliders' motions.
-        channels: cloths
+        channels: world_cloths
             .iter()
+            .flatten()
             .map(|&node| json::animation::Channel {
                 sampler: json::Index::new(0),
                 target: json::animation::Target {
@@ -403,44 +569,26 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         samplers,
     });
 
-    // The colliders (the moving ones made above).
-    let mut nodes = cloths;
-    let moved = |id: ColliderId| moving.iter().find(|m| m.0 == Some(id)).map(|m| m.1);
-    for (k, s) in scene.spheres.iter().enumerate() {
-        if let Some(node) = moved(ColliderId::Sphere(k)) {
-            nodes.push(node);
-            continue;
+    // One world: its nodes at the root. Several: a node each on the grid, holding its
+    // cloths and colliders.
+    let mut nodes = Vec::new();
+    let (offsets, floor) = layout(recs, scene);
+    if worlds == 1 {
+        nodes.extend(world_cloths.concat());
+        nodes.extend(colliders);
+    } else {
+        for (w, (cloths, copy)) in world_cloths.into_iter().zip(copies).enumerate() {
+            nodes.push(root.push(json::Node {
+                name: Some(format!("world {w}")),
+                translation: Some(offsets[w]),
+                children: Some(cloths.into_iter().chain(copy).collect()),
+                ..Default::default()
+            }));
         }
-        let (p, t) = sphere_mesh(s.center, s.radius);
-        nodes.push(static_mesh(&mut root, &mut bin, &format!("sphere {k}"), &p, &t));
     }
-    for (k, b) in scene.boxes.iter().enumerate() {
-        if let Some(node) = moved(ColliderId::Box(k)) {
-            nodes.push(node);
-            continue;
-        }
-        let lo = [b.min[0], b.min[1], b.min[2]];
-        let hi = [b.max[0], b.max[1], b.max[2]];
-        let (p, t) = box_mesh(lo, hi);
-        nodes.push(static_mesh(&mut root, &mut bin, &format!("box {k}"), &p, &t));
-    }
-    // The rods, each about its centre.
-    let rods = scene.rods.iter().enumerate().map(|(k, c)| {
-        let i = scene.rods[..k].iter().filter(|o| o.kind == c.kind).count();
-        (scene.rod_id(k), format!("{} {i}", c.kind.name()), c.center(), rod_local(c))
-    });
-    for (id, name, centre, (p, t)) in rods {
-        if let Some(node) = moved(id) {
-            nodes.push(node);
-            continue;
-        }
-        let node = static_mesh(&mut root, &mut bin, &name, &p, &t);
-        root.nodes[node.value()].translation = Some(centre);
-        nodes.push(node);
-    }
-    nodes.extend(body_nodes);
     if let Some(y) = scene.floor_y {
-        let p = [[-5.0, y, -5.0], [5.0, y, -5.0], [5.0, y, 5.0], [-5.0, y, 5.0]];
+        let ([x0, z0], [x1, z1]) = floor;
+        let p = [[x0, y, z0], [x1, y, z0], [x1, y, z1], [x0, y, z1]];
         nodes.push(static_mesh(&mut root, &mut bin, "floor", &p, &[[0, 2, 1], [0, 3, 2]]));
     }
     root.push(json::Scene { extensions: Default::default(), extras: Default::default(), name: None, nodes });
@@ -466,6 +614,77 @@ pub fn glb(rec: &Recording, topo: &ClothTopology, scene: &Scene) -> Result<Vec<u
         bin: Some(Cow::Owned(bin)),
     };
     Ok(glb.to_vec()?)
+}
+
+/// A square on the floor: its corners' (x, z), the least and the most.
+type Square = ([f32; 2], [f32; 2]);
+
+/// Where each world goes ([`glb_worlds`]) and the floor's square `([x0, z0], [x1, z1])`
+/// under them. One world stays where it is on a floor 10 m square about the origin.
+/// Several go on a grid (the fewest columns whose square holds them, row after row along
+/// x, rows along z) as far apart as a world is wide and a quarter more: a world's width
+/// is the most, along x or z, that its cloths spread over the recorded frames or the
+/// colliders' bounds reach (a moving one's from each of its places), and the floor
+/// reaches 5 m past the outer worlds.
+fn layout(recs: &[Recording], scene: &Scene) -> (Vec<[f32; 3]>, Square) {
+    let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+    let mut take = |p: [f32; 3], r: f32| {
+        if p.iter().all(|c| c.is_finite()) {
+            for (k, c) in [0, 2].into_iter().enumerate() {
+                lo[k] = lo[k].min(p[c] - r);
+                hi[k] = hi[k].max(p[c] + r);
+            }
+        }
+    };
+    for p in recs.iter().flat_map(|r| r.frames.iter().flatten()) {
+        take(*p, 0.0);
+    }
+    let times: Vec<f64> = recs.first().map_or(Vec::new(), |r| r.times.iter().map(|&t| f64::from(t)).collect());
+    let placed = |id: ColliderId, centre: [f32; 3]| -> Vec<[f32; 3]> {
+        match scene.motions.iter().find(|(i, _)| *i == id) {
+            Some((_, m)) => {
+                times.iter().map(|&t| m.at(t).offset).map(|o| [0, 1, 2].map(|c| centre[c] + o[c])).collect()
+            }
+            None => vec![centre],
+        }
+    };
+    for (k, s) in scene.spheres.iter().enumerate() {
+        for c in placed(ColliderId::Sphere(k), s.center) {
+            take(c, s.radius);
+        }
+    }
+    for (k, b) in scene.boxes.iter().enumerate() {
+        let centre = [0, 1, 2].map(|c| 0.5 * (b.min[c] + b.max[c]));
+        let r = (0..3).map(|c| 0.5 * (b.max[c] - b.min[c])).map(|h| h * h).sum::<f32>().sqrt();
+        for c in placed(ColliderId::Box(k), centre) {
+            take(c, r);
+        }
+    }
+    for (k, rod) in scene.rods.iter().enumerate() {
+        for c in placed(scene.rod_id(k), rod.center()) {
+            take(c, rod.half_length() + rod.radius());
+        }
+    }
+    for b in &scene.bodies {
+        let r = b.mesh.positions.iter().map(|p| glam::Vec3::from(*p) - glam::Vec3::from(b.pivot)).map(|d| d.length());
+        let r = r.fold(0.0f32, f32::max);
+        for t in &times {
+            let o = b.motion.at(*t).offset;
+            take([0, 1, 2].map(|c| b.pivot[c] + o[c]), r);
+        }
+    }
+    let worlds = recs.len();
+    if worlds <= 1 || !(lo[0] <= hi[0] && lo[1] <= hi[1]) {
+        return (vec![[0.0; 3]; worlds], ([-5.0, -5.0], [5.0, 5.0]));
+    }
+    let width = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(0.1);
+    let step = 1.25 * width;
+    let cols = (1..).find(|c: &usize| c * c >= worlds).unwrap_or(1);
+    let offsets: Vec<[f32; 3]> =
+        (0..worlds).map(|w| [(w % cols) as f32 * step, 0.0, (w / cols) as f32 * step]).collect();
+    let rows = worlds.div_ceil(cols);
+    let far = [(cols - 1) as f32 * step, (rows - 1) as f32 * step];
+    (offsets, ([lo[0] - 5.0, lo[1] - 5.0], [hi[0] + far[0] + 5.0, hi[1] + far[1] + 5.0]))
 }
 
 /// A float accessor over a whole view, without bounds.
@@ -655,5 +874,56 @@ mod tests {
         // 4000 frames of a 512² cloth: 12.6 GB of targets.
         assert!(Recording::predicted_bytes(4000, 512 * 512, 2 * 511 * 511) > MAX_GLB_BYTES);
         assert!(Recording::predicted_bytes(100, 100 * 100, 2 * 99 * 99) < MAX_GLB_BYTES);
+    }
+
+    #[test]
+    fn a_batchs_worlds_each_move_their_own_copy_of_a_moving_collider_by_the_shared_sampler() {
+        // Two worlds, sphere 1 sliding at 0.6 m/s: each world's node holds a copy of it
+        // whose translation channel reads the same sampler (the same keys), and the
+        // worlds stand apart by more than the scene is wide (1.25 of it).
+        use clothlab_core::Motion;
+        let mut scene = Scene::with_n(6);
+        scene.motions = vec![(ColliderId::Sphere(1), Motion { velocity: [0.6, 0.0, 0.0], ..Motion::default() })];
+        let params = clothlab_core::SimParams::default();
+        let (mut state, topo) = clothlab_core::build(&scene, &params).unwrap();
+        let recs: Vec<Recording> = (0..2)
+            .map(|w| {
+                let mut rec = Recording::default();
+                for k in 0..3 {
+                    rec.push(k as f32 / 60.0, &state);
+                    state.pos.iter_mut().for_each(|p| p[1] -= 0.01 * (w + 1) as f32);
+                }
+                rec
+            })
+            .collect();
+        let bytes = glb_worlds(&recs, &topo, &scene).unwrap();
+        let (doc, _, _) = gltf::import_slice(&bytes).unwrap();
+        let anim = doc.animations().next().unwrap();
+        let moving: Vec<(String, usize)> = anim
+            .channels()
+            .filter(|c| c.target().property() == gltf::animation::Property::Translation)
+            .map(|c| (c.target().node().name().unwrap().to_string(), c.sampler().index()))
+            .collect();
+        assert_eq!(moving.len(), 2, "{moving:?}");
+        assert_eq!((moving[0].0.as_str(), moving[1].0.as_str()), ("sphere 1", "world 1 sphere 1"));
+        assert_eq!(moving[0].1, moving[1].1, "one sampler for both worlds' sphere");
+        let weights =
+            anim.channels().filter(|c| c.target().property() == gltf::animation::Property::MorphTargetWeights);
+        assert_eq!(weights.count(), 2, "a weights channel per world's cloth");
+        let at = |k: usize| {
+            let n = doc.nodes().find(|n| n.name() == Some(&format!("world {k}"))).unwrap();
+            n.transform().decomposed().0
+        };
+        let (l, _) = layout(&recs, &scene);
+        assert_eq!([at(0), at(1)], [l[0], l[1]]);
+        // The cloth, 2 m square, is the widest thing in the scene (the spheres lie under
+        // it, the sliding one moves 2 cm): the worlds stand 1.25 × 2 m apart along x.
+        assert_eq!(at(1)[0] - at(0)[0], 2.5, "{:?} {:?}", at(0), at(1));
+        assert_eq!((at(0)[2], at(1)[2]), (0.0, 0.0), "two worlds: one row");
+        // And the worlds' recordings must share their times.
+        let mut other = recs.clone();
+        other[1].times[2] += 0.01;
+        let err = glb_worlds(&other, &topo, &scene).unwrap_err().to_string();
+        assert!(err.contains("world 1 was recorded at other times"), "{err}");
     }
 }

@@ -9,7 +9,7 @@ use clothlab_cpu::{CpuSolver, Exec};
 use rayon::prelude::*;
 
 use crate::backend::{AnySolver, Backend, GpuSetup, Shared, make};
-use crate::record::{MAX_GLB_BYTES, Recording, glb};
+use crate::record::Recorder;
 use crate::setup::{Physics, Setup, split_world_sets, world_params};
 
 pub use clothlab_core::scene_file::MAX_ENVS;
@@ -709,38 +709,29 @@ impl Sim {
     }
 
     /// Runs `frames` frames recording every `every`-th (and the first) and writes them to
-    /// `path` as binary glTF (as `sim --record`); returns the frames kept.
-    pub fn record(&mut self, path: &Path, frames: u64, every: u32) -> Result<usize> {
-        if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
-            bail!("record {}: a recording is binary glTF, give a .glb file name", path.display());
-        }
-        if !(1..=1_000_000).contains(&every) {
-            bail!("invalid every {every}: must be in 1 ..= 1000000");
-        }
+    /// `path` as binary glTF (as `sim --record`): world `world` of a batch, or with `None`
+    /// every world, laid out on a grid ([`crate::record::glb_worlds`]); returns the frames
+    /// kept.
+    pub fn record(&mut self, path: &Path, frames: u64, every: u32, world: Option<usize>) -> Result<usize> {
         if frames > MAX_STEPS {
             bail!("invalid frames {frames}: must be in 0 ..= {MAX_STEPS}");
         }
-        crate::files::check_writable(path)?;
-        let kept = 1 + frames / u64::from(every);
-        let np = self.num_particles() as u64;
-        let bytes = Recording::predicted_bytes(kept, np, self.topology().triangles.len() as u64);
-        if bytes > MAX_GLB_BYTES {
-            bail!(
-                "record: {kept} frames of {np} particles would be {bytes} bytes, more than the {MAX_GLB_BYTES} a .glb may hold; record every more frames"
-            );
-        }
-        let t0 = self.time() as f32;
-        let mut recording = Recording::default();
-        recording.push(0.0, &self.state()?);
+        let mut rec = self.recorder(path, frames, every, world)?;
+        rec.frame(0, |k| self.world_state(k))?;
         for f in 1..=frames {
-            self.solver.get().step_frame()?;
-            if f % u64::from(every) == 0 {
-                recording.push(self.time() as f32 - t0, &self.state()?);
-            }
+            self.step(1)?;
+            rec.frame(f, |k| self.world_state(k))?;
         }
-        let bytes = glb(&recording, self.topology(), &self.setup.scene)?;
-        crate::files::write_bytes(path, &bytes)?;
-        Ok(recording.frames.len())
+        Ok(rec.finish(self.topology(), &self.setup.scene)?.1)
+    }
+
+    /// A recording of a run of `frames` frames of this simulation ([`Recorder`]: of world
+    /// `world`, or of every world), checked before the run: the file name, the world, the
+    /// worlds' frame times, the size.
+    pub fn recorder(&self, path: &Path, frames: u64, every: u32, world: Option<usize>) -> Result<Recorder> {
+        let frame_dt =
+            (0..self.envs()).map(|k| self.world_params(k).map(|p| p.frame_dt)).collect::<Result<Vec<_>>>()?;
+        Recorder::new(path, frames, every, world, &frame_dt, self.num_particles(), self.topology().triangles.len())
     }
 
     /// The solver, for what the facade does not wrap (its kernels, its buffers).

@@ -397,10 +397,12 @@ class Sim:
         image, _adapter = self._sim.render(_count(width, "width"), _count(height, "height"), mode, api)
         return image
 
-    def record(self, path: PathLike, frames: int = 120, every: int = 1) -> int:
+    def record(self, path: PathLike, frames: int = 120, every: int = 1, world: Optional[int] = None) -> int:
         """Run ``frames`` frames recording every ``every``-th (and the first) to a binary
-        glTF file (as ``clothlab sim --record``); returns the frames kept."""
-        return self._sim.record(os.fspath(path), _count(frames, "frames"), _count(every, "every"))
+        glTF file (as ``clothlab sim --record``); returns the frames kept. In a batch every
+        world is recorded, each a node ``world k`` laid out on a grid, or ``world`` alone."""
+        w = None if world is None else _count(world, "world")
+        return self._sim.record(os.fspath(path), _count(frames, "frames"), _count(every, "every"), w)
 
     def close(self) -> None:
         """Release the solver and its device now (later calls raise)."""

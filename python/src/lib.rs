@@ -422,9 +422,18 @@ impl Sim {
         Ok((image.into_any(), adapter))
     }
 
-    /// Records `frames` frames to a .glb; returns the frames kept.
-    fn record(&self, py: Python<'_>, path: std::path::PathBuf, frames: u64, every: u32) -> PyResult<usize> {
-        self.call(py, move |s| s.record(&path, frames, every))
+    /// Records `frames` frames to a .glb (world `world` of a batch, or every world);
+    /// returns the frames kept.
+    #[pyo3(signature = (path, frames, every, world=None))]
+    fn record(
+        &self,
+        py: Python<'_>,
+        path: std::path::PathBuf,
+        frames: u64,
+        every: u32,
+        world: Option<usize>,
+    ) -> PyResult<usize> {
+        self.call(py, move |s| s.record(&path, frames, every, world))
     }
 
     /// Ends the simulation's thread; later calls raise.

@@ -226,6 +226,21 @@ def test_record_writes_a_glb(tmp_path):
         sim.record(tmp_path / "run.gltf", frames=1)
 
 
+def test_record_of_a_batch_writes_every_world_or_the_one_asked_for(tmp_path):
+    # World 1 of a damping sweep recorded alone is the recording of a single run with its
+    # damping, byte for byte (a world computes a single run's bits); every world's
+    # recording holds a node per world; a world past the batch is refused.
+    batch = clothlab.Sim(n=6, envs=2, params={"damping": [0.01, 0.2]})
+    assert batch.record(tmp_path / "all.glb", frames=2) == 3
+    assert b'"world 1"' in (tmp_path / "all.glb").read_bytes()
+    batch = clothlab.Sim(n=6, envs=2, params={"damping": [0.01, 0.2]})
+    batch.record(tmp_path / "one.glb", frames=2, world=1)
+    clothlab.Sim(n=6, params={"damping": 0.2}).record(tmp_path / "single.glb", frames=2)
+    assert (tmp_path / "one.glb").read_bytes() == (tmp_path / "single.glb").read_bytes()
+    with pytest.raises(ValueError, match="world 2: the batch has 2 worlds"):
+        batch.record(tmp_path / "x.glb", frames=1, world=2)
+
+
 def test_bench_gives_kernel_and_frame_rows():
     rows = clothlab.bench(sizes=[16], backends=["cpu"], frames=2, resolution=(32, 32))
     kernel = {r["label"]: r for r in rows if r["table"] == "kernel"}

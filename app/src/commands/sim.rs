@@ -8,7 +8,7 @@ use anyhow::{Result, bail};
 use clothlab::core::stats::{summarize, write_json, write_obj};
 use clothlab::core::timing::SUBSTEP;
 use clothlab::core::{StateField, crossings};
-use clothlab::record::{MAX_GLB_BYTES, Recording, glb};
+use clothlab::record::Recorder;
 use clothlab::{AnySolver, MAX_STEPS, Sim, SimOptions};
 
 use crate::cli::{SimArgs, StatsArg};
@@ -43,35 +43,19 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     if sim.envs() > 1 {
         return batch(&args, &mut sim, frames, out);
     }
-    let record = match &args.record {
-        Some(path) => {
-            if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
-                bail!("--record {}: a recording is binary glTF, give a .glb file name", path.display());
-            }
-            clothlab::files::check_writable(path)?;
-            let kept = 1 + frames / args.record_every as u64;
-            let np = scene.num_particles() as u64;
-            let bytes = Recording::predicted_bytes(kept, np, 2 * np);
-            if bytes > MAX_GLB_BYTES {
-                bail!(
-                    "--record: {kept} frames of {np} particles would be {bytes} bytes, more than the {MAX_GLB_BYTES} a .glb may hold; raise --record-every"
-                );
-            }
-            Some(path)
-        }
+    let mut recording = match &args.record {
+        Some(path) => Some(sim.recorder(path, frames, args.record_every, args.world)?),
         None => None,
     };
-    let mut recording = Recording::default();
     let cpu_path = match sim.solver() {
         AnySolver::Cpu(cpu) => Some(cpu.path()),
         _ => None,
     };
     let title = sim.title().map(str::to_owned);
     let any = sim.solver();
-    let frame_dt = any.get_ref().params().frame_dt;
     let mut wall = std::time::Duration::ZERO;
-    if record.is_some() {
-        recording.push(0.0, &any.get().state()?);
+    if let Some(rec) = &mut recording {
+        rec.frame(0, |_| Ok(any.get().state()?))?;
     }
     // With --check-crossings: the most crossings in a frame, at which frame, and the first
     // frame with any.
@@ -90,8 +74,8 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
             pair_most = pair_most.max(c.pairs);
         }
         // Read back outside the timed part (a GPU solver waits for its frame here).
-        if record.is_some() && f % args.record_every as u64 == 0 {
-            recording.push(f as f32 * frame_dt, &any.get().state()?);
+        if let Some(rec) = &mut recording {
+            rec.frame(f, |_| Ok(any.get().state()?))?;
         }
         if args.check_crossings {
             let c = crossings::count(&any.get().field(StateField::Pos)?, &any.topology().triangles).pairs;
@@ -208,10 +192,8 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         })?;
         outln!("state written  {}", path.display())?;
     }
-    if let Some(path) = record {
-        let bytes = glb(&recording, any.topology(), &scene)?;
-        clothlab::files::write_atomic(path, |w| std::io::Write::write_all(w, &bytes))?;
-        outln!("recorded       {} ({} frames, {} bytes)", path.display(), recording.frames.len(), bytes.len())?;
+    if let Some(rec) = recording {
+        recorded(rec, any.topology(), &scene)?;
     }
     Ok(if summary.nan_count == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }
@@ -225,8 +207,12 @@ fn batch(
     out: Option<(&std::path::PathBuf, OutFormat)>,
 ) -> Result<ExitCode> {
     let envs = sim.envs();
-    if let Some(path) = &args.record {
-        bail!("--record {}: a recording holds one world; record with --envs 1", path.display());
+    let mut recording = match &args.record {
+        Some(path) => Some(sim.recorder(path, frames, args.record_every, args.world)?),
+        None => None,
+    };
+    if let Some(rec) = &mut recording {
+        rec.frame(0, |k| sim.world_state(k))?;
     }
     if let Some((path, OutFormat::Obj)) = &out {
         bail!(
@@ -242,6 +228,9 @@ fn batch(
         let t0 = Instant::now();
         sim.step(1)?;
         wall += t0.elapsed();
+        if let Some(rec) = &mut recording {
+            rec.frame(f, |k| sim.world_state(k))?;
+        }
         if args.check_crossings {
             let c = sim.crossings()?;
             if c > most.0 {
@@ -310,7 +299,26 @@ fn batch(
         clothlab::files::write_atomic(path, |w| write_json(w, &all))?;
         outln!("state written  {} ({envs} worlds, world after world)", path.display())?;
     }
+    if let Some(rec) = recording {
+        recorded(rec, sim.topology(), &scene)?;
+    }
     Ok(if nan == 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+}
+
+/// Writes a run's recording and says so.
+fn recorded(rec: Recorder, topo: &clothlab::core::ClothTopology, scene: &clothlab::core::Scene) -> Result<()> {
+    let worlds = rec.worlds();
+    let (path, frames, bytes) = rec.finish(topo, scene)?;
+    match worlds[..] {
+        [k] if k > 0 => outln!("recorded       {} (world {k}, {frames} frames, {bytes} bytes)", path.display())?,
+        [_] => outln!("recorded       {} ({frames} frames, {bytes} bytes)", path.display())?,
+        _ => outln!(
+            "recorded       {} ({} worlds on a grid, {frames} frames, {bytes} bytes)",
+            path.display(),
+            worlds.len()
+        )?,
+    }
+    Ok(())
 }
 
 enum OutFormat {

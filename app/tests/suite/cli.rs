@@ -199,6 +199,10 @@ fn bad_input_is_refused_with_one_clear_message() {
         "a batch of worlds runs on the cpu and cpu-par",
     );
     refused(&["sim", "--n", "4", "--envs", "2", "--out", "/tmp/worlds.obj"], "an .obj holds one cloth");
+    refused(
+        &["sim", "--n", "4", "--envs", "2", "--set", "frame_dt=[0.02,0.01]", "--record", "/tmp/w.glb"],
+        "worlds are recorded together at one frame time",
+    );
 }
 
 #[test]
@@ -330,6 +334,82 @@ fn render_lays_a_batch_out_on_a_grid_or_draws_the_world_asked_for() {
     refused(
         &[&args[..], &["--world", "5", "--out", "/tmp/x.png"]].concat(),
         "invalid --world 5: the batch has 4 worlds",
+    );
+}
+
+#[test]
+fn sim_records_every_world_of_a_batch_on_a_grid_or_the_world_asked_for() {
+    // Three worlds of different damping, 4 frames of 4 substeps, every 2nd frame kept.
+    // World 1 recorded alone is, byte for byte, the recording of a single run with world
+    // 1's damping (a world computes a single run's bits, and its recording is made the
+    // same way); recorded with the others, its node's cloth ends where the single run's
+    // does, to the bit, and the worlds' nodes lie apart on the grid.
+    let dir = scratch("record-worlds");
+    let (all, one, single) = (dir.join("all.glb"), dir.join("one.glb"), dir.join("single.glb"));
+    let run = |extra: &[&str], set: &str, glb: &std::path::Path| {
+        let args =
+            ["sim", "--backend", "cpu", "--n", "6", "--steps", "16", "--record-every", "2", "--set", "substeps=4"];
+        let o = clothlab(&[&args[..], extra, &["--set", set, "--record", glb.to_str().unwrap()]].concat());
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let said = run(&["--envs", "3"], "damping=[0.01,0.3,0.05]", &all);
+    assert!(said.contains("(3 worlds on a grid, 3 frames,"), "{said}");
+    let said = run(&["--envs", "3", "--world", "1"], "damping=[0.01,0.3,0.05]", &one);
+    assert!(said.contains("(world 1, 3 frames,"), "{said}");
+    run(&[], "damping=0.3", &single);
+    assert_eq!(
+        std::fs::read(&one).unwrap(),
+        std::fs::read(&single).unwrap(),
+        "world 1 alone differs from its single run"
+    );
+
+    let last = |doc: &gltf::Document, buffers: &[gltf::buffer::Data], mesh: &str| -> Vec<[f32; 3]> {
+        let get = |b: gltf::Buffer<'_>| Some(&buffers[b.index()][..]);
+        let m = doc.meshes().find(|m| m.name() == Some(mesh)).unwrap_or_else(|| panic!("no mesh {mesh}"));
+        let prim = m.primitives().next().unwrap();
+        let r = prim.reader(get);
+        let base: Vec<[f32; 3]> = r.read_positions().unwrap().collect();
+        let d: Vec<[f32; 3]> = r.read_morph_targets().last().unwrap().0.unwrap().collect();
+        base.iter().zip(&d).map(|(b, d)| [b[0] + d[0], b[1] + d[1], b[2] + d[2]]).collect()
+    };
+    let (doc, buffers, _) = gltf::import(&all).unwrap();
+    let (sdoc, sbuffers, _) = gltf::import(&single).unwrap();
+    assert_eq!(last(&doc, &buffers, "world 1 cloth"), last(&sdoc, &sbuffers, "cloth"));
+    // The worlds differ (damping 0.01 against 0.3 over 4 frames: millimetres at least).
+    let (w0, w1) = (last(&doc, &buffers, "world 0 cloth"), last(&doc, &buffers, "world 1 cloth"));
+    let apart = w0.iter().zip(&w1).map(|(a, b)| (a[1] - b[1]).abs()).fold(0.0f32, f32::max);
+    assert!(apart > 1e-4, "the worlds' damping changed nothing: {apart} m");
+    // A node a world, each with its cloth and its three spheres, on a 2 x 2 grid as far
+    // apart as a world is wide and more (the default scene spreads about 2.6 m): no two
+    // worlds' cloths' boxes meet. One floor under them all.
+    let world = |k: usize| doc.nodes().find(|n| n.name() == Some(&format!("world {k}"))).unwrap();
+    let mut boxes = Vec::new();
+    for k in 0..3 {
+        let n = world(k);
+        let names: Vec<_> = n.children().filter_map(|c| c.name().map(String::from)).collect();
+        let want: Vec<String> = ["cloth", "sphere 0", "sphere 1", "sphere 2"]
+            .iter()
+            .map(|c| if k == 0 && *c != "cloth" { c.to_string() } else { format!("world {k} {c}") })
+            .collect();
+        assert_eq!(names, want, "world {k}'s nodes");
+        let [x, _, z] = n.transform().decomposed().0;
+        let pts = last(&doc, &buffers, &format!("world {k} cloth"));
+        let lo = pts.iter().fold([f32::MAX; 2], |m, p| [m[0].min(p[0] + x), m[1].min(p[2] + z)]);
+        let hi = pts.iter().fold([f32::MIN; 2], |m, p| [m[0].max(p[0] + x), m[1].max(p[2] + z)]);
+        boxes.push((lo, hi));
+    }
+    for (i, a) in boxes.iter().enumerate() {
+        for b in &boxes[i + 1..] {
+            let meet = a.0[0] < b.1[0] && b.0[0] < a.1[0] && a.0[1] < b.1[1] && b.0[1] < a.1[1];
+            assert!(!meet, "two worlds' cloths overlap: {a:?} {b:?}");
+        }
+    }
+    assert_eq!(doc.nodes().filter(|n| n.name() == Some("floor")).count(), 1);
+    std::fs::remove_dir_all(&dir).ok();
+    refused(
+        &["sim", "--n", "4", "--envs", "3", "--world", "3", "--record", "/tmp/w.glb"],
+        "world 3: the batch has 3 worlds",
     );
 }
 
