@@ -415,12 +415,24 @@ pub fn mean_displacement(start: &[crate::grid::V4], pos: &[crate::grid::V4]) -> 
     let (mut sum, mut count) = ([0i64; 3], 0u32);
     for (a, b) in start.iter().zip(pos) {
         if b[3] > 0.0 {
-            for c in 0..3 {
-                sum[c] = sum[c].wrapping_add(((b[c] - a[c]) / MEAN_UNIT) as i32 as i64);
+            for (s, u) in sum.iter_mut().zip(mean_units(a, b)) {
+                *s = s.wrapping_add(u as i64);
             }
             count += 1;
         }
     }
+    mean_of_units(sum, count)
+}
+
+/// A vertex's displacement from `a` to `b` in [`MEAN_UNIT`]s, truncated: what
+/// [`mean_displacement`] and the `tri_clamp_sum` kernel add for it.
+pub fn mean_units(a: &crate::grid::V4, b: &crate::grid::V4) -> [i32; 3] {
+    [0, 1, 2].map(|c| ((b[c] - a[c]) / MEAN_UNIT) as i32)
+}
+
+/// The mean of `count` displacements from the sums of their [`mean_units`] (64-bit, as
+/// the kernel keeps them in two words each).
+pub fn mean_of_units(sum: [i64; 3], count: u32) -> Vec3 {
     let mean = |s: i64| {
         ((s >> 32) as i32 as f32 * 4_294_967_296.0 + s as u32 as f32) * MEAN_UNIT * (1.0 / count.max(1) as f32)
     };

@@ -18,9 +18,7 @@ use glam::Vec3;
 
 use clothlab_core::grid::V4;
 use clothlab_core::step_params::StepParams;
-use clothlab_core::tri_contact::{
-    BOUND_FRACTION, MAX_REACH_SPACINGS, MEAN_UNIT, REACH_PER_MOTION, edge_edge, point_triangle,
-};
+use clothlab_core::tri_contact::{BOUND_FRACTION, MAX_REACH_SPACINGS, REACH_PER_MOTION, ee_pair, vt_pair};
 
 pub use clothlab_core::layout::TRI_SLOTS;
 
@@ -323,31 +321,18 @@ pub fn tri_pairs(topo: &clothlab_core::grid::ClothTopology, pos: &[V4], b: &mut 
     for o in 0..l.num_owners() {
         let mut found: Vec<(u32, f32)> = Vec::new();
         if o < l.np {
+            // The search's own tests (`vt_pair`, `ee_pair`): the kernel's exact distances,
+            // its early outs never dropping a pair within the reach.
             let x = at_(o as u32);
             query(b.ints, &l, pos, topo, 0, [x, x], reach, 0, |t| {
-                let tri = topo.triangles[t as usize];
-                if tri.contains(&(o as u32)) {
-                    return;
-                }
-                let d = (point_triangle(x, at_(tri[0]), at_(tri[1]), at_(tri[2])).point - x).length();
-                if d < reach {
-                    found.push((t, d));
-                }
+                found.extend(vt_pair(pos, &topo.triangles, o as u32, t, reach).map(|(_, t, d)| (t, d)));
             });
         } else {
             let e = (o - l.np) as u32;
             let [a, bb] = edges[e as usize];
             let (p0, p1) = (at_(a), at_(bb));
             query(b.ints, &l, pos, topo, 1, [p0.min(p1), p0.max(p1)], reach, e + 1, |g| {
-                let [c, d] = edges[g as usize];
-                if c == a || c == bb || d == a || d == bb {
-                    return;
-                }
-                let r = edge_edge(p0, p1, at_(c), at_(d));
-                let dist = (r.p - r.q).length();
-                if dist < reach {
-                    found.push((g, dist));
-                }
+                found.extend(ee_pair(pos, edges, e, g, reach).map(|(_, g, d)| (g, d)));
             });
         }
         let slots = TRI_SLOTS as usize;
@@ -457,12 +442,6 @@ pub fn tri_vbd(p: &StepParams, topo: &clothlab_core::grid::ClothTopology, pos: &
     }
 }
 
-/// The vertices of a side with a weight (those a response moves).
-fn acting(ks: &[u32; 3], ws: &[f32; 3]) -> impl Iterator<Item = u32> {
-    let (ks, ws) = (*ks, *ws);
-    (0..3).filter(move |&i| ws[i] != 0.0).map(move |i| ks[i])
-}
-
 /// `tri_impulse_count` and `tri_separate_count`: each vertex's count of the pairs with a
 /// response that move it (word 3 of its sums).
 pub fn tri_count(
@@ -474,9 +453,7 @@ pub fn tri_count(
     pass: Pass,
 ) {
     let mut counts = Vec::new();
-    each_response(p, topo, pos, vel, b, pass, |r| {
-        counts.extend(acting(&r.s.a, &r.s.wa).chain(acting(&r.s.b, &r.s.wb)));
-    });
+    each_response(p, topo, pos, vel, b, pass, |r| counts.extend(r.acting()));
     let sums = b.l.sums();
     for k in counts {
         let w = &mut b.ints[sums + 4 * k as usize + 3];
@@ -501,22 +478,8 @@ pub fn tri_share(
     let ints = &*b.ints;
     each_response(p, topo, pos, vel, b, pass, |r| {
         responses += 1;
-        let most = acting(&r.s.a, &r.s.wa)
-            .chain(acting(&r.s.b, &r.s.wb))
-            .map(|k| ints[sums + 4 * k as usize + 3] as i32)
-            .max()
-            .unwrap_or(1)
-            .max(1);
-        let scale = (1.0 / most as f32) * (1.0 / r.m) * (1.0 / u);
-        for (ks, ws, sign) in [(&r.s.a, &r.s.wa, 1.0f32), (&r.s.b, &r.s.wb, -1.0)] {
-            for (&k, &w) in ks.iter().zip(ws) {
-                if w == 0.0 {
-                    continue;
-                }
-                let d = r.change * (sign * pos[k as usize][3] * w * scale);
-                adds.push((k, [d[0] as i32, d[1] as i32, d[2] as i32]));
-            }
-        }
+        let most = r.acting().map(|k| ints[sums + 4 * k as usize + 3]).max().unwrap_or(1);
+        adds.extend(r.shares(most, |k| pos[k as usize][3], u));
     });
     for (k, d) in adds {
         for (c, dc) in d.iter().enumerate() {
@@ -536,7 +499,7 @@ pub fn tri_apply(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs
     for (k, (x, v)) in pos.iter_mut().zip(vel.iter_mut()).enumerate() {
         let s = &mut b.ints[sums + 4 * k..sums + 4 * k + 4];
         for c in 0..3 {
-            let d = s[c] as i32 as f32 * u;
+            let d = crate::tri_pipeline::from_units(s[c] as i32, u);
             match pass {
                 Pass::Velocity => v[c] += d,
                 Pass::Separation => {
@@ -550,15 +513,15 @@ pub fn tri_apply(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs
 }
 
 /// `tri_clamp_sum`: the free vertices' displacements since the start, in
-/// [`MEAN_UNIT`]s, into the 64-bit sums (`clothlab_core::tri_contact::mean_displacement`), and
+/// `MEAN_UNIT`s, into the 64-bit sums (`clothlab_core::tri_contact::mean_displacement`), and
 /// their count.
 pub fn tri_clamp_sum(pos: &[V4], b: &mut TriBufs) {
     for (x, s) in pos.iter().zip(b.floats.iter()) {
         if x[3] <= 0.0 {
             continue;
         }
-        for c in 0..3 {
-            let units = ((x[c] - s[c]) / MEAN_UNIT) as i32 as i64;
+        for (c, units) in clothlab_core::tri_contact::mean_units(s, x).into_iter().enumerate() {
+            let units = units as i64;
             let (lo, hi) = (at::MEAN + 2 * c, at::MEAN + 2 * c + 1);
             let sum = ((b.ints[hi] as u64) << 32 | b.ints[lo] as u64) as i64;
             let sum = sum.wrapping_add(units);
@@ -570,12 +533,8 @@ pub fn tri_clamp_sum(pos: &[V4], b: &mut TriBufs) {
 
 /// The free vertices' mean displacement from the sums.
 pub fn clamp_mean(ints: &[u32]) -> Vec3 {
-    let count = 1.0 / ints[at::FREE].max(1) as f32;
-    let c = |k: usize| {
-        let (lo, hi) = (ints[at::MEAN + 2 * k], ints[at::MEAN + 2 * k + 1]);
-        (hi as i32 as f32 * 4_294_967_296.0 + lo as f32) * MEAN_UNIT * count
-    };
-    Vec3::new(c(0), c(1), c(2))
+    let sum = [0, 1, 2].map(|k| ((ints[at::MEAN + 2 * k + 1] as u64) << 32 | ints[at::MEAN + 2 * k] as u64) as i64);
+    clothlab_core::tri_contact::mean_of_units(sum, ints[at::FREE])
 }
 
 /// `tri_clamp_check`: whether some vertex is farther than its bound from the mean
@@ -606,18 +565,7 @@ pub fn tri_clamp(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs
     }
     let mut clamped = 0;
     for ((x, v), s) in pos.iter_mut().zip(vel.iter_mut()).zip(b.floats.iter()) {
-        let x0 = v3(s);
-        let d = v3(x) - x0;
-        let len = d.length();
-        if len <= s[3] || !len.is_finite() {
-            continue;
-        }
-        let to = x0 + d * (s[3] * (1.0 / len));
-        for c in 0..3 {
-            v[c] += (to[c] - x[c]) * (1.0 / p.dt);
-            x[c] = to[c];
-        }
-        clamped += 1;
+        clamped += u32::from(crate::tri_pipeline::clamp_to_bound(x, v, v3(s), s[3], p.dt));
     }
     b.ints[at::CLAMPED] += clamped;
 }

@@ -307,6 +307,69 @@ pub(crate) struct Response {
     pub(crate) change: Vec3,
 }
 
+impl Response {
+    /// The vertices it moves (weight ≠ 0): side a's, then side b's.
+    pub(crate) fn acting(&self) -> impl Iterator<Item = u32> + '_ {
+        self.sides().map(|(k, _, _)| k)
+    }
+
+    /// Each vertex it moves with its weight and its side's sign (+1 for a, −1 for b).
+    fn sides(&self) -> impl Iterator<Item = (u32, f32, f32)> + '_ {
+        [(&self.s.a, &self.s.wa, 1.0f32), (&self.s.b, &self.s.wb, -1.0)]
+            .into_iter()
+            .flat_map(|(ks, ws, sign)| ks.iter().zip(ws).filter(|(_, w)| **w != 0.0).map(move |(&k, &w)| (k, w, sign)))
+    }
+
+    /// Each vertex's share of it in fixed point of `unit`: `± inv · w · change / m` (the
+    /// impulse that makes the pair's change, spread so that the pair's momentum does not
+    /// change), scaled by one over `most` (the most pairs any of its vertices is in: the
+    /// same factor on both sides, so the momentum is still kept, and a vertex in k pairs
+    /// is not moved k times over — a Jacobi sum's overshoot), truncated to i32 (a
+    /// saturating conversion: what a GPU's i32 atomics then add with wrap-around). The
+    /// one computation of a share: [`Contact`]'s passes and the `tri_*_share` kernels'
+    /// twins both call it.
+    pub(crate) fn shares(
+        &self,
+        most: u32,
+        inv: impl Fn(u32) -> f32,
+        unit: f32,
+    ) -> impl Iterator<Item = (u32, [i32; 3])> {
+        let scale = (1.0 / most.max(1) as f32) * (1.0 / self.m) * (1.0 / unit);
+        self.sides().map(move |(k, w, sign)| {
+            let d = self.change * (sign * inv(k) * w * scale);
+            (k, [d[0] as i32, d[1] as i32, d[2] as i32])
+        })
+    }
+}
+
+/// A fixed-point sum of shares ([`Response::shares`]) in `unit`s, as a float.
+pub(crate) fn from_units(sum: i32, unit: f32) -> f32 {
+    sum as f32 * unit
+}
+
+/// Vertex `x`'s motion since `x0` cut to `bound` where it is longer (and finite), the cut
+/// taken from its velocity `v` over `dt`; whether it was cut. The one clamp:
+/// [`Contact::clamp`] and the `tri_clamp` kernel's twin both call it.
+pub(crate) fn clamp_to_bound(
+    x: &mut clothlab_core::grid::V4,
+    v: &mut clothlab_core::grid::V4,
+    x0: Vec3,
+    bound: f32,
+    dt: f32,
+) -> bool {
+    let d = Vec3::from_slice(&x[..3]) - x0;
+    let len = d.length();
+    if len <= bound || !len.is_finite() {
+        return false;
+    }
+    let to = x0 + d * (bound * (1.0 / len));
+    for c in 0..3 {
+        v[c] += (to[c] - x[c]) * (1.0 / dt);
+        x[c] = to[c];
+    }
+    true
+}
+
 /// What a pass computes of a pair: the velocity pass's impulse, or the separation's push.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pass {
@@ -376,13 +439,9 @@ pub(crate) fn mass_term(ks: &[u32; 3], ws: &[f32; 3], inv: impl Fn(u32) -> f32) 
     ks.iter().zip(ws).map(|(&k, &w)| inv(k) * w * w).sum()
 }
 
-/// Each vertex's share of `responses`: `± inv · w · change / m` (the impulse that makes
-/// the pair's change, spread so that the pair's momentum does not change), each pair's
-/// scaled by one over the most pairs any of its vertices is in — the same factor on both
-/// sides, so the momentum is still kept, and a vertex in k pairs is not moved k times
-/// over (a Jacobi sum's overshoot: without it the velocity pass diverged on a heap).
-/// Summed in fixed point of `unit` (truncated, then added as 32-bit integers with
-/// wrap-around — a GPU's atomics: the same sum in any order, on every backend).
+/// Each vertex's share of `responses` ([`Response::shares`], each pair's over the most
+/// pairs any of its vertices is in), summed in fixed point of `unit` as 32-bit integers
+/// with wrap-around — a GPU's atomics: the same sum in any order, on every backend.
 fn share(
     responses: &[Response],
     n: usize,
@@ -391,32 +450,22 @@ fn share(
     min_len: usize,
 ) -> Vec<[f32; 3]> {
     use std::sync::atomic::{AtomicI32, AtomicU32, Ordering::Relaxed};
-    // A side's acting vertices (weight ≠ 0), with their weights.
-    let acting = |ks: &'_ [u32; 3], ws: &'_ [f32; 3]| {
-        ks.iter().zip(ws).filter(|(_, w)| **w != 0.0).map(|(&k, &w)| (k, w)).collect::<Vec<_>>()
-    };
     let count: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(0)).collect();
     responses.par_iter().with_min_len(min_len).for_each(|r| {
-        for (k, _) in acting(&r.s.a, &r.s.wa).into_iter().chain(acting(&r.s.b, &r.s.wb)) {
+        for k in r.acting() {
             count[k as usize].fetch_add(1, Relaxed);
         }
     });
     let sum: Vec<[AtomicI32; 3]> = (0..n).map(|_| [AtomicI32::new(0), AtomicI32::new(0), AtomicI32::new(0)]).collect();
     responses.par_iter().with_min_len(min_len).for_each(|r| {
-        let (a, b) = (acting(&r.s.a, &r.s.wa), acting(&r.s.b, &r.s.wb));
-        let most = a.iter().chain(&b).map(|&(k, _)| count[k as usize].load(Relaxed)).max();
-        let scale = (1.0 / most.unwrap_or(1).max(1) as f32) * (1.0 / r.m) * (1.0 / unit);
-        for (side, sign) in [(a, 1.0f32), (b, -1.0)] {
-            for (k, w) in side {
-                let d = r.change * (sign * inv(k) * w * scale);
-                for (acc, c) in sum[k as usize].iter().zip(d.to_array()) {
-                    // Saturating conversion and wrapping sums: what a GPU's i32 atomics do.
-                    acc.fetch_add(c as i32, Relaxed);
-                }
+        let most = r.acting().map(|k| count[k as usize].load(Relaxed)).max().unwrap_or(1);
+        for (k, d) in r.shares(most, &inv, unit) {
+            for (acc, c) in sum[k as usize].iter().zip(d) {
+                acc.fetch_add(c, Relaxed);
             }
         }
     });
-    sum.iter().map(|s| s.each_ref().map(|c| c.load(Relaxed) as f32 * unit)).collect()
+    sum.iter().map(|s| s.each_ref().map(|c| from_units(c.load(Relaxed), unit))).collect()
 }
 
 /// The contact between triangles as stages of a substep (docs/contact.md, the CPU
@@ -881,20 +930,7 @@ impl Contact {
             .zip(vel.par_iter_mut())
             .enumerate()
             .with_min_len(self.min_len())
-            .map(|(k, (x, v))| {
-                let x0 = Vec3::from_slice(&start[k][..3]);
-                let d = Vec3::from_slice(&x[..3]) - x0;
-                let len = d.length();
-                if len <= bounds[k] || !len.is_finite() {
-                    return 0;
-                }
-                let to = x0 + d * (bounds[k] * (1.0 / len));
-                for c in 0..3 {
-                    v[c] += (to[c] - x[c]) * (1.0 / dt);
-                    x[c] = to[c];
-                }
-                1
-            })
+            .map(|(k, (x, v))| usize::from(clamp_to_bound(x, v, Vec3::from_slice(&start[k][..3]), bounds[k], dt)))
             .sum();
     }
 
