@@ -112,9 +112,10 @@ pub struct RenderArgs {
 
 #[derive(clap::Args)]
 pub struct ValidateArgs {
-    /// GPU backends to check (comma-separated).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::WgpuNaive, Backend::Wgpu, Backend::VulkanNaive, Backend::Vulkan, Backend::GlNaive, Backend::Gl])]
-    pub backends: Vec<Backend>,
+    /// Backends to check (comma-separated): the GPU backends (default every one), or with
+    /// `--envs` the batch backends (default cpu,cpu-par).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub backends: Option<Vec<Backend>>,
     /// Particles per side for the kernel checks and the rollout (2 ..= 1024; default 64,
     /// or the scene file's).
     #[arg(long)]
@@ -128,6 +129,11 @@ pub struct ValidateArgs {
     /// `--n` cloth; n = 32 keeps it quick).
     #[arg(long)]
     pub bisect: bool,
+    /// Instead of the checks: a batch of N worlds (the lists of `--set` and of the scene
+    /// file's `[params]` giving each its values) on each backend, each world against a
+    /// single run with its parameters — the same values, or the row fails.
+    #[arg(long, value_name = "N")]
+    pub envs: Option<u32>,
     /// Check every switch: every flavor of every kernel (constants in storage, uniform
     /// or push constants; colliders in storage or uniform blocks; float or
     /// compare-exchange atomics; the table from storage, an image or uniform constants)

@@ -87,6 +87,27 @@ pub struct Sim {
     gpu: GpuSetup,
 }
 
+impl SimOptions {
+    /// World `k`'s single run: these options with one world, each value given a world —
+    /// a list of `physics.set` or of the scene file's `[params]` — its k-th (what world k
+    /// of the batch computes, bit for bit).
+    pub fn world(&self, k: usize) -> Result<SimOptions> {
+        let (common, per_world) = split_world_sets(&self.physics.set);
+        let setup = Physics { set: common.clone(), ..self.physics.clone() }.setup(self.n, DEFAULT_N)?;
+        let named = |s: &String| s.split_once('=').map(|(n, _)| n.trim().to_owned());
+        let given: Vec<String> = self.physics.set.iter().filter_map(named).collect();
+        let lists = setup.world_params.iter().filter(|(name, _)| !given.contains(name)).chain(&per_world);
+        let mut set = common;
+        for (name, values) in lists {
+            let Some(v) = values.get(k) else {
+                bail!("world {k}: `{name}` has {} values", values.len());
+            };
+            set.push(format!("{name}={v}"));
+        }
+        Ok(SimOptions { physics: Physics { set, ..self.physics.clone() }, envs: Some(1), ..self.clone() })
+    }
+}
+
 impl Sim {
     /// Opens the scene of `opts` on its backend. Every argument is checked first; a GPU
     /// backend without an adapter is refused in one line.
@@ -880,6 +901,34 @@ mod tests {
             // The worlds differ (each its own parameters), so the comparison saw something.
             assert!(bits(&batch.world_state(0).unwrap()) != bits(&batch.world_state(2).unwrap()), "{file}");
         }
+    }
+
+    #[test]
+    fn a_worlds_single_run_takes_its_value_of_every_list_the_files_and_the_command_lines() {
+        // The file gives damping per world and the command line wind per world and the
+        // drag once; the command line's damping list would replace the file's.
+        let toml = "envs = 3\n[cloth]\nn = 6\n[params]\ndamping = [0.0, 0.01, 0.1]\nair_drag = [0.1, 0.2, 0.3]\n";
+        let opts = |set: &[&str]| SimOptions {
+            backend: Backend::Cpu,
+            physics: Physics {
+                scene: SceneSource::Toml(toml.into()),
+                set: set.iter().map(|s| s.to_string()).collect(),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let batch = opts(&["wind=[[0,0,0],[3,0,0],[0,0,-2]]", "air_drag=0.5"]);
+        let one = Sim::open(batch.world(1).unwrap()).unwrap();
+        assert_eq!(one.envs(), 1);
+        let p = one.params();
+        assert_eq!((p.damping, p.wind, p.air_drag), (0.01, [3.0, 0.0, 0.0], 0.5));
+        let all = Sim::open(batch).unwrap();
+        assert_eq!(all.world_params(1).unwrap(), p, "world 1's parameters are its single run's");
+        let replaced = opts(&["damping=[0.2,0.3,0.4]"]).world(2).unwrap();
+        let p = Sim::open(replaced).unwrap().params().clone();
+        assert_eq!((p.damping, p.air_drag), (0.4, 0.3));
+        let err = opts(&["damping=[0.2,0.3]"]).world(2).unwrap_err().to_string();
+        assert!(err.contains("world 2: `damping` has 2 values"), "{err}");
     }
 
     #[test]

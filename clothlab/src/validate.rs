@@ -32,6 +32,9 @@ pub struct ValidateOptions {
     pub preset: Option<String>,
     /// Single switches over the preset, `KEY=VALUE`.
     pub set_variant: Vec<String>,
+    /// Instead of the checks: a batch of this many worlds on each (CPU) backend, each
+    /// world against a single run of its parameters ([`validate_worlds`]).
+    pub envs: Option<u32>,
 }
 
 impl Default for ValidateOptions {
@@ -45,6 +48,7 @@ impl Default for ValidateOptions {
             every_switch: false,
             preset: None,
             set_variant: Vec::new(),
+            envs: None,
         }
     }
 }
@@ -151,6 +155,9 @@ fn worst_rows(kernels: &[KernelRef], checks: &[Check], suffix: &str) -> Vec<Chec
 /// Runs the checks of `opts`, handing each line to `on_line` as it is known (an error
 /// of `on_line` stops the run); all arguments are checked before any backend opens.
 pub fn validate(opts: &ValidateOptions, mut on_line: impl FnMut(&Line) -> Result<()>) -> Result<Validation> {
+    if let Some(envs) = opts.envs {
+        return validate_worlds(opts, envs, on_line);
+    }
     let setup = opts.physics.setup(opts.n, 64)?;
     let (scene, params) = (setup.scene, setup.params);
     let n = scene.cloth.n;
@@ -267,6 +274,74 @@ pub fn validate(opts: &ValidateOptions, mut on_line: impl FnMut(&Line) -> Result
             emit(&mut out, Line::Check { backend: name.clone(), check: c })?;
         }
         emit(&mut out, Line::Adapter { backend: name, adapter })?;
+    }
+    Ok(out)
+}
+
+/// `validate --envs N`: on each backend of `opts` (the batch backends, cpu and cpu-par),
+/// a batch of `envs` worlds run `opts.steps` substeps (whole frames), and each world
+/// against a single run of the scene with that world's parameters on `cpu` — a row a
+/// world, its positions and its velocities, which must be the same values (bound 0: a
+/// world computes a single run's bits). The worlds' values are the lists of `--set` and
+/// of the scene file's `[params]`.
+pub fn validate_worlds(
+    opts: &ValidateOptions,
+    envs: u32,
+    mut on_line: impl FnMut(&Line) -> Result<()>,
+) -> Result<Validation> {
+    if opts.bisect || opts.every_switch {
+        bail!("--envs checks a batch's worlds against single runs: leave out --bisect and --every-switch");
+    }
+    if opts.preset.is_some() || !opts.set_variant.is_empty() {
+        bail!("--envs runs on the CPU backends: leave out --variant and --set-variant");
+    }
+    if opts.steps == 0 || opts.steps > 100_000 {
+        bail!("invalid --steps {}: must be in 1 ..= 100000", opts.steps);
+    }
+    if opts.backends.is_empty() {
+        bail!("no backend to validate: name cpu or cpu-par");
+    }
+    if let Some(b) = opts.backends.iter().find(|b| b.is_gpu()) {
+        bail!(
+            "--envs: a batch of worlds runs on the cpu and cpu-par backends; {} has no world dimension yet",
+            b.name()
+        );
+    }
+    let batch_opts = |backend| crate::SimOptions {
+        backend,
+        physics: opts.physics.clone(),
+        n: opts.n,
+        envs: Some(envs),
+        ..Default::default()
+    };
+    // Everything checked (the lists' lengths, each world's values) before anything runs.
+    let probe = crate::Sim::open(batch_opts(Backend::Cpu))?;
+    let frames = u64::from(opts.steps.div_ceil(probe.params().substeps));
+    let singles: Vec<crate::SimOptions> =
+        (0..envs as usize).map(|k| batch_opts(Backend::Cpu).world(k)).collect::<Result<_>>()?;
+    drop(probe);
+    let mut out = Validation { lines: Vec::new(), spread: 0.0, substeps: 0, failed: 0 };
+    let mut reference = Vec::new();
+    for &backend in &opts.backends {
+        let mut batch = crate::Sim::open(batch_opts(backend))?;
+        out.substeps = frames * u64::from(batch.params().substeps);
+        batch.step(frames)?;
+        for (k, single) in singles.iter().enumerate() {
+            if reference.len() <= k {
+                let mut one = crate::Sim::open(single.clone())?;
+                one.step(frames)?;
+                reference.push(one.state()?);
+            }
+            let (got, want) = (batch.world_state(k)?, &reference[k]);
+            for (buffer, g, w) in [("pos", &got.pos, &want.pos), ("vel", &got.vel, &want.vel)] {
+                let what = format!("world {k} vs its single run");
+                let check = clothlab_cpu::validate::compare(&what, buffer, g, w, false, 0.0);
+                out.failed += usize::from(!check.passed());
+                let line = Line::Check { backend: backend.name().to_string(), check };
+                on_line(&line)?;
+                out.lines.push(line);
+            }
+        }
     }
     Ok(out)
 }

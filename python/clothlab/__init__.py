@@ -443,17 +443,21 @@ def validate(
     steps: int = 200,
     every_switch: bool = False,
     bisect: bool = False,
+    envs: Optional[int] = None,
 ) -> List[Dict[str, Any]]:
     """Check GPU backends against the CPU (as ``clothlab validate``): every kernel of the
     backend's recipe against its CPU twin on random inputs, and a rollout of ``steps``
-    substeps against the CPU solver.
+    substeps against the CPU solver. With ``envs``: a batch of that many worlds (their
+    values the lists in ``params``) on each batch backend, each world against a single
+    run with its parameters (``validate --envs``).
 
-    ``backend`` or ``backends``: GPU backends (default: every one). Returns one dict per
-    check: ``backend``, ``check`` (kernel or rollout), ``buffer``, ``max_abs``, ``rms``,
-    ``error`` (relative for kernels, metres for rollouts), ``bound``, ``passed``,
-    ``adapter``.
+    ``backend`` or ``backends``: GPU backends (default: every one; with ``envs``,
+    ``cpu`` and ``cpu-par``). Returns one dict per check: ``backend``, ``check`` (kernel,
+    rollout or world), ``buffer``, ``max_abs``, ``rms``, ``error`` (relative for
+    kernels, metres for rollouts and worlds), ``bound``, ``passed``, ``adapter``.
     """
-    names = _names(backend, backends, [b for b in BACKENDS if not b.startswith("cpu")])
+    default = ["cpu", "cpu-par"] if envs is not None else [b for b in BACKENDS if not b.startswith("cpu")]
+    names = _names(backend, backends, default)
     rows = _clothlab.validate(
         names,
         scene=_path(scene),
@@ -463,6 +467,7 @@ def validate(
         every_switch=bool(every_switch),
         bisect=bool(bisect),
         sets=_sets(params),
+        envs=None if envs is None else _count(envs, "envs"),
     )
     keys = ("backend", "check", "buffer", "max_abs", "rms", "error", "bound", "passed", "adapter")
     return [dict(zip(keys, r)) for r in rows]

@@ -79,6 +79,7 @@ def validate(
     every_switch: bool = False,
     bisect: bool = False,
     sets: List[str] = ...,
+    envs: Optional[int] = None,
 ) -> List[Tuple[str, str, str, float, float, float, float, bool, str]]: ...
 def bench(
     backends: List[str],

@@ -484,7 +484,7 @@ type CheckRow = (String, String, String, f64, f64, f64, f64, bool, String);
 
 /// Runs validate; a list of (backend, check, buffer, max_abs, rms, error, bound, passed, adapter).
 #[pyfunction]
-#[pyo3(signature = (backends, scene=None, toml=None, n=None, steps=200, every_switch=false, bisect=false, sets=Vec::new()))]
+#[pyo3(signature = (backends, scene=None, toml=None, n=None, steps=200, every_switch=false, bisect=false, sets=Vec::new(), envs=None))]
 #[allow(clippy::too_many_arguments)]
 fn validate(
     py: Python<'_>,
@@ -496,6 +496,7 @@ fn validate(
     every_switch: bool,
     bisect: bool,
     sets: Vec<String>,
+    envs: Option<u32>,
 ) -> PyResult<Vec<CheckRow>> {
     let run = move || -> anyhow::Result<Vec<CheckRow>> {
         let opts = clothlab::ValidateOptions {
@@ -507,6 +508,7 @@ fn validate(
             every_switch,
             preset: None,
             set_variant: Vec::new(),
+            envs,
         };
         let v = clothlab::validate(&opts, |_| Ok(()))?;
         Ok(v.checks()

@@ -241,6 +241,17 @@ def test_record_of_a_batch_writes_every_world_or_the_one_asked_for(tmp_path):
         batch.record(tmp_path / "x.glb", frames=1, world=2)
 
 
+def test_validate_envs_checks_each_world_against_its_single_run():
+    # Two worlds of different damping on cpu and cpu-par: each world's positions and
+    # velocities are its single run's (bound 0).
+    rows = clothlab.validate(envs=2, params={"damping": [0.0, 0.05]}, n=6, steps=16)
+    assert len(rows) == 2 * 2 * 2
+    assert {r["backend"] for r in rows} == {"cpu", "cpu-par"}
+    assert all(r["passed"] and r["max_abs"] == 0.0 for r in rows)
+    with pytest.raises(ValueError, match="no world dimension yet"):
+        clothlab.validate(backend="vulkan", envs=2, n=6, steps=16)
+
+
 def test_bench_gives_kernel_and_frame_rows():
     rows = clothlab.bench(sizes=[16], backends=["cpu"], frames=2, resolution=(32, 32))
     kernel = {r["label"]: r for r in rows if r["table"] == "kernel"}

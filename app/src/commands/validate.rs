@@ -5,6 +5,7 @@
 use std::process::ExitCode;
 
 use anyhow::Result;
+use clothlab::Backend;
 use clothlab::cpu::validate::Check;
 use clothlab::validate::{Line, ValidateOptions, validate as run};
 
@@ -27,8 +28,12 @@ fn print_check(backend: &str, c: &Check, width: usize) -> Result<(), crate::out:
 
 /// Runs `validate`.
 pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
+    let backends = args.backends.clone().unwrap_or_else(|| match args.envs {
+        Some(_) => vec![Backend::Cpu, Backend::CpuPar],
+        None => Backend::ALL.into_iter().filter(|b| b.is_gpu()).collect(),
+    });
     let opts = ValidateOptions {
-        backends: args.backends.clone(),
+        backends,
         physics: args.physics.physics(),
         n: args.n,
         steps: args.steps,
@@ -36,6 +41,7 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
         every_switch: args.every_switch,
         preset: args.variant.variant.clone(),
         set_variant: args.variant.set_variant.clone(),
+        envs: args.envs,
     };
     let width = if args.bisect {
         40
@@ -71,10 +77,16 @@ pub fn validate(args: ValidateArgs) -> Result<ExitCode> {
         }
         Ok(())
     })?;
-    if header && !args.bisect {
-        outln!("{}", result.bound_note())?;
+    if args.envs.is_some() {
+        outln!(
+            "a world's error is its largest difference from its single run, in metres (m/s for vel): a world computes a single run's values"
+        )?;
+    } else {
+        if header && !args.bisect {
+            outln!("{}", result.bound_note())?;
+        }
+        outln!("kernel errors are relative to the largest value in the buffer; rollout errors are in metres")?;
     }
-    outln!("kernel errors are relative to the largest value in the buffer; rollout errors are in metres")?;
     if result.failed > 0 {
         eprintln!(
             "error: {} check(s) over their bound: do not trust this backend's numbers on this adapter",

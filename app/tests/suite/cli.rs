@@ -240,6 +240,29 @@ fn validate_checks_the_gpu_backends_or_says_why_not() {
 }
 
 #[test]
+fn validate_envs_checks_each_world_of_a_batch_against_its_single_run() {
+    // Three worlds of a scene file whose [params] give each its damping, the command line
+    // its wind: on cpu and cpu-par each world's positions and velocities are its single
+    // run's (bound 0), a row each: 2 backends x 3 worlds x 2 buffers.
+    let file = std::env::temp_dir().join(format!("clothlab-validate-envs-{}.toml", std::process::id()));
+    std::fs::write(&file, "envs = 3\n[cloth]\nn = 8\n[params]\ndamping = [0.0, 0.01, 0.1]\n").unwrap();
+    let args = ["validate", "--envs", "3", "--steps", "32", "--scene", file.to_str().unwrap()];
+    let out = clothlab(&[&args[..], &["--set", "wind=[[0,0,0],[3,0,0],[0,0,-2]]"]].concat());
+    let (text, err) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{text}\n{err}");
+    let rows: Vec<&str> = text.lines().filter(|l| l.contains("vs its single run")).collect();
+    assert_eq!(rows.len(), 12, "{text}");
+    assert!(rows.iter().all(|l| l.ends_with(" ok")), "{text}");
+    for (b, k) in [("cpu ", 0), ("cpu-par", 2)] {
+        assert!(rows.iter().any(|l| l.starts_with(b) && l.contains(&format!("world {k} "))), "{b} world {k}: {text}");
+    }
+    // A GPU backend has no batch yet; a list of the wrong length names itself.
+    refused(&[&args[..], &["--backends", "vulkan"]].concat(), "vulkan has no world dimension yet");
+    refused(&[&args[..], &["--set", "wind=[[0,0,0]]"]].concat(), "`wind` has 1 value for 3 worlds");
+    std::fs::remove_file(&file).ok();
+}
+
+#[test]
 fn validate_bisects_a_rollout_and_prints_nothing_about_a_display() {
     // Without XDG_RUNTIME_DIR (CI's case) the headless commands print no Wayland noise.
     let out = Command::new(env!("CARGO_BIN_EXE_clothlab"))
