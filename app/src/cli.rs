@@ -159,6 +159,10 @@ pub struct RunArgs {
     /// file's).
     #[arg(long)]
     pub n: Option<u32>,
+    /// Which world of a batch to show (0-based; default 0): a scene file's `envs` and the
+    /// lists of `--set` and of its `[params]` give each world its values.
+    #[arg(long, value_name = "K")]
+    pub world: Option<usize>,
     /// Quit after this many frames (for tests and screenshots).
     #[arg(long)]
     pub frames: Option<u64>,
@@ -192,6 +196,7 @@ impl Default for RunArgs {
             api: Api::Wgpu,
             backend: None,
             n: None,
+            world: None,
             frames: None,
             screenshot: None,
             width: 1280,

@@ -64,6 +64,16 @@ impl Setup {
         }
     }
 
+    /// World `k`'s parameters: the file's values given one per world, its k-th (what
+    /// world k of a batch of the file runs with; one world: the parameters).
+    pub fn params_of_world(&self, k: usize) -> Result<SimParams> {
+        let envs = self.envs.unwrap_or(1) as usize;
+        if k >= envs {
+            bail!("world {k}: the scene has {envs} worlds (0 ..= {})", envs - 1);
+        }
+        Ok(world_params(std::slice::from_ref(&self.params), &self.world_params, envs)?.swap_remove(k))
+    }
+
     /// A scene file's contents.
     pub fn from_file(f: SceneFile) -> Self {
         Self {
@@ -223,4 +233,22 @@ pub fn world_params(base: &[SimParams], per_world: &[WorldSet], envs: usize) -> 
             apply_overrides(&base[k.min(base.len() - 1)], &sets).map_err(|e| anyhow::anyhow!("world {k}: {e}"))
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_files_world_takes_its_value_of_each_list_and_a_world_past_the_batch_is_refused() {
+        // What the app shows of a file of several worlds (world 0 of a dropped file,
+        // `run --world K`): the k-th of each `[params]` list, the rest as the file says.
+        let text = "envs = 3\n[cloth]\nn = 6\n[params]\ndamping = [0.0, 0.01, 0.1]\nair_drag = 0.3\n";
+        let setup = Setup::from_file(clothlab_core::scene_file::SceneFile::parse(text, "w.toml").unwrap());
+        let p = setup.params_of_world(2).unwrap();
+        assert_eq!((p.damping, p.air_drag), (0.1, 0.3));
+        assert_eq!(setup.params_of_world(0).unwrap().damping, 0.0);
+        let err = setup.params_of_world(3).unwrap_err().to_string();
+        assert!(err.contains("world 3: the scene has 3 worlds (0 ..= 2)"), "{err}");
+    }
 }

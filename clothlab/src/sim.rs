@@ -97,12 +97,16 @@ impl SimOptions {
         let named = |s: &String| s.split_once('=').map(|(n, _)| n.trim().to_owned());
         let given: Vec<String> = self.physics.set.iter().filter_map(named).collect();
         let lists = setup.world_params.iter().filter(|(name, _)| !given.contains(name)).chain(&per_world);
+        let envs = self.envs.or(setup.envs).unwrap_or(1) as usize;
+        if k >= envs {
+            bail!("world {k}: the batch has {envs} worlds (0 ..= {})", envs - 1);
+        }
         let mut set = common;
         for (name, values) in lists {
-            let Some(v) = values.get(k) else {
-                bail!("world {k}: `{name}` has {} values", values.len());
-            };
-            set.push(format!("{name}={v}"));
+            if values.len() != envs {
+                bail!("`{name}` has {} values for {envs} worlds: give one per world", values.len());
+            }
+            set.push(format!("{name}={}", values[k]));
         }
         Ok(SimOptions { physics: Physics { set, ..self.physics.clone() }, envs: Some(1), ..self.clone() })
     }
@@ -927,8 +931,10 @@ mod tests {
         let replaced = opts(&["damping=[0.2,0.3,0.4]"]).world(2).unwrap();
         let p = Sim::open(replaced).unwrap().params().clone();
         assert_eq!((p.damping, p.air_drag), (0.4, 0.3));
-        let err = opts(&["damping=[0.2,0.3]"]).world(2).unwrap_err().to_string();
-        assert!(err.contains("world 2: `damping` has 2 values"), "{err}");
+        let err = opts(&["damping=[0.2,0.3]"]).world(1).unwrap_err().to_string();
+        assert!(err.contains("`damping` has 2 values for 3 worlds"), "{err}");
+        let err = opts(&[]).world(3).unwrap_err().to_string();
+        assert!(err.contains("world 3: the batch has 3 worlds"), "{err}");
     }
 
     #[test]

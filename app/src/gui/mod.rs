@@ -505,7 +505,15 @@ impl Running {
             self.ui.message = format!("{}: the app takes 10 ..= 1024 particles per side, not {n}", path.display());
             return Ok(());
         }
-        let setup = clothlab::setup::Setup::from_file(file);
+        let mut setup = clothlab::setup::Setup::from_file(file);
+        // A file of several worlds shows its first (its values of the per-world lists).
+        match setup.params_of_world(0) {
+            Ok(p) => setup.params = p,
+            Err(e) => {
+                self.ui.message = format!("{}: {e:#}", path.display());
+                return Ok(());
+            }
+        }
         let sim = match Sim::new(self.sim.backend, setup.scene.clone(), setup.params.clone(), &self.gfx.shared()) {
             Ok(sim) => sim,
             Err(e) => {

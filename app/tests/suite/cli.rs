@@ -259,6 +259,8 @@ fn validate_envs_checks_each_world_of_a_batch_against_its_single_run() {
     // A GPU backend has no batch yet; a list of the wrong length names itself.
     refused(&[&args[..], &["--backends", "vulkan"]].concat(), "vulkan has no world dimension yet");
     refused(&[&args[..], &["--set", "wind=[[0,0,0]]"]].concat(), "`wind` has 1 value for 3 worlds");
+    // The app shows one world of the file; one past the batch is refused before a window.
+    refused(&["run", "--scene", file.to_str().unwrap(), "--world", "3"], "world 3: the batch has 3 worlds");
     std::fs::remove_file(&file).ok();
 }
 
