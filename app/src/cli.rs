@@ -236,8 +236,8 @@ pub struct SimArgs {
     /// ones as animated nodes; Blender imports it as shape keys).
     #[arg(long, value_name = "FILE.glb")]
     pub record: Option<PathBuf>,
-    /// With `--record` and `--envs`: record world K alone (0-based); without it every
-    /// world is recorded, each a node `world k` on a grid.
+    /// With `--envs`: the world `--record` records and `--out` writes alone (0-based);
+    /// without it every world is recorded (each a node `world k` on a grid) and written.
     #[arg(long, value_name = "K")]
     pub world: Option<usize>,
     /// With `--record`: keep every K-th frame (and the first).

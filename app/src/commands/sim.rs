@@ -40,6 +40,9 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
     let scene = sim.scene().clone();
     let frames = args.steps.div_ceil(sim.params().substeps as u64);
     let substeps = frames * sim.params().substeps as u64;
+    if let Some(k) = args.world.filter(|&k| k >= sim.envs()) {
+        bail!("invalid --world {k}: the batch has {} worlds (0 ..= {})", sim.envs(), sim.envs() - 1);
+    }
     if sim.envs() > 1 {
         return batch(&args, &mut sim, frames, out);
     }
@@ -214,9 +217,9 @@ fn batch(
     if let Some(rec) = &mut recording {
         rec.frame(0, |k| sim.world_state(k))?;
     }
-    if let Some((path, OutFormat::Obj)) = &out {
+    if let (Some((path, OutFormat::Obj)), None) = (&out, args.world) {
         bail!(
-            "--out {}: an .obj holds one cloth; with --envs {envs} write .json (every world's state)",
+            "--out {}: an .obj holds one cloth; with --envs {envs} write .json (every world's state) or name one --world",
             path.display()
         );
     }
@@ -295,9 +298,20 @@ fn batch(
             None => outln!("  every frame  none in any of the {frames} frames")?,
         }
     }
-    if let Some((path, _)) = out {
-        clothlab::files::write_atomic(path, |w| write_json(w, &all))?;
-        outln!("state written  {} ({envs} worlds, world after world)", path.display())?;
+    match (out, args.world) {
+        (Some((path, format)), Some(k)) => {
+            let state = sim.world_state(k)?;
+            clothlab::files::write_atomic(path, |w| match format {
+                OutFormat::Obj => write_obj(w, &state, sim.topology()),
+                OutFormat::Json => write_json(w, &state),
+            })?;
+            outln!("state written  {} (world {k})", path.display())?;
+        }
+        (Some((path, _)), None) => {
+            clothlab::files::write_atomic(path, |w| write_json(w, &all))?;
+            outln!("state written  {} ({envs} worlds, world after world)", path.display())?;
+        }
+        (None, _) => {}
     }
     if let Some(rec) = recording {
         recorded(rec, sim.topology(), &scene)?;

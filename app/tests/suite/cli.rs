@@ -388,6 +388,15 @@ fn sim_records_every_world_of_a_batch_on_a_grid_or_the_world_asked_for() {
         std::fs::read(&single).unwrap(),
         "world 1 alone differs from its single run"
     );
+    // --out of world 1 alone (an .obj: one cloth) is the single run's file.
+    let (w1, s1) = (dir.join("w1.obj"), dir.join("s1.obj"));
+    run(&["--envs", "3", "--world", "1", "--out", w1.to_str().unwrap()], "damping=[0.01,0.3,0.05]", &dir.join("x.glb"));
+    run(&["--out", s1.to_str().unwrap()], "damping=0.3", &dir.join("y.glb"));
+    assert_eq!(
+        std::fs::read(&w1).unwrap(),
+        std::fs::read(&s1).unwrap(),
+        "world 1's .obj differs from its single run's"
+    );
 
     let last = |doc: &gltf::Document, buffers: &[gltf::buffer::Data], mesh: &str| -> Vec<[f32; 3]> {
         let get = |b: gltf::Buffer<'_>| Some(&buffers[b.index()][..]);
@@ -436,6 +445,7 @@ fn sim_records_every_world_of_a_batch_on_a_grid_or_the_world_asked_for() {
         &["sim", "--n", "4", "--envs", "3", "--world", "3", "--record", "/tmp/w.glb"],
         "world 3: the batch has 3 worlds",
     );
+    refused(&["sim", "--n", "4", "--world", "1"], "invalid --world 1: the batch has 1 worlds");
 }
 
 #[test]
