@@ -120,8 +120,8 @@ impl Recorder {
     }
 
     /// The worlds it records.
-    pub fn worlds(&self) -> Vec<usize> {
-        self.worlds.clone()
+    pub fn worlds(&self) -> &[usize] {
+        &self.worlds
     }
 
     /// After frame `frame` of the run (0: before it): each recorded world's state from
@@ -623,58 +623,48 @@ type Square = ([f32; 2], [f32; 2]);
 /// under them. One world stays where it is on a floor 10 m square about the origin.
 /// Several go on a grid (the fewest columns whose square holds them, row after row along
 /// x, rows along z) as far apart as a world is wide and a quarter more: a world's width
-/// is the most, along x or z, that its cloths spread over the recorded frames or the
-/// colliders' bounds reach (a moving one's from each of its places), and the floor
-/// reaches 5 m past the outer worlds.
+/// is the most, along x or z, that its cloths spread over the recorded frames or its
+/// colliders reach where their motions have them at those frames (`Scene::moved_to`:
+/// each shape's `Shape::bound`, each body's posed mesh), and the floor reaches 5 m past
+/// the outer worlds.
 fn layout(recs: &[Recording], scene: &Scene) -> (Vec<[f32; 3]>, Square) {
+    let worlds = recs.len();
+    if worlds <= 1 {
+        return (vec![[0.0; 3]; worlds], ([-5.0, -5.0], [5.0, 5.0]));
+    }
+    use clothlab_core::contact::{Bound, Shape};
     let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
-    let mut take = |p: [f32; 3], r: f32| {
-        if p.iter().all(|c| c.is_finite()) {
-            for (k, c) in [0, 2].into_iter().enumerate() {
-                lo[k] = lo[k].min(p[c] - r);
-                hi[k] = hi[k].max(p[c] + r);
+    let mut take = |p: glam::Vec3, r: f32| {
+        if p.is_finite() {
+            for (k, c) in [p.x, p.z].into_iter().enumerate() {
+                lo[k] = lo[k].min(c - r);
+                hi[k] = hi[k].max(c + r);
             }
         }
     };
     for p in recs.iter().flat_map(|r| r.frames.iter().flatten()) {
-        take(*p, 0.0);
+        take(glam::Vec3::from(*p), 0.0);
     }
-    let times: Vec<f64> = recs.first().map_or(Vec::new(), |r| r.times.iter().map(|&t| f64::from(t)).collect());
-    let placed = |id: ColliderId, centre: [f32; 3]| -> Vec<[f32; 3]> {
-        match scene.motions.iter().find(|(i, _)| *i == id) {
-            Some((_, m)) => {
-                times.iter().map(|&t| m.at(t).offset).map(|o| [0, 1, 2].map(|c| centre[c] + o[c])).collect()
+    // Still colliders are where they are at any time: one look.
+    let moving = !scene.motions.is_empty() || scene.bodies.iter().any(|b| !b.motion.is_still());
+    let times = &recs[0].times[..if moving { recs[0].times.len() } else { recs[0].times.len().min(1) }];
+    for &t in times {
+        let at = scene.moved_to(f64::from(t));
+        let shapes = at.spheres.iter().map(|c| c.bound(0.0));
+        for b in shapes.chain(at.boxes.iter().map(|c| c.bound(0.0))).chain(at.rods.iter().map(|c| c.bound(0.0))) {
+            match b {
+                Bound::Ball { center, r } => take(center, r),
+                Bound::Box { lo, hi } => {
+                    take(lo, 0.0);
+                    take(hi, 0.0);
+                }
             }
-            None => vec![centre],
         }
-    };
-    for (k, s) in scene.spheres.iter().enumerate() {
-        for c in placed(ColliderId::Sphere(k), s.center) {
-            take(c, s.radius);
+        for p in at.bodies.iter().flat_map(|b| b.mesh.positions.iter()) {
+            take(glam::Vec3::from(*p), 0.0);
         }
     }
-    for (k, b) in scene.boxes.iter().enumerate() {
-        let centre = [0, 1, 2].map(|c| 0.5 * (b.min[c] + b.max[c]));
-        let r = (0..3).map(|c| 0.5 * (b.max[c] - b.min[c])).map(|h| h * h).sum::<f32>().sqrt();
-        for c in placed(ColliderId::Box(k), centre) {
-            take(c, r);
-        }
-    }
-    for (k, rod) in scene.rods.iter().enumerate() {
-        for c in placed(scene.rod_id(k), rod.center()) {
-            take(c, rod.half_length() + rod.radius());
-        }
-    }
-    for b in &scene.bodies {
-        let r = b.mesh.positions.iter().map(|p| glam::Vec3::from(*p) - glam::Vec3::from(b.pivot)).map(|d| d.length());
-        let r = r.fold(0.0f32, f32::max);
-        for t in &times {
-            let o = b.motion.at(*t).offset;
-            take([0, 1, 2].map(|c| b.pivot[c] + o[c]), r);
-        }
-    }
-    let worlds = recs.len();
-    if worlds <= 1 || !(lo[0] <= hi[0] && lo[1] <= hi[1]) {
+    if !(lo[0] <= hi[0] && lo[1] <= hi[1]) {
         return (vec![[0.0; 3]; worlds], ([-5.0, -5.0], [5.0, 5.0]));
     }
     let width = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(0.1);

@@ -216,10 +216,19 @@ pub fn split_world_sets(sets: &[String]) -> (Vec<String>, Vec<WorldSet>) {
     (common, per_world)
 }
 
-/// Each of `envs` worlds' parameters: `base` with world k's value of every override in
-/// `per_world` applied (each list one value per world), each world's checked on its own;
-/// a refusal names the world.
-pub fn world_params(base: &[SimParams], per_world: &[WorldSet], envs: usize) -> Result<Vec<SimParams>> {
+/// The lists that give each world its value: the scene file's (`setup.world_params`) less
+/// those whose names `sets` (every `--set`) gives again, then the command line's own
+/// (`per_world`, from [`split_world_sets`]). [`crate::Sim::open`] and
+/// [`crate::SimOptions::world`] both take them so.
+pub fn world_lists(setup: &Setup, sets: &[String], per_world: Vec<WorldSet>) -> Vec<WorldSet> {
+    let named = |s: &String| s.split_once('=').map(|(n, _)| n.trim().to_owned());
+    let given: Vec<String> = sets.iter().filter_map(named).collect();
+    setup.world_params.iter().filter(|(name, _)| !given.contains(name)).cloned().chain(per_world).collect()
+}
+
+/// Every list of `per_world` holds one value a world of `envs`, or the first that does
+/// not is named.
+pub fn check_lists(per_world: &[WorldSet], envs: usize) -> Result<()> {
     for (name, values) in per_world {
         if values.len() != envs {
             let worlds = if envs == 1 { "1 world".to_string() } else { format!("{envs} worlds") };
@@ -227,6 +236,14 @@ pub fn world_params(base: &[SimParams], per_world: &[WorldSet], envs: usize) -> 
             bail!("`{name}` has {n} value{} for {worlds}: give one per world", if n == 1 { "" } else { "s" });
         }
     }
+    Ok(())
+}
+
+/// Each of `envs` worlds' parameters: `base` with world k's value of every override in
+/// `per_world` applied (each list one value per world), each world's checked on its own;
+/// a refusal names the world.
+pub fn world_params(base: &[SimParams], per_world: &[WorldSet], envs: usize) -> Result<Vec<SimParams>> {
+    check_lists(per_world, envs)?;
     (0..envs)
         .map(|k| {
             let sets: Vec<String> = per_world.iter().map(|(name, v)| format!("{name}={}", v[k])).collect();

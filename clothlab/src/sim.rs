@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::backend::{AnySolver, Backend, GpuSetup, Shared, make};
 use crate::record::Recorder;
-use crate::setup::{Physics, Setup, split_world_sets, world_params};
+use crate::setup::{Physics, Setup, check_lists, split_world_sets, world_lists, world_params};
 
 pub use clothlab_core::scene_file::MAX_ENVS;
 
@@ -94,20 +94,14 @@ impl SimOptions {
     pub fn world(&self, k: usize) -> Result<SimOptions> {
         let (common, per_world) = split_world_sets(&self.physics.set);
         let setup = Physics { set: common.clone(), ..self.physics.clone() }.setup(self.n, DEFAULT_N)?;
-        let named = |s: &String| s.split_once('=').map(|(n, _)| n.trim().to_owned());
-        let given: Vec<String> = self.physics.set.iter().filter_map(named).collect();
-        let lists = setup.world_params.iter().filter(|(name, _)| !given.contains(name)).chain(&per_world);
+        let lists = world_lists(&setup, &self.physics.set, per_world);
         let envs = self.envs.or(setup.envs).unwrap_or(1) as usize;
         if k >= envs {
             bail!("world {k}: the batch has {envs} worlds (0 ..= {})", envs - 1);
         }
+        check_lists(&lists, envs)?;
         let mut set = common;
-        for (name, values) in lists {
-            if values.len() != envs {
-                bail!("`{name}` has {} values for {envs} worlds: give one per world", values.len());
-            }
-            set.push(format!("{name}={}", values[k]));
-        }
+        set.extend(lists.iter().map(|(name, values)| format!("{name}={}", values[k])));
         Ok(SimOptions { physics: Physics { set, ..self.physics.clone() }, envs: Some(1), ..self.clone() })
     }
 }
@@ -135,11 +129,7 @@ impl Sim {
                 "envs {envs}: a batch of worlds runs on the cpu and cpu-par backends; the GPU backends' world dimension is not built yet"
             );
         }
-        // The file's per-world values, less those the command line sets again.
-        let named = |s: &String| s.split_once('=').map(|(n, _)| n.trim().to_owned());
-        let given: Vec<String> = opts.physics.set.iter().filter_map(named).collect();
-        let per_world: Vec<_> =
-            setup.world_params.iter().filter(|(name, _)| !given.contains(name)).cloned().chain(per_world).collect();
+        let per_world = world_lists(&setup, &opts.physics.set, per_world);
         let params = world_params(std::slice::from_ref(&setup.params), &per_world, envs as usize)?;
         for (k, p) in params.iter().enumerate() {
             clothlab_core::cloth::check_params(&setup.scene, p)

@@ -314,16 +314,15 @@ pub fn validate_worlds(
         envs: Some(envs),
         ..Default::default()
     };
-    // Everything checked (the lists' lengths, each world's values) before anything runs.
-    let probe = crate::Sim::open(batch_opts(Backend::Cpu))?;
-    let frames = u64::from(opts.steps.div_ceil(probe.params().substeps));
+    // The lists' lengths checked before anything runs (each world's values when the first
+    // batch opens, before it steps).
     let singles: Vec<crate::SimOptions> =
         (0..envs as usize).map(|k| batch_opts(Backend::Cpu).world(k)).collect::<Result<_>>()?;
-    drop(probe);
     let mut out = Validation { lines: Vec::new(), spread: 0.0, substeps: 0, failed: 0 };
     let mut reference = Vec::new();
     for &backend in &opts.backends {
         let mut batch = crate::Sim::open(batch_opts(backend))?;
+        let frames = u64::from(opts.steps.div_ceil(batch.params().substeps));
         out.substeps = frames * u64::from(batch.params().substeps);
         batch.step(frames)?;
         for (k, single) in singles.iter().enumerate() {

@@ -321,7 +321,7 @@ fn batch(
 
 /// Writes a run's recording and says so.
 fn recorded(rec: Recorder, topo: &clothlab::core::ClothTopology, scene: &clothlab::core::Scene) -> Result<()> {
-    let worlds = rec.worlds();
+    let worlds = rec.worlds().to_vec();
     let (path, frames, bytes) = rec.finish(topo, scene)?;
     match worlds[..] {
         [k] if k > 0 => outln!("recorded       {} (world {k}, {frames} frames, {bytes} bytes)", path.display())?,

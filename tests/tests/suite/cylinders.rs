@@ -7,20 +7,47 @@ use clothlab_core::scene::{ColliderId, Pinning};
 use clothlab_core::{Integrator, Motion, Rod, RodKind, Scene, SceneFile, SimParams};
 use clothlab_tests::{assert_checks, backend, mean, still_air};
 
-/// A 2 cm patch of 4 × 4 particles 1 mm above the top cap (y = 1) of an upright cylinder
-/// of radius 0.3 m, its centre `off` m from the axis along x, the cylinder turning at
-/// `spin` rad/s about its axis.
-fn turntable(off: f32, spin: f32) -> Scene {
+/// A 2 cm patch of 4 × 4 particles with its centre 1 mm plus the margin above the point
+/// `at`, over the rod `rod` alone (no floor, no sphere) spinning at `spin` rad/s about the
+/// vertical: `cones.rs` drops it on cones too.
+pub(super) fn patch_over(at: [f32; 3], rod: Rod, spin: f32) -> Scene {
     let mut s = Scene::with_n(4);
     s.cloth.size = 0.02;
     s.cloth.pinning = Pinning::None;
     let margin = SimParams::default().collision_margin;
-    s.cloth.top_center = [off, 1.0 + margin + 1e-3, -0.01];
+    s.cloth.top_center = [at[0], at[1] + margin + 1e-3, at[2] - 0.01];
     s.floor_y = None;
     s.spheres.clear();
-    s.rods = vec![Rod::new(RodKind::Cylinder, [0.0, 0.6, 0.0], [0.0, 1.0, 0.0], 0.3)];
-    s.motions = vec![(ColliderId::Rod(RodKind::Cylinder, 0), Motion { spin: [0.0, spin, 0.0], ..Motion::default() })];
+    s.rods = vec![rod];
+    s.motions = vec![(ColliderId::Rod(rod.kind, 0), Motion { spin: [0.0, spin, 0.0], ..Motion::default() })];
     s
+}
+
+/// The patch of [`patch_over`] `off` m from the axis of an upright cylinder of radius
+/// 0.3 m whose top cap is at y = 1, the cylinder turning at `spin` rad/s.
+fn turntable(off: f32, spin: f32) -> Scene {
+    patch_over([off, 1.0, 0.0], Rod::new(RodKind::Cylinder, [0.0, 0.6, 0.0], [0.0, 1.0, 0.0], 0.3), spin)
+}
+
+/// After 30 frames on a face turning at `omega` rad/s about the vertical with friction 1,
+/// each particle has left each contact at the face's velocity there, ω times its
+/// distance from the axis: the patch's mean speed is ω times its mean distance within
+/// 0.5 % (the last substep's gravity and rounding; measured to 4 digits), and it has
+/// turned about the axis (its centre's angle from +x by more than 0.5 rad in 0.5 s: ω t =
+/// 1 rad less the first contacts). `what` names the face.
+pub(super) fn assert_carried_round(name: &str, s: &mut dyn clothlab_core::Solver, omega: f64, what: &str) {
+    for _ in 0..30 {
+        s.step_frame().unwrap();
+    }
+    let st = s.state().unwrap();
+    let r = |i: usize| (st.pos[i][0] as f64).hypot(st.pos[i][2] as f64);
+    let v = mean(&st, |i| st.vel[i][..3].iter().map(|&c| (c as f64).powi(2)).sum::<f64>().sqrt());
+    let expect = omega * mean(&st, r);
+    let (x, z) = (mean(&st, |i| st.pos[i][0] as f64), mean(&st, |i| st.pos[i][2] as f64));
+    let turned = (-z).atan2(x);
+    println!("{name:18} {what}: mean speed {v:.4} m/s (ω r̄ {expect:.4}), turned {turned:.3} rad");
+    assert!((v - expect).abs() <= 0.005 * expect, "{name}: {v} m/s, the {what} {expect}");
+    assert!(turned > 0.5, "{name}: turned {turned} rad");
 }
 
 clothlab_tests::per_backend!(a_patch_rests_on_the_cap_and_the_side_and_a_turntable_carries_it_round);
@@ -54,24 +81,9 @@ fn a_patch_rests_on_the_cap_and_the_side_and_a_turntable_carries_it_round(name: 
         println!("{name:18} on the side: farthest particle {worst:.2e} m off it");
         assert!(worst <= 1e-6, "{name}: a particle {worst} m off the side");
     }
-    // A turntable at ω = 2 rad/s with friction 1: each particle leaves each contact at the
-    // cap's velocity there, ω times its distance from the axis, so the mean speed is ω
-    // times the mean distance within 0.5 % (the last substep's gravity and rounding;
-    // measured to 4 digits), and the patch has turned about the axis (its centre's angle
-    // from +x moved by more than 0.5 rad in 0.5 s: ω t = 1 rad less the first contacts).
+    // A turntable at ω = 2 rad/s with friction 1 carries the patch round at ω r.
     if let Some(mut s) = backend(name, &turntable(0.1, 2.0), &still_air(1.0)) {
-        for _ in 0..30 {
-            s.step_frame().unwrap();
-        }
-        let st = s.state().unwrap();
-        let r = |i: usize| (st.pos[i][0] as f64).hypot(st.pos[i][2] as f64);
-        let v = mean(&st, |i| st.vel[i][..3].iter().map(|&c| (c as f64).powi(2)).sum::<f64>().sqrt());
-        let expect = 2.0 * mean(&st, r);
-        let (x, z) = (mean(&st, |i| st.pos[i][0] as f64), mean(&st, |i| st.pos[i][2] as f64));
-        let turned = (-z).atan2(x);
-        println!("{name:18} turntable: mean speed {v:.4} m/s (ω r̄ {expect:.4}), turned {turned:.3} rad");
-        assert!((v - expect).abs() <= 0.005 * expect, "{name}: {v} m/s, the cap {expect}");
-        assert!(turned > 0.5, "{name}: turned {turned} rad");
+        assert_carried_round(name, s.as_mut(), 2.0, "turntable");
     }
 }
 
