@@ -98,6 +98,36 @@ fn storage_params() -> String {
     format!("@group(0) @binding({}) var<storage, read> step_params: StepParams;", Buf::ParamsStorage.binding())
 }
 
+/// The single run's world offsets (`shared/types.wgsl`), which a `_w` twin makes private.
+const WORLD_CONSTS: &str = "const world_base: u32 = 0u;\nconst face_base: u32 = 0u;";
+
+/// A kernel's `_w` twin (`//! worlds` among its header lines): every world of a batch in
+/// one dispatch, the world in the dispatch's z. The step constants come from the world's
+/// element of an array in the storage buffer at `layout::Buf::ParamsStorage`, and the
+/// kernel's first statement (`p = step_params;`) also sets where the world's particles and
+/// faces start (`world_base`, `face_base`), which every access to a per-world buffer adds.
+fn world_twin(name: &str, source: &str) -> String {
+    const FIRST: &str = "    p = step_params;\n";
+    if source.matches(FIRST).count() != 1 || !source.contains(UNIFORM_PARAMS) || !source.contains(WORLD_CONSTS) {
+        fail(format!(
+            "{name}: a `//! worlds` kernel reads the step constants from the uniform block once, as its first statement"
+        ));
+    }
+    source
+        .replace(
+            UNIFORM_PARAMS,
+            &format!(
+                "@group(0) @binding({}) var<storage, read> world_params: array<StepParams>;",
+                Buf::ParamsStorage.binding()
+            ),
+        )
+        .replace(WORLD_CONSTS, "var<private> world_base: u32;\nvar<private> face_base: u32;")
+        .replace(
+            FIRST,
+            "    p = world_params[id.z];\n    world_base = id.z * p.num_particles;\n    face_base = 2u * world_base;\n",
+        )
+}
+
 /// The group-0 bindings the kernel's entry point reads and writes (atomics count as
 /// both), each checked against core's [`Buf`] table: a number it does not know, or a
 /// uniform where it says storage, fails the build. (The renderer's and the overhead
@@ -336,6 +366,9 @@ fn main() {
         // for shared functions it does not call (the tiled substep reads the grid's
         // constants from the uniform block) gets no `_tex` twin.
         let no_tex = body.lines().nth(1).is_some_and(|l| l.trim() == "//! no table image");
+        // `//! worlds` among the header lines: the kernel also runs a batch of worlds, as
+        // `<name>…_w` twins ([`world_twin`]).
+        let worlds = body.lines().take_while(|l| l.starts_with("//!")).any(|l| l.trim() == "//! worlds");
         let applicable: Vec<_> = subs
             .iter()
             .filter(|(from, ..)| includes.iter().any(|i| i == from) && !(no_tex && *from == "table"))
@@ -378,6 +411,9 @@ fn main() {
                 emit(&out, &mut list, &format!("{vname}_imm"), &imm);
                 let sto = source.replace(UNIFORM_PARAMS, &storage_params());
                 emit(&out, &mut list, &format!("{vname}_sto"), &sto);
+            }
+            if worlds {
+                emit(&out, &mut list, &format!("{vname}_w"), &world_twin(&vname, &source));
             }
         }
     }

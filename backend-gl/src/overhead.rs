@@ -43,7 +43,7 @@ impl OverheadTarget for Target {
             uniform: &[],
             textures: &[],
             values: &[],
-            groups: (1, 1),
+            groups: (1, 1, 1),
         };
         let t = Instant::now();
         self.gl.clear(self.data)?;

@@ -51,7 +51,7 @@ impl OverheadTarget for Target {
 
     fn chain(&mut self, k: u32) -> Result<ChainSample, VkError> {
         let queries = if self.dev.timestamps { 2 } else { 0 };
-        let dispatch = Dispatch { kernel: &self.kernel, set: &self.set, push: &[], groups: (1, 1) };
+        let dispatch = Dispatch { kernel: &self.kernel, set: &self.set, push: &[], groups: (1, 1, 1) };
         let t = Instant::now();
         self.cmds.begin(queries)?;
         self.cmds.zero(&self.data);

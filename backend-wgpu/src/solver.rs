@@ -507,7 +507,7 @@ impl Engine for WgpuEngine {
             pass.set_immediates(0, d.immediates);
         }
         pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups(d.groups.0, d.groups.1, 1);
+        pass.dispatch_workgroups(d.groups.0, d.groups.1, d.groups.2);
     }
 
     /// Read after the wait (wgpu maps a copy of the buffer then).

@@ -243,34 +243,51 @@ pub fn make(
     setup: &GpuSetup,
     shared: &Shared<'_>,
 ) -> Result<AnySolver> {
+    make_worlds(backend, scene, vec![params], setup, shared)
+}
+
+/// [`make`] for a batch of worlds, one parameter set each: a GPU solver running them all
+/// in each dispatch (`GpuSolver::new_worlds`); a CPU backend takes one (its batches are
+/// a solver a world: `Sim`).
+pub fn make_worlds(
+    backend: Backend,
+    scene: Scene,
+    worlds: Vec<SimParams>,
+    setup: &GpuSetup,
+    shared: &Shared<'_>,
+) -> Result<AnySolver> {
     if backend.api().is_none() && *setup != GpuSetup::default() {
         bail!("--stats, --variant and --set-variant apply to the GPU backends only");
     }
     let options = setup.options;
     let v = setup.variant.clone().unwrap_or_else(|| backend.variant().into());
+    let one = |worlds: Vec<SimParams>| match <[SimParams; 1]>::try_from(worlds) {
+        Ok([p]) => Ok(p),
+        Err(w) => Err(anyhow::anyhow!("{} worlds: a CPU solver runs one", w.len())),
+    };
     Ok(match (backend, shared) {
-        (Backend::Cpu, _) => AnySolver::Cpu(Box::new(CpuSolver::new(Exec::Serial, scene, params)?)),
-        (Backend::CpuPar, _) => AnySolver::Cpu(Box::new(CpuSolver::new(Exec::Parallel, scene, params)?)),
+        (Backend::Cpu, _) => AnySolver::Cpu(Box::new(CpuSolver::new(Exec::Serial, scene, one(worlds)?)?)),
+        (Backend::CpuPar, _) => AnySolver::Cpu(Box::new(CpuSolver::new(Exec::Parallel, scene, one(worlds)?)?)),
         (Backend::WgpuNaive | Backend::Wgpu, Shared::Wgpu(ctx)) => {
             let engine = WgpuEngine::on((*ctx).clone());
-            AnySolver::Wgpu(Box::new(GpuSolver::new(engine, v, scene, params, options)?), true)
+            AnySolver::Wgpu(Box::new(GpuSolver::new_worlds(engine, v, scene, worlds, options)?), true)
         }
         (Backend::WgpuNaive | Backend::Wgpu, _) => {
-            AnySolver::Wgpu(Box::new(GpuSolver::new(WgpuEngine::new()?, v, scene, params, options)?), false)
+            AnySolver::Wgpu(Box::new(GpuSolver::new_worlds(WgpuEngine::new()?, v, scene, worlds, options)?), false)
         }
         (Backend::VulkanNaive | Backend::Vulkan, Shared::Vulkan(dev)) => {
             let engine = VulkanEngine::on_device(dev)?;
-            AnySolver::Vulkan(Box::new(GpuSolver::new(engine, v, scene, params, options)?), true)
+            AnySolver::Vulkan(Box::new(GpuSolver::new_worlds(engine, v, scene, worlds, options)?), true)
         }
         (Backend::VulkanNaive | Backend::Vulkan, _) => {
             let engine = VulkanEngine::new(vulkan_validation())?;
-            AnySolver::Vulkan(Box::new(GpuSolver::new(engine, v, scene, params, options)?), false)
+            AnySolver::Vulkan(Box::new(GpuSolver::new_worlds(engine, v, scene, worlds, options)?), false)
         }
         (Backend::GlNaive | Backend::Gl, Shared::Gl(ctx)) => {
-            AnySolver::Gl(Box::new(GpuSolver::new(GlEngine::with_context(ctx)?, v, scene, params, options)?))
+            AnySolver::Gl(Box::new(GpuSolver::new_worlds(GlEngine::with_context(ctx)?, v, scene, worlds, options)?))
         }
         (Backend::GlNaive | Backend::Gl, _) => {
-            AnySolver::Gl(Box::new(GpuSolver::new(GlEngine::new()?, v, scene, params, options)?))
+            AnySolver::Gl(Box::new(GpuSolver::new_worlds(GlEngine::new()?, v, scene, worlds, options)?))
         }
     })
 }
@@ -303,6 +320,27 @@ impl AnySolver {
             AnySolver::Wgpu(s, _) => s.topology(),
             AnySolver::Vulkan(s, _) => s.topology(),
             AnySolver::Gl(s) => s.topology(),
+        }
+    }
+
+    /// A GPU solver's worlds (`None` for the CPU solvers, whose batches are a solver a
+    /// world).
+    pub fn batch(&mut self) -> Option<&mut dyn clothlab_engine::Batch> {
+        match self {
+            AnySolver::Cpu(_) => None,
+            AnySolver::Wgpu(s, _) => Some(s.as_mut()),
+            AnySolver::Vulkan(s, _) => Some(s.as_mut()),
+            AnySolver::Gl(s) => Some(s.as_mut()),
+        }
+    }
+
+    /// [`AnySolver::batch`], to read.
+    pub fn batch_ref(&self) -> Option<&dyn clothlab_engine::Batch> {
+        match self {
+            AnySolver::Cpu(_) => None,
+            AnySolver::Wgpu(s, _) => Some(s.as_ref()),
+            AnySolver::Vulkan(s, _) => Some(s.as_ref()),
+            AnySolver::Gl(s) => Some(s.as_ref()),
         }
     }
 

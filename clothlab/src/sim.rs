@@ -6,9 +6,10 @@ use anyhow::{Context, Result, bail};
 use clothlab_core::grid::Grab;
 use clothlab_core::{ClothState, ClothTopology, KernelTimings, RenderMode, Scene, SimParams, Solver, StateField, View};
 use clothlab_cpu::{CpuSolver, Exec};
+use clothlab_engine::Batch;
 use rayon::prelude::*;
 
-use crate::backend::{AnySolver, Backend, GpuSetup, Shared, make};
+use crate::backend::{AnySolver, Backend, GpuSetup, Shared, make, make_worlds};
 use crate::record::Recorder;
 use crate::setup::{Physics, Setup, check_lists, split_world_sets, world_lists, world_params};
 
@@ -124,19 +125,15 @@ impl Sim {
                 MAX_BATCH_PARTICLES / np.max(1)
             );
         }
-        if envs > 1 && opts.backend.is_gpu() {
-            bail!(
-                "envs {envs}: a batch of worlds runs on the cpu and cpu-par backends; the GPU backends' world dimension is not built yet"
-            );
-        }
         let per_world = world_lists(&setup, &opts.physics.set, per_world);
         let params = world_params(std::slice::from_ref(&setup.params), &per_world, envs as usize)?;
         for (k, p) in params.iter().enumerate() {
             clothlab_core::cloth::check_params(&setup.scene, p)
                 .map_err(|e| if envs > 1 { anyhow::anyhow!("world {k}: {e}") } else { e.into() })?;
         }
-        if envs == 1 {
-            let solver = make(opts.backend, setup.scene.clone(), params[0].clone(), &opts.gpu, &Shared::None)?;
+        // A single run, or a GPU batch: one solver, every world in each dispatch.
+        if envs == 1 || opts.backend.is_gpu() {
+            let solver = make_worlds(opts.backend, setup.scene.clone(), params, &opts.gpu, &Shared::None)?;
             return Ok(Sim { solver, worlds: Vec::new(), backend: opts.backend, setup, gpu: opts.gpu });
         }
         if opts.gpu.variant.is_some() {
@@ -156,7 +153,29 @@ impl Sim {
 
     /// How many worlds (1 for a single run).
     pub fn envs(&self) -> usize {
-        1 + self.worlds.len()
+        match self.solver.batch_ref() {
+            Some(b) => b.envs(),
+            None => 1 + self.worlds.len(),
+        }
+    }
+
+    /// The GPU solver's worlds where it runs a batch of more than one (`None`: a single
+    /// run, or a CPU batch of a solver a world).
+    fn gpu_batch(&mut self) -> Option<&mut dyn Batch> {
+        self.solver.batch().filter(|b| b.envs() > 1)
+    }
+
+    /// [`Sim::gpu_batch`], to read.
+    fn gpu_batch_ref(&self) -> Option<&dyn Batch> {
+        self.solver.batch_ref().filter(|b| b.envs() > 1)
+    }
+
+    /// World `k` checked against the batch.
+    fn check_world(&self, k: usize) -> Result<()> {
+        if k >= self.envs() {
+            bail!("world {k}: the batch has {} worlds (0 ..= {})", self.envs(), self.envs() - 1);
+        }
+        Ok(())
     }
 
     /// Every world's solver, world 0 first (a batch: all CPU solvers).
@@ -182,8 +201,11 @@ impl Sim {
         }
     }
 
-    /// World `k`'s solver.
+    /// World `k`'s solver (a GPU batch's worlds after 0 have none of their own).
     fn world(&mut self, k: usize) -> Result<&mut dyn Solver> {
+        if k > 0 && k < self.envs() && self.gpu_batch_ref().is_some() {
+            bail!("world {k}: a GPU batch's worlds share one solver, which this takes for world 0 only");
+        }
         match k {
             0 => Ok(self.solver.get()),
             _ if k < self.envs() => Ok(&mut self.worlds[k - 1]),
@@ -237,6 +259,10 @@ impl Sim {
 
     /// World `k`'s parameters.
     pub fn world_params(&self, k: usize) -> Result<&SimParams> {
+        if let Some(b) = self.gpu_batch_ref() {
+            self.check_world(k)?;
+            return Ok(&b.world_params()[k]);
+        }
         Ok(self.world_ref(k)?.params())
     }
 
@@ -273,6 +299,9 @@ impl Sim {
                 scene.check_motion_speed(p.dt()).map_err(|e| anyhow::anyhow!("world {k}: {e}"))?;
             }
         }
+        if let Some(b) = self.gpu_batch() {
+            return Ok(b.set_world_params(params)?);
+        }
         if self.worlds.is_empty() {
             let p = params.into_iter().next().context("one parameter set")?;
             return Ok(self.solver.get().set_params(p)?);
@@ -290,7 +319,7 @@ impl Sim {
         let (common, per_world) = split_world_sets(sets);
         let mut each = Vec::with_capacity(self.envs());
         for k in 0..self.envs() {
-            let p = crate::setup::apply_overrides(self.world_ref(k)?.params(), &common)?;
+            let p = crate::setup::apply_overrides(self.world_params(k)?, &common)?;
             each.push(p);
         }
         let params = world_params(&each, &per_world, self.envs())?;
@@ -330,8 +359,7 @@ impl Sim {
         if k == 0 {
             return Ok(());
         }
-        let whole: Vec<SimParams> =
-            (0..self.envs()).map(|w| self.world_ref(w).map(|s| s.params().clone())).collect::<Result<_>>()?;
+        let whole: Vec<SimParams> = (0..self.envs()).map(|w| self.world_params(w).cloned()).collect::<Result<_>>()?;
         if whole.iter().all(|p| p.substeps == 1) {
             return self.step(k);
         }
@@ -349,6 +377,10 @@ impl Sim {
 
     /// World `k`'s simulated time, s.
     pub fn world_time(&self, k: usize) -> Result<f64> {
+        if let Some(b) = self.gpu_batch_ref() {
+            self.check_world(k)?;
+            return Ok(b.world_time(k));
+        }
         Ok(self.world_ref(k)?.time())
     }
 
@@ -366,6 +398,9 @@ impl Sim {
 
     /// A copy of world `k`'s state.
     pub fn world_state(&mut self, k: usize) -> Result<ClothState> {
+        if let Some(b) = self.gpu_batch() {
+            return Ok(b.world_state(k)?);
+        }
         Ok(self.world(k)?.state()?)
     }
 
@@ -378,6 +413,9 @@ impl Sim {
     /// Replaces world `k`'s state: of this cloth, finite, or refused with nothing changed.
     pub fn set_world_state(&mut self, k: usize, state: &ClothState) -> Result<()> {
         state.check(self.topology())?;
+        if let Some(b) = self.gpu_batch() {
+            return Ok(b.set_world_state(k, state)?);
+        }
         Ok(self.world(k)?.set_state(state)?)
     }
 
@@ -396,6 +434,27 @@ impl Sim {
                 bail!("reset: world {k} is named twice");
             }
         }
+        // A GPU batch's world starts again where a new run of its parameters starts: its
+        // state as the solver starts one, its time 0 (a moving scene's worlds share their
+        // clock: only all of them together), world 0's grab let go.
+        if self.gpu_batch_ref().is_some() {
+            let starts: Vec<ClothState> =
+                chosen.iter().map(|&k| self.start_state(self.world_params(k)?)).collect::<Result<_>>()?;
+            if chosen.len() < self.envs() && self.setup.scene.moves() {
+                bail!(
+                    "reset: a GPU batch's worlds share the clock of the scene's moving colliders and pins: reset every world together"
+                );
+            }
+            let b = self.gpu_batch().context("a GPU batch")?;
+            for (&k, start) in chosen.iter().zip(&starts) {
+                b.set_world_state(k, start)?;
+                b.set_world_time(k, 0.0)?;
+            }
+            if chosen.contains(&0) {
+                self.solver.get().set_grab(None);
+            }
+            return Ok(());
+        }
         // Each chosen world is built again, as a new run starts (its caches, grab and time
         // with it): a batch's world as `build_worlds` builds it, a single run as `open`.
         for &k in chosen {
@@ -411,6 +470,15 @@ impl Sim {
         Ok(())
     }
 
+    /// The state a run of this scene with `params` starts from: the cloth as built, its
+    /// normals and wind as every solver computes them first.
+    fn start_state(&self, params: &SimParams) -> Result<ClothState> {
+        let (state, topo) = clothlab_core::build(&self.setup.scene, params)?;
+        let sp = clothlab_core::step_params::StepParams::new(params, &self.setup.scene, None);
+        let b = clothlab_engine::cpu::start_buffers(Exec::Serial, &sp, &topo, &state);
+        Ok(ClothState { n: state.n, pos: b.pos, vel: b.vel, force: b.force, normal: b.normal })
+    }
+
     /// The reference mass inverse masses are relative to, kg (the cloth's mass over its
     /// particles).
     fn reference_mass(&self) -> f32 {
@@ -420,6 +488,9 @@ impl Sim {
     /// One array of the state as it is (w: see [`ClothState`]), read back alone: every
     /// world's, world after world.
     pub fn field(&mut self, field: StateField) -> Result<Vec<[f32; 4]>> {
+        if let Some(b) = self.gpu_batch() {
+            return Ok(b.fields(field)?);
+        }
         if self.worlds.is_empty() {
             return Ok(self.solver.get().field(field)?);
         }
@@ -552,6 +623,9 @@ impl Sim {
             bail!("grab target {target:?}: a position is finite");
         }
         let (k, particle) = (particle as usize / np.max(1), particle % np.max(1) as u32);
+        if k > 0 && self.gpu_batch_ref().is_some() {
+            bail!("particle {particle} of world {k}: a GPU batch holds a grab in world 0 only");
+        }
         self.world(k)?.set_grab(Some(Grab { particle, target }));
         Ok(())
     }
@@ -622,9 +696,9 @@ impl Sim {
     /// (In a batch: summed over the worlds.)
     pub fn crossings(&mut self) -> Result<usize> {
         let mut sum = 0;
-        for k in 0..self.envs() {
-            let pos = self.world(k)?.field(StateField::Pos)?;
-            sum += clothlab_core::crossings::count(&pos, &self.topology().triangles).pairs;
+        let (np, all) = (self.num_particles(), self.field(StateField::Pos)?);
+        for pos in all.chunks_exact(np.max(1)) {
+            sum += clothlab_core::crossings::count(pos, &self.topology().triangles).pairs;
         }
         Ok(sum)
     }
@@ -708,6 +782,17 @@ impl Sim {
         }
         if k == 0 {
             return self.render(width, height, view, api);
+        }
+        // A GPU batch's world k: its state read back, drawn as a CPU solver holding it draws
+        // (the renderer draws a solver's world 0).
+        if self.gpu_batch_ref().is_some() {
+            let params = self.world_params(k)?.clone();
+            let (state, time) = (self.world_state(k)?, self.world_time(k)?);
+            let mut world = CpuSolver::new(Exec::Serial, self.setup.scene.clone(), params)?;
+            world.set_state(&state)?;
+            world.set_time(time)?;
+            let mut solver = AnySolver::Cpu(Box::new(world));
+            return crate::render::image(&mut solver, &self.setup.scene, view, (width, height), api);
         }
         // World k takes world 0's place for the picture (a batch's worlds are all CPU
         // solvers), and goes back after it.

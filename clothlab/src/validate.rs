@@ -278,12 +278,13 @@ pub fn validate(opts: &ValidateOptions, mut on_line: impl FnMut(&Line) -> Result
     Ok(out)
 }
 
-/// `validate --envs N`: on each backend of `opts` (the batch backends, cpu and cpu-par),
-/// a batch of `envs` worlds run `opts.steps` substeps (whole frames), and each world
-/// against a single run of the scene with that world's parameters on `cpu` — a row a
-/// world, its positions and its velocities, which must be the same values (bound 0: a
-/// world computes a single run's bits). The worlds' values are the lists of `--set` and
-/// of the scene file's `[params]`.
+/// `validate --envs N`: on each backend of `opts`, a batch of `envs` worlds run
+/// `opts.steps` substeps (whole frames), and each world against a single run of the scene
+/// with that world's parameters — on `cpu` for the CPU backends, on the backend itself for
+/// a GPU one (its batch runs every world in each dispatch) — a row a world, its positions
+/// and its velocities, which must be the same values (bound 0: a world computes a single
+/// run's bits). The worlds' values are the lists of `--set` and of the scene file's
+/// `[params]`.
 pub fn validate_worlds(
     opts: &ValidateOptions,
     envs: u32,
@@ -293,19 +294,13 @@ pub fn validate_worlds(
         bail!("--envs checks a batch's worlds against single runs: leave out --bisect and --every-switch");
     }
     if opts.preset.is_some() || !opts.set_variant.is_empty() {
-        bail!("--envs runs on the CPU backends: leave out --variant and --set-variant");
+        bail!("--envs checks each backend's own recipe: leave out --variant and --set-variant");
     }
     if opts.steps == 0 || opts.steps > 100_000 {
         bail!("invalid --steps {}: must be in 1 ..= 100000", opts.steps);
     }
     if opts.backends.is_empty() {
-        bail!("no backend to validate: name cpu or cpu-par");
-    }
-    if let Some(b) = opts.backends.iter().find(|b| b.is_gpu()) {
-        bail!(
-            "--envs: a batch of worlds runs on the cpu and cpu-par backends; {} has no world dimension yet",
-            b.name()
-        );
+        bail!("no backend to validate");
     }
     let batch_opts = |backend| crate::SimOptions {
         backend,
@@ -319,19 +314,26 @@ pub fn validate_worlds(
     let singles: Vec<crate::SimOptions> =
         (0..envs as usize).map(|k| batch_opts(Backend::Cpu).world(k)).collect::<Result<_>>()?;
     let mut out = Validation { lines: Vec::new(), spread: 0.0, substeps: 0, failed: 0 };
-    let mut reference = Vec::new();
+    // Each world's single run's end, by the backend it ran on (cpu for both CPU backends).
+    let mut reference: Vec<(Backend, Vec<clothlab_core::ClothState>)> = Vec::new();
     for &backend in &opts.backends {
         let mut batch = crate::Sim::open(batch_opts(backend))?;
         let frames = u64::from(opts.steps.div_ceil(batch.params().substeps));
         out.substeps = frames * u64::from(batch.params().substeps);
         batch.step(frames)?;
-        for (k, single) in singles.iter().enumerate() {
-            if reference.len() <= k {
-                let mut one = crate::Sim::open(single.clone())?;
+        let on = if backend.is_gpu() { backend } else { Backend::Cpu };
+        if !reference.iter().any(|(b, _)| *b == on) {
+            let mut ends = Vec::with_capacity(singles.len());
+            for single in &singles {
+                let mut one = crate::Sim::open(crate::SimOptions { backend: on, ..single.clone() })?;
                 one.step(frames)?;
-                reference.push(one.state()?);
+                ends.push(one.state()?);
             }
-            let (got, want) = (batch.world_state(k)?, &reference[k]);
+            reference.push((on, ends));
+        }
+        let ends = &reference.iter().find(|(b, _)| *b == on).expect("just made").1;
+        for (k, want) in ends.iter().enumerate() {
+            let got = batch.world_state(k)?;
             for (buffer, g, w) in [("pos", &got.pos, &want.pos), ("vel", &got.vel, &want.vel)] {
                 let what = format!("world {k} vs its single run");
                 let check = clothlab_cpu::validate::compare(&what, buffer, g, w, false, 0.0);

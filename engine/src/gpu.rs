@@ -62,8 +62,9 @@ pub struct Dispatch<'a> {
     pub kernel: KernelRef,
     /// Which binding set: the one whose current positions are position buffer `parity`.
     pub parity: usize,
-    /// Workgroups in x and y.
-    pub groups: (u32, u32),
+    /// Workgroups in x and y, and the worlds in z (1 for a single run; a batch's
+    /// `_w` kernels find their world in `global_invocation_id.z`).
+    pub groups: (u32, u32, u32),
     /// Immediates (push constants), maybe empty.
     pub immediates: &'a [u8],
     /// Write timestamps `q` and `q + 1` before and after it.

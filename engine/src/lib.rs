@@ -12,7 +12,9 @@
 //! * [`solver`] — [`GpuSolver`]: `Solver` and `KernelRunner` written once over any engine;
 //! * [`validate`] — every kernel of a GPU runner against its twin, and the bisection of a
 //!   rollout between the CPU engine and a GPU backend;
-//! * [`tables`] — the spring tables as the GPU backends upload them, and their timing.
+//! * [`tables`] — the spring tables as the GPU backends upload them, and their timing;
+//! * [`worlds`] — a batch of worlds in one set of buffers, every kernel dispatched once
+//!   for all of them ([`Batch`]).
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -24,12 +26,13 @@ pub mod solver;
 pub mod tables;
 pub mod validate;
 pub mod variant;
+pub mod worlds;
 
 pub use cpu::{CpuEngine, RecipeSolver};
 pub use gpu::Engine;
 pub use kernels::{Flavor, HostBuffers, KernelDef, KernelRef, TwinArgs};
 pub use recipe::{Caps, Command, StatsMode, Variant};
-pub use solver::{GpuSolver, SolverOptions};
+pub use solver::{Batch, GpuSolver, SolverOptions};
 pub use validate::KernelRunner;
 pub use variant::{VariantError, VariantSpec};
 

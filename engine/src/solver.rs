@@ -106,6 +106,13 @@ pub struct GpuSolver<E: Engine> {
     /// Every kernel it can run ([`KernelRunner::kernels`]): its recipe's, built when it
     /// starts, and the plain flavor of every kernel of the step, built when first run.
     offered: Vec<KernelRef>,
+    /// Each world's parameters (one: a single run; world 0's are `params`). A batch's
+    /// worlds lie world after world in the per-particle buffers and run in every
+    /// dispatch's z ([`crate::worlds`]).
+    worlds: Vec<SimParams>,
+    /// Each world's simulated time, s (a batch's worlds step together; `time` is the
+    /// clock of the colliders and pins, which every world of a moving scene shares).
+    times: Vec<f64>,
 }
 
 /// Substeps per recording of `variant`'s recipe on `topo` with `params`, refused with
@@ -176,12 +183,30 @@ impl<E: Engine> GpuSolver<E> {
     /// Builds the cloth of `scene` on `engine`, stepped by `variant` (a preset falls back
     /// to what the adapter has; a switch set explicitly is refused where it lacks it).
     pub fn new(
-        mut engine: E,
+        engine: E,
         variant: impl Into<VariantSpec>,
         scene: Scene,
         params: SimParams,
         options: SolverOptions,
     ) -> Result<Self, SolverError> {
+        Self::new_worlds(engine, variant, scene, vec![params], options)
+    }
+
+    /// A batch: the cloth of `scene` once per element of `worlds` (its parameters), every
+    /// world in the same buffers and every kernel dispatched once for all of them
+    /// ([`crate::worlds`]: what may differ between worlds, what a batch refuses). One
+    /// element is [`GpuSolver::new`].
+    pub fn new_worlds(
+        mut engine: E,
+        variant: impl Into<VariantSpec>,
+        scene: Scene,
+        worlds: Vec<SimParams>,
+        options: SolverOptions,
+    ) -> Result<Self, SolverError> {
+        let Some(params) = worlds.first().cloned() else {
+            return Err(SolverError::Invalid("a batch of no worlds".into()));
+        };
+        let envs = worlds.len();
         if scene.spheres.len() > MAX_COLLIDERS
             || scene.boxes.len() > MAX_COLLIDERS
             || scene.rods.len() > clothlab_core::sdf::MAX_RODS
@@ -217,6 +242,9 @@ impl<E: Engine> GpuSolver<E> {
         let per_particle = (STRAIN_SLOTS * std::mem::size_of::<SpringSlot>()) as u64;
         SolverError::check_table(scene.cloth.n, per_particle, info.max_binding, &info.adapter)?;
         let (state, topo) = build(&scene, &params)?;
+        if envs > 1 {
+            crate::worlds::check_batch(&scene, &topo, &worlds, options.stats, &info)?;
+        }
         let tri_buffers = has_tri_buffers(&topo, &params);
         check_contact(&topo, tri_buffers, &params)?;
         let tri = tri_contents(&topo, tri_buffers);
@@ -232,9 +260,16 @@ impl<E: Engine> GpuSolver<E> {
                 info.max_binding >> 20
             )));
         }
-        // Initial normals and wind, as every solver starts.
+        // Initial normals and wind, as every solver starts (each world with its own).
         let sp = StepParams::new(&params, &scene, None);
         let state = start_buffers(twins::Exec::Serial, &sp, &topo, &state);
+        let mut per_world = crate::worlds::Starts::new(&state, &sp, envs, topo.num_particles());
+        for p in &worlds[1..] {
+            let (s, _) = build(&scene, p)?;
+            let sp = StepParams::new(p, &scene, None);
+            per_world.push(&start_buffers(twins::Exec::Serial, &sp, &topo, &s), &sp);
+        }
+        let state = per_world.state;
         let face = &state.faces;
 
         // The colliders at time 0, with their velocities (what the CPU engine's twins see:
@@ -256,7 +291,7 @@ impl<E: Engine> GpuSolver<E> {
         let stats_zero = vec![0u8; 4 * MAX_SUBSTEPS as usize];
         let partials_zero = vec![0u8; 8 * (x * y) as usize];
         let pos_bytes: &[u8] = bytemuck::cast_slice(&state.pos);
-        let aux_zero = vec![0u8; 16 * topo.num_particles()];
+        let aux_zero = vec![0u8; 16 * envs * topo.num_particles()];
         // Moving pins: their table, and room for a frame's poses at the most substeps (a
         // block of MAX_PIN_GROUPS a substep); none: one unused element each.
         // The unused element names no particle (a dispatch of no pins still runs one
@@ -271,7 +306,7 @@ impl<E: Engine> GpuSolver<E> {
         // Positions and normals are the renderer's vertex buffers too (no copy).
         let contents: [(Buf, &[u8]); 39] = [
             (Buf::Params, sp.gpu_bytes()),
-            (Buf::ParamsStorage, sp.gpu_bytes()),
+            (Buf::ParamsStorage, &per_world.params),
             (Buf::Contact, bytemuck::bytes_of(&sp.contact)),
             (Buf::SpheresUniform, bytemuck::cast_slice(&spheres)),
             (Buf::BoxesUniform, bytemuck::cast_slice(&boxes)),
@@ -322,9 +357,11 @@ impl<E: Engine> GpuSolver<E> {
         }
         // draw=copy: vertex buffers of the renderer's own, refreshed at every frame's end.
         let draw = if variant.draw == Draw::Copy {
-            let normal_bytes: &[u8] = bytemuck::cast_slice(&state.normal);
+            // World 0's: what a batch's renderer draws.
+            let np = topo.num_particles();
+            let normal_bytes: &[u8] = bytemuck::cast_slice(&state.normal[..np]);
             Some([
-                engine.create_buffer(Buf::Pos, "draw pos", pos_bytes, true)?,
+                engine.create_buffer(Buf::Pos, "draw pos", &pos_bytes[..16 * np], true)?,
                 engine.create_buffer(Buf::Normal, "draw normal", normal_bytes, true)?,
             ])
         } else {
@@ -355,6 +392,7 @@ impl<E: Engine> GpuSolver<E> {
         let step = specialised(recipe_for(&variant, params.strain_iterations, Integration::of(&params), &topo), uses);
         let group = recipe_group(&variant, &params, &topo, options, &scene)?;
         let end = specialised(frame_end(&variant, Integration::of(&params)), uses);
+        let (step, end) = crate::worlds::in_worlds(step, end, envs)?;
         // Only what the frame dispatches is built now; the other kernels a validation may
         // run (`offered`) are built when first run (`run_host`): most are other
         // integrators' and other features', and building them all took a Vulkan solver's
@@ -393,6 +431,8 @@ impl<E: Engine> GpuSolver<E> {
             contact: None,
             searches: 0,
             offered,
+            worlds,
+            times: vec![0.0; envs],
         };
         for k in build_list {
             solver.build(k)?;
@@ -431,6 +471,66 @@ impl<E: Engine> GpuSolver<E> {
             });
         }
         self.engine.build(k, immediates)
+    }
+
+    /// Sets every world's parameters (`worlds`, one a world), refused with nothing changed
+    /// where one world's are invalid or a batch's worlds differ where they share.
+    fn apply_params(&mut self, worlds: Vec<SimParams>) -> Result<(), SolverError> {
+        if worlds.len() != self.worlds.len() {
+            return Err(SolverError::Invalid(format!(
+                "{} parameter sets for {} worlds",
+                worlds.len(),
+                self.worlds.len()
+            )));
+        }
+        for (k, p) in worlds.iter().enumerate() {
+            let world =
+                |e: SolverError| if worlds.len() > 1 { SolverError::Invalid(format!("world {k}: {e}")) } else { e };
+            check_contact(&self.topo, self.tri_buffers, p).map_err(world)?;
+            self.topo.validate_params(p).map_err(|e| world(e.into()))?;
+            self.scene.check_motion_speed(p.dt()).map_err(|e| world(e.into()))?;
+        }
+        if worlds.len() > 1 {
+            crate::worlds::check_batch(&self.scene, &self.topo, &worlds, self.options.stats, self.engine.info())?;
+        }
+        let params = worlds[0].clone();
+        // A new dt keeps the velocity as it is: the state holds it, not Verlet's history.
+        if spring_constants(&params, &self.topo) != spring_constants(&self.params, &self.topo) {
+            // The spring constants depend on dt and the stiffness fractions: rewrite the
+            // tables in place (the binding sets keep pointing at the same buffers). Wind,
+            // gravity and the like reach the kernels with the next frame's constants.
+            self.topo.set_spring_constants(&params);
+            if self.variant.table == Table::Image {
+                let (texels, height) = table_texels(&self.topo);
+                self.engine.set_table_image(&texels, height)?;
+            }
+            let (strain, bend) = split_slots(&self.topo);
+            let (a, b) = spring_halves(&self.topo.springs);
+            let (a, b) = (a.to_vec(), b.to_vec());
+            let interior = interior_block(&self.topo, self.variant.table);
+            self.write(Buf::Slots, bytemuck::cast_slice(&strain))?;
+            self.write(Buf::BendSlots, bytemuck::cast_slice(&bend))?;
+            self.write(Buf::Springs, bytemuck::cast_slice(&a))?;
+            self.write(Buf::SpringsB, bytemuck::cast_slice(&b))?;
+            self.write(Buf::Interior, bytemuck::bytes_of(&interior))?;
+        }
+        // Specialised kernels follow what the parameters use (Coulomb's coefficients).
+        let uses = uses_of(&self.variant, &self.scene, &params);
+        let integration = Integration::of(&params);
+        let step = specialised(recipe_for(&self.variant, params.strain_iterations, integration, &self.topo), uses);
+        let group = recipe_group(&self.variant, &params, &self.topo, self.options, &self.scene)?;
+        let end = specialised(frame_end(&self.variant, integration), uses);
+        let (step, end) = crate::worlds::in_worlds(step, end, self.worlds.len())?;
+        for k in kernels_of(&step).into_iter().chain(kernels_of(&end)) {
+            self.build(k)?;
+        }
+        self.engine.check("building the integrator's kernels")?;
+        self.recipe = step;
+        self.frame_end = end;
+        self.substeps_per_recording = group;
+        self.params = params;
+        self.worlds = worlds;
+        Ok(())
     }
 
     /// The engine (the API's device and buffers).
@@ -618,7 +718,10 @@ impl<E: Engine> GpuSolver<E> {
             self.engine.dispatch(&Dispatch {
                 kernel: k,
                 parity: self.current_pos,
-                groups: groups(count),
+                groups: {
+                    let (x, y) = groups(count);
+                    (x, y, self.worlds.len() as u32)
+                },
                 immediates,
                 timestamps: timed.then_some(*q),
             });
@@ -770,45 +873,9 @@ impl<E: Engine> Solver for GpuSolver<E> {
         &self.params
     }
 
+    /// Every world's parameters (a batch's one by one: [`Batch::set_world_params`]).
     fn set_params(&mut self, params: SimParams) -> Result<(), SolverError> {
-        check_contact(&self.topo, self.tri_buffers, &params)?;
-        self.topo.validate_params(&params)?;
-        self.scene.check_motion_speed(params.dt())?;
-        // A new dt keeps the velocity as it is: the state holds it, not Verlet's history.
-        if spring_constants(&params, &self.topo) != spring_constants(&self.params, &self.topo) {
-            // The spring constants depend on dt and the stiffness fractions: rewrite the
-            // tables in place (the binding sets keep pointing at the same buffers). Wind,
-            // gravity and the like reach the kernels with the next frame's constants.
-            self.topo.set_spring_constants(&params);
-            if self.variant.table == Table::Image {
-                let (texels, height) = table_texels(&self.topo);
-                self.engine.set_table_image(&texels, height)?;
-            }
-            let (strain, bend) = split_slots(&self.topo);
-            let (a, b) = spring_halves(&self.topo.springs);
-            let (a, b) = (a.to_vec(), b.to_vec());
-            let interior = interior_block(&self.topo, self.variant.table);
-            self.write(Buf::Slots, bytemuck::cast_slice(&strain))?;
-            self.write(Buf::BendSlots, bytemuck::cast_slice(&bend))?;
-            self.write(Buf::Springs, bytemuck::cast_slice(&a))?;
-            self.write(Buf::SpringsB, bytemuck::cast_slice(&b))?;
-            self.write(Buf::Interior, bytemuck::bytes_of(&interior))?;
-        }
-        // Specialised kernels follow what the parameters use (Coulomb's coefficients).
-        let uses = uses_of(&self.variant, &self.scene, &params);
-        let integration = Integration::of(&params);
-        let step = specialised(recipe_for(&self.variant, params.strain_iterations, integration, &self.topo), uses);
-        let group = recipe_group(&self.variant, &params, &self.topo, self.options, &self.scene)?;
-        let end = specialised(frame_end(&self.variant, integration), uses);
-        for k in kernels_of(&step).into_iter().chain(kernels_of(&end)) {
-            self.build(k)?;
-        }
-        self.engine.check("building the integrator's kernels")?;
-        self.recipe = step;
-        self.frame_end = end;
-        self.substeps_per_recording = group;
-        self.params = params;
-        Ok(())
+        self.apply_params(vec![params; self.worlds.len()])
     }
 
     fn set_grab(&mut self, grab: Option<Grab>) {
@@ -819,6 +886,18 @@ impl<E: Engine> Solver for GpuSolver<E> {
         let t0 = Instant::now();
         self.step_params = StepParams::new(&self.params, &self.scene, self.grab);
         self.step_params.tile_substeps = self.substeps_per_recording;
+        // A batch's worlds' constants (world 0 holds the grab), every frame.
+        let world_bytes: Option<Vec<u8>> = (self.worlds.len() > 1).then(|| {
+            self.worlds
+                .iter()
+                .enumerate()
+                .flat_map(|(k, p)| {
+                    let mut sp = StepParams::new(p, &self.scene, if k == 0 { self.grab } else { None });
+                    sp.tile_substeps = self.substeps_per_recording;
+                    sp.gpu_bytes().to_vec()
+                })
+                .collect()
+        });
         let commands = self.commands();
         let stats = self.options.stats != StatsMode::Off;
         let substeps = self.params.substeps;
@@ -869,8 +948,11 @@ impl<E: Engine> Solver for GpuSolver<E> {
                     let id = self.must(Buf::PinPoses)?;
                     self.engine.record_write(id, bytemuck::cast_slice(&poses))?;
                 }
-                // The storage copy only for a recipe that reads it (kernel checks write both).
-                if self.variant.constants == Constants::Storage {
+                // The storage copy only for a recipe that reads it (kernel checks write both);
+                // a batch's `_w` kernels read every world's there.
+                if let Some(bytes) = &world_bytes {
+                    self.engine.record_write(params_storage, bytes)?;
+                } else if self.variant.constants == Constants::Storage {
                     self.engine.record_write(params_storage, self.step_params.gpu_bytes())?;
                 }
                 let mut written = res::PARAMS;
@@ -891,6 +973,9 @@ impl<E: Engine> Solver for GpuSolver<E> {
                     self.record_colliders()?;
                 }
                 self.time += self.params.dt() as f64 * group as f64;
+                for t in &mut self.times {
+                    *t += self.params.dt() as f64 * group as f64;
+                }
                 self.record(&commands, s, &mut q, &mut labels);
             }
             let last = k + 1 == submissions;
@@ -962,46 +1047,32 @@ impl<E: Engine> Solver for GpuSolver<E> {
         Ok(())
     }
 
+    /// World 0's state (a batch's other worlds: [`Batch::world_state`]).
     fn state(&mut self) -> Result<ClothState, SolverError> {
-        Ok(ClothState {
-            n: self.topo.n,
-            pos: self.read(Buf::Pos)?,
-            vel: self.read(Buf::Vel)?,
-            force: self.read(Buf::Force)?,
-            normal: self.read(Buf::Normal)?,
-        })
+        self.world_state(0)
     }
 
+    /// World 0's (every world's: [`Batch::fields`]).
     fn field(&mut self, field: clothlab_core::StateField) -> Result<Vec<clothlab_core::grid::V4>, SolverError> {
-        use clothlab_core::StateField;
-        self.read(match field {
-            StateField::Pos => Buf::Pos,
-            StateField::Vel => Buf::Vel,
-            StateField::Force => Buf::Force,
-            StateField::Normal => Buf::Normal,
-        })
+        let mut v = self.fields(field)?;
+        v.truncate(self.topo.num_particles());
+        Ok(v)
     }
 
     fn time(&self) -> f64 {
         self.time
     }
 
+    /// The clock and every world's time.
     fn set_time(&mut self, t: f64) -> Result<(), SolverError> {
         self.time = clothlab_core::solver::checked_time(t)?;
+        self.times.iter_mut().for_each(|w| *w = t);
         Ok(())
     }
 
+    /// World 0's state (a batch's other worlds: [`Batch::set_world_state`]).
     fn set_state(&mut self, state: &ClothState) -> Result<(), SolverError> {
-        state.check(&self.topo)?;
-        self.write(Buf::Pos, bytemuck::cast_slice(&state.pos))?;
-        self.write(Buf::Vel, bytemuck::cast_slice(&state.vel))?;
-        self.write(Buf::Force, bytemuck::cast_slice(&state.force))?;
-        self.write(Buf::Normal, bytemuck::cast_slice(&state.normal))?;
-        if let Some([pos, normal]) = self.draw {
-            self.engine.write(pos, bytemuck::cast_slice(&state.pos))?;
-            self.engine.write(normal, bytemuck::cast_slice(&state.normal))?;
-        }
-        Ok(())
+        self.set_world_state(0, state)
     }
 
     fn timings(&self) -> KernelTimings {
@@ -1022,5 +1093,124 @@ impl<E: Engine> Solver for GpuSolver<E> {
 
     fn substep_stats(&self) -> Vec<SubstepStats> {
         self.stats.clone()
+    }
+}
+
+/// A batch of worlds in one solver ([`GpuSolver::new_worlds`], [`crate::worlds`]): what
+/// reads and writes one world, or every world at once. A single run is a batch of one.
+pub trait Batch {
+    /// How many worlds.
+    fn envs(&self) -> usize;
+    /// Each world's parameters.
+    fn world_params(&self) -> &[SimParams];
+    /// Sets each world's parameters (one a world), checked first: nothing changes where
+    /// one is refused.
+    fn set_world_params(&mut self, worlds: Vec<SimParams>) -> Result<(), SolverError>;
+    /// World `k`'s state.
+    fn world_state(&mut self, k: usize) -> Result<ClothState, SolverError>;
+    /// Sets world `k`'s state.
+    fn set_world_state(&mut self, k: usize, state: &ClothState) -> Result<(), SolverError>;
+    /// A field of every world, world after world.
+    fn fields(&mut self, field: clothlab_core::StateField) -> Result<Vec<V4>, SolverError>;
+    /// World `k`'s simulated time, s.
+    fn world_time(&self, k: usize) -> f64;
+    /// Sets world `k`'s time; refused in a scene whose colliders or pins move (its worlds
+    /// share their clock) unless it is every world's.
+    fn set_world_time(&mut self, k: usize, t: f64) -> Result<(), SolverError>;
+}
+
+impl<E: Engine> GpuSolver<E> {
+    /// World `k` checked against the batch.
+    fn check_world(&self, k: usize) -> Result<(), SolverError> {
+        if k >= self.worlds.len() {
+            return Err(SolverError::Invalid(format!(
+                "world {k}: the batch has {} worlds (0 ..= {})",
+                self.worlds.len(),
+                self.worlds.len() - 1
+            )));
+        }
+        Ok(())
+    }
+
+    /// The buffer bound as `buf`, world `k`'s rows replaced by `rows`.
+    fn write_world(&mut self, buf: Buf, k: usize, rows: &[V4]) -> Result<(), SolverError> {
+        if self.worlds.len() == 1 {
+            return self.write(buf, bytemuck::cast_slice(rows));
+        }
+        let np = self.topo.num_particles();
+        let mut all = self.read(buf)?;
+        all[k * np..(k + 1) * np].copy_from_slice(rows);
+        self.write(buf, bytemuck::cast_slice(&all))
+    }
+}
+
+impl<E: Engine> Batch for GpuSolver<E> {
+    fn envs(&self) -> usize {
+        self.worlds.len()
+    }
+
+    fn world_params(&self) -> &[SimParams] {
+        &self.worlds
+    }
+
+    fn set_world_params(&mut self, worlds: Vec<SimParams>) -> Result<(), SolverError> {
+        self.apply_params(worlds)
+    }
+
+    fn world_state(&mut self, k: usize) -> Result<ClothState, SolverError> {
+        self.check_world(k)?;
+        let (n, np) = (self.topo.n, self.topo.num_particles());
+        let mut one = |buf: Buf| -> Result<Vec<V4>, SolverError> { Ok(self.read(buf)?[k * np..(k + 1) * np].to_vec()) };
+        Ok(ClothState {
+            n,
+            pos: one(Buf::Pos)?,
+            vel: one(Buf::Vel)?,
+            force: one(Buf::Force)?,
+            normal: one(Buf::Normal)?,
+        })
+    }
+
+    fn set_world_state(&mut self, k: usize, state: &ClothState) -> Result<(), SolverError> {
+        self.check_world(k)?;
+        state.check(&self.topo)?;
+        self.write_world(Buf::Pos, k, &state.pos)?;
+        self.write_world(Buf::Vel, k, &state.vel)?;
+        self.write_world(Buf::Force, k, &state.force)?;
+        self.write_world(Buf::Normal, k, &state.normal)?;
+        // The renderer's copies hold world 0.
+        if let (0, Some([pos, normal])) = (k, self.draw) {
+            self.engine.write(pos, bytemuck::cast_slice(&state.pos))?;
+            self.engine.write(normal, bytemuck::cast_slice(&state.normal))?;
+        }
+        Ok(())
+    }
+
+    fn fields(&mut self, field: clothlab_core::StateField) -> Result<Vec<V4>, SolverError> {
+        use clothlab_core::StateField;
+        self.read(match field {
+            StateField::Pos => Buf::Pos,
+            StateField::Vel => Buf::Vel,
+            StateField::Force => Buf::Force,
+            StateField::Normal => Buf::Normal,
+        })
+    }
+
+    fn world_time(&self, k: usize) -> f64 {
+        self.times.get(k).copied().unwrap_or(f64::NAN)
+    }
+
+    fn set_world_time(&mut self, k: usize, t: f64) -> Result<(), SolverError> {
+        self.check_world(k)?;
+        let t = clothlab_core::solver::checked_time(t)?;
+        if self.scene.moves() && self.times.iter().enumerate().any(|(j, &w)| j != k && w != t) {
+            return Err(SolverError::Unsupported(format!(
+                "world {k}: a GPU batch's worlds share the clock of the scene's moving colliders and pins: its time cannot differ from the others'"
+            )));
+        }
+        self.times[k] = t;
+        if k == 0 {
+            self.time = t;
+        }
+        Ok(())
     }
 }

@@ -329,6 +329,10 @@ fn checked_flavors(caps: &Caps, table_image: bool) -> impl Iterator<Item = Kerne
         .filter(move |k| {
             let f = k.flavor;
             (caps.immediates || f.constants != ConstantsHome::Immediates)
+                // A batch's `_w` twin as one world: its plain flavor (the others add to it
+                // the switches their uniform-constants twins are checked with).
+                && (f.constants != ConstantsHome::Worlds
+                    || !(f.table_image || f.float_atomics || f.colliders_uniform || f.shuffle || f.sdf_image))
                 && (caps.float_atomics || !f.float_atomics)
                 && (table_image || !f.table_image)
                 && (caps.subgroups || !f.shuffle)

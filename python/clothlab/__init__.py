@@ -147,8 +147,9 @@ class Sim:
     * ``variant``, ``set_variant`` -- a GPU backend's preset (``"naive"``,
       ``"optimized"``, ``"thesis"``) and single switches (``["fusion=tile"]``).
     * ``envs`` -- worlds: copies of the scene stepped together, each with its own state
-      and parameters (default: the scene file's ``envs``, else 1; on ``cpu`` and
-      ``cpu-par``). A parameter takes one value per world as an array
+      and parameters (default: the scene file's ``envs``, else 1; on a GPU backend every
+      kernel runs once for all worlds, and what its worlds share — the spring table, the
+      integrator — must be the same in each). A parameter takes one value per world as an array
       (``params={"damping": np.linspace(0, 0.01, 64)}``); the state's arrays gain a
       leading axis of worlds, ``(envs, N, 3)``. World k computes, bit for bit, what a
       single run with its parameters computes.
@@ -448,8 +449,9 @@ def validate(
     """Check GPU backends against the CPU (as ``clothlab validate``): every kernel of the
     backend's recipe against its CPU twin on random inputs, and a rollout of ``steps``
     substeps against the CPU solver. With ``envs``: a batch of that many worlds (their
-    values the lists in ``params``) on each batch backend, each world against a single
-    run with its parameters (``validate --envs``).
+    values the lists in ``params``) on each backend, each world against a single run
+    with its parameters (on ``cpu`` for the CPU backends, on the backend itself for a GPU
+    one; ``validate --envs``).
 
     ``backend`` or ``backends``: GPU backends (default: every one; with ``envs``,
     ``cpu`` and ``cpu-par``). Returns one dict per check: ``backend``, ``check`` (kernel,

@@ -248,8 +248,11 @@ def test_validate_envs_checks_each_world_against_its_single_run():
     assert len(rows) == 2 * 2 * 2
     assert {r["backend"] for r in rows} == {"cpu", "cpu-par"}
     assert all(r["passed"] and r["max_abs"] == 0.0 for r in rows)
+    # On a GPU backend: each world against its single run there.
+    rows = clothlab.validate(backend="vulkan", envs=2, params={"damping": [0.0, 0.05]}, n=6, steps=16)
+    assert len(rows) == 2 * 2 and all(r["passed"] and r["max_abs"] == 0.0 for r in rows)
     with pytest.raises(ValueError, match="no world dimension yet"):
-        clothlab.validate(backend="vulkan", envs=2, n=6, steps=16)
+        clothlab.validate(backend="vulkan-naive", envs=2, n=6, steps=16)
 
 
 def test_bench_gives_kernel_and_frame_rows():

@@ -1,4 +1,5 @@
 //! include: state, colliders
+//! worlds
 // collide — per particle: push out of every collider (the floor, spheres, boxes, capsules,
 // bodies' fields; shared/colliders.wgsl).
 @compute @workgroup_size(WORKGROUP)
@@ -8,11 +9,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let x4 = pos[i];
+    let x4 = pos[world_base + i];
     if !is_free(i, x4.w) {
         return;
     }
-    let m = collided(Moved(x4.xyz, vel[i].xyz));
-    pos[i] = vec4<f32>(m.x, x4.w);
-    vel[i] = vec4<f32>(m.v, 0.0);
+    let m = collided(Moved(x4.xyz, vel[world_base + i].xyz));
+    pos[world_base + i] = vec4<f32>(m.x, x4.w);
+    vel[world_base + i] = vec4<f32>(m.v, 0.0);
 }

@@ -1,4 +1,5 @@
 //! include: state
+//! worlds
 // euler — explicit Euler per particle (core::cpu::integrators::euler): x' = x + v dt,
 // v' = v + f dt/m with v damped by (1 − damping) first; pins, grab, floor.
 @compute @workgroup_size(WORKGROUP)
@@ -8,10 +9,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let x4 = pos[i];
-    let v0 = vel[i].xyz * (1.0 - p.damping);
-    let v1 = v0 + accel_dt(force[i].xyz, x4.w);
+    let x4 = pos[world_base + i];
+    let v0 = vel[world_base + i].xyz * (1.0 - p.damping);
+    let v1 = v0 + accel_dt(force[world_base + i].xyz, x4.w);
     let m = finish_at(i, x4, x4.xyz + v0 * p.dt, v1);
-    vel[i] = vec4<f32>(m.v, 0.0);
-    pos[i] = vec4<f32>(m.x, x4.w);
+    vel[world_base + i] = vec4<f32>(m.v, 0.0);
+    pos[world_base + i] = vec4<f32>(m.x, x4.w);
 }

@@ -1,4 +1,5 @@
 //! include: state
+//! worlds
 // forces — per particle: gravity and drag added to the wind force in the force buffer.
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -7,5 +8,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    force[i] = forces_at(force[i], vel[i].xyz, pos[i].w);
+    let k = world_base + i;
+    force[k] = forces_at(force[k], vel[k].xyz, pos[k].w);
 }

@@ -1,4 +1,5 @@
 //! include: state, colliders
+//! worlds
 // forces + integrate + collide fused: the thesis's optimized CUDA kernel ("Verlet"). The
 // springs were added into the force buffer by a kernel before (scattered with atomics in
 // the thesis, or gathered); gravity and drag are added here and the total force goes
@@ -12,13 +13,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let x4 = pos[i];
-    let v = vel[i].xyz;
-    let f = forces_at(force[i], v, x4.w).xyz;
+    let x4 = pos[world_base + i];
+    let v = vel[world_base + i].xyz;
+    let f = forces_at(force[world_base + i], v, x4.w).xyz;
     var m = integrated_with(i, x4, v, f);
     if is_free(i, x4.w) {
         m = collided(m);
     }
-    vel[i] = vec4<f32>(m.v, 0.0);
-    pos[i] = vec4<f32>(m.x, x4.w);
+    vel[world_base + i] = vec4<f32>(m.v, 0.0);
+    pos[world_base + i] = vec4<f32>(m.x, x4.w);
 }

@@ -1,4 +1,5 @@
 //! include: state
+//! worlds
 // integrate — per particle: Verlet in velocity form, pins, grab, floor.
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -7,8 +8,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let x4 = pos[i];
-    let m = integrated(i, x4, vel[i].xyz);
-    vel[i] = vec4<f32>(m.v, 0.0);
-    pos[i] = vec4<f32>(m.x, x4.w);
+    let x4 = pos[world_base + i];
+    let m = integrated(i, x4, vel[world_base + i].xyz);
+    vel[world_base + i] = vec4<f32>(m.v, 0.0);
+    pos[world_base + i] = vec4<f32>(m.x, x4.w);
 }

@@ -1,4 +1,5 @@
 //! include: state, colliders
+//! worlds
 // integrate + collide fused (optimized variant): both touch only their own particle, which
 // is loaded once and stored once.
 @compute @workgroup_size(WORKGROUP)
@@ -8,11 +9,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let x4 = pos[i];
-    var m = integrated(i, x4, vel[i].xyz);
+    let x4 = pos[world_base + i];
+    var m = integrated(i, x4, vel[world_base + i].xyz);
     if is_free(i, x4.w) {
         m = collided(m);
     }
-    vel[i] = vec4<f32>(m.v, 0.0);
-    pos[i] = vec4<f32>(m.x, x4.w);
+    vel[world_base + i] = vec4<f32>(m.v, 0.0);
+    pos[world_base + i] = vec4<f32>(m.x, x4.w);
 }

@@ -1,4 +1,5 @@
 //! include: state, table, gather, adjacency
+//! worlds
 // springs — per particle: gather the 12 slots of the spring table.
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -8,5 +9,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    force[i] = vec4<f32>(table_springs(i, point(i), force[i].xyz), 0.0);
+    force[world_base + i] = vec4<f32>(table_springs(i, point(i), force[world_base + i].xyz), 0.0);
 }

@@ -1,4 +1,5 @@
 //! include: table, window, strain_points, strain_window, strain_counts_aux, strain_limit_pass, adjacency, strain_fn
+//! worlds
 // strain_limit — one Jacobi pass of Provot's strain limit plus the tethers
 // (core::cpu::strain_limit::limit_at), each spring divided by the larger of its two ends'
 // counts that strain_count left in aux0 (the momentum stays). Reads pos, writes pos_out.

@@ -1,4 +1,5 @@
 //! include: table, strain_points, strain_count_fn, strain_counts_inline, strain_limit_pass, adjacency, strain_fn, strain_strip
+//! worlds
 // strain_limit_strip — strain_limit with no count dispatch before it, down strips of rows
 // (`strain_counts=strip`, shared/strain_strip.wgsl): each spring's length computed once
 // for the counts of both its ends and the pass; the same counts, the same bits

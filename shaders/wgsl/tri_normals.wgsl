@@ -1,3 +1,4 @@
+//! worlds
 // tri_normals — area-weighted face normals, |N| in w (optimized variant): one invocation per
 // quad computes both its triangles from its four corners, numbered as core::grid::build
 // numbers them (triangles 2q = (p00, p01, p11) and 2q + 1 = (p00, p11, p10) of quad
@@ -13,11 +14,11 @@ var<private> p: StepParams;
 
 // Face t of the triangle list (core::cpu::normals::tri_normals).
 fn list_face(t: u32) {
-    let a = pos[triangles[3u * t]].xyz;
-    let b = pos[triangles[3u * t + 1u]].xyz;
-    let c = pos[triangles[3u * t + 2u]].xyz;
+    let a = pos[world_base + triangles[3u * t]].xyz;
+    let b = pos[world_base + triangles[3u * t + 1u]].xyz;
+    let c = pos[world_base + triangles[3u * t + 2u]].xyz;
     let nrm = cross(b - a, c - a);
-    faces[t] = vec4<f32>(nrm, len3(nrm));
+    faces[face_base + t] = vec4<f32>(nrm, len3(nrm));
 }
 
 @compute @workgroup_size(WORKGROUP)
@@ -37,12 +38,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     let qj = q / m;
     let p00 = qj * p.n + q - qj * m;
-    let x00 = pos[p00].xyz;
-    let x10 = pos[p00 + 1u].xyz;
-    let x01 = pos[p00 + p.n].xyz;
-    let x11 = pos[p00 + p.n + 1u].xyz;
+    let x00 = pos[world_base + p00].xyz;
+    let x10 = pos[world_base + p00 + 1u].xyz;
+    let x01 = pos[world_base + p00 + p.n].xyz;
+    let x11 = pos[world_base + p00 + p.n + 1u].xyz;
     let n0 = cross(x01 - x00, x11 - x00);
     let n1 = cross(x11 - x00, x10 - x00);
-    faces[2u * q] = vec4<f32>(n0, len3(n0));
-    faces[2u * q + 1u] = vec4<f32>(n1, len3(n1));
+    faces[face_base + 2u * q] = vec4<f32>(n0, len3(n0));
+    faces[face_base + 2u * q + 1u] = vec4<f32>(n1, len3(n1));
 }

@@ -1,4 +1,5 @@
 //! include: wind, wind_fn, adjacency
+//! worlds
 // vertex_normals — per particle: sum of the adjacent face normals (gathered in slot order),
 // normalised, and the wind force into the force buffer (optimized variant): each face is
 // read once for both.
@@ -10,7 +11,7 @@ struct Gathered {
 }
 
 fn add_face(g: ptr<function, Gathered>, t: u32, wind: bool) {
-    let f4 = faces[t];
+    let f4 = faces[face_base + t];
     (*g).sum += f4.xyz;
     if wind {
         (*g).wind += face_wind(f4);
@@ -52,6 +53,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             add_face(&g, u32(t), wind);
         }
     }
-    normal[i] = vec4<f32>(normalize_or_zero(g.sum), 0.0);
-    force[i] = vec4<f32>(g.wind, 0.0);
+    normal[world_base + i] = vec4<f32>(normalize_or_zero(g.sum), 0.0);
+    force[world_base + i] = vec4<f32>(g.wind, 0.0);
 }

@@ -8,6 +8,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= p.num_particles {
         return;
     }
-    normal[i] = vec4<f32>(normalize_or_zero(normal[i].xyz), 0.0);
-    force[i] = vec4<f32>(wind_at(i), 0.0);
+    normal[world_base + i] = vec4<f32>(normalize_or_zero(normal[world_base + i].xyz), 0.0);
+    force[world_base + i] = vec4<f32>(wind_at(i), 0.0);
 }

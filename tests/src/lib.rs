@@ -119,6 +119,29 @@ impl Api {
         }
     }
 
+    /// A fresh batch of `worlds` (each world's parameters) of `spec` on this API
+    /// (`GpuSolver::new_worlds`), what it refused, or `None` where there is no adapter and
+    /// none is required ([`or_skip`]). Vulkan runs under the validation layer.
+    pub fn batch(
+        self,
+        spec: impl Into<VariantSpec>,
+        sc: &Scene,
+        worlds: Vec<SimParams>,
+    ) -> Option<Result<Box<dyn AnyGpuBatch>, clothlab_core::SolverError>> {
+        use clothlab_engine::GpuSolver;
+        let (spec, sc, o) = (spec.into(), sc.clone(), SolverOptions::default());
+        Some(match self {
+            Api::Wgpu => GpuSolver::new_worlds(or_skip(clothlab_wgpu::WgpuEngine::new(), "wgpu")?, spec, sc, worlds, o)
+                .map(|s| Box::new(s) as _),
+            Api::Vulkan => {
+                GpuSolver::new_worlds(or_skip(clothlab_vulkan::VulkanEngine::new(true), "vulkan")?, spec, sc, worlds, o)
+                    .map(|s| Box::new(s) as _)
+            }
+            Api::Gl => GpuSolver::new_worlds(or_skip(clothlab_gl::GlEngine::new(), "gl")?, spec, sc, worlds, o)
+                .map(|s| Box::new(s) as _),
+        })
+    }
+
     /// A fresh solver of `spec` on this API, or `None` (the reason printed) where there
     /// is no adapter and none is required ([`or_skip`]). Vulkan runs under the Khronos
     /// validation layer: a message fails the next step, or [`assert_api_clean`].
@@ -454,6 +477,11 @@ impl<E: clothlab_engine::Engine + 'static> AnyGpuSolver for clothlab_engine::Gpu
         self
     }
 }
+
+/// A GPU solver of a batch of worlds ([`Api::batch`]).
+pub trait AnyGpuBatch: AnyGpuSolver + clothlab_engine::Batch {}
+
+impl<E: clothlab_engine::Engine + 'static> AnyGpuBatch for clothlab_engine::GpuSolver<E> {}
 
 /// The recipe `spec` gives on wgpu, Vulkan (under the validation layer) and GL, fresh, by
 /// API name; an API without an adapter is skipped as [`or_skip`] says.

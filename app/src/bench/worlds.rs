@@ -21,8 +21,9 @@ use crate::cli::BenchArgs;
 use crate::out::outln;
 use clothlab::{Backend, Sim, SimOptions};
 
-/// The backends measured unless `--backends` says otherwise: those that run batches.
-pub const DEFAULT_BACKENDS: [Backend; 2] = [Backend::Cpu, Backend::CpuPar];
+/// The backends measured unless `--backends` says otherwise: the CPU's two and each GPU
+/// API's optimized recipe.
+pub const DEFAULT_BACKENDS: [Backend; 5] = [Backend::Cpu, Backend::CpuPar, Backend::Wgpu, Backend::Vulkan, Backend::Gl];
 
 /// The most worlds run as separate simulations for a cell.
 pub const SEPARATE_MOST: u32 = 64;

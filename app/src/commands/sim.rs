@@ -9,7 +9,7 @@ use clothlab::core::stats::{summarize, write_json, write_obj};
 use clothlab::core::timing::SUBSTEP;
 use clothlab::core::{StateField, crossings};
 use clothlab::record::Recorder;
-use clothlab::{AnySolver, MAX_STEPS, Sim, SimOptions};
+use clothlab::{AnySolver, Backend, MAX_STEPS, Sim, SimOptions};
 
 use crate::cli::{SimArgs, StatsArg};
 use crate::out::outln;
@@ -267,7 +267,11 @@ fn batch(
     outln!(
         "backend        {} ({envs} worlds, {})",
         sim.name(),
-        if sim.name() == "cpu-par" { "on rayon's threads" } else { "one after another" }
+        match sim.backend() {
+            Backend::Cpu => "one after another",
+            Backend::CpuPar => "on rayon's threads",
+            _ => "every kernel dispatched once for all",
+        }
     )?;
     if let Some(path) = &args.physics.scene {
         outln!("scene          {} ({})", sim.title().unwrap_or("untitled"), path.display())?;

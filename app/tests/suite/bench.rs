@@ -499,20 +499,35 @@ fn mesh_vs_grid_measures_the_grid_and_the_same_grid_as_a_mesh() {
     std::fs::remove_dir_all(&out).ok();
 }
 
-/// `--envs`: a batch and the same worlds as separate simulations on the CPU backends, at
-/// every count of worlds, each time positive and finite; a GPU backend named in the notes
-/// with its refusal; the files written.
+/// `--envs`: a batch and the same worlds as separate simulations on the CPU backends and
+/// a GPU one, at every count of worlds, each time positive and finite; a GPU recipe that
+/// cannot run a batch (the naive one's scatters) named in the notes with its refusal; the
+/// files written.
 #[test]
 fn worlds_measure_a_batch_against_separate_simulations() {
     let out = tmp("worlds");
-    let args = ["bench", "--envs", "1,3", "--sizes", "6", "--iters", "8", "--backends", "cpu,cpu-par,vulkan", "--out"];
+    let args = [
+        "bench",
+        "--envs",
+        "1,3",
+        "--sizes",
+        "6",
+        "--iters",
+        "8",
+        "--backends",
+        "cpu,cpu-par,vulkan,vulkan-naive",
+        "--out",
+    ];
     let o = clothlab(&[&args[..], &[out.to_str().unwrap()]].concat());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "bench failed: {err}");
     let csv = std::fs::read_to_string(out.join("worlds.csv")).unwrap();
     let rows: Vec<Vec<String>> = csv.lines().skip(1).map(split_csv).collect();
     let cells: Vec<(&str, &str)> = rows.iter().map(|r| (r[1].as_str(), r[2].as_str())).collect();
-    assert_eq!(cells, [("cpu", "1"), ("cpu", "3"), ("cpu-par", "1"), ("cpu-par", "3")]);
+    assert_eq!(
+        cells,
+        [("cpu", "1"), ("cpu", "3"), ("cpu-par", "1"), ("cpu-par", "3"), ("vulkan", "1"), ("vulkan", "3")]
+    );
     for r in &rows {
         for v in [&r[3], &r[5]] {
             let us: f64 = v.parse().unwrap();
@@ -520,7 +535,10 @@ fn worlds_measure_a_batch_against_separate_simulations() {
         }
     }
     let md = std::fs::read_to_string(out.join("worlds.md")).unwrap();
-    assert!(md.contains("- vulkan at n = 6: envs 2: a batch of worlds runs on the cpu and cpu-par"), "{md}");
+    assert!(
+        md.contains("- vulkan-naive at n = 6: ") && md.contains("springs_scatter has no world dimension yet"),
+        "{md}"
+    );
     check_png(&out.join("worlds.png"));
     std::fs::remove_dir_all(&out).ok();
 }

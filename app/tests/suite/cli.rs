@@ -186,7 +186,8 @@ fn bad_input_is_refused_with_one_clear_message() {
     );
     refused(&["frobnicate"], "unrecognized subcommand");
     // Worlds: a count out of range, a batch over the particles a batch holds, a list of
-    // the wrong length, one world's bad value, a batch on a GPU backend, one cloth's output.
+    // the wrong length, one world's bad value, a GPU recipe with a kernel that has no world
+    // dimension, one cloth's output.
     refused(&["sim", "--n", "4", "--envs", "0"], "invalid envs 0: must be in 1 ..= 65536");
     refused(&["sim", "--n", "1024", "--envs", "17"], "at most 16 worlds of this scene");
     refused(&["sim", "--n", "4", "--envs", "3", "--set", "damping=[0.1,0.2]"], "`damping` has 2 values for 3 worlds");
@@ -195,8 +196,8 @@ fn bad_input_is_refused_with_one_clear_message() {
         "world 1: invalid parameter `damping` = -1",
     );
     refused(
-        &["sim", "--n", "4", "--envs", "2", "--backend", "vulkan"],
-        "a batch of worlds runs on the cpu and cpu-par",
+        &["sim", "--n", "4", "--envs", "2", "--backend", "vulkan-naive"],
+        "kernel springs_scatter has no world dimension yet",
     );
     refused(&["sim", "--n", "4", "--envs", "2", "--out", "/tmp/worlds.obj"], "an .obj holds one cloth");
     refused(
@@ -256,8 +257,16 @@ fn validate_envs_checks_each_world_of_a_batch_against_its_single_run() {
     for (b, k) in [("cpu ", 0), ("cpu-par", 2)] {
         assert!(rows.iter().any(|l| l.starts_with(b) && l.contains(&format!("world {k} "))), "{b} world {k}: {text}");
     }
-    // A GPU backend has no batch yet; a list of the wrong length names itself.
-    refused(&[&args[..], &["--backends", "vulkan"]].concat(), "vulkan has no world dimension yet");
+    // On a GPU backend every world of the batch runs in each dispatch, and each world is
+    // its single run on that backend, bit for bit; a recipe with a kernel that has no world
+    // dimension is refused naming it; a list of the wrong length names itself.
+    let out = clothlab(&[&args[..], &["--backends", "vulkan"]].concat());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    let rows: Vec<&str> = text.lines().filter(|l| l.contains("vs its single run")).collect();
+    assert_eq!(rows.len(), 6, "{text}");
+    assert!(rows.iter().all(|l| l.starts_with("vulkan") && l.ends_with(" ok")), "{text}");
+    refused(&[&args[..], &["--backends", "vulkan-naive"]].concat(), "has no world dimension yet");
     refused(&[&args[..], &["--set", "wind=[[0,0,0]]"]].concat(), "`wind` has 1 value for 3 worlds");
     // The app shows one world of the file; one past the batch is refused before a window.
     refused(&["run", "--scene", file.to_str().unwrap(), "--world", "3"], "world 3: the batch has 3 worlds");

@@ -202,8 +202,8 @@ pub struct DispatchDesc<'a> {
     pub textures: &'a [(u32, usize)],
     /// `(uniform index in the program's list, value)`.
     pub values: &'a [(usize, Value)],
-    /// Work groups in x and y.
-    pub groups: (u32, u32),
+    /// Work groups in x, y and z (z: the worlds of a batch).
+    pub groups: (u32, u32, u32),
 }
 
 /// An OpenGL 4.5 core context (headless, through EGL) and the objects made in it.
@@ -865,7 +865,7 @@ impl Gl {
                     Value::F(n, x) => gl.uniform_n_f32(n, loc, x),
                 }
             }
-            gl.dispatch_compute(d.groups.0, d.groups.1, 1);
+            gl.dispatch_compute(d.groups.0, d.groups.1, d.groups.2);
         }
         Ok(())
     }

@@ -50,8 +50,8 @@ pub struct Dispatch<'a> {
     pub set: &'a Set,
     /// Push constants (may be empty).
     pub push: &'a [u8],
-    /// Workgroups in x and y.
-    pub groups: (u32, u32),
+    /// Workgroups in x, y and z (z: the worlds of a batch).
+    pub groups: (u32, u32, u32),
 }
 
 impl Commands {
@@ -206,7 +206,7 @@ impl Commands {
             if !dsp.push.is_empty() {
                 d.cmd_push_constants(self.cmd(), dsp.kernel.layout, vk::ShaderStageFlags::COMPUTE, 0, dsp.push);
             }
-            d.cmd_dispatch(self.cmd(), dsp.groups.0, dsp.groups.1, 1);
+            d.cmd_dispatch(self.cmd(), dsp.groups.0, dsp.groups.1, dsp.groups.2);
         }
         if let Some(q) = timestamps {
             self.timestamp(q + 1);

@@ -60,11 +60,14 @@ fn forces_integrate_collide(a: &TwinArgs, b: &mut HostBuffers) {
 }
 
 /// Gravity and drag into the force buffer (added to the wind force already there).
-pub static FORCES: KernelDef = KernelDef::new("forces", forces, Count::Particles, &[Params, Pos, Vel, Force], &[Force]);
+pub static FORCES: KernelDef = KernelDef {
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
+    ..KernelDef::new("forces", forces, Count::Particles, &[Params, Pos, Vel, Force], &[Force])
+};
 /// The spring gather per particle over its 12-slot table.
 pub static SPRINGS: KernelDef = KernelDef {
     check: GATHER,
-    variants: IMM_TEX,
+    variants: worlds(IMM_TEX),
     ..KernelDef::new("springs", springs, Count::Particles, TABLE, &[Force])
 };
 /// The naive spring scatter: one invocation per spring, forces added with atomics.
@@ -84,7 +87,7 @@ pub static SPRINGS_SCATTER: KernelDef = KernelDef {
 pub static FORCES_SPRINGS: KernelDef = KernelDef {
     check: GATHER,
     label: timing::FORCES_SPRINGS,
-    variants: BLOCKED,
+    variants: worlds(BLOCKED),
     ..KernelDef::new("forces_springs", forces_springs, Count::Blocks, TABLE, &[Force])
 };
 /// `forces_springs` with the wind of the faces around each particle computed from the
@@ -93,7 +96,7 @@ pub static FORCES_SPRINGS_WIND: KernelDef = KernelDef {
     check: WIND_GATHER,
     pure: &[Force],
     label: timing::FORCES_SPRINGS_WIND,
-    variants: BLOCKED,
+    variants: worlds(BLOCKED),
     ..KernelDef::new(
         "forces_springs_wind",
         forces_springs_wind,
@@ -103,7 +106,10 @@ pub static FORCES_SPRINGS_WIND: KernelDef = KernelDef {
     )
 };
 /// Verlet, pins, the grab and the floor.
-pub static INTEGRATE: KernelDef = KernelDef::new("integrate", integrate, Count::Particles, STATE, &[Pos, Vel]);
+pub static INTEGRATE: KernelDef = KernelDef {
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
+    ..KernelDef::new("integrate", integrate, Count::Particles, STATE, &[Pos, Vel])
+};
 /// Moving pins to their poses at the substep's end (`clothlab_core::pins`).
 pub static PINS: KernelDef = KernelDef {
     variants: PLAIN,
@@ -112,12 +118,14 @@ pub static PINS: KernelDef = KernelDef {
     ..KernelDef::new("pins", pins, Count::Pins, &[Pos, Vel, Pins, PinPoses], &[Pos, Vel])
 };
 /// Spheres, boxes and bodies.
-pub static COLLIDE: KernelDef =
-    KernelDef { variants: IMM_CU, ..KernelDef::new("collide", collide, Count::Particles, COLLIDERS, &[Pos, Vel]) };
+pub static COLLIDE: KernelDef = KernelDef {
+    variants: worlds(IMM_CU),
+    ..KernelDef::new("collide", collide, Count::Particles, COLLIDERS, &[Pos, Vel])
+};
 /// `integrate` and `collide` fused: each particle loaded and stored once.
 pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
     label: timing::INTEGRATE_COLLIDE,
-    variants: IMM_CU,
+    variants: worlds(IMM_CU),
     ..KernelDef::new(
         "integrate_collide",
         integrate_collide,
@@ -131,7 +139,7 @@ pub static INTEGRATE_COLLIDE: KernelDef = KernelDef {
 /// the substep, so nothing reads it).
 pub static FORCES_INTEGRATE_COLLIDE: KernelDef = KernelDef {
     label: timing::FORCES_INTEGRATE_COLLIDE,
-    variants: IMM_CU,
+    variants: worlds(IMM_CU),
     ..KernelDef::new(
         "forces_integrate_collide",
         forces_integrate_collide,

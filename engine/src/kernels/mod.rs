@@ -134,6 +134,9 @@ pub struct Variants {
     pub shuffle: bool,
     /// `<name>_si`: the bodies' distance fields sampled from a 3-D image (`sdf=image`).
     pub sdf_image: bool,
+    /// `<name>_w`: every world of a batch in one dispatch ([`ConstantsHome::Worlds`];
+    /// `//! worlds` in the kernel's WGSL).
+    pub worlds: bool,
 }
 
 impl Variants {
@@ -151,6 +154,12 @@ pub enum ConstantsHome {
     Immediates,
     /// A read-only storage buffer ([`Buf::ParamsStorage`]): the `_sto` twins.
     Storage,
+    /// One element a world of an array in [`Buf::ParamsStorage`], the world the
+    /// dispatch's z: the `_w` twins, which run every world of a batch in one dispatch
+    /// (each world's particles, world after world, in the per-particle buffers). A single
+    /// world's dispatch of it computes what the uniform block's shader computes (checked
+    /// against the twin like every flavor).
+    Worlds,
 }
 
 /// One concrete shader of a kernel: which of its variants it is.
@@ -174,7 +183,9 @@ impl Flavor {
     /// Every flavor there is (the registry keeps those a kernel has).
     pub fn all() -> Vec<Flavor> {
         let mut v = Vec::new();
-        for constants in [ConstantsHome::Uniform, ConstantsHome::Immediates, ConstantsHome::Storage] {
+        for constants in
+            [ConstantsHome::Uniform, ConstantsHome::Immediates, ConstantsHome::Storage, ConstantsHome::Worlds]
+        {
             for bits in 0..32u8 {
                 v.push(Flavor {
                     constants,
@@ -515,8 +526,11 @@ impl KernelDef {
     /// Whether the kernel has the shader `flavor`.
     pub fn has(&self, f: Flavor) -> bool {
         let v = self.variants;
-        (f.constants == ConstantsHome::Uniform || v.immediates)
-            && (!f.table_image || v.table_image)
+        (match f.constants {
+            ConstantsHome::Uniform => true,
+            ConstantsHome::Immediates | ConstantsHome::Storage => v.immediates,
+            ConstantsHome::Worlds => v.worlds,
+        }) && (!f.table_image || v.table_image)
             && (!f.float_atomics || v.float_atomics)
             && (!f.colliders_uniform || v.colliders_uniform)
             && (!f.shuffle || v.shuffle)
@@ -530,7 +544,11 @@ impl KernelDef {
         let v = self.variants;
         let table_image = want.table_image && v.table_image;
         let flavor = Flavor {
-            constants: if v.immediates { want.constants } else { ConstantsHome::Uniform },
+            constants: match want.constants {
+                ConstantsHome::Immediates | ConstantsHome::Storage if v.immediates => want.constants,
+                ConstantsHome::Worlds if v.worlds => ConstantsHome::Worlds,
+                _ => ConstantsHome::Uniform,
+            },
             table_image,
             float_atomics: want.float_atomics && v.float_atomics && !table_image,
             colliders_uniform: want.colliders_uniform && v.colliders_uniform,
@@ -597,7 +615,7 @@ impl std::fmt::Display for KernelRef {
 }
 
 impl KernelRef {
-    /// The shader's name: `<name>[_f32][_tex][_cu][_si][_sh][_imm|_sto]`, as
+    /// The shader's name: `<name>[_f32][_tex][_cu][_si][_sh][_imm|_sto|_w]`, as
     /// shaders/build.rs names the twins.
     pub fn shader_name(&self) -> String {
         let f = self.flavor;
@@ -613,6 +631,7 @@ impl KernelRef {
                 ConstantsHome::Uniform => "",
                 ConstantsHome::Immediates => "_imm",
                 ConstantsHome::Storage => "_sto",
+                ConstantsHome::Worlds => "_w",
             }
         )
     }
@@ -891,12 +910,18 @@ const PLAIN: Variants = Variants {
     colliders_uniform: false,
     shuffle: false,
     sdf_image: false,
+    worlds: false,
 };
 const IMM_TEX: Variants = Variants { immediates: true, table_image: true, ..PLAIN };
 const IMM_F32: Variants = Variants { immediates: true, float_atomics: true, ..PLAIN };
 const IMM_CU: Variants = Variants { immediates: true, colliders_uniform: true, sdf_image: true, ..PLAIN };
 /// The blocked gathers: the table's homes, and shuffles for the window.
 const BLOCKED: Variants = Variants { shuffle: true, ..IMM_TEX };
+
+/// `v` and the `_w` twins (a kernel whose WGSL says `//! worlds`).
+const fn worlds(v: Variants) -> Variants {
+    Variants { worlds: true, ..v }
+}
 
 mod cg;
 mod forces;

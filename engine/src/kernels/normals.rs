@@ -36,6 +36,7 @@ fn vertex_normals(a: &TwinArgs, b: &mut HostBuffers) {
 /// A mesh's, per two triangles of the list.
 pub static TRI_NORMALS: KernelDef = KernelDef {
     pure: &[Faces],
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     ..KernelDef::new("tri_normals", tri_normals, Count::Quads, &[Params, Pos, Triangles], &[Faces])
 };
 /// The naive face normals: per triangle, also added to the corners' normals with atomics.
@@ -57,6 +58,7 @@ pub static TRI_NORMALS_SCATTER: KernelDef = KernelDef {
 pub static VERTEX_NORMALS: KernelDef = KernelDef {
     check: GATHER,
     pure: &[Normal, Force],
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     ..KernelDef::new(
         "vertex_normals",
         vertex_normals,

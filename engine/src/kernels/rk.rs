@@ -40,8 +40,11 @@ fn rk4_4(a: &TwinArgs, b: &mut HostBuffers) {
 
 const RK_READS: &[Buf] = &[Params, Pos, Vel, Force, RK_X0, RK_V0, RK_SUM_V, RK_SUM_A, RK_WIND];
 /// Explicit Euler: `x' = x + u`, `u' = u + f dt²/m`.
-pub static EULER: KernelDef =
-    KernelDef { label: timing::INTEGRATE, ..KernelDef::new("euler", euler, Count::Particles, STATE, &[Pos, Vel]) };
+pub static EULER: KernelDef = KernelDef {
+    label: timing::INTEGRATE,
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
+    ..KernelDef::new("euler", euler, Count::Particles, STATE, &[Pos, Vel])
+};
 /// Saves x₀, the damped v₀ and the wind for a Runge–Kutta substep.
 pub static RK_BEGIN: KernelDef = KernelDef {
     label: timing::INTEGRATE,

@@ -59,7 +59,7 @@ fn strain_limit_inline_count(a: &TwinArgs, b: &mut HostBuffers) {
 pub static STRAIN_COUNT: KernelDef = KernelDef {
     check: GATHER,
     pure: &[STRAIN_COUNTS],
-    variants: BLOCKED,
+    variants: worlds(BLOCKED),
     label: timing::STRAIN_LIMIT,
     ..KernelDef::new(
         "strain_count",
@@ -74,7 +74,7 @@ pub static STRAIN_COUNT: KernelDef = KernelDef {
 pub static STRAIN_LIMIT: KernelDef = KernelDef {
     check: GATHER,
     pure: &[PosOut],
-    variants: BLOCKED,
+    variants: worlds(BLOCKED),
     // The counts it divides by, of the disturbed positions (as the recipe runs it).
     test_input: Some(strain_count),
     ..KernelDef::new(
@@ -91,7 +91,7 @@ pub static STRAIN_LIMIT: KernelDef = KernelDef {
 pub static STRAIN_LIMIT_INLINE: KernelDef = KernelDef {
     check: GATHER,
     pure: &[PosOut],
-    variants: BLOCKED,
+    variants: worlds(BLOCKED),
     // Timed as the strain limit, as the count and the pass it replaces are.
     label: timing::STRAIN_LIMIT,
     ..KernelDef::new(
@@ -109,7 +109,7 @@ pub static STRAIN_LIMIT_INLINE: KernelDef = KernelDef {
 pub static STRAIN_LIMIT_STRIP: KernelDef = KernelDef {
     check: GATHER,
     pure: &[PosOut],
-    variants: IMM_TEX,
+    variants: worlds(IMM_TEX),
     label: timing::STRAIN_LIMIT,
     ..KernelDef::new(
         "strain_limit_strip",

@@ -71,7 +71,11 @@ fn block_base(row: u32, c0: u32, u: array<vec3<f32>, 6>, r: array<vec3<f32>, 6>,
 // Face t computed from its corners in the triangle list (for wind_at, shared/wind_fn.wgsl).
 fn face_at(t: u32) -> vec4<f32> {
     let k = 3u * t;
-    return face_of(pos[triangles[k]].xyz, pos[triangles[k + 1u]].xyz, pos[triangles[k + 2u]].xyz);
+    return face_of(
+        pos[world_base + triangles[k]].xyz,
+        pos[world_base + triangles[k + 1u]].xyz,
+        pos[world_base + triangles[k + 2u]].xyz,
+    );
 }
 
 // Particle i (on the grid, any table): its faces from the slots, their corners from the

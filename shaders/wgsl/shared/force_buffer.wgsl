@@ -3,7 +3,7 @@
 
 // The force of particle (c, row) (particle 0's, unused, off the grid: every lane loads).
 fn buffered(c: u32, row: u32) -> vec3<f32> {
-    return force[select(0u, row * p.n + c, c < p.n && row < p.n)].xyz;
+    return force[world_base + select(0u, row * p.n + c, c < p.n && row < p.n)].xyz;
 }
 
 // Block (row, c0): its particles' forces (the window's positions are not needed here).
@@ -13,5 +13,5 @@ fn block_base(row: u32, c0: u32, u: array<vec3<f32>, 6>, r: array<vec3<f32>, 6>,
 
 // Particle i (on the grid).
 fn particle_base(i: u32) -> vec3<f32> {
-    return force[i].xyz;
+    return force[world_base + i].xyz;
 }

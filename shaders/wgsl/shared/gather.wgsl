@@ -12,7 +12,7 @@ struct Pt {
 }
 
 fn point(k: u32) -> Pt {
-    return Pt(pos[k].xyz, vel[k].xyz);
+    return Pt(pos[world_base + k].xyz, vel[world_base + k].xyz);
 }
 
 // Grid point (c, r), which may lie outside the grid: its particle's point (particle 0's

@@ -31,7 +31,7 @@ fn block_particle(
     let f = forces_at_mean(vec4<f32>(base, 0.0), a.pt.v).xyz;
     let acc = grid_springs(f, a.pt, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11);
     if a.inside && interior.enabled != 0u {
-        force[i] = vec4<f32>(acc, 0.0);
+        force[world_base + i] = vec4<f32>(acc, 0.0);
     }
 }
 
@@ -130,8 +130,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         let i = row * width + c0 + k;
         if row < rows && c0 + k < width {
             let a = point(i);
-            let f = forces_at(vec4<f32>(particle_base(i), 0.0), a.v, pos[i].w);
-            force[i] = vec4<f32>(table_springs(i, a, f.xyz), 0.0);
+            let f = forces_at(vec4<f32>(particle_base(i), 0.0), a.v, pos[world_base + i].w);
+            force[world_base + i] = vec4<f32>(table_springs(i, a, f.xyz), 0.0);
         }
     }
 }

@@ -111,7 +111,7 @@ fn grab_vel(x: vec3<f32>) -> vec3<f32> {
 // core::cpu::integrate::integrate_at: the new (x, v) of particle i at x4 (w: inverse mass
 // flag) moving at v.
 fn integrated(i: u32, x4: vec4<f32>, v: vec3<f32>) -> Moved {
-    return integrated_with(i, x4, v, force[i].xyz);
+    return integrated_with(i, x4, v, force[world_base + i].xyz);
 }
 
 // integrated with the total force f given (the fused forces + integrate kernel).

@@ -47,7 +47,7 @@ fn count_row(i: u32, xi: vec3<f32>) -> f32 {
     for (var s = 0u; s < r.head; s++) {
         let slot = row_slot(i, r, s);
         if slot.neighbor >= 0 {
-            c += over(xi, pos[u32(slot.neighbor)], slot.rest);
+            c += over(xi, pos[world_base + u32(slot.neighbor)], slot.rest);
         }
     }
     return c;

@@ -4,19 +4,19 @@
 
 // Grid point a's count (its neighbours s0 … s7 unused here).
 fn own_block_count(a: Gp, s0: Gp, s1: Gp, s2: Gp, s3: Gp, s4: Gp, s5: Gp, s6: Gp, s7: Gp) -> f32 {
-    return strain_counts[a.k].x;
+    return strain_counts[world_base + a.k].x;
 }
 
 // Particle i's count (at xi) on an irregular table.
 fn own_row_count(i: u32, xi: vec3<f32>) -> f32 {
-    return strain_counts[i].x;
+    return strain_counts[world_base + i].x;
 }
 
 // A neighbour's count: grid point b, or particle b (at xb) of an irregular table.
 fn grid_neighbour_count(b: Gp) -> f32 {
-    return strain_counts[b.k].x;
+    return strain_counts[world_base + b.k].x;
 }
 
 fn row_neighbour_count(b: u32, xb: vec3<f32>) -> f32 {
-    return strain_counts[b].x;
+    return strain_counts[world_base + b].x;
 }

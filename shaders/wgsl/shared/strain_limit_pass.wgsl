@@ -22,8 +22,8 @@ fn limit_grid(c: ptr<function, Correction>, b: Gp, s: u32, xi: vec3<f32>, wi: f3
 // Stores particle k's corrected point `out` (from x4) and the velocity its move implies
 // (core::cpu::strain_limit::strain_vel: v += (out − x)·(1/dt)).
 fn store_point(k: u32, x4: vec4<f32>, out: vec4<f32>) {
-    pos_out[k] = out;
-    vel[k] = vec4<f32>(vel[k].xyz + (out.xyz - x4.xyz) * (1.0 / p.dt), 0.0);
+    pos_out[world_base + k] = out;
+    vel[world_base + k] = vec4<f32>(vel[world_base + k].xyz + (out.xyz - x4.xyz) * (1.0 / p.dt), 0.0);
     strained(k, out);
 }
 
@@ -54,7 +54,7 @@ fn block_particle(row: u32, col: u32, a: Gp, s0: Gp, s1: Gp, s2: Gp, s3: Gp, s4:
 
 // Particle i from its table (an irregular table).
 fn table_particle(i: u32) {
-    let x4 = pos[i];
+    let x4 = pos[world_base + i];
     let wi = mobility(i, x4.w);
     let ci = own_row_count(i, x4.xyz);
     var c = Correction(vec3<f32>(0.0), 0.0);
@@ -65,7 +65,7 @@ fn table_particle(i: u32) {
         let slot = row_slot(i, r, s);
         if slot.neighbor >= 0 {
             let b = u32(slot.neighbor);
-            let xb4 = pos[b];
+            let xb4 = pos[world_base + b];
             var cb = 0.0;
             if over(x4.xyz, xb4, slot.rest) != 0.0 {
                 cb = row_neighbour_count(b, xb4.xyz);

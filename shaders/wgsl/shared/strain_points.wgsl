@@ -17,7 +17,7 @@ var<private> interior: GridSpringConstants;
 // The pins' positions for the tethers (shared/strain_fn.wgsl's `finish`): this pass's
 // input positions.
 fn pin_point(pin: u32) -> vec3<f32> {
-    return pos[pin].xyz;
+    return pos[world_base + pin].xyz;
 }
 
 // Grid point (c, r): its particle (particle 0 when outside the grid, so that every lane
@@ -32,5 +32,5 @@ fn grid_point(c: i32, r: i32) -> Gp {
     let n = i32(p.n);
     let inside = c >= 0 && c < n && r >= 0 && r < n;
     let k = u32(select(0, r * n + c, inside));
-    return Gp(k, pos[k], inside);
+    return Gp(k, pos[world_base + k], inside);
 }

@@ -156,8 +156,16 @@ fn surface_vel(v: vec3<f32>, spin: vec3<f32>, arm: vec3<f32>) -> vec3<f32> {
     );
 }
 
+// The first particle and the first face of the invocation's world. A single run's kernels
+// see these constants; a kernel's `_w` twin (a batch of worlds, each world a z of the
+// dispatch) has private variables instead, set by its first statement from the world's
+// step constants (shaders/build.rs): a world's particles follow each other, world after
+// world, and its faces start at twice its first particle.
+const world_base: u32 = 0u;
+const face_base: u32 = 0u;
+
 // Invocation index of a 1-D job dispatched as a 2-D grid of workgroups (one dimension
-// holds at most 65535 workgroups).
+// holds at most 65535 workgroups): within its world.
 fn flat_id(id: vec3<u32>, groups: vec3<u32>) -> u32 {
     return id.x + id.y * groups.x * WORKGROUP;
 }

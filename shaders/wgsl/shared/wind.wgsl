@@ -10,5 +10,5 @@ var<private> p: StepParams;
 
 // Face t, as tri_normals stored it (for wind_at, shared/wind_fn.wgsl).
 fn face_at(t: u32) -> vec4<f32> {
-    return faces[t];
+    return faces[face_base + t];
 }

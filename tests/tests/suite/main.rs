@@ -33,3 +33,4 @@ mod two_cloths;
 mod vulkan_render;
 mod vulkan_window;
 mod wgpu_on_gl;
+mod worlds;

@@ -1,0 +1,127 @@
+//! A batch of worlds on each GPU API (`GpuSolver::new_worlds`, engine/src/worlds.rs):
+//! every kernel dispatched once for all worlds, and world k computing, bit for bit, what a
+//! single run of the scene with world k's parameters computes on the same API and recipe
+//! (whose bits are the CPU's: scenes.rs, integrators.rs). What a batch cannot share yet is
+//! refused in one line.
+
+use clothlab_core::scene::ClothSpec;
+use clothlab_core::{Integrator, Scene, SimParams, Solver};
+use clothlab_engine::{Batch, VariantSpec};
+use clothlab_tests::Api;
+
+/// The default scene (floor, three spheres, top corners pinned) at 18 × 18: rows that
+/// are not a whole number of the gathers' blocks of four.
+fn scene() -> Scene {
+    Scene { cloth: ClothSpec { n: 18, ..ClothSpec::default() }, ..Scene::default() }
+}
+
+/// World k's parameters: damping, wind, gravity and drag differ from world to world.
+fn world(k: usize) -> SimParams {
+    let k = k as f32;
+    SimParams {
+        damping: 0.0005 + 0.002 * k,
+        wind: [1.5 * k, 0.0, -0.5 * k],
+        gravity: [0.0, -9.81 + 0.7 * k, 0.0],
+        air_drag: 0.1 + 0.05 * k,
+        // Tight enough that the strain passes move particles in every world.
+        strain_limit: 0.001 / (1.0 + k),
+        ..SimParams::default()
+    }
+}
+
+/// The recipes: the optimized one (the gathers fused, the wind in the forces, the normals
+/// once a frame, the strain limit counting for itself) and the kernels one by one (forces,
+/// springs, integrate, collide, strain count and pass, both normals kernels).
+fn specs() -> [VariantSpec; 2] {
+    [
+        VariantSpec::parse("optimized", &[]).expect("a preset"),
+        VariantSpec::parse("naive", &["springs=gather".into(), "normals=gather".into()]).expect("switches"),
+    ]
+}
+
+fn bits(v: &[[f32; 4]]) -> Vec<u32> {
+    v.iter().flatten().map(|x| x.to_bits()).collect()
+}
+
+/// Every world's state against its single run's, bit for bit.
+fn assert_worlds_are_their_runs(batch: &mut dyn Batch, singles: &mut [Box<dyn Solver>], what: &str) {
+    for (k, single) in singles.iter_mut().enumerate() {
+        let (got, want) = (batch.world_state(k).unwrap(), single.state().unwrap());
+        for (name, g, w) in [("positions", &got.pos, &want.pos), ("velocities", &got.vel, &want.vel)] {
+            let differ = bits(g).iter().zip(bits(w)).filter(|(a, b)| **a != *b).count();
+            assert_eq!(differ, 0, "{what}, world {k}: {differ} words of its {name} differ from its single run's");
+        }
+    }
+}
+
+/// The fan mesh (513 vertices, 960 triangles; scenes/mesh-fan.toml): the tables' paths,
+/// each particle's own mass, the faces from the triangle list.
+fn fan() -> Scene {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    clothlab_core::SceneFile::load(&dir.join("mesh-fan.toml")).unwrap_or_else(|e| panic!("{e}")).scene
+}
+
+fn a_gpu_batch_s_world_k_is_its_single_run_bit_for_bit(api: Api) {
+    let worlds: Vec<SimParams> = (0..4).map(world).collect();
+    let [optimized, one_by_one] = specs();
+    for (sc, spec) in [(scene(), optimized.clone()), (scene(), one_by_one), (fan(), optimized)] {
+        let what = format!("{api} {} {spec:?}", if sc.cloth.is_mesh() { "fan" } else { "grid" });
+        let Some(batch) = api.batch(spec.clone(), &sc, worlds.clone()) else { return };
+        let mut batch = batch.unwrap_or_else(|e| panic!("{what}: {e}"));
+        let mut singles: Vec<Box<dyn Solver>> =
+            worlds.iter().map(|p| api.solver(spec.clone(), &sc, p).expect("an adapter").into_solver()).collect();
+        // Every kernel of the batch's recipe is a `_w` twin: one dispatch for all worlds.
+        let kernels = batch.recipe_kernels();
+        assert!(kernels.iter().all(|k| k.shader_name().ends_with("_w")), "{what}: {kernels:?}");
+        for _ in 0..2 {
+            batch.step_frame().unwrap();
+            singles.iter_mut().for_each(|s| s.step_frame().unwrap());
+        }
+        assert_worlds_are_their_runs(batch.as_mut(), &mut singles, &what);
+        // The worlds differ (so a world computed with another's parameters would show).
+        let (w0, w3) = (batch.world_state(0).unwrap(), batch.world_state(3).unwrap());
+        assert_ne!(bits(&w0.pos), bits(&w3.pos), "{what}: worlds 0 and 3 moved alike");
+        // New parameters, world by world (world k gets world 3 − k's), reach their worlds.
+        let changed: Vec<SimParams> = worlds.iter().rev().cloned().collect();
+        batch.set_world_params(changed.clone()).unwrap();
+        for (s, p) in singles.iter_mut().zip(&changed) {
+            s.set_params(p.clone()).unwrap();
+        }
+        batch.step_frame().unwrap();
+        singles.iter_mut().for_each(|s| s.step_frame().unwrap());
+        assert_worlds_are_their_runs(batch.as_mut(), &mut singles, &format!("{what}, parameters changed"));
+        // A world's state set from outside is what it then holds, the others unchanged.
+        let before = batch.world_state(1).unwrap();
+        let mut moved = batch.world_state(2).unwrap();
+        moved.pos.iter_mut().for_each(|x| x[1] += 0.25);
+        batch.set_world_state(2, &moved).unwrap();
+        assert_eq!(bits(&batch.world_state(2).unwrap().pos), bits(&moved.pos), "{what}: world 2 set");
+        assert_eq!(bits(&batch.world_state(1).unwrap().pos), bits(&before.pos), "{what}: world 1 untouched");
+        batch.api_check().unwrap();
+    }
+}
+clothlab_tests::per_api!(a_gpu_batch_s_world_k_is_its_single_run_bit_for_bit);
+
+#[test]
+fn what_a_gpu_batch_cannot_share_is_refused_in_one_line_naming_the_world_or_the_kernel() {
+    let (sc, spec) = (scene(), VariantSpec::parse("optimized", &[]).unwrap());
+    let refused = |worlds: Vec<SimParams>| match Api::Wgpu.batch(spec.clone(), &sc, worlds) {
+        None => None,
+        Some(Ok(_)) => panic!("a batch it cannot run was built"),
+        Some(Err(e)) => Some(e.to_string()),
+    };
+    let softer = SimParams { structural_stiffness: 0.5 * world(1).structural_stiffness, ..world(1) };
+    let Some(e) = refused(vec![world(0), softer]) else { return };
+    assert!(e.contains("world 1") && e.contains("stiffness") && !e.contains('\n'), "{e}");
+    let xpbd = SimParams { integrator: Integrator::Xpbd, ..world(0) };
+    let e = refused(vec![xpbd.clone(), xpbd]).unwrap();
+    assert!(e.contains("xpbd") && e.contains("no world dimension"), "{e}");
+    // A world's bad value is refused naming it, nothing changed.
+    let mut batch = Api::Wgpu.batch(spec, &sc, (0..3).map(world).collect()).unwrap().unwrap();
+    let bad = vec![world(0), world(1), SimParams { damping: -1.0, ..world(2) }];
+    let e = batch.set_world_params(bad).unwrap_err().to_string();
+    assert!(e.starts_with("world 2:"), "{e}");
+    assert_eq!(batch.world_params()[2], world(2), "world 2's parameters kept");
+    let e = batch.world_state(3).unwrap_err().to_string();
+    assert!(e.contains("world 3") && e.contains("3 worlds"), "{e}");
+}
