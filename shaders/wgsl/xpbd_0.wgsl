@@ -1,4 +1,5 @@
 //! include: state, table, aux, xpbd, xpbd_grid, adjacency
+//! worlds
 // xpbd_0 — XPBD pass 0 of 12: the springs in slot 1 (offset (1, 0)) of the particles of
 // colour 0 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)

@@ -1,4 +1,5 @@
 //! include: state, table, aux, xpbd, xpbd_grid, adjacency
+//! worlds
 // xpbd_1 — XPBD pass 1 of 12: the springs in slot 1 (offset (1, 0)) of the particles of
 // colour 1 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)

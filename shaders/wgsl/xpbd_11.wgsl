@@ -1,4 +1,5 @@
 //! include: state, table, aux, xpbd, xpbd_grid, adjacency
+//! worlds
 // xpbd_11 — XPBD pass 11 of 12: the springs in slot 11 (offset (0, 2)) of the particles of
 // colour 1 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)

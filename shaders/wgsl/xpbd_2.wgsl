@@ -1,4 +1,5 @@
 //! include: state, table, aux, xpbd, xpbd_grid, adjacency
+//! worlds
 // xpbd_2 — XPBD pass 2 of 12: the springs in slot 3 (offset (0, 1)) of the particles of
 // colour 0 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)

@@ -1,4 +1,5 @@
 //! include: state, table, aux, xpbd, xpbd_grid, adjacency
+//! worlds
 // xpbd_4 — XPBD pass 4 of 12: the springs in slot 7 (offset (1, 1)) of the particles of
 // colour 0 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)

@@ -1,4 +1,5 @@
 //! include: state, table, aux, xpbd, xpbd_grid, adjacency
+//! worlds
 // xpbd_6 — XPBD pass 6 of 12: the springs in slot 6 (offset (-1, 1)) of the particles of
 // colour 0 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)

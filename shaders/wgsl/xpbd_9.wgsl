@@ -1,4 +1,5 @@
 //! include: state, table, aux, xpbd, xpbd_grid, adjacency
+//! worlds
 // xpbd_9 — XPBD pass 9 of 12: the springs in slot 9 (offset (2, 0)) of the particles of
 // colour 1 (core::cpu::integrators::XPBD_PASSES).
 @compute @workgroup_size(WORKGROUP)

@@ -1,4 +1,5 @@
 //! include: state, aux, xpbd, range
+//! worlds
 // xpbd_mesh — one XPBD pass of a mesh (core::cpu::integrators::xpbd_mesh_pass): springs
 // first … first + count − 1 of the spring list, one colour of its greedy colouring (the
 // list is sorted by pass when the mesh is built: clothlab_core::grid::MeshTables), so no
@@ -21,17 +22,17 @@ fn spring_at(k: u32) -> Spring {
 fn mesh_lambda(k: u32) -> f32 {
     let words = 4u * p.num_particles;
     if k < words {
-        return aux0[k / 4u][k % 4u];
+        return aux0[world_base + k / 4u][k % 4u];
     }
-    return aux1[(k - words) / 4u][(k - words) % 4u];
+    return aux1[world_base + (k - words) / 4u][(k - words) % 4u];
 }
 
 fn set_mesh_lambda(k: u32, l: f32) {
     let words = 4u * p.num_particles;
     if k < words {
-        aux0[k / 4u][k % 4u] = l;
+        aux0[world_base + k / 4u][k % 4u] = l;
     } else {
-        aux1[(k - words) / 4u][(k - words) % 4u] = l;
+        aux1[world_base + (k - words) / 4u][(k - words) % 4u] = l;
     }
 }
 

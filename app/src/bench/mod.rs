@@ -123,6 +123,12 @@ pub fn bench(mut args: BenchArgs) -> Result<ExitCode> {
         }
         args.out = dir.clone();
     }
+    if args.replot && !args.envs.is_empty() {
+        for f in worlds::replot(&args.out)? {
+            outln!("wrote {}", f.display())?;
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
     if args.replot && args.integrators {
         for f in integrators::replot(&args.out)? {
             outln!("wrote {}", f.display())?;

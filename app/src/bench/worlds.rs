@@ -176,6 +176,42 @@ pub fn csv(rows: &[Row]) -> String {
     s
 }
 
+/// Draws worlds.{svg,png} of `out`/worlds.csv again (`bench --envs .. --replot`); the
+/// machine's label is read from the report beside it (its line after the title).
+pub fn replot(out: &std::path::Path) -> Result<Vec<std::path::PathBuf>> {
+    use anyhow::Context as _;
+    let path = out.join("worlds.csv");
+    let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    let rows = text
+        .lines()
+        .skip(1)
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            let num = |k: usize| -> Result<f64> {
+                f.get(k)
+                    .and_then(|v| v.parse().ok())
+                    .with_context(|| format!("{}: `{l}` is not a row of a worlds run", path.display()))
+            };
+            Ok(Row {
+                n: num(0)? as u32,
+                backend: f[1].to_owned(),
+                envs: num(2)? as u32,
+                batched_us: num(3)?,
+                spread: num(4)?,
+                separate_us: num(5)?,
+            })
+        })
+        .collect::<Result<Vec<Row>>>()?;
+    let md = std::fs::read_to_string(out.join("worlds.md")).unwrap_or_default();
+    let machine = md.lines().nth(2).and_then(|l| l.split(';').next()).unwrap_or("unknown machine").to_owned();
+    let (svg, png) = both(&Lines { rows: &rows, machine: &machine })?;
+    let files = [out.join("worlds.svg"), out.join("worlds.png")];
+    clothlab::files::write_bytes(&files[0], svg.as_bytes())?;
+    clothlab::files::write_bytes(&files[1], &png)?;
+    Ok(files.to_vec())
+}
+
 /// Lines: µs per world-substep against worlds (log axes), a line per backend and size,
 /// the batch solid and the separate runs dashed.
 struct Lines<'a> {
@@ -213,25 +249,47 @@ impl Figure for Lines<'_> {
             .map_err(err)?;
         let mut lines: Vec<(u32, &str)> = self.rows.iter().map(|r| (r.n, r.backend.as_str())).collect();
         lines.dedup();
-        let palette = [RGBColor(40, 90, 170), RGBColor(220, 120, 40), RGBColor(90, 160, 80), RGBColor(160, 60, 160)];
-        for (i, (n, b)) in lines.iter().enumerate() {
-            let colour = palette[i % palette.len()];
+        // A colour a backend (the five default ones apart), a wider line a larger size.
+        let palette = [
+            RGBColor(40, 90, 170),
+            RGBColor(220, 120, 40),
+            RGBColor(90, 160, 80),
+            RGBColor(160, 60, 160),
+            RGBColor(200, 50, 50),
+            RGBColor(60, 170, 180),
+        ];
+        let mut backends: Vec<&str> = Vec::new();
+        let mut sizes: Vec<u32> = Vec::new();
+        for &(n, b) in &lines {
+            if !backends.contains(&b) {
+                backends.push(b);
+            }
+            if !sizes.contains(&n) {
+                sizes.push(n);
+            }
+        }
+        for (n, b) in &lines {
+            let colour = palette[backends.iter().position(|x| x == b).unwrap_or(0) % palette.len()];
+            let wide = sizes.iter().position(|x| x == n).unwrap_or(0) as u32;
             let of: Vec<&Row> = self.rows.iter().filter(|r| r.n == *n && r.backend == *b).collect();
             chart
-                .draw_series(LineSeries::new(of.iter().map(|r| (r.envs as f64, r.batched_us)), colour.stroke_width(2)))
+                .draw_series(LineSeries::new(
+                    of.iter().map(|r| (r.envs as f64, r.batched_us)),
+                    colour.stroke_width(2 + wide),
+                ))
                 .map_err(err)?
                 .label(format!("{b}, n = {n}: batch"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2)));
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2 + wide)));
             chart
                 .draw_series(DashedLineSeries::new(
                     of.iter().map(|r| (r.envs as f64, r.separate_us)),
                     6,
                     4,
-                    colour.stroke_width(1),
+                    colour.stroke_width(1 + wide),
                 ))
                 .map_err(err)?
                 .label(format!("{b}, n = {n}: separate"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(1)));
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(1 + wide)));
         }
         chart
             .configure_series_labels()

@@ -48,7 +48,7 @@ const fn xpbd(name: &'static str, twin: Twin, pass: usize) -> KernelDef {
     KernelDef {
         check: GATHER,
         label: timing::XPBD,
-        variants: IMM_TEX,
+        variants: worlds(IMM_TEX),
         cloths: Cloths::Grid,
         on_mesh: if pass == cpu::XPBD_ORDER[0] { OnMesh::Kernel(&XPBD_MESH) } else { OnMesh::Nothing },
         ..KernelDef::new(
@@ -80,7 +80,7 @@ pub static XPBD: [KernelDef; 12] = [
 pub static XPBD_MESH: KernelDef = KernelDef {
     check: GATHER,
     label: timing::XPBD,
-    variants: PLAIN,
+    variants: worlds(PLAIN),
     immediates: Immediates::Range,
     cloths: Cloths::Mesh,
     dispatches: Dispatches::MeshPasses,

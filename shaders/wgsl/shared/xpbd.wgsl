@@ -21,8 +21,8 @@ struct Solved {
 // multiplier l, both ends (and their velocities) moved in place; nothing when neither
 // moves.
 fn xpbd_solve(a: u32, b: u32, slot: SpringSlot, l: f32) -> Solved {
-    let xa4 = pos[a];
-    let xb4 = pos[b];
+    let xa4 = pos[world_base + a];
+    let xb4 = pos[world_base + b];
     // w / m̄ as one division, as the twin computes it (w · (1 / m̄) rounds twice, and a
     // compiler allowed reciprocals may rewrite one into the other).
     let wa = mobility(a, xa4.w) / p.particle_mass;
@@ -38,16 +38,16 @@ fn xpbd_solve(a: u32, b: u32, slot: SpringSlot, l: f32) -> Solved {
     let n = d * (1.0 / len);
     let alpha = 1.0 / (slot.ks * p.dt * p.dt);
     let gamma = slot.kd / (slot.ks * p.dt);
-    let va = vel[a].xyz;
-    let vb = vel[b].xyz;
+    let va = vel[world_base + a].xyz;
+    let vb = vel[world_base + b].xyz;
     let rel = dot3(n, va - vb) * p.dt;
     let dl = -((len - slot.rest) + alpha * l + gamma * rel) / ((1.0 + gamma) * (wa + wb) + alpha);
     let da = n * (dl * wa);
     let db = n * (dl * wb);
     let inv_dt = 1.0 / p.dt;
-    pos[a] = vec4<f32>(xa4.xyz + da, xa4.w);
-    pos[b] = vec4<f32>(xb4.xyz - db, xb4.w);
-    vel[a] = vec4<f32>(va + da * inv_dt, 0.0);
-    vel[b] = vec4<f32>(vb - db * inv_dt, 0.0);
+    pos[world_base + a] = vec4<f32>(xa4.xyz + da, xa4.w);
+    pos[world_base + b] = vec4<f32>(xb4.xyz - db, xb4.w);
+    vel[world_base + a] = vec4<f32>(va + da * inv_dt, 0.0);
+    vel[world_base + b] = vec4<f32>(vb - db * inv_dt, 0.0);
     return Solved(true, dl);
 }

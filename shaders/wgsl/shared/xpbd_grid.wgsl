@@ -12,16 +12,16 @@ fn xpbd_colour(di: i32, dj: i32, i: u32, j: u32) -> u32 {
 
 fn lambda_at(a: u32, buf: u32, c: u32) -> f32 {
     if buf == 0u {
-        return aux0[a][c];
+        return aux0[world_base + a][c];
     }
-    return aux1[a][c];
+    return aux1[world_base + a][c];
 }
 
 fn set_lambda(a: u32, buf: u32, c: u32, l: f32) {
     if buf == 0u {
-        aux0[a][c] = l;
+        aux0[world_base + a][c] = l;
     } else {
-        aux1[a][c] = l;
+        aux1[world_base + a][c] = l;
     }
 }
 
