@@ -76,9 +76,11 @@ pub struct ClothRange {
 /// world's particles, world after world; what reads one cloth (its state, a picture, a
 /// recording) reads world 0. On the CPU each world is a solver of its own, the worlds
 /// stepped on rayon's threads on `cpu-par` (a kernel costs no launch there, so a world
-/// runs its substeps through without waiting for the others).
+/// runs its substeps through without waiting for the others); on a GPU backend one solver
+/// holds every world and dispatches each kernel once for all of them
+/// (`clothlab_engine::worlds`: what its worlds share, what it refuses).
 pub struct Sim {
-    /// World 0.
+    /// World 0 (a GPU batch: every world).
     solver: AnySolver,
     /// Worlds 1 and on (a batch on a CPU backend).
     worlds: Vec<CpuSolver>,

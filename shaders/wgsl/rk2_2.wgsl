@@ -1,4 +1,5 @@
 //! include: state, aux, rk
+//! worlds
 // rk2_2 — the midpoint method's second stage: the end of the substep (core::cpu::integrators::RK2).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

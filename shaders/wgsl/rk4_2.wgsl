@@ -1,4 +1,5 @@
 //! include: state, aux, rk
+//! worlds
 // rk4_2 — RK4's second stage (core::cpu::integrators::RK4).
 @compute @workgroup_size(WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

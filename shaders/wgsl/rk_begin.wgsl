@@ -1,4 +1,5 @@
 //! include: state, aux
+//! worlds
 // rk_begin — the start of a Runge–Kutta substep (core::cpu::integrators::rk_begin): saves
 // x₀, the damped v₀ and the wind force, and writes v₀ to the velocities.
 @compute @workgroup_size(WORKGROUP)
@@ -8,10 +9,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let x4 = pos[i];
-    let v0 = vec4<f32>(vel[i].xyz * (1.0 - p.damping), 0.0);
-    aux0[i] = x4;
-    aux1[i] = v0;
-    aux4[i] = force[i];
-    vel[i] = v0;
+    let x4 = pos[world_base + i];
+    let v0 = vec4<f32>(vel[world_base + i].xyz * (1.0 - p.damping), 0.0);
+    aux0[world_base + i] = x4;
+    aux1[world_base + i] = v0;
+    aux4[world_base + i] = force[world_base + i];
+    vel[world_base + i] = v0;
 }

@@ -49,12 +49,14 @@ pub static EULER: KernelDef = KernelDef {
 pub static RK_BEGIN: KernelDef = KernelDef {
     label: timing::INTEGRATE,
     pure: &[RK_X0, RK_V0, RK_WIND],
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     ..KernelDef::new("rk_begin", rk_begin, Count::Particles, STATE, &[Vel, RK_X0, RK_V0, RK_WIND])
 };
 /// A stage kernel (every stage's shader has the force write; the last one never runs it).
 const fn rk(name: &'static str, twin: Twin) -> KernelDef {
     KernelDef {
         label: timing::INTEGRATE,
+        variants: worlds(Variants { immediates: true, ..PLAIN }),
         ..KernelDef::new(name, twin, Count::Particles, RK_READS, &[Pos, Vel, Force, RK_SUM_V, RK_SUM_A])
     }
 }

@@ -4,30 +4,30 @@
 // saved wind back in the force buffer), or the last stage ends the substep at
 // y₀ + dt Σ bₛkₛ.
 fn rk_stage(i: u32, c_next: f32, b: f32, first: bool, last: bool) {
-    let x4 = pos[i];
-    let us = vel[i].xyz;
-    let gs = accel_dt(force[i].xyz, x4.w);
+    let x4 = pos[world_base + i];
+    let us = vel[world_base + i].xyz;
+    let gs = accel_dt(force[world_base + i].xyz, x4.w);
     var sx = us * b;
     var su = gs * b;
     if !first {
-        sx = aux2[i].xyz + us * b;
-        su = aux3[i].xyz + gs * b;
+        sx = aux2[world_base + i].xyz + us * b;
+        su = aux3[world_base + i].xyz + gs * b;
     }
-    let x0 = aux0[i].xyz;
-    let v0 = aux1[i].xyz;
-    aux2[i] = vec4<f32>(sx, 0.0);
-    aux3[i] = vec4<f32>(su, 0.0);
+    let x0 = aux0[world_base + i].xyz;
+    let v0 = aux1[world_base + i].xyz;
+    aux2[world_base + i] = vec4<f32>(sx, 0.0);
+    aux3[world_base + i] = vec4<f32>(su, 0.0);
     if last {
         let m = finish_at(i, x4, x0 + sx * p.dt, v0 + su);
-        vel[i] = vec4<f32>(m.v, 0.0);
-        pos[i] = vec4<f32>(m.x, x4.w);
+        vel[world_base + i] = vec4<f32>(m.v, 0.0);
+        pos[world_base + i] = vec4<f32>(m.x, x4.w);
         return;
     }
-    force[i] = aux4[i];
+    force[world_base + i] = aux4[world_base + i];
     if held(i, x4.w) {
-        vel[i] = vec4<f32>(0.0);
+        vel[world_base + i] = vec4<f32>(0.0);
         return;
     }
-    pos[i] = vec4<f32>(x0 + us * (c_next * p.dt), x4.w);
-    vel[i] = vec4<f32>(v0 + gs * c_next, 0.0);
+    pos[world_base + i] = vec4<f32>(x0 + us * (c_next * p.dt), x4.w);
+    vel[world_base + i] = vec4<f32>(v0 + gs * c_next, 0.0);
 }

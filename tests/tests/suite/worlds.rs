@@ -1,8 +1,8 @@
 //! A batch of worlds on each GPU API (`GpuSolver::new_worlds`, engine/src/worlds.rs):
 //! every kernel dispatched once for all worlds, and world k computing, bit for bit, what a
 //! single run of the scene with world k's parameters computes on the same API and recipe
-//! (whose bits are the CPU's: scenes.rs, integrators.rs), under Verlet and XPBD, on a grid
-//! and a mesh. What a batch cannot share yet is refused in one line.
+//! (whose bits are the CPU's: scenes.rs, integrators.rs), under Verlet, XPBD and RK4, on
+//! a grid and a mesh. What a batch cannot share yet is refused in one line.
 
 use clothlab_core::scene::ClothSpec;
 use clothlab_core::{Integrator, Scene, SimParams, Solver};
@@ -47,6 +47,7 @@ fn bits(v: &[[f32; 4]]) -> Vec<u32> {
 fn assert_worlds_are_their_runs(batch: &mut dyn Batch, singles: &mut [Box<dyn Solver>], what: &str) {
     for (k, single) in singles.iter_mut().enumerate() {
         let (got, want) = (batch.world_state(k).unwrap(), single.state().unwrap());
+        assert!(got.pos.iter().flatten().all(|x| x.is_finite()), "{what}, world {k}: not finite");
         for (name, g, w) in [("positions", &got.pos, &want.pos), ("velocities", &got.vel, &want.vel)] {
             let differ = bits(g).iter().zip(bits(w)).filter(|(a, b)| **a != *b).count();
             assert_eq!(differ, 0, "{what}, world {k}: {differ} words of its {name} differ from its single run's");
@@ -68,6 +69,7 @@ fn a_gpu_batch_s_world_k_is_its_single_run_bit_for_bit(api: Api) {
         (scene(), optimized.clone(), verlet),
         (scene(), one_by_one, verlet),
         (scene(), optimized.clone(), xpbd),
+        (scene(), optimized.clone(), Integrator::Rk4),
         (fan(), optimized.clone(), verlet),
         (fan(), optimized, xpbd),
     ];
