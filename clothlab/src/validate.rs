@@ -332,8 +332,8 @@ pub fn validate_worlds(
             reference.push((on, ends));
         }
         let ends = &reference.iter().find(|(b, _)| *b == on).expect("just made").1;
-        for (k, want) in ends.iter().enumerate() {
-            let got = batch.world_state(k)?;
+        let states = batch.world_states()?;
+        for (k, (want, got)) in ends.iter().zip(states).enumerate() {
             for (buffer, g, w) in [("pos", &got.pos, &want.pos), ("vel", &got.vel, &want.vel)] {
                 let what = format!("world {k} vs its single run");
                 let check = clothlab_cpu::validate::compare(&what, buffer, g, w, false, 0.0);

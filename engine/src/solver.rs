@@ -1112,6 +1112,11 @@ pub trait Batch {
     fn set_world_state(&mut self, k: usize, state: &ClothState) -> Result<(), SolverError>;
     /// A field of every world, world after world.
     fn fields(&mut self, field: clothlab_core::StateField) -> Result<Vec<V4>, SolverError>;
+    /// Every world's state, each buffer read once.
+    fn states(&mut self) -> Result<Vec<ClothState>, SolverError>;
+    /// Sets every world's state (one a world, each checked first: nothing changes where
+    /// one is refused), each buffer written once.
+    fn set_states(&mut self, states: &[ClothState]) -> Result<(), SolverError>;
     /// World `k`'s simulated time, s.
     fn world_time(&self, k: usize) -> f64;
     /// Sets world `k`'s time; refused in a scene whose colliders or pins move (its worlds
@@ -1193,6 +1198,39 @@ impl<E: Engine> Batch for GpuSolver<E> {
             StateField::Force => Buf::Force,
             StateField::Normal => Buf::Normal,
         })
+    }
+
+    fn states(&mut self) -> Result<Vec<ClothState>, SolverError> {
+        let (n, np) = (self.topo.n, self.topo.num_particles().max(1));
+        let [pos, vel, force, normal] = [Buf::Pos, Buf::Vel, Buf::Force, Buf::Normal].map(|b| self.read(b));
+        let (pos, vel, force, normal) = (pos?, vel?, force?, normal?);
+        Ok((0..self.worlds.len())
+            .map(|k| {
+                let rows = |v: &[V4]| v[k * np..(k + 1) * np].to_vec();
+                ClothState { n, pos: rows(&pos), vel: rows(&vel), force: rows(&force), normal: rows(&normal) }
+            })
+            .collect())
+    }
+
+    fn set_states(&mut self, states: &[ClothState]) -> Result<(), SolverError> {
+        if states.len() != self.worlds.len() {
+            return Err(SolverError::Invalid(format!("{} states for {} worlds", states.len(), self.worlds.len())));
+        }
+        for (k, st) in states.iter().enumerate() {
+            st.check(&self.topo).map_err(|e| SolverError::Invalid(format!("world {k}: {e}")))?;
+        }
+        let all =
+            |f: fn(&ClothState) -> &Vec<V4>| states.iter().flat_map(|st| f(st).iter().copied()).collect::<Vec<V4>>();
+        let (pos, vel, force, normal) = (all(|s| &s.pos), all(|s| &s.vel), all(|s| &s.force), all(|s| &s.normal));
+        self.write(Buf::Pos, bytemuck::cast_slice(&pos))?;
+        self.write(Buf::Vel, bytemuck::cast_slice(&vel))?;
+        self.write(Buf::Force, bytemuck::cast_slice(&force))?;
+        self.write(Buf::Normal, bytemuck::cast_slice(&normal))?;
+        if let Some([p, nrm]) = self.draw {
+            self.engine.write(p, bytemuck::cast_slice(&states[0].pos))?;
+            self.engine.write(nrm, bytemuck::cast_slice(&states[0].normal))?;
+        }
+        Ok(())
     }
 
     fn world_time(&self, k: usize) -> f64 {

@@ -215,7 +215,7 @@ fn batch(
         None => None,
     };
     if let Some(rec) = &mut recording {
-        rec.frame(0, |k| sim.world_state(k))?;
+        sim.record_frame(rec, 0)?;
     }
     if let (Some((path, OutFormat::Obj)), None) = (&out, args.world) {
         bail!(
@@ -232,7 +232,7 @@ fn batch(
         sim.step(1)?;
         wall += t0.elapsed();
         if let Some(rec) = &mut recording {
-            rec.frame(f, |k| sim.world_state(k))?;
+            sim.record_frame(rec, f)?;
         }
         if args.check_crossings {
             let c = sim.crossings()?;
@@ -250,8 +250,7 @@ fn batch(
     let (mut max_strain, mut lowest, mut nan, mut crossed) = (0f32, f32::INFINITY, 0usize, 0usize);
     let mut all =
         clothlab::core::ClothState { n: 0, pos: Vec::new(), vel: Vec::new(), force: Vec::new(), normal: Vec::new() };
-    for k in 0..envs {
-        let state = sim.world_state(k)?;
+    for state in sim.world_states()? {
         let summary = summarize(&state, sim.topology());
         max_strain = max_strain.max(summary.max_strain);
         lowest = lowest.min(summary.lowest_y);
