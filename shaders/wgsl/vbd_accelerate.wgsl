@@ -1,4 +1,5 @@
 //! include: state, aux, range
+//! worlds
 // vbd_accelerate — the paper's Chebyshev acceleration after a VBD sweep
 // (core::cpu::vbd::vbd_accelerate): D ← ω (D − D⁽ᵏ⁻²⁾) + D⁽ᵏ⁻²⁾ per free particle, the sweeps'
 // last two results in aux3 (the last) and aux4 (the one before); after the first sweep
@@ -15,21 +16,21 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let omega = bitcast<f32>(range.first);
-    let d = aux2[i].xyz;
+    let d = aux2[world_base + i].xyz;
     var acc = d;
     var last = d;
     var before = d;
-    if !held(i, aux1[i].w) {
+    if !held(i, aux1[world_base + i].w) {
         if omega == 1.0 {
-            before = aux0[i].xyz * p.dt;
+            before = aux0[world_base + i].xyz * p.dt;
         } else {
-            before = aux4[i].xyz;
+            before = aux4[world_base + i].xyz;
             acc = (d - before) * omega + before;
             last = acc;
-            before = aux3[i].xyz;
+            before = aux3[world_base + i].xyz;
         }
     }
-    aux2[i] = vec4<f32>(acc, 0.0);
-    aux3[i] = vec4<f32>(last, 0.0);
-    aux4[i] = vec4<f32>(before, 0.0);
+    aux2[world_base + i] = vec4<f32>(acc, 0.0);
+    aux3[world_base + i] = vec4<f32>(last, 0.0);
+    aux4[world_base + i] = vec4<f32>(before, 0.0);
 }

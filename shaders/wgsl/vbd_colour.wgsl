@@ -1,4 +1,5 @@
 //! include: state, table, aux, adjacency, colliders, range, vbd
+//! worlds
 // vbd_colour — one colour of Vertex Block Descent's sweep (core::cpu::vbd::vbd_colour and
 // block_step): particles first … first + count − 1 of the colouring's list (binding 31,
 // clothlab_core::tables::Colours; no two of a colour share a spring, so each reads only
@@ -23,5 +24,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if !block_begin(i) {
         return;
     }
-    aux2[i] = vec4<f32>(block_end(), 0.0);
+    aux2[world_base + i] = vec4<f32>(block_end(), 0.0);
 }

@@ -34,6 +34,7 @@ fn vbd_finish(a: &TwinArgs, b: &mut HostBuffers) {
 pub static VBD_BEGIN: KernelDef = KernelDef {
     label: timing::INTEGRATE,
     pure: &[VBD_PREDICTED, VBD_START, VBD_DISPLACEMENT],
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     ..KernelDef::new("vbd_begin", vbd_begin, Count::Particles, STATE, &[VBD_PREDICTED, VBD_START, VBD_DISPLACEMENT])
 };
 /// VBD: one colour's Newton steps, each particle of the range of the colouring's list
@@ -45,7 +46,7 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
         reason: "a gather over the row's springs into a 3 × 3 block, solved by cofactors (one division)",
     },
     label: timing::VBD,
-    variants: Variants { table_image: true, colliders_uniform: true, sdf_image: true, ..PLAIN },
+    variants: worlds(Variants { table_image: true, colliders_uniform: true, sdf_image: true, ..PLAIN }),
     immediates: Immediates::Range,
     dispatches: Dispatches::Colours,
     ..KernelDef::new(
@@ -73,7 +74,7 @@ pub static VBD_COLOUR: KernelDef = KernelDef {
 /// the bits of the range's `first`, `count` the particles (core::cpu::vbd::vbd_accelerate).
 pub static VBD_ACCELERATE: KernelDef = KernelDef {
     label: timing::VBD,
-    variants: PLAIN,
+    variants: worlds(PLAIN),
     immediates: Immediates::Range,
     dispatches: Dispatches::Chebyshev,
     ..KernelDef::new(
@@ -88,6 +89,7 @@ pub static VBD_ACCELERATE: KernelDef = KernelDef {
 /// (core::cpu::vbd::vbd_finish).
 pub static VBD_FINISH: KernelDef = KernelDef {
     label: timing::INTEGRATE,
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     ..KernelDef::new(
         "vbd_finish",
         vbd_finish,

@@ -140,15 +140,15 @@ var<private> vbd_moved: vec3<f32>;
 // Particle i's block and force over its row's springs, inertia first (core::cpu::vbd::
 // block_step up to the contacts); false for a held particle (no step).
 fn block_begin(i: u32) -> bool {
-    let x4 = aux1[i];
+    let x4 = aux1[world_base + i];
     if held(i, x4.w) {
         return false;
     }
     let h = p.dt;
     let x0 = x4.xyz;
     let inertia = mass_of(x4.w) / (h * h);
-    let moved = aux2[i].xyz;
-    var f = (aux0[i].xyz * h - moved) * inertia;
+    let moved = aux2[world_base + i].xyz;
+    var f = (aux0[world_base + i].xyz * h - moved) * inertia;
     hess = array<f32, 6>(inertia, inertia, inertia, 0.0, 0.0, 0.0);
     let r = slot_row(i);
     for (var s = 0u; s < r.count; s++) {
@@ -158,8 +158,8 @@ fn block_begin(i: u32) -> bool {
             continue;
         }
         let j = u32(other);
-        let u = moved - aux2[j].xyz;
-        let dx = (x0 - aux1[j].xyz) + u;
+        let u = moved - aux2[world_base + j].xyz;
+        let dx = (x0 - aux1[world_base + j].xyz) + u;
         let l = len3(dx);
         if l <= 1.17549435e-38 {
             continue;
