@@ -1062,18 +1062,26 @@ mod tests {
     fn each_world_falls_freely_by_its_own_gravity() {
         // Verlet's free fall from rest: the drop after k substeps is g dt² k(k+1)/2 (the
         // recurrence free_fall.rs checks), here per world; the springs' forces sum to zero.
+        // On cpu-par (a solver a world) and on a Vulkan batch (each world's gravity in its
+        // element of the step constants' array).
         let g = [9.81f64, 4.0, 1.0];
-        let mut sim =
-            open("free-fall.toml", Backend::CpuPar, 8, 3, &["gravity=[[0,-9.81,0],[0,-4,0],[0,-1,0]]"]).unwrap();
-        let y0: Vec<f64> = (0..3).map(|k| mean_y(&sim.world_state(k).unwrap())).collect();
-        sim.step(30).unwrap();
-        let p = sim.params().clone();
-        let (dt, steps) = (p.dt() as f64, 30.0 * p.substeps as f64);
-        for k in 0..3 {
-            let drop = y0[k] - mean_y(&sim.world_state(k).unwrap());
-            let exact = g[k] * dt * dt * steps * (steps + 1.0) / 2.0;
-            // f32 positions summed over 30 frames: well within 1e-4 of the drop.
-            assert!((drop - exact).abs() < 1e-4 * exact, "world {k}: fell {drop} m, the recurrence {exact} m");
+        for backend in [Backend::CpuPar, Backend::Vulkan] {
+            let Some(mut sim) =
+                or_skip(open("free-fall.toml", backend, 8, 3, &["gravity=[[0,-9.81,0],[0,-4,0],[0,-1,0]]"]))
+            else {
+                continue;
+            };
+            let y0: Vec<f64> = (0..3).map(|k| mean_y(&sim.world_state(k).unwrap())).collect();
+            sim.step(30).unwrap();
+            let p = sim.params().clone();
+            let (dt, steps) = (p.dt() as f64, 30.0 * p.substeps as f64);
+            for k in 0..3 {
+                let drop = y0[k] - mean_y(&sim.world_state(k).unwrap());
+                let exact = g[k] * dt * dt * steps * (steps + 1.0) / 2.0;
+                // f32 positions summed over 30 frames: well within 1e-4 of the drop.
+                let b = backend.name();
+                assert!((drop - exact).abs() < 1e-4 * exact, "{b} world {k}: fell {drop} m, the recurrence {exact} m");
+            }
         }
     }
 
