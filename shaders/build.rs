@@ -99,7 +99,7 @@ fn storage_params() -> String {
 }
 
 /// The single run's world offsets (`shared/types.wgsl`), which a `_w` twin makes private.
-const WORLD_CONSTS: &str = "const world_base: u32 = 0u;\nconst face_base: u32 = 0u;";
+const WORLD_CONSTS: &str = "const world_base: u32 = 0u;\nconst face_base: u32 = 0u;\nconst world_index: u32 = 0u;";
 
 /// A kernel's `_w` twin (`//! worlds` among its header lines): every world of a batch in
 /// one dispatch, the world in the dispatch's z. The step constants come from the world's
@@ -121,10 +121,10 @@ fn world_twin(name: &str, source: &str) -> String {
                 Buf::ParamsStorage.binding()
             ),
         )
-        .replace(WORLD_CONSTS, "var<private> world_base: u32;\nvar<private> face_base: u32;")
+        .replace(WORLD_CONSTS, "var<private> world_base: u32;\nvar<private> face_base: u32;\nvar<private> world_index: u32;")
         .replace(
             FIRST,
-            "    p = world_params[id.z];\n    world_base = id.z * p.num_particles;\n    face_base = 2u * world_base;\n",
+            "    p = world_params[id.z];\n    world_index = id.z;\n    world_base = id.z * p.num_particles;\n    face_base = 2u * world_base;\n",
         )
 }
 

@@ -6,7 +6,10 @@
 //! faces from twice its first particle (`2·np` faces a world; a mesh of more triangles
 //! than twice its vertices is refused). The tables — springs,
 //! triangles, adjacency, tethers, colours — are the scene's, one copy for every world:
-//! a kernel indexes them by the particle's index within its world.
+//! a kernel indexes them by the particle's index within its world. The self-collision's
+//! hash tables lie world after world in their scratch buffer, each a whole number of the
+//! scan's blocks, and each world's scan starts from its first particle: a world's contacts
+//! are found among its own particles.
 //!
 //! Dispatch: the kernels' `_w` twins ([`ConstantsHome::Worlds`]) find their world in the
 //! dispatch's z and its step constants — gravity, wind, damping, drag, the collision
@@ -65,6 +68,15 @@ pub(crate) fn check_batch(
         )));
     }
     let first = &worlds[0];
+    // The worlds' hash tables lie one after another, a whole number of the scan's blocks
+    // each, in the scratch buffers' four words a particle.
+    let np = topo.num_particles();
+    let stride = clothlab_cpu::self_collide::hash_blocks(np) as usize * clothlab_core::layout::WORKGROUP as usize;
+    if first.self_collision == clothlab_core::SelfCollision::Particles && stride > 4 * np {
+        return Err(SolverError::Unsupported(format!(
+            "a batch of worlds with self-collision needs 16 particles a world or more; this cloth has {np}"
+        )));
+    }
     let sp0 = StepParams::new(first, scene, None);
     for (k, p) in worlds.iter().enumerate().skip(1) {
         let shared = |what: &str| {

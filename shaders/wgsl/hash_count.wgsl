@@ -1,4 +1,5 @@
 //! include: state, hash_atomic, hash_totals_atomic, hash_fn, cells
+//! worlds
 // hash_count — per particle: one more in its bucket's count and in its block's total
 // (core::cpu::self_collide::hash_count; the recipe clears both before). The blocks'
 // totals here spare the scan a pass that adds their offsets back (a dispatch costs
@@ -10,5 +11,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    count_point(pos[i].xyz);
+    count_point(pos[world_base + i].xyz);
 }

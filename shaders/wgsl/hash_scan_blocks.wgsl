@@ -1,4 +1,5 @@
 //! include: state, hash_vec4, hash_fn, cells
+//! worlds
 // hash_scan_blocks — per WORKGROUP consecutive buckets (one invocation each, in order, no
 // barriers: on lavapipe a workgroup-wide scan's twelve barriers cost more than the sums),
 // read and written four at a time: the inclusive prefix of the counts in place, from the
@@ -15,8 +16,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     // The table's size is a multiple of 4.
     let last = min(first + WORKGROUP, size);
-    var acc = totals[4u * g + 2u];
-    for (var q = first / 4u; q < last / 4u; q++) {
+    // (A batch's world: its own table and blocks, whole blocks from table_base.)
+    var acc = totals[4u * (block_base() + g) + 2u];
+    let q0 = table_base() / 4u;
+    for (var q = q0 + first / 4u; q < q0 + last / 4u; q++) {
         var v = cells4[q];
         v.x += acc;
         v.y += v.x;

@@ -1,4 +1,5 @@
 //! include: state, hash, hash_fn, self_frictionless, self_collide_grid, self_collide_walk, cells
+//! worlds
 // self_collide — per pair of grid neighbours (i, i + 1) of a row: each pushed out of every
 // candidate closer than the thickness, the push added to its velocity (Δx/dt); into
 // pos_out, vel in place (core::cpu::self_collide::self_collide_at, per particle there).

@@ -1,4 +1,5 @@
 //! include: table, strain_points, strain_count_fn, strain_counts_inline, strain_limit_pass, hash_atomic, hash_totals_atomic, hash_fn, adjacency, strain_fn, strain_strip, cells
+//! worlds
 // strain_limit_strip_count — strain_limit_count down strips of rows (`strain_counts=strip`,
 // shared/strain_strip.wgsl): the strain limit's last pass, each corrected point then
 // counted into the self-collision hash (core::cpu::strain_limit::count_at and limit_at,

@@ -96,7 +96,12 @@ const fn hash(
     reads: &'static [Buf],
     writes: &'static [Buf],
 ) -> KernelDef {
-    KernelDef { check: EXACT, label: timing::SELF_HASH, ..KernelDef::new(name, twin, count, reads, writes) }
+    KernelDef {
+        check: EXACT,
+        label: timing::SELF_HASH,
+        variants: worlds(Variants { immediates: true, ..PLAIN }),
+        ..KernelDef::new(name, twin, count, reads, writes)
+    }
 }
 /// Each particle's bucket, and the buckets' and their blocks' counts (atomics).
 pub static HASH_COUNT: KernelDef = KernelDef {
@@ -124,7 +129,9 @@ pub static HASH_SCAN_BLOCKS: KernelDef = KernelDef {
 /// (atomics), each bucket's word moved to its start: checked bucket by bucket as sets.
 pub static HASH_SCATTER: KernelDef = KernelDef {
     test_input: Some(after_scan),
-    check: Check::Own("the_gpu_hash_lists_what_the_cpu_lists_after_its_scatter"),
+    check: Check::Own(
+        "every_self_collision_kernel_matches_its_twin_and_a_rollout_through_the_contacts_follows_the_cpu",
+    ),
     ..hash(
         "hash_scatter",
         hash_scatter,
@@ -143,6 +150,7 @@ const RESPONSE: Check = Check::Bound {
 /// position buffer.
 pub static SELF_COLLIDE: KernelDef = KernelDef {
     check: RESPONSE,
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     pure: &[PosOut],
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
@@ -162,6 +170,7 @@ pub static SELF_COLLIDE: KernelDef = KernelDef {
 /// parameters have Coulomb's coefficients.
 pub static SELF_COLLIDE_FRICTION: KernelDef = KernelDef {
     check: RESPONSE,
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     pure: &[PosOut],
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
@@ -179,6 +188,7 @@ pub static SELF_COLLIDE_FRICTION: KernelDef = KernelDef {
 /// its springs (from the table, for the entries within the thickness).
 pub static SELF_COLLIDE_MESH: KernelDef = KernelDef {
     check: RESPONSE,
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     pure: &[PosOut],
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),
@@ -195,6 +205,7 @@ pub static SELF_COLLIDE_MESH: KernelDef = KernelDef {
 /// [`SELF_COLLIDE_MESH`] with Coulomb friction at its contacts ([`SELF_COLLIDE_FRICTION`]'s).
 pub static SELF_COLLIDE_MESH_FRICTION: KernelDef = KernelDef {
     check: RESPONSE,
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     pure: &[PosOut],
     label: timing::SELF_COLLIDE,
     test_input: Some(built_hash),

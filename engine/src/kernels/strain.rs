@@ -137,7 +137,7 @@ pub static STRAIN_LIMIT_COUNT: KernelDef = KernelDef {
     check: GATHER,
     pure: &[PosOut],
     accumulates: &[HASH_CELLS, HASH_TOTALS],
-    variants: BLOCKED,
+    variants: worlds(BLOCKED),
     test_input: Some(strain_count),
     label: timing::STRAIN_LIMIT_COUNT,
     from_output: Some(recount),
@@ -169,7 +169,7 @@ pub static STRAIN_LIMIT_INLINE_COUNT: KernelDef = KernelDef {
     check: GATHER,
     pure: &[PosOut],
     accumulates: &[HASH_CELLS, HASH_TOTALS],
-    variants: BLOCKED,
+    variants: worlds(BLOCKED),
     label: timing::STRAIN_LIMIT_COUNT,
     from_output: Some(recount),
     ..KernelDef::new(
@@ -187,7 +187,7 @@ pub static STRAIN_LIMIT_STRIP_COUNT: KernelDef = KernelDef {
     check: GATHER,
     pure: &[PosOut],
     accumulates: &[HASH_CELLS, HASH_TOTALS],
-    variants: IMM_TEX,
+    variants: worlds(IMM_TEX),
     label: timing::STRAIN_LIMIT_COUNT,
     from_output: Some(recount),
     ..KernelDef::new(

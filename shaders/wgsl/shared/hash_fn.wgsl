@@ -19,6 +19,22 @@ fn table_size() -> u32 {
     return TABLE_FACTOR << firstLeadingBit(max(p.num_particles, 1u));
 }
 
+// The blocks of WORKGROUP buckets the scan sums separately
+// (core::cpu::self_collide::hash_blocks).
+fn hash_blocks() -> u32 {
+    return (table_size() + WORKGROUP - 1u) / WORKGROUP;
+}
+
+// A batch of worlds (a kernel's `_w` twin) lays the worlds' tables one after another, each
+// a whole number of blocks: the world's first bucket and first block (0 in a single run).
+fn table_base() -> u32 {
+    return world_index * hash_blocks() * WORKGROUP;
+}
+
+fn block_base() -> u32 {
+    return world_index * hash_blocks();
+}
+
 // What a slot holds for particle i in cell c besides its position: its grid coordinates,
 // its row's tag and whether it is pinned, i | j << 12 | tag << 24 | pinned << 31; on a
 // mesh (n = 0) the particle's index in the low 24 bits (core::cpu::self_collide::slot_word,

@@ -28,7 +28,7 @@ fn mesh_candidates(a: u32, b: u32) -> bool {
 fn other_mobility(w: u32, hit: bool) -> f32 {
     var wj = 0.0;
     if hit && (w & PINNED) == 0u {
-        wj = pos[w & INDEX_MASK].w;
+        wj = pos[world_base + (w & INDEX_MASK)].w;
     }
     return wj;
 }

@@ -121,7 +121,10 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
     var total = 0u;
     // core::cpu::self_collide::row_ranges: a row whose buckets wrap around the table's
     // end is two ranges, [start, np) and [cells[0], end): walked as one, past np wrapped.
-    let wrap = min(cells[0], np);
+    // (A batch's world reads its own table, from table_base, whose words are slots from
+    // world_base: taken back to the world's own here, and added again at the reads.)
+    let tb = table_base();
+    let wrap = min(cells[tb] - world_base, np);
     // Only the rows of the box that a mover reaches, one iteration each.
     var todo = box_rows(*a, lo) | box_rows(*b, lo);
     while todo != 0u {
@@ -136,10 +139,10 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
             let last_x = lo.x - 1 + i32(firstLeadingBit(bits));
             let first = bucket(vec3<i32>(first_x, y, z), size);
             let stop = first + u32(last_x - first_x) + 1u;
-            let start = min(cells[first], np);
+            let start = min(cells[tb + first] - world_base, np);
             // One read for the end (both sides of a branch run on lavapipe, reads too).
             let wraps = stop > size;
-            let at_end = cells[select(min(stop, size - 1u), stop - size, wraps)];
+            let at_end = cells[tb + select(min(stop, size - 1u), stop - size, wraps)] - world_base;
             let len = select(
                 clamp(select(at_end, np, stop == size), start, np) - start,
                 np - start + clamp(at_end, wrap, np) - wrap,
@@ -179,7 +182,7 @@ fn walk(a: ptr<function, Mover>, b: ptr<function, Mover>) {
         }
         let s0 = cur + (k - base);
         let s = select(s0, s0 - np + wrap, s0 >= np);
-        let y4 = slot_pos[s];
+        let y4 = slot_pos[world_base + s];
         let w = bitcast<u32>(y4.w);
         push(a, y4, w);
         push(b, y4, w);
@@ -196,8 +199,8 @@ fn mover(i: u32, col: u32, j: u32, valid: bool) -> Mover {
     m.contacts = 0u;
     m.rub = vec3<i32>(0);
     // Past the grid's end (an odd n's last column) a particle that stays.
-    m.x4 = pos[min(i, num_particles() - 1u)];
-    m.v = vel[min(i, num_particles() - 1u)].xyz;
+    m.x4 = pos[world_base + min(i, num_particles() - 1u)];
+    m.v = vel[world_base + min(i, num_particles() - 1u)].xyz;
     m.moving = valid && m.x4.w != 0.0 && i32(i) != p.grab_index;
     let v = scaled(m.x4.xyz);
     m.c = cell_of(m.x4.xyz);
@@ -223,12 +226,12 @@ fn finish(m: Mover) {
     // One site per buffer, values chosen by select: lavapipe walks the lanes of every
     // load and store site in the code, taken or not.
     let x = select(x4.xyz, x4.xyz + select(delta, delta - fr * p.dt, c), pushed);
-    pos_out[i] = vec4<f32>(x, x4.w);
+    pos_out[world_base + i] = vec4<f32>(x, x4.w);
     // The push as motion: v += Δx / dt (core::cpu::self_collide::self_collide_at).
     if pushed {
-        let v4 = vel[i];
+        let v4 = vel[world_base + i];
         let u = v4.xyz + delta * (1.0 / p.dt);
-        vel[i] = vec4<f32>(select(u, u - fr, c), v4.w);
+        vel[world_base + i] = vec4<f32>(select(u, u - fr, c), v4.w);
     }
 }
 

@@ -27,7 +27,7 @@ fn friction_scale() -> f32 {
 // against the contact's velocity before the response, from the copy.
 fn rub(m: ptr<function, Mover>, e: vec3<f32>, d2: f32, sep: f32, share: f32, w: u32, hit: bool) {
     if coulomb() {
-        let vj = vel_copy[min(slot_particle(w), num_particles() - 1u)].xyz;
+        let vj = vel_copy[world_base + min(slot_particle(w), num_particles() - 1u)].xyz;
         let r = pair_friction(e, d2, sep, (*m).v - vj);
         (*m).rub += select(vec3<i32>(0), vec3<i32>(r * (share * friction_scale())), hit);
     }

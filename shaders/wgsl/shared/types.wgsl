@@ -160,9 +160,11 @@ fn surface_vel(v: vec3<f32>, spin: vec3<f32>, arm: vec3<f32>) -> vec3<f32> {
 // see these constants; a kernel's `_w` twin (a batch of worlds, each world a z of the
 // dispatch) has private variables instead, set by its first statement from the world's
 // step constants (shaders/build.rs): a world's particles follow each other, world after
-// world, and its faces start at twice its first particle.
+// world, and its faces start at twice its first particle. `world_index` is the world's
+// number (the self-collision hash's tables lie world after world).
 const world_base: u32 = 0u;
 const face_base: u32 = 0u;
+const world_index: u32 = 0u;
 
 // Invocation index of a 1-D job dispatched as a 2-D grid of workgroups (one dimension
 // holds at most 65535 workgroups): within its world.
