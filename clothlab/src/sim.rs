@@ -473,10 +473,16 @@ impl Sim {
             for (&k, start) in chosen.iter().zip(starts) {
                 states[k] = start;
             }
+            let pins = self.setup.scene.pins.clone();
             let b = self.gpu_batch().context("a GPU batch")?;
             b.set_states(&states)?;
+            // A script's motions go: each chosen world's scripted groups move as the
+            // scene says again.
             for &k in chosen {
                 b.set_world_time(k, 0.0)?;
+                for (g, group) in pins.iter().enumerate().filter(|(_, g)| g.scripted) {
+                    b.set_world_pin_motion(k, g, group.motion.clone())?;
+                }
             }
             if chosen.contains(&0) {
                 self.solver.get().set_grab(None);
@@ -671,11 +677,14 @@ impl Sim {
             None => (0..self.envs()).collect(),
         };
         for k in worlds {
-            let s = self.world(k)?;
-            let now = s.time();
-            let frame = s.params().frame_dt as f64;
-            let Some(g) = s.scene().pins.get(group) else {
-                bail!("pin group {group}: the scene has {} [[pins]] groups", s.scene().pins.len());
+            self.check_world(k)?;
+            let (now, frame) = (self.world_time(k)?, self.world_params(k)?.frame_dt as f64);
+            let pins: &[clothlab_core::PinGroup] = match self.gpu_batch_ref() {
+                Some(b) => b.world_pins(k)?,
+                None => &self.world_ref(k)?.scene().pins,
+            };
+            let Some(g) = pins.get(group) else {
+                bail!("pin group {group}: the scene has {} [[pins]] groups", pins.len());
             };
             // Where the group is now: its motion's pose (a turn as a key's angles).
             let pose = g.motion.at(now);
@@ -689,9 +698,14 @@ impl Sim {
                 keys: vec![Key { t: t0, offset: pose.offset, rotate_deg: from }, Key { t: t1, offset, rotate_deg }],
                 ..Motion::default()
             };
-            s.set_pin_motion(group, motion).map_err(|e| {
+            let batch = self.envs() > 1;
+            let set = match self.gpu_batch() {
+                Some(b) => b.set_world_pin_motion(k, group, motion),
+                None => self.world(k)?.set_pin_motion(group, motion),
+            };
+            set.map_err(|e| {
                 let e = anyhow::Error::from(e);
-                if self.worlds.is_empty() { e } else { e.context(format!("world {k}")) }
+                if batch { e.context(format!("world {k}")) } else { e }
             })?;
         }
         Ok(())
@@ -1251,16 +1265,48 @@ mod tests {
 
     #[test]
     fn in_a_batch_a_script_moves_each_world_s_group_its_own_way() {
-        let mut batch = scripted(Backend::CpuPar, 2).unwrap();
-        batch.set_pin_pose(0, [0.1, 0.0, 0.0], [0.0; 3], Some(1)).unwrap();
-        batch.step(2).unwrap();
-        let mut one = scripted(Backend::Cpu, 1).unwrap();
-        one.set_pin_pose(0, [0.1, 0.0, 0.0], [0.0; 3], None).unwrap();
-        one.step(2).unwrap();
-        assert!(bits(&batch.world_state(1).unwrap()) == bits(&one.state().unwrap()), "world 1 moved as a single run");
-        let mut still = scripted(Backend::Cpu, 1).unwrap();
-        still.step(2).unwrap();
-        assert!(bits(&batch.world_state(0).unwrap()) == bits(&still.state().unwrap()), "world 0 left alone");
+        // On the CPU (a solver a world) and in a Vulkan batch (one pins dispatch for every
+        // world, each world's poses its own block): world k is the single run that the
+        // same script moves, on the same backend, bit for bit.
+        for backend in [Backend::CpuPar, Backend::Vulkan] {
+            let mut batch = match scripted(backend, 3) {
+                Ok(b) => b,
+                Err(e) => {
+                    assert!(std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1"), "{e:#}");
+                    eprintln!("no {backend:?} here: {e:#}");
+                    continue;
+                }
+            };
+            let single = if backend == Backend::CpuPar { Backend::Cpu } else { backend };
+            let (shift, turn) = (([0.1, 0.0, 0.0], [0.0; 3]), ([0.0, -0.05, 0.1], [0.0, 30.0, 0.0]));
+            batch.set_pin_pose(0, shift.0, shift.1, Some(1)).unwrap();
+            batch.set_pin_pose(0, turn.0, turn.1, Some(2)).unwrap();
+            batch.step(2).unwrap();
+            for (k, pose) in [(1, shift), (2, turn)] {
+                let mut one = scripted(single, 1).unwrap();
+                one.set_pin_pose(0, pose.0, pose.1, None).unwrap();
+                one.step(2).unwrap();
+                let what = format!("{backend:?}: world {k} moved as a single run");
+                assert!(bits(&batch.world_state(k).unwrap()) == bits(&one.state().unwrap()), "{what}");
+            }
+            let mut still = scripted(single, 1).unwrap();
+            still.step(2).unwrap();
+            let want = bits(&still.state().unwrap());
+            assert!(bits(&batch.world_state(0).unwrap()) == want, "{backend:?}: world 0 left alone");
+            // Reset, the script's motions go: every world is the still run again.
+            batch.reset(None).unwrap();
+            batch.step(2).unwrap();
+            for k in 0..3 {
+                assert!(bits(&batch.world_state(k).unwrap()) == want, "{backend:?}: world {k} after reset");
+            }
+            // A GPU batch holds its worlds' poses for the substeps it opened with (16).
+            let more = batch.set(&["substeps=32".into()]);
+            if backend == Backend::Vulkan {
+                let e = format!("{:#}", more.unwrap_err());
+                assert!(e.contains("poses for 16 substeps") && !e.contains('\n'), "{e}");
+                assert_eq!(batch.world_params(1).unwrap().substeps, 16, "nothing changed");
+            }
+        }
     }
 
     #[test]

@@ -113,6 +113,12 @@ pub struct GpuSolver<E: Engine> {
     /// Each world's simulated time, s (a batch's worlds step together; `time` is the
     /// clock of the colliders and pins, which every world of a moving scene shares).
     times: Vec<f64>,
+    /// A batch's pin groups, world by world (a script moves each world's own; world 0's
+    /// are the scene's too); empty in a single run, whose are the scene's.
+    world_pins: Vec<Vec<clothlab_core::PinGroup>>,
+    /// The substeps a frame's pin poses have room for: every count up to MAX_SUBSTEPS in
+    /// a single run, the batch's own in a batch (a block per substep and world).
+    pose_substeps: u32,
 }
 
 /// Substeps per recording of `variant`'s recipe on `topo` with `params`, refused with
@@ -298,7 +304,9 @@ impl<E: Engine> GpuSolver<E> {
         // workgroup, whose first invocation sees it and skips it).
         let no_pin = [PinSlot { rest: [0.0; 3], index: u32::MAX, group: 0, pad: [0; 3] }];
         let pin_slots: &[PinSlot] = if topo.pins.slots.is_empty() { &no_pin } else { &topo.pins.slots };
-        let pose_blocks = if topo.pins.slots.is_empty() { 1 } else { MAX_SUBSTEPS as usize };
+        // A batch's: a block per world for each of its substeps.
+        let pose_substeps = if envs > 1 { params.substeps } else { MAX_SUBSTEPS };
+        let pose_blocks = if topo.pins.slots.is_empty() { 1 } else { envs * pose_substeps as usize };
         let pin_poses = vec![0u8; pose_blocks * MAX_PIN_GROUPS * std::mem::size_of::<PinPose>()];
         // The capsules and bodies at time 0, then the bodies' fields (still ones stay).
         let mut shapes = scene.shapes_at(0.0);
@@ -403,6 +411,7 @@ impl<E: Engine> GpuSolver<E> {
         let mut offered = kernels_for(&variant);
         offered.extend(build_list.iter().copied());
         let name = variant.solver_name(info.api);
+        let world_pins = if envs > 1 { vec![scene.pins.clone(); envs] } else { Vec::new() };
         let mut solver = Self {
             engine,
             name,
@@ -431,6 +440,8 @@ impl<E: Engine> GpuSolver<E> {
             contact: None,
             searches: 0,
             offered,
+            world_pins,
+            pose_substeps,
             worlds,
             times: vec![0.0; envs],
         };
@@ -492,6 +503,12 @@ impl<E: Engine> GpuSolver<E> {
         }
         if worlds.len() > 1 {
             crate::worlds::check_batch(&self.scene, &self.topo, &worlds, self.options.stats, self.engine.info())?;
+            if !self.topo.pins.slots.is_empty() && worlds[0].substeps > self.pose_substeps {
+                return Err(SolverError::Unsupported(format!(
+                    "a GPU batch with moving pins holds their poses for {} substeps a frame (its count when opened): {} need a new batch",
+                    self.pose_substeps, worlds[0].substeps
+                )));
+            }
         }
         let params = worlds[0].clone();
         // A new dt keeps the velocity as it is: the state holds it, not Verlet's history.
@@ -682,7 +699,8 @@ impl<E: Engine> GpuSolver<E> {
     /// Records `commands` of substep `substep` (each after the barrier it needs),
     /// timestamps from query `*q` on while timing and there is room.
     fn record(&mut self, commands: &[Command], substep: u32, q: &mut u32, labels: &mut Vec<&'static str>) {
-        let substep_bytes = substep.to_le_bytes();
+        // The substep's first block of pin poses (a batch's: a block per world).
+        let substep_bytes = (substep * self.worlds.len() as u32).to_le_bytes();
         let timestamps = self.time_kernels && self.engine.info().timestamps;
         for c in commands {
             // Only the barriers the data needs (see recipe::Hazards); a swap flips `cur`.
@@ -861,8 +879,13 @@ impl<E: Engine> Solver for GpuSolver<E> {
         &self.name
     }
 
+    /// Every world's group (a batch's one by one: [`Batch::set_world_pin_motion`]).
     fn set_pin_motion(&mut self, group: usize, motion: clothlab_core::motion::Motion) -> Result<(), SolverError> {
-        Ok(clothlab_core::pins::set_scripted(&mut self.scene.pins, group, motion)?)
+        clothlab_core::pins::set_scripted(&mut self.scene.pins, group, motion.clone())?;
+        for pins in &mut self.world_pins {
+            clothlab_core::pins::set_scripted(pins, group, motion.clone())?;
+        }
+        Ok(())
     }
 
     fn scene(&self) -> &Scene {
@@ -937,14 +960,7 @@ impl<E: Engine> Solver for GpuSolver<E> {
                 self.engine.record_write(contact, bytemuck::bytes_of(&self.step_params.contact))?;
                 // The frame's poses of the moving pins, every substep's block at once.
                 if !self.topo.pins.slots.is_empty() {
-                    let poses = clothlab_core::pins::frame_poses(
-                        &self.scene.pins,
-                        &self.topo.pins.pivots,
-                        self.params.integrator,
-                        self.time,
-                        self.params.dt() as f64,
-                        substeps,
-                    );
+                    let poses = self.frame_poses(substeps);
                     let id = self.must(Buf::PinPoses)?;
                     self.engine.record_write(id, bytemuck::cast_slice(&poses))?;
                 }
@@ -1122,9 +1138,45 @@ pub trait Batch {
     /// Sets world `k`'s time; refused in a scene whose colliders or pins move (its worlds
     /// share their clock) unless it is every world's.
     fn set_world_time(&mut self, k: usize, t: f64) -> Result<(), SolverError>;
+    /// World `k`'s pin groups (a script's motions in its own).
+    fn world_pins(&self, k: usize) -> Result<&[clothlab_core::PinGroup], SolverError>;
+    /// Sets the motion of world `k`'s scripted pin group `group`
+    /// ([`Solver::set_pin_motion`] for one world).
+    fn set_world_pin_motion(
+        &mut self,
+        k: usize,
+        group: usize,
+        motion: clothlab_core::motion::Motion,
+    ) -> Result<(), SolverError>;
 }
 
 impl<E: Engine> GpuSolver<E> {
+    /// The frame's poses of the moving pins, a block of MAX_PIN_GROUPS per substep; a
+    /// batch's per substep a block per world, world after world (each world's groups,
+    /// from the shared clock).
+    fn frame_poses(&self, substeps: u32) -> Vec<PinPose> {
+        let dt = self.params.dt() as f64;
+        let poses = |pins: &[clothlab_core::PinGroup]| {
+            clothlab_core::pins::frame_poses(
+                pins,
+                &self.topo.pins.pivots,
+                self.params.integrator,
+                self.time,
+                dt,
+                substeps,
+            )
+        };
+        if self.world_pins.is_empty() {
+            return poses(&self.scene.pins);
+        }
+        let each: Vec<Vec<PinPose>> = self.world_pins.iter().map(|p| poses(p)).collect();
+        (0..substeps as usize)
+            .flat_map(|s| {
+                each.iter().flat_map(move |w| w[s * MAX_PIN_GROUPS..(s + 1) * MAX_PIN_GROUPS].iter().copied())
+            })
+            .collect()
+    }
+
     /// World `k` checked against the batch.
     fn check_world(&self, k: usize) -> Result<(), SolverError> {
         if k >= self.worlds.len() {
@@ -1248,6 +1300,28 @@ impl<E: Engine> Batch for GpuSolver<E> {
         self.times[k] = t;
         if k == 0 {
             self.time = t;
+        }
+        Ok(())
+    }
+
+    fn world_pins(&self, k: usize) -> Result<&[clothlab_core::PinGroup], SolverError> {
+        self.check_world(k)?;
+        Ok(if self.world_pins.is_empty() { &self.scene.pins } else { &self.world_pins[k] })
+    }
+
+    fn set_world_pin_motion(
+        &mut self,
+        k: usize,
+        group: usize,
+        motion: clothlab_core::motion::Motion,
+    ) -> Result<(), SolverError> {
+        self.check_world(k)?;
+        if self.world_pins.is_empty() {
+            return self.set_pin_motion(group, motion);
+        }
+        clothlab_core::pins::set_scripted(&mut self.world_pins[k], group, motion.clone())?;
+        if k == 0 {
+            clothlab_core::pins::set_scripted(&mut self.scene.pins, group, motion)?;
         }
         Ok(())
     }

@@ -112,10 +112,10 @@ pub static INTEGRATE: KernelDef = KernelDef {
 };
 /// Moving pins to their poses at the substep's end (`clothlab_core::pins`).
 pub static PINS: KernelDef = KernelDef {
-    variants: PLAIN,
+    variants: worlds(PLAIN),
     immediates: Immediates::Substep,
     label: timing::PINS,
-    ..KernelDef::new("pins", pins, Count::Pins, &[Pos, Vel, Pins, PinPoses], &[Pos, Vel])
+    ..KernelDef::new("pins", pins, Count::Pins, &[Params, Pos, Vel, Pins, PinPoses], &[Pos, Vel])
 };
 /// Spheres, boxes and bodies.
 pub static COLLIDE: KernelDef = KernelDef {
