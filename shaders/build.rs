@@ -113,6 +113,8 @@ fn world_twin(name: &str, source: &str) -> String {
             "{name}: a `//! worlds` kernel reads the step constants from the uniform block once, as its first statement"
         ));
     }
+    // A kernel's per-world setup beyond the offsets (shared/tri.wgsl's), after them.
+    let begin = if source.contains("fn world_begin()") { "    world_begin();\n" } else { "" };
     source
         .replace(
             UNIFORM_PARAMS,
@@ -124,7 +126,9 @@ fn world_twin(name: &str, source: &str) -> String {
         .replace(WORLD_CONSTS, "var<private> world_base: u32;\nvar<private> face_base: u32;\nvar<private> world_index: u32;")
         .replace(
             FIRST,
-            "    p = world_params[id.z];\n    world_index = id.z;\n    world_base = id.z * p.num_particles;\n    face_base = 2u * world_base;\n",
+            &format!(
+                "    p = world_params[id.z];\n    world_index = id.z;\n    world_base = id.z * p.num_particles;\n    face_base = 2u * world_base;\n{begin}"
+            ),
         )
 }
 

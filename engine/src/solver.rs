@@ -169,7 +169,7 @@ fn check_contact(topo: &ClothTopology, built_with: bool, params: &SimParams) -> 
 
 /// The contact between triangles' buffers' first contents: the edges with their header,
 /// zeroed starts, integers and pairs; one zero element each where `on` is false.
-fn tri_contents(topo: &ClothTopology, on: bool) -> [(Buf, Vec<u8>); 4] {
+fn tri_contents(topo: &ClothTopology, on: bool, envs: usize) -> [(Buf, Vec<u8>); 4] {
     let zeros = |words: usize| vec![0u8; 16 * words.div_ceil(4).max(1)];
     if !on {
         return [Buf::TriEdges, Buf::TriFloats, Buf::TriInts, Buf::TriPairs].map(|b| (b, zeros(1)));
@@ -179,9 +179,9 @@ fn tri_contents(topo: &ClothTopology, on: bool) -> [(Buf, Vec<u8>); 4] {
     edges.resize(edges.len().div_ceil(4) * 4, 0);
     [
         (Buf::TriEdges, bytemuck::cast_slice(&edges).to_vec()),
-        (Buf::TriFloats, zeros(4 * l.np)),
-        (Buf::TriInts, zeros(l.words())),
-        (Buf::TriPairs, zeros(l.pair_words())),
+        (Buf::TriFloats, zeros(4 * l.np * envs)),
+        (Buf::TriInts, zeros(l.words() * envs)),
+        (Buf::TriPairs, zeros(l.pair_words() * envs)),
     ]
 }
 
@@ -251,9 +251,10 @@ impl<E: Engine> GpuSolver<E> {
         if envs > 1 {
             crate::worlds::check_batch(&scene, &topo, &worlds, options.stats, &info)?;
         }
-        let tri_buffers = has_tri_buffers(&topo, &params);
+        // A batch makes them only for the contact it runs (every world's, world after world).
+        let tri_buffers = if envs > 1 { params.self_collision.triangles() } else { has_tri_buffers(&topo, &params) };
         check_contact(&topo, tri_buffers, &params)?;
-        let tri = tri_contents(&topo, tri_buffers);
+        let tri = tri_contents(&topo, tri_buffers, envs);
         // A mesh's table in two bindings (its rows split by entries, whole rows each).
         let (first, second) = split_slots(&topo);
         let table_bytes = std::mem::size_of_val(first.as_slice()).max(std::mem::size_of_val(second.as_slice())) as u64;

@@ -42,8 +42,11 @@ pub(crate) fn check_batch(
     stats: StatsMode,
     info: &crate::gpu::EngineInfo,
 ) -> Result<(), SolverError> {
-    // The largest binding: the faces, 2·np a world of 16 bytes.
-    let per_world = 32 * topo.num_particles() as u64;
+    // The largest binding: the faces, 2·np a world of 16 bytes, or the contact between
+    // triangles' integers or pairs.
+    let tri = clothlab_cpu::tri_contact::TriLayout::of(topo);
+    let contact = if worlds[0].self_collision.triangles() { 4 * tri.words().max(tri.pair_words()) as u64 } else { 0 };
+    let per_world = (32 * topo.num_particles() as u64).max(contact);
     if worlds.len() as u64 * per_world > info.max_binding {
         return Err(SolverError::Unsupported(format!(
             "{} worlds of {} particles need {} MiB buffers; {} binds at most {} MiB: at most {} worlds of this scene",

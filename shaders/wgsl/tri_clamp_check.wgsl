@@ -1,4 +1,5 @@
 //! include: state, tri, tri_floats, cells
+//! worlds
 // tri_clamp_check — per particle: whether it is farther than its bound from the free
 // vertices' mean displacement, and whether it moved farther than its bound
 // (core::cpu::tri_contact::tri_clamp_check).
@@ -16,12 +17,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         let hi = load_int(TRI_AT_MEAN + 2u * c + 1u);
         mean[c] = (f32(bitcast<i32>(hi)) * 4294967296.0 + f32(lo)) * TRI_MEAN_UNIT * count;
     }
-    let s = tri_floats[i];
-    let d = pos[i].xyz - s.xyz;
+    let s = tri_floats[world_base + i];
+    let d = pos[world_base + i].xyz - s.xyz;
     if !(len3(d - mean) <= s.w) {
-        atomicStore(&tri_ints[TRI_AT_OVER], 1u);
+        atomicStore(&tri_ints[ib() + TRI_AT_OVER], 1u);
     }
     if len3(d) > s.w {
-        atomicStore(&tri_ints[TRI_AT_MOVED], 1u);
+        atomicStore(&tri_ints[ib() + TRI_AT_MOVED], 1u);
     }
 }

@@ -1,4 +1,5 @@
 //! include: state, tri, tri_floats, cells
+//! worlds
 // tri_clamp_sum — per particle: a free vertex's displacement since the start, in
 // TRI_MEAN_UNITs, into the 64-bit sums (two words, the carry added to the high one), and
 // the count (core::cpu::tri_contact::tri_clamp_sum).
@@ -9,17 +10,17 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let x = pos[i];
+    let x = pos[world_base + i];
     if x.w <= 0.0 {
         return;
     }
-    let s = tri_floats[i];
+    let s = tri_floats[world_base + i];
     for (var c = 0u; c < 3u; c++) {
         let units = i32((x[c] - s[c]) / TRI_MEAN_UNIT);
         let lo = bitcast<u32>(units);
-        let old = atomicAdd(&tri_ints[TRI_AT_MEAN + 2u * c], lo);
+        let old = atomicAdd(&tri_ints[ib() + TRI_AT_MEAN + 2u * c], lo);
         let carry = select(0u, 1u, old + lo < old);
-        atomicAdd(&tri_ints[TRI_AT_MEAN + 2u * c + 1u], select(0u, 0xffffffffu, units < 0i) + carry);
+        atomicAdd(&tri_ints[ib() + TRI_AT_MEAN + 2u * c + 1u], select(0u, 0xffffffffu, units < 0i) + carry);
     }
-    atomicAdd(&tri_ints[TRI_AT_FREE], 1u);
+    atomicAdd(&tri_ints[ib() + TRI_AT_FREE], 1u);
 }

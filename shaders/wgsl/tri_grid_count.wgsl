@@ -1,4 +1,5 @@
 //! include: state, tri, cells
+//! worlds
 // tri_grid_count — per primitive (triangles, then edges): one more in its bucket's count,
 // its box's extent into its grid's largest, a wide box's not (it is listed apart)
 // (core::cpu::tri_contact::tri_grid_count).
@@ -14,13 +15,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         return;
     }
     let cell = load_f(TRI_AT_CELL);
-    atomicAdd(&tri_ints[grid_at() + bucket_of(b, o, cell)], 1u);
+    atomicAdd(&tri_ints[ib() + grid_at() + bucket_of(b, o, cell)], 1u);
     if is_big(b, cell) {
         return;
     }
     let ext = select(TRI_AT_EXTENT_E, TRI_AT_EXTENT_T, o < tris_len());
     let e = b.hi - b.lo;
-    atomicMax(&tri_ints[ext], bitcast<u32>(e.x));
-    atomicMax(&tri_ints[ext + 1u], bitcast<u32>(e.y));
-    atomicMax(&tri_ints[ext + 2u], bitcast<u32>(e.z));
+    atomicMax(&tri_ints[ib() + ext], bitcast<u32>(e.x));
+    atomicMax(&tri_ints[ib() + ext + 1u], bitcast<u32>(e.y));
+    atomicMax(&tri_ints[ib() + ext + 2u], bitcast<u32>(e.z));
 }

@@ -1,4 +1,5 @@
 //! include: state, tri, cells
+//! worlds
 // tri_grid_sort — per bucket (both grids'): its entries in increasing order, by insertion
 // (a bucket holds a few), so that every query meets them in one order
 // (core::cpu::tri_contact::tri_grid_sort).
@@ -12,12 +13,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     let start = bucket_start(k);
     let end = bucket_end(k);
     for (var i = start + 1u; i < end; i++) {
-        let v = atomicLoad(&tri_ints[i]);
+        let v = atomicLoad(&tri_ints[ib() + i]);
         var j = i;
-        while j > start && atomicLoad(&tri_ints[j - 1u]) > v {
-            atomicStore(&tri_ints[j], atomicLoad(&tri_ints[j - 1u]));
+        while j > start && atomicLoad(&tri_ints[ib() + j - 1u]) > v {
+            atomicStore(&tri_ints[ib() + j], atomicLoad(&tri_ints[ib() + j - 1u]));
             j -= 1u;
         }
-        atomicStore(&tri_ints[j], v);
+        atomicStore(&tri_ints[ib() + j], v);
     }
 }

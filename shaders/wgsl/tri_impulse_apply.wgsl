@@ -1,4 +1,5 @@
 //! include: state, tri, cells
+//! worlds
 // tri_impulse_apply — per particle: its sums added (the velocity pass's impulses) and cleared
 // (core::cpu::tri_contact::tri_apply).
 @compute @workgroup_size(WORKGROUP)
@@ -8,6 +9,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let v = vel[i];
-    vel[i] = vec4<f32>(v.xyz + take_sums(i, true), v.w);
+    let v = vel[world_base + i];
+    vel[world_base + i] = vec4<f32>(v.xyz + take_sums(i, true), v.w);
 }

@@ -1,4 +1,5 @@
 //! include: state, tri, cells
+//! worlds
 // tri_impulse_share — per owner: its pairs' responses spread over their vertices, by the
 // most pairs any of them is in, into the fixed-point sums (the velocity pass's impulses;
 // core::cpu::tri_contact::tri_share).

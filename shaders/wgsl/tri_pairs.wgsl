@@ -1,4 +1,5 @@
 //! include: state, tri, tri_bounds, cells
+//! worlds
 // tri_pairs — per owner (the vertices, then the edges): its pairs closer than the reach
 // through the grid of the other primitives' boxes, the TRI_SLOTS nearest kept (by
 // distance, then index: the same set in any order of the query) and all counted; every
@@ -7,7 +8,7 @@
 // the box's corner less the grid's largest extent to its other corner, each entry whose
 // own lowest corner lies in the cell visited, then the wide boxes).
 fn lower(k: u32, d: f32) {
-    atomicMin(&tri_bounds[4u * k + 3u], bitcast<u32>(TRI_BOUND_FRACTION * d));
+    atomicMin(&tri_bounds[4u * world_base + 4u * k + 3u], bitcast<u32>(TRI_BOUND_FRACTION * d));
 }
 
 // Whether a pair `d` away with `other` lies after one `e` away with `f` in the order of
@@ -19,8 +20,8 @@ fn farther(d: f32, other: u32, e: f32, f: u32) -> bool {
 // Owner o's n-th pair found within its first TRI_SLOTS: `other`, `d` away (the kept
 // pairs' distances in the buffer's second half, f32 bits).
 fn keep(o: u32, n: u32, other: u32, d: f32) {
-    tri_pairs[o * TRI_SLOTS + n] = other;
-    tri_pairs[(num_owners() + o) * TRI_SLOTS + n] = bitcast<u32>(d);
+    tri_pairs[pb() + o * TRI_SLOTS + n] = other;
+    tri_pairs[pb() + (num_owners() + o) * TRI_SLOTS + n] = bitcast<u32>(d);
 }
 
 // A later pair of owner o, `other` `d` away: in place of the farthest kept if nearer.
@@ -28,15 +29,15 @@ fn replace(o: u32, other: u32, d: f32) {
     let base = o * TRI_SLOTS;
     let dist = num_owners() * TRI_SLOTS + base;
     var far = 0u;
-    var far_d = bitcast<f32>(tri_pairs[dist]);
+    var far_d = bitcast<f32>(tri_pairs[pb() + dist]);
     for (var k = 1u; k < TRI_SLOTS; k++) {
-        let dk = bitcast<f32>(tri_pairs[dist + k]);
-        if farther(dk, tri_pairs[base + k], far_d, tri_pairs[base + far]) {
+        let dk = bitcast<f32>(tri_pairs[pb() + dist + k]);
+        if farther(dk, tri_pairs[pb() + base + k], far_d, tri_pairs[pb() + base + far]) {
             far = k;
             far_d = dk;
         }
     }
-    if farther(far_d, tri_pairs[base + far], d, other) {
+    if farther(far_d, tri_pairs[pb() + base + far], d, other) {
         keep(o, far, other, d);
     }
 }
@@ -200,11 +201,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if found > TRI_SLOTS {
         walk(o, true);
     }
-    atomicStore(&tri_ints[owners_at() + o], found);
+    atomicStore(&tri_ints[ib() + owners_at() + o], found);
     if found > 0u {
-        atomicAdd(&tri_ints[TRI_AT_PAIRS], found);
+        atomicAdd(&tri_ints[ib() + TRI_AT_PAIRS], found);
     }
     if found > TRI_SLOTS {
-        atomicAdd(&tri_ints[TRI_AT_OVERFLOW], found - TRI_SLOTS);
+        atomicAdd(&tri_ints[ib() + TRI_AT_OVERFLOW], found - TRI_SLOTS);
     }
 }

@@ -1,4 +1,5 @@
 //! include: state, tri, cells
+//! worlds
 // tri_separate_count — per owner: one more in the count of every vertex one of its pairs'
 // responses moves (the separation's pushes; core::cpu::tri_contact::tri_count).
 @compute @workgroup_size(WORKGROUP)

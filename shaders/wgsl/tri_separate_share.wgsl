@@ -1,4 +1,5 @@
 //! include: state, tri, cells
+//! worlds
 // tri_separate_share — per owner: its pairs' responses spread over their vertices, by the
 // most pairs any of them is in, into the fixed-point sums (the separation's pushes;
 // core::cpu::tri_contact::tri_share).

@@ -1,4 +1,5 @@
 //! include: state, tri, tri_floats, cells
+//! worlds
 // tri_start — per particle: its start position and its bound at the reach's fraction;
 // the reach and the grids' cell into the scalars (core::cpu::tri_contact::tri_start).
 @compute @workgroup_size(WORKGROUP)
@@ -15,9 +16,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     // The cap t + 2 s as s + s (exact) added to t: Mesa fuses t + 2.0 * s into one
     // rounding, core rounds twice (TRI_MAX_REACH_SPACINGS is 2: layout.rs checks).
     let reach = clamp(TRI_REACH_PER_MOTION * motion, t, t + (p.spacing + p.spacing));
-    tri_floats[i] = vec4<f32>(pos[i].xyz, TRI_BOUND_FRACTION * reach);
+    tri_floats[world_base + i] = vec4<f32>(pos[world_base + i].xyz, TRI_BOUND_FRACTION * reach);
     if i == 0u {
-        atomicStore(&tri_ints[TRI_AT_REACH], bitcast<u32>(reach));
-        atomicStore(&tri_ints[TRI_AT_CELL], bitcast<u32>(max(2.0 * reach, 1.5 * p.spacing)));
+        atomicStore(&tri_ints[ib() + TRI_AT_REACH], bitcast<u32>(reach));
+        atomicStore(&tri_ints[ib() + TRI_AT_CELL], bitcast<u32>(max(2.0 * reach, 1.5 * p.spacing)));
     }
 }

@@ -1,4 +1,5 @@
 //! include: state, tri, range, cells
+//! worlds
 // tri_vbd — per owner: the contact terms of its pairs at the positions (VBD's iterate) for
 // the vertices of one colour (the range's `first`; core::cpu::tri_contact::tri_vbd), added
 // into their fixed-point sums, which vbd_colour_tri takes and clears.
@@ -6,11 +7,11 @@
 
 // Whether vertex k's terms are gathered: in the colour, not held.
 fn wanted(k: u32) -> bool {
-    return colours[num_particles() + k] == pass_range.first && !held(k, pos[k].w);
+    return colours[num_particles() + k] == pass_range.first && !held(k, pos[world_base + k].w);
 }
 
 fn add_word(k: u32, v: f32) {
-    atomicAdd(&tri_ints[k], bitcast<u32>(i32(v)));
+    atomicAdd(&tri_ints[ib() + k], bitcast<u32>(i32(v)));
 }
 
 // The pair's energy ½ k (t − d)² as a side's force and block k w n nᵀ
@@ -50,7 +51,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     let np = num_particles();
     for (var k = 0u; k < kept(o); k++) {
-        let other = tri_pairs[o * TRI_SLOTS + k];
+        let other = tri_pairs[pb() + o * TRI_SLOTS + k];
         // The closest points only for a pair with a vertex to act on.
         var any = false;
         if o < np {

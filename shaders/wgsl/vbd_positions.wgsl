@@ -1,4 +1,5 @@
 //! include: state, aux
+//! worlds
 // vbd_positions — the positions at VBD's iterate x⁰ + D (core::cpu::vbd::vbd_positions),
 // after the prediction and each Chebyshev step where the contact between triangles' terms
 // are found at them (tri_vbd).
@@ -9,6 +10,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if i >= num_particles() {
         return;
     }
-    let x4 = aux1[i];
-    pos[i] = vec4<f32>(x4.xyz + aux2[i].xyz, x4.w);
+    let x4 = aux1[world_base + i];
+    pos[world_base + i] = vec4<f32>(x4.xyz + aux2[world_base + i].xyz, x4.w);
 }

@@ -209,7 +209,13 @@ const fn row(
     label: &'static str,
     input: Twin,
 ) -> KernelDef {
-    KernelDef { check: TRI, label, test_input: Some(input), ..KernelDef::new(name, twin, count, reads, writes) }
+    KernelDef {
+        check: TRI,
+        label,
+        test_input: Some(input),
+        variants: worlds(Variants { immediates: true, ..PLAIN }),
+        ..KernelDef::new(name, twin, count, reads, writes)
+    }
 }
 
 const B: &str = timing::TRI_BOUNDS;
@@ -218,11 +224,18 @@ const C: &str = timing::TRI_CONTACT;
 /// The fastest free vertex's speed (the integers cleared before).
 pub static TRI_SPEED: KernelDef = KernelDef {
     accumulates: &[TriInts],
-    ..row("tri_speed", tri_speed, Count::Particles, &[Params, Pos, Vel, TriInts], &[TriInts], B, cleared)
+    ..row("tri_speed", tri_speed, Count::Particles, &[Params, Pos, Vel, TriEdges, TriInts], &[TriInts], B, cleared)
 };
 /// Each particle's start and bound at the reach's fraction; the reach and the cell.
-pub static TRI_START: KernelDef =
-    row("tri_start", tri_start, Count::Particles, &[Params, Pos, TriInts], &[TriFloats, TriInts], B, after_speed);
+pub static TRI_START: KernelDef = row(
+    "tri_start",
+    tri_start,
+    Count::Particles,
+    &[Params, Pos, TriEdges, TriInts],
+    &[TriFloats, TriInts],
+    B,
+    after_speed,
+);
 /// The primitives' bucket counts and largest extents.
 pub static TRI_GRID_COUNT: KernelDef = row(
     "tri_grid_count",
@@ -297,7 +310,7 @@ pub static TRI_CLAMP_SUM: KernelDef = row(
     "tri_clamp_sum",
     tri_clamp_sum,
     Count::Particles,
-    &[Params, Pos, TriFloats, TriInts],
+    &[Params, Pos, TriEdges, TriFloats, TriInts],
     &[TriInts],
     C,
     after_separation,
@@ -307,7 +320,7 @@ pub static TRI_CLAMP_CHECK: KernelDef = row(
     "tri_clamp_check",
     tri_clamp_check,
     Count::Particles,
-    &[Params, Pos, TriFloats, TriInts],
+    &[Params, Pos, TriEdges, TriFloats, TriInts],
     &[TriInts],
     C,
     after_clamp_sum,
@@ -317,7 +330,7 @@ pub static TRI_CLAMP: KernelDef = row(
     "tri_clamp",
     tri_clamp,
     Count::Particles,
-    &[Params, Pos, Vel, TriFloats, TriInts],
+    &[Params, Pos, Vel, TriEdges, TriFloats, TriInts],
     &[Pos, Vel, TriInts],
     C,
     after_clamp_check,
@@ -334,7 +347,7 @@ pub static VBD_POSITIONS: KernelDef = KernelDef {
 pub static TRI_VBD: KernelDef = KernelDef {
     immediates: Immediates::Range,
     dispatches: Dispatches::ContactColours,
-    variants: PLAIN,
+    variants: worlds(PLAIN),
     ..row(
         "tri_vbd",
         tri_vbd,

@@ -57,16 +57,36 @@ fn num_owners() -> u32 {
     return num_particles() + edges_len();
 }
 
+// A batch of worlds (a kernel's `_w` twin) lays each world's integers and pairs after the
+// worlds' before it (core::cpu::tri_contact::TriLayout::words and pair_words a world):
+// where the world's start, 0 in a single run. world_begin (the twin calls it after its
+// first statement) finds them once. A world's starts and bounds are by particle.
+var<private> world_ints: u32;
+var<private> world_pairs: u32;
+
+fn world_begin() {
+    world_ints = world_index * (sums_at() + 4u * num_particles());
+    world_pairs = world_index * (2u * num_owners() * TRI_SLOTS);
+}
+
+fn ib() -> u32 {
+    return world_ints;
+}
+
+fn pb() -> u32 {
+    return world_pairs;
+}
+
 fn load_int(k: u32) -> u32 {
-    return atomicLoad(&tri_ints[k]);
+    return atomicLoad(&tri_ints[ib() + k]);
 }
 
 fn load_f(k: u32) -> f32 {
-    return bitcast<f32>(atomicLoad(&tri_ints[k]));
+    return bitcast<f32>(atomicLoad(&tri_ints[ib() + k]));
 }
 
 fn at3(k: u32) -> vec3<f32> {
-    return pos[k].xyz;
+    return pos[world_base + k].xyz;
 }
 
 // core's Vec3::cross, spelled out (see dot3).
@@ -232,7 +252,7 @@ fn sides(o: u32, other: u32) -> Sides {
 fn mass_term(ks: vec3<u32>, ws: vec3<f32>) -> f32 {
     var m = 0.0;
     for (var i = 0u; i < 3u; i++) {
-        m = m + pos[ks[i]].w * ws[i] * ws[i];
+        m = m + pos[world_base + ks[i]].w * ws[i] * ws[i];
     }
     return m;
 }
@@ -241,7 +261,7 @@ fn mass_term(ks: vec3<u32>, ws: vec3<f32>) -> f32 {
 fn speed_of(ks: vec3<u32>, ws: vec3<f32>) -> vec3<f32> {
     var v = vec3<f32>(0.0);
     for (var i = 0u; i < 3u; i++) {
-        v = v + vel[ks[i]].xyz * ws[i];
+        v = v + vel[world_base + ks[i]].xyz * ws[i];
     }
     return v;
 }
@@ -327,16 +347,16 @@ fn kept(o: u32) -> u32 {
 fn count_pass(o: u32, velocity: bool) {
     let sums = sums_at();
     for (var k = 0u; k < kept(o); k++) {
-        let r = response(o, tri_pairs[o * TRI_SLOTS + k], velocity);
+        let r = response(o, tri_pairs[pb() + o * TRI_SLOTS + k], velocity);
         if !r.ok {
             continue;
         }
         for (var i = 0u; i < 3u; i++) {
             if r.s.wa[i] != 0.0 {
-                atomicAdd(&tri_ints[sums + 4u * r.s.a[i] + 3u], 1u);
+                atomicAdd(&tri_ints[ib() + sums + 4u * r.s.a[i] + 3u], 1u);
             }
             if r.s.wb[i] != 0.0 {
-                atomicAdd(&tri_ints[sums + 4u * r.s.b[i] + 3u], 1u);
+                atomicAdd(&tri_ints[ib() + sums + 4u * r.s.b[i] + 3u], 1u);
             }
         }
     }
@@ -344,7 +364,7 @@ fn count_pass(o: u32, velocity: bool) {
 
 fn add_share(sums: u32, k: u32, d: vec3<f32>) {
     for (var c = 0u; c < 3u; c++) {
-        atomicAdd(&tri_ints[sums + 4u * k + c], bitcast<u32>(i32(d[c])));
+        atomicAdd(&tri_ints[ib() + sums + 4u * k + c], bitcast<u32>(i32(d[c])));
     }
 }
 
@@ -355,7 +375,7 @@ fn share_pass(o: u32, velocity: bool) {
     let u = pass_unit(velocity);
     var responses = 0u;
     for (var k = 0u; k < kept(o); k++) {
-        let r = response(o, tri_pairs[o * TRI_SLOTS + k], velocity);
+        let r = response(o, tri_pairs[pb() + o * TRI_SLOTS + k], velocity);
         if !r.ok {
             continue;
         }
@@ -372,17 +392,17 @@ fn share_pass(o: u32, velocity: bool) {
         let scale = (1.0 / f32(most)) * (1.0 / r.m) * (1.0 / u);
         for (var i = 0u; i < 3u; i++) {
             if r.s.wa[i] != 0.0 {
-                add_share(sums, r.s.a[i], r.change * (1.0 * pos[r.s.a[i]].w * r.s.wa[i] * scale));
+                add_share(sums, r.s.a[i], r.change * (1.0 * pos[world_base + r.s.a[i]].w * r.s.wa[i] * scale));
             }
         }
         for (var i = 0u; i < 3u; i++) {
             if r.s.wb[i] != 0.0 {
-                add_share(sums, r.s.b[i], r.change * (-1.0 * pos[r.s.b[i]].w * r.s.wb[i] * scale));
+                add_share(sums, r.s.b[i], r.change * (-1.0 * pos[world_base + r.s.b[i]].w * r.s.wb[i] * scale));
             }
         }
     }
     if responses > 0u {
-        atomicAdd(&tri_ints[select(TRI_AT_PUSHED, TRI_AT_SLOWED, velocity)], responses);
+        atomicAdd(&tri_ints[ib() + select(TRI_AT_PUSHED, TRI_AT_SLOWED, velocity)], responses);
     }
 }
 
@@ -392,12 +412,12 @@ fn take_sums(i: u32, velocity: bool) -> vec3<f32> {
     let sums = sums_at() + 4u * i;
     let u = pass_unit(velocity);
     let d = vec3<f32>(
-        f32(bitcast<i32>(atomicLoad(&tri_ints[sums]))) * u,
-        f32(bitcast<i32>(atomicLoad(&tri_ints[sums + 1u]))) * u,
-        f32(bitcast<i32>(atomicLoad(&tri_ints[sums + 2u]))) * u,
+        f32(bitcast<i32>(atomicLoad(&tri_ints[ib() + sums]))) * u,
+        f32(bitcast<i32>(atomicLoad(&tri_ints[ib() + sums + 1u]))) * u,
+        f32(bitcast<i32>(atomicLoad(&tri_ints[ib() + sums + 2u]))) * u,
     );
     for (var c = 0u; c < 4u; c++) {
-        atomicStore(&tri_ints[sums + c], 0u);
+        atomicStore(&tri_ints[ib() + sums + c], 0u);
     }
     return d;
 }

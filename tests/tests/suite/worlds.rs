@@ -119,31 +119,45 @@ clothlab_tests::per_api!(a_gpu_batch_s_world_k_is_its_single_run_bit_for_bit);
 /// A start in which every 7th particle sits within 0.3–0.8 thicknesses of one half the
 /// cloth away (as the self-collision kernels' checks build theirs): contacts from the first
 /// substep, in every world at the same places.
-fn crowded(mut s: clothlab_core::ClothState, t: f32) -> clothlab_core::ClothState {
+fn crowded(mut s: clothlab_core::ClothState, t: f32, apart: usize, every: usize) -> clothlab_core::ClothState {
     let np = s.pos.len();
-    for i in (0..np).step_by(7) {
-        let q = (i + np / 2) % np;
-        let off = t * (0.3 + 0.5 * ((i / 7) % 5) as f32 / 4.0);
-        let dir: [f32; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.6, 0.8, 0.0]][(i / 7) % 4];
+    for i in (0..np).step_by(every) {
+        let q = (i + apart) % np;
+        let off = t * (0.3 + 0.5 * ((i / every) % 5) as f32 / 4.0);
+        let dir: [f32; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.6, 0.8, 0.0]][(i / every) % 4];
         let to: Vec<f32> = (0..3).map(|c| s.pos[q][c] + off * dir[c]).collect();
         s.pos[i][..3].copy_from_slice(&to);
     }
     s
 }
 
-/// Self-collision in a batch: each world's hash is its own (its table, its blocks, its
-/// slots), so the worlds — copies in the same place, every particle beside its copies in
-/// the other worlds — push nothing across: world k is its single run bit for bit, with
-/// the hash counted by hash_count (one by one) or by the strain limit's last pass
-/// (optimized), with and without Coulomb friction between particles, on a grid and a mesh.
-fn a_gpu_batch_s_self_collision_keeps_to_each_world(api: Api) {
+/// Contact in a batch: each world's self-collision hash is its own (its table, its
+/// blocks, its slots), and so are its contact between triangles' integers, pairs, starts
+/// and bounds; so the worlds — copies in the same place, every particle beside its copies
+/// in the other worlds — push nothing across: world k is its single run bit for bit.
+/// Between particles: the hash counted by hash_count (one by one) or by the strain limit's
+/// last pass (optimized), with and without Coulomb friction, on a grid and a mesh;
+/// between triangles with friction on the grid (its triangles and edges; the kernels are
+/// the same under every integrator but VBD, whose terms a batch refuses yet).
+fn a_gpu_batch_s_contact_keeps_to_each_world(api: Api) {
+    use clothlab_core::SelfCollision::{Particles, Triangles};
     let [optimized, one_by_one] = specs();
-    let rows = [(scene(), optimized.clone(), 0.0), (scene(), one_by_one, 0.8), (fan(), optimized, 0.8)];
-    for (sc, spec, mu) in rows {
-        let t = if sc.cloth.is_mesh() { 0.004 } else { 0.02 };
-        let worlds: Vec<SimParams> = (0..4)
+    let verlet = Integrator::Verlet;
+    let rows = [
+        (scene(), optimized.clone(), 0.0, Particles, verlet),
+        (scene(), one_by_one, 0.8, Particles, verlet),
+        (fan(), optimized.clone(), 0.8, Particles, verlet),
+        (scene(), optimized, 0.5, Triangles, verlet),
+    ];
+    for (sc, spec, mu, mode, integrator) in rows {
+        let t = if sc.cloth.is_mesh() || mode == Triangles { 0.004 } else { 0.02 };
+        // The contact between triangles costs lavapipe ~5 ms a world-substep: two worlds
+        // and a frame of it (its worlds still in the same place, moved apart by gravity).
+        let (envs, frames) = if mode == Triangles { (2, 1) } else { (4, 2) };
+        let worlds: Vec<SimParams> = (0..envs)
             .map(|k| SimParams {
-                self_collision: clothlab_core::SelfCollision::Particles,
+                integrator,
+                self_collision: mode,
                 self_thickness: t,
                 static_friction: mu,
                 kinetic_friction: 0.5 * mu,
@@ -151,24 +165,28 @@ fn a_gpu_batch_s_self_collision_keeps_to_each_world(api: Api) {
             })
             .collect();
         let cloth = if sc.cloth.is_mesh() { "fan" } else { "grid" };
-        let what = format!("{api} {cloth} self-collision μs {mu} {spec:?}");
+        let what = format!("{api} {cloth} {mode:?} {} μs {mu} {spec:?}", integrator.name());
         let Some(batch) = api.batch(spec.clone(), &sc, worlds.clone()) else { return };
         let mut batch = batch.unwrap_or_else(|e| panic!("{what}: {e}"));
         let kernels = batch.recipe_kernels();
         assert!(kernels.iter().all(|k| k.shader_name().ends_with("_w")), "{what}: {kernels:?}");
-        assert!(kernels.iter().any(|k| k.shader_name().starts_with("self_collide")), "{what}: {kernels:?}");
+        let response = if mode == Particles { "self_collide" } else { "tri_impulse_share" };
+        assert!(kernels.iter().any(|k| k.shader_name().starts_with(response)), "{what}: {kernels:?}");
         let mut singles: Vec<Box<dyn Solver>> =
             worlds.iter().map(|p| api.solver(spec.clone(), &sc, p).expect("an adapter").into_solver()).collect();
-        let start = crowded(singles[0].state().unwrap(), t);
+        let np = sc.num_particles();
+        let apart = if mode == Triangles && !sc.cloth.is_mesh() { 3 * sc.cloth.n as usize } else { np / 2 };
+        let every = if mode == Triangles { 31 } else { 7 };
+        let start = crowded(singles[0].state().unwrap(), t, apart, every);
         for (k, s) in singles.iter_mut().enumerate() {
             s.set_state(&start).unwrap();
             batch.set_world_state(k, &start).unwrap();
         }
-        // World 0 without self-collision, from the same start: the contacts move it.
+        // World 0 without the contact, from the same start: the contacts move it.
         let apart = SimParams { self_collision: clothlab_core::SelfCollision::Off, ..worlds[0].clone() };
         let mut without = api.solver(spec.clone(), &sc, &apart).expect("an adapter").into_solver();
         without.set_state(&start).unwrap();
-        for _ in 0..2 {
+        for _ in 0..frames {
             batch.step_frame().unwrap();
             singles.iter_mut().for_each(|s| s.step_frame().unwrap());
             without.step_frame().unwrap();
@@ -179,11 +197,11 @@ fn a_gpu_batch_s_self_collision_keeps_to_each_world(api: Api) {
             .zip(bits(&without.state().unwrap().pos))
             .filter(|(a, b)| **a != *b)
             .count();
-        assert!(differ > 0, "{what}: the self-collision changed nothing (no contacts to keep apart)");
+        assert!(differ > 0, "{what}: the contact changed nothing (no contacts to keep apart)");
         batch.api_check().unwrap();
     }
 }
-clothlab_tests::per_api!(a_gpu_batch_s_self_collision_keeps_to_each_world);
+clothlab_tests::per_api!(a_gpu_batch_s_contact_keeps_to_each_world);
 
 #[test]
 fn what_a_gpu_batch_cannot_share_is_refused_in_one_line_naming_the_world_or_the_kernel() {
