@@ -118,8 +118,19 @@ shared_struct! {
         /// VBD's spectral radius ρ for Chebyshev acceleration (`SimParams::vbd_rho`; 0 off).
         pub vbd_rho: f32,
         /// 0, always: the word the VBD kernels' sums go through so that the compiler
-        /// keeps their order ([`ZeroWord`]); it also fills the block to 16 bytes.
+        /// keeps their order ([`ZeroWord`]).
         pub zero: ZeroWord,
+        /// A GPU batch's words of the contact between triangles' integers a world (world
+        /// k's start at k times these; set by the batch, 0 elsewhere, where no kernel
+        /// reads it): for the kernel that finds its world's VBD terms without the
+        /// contact's layout (`vbd_colour_tri`).
+        pub tri_world_words: u32,
+        /// Unused: fills the block to 32 bytes (a uniform block's size is a multiple of 16).
+        pub pad0: u32,
+        /// Unused, as `pad0`.
+        pub pad1: u32,
+        /// Unused, as `pad0`.
+        pub pad2: u32,
     }
 }
 
@@ -259,6 +270,10 @@ impl StepParams {
                 kinetic_friction: params.kinetic_friction,
                 vbd_rho: params.vbd_rho,
                 zero: ZeroWord::ZERO,
+                tri_world_words: 0,
+                pad0: 0,
+                pad1: 0,
+                pad2: 0,
             },
         }
     }

@@ -910,6 +910,10 @@ impl<E: Engine> Solver for GpuSolver<E> {
         let t0 = Instant::now();
         self.step_params = StepParams::new(&self.params, &self.scene, self.grab);
         self.step_params.tile_substeps = self.substeps_per_recording;
+        if self.worlds.len() > 1 && self.tri_buffers {
+            self.step_params.contact.tri_world_words =
+                clothlab_cpu::tri_contact::TriLayout::of(&self.topo).words() as u32;
+        }
         // A batch's worlds' constants (world 0 holds the grab), every frame.
         let world_bytes: Option<Vec<u8>> = (self.worlds.len() > 1).then(|| {
             self.worlds

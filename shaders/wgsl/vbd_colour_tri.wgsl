@@ -1,4 +1,5 @@
 //! include: state, table, aux, adjacency, colliders, range, vbd
+//! worlds
 // vbd_colour_tri — one colour of Vertex Block Descent's sweep with the contact between
 // triangles inside the solves (core::cpu::vbd::vbd_colour with TriVbd): vbd_colour's block,
 // to which each particle adds the contact terms tri_vbd gathered for its colour (after the
@@ -9,10 +10,12 @@
 // The contact's integers (shared/tri.wgsl's): VBD's terms right after the scalars.
 @group(0) @binding(40) var<storage, read_write> tri_ints: array<atomic<u32>>;
 
-// Word k of the terms as f32, cleared.
+// Word k of the terms as f32, cleared (a batch's world's: from its integers' start,
+// world_index times the words a world, which the contact's block carries).
 fn take_term(k: u32) -> f32 {
-    let v = f32(bitcast<i32>(atomicLoad(&tri_ints[k])));
-    atomicStore(&tri_ints[k], 0u);
+    let at = world_index * contact_params.tri_world_words + k;
+    let v = f32(bitcast<i32>(atomicLoad(&tri_ints[at])));
+    atomicStore(&tri_ints[at], 0u);
     return v;
 }
 
@@ -52,7 +55,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     hess[4] += h4 * hu;
     hess[5] += h5 * hu;
     let d = block_end();
-    aux2[i] = vec4<f32>(d, 0.0);
-    let x4 = aux1[i];
-    pos[i] = vec4<f32>(x4.xyz + d, x4.w);
+    aux2[world_base + i] = vec4<f32>(d, 0.0);
+    let x4 = aux1[world_base + i];
+    pos[world_base + i] = vec4<f32>(x4.xyz + d, x4.w);
 }

@@ -367,7 +367,7 @@ pub static VBD_COLOUR_TRI: KernelDef = KernelDef {
         reason: "vbd_colour's block and solve (a division and square roots a spring, exact on llvmpipe), \
                  with the colour's integer terms; checked over one colour (validate.rs says why)",
     },
-    variants: Variants { table_image: true, colliders_uniform: true, sdf_image: true, ..PLAIN },
+    variants: worlds(Variants { table_image: true, colliders_uniform: true, sdf_image: true, ..PLAIN }),
     immediates: Immediates::Range,
     dispatches: Dispatches::ColoursWithContact,
     ..row(

@@ -137,8 +137,9 @@ fn crowded(mut s: clothlab_core::ClothState, t: f32, apart: usize, every: usize)
 /// in the other worlds — push nothing across: world k is its single run bit for bit.
 /// Between particles: the hash counted by hash_count (one by one) or by the strain limit's
 /// last pass (optimized), with and without Coulomb friction, on a grid and a mesh;
-/// between triangles with friction on the grid (its triangles and edges; the kernels are
-/// the same under every integrator but VBD, whose terms a batch refuses yet).
+/// between triangles with friction on the grid (its triangles and edges), under Verlet
+/// and under VBD (its terms in the colour sweep; the other integrators run the contact's
+/// kernels as Verlet does).
 fn a_gpu_batch_s_contact_keeps_to_each_world(api: Api) {
     use clothlab_core::SelfCollision::{Particles, Triangles};
     let [optimized, one_by_one] = specs();
@@ -147,7 +148,8 @@ fn a_gpu_batch_s_contact_keeps_to_each_world(api: Api) {
         (scene(), optimized.clone(), 0.0, Particles, verlet),
         (scene(), one_by_one, 0.8, Particles, verlet),
         (fan(), optimized.clone(), 0.8, Particles, verlet),
-        (scene(), optimized, 0.5, Triangles, verlet),
+        (scene(), optimized.clone(), 0.5, Triangles, verlet),
+        (scene(), optimized, 0.5, Triangles, Integrator::Vbd),
     ];
     for (sc, spec, mu, mode, integrator) in rows {
         let t = if sc.cloth.is_mesh() || mode == Triangles { 0.004 } else { 0.02 };
@@ -170,7 +172,11 @@ fn a_gpu_batch_s_contact_keeps_to_each_world(api: Api) {
         let mut batch = batch.unwrap_or_else(|e| panic!("{what}: {e}"));
         let kernels = batch.recipe_kernels();
         assert!(kernels.iter().all(|k| k.shader_name().ends_with("_w")), "{what}: {kernels:?}");
-        let response = if mode == Particles { "self_collide" } else { "tri_impulse_share" };
+        let response = match (mode, integrator) {
+            (Particles, _) => "self_collide",
+            (_, Integrator::Vbd) => "vbd_colour_tri",
+            _ => "tri_impulse_share",
+        };
         assert!(kernels.iter().any(|k| k.shader_name().starts_with(response)), "{what}: {kernels:?}");
         let mut singles: Vec<Box<dyn Solver>> =
             worlds.iter().map(|p| api.solver(spec.clone(), &sc, p).expect("an adapter").into_solver()).collect();
