@@ -1,4 +1,5 @@
 //! include: atomic_cas
+//! worlds
 // springs — per spring: add the force to both ends with atomics (naive variant).
 @group(0) @binding(0) var<uniform> step_params: StepParams;
 // Copied from step_params by the kernel's first statement (see shared/state.wgsl).
@@ -25,13 +26,16 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     } else {
         s = springs_b[k - half];
     }
-    let xa = pos[s.a].xyz;
-    let xb = pos[s.b].xyz;
-    let va = vel[s.a].xyz;
-    let vb = vel[s.b].xyz;
+    // (A batch's world: its particles from world_base; the springs are every world's.)
+    let a = world_base + s.a;
+    let b = world_base + s.b;
+    let xa = pos[a].xyz;
+    let xb = pos[b].xyz;
+    let va = vel[a].xyz;
+    let vb = vel[b].xyz;
     let fa = spring_force(xa - xb, va - vb, SpringSlot(i32(s.b), s.rest, s.ks, s.kd));
     for (var c = 0u; c < 3u; c++) {
-        atomic_add_f32(4u * s.a + c, fa[c]);
-        atomic_add_f32(4u * s.b + c, -fa[c]);
+        atomic_add_f32(4u * a + c, fa[c]);
+        atomic_add_f32(4u * b + c, -fa[c]);
     }
 }

@@ -1,4 +1,5 @@
 //! include: atomic_cas
+//! worlds
 // tri_normals — per triangle (naive variant): the face normal, also added to its three
 // corners' normal accumulators with atomics.
 @group(0) @binding(0) var<uniform> step_params: StepParams;
@@ -13,15 +14,16 @@ var<private> p: StepParams;
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     p = step_params;
     let t = flat_id(id, groups);
-    if t >= arrayLength(&faces) {
+    if t >= arrayLength(&triangles) / 3u {
         return;
     }
-    let ia = triangles[3u * t];
-    let ib = triangles[3u * t + 1u];
-    let ic = triangles[3u * t + 2u];
+    // (A batch's world: its particles from world_base, its faces from face_base.)
+    let ia = world_base + triangles[3u * t];
+    let ib = world_base + triangles[3u * t + 1u];
+    let ic = world_base + triangles[3u * t + 2u];
     let xa = pos[ia].xyz;
     let nrm = cross(pos[ib].xyz - xa, pos[ic].xyz - xa);
-    faces[t] = vec4<f32>(nrm, len3(nrm));
+    faces[face_base + t] = vec4<f32>(nrm, len3(nrm));
     for (var c = 0u; c < 3u; c++) {
         atomic_add_f32(4u * ia + c, nrm[c]);
         atomic_add_f32(4u * ib + c, nrm[c]);

@@ -1,4 +1,5 @@
 //! include: wind, wind_fn, adjacency
+//! worlds
 // vertex_normals — per particle (naive variant): normalise the sum tri_normals_scatter
 // accumulated with atomics, and the wind force into the force buffer.
 @compute @workgroup_size(WORKGROUP)

@@ -74,7 +74,7 @@ pub static SPRINGS: KernelDef = KernelDef {
 pub static SPRINGS_SCATTER: KernelDef = KernelDef {
     check: SCATTER,
     label: timing::SPRINGS,
-    variants: IMM_F32,
+    variants: worlds(IMM_F32),
     ..KernelDef::new(
         "springs_scatter",
         springs_scatter,

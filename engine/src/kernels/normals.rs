@@ -45,7 +45,7 @@ pub static TRI_NORMALS_SCATTER: KernelDef = KernelDef {
     pure: &[Faces],
     accumulates: &[Normal],
     label: timing::TRI_NORMALS,
-    variants: IMM_F32,
+    variants: worlds(IMM_F32),
     ..KernelDef::new(
         "tri_normals_scatter",
         tri_normals_scatter,
@@ -73,6 +73,7 @@ pub static VERTEX_NORMALS_NAIVE: KernelDef = KernelDef {
     pure: &[Force],
     label: timing::VERTEX_NORMALS,
     test_input: Some(face_sums_input),
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     ..KernelDef::new(
         "vertex_normals_naive",
         vertex_normals,
