@@ -299,6 +299,8 @@ impl<E: Engine> GpuSolver<E> {
         let partials_zero = vec![0u8; 8 * (x * y) as usize];
         let pos_bytes: &[u8] = bytemuck::cast_slice(&state.pos);
         let aux_zero = vec![0u8; 16 * envs * topo.num_particles()];
+        // The conjugate gradient's scalars, a vec4 a world.
+        let scalars_zero = vec![0u8; 16 * envs];
         // Moving pins: their table, and room for a frame's poses at the most substeps (a
         // block of MAX_PIN_GROUPS a substep); none: one unused element each.
         // The unused element names no particle (a dispatch of no pins still runs one
@@ -345,7 +347,7 @@ impl<E: Engine> GpuSolver<E> {
             (Buf::Aux2, &aux_zero),
             (Buf::Aux3, &aux_zero),
             (Buf::Aux4, &aux_zero),
-            (Buf::Scalars, &[0u8; 16]),
+            (Buf::Scalars, &scalars_zero),
             (Buf::Pins, bytemuck::cast_slice(pin_slots)),
             (Buf::PinPoses, &pin_poses),
             (Buf::Shapes, bytemuck::cast_slice(&shapes)),

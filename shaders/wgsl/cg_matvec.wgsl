@@ -1,4 +1,5 @@
 //! include: state, table, aux, cg, adjacency
+//! worlds
 // cg_matvec — q = S A p, zero for held particles (core::cpu::integrators::cg_matvec); the
 // partial sums of p·q.
 @compute @workgroup_size(WORKGROUP)
@@ -14,11 +15,11 @@ fn main(
     var term = 0.0;
     if i < num_particles() {
         var q = vec3<f32>(0.0);
-        if !held(i, pos[i].w) {
+        if !held(i, pos[world_base + i].w) {
             q = apply_at(i, true).v;
         }
-        aux3[i] = vec4<f32>(q, 0.0);
-        term = dot3(aux2[i].xyz, q);
+        aux3[world_base + i] = vec4<f32>(q, 0.0);
+        term = dot3(aux2[world_base + i].xyz, q);
     }
     store_partial(workgroup_sum(term, li), li, wg, groups);
 }

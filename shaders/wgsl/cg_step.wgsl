@@ -1,4 +1,5 @@
 //! include: state, aux
+//! worlds
 // cg_step — Δv += α p, r −= α q (core::cpu::integrators::cg_step); the partial sums of
 // the new r·z.
 @compute @workgroup_size(WORKGROUP)
@@ -13,11 +14,11 @@ fn main(
     // No early return: every invocation takes part in the workgroup sum.
     var term = 0.0;
     if i < num_particles() {
-        let alpha = scalars[0].z;
-        let x = aux0[i].xyz + aux2[i].xyz * alpha;
-        let r4 = vec4<f32>(aux1[i].xyz - aux3[i].xyz * alpha, aux1[i].w);
-        aux0[i] = vec4<f32>(x, 0.0);
-        aux1[i] = r4;
+        let alpha = scalars[world_index].z;
+        let x = aux0[world_base + i].xyz + aux2[world_base + i].xyz * alpha;
+        let r4 = vec4<f32>(aux1[world_base + i].xyz - aux3[world_base + i].xyz * alpha, aux1[world_base + i].w);
+        aux0[world_base + i] = vec4<f32>(x, 0.0);
+        aux1[world_base + i] = r4;
         term = dot3(r4.xyz, precondition(r4));
     }
     store_partial(workgroup_sum(term, li), li, wg, groups);

@@ -60,7 +60,7 @@ const CG_PARTIALS: &[Buf] = &[Params, CG_SUMS, Scalars];
 pub static CG_BEGIN: KernelDef = KernelDef {
     check: GATHER,
     label: timing::CG,
-    variants: IMM_TEX,
+    variants: worlds(IMM_TEX),
     ..KernelDef::new(
         "cg_begin",
         cg_begin,
@@ -73,7 +73,7 @@ pub static CG_BEGIN: KernelDef = KernelDef {
 pub static CG_MATVEC: KernelDef = KernelDef {
     check: GATHER,
     label: timing::CG,
-    variants: IMM_TEX,
+    variants: worlds(IMM_TEX),
     ..KernelDef::new(
         "cg_matvec",
         cg_matvec,
@@ -84,12 +84,14 @@ pub static CG_MATVEC: KernelDef = KernelDef {
 };
 /// Implicit: p·q folded, α = r·z / p·q.
 pub static CG_REDUCE_PQ: KernelDef = KernelDef {
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     check: CG,
     label: timing::CG,
     ..KernelDef::new("cg_reduce_pq", cg_reduce_pq, Count::Workgroup, CG_PARTIALS, &[Scalars])
 };
 /// Implicit: Δv += α p, r −= α q, and the partials of r·z.
 pub static CG_STEP: KernelDef = KernelDef {
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     check: CG,
     label: timing::CG,
     ..KernelDef::new(
@@ -102,18 +104,21 @@ pub static CG_STEP: KernelDef = KernelDef {
 };
 /// Implicit: r·z folded, β = new / old.
 pub static CG_REDUCE_RZ: KernelDef = KernelDef {
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     check: CG,
     label: timing::CG,
     ..KernelDef::new("cg_reduce_rz", cg_reduce_rz, Count::Workgroup, CG_PARTIALS, &[Scalars])
 };
 /// Implicit: p = z + β p.
 pub static CG_DIRECTION: KernelDef = KernelDef {
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     check: CG,
     label: timing::CG,
     ..KernelDef::new("cg_direction", cg_direction, Count::Particles, &[Params, CG_R, CG_P, Scalars], &[CG_P])
 };
 /// Implicit: v₁ = (1 − damping) v₀ + Δv, x₁ = x₀ + v₁ dt, with pins, grab and floor.
 pub static IMPLICIT_FINISH: KernelDef = KernelDef {
+    variants: worlds(Variants { immediates: true, ..PLAIN }),
     label: timing::INTEGRATE,
     ..KernelDef::new("implicit_finish", implicit_finish, Count::Particles, &[Params, Pos, Vel, CG_DV], &[Pos, Vel])
 };

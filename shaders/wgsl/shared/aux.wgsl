@@ -25,11 +25,12 @@ fn workgroup_sum(v: f32, li: u32) -> f32 {
     return wg_sum_acc[0];
 }
 
-// Stores a workgroup's partial sum where the reduction kernels fold them (aux4[g].x).
+// Stores a workgroup's partial sum where the reduction kernels fold them (aux4[g].x; a
+// batch's world's in its own rows).
 fn store_partial(total: f32, li: u32, wg: vec3<u32>, groups: vec3<u32>) {
     let g = wg.x + wg.y * groups.x;
-    if li == 0u && g < arrayLength(&aux4) {
-        aux4[g] = vec4<f32>(total, 0.0, 0.0, 0.0);
+    if li == 0u && world_base + g < arrayLength(&aux4) {
+        aux4[world_base + g] = vec4<f32>(total, 0.0, 0.0, 0.0);
     }
 }
 
@@ -39,7 +40,7 @@ fn fold_partials(li: u32) -> f32 {
     let count = (p.num_particles + WORKGROUP - 1u) / WORKGROUP;
     var acc = 0.0;
     for (var k = li; k < count; k += WORKGROUP) {
-        acc += aux4[k].x;
+        acc += aux4[world_base + k].x;
     }
     return workgroup_sum(acc, li);
 }

@@ -9,9 +9,9 @@ struct Applied {
 // The vector A (or dt² K) is applied to, at particle k: p (aux2) or the velocity v.
 fn y_at(k: u32, from_p: bool) -> vec3<f32> {
     if from_p {
-        return aux2[k].xyz;
+        return aux2[world_base + k].xyz;
     }
-    return vel[k].xyz;
+    return vel[world_base + k].xyz;
 }
 
 // (dt² Kₛ + dt Dₛ) y (without Dₛ unless with_damping) for the spring from xa to xb, and a
@@ -36,7 +36,7 @@ fn spring_block(s: SpringSlot, xa: vec3<f32>, xb: vec3<f32>, y: vec3<f32>, with_
 
 // (A y)ᵢ with y = p (full), or dt² (K v)ᵢ (not full); and the diagonal of A.
 fn apply_at(i: u32, full: bool) -> Applied {
-    let xa4 = pos[i];
+    let xa4 = pos[world_base + i];
     let xa = xa4.xyz;
     let ya = y_at(i, full);
     let m = mass_of(xa4.w) * (1.0 + p.dt * p.air_drag);
@@ -53,7 +53,7 @@ fn apply_at(i: u32, full: bool) -> Applied {
             continue;
         }
         let b = u32(other);
-        let blk = spring_block(slot, xa, pos[b].xyz, ya - y_at(b, full), full);
+        let blk = spring_block(slot, xa, pos[world_base + b].xyz, ya - y_at(b, full), full);
         acc += blk.v;
         diag += blk.diag;
     }

@@ -1,8 +1,8 @@
 //! A batch of worlds on each GPU API (`GpuSolver::new_worlds`, engine/src/worlds.rs):
 //! every kernel dispatched once for all worlds, and world k computing, bit for bit, what a
 //! single run of the scene with world k's parameters computes on the same API and recipe
-//! (whose bits are the CPU's: scenes.rs, integrators.rs), under Verlet, XPBD, RK4 and
-//! VBD, on a grid and a mesh. What a batch cannot share yet is refused in one line.
+//! (whose bits are the CPU's: scenes.rs, integrators.rs), under Verlet, XPBD, RK4,
+//! implicit Euler and VBD, on a grid and a mesh. What a batch cannot share yet is refused in one line.
 
 use clothlab_core::scene::ClothSpec;
 use clothlab_core::{Integrator, Scene, SimParams, Solver};
@@ -83,6 +83,7 @@ fn a_gpu_batch_s_world_k_is_its_single_run_bit_for_bit(api: Api) {
         (scene(), one_by_one, verlet),
         (scene(), optimized.clone(), xpbd),
         (scene(), optimized.clone(), Integrator::Rk4),
+        (scene(), optimized.clone(), Integrator::Implicit),
         (scene(), optimized.clone(), Integrator::Vbd),
         (fan(), optimized.clone(), verlet),
         (fan(), optimized.clone(), xpbd),
@@ -239,9 +240,13 @@ fn what_a_gpu_batch_cannot_share_is_refused_in_one_line_naming_the_world_or_the_
     let softer = SimParams { structural_stiffness: 0.5 * world(1).structural_stiffness, ..world(1) };
     let Some(e) = refused(vec![world(0), softer]) else { return };
     assert!(e.contains("world 1") && e.contains("stiffness") && !e.contains('\n'), "{e}");
-    let implicit = SimParams { integrator: Integrator::Implicit, ..world(0) };
-    let e = refused(vec![implicit.clone(), implicit]).unwrap();
-    assert!(e.contains("kernel cg_") && e.contains("no world dimension"), "{e}");
+    // The tiled substep (`fusion=tile`) has no world dimension yet.
+    let tiled = VariantSpec::parse("optimized", &["fusion=tile".into()]).unwrap();
+    let e = match Api::Wgpu.batch(tiled, &sc, vec![world(0), world(1)]) {
+        Some(Err(e)) => e.to_string(),
+        other => panic!("a tiled batch: {:?}", other.map(|r| r.is_ok())),
+    };
+    assert!(e.contains("kernel substep_tile") && e.contains("no world dimension"), "{e}");
     // A world's bad value is refused naming it, nothing changed.
     let mut batch = Api::Wgpu.batch(spec, &sc, (0..3).map(world).collect()).unwrap().unwrap();
     let bad = vec![world(0), world(1), SimParams { damping: -1.0, ..world(2) }];
