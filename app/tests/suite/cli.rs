@@ -196,8 +196,8 @@ fn bad_input_is_refused_with_one_clear_message() {
         "world 1: invalid parameter `damping` = -1",
     );
     refused(
-        &["sim", "--n", "4", "--envs", "2", "--backend", "vulkan-naive"],
-        "kernel springs_scatter has no world dimension yet",
+        &["sim", "--n", "4", "--envs", "2", "--backend", "vulkan", "--set-variant", "fusion=tile"],
+        "kernel substep_tile has no world dimension yet",
     );
     refused(&["sim", "--n", "4", "--envs", "2", "--out", "/tmp/worlds.obj"], "an .obj holds one cloth");
     refused(
@@ -258,15 +258,18 @@ fn validate_envs_checks_each_world_of_a_batch_against_its_single_run() {
         assert!(rows.iter().any(|l| l.starts_with(b) && l.contains(&format!("world {k} "))), "{b} world {k}: {text}");
     }
     // On a GPU backend every world of the batch runs in each dispatch, and each world is
-    // its single run on that backend, bit for bit; a recipe with a kernel that has no world
-    // dimension is refused naming it; a list of the wrong length names itself.
+    // its single run on that backend, bit for bit; what a batch's worlds share (the spring
+    // table) differing is refused naming the world; a list of the wrong length names itself.
     let out = clothlab(&[&args[..], &["--backends", "vulkan"]].concat());
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}");
     let rows: Vec<&str> = text.lines().filter(|l| l.contains("vs its single run")).collect();
     assert_eq!(rows.len(), 6, "{text}");
     assert!(rows.iter().all(|l| l.starts_with("vulkan") && l.ends_with(" ok")), "{text}");
-    refused(&[&args[..], &["--backends", "vulkan-naive"]].concat(), "has no world dimension yet");
+    refused(
+        &[&args[..], &["--backends", "vulkan", "--set", "structural_stiffness=[0.5,0.4,0.5]"]].concat(),
+        "world 1: its spring constants",
+    );
     refused(&[&args[..], &["--set", "wind=[[0,0,0]]"]].concat(), "`wind` has 1 value for 3 worlds");
     // The app shows one world of the file; one past the batch is refused before a window.
     refused(&["run", "--scene", file.to_str().unwrap(), "--world", "3"], "world 3: the batch has 3 worlds");
