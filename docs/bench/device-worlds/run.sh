@@ -10,6 +10,9 @@
 #    world-step of its 3.5 K-particle shirt, 8 worlds in 31 ms on an RTX PRO 6000); a batch
 #    past an API's largest binding is refused with the most worlds that fit (in the notes);
 # 3. the same at n = 16 and 32 (the sizes measured on lavapipe: docs/benchmarking.md).
+# 4. validate --envs 4 with each contact on Vulkan (the thin heap at n = 32: triangles;
+#    the heap: particles), and bench --envs 1,64,1024 at n = 32 with the contact between
+#    triangles on vulkan (its search every substep is what a batch does not share).
 # Results under /tmp/r, packed into $OUT/results.tgz after each part.
 # Here, first: cargo build --release -p clothlab-app; mkdir -p .dev; cp target/release/clothlab
 # .dev/; strip .dev/clothlab; gzip -9 .dev/clothlab; the loaders into .gl (the device tool's
@@ -40,4 +43,11 @@ pack
 pack
 ( time timeout 150 "$B" bench --envs "$SMALL" --sizes 16,32 --backends wgpu,vulkan,gl --iters 4 \
     --repeat "$ROUNDS" --out $R/small ) > $R/bench-small.txt 2>&1
+pack
+for scene in thin-heap heap; do
+  ( time timeout 30 "$B" validate --envs 4 --backends vulkan --scene scenes/$scene.toml --n 32 --steps 64 \
+      --set 'damping=[0,0.002,0.004,0.008]' ) > $R/validate-envs-$scene.txt 2>&1
+done
+( time timeout 60 "$B" bench --envs 1,64,1024 --sizes 32 --backends vulkan --iters 4 \
+    --set 'self_collision="triangles"' --set self_thickness=0.004 --out $R/contact ) > $R/bench-contact.txt 2>&1
 pack
