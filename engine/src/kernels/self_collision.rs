@@ -70,20 +70,27 @@ fn after_scan(a: &TwinArgs, b: &mut HostBuffers) {
     hash_input(3)(a, b)
 }
 
+/// Every `every`-th particle `i` put within 0.3–0.8 thicknesses `t` of particle
+/// `i + apart` (mod the count), velocity kept: contacts from a start the cloth did not
+/// reach (the response's checks, and the worlds' contact tests).
+pub fn crowd(pos: &mut [[f32; 4]], t: f32, apart: usize, every: usize) {
+    let np = pos.len();
+    for i in (0..np).step_by(every) {
+        let q = (i + apart) % np;
+        let off = t * (0.3 + 0.5 * ((i / every) % 5) as f32 / 4.0);
+        let dir: [f32; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.6, 0.8, 0.0]][(i / every) % 4];
+        for (c, d) in dir.iter().enumerate() {
+            pos[i][c] = pos[q][c] + off * d;
+        }
+    }
+}
+
 /// The response's input: every 7th particle put within 0.3–0.8 thicknesses of one far
 /// away in the grid (half the cloth on), velocity kept, so that contacts are many; then
 /// the hash built.
 fn built_hash(a: &TwinArgs, b: &mut HostBuffers) {
-    let (np, t) = (b.pos.len(), a.p.self_thickness);
-    for i in (0..np).step_by(7) {
-        let q = (i + np / 2) % np;
-        let off = t * (0.3 + 0.5 * ((i / 7) % 5) as f32 / 4.0);
-        let dir: [f32; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.6, 0.8, 0.0]][(i / 7) % 4];
-        for (c, d) in dir.iter().enumerate() {
-            let to = b.pos[q][c] + off * d;
-            b.pos[i][c] = to;
-        }
-    }
+    let np = b.pos.len();
+    crowd(&mut b.pos, a.p.self_thickness, np / 2, 7);
     hash_input(4)(a, b)
 }
 

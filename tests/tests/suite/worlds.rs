@@ -141,21 +141,6 @@ fn a_gpu_batch_s_world_k_is_its_single_run_bit_for_bit(api: Api) {
 }
 clothlab_tests::per_api!(a_gpu_batch_s_world_k_is_its_single_run_bit_for_bit);
 
-/// A start in which every 7th particle sits within 0.3–0.8 thicknesses of one half the
-/// cloth away (as the self-collision kernels' checks build theirs): contacts from the first
-/// substep, in every world at the same places.
-fn crowded(mut s: clothlab_core::ClothState, t: f32, apart: usize, every: usize) -> clothlab_core::ClothState {
-    let np = s.pos.len();
-    for i in (0..np).step_by(every) {
-        let q = (i + apart) % np;
-        let off = t * (0.3 + 0.5 * ((i / every) % 5) as f32 / 4.0);
-        let dir: [f32; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.6, 0.8, 0.0]][(i / every) % 4];
-        let to: Vec<f32> = (0..3).map(|c| s.pos[q][c] + off * dir[c]).collect();
-        s.pos[i][..3].copy_from_slice(&to);
-    }
-    s
-}
-
 /// Contact in a batch: each world's self-collision hash is its own (its table, its
 /// blocks, its slots), and so are its contact between triangles' integers, pairs, starts
 /// and bounds; so the worlds — copies in the same place, every particle beside its copies
@@ -213,7 +198,13 @@ fn a_gpu_batch_s_contact_keeps_to_each_world(api: Api) {
         // Each world crowded its own way (one more particle over), in the same place: a
         // world that read another's pairs or counts would take the wrong ones.
         let built = singles[0].state().unwrap();
-        let starts: Vec<_> = (0..envs).map(|k| crowded(built.clone(), t, apart + k, every)).collect();
+        let starts: Vec<_> = (0..envs)
+            .map(|k| {
+                let mut s = built.clone();
+                clothlab_engine::kernels::crowd(&mut s.pos, t, apart + k, every);
+                s
+            })
+            .collect();
         for (k, s) in singles.iter_mut().enumerate() {
             s.set_state(&starts[k]).unwrap();
             batch.set_world_state(k, &starts[k]).unwrap();
