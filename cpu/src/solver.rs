@@ -453,14 +453,7 @@ impl CpuSolver {
                     for k in 0..topo.colours.len() {
                         let colour = topo.colours.colour(k);
                         let tri = contact.as_mut().filter(|_| vbd_contact).map(|ct| {
-                            ct.vbd_terms(
-                                pos,
-                                &topo.triangles,
-                                params.self_thickness,
-                                &topo.colours.of,
-                                k as u32,
-                                p.grab_index,
-                            );
+                            ct.vbd_terms(&p, pos, &topo.triangles, &topo.colours.of, k as u32);
                             super::vbd::TriVbd { sums: ct.vbd_sums(), pos: &mut pos[..] }
                         });
                         super::vbd::vbd_colour(e, &p, &topo.slots, c, colour, aux, tri);
@@ -523,33 +516,19 @@ impl CpuSolver {
                 }
                 Stage::TriangleBounds => {
                     if let Some(c) = contact {
-                        let mu = crate::tri_pipeline::Friction {
-                            stat: params.static_friction,
-                            kinetic: params.kinetic_friction,
-                        };
-                        c.begin(
-                            pos,
-                            vel,
-                            &topo.triangles,
-                            params.dt(),
-                            params.gravity,
-                            params.self_thickness,
-                            p.spacing,
-                            mu,
-                            params.search_margin,
-                        );
+                        c.begin(&p, pos, vel, &topo.triangles, params.search_margin);
                     }
                     TRI_BOUNDS
                 }
                 Stage::TriangleSeparate => {
                     if let Some(c) = contact {
-                        c.separate(pos, vel, &topo.triangles, params.self_thickness, params.dt());
+                        c.separate(&p, pos, vel, &topo.triangles);
                     }
                     TRI_CONTACT
                 }
                 Stage::TriangleClamp => {
                     if let Some(c) = contact {
-                        c.clamp(pos, vel, params.dt());
+                        c.clamp(&p, pos, vel, &topo.triangles);
                     }
                     TRI_CONTACT
                 }
@@ -631,7 +610,7 @@ impl Solver for CpuSolver {
     }
 
     fn contact_stats(&self) -> Option<clothlab_core::solver::ContactStats> {
-        self.contact.as_ref().map(|c| c.stats)
+        self.contact.as_ref().map(|c| c.stats())
     }
 
     fn field(&mut self, field: clothlab_core::solver::StateField) -> Result<Vec<clothlab_core::grid::V4>, SolverError> {

@@ -5,20 +5,22 @@
 //! scalars, the two grids' buckets and entries, each owner's count of pairs, each
 //! particle's fixed-point sums) and the pairs ([`TRI_SLOTS`] an owner).
 //!
-//! Run in order they give what `crate::tri_pipeline::Contact`'s stages give, bit for bit:
-//! the pairs do not depend on the broad phase (an owner keeps its [`TRI_SLOTS`] nearest;
-//! the scalars count what did not fit), and every sum is an integer sum.
-//! The CPU solvers run `Contact` (its grid is faster on a CPU); these are what the GPU
-//! solvers run and what their kernels are checked against.
+//! They are what the GPU solvers' kernels are checked against and what the CPU solvers
+//! run (`crate::tri_pipeline::Contact`: these functions in the recipe's order, the pairs
+//! from the pairs it keeps between searches instead of the grid's walk, through
+//! [`keep_pairs`]): the pairs do not depend on the broad phase (an owner keeps its
+//! [`TRI_SLOTS`] nearest; the scalars count what did not fit), and every sum is an
+//! integer sum, so both give the same bits.
 //!
 //! Owners: vertex `v` (`0 ≤ o < np`) owns its vertex–triangle pairs, edge `e` (`o = np +
 //! e`) its edge–edge pairs with the edges numbered above it.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use clothlab_core::grid::V4;
 use clothlab_core::step_params::StepParams;
-use clothlab_core::tri_contact::{BOUND_FRACTION, MAX_REACH_SPACINGS, REACH_PER_MOTION, ee_pair, vt_pair};
+use clothlab_core::tri_contact::{BOUND_FRACTION, MAX_REACH_SPACINGS, Pair, REACH_PER_MOTION, ee_pair, vt_pair};
 
 pub use clothlab_core::layout::TRI_SLOTS;
 
@@ -121,6 +123,26 @@ pub struct TriBufs<'a> {
     pub ints: &'a mut [u32],
     /// The pairs.
     pub pairs: &'a mut [u32],
+    /// The owners (or particles) a task takes on rayon's threads: 1 for `cpu-par`,
+    /// `usize::MAX` for one task (`cpu`, and the twins of a kernel test).
+    pub min_len: usize,
+}
+
+/// The primitives the contact pairs: the cloths' triangles and their edges
+/// (`clothlab_core::tables::edges`, as `ClothTopology::edges`).
+#[derive(Debug, Clone, Copy)]
+pub struct Prims<'a> {
+    /// The triangles.
+    pub triangles: &'a [[u32; 3]],
+    /// The edges.
+    pub edges: &'a [[u32; 2]],
+}
+
+impl<'a> Prims<'a> {
+    /// `topo`'s triangles and edges.
+    pub fn of(topo: &'a clothlab_core::grid::ClothTopology) -> Self {
+        Self { triangles: &topo.triangles, edges: topo.edges() }
+    }
 }
 
 fn v3(x: &V4) -> Vec3 {
@@ -142,7 +164,11 @@ pub fn tri_speed(pos: &[V4], vel: &[V4], b: &mut TriBufs) {
     }
 }
 
-/// The substep's reach from the fastest speed (`crate::tri_pipeline::Contact::reach`).
+/// The substep's reach from the fastest free vertex's speed: how far the bounds look at
+/// the substep's start — the thickness, or farther where the cloth moves fast, far enough
+/// that a vertex with nothing near may move 1.25 times the fastest vertex's motion
+/// (`|v| dt + |g| dt²`), at most the thickness plus [`MAX_REACH_SPACINGS`] rest spacings
+/// (a constant, so that no sum over the edges is taken a substep).
 pub fn reach_of(p: &StepParams, fastest: f32) -> f32 {
     let g = Vec3::new(p.gravity[0], p.gravity[1], p.gravity[2]).length();
     let motion = fastest * p.dt + g * (p.dt * p.dt);
@@ -178,14 +204,8 @@ fn prim_box(o: usize, pos: &[V4], tris: &[[u32; 3]], edges: &[[u32; 2]]) -> [Vec
 /// Primitive `o`'s bucket among both grids' (the triangles', then the edges', each
 /// [`TriLayout::buckets`] and one for the wide boxes: [`clothlab_core::broad::slot_of`]) and its
 /// box, or `None` where its box is not finite.
-fn bucket_of(
-    o: usize,
-    pos: &[V4],
-    topo: &clothlab_core::grid::ClothTopology,
-    l: &TriLayout,
-    cell: f32,
-) -> Option<(usize, [Vec3; 2])> {
-    let bx = prim_box(o, pos, &topo.triangles, topo.edges());
+fn bucket_of(o: usize, pos: &[V4], m: Prims, l: &TriLayout, cell: f32) -> Option<(usize, [Vec3; 2])> {
+    let bx = prim_box(o, pos, m.triangles, m.edges);
     let slot = clothlab_core::broad::slot_of(bx, cell, l.buckets as u32)?;
     let grid = if o < l.tris { 0 } else { l.grid_buckets() };
     Some((grid + slot as usize, bx))
@@ -193,10 +213,10 @@ fn bucket_of(
 
 /// `tri_grid_count`: each primitive one more in its bucket's count, its box's extent into
 /// its grid's largest (a wide box's not: it is listed apart).
-pub fn tri_grid_count(topo: &clothlab_core::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
+pub fn tri_grid_count(m: Prims, pos: &[V4], b: &mut TriBufs) {
     let cell = f(b.ints[at::CELL]);
     for o in 0..b.l.tris + b.l.edges {
-        let Some((bucket, [lo, hi])) = bucket_of(o, pos, topo, &b.l, cell) else { continue };
+        let Some((bucket, [lo, hi])) = bucket_of(o, pos, m, &b.l, cell) else { continue };
         b.ints[b.l.grid() + bucket] += 1;
         if clothlab_core::broad::is_big([lo, hi], cell) {
             continue;
@@ -220,10 +240,10 @@ pub fn tri_grid_scan(b: &mut TriBufs) {
 
 /// `tri_grid_scatter`: each primitive into its bucket's next entry (its bucket's word
 /// becomes the bucket's end).
-pub fn tri_grid_scatter(topo: &clothlab_core::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
+pub fn tri_grid_scatter(m: Prims, pos: &[V4], b: &mut TriBufs) {
     let cell = f(b.ints[at::CELL]);
     for o in 0..b.l.tris + b.l.edges {
-        let Some((bucket, _)) = bucket_of(o, pos, topo, &b.l, cell) else { continue };
+        let Some((bucket, _)) = bucket_of(o, pos, m, &b.l, cell) else { continue };
         let slot = b.ints[b.l.grid() + bucket] as usize;
         b.ints[b.l.grid() + bucket] += 1;
         let id = if o < b.l.tris { o } else { o - b.l.tris };
@@ -253,7 +273,7 @@ struct Listed<'a> {
     ints: &'a [u32],
     l: TriLayout,
     pos: &'a [V4],
-    topo: &'a clothlab_core::grid::ClothTopology,
+    m: Prims<'a>,
     grid: usize,
 }
 
@@ -265,7 +285,7 @@ impl clothlab_core::broad::Listing for Listed<'_> {
     fn entry(&self, e: usize) -> (u32, [Vec3; 2]) {
         let id = self.ints[e];
         let offset = if self.grid == 0 { 0 } else { self.l.tris };
-        (id, prim_box(offset + id as usize, self.pos, &self.topo.triangles, self.topo.edges()))
+        (id, prim_box(offset + id as usize, self.pos, self.m.triangles, self.m.edges))
     }
 }
 
@@ -277,7 +297,7 @@ fn query(
     ints: &[u32],
     l: &TriLayout,
     pos: &[V4],
-    topo: &clothlab_core::grid::ClothTopology,
+    m: Prims,
     grid: usize,
     b: [Vec3; 2],
     grow: f32,
@@ -293,7 +313,7 @@ fn query(
         extent,
         most_cells: clothlab_core::layout::TRI_QUERY_CELLS,
     };
-    clothlab_core::broad::query(&Listed { ints, l: *l, pos, topo, grid }, &shape, b, grow, first, f);
+    clothlab_core::broad::query(&Listed { ints, l: *l, pos, m, grid }, &shape, b, grow, first, f);
 }
 
 /// Lowers vertex `k`'s bound to `bound` (the kernels' atomic minimum on its bits).
@@ -310,73 +330,118 @@ fn farther(a: (f32, u32), b: (f32, u32)) -> bool {
     a.0 > b.0 || (a.0 == b.0 && a.1 > b.1)
 }
 
-/// `tri_pairs`: each owner's pairs closer than the reach, the [`TRI_SLOTS`] nearest kept
-/// (by distance, then index; in the slots where the kernel's walk leaves them); each
-/// vertex's bound lowered to the fraction of every pair's distance it belongs to.
-pub fn tri_pairs(topo: &clothlab_core::grid::ClothTopology, pos: &[V4], b: &mut TriBufs) {
+/// `tri_pairs`: each owner's pairs closer than the reach, found by walking the grid
+/// ([`keep_pairs`] keeps them).
+pub fn tri_pairs(m: Prims, pos: &[V4], b: &mut TriBufs) {
     let l = b.l;
     let reach = f(b.ints[at::REACH]);
     let at_ = |k: u32| v3(&pos[k as usize]);
-    let edges = topo.edges();
-    for o in 0..l.num_owners() {
-        let mut found: Vec<(u32, f32)> = Vec::new();
-        if o < l.np {
-            // The search's own tests (`vt_pair`, `ee_pair`): the kernel's exact distances,
-            // its early outs never dropping a pair within the reach.
-            let x = at_(o as u32);
-            query(b.ints, &l, pos, topo, 0, [x, x], reach, 0, |t| {
-                found.extend(vt_pair(pos, &topo.triangles, o as u32, t, reach).map(|(_, t, d)| (t, d)));
-            });
-        } else {
-            let e = (o - l.np) as u32;
-            let [a, bb] = edges[e as usize];
-            let (p0, p1) = (at_(a), at_(bb));
-            query(b.ints, &l, pos, topo, 1, [p0.min(p1), p0.max(p1)], reach, e + 1, |g| {
-                found.extend(ee_pair(pos, edges, e, g, reach).map(|(_, g, d)| (g, d)));
-            });
-        }
-        let slots = TRI_SLOTS as usize;
-        let (kept, near) = b.pairs.split_at_mut(l.num_owners() * slots);
-        let (kept, near) = (&mut kept[o * slots..(o + 1) * slots], &mut near[o * slots..(o + 1) * slots]);
-        for (n, &(other, d)) in found.iter().enumerate() {
-            let verts: Vec<u32> = if o < l.np {
-                std::iter::once(o as u32).chain(topo.triangles[other as usize]).collect()
+    let ints: &[u32] = b.ints;
+    // Each owner's pairs in the order the kernel's walk finds them (which slot a pair
+    // takes; the kernel test compares the slots exactly).
+    let found: Vec<Pair> = (0..l.num_owners())
+        .into_par_iter()
+        .with_min_len(b.min_len)
+        .flat_map_iter(|o| {
+            let mut found: Vec<Pair> = Vec::new();
+            if o < l.np {
+                // The search's own tests (`vt_pair`, `ee_pair`): the kernel's exact
+                // distances, its early outs never dropping a pair within the reach.
+                let x = at_(o as u32);
+                query(ints, &l, pos, m, 0, [x, x], reach, 0, |t| {
+                    found.extend(vt_pair(pos, m.triangles, o as u32, t, reach));
+                });
             } else {
-                edges[o - l.np].iter().chain(&edges[other as usize]).copied().collect()
-            };
-            for k in verts {
-                lower(b.floats, k, BOUND_FRACTION * d);
+                let e = (o - l.np) as u32;
+                let [a, bb] = m.edges[e as usize];
+                let (p0, p1) = (at_(a), at_(bb));
+                query(ints, &l, pos, m, 1, [p0.min(p1), p0.max(p1)], reach, e + 1, |g| {
+                    found.extend(ee_pair(pos, m.edges, e, g, reach).map(|(_, g, d)| (o as u32, g, d)));
+                });
             }
-            if n < slots {
-                kept[n] = other;
-                near[n] = d.to_bits();
-            } else {
-                // Full: the farthest kept gives way to a nearer (the kernel's walk).
-                let key = |k: usize| (f32::from_bits(near[k]), kept[k]);
-                let far = (1..slots).fold(0, |far, k| if farther(key(k), key(far)) { k } else { far });
-                if farther(key(far), (d, other)) {
-                    kept[far] = other;
-                    near[far] = d.to_bits();
+            found
+        })
+        .collect();
+    keep_pairs(m, &found, b);
+}
+
+/// The second half of `tri_pairs`, whatever found the pairs: `found` is every pair
+/// closer than the reach, `(owner, other, distance)` ([`vt_pair`]'s and [`ee_pair`]'s
+/// distances; owners as numbered above, in increasing order). Each owner's
+/// [`TRI_SLOTS`] nearest are kept (by distance, then index: in the slots where `found`'s
+/// order leaves them, as the kernel's walk leaves its), its count of pairs written, each
+/// vertex's bound lowered to the fraction of every pair's distance it belongs to, and the
+/// pairs and those beyond the slots counted. The CPU solvers hand it the pairs kept
+/// between searches (`crate::tri_pipeline::Contact`); the set of pairs, and so every
+/// stage after it, is the same.
+pub fn keep_pairs(m: Prims, found: &[Pair], b: &mut TriBufs) {
+    let l = b.l;
+    let slots = TRI_SLOTS as usize;
+    // Where each owner's pairs start in `found`.
+    let mut starts = vec![0u32; l.num_owners() + 1];
+    for &(o, _, _) in found {
+        starts[o as usize + 1] += 1;
+    }
+    for o in 0..l.num_owners() {
+        starts[o + 1] += starts[o];
+    }
+    let (kept, near) = b.pairs.split_at_mut(l.num_owners() * slots);
+    let counts = &mut b.ints[l.owners()..l.owners() + l.num_owners()];
+    kept.par_chunks_mut(slots)
+        .zip(near.par_chunks_mut(slots))
+        .zip(counts.par_iter_mut())
+        .enumerate()
+        .with_min_len(b.min_len.max(64))
+        .for_each(|(o, ((kept, near), count))| {
+            let mine = &found[starts[o] as usize..starts[o + 1] as usize];
+            for (n, &(_, other, d)) in mine.iter().enumerate() {
+                if n < slots {
+                    kept[n] = other;
+                    near[n] = d.to_bits();
+                } else {
+                    // Full: the farthest kept gives way to a nearer (the kernel's walk).
+                    let key = |k: usize| (f32::from_bits(near[k]), kept[k]);
+                    let far = (1..slots).fold(0, |far, k| if farther(key(k), key(far)) { k } else { far });
+                    if farther(key(far), (d, other)) {
+                        kept[far] = other;
+                        near[far] = d.to_bits();
+                    }
                 }
             }
+            *count = mine.len() as u32;
+        });
+    for &(o, other, d) in found {
+        for k in verts(m, &l, o as usize, other) {
+            lower(b.floats, k, BOUND_FRACTION * d);
         }
-        let n = found.len() as u32;
-        b.ints[l.owners() + o] = n;
-        b.ints[at::PAIRS] += n;
-        b.ints[at::OVERFLOW] += n.saturating_sub(TRI_SLOTS);
     }
+    let n = found.len() as u32;
+    b.ints[at::PAIRS] += n;
+    b.ints[at::OVERFLOW] +=
+        (0..l.num_owners()).map(|o| (starts[o + 1] - starts[o]).saturating_sub(TRI_SLOTS)).sum::<u32>();
 }
 
 pub use crate::tri_pipeline::Pass;
 use crate::tri_pipeline::{Response, Sides};
 
-/// Owner `o`'s pair with primitive `other`: a vertex and a triangle, or two edges.
-fn sides(topo: &clothlab_core::grid::ClothTopology, pos: &[V4], l: &TriLayout, o: usize, other: u32) -> Sides {
+/// The vertices of owner `o`'s pair with primitive `other`: the vertex and the
+/// triangle's, or both edges'.
+fn verts(m: Prims, l: &TriLayout, o: usize, other: u32) -> [u32; 4] {
     if o < l.np {
-        Sides::vertex_triangle(pos, o as u32, topo.triangles[other as usize])
+        let [a, b, c] = m.triangles[other as usize];
+        [o as u32, a, b, c]
     } else {
-        let edges = topo.edges();
-        Sides::edge_edge(pos, edges[o - l.np], edges[other as usize])
+        let ([a, b], [c, d]) = (m.edges[o - l.np], m.edges[other as usize]);
+        [a, b, c, d]
+    }
+}
+
+/// Owner `o`'s pair with primitive `other`: a vertex and a triangle, or two edges.
+fn sides(m: Prims, pos: &[V4], l: &TriLayout, o: usize, other: u32) -> Sides {
+    if o < l.np {
+        Sides::vertex_triangle(pos, o as u32, m.triangles[other as usize])
+    } else {
+        Sides::edge_edge(pos, m.edges[o - l.np], m.edges[other as usize])
     }
 }
 
@@ -395,67 +460,58 @@ fn unit(p: &StepParams, pass: Pass) -> f32 {
     }
 }
 
-/// Every kept pair of every owner, with its response where it has one.
-fn each_response(
-    p: &StepParams,
-    topo: &clothlab_core::grid::ClothTopology,
-    pos: &[V4],
-    vel: &[V4],
-    b: &TriBufs,
-    pass: Pass,
-    mut f: impl FnMut(Response),
-) {
-    for o in 0..b.l.num_owners() {
-        let n = b.ints[b.l.owners() + o].min(TRI_SLOTS) as usize;
-        for slot in 0..n {
-            let other = b.pairs[o * TRI_SLOTS as usize + slot];
-            if let Some(r) = response(p, pos, vel, sides(topo, pos, &b.l, o, other), pass) {
-                f(r);
-            }
-        }
-    }
+/// Each owner's kept pairs `(owner, other)` that `keep` takes, owner by owner.
+fn kept_pairs<'a>(
+    b: &'a TriBufs,
+    keep: &'a (dyn Fn(usize, u32) -> bool + Sync),
+) -> impl ParallelIterator<Item = (usize, u32)> + 'a {
+    let (l, ints, pairs) = (b.l, &*b.ints, &*b.pairs);
+    (0..l.num_owners()).into_par_iter().with_min_len(b.min_len.max(256)).flat_map_iter(move |o| {
+        let n = ints[l.owners() + o].min(TRI_SLOTS) as usize;
+        pairs[o * TRI_SLOTS as usize..][..n].iter().filter(move |&&other| keep(o, other)).map(move |&other| (o, other))
+    })
+}
+
+/// Every kept pair's response in `pass` at `pos` and `vel`, where it has one (what the
+/// count and the share of a pass both compute).
+pub(crate) fn responses(p: &StepParams, m: Prims, pos: &[V4], vel: &[V4], b: &TriBufs, pass: Pass) -> Vec<Response> {
+    let l = b.l;
+    kept_pairs(b, &|_, _| true)
+        .filter_map(|(o, other)| response(p, pos, vel, sides(m, pos, &l, o, other), pass))
+        .collect()
 }
 
 /// `tri_vbd`: the contact terms under VBD (`crate::tri_pipeline::vbd_terms`) of every kept
 /// pair at `pos` (the sweep's iterate) for the vertices of colour `colour`
-/// (`topo.colours.of`) that are not held, into their sums ([`TriLayout::vbd`]).
-pub fn tri_vbd(p: &StepParams, topo: &clothlab_core::grid::ClothTopology, pos: &[V4], colour: u32, b: &mut TriBufs) {
-    let wanted = crate::tri_pipeline::vbd_wanted(pos, &topo.colours.of, colour, p.grab_index);
-    let edges = topo.edges();
+/// (`colour_of`: each particle's) that are not held, into their sums ([`TriLayout::vbd`]).
+pub fn tri_vbd(p: &StepParams, m: Prims, colour_of: &[u32], pos: &[V4], colour: u32, b: &mut TriBufs) {
+    let wanted = crate::tri_pipeline::vbd_wanted(pos, colour_of, colour, p.grab_index);
     let (l, at) = (b.l, b.l.vbd());
-    for o in 0..l.num_owners() {
-        let n = b.ints[l.owners() + o].min(TRI_SLOTS) as usize;
-        for slot in 0..n {
-            let other = b.pairs[o * TRI_SLOTS as usize + slot];
-            let verts: [u32; 4] = if o < l.np {
-                let [a, b, c] = topo.triangles[other as usize];
-                [o as u32, a, b, c]
-            } else {
-                let ([a, b], [c, d]) = (edges[o - l.np], edges[other as usize]);
-                [a, b, c, d]
-            };
-            if verts.iter().any(|&v| wanted(v)) {
-                let s = sides(topo, pos, &l, o, other);
-                crate::tri_pipeline::vbd_terms(&s, p.self_thickness, wanted, &mut b.ints[at..]);
-            }
-        }
+    let words: Vec<(usize, u32)> = kept_pairs(b, &|o, other| verts(m, &l, o, other).iter().any(|&v| wanted(v)))
+        .flat_map_iter(|(o, other)| {
+            let mut words = Vec::new();
+            crate::tri_pipeline::vbd_terms(&sides(m, pos, &l, o, other), p.self_thickness, wanted, |i, v| {
+                words.push((i, v))
+            });
+            words
+        })
+        .collect();
+    for (i, v) in words {
+        b.ints[at + i] = b.ints[at + i].wrapping_add(v);
     }
 }
 
 /// `tri_impulse_count` and `tri_separate_count`: each vertex's count of the pairs with a
 /// response that move it (word 3 of its sums).
-pub fn tri_count(
-    p: &StepParams,
-    topo: &clothlab_core::grid::ClothTopology,
-    pos: &[V4],
-    vel: &[V4],
-    b: &mut TriBufs,
-    pass: Pass,
-) {
-    let mut counts = Vec::new();
-    each_response(p, topo, pos, vel, b, pass, |r| counts.extend(r.acting()));
+pub fn tri_count(p: &StepParams, m: Prims, pos: &[V4], vel: &[V4], b: &mut TriBufs, pass: Pass) {
+    let r = responses(p, m, pos, vel, b, pass);
+    count_responses(&r, b);
+}
+
+/// The count of [`tri_count`] from the pass's responses.
+pub(crate) fn count_responses(responses: &[Response], b: &mut TriBufs) {
     let sums = b.l.sums();
-    for k in counts {
+    for k in responses.iter().flat_map(|r| r.acting()) {
         let w = &mut b.ints[sums + 4 * k as usize + 3];
         *w = w.wrapping_add(1);
     }
@@ -464,23 +520,23 @@ pub fn tri_count(
 /// `tri_impulse_share` and `tri_separate_share`: each response spread over its vertices
 /// (`clothlab_core::tri_contact`'s share: over the most pairs any of its vertices is in, by
 /// inverse mass and weight), in fixed point into the sums; the responses counted.
-pub fn tri_share(
-    p: &StepParams,
-    topo: &clothlab_core::grid::ClothTopology,
-    pos: &[V4],
-    vel: &[V4],
-    b: &mut TriBufs,
-    pass: Pass,
-) {
+pub fn tri_share(p: &StepParams, m: Prims, pos: &[V4], vel: &[V4], b: &mut TriBufs, pass: Pass) {
+    let r = responses(p, m, pos, vel, b, pass);
+    share_responses(p, pos, &r, b, pass);
+}
+
+/// The shares of [`tri_share`] from the pass's responses (counted by [`count_responses`]).
+pub(crate) fn share_responses(p: &StepParams, pos: &[V4], responses: &[Response], b: &mut TriBufs, pass: Pass) {
     let (sums, u) = (b.l.sums(), unit(p, pass));
-    let mut adds: Vec<(u32, [i32; 3])> = Vec::new();
-    let mut responses = 0u32;
     let ints = &*b.ints;
-    each_response(p, topo, pos, vel, b, pass, |r| {
-        responses += 1;
-        let most = r.acting().map(|k| ints[sums + 4 * k as usize + 3]).max().unwrap_or(1);
-        adds.extend(r.shares(most, |k| pos[k as usize][3], u));
-    });
+    let adds: Vec<(u32, [i32; 3])> = responses
+        .par_iter()
+        .with_min_len(b.min_len.max(256))
+        .flat_map_iter(|r| {
+            let most = r.acting().map(|k| ints[sums + 4 * k as usize + 3]).max().unwrap_or(1);
+            r.shares(most, |k| pos[k as usize][3], u).collect::<Vec<_>>()
+        })
+        .collect();
     for (k, d) in adds {
         for (c, dc) in d.iter().enumerate() {
             let w = &mut b.ints[sums + 4 * k as usize + c];
@@ -488,7 +544,17 @@ pub fn tri_share(
         }
     }
     let stat = if pass == Pass::Velocity { at::SLOWED } else { at::PUSHED };
-    b.ints[stat] += responses;
+    b.ints[stat] += responses.len() as u32;
+}
+
+/// One pass (the velocity pass, or a separation pass) as the CPU runs it: its responses
+/// found once for [`count_responses`] and [`share_responses`] (what `tri_*_count` and
+/// `tri_*_share` each find), then [`tri_apply`].
+pub(crate) fn run_pass(p: &StepParams, m: Prims, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs, pass: Pass) {
+    let r = responses(p, m, pos, vel, b, pass);
+    count_responses(&r, b);
+    share_responses(p, pos, &r, b, pass);
+    tri_apply(p, pos, vel, b, pass);
 }
 
 /// `tri_impulse_apply` and `tri_separate_apply`: each particle's sums added (the

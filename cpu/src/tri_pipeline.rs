@@ -1,15 +1,23 @@
 //! The contact between triangles as the CPU runs it (docs/contact.md): the stages of a
-//! substep ([`Contact`]: each vertex's bound at the start, the approaches slowed, the
-//! pairs pushed apart, every motion clamped to its bound at the end), the pairs kept
-//! between searches, the response's shares and Coulomb friction, and VBD's contact
-//! terms. The geometry it is built from — closest points, the pair search, the bounds and
+//! substep ([`Contact`]: the GPU kernels' twins of `crate::tri_contact` in the recipe's
+//! order, each vertex's bound at the start, the approaches slowed, the pairs pushed
+//! apart, every motion clamped to its bound at the end) with the pairs kept between
+//! searches; and what the twins compute of a pair — its response, its shares with
+//! Coulomb friction, the clamp, VBD's contact terms. The geometry it is built from — closest points, the pair search, the bounds and
 //! the constants the kernels share — is the model's (`clothlab_core::tri_contact`).
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use clothlab_core::broad::BoxGrid;
+use clothlab_core::grid::V4;
+use clothlab_core::step_params::StepParams;
 use clothlab_core::tri_contact::*;
+
+use crate::tri_contact::{
+    Prims, TriBufs, TriLayout, at, keep_pairs, run_pass, stats, tri_clamp, tri_clamp_check, tri_clamp_sum, tri_speed,
+    tri_start, tri_vbd,
+};
 
 /// The pairs of the last search (within its reach at its positions) and what it needs
 /// to tell whether they still hold every pair within a substep's reach.
@@ -212,93 +220,6 @@ impl Search {
     }
 }
 
-/// One Jacobi pass of the contact between primitives: each pair of [`find_pairs`] closer
-/// than `thickness` is pushed apart to it along the line between its closest points — the
-/// constraint `n·(p − q) ≥ thickness` projected with the vertices' inverse masses
-/// `inv_mass` (0: pinned) and the closest points' weights, so that the pair's momentum
-/// does not change (its pushes weighted by mass sum to zero). Each vertex's pushes are
-/// summed in fixed point ([`clothlab_core::tables::CONTACT_UNITS`] per thickness, truncated:
-/// the same sum in any order, as the particle contact's). Writes the moved positions to
-/// `out` and returns the pairs pushed.
-pub fn separate(
-    pos: &[clothlab_core::grid::V4],
-    triangles: &[[u32; 3]],
-    inv_mass: &[f32],
-    thickness: f32,
-    out: &mut [clothlab_core::grid::V4],
-) -> usize {
-    separate_with(pos, triangles, &clothlab_core::crossings::edges(triangles), inv_mass, thickness, true, out)
-}
-
-/// [`separate`] with the triangles' `edges` given.
-pub fn separate_with(
-    pos: &[clothlab_core::grid::V4],
-    triangles: &[[u32; 3]],
-    edges: &[[u32; 2]],
-    inv_mass: &[f32],
-    thickness: f32,
-    parallel: bool,
-    out: &mut [clothlab_core::grid::V4],
-) -> usize {
-    let (vt, ee) = find_pairs(pos, triangles, edges, thickness, parallel);
-    let pairs = Pairs { triangles, edges, vt: &vt, ee: &ee };
-    out.copy_from_slice(pos);
-    separation_pass(out, &pairs, inv_mass, thickness)
-}
-
-/// One Jacobi pass of the separation over `pairs` (found before) at `pos`, in place;
-/// returns the pairs closer than `thickness` it pushed.
-pub fn separation_pass(pos: &mut [clothlab_core::grid::V4], pairs: &Pairs, inv_mass: &[f32], thickness: f32) -> usize {
-    let (moves, pushed) = separation_shares(pos, pairs, |k| inv_mass[k as usize], thickness, usize::MAX);
-    for (x, d) in pos.iter_mut().zip(&moves) {
-        for c in 0..3 {
-            x[c] += d[c];
-        }
-    }
-    pushed
-}
-
-/// One pass of the contact stage's separation (`Contact::separate`): [`separation_pass`]
-/// with the inverse masses from `pos`'s w, each vertex's move also added to its velocity
-/// (over `dt`); returns the pairs pushed.
-fn separation_moves(
-    pos: &mut [clothlab_core::grid::V4],
-    vel: &mut [clothlab_core::grid::V4],
-    pairs: &Pairs,
-    thickness: f32,
-    dt: f32,
-    min_len: usize,
-) -> usize {
-    // The inverse masses are the positions' w, which the moves leave as they are.
-    let at: &[clothlab_core::grid::V4] = pos;
-    let (moves, pushed) = separation_shares(at, pairs, |k| at[k as usize][3], thickness, min_len);
-    pos.par_iter_mut().zip(vel.par_iter_mut()).zip(&moves).with_min_len(min_len.max(1024)).for_each(|((x, v), d)| {
-        for c in 0..3 {
-            x[c] += d[c];
-            v[c] += d[c] * (1.0 / dt);
-        }
-    });
-    pushed
-}
-
-/// Each vertex's move in one Jacobi pass of the separation over `pairs` at `pos`, and
-/// the pairs closer than `thickness` that it pushes.
-fn separation_shares(
-    pos: &[clothlab_core::grid::V4],
-    pairs: &Pairs,
-    inv: impl Fn(u32) -> f32 + Copy + Sync + Send,
-    thickness: f32,
-    min_len: usize,
-) -> (Vec<[f32; 3]>, usize) {
-    let responses: Vec<Response> = (0..pairs.vt.len() + pairs.ee.len())
-        .into_par_iter()
-        .with_min_len(min_len)
-        .filter_map(|k| response(sides(pos, pairs, k), inv, &[], thickness, 1.0, Friction::default(), Pass::Separation))
-        .collect();
-    let moves = share(&responses, pos.len(), inv, thickness * (1.0 / clothlab_core::tables::CONTACT_UNITS), min_len);
-    (moves, responses.len())
-}
-
 /// One pair's response: `change` to the relative motion of its closest points (p − q),
 /// `m` = Σ inverse mass × weight² over its vertices (how much a unit impulse moves it).
 pub(crate) struct Response {
@@ -326,8 +247,7 @@ impl Response {
     /// same factor on both sides, so the momentum is still kept, and a vertex in k pairs
     /// is not moved k times over — a Jacobi sum's overshoot), truncated to i32 (a
     /// saturating conversion: what a GPU's i32 atomics then add with wrap-around). The
-    /// one computation of a share: [`Contact`]'s passes and the `tri_*_share` kernels'
-    /// twins both call it.
+    /// one computation of a share (the `tri_*_share` kernels' twins).
     pub(crate) fn shares(
         &self,
         most: u32,
@@ -348,8 +268,8 @@ pub(crate) fn from_units(sum: i32, unit: f32) -> f32 {
 }
 
 /// Vertex `x`'s motion since `x0` cut to `bound` where it is longer (and finite), the cut
-/// taken from its velocity `v` over `dt`; whether it was cut. The one clamp:
-/// [`Contact::clamp`] and the `tri_clamp` kernel's twin both call it.
+/// taken from its velocity `v` over `dt`; whether it was cut. (The `tri_clamp`
+/// kernel's twin.)
 pub(crate) fn clamp_to_bound(
     x: &mut clothlab_core::grid::V4,
     v: &mut clothlab_core::grid::V4,
@@ -373,14 +293,23 @@ pub(crate) fn clamp_to_bound(
 /// What a pass computes of a pair: the velocity pass's impulse, or the separation's push.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pass {
-    /// [`approach_impulses`].
+    /// At the substep's start (Bridson, Fedkiw & Anderson 2002's inelastic impulses,
+    /// before the step): every pair whose relative normal velocity at its closest points
+    /// would bring it under the thickness within the substep gets the impulse that
+    /// brings it to the thickness instead, spread over its vertices by their weights and
+    /// inverse masses so that the pair's momentum does not change, and Coulomb friction
+    /// on its sliding. It keeps the motion bounds from cutting most approaches: a cut is
+    /// not an internal force, an impulse is.
     Velocity,
-    /// [`separation_pass`].
+    /// After the integrator, a Jacobi pass: each pair closer than the thickness pushed
+    /// apart to it along the line between its closest points (the constraint
+    /// `n·(p − q) ≥ thickness` projected with the vertices' inverse masses and the
+    /// closest points' weights: the pair's momentum kept).
     Separation,
 }
 
-/// A pair's response in `pass` (the one computation of it: `Contact`'s stages and the
-/// GPU kernels' twins both call it), `None` where it has none: with the inverse masses
+/// A pair's response in `pass` (the one computation of it: the GPU kernels' twins call
+/// it), `None` where it has none: with the inverse masses
 /// `inv`, the velocities `vel` (the velocity pass's only), the `thickness` (none where it
 /// is not positive: a scene without the contact), the substep `dt` and Coulomb's `mu`.
 ///
@@ -437,67 +366,6 @@ pub(crate) fn response(
 /// Σ inverse mass × weight² of a side.
 pub(crate) fn mass_term(ks: &[u32; 3], ws: &[f32; 3], inv: impl Fn(u32) -> f32) -> f32 {
     ks.iter().zip(ws).map(|(&k, &w)| inv(k) * w * w).sum()
-}
-
-/// Each vertex's share of `responses` ([`Response::shares`], each pair's over the most
-/// pairs any of its vertices is in), summed in fixed point of `unit` as 32-bit integers
-/// with wrap-around — a GPU's atomics: the same sum in any order, on every backend.
-fn share(
-    responses: &[Response],
-    n: usize,
-    inv: impl Fn(u32) -> f32 + Sync,
-    unit: f32,
-    min_len: usize,
-) -> Vec<[f32; 3]> {
-    use std::sync::atomic::{AtomicI32, AtomicU32, Ordering::Relaxed};
-    let count: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(0)).collect();
-    responses.par_iter().with_min_len(min_len).for_each(|r| {
-        for k in r.acting() {
-            count[k as usize].fetch_add(1, Relaxed);
-        }
-    });
-    let sum: Vec<[AtomicI32; 3]> = (0..n).map(|_| [AtomicI32::new(0), AtomicI32::new(0), AtomicI32::new(0)]).collect();
-    responses.par_iter().with_min_len(min_len).for_each(|r| {
-        let most = r.acting().map(|k| count[k as usize].load(Relaxed)).max().unwrap_or(1);
-        for (k, d) in r.shares(most, &inv, unit) {
-            for (acc, c) in sum[k as usize].iter().zip(d) {
-                acc.fetch_add(c, Relaxed);
-            }
-        }
-    });
-    sum.iter().map(|s| s.each_ref().map(|c| from_units(c.load(Relaxed), unit))).collect()
-}
-
-/// The contact between triangles as stages of a substep (docs/contact.md, the CPU
-/// solver's `Stage::Triangle*`): at the substep's start each vertex's bound on its motion
-/// ([`Contact::begin`]); after the integrator, the pairs closer than the thickness pushed
-/// apart ([`Contact::separate`]); at the substep's end every vertex's motion since the
-/// start clamped to its bound ([`Contact::clamp`]), whatever moved it — the integrator,
-/// the separation, the colliders, the strain limit. So a state without crossings keeps
-/// none under every integrator. The velocity takes each move (`Δx/dt`, as the strain
-/// limit's does).
-#[derive(Debug, Clone, Default)]
-pub struct Contact {
-    /// Search and clamp on rayon's threads (`Exec::Parallel`); else on the caller's.
-    pub parallel: bool,
-    edges: Vec<[u32; 2]>,
-    start: Vec<clothlab_core::grid::V4>,
-    bounds: Vec<f32>,
-    /// The pairs within the reach at the substep's start: the velocity pass's and the
-    /// separation's.
-    vt: Vec<Pair>,
-    ee: Vec<Pair>,
-    /// VBD's contact terms of the colour being swept ([`VBD_TERMS`] words a particle).
-    vbd: Vec<u32>,
-    /// The last search's pairs, which serve the substeps until a vertex has moved too far.
-    search: Search,
-    /// The indices of the substep's pairs with a vertex of each colour (VBD's terms),
-    /// found at the first colour's terms after each [`Contact::begin`].
-    by_colour: Vec<Vec<u32>>,
-    /// What the last substep's stages did: the reach and pairs of [`Contact::begin`], the
-    /// approaches it slowed, the pairs [`Contact::separate`] pushed and the vertices
-    /// [`Contact::clamp`] cut short (what [`clothlab_core::Solver::contact_stats`] reports).
-    pub stats: clothlab_core::solver::ContactStats,
 }
 
 /// Coulomb's coefficients at the contacts between triangles (both 0: frictionless).
@@ -557,65 +425,6 @@ impl Sides {
     }
 }
 
-/// The [`Sides`] of `pairs`' pair `k` (vertex–triangle pairs first, then edge–edge).
-fn sides(pos: &[clothlab_core::grid::V4], pairs: &Pairs, k: usize) -> Sides {
-    if k < pairs.vt.len() {
-        let (v, t, _) = pairs.vt[k];
-        Sides::vertex_triangle(pos, v, pairs.triangles[t as usize])
-    } else {
-        let (e, f, _) = pairs.ee[k - pairs.vt.len()];
-        Sides::edge_edge(pos, pairs.edges[e as usize], pairs.edges[f as usize])
-    }
-}
-
-/// The velocity pass of the contact between triangles (Bridson, Fedkiw & Anderson 2002's
-/// inelastic impulses, before the step): every pair of `pairs` whose relative normal
-/// velocity at its closest points would bring it under `thickness` within `dt` gets the
-/// impulse that brings it to the thickness instead, spread over its vertices by their
-/// weights and inverse masses (`pos`'s w) so that the pair's momentum does not change, and
-/// Coulomb friction `mu` on its sliding (stopped where μs times the normal impulse can,
-/// else slowed by μk times it). Each vertex's changes are summed in fixed point
-/// ([`clothlab_core::tables::CONTACT_UNITS`] per `thickness / dt`, truncated: the same sum in any
-/// order). Returns the pairs slowed. It keeps the motion bounds from cutting most
-/// approaches: a cut is not an internal force, an impulse is.
-pub fn approach_impulses(
-    pos: &[clothlab_core::grid::V4],
-    vel: &mut [clothlab_core::grid::V4],
-    pairs: &Pairs,
-    thickness: f32,
-    dt: f32,
-    mu: Friction,
-) -> usize {
-    approach_impulses_on(pos, vel, pairs, thickness, dt, mu, usize::MAX)
-}
-
-/// [`approach_impulses`], its pairs taken `min_len` at a time on rayon's threads.
-fn approach_impulses_on(
-    pos: &[clothlab_core::grid::V4],
-    vel: &mut [clothlab_core::grid::V4],
-    pairs: &Pairs,
-    thickness: f32,
-    dt: f32,
-    mu: Friction,
-    min_len: usize,
-) -> usize {
-    let inv = |k: u32| pos[k as usize][3];
-    let seen: &[clothlab_core::grid::V4] = vel;
-    let responses: Vec<Response> = (0..pairs.vt.len() + pairs.ee.len())
-        .into_par_iter()
-        .with_min_len(min_len)
-        .filter_map(|k| response(sides(pos, pairs, k), inv, seen, thickness, dt, mu, Pass::Velocity))
-        .collect();
-    let unit = thickness * (1.0 / dt) * (1.0 / clothlab_core::tables::CONTACT_UNITS);
-    let changes = share(&responses, pos.len(), inv, unit, min_len);
-    for (v, d) in vel.iter_mut().zip(&changes) {
-        for c in 0..3 {
-            v[c] += d[c];
-        }
-    }
-    responses.len()
-}
-
 /// Whether VBD's contact terms act on vertex `k` while colour `colour` is swept: a
 /// vertex of that colour (`colour_of`: each particle's) that is not held (pinned, its
 /// `pos` w 0, or the grabbed `grab`). [`Contact::vbd_terms`] and
@@ -635,9 +444,10 @@ pub(crate) fn vbd_wanted<'a>(
 /// vertex (weight `w` ≠ 0) that `wanted` takes (the colour being swept, not held) gets
 /// its force `−∂E/∂x = ± k (t − d) w n` (`+` on the first side) in units of
 /// `t / CONTACT_UNITS`, and its block `k w n nᵀ` in units of `1 / CONTACT_UNITS`, over
-/// `k` (the block multiplies it in: `cpu::vbd`), added to its [`VBD_TERMS`] words of
-/// `sums` as 32-bit integers (truncated, wrapping: the same sum in any order, as the GPU's
-/// atomics). Returns whether the pair is closer than `t`.
+/// `k` (the block multiplies it in: `cpu::vbd`), handed to `add` word by word (its index
+/// among the sums, [`VBD_TERMS`] words a particle, and the value: a 32-bit integer,
+/// truncated, added with wrap-around — the same sum in any order, as the GPU's atomics).
+/// Returns whether the pair is closer than `t`.
 ///
 /// The block is the Gauss–Newton `k w² n nᵀ` raised to `k w n nᵀ` (w ≤ 1: still the
 /// pair's energy's majorant along n), so that a vertex's step is its pairs' gaps to the
@@ -645,13 +455,12 @@ pub(crate) fn vbd_wanted<'a>(
 /// pairs mix weights (vertex–triangle at 1, edge–edge at ½) stepped past the thickness,
 /// where the one-sided energy is zero and the inertia pulled it back: a sheet pressed to
 /// 0.6 t on another went to 1.03 t and back to 0.6 t sweep after sweep.
-pub(crate) fn vbd_terms(s: &Sides, thickness: f32, wanted: impl Fn(u32) -> bool, sums: &mut [u32]) -> bool {
-    vbd_terms_each(s, thickness, wanted, |i, v| sums[i] = sums[i].wrapping_add(v))
-}
-
-/// [`vbd_terms`] with each word's addition handed to `add` (the word's index in the sums,
-/// the value to add with wrap-around).
-fn vbd_terms_each(s: &Sides, thickness: f32, wanted: impl Fn(u32) -> bool, mut add: impl FnMut(usize, u32)) -> bool {
+pub(crate) fn vbd_terms(
+    s: &Sides,
+    thickness: f32,
+    wanted: impl Fn(u32) -> bool,
+    mut add: impl FnMut(usize, u32),
+) -> bool {
     if thickness.is_nan() || thickness <= 0.0 {
         return false;
     }
@@ -679,33 +488,37 @@ fn vbd_terms_each(s: &Sides, thickness: f32, wanted: impl Fn(u32) -> bool, mut a
     true
 }
 
-/// Each owner's pairs in `pairs` (grouped by owner, as [`find_pairs`] gives them) cut to
-/// its [`PAIRS_PER_OWNER`] nearest (distance, then index), the order otherwise kept.
-pub fn keep_nearest(pairs: &mut Vec<Pair>) {
-    let key = |p: &Pair| (p.2, p.1);
-    let mut out = 0;
-    let mut start = 0;
-    while start < pairs.len() {
-        let owner = pairs[start].0;
-        let end = start + pairs[start..].iter().take_while(|p| p.0 == owner).count();
-        if end - start > PAIRS_PER_OWNER {
-            let mut keys: Vec<(f32, u32)> = pairs[start..end].iter().map(key).collect();
-            keys.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            let last = keys[PAIRS_PER_OWNER - 1];
-            for k in start..end {
-                let (d, other) = key(&pairs[k]);
-                if d < last.0 || (d == last.0 && other <= last.1) {
-                    pairs[out] = pairs[k];
-                    out += 1;
-                }
-            }
-        } else {
-            pairs.copy_within(start..end, out);
-            out += end - start;
-        }
-        start = end;
-    }
-    pairs.truncate(out);
+/// The contact between triangles as the CPU solvers run it (docs/contact.md, the CPU
+/// solver's `Stage::Triangle*`): the GPU kernels' twins (`crate::tri_contact`) on
+/// buffers of the kernels' layout, in the recipe's order — one implementation of each
+/// stage. What differs is only how the pairs are found: a GPU walks its grid every
+/// substep; here a search's pairs within its reach and a margin are kept and serve the
+/// substeps after it until a vertex has drifted too far ([`Search`]), and
+/// `tri_contact::keep_pairs` makes of either the same owners' slots, so every stage
+/// after computes the same bits.
+///
+/// At the substep's start each vertex's bound on its motion and the velocity pass
+/// ([`Contact::begin`]); after the integrator the pairs closer than the thickness pushed
+/// apart ([`Contact::separate`]); at the end every vertex's motion since the start
+/// clamped to its bound ([`Contact::clamp`]), whatever moved it — the integrator, the
+/// separation, the colliders, the strain limit. So a state without crossings keeps none
+/// under every integrator. The velocity takes each move (`Δx/dt`, as the strain limit's
+/// does).
+#[derive(Debug, Clone, Default)]
+pub struct Contact {
+    /// Search and run the stages on rayon's threads (`Exec::Parallel`); else on one.
+    pub parallel: bool,
+    edges: Vec<[u32; 2]>,
+    /// The kernels' buffers ([`TriLayout`]): each particle's start and bound, the
+    /// integers, the pairs.
+    layout: Option<TriLayout>,
+    floats: Vec<V4>,
+    ints: Vec<u32>,
+    pairs: Vec<u32>,
+    /// The last search's pairs, which serve the substeps until a vertex has moved too far.
+    search: Search,
+    searches: u64,
+    refreshes: u64,
 }
 
 impl Contact {
@@ -714,234 +527,127 @@ impl Contact {
         Self { parallel, edges: clothlab_core::crossings::edges(triangles), ..Self::default() }
     }
 
-    fn min_len(&self) -> usize {
-        if self.parallel { 1 } else { usize::MAX }
-    }
-
-    /// The pairs (or vertices) a task of the passes over them takes on rayon's threads.
+    /// The pairs (or vertices) a task of the search takes on rayon's threads.
     fn pass_len(&self) -> usize {
         if self.parallel { 256 } else { usize::MAX }
     }
 
-    /// How far the bounds look at the substep's start: the thickness, or farther where
-    /// the cloth moves fast — far enough that a vertex with nothing near may move 1.25
-    /// times the fastest vertex's motion (`|v| dt + |g| dt²`), at most the thickness plus
-    /// [`MAX_REACH_SPACINGS`] times `spacing` (the scene's rest spacing: a constant,
-    /// so that no sum over the edges is taken a substep).
-    pub fn reach(
-        pos: &[clothlab_core::grid::V4],
-        vel: &[clothlab_core::grid::V4],
-        spacing: f32,
-        dt: f32,
-        gravity: [f32; 3],
-        thickness: f32,
-    ) -> f32 {
-        let fastest = vel
-            .iter()
-            .zip(pos)
-            .filter(|(_, x)| x[3] > 0.0)
-            .map(|(v, _)| Vec3::from_slice(&v[..3]).length())
-            .filter(|s| s.is_finite())
-            .fold(0.0, f32::max);
-        // g (dt dt): the GPU's compilers hoist the product of the constants.
-        let motion = fastest * dt + Vec3::from(gravity).length() * (dt * dt);
-        (REACH_PER_MOTION * motion).clamp(thickness, thickness + MAX_REACH_SPACINGS * spacing)
+    /// The primitives, the kernels' buffers (sized for `np` particles) and the kept pairs.
+    fn parts<'a>(&'a mut self, triangles: &'a [[u32; 3]], np: usize) -> (Prims<'a>, TriBufs<'a>, &'a mut Search) {
+        let l = TriLayout::new(np, triangles.len(), self.edges.len());
+        if self.layout != Some(l) {
+            self.layout = Some(l);
+            self.floats = vec![[0.0; 4]; np];
+            self.ints = vec![0; l.words()];
+            self.pairs = vec![0; l.pair_words()];
+        }
+        let min_len = if self.parallel { 1 } else { usize::MAX };
+        let b = TriBufs { l, floats: &mut self.floats, ints: &mut self.ints, pairs: &mut self.pairs, min_len };
+        (Prims { triangles, edges: &self.edges }, b, &mut self.search)
     }
 
-    /// At the substep's start: the positions kept, each vertex's bound found, and the
-    /// approach of every pair within the reach that would close to under the thickness in
-    /// this substep slowed to what closes it to the thickness ([`approach_impulses`], with
-    /// Coulomb friction `mu`); `spacing` the scene's rest spacing ([`Contact::reach`]).
-    #[allow(clippy::too_many_arguments)]
-    pub fn begin(
-        &mut self,
-        pos: &[clothlab_core::grid::V4],
-        vel: &mut [clothlab_core::grid::V4],
-        triangles: &[[u32; 3]],
-        dt: f32,
-        gravity: [f32; 3],
-        thickness: f32,
-        spacing: f32,
-        mu: Friction,
-        margin: f32,
-    ) {
-        let reach = Self::reach(pos, vel, spacing, dt, gravity, thickness);
-        self.stats.reach = reach;
-        self.start.clear();
-        self.start.extend_from_slice(pos);
-        let min_len = self.pass_len();
-        match self.search.covers(pos, reach, min_len) {
+    /// At the substep's start (`tri_speed`, `tri_start`, the pairs, the velocity pass): the
+    /// reach from the fastest vertex (`tri_contact::reach_of`), the positions kept, each
+    /// vertex's bound, and the approach of every pair within the reach that would close
+    /// to under the thickness in this substep slowed to what closes it to the thickness
+    /// (with Coulomb friction). The pairs are the kept ones where they still hold every
+    /// pair within the reach ([`Search::covers`]), else a search's within the reach and
+    /// `margin` spacings more.
+    pub fn begin(&mut self, p: &StepParams, pos: &mut [V4], vel: &mut [V4], triangles: &[[u32; 3]], margin: f32) {
+        let (parallel, min_len) = (self.parallel, self.pass_len());
+        let (mut searched, mut refreshed) = (0, 0);
+        let (m, mut b, search) = self.parts(triangles, pos.len());
+        b.ints.fill(0);
+        tri_speed(pos, vel, &mut b);
+        tri_start(p, pos, &mut b);
+        let reach = f32::from_bits(b.ints[at::REACH]);
+        match search.covers(pos, reach, min_len) {
             Cover::Holds => {}
             Cover::Refresh(fast) => {
-                self.search.refresh(&fast, triangles, &self.edges);
-                self.stats.refreshes += 1;
+                search.refresh(&fast, m.triangles, m.edges);
+                refreshed = 1;
             }
             Cover::Search => {
-                let far = reach + margin * spacing;
-                let (vt, ee) = find_pairs(pos, triangles, &self.edges, far, self.parallel);
+                let far = reach + margin * p.spacing;
+                let (vt, ee) = find_pairs(pos, m.triangles, m.edges, far, parallel);
                 let scale = pos.iter().map(|x| Vec3::from_slice(&x[..3]).abs().max_element()).fold(0.0, f32::max);
-                self.search = Search { at: pos.to_vec(), reach: far, vt, ee, drifts: vec![0.0; pos.len()], scale };
-                self.stats.searches += 1;
+                *search = Search { at: pos.to_vec(), reach: far, vt, ee, drifts: vec![0.0; pos.len()], scale };
+                searched = 1;
             }
         }
-        self.by_colour.clear();
-        self.stats.kept = self.search.vt.len() + self.search.ee.len();
-        (self.vt, self.ee) = self.search.within(pos, triangles, &self.edges, reach, min_len);
-        let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
-        bounds_of(pos.len(), &pairs, reach, &mut self.bounds);
-        self.stats.pairs = self.vt.len() + self.ee.len();
-        // Summed over the substep's separations (XPBD's iterations take one each).
-        self.stats.pushed = 0;
-        keep_nearest(&mut self.vt);
-        keep_nearest(&mut self.ee);
-        let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
-        self.stats.slowed = approach_impulses_on(pos, vel, &pairs, thickness, dt, mu, self.pass_len());
+        let (vt, ee) = search.within(pos, m.triangles, m.edges, reach, min_len);
+        // Owners as the kernels number them: the vertices, then the edges.
+        let np = pos.len() as u32;
+        let found: Vec<Pair> = vt.into_iter().chain(ee.into_iter().map(|(e, f, d)| (np + e, f, d))).collect();
+        keep_pairs(m, &found, &mut b);
+        run_pass(p, m, pos, vel, &mut b, Pass::Velocity);
+        self.searches += searched;
+        self.refreshes += refreshed;
     }
 
-    /// [`SEPARATION_PASSES`] passes of the separation on `pos` over the pairs of the
-    /// substep's start (within the reach, which is at least the thickness) that are now
-    /// closer than the thickness, each pass's moves added to `vel` too (over `dt`). No
-    /// second search: a pair that came within the thickness from beyond the reach in this
-    /// substep is pushed in the next (the bounds keep it from crossing meanwhile).
-    pub fn separate(
-        &mut self,
-        pos: &mut [clothlab_core::grid::V4],
-        vel: &mut [clothlab_core::grid::V4],
-        triangles: &[[u32; 3]],
-        thickness: f32,
-        dt: f32,
-    ) {
-        let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
+    /// [`SEPARATION_PASSES`] passes of the separation (`tri_separate_*`) on `pos` over
+    /// the pairs of the substep's start (within the reach, which is at least the
+    /// thickness) that are now closer than the thickness, each pass's moves added to `vel`
+    /// too (over the substep). No second search: a pair that came within the thickness
+    /// from beyond the reach in this substep is pushed in the next (the bounds keep it
+    /// from crossing meanwhile).
+    pub fn separate(&mut self, p: &StepParams, pos: &mut [V4], vel: &mut [V4], triangles: &[[u32; 3]]) {
+        let (m, mut b, _) = self.parts(triangles, pos.len());
         for _ in 0..SEPARATION_PASSES {
-            self.stats.pushed += separation_moves(pos, vel, &pairs, thickness, dt, self.pass_len());
+            run_pass(p, m, pos, vel, &mut b, Pass::Separation);
         }
     }
 
-    /// VBD's contact terms (`vbd_terms`) of the pairs of the substep's start at `pos`
-    /// (the sweep's iterate, `x⁰ + D`), for the vertices of colour `colour`
-    /// (`colour_of`: each particle's) that are not held (pinned, or the grabbed
-    /// `grab`): what `cpu::vbd::vbd_colour` adds to their blocks, and clears. Returns the
-    /// pairs closer than the thickness with a vertex in the colour.
-    pub fn vbd_terms(
-        &mut self,
-        pos: &[clothlab_core::grid::V4],
-        triangles: &[[u32; 3]],
-        thickness: f32,
-        colour_of: &[u32],
-        colour: u32,
-        grab: i32,
-    ) -> usize {
-        self.vbd.resize(VBD_TERMS * pos.len(), 0);
-        let wanted = vbd_wanted(pos, colour_of, colour, grab);
-        let pairs = Pairs { triangles, edges: &self.edges, vt: &self.vt, ee: &self.ee };
-        let verts = |k: usize| -> [u32; 4] {
-            if k < self.vt.len() {
-                let (v, t, _) = self.vt[k];
-                let [a, b, c] = triangles[t as usize];
-                [v, a, b, c]
-            } else {
-                let (e, f, _) = self.ee[k - self.vt.len()];
-                let ([a, b], [c, d]) = (self.edges[e as usize], self.edges[f as usize]);
-                [a, b, c, d]
-            }
-        };
-        // Each colour's pairs (a vertex of it in the pair), once a substep.
-        if self.by_colour.is_empty() {
-            let colours = colour_of.iter().copied().max().map_or(0, |c| c as usize + 1);
-            self.by_colour = vec![Vec::new(); colours];
-            for k in 0..self.vt.len() + self.ee.len() {
-                let mut seen = [u32::MAX; 4];
-                for (j, v) in verts(k).into_iter().enumerate() {
-                    let c = colour_of[v as usize];
-                    if !seen[..j].contains(&c) {
-                        self.by_colour[c as usize].push(k as u32);
-                    }
-                    seen[j] = c;
-                }
-            }
-        }
-        let list = self.by_colour.get(colour as usize).map_or(&[][..], |l| &l[..]);
-        // The closest points only for a pair with a vertex to act on; each pair's words
-        // found on rayon's threads and added in any order (integer sums: the same bits).
-        let found: Vec<(usize, u32)> = list
-            .par_iter()
-            .with_min_len(self.pass_len().min(list.len().max(1)).max(64))
-            .flat_map_iter(|&k| {
-                let mut words = Vec::new();
-                let k = k as usize;
-                if verts(k).iter().any(|&v| wanted(v)) {
-                    let touching = vbd_terms_each(&sides(pos, &pairs, k), thickness, wanted, |i, v| words.push((i, v)));
-                    // A touching pair's mark: one word past the sums (counted, not added).
-                    if touching {
-                        words.push((usize::MAX, 0));
-                    }
-                }
-                words
-            })
-            .collect();
-        let mut touching = 0;
-        for (i, v) in found {
-            if i == usize::MAX {
-                touching += 1;
-            } else {
-                self.vbd[i] = self.vbd[i].wrapping_add(v);
-            }
-        }
-        touching
+    /// VBD's contact terms (`tri_vbd`) of the pairs of the substep's start at `pos` (the
+    /// sweep's iterate, `x⁰ + D`) for the vertices of colour `colour` (`colour_of`: each
+    /// particle's) that are not held (pinned, or the grabbed one): what
+    /// `cpu::vbd::vbd_colour` adds to their blocks ([`Contact::vbd_sums`]), and clears.
+    pub fn vbd_terms(&mut self, p: &StepParams, pos: &[V4], triangles: &[[u32; 3]], colour_of: &[u32], colour: u32) {
+        let (m, mut b, _) = self.parts(triangles, pos.len());
+        tri_vbd(p, m, colour_of, pos, colour, &mut b);
     }
 
-    /// Each vertex's bound of the last [`Contact::begin`].
-    pub fn bounds(&self) -> &[f32] {
-        &self.bounds
-    }
-
-    /// The terms [`Contact::vbd_terms`] left, for `cpu::vbd::vbd_colour` (which clears
-    /// its colour's).
+    /// The terms [`Contact::vbd_terms`] left ([`VBD_TERMS`] words a particle), for
+    /// `cpu::vbd::vbd_colour` (which clears its colour's).
     pub fn vbd_sums(&mut self) -> &mut [u32] {
-        &mut self.vbd
+        match self.layout {
+            Some(l) => &mut self.ints[l.vbd()..l.words()],
+            None => &mut [],
+        }
     }
 
     /// Every vertex's motion since [`Contact::begin`] cut to its bound, the cut taken
-    /// from its velocity too (over `dt`) — unless the cloths move as one: measured from
-    /// their mean displacement (of the free vertices, summed in f64 in vertex order), no
-    /// vertex over its bound. A displacement all vertices share changes no distance, so the bounds hold in that
-    /// frame too and nothing is cut: two sheets falling together are not slowed, however
-    /// fast. (Cutting in the mean's frame where some vertex is over it was tried: the thin
-    /// heap's landed half was dragged into the floor's margin and its closest pair came
-    /// to 0.42 of the thickness instead of 0.93; each vertex's own motion is cut instead.)
-    pub fn clamp(&mut self, pos: &mut [clothlab_core::grid::V4], vel: &mut [clothlab_core::grid::V4], dt: f32) {
-        if let Some(mean) = self.mean_within_bounds(pos) {
-            // Reported only where it spared a cut: a cloth at rest is within its bounds
-            // from either frame.
-            let spared = self
-                .start
-                .iter()
-                .zip(pos.iter())
-                .zip(&self.bounds)
-                .any(|((a, b), &bound)| (Vec3::from_slice(&b[..3]) - Vec3::from_slice(&a[..3])).length() > bound);
-            self.stats.shared = if spared { mean.length() } else { 0.0 };
-            self.stats.clamped = 0;
-            return;
-        }
-        self.stats.shared = 0.0;
-        let (start, bounds) = (&self.start, &self.bounds);
-        self.stats.clamped = pos
-            .par_iter_mut()
-            .zip(vel.par_iter_mut())
-            .enumerate()
-            .with_min_len(self.min_len())
-            .map(|(k, (x, v))| usize::from(clamp_to_bound(x, v, Vec3::from_slice(&start[k][..3]), bounds[k], dt)))
-            .sum();
+    /// from its velocity too (over the substep) — unless the cloths move as one
+    /// (`tri_clamp_sum`, `tri_clamp_check`, `tri_clamp`): measured from the free
+    /// vertices' mean displacement (summed in fixed point: the same bits in any order),
+    /// no vertex over its bound. A displacement all vertices share changes no distance,
+    /// so the bounds hold in that frame too and nothing is cut: two sheets falling
+    /// together are not slowed, however fast. (Cutting in the mean's frame where some
+    /// vertex is over it was tried: the thin heap's landed half was dragged into the
+    /// floor's margin and its closest pair came to 0.42 of the thickness instead of
+    /// 0.93; each vertex's own motion is cut instead.)
+    pub fn clamp(&mut self, p: &StepParams, pos: &mut [V4], vel: &mut [V4], triangles: &[[u32; 3]]) {
+        let (_, mut b, _) = self.parts(triangles, pos.len());
+        tri_clamp_sum(pos, &mut b);
+        tri_clamp_check(pos, &mut b);
+        tri_clamp(p, pos, vel, &mut b);
     }
 
-    /// The free vertices' mean displacement since [`Contact::begin`] if every vertex's
-    /// (pinned ones' too) is within its bound of it, else `None`. Summed in fixed point
-    /// ([`mean_displacement`]): the same bits in any order, on every backend.
-    fn mean_within_bounds(&self, pos: &[clothlab_core::grid::V4]) -> Option<Vec3> {
-        let mean = mean_displacement(&self.start, pos);
-        let moves = self.start.iter().zip(pos).map(|(a, b)| Vec3::from_slice(&b[..3]) - Vec3::from_slice(&a[..3]));
-        // A vertex that is not finite fails the test (NaN compares false): cut as before.
-        moves.zip(&self.bounds).all(|(d, &b)| (d - mean).length() <= b).then_some(mean)
+    /// Each vertex's bound of the last [`Contact::begin`].
+    pub fn bounds(&self) -> Vec<f32> {
+        self.floats.iter().map(|x| x[3]).collect()
+    }
+
+    /// What the last substep's stages did (`tri_contact::stats`) and how the pairs were
+    /// found: what [`clothlab_core::Solver::contact_stats`] reports.
+    pub fn stats(&self) -> clothlab_core::solver::ContactStats {
+        let outcome = if self.ints.is_empty() { Default::default() } else { stats(&self.ints) };
+        clothlab_core::solver::ContactStats {
+            searches: self.searches,
+            refreshes: self.refreshes,
+            kept: self.search.vt.len() + self.search.ee.len(),
+            ..outcome
+        }
     }
 }
 
@@ -1028,6 +734,36 @@ mod tests {
         (r.p - r.q).length()
     }
 
+    /// A step's constants with the contact's thickness `t`, substep `dt` and rest
+    /// `spacing` (no gravity, no friction, nothing grabbed).
+    fn consts(t: f32, dt: f32, spacing: f32) -> StepParams {
+        StepParams { dt, self_thickness: t, spacing, grab_index: -1, ..bytemuck::Zeroable::zeroed() }
+    }
+
+    /// One separation pass (the `tri_separate_*` twins) over the pairs closer than `t` at
+    /// `pos`, the vertices' inverse masses `inv`: the moved positions into `out` (their w
+    /// as `pos`'s); returns the pairs pushed.
+    fn separate(pos: &[V4], tris: &[[u32; 3]], inv: &[f32], t: f32, out: &mut [V4]) -> usize {
+        let edges = clothlab_core::crossings::edges(tris);
+        let m = Prims { triangles: tris, edges: &edges };
+        let l = TriLayout::new(pos.len(), tris.len(), edges.len());
+        let (mut floats, mut ints, mut pairs) = (vec![[0.0; 4]; l.np], vec![0; l.words()], vec![0; l.pair_words()]);
+        let mut b = TriBufs { l, floats: &mut floats, ints: &mut ints, pairs: &mut pairs, min_len: usize::MAX };
+        for ((o, x), &w) in out.iter_mut().zip(pos).zip(inv) {
+            *o = [x[0], x[1], x[2], w];
+        }
+        let (vt, ee) = find_pairs(out, tris, &edges, t, false);
+        let np = pos.len() as u32;
+        let found: Vec<Pair> = vt.into_iter().chain(ee.into_iter().map(|(e, f, d)| (np + e, f, d))).collect();
+        keep_pairs(m, &found, &mut b);
+        let mut vel = vec![[0.0; 4]; pos.len()];
+        run_pass(&consts(t, 1.0, 1.0), m, out, &mut vel, &mut b, Pass::Separation);
+        for (o, x) in out.iter_mut().zip(pos) {
+            o[3] = x[3];
+        }
+        b.ints[at::PUSHED] as usize
+    }
+
     /// Σ of the moves of `out` from `pos` weighted by mass (1 / inverse mass; pinned left out).
     fn momentum(pos: &[clothlab_core::grid::V4], out: &[clothlab_core::grid::V4], inv_mass: &[f32]) -> Vec3 {
         pos.iter()
@@ -1101,9 +837,10 @@ mod tests {
         steps: usize,
     ) -> (Vec<Vec<clothlab_core::grid::V4>>, usize) {
         let mut c = Contact::new(tris, false);
+        let p = consts(t, dt, 1.0);
         let (mut path, mut clamped) = (Vec::new(), 0);
         for step in 0..steps {
-            c.begin(pos, vel, tris, dt, [0.0; 3], t, 1.0, Friction::default(), 0.5);
+            c.begin(&p, pos, vel, tris, 0.5);
             if step == 0 {
                 for v in &mut vel[3..] {
                     v[2] += kick;
@@ -1114,9 +851,9 @@ mod tests {
                     x[k] += v[k] * dt;
                 }
             }
-            c.separate(pos, vel, tris, t, dt);
-            c.clamp(pos, vel, dt);
-            clamped += c.stats.clamped;
+            c.separate(&p, pos, vel, tris);
+            c.clamp(&p, pos, vel, tris);
+            clamped += c.stats().clamped;
             path.push(pos.to_vec());
         }
         (path, clamped)

@@ -61,26 +61,30 @@ fn vertices_moved_within_their_bounds_never_cross_and_three_times_as_far_do() {
 }
 
 /// The stack of scenes/stack.toml run on the CPU to frame 14: five sheets piled on the
-/// sphere, layers millimetres apart, not yet crossed; its triangles and positions.
-fn piled_stack() -> (Vec<[u32; 3]>, Vec<[f32; 4]>, clothlab_core::SimParams, f32) {
+/// sphere, layers millimetres apart, not yet crossed; its triangles and positions, its
+/// parameters and its step's constants without gravity and friction (at rest, the
+/// reach is the thickness).
+fn piled_stack() -> (Vec<[u32; 3]>, Vec<[f32; 4]>, clothlab_core::SimParams, clothlab_core::StepParams) {
     let f = SceneFile::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/stack.toml")).unwrap();
-    let mut s = CpuSolver::new(Exec::Parallel, f.scene, f.params.clone()).unwrap();
+    let mut s = CpuSolver::new(Exec::Parallel, f.scene.clone(), f.params.clone()).unwrap();
     for _ in 0..14 {
         s.step_frame().unwrap();
     }
-    (s.topology().triangles.clone(), s.state_ref().pos.clone(), f.params, s.topology().spacing)
+    let still =
+        clothlab_core::SimParams { gravity: [0.0; 3], static_friction: 0.0, kinetic_friction: 0.0, ..f.params.clone() };
+    let p = clothlab_core::StepParams::new(&still, &f.scene, None);
+    (s.topology().triangles.clone(), s.state_ref().pos.clone(), f.params, p)
 }
 
 #[test]
 fn vertices_moved_within_their_bounds_between_searches_never_cross() {
-    use clothlab_cpu::tri_pipeline::{Contact, Friction};
+    use clothlab_cpu::tri_pipeline::Contact;
     // The piled stack, 40 rounds of every vertex moved in a random direction by up to its
     // bound, the bounds taken each round from the kept pairs (searched again only when a
     // vertex drifted too far): no crossing, and each round's bounds are the bits of a
     // search at that round's positions (the kept pairs are the pairs within the reach).
-    let (triangles, start, params, spacing) = piled_stack();
+    let (triangles, start, _, p) = piled_stack();
     assert_eq!(crossings::count(&start, &triangles).pairs, 0, "the pile crossed before the test began");
-    let t = params.self_thickness;
     let mut c = Contact::new(&triangles, true);
     let mut pos = start.clone();
     let mut vel = vec![[0.0f32; 4]; pos.len()];
@@ -89,10 +93,10 @@ fn vertices_moved_within_their_bounds_between_searches_never_cross() {
     for r in 0..ROUNDS {
         // At rest (the reach is the thickness), so that only the moves drift.
         vel.iter_mut().for_each(|v| *v = [0.0; 4]);
-        c.begin(&pos, &mut vel, &triangles, params.dt(), [0.0; 3], t, spacing, Friction::default(), 0.5);
-        let searched = motion_bounds(&pos, &triangles, c.stats.reach);
-        assert!(c.bounds() == &searched[..], "round {r}: the kept pairs' bounds are not a search's");
-        let bounds = c.bounds().to_vec();
+        c.begin(&p, &mut pos, &mut vel, &triangles, 0.5);
+        let searched = motion_bounds(&pos, &triangles, c.stats().reach);
+        assert!(c.bounds() == searched, "round {r}: the kept pairs' bounds are not a search's");
+        let bounds = c.bounds();
         for (k, x) in pos.iter_mut().enumerate() {
             let d = jitter(k, r);
             for c in 0..3 {
@@ -101,7 +105,7 @@ fn vertices_moved_within_their_bounds_between_searches_never_cross() {
         }
         most = most.max(crossings::count(&pos, &triangles).pairs);
     }
-    let s = c.stats;
+    let s = c.stats();
     println!("{ROUNDS} rounds: {} searches, {} partial, {} pairs kept at the last", s.searches, s.refreshes, s.kept);
     assert_eq!(most, 0, "a move within the bounds crossed");
     // Each round moves a vertex by up to 0.45 t against a margin of half a spacing (8 t):
@@ -114,34 +118,37 @@ fn vertices_moved_within_their_bounds_between_searches_never_cross() {
 #[test]
 fn a_vertex_moved_past_the_margin_makes_a_search_that_finds_its_new_pairs() {
     use clothlab_core::tri_contact::find_pairs;
-    use clothlab_cpu::tri_pipeline::{Contact, Friction};
+    use clothlab_cpu::tri_pipeline::Contact;
     // The piled stack; a begin (a search), then one vertex of the top sheet moved onto
     // the first sheet — past what the kept pairs can vouch for, though nothing else
     // moved. The next begin must find its pairs again: its pairs are exactly a search's
     // at the new positions.
-    let (triangles, mut pos, params, spacing) = piled_stack();
+    let (triangles, mut pos, params, p) = piled_stack();
     let t = params.self_thickness;
     let mut c = Contact::new(&triangles, false);
     let mut vel = vec![[0.0f32; 4]; pos.len()];
-    c.begin(&pos, &mut vel, &triangles, params.dt(), [0.0; 3], t, spacing, Friction::default(), 0.5);
-    c.begin(&pos, &mut vel, &triangles, params.dt(), [0.0; 3], t, spacing, Friction::default(), 0.5);
-    assert_eq!((c.stats.searches, c.stats.refreshes), (1, 0), "nothing moved: the kept pairs serve");
+    c.begin(&p, &mut pos, &mut vel, &triangles, 0.5);
+    vel.iter_mut().for_each(|v| *v = [0.0; 4]);
+    c.begin(&p, &mut pos, &mut vel, &triangles, 0.5);
+    assert_eq!((c.stats().searches, c.stats().refreshes), (1, 0), "nothing moved: the kept pairs serve");
     let edges = crossings::edges(&triangles);
     let count = |pos: &[[f32; 4]]| {
         let (vt, ee) = find_pairs(pos, &triangles, &edges, t, false);
         vt.len() + ee.len()
     };
     let before = count(&pos);
-    assert_eq!(c.stats.pairs, before);
+    assert_eq!(c.stats().pairs, before);
     // The last vertex (the top sheet's) to half a thickness over the first sheet's middle.
     let (k, j) = (pos.len() - 1, pos.len() / 10);
     pos[k] = [pos[j][0], pos[j][1] + 0.5 * t, pos[j][2], pos[k][3]];
-    c.begin(&pos, &mut vel, &triangles, params.dt(), [0.0; 3], t, spacing, Friction::default(), 0.5);
-    println!("pairs {before} -> {} ({:?})", c.stats.pairs, c.stats);
-    assert_eq!(c.stats.searches + c.stats.refreshes, 2, "the moved vertex did not make a search");
-    assert!(c.stats.pairs > before, "the moved vertex found no new pair: the test would hold little");
-    assert_eq!(c.stats.pairs, count(&pos), "the pairs after the move are not a search's");
-    assert!(c.bounds() == &motion_bounds(&pos, &triangles, t)[..], "the bounds after the move are not a search's");
+    vel.iter_mut().for_each(|v| *v = [0.0; 4]);
+    c.begin(&p, &mut pos, &mut vel, &triangles, 0.5);
+    let s = c.stats();
+    println!("pairs {before} -> {} ({s:?})", s.pairs);
+    assert_eq!(s.searches + s.refreshes, 2, "the moved vertex did not make a search");
+    assert!(s.pairs > before, "the moved vertex found no new pair: the test would hold little");
+    assert_eq!(s.pairs, count(&pos), "the pairs after the move are not a search's");
+    assert!(c.bounds() == motion_bounds(&pos, &triangles, t), "the bounds after the move are not a search's");
 }
 
 #[test]
@@ -344,12 +351,13 @@ fn two_sheets_a_thickness_and_a_half_apart_fall_freely_together() {
 #[test]
 fn the_gpu_kernels_twins_in_order_give_the_contact_stages_bits() {
     // The thin heap at n = 24 after 60 frames (piled: pairs within the reach), one substep
-    // of the contact both ways: `Contact`'s stages (what the CPU solvers run) and the
-    // kernels' twins in the GPU recipe's order (core::cpu::tri_contact), with a shove
-    // between the start and the separation (every 5th vertex moved 0.6 thicknesses: the
-    // separation pushes and the clamp cuts). Positions, velocities and the stages'
-    // counts must be the same bits: the pairs do not depend on the broad phase and every
-    // sum is an integer sum.
+    // of the contact both ways: `Contact`'s stages (what the CPU solvers run: the twins,
+    // the pairs from a CPU search within the reach and a margin, filtered) and the
+    // kernels' twins in the GPU recipe's order, the pairs from walking the GPU's grid
+    // (clothlab_cpu::tri_contact), with a shove between the start and the separation
+    // (every 5th vertex moved 0.6 thicknesses: the separation pushes and the clamp cuts).
+    // Positions, velocities and the stages' counts must be the same bits: the pairs do
+    // not depend on the broad phase and every sum is an integer sum.
     //
     // Twice: as piled, where no owner has more pairs than it keeps, and with the
     // velocities 40 times the pile's (the reach at its cap of two spacings beyond the
@@ -387,40 +395,40 @@ fn twins_against_stages(s: &clothlab_cpu::CpuSolver, boost: f32) -> u32 {
     // The stages.
     let (mut pos, mut vel) = (pos0.clone(), vel0.clone());
     let mut c = clothlab_cpu::tri_pipeline::Contact::new(&topo.triangles, false);
-    let mu = clothlab_cpu::tri_pipeline::Friction { stat: params.static_friction, kinetic: params.kinetic_friction };
-    c.begin(&pos, &mut vel, &topo.triangles, params.dt(), params.gravity, t, topo.spacing, mu, params.search_margin);
+    c.begin(&p, &mut pos, &mut vel, &topo.triangles, params.search_margin);
     shove(&mut pos);
-    c.separate(&mut pos, &mut vel, &topo.triangles, t, params.dt());
-    c.clamp(&mut pos, &mut vel, params.dt());
+    c.separate(&p, &mut pos, &mut vel, &topo.triangles);
+    c.clamp(&p, &mut pos, &mut vel, &topo.triangles);
     // The twins.
     let l = TriLayout::of(topo);
     let (mut floats, mut ints, mut pairs) =
         (vec![[0.0f32; 4]; l.np], vec![0u32; l.words()], vec![0u32; l.pair_words()]);
-    let mut b = TriBufs { l, floats: &mut floats, ints: &mut ints, pairs: &mut pairs };
+    let mut b = TriBufs { l, floats: &mut floats, ints: &mut ints, pairs: &mut pairs, min_len: usize::MAX };
+    let m = tk::Prims::of(topo);
     let (mut tp, mut tv) = (pos0.clone(), vel0.clone());
     tk::tri_speed(&tp, &tv, &mut b);
     tk::tri_start(&p, &tp, &mut b);
-    tk::tri_grid_count(topo, &tp, &mut b);
+    tk::tri_grid_count(m, &tp, &mut b);
     tk::tri_grid_scan(&mut b);
-    tk::tri_grid_scatter(topo, &tp, &mut b);
+    tk::tri_grid_scatter(m, &tp, &mut b);
     tk::tri_grid_sort(&mut b);
-    tk::tri_pairs(topo, &tp, &mut b);
-    tk::tri_count(&p, topo, &tp, &tv, &mut b, Pass::Velocity);
-    tk::tri_share(&p, topo, &tp, &tv, &mut b, Pass::Velocity);
+    tk::tri_pairs(m, &tp, &mut b);
+    tk::tri_count(&p, m, &tp, &tv, &mut b, Pass::Velocity);
+    tk::tri_share(&p, m, &tp, &tv, &mut b, Pass::Velocity);
     tk::tri_apply(&p, &mut tp, &mut tv, &mut b, Pass::Velocity);
     shove(&mut tp);
     for _ in 0..clothlab_core::tri_contact::SEPARATION_PASSES {
-        tk::tri_count(&p, topo, &tp, &tv, &mut b, Pass::Separation);
-        tk::tri_share(&p, topo, &tp, &tv, &mut b, Pass::Separation);
+        tk::tri_count(&p, m, &tp, &tv, &mut b, Pass::Separation);
+        tk::tri_share(&p, m, &tp, &tv, &mut b, Pass::Separation);
         tk::tri_apply(&p, &mut tp, &mut tv, &mut b, Pass::Separation);
     }
     tk::tri_clamp_sum(&tp, &mut b);
     tk::tri_clamp_check(&tp, &mut b);
     tk::tri_clamp(&p, &mut tp, &mut tv, &mut b);
     let stats = tk::stats(b.ints);
-    println!("stages {:?}\ntwins  {stats:?}", c.stats);
+    println!("stages {:?}\ntwins  {stats:?}", c.stats());
     assert!(stats.pairs > 10 && stats.slowed > 0 && stats.pushed > 0 && stats.clamped > 0, "{stats:?}");
-    assert_eq!(stats, c.stats.outcome());
+    assert_eq!(stats, c.stats().outcome());
     let bits = |v: &[[f32; 4]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<u32>>();
     assert!(bits(&tp) == bits(&pos), "positions differ");
     assert!(bits(&tv) == bits(&vel), "velocities differ");
@@ -434,7 +442,7 @@ fn vbd_takes_the_contact_between_triangles_inside_its_solves() {
     // thickness (k a thousand times the inertia: within 0.1 % of the gap closed) — before
     // the separation that follows the sweeps; without the terms the sweeps leave it where
     // it was (nothing else acts), so the test can fail.
-    use clothlab_cpu::tri_pipeline::{Contact, Friction};
+    use clothlab_cpu::tri_pipeline::Contact;
     use clothlab_cpu::vbd::{TriVbd, VBD_AUX, vbd_begin, vbd_colour, vbd_finish, vbd_positions};
     let t = 0.005;
     let sheet = |y: f32| {
@@ -463,8 +471,8 @@ fn vbd_takes_the_contact_between_triangles_inside_its_solves() {
         let mut pos = start.clone();
         let mut vel = vec![[0.0f32; 4]; np];
         let mut c = Contact::new(&topo.triangles, false);
-        let dt = f.params.dt();
-        c.begin(&pos, &mut vel, &topo.triangles, dt, [0.0; 3], t, topo.spacing, Friction::default(), 0.5);
+        assert_eq!((p.mu_static(), p.mu_kinetic(), p.gravity), (0.0, 0.0, [0.0; 4]), "the test wants none");
+        c.begin(&p, &mut pos, &mut vel, &topo.triangles, 0.5);
         // (The start's velocity pass would push the pairs apart by the substep's end: only
         // its pairs are kept.)
         vel.iter_mut().for_each(|v| *v = [0.0; 4]);
@@ -474,7 +482,7 @@ fn vbd_takes_the_contact_between_triangles_inside_its_solves() {
         for _ in 0..sweeps {
             for k in 0..topo.colours.len() {
                 let tri = terms.then(|| {
-                    c.vbd_terms(&pos, &topo.triangles, t, &topo.colours.of, k as u32, p.grab_index);
+                    c.vbd_terms(&p, &pos, &topo.triangles, &topo.colours.of, k as u32);
                     TriVbd { sums: c.vbd_sums(), pos: &mut pos }
                 });
                 let colliders = clothlab_cpu::Colliders::default();

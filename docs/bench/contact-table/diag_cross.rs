@@ -1,7 +1,6 @@
 //! Temporary diagnostic: the first substep where the thin heap at n = 128, t = 2 mm crosses.
 use clothlab_core::crossings::{edges, segment_crosses_triangle};
 use clothlab_core::tri_contact::{edge_edge, motion_bounds, point_triangle};
-use clothlab_cpu::tri_pipeline::Contact;
 use clothlab_core::{SceneFile, SimParams, Solver};
 use clothlab_cpu::{CpuSolver, Exec};
 use glam::{DVec3, Vec3};
@@ -34,7 +33,10 @@ fn main() {
             continue;
         }
         println!("substep {k} after frame {frames}: {c} crossings");
-        let reach = Contact::reach(&s0.pos, &s0.vel, scene.spacing(), params.dt(), params.gravity, params.self_thickness);
+        let reach = clothlab_cpu::tri_contact::reach_of(
+                &clothlab_core::StepParams::new(&params, &scene, None),
+                s0.vel.iter().zip(&s0.pos).filter(|(_, x)| x[3] > 0.0).map(|(v, _)| Vec3::from_slice(&v[..3]).length()).fold(0.0, f32::max),
+            );
         let bounds = motion_bounds(&s0.pos, &tris, reach);
         println!("reach {reach}");
         let mut shown = 0;

@@ -1,5 +1,4 @@
 use clothlab_core::tri_contact::{edge_edge, motion_bounds};
-use clothlab_cpu::tri_pipeline::Contact;
 use clothlab_core::{SceneFile, SimParams, Solver};
 use clothlab_cpu::{CpuSolver, Exec};
 use glam::Vec3;
@@ -25,7 +24,10 @@ fn main() {
         let r = edge_edge(v(s0.pos[6588]), v(s0.pos[6716]), v(s0.pos[7995]), v(s0.pos[7996]));
         let d = (r.p - r.q).length();
         if k % 4 == 0 || d < 1e-3 {
-            let reach = Contact::reach(&s0.pos, &s0.vel, scene.spacing(), params.dt(), params.gravity, params.self_thickness);
+            let reach = clothlab_cpu::tri_contact::reach_of(
+                &clothlab_core::StepParams::new(&params, &scene, None),
+                s0.vel.iter().zip(&s0.pos).filter(|(_, x)| x[3] > 0.0).map(|(v, _)| Vec3::from_slice(&v[..3]).length()).fold(0.0, f32::max),
+            );
             let b = motion_bounds(&s0.pos, &tris, reach);
             println!(
                 "substep {k}: d {d:.3e} bounds {:.2e} {:.2e} {:.2e} {:.2e} vel {:.3} {:.3} y {:.4}",

@@ -14,7 +14,9 @@ fn split<'b>(a: &TwinArgs, b: &'b mut HostBuffers) -> (&'b mut Vec<V4>, &'b mut 
     let HostBuffers { pos, vel, tri_floats, tri_ints, tri_pairs, .. } = b;
     let ints: &mut [u32] = bytemuck::cast_slice_mut(tri_ints.as_mut_slice());
     let pairs: &mut [u32] = bytemuck::cast_slice_mut(tri_pairs.as_mut_slice());
-    let t = TriBufs { l, floats: tri_floats, ints: &mut ints[..l.words()], pairs: &mut pairs[..l.pair_words()] };
+    let min_len = if a.exec == cpu::Exec::Parallel { 1 } else { usize::MAX };
+    let t =
+        TriBufs { l, floats: tri_floats, ints: &mut ints[..l.words()], pairs: &mut pairs[..l.pair_words()], min_len };
     (pos, vel, t)
 }
 
@@ -30,7 +32,7 @@ fn tri_start(a: &TwinArgs, b: &mut HostBuffers) {
 
 fn tri_grid_count(a: &TwinArgs, b: &mut HostBuffers) {
     let (pos, _, mut t) = split(a, b);
-    tc::tri_grid_count(a.topo, pos, &mut t);
+    tc::tri_grid_count(tc::Prims::of(a.topo), pos, &mut t);
 }
 
 fn tri_grid_scan(a: &TwinArgs, b: &mut HostBuffers) {
@@ -39,7 +41,7 @@ fn tri_grid_scan(a: &TwinArgs, b: &mut HostBuffers) {
 
 fn tri_grid_scatter(a: &TwinArgs, b: &mut HostBuffers) {
     let (pos, _, mut t) = split(a, b);
-    tc::tri_grid_scatter(a.topo, pos, &mut t);
+    tc::tri_grid_scatter(tc::Prims::of(a.topo), pos, &mut t);
 }
 
 fn tri_grid_sort(a: &TwinArgs, b: &mut HostBuffers) {
@@ -48,17 +50,17 @@ fn tri_grid_sort(a: &TwinArgs, b: &mut HostBuffers) {
 
 fn tri_pairs(a: &TwinArgs, b: &mut HostBuffers) {
     let (pos, _, mut t) = split(a, b);
-    tc::tri_pairs(a.topo, pos, &mut t);
+    tc::tri_pairs(tc::Prims::of(a.topo), pos, &mut t);
 }
 
 fn count(a: &TwinArgs, b: &mut HostBuffers, pass: Pass) {
     let (pos, vel, mut t) = split(a, b);
-    tc::tri_count(a.p, a.topo, pos, vel, &mut t, pass);
+    tc::tri_count(a.p, tc::Prims::of(a.topo), pos, vel, &mut t, pass);
 }
 
 fn share(a: &TwinArgs, b: &mut HostBuffers, pass: Pass) {
     let (pos, vel, mut t) = split(a, b);
-    tc::tri_share(a.p, a.topo, pos, vel, &mut t, pass);
+    tc::tri_share(a.p, tc::Prims::of(a.topo), pos, vel, &mut t, pass);
 }
 
 fn apply(a: &TwinArgs, b: &mut HostBuffers, pass: Pass) {
@@ -107,7 +109,7 @@ fn tri_clamp(a: &TwinArgs, b: &mut HostBuffers) {
 
 fn tri_vbd(a: &TwinArgs, b: &mut HostBuffers) {
     let (pos, _, mut t) = split(a, b);
-    tc::tri_vbd(a.p, a.topo, pos, a.range.0, &mut t);
+    tc::tri_vbd(a.p, tc::Prims::of(a.topo), &a.topo.colours.of, pos, a.range.0, &mut t);
 }
 
 /// One colour of VBD's sweep with the contact's terms (`core::cpu::vbd::vbd_colour` with
