@@ -16,6 +16,7 @@
 mod collide;
 mod forces;
 mod fused;
+pub mod grad;
 pub(crate) mod integrate;
 mod integrators;
 mod lanes;

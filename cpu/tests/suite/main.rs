@@ -7,6 +7,7 @@
 mod cloths;
 mod contact;
 mod fused;
+mod grad;
 mod mesh_cloth;
 mod physics;
 mod vbd;

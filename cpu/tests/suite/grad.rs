@@ -1,0 +1,236 @@
+//! Gradients through the cloth (`clothlab_cpu::grad`): the model is the solver's step,
+//! and its adjoint is its derivative — against central finite differences of the f64
+//! model and a closed form.
+
+use clothlab_core::{SceneFile, Solver};
+use clothlab_cpu::grad::{Model, PARAMS, Recording};
+use clothlab_cpu::{CpuSolver, Exec};
+use glam::DVec3;
+
+/// An 8 × 8 cloth held at its top corners above a sphere and a floor: it falls onto the
+/// sphere within the run (the contact's adjoint runs), no strain limit.
+const DRAPE: &str = r#"
+[cloth]
+n = 8
+size = 0.8
+top_center = [0.0, 0.7, -0.4]
+across = [1.0, 0.0, 0.0]
+down = [0.0, 0.0, 1.0]
+pinning = "top-corners"
+
+[floor]
+y = 0.0
+
+[[spheres]]
+center = [0.0, 0.35, 0.05]
+radius = 0.25
+
+[params]
+strain_iterations = 0
+substeps = 8
+"#;
+
+/// `frames` frames of `text` on the serial CPU solver, each frame's start recorded.
+fn record(text: &str, frames: usize) -> (Recording, CpuSolver) {
+    let f = SceneFile::parse(text, "grad").unwrap();
+    let mut s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+    let w: Vec<f32> = s.state_ref().pos.iter().map(|x| x[3]).collect();
+    let model = Model::new(&f.scene, s.topology(), &f.params, &w).unwrap();
+    let mut rec = Recording::new(model);
+    for _ in 0..frames {
+        let st = s.state_ref().clone();
+        rec.push(&st.pos, &st.vel);
+        s.step_frame().unwrap();
+    }
+    (rec, s)
+}
+
+/// Deterministic weights in [-1, 1) (xorshift).
+fn weights(n: usize, seed: u64) -> Vec<[f32; 3]> {
+    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    let mut next = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    };
+    (0..n).map(|_| [next(), next(), next()]).collect()
+}
+
+/// The loss Σ a·x + b·v of a replay's final state.
+fn loss(rec: &Recording, a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
+    let (x, v) = rec.replay();
+    let dot = |w: &[[f32; 3]], y: &[DVec3]| -> f64 {
+        w.iter().zip(y).map(|(w, y)| DVec3::from(w.map(f64::from)).dot(*y)).sum()
+    };
+    dot(a, &x) + dot(b, &v)
+}
+
+/// The central difference of `loss` along a change `apply(rec, ±h)`.
+fn central(rec: &Recording, a: &[[f32; 3]], b: &[[f32; 3]], h: f64, apply: impl Fn(&mut Recording, f64)) -> f64 {
+    let (mut up, mut down) = (rec.clone(), rec.clone());
+    apply(&mut up, h);
+    apply(&mut down, -h);
+    (loss(&up, a, b) - loss(&down, a, b)) / (2.0 * h)
+}
+
+#[test]
+fn the_f64_model_replays_the_solvers_run() {
+    // 30 frames (240 substeps) of the drape on the f32 solver against the model's replay
+    // in f64 from the first frame's state: the same step, so the same positions to f32's
+    // rounding accumulated over the run (bound 1e-4 m; measured below). And the sphere
+    // was touched: some particle ends on its grown surface.
+    let (rec, mut s) = record(DRAPE, 30);
+    let (x, _) = rec.replay();
+    let st = s.state().unwrap();
+    let most = x
+        .iter()
+        .zip(&st.pos)
+        .map(|(a, b)| (*a - DVec3::new(b[0] as f64, b[1] as f64, b[2] as f64)).length())
+        .fold(0.0, f64::max);
+    let c = DVec3::new(0.0, 0.35, 0.05);
+    let r = 0.25 + s.params().collision_margin as f64;
+    let nearest = x.iter().map(|p| (*p - c).length() - r).fold(f64::INFINITY, f64::min);
+    println!("replay against the solver: {most:.2e} m; nearest to the sphere {nearest:.2e} m");
+    assert!(most < 1e-4, "the model's step is not the solver's: {most} m apart");
+    assert!(nearest.abs() < 1e-6, "nothing rests on the sphere ({nearest} m): the contact's adjoint is not tested");
+}
+
+#[test]
+fn every_gradient_of_the_drape_is_its_finite_difference() {
+    // In both units of stiffness: fractions of the stability limit (the default) and
+    // physical moduli (whose gradients, and the mass's, are then not 0).
+    for units in ["fraction", "physical"] {
+        drape_against_finite_differences(&format!("{DRAPE}stiffness_units = \"{units}\"\n"));
+    }
+}
+
+fn drape_against_finite_differences(text: &str) {
+    // The drape over 12 frames (96 substeps: the cloth lands on the sphere), the loss
+    // Σ a·x + b·v of the final state with random weights. Each parameter's gradient, the
+    // initial positions' and velocities' along three random directions, and two frames'
+    // pins, against central differences of the f64 model (h 1e-6 of the value or of 1: truncation
+    // ~1e-12, rounding ~1e-10 of the loss) of the recording's checkpoints in f64 (the
+    // replay's own: `in_f64`): within 1e-5 relative, or of 1e-3 of the loss's scale where
+    // the gradient is near 0 (the mass in fraction units: the springs scale with it).
+    // The f32 run's own checkpoints give each gradient within 1e-2 of those (its
+    // rounding moves where each frame's derivative is taken: measured up to 2e-3).
+    let (raw, s) = record(text, 12);
+    let rec = raw.in_f64();
+    let np = s.state_ref().pos.len();
+    let (a, b) = (weights(np, 1), weights(np, 2));
+    let g = rec.backward(&a, &b);
+    let g32 = raw.backward(&a, &b);
+    let scale = loss(&rec, &a, &b).abs().max(1.0);
+    let check = |what: &str, got: f64, want: f64| {
+        let err = (got - want).abs() / want.abs().max(1e-3 * scale);
+        println!("{what:24} adjoint {got:+.6e}  finite difference {want:+.6e}  ({err:.1e})");
+        assert!(err < 1e-5, "{what}: adjoint {got} against finite difference {want}");
+    };
+    let p0 = rec.model().params();
+    for (k, name) in PARAMS.iter().enumerate() {
+        let h = 1e-6 * p0[k].abs().max(1.0);
+        let want = central(&rec, &a, &b, h, |r, d| r.model_mut().set_param(k, p0[k] + d));
+        let got = g.params.iter().find(|(n, _)| n == name).unwrap().1;
+        check(name, got, want);
+        let got32 = g32.params.iter().find(|(n, _)| n == name).unwrap().1;
+        assert!(
+            (got32 - got).abs() <= 1e-2 * got.abs().max(1e-3 * scale),
+            "{name}: the f32 run's {got32} against {got}"
+        );
+    }
+    let pinned = g.pinned.clone();
+    for seed in 0..3 {
+        let dir = weights(np, 10 + seed);
+        // Positions: the free particles at the start, the pinned ones in every frame.
+        let got: f64 = g.positions.iter().zip(&dir).map(|(g, d)| (0..3).map(|c| g[c] * d[c] as f64).sum::<f64>()).sum();
+        let want = central(&rec, &a, &b, 1e-6, |r, h| {
+            for f in 0..r.frames() {
+                let (x, _) = r.checkpoint_mut(f);
+                for (i, p) in x.iter_mut().enumerate() {
+                    if f == 0 || pinned.contains(&(i as u32)) {
+                        *p += DVec3::from(dir[i].map(f64::from)) * h;
+                    }
+                }
+            }
+        });
+        check(&format!("positions, direction {seed}"), got, want);
+        let got: f64 =
+            g.velocities.iter().zip(&dir).map(|(g, d)| (0..3).map(|c| g[c] * d[c] as f64).sum::<f64>()).sum();
+        let want = central(&rec, &a, &b, 1e-6, |r, h| {
+            let (_, v) = r.checkpoint_mut(0);
+            for (i, p) in v.iter_mut().enumerate() {
+                *p += DVec3::from(dir[i].map(f64::from)) * h;
+            }
+        });
+        check(&format!("velocities, direction {seed}"), got, want);
+    }
+    // The pins of frames 3 and 9 alone (a controller's move in one frame).
+    for f in [3, 9] {
+        let dir = weights(pinned.len(), 20 + f as u64);
+        let got: f64 = g.pins[f].iter().zip(&dir).map(|(g, d)| (0..3).map(|c| g[c] * d[c] as f64).sum::<f64>()).sum();
+        let want = central(&rec, &a, &b, 1e-6, |r, h| {
+            let (x, _) = r.checkpoint_mut(f);
+            for (k, &i) in pinned.iter().enumerate() {
+                x[i as usize] += DVec3::from(dir[k].map(f64::from)) * h;
+            }
+        });
+        check(&format!("pins of frame {f}"), got, want);
+    }
+}
+
+#[test]
+fn free_fall_s_gradient_by_gravity_is_the_recurrence_s_closed_form() {
+    // The free-fall scene (no pins, no floor, springs at rest: every particle the same
+    // recurrence v' = r v + g dt, r = 1 − damping − air_drag dt, x' = x + v' dt) with
+    // damping and drag on: after N substeps d y / d g_y = dt² Σ_{k=1..N} (1 − r^k)/(1 − r)
+    // for every particle, and d y / d v₀ = dt Σ r^k. The loss: the mean height.
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/free-fall.toml")).unwrap();
+    let text = text
+        .replace("n = 32", "n = 6")
+        .replace("air_drag = 0.0\ndamping = 0.0", "air_drag = 0.3\ndamping = 0.002\nstrain_iterations = 0");
+    assert!(text.contains("air_drag = 0.3"), "scenes/free-fall.toml changed: the test's edit missed");
+    let (rec, s) = record(&text, 10);
+    let np = s.state_ref().pos.len();
+    let a = vec![[0.0, 1.0 / np as f32, 0.0]; np];
+    let g = rec.backward(&a, &vec![[0.0; 3]; np]);
+    let p = s.params();
+    let (dt, n) = (p.dt() as f64, 10 * p.substeps as i32);
+    let r = 1.0 - p.damping as f64 - p.air_drag as f64 * dt;
+    let want_g: f64 = (1..=n).map(|k| dt * dt * (1.0 - r.powi(k)) / (1.0 - r)).sum();
+    let want_v: f64 = (1..=n).map(|k| dt * r.powi(k)).sum::<f64>() / np as f64;
+    let got_g = g.params.iter().find(|(n, _)| *n == "gravity[1]").unwrap().1;
+    println!(
+        "d mean y / d g_y: {got_g:.9} against {want_g:.9}; d mean y / d v0_y {:.9e} against {want_v:.9e}",
+        g.velocities[0][1]
+    );
+    // The springs stay at rest (every particle moves alike) but for the f32 run's
+    // rounding of the checkpoints, which leaves them a few ulps off their rest lengths:
+    // measured 7e-9 relative; bound 1e-6.
+    assert!((got_g - want_g).abs() < 1e-6 * want_g.abs(), "{got_g} against {want_g}");
+    for v in &g.velocities {
+        assert!(
+            (v[1] - want_v).abs() < 1e-6 * want_v.abs() && v[0].abs() < 1e-6 * want_v.abs(),
+            "{v:?} against {want_v}"
+        );
+    }
+}
+
+#[test]
+fn what_has_no_adjoint_is_refused_in_one_line() {
+    for (set, names) in [
+        ("integrator = \"implicit\"", "integrator"),
+        ("strain_iterations = 1", "strain limit"),
+        ("wind = [1.0, 0.0, 0.0]", "wind"),
+        ("static_friction = 0.5", "Coulomb"),
+        ("self_collision = \"particles\"", "self-contact"),
+    ] {
+        let text = DRAPE.replace("strain_iterations = 0\n", "") + set + "\n";
+        let text = if set.starts_with("strain") { text } else { text + "strain_iterations = 0\n" };
+        let f = SceneFile::parse(&text, "refused").unwrap();
+        let s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+        let w: Vec<f32> = s.state_ref().pos.iter().map(|x| x[3]).collect();
+        let e = Model::new(&f.scene, s.topology(), &f.params, &w).unwrap_err();
+        assert!(e.contains(names) && !e.contains('\n'), "{set}: {e}");
+    }
+}
