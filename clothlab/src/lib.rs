@@ -42,6 +42,7 @@ pub mod validate;
 pub use anyhow::{Error, Result};
 pub use backend::{AnySolver, Api, Backend, GpuSetup, Shared, make, variant_spec};
 pub use clothlab_core::{ClothState, Integrator, KernelTimings, RenderMode, Scene, SimParams, TimingRow, View};
+pub use clothlab_cpu::grad::{Gradients, PARAMS as GRAD_PARAMS};
 pub use clothlab_engine::{SolverOptions, StatsMode, VariantSpec};
 pub use setup::{Physics, SceneSource, Setup, apply_overrides};
 pub use sim::{ClothRange, DEFAULT_N, MAX_STEPS, MOSAIC_WORLDS, Sim, SimOptions, available};

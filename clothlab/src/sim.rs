@@ -42,6 +42,9 @@ pub struct SimOptions {
     /// parameters (default: the scene file's `envs`, else 1). More than one runs on the
     /// CPU backends for now.
     pub envs: Option<u32>,
+    /// Record the run for gradients ([`Sim::backward`], docs/gradients.md): one world, on
+    /// `cpu` or `cpu-par` for now; what has no adjoint yet is refused when opened.
+    pub grad: bool,
 }
 
 /// One cloth's particles and triangles in a scene's arrays.
@@ -88,6 +91,17 @@ pub struct Sim {
     setup: Setup,
     /// The GPU variant it was opened with (what [`Sim::reset`] builds a GPU world with).
     gpu: GpuSetup,
+    /// The recording for gradients ([`SimOptions::grad`]).
+    grad: Option<Box<Grad>>,
+}
+
+/// A run recorded for gradients: the recording, what its model was built from, and the
+/// state the last recorded frame ended with.
+struct Grad {
+    rec: clothlab_cpu::grad::Recording,
+    params: SimParams,
+    w: Vec<f32>,
+    ended: Option<ClothState>,
 }
 
 impl SimOptions {
@@ -133,17 +147,34 @@ impl Sim {
             clothlab_core::cloth::check_params(&setup.scene, p)
                 .map_err(|e| if envs > 1 { anyhow::anyhow!("world {k}: {e}") } else { e.into() })?;
         }
+        if opts.grad && (envs > 1 || opts.backend.is_gpu()) {
+            bail!(
+                "grad=True records one world on cpu or cpu-par for now ({} with envs {envs}): the GPU APIs' adjoint kernels are not built yet",
+                opts.backend.name()
+            );
+        }
         // A single run, or a GPU batch: one solver, every world in each dispatch.
         if envs == 1 || opts.backend.is_gpu() {
             let solver = make_worlds(opts.backend, setup.scene.clone(), params, &opts.gpu, &Shared::None)?;
-            return Ok(Sim { solver, worlds: Vec::new(), backend: opts.backend, setup, gpu: opts.gpu });
+            let mut sim = Sim { solver, worlds: Vec::new(), backend: opts.backend, setup, gpu: opts.gpu, grad: None };
+            if opts.grad {
+                sim.grad = Some(Box::new(sim.new_recording()?));
+            }
+            return Ok(sim);
         }
         if opts.gpu.variant.is_some() {
             bail!("--preset and --set-variant choose a GPU backend's kernels, and {} is the CPU", opts.backend.name());
         }
         let mut worlds = Self::build_worlds(opts.backend, &setup.scene, &params)?;
         let first = worlds.remove(0);
-        Ok(Sim { solver: AnySolver::Cpu(Box::new(first)), worlds, backend: opts.backend, setup, gpu: opts.gpu })
+        Ok(Sim {
+            solver: AnySolver::Cpu(Box::new(first)),
+            worlds,
+            backend: opts.backend,
+            setup,
+            gpu: opts.gpu,
+            grad: None,
+        })
     }
 
     /// One CPU solver a world (each on one thread: the worlds are what runs in parallel),
@@ -304,6 +335,12 @@ impl Sim {
         if let Some(b) = self.gpu_batch() {
             return Ok(b.set_world_params(params)?);
         }
+        if self.grad.is_some() {
+            // What has no adjoint is refused here, not at the next frame.
+            let w: Vec<f32> = self.solver.get().state()?.pos.iter().map(|x| x[3]).collect();
+            clothlab_cpu::grad::Model::new(&self.setup.scene, self.topology(), &params[0], &w)
+                .map_err(anyhow::Error::msg)?;
+        }
         if self.worlds.is_empty() {
             let p = params.into_iter().next().context("one parameter set")?;
             return Ok(self.solver.get().set_params(p)?);
@@ -338,6 +375,17 @@ impl Sim {
         if frames > MAX_STEPS {
             bail!("invalid frames {frames}: must be in 0 ..= {MAX_STEPS}");
         }
+        if self.grad.is_some() {
+            for _ in 0..frames {
+                self.record_frame_start()?;
+                self.solver.get().step_frame()?;
+                let ended = self.solver.get().state()?;
+                if let Some(g) = &mut self.grad {
+                    g.ended = Some(ended);
+                }
+            }
+            return Ok(());
+        }
         if self.worlds.is_empty() {
             for _ in 0..frames {
                 self.solver.get().step_frame()?;
@@ -361,6 +409,9 @@ impl Sim {
         if k == 0 {
             return Ok(());
         }
+        if self.grad.is_some() {
+            bail!("substep: a recording for gradients steps whole frames (step)");
+        }
         let whole: Vec<SimParams> = (0..self.envs()).map(|w| self.world_params(w).cloned()).collect::<Result<_>>()?;
         if whole.iter().all(|p| p.substeps == 1) {
             return self.step(k);
@@ -370,6 +421,94 @@ impl Sim {
         let stepped = self.step(k);
         self.set_world_params(whole)?;
         stepped
+    }
+
+    /// A new recording from the current state with the current parameters (refused
+    /// where the run uses what has no adjoint yet).
+    fn new_recording(&mut self) -> Result<Grad> {
+        let st = self.solver.get().state()?;
+        let params = self.params().clone();
+        let w: Vec<f32> = st.pos.iter().map(|x| x[3]).collect();
+        let model = clothlab_cpu::grad::Model::new(&self.setup.scene, self.topology(), &params, &w)
+            .map_err(anyhow::Error::msg)?;
+        Ok(Grad { rec: clothlab_cpu::grad::Recording::new(model), params, w, ended: None })
+    }
+
+    /// Before a recorded frame: its starting state kept. The recording starts again where
+    /// the parameters or the masses changed since it began, or the free particles' state
+    /// was set since the last frame ended (the pinned particles' positions may be set
+    /// between frames: each frame's are an input of their own, [`Sim::backward`]'s pins).
+    fn record_frame_start(&mut self) -> Result<()> {
+        let st = self.solver.get().state()?;
+        let params = self.params().clone();
+        let g = self.grad.as_ref().context("a recording")?;
+        let w: Vec<f32> = st.pos.iter().map(|x| x[3]).collect();
+        let moved = g
+            .ended
+            .as_ref()
+            .is_some_and(|e| e.vel != st.vel || e.pos.iter().zip(&st.pos).any(|(a, b)| b[3] != 0.0 && a != b));
+        if params != g.params || w != g.w {
+            let fresh = self.new_recording()?;
+            self.grad = Some(Box::new(fresh));
+        } else if moved {
+            let g = self.grad.as_mut().context("a recording")?;
+            g.rec = clothlab_cpu::grad::Recording::new(g.rec.model().clone());
+        }
+        let g = self.grad.as_mut().context("a recording")?;
+        g.rec.push(&st.pos, &st.vel);
+        Ok(())
+    }
+
+    /// The gradients of a loss of the final state with respect to the recording's initial
+    /// state, the parameters and each frame's pins ([`clothlab_cpu::grad::Gradients`],
+    /// docs/gradients.md): `positions` and `velocities` are the loss's gradient with
+    /// respect to the final positions and velocities (one row a particle; either may be
+    /// `None`: zeros). Each recorded frame's substeps are recomputed from its starting
+    /// state, then walked back. Refused without a recording (`grad`), before a frame was
+    /// recorded, or after the state was set since the last recorded frame.
+    pub fn backward(
+        &mut self,
+        positions: Option<&[[f32; 3]]>,
+        velocities: Option<&[[f32; 3]]>,
+    ) -> Result<clothlab_cpu::grad::Gradients> {
+        let np = self.num_particles();
+        let st = self.solver.get().state()?;
+        let Some(g) = &self.grad else { bail!("backward: nothing is recorded: open the Sim with grad=True") };
+        if g.rec.frames() == 0 {
+            bail!("backward: no frame recorded since the recording began: step first");
+        }
+        if g.ended.as_ref().is_some_and(|e| e.pos != st.pos || e.vel != st.vel) {
+            bail!("backward: the state was set after the last recorded frame: step, or reset_grad and step");
+        }
+        let zeros = vec![[0.0f32; 3]; np];
+        let rows = |v: Option<&[[f32; 3]]>, what: &str| -> Result<Vec<[f32; 3]>> {
+            let Some(v) = v else { return Ok(zeros.clone()) };
+            if v.len() != np {
+                bail!("backward: {what}: {} rows for {np} particles", v.len());
+            }
+            if let Some(i) = v.iter().position(|r| !r.iter().all(|c| c.is_finite())) {
+                bail!("backward: {what}: row {i} is not finite");
+            }
+            Ok(v.to_vec())
+        };
+        let (xb, vb) = (rows(positions, "positions")?, rows(velocities, "velocities")?);
+        Ok(g.rec.backward(&xb, &vb))
+    }
+
+    /// Starts a new recording from the current state and parameters (`grad` only).
+    pub fn reset_grad(&mut self) -> Result<()> {
+        if self.grad.is_none() {
+            bail!("reset_grad: nothing is recorded: open the Sim with grad=True");
+        }
+        let fresh = self.new_recording()?;
+        self.grad = Some(Box::new(fresh));
+        Ok(())
+    }
+
+    /// Frames in the recording for gradients, and the bytes its checkpoints hold (`None`
+    /// without `grad`).
+    pub fn recorded(&self) -> Option<(usize, usize)> {
+        self.grad.as_ref().map(|g| (g.rec.frames(), g.rec.bytes()))
     }
 
     /// Simulated time, s.
@@ -650,6 +789,9 @@ impl Sim {
         }
         if !target.iter().all(|v| v.is_finite()) {
             bail!("grab target {target:?}: a position is finite");
+        }
+        if self.grad.is_some() {
+            bail!("grab: a grab has no adjoint yet (a recording for gradients is open: grad=True)");
         }
         let (k, particle) = (particle as usize / np.max(1), particle % np.max(1) as u32);
         if k > 0 && self.gpu_batch_ref().is_some() {
@@ -1405,5 +1547,101 @@ mod tests {
         assert_eq!(super::mosaic_grid(1), (1, 1));
         let e = batch.render_worlds(0, 2, 2, &view, None).unwrap_err().to_string();
         assert!(e.contains("cannot hold 5 worlds"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod grad_tests {
+    use super::*;
+    use crate::setup::SceneSource;
+
+    fn opts(backend: Backend, set: &[&str]) -> SimOptions {
+        SimOptions {
+            backend,
+            physics: Physics {
+                scene: SceneSource::Default,
+                set: set.iter().map(|s| s.to_string()).collect(),
+                ..Default::default()
+            },
+            n: Some(8),
+            grad: true,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_recorded_sim_s_gradient_is_its_recording_s_and_follows_what_changes_between_frames() {
+        // The default scene at n = 8 without the strain limit, 6 frames on cpu-par: the
+        // gradient of the mean height by gravity's y is positive and below the closed
+        // form's free fall (the held corners and the springs hold the cloth up: the
+        // mean falls less than freely: 0 < d < dt² Σ (1 − r^k)/(1 − r); measured 0.93 of it).
+        let mut sim = Sim::open(opts(Backend::CpuPar, &["strain_iterations=0"])).unwrap();
+        sim.step(6).unwrap();
+        let np = sim.num_particles();
+        let loss = vec![[0.0, 1.0 / np as f32, 0.0]; np];
+        let g = sim.backward(Some(&loss), None).unwrap();
+        assert_eq!(sim.recorded().unwrap().0, 6);
+        let dy = g.params.iter().find(|(n, _)| *n == "gravity[1]").unwrap().1;
+        let p = sim.params();
+        let (dt, n) = (p.dt() as f64, 6 * p.substeps as i32);
+        let r = 1.0 - p.damping as f64 - p.air_drag as f64 * dt;
+        let free: f64 = (1..=n).map(|k| dt * dt * (1.0 - r.powi(k)) / (1.0 - r)).sum();
+        println!("d mean y / d g_y = {dy:.6} (free fall {free:.6})");
+        assert!(dy > 0.1 * free && dy < free, "{dy} against free fall's {free}");
+        assert_eq!(g.pins.len(), 6);
+        assert_eq!(g.pinned.len(), 2, "the default scene holds two corners");
+        // Setting the pinned particles' positions between frames keeps the recording (they
+        // are each frame's input); setting a free particle's starts a new one.
+        let mut x = sim.positions().unwrap();
+        x[g.pinned[0] as usize][0] += 0.01;
+        sim.set_positions(&x).unwrap();
+        sim.step(1).unwrap();
+        assert_eq!(sim.recorded().unwrap().0, 7, "moving a pin started a new recording");
+        let mut x = sim.positions().unwrap();
+        x[np / 2][1] += 0.01;
+        sim.set_positions(&x).unwrap();
+        let e = sim.backward(Some(&loss), None).unwrap_err().to_string();
+        assert!(e.contains("state was set after the last recorded frame"), "{e}");
+        sim.step(2).unwrap();
+        assert_eq!(sim.recorded().unwrap().0, 2, "a free particle moved: a new recording");
+        // Changing a parameter starts one too; one without an adjoint is refused.
+        sim.set(&["damping=0.01".into()]).unwrap();
+        sim.step(1).unwrap();
+        assert_eq!(sim.recorded().unwrap().0, 1);
+        let e = sim.set(&["strain_iterations=2".into()]).unwrap_err().to_string();
+        assert!(e.contains("strain limit has no adjoint yet"), "{e}");
+        sim.reset_grad().unwrap();
+        assert_eq!(sim.recorded().unwrap().0, 0);
+        let e = sim.backward(None, None).unwrap_err().to_string();
+        assert!(e.contains("no frame recorded"), "{e}");
+    }
+
+    #[test]
+    fn what_a_recording_cannot_take_is_refused_in_one_line() {
+        let one_line = |e: anyhow::Error| {
+            let e = format!("{e:#}");
+            assert!(!e.contains('\n'), "{e}");
+            e
+        };
+        let e = one_line(Sim::open(opts(Backend::Cpu, &[])).err().unwrap());
+        assert!(e.contains("strain limit"), "{e}");
+        let e = one_line(
+            Sim::open(SimOptions { envs: Some(2), ..opts(Backend::Cpu, &["strain_iterations=0"]) }).err().unwrap(),
+        );
+        assert!(e.contains("one world"), "{e}");
+        let e = one_line(Sim::open(opts(Backend::Vulkan, &["strain_iterations=0"])).err().unwrap());
+        assert!(e.contains("cpu or cpu-par"), "{e}");
+        let mut sim = Sim::open(opts(Backend::Cpu, &["strain_iterations=0"])).unwrap();
+        assert!(one_line(sim.grab(10, [0.0, 1.0, 0.0]).unwrap_err()).contains("grab"));
+        assert!(one_line(sim.substep(3).unwrap_err()).contains("whole frames"));
+        sim.step(1).unwrap();
+        let np = sim.num_particles();
+        let short = vec![[0.0f32; 3]; np - 1];
+        assert!(one_line(sim.backward(Some(&short), None).unwrap_err()).contains(&format!("{} rows for {np}", np - 1)));
+        let nan = vec![[f32::NAN; 3]; np];
+        assert!(one_line(sim.backward(None, Some(&nan)).unwrap_err()).contains("not finite"));
+        let mut plain = Sim::open(SimOptions { grad: false, ..opts(Backend::Cpu, &[]) }).unwrap();
+        assert!(one_line(plain.backward(None, None).unwrap_err()).contains("grad=True"));
+        assert!(plain.recorded().is_none());
     }
 }

@@ -137,10 +137,11 @@ impl Model {
     pub fn new(scene: &Scene, topo: &ClothTopology, params: &SimParams, w: &[f32]) -> Result<Self, String> {
         let no = |what: &str| Err(format!("grad=True: {what} has no adjoint yet"));
         if !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler) {
-            return no(&format!("integrator {:?} (verlet and symplectic-euler have)", params.integrator));
+            return no(&format!("integrator {}", params.integrator.name()))
+                .map_err(|e: String| e + " (verlet and symplectic-euler have)");
         }
         if params.strain_iterations > 0 && params.strain_limit > 0.0 {
-            return no("the strain limit (set strain_iterations=0)");
+            return no("the strain limit").map_err(|e: String| e + " (set strain_iterations=0)");
         }
         if params.wind != [0.0; 3] {
             return no("wind");
@@ -149,7 +150,7 @@ impl Model {
             return no("self-contact");
         }
         if params.static_friction > 0.0 || params.kinetic_friction > 0.0 {
-            return no("Coulomb friction (static_friction, kinetic_friction)");
+            return no("Coulomb friction").map_err(|e: String| e + " (static_friction, kinetic_friction)");
         }
         if !scene.boxes.is_empty() || !scene.rods.is_empty() || !scene.bodies.is_empty() {
             return no("a box, rod or body collider");

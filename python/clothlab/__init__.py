@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -133,7 +133,7 @@ class Sim:
     """A scene simulated on one backend.
 
     ``Sim(scene=None, backend="cpu", integrator=None, params=None, n=None, toml=None,
-    variant=None, set_variant=None, envs=None)``
+    variant=None, set_variant=None, envs=None, grad=False)``
 
     * ``scene`` -- a scene file (TOML, see ``scenes/``); ``toml`` -- a scene file's text
       instead; neither: the default scene (a grid over three spheres and a floor).
@@ -153,6 +153,10 @@ class Sim:
       (``params={"damping": np.linspace(0, 0.01, 64)}``); the state's arrays gain a
       leading axis of worlds, ``(envs, N, 3)``. World k computes, bit for bit, what a
       single run with its parameters computes.
+    * ``grad`` -- record the run for gradients (:meth:`backward`, docs/gradients.md):
+      each frame's starting state is kept; one world on ``cpu`` or ``cpu-par`` for now,
+      Verlet or symplectic Euler without the strain limit, wind, self-contact or
+      Coulomb friction (what has no adjoint yet is refused when opened).
 
     Everything is checked before the solver opens; a refusal raises
     :class:`ClothlabError` with the reason. The solver lives on a thread of its own:
@@ -170,6 +174,7 @@ class Sim:
         variant: Optional[str] = None,
         set_variant: Optional[Sequence[str]] = None,
         envs: Optional[int] = None,
+        grad: bool = False,
     ) -> None:
         if not isinstance(backend, str):
             raise ClothlabTypeError(f"backend must be a name such as 'cpu' or 'vulkan', not {backend!r}")
@@ -177,6 +182,8 @@ class Sim:
             raise ClothlabValueError(f"n must be a positive whole number of particles per side, not {n!r}")
         if envs is not None and not 0 < _whole(envs, "envs") < 2**32:
             raise ClothlabValueError(f"envs must be a positive whole number of worlds, not {envs!r}")
+        if not isinstance(grad, (bool, np.bool_)):
+            raise ClothlabTypeError(f"grad must be True or False, not {grad!r}")
         self._sim = _clothlab.Sim(
             backend,
             scene=_path(scene),
@@ -187,6 +194,7 @@ class Sim:
             preset=variant,
             set_variant=list(set_variant or []),
             envs=None if envs is None else int(envs),
+            grad=bool(grad),
         )
         self._info = self._sim.info()
 
@@ -251,6 +259,41 @@ class Sim:
     def substep(self, k: int = 1) -> None:
         """Advance ``k`` substeps (each run as a frame of one substep of the same dt)."""
         self._sim.substep(_count(k, "k"))
+
+    # -- gradients ----------------------------------------------------------------------
+
+    def backward(self, positions: Any = None, velocities: Any = None) -> Dict[str, Any]:
+        """The gradients of a loss of the final state, back through every frame recorded
+        since the recording began (``grad=True``; :meth:`reset_grad`).
+
+        ``positions``, ``velocities`` -- the loss's gradient with respect to the final
+        positions and velocities, array-likes of shape (N, 3) (either may be omitted:
+        zeros). Returns a dict: ``"positions"`` and ``"velocities"`` -- the gradient with
+        respect to the recording's initial state, float64 (N, 3); ``"params"`` --
+        ``{name: value}`` for each differentiable parameter under its ``params`` name
+        (the stiffnesses and dampings, the moduli, ``damping``, ``air_drag``,
+        ``cloth_mass``, ``friction``, ``gravity[0]`` … ``gravity[2]``); ``"pinned"`` --
+        the pinned particles' indices; ``"pins"`` -- float64 (frames, pinned, 3), the
+        gradient with respect to each pinned particle's position during each frame
+        (what a controller that sets them between frames moves). At a contact the
+        derivative is the side the run took (docs/gradients.md).
+        """
+        n = self.num_particles
+        x = None if positions is None else _rows3(positions, n, "positions")
+        v = None if velocities is None else _rows3(velocities, n, "velocities")
+        return self._sim.backward(x, v)
+
+    def reset_grad(self) -> None:
+        """Start a new recording for gradients from the current state and parameters
+        (changing the parameters, the masses or the free particles' state between
+        frames starts one too)."""
+        self._sim.reset_grad()
+
+    @property
+    def recorded(self) -> Optional[Tuple[int, int]]:
+        """Frames recorded for gradients and the bytes their checkpoints hold (``None``
+        without ``grad``)."""
+        return self._sim.recorded()
 
     @property
     def time(self) -> float:

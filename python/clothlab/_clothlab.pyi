@@ -1,7 +1,7 @@
 """Type stubs of clothlab's native module (python/src/lib.rs); the public API is the
 package's `clothlab.Sim`, `backends`, `validate`, `bench` (python/clothlab/__init__.py)."""
 
-from typing import List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -32,8 +32,16 @@ class Sim:
         preset: Optional[str] = None,
         set_variant: List[str] = ...,
         envs: Optional[int] = None,
+        grad: bool = False,
     ) -> None: ...
     def info(self) -> dict: ...
+    def backward(
+        self,
+        positions: Optional[npt.NDArray[np.float32]] = None,
+        velocities: Optional[npt.NDArray[np.float32]] = None,
+    ) -> Dict[str, Any]: ...
+    def reset_grad(self) -> None: ...
+    def recorded(self) -> Optional[Tuple[int, int]]: ...
     def reset(self, worlds: Optional[List[int]] = None) -> None: ...
     def set_pin_pose(
         self,

@@ -152,7 +152,7 @@ fn array3<'py>(py: Python<'py>, v: Vec<[f32; 3]>) -> PyResult<Bound<'py, PyAny>>
 impl Sim {
     /// Opens a scene on a backend (see `clothlab.Sim`).
     #[new]
-    #[pyo3(signature = (backend, scene=None, toml=None, n=None, integrator=None, sets=Vec::new(), preset=None, set_variant=Vec::new(), envs=None))]
+    #[pyo3(signature = (backend, scene=None, toml=None, n=None, integrator=None, sets=Vec::new(), preset=None, set_variant=Vec::new(), envs=None, grad=false))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -165,6 +165,7 @@ impl Sim {
         preset: Option<String>,
         set_variant: Vec<String>,
         envs: Option<u32>,
+        grad: bool,
     ) -> PyResult<Self> {
         let options = (|| -> anyhow::Result<SimOptions> {
             let backend = Backend::parse(backend)?;
@@ -188,6 +189,7 @@ impl Sim {
                 n,
                 gpu: clothlab::GpuSetup { variant, ..Default::default() },
                 envs,
+                grad,
             })
         })()
         .map_err(py_err)?;
@@ -252,6 +254,48 @@ impl Sim {
     /// Advances `frames` frames.
     fn step(&self, py: Python<'_>, frames: u64) -> PyResult<()> {
         self.call(py, move |s| s.step(frames))
+    }
+
+    /// The gradients of a loss of the final state (see `clothlab.Sim.backward`): a dict of
+    /// `positions` and `velocities` ((N, 3) float64), `params` ({name: float}), `pinned`
+    /// (the pinned particles' indices) and `pins` ((frames, pinned, 3) float64).
+    #[pyo3(signature = (positions=None, velocities=None))]
+    fn backward<'py>(
+        &self,
+        py: Python<'py>,
+        positions: Option<PyReadonlyArray2<'py, f32>>,
+        velocities: Option<PyReadonlyArray2<'py, f32>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let x = positions.as_ref().map(rows3).transpose()?;
+        let v = velocities.as_ref().map(rows3).transpose()?;
+        let g = self.call(py, move |s| s.backward(x.as_deref(), v.as_deref()))?;
+        let d = PyDict::new(py);
+        let array = |rows: Vec<[f64; 3]>| -> PyResult<Bound<'py, PyAny>> {
+            let n = rows.len();
+            Ok(PyArray1::from_vec(py, rows.into_flattened()).reshape([n, 3])?.into_any())
+        };
+        d.set_item("positions", array(g.positions)?)?;
+        d.set_item("velocities", array(g.velocities)?)?;
+        let params = PyDict::new(py);
+        for (name, value) in g.params {
+            params.set_item(name, value)?;
+        }
+        d.set_item("params", params)?;
+        d.set_item("pinned", PyArray1::from_vec(py, g.pinned))?;
+        let (frames, pinned) = (g.pins.len(), d.get_item("pinned")?.map_or(0, |p| p.len().unwrap_or(0)));
+        let pins: Vec<f64> = g.pins.into_iter().flatten().flatten().collect();
+        d.set_item("pins", PyArray1::from_vec(py, pins).reshape([frames, pinned, 3])?)?;
+        Ok(d)
+    }
+
+    /// Starts a new recording for gradients from the current state and parameters.
+    fn reset_grad(&self, py: Python<'_>) -> PyResult<()> {
+        self.call(py, |s| s.reset_grad())
+    }
+
+    /// Frames recorded for gradients and the bytes their checkpoints hold, or None.
+    fn recorded(&self, py: Python<'_>) -> PyResult<Option<(usize, usize)>> {
+        self.call(py, |s| Ok(s.recorded()))
     }
 
     /// Advances `k` substeps.
