@@ -485,20 +485,58 @@ pub(crate) fn responses(p: &StepParams, m: Prims, pos: &[V4], vel: &[V4], b: &Tr
 /// pair at `pos` (the sweep's iterate) for the vertices of colour `colour`
 /// (`colour_of`: each particle's) that are not held, into their sums ([`TriLayout::vbd`]).
 pub fn tri_vbd(p: &StepParams, m: Prims, colour_of: &[u32], pos: &[V4], colour: u32, b: &mut TriBufs) {
+    let pairs: Vec<(u32, u32)> = kept_pairs(b, &|_, _| true).map(|(o, other)| (o as u32, other)).collect();
+    add_vbd_terms(p, m, colour_of, pos, colour, &pairs, b);
+}
+
+/// The second half of [`tri_vbd`], over `pairs` `(owner, other)`: at least the kept
+/// pairs with a vertex of the colour (the CPU solvers hand it each colour's, listed once
+/// a substep by [`pairs_by_colour`]; a pair without one adds nothing).
+pub(crate) fn add_vbd_terms(
+    p: &StepParams,
+    m: Prims,
+    colour_of: &[u32],
+    pos: &[V4],
+    colour: u32,
+    pairs: &[(u32, u32)],
+    b: &mut TriBufs,
+) {
     let wanted = crate::tri_pipeline::vbd_wanted(pos, colour_of, colour, p.grab_index);
     let (l, at) = (b.l, b.l.vbd());
-    let words: Vec<(usize, u32)> = kept_pairs(b, &|o, other| verts(m, &l, o, other).iter().any(|&v| wanted(v)))
-        .flat_map_iter(|(o, other)| {
+    let words: Vec<(usize, u32)> = pairs
+        .par_iter()
+        .with_min_len(b.min_len.max(64))
+        .flat_map_iter(|&(o, other)| {
             let mut words = Vec::new();
-            crate::tri_pipeline::vbd_terms(&sides(m, pos, &l, o, other), p.self_thickness, wanted, |i, v| {
-                words.push((i, v))
-            });
+            if verts(m, &l, o as usize, other).iter().any(|&v| wanted(v)) {
+                let s = sides(m, pos, &l, o as usize, other);
+                crate::tri_pipeline::vbd_terms(&s, p.self_thickness, wanted, |i, v| words.push((i, v)));
+            }
             words
         })
         .collect();
     for (i, v) in words {
         b.ints[at + i] = b.ints[at + i].wrapping_add(v);
     }
+}
+
+/// The kept pairs `(owner, other)` with a vertex of each colour (`colour_of`: each
+/// particle's), a list a colour.
+pub(crate) fn pairs_by_colour(m: Prims, colour_of: &[u32], b: &TriBufs) -> Vec<Vec<(u32, u32)>> {
+    let colours = colour_of.iter().copied().max().map_or(0, |c| c as usize + 1);
+    let mut lists = vec![Vec::new(); colours];
+    let l = b.l;
+    for (o, other) in kept_pairs(b, &|_, _| true).collect::<Vec<_>>() {
+        let mut seen = [u32::MAX; 4];
+        for (j, v) in verts(m, &l, o, other).into_iter().enumerate() {
+            let c = colour_of[v as usize];
+            if !seen[..j].contains(&c) {
+                lists[c as usize].push((o as u32, other));
+            }
+            seen[j] = c;
+        }
+    }
+    lists
 }
 
 /// `tri_impulse_count` and `tri_separate_count`: each vertex's count of the pairs with a

@@ -15,8 +15,8 @@ use clothlab_core::step_params::StepParams;
 use clothlab_core::tri_contact::*;
 
 use crate::tri_contact::{
-    Prims, TriBufs, TriLayout, at, keep_pairs, run_pass, stats, tri_clamp, tri_clamp_check, tri_clamp_sum, tri_speed,
-    tri_start, tri_vbd,
+    Prims, TriBufs, TriLayout, add_vbd_terms, at, keep_pairs, pairs_by_colour, run_pass, stats, tri_clamp,
+    tri_clamp_check, tri_clamp_sum, tri_speed, tri_start,
 };
 
 /// The pairs of the last search (within its reach at its positions) and what it needs
@@ -517,6 +517,9 @@ pub struct Contact {
     pairs: Vec<u32>,
     /// The last search's pairs, which serve the substeps until a vertex has moved too far.
     search: Search,
+    /// The substep's kept pairs with a vertex of each colour (VBD's terms), listed at the
+    /// first colour's terms after each [`Contact::begin`].
+    by_colour: Vec<Vec<(u32, u32)>>,
     searches: u64,
     refreshes: u64,
 }
@@ -581,6 +584,7 @@ impl Contact {
         let found: Vec<Pair> = vt.into_iter().chain(ee.into_iter().map(|(e, f, d)| (np + e, f, d))).collect();
         keep_pairs(m, &found, &mut b);
         run_pass(p, m, pos, vel, &mut b, Pass::Velocity);
+        self.by_colour.clear();
         self.searches += searched;
         self.refreshes += refreshed;
     }
@@ -603,8 +607,14 @@ impl Contact {
     /// particle's) that are not held (pinned, or the grabbed one): what
     /// `cpu::vbd::vbd_colour` adds to their blocks ([`Contact::vbd_sums`]), and clears.
     pub fn vbd_terms(&mut self, p: &StepParams, pos: &[V4], triangles: &[[u32; 3]], colour_of: &[u32], colour: u32) {
+        let mut lists = std::mem::take(&mut self.by_colour);
         let (m, mut b, _) = self.parts(triangles, pos.len());
-        tri_vbd(p, m, colour_of, pos, colour, &mut b);
+        if lists.is_empty() {
+            lists = pairs_by_colour(m, colour_of, &b);
+        }
+        let pairs = lists.get(colour as usize).map_or(&[][..], |l| &l[..]);
+        add_vbd_terms(p, m, colour_of, pos, colour, pairs, &mut b);
+        self.by_colour = lists;
     }
 
     /// The terms [`Contact::vbd_terms`] left ([`VBD_TERMS`] words a particle), for

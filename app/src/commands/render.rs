@@ -35,6 +35,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
         n: args.n,
         gpu,
         envs: args.envs,
+        grad: false,
     })?;
     if let Some(k) = args.world
         && k >= sim.envs()

@@ -36,6 +36,7 @@ pub fn sim(args: SimArgs) -> Result<ExitCode> {
         n: args.n,
         gpu,
         envs: args.envs,
+        grad: false,
     })?;
     let scene = sim.scene().clone();
     let frames = args.steps.div_ceil(sim.params().substeps as u64);
