@@ -460,24 +460,37 @@ fn unit(p: &StepParams, pass: Pass) -> f32 {
     }
 }
 
-/// Each owner's kept pairs `(owner, other)` that `keep` takes, owner by owner.
-fn kept_pairs<'a>(
-    b: &'a TriBufs,
-    keep: &'a (dyn Fn(usize, u32) -> bool + Sync),
-) -> impl ParallelIterator<Item = (usize, u32)> + 'a {
+/// Every owner's kept pairs `(owner, other)`, owner by owner (what the passes and VBD's
+/// terms walk: the CPU solvers list them once a substep).
+pub(crate) fn kept_list(b: &TriBufs) -> Vec<(u32, u32)> {
     let (l, ints, pairs) = (b.l, &*b.ints, &*b.pairs);
-    (0..l.num_owners()).into_par_iter().with_min_len(b.min_len.max(256)).flat_map_iter(move |o| {
-        let n = ints[l.owners() + o].min(TRI_SLOTS) as usize;
-        pairs[o * TRI_SLOTS as usize..][..n].iter().filter(move |&&other| keep(o, other)).map(move |&other| (o, other))
-    })
+    (0..l.num_owners())
+        .into_par_iter()
+        .with_min_len(b.min_len.max(1024))
+        .flat_map_iter(|o| {
+            let n = ints[l.owners() + o].min(TRI_SLOTS) as usize;
+            pairs[o * TRI_SLOTS as usize..][..n].iter().map(move |&other| (o as u32, other))
+        })
+        .collect()
 }
 
-/// Every kept pair's response in `pass` at `pos` and `vel`, where it has one (what the
-/// count and the share of a pass both compute).
-pub(crate) fn responses(p: &StepParams, m: Prims, pos: &[V4], vel: &[V4], b: &TriBufs, pass: Pass) -> Vec<Response> {
+/// The response in `pass` at `pos` and `vel` of each of `pairs` (`(owner, other)`: the
+/// kept pairs, [`kept_list`]) that has one (what the count and the share of a pass both
+/// compute).
+pub(crate) fn responses(
+    p: &StepParams,
+    m: Prims,
+    pos: &[V4],
+    vel: &[V4],
+    b: &TriBufs,
+    pairs: &[(u32, u32)],
+    pass: Pass,
+) -> Vec<Response> {
     let l = b.l;
-    kept_pairs(b, &|_, _| true)
-        .filter_map(|(o, other)| response(p, pos, vel, sides(m, pos, &l, o, other), pass))
+    pairs
+        .par_iter()
+        .with_min_len(b.min_len.max(256))
+        .filter_map(|&(o, other)| response(p, pos, vel, sides(m, pos, &l, o as usize, other), pass))
         .collect()
 }
 
@@ -485,7 +498,7 @@ pub(crate) fn responses(p: &StepParams, m: Prims, pos: &[V4], vel: &[V4], b: &Tr
 /// pair at `pos` (the sweep's iterate) for the vertices of colour `colour`
 /// (`colour_of`: each particle's) that are not held, into their sums ([`TriLayout::vbd`]).
 pub fn tri_vbd(p: &StepParams, m: Prims, colour_of: &[u32], pos: &[V4], colour: u32, b: &mut TriBufs) {
-    let pairs: Vec<(u32, u32)> = kept_pairs(b, &|_, _| true).map(|(o, other)| (o as u32, other)).collect();
+    let pairs = kept_list(b);
     add_vbd_terms(p, m, colour_of, pos, colour, &pairs, b);
 }
 
@@ -520,18 +533,17 @@ pub(crate) fn add_vbd_terms(
     }
 }
 
-/// The kept pairs `(owner, other)` with a vertex of each colour (`colour_of`: each
+/// The kept pairs `kept` (`(owner, other)`, [`kept_list`]) with a vertex of each colour (`colour_of`: each
 /// particle's), a list a colour.
-pub(crate) fn pairs_by_colour(m: Prims, colour_of: &[u32], b: &TriBufs) -> Vec<Vec<(u32, u32)>> {
+pub(crate) fn pairs_by_colour(m: Prims, colour_of: &[u32], l: &TriLayout, kept: &[(u32, u32)]) -> Vec<Vec<(u32, u32)>> {
     let colours = colour_of.iter().copied().max().map_or(0, |c| c as usize + 1);
     let mut lists = vec![Vec::new(); colours];
-    let l = b.l;
-    for (o, other) in kept_pairs(b, &|_, _| true).collect::<Vec<_>>() {
+    for &(o, other) in kept {
         let mut seen = [u32::MAX; 4];
-        for (j, v) in verts(m, &l, o, other).into_iter().enumerate() {
+        for (j, v) in verts(m, l, o as usize, other).into_iter().enumerate() {
             let c = colour_of[v as usize];
             if !seen[..j].contains(&c) {
-                lists[c as usize].push((o as u32, other));
+                lists[c as usize].push((o, other));
             }
             seen[j] = c;
         }
@@ -542,7 +554,7 @@ pub(crate) fn pairs_by_colour(m: Prims, colour_of: &[u32], b: &TriBufs) -> Vec<V
 /// `tri_impulse_count` and `tri_separate_count`: each vertex's count of the pairs with a
 /// response that move it (word 3 of its sums).
 pub fn tri_count(p: &StepParams, m: Prims, pos: &[V4], vel: &[V4], b: &mut TriBufs, pass: Pass) {
-    let r = responses(p, m, pos, vel, b, pass);
+    let r = responses(p, m, pos, vel, b, &kept_list(b), pass);
     count_responses(&r, b);
 }
 
@@ -559,7 +571,7 @@ pub(crate) fn count_responses(responses: &[Response], b: &mut TriBufs) {
 /// (`clothlab_core::tri_contact`'s share: over the most pairs any of its vertices is in, by
 /// inverse mass and weight), in fixed point into the sums; the responses counted.
 pub fn tri_share(p: &StepParams, m: Prims, pos: &[V4], vel: &[V4], b: &mut TriBufs, pass: Pass) {
-    let r = responses(p, m, pos, vel, b, pass);
+    let r = responses(p, m, pos, vel, b, &kept_list(b), pass);
     share_responses(p, pos, &r, b, pass);
 }
 
@@ -572,7 +584,7 @@ pub(crate) fn share_responses(p: &StepParams, pos: &[V4], responses: &[Response]
         .with_min_len(b.min_len.max(256))
         .flat_map_iter(|r| {
             let most = r.acting().map(|k| ints[sums + 4 * k as usize + 3]).max().unwrap_or(1);
-            r.shares(most, |k| pos[k as usize][3], u).collect::<Vec<_>>()
+            r.shares(most, |k| pos[k as usize][3], u)
         })
         .collect();
     for (k, d) in adds {
@@ -588,8 +600,16 @@ pub(crate) fn share_responses(p: &StepParams, pos: &[V4], responses: &[Response]
 /// One pass (the velocity pass, or a separation pass) as the CPU runs it: its responses
 /// found once for [`count_responses`] and [`share_responses`] (what `tri_*_count` and
 /// `tri_*_share` each find), then [`tri_apply`].
-pub(crate) fn run_pass(p: &StepParams, m: Prims, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs, pass: Pass) {
-    let r = responses(p, m, pos, vel, b, pass);
+pub(crate) fn run_pass(
+    p: &StepParams,
+    m: Prims,
+    pos: &mut [V4],
+    vel: &mut [V4],
+    b: &mut TriBufs,
+    pairs: &[(u32, u32)],
+    pass: Pass,
+) {
+    let r = responses(p, m, pos, vel, b, pairs, pass);
     count_responses(&r, b);
     share_responses(p, pos, &r, b, pass);
     tri_apply(p, pos, vel, b, pass);

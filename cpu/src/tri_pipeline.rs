@@ -15,7 +15,7 @@ use clothlab_core::step_params::StepParams;
 use clothlab_core::tri_contact::*;
 
 use crate::tri_contact::{
-    Prims, TriBufs, TriLayout, add_vbd_terms, at, keep_pairs, pairs_by_colour, run_pass, stats, tri_clamp,
+    Prims, TriBufs, TriLayout, add_vbd_terms, at, keep_pairs, kept_list, pairs_by_colour, run_pass, stats, tri_clamp,
     tri_clamp_check, tri_clamp_sum, tri_speed, tri_start,
 };
 
@@ -520,6 +520,9 @@ pub struct Contact {
     /// The substep's kept pairs with a vertex of each colour (VBD's terms), listed at the
     /// first colour's terms after each [`Contact::begin`].
     by_colour: Vec<Vec<(u32, u32)>>,
+    /// The substep's kept pairs `(owner, other)` (`tri_contact::kept_list`), listed once
+    /// for the passes and VBD's terms.
+    kept: Vec<(u32, u32)>,
     searches: u64,
     refreshes: u64,
 }
@@ -583,7 +586,9 @@ impl Contact {
         let np = pos.len() as u32;
         let found: Vec<Pair> = vt.into_iter().chain(ee.into_iter().map(|(e, f, d)| (np + e, f, d))).collect();
         keep_pairs(m, &found, &mut b);
-        run_pass(p, m, pos, vel, &mut b, Pass::Velocity);
+        let kept = kept_list(&b);
+        run_pass(p, m, pos, vel, &mut b, &kept, Pass::Velocity);
+        self.kept = kept;
         self.by_colour.clear();
         self.searches += searched;
         self.refreshes += refreshed;
@@ -596,10 +601,12 @@ impl Contact {
     /// from beyond the reach in this substep is pushed in the next (the bounds keep it
     /// from crossing meanwhile).
     pub fn separate(&mut self, p: &StepParams, pos: &mut [V4], vel: &mut [V4], triangles: &[[u32; 3]]) {
+        let kept = std::mem::take(&mut self.kept);
         let (m, mut b, _) = self.parts(triangles, pos.len());
         for _ in 0..SEPARATION_PASSES {
-            run_pass(p, m, pos, vel, &mut b, Pass::Separation);
+            run_pass(p, m, pos, vel, &mut b, &kept, Pass::Separation);
         }
+        self.kept = kept;
     }
 
     /// VBD's contact terms (`tri_vbd`) of the pairs of the substep's start at `pos` (the
@@ -608,13 +615,15 @@ impl Contact {
     /// `cpu::vbd::vbd_colour` adds to their blocks ([`Contact::vbd_sums`]), and clears.
     pub fn vbd_terms(&mut self, p: &StepParams, pos: &[V4], triangles: &[[u32; 3]], colour_of: &[u32], colour: u32) {
         let mut lists = std::mem::take(&mut self.by_colour);
+        let kept = std::mem::take(&mut self.kept);
         let (m, mut b, _) = self.parts(triangles, pos.len());
         if lists.is_empty() {
-            lists = pairs_by_colour(m, colour_of, &b);
+            lists = pairs_by_colour(m, colour_of, &b.l, &kept);
         }
         let pairs = lists.get(colour as usize).map_or(&[][..], |l| &l[..]);
         add_vbd_terms(p, m, colour_of, pos, colour, pairs, &mut b);
         self.by_colour = lists;
+        self.kept = kept;
     }
 
     /// The terms [`Contact::vbd_terms`] left ([`VBD_TERMS`] words a particle), for
@@ -767,7 +776,8 @@ mod tests {
         let found: Vec<Pair> = vt.into_iter().chain(ee.into_iter().map(|(e, f, d)| (np + e, f, d))).collect();
         keep_pairs(m, &found, &mut b);
         let mut vel = vec![[0.0; 4]; pos.len()];
-        run_pass(&consts(t, 1.0, 1.0), m, out, &mut vel, &mut b, Pass::Separation);
+        let kept = kept_list(&b);
+        run_pass(&consts(t, 1.0, 1.0), m, out, &mut vel, &mut b, &kept, Pass::Separation);
         for (o, x) in out.iter_mut().zip(pos) {
             o[3] = x[3];
         }

@@ -14,7 +14,7 @@
 use std::path::{Path, PathBuf};
 
 /// The pages whose names are checked.
-const PAGES: [&str; 13] = [
+const PAGES: [&str; 14] = [
     "README.md",
     "docs/figures.md",
     "docs/README.md",
@@ -28,6 +28,7 @@ const PAGES: [&str; 13] = [
     "docs/cli.md",
     "docs/python.md",
     "docs/app.md",
+    "docs/gradients.md",
 ];
 
 fn root() -> PathBuf {
