@@ -8,22 +8,23 @@
 //! What it differentiates: Verlet and symplectic Euler (in the (x, v) state both are
 //! `v' = (1 − damping) v + a dt`, `x' = x + v' dt`), the springs (stiffness, damping and
 //! their parameters in either unit), gravity, air drag, the velocity damping, the
-//! cloth's mass, the floor and still spheres with the share friction (as the functions
-//! they compute: where a contact switches on or off, the derivative of the side the
-//! run took), and the pinned particles' positions frame by frame. What it does not yet
-//! (refused by [`Model::new`] in one line): the other integrators, the strain limit,
-//! wind, boxes, rods and bodies, moving colliders, Coulomb friction, self-contact, a
+//! cloth's mass, the floor and still spheres with the share friction, the strain limit's
+//! passes and tethers (as the functions they compute: where a contact or a limit
+//! switches on or off, the derivative of the side the run took), and the pinned
+//! particles' positions frame by frame. What it does not yet (refused by [`Model::new`]
+//! in one line): the other integrators, wind, boxes, rods and bodies, moving colliders, Coulomb friction, self-contact, a
 //! grabbed particle and pins moved within a frame.
 
 use glam::DVec3;
 
 use clothlab_core::grid::{ClothTopology, SpringKind, V4};
+use clothlab_core::layout::STRAIN_AIM;
 use clothlab_core::params::{Integrator, SimParams, StiffnessUnits};
 use clothlab_core::scene::Scene;
 
 /// The parameters [`Model`] differentiates, by their `set` names (`SimParams`' fields;
 /// a vector's components as `gravity[0]` …).
-pub const PARAMS: [&str; 16] = [
+pub const PARAMS: [&str; 17] = [
     "structural_stiffness",
     "shear_stiffness",
     "bend_stiffness",
@@ -40,6 +41,7 @@ pub const PARAMS: [&str; 16] = [
     "gravity[0]",
     "gravity[1]",
     "gravity[2]",
+    "strain_limit",
 ];
 
 /// Indices into [`PARAMS`].
@@ -52,6 +54,7 @@ mod at {
     pub const MASS: usize = 11;
     pub const FRICTION: usize = 12;
     pub const GRAVITY: usize = 13;
+    pub const STRAIN: usize = 16;
 }
 
 /// One spring of the model: its ends, rest length, kind and mass (its lighter end's
@@ -106,6 +109,15 @@ pub struct Model {
     physical: bool,
     /// The rest spacing (the bend modulus is over its square).
     spacing: f64,
+    /// The strain limit's passes a substep, each particle's held springs (the other end,
+    /// the rest length) and tethers (the pin, the rest distance).
+    strain_passes: u32,
+    held: Vec<Vec<(usize, f64)>>,
+    tethers: Vec<Vec<(usize, f64)>>,
+    /// A hash of every switch the steps since [`Model::take_trace`] took (a contact or a
+    /// limit on or off): two runs with the same trace took the same smooth piece, so a
+    /// finite difference between them is a derivative of it.
+    trace: std::cell::Cell<u64>,
 }
 
 /// The gradients of a loss with respect to what a recording started from and ran with.
@@ -139,9 +151,6 @@ impl Model {
         if !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler) {
             return no(&format!("integrator {}", params.integrator.name()))
                 .map_err(|e: String| e + " (verlet and symplectic-euler have)");
-        }
-        if params.strain_iterations > 0 && params.strain_limit > 0.0 {
-            return no("the strain limit").map_err(|e: String| e + " (set strain_iterations=0)");
         }
         if params.wind != [0.0; 3] {
             return no("wind");
@@ -198,8 +207,24 @@ impl Model {
             params.gravity[0],
             params.gravity[1],
             params.gravity[2],
+            params.strain_limit,
         ]
         .map(f64::from);
+        let held = (0..topo.num_particles())
+            .map(|i| {
+                topo.slots
+                    .head(i)
+                    .iter()
+                    .filter(|s| s.neighbor >= 0)
+                    .map(|s| (s.neighbor as usize, s.rest as f64))
+                    .collect()
+            })
+            .collect();
+        let tethers = topo
+            .tethers
+            .iter()
+            .map(|ts| ts.iter().filter(|t| t.pin >= 0).map(|t| (t.pin as usize, t.rest as f64)).collect())
+            .collect();
         let balls = scene
             .spheres
             .iter()
@@ -221,6 +246,10 @@ impl Model {
             balls,
             physical: params.stiffness_units == StiffnessUnits::Physical,
             spacing: topo.spacing as f64,
+            strain_passes: params.strain_iterations,
+            held,
+            tethers,
+            trace: std::cell::Cell::new(0),
         };
         m.derive();
         Ok(m)
@@ -286,6 +315,17 @@ impl Model {
         DVec3::new(self.p[at::GRAVITY], self.p[at::GRAVITY + 1], self.p[at::GRAVITY + 2])
     }
 
+    /// The trace of the switches taken since the last call ([`Model::trace`]), cleared.
+    pub fn take_trace(&self) -> u64 {
+        self.trace.replace(0)
+    }
+
+    /// Notes a switch (on or off) in the trace.
+    fn note(&self, on: bool) {
+        let t = self.trace.get();
+        self.trace.set(t.rotate_left(7).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ u64::from(on));
+    }
+
     /// Substeps a frame.
     pub fn substeps(&self) -> u32 {
         self.substeps
@@ -314,10 +354,19 @@ impl Model {
         f
     }
 
-    /// One substep from `(x, v)` in place (`cpu::integrate` then `cpu::collide`): every
-    /// free particle's `v ← (1 − damping) v + (w/m̄ f + g − air_drag v) dt`,
-    /// `x ← x + v dt`, the floor, then the spheres in scene order; a pinned one still.
+    /// One substep from `(x, v)` in place (`cpu::integrate`, `cpu::collide`, then the
+    /// strain limit's passes): every free particle's `v ← (1 − damping) v + (w/m̄ f + g −
+    /// air_drag v) dt`, `x ← x + v dt`, the floor, then the spheres in scene order; a
+    /// pinned one still.
     pub fn substep(&self, x: &mut [DVec3], v: &mut [DVec3]) {
+        self.integrate(x, v);
+        for _ in 0..self.strain_passes {
+            self.strain_pass(x, v);
+        }
+    }
+
+    /// The substep's integration and contacts (before the strain limit).
+    fn integrate(&self, x: &mut [DVec3], v: &mut [DVec3]) {
         let f = self.forces(x, v);
         let (mass, g, drag, damping) = (self.mass(), self.gravity(), self.p[at::AIR_DRAG], self.p[at::DAMPING]);
         for i in 0..x.len() {
@@ -333,13 +382,129 @@ impl Model {
         }
     }
 
+    /// Particle `i`'s position after one strain pass over `x` (`cpu::strain_limit`'s
+    /// `limit_at` in f64): its over-stretched held springs' corrections (each shared by
+    /// mobility and divided by the larger of its ends' counts), then its tethers. With
+    /// `back`, the adjoint: `g` (the gradient with respect to the result) taken back onto
+    /// `xb` (of every position it read) and the strain limit's parameter.
+    fn strain_at(
+        &self,
+        i: usize,
+        x: &[DVec3],
+        counts: &[f64],
+        back: Option<(DVec3, &mut [DVec3], &mut [f64])>,
+    ) -> DVec3 {
+        let tau = self.p[at::STRAIN];
+        let (stretch, aim) = (1.0 + tau, 1.0 + STRAIN_AIM as f64 * tau);
+        let wi = self.w[i];
+        if wi == 0.0 {
+            if let Some((g, xb, _)) = back {
+                xb[i] += g;
+            }
+            return x[i];
+        }
+        // The springs: c = k (d − A n), k = wᵢ/((wᵢ + w_b) m), A = aim·rest.
+        let live = |&(b, rest): &(usize, f64)| {
+            let d = x[b] - x[i];
+            let len = d.length();
+            (len > stretch * rest).then(|| {
+                let k = wi / ((wi + self.w[b]) * counts[i].max(counts[b]).max(1.0));
+                (b, rest, d, len, k)
+            })
+        };
+        let mut z = x[i];
+        for (_, rest, d, len, k) in self.held[i].iter().filter_map(live) {
+            z += k * (d - aim * rest * d / len);
+        }
+        // The tethers, in order: each a projection onto the sphere about its pin.
+        let mut chain = Vec::new();
+        for &(pin, rest) in &self.tethers[i] {
+            let d = z - x[pin];
+            let len = d.length();
+            let max = stretch * rest;
+            // A point a pass before put on the sphere sits on it to rounding: on either
+            // side of it the derivative is the projection's (P·P = P), no switch.
+            if (len - max).abs() > 1e-12 * max {
+                self.note(len > max);
+            }
+            if len > max {
+                chain.push((pin, rest, z));
+                z = x[pin] + d * (max / len);
+            }
+        }
+        if let Some((mut g, xb, params)) = back {
+            for &(pin, rest, before) in chain.iter().rev() {
+                let d = before - x[pin];
+                let len = d.length();
+                let n = d / len;
+                let max = stretch * rest;
+                let through = (g - n * n.dot(g)) * (max / len);
+                xb[pin] += g - through;
+                params[at::STRAIN] += rest * n.dot(g);
+                g = through;
+            }
+            xb[i] += g;
+            for (b, rest, d, len, k) in self.held[i].iter().filter_map(live) {
+                let n = d / len;
+                // ∂c/∂d = k (I − (A/len)(I − n nᵀ)), symmetric.
+                let a = aim * rest;
+                let md = k * (g - (a / len) * (g - n * n.dot(g)));
+                xb[b] += md;
+                xb[i] -= md;
+                params[at::STRAIN] -= k * n.dot(g) * rest * STRAIN_AIM as f64;
+            }
+        }
+        z
+    }
+
+    /// Each particle's count of over-stretched held springs at `x` (`cpu::strain_count`).
+    fn strain_counts(&self, x: &[DVec3]) -> Vec<f64> {
+        let stretch = 1.0 + self.p[at::STRAIN];
+        (0..x.len())
+            .map(|i| {
+                let over = |&&(b, rest): &&(usize, f64)| (x[b] - x[i]).length() > stretch * rest;
+                let c = self.held[i].iter().filter(over).count();
+                self.note(c > 0);
+                self.trace.set(self.trace.get() ^ c as u64);
+                c as f64
+            })
+            .collect()
+    }
+
+    /// One strain pass in place: the positions corrected, the velocities by the move over
+    /// the substep (`cpu::strain_vel`).
+    fn strain_pass(&self, x: &mut [DVec3], v: &mut [DVec3]) {
+        let counts = self.strain_counts(x);
+        let y: Vec<DVec3> = (0..x.len()).map(|i| self.strain_at(i, x, &counts, None)).collect();
+        for i in 0..x.len() {
+            v[i] += (y[i] - x[i]) / self.dt;
+            x[i] = y[i];
+        }
+    }
+
+    /// The adjoint of [`Model::strain_pass`] at its input `x`: `xb`, `vb` from the
+    /// gradient with respect to its output to the one with respect to its input.
+    fn strain_adjoint(&self, x: &[DVec3], xb: &mut [DVec3], vb: &[DVec3], params: &mut [f64]) {
+        let counts = self.strain_counts(x);
+        // v' = v + (y − x)/dt: ȳ = x̄' + v̄'/dt, x̄ = J_yᵀ ȳ − v̄'/dt, v̄ = v̄'.
+        let gy: Vec<DVec3> = xb.iter().zip(vb).map(|(gx, gv)| *gx + *gv / self.dt).collect();
+        for (g, gv) in xb.iter_mut().zip(vb) {
+            *g = -*gv / self.dt;
+        }
+        for (i, &g) in gy.iter().enumerate() {
+            self.strain_at(i, x, &counts, Some((g, &mut *xb, &mut *params)));
+        }
+    }
+
     /// The share friction's velocity at a contact of normal `n` (`contact_vel`).
     fn slide(&self, v: DVec3, n: DVec3) -> DVec3 {
         let vn = v.dot(n);
+        self.note(vn > 0.0);
         (v - vn * n) * (1.0 - self.p[at::FRICTION]) + vn.max(0.0) * n
     }
 
     fn floor(&self, mut x: DVec3, v: DVec3) -> (DVec3, DVec3) {
+        self.note(x.y < self.floor);
         if x.y < self.floor {
             x.y = self.floor;
             return (x, self.slide(v, DVec3::Y));
@@ -351,6 +516,7 @@ impl Model {
     fn ball(&self, b: &Ball, x: DVec3, v: DVec3) -> Option<(DVec3, DVec3)> {
         let d = x - b.center;
         let dist = d.length();
+        self.note(dist < b.r);
         if dist >= b.r || dist <= 0.0 {
             return None;
         }
@@ -364,6 +530,19 @@ impl Model {
     /// ([`PARAMS`]' order). A pinned particle's `xb` gathers what its position is worth
     /// (the caller takes it to the frame's pins).
     pub fn adjoint(&self, x: &[DVec3], v: &[DVec3], xb: &mut [DVec3], vb: &mut [DVec3], params: &mut [f64]) {
+        if self.strain_passes > 0 {
+            // Back through the strain passes, last first: each one's input again.
+            let (mut xs, mut vs) = (x.to_vec(), v.to_vec());
+            self.integrate(&mut xs, &mut vs);
+            let mut inputs = Vec::with_capacity(self.strain_passes as usize);
+            for _ in 0..self.strain_passes {
+                inputs.push(xs.clone());
+                self.strain_pass(&mut xs, &mut vs);
+            }
+            for input in inputs.iter().rev() {
+                self.strain_adjoint(input, xb, vb, params);
+            }
+        }
         let np = x.len();
         let f = self.forces(x, v);
         let (mass, g0, drag, damping) = (self.mass(), self.gravity(), self.p[at::AIR_DRAG], self.p[at::DAMPING]);
@@ -529,6 +708,7 @@ impl Recording {
     /// particles set from each frame's): the final positions and velocities.
     pub fn replay(&self) -> (Vec<DVec3>, Vec<DVec3>) {
         let Some((x0, v0)) = self.checkpoints.first() else { return (Vec::new(), Vec::new()) };
+        self.model.take_trace();
         let (mut x, mut v) = (x0.clone(), v0.clone());
         for (cx, _) in &self.checkpoints {
             for (i, p) in x.iter_mut().enumerate() {

@@ -155,8 +155,8 @@ class Sim:
       single run with its parameters computes.
     * ``grad`` -- record the run for gradients (:meth:`backward`, docs/gradients.md):
       each frame's starting state is kept; one world on ``cpu`` or ``cpu-par`` for now,
-      Verlet or symplectic Euler without the strain limit, wind, self-contact or
-      Coulomb friction (what has no adjoint yet is refused when opened).
+      Verlet or symplectic Euler without wind, self-contact or Coulomb friction (what
+      has no adjoint yet is refused when opened).
 
     Everything is checked before the solver opens; a refusal raises
     :class:`ClothlabError` with the reason. The solver lives on a thread of its own:

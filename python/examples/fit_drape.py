@@ -1,8 +1,8 @@
 """Fit a cloth's stretch and bend stiffness and its damping to a target drape, by the
 gradients of a recorded run (``clothlab.Sim(grad=True)``, docs/gradients.md).
 
-The default scene (a cloth held at two corners swinging onto three spheres) at n = 16,
-without the strain limit (it has no adjoint yet). The target: the positions after
+The default scene (a cloth held at two corners swinging onto three spheres and the floor,
+its strain limit on) at n = 16. The target: the positions after
 ``FRAMES`` frames with the default values. The fit starts every value 2× off — half the
 target's (twice would pass the explicit stability limit the stiffnesses sum to) — and
 descends on their logarithms (Adam), each step one run forward and one backward:
@@ -24,7 +24,6 @@ import clothlab
 FRAMES = 40
 NAMES = ["structural_stiffness", "bend_stiffness", "damping"]
 TARGET = {"structural_stiffness": 0.45, "bend_stiffness": 0.05, "damping": 0.0005}
-BASE = {"strain_iterations": 0}
 
 
 def run(sim: clothlab.Sim, values: dict) -> np.ndarray:
@@ -68,7 +67,7 @@ def main() -> int:
     ap.add_argument("--steps", type=int, default=100)
     ap.add_argument("--backend", default="cpu-par")
     a = ap.parse_args()
-    sim = clothlab.Sim(n=16, backend=a.backend, params=BASE, grad=True)
+    sim = clothlab.Sim(n=16, backend=a.backend, grad=True)
     target = run(sim, TARGET)
     n = len(target)
     theta = np.array([math.log(0.5 * TARGET[k]) for k in NAMES])

