@@ -476,9 +476,9 @@ impl Model {
     fn strain_pass(&self, x: &mut [DVec3], v: &mut [DVec3]) {
         let counts = self.strain_counts(x);
         let y: Vec<DVec3> = (0..x.len()).map(|i| self.strain_at(i, x, &counts, None)).collect();
-        for i in 0..x.len() {
-            v[i] += (y[i] - x[i]) / self.dt;
-            x[i] = y[i];
+        for ((xi, vi), yi) in x.iter_mut().zip(v.iter_mut()).zip(&y) {
+            *vi += (*yi - *xi) / self.dt;
+            *xi = *yi;
         }
     }
 
