@@ -430,7 +430,8 @@ impl Sim {
         let params = self.params().clone();
         let w: Vec<f32> = st.pos.iter().map(|x| x[3]).collect();
         let model = clothlab_cpu::grad::Model::new(&self.setup.scene, self.topology(), &params, &w)
-            .map_err(anyhow::Error::msg)?;
+            .map_err(anyhow::Error::msg)?
+            .parallel(self.backend == Backend::CpuPar);
         Ok(Grad { rec: clothlab_cpu::grad::Recording::new(model), params, w, ended: None })
     }
 

@@ -16,6 +16,7 @@
 //! grabbed particle and pins moved within a frame.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use clothlab_core::grid::{ClothTopology, SpringKind, V4};
 use clothlab_core::layout::STRAIN_AIM;
@@ -117,7 +118,27 @@ pub struct Model {
     /// A hash of every switch the steps since [`Model::take_trace`] took (a contact or a
     /// limit on or off): two runs with the same trace took the same smooth piece, so a
     /// finite difference between them is a derivative of it.
-    trace: std::cell::Cell<u64>,
+    trace: Trace,
+    /// The springs' forces on rayon's threads (`cpu-par`); else on the caller's.
+    parallel: bool,
+}
+
+/// [`Model`]'s trace of switches: an atomic (the model is shared with rayon's threads),
+/// copied with the model.
+#[derive(Debug, Default)]
+struct Trace(std::sync::atomic::AtomicU64);
+
+impl Clone for Trace {
+    fn clone(&self) -> Self {
+        Self(std::sync::atomic::AtomicU64::new(self.0.load(std::sync::atomic::Ordering::Relaxed)))
+    }
+}
+
+impl std::ops::Deref for Trace {
+    type Target = std::sync::atomic::AtomicU64;
+    fn deref(&self) -> &Self::Target {
+        &self.0
+    }
 }
 
 /// The gradients of a loss with respect to what a recording started from and ran with.
@@ -249,10 +270,17 @@ impl Model {
             strain_passes: params.strain_iterations,
             held,
             tethers,
-            trace: std::cell::Cell::new(0),
+            trace: Trace::default(),
+            parallel: false,
         };
         m.derive();
         Ok(m)
+    }
+
+    /// This model with its springs' forces on rayon's threads (`cpu-par`) or not.
+    pub fn parallel(mut self, on: bool) -> Self {
+        self.parallel = on;
+        self
     }
 
     /// The parameters, [`PARAMS`]' order.
@@ -317,13 +345,14 @@ impl Model {
 
     /// The trace of the switches taken since the last call ([`Model::trace`]), cleared.
     pub fn take_trace(&self) -> u64 {
-        self.trace.replace(0)
+        self.trace.swap(0, std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Notes a switch (on or off) in the trace.
     fn note(&self, on: bool) {
-        let t = self.trace.get();
-        self.trace.set(t.rotate_left(7).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ u64::from(on));
+        use std::sync::atomic::Ordering::Relaxed;
+        let t = self.trace.load(Relaxed);
+        self.trace.store(t.rotate_left(7).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ u64::from(on), Relaxed);
     }
 
     /// Substeps a frame.
@@ -339,15 +368,23 @@ impl Model {
     /// Each particle's spring force at `(x, v)`: `−(ks (|l| − r) + kd (l̇·l̂)) l̂` on end a,
     /// its opposite on end b (`cpu::springs`).
     fn forces(&self, x: &[DVec3], v: &[DVec3]) -> Vec<DVec3> {
+        let each: Vec<DVec3> = self
+            .springs
+            .par_iter()
+            .zip(&self.k)
+            .with_min_len(if self.parallel { 4096 } else { usize::MAX })
+            .map(|(s, k)| {
+                let l = x[s.a] - x[s.b];
+                let len = l.length();
+                if len <= f64::MIN_POSITIVE {
+                    return DVec3::ZERO;
+                }
+                let dir = l / len;
+                -(k.ks * (len - s.rest) + k.kd * (v[s.a] - v[s.b]).dot(dir)) * dir
+            })
+            .collect();
         let mut f = vec![DVec3::ZERO; x.len()];
-        for (s, k) in self.springs.iter().zip(&self.k) {
-            let l = x[s.a] - x[s.b];
-            let len = l.length();
-            if len <= f64::MIN_POSITIVE {
-                continue;
-            }
-            let dir = l / len;
-            let fs = -(k.ks * (len - s.rest) + k.kd * (v[s.a] - v[s.b]).dot(dir)) * dir;
+        for (s, fs) in self.springs.iter().zip(each) {
             f[s.a] += fs;
             f[s.b] -= fs;
         }
@@ -368,6 +405,11 @@ impl Model {
     /// The substep's integration and contacts (before the strain limit).
     fn integrate(&self, x: &mut [DVec3], v: &mut [DVec3]) {
         let f = self.forces(x, v);
+        self.integrate_with(&f, x, v);
+    }
+
+    /// [`Model::integrate`] with the springs' forces at `(x, v)` given.
+    fn integrate_with(&self, f: &[DVec3], x: &mut [DVec3], v: &mut [DVec3]) {
         let (mass, g, drag, damping) = (self.mass(), self.gravity(), self.p[at::AIR_DRAG], self.p[at::DAMPING]);
         for i in 0..x.len() {
             if self.w[i] == 0.0 {
@@ -465,7 +507,7 @@ impl Model {
                 let over = |&&(b, rest): &&(usize, f64)| (x[b] - x[i]).length() > stretch * rest;
                 let c = self.held[i].iter().filter(over).count();
                 self.note(c > 0);
-                self.trace.set(self.trace.get() ^ c as u64);
+                self.trace.fetch_xor(c as u64, std::sync::atomic::Ordering::Relaxed);
                 c as f64
             })
             .collect()
@@ -530,10 +572,11 @@ impl Model {
     /// ([`PARAMS`]' order). A pinned particle's `xb` gathers what its position is worth
     /// (the caller takes it to the frame's pins).
     pub fn adjoint(&self, x: &[DVec3], v: &[DVec3], xb: &mut [DVec3], vb: &mut [DVec3], params: &mut [f64]) {
+        let f = self.forces(x, v);
         if self.strain_passes > 0 {
             // Back through the strain passes, last first: each one's input again.
             let (mut xs, mut vs) = (x.to_vec(), v.to_vec());
-            self.integrate(&mut xs, &mut vs);
+            self.integrate_with(&f, &mut xs, &mut vs);
             let mut inputs = Vec::with_capacity(self.strain_passes as usize);
             for _ in 0..self.strain_passes {
                 inputs.push(xs.clone());
@@ -544,7 +587,6 @@ impl Model {
             }
         }
         let np = x.len();
-        let f = self.forces(x, v);
         let (mass, g0, drag, damping) = (self.mass(), self.gravity(), self.p[at::AIR_DRAG], self.p[at::DAMPING]);
         // The gradient with respect to each free particle's acceleration.
         let mut ab = vec![DVec3::ZERO; np];
