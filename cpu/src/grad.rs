@@ -343,7 +343,9 @@ impl Model {
         DVec3::new(self.p[at::GRAVITY], self.p[at::GRAVITY + 1], self.p[at::GRAVITY + 2])
     }
 
-    /// The trace of the switches taken since the last call ([`Model::trace`]), cleared.
+    /// The trace of the switches the steps took since the last call, cleared: a hash of
+    /// every contact or limit switched on or off (two runs with the same trace took the
+    /// same smooth piece).
     pub fn take_trace(&self) -> u64 {
         self.trace.swap(0, std::sync::atomic::Ordering::Relaxed)
     }

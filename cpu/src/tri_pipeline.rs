@@ -493,7 +493,7 @@ pub(crate) fn vbd_terms(
 /// buffers of the kernels' layout, in the recipe's order — one implementation of each
 /// stage. What differs is only how the pairs are found: a GPU walks its grid every
 /// substep; here a search's pairs within its reach and a margin are kept and serve the
-/// substeps after it until a vertex has drifted too far ([`Search`]), and
+/// substeps after it until a vertex has drifted too far (docs/contact.md), and
 /// `tri_contact::keep_pairs` makes of either the same owners' slots, so every stage
 /// after computes the same bits.
 ///
@@ -557,7 +557,7 @@ impl Contact {
     /// vertex's bound, and the approach of every pair within the reach that would close
     /// to under the thickness in this substep slowed to what closes it to the thickness
     /// (with Coulomb friction). The pairs are the kept ones where they still hold every
-    /// pair within the reach ([`Search::covers`]), else a search's within the reach and
+    /// pair within the reach (no vertex drifted too far since), else a search's within the reach and
     /// `margin` spacings more.
     pub fn begin(&mut self, p: &StepParams, pos: &mut [V4], vel: &mut [V4], triangles: &[[u32; 3]], margin: f32) {
         let (parallel, min_len) = (self.parallel, self.pass_len());
