@@ -28,6 +28,7 @@ mod springs;
 mod stats;
 mod strain_limit;
 pub mod tri_contact;
+pub mod tri_pair;
 pub mod tri_pipeline;
 pub mod validate;
 pub mod vbd;

@@ -421,8 +421,8 @@ pub fn keep_pairs(m: Prims, found: &[Pair], b: &mut TriBufs) {
         (0..l.num_owners()).map(|o| (starts[o + 1] - starts[o]).saturating_sub(TRI_SLOTS)).sum::<u32>();
 }
 
-pub use crate::tri_pipeline::Pass;
-use crate::tri_pipeline::{Response, Sides};
+pub use crate::tri_pair::Pass;
+use crate::tri_pair::{Response, Sides};
 
 /// The vertices of owner `o`'s pair with primitive `other`: the vertex and the
 /// triangle's, or both edges'.
@@ -448,8 +448,8 @@ fn sides(m: Prims, pos: &[V4], l: &TriLayout, o: usize, other: u32) -> Sides {
 /// The pair's response (`clothlab_core::tri_contact`'s, with the inverse masses from `pos`'s w
 /// and the step's thickness, substep and friction).
 fn response(p: &StepParams, pos: &[V4], vel: &[V4], s: Sides, pass: Pass) -> Option<Response> {
-    let mu = crate::tri_pipeline::Friction { stat: p.mu_static(), kinetic: p.mu_kinetic() };
-    crate::tri_pipeline::response(s, |k| pos[k as usize][3], vel, p.self_thickness, p.dt, mu, pass)
+    let mu = crate::tri_pair::Friction { stat: p.mu_static(), kinetic: p.mu_kinetic() };
+    crate::tri_pair::response(s, |k| pos[k as usize][3], vel, p.self_thickness, p.dt, mu, pass)
 }
 
 /// The fixed point of a pass's sums.
@@ -494,7 +494,7 @@ pub(crate) fn responses(
         .collect()
 }
 
-/// `tri_vbd`: the contact terms under VBD (`crate::tri_pipeline::vbd_terms`) of every kept
+/// `tri_vbd`: the contact terms under VBD (`crate::tri_pair::vbd_terms`) of every kept
 /// pair at `pos` (the sweep's iterate) for the vertices of colour `colour`
 /// (`colour_of`: each particle's) that are not held, into their sums ([`TriLayout::vbd`]).
 pub fn tri_vbd(p: &StepParams, m: Prims, colour_of: &[u32], pos: &[V4], colour: u32, b: &mut TriBufs) {
@@ -514,7 +514,7 @@ pub(crate) fn add_vbd_terms(
     pairs: &[(u32, u32)],
     b: &mut TriBufs,
 ) {
-    let wanted = crate::tri_pipeline::vbd_wanted(pos, colour_of, colour, p.grab_index);
+    let wanted = crate::tri_pair::vbd_wanted(pos, colour_of, colour, p.grab_index);
     let (l, at) = (b.l, b.l.vbd());
     let words: Vec<(usize, u32)> = pairs
         .par_iter()
@@ -523,7 +523,7 @@ pub(crate) fn add_vbd_terms(
             let mut words = Vec::new();
             if verts(m, &l, o as usize, other).iter().any(|&v| wanted(v)) {
                 let s = sides(m, pos, &l, o as usize, other);
-                crate::tri_pipeline::vbd_terms(&s, p.self_thickness, wanted, |i, v| words.push((i, v)));
+                crate::tri_pair::vbd_terms(&s, p.self_thickness, wanted, |i, v| words.push((i, v)));
             }
             words
         })
@@ -623,7 +623,7 @@ pub fn tri_apply(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs
     for (k, (x, v)) in pos.iter_mut().zip(vel.iter_mut()).enumerate() {
         let s = &mut b.ints[sums + 4 * k..sums + 4 * k + 4];
         for c in 0..3 {
-            let d = crate::tri_pipeline::from_units(s[c] as i32, u);
+            let d = crate::tri_pair::from_units(s[c] as i32, u);
             match pass {
                 Pass::Velocity => v[c] += d,
                 Pass::Separation => {
@@ -689,7 +689,7 @@ pub fn tri_clamp(p: &StepParams, pos: &mut [V4], vel: &mut [V4], b: &mut TriBufs
     }
     let mut clamped = 0;
     for ((x, v), s) in pos.iter_mut().zip(vel.iter_mut()).zip(b.floats.iter()) {
-        clamped += u32::from(crate::tri_pipeline::clamp_to_bound(x, v, v3(s), s[3], p.dt));
+        clamped += u32::from(crate::tri_pair::clamp_to_bound(x, v, v3(s), s[3], p.dt));
     }
     b.ints[at::CLAMPED] += clamped;
 }

@@ -332,7 +332,7 @@ pub fn block_step(
     solve_sym3(hess, f)
 }
 
-/// A particle's contact terms between triangles (`crate::tri_pipeline::vbd_terms`'s
+/// A particle's contact terms between triangles (`crate::tri_pair::vbd_terms`'s
 /// fixed-point sums) added to its force and block, times the contact's stiffness
 /// `k` = [`CONTACT_STIFFNESS`] × the reference particle's inertia m̄/h² (one stiffness for
 /// every pair, so that the terms are one energy's): the force in units of
