@@ -45,7 +45,12 @@ def svg(losses: list, path: str) -> None:
         f"{pad + (w - 2 * pad) * k / max(len(logs) - 1, 1):.1f},{h - pad - (h - 2 * pad) * (v - lo) / (hi - lo):.1f}"
         for k, v in enumerate(logs)
     )
-    ticks = "".join(
+    steps = len(logs) - 1
+    xticks = "".join(
+        f'<text x="{pad + (w - 2 * pad) * k / max(steps, 1):.1f}" y="{h - pad + 16}" font-size="11" text-anchor="middle">{k}</text>'
+        for k in range(0, steps + 1, max(steps // 4, 1))
+    )
+    ticks = xticks + "".join(
         f'<text x="{pad - 6}" y="{h - pad - (h - 2 * pad) * (e - lo) / (hi - lo) + 4:.1f}" font-size="11" text-anchor="end">1e{e}</text>'
         for e in range(math.ceil(lo), math.floor(hi) + 1)
     )
@@ -55,8 +60,8 @@ def svg(losses: list, path: str) -> None:
             f'<rect width="{w}" height="{h}" fill="white"/>'
             f'<line x1="{pad}" y1="{h - pad}" x2="{w - pad}" y2="{h - pad}" stroke="black"/>'
             f'<line x1="{pad}" y1="{pad}" x2="{pad}" y2="{h - pad}" stroke="black"/>{ticks}'
-            f'<text x="{w / 2}" y="{h - 12}" font-size="12" text-anchor="middle">gradient step ({len(losses) - 1})</text>'
-            f'<text x="{w / 2}" y="24" font-size="13" text-anchor="middle">fit_drape.py: the loss (mean squared distance to the target drape, m²)</text>'
+            f'<text x="{w / 2}" y="{h - 12}" font-size="12" text-anchor="middle">gradient step</text>'
+            f'<text x="{w / 2}" y="24" font-size="13" text-anchor="middle">fit_drape.py: the loss (half the mean squared distance to the target drape, m²)</text>'
             f'<polyline points="{pts}" fill="none" stroke="#1f77b4" stroke-width="2"/></svg>'
         )
 
@@ -78,7 +83,7 @@ def main() -> int:
         values = {k: float(math.exp(t)) for k, t in zip(NAMES, theta)}
         x = run(sim, values)
         r = x - target
-        loss = 0.5 * float((r * r).sum()) / n
+        loss = 0.5 * float((r * r).sum()) / n  # half the mean squared distance
         losses.append(loss)
         off = max(abs(values[k] / TARGET[k] - 1) for k in NAMES)
         print(f"step {step:3d}  loss {loss:.3e}  " + "  ".join(f"{k} {values[k]:.6g}" for k in NAMES) + f"  (off {off:.2%})")
