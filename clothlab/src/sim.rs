@@ -1645,4 +1645,35 @@ mod grad_tests {
         assert!(one_line(plain.backward(None, None).unwrap_err()).contains("grad=True"));
         assert!(plain.recorded().is_none());
     }
+
+    #[test]
+    fn a_recording_of_a_thousand_frames_at_n_128_holds_under_twice_the_state_a_frame() {
+        // The default scene at n = 128 on cpu-par, 1 000 frames recorded: the checkpoints
+        // are 48 bytes a particle a frame (f64 positions and velocities), 1.5 times the
+        // f32 state's 32 — under the bound of twice it; and the process grew by about that
+        // (its resident memory: the checkpoints' 786 MB, with 256 MB of slack for what the
+        // tests running beside it hold).
+        let rss = || -> f64 {
+            let s = std::fs::read_to_string("/proc/self/statm").unwrap_or_default();
+            let pages: f64 = s.split_whitespace().nth(1).and_then(|p| p.parse().ok()).unwrap_or(0.0);
+            pages * 4096.0
+        };
+        let mut sim = Sim::open(SimOptions { n: Some(128), ..opts(Backend::CpuPar, &[]) }).unwrap();
+        let before = rss();
+        sim.step(1000).unwrap();
+        let grew = rss() - before;
+        let (frames, bytes) = sim.recorded().unwrap();
+        let state = 32.0 * sim.num_particles() as f64;
+        println!(
+            "{frames} frames: {:.0} MB recorded ({:.2} × the state a frame); resident memory grew {:.0} MB",
+            bytes as f64 / 1e6,
+            bytes as f64 / frames as f64 / state,
+            grew / 1e6
+        );
+        assert_eq!(frames, 1000);
+        assert!(bytes as f64 <= 2.0 * state * frames as f64, "{bytes} bytes");
+        if before > 0.0 {
+            assert!(grew < 2.0 * state * frames as f64 + 256e6, "grew {grew} bytes");
+        }
+    }
 }
