@@ -259,6 +259,14 @@ pub struct Contact {
     refreshes: u64,
 }
 
+/// A search's pairs (vertex–triangle `vt`, edge–edge `ee`, each grouped by owner) as
+/// `keep_pairs` takes them: owners as the kernels number them, the `np` vertices, then
+/// the edges.
+fn by_owner(np: usize, vt: Vec<Pair>, ee: Vec<Pair>) -> Vec<Pair> {
+    let np = np as u32;
+    vt.into_iter().chain(ee.into_iter().map(|(e, f, d)| (np + e, f, d))).collect()
+}
+
 impl Contact {
     /// The stages' buffers for the cloths of `triangles`.
     pub fn new(triangles: &[[u32; 3]], parallel: bool) -> Self {
@@ -314,10 +322,7 @@ impl Contact {
             }
         }
         let (vt, ee) = search.within(pos, m.triangles, m.edges, reach, min_len);
-        // Owners as the kernels number them: the vertices, then the edges.
-        let np = pos.len() as u32;
-        let found: Vec<Pair> = vt.into_iter().chain(ee.into_iter().map(|(e, f, d)| (np + e, f, d))).collect();
-        keep_pairs(m, &found, &mut b);
+        keep_pairs(m, &by_owner(pos.len(), vt, ee), &mut b);
         let kept = kept_list(&b);
         run_pass(p, m, pos, vel, &mut b, &kept, Pass::Velocity);
         self.kept = kept;
@@ -504,9 +509,7 @@ mod tests {
             *o = [x[0], x[1], x[2], w];
         }
         let (vt, ee) = find_pairs(out, tris, &edges, t, false);
-        let np = pos.len() as u32;
-        let found: Vec<Pair> = vt.into_iter().chain(ee.into_iter().map(|(e, f, d)| (np + e, f, d))).collect();
-        keep_pairs(m, &found, &mut b);
+        keep_pairs(m, &by_owner(pos.len(), vt, ee), &mut b);
         let mut vel = vec![[0.0; 4]; pos.len()];
         let kept = kept_list(&b);
         run_pass(&consts(t, 1.0, 1.0), m, out, &mut vel, &mut b, &kept, Pass::Separation);

@@ -281,8 +281,8 @@ impl Sim {
             params.set_item(name, value)?;
         }
         d.set_item("params", params)?;
+        let (frames, pinned) = (g.pins.len(), g.pinned.len());
         d.set_item("pinned", PyArray1::from_vec(py, g.pinned))?;
-        let (frames, pinned) = (g.pins.len(), d.get_item("pinned")?.map_or(0, |p| p.len().unwrap_or(0)));
         let pins: Vec<f64> = g.pins.into_iter().flatten().flatten().collect();
         d.set_item("pins", PyArray1::from_vec(py, pins).reshape([frames, pinned, 3])?)?;
         Ok(d)
