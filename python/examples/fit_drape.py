@@ -15,6 +15,7 @@ It prints each step's loss and values and writes the loss's curve as an SVG. Exi
 
 import argparse
 import math
+import os
 import sys
 
 import numpy as np
@@ -54,7 +55,9 @@ def svg(losses: list, path: str) -> None:
         f'<text x="{pad - 6}" y="{h - pad - (h - 2 * pad) * (e - lo) / (hi - lo) + 4:.1f}" font-size="11" text-anchor="end">1e{e}</text>'
         for e in range(math.ceil(lo), math.floor(hi) + 1)
     )
-    with open(path, "w") as f:
+    # Written beside it and renamed: a stopped run leaves the old file whole.
+    tmp = f"{path}.tmp"
+    with open(tmp, "w") as f:
         f.write(
             f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}">'
             f'<rect width="{w}" height="{h}" fill="white"/>'
@@ -64,6 +67,7 @@ def svg(losses: list, path: str) -> None:
             f'<text x="{w / 2}" y="24" font-size="13" text-anchor="middle">fit_drape.py: the loss (half the mean squared distance to the target drape, m²)</text>'
             f'<polyline points="{pts}" fill="none" stroke="#1f77b4" stroke-width="2"/></svg>'
         )
+    os.replace(tmp, path)
 
 
 def main() -> int:
