@@ -31,6 +31,9 @@ pub const TRI_QUERY_CELLS: u32 = crate::broad::QUERY_CELLS;
 /// substep and the pinned corners jitter; 0.95 measured no jitter (max speed of a cloth
 /// at rest 0.09 m/s vs 1.1 m/s at 0.9).
 pub const STRAIN_AIM: f32 = 0.95;
+/// Planes of [`Buf::Adjoint`]: x̄, v̄, the force's gradient, then five of the parameters'
+/// partials (`clothlab_cpu::adjoint::Partial`).
+pub const ADJ_ROWS: u32 = 8;
 
 /// What kind of binding a [`Buf`] is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -173,11 +176,17 @@ pub enum Buf {
     /// The contact between triangles' pairs: [`TRI_SLOTS`] an owner (a vertex's
     /// triangles, an edge's edges).
     TriPairs = 41,
+    /// The adjoint of a substep (`grad=True` on a GPU; docs/gradients.md): [`ADJ_ROWS`]
+    /// planes of one `vec4` a particle, plane `r` of particle `i` at `r · N + i`: the
+    /// gradient with respect to the position, the velocity, the force, then
+    /// [`ADJ_ROWS`]` − 3` planes of the parameters' partials each particle adds up
+    /// (`clothlab_cpu::adjoint`). One element where the solver has none.
+    Adjoint = 42,
 }
 
 impl Buf {
     /// Every binding, in binding order.
-    pub const ALL: [Buf; 42] = [
+    pub const ALL: [Buf; 43] = [
         Buf::Params,
         Buf::Pos,
         Buf::Vel,
@@ -220,6 +229,7 @@ impl Buf {
         Buf::TriFloats,
         Buf::TriInts,
         Buf::TriPairs,
+        Buf::Adjoint,
     ];
 
     /// The integrators' scratch particle buffers, in order.
@@ -291,6 +301,7 @@ impl Buf {
             Buf::TriFloats => "tri_floats",
             Buf::TriInts => "tri_ints",
             Buf::TriPairs => "tri_pairs",
+            Buf::Adjoint => "adjoint",
         }
     }
 
@@ -420,6 +431,7 @@ pub fn wgsl_constants() -> String {
     s += &u("STRIP_ROWS", STRIP_ROWS);
     s += &u("TABLE_WIDTH", TABLE_WIDTH);
     s += &u("TRI_SLOTS", TRI_SLOTS);
+    s += &u("ADJ_ROWS", ADJ_ROWS);
     s += &u("VBD_TERMS", crate::tri_contact::VBD_TERMS as u32);
     s += &u("TRI_QUERY_CELLS", TRI_QUERY_CELLS);
     s += &format!("const BIG_CELLS: f32 = {:?};\n", crate::broad::BIG_CELLS);

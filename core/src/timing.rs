@@ -63,8 +63,10 @@ pub const TRI_BOUNDS: &str = "tri_bounds";
 /// The contact between triangles' response: the pairs closer than the thickness pushed
 /// apart, then every vertex's motion clamped to its bound.
 pub const TRI_CONTACT: &str = "tri_contact";
+/// Label of a substep's adjoint (`grad=True`: the adjoint kernels, docs/gradients.md).
+pub const ADJOINT: &str = "adjoint";
 /// Every label a kernel (a registry row or a CPU sweep) is timed under, in step order.
-pub const KERNEL_LABELS: [&str; 23] = [
+pub const KERNEL_LABELS: [&str; 24] = [
     TRI_BOUNDS,
     PINS,
     FORCES,
@@ -88,6 +90,7 @@ pub const KERNEL_LABELS: [&str; 23] = [
     STATS,
     FUSED_STEP,
     SUBSTEP_TILE,
+    ADJOINT,
 ];
 /// Label of the whole-frame row (all substeps of a frame).
 pub const FRAME: &str = "frame";

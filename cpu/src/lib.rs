@@ -13,6 +13,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod adjoint;
 mod collide;
 mod forces;
 mod fused;

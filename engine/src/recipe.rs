@@ -543,8 +543,10 @@ pub mod res {
     pub const SCALARS: u32 = 1 << 10;
     /// The contact between triangles' start, integers and pairs (one bit).
     pub const TRI: u32 = 1 << 11;
+    /// The adjoint's planes.
+    pub const ADJOINT: u32 = 1 << 12;
     /// Everything.
-    pub const ALL: u32 = (1 << 12) - 1;
+    pub const ALL: u32 = (1 << 13) - 1;
 }
 
 /// The hazard bits of `buf` when the current positions are `pos[cur]`.
@@ -565,6 +567,7 @@ pub fn bits(buf: Buf, cur: usize) -> u32 {
         Buf::Aux0 | Buf::Aux1 | Buf::Aux2 | Buf::Aux3 | Buf::Aux4 => AUX,
         Buf::Scalars => SCALARS,
         Buf::TriFloats | Buf::TriInts | Buf::TriPairs => TRI,
+        Buf::Adjoint => ADJOINT,
         // Tables: written only between frames, with a full barrier.
         _ => 0,
     }

@@ -10,7 +10,7 @@ use clothlab_core::build;
 use clothlab_core::grid::{
     ClothState, ClothTopology, Grab, GridSpringConstants, STRAIN_SLOTS, SpringSlot, V4, spring_constants,
 };
-use clothlab_core::layout::{Buf, Uses};
+use clothlab_core::layout::{ADJ_ROWS, Buf, Uses};
 use clothlab_core::params::MAX_SUBSTEPS;
 use clothlab_core::pins::{MAX_PIN_GROUPS, PinPose, PinSlot};
 use clothlab_core::scene::{Aabb, MAX_COLLIDERS, Scene, Sphere};
@@ -59,6 +59,9 @@ fn host_buffers(commands: &[Command]) -> Vec<Buf> {
     }
     if touches(&|b| matches!(b, Buf::TriFloats | Buf::TriInts | Buf::TriPairs)) {
         v.extend([Buf::TriFloats, Buf::TriInts, Buf::TriPairs]);
+    }
+    if touches(&|b| *b == Buf::Adjoint) {
+        v.push(Buf::Adjoint);
     }
     v
 }
@@ -154,6 +157,13 @@ pub const TRI_BUFFERS_ALWAYS: usize = 128 * 128;
 /// buffers.
 fn has_tri_buffers(topo: &ClothTopology, params: &SimParams) -> bool {
     params.self_collision.triangles() || topo.num_particles() <= TRI_BUFFERS_ALWAYS
+}
+
+/// Whether a single run's solver of `topo` has the adjoint's planes ([`Buf::Adjoint`],
+/// 128 bytes a particle): the cloths that get the contact between triangles' buffers
+/// whatever their parameters.
+pub fn has_adjoint(topo: &ClothTopology) -> bool {
+    topo.num_particles() <= TRI_BUFFERS_ALWAYS
 }
 
 /// Refuses the contact between triangles on a solver built without its buffers.
@@ -299,6 +309,10 @@ impl<E: Engine> GpuSolver<E> {
         let partials_zero = vec![0u8; 8 * (x * y) as usize];
         let pos_bytes: &[u8] = bytemuck::cast_slice(&state.pos);
         let aux_zero = vec![0u8; 16 * envs * topo.num_particles()];
+        // The adjoint's planes where the contact's buffers are made for any parameters
+        // (`has_adjoint`), a single run's; one unused element elsewhere.
+        let adjoint_zero =
+            vec![0u8; 16 * if envs == 1 && has_adjoint(&topo) { ADJ_ROWS as usize * topo.num_particles() } else { 1 }];
         // The conjugate gradient's scalars, a vec4 a world.
         let scalars_zero = vec![0u8; 16 * envs];
         // Moving pins: their table, and room for a frame's poses at the most substeps (a
@@ -315,7 +329,7 @@ impl<E: Engine> GpuSolver<E> {
         let mut shapes = scene.shapes_at(0.0);
         shapes.extend(clothlab_core::sdf::concat(&scene.bodies).0);
         // Positions and normals are the renderer's vertex buffers too (no copy).
-        let contents: [(Buf, &[u8]); 39] = [
+        let contents: [(Buf, &[u8]); 40] = [
             (Buf::Params, sp.gpu_bytes()),
             (Buf::ParamsStorage, &per_world.params),
             (Buf::Contact, bytemuck::bytes_of(&sp.contact)),
@@ -355,6 +369,7 @@ impl<E: Engine> GpuSolver<E> {
             (tri[1].0, &tri[1].1),
             (tri[2].0, &tri[2].1),
             (tri[3].0, &tri[3].1),
+            (Buf::Adjoint, &adjoint_zero),
         ];
         let mut ids = Vec::with_capacity(contents.len());
         for (buf, bytes) in contents {
@@ -785,6 +800,14 @@ impl<E: Engine> GpuSolver<E> {
                 ));
             }
             bufs.tri_sized(clothlab_cpu::tri_contact::TriLayout::of(&self.topo));
+        }
+        if moved.contains(&Buf::Adjoint) {
+            if !has_adjoint(&self.topo) || self.worlds.len() > 1 {
+                return Err(SolverError::Unsupported(format!(
+                    "the adjoint's kernels run on a single run's cloth of at most {TRI_BUFFERS_ALWAYS} particles"
+                )));
+            }
+            bufs.adjoint_sized(self.topo.num_particles());
         }
         for &buf in &moved {
             if let Some(v) = bufs.get(buf) {

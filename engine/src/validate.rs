@@ -147,7 +147,7 @@ fn sink_into_colliders(scene: &Scene, pos: &mut [[f32; 4]]) -> bool {
 /// velocities, forces, normals, face normals, the five integrator scratch buffers, the
 /// CG scalars, and the contact between triangles' starts, integers and pairs (the last
 /// two exactly: integers, with the scalars' f32 values as their bits).
-pub const COMPARED_BUFFERS: usize = 14;
+pub const COMPARED_BUFFERS: usize = 20;
 
 /// `words` (u32s four to an element) as elements whose compared components (xyz) hold
 /// each word's two 16-bit halves, exact in f32: an exact comparison of these compares the
@@ -157,6 +157,16 @@ fn halves(words: &[[f32; 4]]) -> Vec<[f32; 4]> {
         .iter()
         .flat_map(|v| v.map(|x| [(x.to_bits() & 0xffff) as f32, (x.to_bits() >> 16) as f32, 0.0, 0.0]))
         .collect()
+}
+
+/// The adjoint's planes `planes` of `np` particles (each partials' plane with its w in
+/// the compared xyz: [`with_w`]); nothing where a kernel left it empty.
+fn adjoint_planes(adjoint: &[[f32; 4]], np: usize, planes: std::ops::Range<usize>) -> Vec<[f32; 4]> {
+    if adjoint.is_empty() {
+        return Vec::new();
+    }
+    let v = &adjoint[planes.start * np..planes.end * np];
+    if planes.start >= 3 { with_w(v) } else { v.to_vec() }
 }
 
 /// `v`'s w components in the compared xyz (after xyz): the contact's bounds.
@@ -266,6 +276,16 @@ pub fn validate_kernels_with(
         }
         let what = k.report_name();
         type Pair<'a> = (&'static str, &'a Vec<[f32; 4]>, &'a Vec<[f32; 4]>);
+        // The adjoint: the state's, the force's gradients, then each plane of partials
+        // alone (their magnitudes differ by orders: a spring's stiffness times its
+        // partial beside gravity's).
+        let np = topo.num_particles();
+        let adj = |b: &HostBuffers| -> Vec<Vec<[f32; 4]>> {
+            std::iter::once(adjoint_planes(&b.adjoint, np, 0..3))
+                .chain((3..clothlab_core::layout::ADJ_ROWS as usize).map(|r| adjoint_planes(&b.adjoint, np, r..r + 1)))
+                .collect()
+        };
+        let (adj_got, adj_want) = (adj(&got), adj(&want));
         let compared: [Pair; COMPARED_BUFFERS] = [
             ("pos", &got.pos, &want.pos),
             ("vel", &got.vel, &want.vel),
@@ -281,6 +301,12 @@ pub fn validate_kernels_with(
             ("tri_floats", &with_w(&got.tri_floats), &with_w(&want.tri_floats)),
             ("tri_ints", &halves(&got.tri_ints), &halves(&want.tri_ints)),
             ("tri_pairs", &halves(&got.tri_pairs), &halves(&want.tri_pairs)),
+            ("adjoint", &adj_got[0], &adj_want[0]),
+            ("adjoint 3", &adj_got[1], &adj_want[1]),
+            ("adjoint 4", &adj_got[2], &adj_want[2]),
+            ("adjoint 5", &adj_got[3], &adj_want[3]),
+            ("adjoint 6", &adj_got[4], &adj_want[4]),
+            ("adjoint 7", &adj_got[5], &adj_want[5]),
         ];
         // The image's flavors: positions within `sdf_image_bound` of the twin's and
         // velocities within `sdf_image_vel_bound` (in metres and m/s, so relative to the

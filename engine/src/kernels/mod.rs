@@ -337,6 +337,9 @@ pub struct HostBuffers {
     pub tri_ints: Vec<V4>,
     /// Its pairs ([`Buf::TriPairs`]), u32 words four to an element.
     pub tri_pairs: Vec<V4>,
+    /// The adjoint's planes ([`Buf::Adjoint`]): empty until an adjoint kernel runs
+    /// ([`HostBuffers::adjoint_sized`]).
+    pub adjoint: Vec<V4>,
 }
 
 impl HostBuffers {
@@ -364,6 +367,15 @@ impl HostBuffers {
             tri_floats: Vec::new(),
             tri_ints: Vec::new(),
             tri_pairs: Vec::new(),
+            adjoint: Vec::new(),
+        }
+    }
+
+    /// The adjoint's planes sized for `np` particles (zeroed where their size changes).
+    pub fn adjoint_sized(&mut self, np: usize) {
+        let len = clothlab_core::layout::ADJ_ROWS as usize * np;
+        if self.adjoint.len() != len {
+            self.adjoint = vec![[0.0; 4]; len];
         }
     }
 
@@ -396,6 +408,7 @@ impl HostBuffers {
             Buf::TriFloats => &self.tri_floats,
             Buf::TriInts => &self.tri_ints,
             Buf::TriPairs => &self.tri_pairs,
+            Buf::Adjoint => &self.adjoint,
             b => return Buf::AUX.iter().position(|a| *a == b).map(|k| &self.aux[k]),
         })
     }
@@ -414,6 +427,7 @@ impl HostBuffers {
             Buf::TriFloats => &mut self.tri_floats,
             Buf::TriInts => &mut self.tri_ints,
             Buf::TriPairs => &mut self.tri_pairs,
+            Buf::Adjoint => &mut self.adjoint,
             b => return Buf::AUX.iter().position(|a| *a == b).map(|k| &mut self.aux[k]),
         })
     }
@@ -923,6 +937,7 @@ const fn worlds(v: Variants) -> Variants {
     Variants { worlds: true, ..v }
 }
 
+mod adjoint;
 mod cg;
 mod forces;
 mod normals;
@@ -935,6 +950,7 @@ mod tri_contact;
 mod vbd;
 mod xpbd;
 
+pub use adjoint::*;
 pub use cg::*;
 pub use forces::*;
 pub use normals::*;
@@ -961,6 +977,7 @@ const FAMILIES: &[&[&KernelDef]] = &[
     self_collision::ROWS,
     tile::ROWS,
     tri_contact::ROWS,
+    adjoint::ROWS,
 ];
 
 /// How many kernels the families hold.

@@ -1,0 +1,68 @@
+//! The adjoint of a substep (clothlab_cpu::adjoint; docs/gradients.md): run on the
+//! substep's input after its force is recomputed there, they take the gradient with
+//! respect to its output back to its input and add each particle's partials of the
+//! parameters ([`Buf::Adjoint`]'s planes).
+
+use super::*;
+
+fn adj_integrate(a: &TwinArgs, b: &mut HostBuffers) {
+    b.adjoint_sized(a.topo.num_particles());
+    cpu::adjoint::adj_integrate(a.exec, a.p, a.colliders, &b.pos, &b.vel, &b.force, &mut b.adjoint);
+}
+
+fn adj_springs(a: &TwinArgs, b: &mut HostBuffers) {
+    b.adjoint_sized(a.topo.num_particles());
+    cpu::adjoint::adj_springs(a.exec, a.topo.mesh.is_none(), &a.topo.slots, &b.pos, &b.vel, &mut b.adjoint);
+}
+
+/// A kernel check's adjoint: every plane random in ±1 (seeded), so that what a kernel
+/// reads (the gradients it starts from, its neighbours' force gradients) and what it adds
+/// to (the partials) all show.
+fn random_adjoint(a: &TwinArgs, b: &mut HostBuffers) {
+    let np = a.topo.num_particles();
+    b.adjoint_sized(np);
+    let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+    for v in b.adjoint.iter_mut().flatten() {
+        rng = rng.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        *v = ((rng >> 40) as f32 / (1u64 << 23) as f32) - 1.0;
+    }
+}
+
+/// The adjoint's per-particle work: a few dozen operations and, at a sphere, a division
+/// by the distance from its centre.
+const ADJ_ELEMENT: Check = Check::Bound {
+    relative: 2e-5,
+    reason: "a few dozen f32 operations per particle, a sphere's taken back through a division by its distance",
+};
+
+/// The adjoint of `integrate` (Verlet, the floor) and `collide`'s still spheres.
+pub static ADJ_INTEGRATE: KernelDef = KernelDef {
+    check: ADJ_ELEMENT,
+    label: timing::ADJOINT,
+    variants: Variants { immediates: true, ..PLAIN },
+    test_input: Some(random_adjoint),
+    ..KernelDef::new(
+        "adj_integrate",
+        adj_integrate,
+        Count::Particles,
+        &[Params, Pos, Vel, Force, Spheres, Adjoint],
+        &[Adjoint],
+    )
+};
+/// The adjoint of the spring gather, a gather itself (no atomics).
+pub static ADJ_SPRINGS: KernelDef = KernelDef {
+    check: GATHER,
+    label: timing::ADJOINT,
+    variants: Variants { immediates: true, ..PLAIN },
+    test_input: Some(random_adjoint),
+    ..KernelDef::new(
+        "adj_springs",
+        adj_springs,
+        Count::Particles,
+        &[Params, Pos, Vel, Slots, BendSlots, Adjacency, Adjoint],
+        &[Adjoint],
+    )
+};
+
+/// This family's kernels, in the registry's order ([`super::ALL`]).
+pub(super) const ROWS: &[&KernelDef] = &[&ADJ_INTEGRATE, &ADJ_SPRINGS];
