@@ -47,12 +47,21 @@ impl Partial {
             Partial::Spring(kind, c) => (5 + kind, c),
         }
     }
+}
 
-    /// Its sum over the particles of the planes `adjoint` of `np` particles, in f64.
-    pub fn sum(self, adjoint: &[V4], np: usize) -> f64 {
-        let (plane, c) = self.at();
-        adjoint[plane * np..(plane + 1) * np].iter().map(|v| v[c] as f64).sum()
+/// The partials' sums a backward pass ends with: planes 3 … 7 summed over the
+/// particles in f64, four a plane ([`partial_sums`]; [`Partial::at`]'s plane − 3, times
+/// 4, plus its component).
+pub const PARTIALS: usize = 4 * (ADJ_ROWS as usize - 3);
+
+/// Every partial's sum over the `np` particles of `adjoint` ([`PARTIALS`]).
+pub fn partial_sums(adjoint: &[V4], np: usize) -> [f64; PARTIALS] {
+    let mut s = [0.0; PARTIALS];
+    for (k, sum) in s.iter_mut().enumerate() {
+        let plane = 3 + k / 4;
+        *sum = adjoint[plane * np..(plane + 1) * np].iter().map(|v| v[k % 4] as f64).sum();
     }
+    s
 }
 
 /// The planes of `np` particles as ([`ADJ_ROWS`] slices).

@@ -357,6 +357,59 @@ impl Model {
         self.trace.store(t.rotate_left(7).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ u64::from(on), Relaxed);
     }
 
+    /// The parameters' gradients from the adjoint kernels' partials summed over the
+    /// particles ([`crate::adjoint::partial_sums`]): gravity, air drag, damping and
+    /// friction as they are; the particle mass's onto the cloth's; each spring family's
+    /// `Σ ∂/∂ks`, `Σ ∂/∂kd` times its constants' derivatives where the family's springs
+    /// share them (a grid's), else `Σ ks ∂/∂ks` and `Σ kd ∂/∂kd` over the parameter (a
+    /// mesh's springs, whose constants follow their masses: refused where that parameter
+    /// is 0).
+    pub fn params_from_partials(&self, s: &[f64; crate::adjoint::PARTIALS]) -> Result<[f64; PARAMS.len()], String> {
+        let mut g = [0.0; PARAMS.len()];
+        g[at::GRAVITY..at::GRAVITY + 3].copy_from_slice(&s[..3]);
+        g[at::AIR_DRAG] = s[3];
+        g[at::DAMPING] = s[4];
+        g[at::FRICTION] = s[5];
+        let mass = self.p[at::MASS];
+        g[at::MASS] = s[6] * self.mass_unit;
+        for kind in 0..3 {
+            let [sks, skd, lks, lkd] = [0, 1, 2, 3].map(|c| s[8 + 4 * kind + c]);
+            let of_kind: Vec<&Constants> =
+                self.springs.iter().zip(&self.k).filter(|(sp, _)| sp.kind == kind).map(|(_, k)| k).collect();
+            let Some(k0) = of_kind.first() else { continue };
+            let shared = of_kind.iter().all(|k| k.ks == k0.ks && k.kd == k0.kd);
+            let over = |l: f64, at: usize| -> Result<f64, String> {
+                match (shared, self.p[at]) {
+                    (true, _) => unreachable!("shared constants take the sums"),
+                    (false, v) if v != 0.0 => Ok(l / v),
+                    _ => Err(format!(
+                        "grad=True: {} = 0 on a mesh: its gradient from the adjoint kernels needs it non-zero",
+                        PARAMS[at]
+                    )),
+                }
+            };
+            if self.physical {
+                // ks = the modulus (over the spacing², bend), shared; kd = ζ 2 √(ks m).
+                g[at::MODULUS + kind] += sks * k0.dks;
+                g[at::MODULUS + kind] += if shared {
+                    skd * k0.dkd_modulus
+                } else if k0.ks > 0.0 {
+                    lkd / (2.0 * k0.ks) * k0.dks
+                } else {
+                    0.0
+                };
+                g[at::ZETA + kind] += if shared { skd * k0.dkd_zeta } else { over(lkd, at::ZETA + kind)? };
+                g[at::MASS] += lkd / (2.0 * mass);
+            } else {
+                // ks = κ m/dt², kd = ζ m/dt: both in proportion to the mass.
+                g[at::KAPPA + kind] += if shared { sks * k0.dks } else { over(lks, at::KAPPA + kind)? };
+                g[at::ZETA + kind] += if shared { skd * k0.dkd_zeta } else { over(lkd, at::ZETA + kind)? };
+                g[at::MASS] += (lks + lkd) / mass;
+            }
+        }
+        Ok(g)
+    }
+
     /// Substeps a frame.
     pub fn substeps(&self) -> u32 {
         self.substeps
@@ -794,8 +847,15 @@ impl Recording {
 
     /// The gradients of a loss whose gradient with respect to the final positions and
     /// velocities is `xb`, `vb` (either may be all zeros), back through every recorded
-    /// frame: each frame's substeps recomputed from its checkpoint, then their adjoints.
+    /// frame: each frame's substeps recomputed from its checkpoint, then their adjoints
+    /// (the f64 model's: [`Model::substep`], [`Model::adjoint`]).
     pub fn backward(&self, xb: &[[f32; 3]], vb: &[[f32; 3]]) -> Gradients {
+        self.backward_by(&mut ModelWalk, xb, vb).expect("the model's walk does not fail")
+    }
+
+    /// [`Recording::backward`] with the substeps recomputed and walked back by `walk`
+    /// (the f64 model, or the adjoint kernels on a kernel runner).
+    pub fn backward_by(&self, walk: &mut dyn Walk, xb: &[[f32; 3]], vb: &[[f32; 3]]) -> Result<Gradients, String> {
         let m = &self.model;
         let mut gx: Vec<DVec3> = xb.iter().map(|g| DVec3::from(g.map(f64::from))).collect();
         let mut gv: Vec<DVec3> = vb.iter().map(|g| DVec3::from(g.map(f64::from))).collect();
@@ -803,17 +863,12 @@ impl Recording {
         let pinned = m.pinned();
         let frames = self.checkpoints.len();
         let mut pins = vec![vec![[0.0; 3]; pinned.len()]; frames];
-        let mut path: Vec<(Vec<DVec3>, Vec<DVec3>)> = Vec::with_capacity(m.substeps as usize);
         for f in (0..frames).rev() {
             // The frame's substeps again: each one's input.
-            path.clear();
-            let (mut x, mut v) = self.checkpoints[f].clone();
-            for _ in 0..m.substeps {
-                path.push((x.clone(), v.clone()));
-                m.substep(&mut x, &mut v);
-            }
+            let (x, v) = &self.checkpoints[f];
+            let path = walk.inputs(m, x, v)?;
             for (x, v) in path.iter().rev() {
-                m.adjoint(x, v, &mut gx, &mut gv, &mut params);
+                walk.adjoint(m, x, v, &mut gx, &mut gv, &mut params)?;
             }
             // A pinned particle's position is the frame's pin: its gradient is the
             // frame's, not carried to the frame before (which set its own).
@@ -824,16 +879,69 @@ impl Recording {
                 }
             }
         }
+        walk.finish(m, &mut params)?;
         // The initial pinned positions: held from the start, every frame's pin.
         for (k, &i) in pinned.iter().enumerate() {
             gx[i as usize] = pins.iter().map(|p| DVec3::from(p[k])).sum();
         }
-        Gradients {
+        Ok(Gradients {
             positions: gx.iter().map(|g| g.to_array()).collect(),
             velocities: gv.iter().map(|g| g.to_array()).collect(),
             params: PARAMS.iter().copied().zip(params).collect(),
             pinned,
             pins,
+        })
+    }
+}
+
+/// A frame's states and substeps: what a backward pass walks a recording with.
+pub trait Walk {
+    /// The inputs of the substeps of a frame that starts from `(x, v)`, in order (the
+    /// frame's substeps recomputed).
+    #[allow(clippy::type_complexity)]
+    fn inputs(&mut self, model: &Model, x: &[DVec3], v: &[DVec3]) -> Result<Vec<(Vec<DVec3>, Vec<DVec3>)>, String>;
+    /// The adjoint of the substep from `(x, v)` ([`Model::adjoint`]'s contract): `xb`,
+    /// `vb` from the gradient with respect to its output to the one with respect to its
+    /// input; the parameters' gradients added to `params` here or at [`Walk::finish`].
+    fn adjoint(
+        &mut self,
+        model: &Model,
+        x: &[DVec3],
+        v: &[DVec3],
+        xb: &mut [DVec3],
+        vb: &mut [DVec3],
+        params: &mut [f64],
+    ) -> Result<(), String>;
+    /// After the last substep: what it kept of the parameters' gradients added to `params`.
+    fn finish(&mut self, _model: &Model, _params: &mut [f64]) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// The f64 model's walk ([`Recording::backward`]).
+pub struct ModelWalk;
+
+impl Walk for ModelWalk {
+    fn inputs(&mut self, m: &Model, x: &[DVec3], v: &[DVec3]) -> Result<Vec<(Vec<DVec3>, Vec<DVec3>)>, String> {
+        let (mut x, mut v) = (x.to_vec(), v.to_vec());
+        let mut path = Vec::with_capacity(m.substeps as usize);
+        for _ in 0..m.substeps {
+            path.push((x.clone(), v.clone()));
+            m.substep(&mut x, &mut v);
         }
+        Ok(path)
+    }
+
+    fn adjoint(
+        &mut self,
+        m: &Model,
+        x: &[DVec3],
+        v: &[DVec3],
+        xb: &mut [DVec3],
+        vb: &mut [DVec3],
+        params: &mut [f64],
+    ) -> Result<(), String> {
+        m.adjoint(x, v, xb, vb, params);
+        Ok(())
     }
 }

@@ -7,6 +7,7 @@
 //! * [`recipe`] — the commands of a substep per variant (dispatches, clears, swaps) and
 //!   the barriers they need;
 //! * [`cpu`] — the CPU engine: runs any commands through the twins;
+//! * [`grad`] — gradients: a recording walked back by the adjoint kernels on any runner;
 //! * [`gpu`] — the [`Engine`] trait: the API's part of a GPU solver (buffers, uploads,
 //!   downloads, dispatches, barriers, timestamps, submit and wait);
 //! * [`solver`] — [`GpuSolver`]: `Solver` and `KernelRunner` written once over any engine;
@@ -20,6 +21,7 @@
 
 pub mod cpu;
 pub mod gpu;
+pub mod grad;
 pub mod kernels;
 pub mod recipe;
 pub mod solver;

@@ -154,9 +154,10 @@ class Sim:
       leading axis of worlds, ``(envs, N, 3)``. World k computes, bit for bit, what a
       single run with its parameters computes.
     * ``grad`` -- record the run for gradients (:meth:`backward`, docs/gradients.md):
-      each frame's starting state is kept; one world on ``cpu`` or ``cpu-par`` for now,
-      Verlet or symplectic Euler without wind, self-contact or Coulomb friction (what
-      has no adjoint yet is refused when opened).
+      each frame's starting state is kept; one world, Verlet or symplectic Euler without
+      wind, self-contact or Coulomb friction; on a GPU backend (its adjoint kernels)
+      without the strain limit for now (``strain_iterations=0``). What has no adjoint
+      yet is refused when opened.
 
     Everything is checked before the solver opens; a refusal raises
     :class:`ClothlabError` with the reason. The solver lives on a thread of its own:

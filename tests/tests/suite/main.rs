@@ -16,6 +16,7 @@ mod dt_change;
 mod free_fall;
 mod friction;
 mod gl_render;
+mod grad;
 mod integrators;
 mod mesh_gpu;
 mod module_graph;
