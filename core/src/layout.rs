@@ -31,9 +31,10 @@ pub const TRI_QUERY_CELLS: u32 = crate::broad::QUERY_CELLS;
 /// substep and the pinned corners jitter; 0.95 measured no jitter (max speed of a cloth
 /// at rest 0.09 m/s vs 1.1 m/s at 0.9).
 pub const STRAIN_AIM: f32 = 0.95;
-/// Planes of [`Buf::Adjoint`]: x̄, v̄, the force's gradient, then five of the parameters'
-/// partials (`clothlab_cpu::adjoint::Partial`).
-pub const ADJ_ROWS: u32 = 8;
+/// Planes of [`Buf::Adjoint`]: x̄, v̄, the force's gradient (a strain pass: its point's),
+/// five of the parameters' partials (`clothlab_cpu::adjoint::Partial`), then a strain
+/// pass's two tethers' shares of their pins.
+pub const ADJ_ROWS: u32 = 10;
 
 /// What kind of binding a [`Buf`] is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -178,8 +179,8 @@ pub enum Buf {
     TriPairs = 41,
     /// The adjoint of a substep (`grad=True` on a GPU; docs/gradients.md): [`ADJ_ROWS`]
     /// planes of one `vec4` a particle, plane `r` of particle `i` at `r · N + i`: the
-    /// gradient with respect to the position, the velocity, the force, then
-    /// [`ADJ_ROWS`]` − 3` planes of the parameters' partials each particle adds up
+    /// gradient with respect to the position, the velocity, the force, five planes of the
+    /// parameters' partials each particle adds up, two of the tethers' shares
     /// (`clothlab_cpu::adjoint`). One element where the solver has none.
     Adjoint = 42,
 }

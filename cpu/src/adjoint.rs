@@ -13,8 +13,9 @@ use glam::Vec3;
 use super::{Exec, dt_over_mass, for_each, mass, v3, v4};
 use crate::collide::Colliders;
 use crate::integrate::contact_vel;
-use clothlab_core::grid::{Rows, SpringSlot, V4};
+use clothlab_core::grid::{Rows, SpringSlot, TETHER_SLOTS, Tether, V4};
 use clothlab_core::layout::ADJ_ROWS;
+use clothlab_core::layout::STRAIN_AIM;
 use clothlab_core::step_params::StepParams;
 
 /// The partials' places: plane and component of each.
@@ -30,6 +31,8 @@ pub enum Partial {
     Friction,
     /// The particle mass `StepParams::particle_mass` (plane 4, z).
     ParticleMass,
+    /// The strain limit τ (plane 4, w).
+    StrainLimit,
     /// A spring family's (0 structural or a mesh's edges, 1 shear, 2 bend): `Σ ∂/∂ks`,
     /// `Σ ∂/∂kd`, `Σ ks ∂/∂ks`, `Σ kd ∂/∂kd` over its springs (planes 5, 6, 7, x y z w).
     Spring(usize, usize),
@@ -44,6 +47,7 @@ impl Partial {
             Partial::Damping => (4, 0),
             Partial::Friction => (4, 1),
             Partial::ParticleMass => (4, 2),
+            Partial::StrainLimit => (4, 3),
             Partial::Spring(kind, c) => (5 + kind, c),
         }
     }
@@ -52,7 +56,7 @@ impl Partial {
 /// The partials' sums a backward pass ends with: planes 3 … 7 summed over the
 /// particles in f64, four a plane ([`partial_sums`]; [`Partial::at`]'s plane − 3, times
 /// 4, plus its component).
-pub const PARTIALS: usize = 4 * (ADJ_ROWS as usize - 3);
+pub const PARTIALS: usize = 4 * 5;
 
 /// Every partial's sum over the `np` particles of `adjoint` ([`PARTIALS`]).
 pub fn partial_sums(adjoint: &[V4], np: usize) -> [f64; PARTIALS] {
@@ -237,5 +241,171 @@ pub fn adj_springs(exec: Exec, grid: bool, slots: &Rows<SpringSlot>, pos: &[V4],
                 a[c] += o[r][c];
             }
         }
+    }
+}
+
+/// `adj_strain_back`'s twin: per particle, at a strain pass's input `pos` with its
+/// `counts`, the gradient with respect to the pass's output point `ȳ = x̄′ + v̄′/dt`
+/// taken back through the tethers to the point before them (plane 2), each tether's
+/// share of its pin (planes 8, 9: the share, the pin's index in w, −1 none) and the
+/// strain limit's partial added to plane 4's w.
+pub fn adj_strain_back(
+    exec: Exec,
+    p: &StepParams,
+    slots: &Rows<SpringSlot>,
+    tethers: &[[Tether; TETHER_SLOTS]],
+    pos: &[V4],
+    counts: &[V4],
+    adjoint: &mut [V4],
+) {
+    let np = pos.len();
+    let mut out = vec![[[0.0f32; 4]; 4]; np];
+    let planes = planes(adjoint, np);
+    let (xb, vb, p4) = (&*planes[0], &*planes[1], &*planes[4]);
+    let stretch = 1.0 + p.strain_limit;
+    let aim = 1.0 + STRAIN_AIM * p.strain_limit;
+    for_each(exec, &mut out, |i, o| {
+        let mut g = v3(xb[i]) + v3(vb[i]) * (1.0 / p.dt);
+        let none = [0.0, 0.0, 0.0, -1.0];
+        let wi = pos[i][3];
+        if wi == 0.0 {
+            *o = [v4(g, 0.0), none, none, p4[i]];
+            return;
+        }
+        let xi = v3(pos[i]);
+        let ci = counts[i][0];
+        let (mut corr, mut count) = (Vec3::ZERO, 0.0f32);
+        if ci > 0.0 {
+            for slot in slots.head(i) {
+                if slot.neighbor < 0 {
+                    continue;
+                }
+                let b = slot.neighbor as usize;
+                let d = v3(pos[b]) - xi;
+                let len = d.dot(d).sqrt();
+                if len > stretch * slot.rest {
+                    let wb = pos[b][3];
+                    corr += d * (wi * (len - aim * slot.rest) / ((wi + wb) * len * ci.max(counts[b][0]).max(1.0)));
+                    count += 1.0;
+                }
+            }
+        }
+        let mut z = if count > 0.0 { xi + corr } else { xi };
+        let mut before = [Vec3::ZERO; TETHER_SLOTS];
+        let mut on = [false; TETHER_SLOTS];
+        for (t, tether) in tethers[i].iter().enumerate() {
+            before[t] = z;
+            if tether.pin < 0 {
+                continue;
+            }
+            let pin = v3(pos[tether.pin as usize]);
+            let d = z - pin;
+            let len = d.dot(d).sqrt();
+            let max = stretch * tether.rest;
+            if len > max {
+                on[t] = true;
+                z = pin + d * (max / len);
+            }
+        }
+        let mut shares = [none; TETHER_SLOTS];
+        let mut g_tau = 0.0;
+        for t in (0..TETHER_SLOTS).rev() {
+            if !on[t] {
+                continue;
+            }
+            let tether = &tethers[i][t];
+            let d = before[t] - v3(pos[tether.pin as usize]);
+            let len = d.dot(d).sqrt();
+            let n = d * (1.0 / len);
+            let max = stretch * tether.rest;
+            let through = (g - n * n.dot(g)) * (max / len);
+            shares[t] = v4(g - through, tether.pin as f32);
+            g_tau += tether.rest * n.dot(g);
+            g = through;
+        }
+        let mut q = p4[i];
+        q[3] += g_tau;
+        *o = [v4(g, 0.0), shares[0], shares[1], q];
+    });
+    let mut planes = planes;
+    for (i, o) in out.iter().enumerate() {
+        for (r, plane) in [2, 8, 9, 4].into_iter().enumerate() {
+            planes[plane][i] = o[r];
+        }
+    }
+}
+
+/// The correction's adjoint of the strain-limited spring from `a` (mobility `wa`, count
+/// `ca`, its point's gradient `ga`) to `b`, `d = x_b − x_a`.
+#[allow(clippy::too_many_arguments)]
+fn spring_back(p: &StepParams, ga: Vec3, d: Vec3, len: f32, rest: f32, wa: f32, wb: f32, ca: f32, cb: f32) -> Vec3 {
+    let aim = 1.0 + STRAIN_AIM * p.strain_limit;
+    let k = wa / ((wa + wb) * ca.max(cb).max(1.0));
+    let n = d * (1.0 / len);
+    k * (ga - (aim * rest / len) * (ga - n * n.dot(ga)))
+}
+
+/// `adj_strain_gather`'s twin: per particle, after [`adj_strain_back`], the gradient with
+/// respect to the pass's input position (plane 0): `−v̄′/dt` plus its point's gradient
+/// taken through its own over-stretched springs' corrections and its neighbours' onto it,
+/// and on a pinned particle every tether's share of it; the strain limit's partial of its
+/// own springs added to plane 4's w.
+pub fn adj_strain_gather(
+    exec: Exec,
+    p: &StepParams,
+    slots: &Rows<SpringSlot>,
+    pos: &[V4],
+    counts: &[V4],
+    adjoint: &mut [V4],
+) {
+    let np = pos.len();
+    let mut out = vec![[[0.0f32; 4]; 2]; np];
+    let planes = planes(adjoint, np);
+    let (vb, gp, p4, t8, t9) = (&*planes[1], &*planes[2], &*planes[4], &*planes[8], &*planes[9]);
+    let stretch = 1.0 + p.strain_limit;
+    for_each(exec, &mut out, |i, o| {
+        let (xi, wi, ci, gi) = (v3(pos[i]), pos[i][3], counts[i][0], v3(gp[i]));
+        let mut gx = gi;
+        let mut g_tau = 0.0f32;
+        for slot in slots.head(i) {
+            if slot.neighbor < 0 {
+                continue;
+            }
+            let b = slot.neighbor as usize;
+            let d = v3(pos[b]) - xi;
+            let len = d.dot(d).sqrt();
+            // Over its limit as the pass decides it (a NaN length is not).
+            let live = len > stretch * slot.rest;
+            if !live {
+                continue;
+            }
+            let (wb, cb) = (pos[b][3], counts[b][0]);
+            if wi != 0.0 {
+                gx -= spring_back(p, gi, d, len, slot.rest, wi, wb, ci, cb);
+                let k = wi / ((wi + wb) * ci.max(cb).max(1.0));
+                g_tau -= k * (d * (1.0 / len)).dot(gi) * slot.rest * STRAIN_AIM;
+            }
+            if wb != 0.0 {
+                gx += spring_back(p, v3(gp[b]), -d, len, slot.rest, wb, wi, cb, ci);
+            }
+        }
+        if wi == 0.0 {
+            let me = i as f32;
+            for k in 0..np {
+                for share in [t8[k], t9[k]] {
+                    if share[3] == me {
+                        gx += v3(share);
+                    }
+                }
+            }
+        }
+        let mut q = p4[i];
+        q[3] += g_tau;
+        *o = [v4(gx - v3(vb[i]) * (1.0 / p.dt), 0.0), q];
+    });
+    let mut planes = planes;
+    for (i, o) in out.iter().enumerate() {
+        planes[0][i] = o[0];
+        planes[4][i] = o[1];
     }
 }

@@ -370,6 +370,7 @@ impl Model {
         g[at::AIR_DRAG] = s[3];
         g[at::DAMPING] = s[4];
         g[at::FRICTION] = s[5];
+        g[at::STRAIN] = s[7];
         let mass = self.p[at::MASS];
         g[at::MASS] = s[6] * self.mass_unit;
         for kind in 0..3 {

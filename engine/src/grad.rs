@@ -3,7 +3,9 @@
 //! ([`crate::kernels::ADJ_INTEGRATE`], [`crate::kernels::ADJ_SPRINGS`]) on a GPU solver or
 //! on the CPU engine (their twins). Each frame's substeps are recomputed by the plain
 //! kernels from the frame's checkpoint, and each substep's adjoint runs at its input: the
-//! force again (`forces`, `springs`), then `adj_integrate` and `adj_springs`. The
+//! strain passes' inputs again, back through each pass last first (`strain_count` at its
+//! input, `adj_strain_back`, `adj_strain_gather`), then the force again (`forces`,
+//! `springs`), `adj_integrate` and `adj_springs`. The
 //! parameters' partials stay in the adjoint's planes, added to by every substep, and are
 //! summed once at the end ([`clothlab_cpu::adjoint::partial_sums`]).
 //!
@@ -16,7 +18,7 @@ use glam::DVec3;
 
 use clothlab_core::SolverError;
 use clothlab_core::grid::{ClothState, ClothTopology, V4};
-use clothlab_core::layout::{ADJ_ROWS, Buf};
+use clothlab_core::layout::ADJ_ROWS;
 use clothlab_core::params::SimParams;
 use clothlab_core::scene::Scene;
 use clothlab_core::step_params::StepParams;
@@ -33,18 +35,8 @@ pub struct KernelWalk<'a> {
     bufs: HostBuffers,
     /// Each particle's `pos.w`.
     w: Vec<f32>,
-}
-
-/// What `grad` on a GPU refuses beyond what [`Model::new`] refuses: the strain limit's
-/// passes (their adjoint kernel is not built yet).
-pub fn check(params: &SimParams) -> Result<(), String> {
-    if params.strain_iterations > 0 {
-        return Err(format!(
-            "grad=True on a GPU: the strain limit's adjoint kernel is not built yet (strain_iterations = {}: set it to 0, or use cpu / cpu-par)",
-            params.strain_iterations
-        ));
-    }
-    Ok(())
+    /// The strain limit's passes a substep.
+    passes: u32,
 }
 
 impl<'a> KernelWalk<'a> {
@@ -58,14 +50,13 @@ impl<'a> KernelWalk<'a> {
         topo: &ClothTopology,
         state: &ClothState,
     ) -> Result<Self, SolverError> {
-        check(params).map_err(SolverError::Unsupported)?;
         let p = StepParams::new(params, scene, None);
         let np = state.pos.len();
         let bufs = HostBuffers::new(state, vec![[0.0; 4]; topo.triangles.len()]);
         let mut bufs = bufs;
         bufs.adjoint = vec![[0.0; 4]; ADJ_ROWS as usize * np];
         let w = state.pos.iter().map(|x| x[3]).collect();
-        Ok(Self { runner, p, bufs, w })
+        Ok(Self { runner, p, bufs, w, passes: params.strain_iterations })
     }
 
     fn load(&mut self, x: &[DVec3], v: &[DVec3]) {
@@ -77,10 +68,22 @@ impl<'a> KernelWalk<'a> {
         self.bufs.pos_out.clone_from(&self.bufs.pos);
     }
 
+    /// Runs `kernels` (each with its clears and swap: `recipe::run`).
     fn run(&mut self, kernels: &[&'static k::KernelDef]) -> Result<(), String> {
-        let mut commands = vec![Command::Clear(Buf::Force)];
-        commands.extend(kernels.iter().map(|d| Command::Dispatch(d.plain())));
+        let commands: Vec<Command> = kernels.iter().flat_map(|d| crate::recipe::run(d.plain())).collect();
         self.runner.run_commands(&commands, &self.p, &mut self.bufs).map_err(|e| e.to_string())
+    }
+
+    /// The substep's integration and colliders from the loaded state, the force first
+    /// (cleared: no wind).
+    fn integrate(&mut self) -> Result<(), String> {
+        self.bufs.force.iter_mut().for_each(|f| *f = [0.0; 4]);
+        self.run(&[&k::FORCES, &k::SPRINGS, &k::INTEGRATE, &k::COLLIDE])
+    }
+
+    /// One strain pass (its counts, then the pass and its swap).
+    fn strain_pass(&mut self) -> Result<(), String> {
+        self.run(&[&k::STRAIN_COUNT, &k::STRAIN_LIMIT])
     }
 }
 
@@ -94,7 +97,10 @@ impl Walk for KernelWalk<'_> {
         let mut path = Vec::with_capacity(m.substeps() as usize);
         for _ in 0..m.substeps() {
             path.push((self.bufs.pos.iter().map(d3).collect(), self.bufs.vel.iter().map(d3).collect()));
-            self.run(&[&k::FORCES, &k::SPRINGS, &k::INTEGRATE, &k::COLLIDE])?;
+            self.integrate()?;
+            for _ in 0..self.passes {
+                self.strain_pass()?;
+            }
         }
         Ok(path)
     }
@@ -108,12 +114,29 @@ impl Walk for KernelWalk<'_> {
         vb: &mut [DVec3],
         _: &mut [f64],
     ) -> Result<(), String> {
-        self.load(x, v);
         let np = x.len();
         for (i, (gx, gv)) in xb.iter().zip(vb.iter()).enumerate() {
             self.bufs.adjoint[i] = [gx.x as f32, gx.y as f32, gx.z as f32, 0.0];
             self.bufs.adjoint[np + i] = [gv.x as f32, gv.y as f32, gv.z as f32, 0.0];
         }
+        if self.passes > 0 {
+            // The strain passes' inputs again, then back through them, last first: each
+            // one's counts at its input, then its adjoint's two halves.
+            self.load(x, v);
+            self.integrate()?;
+            let mut inputs = Vec::with_capacity(self.passes as usize);
+            for _ in 0..self.passes {
+                inputs.push(self.bufs.pos.clone());
+                self.strain_pass()?;
+            }
+            for input in inputs.iter().rev() {
+                self.bufs.pos.clone_from(input);
+                self.bufs.pos_out.clone_from(input);
+                self.run(&[&k::STRAIN_COUNT, &k::ADJ_STRAIN_BACK, &k::ADJ_STRAIN_GATHER])?;
+            }
+        }
+        self.load(x, v);
+        self.bufs.force.iter_mut().for_each(|f| *f = [0.0; 4]);
         self.run(&[&k::FORCES, &k::SPRINGS, &k::ADJ_INTEGRATE, &k::ADJ_SPRINGS])?;
         for (i, (gx, gv)) in xb.iter_mut().zip(vb.iter_mut()).enumerate() {
             *gx = d3(&self.bufs.adjoint[i]);

@@ -155,9 +155,9 @@ class Sim:
       single run with its parameters computes.
     * ``grad`` -- record the run for gradients (:meth:`backward`, docs/gradients.md):
       each frame's starting state is kept; one world, Verlet or symplectic Euler without
-      wind, self-contact or Coulomb friction; on a GPU backend (its adjoint kernels)
-      without the strain limit for now (``strain_iterations=0``). What has no adjoint
-      yet is refused when opened.
+      wind, self-contact or Coulomb friction (on a GPU backend its adjoint kernels walk
+      the recording back, on cloths of up to 128 × 128). What has no adjoint yet is
+      refused when opened.
 
     Everything is checked before the solver opens; a refusal raises
     :class:`ClothlabError` with the reason. The solver lives on a thread of its own:

@@ -3,14 +3,15 @@
 //! CPU engine (their twins), and the twins' walk against the f64 model's.
 
 use clothlab_core::{SceneFile, Solver};
-use clothlab_cpu::grad::{Gradients, Model, Recording};
+use clothlab_cpu::grad::{Gradients, Model, Recording, Walk};
 use clothlab_cpu::{CpuSolver, Exec};
 use clothlab_engine::grad::KernelWalk;
 use clothlab_engine::{CpuEngine, Variant};
 use clothlab_tests::Api;
+use glam::DVec3;
 
 /// A 12 × 12 cloth held at its top corners above a sphere and a floor: it falls onto the
-/// sphere within the run (the contact's adjoint runs), no strain limit.
+/// sphere within the run (the contact's adjoint runs); [`STRAINED`] adds the strain limit.
 const DRAPE: &str = r#"
 [cloth]
 n = 12
@@ -33,10 +34,16 @@ substeps = 8
 friction = 0.3
 "#;
 
-/// `frames` frames of the drape on the serial CPU solver, recorded, and the state it
+/// [`DRAPE`] with two strain passes at a 3 % limit: springs over it and tethers pulling
+/// from the first frames.
+fn strained() -> String {
+    DRAPE.replace("strain_iterations = 0", "strain_iterations = 2\nstrain_limit = 0.03")
+}
+
+/// `frames` frames of `text` on the serial CPU solver, recorded, and the state it
 /// started from.
-fn record(frames: usize) -> (SceneFile, Recording, clothlab_core::ClothState) {
-    let f = SceneFile::parse(DRAPE, "grad").unwrap();
+fn record(text: &str, frames: usize) -> (SceneFile, Recording, clothlab_core::ClothState) {
+    let f = SceneFile::parse(text, "grad").unwrap();
     let mut s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
     let start = s.state_ref().clone();
     let w: Vec<f32> = start.pos.iter().map(|x| x[3]).collect();
@@ -94,20 +101,86 @@ fn the_adjoint_kernels_twins_walk_a_recording_as_the_f64_model_does() {
     // The twins compute the adjoint in f32 at the recorded f32 states; the model in f64.
     // Their difference is f32 rounding carried back through 96 substeps of a cloth on a
     // sphere (measured: see the assertion's message).
-    let (f, rec, start) = record(12);
+    for (label, text) in [("drape", DRAPE.to_string()), ("strained", strained())] {
+        let (f, rec, start) = record(&text, 12);
+        let np = start.pos.len();
+        let (xb, vb) = (weights(np, 1), weights(np, 2));
+        let s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+        let mut engine = CpuEngine::new(Exec::Serial, f.scene.clone(), s.topology().clone());
+        let mut twins = CpuEngine::new(Exec::Serial, f.scene.clone(), s.topology().clone());
+        let want = if label == "drape" {
+            rec.backward(&xb, &vb)
+        } else {
+            // The strain limit switches where a spring crosses its limit: a frame's substeps
+            // recomputed in f64 cross some elsewhere than the f32 run's (the loss jumps
+            // there, docs/gradients.md), so the model is taken at the f32 substeps' states.
+            let walk = KernelWalk::new(&mut twins, &f.scene, &f.params, s.topology(), &start).unwrap();
+            rec.backward_by(&mut ModelAt(walk), &xb, &vb).unwrap()
+        };
+        let mut walk = KernelWalk::new(&mut engine, &f.scene, &f.params, s.topology(), &start).unwrap();
+        let got = rec.backward_by(&mut walk, &xb, &vb).unwrap();
+        for ((name, a), (_, b)) in got.params.iter().zip(&want.params) {
+            println!("{label}: {name:22} twins {a:+.6e} model {b:+.6e}");
+        }
+        let (e, what) = worst(&got, &want);
+        println!("{label}: twins vs f64 model: worst {e:.2e} ({what})");
+        // The drape: f32 rounding carried back (measured 1.3e-3, structural damping, a
+        // sum that cancels). Strained: the model recomputes each substep's strain passes in
+        // f64 from the f32 input and some springs at their limit switch otherwise inside
+        // the substep (measured 1.9e-2; one substep alone: the test below).
+        let bound = if label == "drape" { 2e-3 } else { 3e-2 };
+        assert!(e <= bound, "{label}: the twins' gradients {e:.2e} off the f64 model's ({what})");
+    }
+}
+
+#[test]
+fn one_strained_substep_s_adjoint_is_the_f64_model_s() {
+    // The strained drape settled on the sphere (80 substeps: springs at the limit, tethers
+    // pulling), then one substep recorded: the twins' adjoint (strain passes, springs,
+    // integration, contacts) against the f64 model's at the same state, where the passes
+    // take the same switches: f32 rounding only (measured 2.2e-5).
+    let text = strained().replace("substeps = 8", "substeps = 1");
+    let f = SceneFile::parse(&text, "grad").unwrap();
+    let mut s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+    for _ in 0..80 {
+        s.step_frame().unwrap();
+    }
+    let start = s.state_ref().clone();
+    let w: Vec<f32> = start.pos.iter().map(|x| x[3]).collect();
+    let mut rec = Recording::new(Model::new(&f.scene, s.topology(), &f.params, &w).unwrap());
+    rec.push(&start.pos, &start.vel);
     let np = start.pos.len();
-    let (xb, vb) = (weights(np, 1), weights(np, 2));
+    let (xb, vb) = (weights(np, 5), weights(np, 6));
     let want = rec.backward(&xb, &vb);
-    let s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+    assert!(want.params[16].1.abs() > 1.0, "the strain limit acts: {:?}", want.params[16]);
     let mut engine = CpuEngine::new(Exec::Serial, f.scene.clone(), s.topology().clone());
     let mut walk = KernelWalk::new(&mut engine, &f.scene, &f.params, s.topology(), &start).unwrap();
     let got = rec.backward_by(&mut walk, &xb, &vb).unwrap();
-    for ((name, a), (_, b)) in got.params.iter().zip(&want.params) {
-        println!("{name:22} twins {a:+.6e} model {b:+.6e}");
-    }
     let (e, what) = worst(&got, &want);
-    println!("twins vs f64 model: worst {e:.2e} ({what})");
-    assert!(e <= 2e-3, "the twins' gradients {e:.2e} off the f64 model's ({what})");
+    println!("one strained substep: worst {e:.2e} ({what})");
+    assert!(e <= 2e-4, "one substep's gradients {e:.2e} off the f64 model's ({what})");
+}
+
+/// The f64 model's adjoint at the substep states a kernel walk recomputes.
+struct ModelAt<'a>(KernelWalk<'a>);
+
+impl Walk for ModelAt<'_> {
+    fn inputs(&mut self, m: &Model, x: &[DVec3], v: &[DVec3]) -> Result<Vec<(Vec<DVec3>, Vec<DVec3>)>, String> {
+        self.0.inputs(m, x, v)
+    }
+
+    fn adjoint(
+        &mut self,
+        m: &Model,
+        x: &[DVec3],
+        v: &[DVec3],
+        xb: &mut [DVec3],
+        vb: &mut [DVec3],
+        params: &mut [f64],
+    ) -> Result<(), String> {
+        m.adjoint(x, v, xb, vb, params);
+        Ok(())
+    }
 }
 
 clothlab_tests::per_api!(every_api_s_gradients_are_the_twins_);
@@ -116,7 +189,7 @@ fn every_api_s_gradients_are_the_twins_(api: Api) {
     // The same walk on the API's kernels and on the CPU engine's twins: the kernels'
     // arithmetic against the twins' through 96 substeps' adjoints (adj_springs sums in
     // another order where FMA contracts: 1.8e-7 a call on lavapipe).
-    let (f, rec, start) = record(12);
+    let (f, rec, start) = record(&strained(), 12);
     let np = start.pos.len();
     let (xb, vb) = (weights(np, 3), weights(np, 4));
     let Some(mut gpu) = api.solver(Variant::OPTIMIZED, &f.scene, &f.params) else { return };
@@ -132,13 +205,4 @@ fn every_api_s_gradients_are_the_twins_(api: Api) {
     println!("{} vs the twins: worst {e:.2e} ({what})", api.name());
     assert!(e <= 1e-4, "{}: gradients {e:.2e} off the twins' ({what})", api.name());
     clothlab_tests::assert_api_clean(&mut *gpu);
-}
-
-#[test]
-fn a_gpu_walk_refuses_the_strain_limit_in_one_line() {
-    let f = SceneFile::parse(&DRAPE.replace("strain_iterations = 0", "strain_iterations = 2"), "grad").unwrap();
-    let s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
-    let mut engine = CpuEngine::new(Exec::Serial, f.scene.clone(), s.topology().clone());
-    let e = KernelWalk::new(&mut engine, &f.scene, &f.params, s.topology(), s.state_ref()).err().unwrap().to_string();
-    assert!(e.contains("strain") && !e.contains('\n'), "{e}");
 }
