@@ -1141,7 +1141,7 @@ mod tests {
 
     /// `Some(sim)`, or `None` where it is a GPU one and there is no adapter and none is
     /// required (`CLOTHLAB_REQUIRE_GPU`).
-    fn or_skip(sim: Result<Sim>) -> Option<Sim> {
+    pub(super) fn or_skip(sim: Result<Sim>) -> Option<Sim> {
         match sim {
             Ok(s) => Some(s),
             Err(e) => {
@@ -1693,7 +1693,7 @@ mod grad_tests {
         let xb: Vec<[f32; 3]> = (0..np).map(|i| [0.0, 1.0 / np as f32, (i % 3) as f32 * 0.1]).collect();
         let want = cpu.backward(Some(&xb), None).unwrap();
         for backend in [Backend::Wgpu, Backend::Vulkan, Backend::Gl] {
-            let Some(mut gpu) = or_skip_gpu(Sim::open(opts(backend, &set))) else { continue };
+            let Some(mut gpu) = super::tests::or_skip(Sim::open(opts(backend, &set))) else { continue };
             gpu.step(10).unwrap();
             let before = gpu.state().unwrap();
             let got = gpu.backward(Some(&xb), None).unwrap();
@@ -1708,18 +1708,6 @@ mod grad_tests {
                 assert!(e <= 2e-3, "{}: {name}: {a} vs {b} ({e:.1e})", backend.name());
             }
             assert_eq!(got.pins.len(), 10);
-        }
-    }
-
-    /// `Some(sim)`, or `None` where there is no adapter and none is required.
-    fn or_skip_gpu(sim: Result<Sim>) -> Option<Sim> {
-        match sim {
-            Ok(s) => Some(s),
-            Err(e) => {
-                assert!(std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1"), "{e:#}");
-                eprintln!("no adapter here: {e:#}");
-                None
-            }
         }
     }
 

@@ -878,6 +878,10 @@ impl<E: Engine> KernelRunner for GpuSolver<E> {
         v.extend(self.offered.iter().copied());
         v.sort_by_key(|k| k.shader_name());
         v.dedup();
+        // The adjoint's kernels only where it has their planes.
+        if !has_adjoint(&self.topo) || self.worlds.len() > 1 {
+            v.retain(|k| !crate::kernels::ADJOINT_KERNELS.contains(&k.def));
+        }
         v
     }
 

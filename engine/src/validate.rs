@@ -232,6 +232,10 @@ pub fn validate_kernels_with(
         if !k.def.cloths.run_on(topo) {
             continue;
         }
+        // The adjoint's kernels on a cloth a solver makes their planes for.
+        if kernels::ADJOINT_KERNELS.contains(&k.def) && !crate::solver::has_adjoint(topo) {
+            continue;
+        }
         // The kernel's dispatches on the cloth as a recipe makes them (its row's
         // `Dispatches`): every colour of one VBD sweep, the tiles, every pass of a mesh's
         // XPBD iteration (its λ cleared first, as the recipe does once a substep).

@@ -9,26 +9,7 @@ use glam::DVec3;
 
 /// An 8 × 8 cloth held at its top corners above a sphere and a floor: it falls onto the
 /// sphere within the run (the contact's adjoint runs), no strain limit.
-const DRAPE: &str = r#"
-[cloth]
-n = 8
-size = 0.8
-top_center = [0.0, 0.7, -0.4]
-across = [1.0, 0.0, 0.0]
-down = [0.0, 0.0, 1.0]
-pinning = "top-corners"
-
-[floor]
-y = 0.0
-
-[[spheres]]
-center = [0.0, 0.35, 0.05]
-radius = 0.25
-
-[params]
-strain_iterations = 0
-substeps = 8
-"#;
+const DRAPE: &str = include_str!("drape.toml");
 
 /// `frames` frames of `text` on the serial CPU solver, each frame's start recorded.
 fn record(text: &str, frames: usize) -> (Recording, CpuSolver) {

@@ -114,5 +114,9 @@ pub static ADJ_STRAIN_GATHER: KernelDef = KernelDef {
     )
 };
 
+/// The adjoint's kernels: run only where a solver has the adjoint's planes
+/// (`crate::solver::has_adjoint`).
+pub const ADJOINT_KERNELS: [&KernelDef; 4] = [&ADJ_INTEGRATE, &ADJ_SPRINGS, &ADJ_STRAIN_BACK, &ADJ_STRAIN_GATHER];
+
 /// This family's kernels, in the registry's order ([`super::ALL`]).
 pub(super) const ROWS: &[&KernelDef] = &[&ADJ_INTEGRATE, &ADJ_SPRINGS, &ADJ_STRAIN_BACK, &ADJ_STRAIN_GATHER];

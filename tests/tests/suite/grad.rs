@@ -3,7 +3,7 @@
 //! CPU engine (their twins), and the twins' walk against the f64 model's.
 
 use clothlab_core::{SceneFile, Solver};
-use clothlab_cpu::grad::{Gradients, Model, Recording, Walk};
+use clothlab_cpu::grad::{Gradients, Model, ModelWalk, Recording, Walk};
 use clothlab_cpu::{CpuSolver, Exec};
 use clothlab_engine::grad::KernelWalk;
 use clothlab_engine::{CpuEngine, Variant};
@@ -11,33 +11,16 @@ use clothlab_tests::Api;
 use glam::DVec3;
 
 /// A 12 × 12 cloth held at its top corners above a sphere and a floor: it falls onto the
-/// sphere within the run (the contact's adjoint runs); [`STRAINED`] adds the strain limit.
-const DRAPE: &str = r#"
-[cloth]
-n = 12
-size = 0.8
-top_center = [0.0, 0.7, -0.4]
-across = [1.0, 0.0, 0.0]
-down = [0.0, 0.0, 1.0]
-pinning = "top-corners"
+/// sphere within the run (the contact's adjoint runs); [`strained`] adds the strain limit.
+/// (cpu/tests/suite/drape.toml at n = 12, with friction.)
+fn drape() -> String {
+    include_str!("../../../cpu/tests/suite/drape.toml").replace("n = 8", "n = 12") + "friction = 0.3\n"
+}
 
-[floor]
-y = 0.0
-
-[[spheres]]
-center = [0.0, 0.35, 0.05]
-radius = 0.25
-
-[params]
-strain_iterations = 0
-substeps = 8
-friction = 0.3
-"#;
-
-/// [`DRAPE`] with two strain passes at a 3 % limit: springs over it and tethers pulling
+/// [`drape`] with two strain passes at a 3 % limit: springs over it and tethers pulling
 /// from the first frames.
 fn strained() -> String {
-    DRAPE.replace("strain_iterations = 0", "strain_iterations = 2\nstrain_limit = 0.03")
+    drape().replace("strain_iterations = 0", "strain_iterations = 2\nstrain_limit = 0.03")
 }
 
 /// `frames` frames of `text` on the serial CPU solver, recorded, and the state it
@@ -101,7 +84,7 @@ fn the_adjoint_kernels_twins_walk_a_recording_as_the_f64_model_does() {
     // The twins compute the adjoint in f32 at the recorded f32 states; the model in f64.
     // Their difference is f32 rounding carried back through 96 substeps of a cloth on a
     // sphere (measured: see the assertion's message).
-    for (label, text) in [("drape", DRAPE.to_string()), ("strained", strained())] {
+    for (label, text) in [("drape", drape()), ("strained", strained())] {
         let (f, rec, start) = record(&text, 12);
         let np = start.pos.len();
         let (xb, vb) = (weights(np, 1), weights(np, 2));
@@ -178,8 +161,7 @@ impl Walk for ModelAt<'_> {
         vb: &mut [DVec3],
         params: &mut [f64],
     ) -> Result<(), String> {
-        m.adjoint(x, v, xb, vb, params);
-        Ok(())
+        ModelWalk.adjoint(m, x, v, xb, vb, params)
     }
 }
 
