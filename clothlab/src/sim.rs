@@ -337,7 +337,7 @@ impl Sim {
             let w: Vec<f32> = self.solver.get().state()?.pos.iter().map(|x| x[3]).collect();
             clothlab_cpu::grad::Model::new(&self.setup.scene, self.topology(), &params[0], &w)
                 .map_err(anyhow::Error::msg)?;
-            self.check_gpu_grad(&params[0])?;
+            self.check_gpu_grad()?;
         }
         if self.worlds.is_empty() {
             let p = params.into_iter().next().context("one parameter set")?;
@@ -422,7 +422,7 @@ impl Sim {
     }
 
     /// On a GPU backend, a cloth without the adjoint's buffer.
-    fn check_gpu_grad(&self, _params: &SimParams) -> Result<()> {
+    fn check_gpu_grad(&self) -> Result<()> {
         if !self.backend.is_gpu() {
             return Ok(());
         }
@@ -441,7 +441,7 @@ impl Sim {
     fn new_recording(&mut self) -> Result<Grad> {
         let st = self.solver.get().state()?;
         let params = self.params().clone();
-        self.check_gpu_grad(&params)?;
+        self.check_gpu_grad()?;
         let w: Vec<f32> = st.pos.iter().map(|x| x[3]).collect();
         let model = clothlab_cpu::grad::Model::new(&self.setup.scene, self.topology(), &params, &w)
             .map_err(anyhow::Error::msg)?

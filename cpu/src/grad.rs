@@ -366,15 +366,22 @@ impl Model {
     /// is 0).
     pub fn params_from_partials(&self, s: &[f64; crate::adjoint::PARTIALS]) -> Result<[f64; PARAMS.len()], String> {
         let mut g = [0.0; PARAMS.len()];
-        g[at::GRAVITY..at::GRAVITY + 3].copy_from_slice(&s[..3]);
-        g[at::AIR_DRAG] = s[3];
-        g[at::DAMPING] = s[4];
-        g[at::FRICTION] = s[5];
-        g[at::STRAIN] = s[7];
+        use crate::adjoint::Partial as P;
+        let sum = |q: P| {
+            let (plane, c) = q.at();
+            s[4 * (plane - 3) + c]
+        };
+        for c in 0..3 {
+            g[at::GRAVITY + c] = sum(P::Gravity(c));
+        }
+        g[at::AIR_DRAG] = sum(P::AirDrag);
+        g[at::DAMPING] = sum(P::Damping);
+        g[at::FRICTION] = sum(P::Friction);
+        g[at::STRAIN] = sum(P::StrainLimit);
         let mass = self.p[at::MASS];
-        g[at::MASS] = s[6] * self.mass_unit;
+        g[at::MASS] = sum(P::ParticleMass) * self.mass_unit;
         for kind in 0..3 {
-            let [sks, skd, lks, lkd] = [0, 1, 2, 3].map(|c| s[8 + 4 * kind + c]);
+            let [sks, skd, lks, lkd] = [0, 1, 2, 3].map(|c| sum(P::Spring(kind, c)));
             let of_kind: Vec<&Constants> =
                 self.springs.iter().zip(&self.k).filter(|(sp, _)| sp.kind == kind).map(|(_, k)| k).collect();
             let Some(k0) = of_kind.first() else { continue };

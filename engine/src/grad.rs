@@ -52,8 +52,7 @@ impl<'a> KernelWalk<'a> {
     ) -> Result<Self, SolverError> {
         let p = StepParams::new(params, scene, None);
         let np = state.pos.len();
-        let bufs = HostBuffers::new(state, vec![[0.0; 4]; topo.triangles.len()]);
-        let mut bufs = bufs;
+        let mut bufs = HostBuffers::new(state, vec![[0.0; 4]; topo.triangles.len()]);
         bufs.adjoint = vec![[0.0; 4]; ADJ_ROWS as usize * np];
         let w = state.pos.iter().map(|x| x[3]).collect();
         Ok(Self { runner, p, bufs, w, passes: params.strain_iterations })
