@@ -4,6 +4,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use clothlab_core::grid::Grab;
+use clothlab_core::params::Integrator;
 use clothlab_core::{ClothState, ClothTopology, KernelTimings, RenderMode, Scene, SimParams, Solver, StateField, View};
 use clothlab_cpu::{CpuSolver, Exec};
 use clothlab_engine::Batch;
@@ -431,6 +432,13 @@ impl Sim {
             bail!(
                 "grad=True on a GPU: a cloth of {np} particles is over the {} the adjoint's buffer is made for (use cpu-par)",
                 clothlab_engine::solver::TRI_BUFFERS_ALWAYS
+            );
+        }
+        let integrator = self.params().integrator;
+        if !matches!(integrator, Integrator::Verlet | Integrator::SymplecticEuler) {
+            bail!(
+                "grad=True on a GPU: the adjoint kernels walk verlet and symplectic-euler; integrator {}'s adjoint runs on cpu and cpu-par",
+                integrator.name()
             );
         }
         Ok(())
@@ -1649,21 +1657,24 @@ mod grad_tests {
             assert!(!e.contains('\n'), "{e}");
             e
         };
-        let e = one_line(Sim::open(opts(Backend::Cpu, &["integrator=implicit"])).err().unwrap());
-        assert!(e.contains("integrator implicit has no adjoint yet"), "{e}");
+        let e = one_line(Sim::open(opts(Backend::Cpu, &["integrator=xpbd"])).err().unwrap());
+        assert!(e.contains("integrator xpbd has no adjoint yet"), "{e}");
         let e = one_line(
             Sim::open(SimOptions { envs: Some(2), ..opts(Backend::Cpu, &["strain_iterations=0"]) }).err().unwrap(),
         );
         assert!(e.contains("one world"), "{e}");
-        // A GPU backend: a cloth over the adjoint's buffer.
-        if let Some(e) = Sim::open(SimOptions { n: Some(129), ..opts(Backend::Vulkan, &[]) }).err().map(one_line) {
+        // A GPU backend: a cloth over the adjoint's buffer; implicit Euler, whose adjoint
+        // is the CPU's.
+        for (o, says) in [
+            (SimOptions { n: Some(129), ..opts(Backend::Vulkan, &[]) }, "16384"),
+            (opts(Backend::Vulkan, &["integrator=implicit"]), "implicit's adjoint runs on cpu and cpu-par"),
+        ] {
+            let Some(e) = Sim::open(o).err().map(one_line) else { panic!("a GPU recording ({says}) was not refused") };
             if e.contains("adjoint") {
-                assert!(e.contains("16384"), "{e}");
+                assert!(e.contains(says), "{e}");
             } else {
                 assert!(std::env::var("CLOTHLAB_REQUIRE_GPU").as_deref() != Ok("1"), "{e}");
             }
-        } else {
-            panic!("a GPU recording of a cloth over the adjoint's buffer was not refused");
         }
         let mut sim = Sim::open(opts(Backend::Cpu, &["strain_iterations=0"])).unwrap();
         assert!(one_line(sim.grab(10, [0.0, 1.0, 0.0]).unwrap_err()).contains("grab"));

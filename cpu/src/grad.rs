@@ -6,13 +6,14 @@
 //! checkpoints plus one frame's substeps, not O(substeps).
 //!
 //! What it differentiates: Verlet and symplectic Euler (in the (x, v) state both are
-//! `v' = (1 − damping) v + a dt`, `x' = x + v' dt`), the springs (stiffness, damping and
+//! `v' = (1 − damping) v + a dt`, `x' = x + v' dt`), implicit Euler (its Newton step's
+//! linear solve taken exactly: the adjoint is one more solve with the same matrix), the springs (stiffness, damping and
 //! their parameters in either unit), gravity, air drag, the velocity damping, the
 //! cloth's mass, the floor and still spheres with the share friction, the strain limit's
 //! passes and tethers (as the functions they compute: where a contact or a limit
 //! switches on or off, the derivative of the side the run took), and the pinned
 //! particles' positions frame by frame. What it does not yet (refused by [`Model::new`]
-//! in one line): the other integrators, wind, boxes, rods and bodies, moving colliders, Coulomb friction, self-contact, a
+//! in one line): the other integrators (XPBD, RK, VBD, explicit Euler), wind, boxes, rods and bodies, moving colliders, Coulomb friction, self-contact, a
 //! grabbed particle and pins moved within a frame.
 
 use glam::DVec3;
@@ -121,6 +122,8 @@ pub struct Model {
     trace: Trace,
     /// The springs' forces on rayon's threads (`cpu-par`); else on the caller's.
     parallel: bool,
+    /// Implicit Euler (else Verlet's recurrence).
+    implicit: bool,
 }
 
 /// [`Model`]'s trace of switches: an atomic (the model is shared with rayon's threads),
@@ -169,9 +172,9 @@ impl Model {
     /// adjoint yet.
     pub fn new(scene: &Scene, topo: &ClothTopology, params: &SimParams, w: &[f32]) -> Result<Self, String> {
         let no = |what: &str| Err(format!("grad=True: {what} has no adjoint yet"));
-        if !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler) {
+        if !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler | Integrator::Implicit) {
             return no(&format!("integrator {}", params.integrator.name()))
-                .map_err(|e: String| e + " (verlet and symplectic-euler have)");
+                .map_err(|e: String| e + " (verlet, symplectic-euler and implicit have)");
         }
         if params.wind != [0.0; 3] {
             return no("wind");
@@ -272,6 +275,7 @@ impl Model {
             tethers,
             trace: Trace::default(),
             parallel: false,
+            implicit: params.integrator == Integrator::Implicit,
         };
         m.derive();
         Ok(m)
@@ -473,18 +477,219 @@ impl Model {
 
     /// [`Model::integrate`] with the springs' forces at `(x, v)` given.
     fn integrate_with(&self, f: &[DVec3], x: &mut [DVec3], v: &mut [DVec3]) {
-        let (mass, g, drag, damping) = (self.mass(), self.gravity(), self.p[at::AIR_DRAG], self.p[at::DAMPING]);
+        let vt = self.velocities(f, x, v);
         for i in 0..x.len() {
             if self.w[i] == 0.0 {
                 v[i] = DVec3::ZERO;
                 continue;
             }
-            let a = f[i] * (self.w[i] / mass) + g - v[i] * drag;
-            let vn = v[i] * (1.0 - damping) + a * self.dt;
-            let (xn, vn) = self.floor(x[i] + vn * self.dt, vn);
+            let (xn, vn) = self.floor(x[i] + vt[i] * self.dt, vt[i]);
             let (xn, vn) = self.balls.iter().fold((xn, vn), |(x, v), b| self.ball(b, x, v).unwrap_or((x, v)));
             (x[i], v[i]) = (xn, vn);
         }
+    }
+
+    /// Each free particle's velocity at the substep's end before the contacts: Verlet's
+    /// `(1 − damping) v + (w/m̄ f + g − air_drag v) dt`, or implicit Euler's `(1 −
+    /// damping) v + Δv` (a held particle's: unused).
+    fn velocities(&self, f: &[DVec3], x: &[DVec3], v: &[DVec3]) -> Vec<DVec3> {
+        let (mass, g, drag, damping) = (self.mass(), self.gravity(), self.p[at::AIR_DRAG], self.p[at::DAMPING]);
+        if self.implicit {
+            let dv = self.newton_step(f, x, v);
+            return v.iter().zip(dv).map(|(v, dv)| *v * (1.0 - damping) + dv).collect();
+        }
+        (0..x.len())
+            .map(|i| {
+                let a = f[i] * (self.w[i] / mass) + g - v[i] * drag;
+                v[i] * (1.0 - damping) + a * self.dt
+            })
+            .collect()
+    }
+
+    /// Particle `i`'s mass (a free one's: m̄/w).
+    fn mass_of(&self, i: usize) -> f64 {
+        self.mass() / self.w[i]
+    }
+
+    /// Implicit Euler's Newton step in velocities (`cpu::integrators`' `cg_begin` …
+    /// `implicit_finish`): `A Δv = dt (f + m g − air_drag m v) − dt² K v` over the free
+    /// particles, `A = m (1 + dt air_drag) I + Σₛ (dt² Kₛ + dt Dₛ)`, `Kₛ = ks [n nᵀ +
+    /// max(0, 1 − rest/len) (I − n nᵀ)]`, `Dₛ = kd n nᵀ`; solved to f64's rounding (the
+    /// solver's `cg_iterations` truncate it: measured 1e-6 m apart after 30 frames at 64).
+    fn newton_step(&self, f: &[DVec3], x: &[DVec3], v: &[DVec3]) -> Vec<DVec3> {
+        let (g, drag, dt) = (self.gravity(), self.p[at::AIR_DRAG], self.dt);
+        // Kₛ's part across the spring switches on as it stretches past its rest length.
+        for s in &self.springs {
+            self.note((x[s.a] - x[s.b]).length() > s.rest);
+        }
+        let kv = self.implicit_apply(x, v, false);
+        let b: Vec<DVec3> = (0..x.len())
+            .map(|i| {
+                if self.w[i] == 0.0 {
+                    return DVec3::ZERO;
+                }
+                let m = self.mass_of(i);
+                (f[i] + m * g - drag * m * v[i]) * dt - kv[i]
+            })
+            .collect();
+        self.solve(x, &b)
+    }
+
+    /// `(A y)ᵢ` for every free particle (0 for a held one), or without the mass and the
+    /// springs' damping (`full` false): `dt² (K y)ᵢ`.
+    fn implicit_apply(&self, x: &[DVec3], y: &[DVec3], full: bool) -> Vec<DVec3> {
+        let (drag, dt) = (self.p[at::AIR_DRAG], self.dt);
+        let mut out: Vec<DVec3> = (0..x.len())
+            .map(|i| if full && self.w[i] != 0.0 { y[i] * self.mass_of(i) * (1.0 + dt * drag) } else { DVec3::ZERO })
+            .collect();
+        for (s, k) in self.springs.iter().zip(&self.k) {
+            let d = x[s.a] - x[s.b];
+            let len = d.length();
+            if len <= f64::MIN_POSITIVE {
+                continue;
+            }
+            let n = d / len;
+            let soft = (1.0 - s.rest / len).max(0.0);
+            let yd = y[s.a] - y[s.b];
+            let ny = n.dot(yd);
+            let (k2, c) = (k.ks * dt * dt, if full { k.kd * dt } else { 0.0 });
+            let t = n * ((k2 + c) * ny) + (yd - n * ny) * (k2 * soft);
+            out[s.a] += t;
+            out[s.b] -= t;
+        }
+        for (i, o) in out.iter_mut().enumerate() {
+            if self.w[i] == 0.0 {
+                *o = DVec3::ZERO;
+            }
+        }
+        out
+    }
+
+    /// `A⁻¹ b` over the free particles (a held one's row 0), by conjugate gradients
+    /// preconditioned with A's diagonal, to a residual of 1e-13 of `b`'s.
+    fn solve(&self, x: &[DVec3], b: &[DVec3]) -> Vec<DVec3> {
+        let (drag, dt) = (self.p[at::AIR_DRAG], self.dt);
+        let mut diag: Vec<f64> =
+            (0..x.len()).map(|i| if self.w[i] == 0.0 { 0.0 } else { self.mass_of(i) * (1.0 + dt * drag) }).collect();
+        for (s, k) in self.springs.iter().zip(&self.k) {
+            let len = (x[s.a] - x[s.b]).length();
+            if len <= f64::MIN_POSITIVE {
+                continue;
+            }
+            let soft = (1.0 - s.rest / len).max(0.0);
+            let t = (k.ks * dt * dt * (1.0 + 2.0 * soft) + k.kd * dt) / 3.0;
+            for e in [s.a, s.b] {
+                if self.w[e] != 0.0 {
+                    diag[e] += t;
+                }
+            }
+        }
+        let dot = |a: &[DVec3], b: &[DVec3]| a.iter().zip(b).map(|(a, b)| a.dot(*b)).sum::<f64>();
+        let pre = |r: &[DVec3]| -> Vec<DVec3> {
+            r.iter().zip(&diag).map(|(r, d)| if *d > 0.0 { *r / *d } else { DVec3::ZERO }).collect()
+        };
+        let mut r: Vec<DVec3> =
+            b.iter().enumerate().map(|(i, b)| if self.w[i] == 0.0 { DVec3::ZERO } else { *b }).collect();
+        let mut sol = vec![DVec3::ZERO; x.len()];
+        let stop = 1e-26 * dot(&r, &r);
+        let mut z = pre(&r);
+        let mut p = z.clone();
+        let mut rz = dot(&r, &z);
+        for _ in 0..4 * x.len() + 64 {
+            if dot(&r, &r) <= stop || rz <= 0.0 {
+                break;
+            }
+            let q = self.implicit_apply(x, &p, true);
+            let alpha = rz / dot(&p, &q);
+            for i in 0..x.len() {
+                sol[i] += alpha * p[i];
+                r[i] -= alpha * q[i];
+            }
+            z = pre(&r);
+            let next = dot(&r, &z);
+            let beta = next / rz;
+            rz = next;
+            for (p, z) in p.iter_mut().zip(&z) {
+                *p = *z + beta * *p;
+            }
+        }
+        sol
+    }
+
+    /// The adjoint of [`Model::newton_step`] onto `dvb` (the gradient with respect to
+    /// `Δv`): `λ = A⁻¹ dvb` (A is symmetric), then `λᵀ ∂(b − A Δv)/∂·` onto the
+    /// positions, velocities and parameters (the residual's, as `Δv` solves it: the
+    /// implicit function's derivative).
+    #[allow(clippy::too_many_arguments)]
+    fn newton_adjoint(
+        &self,
+        x: &[DVec3],
+        v: &[DVec3],
+        dv: &[DVec3],
+        dvb: &[DVec3],
+        xin: &mut [DVec3],
+        vin: &mut [DVec3],
+        params: &mut [f64],
+    ) {
+        let lam = self.solve(x, dvb);
+        let (g, drag, dt, big_m) = (self.gravity(), self.p[at::AIR_DRAG], self.dt, self.p[at::MASS]);
+        for i in 0..x.len() {
+            if self.w[i] == 0.0 {
+                continue;
+            }
+            // Rᵢ ∋ dt m (g − air_drag v) − m (1 + dt air_drag) Δv.
+            let (m, l) = (self.mass_of(i), lam[i]);
+            for c in 0..3 {
+                params[at::GRAVITY + c] += dt * m * l[c];
+            }
+            params[at::AIR_DRAG] -= dt * m * l.dot(v[i] + dv[i]);
+            vin[i] -= l * (dt * drag * m);
+            params[at::MASS] += l.dot((g - drag * v[i]) * (dt * m) - dv[i] * (m * (1.0 + dt * drag))) / big_m;
+        }
+        // A spring's part of R at its end a (its opposite at b):
+        // dt fₛ − dt² Kₛ (u + δ) − dt Dₛ δ, u = v_a − v_b, δ = Δv_a − Δv_b;
+        // φ = (λ_a − λ_b)·that, differentiated by d = x_a − x_b, u, ks and kd.
+        for (s, k) in self.springs.iter().zip(&self.k) {
+            let e = lam[s.a] - lam[s.b];
+            let d = x[s.a] - x[s.b];
+            let len = d.length();
+            if e == DVec3::ZERO || len <= f64::MIN_POSITIVE {
+                continue;
+            }
+            let n = d / len;
+            let (u, delta) = (v[s.a] - v[s.b], dv[s.a] - dv[s.b]);
+            let z = u + delta;
+            let open = 1.0 - s.rest / len;
+            let (soft, dsoft) = if open > 0.0 { (open, s.rest / (len * len)) } else { (0.0, 0.0) };
+            let (ne, nz, nu, nd) = (n.dot(e), n.dot(z), n.dot(u), n.dot(delta));
+            let stretch = len - s.rest;
+            let (dt2, ks, kd) = (dt * dt, k.ks, k.kd);
+            let gn = -dt * kd * ne * u
+                - dt * (ks * stretch + kd * nu) * e
+                - dt2 * ks * (1.0 - soft) * (nz * e + ne * z)
+                - dt * kd * (nd * e + ne * delta);
+            let glen = -dt * ks * ne - dt2 * ks * (e.dot(z) - ne * nz) * dsoft;
+            let gd = (gn - n * n.dot(gn)) / len + n * glen;
+            let gu = -dt * kd * ne * n - dt2 * ks * ((1.0 - soft) * ne * n + soft * e);
+            xin[s.a] += gd;
+            xin[s.b] -= gd;
+            vin[s.a] += gu;
+            vin[s.b] -= gu;
+            let gks = -dt * stretch * ne - dt2 * ((1.0 - soft) * ne * nz + soft * e.dot(z));
+            let gkd = -dt * nu * ne - dt * ne * nd;
+            self.spring_partials(s, k, gks, gkd, params);
+        }
+    }
+
+    /// A spring's `∂/∂ks`, `∂/∂kd` onto the parameters its constants follow.
+    fn spring_partials(&self, s: &Spring, k: &Constants, gks: f64, gkd: f64, params: &mut [f64]) {
+        if self.physical {
+            params[at::MODULUS + s.kind] += gks * k.dks + gkd * k.dkd_modulus;
+        } else {
+            params[at::KAPPA + s.kind] += gks * k.dks;
+        }
+        params[at::ZETA + s.kind] += gkd * k.dkd_zeta;
+        params[at::MASS] += gks * k.dks_mass + gkd * k.dkd_mass;
     }
 
     /// Particle `i`'s position after one strain pass over `x` (`cpu::strain_limit`'s
@@ -650,8 +855,10 @@ impl Model {
             }
         }
         let np = x.len();
-        let (mass, g0, drag, damping) = (self.mass(), self.gravity(), self.p[at::AIR_DRAG], self.p[at::DAMPING]);
-        // The gradient with respect to each free particle's acceleration.
+        let (mass, drag, damping) = (self.mass(), self.p[at::AIR_DRAG], self.p[at::DAMPING]);
+        let vts = self.velocities(&f, x, v);
+        // The gradient with respect to each free particle's acceleration (Verlet) or
+        // Newton step (implicit).
         let mut ab = vec![DVec3::ZERO; np];
         let mut xin = vec![DVec3::ZERO; np];
         let mut vin = vec![DVec3::ZERO; np];
@@ -662,8 +869,7 @@ impl Model {
                 continue;
             }
             // Forward again, keeping what the adjoint needs.
-            let a = f[i] * (self.w[i] / mass) + g0 - v[i] * drag;
-            let vt = v[i] * (1.0 - damping) + a * self.dt;
+            let vt = vts[i];
             let xt = x[i] + vt * self.dt;
             let floored = xt.y < self.floor;
             let (mut xc, mut vc) = self.floor(xt, vt);
@@ -687,9 +893,13 @@ impl Model {
             // x' = x + v' dt.
             let gvt = gv + gx * self.dt;
             xin[i] += gx;
-            // v' = (1 − damping) v + a dt.
+            // v' = (1 − damping) v + a dt (Verlet), or + Δv (implicit).
             vin[i] += gvt * (1.0 - damping);
             params[at::DAMPING] -= v[i].dot(gvt);
+            if self.implicit {
+                ab[i] = gvt;
+                continue;
+            }
             let g = gvt * self.dt;
             ab[i] = g;
             // a = w/m̄ f + g − air_drag v.
@@ -700,6 +910,13 @@ impl Model {
             vin[i] -= g * drag;
             // ∂(w/m̄)/∂M = −(w/m̄)/M.
             params[at::MASS] -= f[i].dot(g) * (self.w[i] / mass) / self.p[at::MASS];
+        }
+        if self.implicit {
+            let dv: Vec<DVec3> = vts.iter().zip(v).map(|(vt, v)| *vt - *v * (1.0 - damping)).collect();
+            self.newton_adjoint(x, v, &dv, &ab, &mut xin, &mut vin, params);
+            xb.copy_from_slice(&xin);
+            vb.copy_from_slice(&vin);
+            return;
         }
         // The springs: f̄ on each from its ends' accelerations.
         for (s, k) in self.springs.iter().zip(&self.k) {
@@ -722,14 +939,7 @@ impl Model {
             xin[s.b] -= gl;
             vin[s.a] += gdv;
             vin[s.b] -= gdv;
-            let (gks, gkd) = (-stretch * along, -rate * along);
-            if self.physical {
-                params[at::MODULUS + s.kind] += gks * k.dks + gkd * k.dkd_modulus;
-            } else {
-                params[at::KAPPA + s.kind] += gks * k.dks;
-            }
-            params[at::ZETA + s.kind] += gkd * k.dkd_zeta;
-            params[at::MASS] += gks * k.dks_mass + gkd * k.dkd_mass;
+            self.spring_partials(s, k, -stretch * along, -rate * along, params);
         }
         xb.copy_from_slice(&xin);
         vb.copy_from_slice(&vin);

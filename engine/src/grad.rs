@@ -19,7 +19,7 @@ use glam::DVec3;
 use clothlab_core::SolverError;
 use clothlab_core::grid::{ClothState, ClothTopology, V4};
 use clothlab_core::layout::ADJ_ROWS;
-use clothlab_core::params::SimParams;
+use clothlab_core::params::{Integrator, SimParams};
 use clothlab_core::scene::Scene;
 use clothlab_core::step_params::StepParams;
 use clothlab_cpu::grad::{Model, Walk};
@@ -50,6 +50,12 @@ impl<'a> KernelWalk<'a> {
         topo: &ClothTopology,
         state: &ClothState,
     ) -> Result<Self, SolverError> {
+        if !matches!(params.integrator, Integrator::Verlet | Integrator::SymplecticEuler) {
+            return Err(SolverError::Unsupported(format!(
+                "the adjoint kernels walk verlet and symplectic-euler, not {} (its adjoint runs on the CPU's f64 model)",
+                params.integrator.name()
+            )));
+        }
         let p = StepParams::new(params, scene, None);
         let np = state.pos.len();
         let mut bufs = HostBuffers::new(state, vec![[0.0; 4]; topo.triangles.len()]);

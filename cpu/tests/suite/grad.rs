@@ -14,7 +14,12 @@ const DRAPE: &str = include_str!("drape.toml");
 /// `frames` frames of `text` on the serial CPU solver, each frame's start recorded.
 fn record(text: &str, frames: usize) -> (Recording, CpuSolver) {
     let f = SceneFile::parse(text, "grad").unwrap();
-    let mut s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+    let s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+    record_from(s, &f, frames)
+}
+
+/// `frames` frames of `f` on `s` from its current state, each frame's start recorded.
+fn record_from(mut s: CpuSolver, f: &SceneFile, frames: usize) -> (Recording, CpuSolver) {
     let w: Vec<f32> = s.state_ref().pos.iter().map(|x| x[3]).collect();
     let model = Model::new(&f.scene, s.topology(), &f.params, &w).unwrap();
     let mut rec = Recording::new(model);
@@ -90,9 +95,14 @@ fn drape_with(extra: &str) -> String {
 }
 
 /// The drape's variants the model must compute as the solver does: both units of
-/// stiffness (the springs' constants derived again in f64), and the strain limit on.
-const VARIANTS: [&str; 3] =
-    ["stiffness_units = \"fraction\"", "stiffness_units = \"physical\"", "strain_iterations = 2\nstrain_limit = 0.03"];
+/// stiffness (the springs' constants derived again in f64), the strain limit on, and
+/// implicit Euler.
+const VARIANTS: [&str; 4] = [
+    "stiffness_units = \"fraction\"",
+    "stiffness_units = \"physical\"",
+    "strain_iterations = 2\nstrain_limit = 0.03",
+    "integrator = \"implicit\"",
+];
 
 #[test]
 fn the_f64_model_replays_the_solvers_run() {
@@ -141,7 +151,25 @@ fn drape_against_finite_differences(text: &str) {
     // the gradient is near 0 (the mass in fraction units: the springs scale with it).
     // The f32 run's own checkpoints give each gradient within 1e-2 of those (its
     // rounding moves where each frame's derivative is taken: measured up to 2e-3).
-    let (raw, s) = record(text, 12);
+    // Implicit Euler's matrix has a kink where a spring passes its rest length (its
+    // stiffness across the spring switches on as it stretches): the drape starts with
+    // every spring there (and its falling middle keeps them there to f32's rounding for
+    // frames), so a difference from it straddles the kink whichever its size. Its
+    // free particles are moved at random by up to 1 cm first: the springs are off it,
+    // and the trace shrinks the step off the ones that come near.
+    let f = SceneFile::parse(text, "grad").unwrap();
+    let mut s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
+    if text.contains("implicit") {
+        let mut st = s.state_ref().clone();
+        let np = st.pos.len();
+        for (x, d) in st.pos.iter_mut().zip(weights(np, 99)) {
+            if x[3] != 0.0 {
+                (0..3).for_each(|c| x[c] += 0.01 * d[c]);
+            }
+        }
+        s.set_state(&st).unwrap();
+    }
+    let (raw, s) = record_from(s, &f, 12);
     let rec = raw.in_f64();
     let np = s.state_ref().pos.len();
     let (a, b) = (weights(np, 1), weights(np, 2));
@@ -216,44 +244,58 @@ fn drape_against_finite_differences(text: &str) {
 #[test]
 fn free_fall_s_gradient_by_gravity_is_the_recurrence_s_closed_form() {
     // The free-fall scene (no pins, no floor, springs at rest: every particle the same
-    // recurrence v' = r v + g dt, r = 1 − damping − air_drag dt, x' = x + v' dt) with
-    // damping and drag on: after N substeps d y / d g_y = dt² Σ_{k=1..N} (1 − r^k)/(1 − r)
-    // for every particle, and d y / d v₀ = dt Σ r^k. The loss: the mean height.
+    // recurrence v' = r v + c g, x' = x + v' dt) with damping and drag on. Verlet:
+    // r = 1 − damping − air_drag dt, c = dt; implicit Euler (its Newton step with the
+    // springs at rest: m (1 + dt air_drag) Δv = dt m (g − air_drag v)): r = 1 − damping −
+    // dt air_drag/(1 + dt air_drag), c = dt/(1 + dt air_drag). After N substeps
+    // d y / d g_y = dt c Σ_{k=1..N} (1 − r^k)/(1 − r) for every particle, and
+    // d y / d v₀ = dt Σ r^k. The loss: the mean height.
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/free-fall.toml")).unwrap();
     let text = text
         .replace("n = 32", "n = 6")
         .replace("air_drag = 0.0\ndamping = 0.0", "air_drag = 0.3\ndamping = 0.002\nstrain_iterations = 0");
     assert!(text.contains("air_drag = 0.3"), "scenes/free-fall.toml changed: the test's edit missed");
-    let (rec, s) = record(&text, 10);
-    let np = s.state_ref().pos.len();
-    let a = vec![[0.0, 1.0 / np as f32, 0.0]; np];
-    let g = rec.backward(&a, &vec![[0.0; 3]; np]);
-    let p = s.params();
-    let (dt, n) = (p.dt() as f64, 10 * p.substeps as i32);
-    let r = 1.0 - p.damping as f64 - p.air_drag as f64 * dt;
-    let want_g: f64 = (1..=n).map(|k| dt * dt * (1.0 - r.powi(k)) / (1.0 - r)).sum();
-    let want_v: f64 = (1..=n).map(|k| dt * r.powi(k)).sum::<f64>() / np as f64;
-    let got_g = g.params.iter().find(|(n, _)| *n == "gravity[1]").unwrap().1;
-    println!(
-        "d mean y / d g_y: {got_g:.9} against {want_g:.9}; d mean y / d v0_y {:.9e} against {want_v:.9e}",
-        g.velocities[0][1]
-    );
-    // The springs stay at rest (every particle moves alike) but for the f32 run's
-    // rounding of the checkpoints, which leaves them a few ulps off their rest lengths:
-    // measured 7e-9 relative; bound 1e-6.
-    assert!((got_g - want_g).abs() < 1e-6 * want_g.abs(), "{got_g} against {want_g}");
-    for v in &g.velocities {
-        assert!(
-            (v[1] - want_v).abs() < 1e-6 * want_v.abs() && v[0].abs() < 1e-6 * want_v.abs(),
-            "{v:?} against {want_v}"
+    for implicit in [false, true] {
+        let text = if implicit {
+            text.replace("strain_iterations = 0", "strain_iterations = 0\nintegrator = \"implicit\"")
+        } else {
+            text.clone()
+        };
+        let (rec, s) = record(&text, 10);
+        let np = s.state_ref().pos.len();
+        let a = vec![[0.0, 1.0 / np as f32, 0.0]; np];
+        let g = rec.backward(&a, &vec![[0.0; 3]; np]);
+        let p = s.params();
+        let (dt, n, drag) = (p.dt() as f64, 10 * p.substeps as i32, p.air_drag as f64);
+        let (r, c) = if implicit {
+            (1.0 - p.damping as f64 - dt * drag / (1.0 + dt * drag), dt / (1.0 + dt * drag))
+        } else {
+            (1.0 - p.damping as f64 - drag * dt, dt)
+        };
+        let want_g: f64 = (1..=n).map(|k| dt * c * (1.0 - r.powi(k)) / (1.0 - r)).sum();
+        let want_v: f64 = (1..=n).map(|k| dt * r.powi(k)).sum::<f64>() / np as f64;
+        let got_g = g.params.iter().find(|(n, _)| *n == "gravity[1]").unwrap().1;
+        println!(
+            "implicit {implicit}: d mean y / d g_y {got_g:.9} against {want_g:.9}; d mean y / d v0_y {:.9e} against {want_v:.9e}",
+            g.velocities[0][1]
         );
+        // The springs stay at rest (every particle moves alike) but for the f32 run's
+        // rounding of the checkpoints, which leaves them a few ulps off their rest
+        // lengths: measured 7e-9 relative under either; bound 1e-6.
+        assert!((got_g - want_g).abs() < 1e-6 * want_g.abs(), "implicit {implicit}: {got_g} against {want_g}");
+        for v in &g.velocities {
+            assert!(
+                (v[1] - want_v).abs() < 1e-6 * want_v.abs() && v[0].abs() < 1e-6 * want_v.abs(),
+                "implicit {implicit}: {v:?} against {want_v}"
+            );
+        }
     }
 }
 
 #[test]
 fn what_has_no_adjoint_is_refused_in_one_line() {
     for (set, names) in [
-        ("integrator = \"implicit\"", "integrator"),
+        ("integrator = \"xpbd\"", "integrator"),
         ("wind = [1.0, 0.0, 0.0]", "wind"),
         ("static_friction = 0.5", "Coulomb"),
         ("self_collision = \"particles\"", "self-contact"),
@@ -334,13 +376,26 @@ fn internal_forces_move_no_gradient_of_the_mean() {
     // decays by r a substep), and the springs' and the limit's parameters' gradients are 0
     // — to rounding (1e-9 of each). One particle's final x is moved by the others through
     // the springs (its gradient spreads over them: the test sees the springs act), and by
-    // a common shift alike: Σᵢ ∂x_N/∂x₀ᵢ = (1, 0, 0).
+    // a common shift alike: Σᵢ ∂x_N/∂x₀ᵢ = (1, 0, 0). Under Verlet and implicit Euler
+    // (whose Newton step's spring rows also cancel in the sum: r = 1 − damping −
+    // dt air_drag/(1 + dt air_drag)).
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/free-fall.toml")).unwrap();
     let text = text
         .replace("n = 32", "n = 6")
         .replace("air_drag = 0.0\ndamping = 0.0", "air_drag = 0.3\ndamping = 0.002\nstrain_limit = 0.001");
     assert!(text.contains("strain_limit = 0.001"), "scenes/free-fall.toml changed: the test's edit missed");
-    let f = SceneFile::parse(&text, "thrown").unwrap();
+    for implicit in [false, true] {
+        let text = if implicit {
+            text.replace("strain_limit = 0.001", "strain_limit = 0.001\nintegrator = \"implicit\"")
+        } else {
+            text.clone()
+        };
+        thrown_cloth_s_mean(&text, implicit);
+    }
+}
+
+fn thrown_cloth_s_mean(text: &str, implicit: bool) {
+    let f = SceneFile::parse(text, "thrown").unwrap();
     let mut s = CpuSolver::new(Exec::Serial, f.scene.clone(), f.params.clone()).unwrap();
     let mut st = s.state_ref().clone();
     for (v, w) in st.vel.iter_mut().zip(weights(st.pos.len(), 7)) {
@@ -359,7 +414,8 @@ fn internal_forces_move_no_gradient_of_the_mean() {
     let np = st.pos.len();
     let p = &f.params;
     let (dt, n) = (p.dt() as f64, frames * p.substeps as i32);
-    let r = 1.0 - p.damping as f64 - p.air_drag as f64 * dt;
+    let drag = p.air_drag as f64;
+    let r = 1.0 - p.damping as f64 - if implicit { dt * drag / (1.0 + dt * drag) } else { drag * dt };
     let decay: f64 = (1..=n).map(|k| dt * r.powi(k)).sum();
     // The loss's gradient goes in as f32: each particle's weight is 1/N to f32's rounding.
     let share = (1.0 / np as f32) as f64;
@@ -368,7 +424,9 @@ fn internal_forces_move_no_gradient_of_the_mean() {
         rows.iter().map(|r| (DVec3::from(*r) - DVec3::X * want).length()).fold(0.0, f64::max) / want
     };
     let (ox, ov) = (off(&g.positions, share), off(&g.velocities, decay * share));
-    println!("the mean: each particle's gradient off its share by {ox:.1e} (positions), {ov:.1e} (velocities)");
+    println!(
+        "implicit {implicit}: the mean: each particle's gradient off its share by {ox:.1e} (positions), {ov:.1e} (velocities)"
+    );
     assert!(ox < 1e-9 && ov < 1e-9, "{ox} {ov}");
     for name in ["structural_stiffness", "shear_stiffness", "bend_stiffness", "structural_damping", "strain_limit"] {
         let v = g.params.iter().find(|(k, _)| *k == name).unwrap().1;
